@@ -1,0 +1,249 @@
+/*
+ * pkm.h -- the C contract of the parallel-kinematic-machine (PKM) reference core.
+ *
+ * Everything outside c_core/ (the FMUs, the Python package, the tests) reaches the
+ * physics through this header only.  Conventions:
+ *
+ *  1. Units are SI throughout: m, rad, kg, N, N m, s.  Angles of the 6-PUS pose are
+ *     fixed-axis rotations, R = Rx(rx) Ry(ry) Rz(rz) (seed 000 eq. 2.5).
+ *  2. Two handles.  pkm_model is constant while computations run: robot kind,
+ *     named parameters, derived geometry.  pkm_data is mutable: work buffers, the
+ *     last error, counters.  Every computation is a free function taking
+ *     (const pkm_model*, pkm_data*).  A data belongs to the model it was created
+ *     for (pkm_data_check); use one data per thread.  Changing a parameter of a
+ *     model invalidates nothing but the results computed before the change.
+ *  3. Every create has a destroy.  Handles are opaque.
+ *  4. Every function that can fail returns an int status: PKM_OK (0) or a negative
+ *     pkm_status.  The message, saying what failed and where (leg, item of a
+ *     batch, time), is kept in the data (pkm_data_error) or, for functions without
+ *     a data, written to the caller's err buffer (may be NULL).  No C++ exception
+ *     crosses this boundary; no function returns a NaN in place of an error.
+ *  5. Arrays are contiguous, row-major double.  Shapes are given as [rows,cols];
+ *     n is the number of items of a batched call, nd = pkm_model_ndof(m).
+ *     Batched calls go on past failing items, write each item's status into
+ *     status[n] (may be NULL), fill failing items' outputs with NaN *and* return
+ *     the first failure status, so a NaN is never silent.
+ *  6. The pose x of a robot has nd coordinates, its velocity xd is the time
+ *     derivative of those coordinates (for the 6-PUS: Euler-angle rates, not the
+ *     angular velocity).  q are the actuated joint coordinates (slider strokes for
+ *     the 6-PUS [m], motor-side arm angles for the Quattro [rad]), tau the actuator
+ *     efforts along them [N or N m].
+ */
+#ifndef PKM_PKM_H
+#define PKM_PKM_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32)
+#define PKM_API __declspec(dllexport)
+#else
+#define PKM_API __attribute__((visibility("default")))
+#endif
+
+/* ===================================================================== status */
+
+typedef enum pkm_status {
+  PKM_OK = 0,
+  PKM_ERR_ARGUMENT = -1,      /* NULL pointer, wrong size, NaN/Inf in an input      */
+  PKM_ERR_PARAMETER = -2,     /* a parameter value is invalid (name and value given) */
+  PKM_ERR_UNREACHABLE = -3,   /* pose outside the workspace of a leg/arm              */
+  PKM_ERR_SINGULAR = -4,      /* singular configuration (which kind, which leg)       */
+  PKM_ERR_NO_CONVERGENCE = -5,/* iterative solver did not converge (iter, residual)   */
+  PKM_ERR_JOINT_LIMIT = -6,   /* stroke / joint range exceeded (which joint, value)   */
+  PKM_ERR_INTEGRATION = -7,   /* CVODE failure (flag, time)                           */
+  PKM_ERR_UNSUPPORTED = -8,   /* the robot does not provide this function             */
+  PKM_ERR_INTERNAL = -9       /* a bug: please report the message                    */
+} pkm_status;
+
+/* Short constant name of a status ("PKM_ERR_SINGULAR"...). */
+PKM_API const char* pkm_status_name(int status);
+
+/* ============================================================== model / data */
+
+typedef struct pkm_model pkm_model;
+typedef struct pkm_data pkm_data;
+
+/* Create a model of robot "6pus", "quattro" or "fourbar" with a named parameter set
+ * (NULL or "default"; the Quattro also has "appendix_a").  Returns NULL on error
+ * and writes the reason into err[errlen]. */
+PKM_API pkm_model* pkm_model_create(const char* robot, const char* param_set,
+                                    char* err, size_t errlen);
+PKM_API pkm_model* pkm_model_copy(const pkm_model* m);
+PKM_API void pkm_model_destroy(pkm_model* m);
+
+PKM_API const char* pkm_model_robot(const pkm_model* m);   /* "6pus", ...          */
+PKM_API int pkm_model_ndof(const pkm_model* m);            /* actuators = pose dim */
+
+/* Named parameters (Modelica-style dotted names, e.g. "leg[1].L", "platform.m").
+ * Index i runs over 0..nparam-1; names, units and descriptions stay valid for the
+ * model's lifetime. */
+PKM_API int pkm_model_nparam(const pkm_model* m);
+PKM_API int pkm_param_index(const pkm_model* m, const char* name); /* -1 if unknown */
+PKM_API const char* pkm_param_name(const pkm_model* m, int i);
+PKM_API const char* pkm_param_unit(const pkm_model* m, int i);
+PKM_API const char* pkm_param_description(const pkm_model* m, int i);
+PKM_API double pkm_param_get(const pkm_model* m, int i);
+/* Sets one parameter after checking its own range (e.g. a length > 0, a mass >= 0).
+ * Cross-parameter consistency is checked by pkm_model_validate. */
+PKM_API int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen);
+/* Recomputes derived quantities and checks the parameter set as a whole (e.g. rail
+ * directions of unit length, home pose reachable).  Call after pkm_param_set and
+ * before computing; computations on an unvalidated model return PKM_ERR_PARAMETER. */
+PKM_API int pkm_model_validate(pkm_model* m, char* err, size_t errlen);
+/* The robot's home pose x[nd] (a reachable, non-singular reference pose). */
+PKM_API int pkm_model_home(const pkm_model* m, double* x);
+
+PKM_API pkm_data* pkm_data_create(const pkm_model* m);
+PKM_API void pkm_data_destroy(pkm_data* d);
+/* PKM_OK if d was created for a model of the same robot and size as m. */
+PKM_API int pkm_data_check(const pkm_model* m, const pkm_data* d);
+/* Message of the last failure on d ("" if none); valid until the next call on d. */
+PKM_API const char* pkm_data_error(const pkm_data* d);
+
+/* ================================================================ kinematics */
+
+/* Inverse kinematics: pose x[nd] -> joints q[nd].  Each leg/arm uses the branch
+ * fixed by its parameters (6-PUS: leg[i].branch).  PKM_ERR_UNREACHABLE names the leg. */
+PKM_API int pkm_ik(const pkm_model* m, pkm_data* d, const double* x, double* q);
+PKM_API int pkm_ik_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
+                         double* q, int* status);
+
+typedef struct pkm_fk_options {
+  double tol;       /* residual tolerance on the constraint, m (default 1e-13)   */
+  int max_iter;     /* Newton iterations (default 50)                            */
+  double damping;   /* Levenberg damping of the Newton step (default 1e-9)        */
+} pkm_fk_options;
+
+typedef struct pkm_fk_info {
+  int iterations;   /* Newton iterations used                                    */
+  double residual;  /* final max |q_ik(x) - q| [m or rad]                        */
+} pkm_fk_info;
+
+/* Forward kinematics by damped Newton from x_guess[nd].  Refuses (returns
+ * PKM_ERR_NO_CONVERGENCE, x untouched) a pose it did not converge to.
+ * opt and info may be NULL. */
+PKM_API int pkm_fk(const pkm_model* m, pkm_data* d, const double* q, const double* x_guess,
+                   const pkm_fk_options* opt, double* x, pkm_fk_info* info);
+PKM_API int pkm_fk_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q,
+                         const double* x_guess, const pkm_fk_options* opt, double* x,
+                         int* status);
+
+/* Jacobians at pose x (seed 001 eq. 5-6): Jx[nd,nd] xd = Jq[nd,nd] qd, and
+ * J[nd,nd] = Jq^-1 Jx, so qd = J xd.  Any output may be NULL. */
+PKM_API int pkm_jacobians(const pkm_model* m, pkm_data* d, const double* x, double* Jx,
+                          double* Jq, double* J);
+/* Time derivative of J along (x, xd): Jdot[nd,nd]. */
+PKM_API int pkm_jacobian_dot(const pkm_model* m, pkm_data* d, const double* x,
+                             const double* xd, double* Jdot);
+
+/* Singularity measures at x, each in [0, 1], 0 = singular:
+ *  measures[0]: inverse-kinematic (type 1, serial) singularity, min over legs of the
+ *               normalised |det Jq| contribution (a leg perpendicular to its rail);
+ *  measures[1]: direct (type 2, parallel) singularity, 1 / cond(scaled J). */
+PKM_API int pkm_singularity(const pkm_model* m, pkm_data* d, const double* x,
+                            double* measures);
+
+/* Velocity and acceleration kinematics. */
+PKM_API int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x,
+                               const double* xd, double* qd);
+PKM_API int pkm_pose_velocity(const pkm_model* m, pkm_data* d, const double* x,
+                              const double* qd, double* xd);
+PKM_API int pkm_joint_acceleration(const pkm_model* m, pkm_data* d, const double* x,
+                                   const double* xd, const double* xdd, double* qdd);
+PKM_API int pkm_pose_acceleration(const pkm_model* m, pkm_data* d, const double* x,
+                                  const double* xd, const double* qdd, double* xdd);
+
+/* ================================================================== dynamics */
+
+/* Inverse dynamics: actuator efforts tau[nd] that produce xdd at (x, xd), with
+ * gravity, joint friction (Coulomb uses sign(qd), 0 at qd = 0) and payload. */
+PKM_API int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x,
+                                 const double* xd, const double* xdd, double* tau);
+PKM_API int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                       const double* x, const double* xd,
+                                       const double* xdd, double* tau, int* status);
+/* Forward dynamics: xdd[nd] from (x, xd, tau). */
+PKM_API int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x,
+                                 const double* xd, const double* tau, double* xdd);
+PKM_API int pkm_forward_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                       const double* x, const double* xd,
+                                       const double* tau, double* xdd, int* status);
+/* Task-space mass matrix M[nd,nd] (symmetric positive definite away from
+ * singularities): the kinetic energy is 0.5 xd' M xd. */
+PKM_API int pkm_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M);
+/* Joint-space gravity load g[nd]: the actuator efforts that hold the robot still at x
+ * (what PD + gravity compensation feeds forward). */
+PKM_API int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, double* g);
+/* Kinetic and potential (gravity) energy [J]. */
+PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                       double* kinetic, double* potential);
+
+/* =============================================================== integration */
+
+typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1 } pkm_lmm;
+
+typedef struct pkm_sim_options {
+  int method;        /* PKM_BDF (stiff, default) or PKM_ADAMS                     */
+  double rtol;       /* relative tolerance (default 1e-8)                         */
+  double atol;       /* absolute tolerance (default 1e-10)                        */
+  double max_step;   /* largest internal step, s (0 = unlimited)                  */
+  long max_steps;    /* internal steps per advance (default 100000)               */
+  double sing_min;   /* stop when measures[1] of pkm_singularity drops below (1e-4) */
+} pkm_sim_options;
+
+typedef struct pkm_sim_stats {
+  long steps, rhs_evals, jac_evals, error_test_fails, nonlin_conv_fails;
+} pkm_sim_stats;
+
+/* A CVODE integration of the task-space state (x, xd) under a zero-order-hold input
+ * tau.  Each pkm_sim_advance restarts CVODE from the current state, so the result of
+ * an advance depends only on (t, x, xd, tau, options): rolling a state back and
+ * advancing again reproduces the trajectory bit for bit. */
+typedef struct pkm_sim pkm_sim;
+
+PKM_API void pkm_sim_default_options(pkm_sim_options* opt);
+PKM_API pkm_sim* pkm_sim_create(const pkm_model* m, const pkm_sim_options* opt, char* err,
+                                size_t errlen);
+PKM_API void pkm_sim_destroy(pkm_sim* s);
+PKM_API int pkm_sim_reset(pkm_sim* s, double t0, const double* x, const double* xd);
+PKM_API int pkm_sim_set_input(pkm_sim* s, const double* tau);
+/* Integrates to t_end.  On a stroke/joint limit, a singularity or a CVODE failure,
+ * stops at the event time with the state there and returns the status; the message
+ * names the leg and the time. */
+PKM_API int pkm_sim_advance(pkm_sim* s, double t_end);
+PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd);
+PKM_API int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats);
+PKM_API const char* pkm_sim_error(const pkm_sim* s);
+
+/* ====================================================== 6-PUS specific (seed 000) */
+
+enum { PKM_FRAME_WORLD = 0, PKM_FRAME_PLATFORM = 1 };
+
+/* Calibration regression rows rows[6,10]: dq_i / d eta_i for each leg i, eta_i =
+ * [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (seed 000 eq. 4.1).  frame selects the
+ * coordinates of the platform point: PKM_FRAME_WORLD differentiates with respect to
+ * the world position of P_i at this pose (the seed's tables), PKM_FRAME_PLATFORM with
+ * respect to its platform-frame coordinates leg[i].px/py/pz (what calibration needs:
+ * constant over poses).  The rail-direction columns are the implicit derivatives of
+ * the constraint without keeping |s| = 1, i.e. -q w / (s . w). */
+PKM_API int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x, int frame,
+                                double* rows);
+/* World positions of the platform points P[6,3] and of the sliders S[6,3] at pose x. */
+PKM_API int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x, double* P,
+                                double* S);
+
+/* ==================================================== four-bar specific (seed 002) */
+
+/* Output of the four-bar at crank angle theta [rad]: X [m] of the mid point of
+ * link 2, and dX/dl[4] with respect to the link lengths l1..l4 (may be NULL). */
+PKM_API int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta, double* X,
+                               double* dX_dl);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* PKM_PKM_H */

@@ -1,0 +1,100 @@
+// The one place where C++ exceptions become C status codes (no exception crosses
+// the C boundary).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <new>
+#include <string>
+
+#include "common/handles.hpp"
+
+namespace pkm {
+
+inline void write_err(char* err, size_t errlen, const std::string& msg) {
+  if (err && errlen > 0) {
+    std::strncpy(err, msg.c_str(), errlen - 1);
+    err[errlen - 1] = '\0';
+  }
+}
+
+// Runs f(); on an exception stores the message into `sink` and returns the status.
+template <class F>
+int guard_into(std::string& sink, F&& f) {
+  try {
+    f();
+    return PKM_OK;
+  } catch (const Error& e) {
+    sink = e.what();
+    return e.status;
+  } catch (const std::bad_alloc&) {
+    sink = "out of memory";
+    return PKM_ERR_INTERNAL;
+  } catch (const std::exception& e) {
+    sink = std::string("internal error: ") + e.what();
+    return PKM_ERR_INTERNAL;
+  } catch (...) {
+    sink = "internal error: unknown exception";
+    return PKM_ERR_INTERNAL;
+  }
+}
+
+template <class F>
+int guard(pkm_data* d, F&& f) {
+  if (!d) return PKM_ERR_ARGUMENT;
+  d->error.clear();
+  return guard_into(d->error, f);
+}
+
+template <class F>
+int guard_err(char* err, size_t errlen, F&& f) {
+  std::string msg;
+  int s = guard_into(msg, f);
+  if (s != PKM_OK) write_err(err, errlen, msg);
+  return s;
+}
+
+inline void require(bool ok, int status, const std::string& msg) {
+  if (!ok) throw Error(status, msg);
+}
+
+// Inputs must be finite: a NaN in is reported, never passed on.
+inline void check_finite(const double* v, int n, const char* what) {
+  if (!v) throw Error(PKM_ERR_ARGUMENT, std::string(what) + " is NULL");
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      throw Error(PKM_ERR_ARGUMENT,
+                  std::string(what) + "[" + std::to_string(i) + "] is not finite (" +
+                      std::to_string(v[i]) + ")");
+}
+
+inline void check_out(const void* p, const char* what) {
+  if (!p) throw Error(PKM_ERR_ARGUMENT, std::string(what) + " is NULL");
+}
+
+// Runs a per-item function over a batch: records each item's status, NaN-fills the
+// outputs of a failing item, keeps the first failure's message (prefixed with the item
+// index) and returns its status.
+template <class F>
+int run_batch(pkm_data* d, size_t n, int* status, double* out, int out_stride, F&& item) {
+  if (!d) return PKM_ERR_ARGUMENT;
+  d->error.clear();
+  int first = PKM_OK;
+  std::string msg;
+  for (size_t k = 0; k < n; ++k) {
+    int s = guard_into(msg, [&] { item(k); });
+    if (status) status[k] = s;
+    if (s != PKM_OK) {
+      if (out)
+        for (int j = 0; j < out_stride; ++j) out[k * out_stride + j] = std::nan("");
+      if (first == PKM_OK) {
+        first = s;
+        d->error = "item " + std::to_string(k) + ": " + msg;
+      }
+    }
+  }
+  return first;
+}
+
+}  // namespace pkm

@@ -1,0 +1,33 @@
+// The structs behind the opaque C handles pkm_model and pkm_data.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/robot.hpp"
+
+struct pkm_model {
+  const pkm::Robot* robot = nullptr;
+  std::string robot_name;
+  std::vector<pkm::ParamSpec> specs;
+  std::vector<double> values;
+  // Null until pkm_model_validate succeeds; reset by pkm_param_set.
+  std::shared_ptr<const pkm::RobotModel> compiled;
+};
+
+struct pkm_data {
+  const pkm::Robot* robot = nullptr;
+  int ndof = 0;
+  std::unique_ptr<pkm::RobotData> rd;
+  const pkm::RobotModel* rd_for = nullptr;  // the compiled model rd was made for
+  std::shared_ptr<const pkm::RobotModel> keep;  // keeps rd_for alive
+  std::string error;
+};
+
+namespace pkm {
+// The compiled model and the work data of (m, d), rebuilding the work data if the model
+// was recompiled since; throws Error if the pair does not belong together or m is not
+// validated.
+const RobotModel& prepare(const pkm_model* m, pkm_data* d);
+}  // namespace pkm

@@ -1,0 +1,158 @@
+// C API: models, data and named parameters.
+#include <cmath>
+#include <sstream>
+
+#include "common/guard.hpp"
+
+using pkm::Error;
+
+namespace pkm {
+
+[[noreturn]] void unsupported(const Robot& r, const char* what) {
+  throw Error(PKM_ERR_UNSUPPORTED, std::string("robot '") + r.name() + "' does not provide " + what);
+}
+
+const RobotModel& prepare(const pkm_model* m, pkm_data* d) {
+  if (!m) throw Error(PKM_ERR_ARGUMENT, "model is NULL");
+  if (d->robot != m->robot)
+    throw Error(PKM_ERR_ARGUMENT, "data was created for robot '" + std::string(d->robot->name()) +
+                                      "', not for this '" + m->robot_name + "' model");
+  if (!m->compiled)
+    throw Error(PKM_ERR_PARAMETER,
+                "model parameters were changed and not validated: call pkm_model_validate");
+  if (d->rd_for != m->compiled.get()) {
+    d->rd = m->robot->make_data(*m->compiled);
+    d->rd_for = m->compiled.get();
+    d->keep = m->compiled;
+  }
+  return *m->compiled;
+}
+
+}  // namespace pkm
+
+extern "C" {
+
+const char* pkm_status_name(int s) {
+  switch (s) {
+    case PKM_OK: return "PKM_OK";
+    case PKM_ERR_ARGUMENT: return "PKM_ERR_ARGUMENT";
+    case PKM_ERR_PARAMETER: return "PKM_ERR_PARAMETER";
+    case PKM_ERR_UNREACHABLE: return "PKM_ERR_UNREACHABLE";
+    case PKM_ERR_SINGULAR: return "PKM_ERR_SINGULAR";
+    case PKM_ERR_NO_CONVERGENCE: return "PKM_ERR_NO_CONVERGENCE";
+    case PKM_ERR_JOINT_LIMIT: return "PKM_ERR_JOINT_LIMIT";
+    case PKM_ERR_INTEGRATION: return "PKM_ERR_INTEGRATION";
+    case PKM_ERR_UNSUPPORTED: return "PKM_ERR_UNSUPPORTED";
+    case PKM_ERR_INTERNAL: return "PKM_ERR_INTERNAL";
+    default: return "PKM_ERR_UNKNOWN";
+  }
+}
+
+pkm_model* pkm_model_create(const char* robot, const char* param_set, char* err, size_t errlen) {
+  pkm_model* out = nullptr;
+  pkm::guard_err(err, errlen, [&] {
+    pkm::require(robot != nullptr, PKM_ERR_ARGUMENT, "robot name is NULL");
+    const pkm::Robot* r = pkm::find_robot(robot);
+    pkm::require(r != nullptr, PKM_ERR_ARGUMENT,
+                 std::string("unknown robot '") + robot + "' (known: " + pkm::known_robots() + ")");
+    auto m = std::make_unique<pkm_model>();
+    m->robot = r;
+    m->robot_name = r->name();
+    m->specs = r->param_specs(param_set ? param_set : "default");
+    for (const auto& s : m->specs) m->values.push_back(s.value);
+    m->compiled = std::shared_ptr<const pkm::RobotModel>(r->compile(m->specs, m->values));
+    out = m.release();
+  });
+  return out;
+}
+
+pkm_model* pkm_model_copy(const pkm_model* m) {
+  if (!m) return nullptr;
+  try {
+    return new pkm_model(*m);
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+void pkm_model_destroy(pkm_model* m) { delete m; }
+
+const char* pkm_model_robot(const pkm_model* m) { return m ? m->robot_name.c_str() : ""; }
+int pkm_model_ndof(const pkm_model* m) { return m ? m->robot->ndof() : 0; }
+int pkm_model_nparam(const pkm_model* m) { return m ? (int)m->specs.size() : 0; }
+
+int pkm_param_index(const pkm_model* m, const char* name) {
+  if (!m || !name) return -1;
+  for (size_t i = 0; i < m->specs.size(); ++i)
+    if (m->specs[i].name == name) return (int)i;
+  return -1;
+}
+
+static bool valid_index(const pkm_model* m, int i) { return m && i >= 0 && i < (int)m->specs.size(); }
+
+const char* pkm_param_name(const pkm_model* m, int i) { return valid_index(m, i) ? m->specs[i].name.c_str() : ""; }
+const char* pkm_param_unit(const pkm_model* m, int i) { return valid_index(m, i) ? m->specs[i].unit.c_str() : ""; }
+const char* pkm_param_description(const pkm_model* m, int i) {
+  return valid_index(m, i) ? m->specs[i].description.c_str() : "";
+}
+double pkm_param_get(const pkm_model* m, int i) { return valid_index(m, i) ? m->values[i] : std::nan(""); }
+
+int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen) {
+  return pkm::guard_err(err, errlen, [&] {
+    pkm::require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+    pkm::require(valid_index(m, i), PKM_ERR_ARGUMENT,
+                 "parameter index " + std::to_string(i) + " out of range [0, " +
+                     std::to_string(m->specs.size()) + ")");
+    const auto& s = m->specs[i];
+    std::ostringstream os;
+    os.precision(17);
+    if (!std::isfinite(value) || value < s.lo || value > s.hi) {
+      os << "parameter " << s.name << " = " << value << " " << s.unit << " is outside its valid range ["
+         << s.lo << ", " << s.hi << "]";
+      throw Error(PKM_ERR_PARAMETER, os.str());
+    }
+    m->values[i] = value;
+    m->compiled.reset();
+  });
+}
+
+int pkm_model_validate(pkm_model* m, char* err, size_t errlen) {
+  return pkm::guard_err(err, errlen, [&] {
+    pkm::require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+    m->compiled = std::shared_ptr<const pkm::RobotModel>(m->robot->compile(m->specs, m->values));
+  });
+}
+
+int pkm_model_home(const pkm_model* m, double* x) {
+  if (!m || !x || !m->compiled) return m && x ? PKM_ERR_PARAMETER : PKM_ERR_ARGUMENT;
+  std::string sink;
+  return pkm::guard_into(sink, [&] { m->robot->home(*m->compiled, x); });
+}
+
+pkm_data* pkm_data_create(const pkm_model* m) {
+  if (!m) return nullptr;
+  try {
+    auto d = std::make_unique<pkm_data>();
+    d->robot = m->robot;
+    d->ndof = m->robot->ndof();
+    if (m->compiled) {
+      d->rd = m->robot->make_data(*m->compiled);
+      d->rd_for = m->compiled.get();
+      d->keep = m->compiled;
+    }
+    return d.release();
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+void pkm_data_destroy(pkm_data* d) { delete d; }
+
+int pkm_data_check(const pkm_model* m, const pkm_data* d) {
+  if (!m || !d) return PKM_ERR_ARGUMENT;
+  return (d->robot == m->robot && d->ndof == m->robot->ndof()) ? PKM_OK : PKM_ERR_ARGUMENT;
+}
+
+const char* pkm_data_error(const pkm_data* d) { return d ? d->error.c_str() : "data is NULL"; }
+
+}  // extern "C"

@@ -1,0 +1,27 @@
+// Defaults of the Robot interface for functions a robot does not provide.
+#include "common/robot.hpp"
+
+namespace pkm {
+
+void Robot::ik(const RobotModel&, RobotData&, const double*, double*) const { unsupported(*this, "inverse kinematics"); }
+void Robot::jacobians(const RobotModel&, RobotData&, const double*, double*, double*, double*) const {
+  unsupported(*this, "Jacobians");
+}
+void Robot::jacobian_dot(const RobotModel&, RobotData&, const double*, const double*, double*) const {
+  unsupported(*this, "the Jacobian time derivative");
+}
+void Robot::singularity(const RobotModel&, RobotData&, const double*, double*) const {
+  unsupported(*this, "singularity measures");
+}
+void Robot::inverse_dynamics(const RobotModel&, RobotData&, const double*, const double*, const double*,
+                             double*) const {
+  unsupported(*this, "inverse dynamics");
+}
+void Robot::mass_matrix(const RobotModel&, RobotData&, const double*, double*) const {
+  unsupported(*this, "the mass matrix");
+}
+void Robot::energy(const RobotModel&, RobotData&, const double*, const double*, double*, double*) const {
+  unsupported(*this, "energy");
+}
+
+}  // namespace pkm

@@ -1,0 +1,95 @@
+// Internal interface between the C API (c_core/src/*/..._api.cpp) and the robots.
+//
+// A Robot is a stateless description of one robot kind (a vtable): its parameter
+// table, how a parameter vector is compiled into a constant RobotModel, and its
+// kinematics and dynamics.  Algorithms throw pkm::Error; the C boundary turns that
+// into a status and a message (see common/guard.hpp).  Default implementations of
+// the generic algorithms (forward kinematics by damped Newton, velocity and
+// acceleration kinematics, forward dynamics from the mass matrix) live in
+// kinematics/ and dynamics/ and work for any robot that supplies ik, jacobians,
+// jacobian_dot, mass_matrix and inverse_dynamics.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pkm/pkm.h"
+
+namespace pkm {
+
+struct Error : std::runtime_error {
+  int status;
+  Error(int s, const std::string& msg) : std::runtime_error(msg), status(s) {}
+};
+
+// One named parameter: Modelica-style dotted name, unit, description, default and the
+// closed range its own value must lie in (cross-parameter checks belong in compile()).
+struct ParamSpec {
+  std::string name, unit, description;
+  double value;
+  double lo = -1e300, hi = 1e300;
+};
+
+// Robot-specific constant data derived from a parameter vector (geometry in the
+// layout the algorithms want).  Built by Robot::compile, shared read-only by every
+// pkm_data of the model.
+struct RobotModel {
+  virtual ~RobotModel() = default;
+};
+
+// Robot-specific mutable work buffers (one per pkm_data).
+struct RobotData {
+  virtual ~RobotData() = default;
+};
+
+class Robot {
+ public:
+  virtual ~Robot() = default;
+  virtual const char* name() const = 0;
+  virtual int ndof() const = 0;
+
+  // Parameter table of a named set ("default", ...); throws Error(PKM_ERR_ARGUMENT)
+  // naming the known sets if the set is unknown.
+  virtual std::vector<ParamSpec> param_specs(const std::string& set) const = 0;
+  // Checks the parameter vector as a whole and derives the constant model; throws
+  // Error(PKM_ERR_PARAMETER) with the parameter names involved.
+  virtual std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
+                                              const std::vector<double>& values) const = 0;
+  virtual std::unique_ptr<RobotData> make_data(const RobotModel&) const {
+    return std::make_unique<RobotData>();
+  }
+  virtual void home(const RobotModel&, double* x) const = 0;
+
+  // --- kinematics (x[nd] pose, q[nd] joints; matrices row-major [nd,nd])
+  virtual void ik(const RobotModel&, RobotData&, const double* x, double* q) const;
+  virtual void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx,
+                         double* Jq, double* J) const;
+  virtual void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
+                            double* Jdot) const;
+  virtual void singularity(const RobotModel&, RobotData&, const double* x,
+                           double* measures) const;
+  // Overridable generic algorithms (defaults in kinematics/ and dynamics/).
+  virtual void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
+                  const pkm_fk_options& opt, double* x, pkm_fk_info& info) const;
+  virtual void joint_acceleration(const RobotModel&, RobotData&, const double* x,
+                                  const double* xd, const double* xdd, double* qdd) const;
+
+  // --- dynamics
+  virtual void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                                const double* xdd, double* tau) const;
+  virtual void mass_matrix(const RobotModel&, RobotData&, const double* x, double* M) const;
+  virtual void forward_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                                const double* tau, double* xdd) const;
+  virtual void energy(const RobotModel&, RobotData&, const double* x, const double* xd,
+                      double* kinetic, double* potential) const;
+};
+
+// The robots compiled into the core (robots/registry.cpp).  nullptr if unknown.
+const Robot* find_robot(const std::string& name);
+std::string known_robots();
+
+[[noreturn]] void unsupported(const Robot& r, const char* what);
+
+}  // namespace pkm

@@ -1,0 +1,102 @@
+// Robot-independent kinematics built on a robot's ik, jacobians and jacobian_dot:
+// forward kinematics by damped Newton, and joint <-> pose velocity/acceleration maps.
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+
+#include "common/robot.hpp"
+#include "kinematics/generic_kinematics.hpp"
+
+namespace pkm {
+
+using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
+using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+
+void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const double* x_guess,
+               const pkm_fk_options& opt, double* x_out, pkm_fk_info& info) const {
+  const int n = ndof();
+  Vec x = Eigen::Map<const Vec>(x_guess, n), qk(n), r(n), dx(n), xt(n), qt(n);
+  Eigen::Map<const Vec> qv(q, n);
+  Mat J(n, n);
+  // The guess itself must be a pose the legs can reach.
+  ik(rm, rd, x.data(), qk.data());
+  r = qk - qv;
+  double rn = r.cwiseAbs().maxCoeff();
+  int it = 0;
+  for (; it < opt.max_iter && rn > opt.tol; ++it) {
+    jacobians(rm, rd, x.data(), nullptr, nullptr, J.data());
+    Mat A = J.transpose() * J;
+    A.diagonal().array() += opt.damping;
+    dx = -A.ldlt().solve(J.transpose() * r);
+    if (!dx.allFinite())
+      throw Error(PKM_ERR_SINGULAR, "forward kinematics: singular Jacobian at iteration " + std::to_string(it));
+    // Backtrack if the full step leaves the workspace or does not reduce the residual.
+    double step = 1.0;
+    bool accepted = false;
+    for (int ls = 0; ls < 30; ++ls, step *= 0.5) {
+      xt = x + step * dx;
+      try {
+        ik(rm, rd, xt.data(), qt.data());
+      } catch (const Error&) {
+        continue;
+      }
+      double rt = (qt - qv).cwiseAbs().maxCoeff();
+      if (rt < rn || rt <= opt.tol) {
+        x = xt;
+        r = qt - qv;
+        rn = rt;
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) break;
+  }
+  info.iterations = it;
+  info.residual = rn;
+  if (!(rn <= opt.tol)) {
+    std::ostringstream os;
+    os.precision(3);
+    os << "forward kinematics did not converge: residual " << rn << " after " << it
+       << " iterations (tolerance " << opt.tol << "); the joints may be unreachable from this guess";
+    throw Error(PKM_ERR_NO_CONVERGENCE, os.str());
+  }
+  for (int i = 0; i < n; ++i) x_out[i] = x[i];
+}
+
+void Robot::joint_acceleration(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                               const double* xdd, double* qdd) const {
+  const int n = ndof();
+  Mat J(n, n), Jd(n, n);
+  jacobians(rm, rd, x, nullptr, nullptr, J.data());
+  jacobian_dot(rm, rd, x, xd, Jd.data());
+  Eigen::Map<Vec>(qdd, n) = J * Eigen::Map<const Vec>(xdd, n) + Jd * Eigen::Map<const Vec>(xd, n);
+}
+
+// Solves J y = b with a singularity check that says so instead of returning garbage.
+static void solve_J(const Mat& J, const Vec& b, double* y, const char* what) {
+  Eigen::FullPivLU<Mat> lu(J);
+  if (!lu.isInvertible() || lu.rcond() < 1e-12)
+    throw Error(PKM_ERR_SINGULAR, std::string(what) + ": the Jacobian is singular at this pose");
+  Vec v = lu.solve(b);
+  for (int i = 0; i < b.size(); ++i) y[i] = v[i];
+}
+
+void pose_velocity(const Robot& r, const RobotModel& rm, RobotData& rd, const double* x, const double* qd,
+                   double* xd) {
+  const int n = r.ndof();
+  Mat J(n, n);
+  r.jacobians(rm, rd, x, nullptr, nullptr, J.data());
+  solve_J(J, Eigen::Map<const Vec>(qd, n), xd, "pose velocity");
+}
+
+void pose_acceleration(const Robot& r, const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                       const double* qdd, double* xdd) {
+  const int n = r.ndof();
+  Mat J(n, n), Jd(n, n);
+  r.jacobians(rm, rd, x, nullptr, nullptr, J.data());
+  r.jacobian_dot(rm, rd, x, xd, Jd.data());
+  Vec b = Eigen::Map<const Vec>(qdd, n) - Jd * Eigen::Map<const Vec>(xd, n);
+  solve_J(J, b, xdd, "pose acceleration");
+}
+
+}  // namespace pkm

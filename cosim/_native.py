@@ -1,0 +1,223 @@
+"""ctypes layer over the C ABI of the reference core (``c_core/include/pkm/pkm.h``).
+
+This module only loads ``libpkm.so`` and declares the C signatures; the Pythonic
+API is in :mod:`cosim.core`.  The library is looked up, in order, at ``$PKM_LIB``,
+``$PKM_BUILD_DIR/lib/libpkm.so`` and ``<repo>/build/lib/libpkm.so``.
+"""
+from __future__ import annotations
+
+import ctypes as C
+import os
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+
+c_double_p = C.POINTER(C.c_double)
+c_int_p = C.POINTER(C.c_int)
+
+
+class PkmError(RuntimeError):
+    """An error reported by the core; ``status`` is the C status name."""
+
+    def __init__(self, message: str, status: str = "PKM_ERR_INTERNAL"):
+        super().__init__(message)
+        self.status = status
+
+
+class ArgumentError(PkmError, ValueError):
+    """Bad argument: wrong shape, NaN or Inf in an input."""
+
+
+class ParameterError(PkmError, ValueError):
+    """A parameter value is invalid."""
+
+
+class UnreachableError(PkmError):
+    """A pose outside the workspace of a leg or arm."""
+
+
+class SingularError(PkmError):
+    """A singular configuration."""
+
+
+class ConvergenceError(PkmError):
+    """An iterative solver (forward kinematics) did not converge."""
+
+
+class JointLimitError(PkmError):
+    """A stroke or joint range was exceeded."""
+
+
+class IntegrationError(PkmError):
+    """CVODE failed."""
+
+
+class UnsupportedError(PkmError, NotImplementedError):
+    """The robot does not provide the function."""
+
+
+STATUS = {
+    0: ("PKM_OK", None),
+    -1: ("PKM_ERR_ARGUMENT", ArgumentError),
+    -2: ("PKM_ERR_PARAMETER", ParameterError),
+    -3: ("PKM_ERR_UNREACHABLE", UnreachableError),
+    -4: ("PKM_ERR_SINGULAR", SingularError),
+    -5: ("PKM_ERR_NO_CONVERGENCE", ConvergenceError),
+    -6: ("PKM_ERR_JOINT_LIMIT", JointLimitError),
+    -7: ("PKM_ERR_INTEGRATION", IntegrationError),
+    -8: ("PKM_ERR_UNSUPPORTED", UnsupportedError),
+    -9: ("PKM_ERR_INTERNAL", PkmError),
+}
+
+
+def raise_for(status: int, message: str) -> None:
+    """Raise the exception class of a C status (no-op for PKM_OK)."""
+    if status == 0:
+        return
+    name, cls = STATUS.get(status, ("PKM_ERR_UNKNOWN", PkmError))
+    raise (cls or PkmError)(message or name, name)
+
+
+class pkm_fk_options(C.Structure):
+    _fields_ = [("tol", C.c_double), ("max_iter", C.c_int), ("damping", C.c_double)]
+
+
+class pkm_fk_info(C.Structure):
+    _fields_ = [("iterations", C.c_int), ("residual", C.c_double)]
+
+
+class pkm_sim_options(C.Structure):
+    _fields_ = [
+        ("method", C.c_int),
+        ("rtol", C.c_double),
+        ("atol", C.c_double),
+        ("max_step", C.c_double),
+        ("max_steps", C.c_long),
+        ("sing_min", C.c_double),
+    ]
+
+
+class pkm_sim_stats(C.Structure):
+    _fields_ = [
+        ("steps", C.c_long),
+        ("rhs_evals", C.c_long),
+        ("jac_evals", C.c_long),
+        ("error_test_fails", C.c_long),
+        ("nonlin_conv_fails", C.c_long),
+    ]
+
+
+def library_path() -> Path:
+    if os.environ.get("PKM_LIB"):
+        return Path(os.environ["PKM_LIB"])
+    build = Path(os.environ.get("PKM_BUILD_DIR", REPO / "build"))
+    return build / "lib" / "libpkm.so"
+
+
+P = C.c_void_p
+D = c_double_p
+I = C.c_int
+S = C.c_size_t
+CH = C.c_char_p
+
+# name: (restype, argtypes).  Mirrors pkm.h; functions a build lacks are skipped
+# and raise UnsupportedError when called.
+_SIGNATURES = {
+    "pkm_status_name": (CH, [I]),
+    "pkm_model_create": (P, [CH, CH, C.c_char_p, S]),
+    "pkm_model_copy": (P, [P]),
+    "pkm_model_destroy": (None, [P]),
+    "pkm_model_robot": (CH, [P]),
+    "pkm_model_ndof": (I, [P]),
+    "pkm_model_nparam": (I, [P]),
+    "pkm_param_index": (I, [P, CH]),
+    "pkm_param_name": (CH, [P, I]),
+    "pkm_param_unit": (CH, [P, I]),
+    "pkm_param_description": (CH, [P, I]),
+    "pkm_param_get": (C.c_double, [P, I]),
+    "pkm_param_set": (I, [P, I, C.c_double, C.c_char_p, S]),
+    "pkm_model_validate": (I, [P, C.c_char_p, S]),
+    "pkm_model_home": (I, [P, D]),
+    "pkm_data_create": (P, [P]),
+    "pkm_data_destroy": (None, [P]),
+    "pkm_data_check": (I, [P, P]),
+    "pkm_data_error": (CH, [P]),
+    "pkm_ik": (I, [P, P, D, D]),
+    "pkm_ik_batch": (I, [P, P, S, D, D, c_int_p]),
+    "pkm_fk": (I, [P, P, D, D, C.POINTER(pkm_fk_options), D, C.POINTER(pkm_fk_info)]),
+    "pkm_fk_batch": (I, [P, P, S, D, D, C.POINTER(pkm_fk_options), D, c_int_p]),
+    "pkm_jacobians": (I, [P, P, D, D, D, D]),
+    "pkm_jacobian_dot": (I, [P, P, D, D, D]),
+    "pkm_singularity": (I, [P, P, D, D]),
+    "pkm_joint_velocity": (I, [P, P, D, D, D]),
+    "pkm_pose_velocity": (I, [P, P, D, D, D]),
+    "pkm_joint_acceleration": (I, [P, P, D, D, D, D]),
+    "pkm_pose_acceleration": (I, [P, P, D, D, D, D]),
+    "pkm_inverse_dynamics": (I, [P, P, D, D, D, D]),
+    "pkm_inverse_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
+    "pkm_forward_dynamics": (I, [P, P, D, D, D, D]),
+    "pkm_forward_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
+    "pkm_mass_matrix": (I, [P, P, D, D]),
+    "pkm_gravity_load": (I, [P, P, D, D]),
+    "pkm_energy": (I, [P, P, D, D, D, D]),
+    "pkm_sim_default_options": (None, [C.POINTER(pkm_sim_options)]),
+    "pkm_sim_create": (P, [P, C.POINTER(pkm_sim_options), C.c_char_p, S]),
+    "pkm_sim_destroy": (None, [P]),
+    "pkm_sim_reset": (I, [P, C.c_double, D, D]),
+    "pkm_sim_set_input": (I, [P, D]),
+    "pkm_sim_advance": (I, [P, C.c_double]),
+    "pkm_sim_get_state": (I, [P, D, D, D]),
+    "pkm_sim_get_stats": (I, [P, C.POINTER(pkm_sim_stats)]),
+    "pkm_sim_error": (CH, [P]),
+    "pkm_6pus_calib_rows": (I, [P, P, D, I, D]),
+    "pkm_6pus_leg_points": (I, [P, P, D, D, D]),
+    "pkm_fourbar_output": (I, [P, P, C.c_double, D, D]),
+}
+
+
+class _Lib:
+    def __init__(self) -> None:
+        self._lib = None
+
+    def _load(self):
+        path = library_path()
+        if not path.exists():
+            raise ImportError(
+                f"the core library {path} is not built: run ./scripts/bootstrap.sh "
+                "(or set PKM_LIB to a built libpkm.so)"
+            )
+        lib = C.CDLL(str(path))
+        for name, (res, args) in _SIGNATURES.items():
+            fn = getattr(lib, name, None)
+            if fn is None:
+                continue
+            fn.restype = res
+            fn.argtypes = args
+        return lib
+
+    def __getattr__(self, name):
+        if self._lib is None:
+            self._lib = self._load()
+        fn = getattr(self._lib, name, None)
+        if fn is None:
+            raise UnsupportedError(f"{name} is not in this build of libpkm", "PKM_ERR_UNSUPPORTED")
+        return fn
+
+    def register(self, name, restype, argtypes):
+        """Declare a further C function (robot modules add theirs)."""
+        _SIGNATURES[name] = (restype, argtypes)
+        if self._lib is not None:
+            fn = getattr(self._lib, name, None)
+            if fn is not None:
+                fn.restype = restype
+                fn.argtypes = argtypes
+
+
+lib = _Lib()
+
+
+def ptr(a) -> c_double_p:
+    """Pointer to a C-contiguous float64 numpy array (None -> NULL)."""
+    if a is None:
+        return None
+    return a.ctypes.data_as(c_double_p)

@@ -1,0 +1,77 @@
+"""Command-line interface: ``cosim <command> ...``, a thin layer over the package functions."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+COMMANDS = {}
+
+
+def command(name, help):
+    """Register ``fn(args)`` as a sub-command; ``fn.configure(parser)`` adds its options."""
+
+    def deco(fn):
+        COMMANDS[name] = (fn, help)
+        return fn
+
+    return deco
+
+
+def _params_configure(p):
+    p.add_argument("robot", choices=["6pus", "quattro", "fourbar"])
+    p.add_argument("--set", dest="param_set", default=None, help="named parameter set (default: 'default')")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+@command("params", "print a robot's parameter set with units (table or --json)")
+def cmd_params(args):
+    from .core import Model
+
+    m = Model(args.robot, args.param_set)
+    if args.json:
+        print(m.to_json())
+        return 0
+    info = m.param_info()
+    w = max(len(p.name) for p in info) if info else 4
+    print(f"{'name':<{w}}  {'value':>14}  {'unit':<10}  description")
+    for p in info:
+        print(f"{p.name:<{w}}  {p.value:>14.6g}  {p.unit:<10}  {p.description}")
+    return 0
+
+
+cmd_params.configure = _params_configure
+
+
+def _load_plugins():
+    # Capability modules register their own sub-commands on import.
+    import importlib
+
+    for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark"):
+        try:
+            importlib.import_module(f"cosim.{mod}_cli")
+        except ModuleNotFoundError as e:
+            if e.name != f"cosim.{mod}_cli":
+                raise
+
+
+def main(argv=None) -> int:
+    _load_plugins()
+    parser = argparse.ArgumentParser(prog="cosim", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name, (fn, help) in COMMANDS.items():
+        p = sub.add_parser(name, help=help, description=help)
+        if hasattr(fn, "configure"):
+            fn.configure(p)
+        p.set_defaults(_fn=fn)
+    args = parser.parse_args(argv)
+    from ._native import PkmError
+
+    try:
+        return int(args._fn(args) or 0)
+    except (PkmError, ValueError, FileNotFoundError) as e:
+        print(f"cosim {args.command}: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,321 @@
+"""Python binding of the reference core: models, kinematics, dynamics.
+
+Every physical quantity is computed by the C++ core (``libpkm``); this module only
+moves numpy arrays across the C ABI.  Batched calls take arrays of shape ``(n, nd)``
+(``nd`` = number of actuators = pose coordinates) and cost one C call, so a million
+poses are one call.  Units are SI: m, rad, kg, N, N m, s.
+
+Example
+-------
+>>> from cosim.core import Model
+>>> m = Model("6pus")                       # default parameter set
+>>> x = m.home()                            # (x, y, z, rx, ry, rz) [m, rad]
+>>> q = m.ik(x)                             # slider strokes [m]
+>>> m.fk(q, x_guess=x + 1e-3)               # back to the pose
+array([...])
+>>> m.set_params({"platform.m": 0.42})      # overrides by name, checked by the core
+"""
+from __future__ import annotations
+
+import ctypes as C
+import json
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._native import (
+    ArgumentError,
+    ParameterError,
+    PkmError,
+    lib,
+    pkm_fk_info,
+    pkm_fk_options,
+    ptr,
+    raise_for,
+)
+
+__all__ = ["Model", "ParamInfo", "PkmError", "ParameterError", "ArgumentError"]
+
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """One named parameter of a model."""
+
+    name: str
+    value: float
+    unit: str
+    description: str
+
+
+def _errbuf():
+    return C.create_string_buffer(1024)
+
+
+class Model:
+    """A robot model (constant parameters) with its own work data.
+
+    Parameters
+    ----------
+    robot : {"6pus", "quattro", "fourbar"}
+        Robot kind.
+    param_set : str, optional
+        Named parameter set ("default"; the Quattro also has "appendix_a").
+    params : dict, optional
+        Parameter overrides by name, e.g. ``{"leg[1].L": 0.117}`` [SI units].
+
+    Notes
+    -----
+    A ``Model`` owns one ``pkm_data`` work buffer: use one ``Model`` per thread
+    (``Model.copy()`` makes an independent one).
+    """
+
+    def __init__(self, robot: str = "6pus", param_set: str | None = None, params: dict | None = None):
+        err = _errbuf()
+        h = lib.pkm_model_create(robot.encode(), param_set.encode() if param_set else None, err, len(err))
+        if not h:
+            msg = err.value.decode()
+            cls = ParameterError if "parameter" in msg.lower() else ArgumentError
+            raise cls(msg, "PKM_ERR_ARGUMENT")
+        self._m = C.c_void_p(h)
+        self._d = C.c_void_p(lib.pkm_data_create(self._m))
+        self.robot = lib.pkm_model_robot(self._m).decode()
+        self.param_set = param_set or "default"
+        self.ndof = int(lib.pkm_model_ndof(self._m))
+        if params:
+            self.set_params(params)
+
+    # ------------------------------------------------------------------ lifecycle
+    def __del__(self):
+        try:
+            if getattr(self, "_d", None):
+                lib.pkm_data_destroy(self._d)
+            if getattr(self, "_m", None):
+                lib.pkm_model_destroy(self._m)
+        except Exception:  # interpreter shutdown
+            pass
+
+    def copy(self) -> "Model":
+        """An independent model with the same parameters (and its own work data)."""
+        return Model(self.robot, self.param_set, self.params())
+
+    def __repr__(self) -> str:
+        return f"Model({self.robot!r}, ndof={self.ndof}, nparam={len(self.param_names())})"
+
+    # ----------------------------------------------------------------- parameters
+    def param_names(self) -> list[str]:
+        return [lib.pkm_param_name(self._m, i).decode() for i in range(lib.pkm_model_nparam(self._m))]
+
+    def param_info(self) -> list[ParamInfo]:
+        """Name, value, unit and description of every parameter."""
+        out = []
+        for i in range(lib.pkm_model_nparam(self._m)):
+            out.append(
+                ParamInfo(
+                    lib.pkm_param_name(self._m, i).decode(),
+                    float(lib.pkm_param_get(self._m, i)),
+                    lib.pkm_param_unit(self._m, i).decode(),
+                    lib.pkm_param_description(self._m, i).decode(),
+                )
+            )
+        return out
+
+    def params(self) -> dict[str, float]:
+        """Current parameter values by name [SI units]."""
+        return {p.name: p.value for p in self.param_info()}
+
+    def param(self, name: str) -> float:
+        return float(lib.pkm_param_get(self._m, self._index(name)))
+
+    def _index(self, name: str) -> int:
+        i = lib.pkm_param_index(self._m, name.encode())
+        if i < 0:
+            raise ParameterError(f"{self.robot} has no parameter named {name!r}", "PKM_ERR_PARAMETER")
+        return i
+
+    def set_params(self, values: dict) -> None:
+        """Set parameters by name and re-validate the whole set.
+
+        Raises ``ParameterError`` naming the parameter if a value is out of its range
+        or the set is inconsistent (the model keeps its previous values then).
+        """
+        old = self.params()
+        err = _errbuf()
+        try:
+            for name, v in values.items():
+                s = lib.pkm_param_set(self._m, self._index(name), float(v), err, len(err))
+                raise_for(s, err.value.decode())
+            s = lib.pkm_model_validate(self._m, err, len(err))
+            raise_for(s, err.value.decode())
+        except PkmError:
+            for name, v in old.items():
+                lib.pkm_param_set(self._m, self._index(name), v, err, len(err))
+            lib.pkm_model_validate(self._m, err, len(err))
+            raise
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """The parameter set as JSON: ``{"robot", "param_set", "parameters": {name: {value, unit, description}}}``."""
+        return json.dumps(
+            {
+                "robot": self.robot,
+                "param_set": self.param_set,
+                "parameters": {
+                    p.name: {"value": p.value, "unit": p.unit, "description": p.description}
+                    for p in self.param_info()
+                },
+            },
+            indent=indent,
+        )
+
+    # ------------------------------------------------------------------- helpers
+    def _check(self, status: int) -> None:
+        if status != 0:
+            raise_for(status, lib.pkm_data_error(self._d).decode())
+
+    def _arr(self, a, name: str) -> np.ndarray:
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        if a.shape[-1:] != (self.ndof,):
+            raise ArgumentError(
+                f"{name} must have {self.ndof} coordinates in its last axis for robot {self.robot}, "
+                f"got shape {a.shape}",
+                "PKM_ERR_ARGUMENT",
+            )
+        return a
+
+    def _batch(self, fn, inputs, names, errors="raise"):
+        arrs = [self._arr(a, n) for a, n in zip(inputs, names)]
+        shape = np.broadcast_shapes(*[a.shape for a in arrs])
+        arrs = [np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, self.ndof)) for a in arrs]
+        n = arrs[0].shape[0]
+        out = np.empty((n, self.ndof))
+        status = np.zeros(n, dtype=np.intc)
+        s = fn(self._m, self._d, n, *[ptr(a) for a in arrs], ptr(out), status.ctypes.data_as(C.POINTER(C.c_int)))
+        if errors == "raise":
+            self._check(s)
+            return out.reshape(shape)
+        return out.reshape(shape), status.reshape(shape[:-1])
+
+    def _loop(self, fn, inputs, names, out_shape):
+        """Per-item C call for functions without a batched form."""
+        arrs = [self._arr(a, n) for a, n in zip(inputs, names)]
+        shape = np.broadcast_shapes(*[a.shape for a in arrs])
+        flat = [np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, self.ndof)) for a in arrs]
+        n = flat[0].shape[0]
+        out = np.empty((n,) + out_shape)
+        for k in range(n):
+            o = out[k]
+            self._check(fn(self._m, self._d, *[ptr(a[k]) for a in flat], ptr(o)))
+        return out.reshape(shape[:-1] + out_shape)
+
+    # ---------------------------------------------------------------- kinematics
+    def home(self) -> np.ndarray:
+        """The home pose [m, rad]."""
+        x = np.empty(self.ndof)
+        self._check(lib.pkm_model_home(self._m, ptr(x)))
+        return x
+
+    def ik(self, x, errors: str = "raise"):
+        """Inverse kinematics: joints q [m or rad] of pose(s) x, shape (..., nd).
+
+        With ``errors="status"`` returns ``(q, status)`` and NaN rows where status != 0
+        instead of raising on the first unreachable pose.
+        """
+        return self._batch(lib.pkm_ik_batch, [x], ["x"], errors)
+
+    def fk(self, q, x_guess=None, tol: float = 1e-13, max_iter: int = 50, damping: float = 1e-9,
+           errors: str = "raise"):
+        """Forward kinematics by damped Newton from ``x_guess`` (default: home pose).
+
+        Raises ``ConvergenceError`` rather than return a pose it did not converge to.
+        """
+        q = self._arr(q, "q")
+        if x_guess is None:
+            x_guess = self.home()
+        opt = pkm_fk_options(tol, max_iter, damping)
+        arrs = [np.ascontiguousarray(np.broadcast_to(a, np.broadcast_shapes(q.shape, np.shape(x_guess))))
+                .reshape(-1, self.ndof) for a in (q, self._arr(x_guess, "x_guess"))]
+        n = arrs[0].shape[0]
+        out = np.empty((n, self.ndof))
+        status = np.zeros(n, dtype=np.intc)
+        s = lib.pkm_fk_batch(self._m, self._d, n, ptr(arrs[0]), ptr(arrs[1]), C.byref(opt), ptr(out),
+                             status.ctypes.data_as(C.POINTER(C.c_int)))
+        shape = np.broadcast_shapes(q.shape, np.shape(x_guess))
+        if errors == "raise":
+            self._check(s)
+            return out.reshape(shape)
+        return out.reshape(shape), status.reshape(shape[:-1])
+
+    def fk_info(self, q, x_guess=None, tol: float = 1e-13, max_iter: int = 50):
+        """Single forward kinematics solve returning ``(x, iterations, residual)``."""
+        q = np.ascontiguousarray(self._arr(q, "q"))
+        xg = np.ascontiguousarray(self._arr(self.home() if x_guess is None else x_guess, "x_guess"))
+        x = np.empty(self.ndof)
+        info = pkm_fk_info()
+        opt = pkm_fk_options(tol, max_iter, 1e-9)
+        self._check(lib.pkm_fk(self._m, self._d, ptr(q), ptr(xg), C.byref(opt), ptr(x), C.byref(info)))
+        return x, info.iterations, info.residual
+
+    def jacobians(self, x):
+        """(Jx, Jq, J) at pose x, with Jx xd = Jq qd and qd = J xd; each (nd, nd)."""
+        x = np.ascontiguousarray(self._arr(x, "x"))
+        n = self.ndof
+        Jx, Jq, J = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+        self._check(lib.pkm_jacobians(self._m, self._d, ptr(x), ptr(Jx), ptr(Jq), ptr(J)))
+        return Jx, Jq, J
+
+    def jacobian(self, x):
+        """J(x), shape (..., nd, nd): qd = J xd."""
+        n = self.ndof
+
+        def one(m, d, xp, out):
+            return lib.pkm_jacobians(m, d, xp, None, None, out)
+
+        return self._loop(one, [x], ["x"], (n, n))
+
+    def jacobian_dot(self, x, xd):
+        """dJ/dt along (x, xd), shape (..., nd, nd)."""
+        n = self.ndof
+        return self._loop(lib.pkm_jacobian_dot, [x, xd], ["x", "xd"], (n, n))
+
+    def singularity(self, x):
+        """Singularity measures (..., 2) in [0, 1]: [inverse-kinematic, direct]; 0 = singular."""
+        return self._loop(lib.pkm_singularity, [x], ["x"], (2,))
+
+    def joint_velocity(self, x, xd):
+        return self._loop(lib.pkm_joint_velocity, [x, xd], ["x", "xd"], (self.ndof,))
+
+    def pose_velocity(self, x, qd):
+        return self._loop(lib.pkm_pose_velocity, [x, qd], ["x", "qd"], (self.ndof,))
+
+    def joint_acceleration(self, x, xd, xdd):
+        return self._loop(lib.pkm_joint_acceleration, [x, xd, xdd], ["x", "xd", "xdd"], (self.ndof,))
+
+    def pose_acceleration(self, x, xd, qdd):
+        return self._loop(lib.pkm_pose_acceleration, [x, xd, qdd], ["x", "xd", "qdd"], (self.ndof,))
+
+    # ------------------------------------------------------------------ dynamics
+    def inverse_dynamics(self, x, xd, xdd, errors: str = "raise"):
+        """Actuator efforts tau [N or N m], shape (..., nd), producing xdd at (x, xd)."""
+        return self._batch(lib.pkm_inverse_dynamics_batch, [x, xd, xdd], ["x", "xd", "xdd"], errors)
+
+    def forward_dynamics(self, x, xd, tau, errors: str = "raise"):
+        """Pose acceleration xdd, shape (..., nd), from (x, xd, tau)."""
+        return self._batch(lib.pkm_forward_dynamics_batch, [x, xd, tau], ["x", "xd", "tau"], errors)
+
+    def mass_matrix(self, x):
+        """Task-space mass matrix, shape (..., nd, nd): kinetic energy = xd' M xd / 2."""
+        n = self.ndof
+        return self._loop(lib.pkm_mass_matrix, [x], ["x"], (n, n))
+
+    def gravity_load(self, x):
+        """Actuator efforts that hold the robot still at x, shape (..., nd)."""
+        return self._loop(lib.pkm_gravity_load, [x], ["x"], (self.ndof,))
+
+    def energy(self, x, xd):
+        """(kinetic, potential) energy [J], each shape (...)."""
+
+        def one(m, d, xp, xdp, out):
+            return lib.pkm_energy(m, d, xp, xdp, C.cast(out, C.POINTER(C.c_double)),
+                                  C.cast(C.cast(out, C.c_void_p).value + 8, C.POINTER(C.c_double)))
+
+        e = self._loop(one, [x, xd], ["x", "xd"], (2,))
+        return e[..., 0], e[..., 1]
