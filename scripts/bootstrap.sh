@@ -6,7 +6,7 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 
-apt_pkgs=(libeigen3-dev libsundials-dev cmake g++ python3-venv)
+apt_pkgs=(libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv)
 missing=()
 for p in "${apt_pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
@@ -35,5 +35,8 @@ fi
 
 echo "[bootstrap] building (CMake, Release)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j"$(nproc)" 2>&1 | grep -E "error|warning|Error" || true
-cmake --build build -j"$(nproc)" >/dev/null
+if ! cmake --build build -j"$(nproc)" > build/build.log 2>&1; then
+  grep -E -B2 -A8 "error" build/build.log | head -80
+  echo "[bootstrap] build failed: full log in build/build.log" >&2
+  exit 1
+fi
