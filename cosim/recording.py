@@ -1,0 +1,294 @@
+"""Recordings in the ``pkm-recording/1`` format (SPEC 5): read, write, validate.
+
+A recording is a CSV file with a header row and a JSON sidecar of the same name:
+
+* ``time`` [s], strictly increasing, first column;
+* per joint ``i = 1..nd``: ``q<i>`` [m or rad], ``qd<i>`` [m/s or rad/s], ``tau<i>``
+  [N or N m, actuator effort applied], optional ``qref<i>``;
+* optional pose columns: ``x, y, z`` [m] and ``rx, ry, rz`` [rad] (6-PUS),
+  ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output);
+* any further columns are kept in ``Recording.extra``.
+
+Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar",
+"parameters": {...}, "controller": {...}, "notes": "..."}``.
+
+Scenarios export this; calibration and the discrepancy engine read it.  A bad file gets
+one :class:`RecordingError` naming the file, the row (line number in the file) and the
+column.
+
+Example
+-------
+>>> import numpy as np
+>>> from cosim.recording import Recording, write_recording, read_recording
+>>> t = np.arange(5) * 1e-3
+>>> rec = Recording(robot="fourbar", time=t, q=np.zeros((5, 1)), qd=np.zeros((5, 1)),
+...                 tau=np.zeros((5, 1)))
+>>> csv_path, json_path = write_recording("/tmp/example.csv", rec)
+>>> read_recording(csv_path).q.shape
+(5, 1)
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+FORMAT = "pkm-recording/1"
+
+#: joints and pose columns of each robot
+ROBOTS = {
+    "6pus": {"ndof": 6, "pose": ["x", "y", "z", "rx", "ry", "rz"]},
+    "quattro": {"ndof": 4, "pose": ["x", "y", "z", "theta"]},
+    "fourbar": {"ndof": 1, "pose": ["X"]},
+}
+
+
+class RecordingError(ValueError):
+    """A malformed recording; the message names the file, row and column."""
+
+    def __init__(self, path, message, row=None, column=None):
+        where = str(path)
+        if row is not None:
+            where += f", row {row}"
+        if column is not None:
+            where += f", column {column!r}"
+        super().__init__(f"{where}: {message}")
+        self.path, self.row, self.column = path, row, column
+
+
+@dataclass
+class Recording:
+    """One recorded (or simulated) run.
+
+    Arrays have one row per sample: ``time`` (n,) [s]; ``q``, ``qd``, ``tau``, ``qref``
+    (n, nd); ``pose`` (n, npose) in the robot's pose columns (see ``ROBOTS``).
+    """
+
+    robot: str
+    time: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    tau: np.ndarray
+    qref: np.ndarray | None = None
+    pose: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+    parameters: dict = field(default_factory=dict)
+    controller: dict = field(default_factory=dict)
+    notes: str = ""
+    path: Path | None = None
+
+    @property
+    def ndof(self) -> int:
+        return ROBOTS[self.robot]["ndof"]
+
+    @property
+    def pose_columns(self) -> list[str]:
+        return ROBOTS[self.robot]["pose"]
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def slice(self, start: int, stop: int) -> "Recording":
+        """Rows ``start:stop`` as a new recording (same metadata)."""
+        s = slice(start, stop)
+        return Recording(
+            self.robot, self.time[s], self.q[s], self.qd[s], self.tau[s],
+            None if self.qref is None else self.qref[s],
+            None if self.pose is None else self.pose[s],
+            {k: v[s] for k, v in self.extra.items()},
+            dict(self.parameters), dict(self.controller), self.notes, self.path,
+        )
+
+    def column_names(self) -> list[str]:
+        nd = self.ndof
+        cols = ["time"]
+        for i in range(1, nd + 1):
+            cols += [f"q{i}", f"qd{i}", f"tau{i}"] + ([f"qref{i}"] if self.qref is not None else [])
+        if self.pose is not None:
+            cols += self.pose_columns
+        cols += list(self.extra)
+        return cols
+
+    def table(self) -> np.ndarray:
+        """All columns as one (n, ncol) array in ``column_names()`` order."""
+        nd, parts = self.ndof, [self.time[:, None]]
+        for i in range(nd):
+            parts += [self.q[:, i:i + 1], self.qd[:, i:i + 1], self.tau[:, i:i + 1]]
+            if self.qref is not None:
+                parts.append(self.qref[:, i:i + 1])
+        if self.pose is not None:
+            parts.append(self.pose)
+        parts += [np.asarray(v, float)[:, None] for v in self.extra.values()]
+        return np.hstack(parts)
+
+
+def sidecar_path(csv_path) -> Path:
+    return Path(csv_path).with_suffix(".json")
+
+
+def _validate(rec: Recording, path) -> None:
+    if rec.robot not in ROBOTS:
+        raise RecordingError(path, f"unknown robot {rec.robot!r} (known: {', '.join(ROBOTS)})")
+    n, nd = len(rec.time), rec.ndof
+    for name in ("q", "qd", "tau", "qref"):
+        a = getattr(rec, name)
+        if a is None:
+            continue
+        if a.shape != (n, nd):
+            raise RecordingError(path, f"{name} has shape {a.shape}, expected ({n}, {nd}) for robot {rec.robot}")
+    if rec.pose is not None and rec.pose.shape != (n, len(rec.pose_columns)):
+        raise RecordingError(path, f"pose has shape {rec.pose.shape}, expected ({n}, {len(rec.pose_columns)})")
+    bad = np.flatnonzero(np.diff(rec.time) <= 0)
+    if bad.size:
+        k = bad[0] + 1
+        raise RecordingError(path, f"time is not strictly increasing ({rec.time[k - 1]!r} then {rec.time[k]!r})",
+                             row=k + 2, column="time")
+    tab = rec.table()
+    nonfinite = np.argwhere(~np.isfinite(tab))
+    if nonfinite.size:
+        r, c = nonfinite[0]
+        raise RecordingError(path, f"value {tab[r, c]!r} is not a finite number", row=r + 2,
+                             column=rec.column_names()[c])
+
+
+def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[Path, Path]:
+    """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths."""
+    path = Path(path)
+    if path.suffix != ".csv":
+        path = path.with_suffix(".csv")
+    _validate(rec, path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, rec.table(), delimiter=",", header=",".join(rec.column_names()), comments="",
+               fmt=float_format)
+    meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
+            "controller": rec.controller, "notes": rec.notes}
+    side = sidecar_path(path)
+    side.write_text(json.dumps(meta, indent=2, default=_json_default))
+    return path, side
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    raise TypeError(f"cannot write {type(o).__name__} to JSON")
+
+
+def read_recording(path, robot: str | None = None) -> Recording:
+    """Read and validate a ``pkm-recording/1`` CSV (and its sidecar).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file (``.csv`` may be omitted).
+    robot : str, optional
+        Expected robot; also used if the sidecar is missing.
+
+    Raises
+    ------
+    RecordingError
+        Naming the file, row and column of the first problem: a missing sidecar or
+        column, an unknown robot, a cell that is not a finite number, time not strictly
+        increasing, too few rows.
+    """
+    path = Path(path)
+    if not path.exists() and path.with_suffix(".csv").exists():
+        path = path.with_suffix(".csv")
+    if not path.exists():
+        raise RecordingError(path, "file not found")
+    side = sidecar_path(path)
+    meta = {}
+    if side.exists():
+        try:
+            meta = json.loads(side.read_text())
+        except json.JSONDecodeError as e:
+            raise RecordingError(side, f"sidecar is not valid JSON: {e.msg}", row=e.lineno) from None
+        if not isinstance(meta, dict):
+            raise RecordingError(side, "sidecar must be a JSON object")
+        if meta.get("format") != FORMAT:
+            raise RecordingError(side, f"format is {meta.get('format')!r}, expected {FORMAT!r}")
+    elif robot is None:
+        raise RecordingError(path, f"JSON sidecar {side.name} is missing (it names the robot)")
+    rname = meta.get("robot", robot)
+    if robot is not None and rname != robot:
+        raise RecordingError(side, f"recording is of robot {rname!r}, expected {robot!r}")
+    if rname not in ROBOTS:
+        raise RecordingError(side, f"unknown robot {rname!r} (known: {', '.join(ROBOTS)})")
+    nd, pose_cols = ROBOTS[rname]["ndof"], ROBOTS[rname]["pose"]
+
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise RecordingError(path, "file is empty (no header row)", row=1) from None
+        rows = []
+        for lineno, row in enumerate(reader, start=2):
+            if not row or all(not c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                raise RecordingError(path, f"has {len(row)} fields, the header has {len(header)}", row=lineno)
+            vals = []
+            for c, cell in enumerate(row):
+                try:
+                    v = float(cell)
+                except ValueError:
+                    raise RecordingError(path, f"{cell!r} is not a number", row=lineno, column=header[c]) from None
+                if not math.isfinite(v):
+                    raise RecordingError(path, f"value {cell.strip()!r} is not a finite number", row=lineno,
+                                         column=header[c])
+                vals.append(v)
+            rows.append(vals)
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise RecordingError(path, "column appears twice in the header", row=1, column=dup)
+    if not header or header[0] != "time":
+        raise RecordingError(path, f"first column must be 'time', found {header[0] if header else ''!r}", row=1,
+                             column=header[0] if header else None)
+    required = [f"{k}{i}" for i in range(1, nd + 1) for k in ("q", "qd", "tau")]
+    for col in required:
+        if col not in header:
+            raise RecordingError(path, f"required column is missing for robot {rname} ({nd} joints)", row=1,
+                                 column=col)
+    if len(rows) < 2:
+        raise RecordingError(path, f"has {len(rows)} data row(s); at least 2 are needed", row=len(rows) + 2)
+    data = np.asarray(rows, dtype=float)
+    col = {h: data[:, j] for j, h in enumerate(header)}
+    t = col["time"]
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise RecordingError(path, f"time is not strictly increasing ({t[k - 1]!r} then {t[k]!r})", row=k + 2,
+                             column="time")
+
+    def stack(prefix):
+        return np.column_stack([col[f"{prefix}{i}"] for i in range(1, nd + 1)])
+
+    has_qref = [f"qref{i}" in col for i in range(1, nd + 1)]
+    if any(has_qref) and not all(has_qref):
+        missing = f"qref{has_qref.index(False) + 1}"
+        raise RecordingError(path, "qref columns must be given for all joints or none", row=1, column=missing)
+    has_pose = [c in col for c in pose_cols]
+    if any(has_pose) and not all(has_pose):
+        missing = pose_cols[has_pose.index(False)]
+        raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
+    known = set(required) | {"time"} | {f"qref{i}" for i in range(1, nd + 1)} | set(pose_cols)
+    return Recording(
+        robot=rname,
+        time=t,
+        q=stack("q"),
+        qd=stack("qd"),
+        tau=stack("tau"),
+        qref=stack("qref") if all(has_qref) else None,
+        pose=np.column_stack([col[c] for c in pose_cols]) if all(has_pose) else None,
+        extra={h: col[h] for h in header if h not in known},
+        parameters=meta.get("parameters") or {},
+        controller=meta.get("controller") or {},
+        notes=meta.get("notes", ""),
+        path=path,
+    )
