@@ -26,8 +26,8 @@
  *  6. The pose x of a robot has nd coordinates, its velocity xd is the time
  *     derivative of those coordinates (for the 6-PUS: Euler-angle rates, not the
  *     angular velocity).  q are the actuated joint coordinates (slider strokes for
- *     the 6-PUS [m], motor-side arm angles for the Quattro [rad]), tau the actuator
- *     efforts along them [N or N m].
+ *     the 6-PUS [m], arm angles at the gearbox output for the Quattro [rad]), tau the
+ *     actuator efforts along them [N or N m] (Quattro: arm-side torque).
  */
 #ifndef PKM_PKM_H
 #define PKM_PKM_H
@@ -182,6 +182,28 @@ PKM_API int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, d
 PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                        double* kinetic, double* potential);
 
+/* ========================================================= drive and sensors */
+/* Every robot has a drive layer between its mechanics and its controller, with
+ * per-joint parameters "<j>[i].coulomb", ".viscous", ".stribeck", ".stribeck_v",
+ * ".rotor_inertia", ".effort_max", ".encoder_offset", ".backlash", ".compliance"
+ * (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
+ * "actuator.delay", "sensor.delay".  All default to "absent".  Friction and rotor
+ * inertia are part of pkm_inverse_dynamics / pkm_forward_dynamics / pkm_mass_matrix /
+ * pkm_energy; saturation, delays and the sensor model are applied by pkm_sim and by
+ * callers through the functions below.  The sign of the velocity is smoothed,
+ * tanh(qd / drive.v_eps), so the dynamics stay Lipschitz. */
+
+/* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
+ * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd. */
+PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd, double* f);
+/* Effort reaching the mechanism for a commanded effort: clipped at effort_max (if > 0). */
+PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd,
+                                double* tau_applied);
+/* Joint readings at (x, xd) with applied effort tau[nd]:
+ * q_meas = q + encoder_offset + backlash/2 sgn(qd) + compliance tau. */
+PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
+                               const double* xd, const double* tau, double* q_meas);
+
 /* =============================================================== integration */
 
 typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1 } pkm_lmm;
@@ -242,6 +264,52 @@ PKM_API int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x
  * link 2, and dX/dl[4] with respect to the link lengths l1..l4 (may be NULL). */
 PKM_API int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta, double* X,
                                double* dX_dl);
+
+/* ================================================ Quattro specific (seed 003) */
+
+/* Quattro conventions: pose x = (x, y, z, theta), the tool point in the seed's model
+ * frame (arm 1 along +x, arm 2 along +y, z up) with the Adept origin `base.h` above the
+ * motor-axis plane [m], and the platform articulation angle theta (seed theta_0) [rad].
+ * q_i is the seed's arm angle at the gearbox output (positive downwards) [rad] and tau_i
+ * the arm-side torque [N m] = gear.ratio x motor torque (rotor inertia included).
+ *
+ * Performance indices per pose, one column each (seed ch. 3-5; docs/quattro.md):
+ *  0 mu_T      translational manipulability 1/sqrt(det(JD^T JD)), JD = b_r J[:,0:3] [-]
+ *  1 mu_xy     horizontal, sub-matrix variant (columns x, y of b_r J)           [-]
+ *  2 mu_z      vertical, sub-matrix variant (column z of b_r J)                  [-]
+ *  3 mu_T_eig  translational, eigenvalue variant: 3 largest eigenvalues of b_r^2 J^T J
+ *  4 mu_xy_eig horizontal, eigenvalue variant (the two middle eigenvalues)       [-]
+ *  5 mu_z_eig  vertical, eigenvalue variant (the largest eigenvalue)             [-]
+ *  6 kappa_T   condition number of b_r J[:,0:3] (>= 1)                           [-]
+ *  7 dTIM      dynamic isotropy 27 det(TIM) / tr(TIM)^3 of the GIMRE             [-]
+ *  8 dTIM_xy   sqrt(det(N[0:2,:] N[0:2,:]^T))                                    [kg^2]
+ *  9 dTIM_x   10 dTIM_y   11 dTIM_z: norms of rows 1..3 of the GIMRE N            [kg]
+ * 12 kat      mean of kat_x, kat_y, kat_z                                        [kg]
+ * 13 kat_xy   mean of kat_x, kat_y                                               [kg]
+ * 14 kat_x    15 kat_y    16 kat_z: norms of the rows of L = M[0:3,0:3]          [kg]
+ * 17 Fcc_z    |translational Coriolis/centrifugal force| at xd = (0,0,1,0) m/s  [N]
+ * 18 Fcc_xy   the same at xd = (1,1,0,0)/sqrt(2) m/s                             [N]
+ * 19 Fgr      |translational gravity force| (task-space gradient of V)           [N]
+ * 20 alfa_z   largest vertical acceleration with every |tau_i| <= ratio x tau_nominal,
+ *             from rest, gravity left out as in the seed                         [m/s^2]
+ * 21 alfa_x   the same along (-1,-1,0)/sqrt(2), the Adept platform x axis        [m/s^2] */
+enum { PKM_QUATTRO_NINDEX = 22 };
+
+/* Name ("mu_T", ...) and unit of index column i; "" if i is out of range. */
+PKM_API const char* pkm_quattro_index_name(int i);
+PKM_API const char* pkm_quattro_index_unit(int i);
+/* Indices of n poses x[n,4] into out[n,PKM_QUATTRO_NINDEX], one pass in C++.  Batched
+ * convention: an unreachable pose, a pose beyond the joint range or a singular pose
+ * gets its status in status[n] (may be NULL) and a NaN row. */
+PKM_API int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double* x,
+                                double* out, int* status);
+/* Generalized inertia matrix reduced to the end effector N[4,4] (seed ch. 4; no motor
+ * rotors): kinetic energy of links and platform = 0.5 xd' N xd. */
+PKM_API int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, double* N);
+/* Points at pose x, each [4,3] in the world frame [m]: A (motor axes), B (elbows,
+ * forearm upper ends), C (platform joints).  Any output may be NULL. */
+PKM_API int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A,
+                               double* B, double* C);
 
 #ifdef __cplusplus
 }

@@ -7,6 +7,12 @@
 
 #include "common/robot.hpp"
 
+namespace pkm {
+namespace drive {
+struct Params;
+}
+}  // namespace pkm
+
 struct pkm_model {
   const pkm::Robot* robot = nullptr;
   std::string robot_name;
@@ -14,6 +20,7 @@ struct pkm_model {
   std::vector<double> values;
   // Null until pkm_model_validate succeeds; reset by pkm_param_set.
   std::shared_ptr<const pkm::RobotModel> compiled;
+  std::shared_ptr<const pkm::drive::Params> drive;  // the drive layer's parameters (dynamics/drive.hpp)
 };
 
 struct pkm_data {

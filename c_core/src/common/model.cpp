@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "common/guard.hpp"
+#include "dynamics/drive.hpp"
 
 using pkm::Error;
 
@@ -59,8 +60,10 @@ pkm_model* pkm_model_create(const char* robot, const char* param_set, char* err,
     m->robot = r;
     m->robot_name = r->name();
     m->specs = r->param_specs(param_set ? param_set : "default");
+    for (auto& s : pkm::drive::specs(*r)) m->specs.push_back(std::move(s));
     for (const auto& s : m->specs) m->values.push_back(s.value);
     m->compiled = std::shared_ptr<const pkm::RobotModel>(r->compile(m->specs, m->values));
+    m->drive = pkm::drive::compile(*r, m->specs, m->values);
     out = m.release();
   });
   return out;
@@ -120,6 +123,7 @@ int pkm_model_validate(pkm_model* m, char* err, size_t errlen) {
   return pkm::guard_err(err, errlen, [&] {
     pkm::require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
     m->compiled = std::shared_ptr<const pkm::RobotModel>(m->robot->compile(m->specs, m->values));
+    m->drive = pkm::drive::compile(*m->robot, m->specs, m->values);
   });
 }
 

@@ -61,6 +61,12 @@ class Robot {
     return std::make_unique<RobotData>();
   }
   virtual void home(const RobotModel&, double* x) const = 0;
+  // How the drive layer (dynamics/drive.hpp) names and measures the actuated joints:
+  // parameter prefix ("rail" -> "rail[i].coulomb"), the noun in messages, and whether
+  // q is an angle [rad, N m] or a length [m, N].
+  virtual const char* joint_prefix() const { return "joint"; }
+  virtual const char* joint_noun() const { return "joint"; }
+  virtual bool joints_angular() const { return true; }
 
   // --- kinematics (x[nd] pose, q[nd] joints; matrices row-major [nd,nd])
   virtual void ik(const RobotModel&, RobotData&, const double* x, double* q) const;

@@ -1,5 +1,6 @@
 // C API: dynamics.
 #include "common/guard.hpp"
+#include "dynamics/drive.hpp"
 
 using namespace pkm;
 
@@ -8,12 +9,12 @@ extern "C" {
 int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
                          double* tau) {
   return guard(d, [&] {
-    const RobotModel& rm = prepare(m, d);
+    prepare(m, d);
     check_finite(x, d->ndof, "pose x");
     check_finite(xd, d->ndof, "pose velocity xd");
     check_finite(xdd, d->ndof, "pose acceleration xdd");
     check_out(tau, "tau");
-    d->robot->inverse_dynamics(rm, *d->rd, x, xd, xdd, tau);
+    total_inverse_dynamics(m, d, x, xd, xdd, tau);
   });
 }
 
@@ -28,24 +29,23 @@ int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const 
   });
   if (s != PKM_OK) return s;
   const int nd = d->ndof;
-  const RobotModel& rm = *m->compiled;
   return run_batch(d, n, status, tau, nd, [&](size_t k) {
     check_finite(x + k * nd, nd, "pose x");
     check_finite(xd + k * nd, nd, "pose velocity xd");
     check_finite(xdd + k * nd, nd, "pose acceleration xdd");
-    d->robot->inverse_dynamics(rm, *d->rd, x + k * nd, xd + k * nd, xdd + k * nd, tau + k * nd);
+    total_inverse_dynamics(m, d, x + k * nd, xd + k * nd, xdd + k * nd, tau + k * nd);
   });
 }
 
 int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                          double* xdd) {
   return guard(d, [&] {
-    const RobotModel& rm = prepare(m, d);
+    prepare(m, d);
     check_finite(x, d->ndof, "pose x");
     check_finite(xd, d->ndof, "pose velocity xd");
     check_finite(tau, d->ndof, "actuator effort tau");
     check_out(xdd, "xdd");
-    d->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
+    total_forward_dynamics(m, d, x, xd, tau, xdd);
   });
 }
 
@@ -60,21 +60,20 @@ int pkm_forward_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const 
   });
   if (s != PKM_OK) return s;
   const int nd = d->ndof;
-  const RobotModel& rm = *m->compiled;
   return run_batch(d, n, status, xdd, nd, [&](size_t k) {
     check_finite(x + k * nd, nd, "pose x");
     check_finite(xd + k * nd, nd, "pose velocity xd");
     check_finite(tau + k * nd, nd, "actuator effort tau");
-    d->robot->forward_dynamics(rm, *d->rd, x + k * nd, xd + k * nd, tau + k * nd, xdd + k * nd);
+    total_forward_dynamics(m, d, x + k * nd, xd + k * nd, tau + k * nd, xdd + k * nd);
   });
 }
 
 int pkm_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M) {
   return guard(d, [&] {
-    const RobotModel& rm = prepare(m, d);
+    prepare(m, d);
     check_finite(x, d->ndof, "pose x");
     check_out(M, "M");
-    d->robot->mass_matrix(rm, *d->rd, x, M);
+    total_mass_matrix(m, d, x, M);
   });
 }
 
@@ -91,12 +90,42 @@ int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, double* g
 int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* kinetic,
                double* potential) {
   return guard(d, [&] {
-    const RobotModel& rm = prepare(m, d);
+    prepare(m, d);
     check_finite(x, d->ndof, "pose x");
     check_finite(xd, d->ndof, "pose velocity xd");
     check_out(kinetic, "kinetic");
     check_out(potential, "potential");
-    d->robot->energy(rm, *d->rd, x, xd, kinetic, potential);
+    total_energy(m, d, x, xd, kinetic, potential);
+  });
+}
+
+int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd, double* f) {
+  return guard(d, [&] {
+    prepare(m, d);
+    check_finite(qd, d->ndof, "joint velocity qd");
+    check_out(f, "f");
+    drive::friction(*m->drive, qd, f);
+  });
+}
+
+int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd, double* tau_applied) {
+  return guard(d, [&] {
+    prepare(m, d);
+    check_finite(tau_cmd, d->ndof, "commanded effort tau_cmd");
+    check_out(tau_applied, "tau_applied");
+    actuator_effort(*m->drive, tau_cmd, tau_applied);
+  });
+}
+
+int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                       double* q_meas) {
+  return guard(d, [&] {
+    prepare(m, d);
+    check_finite(x, d->ndof, "pose x");
+    check_finite(xd, d->ndof, "pose velocity xd");
+    check_finite(tau, d->ndof, "applied effort tau");
+    check_out(q_meas, "q_meas");
+    measure_joints(m, d, x, xd, tau, q_meas);
   });
 }
 

@@ -1,0 +1,225 @@
+// The drive layer (see drive.hpp): friction, rotor inertia, saturation and sensor model
+// added to a robot's rigid-body mechanics.
+#include "dynamics/drive.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "common/guard.hpp"
+
+namespace pkm {
+namespace drive {
+
+namespace {
+// Per-joint parameter names, in the order of the loop in specs() and compile().
+const char* kKeys[] = {"coulomb", "viscous", "stribeck", "stribeck_v", "rotor_inertia",
+                       "effort_max", "encoder_offset", "backlash", "compliance"};
+constexpr int kNKeys = sizeof(kKeys) / sizeof(kKeys[0]);
+
+double* field(Params& p, int k) {
+  switch (k) {
+    case 0: return p.coulomb;
+    case 1: return p.viscous;
+    case 2: return p.stribeck;
+    case 3: return p.stribeck_v;
+    case 4: return p.rotor;
+    case 5: return p.effort_max;
+    case 6: return p.encoder_offset;
+    case 7: return p.backlash;
+    default: return p.compliance;
+  }
+}
+
+std::string joint_name(const Robot& r, int i, const char* key) {
+  return std::string(r.joint_prefix()) + "[" + std::to_string(i + 1) + "]." + key;
+}
+}  // namespace
+
+std::vector<ParamSpec> specs(const Robot& r) {
+  const bool ang = r.joints_angular();
+  const std::string F = ang ? "N m" : "N", V = ang ? "rad/s" : "m/s", Q = ang ? "rad" : "m";
+  const std::string noun = r.joint_noun();
+  std::vector<ParamSpec> out;
+  for (int i = 0; i < r.ndof(); ++i) {
+    const std::string who = noun + " " + std::to_string(i + 1);
+    out.push_back({joint_name(r, i, "coulomb"), F, "Coulomb friction of actuated " + who, 0.0, 0.0, 1e6});
+    out.push_back({joint_name(r, i, "viscous"), F + " s/" + Q, "viscous friction coefficient of actuated " + who,
+                   0.0, 0.0, 1e6});
+    out.push_back({joint_name(r, i, "stribeck"), F,
+                   "Stribeck friction: static friction in excess of Coulomb at rest, " + who, 0.0, 0.0, 1e6});
+    out.push_back({joint_name(r, i, "stribeck_v"), V, "Stribeck velocity (decay scale of the Stribeck term), " + who,
+                   ang ? 0.05 : 0.005, 1e-9, 1e3});
+    out.push_back({joint_name(r, i, "rotor_inertia"), ang ? "kg m2" : "kg",
+                   "reflected actuator (rotor) inertia at the joint, " + who, 0.0, 0.0, 1e6});
+    out.push_back({joint_name(r, i, "effort_max"), F, "actuator saturation |tau| <= effort_max (0: none), " + who,
+                   0.0, 0.0, 1e9});
+    out.push_back({joint_name(r, i, "encoder_offset"), Q, "encoder offset: measured minus true joint position, " + who,
+                   0.0, -1.0, 1.0});
+    out.push_back({joint_name(r, i, "backlash"), Q, "backlash: total transmission gap seen at reversal, " + who, 0.0,
+                   0.0, 0.1});
+    out.push_back({joint_name(r, i, "compliance"), Q + "/" + F,
+                   "transmission compliance (1/stiffness): encoder deflection per unit effort, " + who, 0.0, 0.0, 1.0});
+  }
+  out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction and backlash", ang ? 1e-3 : 1e-4,
+                 1e-9, 1.0});
+  out.push_back({"actuator.delay", "s", "time delay between commanded and applied actuator effort", 0.0, 0.0, 1.0});
+  out.push_back({"sensor.delay", "s", "time delay of the joint readings", 0.0, 0.0, 1.0});
+  return out;
+}
+
+std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpec>& sp,
+                                      const std::vector<double>& values) {
+  auto p = std::make_shared<Params>();
+  p->nd = r.ndof();
+  auto get = [&](const std::string& name) -> double {
+    for (size_t i = 0; i < sp.size(); ++i)
+      if (sp[i].name == name) return values[i];
+    throw Error(PKM_ERR_INTERNAL, "drive parameter " + name + " missing from the table");
+  };
+  for (int i = 0; i < p->nd; ++i)
+    for (int k = 0; k < kNKeys; ++k) field(*p, k)[i] = get(joint_name(r, i, kKeys[k]));
+  p->v_eps = get("drive.v_eps");
+  p->actuator_delay = get("actuator.delay");
+  p->sensor_delay = get("sensor.delay");
+  for (int i = 0; i < p->nd; ++i) {
+    p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0;
+    p->any_rotor |= p->rotor[i] != 0;
+  }
+  return p;
+}
+
+double smooth_sign(double v, double eps) { return std::tanh(v / eps); }
+
+void friction(const Params& p, const double* qd, double* f) {
+  for (int i = 0; i < p.nd; ++i) {
+    const double v = qd[i];
+    const double r = v / p.stribeck_v[i];
+    f[i] = (p.coulomb[i] + p.stribeck[i] * std::exp(-r * r)) * smooth_sign(v, p.v_eps) + p.viscous[i] * v;
+  }
+}
+
+}  // namespace drive
+
+using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
+using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+
+void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
+                            double* tau) {
+  const RobotModel& rm = *m->compiled;
+  const drive::Params& dp = *m->drive;
+  m->robot->inverse_dynamics(rm, *d->rd, x, xd, xdd, tau);
+  if (!dp.any_friction && !dp.any_rotor) return;
+  const int n = d->ndof;
+  Vec qd(n), qdd(n), f(n);
+  double J[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  Eigen::Map<const Mat> Jm(J, n, n);
+  qd = Jm * Eigen::Map<const Vec>(xd, n);
+  if (dp.any_friction) {
+    drive::friction(dp, qd.data(), f.data());
+    for (int i = 0; i < n; ++i) tau[i] += f[i];
+  }
+  if (dp.any_rotor) {
+    m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd.data());
+    for (int i = 0; i < n; ++i) tau[i] += dp.rotor[i] * qdd[i];
+  }
+}
+
+void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                            double* xdd) {
+  const RobotModel& rm = *m->compiled;
+  const drive::Params& dp = *m->drive;
+  if (!dp.any_friction && !dp.any_rotor) {
+    m->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
+    return;
+  }
+  const int n = d->ndof;
+  double J[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  Eigen::Map<const Mat> Jm(J, n, n);
+  Vec qd = Jm * Eigen::Map<const Vec>(xd, n), net(n), f(n);
+  // Friction and the velocity part of the rotor inertia force are efforts the actuator
+  // spends before the mechanism sees any: the mechanism is driven by the net effort.
+  net = Eigen::Map<const Vec>(tau, n);
+  if (dp.any_friction) {
+    drive::friction(dp, qd.data(), f.data());
+    net -= f;
+  }
+  if (!dp.any_rotor) {
+    m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd);
+    return;
+  }
+  // Rotor inertia Jr qdd with qdd = J xdd + Jdot xd: the mechanism sees
+  // net - Jr (J xdd + Jdot xd), so (M + J' Jr J) xdd = M xdd0 with
+  // xdd0 = FD_robot(net - Jr Jdot xd).
+  double Jd[36];
+  m->robot->jacobian_dot(rm, *d->rd, x, xd, Jd);
+  Vec jdxd = Eigen::Map<const Mat>(Jd, n, n) * Eigen::Map<const Vec>(xd, n);
+  for (int i = 0; i < n; ++i) net[i] -= dp.rotor[i] * jdxd[i];
+  Vec xdd0(n);
+  m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd0.data());
+  Mat M(n, n);
+  m->robot->mass_matrix(rm, *d->rd, x, M.data());
+  Mat Mt = M;
+  for (int i = 0; i < n; ++i)
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) Mt(a, b) += Jm(i, a) * dp.rotor[i] * Jm(i, b);
+  Eigen::LLT<Mat> llt(Mt);
+  if (llt.info() != Eigen::Success)
+    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at this pose");
+  Eigen::Map<Vec>(xdd, n) = llt.solve(M * xdd0);
+}
+
+void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M) {
+  const RobotModel& rm = *m->compiled;
+  const drive::Params& dp = *m->drive;
+  m->robot->mass_matrix(rm, *d->rd, x, M);
+  if (!dp.any_rotor) return;
+  const int n = d->ndof;
+  double J[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  for (int i = 0; i < n; ++i)
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) M[a * n + b] += J[i * n + a] * dp.rotor[i] * J[i * n + b];
+}
+
+void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* kinetic,
+                  double* potential) {
+  const RobotModel& rm = *m->compiled;
+  const drive::Params& dp = *m->drive;
+  m->robot->energy(rm, *d->rd, x, xd, kinetic, potential);
+  if (!dp.any_rotor) return;
+  const int n = d->ndof;
+  double J[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  for (int i = 0; i < n; ++i) {
+    double qd = 0;
+    for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
+    *kinetic += 0.5 * dp.rotor[i] * qd * qd;
+  }
+}
+
+void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied) {
+  for (int i = 0; i < p.nd; ++i) {
+    const double lim = p.effort_max[i];
+    tau_applied[i] = lim > 0 ? std::fmax(-lim, std::fmin(lim, tau_cmd[i])) : tau_cmd[i];
+  }
+}
+
+void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                    double* q_meas) {
+  const RobotModel& rm = *m->compiled;
+  const drive::Params& dp = *m->drive;
+  const int n = d->ndof;
+  m->robot->ik(rm, *d->rd, x, q_meas);
+  double J[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  for (int i = 0; i < n; ++i) {
+    double qd = 0;
+    for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
+    q_meas[i] += dp.encoder_offset[i] + 0.5 * dp.backlash[i] * drive::smooth_sign(qd, dp.v_eps) +
+                 dp.compliance[i] * tau[i];
+  }
+}
+
+}  // namespace pkm

@@ -1,0 +1,73 @@
+// The drive layer: what lies between a robot's rigid-body mechanics and its
+// controller, common to every robot.  Per actuated joint: friction (Coulomb,
+// viscous, Stribeck), reflected rotor inertia, effort saturation; per sensor: encoder
+// offset, backlash at reversal, transmission compliance; and actuator/sensor delays
+// (applied by the integrator, which keeps the history).
+//
+// Rigid-body robots implement only their mechanics; every entry point of the C API
+// and the integrator go through the total_* functions here, so a drive effect is
+// modelled once for all robots and all its users (core, FMU, Python).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/handles.hpp"
+
+namespace pkm {
+namespace drive {
+
+constexpr int kMaxJoints = 6;
+
+struct Params {
+  int nd = 0;
+  double coulomb[kMaxJoints] = {};      // [N | N m]
+  double viscous[kMaxJoints] = {};      // [N s/m | N m s/rad]
+  double stribeck[kMaxJoints] = {};     // static friction in excess of Coulomb at rest [N | N m]
+  double stribeck_v[kMaxJoints] = {};   // Stribeck velocity [m/s | rad/s]
+  double rotor[kMaxJoints] = {};        // reflected actuator inertia [kg | kg m2]
+  double effort_max[kMaxJoints] = {};   // saturation |tau| <= effort_max; 0 = none [N | N m]
+  double encoder_offset[kMaxJoints] = {};  // q_measured - q [m | rad]
+  double backlash[kMaxJoints] = {};     // total gap; measured q leads by +-gap/2 [m | rad]
+  double compliance[kMaxJoints] = {};   // transmission deflection per effort [m/N | rad/(N m)]
+  double v_eps = 1e-4;                  // velocity scale of the smooth sign [m/s | rad/s]
+  double actuator_delay = 0;            // [s]
+  double sensor_delay = 0;              // [s]
+  bool any_friction = false, any_rotor = false;
+};
+
+// Parameter specs appended to every robot's table: "<prefix>[i].coulomb" ..., with the
+// prefix and units of the robot's actuated joints.
+std::vector<ParamSpec> specs(const Robot& r);
+// Reads the drive parameters (by name) from a model's parameter vector.
+std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpec>& specs,
+                                      const std::vector<double>& values);
+
+// Smooth sign, tanh(v / eps): friction and backlash switch over a velocity scale eps so
+// the dynamics stay Lipschitz for the integrator; sign(0) = 0, so a robot at rest
+// feels no friction force.
+double smooth_sign(double v, double eps);
+// Joint friction efforts f[nd] at joint velocities qd[nd] (opposing the motion when
+// subtracted from the actuator effort).
+void friction(const Params& p, const double* qd, double* f);
+
+}  // namespace drive
+
+// Total dynamics = robot mechanics + drive (friction, rotor inertia).  m must be
+// validated; d prepared.  Throw Error like the robot functions.
+void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                            const double* xdd, double* tau);
+void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                            const double* tau, double* xdd);
+void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M);
+void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* kinetic,
+                  double* potential);
+// Effort that reaches the mechanism for a commanded effort (saturation).
+void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied);
+// Joint readings of the sensors at state (x, xd) with the applied effort tau:
+// q + encoder offset + backlash/2 * smooth_sign(qd) + compliance * tau.
+void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                    double* q_meas);
+
+}  // namespace pkm
