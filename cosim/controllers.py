@@ -1,0 +1,456 @@
+"""Joint-space controllers (seed 001 sec. 8.8) and their design/analysis with python-control.
+
+All controllers are sampled at the co-simulation communication step ``dt``: at each
+sample ``t_k`` they read the joint positions ``q`` [m or rad] and velocities ``qd``
+and return the actuator efforts ``tau`` [N or N m] that the plant holds constant
+(zero-order hold) until ``t_k + dt``.
+
+* :func:`pd`: ``tau = Kp (qref - q) + Kd (qdref - qd)``.  Under gravity it settles with
+  the error ``e_ss = Kp^-1 g(x)`` (:func:`predicted_steady_state_error`, SPEC 4), ``g``
+  the joint-space gravity load from the core.
+* :func:`pd_gravity`: the same plus ``g(x)`` fed forward (seed 001 step 6 of algorithm 3
+  with ``J^T [0 0 mg 0 0 0]``); ``x`` is the pose the core's forward kinematics gives for
+  the measured ``q`` (or the reference pose).  No steady-state error.
+* :func:`computed_torque`: ``qdd_cmd = qddref + Kd (qdref - qd) + Kp (qref - q)`` mapped
+  to a pose acceleration and through the core's inverse dynamics, so the closed loop
+  is a decoupled double integrator per joint when the model is exact.
+
+Gains are designed from the decoupled joint double integrator ``m qdd = tau`` with the
+effective joint mass ``m`` (:func:`joint_mass`) and checked on its zero-order-hold
+discretisation at ``dt`` (:func:`design_pd`, :func:`closed_loop`), with python-control.
+The physics (gravity load, inverse dynamics, kinematics) always comes from the core.
+
+Example
+-------
+>>> from cosim.core import Model
+>>> from cosim import controllers as ctl
+>>> m = Model("6pus")
+>>> mq = ctl.joint_mass(m, m.home())                     # (6, 6) [kg]
+>>> d = ctl.design_pd(mass=mq.diagonal().max(), bandwidth_hz=5.0, damping=1.0, dt=1e-3)
+>>> c = ctl.pd_gravity(m, kp=d.kp, kd=d.kd)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+
+class ControllerError(ValueError):
+    """A controller that cannot be built or cannot act (says which gain/joint/time)."""
+
+
+# ---------------------------------------------------------------------- helpers
+
+def _gain(value, nd, name, unit):
+    """A gain as an (nd, nd) matrix from a scalar, a per-joint vector or a matrix."""
+    g = np.asarray(value, dtype=float)
+    if g.ndim == 0:
+        g = np.eye(nd) * g
+    elif g.ndim == 1:
+        if g.shape != (nd,):
+            raise ControllerError(f"{name} has {g.shape[0]} entries, expected {nd} (one per joint) [{unit}]")
+        g = np.diag(g)
+    elif g.shape != (nd, nd):
+        raise ControllerError(f"{name} has shape {g.shape}, expected ({nd}, {nd}) [{unit}]")
+    if not np.all(np.isfinite(g)):
+        raise ControllerError(f"{name} contains a value that is not finite [{unit}]")
+    d = np.diag(g)
+    if np.any(d < 0):
+        j = int(np.argmax(d < 0))
+        raise ControllerError(f"{name} of joint {j + 1} is negative ({d[j]} {unit}): the loop would be unstable")
+    return g
+
+
+def _limit(value, nd):
+    if value is None:
+        return None
+    lim = np.broadcast_to(np.asarray(value, dtype=float), (nd,)).copy()
+    if np.any(~np.isfinite(lim)) or np.any(lim <= 0):
+        j = int(np.argmax(~np.isfinite(lim) | (lim <= 0)))
+        raise ControllerError(f"saturation of joint {j + 1} must be a positive effort, got {lim[j]}")
+    return lim
+
+
+def _tolist(a):
+    a = np.asarray(a)
+    if a.ndim == 2 and np.allclose(a, np.diag(np.diag(a))):
+        d = np.diag(a)
+        return float(d[0]) if np.allclose(d, d[0]) else d.tolist()
+    return a.tolist()
+
+
+@dataclass
+class Reference:
+    """The reference at one sample: joint and pose values (any may be None)."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    x: np.ndarray | None = None
+    xd: np.ndarray | None = None
+    xdd: np.ndarray | None = None
+
+
+@dataclass
+class JointController:
+    """Base class: a sampled joint-space controller with optional saturation.
+
+    Call ``ctrl(t, q, qd, ref)`` at each sample; returns ``tau`` (nd,) [N or N m].
+    ``saturated`` counts the samples where the saturation clipped an effort.
+    """
+
+    ndof: int
+    kp: np.ndarray
+    kd: np.ndarray
+    saturation: np.ndarray | None = None
+    kind: str = "joint"
+    units: tuple = ("N/m", "N s/m")
+    saturated: int = 0
+    info: dict = field(default_factory=dict)
+
+    def reset(self, t0: float, q0, x0=None) -> None:
+        """Start a run at time t0 from joints q0 (and pose x0 if known)."""
+        self.saturated = 0
+
+    def law(self, t, q, qd, ref: Reference) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __call__(self, t, q, qd, ref: Reference) -> np.ndarray:
+        q = np.asarray(q, float)
+        qd = np.asarray(qd, float)
+        for name, v in (("q", q), ("qd", qd), ("qref", ref.q)):
+            if v.shape != (self.ndof,):
+                raise ControllerError(f"{self.kind} at t = {t:.6g} s: {name} has shape {v.shape}, "
+                                      f"expected ({self.ndof},)")
+            bad = np.flatnonzero(~np.isfinite(v))
+            if bad.size:
+                raise ControllerError(f"{self.kind} at t = {t:.6g} s: {name} of joint {bad[0] + 1} is {v[bad[0]]}")
+        tau = self.law(t, q, qd, ref)
+        if self.saturation is not None:
+            clipped = np.clip(tau, -self.saturation, self.saturation)
+            if np.any(clipped != tau):
+                self.saturated += 1
+            tau = clipped
+        return tau
+
+    def describe(self) -> dict:
+        """Type and gains with units, for the recording sidecar."""
+        d = {"type": self.kind, "kp": _tolist(self.kp), "kd": _tolist(self.kd),
+             "kp_unit": self.units[0], "kd_unit": self.units[1]}
+        if self.saturation is not None:
+            d["saturation"] = _tolist(np.diag(self.saturation))
+        d.update(self.info)
+        return d
+
+
+class PD(JointController):
+    def law(self, t, q, qd, ref):
+        return self.kp @ (ref.q - q) + self.kd @ (ref.qd - qd)
+
+
+class PDGravity(JointController):
+    """PD + gravity compensation; ``model`` gives the gravity load, ``gravity`` says where."""
+
+    def __init__(self, model, gravity="measured", **kw):
+        super().__init__(**kw)
+        self.model = model
+        self.gravity = gravity
+        self._x = None
+
+    def reset(self, t0, q0, x0=None):
+        super().reset(t0, q0, x0)
+        self._x = None if x0 is None else np.asarray(x0, float).copy()
+
+    def pose(self, t, q, ref):
+        """Pose of the measured joints by the core's forward kinematics from the last pose."""
+        guess = self._x if self._x is not None else (ref.x if ref.x is not None else self.model.home())
+        try:
+            self._x = self.model.fk(q, x_guess=guess)
+        except Exception as e:
+            raise ControllerError(f"{self.kind} at t = {t:.6g} s: forward kinematics of the measured joints "
+                                  f"failed: {e}") from e
+        return self._x
+
+    def law(self, t, q, qd, ref):
+        if self.gravity == "reference":
+            if ref.x is None:
+                raise ControllerError(f"{self.kind}: gravity='reference' needs the reference pose")
+            x = ref.x
+        else:
+            x = self.pose(t, q, ref)
+        return self.kp @ (ref.q - q) + self.kd @ (ref.qd - qd) + self.model.gravity_load(x)
+
+
+class ComputedTorque(PDGravity):
+    """Computed torque in joint space through the core's inverse dynamics."""
+
+    def law(self, t, q, qd, ref):
+        x = self.pose(t, q, ref)
+        try:
+            xd = self.model.pose_velocity(x, qd)
+            qdd = ref.qdd + self.kd @ (ref.qd - qd) + self.kp @ (ref.q - q)
+            xdd = self.model.pose_acceleration(x, xd, qdd)
+            return self.model.inverse_dynamics(x, xd, xdd)
+        except ControllerError:
+            raise
+        except Exception as e:
+            raise ControllerError(f"{self.kind} at t = {t:.6g} s: {e}") from e
+
+
+# -------------------------------------------------------------------- factories
+
+def pd(*, ndof: int = 6, kp, kd, saturation=None) -> JointController:
+    """Decentralised PD in joint space: ``tau = Kp (qref - q) + Kd (qdref - qd)``.
+
+    Parameters
+    ----------
+    ndof : int
+        Number of joints.
+    kp : float or array_like, shape (nd,) or (nd, nd)
+        Proportional gain [N/m for sliders, N m/rad for revolute joints].
+    kd : float or array_like
+        Derivative gain [N s/m or N m s/rad].
+    saturation : float or array_like, shape (nd,), optional
+        Largest effort magnitude per actuator [N or N m]; efforts are clipped.
+    """
+    return PD(ndof=ndof, kp=_gain(kp, ndof, "kp", "N/m"), kd=_gain(kd, ndof, "kd", "N s/m"),
+              saturation=_limit(saturation, ndof), kind="pd")
+
+
+def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> JointController:
+    """PD plus gravity compensation (seed 001 sec. 8.8).
+
+    ``tau = Kp (qref - q) + Kd (qdref - qd) + g(x)``, ``g`` = ``model.gravity_load``.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The model the controller believes in (its gravity load and kinematics).
+    kp, kd, saturation : see :func:`pd`.
+    gravity : {"measured", "reference"}
+        Evaluate ``g`` at the pose of the measured joints (forward kinematics, the
+        seed's choice) or at the reference pose.
+    """
+    if gravity not in ("measured", "reference"):
+        raise ControllerError(f"gravity must be 'measured' or 'reference', got {gravity!r}")
+    nd = model.ndof
+    c = PDGravity(model, gravity, ndof=nd, kp=_gain(kp, nd, "kp", "N/m"), kd=_gain(kd, nd, "kd", "N s/m"),
+                  saturation=_limit(saturation, nd), kind="pd_gravity")
+    c.info = {"gravity": gravity}
+    return c
+
+
+def computed_torque(model, *, kp, kd, saturation=None) -> JointController:
+    """Computed torque (inverse-dynamics control) in joint space.
+
+    ``qdd_cmd = qddref + Kd (qdref - qd) + Kp (qref - q)``; the core maps it to a pose
+    acceleration at the pose of the measured joints and returns the efforts of its
+    inverse dynamics.  With an exact model each joint error obeys
+    ``e'' + Kd e' + Kp e = 0``.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The model the controller believes in.
+    kp : float or array_like
+        Outer-loop stiffness [1/s^2] (``wn^2``).
+    kd : float or array_like
+        Outer-loop damping [1/s] (``2 zeta wn``).
+    saturation : float or array_like, optional
+        Largest effort magnitude per actuator [N or N m].
+    """
+    nd = model.ndof
+    return ComputedTorque(model, "measured", ndof=nd, kp=_gain(kp, nd, "kp", "1/s^2"),
+                          kd=_gain(kd, nd, "kd", "1/s"), saturation=_limit(saturation, nd),
+                          kind="computed_torque", units=("1/s^2", "1/s"))
+
+
+# ----------------------------------------------------------- design and analysis
+
+def joint_mass(model, x) -> np.ndarray:
+    """Joint-space mass matrix ``Mq = J^-T Mx J^-1`` [kg or kg m^2] at pose x.
+
+    The core gives the task-space mass matrix ``Mx`` (kinetic energy ``xd' Mx xd / 2``)
+    and ``J`` (``qd = J xd``); the same kinetic energy in joint velocities is
+    ``qd' Mq qd / 2``.
+    """
+    J = model.jacobian(x)
+    Mx = model.mass_matrix(x)
+    Jinv = np.linalg.inv(J)
+    Mq = Jinv.T @ Mx @ Jinv
+    return 0.5 * (Mq + Mq.T)
+
+
+def double_integrator(mass: float, dt: float | None = None):
+    """The decoupled joint ``m qdd = tau - g`` as a state-space system.
+
+    States ``[q, qd]``; inputs ``[tau, g]``; output ``q``.  Discretised with a
+    zero-order hold when ``dt`` [s] is given (exact for a piecewise-constant tau).
+    """
+    if not (mass > 0 and np.isfinite(mass)):
+        raise ControllerError(f"the effective joint mass must be positive, got {mass}")
+    sys = control.ss([[0, 1], [0, 0]], [[0, 0], [1 / mass, -1 / mass]], [[1, 0]], [[0, 0]],
+                     inputs=["tau", "g"], outputs=["q"], states=["q", "qd"])
+    return sys if dt is None else control.c2d(sys, dt, method="zoh")
+
+
+def closed_loop(mass: float, kp: float, kd: float, dt: float | None = None, gravity_comp: bool = False):
+    """PD loop around one joint, inputs ``[qref, g]``, outputs ``[q, e = qref - q]``.
+
+    ``tau = kp (qref - q) - kd qd (+ g if gravity_comp)``, sampled at ``dt`` [s] with
+    the plant discretised by zero-order hold (exact for the sampled loop), or
+    continuous when ``dt`` is None.
+    """
+    plant = double_integrator(mass, dt)
+    A, B = np.asarray(plant.A), np.asarray(plant.B)
+    K = np.array([[kp, kd]])
+    # u = kp r - K x (+ g): substitute into x+ = A x + B_tau u + B_g g
+    Acl = A - B[:, :1] @ K
+    Bcl = np.column_stack([B[:, 0] * kp, B[:, 1] + (B[:, 0] if gravity_comp else 0.0)])
+    C = np.array([[1.0, 0.0], [-1.0, 0.0]])
+    D = np.array([[0.0, 0.0], [1.0, 0.0]])
+    return control.ss(Acl, Bcl, C, D, dt if dt is not None else 0,
+                      inputs=["qref", "g"], outputs=["q", "e"], states=["q", "qd"])
+
+
+@dataclass
+class PDDesign:
+    """Gains from a bandwidth/damping spec and what python-control predicts for them."""
+
+    mass: float
+    kp: float
+    kd: float
+    wn: float
+    damping: float
+    dt: float | None
+    poles: np.ndarray
+    step_info: dict
+    stable: bool
+
+    def as_dict(self) -> dict:
+        return {"mass": self.mass, "kp": self.kp, "kd": self.kd, "wn": self.wn, "damping": self.damping,
+                "dt": self.dt, "poles": [complex(p) if np.iscomplex(p) else float(np.real(p)) for p in self.poles],
+                "predicted_step": self.step_info, "stable": self.stable}
+
+
+def design_pd(*, mass: float, bandwidth_hz: float | None = None, wn: float | None = None,
+              damping: float = 1.0, dt: float | None = 1e-3) -> PDDesign:
+    """PD gains placing the poles of ``m s^2 + kd s + kp`` at ``wn``, ``damping``.
+
+    Parameters
+    ----------
+    mass : float
+        Effective joint mass [kg or kg m^2] (e.g. the largest diagonal entry of
+        :func:`joint_mass`; use 1 for computed-torque outer-loop gains).
+    bandwidth_hz : float, optional
+        Natural frequency ``wn / (2 pi)`` [Hz].
+    wn : float, optional
+        Natural frequency [rad/s] (give this or ``bandwidth_hz``).
+    damping : float
+        Damping ratio [-].
+    dt : float or None
+        Communication step [s]; the returned poles and predicted step metrics are of
+        the sampled loop (zero-order hold) when given.
+
+    Returns
+    -------
+    PDDesign
+        ``kp = m wn^2`` [N/m], ``kd = 2 damping wn m`` [N s/m], closed-loop poles
+        (z-plane if sampled), step metrics from ``control.step_info`` and stability.
+    """
+    if (bandwidth_hz is None) == (wn is None):
+        raise ControllerError("give exactly one of bandwidth_hz and wn")
+    w = 2 * np.pi * bandwidth_hz if wn is None else float(wn)
+    if not (w > 0 and np.isfinite(w)):
+        raise ControllerError(f"the natural frequency must be positive, got {w} rad/s")
+    if not (damping > 0):
+        raise ControllerError(f"the damping ratio must be positive, got {damping}")
+    kp, kd = mass * w**2, 2 * damping * w * mass
+    cl = closed_loop(mass, kp, kd, dt)
+    poles = control.poles(cl)
+    stable = bool(np.all(np.abs(poles) < 1)) if dt else bool(np.all(np.real(poles) < 0))
+    info = control.step_info(cl[0, 0], T=_horizon(w, damping, dt)) if stable else {}
+    return PDDesign(float(mass), float(kp), float(kd), w, float(damping), dt, poles,
+                    {k: float(v) for k, v in info.items()}, stable)
+
+
+def _horizon(wn, damping, dt):
+    # Long enough for the slowest pole to settle well inside 2 %.
+    slow = wn * (damping - np.sqrt(damping**2 - 1)) if damping > 1 else wn * damping
+    T = 12.0 / slow
+    return np.arange(0, T, dt) if dt else np.linspace(0, T, 4001)
+
+
+def analyse_pd(*, mass: float, kp: float, kd: float, dt: float | None = 1e-3) -> dict:
+    """What python-control predicts for given PD gains on the decoupled joint.
+
+    Returns a dict with the natural frequency ``wn`` [rad/s], ``damping`` [-],
+    closed-loop ``poles``, ``stable``, the step metrics (``RiseTime``, ``SettlingTime``
+    [s], ``Overshoot`` [%] ...) and ``gravity_compliance``: the steady-state error per
+    unit of gravity load, ``e_ss / g`` [m/N], from the loop's DC gain (equals 1/kp).
+    """
+    wn = np.sqrt(kp / mass)
+    z = kd / (2 * np.sqrt(kp * mass))
+    cl = closed_loop(mass, kp, kd, dt)
+    poles = control.poles(cl)
+    stable = bool(np.all(np.abs(poles) < 1)) if dt else bool(np.all(np.real(poles) < 0))
+    out = {"mass": float(mass), "kp": float(kp), "kd": float(kd), "wn": float(wn), "damping": float(z),
+           "poles": [float(np.real(p)) if abs(np.imag(p)) < 1e-12 else str(complex(p)) for p in poles],
+           "stable": stable}
+    if stable:
+        info = control.step_info(cl[0, 0], T=_horizon(wn, z, dt))
+        out.update({k: float(v) for k, v in info.items()})
+        # e = qref - q for a unit gravity load, at DC
+        out["gravity_compliance"] = float(np.real(control.dcgain(cl[1, 1])))
+    return out
+
+
+def predicted_steady_state_error(model, x, kp) -> np.ndarray:
+    """``e_ss = Kp^-1 g(x)`` [m or rad]: where a PD loop settles under gravity (SPEC 4).
+
+    At rest ``qd = 0`` and the efforts balance the gravity load ``g(x)`` from the core,
+    so ``Kp (qref - q) = g``.  ``x`` is the pose where the robot settles (the reference
+    pose to first order; iterate with the settled pose for more).
+    """
+    nd = model.ndof
+    K = _gain(kp, nd, "kp", "N/m")
+    return np.linalg.solve(K, model.gravity_load(x))
+
+
+def step_metrics(t, y, y0: float | None = None, yfinal: float | None = None,
+                 settling_threshold: float = 0.02) -> dict:
+    """Rise time, settling time, overshoot of a simulated step, by ``control.step_info``.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Time [s] from the step instant.
+    y : array_like, shape (n,)
+        Response [any unit].
+    y0 : float, optional
+        Value before the step (default ``y[0]``).
+    yfinal : float, optional
+        Settled value (default: the last sample).
+    settling_threshold : float
+        Settling band as a fraction of the step amplitude.
+
+    Returns
+    -------
+    dict
+        ``RiseTime`` and ``SettlingTime`` [s], ``Overshoot`` and ``Undershoot`` [%],
+        ``PeakTime`` [s], ``Amplitude`` (``yfinal - y0``).
+    """
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    y0 = y[0] if y0 is None else y0
+    yf = y[-1] if yfinal is None else yfinal
+    amp = yf - y0
+    if amp == 0:
+        raise ControllerError("step_metrics: the response does not move (zero amplitude)")
+    info = control.step_info(y - y0, T=t - t[0], yfinal=amp, SettlingTimeThreshold=settling_threshold)
+    keep = ("RiseTime", "SettlingTime", "Overshoot", "Undershoot", "PeakTime")
+    out = {k: float(info[k]) for k in keep}
+    out["Amplitude"] = float(amp)
+    return out

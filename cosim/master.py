@@ -1,0 +1,523 @@
+"""Co-simulation master: a fixed communication step, the controller in Python between steps.
+
+Two plants share one interface (:class:`Plant`):
+
+* :class:`FMUPlant`: the robot's Co-Simulation FMU driven through fmpy's ``FMU2Slave``,
+  inputs and outputs addressed by variable name;
+* :class:`CorePlant`: the reference core integrated directly by its CVODE simulator
+  (:class:`cosim.simulate.Simulator`), the reference run.
+
+:func:`run` steps either one: at each communication point ``t_k = t0 + k h`` it reads
+the plant's joints, adds the optional sensor noise, asks the controller for the efforts,
+sets them as inputs (held constant over the step) and advances the plant to
+``t_k + h``.  The result (:class:`RunResult`) is a numpy structured array with one row
+per communication point and a unit per field.
+
+Example
+-------
+>>> from cosim.core import Model
+>>> from cosim import controllers as ctl, trajectories as tr
+>>> from cosim.master import CorePlant, run, make_reference
+>>> m = Model("6pus")
+>>> x0 = m.home(); x1 = x0 + [0, 0, -0.01, 0, 0, 0]
+>>> ref = make_reference(m, tr.step(x0, x1), step=1e-3, duration=0.5)
+>>> res = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), ref, x0=x0)
+>>> res["q"].shape                                     # (501, 6)
+"""
+from __future__ import annotations
+
+import shutil
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .controllers import Reference
+
+#: units of the joint and pose coordinates of each robot
+JOINT_UNIT = {"6pus": "m", "quattro": "rad", "fourbar": "rad"}
+POSE_UNITS = {"6pus": ["m", "m", "m", "rad", "rad", "rad"], "quattro": ["m", "m", "m", "rad"], "fourbar": ["m"]}
+EFFORT_UNIT = {"m": "N", "rad": "N m"}
+
+
+class MasterError(RuntimeError):
+    """A co-simulation that could not go on; says at which time and why.
+
+    ``partial`` holds the :class:`RunResult` of the samples taken before the failure.
+    """
+
+    def __init__(self, message, partial=None):
+        super().__init__(message)
+        self.partial = partial
+
+
+@dataclass
+class PlantOutputs:
+    """What a plant shows at a communication point (true values, before sensor noise)."""
+
+    q: np.ndarray    # joints [m or rad]
+    qd: np.ndarray   # joint rates
+    x: np.ndarray    # pose [m, rad]
+    xd: np.ndarray   # pose rate
+
+
+class Plant:
+    """Interface of a plant the master can step."""
+
+    robot: str
+    ndof: int
+    kind: str = "plant"
+
+    def initialize(self, t0: float, x0, xd0=None) -> None:
+        raise NotImplementedError
+
+    def set_input(self, tau) -> None:
+        raise NotImplementedError
+
+    def do_step(self, t: float, h: float) -> None:
+        """Advance from ``t`` to ``t + h`` with the input held [s]."""
+        raise NotImplementedError
+
+    def outputs(self) -> PlantOutputs:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+    def describe(self) -> dict:
+        return {"kind": self.kind}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class CorePlant(Plant):
+    """The core integrated directly by CVODE: the reference plant.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The plant's model (its parameters are the "true" robot).
+    rtol, atol : float
+        CVODE tolerances (relative; absolute on the task-space state [m, rad, m/s, rad/s]).
+    method : {"bdf", "adams"}
+        CVODE linear multistep method.
+    max_step : float
+        Largest internal step [s] (0: unlimited).
+    """
+
+    kind = "core"
+
+    def __init__(self, model, rtol: float = 1e-10, atol: float = 1e-12, method: str = "bdf",
+                 max_step: float = 0.0):
+        from .simulate import Simulator
+
+        self.model = model
+        self.robot = model.robot
+        self.ndof = model.ndof
+        self.options = {"rtol": rtol, "atol": atol, "method": method, "max_step": max_step}
+        self.sim = Simulator(model, rtol=rtol, atol=atol, method=method, max_step=max_step)
+        self._t = None
+
+    def initialize(self, t0, x0, xd0=None):
+        x0 = np.asarray(x0, float)
+        xd0 = np.zeros(self.ndof) if xd0 is None else np.asarray(xd0, float)
+        self.sim.reset(t0, x0, xd0)
+
+    def set_input(self, tau):
+        self.sim.set_input(np.asarray(tau, float))
+
+    def do_step(self, t, h):
+        self.sim.advance(t + h)
+
+    def outputs(self):
+        t, x, xd = self.sim.state
+        q = self.model.ik(x)
+        qd = self.model.joint_velocity(x, xd)
+        return PlantOutputs(q, qd, x, xd)
+
+    def describe(self):
+        return {"kind": "core", **self.options}
+
+
+class FMUPlant(Plant):
+    """A Co-Simulation FMU driven through fmpy (``fmpy.fmi2.FMU2Slave``).
+
+    Variables are addressed by name; the names follow the FMU's
+    ``modelDescription.xml`` (``tau[i]`` inputs, ``q[i]``/``qd[i]`` joint outputs, the
+    pose and its rate, the initial pose parameters), see ``NAMES``.
+
+    Parameters
+    ----------
+    fmu : str or Path
+        The ``.fmu`` file.
+    parameters : dict, optional
+        Start values by variable name, set before initialization (the "true" robot).
+    rtol, atol : float, optional
+        CVODE tolerances inside the FMU (set if the FMU exposes them).
+    names : dict, optional
+        Overrides of ``NAMES`` (format strings with ``{i}``, 1-based).
+    """
+
+    kind = "fmu"
+    #: variable names: each a format string of the 1-based coordinate index i
+    NAMES = {
+        "tau": "tau[{i}]",
+        "q": "q[{i}]",
+        "qd": "qd[{i}]",
+        "x": "pose[{i}]",
+        "xd": "twist[{i}]",
+        "x0": "pose_start[{i}]",
+        "xd0": "twist_start[{i}]",
+        "rtol": "solver.rtol",
+        "atol": "solver.atol",
+    }
+
+    def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = None,
+                 atol: float | None = None, names: dict | None = None, instance_name: str = "plant"):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.path = str(fmu)
+        self.md = read_model_description(self.path)
+        if self.md.coSimulation is None:
+            raise MasterError(f"{self.path}: the FMU has no Co-Simulation interface")
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.names = dict(self.NAMES, **(names or {}))
+        self.ndof = sum(1 for v in self.md.modelVariables if v.causality == "input")
+        if self.ndof == 0:
+            raise MasterError(f"{self.path}: the FMU has no inputs (expected the actuator efforts)")
+        self.robot = self._robot()
+        self.parameters = dict(parameters or {})
+        self.rtol, self.atol = rtol, atol
+        self.vr = {key: self._refs(key) for key in ("tau", "q", "qd", "x", "xd", "x0", "xd0")}
+        self._unzip = extract(self.path)
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
+        self._instantiated = False
+
+    def _robot(self):
+        for r, n in (("6pus", 6), ("quattro", 4), ("fourbar", 1)):
+            if r in self.md.modelName.lower() or r in self.md.coSimulation.modelIdentifier.lower():
+                return r
+        return {6: "6pus", 4: "quattro", 1: "fourbar"}.get(self.ndof, "unknown")
+
+    def _refs(self, key):
+        refs = []
+        for i in range(1, self.ndof + 1):
+            name = self.names[key].format(i=i)
+            if name not in self.vars:
+                raise MasterError(f"{self.path}: no variable {name!r} in the FMU "
+                                  f"(expected for {key}; pass names={{'{key}': ...}} to map it)")
+            refs.append(self.vars[name].valueReference)
+        return refs
+
+    def _set(self, name, value):
+        if name not in self.vars:
+            raise MasterError(f"{self.path}: no variable {name!r} in the FMU")
+        v = self.vars[name]
+        if v.type == "Integer":
+            self.fmu.setInteger([v.valueReference], [int(value)])
+        elif v.type == "Boolean":
+            self.fmu.setBoolean([v.valueReference], [bool(value)])
+        else:
+            self.fmu.setReal([v.valueReference], [float(value)])
+
+    def initialize(self, t0, x0, xd0=None):
+        x0 = np.asarray(x0, float)
+        xd0 = np.zeros(self.ndof) if xd0 is None else np.asarray(xd0, float)
+        if self._instantiated:
+            self.fmu.reset()
+        else:
+            self.fmu.instantiate()
+            self._instantiated = True
+        try:
+            self.fmu.setupExperiment(startTime=t0)
+            for name, value in self.parameters.items():
+                self._set(name, value)
+            if self.rtol is not None and self.names["rtol"] in self.vars:
+                self._set(self.names["rtol"], self.rtol)
+            if self.atol is not None and self.names["atol"] in self.vars:
+                self._set(self.names["atol"], self.atol)
+            self.fmu.setReal(self.vr["x0"], list(x0))
+            self.fmu.setReal(self.vr["xd0"], list(xd0))
+            self.fmu.enterInitializationMode()
+            self.fmu.exitInitializationMode()
+        except Exception as e:
+            raise MasterError(f"{self.path}: initialization at t = {t0} s failed: {e}") from e
+
+    def set_input(self, tau):
+        self.fmu.setReal(self.vr["tau"], [float(v) for v in tau])
+
+    def do_step(self, t, h):
+        try:
+            self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        except Exception as e:
+            raise MasterError(f"{self.path}: fmi2DoStep from t = {t:.9g} s (h = {h} s) failed: {e}") from e
+
+    def outputs(self):
+        g = self.fmu.getReal
+        return PlantOutputs(np.array(g(self.vr["q"])), np.array(g(self.vr["qd"])), np.array(g(self.vr["x"])),
+                            np.array(g(self.vr["xd"])))
+
+    def close(self):
+        if getattr(self, "fmu", None) is not None and self._instantiated:
+            try:
+                self.fmu.terminate()
+            except Exception:
+                pass  # a failed run may leave the FMU in an error state; freeing is still allowed
+            self.fmu.freeInstance()
+            self._instantiated = False
+        if getattr(self, "_unzip", None):
+            shutil.rmtree(self._unzip, ignore_errors=True)
+            self._unzip = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def describe(self):
+        d = {"kind": "fmu", "fmu": self.path, "model": self.md.modelName}
+        if self.rtol is not None:
+            d["rtol"] = self.rtol
+        if self.atol is not None:
+            d["atol"] = self.atol
+        return d
+
+
+# -------------------------------------------------------------------- reference
+
+@dataclass
+class ReferenceTable:
+    """A reference sampled at the communication points.
+
+    ``time`` (n,) [s]; ``q, qd, qdd`` (n, nd) joint reference from the controller's
+    model; ``x, xd, xdd`` (n, nd) pose reference; ``label`` (n,) int segment tags.
+    """
+
+    time: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    label: np.ndarray
+    name: str = ""
+
+    def at(self, k) -> Reference:
+        return Reference(self.q[k], self.qd[k], self.qdd[k], self.x[k], self.xd[k], self.xdd[k])
+
+
+def make_reference(model, trajectory, *, step: float = 1e-3, duration: float, t0: float = 0.0) -> ReferenceTable:
+    """Sample a task-space trajectory at the communication points and map it to joints.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The controller's model: joint references are its inverse kinematics and
+        velocity/acceleration kinematics.
+    trajectory : cosim.trajectories.Trajectory
+        The pose reference.
+    step : float
+        Communication step [s].
+    duration : float
+        Length of the run [s]; ``round(duration / step) + 1`` samples.
+    t0 : float
+        Start time [s].
+    """
+    from .trajectories import joint_reference
+
+    n = _nsteps(duration, step)
+    t = t0 + np.arange(n + 1) * step
+    x, xd, xdd = trajectory.evaluate(t)
+    try:
+        q, qd, qdd = joint_reference(model, x, xd, xdd)
+    except Exception as e:
+        raise MasterError(f"reference {trajectory.name!r}: the controller's model cannot map it to joints: {e}") from e
+    return ReferenceTable(t, q, qd, qdd, x, xd, xdd, trajectory.label(t), trajectory.name)
+
+
+def _nsteps(duration, step):
+    if not (step > 0 and np.isfinite(step)):
+        raise MasterError(f"communication step must be a positive time, got {step} s")
+    if not (duration > 0 and np.isfinite(duration)):
+        raise MasterError(f"duration must be a positive time, got {duration} s")
+    n = int(round(duration / step))
+    if abs(n * step - duration) > 1e-9 * max(1.0, duration):
+        raise MasterError(f"duration {duration} s is not a whole number of steps of {step} s")
+    return n
+
+
+# ------------------------------------------------------------------------ run
+
+@dataclass
+class RunResult:
+    """One co-simulation run.
+
+    ``data`` is a structured array, one row per communication point, with the fields
+    of ``units``: ``time``; ``q``, ``qd`` (joint readings, with sensor noise),
+    ``q_true``, ``qd_true``; ``tau`` (efforts applied over the following step);
+    ``qref``, ``qdref``; ``x`` (true pose), ``x_meas`` (the pose an external tracker
+    sees: true pose + noise), ``xd``, ``xref``; ``label`` (reference segment tag).
+    ``result["q"]`` is a field.
+    """
+
+    data: np.ndarray
+    units: dict
+    robot: str
+    plant: dict
+    controller: dict
+    step: float
+    wall_time: float
+    reference_name: str = ""
+    noise: dict = field(default_factory=dict)
+    saturated: int = 0
+
+    def __getitem__(self, name):
+        return self.data[name]
+
+    def __len__(self):
+        return len(self.data)
+
+    @property
+    def time(self):
+        return self.data["time"]
+
+    def to_recording(self, parameters=None, notes: str = ""):
+        """The run as a ``pkm-recording/1`` :class:`cosim.recording.Recording`.
+
+        Joint readings ``q``/``qd`` as the encoders give them, ``tau`` the efforts
+        applied, ``qref``, and the pose columns from the external tracker
+        (``x_meas``); the segment label goes in an extra column ``label``.
+        """
+        from .recording import Recording
+
+        d = self.data
+        return Recording(robot=self.robot, time=d["time"].copy(), q=d["q"].copy(), qd=d["qd"].copy(),
+                         tau=d["tau"].copy(), qref=d["qref"].copy(), pose=d["x_meas"].copy(),
+                         extra={"label": d["label"].astype(float)}, parameters=dict(parameters or {}),
+                         controller=dict(self.controller), notes=notes)
+
+
+def _dtype(nd):
+    f = [("time", "f8")]
+    for name in ("q", "qd", "q_true", "qd_true", "tau", "qref", "qdref", "x", "x_meas", "xd", "xref"):
+        f.append((name, "f8", (nd,)))
+    f.append(("label", "i4"))
+    return np.dtype(f)
+
+
+def _units(robot, nd):
+    j = JOINT_UNIT.get(robot, "m or rad")
+    pose = POSE_UNITS.get(robot, ["m or rad"] * nd)
+    return {"time": "s", "q": j, "qd": f"{j}/s", "q_true": j, "qd_true": f"{j}/s",
+            "tau": EFFORT_UNIT.get(j, "N or N m"), "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
+            "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
+
+
+def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
+        pose_noise=0.0, seed: int | None = 0, progress: bool | None = None) -> RunResult:
+    """Step ``plant`` and ``controller`` together over the reference's time grid.
+
+    Parameters
+    ----------
+    plant : Plant
+        :class:`FMUPlant` or :class:`CorePlant` (or any object with that interface).
+    controller : callable
+        ``controller(t, q, qd, ref) -> tau`` (see :mod:`cosim.controllers`), called at
+        every communication point with the joint readings.
+    reference : ReferenceTable
+        The reference on the time grid (:func:`make_reference`); its spacing is the
+        communication step.
+    x0, xd0 : array_like, shape (nd,), optional
+        Initial pose [m, rad] and rate (default: the first reference pose, at rest).
+    q_noise, qd_noise : float or array_like
+        Standard deviation of the white noise on the joint readings the controller
+        sees and the recording keeps [m or rad, per second].
+    pose_noise : float or array_like, shape (nd,)
+        Standard deviation of the external tracker's noise on each pose coordinate
+        [m, rad].
+    seed : int, optional
+        Seed of the noise generator.
+    progress : bool, optional
+        Show a tqdm progress bar; by default it appears when the run lasts more than
+        two seconds of wall time.
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    MasterError
+        When the plant or the controller fails; says at which time, and carries the
+        samples taken so far in ``partial``.
+    """
+    from tqdm import tqdm
+
+    t = reference.time
+    n = len(t)
+    if n < 2:
+        raise MasterError("the reference needs at least two communication points")
+    h = float(t[1] - t[0])
+    nd = plant.ndof
+    if reference.q.shape[1] != nd:
+        raise MasterError(f"reference has {reference.q.shape[1]} joints, the plant {nd}")
+    x0 = reference.x[0] if x0 is None else np.asarray(x0, float)
+    rng = np.random.default_rng(seed)
+    sig_q = np.broadcast_to(np.asarray(q_noise, float), (nd,))
+    sig_qd = np.broadcast_to(np.asarray(qd_noise, float), (nd,))
+    sig_x = np.broadcast_to(np.asarray(pose_noise, float), (nd,))
+    for name, s in (("q_noise", sig_q), ("qd_noise", sig_qd), ("pose_noise", sig_x)):
+        if np.any(~np.isfinite(s)) or np.any(s < 0):
+            raise MasterError(f"{name} must be standard deviations >= 0, got {s.tolist()}")
+
+    data = np.zeros(n, dtype=_dtype(nd))
+    data["time"] = t
+    data["qref"] = reference.q
+    data["qdref"] = reference.qd
+    data["xref"] = reference.x
+    data["label"] = reference.label
+    units = _units(plant.robot, nd)
+    ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
+    noise = {"q": sig_q.tolist(), "qd": sig_qd.tolist(), "pose": sig_x.tolist(), "seed": seed}
+
+    def result(rows, wall):
+        return RunResult(data[:rows], units, plant.robot, plant.describe(), ctrl_desc, h, wall, reference.name,
+                         noise, getattr(controller, "saturated", 0))
+
+    start = _time.perf_counter()
+    k = 0
+    bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=(progress is False), leave=False,
+               desc=f"{plant.kind} {reference.name}".strip())
+    try:
+        plant.initialize(float(t[0]), x0, xd0)
+        y = plant.outputs()
+        if hasattr(controller, "reset"):
+            controller.reset(float(t[0]), y.q, y.x)
+        for k in range(n):
+            qm = y.q + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else y.q
+            qdm = y.qd + rng.normal(0.0, 1.0, nd) * sig_qd if np.any(sig_qd) else y.qd
+            xm = y.x + rng.normal(0.0, 1.0, nd) * sig_x if np.any(sig_x) else y.x
+            tau = np.asarray(controller(float(t[k]), qm, qdm, reference.at(k)), float)
+            row = data[k]
+            row["q"], row["qd"], row["q_true"], row["qd_true"] = qm, qdm, y.q, y.qd
+            row["x"], row["x_meas"], row["xd"], row["tau"] = y.x, xm, y.xd, tau
+            if k == n - 1:
+                break
+            plant.set_input(tau)
+            plant.do_step(float(t[k]), h)
+            y = plant.outputs()
+            bar.update(1)
+    except Exception as e:
+        bar.close()
+        raise MasterError(f"{plant.kind} run stopped at t = {t[k]:.6g} s: {e}", result(k, _time.perf_counter() - start)) \
+            from e
+    bar.close()
+    return result(n, _time.perf_counter() - start)

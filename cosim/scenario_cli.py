@@ -1,0 +1,75 @@
+"""``cosim run scenarios/<name>.toml``: run a co-simulation scenario, print its metrics."""
+from __future__ import annotations
+
+from .cli import command
+
+
+def _configure(p):
+    p.add_argument("scenario", help="scenario TOML file (see scenarios/ and docs/scenarios.md)")
+    p.add_argument("--plant", choices=["core", "fmu"], default=None,
+                   help="plant to step: the CS FMU through fmpy or the core directly (default: the file's)")
+    p.add_argument("--duration", type=float, default=None, help="override the duration [s]")
+    p.add_argument("--out", default=None, help="output directory (default: the file's [output] dir or results/<name>)")
+    p.add_argument("--no-figures", action="store_true", help="do not write the figure")
+    p.add_argument("--json", action="store_true", help="print the metrics as JSON")
+
+
+def print_summary(out, file=None) -> None:
+    """A short human-readable summary of a scenario run's metrics."""
+    import sys
+
+    f = file or sys.stdout
+    m = out.metrics
+    res = out.result
+    print(f"scenario {m['scenario']}: robot {m['robot']}, plant {m['plant']['kind']}, controller "
+          f"{m['controller']['type']} (kp {m['controller']['kp']} {m['controller']['kp_unit']}, "
+          f"kd {m['controller']['kd']} {m['controller']['kd_unit']})", file=f)
+    print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall",
+          file=f)
+    if "steady_state" in m:
+        ss = m["steady_state"]
+        for k, v in m["step_info"]["pose"].items():
+            if "RiseTime" in v:
+                print(f"  step of {k} by {v['Amplitude'] * 1e3:+.2f} mm: rise {v['RiseTime'] * 1e3:.1f} ms, "
+                      f"settling (2 %) {v['SettlingTime'] * 1e3:.1f} ms, overshoot {v['Overshoot']:.2f} %", file=f)
+        print("  steady-state joint error qref - q [mm]: " + " ".join(f"{e * 1e3:+.4f}" for e in ss["joint_error"]),
+              file=f)
+        if "predicted_joint_error_equilibrium" in ss:
+            print("  predicted Kp^-1 g                 [mm]: "
+                  + " ".join(f"{e * 1e3:+.4f}" for e in ss["predicted_joint_error_equilibrium"])
+                  + f"   (max relative difference {ss['prediction_relative_error'] * 100:.3f} %)", file=f)
+        else:
+            print(f"  max |e_ss| = {ss['joint_error_max']:.3g} m (predicted 0 with gravity compensation)", file=f)
+        pe = ss["pose_error"]
+        print(f"  steady-state pose error: x y z [um] {pe[0] * 1e6:+.3f} {pe[1] * 1e6:+.3f} {pe[2] * 1e6:+.3f}", file=f)
+    if "tracking" in m:
+        tr = m["tracking"]
+        print(f"  pen-point tracking error: RMS {tr['pen_error_rms'] * 1e6:.4g} um, max {tr['pen_error_max'] * 1e6:.4g} um "
+              f"at t = {tr['pen_error_max_time']:.3f} s; largest effort {tr['effort_max']:.3g} {res.units['tau']}",
+              file=f)
+    if "poses" in m:
+        errs = [p["position_error"] for p in m["poses"]]
+        print(f"  {m['held_poses']} held poses, {sum(p['rows'] for p in m['poses'])} rows while held; position error "
+              f"at hold: max {max(errs) * 1e6:.3g} um" if errs else "  no held poses", file=f)
+    if m["saturated_samples"]:
+        print(f"  actuator saturation active at {m['saturated_samples']} samples", file=f)
+    for k, p in out.files.items():
+        print(f"  {k}: {p}", file=f)
+
+
+@command("run", "run a co-simulation scenario (TOML) against the FMU or the core; export recording, metrics, figure")
+def cmd_run(args):
+    import json
+
+    from .scenario import _json, run_scenario
+
+    out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
+                       figures=False if args.no_figures else None)
+    if args.json:
+        print(json.dumps(out.metrics, indent=2, default=_json))
+    else:
+        print_summary(out)
+    return 0
+
+
+cmd_run.configure = _configure

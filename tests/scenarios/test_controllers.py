@@ -1,0 +1,145 @@
+"""Controllers and the master loop on a plant whose sampled response is known exactly.
+
+The toy plant (conftest) is a double integrator per joint integrated in closed form
+with the effort held over each step, so the master + controller must reproduce
+python-control's zero-order-hold closed loop to round-off: this pins the sampling,
+the hold and the sign conventions independently of any robot.
+"""
+import control
+import numpy as np
+import pytest
+
+from cosim import controllers as ctl
+from cosim import trajectories as tr
+from cosim.master import MasterError, make_reference, run
+
+
+def _forced(sys, t, u, x0):
+    return control.forced_response(sys, T=t, U=u, X0=x0).outputs
+
+
+def test_pd_run_equals_python_control_sampled_loop(toy, toy_plant):
+    kp, kd, dt = np.array([40.0, 25.0]), np.array([6.0, 3.0]), 2e-3
+    x0, x1 = np.array([0.01, -0.02]), np.array([0.03, 0.0])
+    ref = make_reference(toy, tr.step(x0, x1, t_step=0.1), step=dt, duration=1.0)
+    res = run(toy_plant, ctl.pd(ndof=2, kp=kp, kd=kd), ref)
+    for j in range(2):
+        cl = ctl.closed_loop(toy.M[j, j], kp[j], kd[j], dt)
+        u = np.vstack([ref.q[:, j], np.full(len(ref.time), toy.g[j])])
+        y = _forced(cl, ref.time, u, [x0[j], 0.0])
+        np.testing.assert_allclose(res["q"][:, j], y[0], rtol=0, atol=1e-13)
+        np.testing.assert_allclose(res["qref"][:, j] - res["q"][:, j], y[1], rtol=0, atol=1e-13)
+
+
+def test_pd_settles_at_predicted_error_and_pdg_removes_it(toy, toy_plant):
+    kp, kd, dt = 50.0, 8.0, 1e-3
+    x0 = np.array([0.0, 0.0])
+    ref = make_reference(toy, tr.step(x0, x0 + 0.01), step=dt, duration=3.0)
+    res = run(toy_plant, ctl.pd(ndof=2, kp=kp, kd=kd), ref, x0=x0)
+    assert np.all(np.abs(res["q"][-1] - res["q"][0]) > 0.009)   # it did move
+    e_sim = res["qref"][-1] - res["q"][-1]
+    e_pred = ctl.predicted_steady_state_error(toy, ref.x[-1], kp)
+    np.testing.assert_allclose(e_sim, toy.g / kp, rtol=1e-6)   # independent: g / kp by hand
+    np.testing.assert_allclose(e_pred, toy.g / kp, rtol=1e-12)
+    assert ctl.analyse_pd(mass=0.5, kp=kp, kd=kd, dt=dt)["gravity_compliance"] == pytest.approx(1 / kp, rel=1e-9)
+    res = run(toy_plant, ctl.pd_gravity(toy, kp=kp, kd=kd), ref, x0=x0)
+    assert np.max(np.abs(res["qref"][-1] - res["q"][-1])) < 1e-9
+
+
+def test_computed_torque_cancels_mass_and_gravity(toy, toy_plant):
+    """With an exact model each joint error follows the unit-mass loop, whatever M and g."""
+    kp, kd, dt = 400.0, 40.0, 1e-3
+    x0 = np.array([0.0, 0.0])
+    ref = make_reference(toy, tr.step(x0, np.array([0.02, -0.01])), step=dt, duration=0.5)
+    res = run(toy_plant, ctl.computed_torque(toy, kp=kp, kd=kd), ref, x0=x0)
+    cl = ctl.closed_loop(1.0, kp, kd, dt)
+    for j in range(2):
+        y = _forced(cl, ref.time, np.vstack([ref.q[:, j], np.zeros(len(ref.time))]), [0.0, 0.0])
+        np.testing.assert_allclose(res["q"][:, j], y[0], atol=1e-13)
+
+
+def test_computed_torque_tracks_a_blend_with_small_error(toy, toy_plant):
+    traj = tr.waypoints([[0, 0], [0.02, 0.01], [0.0, 0.03]], move_time=0.3, hold_time=0.1)
+    ref = make_reference(toy, traj, step=1e-3, duration=traj.duration)
+    res = run(toy_plant, ctl.computed_torque(toy, kp=(2 * np.pi * 20) ** 2, kd=2 * 2 * np.pi * 20), ref)
+    err = np.abs(res["qref"] - res["q"]).max()
+    # The held effort lags the feed-forward by half a step: error ~ jerk h / (2 wn^2), well below 1e-5 m.
+    assert 0 < err < 2e-6
+    # without feedback the hold alone would leave a larger drift
+    res_ff = run(toy_plant, ctl.computed_torque(toy, kp=0.0, kd=0.0), ref)
+    assert np.abs(res_ff["qref"] - res_ff["q"]).max() > 3 * err
+
+
+def test_design_places_the_continuous_poles():
+    d = ctl.design_pd(mass=0.3, bandwidth_hz=5.0, damping=0.7, dt=None)
+    wn = 2 * np.pi * 5.0
+    assert d.kp == pytest.approx(0.3 * wn**2) and d.kd == pytest.approx(2 * 0.7 * wn * 0.3)
+    want = np.roots([1, 2 * 0.7 * wn, wn**2])
+    np.testing.assert_allclose(np.sort_complex(d.poles), np.sort_complex(want), rtol=1e-9)
+    # 0.7 damping: overshoot exp(-pi z / sqrt(1 - z^2)) = 4.6 %
+    assert d.step_info["Overshoot"] == pytest.approx(100 * np.exp(-np.pi * 0.7 / np.sqrt(1 - 0.49)), rel=2e-2)
+    ds = ctl.design_pd(mass=0.3, bandwidth_hz=5.0, damping=0.7, dt=1e-3)
+    assert ds.stable and np.all(np.abs(ds.poles) < 1)
+    assert ds.step_info["RiseTime"] == pytest.approx(d.step_info["RiseTime"], rel=0.03)
+    # far too slow a sampling for that bandwidth: python-control says unstable
+    assert not ctl.design_pd(mass=0.3, bandwidth_hz=200.0, damping=0.7, dt=5e-3).stable
+
+
+def test_step_metrics_of_a_first_order_response():
+    tau, dt = 0.05, 1e-4
+    t = np.arange(0, 1.0, dt)
+    y = 2.0 + 0.3 * (1 - np.exp(-t / tau))
+    info = ctl.step_metrics(t, y, y0=2.0, yfinal=2.3)
+    assert info["RiseTime"] == pytest.approx(tau * np.log(9), abs=2 * dt)
+    assert info["SettlingTime"] == pytest.approx(tau * np.log(50), abs=2 * dt)
+    assert info["Overshoot"] == 0 and info["Amplitude"] == pytest.approx(0.3)
+    with pytest.raises(ctl.ControllerError, match="zero amplitude"):
+        ctl.step_metrics(t, np.ones_like(t))
+
+
+def test_saturation_clips_and_counts(toy, toy_plant):
+    ref = make_reference(toy, tr.step([0, 0], [0.5, 0.5]), step=1e-3, duration=0.2)
+    c = ctl.pd(ndof=2, kp=1000.0, kd=10.0, saturation=[3.0, 2.0])
+    res = run(toy_plant, c, ref, x0=[0, 0])
+    assert np.all(np.abs(res["tau"]) <= [3.0, 2.0])
+    np.testing.assert_allclose(res["tau"][0], [3.0, 2.0])
+    assert res.saturated > 10 and c.describe()["saturation"] == [3.0, 2.0]
+
+
+def test_bad_gains_and_measurements_are_named():
+    with pytest.raises(ctl.ControllerError, match="kp of joint 2 is negative"):
+        ctl.pd(ndof=3, kp=[1.0, -2.0, 1.0], kd=1.0)
+    with pytest.raises(ctl.ControllerError, match="kd has 2 entries, expected 3"):
+        ctl.pd(ndof=3, kp=1.0, kd=[1.0, 2.0])
+    with pytest.raises(ctl.ControllerError, match="saturation of joint 1"):
+        ctl.pd(ndof=2, kp=1.0, kd=1.0, saturation=0.0)
+    c = ctl.pd(ndof=2, kp=1.0, kd=1.0)
+    ref = ctl.Reference(np.zeros(2), np.zeros(2), np.zeros(2))
+    with pytest.raises(ctl.ControllerError, match=r"t = 0.25 s: q of joint 2 is nan"):
+        c(0.25, np.array([0.0, np.nan]), np.zeros(2), ref)
+    with pytest.raises(ctl.ControllerError, match="exactly one of"):
+        ctl.design_pd(mass=1.0, damping=1.0)
+
+
+def test_master_failure_names_time_and_keeps_samples(toy):
+    from conftest import ToyPlant
+
+    ref = make_reference(toy, tr.step([0, 0], [0.01, 0]), step=1e-3, duration=0.2)
+    with pytest.raises(MasterError, match=r"stopped at t = 0.05 s: toy plant: leg 2") as e:
+        run(ToyPlant(toy, fail_at=0.0505), ctl.pd(ndof=2, kp=10.0, kd=1.0), ref, x0=[0, 0])
+    assert len(e.value.partial) == 50
+    with pytest.raises(MasterError, match="not a whole number of steps"):
+        make_reference(toy, tr.step([0, 0], [0.01, 0]), step=1e-3, duration=0.2005)
+
+
+def test_sensor_and_tracker_noise(toy, toy_plant):
+    ref = make_reference(toy, tr.step([0, 0], [0.0, 0.0]), step=1e-3, duration=2.0)
+    kw = dict(q_noise=1e-5, pose_noise=[2e-5, 0.0], seed=3)
+    res = run(toy_plant, ctl.pd_gravity(toy, kp=100.0, kd=10.0), ref, **kw)
+    assert np.std(res["q"][:, 0] - res["q_true"][:, 0]) == pytest.approx(1e-5, rel=0.1)
+    assert np.std(res["x_meas"][:, 0] - res["x"][:, 0]) == pytest.approx(2e-5, rel=0.1)
+    np.testing.assert_array_equal(res["x_meas"][:, 1], res["x"][:, 1])
+    again = run(toy_plant, ctl.pd_gravity(toy, kp=100.0, kd=10.0), ref, **kw)
+    np.testing.assert_array_equal(again["q"], res["q"])
+    with pytest.raises(MasterError, match="pose_noise must be standard deviations >= 0"):
+        run(toy_plant, ctl.pd(ndof=2, kp=1.0, kd=1.0), ref, pose_noise=-1.0)
