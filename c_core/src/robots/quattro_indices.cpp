@@ -1,0 +1,138 @@
+// C API specific to the Quattro: the kinematic and dynamic performance indices of seed 003
+// ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points.
+#include <cstring>
+
+#include "common/guard.hpp"
+#include "robots/quattro.hpp"
+
+using namespace pkm;
+using namespace pkm::quattro;
+
+namespace {
+
+struct IndexInfo {
+  const char* name;
+  const char* unit;
+};
+
+constexpr IndexInfo kIndex[PKM_QUATTRO_NINDEX] = {
+    {"mu_T", "1"},    {"mu_xy", "1"},    {"mu_z", "1"},  {"mu_T_eig", "1"}, {"mu_xy_eig", "1"}, {"mu_z_eig", "1"},
+    {"kappa_T", "1"}, {"dTIM", "1"},     {"dTIM_xy", "kg2"}, {"dTIM_x", "kg"}, {"dTIM_y", "kg"}, {"dTIM_z", "kg"},
+    {"kat", "kg"},    {"kat_xy", "kg"},  {"kat_x", "kg"}, {"kat_y", "kg"},    {"kat_z", "kg"},     {"Fcc_z", "N"},
+    {"Fcc_xy", "N"},  {"Fgr", "N"},      {"alfa_z", "m/s2"}, {"alfa_x", "m/s2"}};
+
+const Model& quattro_model(const pkm_model* m, pkm_data* d) {
+  const RobotModel& rm = prepare(m, d);
+  if (std::strcmp(m->robot->name(), "quattro") != 0)
+    throw Error(PKM_ERR_ARGUMENT, "this function is for the 'quattro' robot, not '" + m->robot_name + "'");
+  return static_cast<const Model&>(rm);
+}
+
+// Largest scale s of a unit task acceleration a such that |J^-T M a| <= tau_max on every
+// arm: the seed's alfa (ch. 5.6-5.7), from rest and without gravity.
+double alfa(const Model& m, const Pose& p, const Eigen::Matrix4d& M, const Eigen::Vector4d& a) {
+  const Eigen::Vector4d tau = solve_JT(p, M * a, "alfa index");
+  const double t = tau.cwiseAbs().maxCoeff();
+  if (!(t > 0)) throw Error(PKM_ERR_SINGULAR, "alfa index: zero torque for a unit acceleration");
+  return m.tau_arm_max() / t;
+}
+
+void indices(const Model& m, const double* x, double* out) {
+  Pose p;
+  pose_kinematics(m, x, p);
+  const Eigen::Matrix4d JD = m.br * p.J;
+  double* o = out;
+  // Kinematic indices (ch. 3): sub-matrix variants on columns of the normalised J.
+  const Eigen::Matrix<double, 4, 3> JT = JD.leftCols<3>();
+  const Eigen::Matrix<double, 4, 2> Jxy = JD.leftCols<2>();
+  o[0] = 1 / std::sqrt((JT.transpose() * JT).determinant());
+  o[1] = 1 / std::sqrt((Jxy.transpose() * Jxy).determinant());
+  o[2] = 1 / JD.col(2).norm();
+  // Eigenvalue variants: the seed reads the smallest eigenvalue of JD^T JD as the rotation,
+  // the largest as z and the two middle ones as the horizontal directions.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(JD.transpose() * JD, Eigen::EigenvaluesOnly);
+  const Eigen::Vector4d l = es.eigenvalues();
+  o[3] = 1 / std::sqrt(l[1] * l[2] * l[3]);
+  o[4] = 1 / std::sqrt(l[1] * l[2]);
+  o[5] = 1 / std::sqrt(l[3]);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es3(JT.transpose() * JT, Eigen::EigenvaluesOnly);
+  o[6] = std::sqrt(es3.eigenvalues()[2] / es3.eigenvalues()[0]);
+  // GIMRE (ch. 4).
+  const Eigen::Matrix4d Nm = gimre(m, p);
+  const Eigen::Matrix3d TIM = Nm.topLeftCorner<3, 3>();
+  const double tr = TIM.trace();
+  o[7] = 27 * TIM.determinant() / (tr * tr * tr);
+  const Eigen::Matrix<double, 2, 4> N2 = Nm.topRows<2>();
+  o[8] = std::sqrt((N2 * N2.transpose()).determinant());
+  o[9] = Nm.row(0).norm();
+  o[10] = Nm.row(1).norm();
+  o[11] = Nm.row(2).norm();
+  // Dynamic model (ch. 5): mass indices from L = M[0:3,0:3].
+  const Eigen::Matrix4d M = mass_matrix(m, p);
+  const double kx = M.block<1, 3>(0, 0).norm(), ky = M.block<1, 3>(1, 0).norm(), kz = M.block<1, 3>(2, 0).norm();
+  o[12] = (kx + ky + kz) / 3;
+  o[13] = (kx + ky) / 2;
+  o[14] = kx;
+  o[15] = ky;
+  o[16] = kz;
+  const double s2 = std::sqrt(0.5);
+  const Eigen::Vector4d vz(0, 0, 1, 0), vxy(s2, s2, 0, 0);
+  o[17] = velocity_force(m, p, vz).head<3>().norm();
+  o[18] = velocity_force(m, p, vxy).head<3>().norm();
+  o[19] = gravity_force(m, p).head<3>().norm();
+  o[20] = alfa(m, p, M, vz);
+  o[21] = alfa(m, p, M, Eigen::Vector4d(-s2, -s2, 0, 0));
+  for (int k = 0; k < PKM_QUATTRO_NINDEX; ++k)
+    if (!std::isfinite(o[k]))
+      throw Error(PKM_ERR_SINGULAR, std::string("index ") + kIndex[k].name + " is not finite at this pose");
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* pkm_quattro_index_name(int i) { return i >= 0 && i < PKM_QUATTRO_NINDEX ? kIndex[i].name : ""; }
+const char* pkm_quattro_index_unit(int i) { return i >= 0 && i < PKM_QUATTRO_NINDEX ? kIndex[i].unit : ""; }
+
+int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double* x, double* out, int* status) {
+  const Model* qm = nullptr;
+  int s = guard(d, [&] {
+    qm = &quattro_model(m, d);
+    check_out(x, "x");
+    check_out(out, "out");
+  });
+  if (s != PKM_OK) return s;
+  return run_batch(d, n, status, out, PKM_QUATTRO_NINDEX, [&](size_t k) {
+    check_finite(x + 4 * k, 4, "pose x");
+    indices(*qm, x + 4 * k, out + PKM_QUATTRO_NINDEX * k);
+  });
+}
+
+int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, double* Nout) {
+  return guard(d, [&] {
+    const Model& qm = quattro_model(m, d);
+    check_finite(x, 4, "pose x");
+    check_out(Nout, "N");
+    Pose p;
+    pose_kinematics(qm, x, p);
+    Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> out(Nout);
+    out = gimre(qm, p);
+  });
+}
+
+int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A, double* B, double* C) {
+  return guard(d, [&] {
+    const Model& qm = quattro_model(m, d);
+    check_finite(x, 4, "pose x");
+    Pose p;
+    pose_kinematics(qm, x, p);
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < 3; ++j) {
+        if (A) A[3 * i + j] = qm.A[i][j];
+        if (B) B[3 * i + j] = p.B[i][j];
+        if (C) C[3 * i + j] = p.C[i][j];
+      }
+  });
+}
+
+}  // extern "C"
