@@ -1,0 +1,464 @@
+// fmu_gen -- writes an FMU's modelDescription.xml AND the C table of its value
+// references (fmu_vars.h) from one source: the model folder's variables.txt plus the
+// core's own parameter table (names, units, descriptions, defaults come from pkm.h, they
+// are not declared twice).  Run by CMake at build time; see docs/fmu.md.
+//
+//   fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>
+//
+// Exit status 0 on success; otherwise a message naming the file and line on stderr.
+#include <cctype>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pkm/pkm.h"
+
+namespace {
+
+struct Fail : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Var {
+  std::string name, causality, channel, unit, description;
+  int index = 0;       // within the channel
+  bool integer = false;
+  bool has_start = false;
+  double start = 0;
+};
+
+std::string trim(const std::string& s) {
+  size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream is(s);
+  while (std::getline(is, cur, sep)) out.push_back(trim(cur));
+  return out;
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
+  return s;
+}
+
+std::string xml(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+std::string cstr(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c;
+  }
+  return o + "\"";
+}
+
+std::string num(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// Dimensionless quantities carry no unit attribute.
+bool no_unit(const std::string& u) { return u.empty() || u == "1" || u == "-"; }
+
+// SI base-unit exponents of a unit string such as "m/s2", "kg.m2", "N.s/m", "kg m^2".
+// Returns false for a unit it cannot read (written without BaseUnit then).
+bool base_unit(const std::string& unit, std::map<std::string, int>& exps) {
+  static const std::map<std::string, std::map<std::string, int>> sym = {
+      {"m", {{"m", 1}}},   {"kg", {{"kg", 1}}}, {"s", {{"s", 1}}},  {"A", {{"A", 1}}}, {"K", {{"K", 1}}},
+      {"mol", {{"mol", 1}}}, {"cd", {{"cd", 1}}}, {"rad", {{"rad", 1}}},
+      {"N", {{"kg", 1}, {"m", 1}, {"s", -2}}},   {"J", {{"kg", 1}, {"m", 2}, {"s", -2}}},
+      {"W", {{"kg", 1}, {"m", 2}, {"s", -3}}},   {"Pa", {{"kg", 1}, {"m", -1}, {"s", -2}}},
+      {"Hz", {{"s", -1}}}};
+  std::string u = unit;
+  int sign = 1;
+  std::string tok;
+  auto flush = [&]() -> bool {
+    if (tok.empty()) return true;
+    size_t k = 0;
+    while (k < tok.size() && std::isalpha((unsigned char)tok[k])) ++k;
+    std::string s = tok.substr(0, k), e = tok.substr(k);
+    if (!e.empty() && e[0] == '^') e = e.substr(1);
+    int p = 1;
+    if (!e.empty()) {
+      try {
+        size_t used = 0;
+        p = std::stoi(e, &used);
+        if (used != e.size()) return false;
+      } catch (...) {
+        return false;
+      }
+    }
+    auto it = sym.find(s);
+    if (it == sym.end()) return false;
+    for (auto& kv : it->second) exps[kv.first] += sign * p * kv.second;
+    tok.clear();
+    return true;
+  };
+  for (char c : u) {
+    if (c == '.' || c == '*' || c == ' ') {
+      if (!flush()) return false;
+    } else if (c == '/') {
+      if (!flush() || sign < 0) return false;  // one '/' at most
+      sign = -1;
+    } else {
+      tok += c;
+    }
+  }
+  return flush();
+}
+
+struct Table {
+  std::map<std::string, std::string> head;
+  std::vector<Var> vars;
+};
+
+// Channel name -> (is Integer); the plant's enum is fmu_channel in fmu_plant.h.
+const std::map<std::string, std::pair<std::string, bool>>& channels() {
+  static const std::map<std::string, std::pair<std::string, bool>> c = {
+      {"param", {"FMU_CH_PARAM", false}},
+      {"tau", {"FMU_CH_TAU", false}},
+      {"pose", {"FMU_CH_POSE", false}},
+      {"twist", {"FMU_CH_TWIST", false}},
+      {"accel", {"FMU_CH_ACCEL", false}},
+      {"q", {"FMU_CH_Q", false}},
+      {"qd", {"FMU_CH_QD", false}},
+      {"pose0", {"FMU_CH_POSE0", false}},
+      {"twist0", {"FMU_CH_TWIST0", false}},
+      {"sing", {"FMU_CH_SING", false}},
+      {"energy", {"FMU_CH_ENERGY", false}},
+      {"solver.method", {"FMU_CH_SOLVER_METHOD", true}},
+      {"solver.rtol", {"FMU_CH_SOLVER_RTOL", false}},
+      {"solver.atol", {"FMU_CH_SOLVER_ATOL", false}},
+      {"solver.maxStep", {"FMU_CH_SOLVER_MAX_STEP", false}},
+      {"solver.maxSteps", {"FMU_CH_SOLVER_MAX_STEPS", true}},
+      {"solver.singMin", {"FMU_CH_SOLVER_SING_MIN", false}},
+  };
+  return c;
+}
+
+Table read_table(const std::string& path, pkm_model*& model) {
+  std::ifstream in(path);
+  if (!in) throw Fail(path + ": cannot open");
+  Table t;
+  std::string line;
+  int ln = 0, nd = 0;
+  std::vector<double> home;
+  pkm_sim_options so;
+  pkm_sim_default_options(&so);
+  auto where = [&] { return path + ":" + std::to_string(ln) + ": "; };
+  while (std::getline(in, line)) {
+    ++ln;
+    std::string s = trim(line);
+    if (s.empty() || s[0] == '#') continue;
+    if (s[0] == '@') {
+      size_t sp = s.find_first_of(" \t");
+      std::string key = sp == std::string::npos ? s.substr(1) : s.substr(1, sp - 1);
+      std::string val = sp == std::string::npos ? "" : trim(s.substr(sp));
+      if (key == "core-parameters") {
+        if (!model) throw Fail(where() + "@core-parameters before @robot");
+        for (int i = 0; i < pkm_model_nparam(model); ++i) {
+          Var v;
+          v.name = pkm_param_name(model, i);
+          v.causality = "parameter";
+          v.channel = "param";
+          v.index = i;
+          v.unit = pkm_param_unit(model, i);
+          v.description = pkm_param_description(model, i);
+          v.has_start = true;
+          v.start = pkm_param_get(model, i);
+          t.vars.push_back(v);
+        }
+        t.head[key] = "1";
+        continue;
+      }
+      t.head[key] = val;
+      if (key == "robot") {
+        char err[1024] = "";
+        const char* set = t.head.count("paramset") ? t.head["paramset"].c_str() : nullptr;
+        model = pkm_model_create(val.c_str(), set, err, sizeof err);
+        if (!model) throw Fail(where() + "robot '" + val + "': " + err);
+        nd = pkm_model_ndof(model);
+        home.assign(nd, 0.0);
+        int st = pkm_model_home(model, home.data());
+        if (st != PKM_OK) throw Fail(where() + "the core has no home pose for '" + val + "'");
+      }
+      continue;
+    }
+    if (!model) throw Fail(where() + "variable rows need @robot first");
+    auto f = split(s, '|');
+    if (f.size() != 5) throw Fail(where() + "expected 'causality | name | channel | unit | description'");
+    std::string caus = f[0], name = f[1], chan = f[2];
+    if (caus != "input" && caus != "output" && caus != "parameter")
+      throw Fail(where() + "causality '" + caus + "' (use input, output or parameter)");
+    // "pose[3]" -> channel pose, index 3; "q" with a {i} name -> family.
+    std::string cname = chan;
+    int cindex = -1;
+    size_t lb = chan.find('[');
+    if (lb != std::string::npos) {
+      cname = chan.substr(0, lb);
+      cindex = std::stoi(chan.substr(lb + 1));
+    }
+    auto ci = channels().find(cname);
+    if (ci == channels().end() || cname == "param") throw Fail(where() + "unknown channel '" + chan + "'");
+    bool family = name.find("{i}") != std::string::npos;
+    if (family && cindex >= 0) throw Fail(where() + "a {i} family takes the channel without an index");
+    if (!family && cindex < 0) cindex = 0;  // single-valued channels (solver.*)
+    int n = family ? nd : 1;
+    for (int k = 0; k < n; ++k) {
+      Var v;
+      v.causality = caus;
+      v.channel = cname;
+      v.index = family ? k : cindex;
+      v.integer = ci->second.second;
+      v.name = replace_all(name, "{i}", std::to_string(k + 1));
+      v.description = replace_all(f[4], "{i}", std::to_string(k + 1));
+      v.unit = f[3];
+      if (caus == "input") {
+        v.has_start = true;
+        v.start = 0.0;
+      } else if (caus == "parameter") {
+        v.has_start = true;
+        if (cname == "pose0") v.start = home.at(v.index);
+        else if (cname == "twist0") v.start = 0.0;
+        else if (cname == "solver.method") v.start = so.method;
+        else if (cname == "solver.rtol") v.start = so.rtol;
+        else if (cname == "solver.atol") v.start = so.atol;
+        else if (cname == "solver.maxStep") v.start = so.max_step;
+        else if (cname == "solver.maxSteps") v.start = (double)so.max_steps;
+        else if (cname == "solver.singMin") v.start = so.sing_min;
+        else throw Fail(where() + "channel '" + cname + "' cannot be a parameter");
+      }
+      t.vars.push_back(v);
+    }
+  }
+  for (const char* k : {"identifier", "robot", "core-parameters"})
+    if (!t.head.count(k)) throw Fail(path + ": missing @" + std::string(k));
+  return t;
+}
+
+// Checks that the table describes a complete plant: each state, derivative and input
+// exactly once, names unique.
+void check(const Table& t, int nd, const std::string& path) {
+  std::set<std::string> names;
+  std::map<std::pair<std::string, int>, int> seen;
+  for (const auto& v : t.vars) {
+    if (!names.insert(v.name).second) throw Fail(path + ": variable name '" + v.name + "' used twice");
+    if (++seen[{v.channel, v.index}] > 1 && v.channel != "param")
+      throw Fail(path + ": channel " + v.channel + "[" + std::to_string(v.index) + "] used twice");
+  }
+  for (const char* ch : {"tau", "pose", "twist", "accel", "pose0", "twist0"})
+    for (int k = 0; k < nd; ++k)
+      if (!seen.count({ch, k}))
+        throw Fail(path + ": channel " + std::string(ch) + "[" + std::to_string(k) + "] is missing");
+  for (const char* ch : {"solver.method", "solver.rtol", "solver.atol", "solver.maxStep", "solver.maxSteps",
+                         "solver.singMin"})
+    if (!seen.count({ch, 0})) throw Fail(path + ": channel " + std::string(ch) + " is missing");
+  for (const auto& v : t.vars) {
+    if ((v.channel == "tau") != (v.causality == "input"))
+      throw Fail(path + ": " + v.name + ": inputs are the tau channel, and only inputs");
+    if ((v.channel == "pose" || v.channel == "twist" || v.channel == "accel" || v.channel == "q" ||
+         v.channel == "qd" || v.channel == "sing" || v.channel == "energy") != (v.causality == "output"))
+      throw Fail(path + ": " + v.name + ": causality " + v.causality + " does not fit channel " + v.channel);
+    if (v.channel == "sing" && (v.index < 0 || v.index > 1)) throw Fail(path + ": " + v.name + ": sing index 0 or 1");
+    if (v.channel == "energy" && (v.index < 0 || v.index > 1))
+      throw Fail(path + ": " + v.name + ": energy index 0 or 1");
+    if (v.index < 0 || v.index >= nd) {
+      bool small = v.channel == "sing" || v.channel == "energy" || v.channel == "param" ||
+                   v.channel.rfind("solver.", 0) == 0;
+      if (!small) throw Fail(path + ": " + v.name + ": index " + std::to_string(v.index) + " out of range");
+    }
+  }
+}
+
+// 128-bit FNV-1a of the description text, written as a GUID: the same table and core
+// give the same GUID, any change gives another.
+std::string guid_of(const std::string& text) {
+  uint64_t h1 = 14695981039346656037ull, h2 = 0x6c62272e07bb0142ull;
+  for (unsigned char c : text) {
+    h1 = (h1 ^ c) * 1099511628211ull;
+    h2 = (h2 ^ c) * 0x100000001b3ull + 0x9e3779b97f4a7c15ull;
+  }
+  char b[64];
+  std::snprintf(b, sizeof b, "{%08x-%04x-%04x-%04x-%012llx}", (unsigned)(h1 >> 32), (unsigned)((h1 >> 16) & 0xffff),
+                (unsigned)(h1 & 0xffff), (unsigned)(h2 >> 48), (unsigned long long)(h2 & 0xffffffffffffull));
+  return b;
+}
+
+std::string model_description(const Table& t, int nd, const std::string& guid) {
+  const std::string id = t.head.at("identifier");
+  std::ostringstream o;
+  std::string desc = t.head.count("description") ? t.head.at("description") : id;
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<!-- Generated by fmu_gen from the model folder's variables.txt and the core's parameter table. -->\n"
+    << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << xml(id) << "\" guid=\"" << guid
+    << "\"\n  description=\"" << xml(desc) << "\"\n  generationTool=\"pkm fmu_gen\" version=\"" << PKM_FMU_VERSION
+    << "\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n";
+  const char* common =
+      " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\""
+      " canNotUseMemoryManagementFunctions=\"true\" canBeInstantiatedOnlyOncePerProcess=\"false\""
+      " needsExecutionTool=\"false\"";
+  o << "  <ModelExchange modelIdentifier=\"" << xml(id) << "\"" << common
+    << " completedIntegratorStepNotNeeded=\"false\"/>\n";
+  o << "  <CoSimulation modelIdentifier=\"" << xml(id) << "\"" << common
+    << " canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
+       " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\"/>\n";
+
+  std::set<std::string> units;
+  for (const auto& v : t.vars)
+    if (!no_unit(v.unit)) units.insert(v.unit);
+  if (!units.empty()) {
+    o << "  <UnitDefinitions>\n";
+    for (const auto& u : units) {
+      std::map<std::string, int> e;
+      o << "    <Unit name=\"" << xml(u) << "\"";
+      if (base_unit(u, e)) {
+        o << "><BaseUnit";
+        for (const auto& kv : e)
+          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
+        o << "/></Unit>\n";
+      } else {
+        o << "/>\n";
+      }
+    }
+    o << "  </UnitDefinitions>\n";
+  }
+  o << "  <LogCategories>\n"
+       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
+       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
+       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
+       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
+       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
+       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
+       "  </LogCategories>\n";
+  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  o << "  <ModelVariables>\n";
+  std::map<std::pair<std::string, int>, size_t> pos;  // (channel, index) -> 1-based index
+  for (size_t k = 0; k < t.vars.size(); ++k) pos[{t.vars[k].channel, t.vars[k].index}] = k + 1;
+  for (size_t k = 0; k < t.vars.size(); ++k) {
+    const Var& v = t.vars[k];
+    std::string variability = v.causality == "parameter" ? "fixed" : (v.integer ? "discrete" : "continuous");
+    o << "    <!-- " << k + 1 << " -->\n    <ScalarVariable name=\"" << xml(v.name) << "\" valueReference=\"" << k + 1
+      << "\" description=\"" << xml(v.description) << "\" causality=\"" << v.causality << "\" variability=\""
+      << variability << "\"";
+    if (v.causality == "parameter") o << " initial=\"exact\"";
+    if (v.causality == "output") o << " initial=\"calculated\"";
+    o << ">\n      <" << (v.integer ? "Integer" : "Real");
+    if (!v.integer && !no_unit(v.unit)) o << " unit=\"" << xml(v.unit) << "\"";
+    if (v.channel == "twist") o << " derivative=\"" << pos.at({"pose", v.index}) << "\"";
+    if (v.channel == "accel") o << " derivative=\"" << pos.at({"twist", v.index}) << "\"";
+    if (v.has_start) o << " start=\"" << (v.integer ? std::to_string((long long)v.start) : num(v.start)) << "\"";
+    o << "/>\n    </ScalarVariable>\n";
+  }
+  o << "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n";
+  std::vector<size_t> outs;
+  for (size_t k = 0; k < t.vars.size(); ++k)
+    if (t.vars[k].causality == "output") outs.push_back(k + 1);
+  for (size_t k : outs) o << "      <Unknown index=\"" << k << "\"/>\n";
+  // The state vector is (pose, twist): its derivatives are (twist, accel) in that order.
+  o << "    </Outputs>\n    <Derivatives>\n";
+  for (const char* ch : {"twist", "accel"})
+    for (int k = 0; k < nd; ++k) o << "      <Unknown index=\"" << pos.at({ch, k}) << "\"/>\n";
+  // Every output is calculated (states from x0/xd0, derivatives included).
+  o << "    </Derivatives>\n    <InitialUnknowns>\n";
+  for (size_t k : outs) o << "      <Unknown index=\"" << k << "\"/>\n";
+  o << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
+  return o.str();
+}
+
+std::string c_ident(const std::string& name) {
+  std::string o;
+  for (char c : name) {
+    bool ok = std::isalnum((unsigned char)c);
+    if (ok) o += c;
+    else if (o.empty() || o.back() != '_') o += '_';
+  }
+  while (!o.empty() && o.back() == '_') o.pop_back();
+  return o;
+}
+
+std::string vars_header(const Table& t, int nd, int np, const std::string& guid, const std::string& src) {
+  std::ostringstream o;
+  o << "/* Generated by fmu_gen from " << src << " and the core's parameter table: do not edit.\n"
+    << " * The value references here and modelDescription.xml come from the same run. */\n"
+    << "#ifndef PKM_FMU_VARS_H\n#define PKM_FMU_VARS_H\n\n#include \"fmu_plant.h\"\n\n"
+    << "#define FMU_IDENTIFIER " << cstr(t.head.at("identifier")) << "\n"
+    << "#define FMU_GUID " << cstr(guid) << "\n"
+    << "#define FMU_ROBOT " << cstr(t.head.at("robot")) << "\n"
+    << "#define FMU_PARAM_SET " << cstr(t.head.count("paramset") ? t.head.at("paramset") : "default") << "\n"
+    << "#define FMU_NDOF " << nd << "\n#define FMU_NPARAM " << np << "\n#define FMU_NVARS " << t.vars.size()
+    << "\n\n/* Value references by name ([i] and '.' become '_'). */\nenum fmu_vr {\n";
+  std::set<std::string> ids;
+  for (size_t k = 0; k < t.vars.size(); ++k) {
+    std::string id = "FMU_VR_" + c_ident(t.vars[k].name);
+    if (!ids.insert(id).second) throw Fail("C name " + id + " of " + t.vars[k].name + " is not unique");
+    o << "  " << id << " = " << k + 1 << ",\n";
+  }
+  o << "};\n\nstatic const fmu_var FMU_VARS[FMU_NVARS] = {\n";
+  for (size_t k = 0; k < t.vars.size(); ++k) {
+    const Var& v = t.vars[k];
+    const char* caus = v.causality == "parameter" ? "FMU_PARAMETER" : v.causality == "input" ? "FMU_INPUT" : "FMU_OUTPUT";
+    o << "    {" << k + 1 << "u, " << cstr(v.name) << ", " << (v.integer ? "FMU_INTEGER" : "FMU_REAL") << ", " << caus
+      << ", " << channels().at(v.channel).first << ", " << v.index << ", " << num(v.start) << "},\n";
+  }
+  o << "};\n\n#endif\n";
+  return o.str();
+}
+
+void write_if_changed(const std::string& path, const std::string& text) {
+  std::ifstream in(path);
+  std::stringstream old;
+  old << in.rdbuf();
+  if (in && old.str() == text) return;  // keep the timestamp: no needless rebuilds
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw Fail(path + ": cannot write");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 4) {
+    std::cerr << "usage: fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>\n";
+    return 2;
+  }
+  pkm_model* model = nullptr;
+  try {
+    Table t = read_table(argv[1], model);
+    int nd = pkm_model_ndof(model), np = pkm_model_nparam(model);
+    check(t, nd, argv[1]);
+    std::string guid = guid_of(model_description(t, nd, "{}"));
+    write_if_changed(argv[2], model_description(t, nd, guid));
+    write_if_changed(argv[3], vars_header(t, nd, np, guid, argv[1]));
+  } catch (const std::exception& e) {
+    std::cerr << "fmu_gen: " << e.what() << "\n";
+    pkm_model_destroy(model);
+    return 1;
+  }
+  pkm_model_destroy(model);
+  return 0;
+}

@@ -1,0 +1,136 @@
+/*
+ * fmu_plant.h -- the contract between the generic FMI 2.0 layer (fmi2_functions.c)
+ * and the robot-generic plant (plant.c), and the shape of the variable table that
+ * fmu_gen writes for each model folder (fmu/<robot>/variables.txt -> <ID>_vars.h).
+ *
+ * Conventions:
+ *  1. The plant owns a pkm_model, a pkm_data and (Co-Simulation) a pkm_sim: one plant
+ *     per FMU instance, no global mutable state.
+ *  2. Every plant function returns a pkm status (PKM_OK or a negative pkm_status) and,
+ *     on failure, leaves a message saying what and where in plant_error().
+ *  3. A variable is addressed by its row in the generated table: the table gives the
+ *     channel (what the value means to the plant) and the index within the channel.
+ *  4. Parameter changes are pending until plant_apply(): then they go through
+ *     pkm_param_set + pkm_model_validate, so the core decides what is valid.
+ */
+#ifndef PKM_FMU_PLANT_H
+#define PKM_FMU_PLANT_H
+
+#include <stddef.h>
+
+#include "pkm/pkm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------ variable table */
+
+typedef enum fmu_type { FMU_REAL = 0, FMU_INTEGER = 1 } fmu_type;
+
+typedef enum fmu_causality {
+  FMU_PARAMETER = 0, /* fixed, settable before fmi2ExitInitializationMode */
+  FMU_INPUT = 1,
+  FMU_OUTPUT = 2
+} fmu_causality;
+
+/* What a variable means to the plant.  Indexed channels use fmu_var.index (0-based). */
+typedef enum fmu_channel {
+  FMU_CH_PARAM = 0,     /* core parameter number index (pkm_param_*)                   */
+  FMU_CH_TAU,           /* actuator effort tau[index], input                            */
+  FMU_CH_POSE,          /* pose x[index]: continuous state                              */
+  FMU_CH_TWIST,         /* pose rate xd[index]: continuous state, der(pose[index])      */
+  FMU_CH_ACCEL,         /* pose acceleration xdd[index] = der(twist[index])             */
+  FMU_CH_Q,             /* joint position q[index]                                      */
+  FMU_CH_QD,            /* joint velocity qd[index]                                     */
+  FMU_CH_POSE0,         /* initial pose x0[index]                                       */
+  FMU_CH_TWIST0,        /* initial pose rate xd0[index]                                 */
+  FMU_CH_SING,          /* singularity measure index (0: inverse-kinematic, 1: direct)  */
+  FMU_CH_ENERGY,        /* energy index (0: kinetic, 1: potential)                      */
+  FMU_CH_SOLVER_METHOD, /* Integer: PKM_BDF or PKM_ADAMS                                */
+  FMU_CH_SOLVER_RTOL,
+  FMU_CH_SOLVER_ATOL,
+  FMU_CH_SOLVER_MAX_STEP,
+  FMU_CH_SOLVER_MAX_STEPS, /* Integer */
+  FMU_CH_SOLVER_SING_MIN,
+  FMU_CH_COUNT
+} fmu_channel;
+
+typedef struct fmu_var {
+  unsigned vr;          /* value reference (row + 1)                                    */
+  const char* name;     /* Modelica-style name, as in modelDescription.xml              */
+  fmu_type type;
+  fmu_causality causality;
+  fmu_channel channel;
+  int index;
+  double start;         /* start value (parameters, inputs)                             */
+} fmu_var;
+
+/* One FMU: written by each model folder's model.c from its generated header. */
+typedef struct fmu_model_desc {
+  const char* identifier; /* modelIdentifier, name of the .so                            */
+  const char* guid;
+  const char* robot;      /* pkm_model_create robot name                                 */
+  const char* param_set;
+  int ndof;
+  int nparam;             /* core parameters in the table (all of them)                  */
+  int nvars;
+  const fmu_var* vars;    /* vars[k].vr == k + 1                                         */
+} fmu_model_desc;
+
+/* Defined by the model folder (fmu/<robot>/model.c). */
+extern const fmu_model_desc FMU_MODEL;
+
+/* --------------------------------------------------------------- the plant */
+
+typedef struct fmu_plant fmu_plant;
+
+/* Creates the core model of desc->robot, checks that the table's parameter rows match
+ * the core's parameter table (names and order), and sets every value to its start.
+ * Returns NULL and writes the reason into err[errlen]. */
+fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen);
+void plant_destroy(fmu_plant* p);
+const char* plant_error(const fmu_plant* p);
+
+/* Back to the start values of every variable (fmi2Reset). */
+int plant_reset(fmu_plant* p);
+
+/* Pending values: parameters, initial state, solver settings, inputs. */
+int plant_set_real(fmu_plant* p, const fmu_var* v, double value);
+int plant_set_integer(fmu_plant* p, const fmu_var* v, int value);
+/* Values, computing outputs on demand (kinematics, dynamics) from the current state. */
+int plant_get_real(fmu_plant* p, const fmu_var* v, double* value);
+int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value);
+
+/* Relative tolerance imposed by the importer (fmi2SetupExperiment), <= 0 for none. */
+void plant_set_tolerance(fmu_plant* p, double rtol);
+/* Applies pending parameters and solver settings (pkm_param_set + pkm_model_validate),
+ * then puts the state at (t0, x0, xd0) and checks it (reachable, not singular). */
+int plant_start(fmu_plant* p, double t0);
+/* 1 if parameters or the initial state changed since the last plant_start. */
+int plant_dirty(const fmu_plant* p);
+
+/* Co-Simulation: integrates to t_end with the input held.  On a stroke limit, a
+ * singularity or a CVODE failure the state is left at the event time. */
+int plant_step(fmu_plant* p, double t_end);
+double plant_time(const fmu_plant* p);
+
+/* Model Exchange: states s = (x, xd), derivatives ds = (xd, xdd); n = 2 * ndof. */
+int plant_nstates(const fmu_plant* p);
+void plant_set_time(fmu_plant* p, double t);
+int plant_set_states(fmu_plant* p, const double* s, size_t n);
+int plant_get_states(const fmu_plant* p, double* s, size_t n);
+int plant_get_derivatives(fmu_plant* p, double* ds, size_t n);
+/* Checks an accepted ME step: PKM_OK, or PKM_ERR_SINGULAR / the core's IK status when
+ * the pose left the usable workspace (the importer should stop there). */
+int plant_check_state(fmu_plant* p);
+
+/* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate). */
+size_t plant_snapshot_size(const fmu_plant* p); /* in doubles */
+void plant_snapshot_save(const fmu_plant* p, double* buf);
+int plant_snapshot_load(fmu_plant* p, const double* buf);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* PKM_FMU_PLANT_H */

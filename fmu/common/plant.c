@@ -1,0 +1,478 @@
+/*
+ * plant.c -- the robot-generic plant behind every PKM FMU.
+ *
+ * The plant holds the state (t, x, xd), the input tau and the pending parameters of one
+ * FMU instance, and computes outputs by calling the reference core (pkm.h).  It contains
+ * no physics: everything a robot-specific table can name (channels of fmu_plant.h) is
+ * one core call.  See docs/fmu.md.
+ */
+#include "fmu_plant.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { V_KIN = 1, V_ACC = 2, V_SING = 4, V_ENERGY = 8 };
+
+struct fmu_plant {
+  const fmu_model_desc* desc;
+  int cs;            /* Co-Simulation (owns a pkm_sim) or Model Exchange */
+  int nd, np;
+  pkm_model* m;
+  pkm_data* d;
+  pkm_sim* sim;
+
+  double t;
+  double *x, *xd, *tau, *x0, *xd0, *par; /* par: pending parameter values */
+  double *xdd, *q, *qd;                   /* computed on demand (valid bits) */
+  double sing[2], energy[2];
+  unsigned valid;
+
+  pkm_sim_options opt;         /* pending solver settings                    */
+  pkm_sim_options opt_applied; /* settings the current sim was created with  */
+  double tol_override;         /* importer's tolerance, <= 0 for none        */
+  int started;                 /* plant_start succeeded since the last reset */
+  int dirty;                   /* a parameter or x0/xd0 changed since then   */
+  int model_ok;                /* the core model is validated                */
+
+  char msg[2048];
+};
+
+static int fail(fmu_plant* p, int status, const char* fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(p->msg, sizeof p->msg, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+const char* plant_error(const fmu_plant* p) { return p ? p->msg : "plant is NULL"; }
+double plant_time(const fmu_plant* p) { return p->t; }
+int plant_nstates(const fmu_plant* p) { return 2 * p->nd; }
+int plant_dirty(const fmu_plant* p) { return p->dirty || !p->started; }
+
+/* Name of the table row of a channel entry, for messages. */
+static const char* var_name(const fmu_plant* p, fmu_channel ch, int index) {
+  for (int k = 0; k < p->desc->nvars; ++k)
+    if (p->desc->vars[k].channel == ch && p->desc->vars[k].index == index) return p->desc->vars[k].name;
+  return "?";
+}
+
+static void set_starts(fmu_plant* p) {
+  pkm_sim_default_options(&p->opt);
+  for (int k = 0; k < p->desc->nvars; ++k) {
+    const fmu_var* v = &p->desc->vars[k];
+    switch (v->channel) {
+      case FMU_CH_PARAM: p->par[v->index] = v->start; break;
+      case FMU_CH_TAU: p->tau[v->index] = v->start; break;
+      case FMU_CH_POSE0: p->x0[v->index] = v->start; break;
+      case FMU_CH_TWIST0: p->xd0[v->index] = v->start; break;
+      case FMU_CH_SOLVER_METHOD: p->opt.method = (int)v->start; break;
+      case FMU_CH_SOLVER_RTOL: p->opt.rtol = v->start; break;
+      case FMU_CH_SOLVER_ATOL: p->opt.atol = v->start; break;
+      case FMU_CH_SOLVER_MAX_STEP: p->opt.max_step = v->start; break;
+      case FMU_CH_SOLVER_MAX_STEPS: p->opt.max_steps = (long)v->start; break;
+      case FMU_CH_SOLVER_SING_MIN: p->opt.sing_min = v->start; break;
+      default: break;
+    }
+  }
+  memcpy(p->x, p->x0, sizeof(double) * p->nd);
+  memcpy(p->xd, p->xd0, sizeof(double) * p->nd);
+  p->t = 0;
+  p->valid = 0;
+  p->started = 0;
+  p->dirty = 1;
+  p->tol_override = 0;
+}
+
+fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
+  char cerr[1024] = "";
+  pkm_model* m = pkm_model_create(desc->robot, desc->param_set, cerr, sizeof cerr);
+  if (!m) {
+    snprintf(err, errlen, "cannot create the core model of robot '%s': %s", desc->robot, cerr);
+    return NULL;
+  }
+  /* The table was generated from the core's parameter table; a mismatch means the .so
+   * was built against another core and its modelDescription.xml would lie. */
+  int np = pkm_model_nparam(m), nd = pkm_model_ndof(m), seen = 0;
+  if (nd != desc->ndof || np != desc->nparam) {
+    snprintf(err, errlen, "robot '%s' has %d dof and %d parameters in the core, the FMU table %d and %d",
+             desc->robot, nd, np, desc->ndof, desc->nparam);
+    pkm_model_destroy(m);
+    return NULL;
+  }
+  for (int k = 0; k < desc->nvars; ++k) {
+    const fmu_var* v = &desc->vars[k];
+    if (v->channel != FMU_CH_PARAM) continue;
+    ++seen;
+    if (v->index < 0 || v->index >= np || strcmp(pkm_param_name(m, v->index), v->name) != 0) {
+      snprintf(err, errlen, "FMU variable %s does not match core parameter %d (%s)", v->name, v->index,
+               pkm_param_name(m, v->index));
+      pkm_model_destroy(m);
+      return NULL;
+    }
+  }
+  if (seen != np) {
+    snprintf(err, errlen, "the FMU table lists %d of the core's %d parameters", seen, np);
+    pkm_model_destroy(m);
+    return NULL;
+  }
+
+  fmu_plant* p = (fmu_plant*)calloc(1, sizeof *p);
+  double* buf = (double*)calloc((size_t)(8 * nd + np), sizeof(double));
+  pkm_data* d = pkm_data_create(m);
+  if (!p || !buf || !d) {
+    snprintf(err, errlen, "out of memory");
+    free(p);
+    free(buf);
+    pkm_data_destroy(d);
+    pkm_model_destroy(m);
+    return NULL;
+  }
+  p->desc = desc;
+  p->cs = cosimulation;
+  p->nd = nd;
+  p->np = np;
+  p->m = m;
+  p->d = d;
+  p->x = buf;
+  p->xd = p->x + nd;
+  p->tau = p->xd + nd;
+  p->x0 = p->tau + nd;
+  p->xd0 = p->x0 + nd;
+  p->xdd = p->xd0 + nd;
+  p->q = p->xdd + nd;
+  p->qd = p->q + nd;
+  p->par = p->qd + nd;
+  p->model_ok = 1;
+  set_starts(p);
+  return p;
+}
+
+void plant_destroy(fmu_plant* p) {
+  if (!p) return;
+  pkm_sim_destroy(p->sim);
+  pkm_data_destroy(p->d);
+  pkm_model_destroy(p->m);
+  free(p->x);
+  free(p);
+}
+
+int plant_reset(fmu_plant* p) {
+  set_starts(p);
+  p->msg[0] = '\0';
+  return PKM_OK;
+}
+
+void plant_set_tolerance(fmu_plant* p, double rtol) {
+  if (rtol != p->tol_override) p->dirty = 1;
+  p->tol_override = rtol;
+}
+
+/* ----------------------------------------------------------------- set / get */
+
+int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
+  int i = v->index;
+  switch (v->channel) {
+    case FMU_CH_TAU:
+      /* An input is used at once by the next step: a NaN must not get that far. */
+      if (!isfinite(value))
+        return fail(p, PKM_ERR_ARGUMENT, "input %s = %g at t = %.9g s is not finite", v->name, value, p->t);
+      p->tau[i] = value;
+      p->valid &= ~(unsigned)V_ACC;
+      return PKM_OK;
+    case FMU_CH_PARAM: p->par[i] = value; break;
+    case FMU_CH_POSE0: p->x0[i] = value; break;
+    case FMU_CH_TWIST0: p->xd0[i] = value; break;
+    case FMU_CH_SOLVER_RTOL: p->opt.rtol = value; break;
+    case FMU_CH_SOLVER_ATOL: p->opt.atol = value; break;
+    case FMU_CH_SOLVER_MAX_STEP: p->opt.max_step = value; break;
+    case FMU_CH_SOLVER_SING_MIN: p->opt.sing_min = value; break;
+    default: return fail(p, PKM_ERR_ARGUMENT, "variable %s cannot be set", v->name);
+  }
+  p->dirty = 1;
+  return PKM_OK;
+}
+
+int plant_set_integer(fmu_plant* p, const fmu_var* v, int value) {
+  switch (v->channel) {
+    case FMU_CH_SOLVER_METHOD: p->opt.method = value; break;
+    case FMU_CH_SOLVER_MAX_STEPS: p->opt.max_steps = value; break;
+    default: return fail(p, PKM_ERR_ARGUMENT, "variable %s cannot be set", v->name);
+  }
+  p->dirty = 1;
+  return PKM_OK;
+}
+
+static int need_model(fmu_plant* p, const char* what) {
+  if (!p->started || !p->model_ok)
+    return fail(p, PKM_ERR_ARGUMENT, "%s is computed from the state, which exists after initialization", what);
+  return PKM_OK;
+}
+
+static int core_fail(fmu_plant* p, int s, const char* what) {
+  return fail(p, s, "%s at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
+}
+
+static int ensure(fmu_plant* p, unsigned bit, const char* what) {
+  if (p->valid & bit) return PKM_OK;
+  int s = need_model(p, what);
+  if (s) return s;
+  switch (bit) {
+    case V_KIN:
+      if ((s = pkm_ik(p->m, p->d, p->x, p->q))) return core_fail(p, s, "inverse kinematics");
+      if ((s = pkm_joint_velocity(p->m, p->d, p->x, p->xd, p->qd))) return core_fail(p, s, "joint velocity");
+      break;
+    case V_ACC:
+      if ((s = pkm_forward_dynamics(p->m, p->d, p->x, p->xd, p->tau, p->xdd)))
+        return core_fail(p, s, "forward dynamics");
+      break;
+    case V_SING:
+      if ((s = pkm_singularity(p->m, p->d, p->x, p->sing))) return core_fail(p, s, "singularity measure");
+      break;
+    case V_ENERGY:
+      if ((s = pkm_energy(p->m, p->d, p->x, p->xd, &p->energy[0], &p->energy[1])))
+        return core_fail(p, s, "energy");
+      break;
+  }
+  p->valid |= bit;
+  return PKM_OK;
+}
+
+int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
+  int i = v->index, s = PKM_OK;
+  switch (v->channel) {
+    case FMU_CH_PARAM: *value = p->par[i]; break;
+    case FMU_CH_TAU: *value = p->tau[i]; break;
+    case FMU_CH_POSE: *value = p->x[i]; break;
+    case FMU_CH_TWIST: *value = p->xd[i]; break;
+    case FMU_CH_POSE0: *value = p->x0[i]; break;
+    case FMU_CH_TWIST0: *value = p->xd0[i]; break;
+    case FMU_CH_SOLVER_RTOL: *value = p->opt.rtol; break;
+    case FMU_CH_SOLVER_ATOL: *value = p->opt.atol; break;
+    case FMU_CH_SOLVER_MAX_STEP: *value = p->opt.max_step; break;
+    case FMU_CH_SOLVER_SING_MIN: *value = p->opt.sing_min; break;
+    case FMU_CH_ACCEL:
+      if (!(s = ensure(p, V_ACC, v->name))) *value = p->xdd[i];
+      break;
+    case FMU_CH_Q:
+      if (!(s = ensure(p, V_KIN, v->name))) *value = p->q[i];
+      break;
+    case FMU_CH_QD:
+      if (!(s = ensure(p, V_KIN, v->name))) *value = p->qd[i];
+      break;
+    case FMU_CH_SING:
+      if (!(s = ensure(p, V_SING, v->name))) *value = p->sing[i];
+      break;
+    case FMU_CH_ENERGY:
+      if (!(s = ensure(p, V_ENERGY, v->name))) *value = p->energy[i];
+      break;
+    default: return fail(p, PKM_ERR_ARGUMENT, "variable %s is not a Real", v->name);
+  }
+  return s;
+}
+
+int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value) {
+  switch (v->channel) {
+    case FMU_CH_SOLVER_METHOD: *value = p->opt.method; return PKM_OK;
+    case FMU_CH_SOLVER_MAX_STEPS: *value = (int)p->opt.max_steps; return PKM_OK;
+    default: return fail(p, PKM_ERR_ARGUMENT, "variable %s is not an Integer", v->name);
+  }
+}
+
+/* ------------------------------------------------------------ apply / start */
+
+static int same_options(const pkm_sim_options* a, const pkm_sim_options* b) {
+  return a->method == b->method && a->rtol == b->rtol && a->atol == b->atol && a->max_step == b->max_step &&
+         a->max_steps == b->max_steps && a->sing_min == b->sing_min;
+}
+
+/* Pending parameters into the core model, pending solver settings into a (new) sim. */
+static int apply(fmu_plant* p) {
+  char cerr[1024] = "";
+  int changed = !p->model_ok;
+  for (int i = 0; i < p->np; ++i) {
+    double cur = pkm_param_get(p->m, i);
+    if (p->par[i] == cur) continue;
+    int s = pkm_param_set(p->m, i, p->par[i], cerr, sizeof cerr);
+    if (s) {
+      p->model_ok = 0;
+      return fail(p, s, "%s", cerr);
+    }
+    changed = 1;
+  }
+  if (changed) {
+    int s = pkm_model_validate(p->m, cerr, sizeof cerr);
+    p->model_ok = (s == PKM_OK);
+    if (s) return fail(p, s, "%s", cerr);
+  }
+
+  pkm_sim_options o = p->opt;
+  if (p->tol_override > 0) o.rtol = p->tol_override;
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS)
+    return fail(p, PKM_ERR_PARAMETER, "%s = %d: use %d (BDF) or %d (Adams)",
+                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_BDF, PKM_ADAMS);
+  if (!(o.rtol > 0) || !(o.atol > 0))
+    return fail(p, PKM_ERR_PARAMETER, "%s = %g and %s = %g must both be > 0", var_name(p, FMU_CH_SOLVER_RTOL, 0),
+                o.rtol, var_name(p, FMU_CH_SOLVER_ATOL, 0), o.atol);
+  if (!(o.max_step >= 0) || o.max_steps <= 0 || !(o.sing_min >= 0))
+    return fail(p, PKM_ERR_PARAMETER, "%s = %g (>= 0), %s = %ld (> 0), %s = %g (>= 0): out of range",
+                var_name(p, FMU_CH_SOLVER_MAX_STEP, 0), o.max_step, var_name(p, FMU_CH_SOLVER_MAX_STEPS, 0),
+                o.max_steps, var_name(p, FMU_CH_SOLVER_SING_MIN, 0), o.sing_min);
+  if (p->cs && (changed || !p->sim || !same_options(&o, &p->opt_applied))) {
+    pkm_sim_destroy(p->sim);
+    p->sim = pkm_sim_create(p->m, &o, cerr, sizeof cerr);
+    if (!p->sim) return fail(p, PKM_ERR_INTEGRATION, "cannot create the CVODE simulator: %s", cerr);
+  }
+  p->opt_applied = o;
+  return PKM_OK;
+}
+
+static int check_pose(fmu_plant* p, const char* what) {
+  int s = pkm_ik(p->m, p->d, p->x, p->q);
+  if (s) return fail(p, s, "%s at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
+  s = pkm_singularity(p->m, p->d, p->x, p->sing);
+  if (s) return fail(p, s, "%s at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
+  if (p->sing[1] < p->opt_applied.sing_min)
+    return fail(p, PKM_ERR_SINGULAR,
+                "%s at t = %.9g s is (nearly) singular: direct singularity measure %.3g < %s = %.3g", what, p->t,
+                p->sing[1], var_name(p, FMU_CH_SOLVER_SING_MIN, 0), p->opt_applied.sing_min);
+  return PKM_OK;
+}
+
+int plant_start(fmu_plant* p, double t0) {
+  p->started = 0;
+  p->valid = 0;
+  int s = apply(p);
+  if (s) return s;
+  for (int i = 0; i < p->nd; ++i) {
+    if (!isfinite(p->x0[i]))
+      return fail(p, PKM_ERR_ARGUMENT, "initial pose %s = %g is not finite", var_name(p, FMU_CH_POSE0, i), p->x0[i]);
+    if (!isfinite(p->xd0[i]))
+      return fail(p, PKM_ERR_ARGUMENT, "initial rate %s = %g is not finite", var_name(p, FMU_CH_TWIST0, i),
+                  p->xd0[i]);
+  }
+  p->t = t0;
+  memcpy(p->x, p->x0, sizeof(double) * p->nd);
+  memcpy(p->xd, p->xd0, sizeof(double) * p->nd);
+  if ((s = check_pose(p, "initial pose"))) return s;
+  if (p->cs && (s = pkm_sim_reset(p->sim, t0, p->x, p->xd)))
+    return fail(p, s, "CVODE reset at t = %.9g s: %s", t0, pkm_sim_error(p->sim));
+  p->started = 1;
+  p->dirty = 0;
+  return PKM_OK;
+}
+
+/* ------------------------------------------------------------- co-simulation */
+
+int plant_step(fmu_plant* p, double t_end) {
+  int s = pkm_sim_set_input(p->sim, p->tau);
+  if (s) return fail(p, s, "input at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+  s = pkm_sim_advance(p->sim, t_end);
+  int g = pkm_sim_get_state(p->sim, &p->t, p->x, p->xd);
+  p->valid = 0;
+  if (s) return fail(p, s, "%s", pkm_sim_error(p->sim));
+  if (g) return fail(p, g, "reading the CVODE state: %s", pkm_sim_error(p->sim));
+  return PKM_OK;
+}
+
+/* ------------------------------------------------------------ model exchange */
+
+void plant_set_time(fmu_plant* p, double t) {
+  if (t != p->t) p->valid = 0;
+  p->t = t;
+}
+
+int plant_set_states(fmu_plant* p, const double* s, size_t n) {
+  if (n != (size_t)(2 * p->nd))
+    return fail(p, PKM_ERR_ARGUMENT, "%zu continuous states given, the model has %d", n, 2 * p->nd);
+  for (int i = 0; i < 2 * p->nd; ++i)
+    if (!isfinite(s[i]))
+      return fail(p, PKM_ERR_ARGUMENT, "continuous state %d (%s) = %g at t = %.9g s is not finite", i,
+                  i < p->nd ? var_name(p, FMU_CH_POSE, i) : var_name(p, FMU_CH_TWIST, i - p->nd), s[i], p->t);
+  memcpy(p->x, s, sizeof(double) * p->nd);
+  memcpy(p->xd, s + p->nd, sizeof(double) * p->nd);
+  p->valid = 0;
+  return PKM_OK;
+}
+
+int plant_get_states(const fmu_plant* p, double* s, size_t n) {
+  if (n != (size_t)(2 * p->nd)) return PKM_ERR_ARGUMENT;
+  memcpy(s, p->x, sizeof(double) * p->nd);
+  memcpy(s + p->nd, p->xd, sizeof(double) * p->nd);
+  return PKM_OK;
+}
+
+int plant_get_derivatives(fmu_plant* p, double* ds, size_t n) {
+  if (n != (size_t)(2 * p->nd))
+    return fail(p, PKM_ERR_ARGUMENT, "%zu derivatives asked for, the model has %d states", n, 2 * p->nd);
+  int s = ensure(p, V_ACC, "state derivative");
+  if (s) return s;
+  memcpy(ds, p->xd, sizeof(double) * p->nd);
+  memcpy(ds + p->nd, p->xdd, sizeof(double) * p->nd);
+  return PKM_OK;
+}
+
+int plant_check_state(fmu_plant* p) {
+  p->valid &= ~(unsigned)(V_KIN | V_SING);
+  int s = check_pose(p, "pose");
+  if (!s) p->valid |= V_SING; /* check_pose filled q and sing, qd is not computed */
+  return s;
+}
+
+/* ------------------------------------------------------------------ snapshot */
+
+/* Layout (doubles): t, started, dirty, model_ok, tol_override, 6 solver settings,
+ * x, xd, tau, x0, xd0 (nd each), par (np). */
+enum { SNAP_HEAD = 11 };
+
+size_t plant_snapshot_size(const fmu_plant* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np); }
+
+void plant_snapshot_save(const fmu_plant* p, double* b) {
+  b[0] = p->t;
+  b[1] = p->started;
+  b[2] = p->dirty;
+  b[3] = p->model_ok;
+  b[4] = p->tol_override;
+  b[5] = p->opt.method;
+  b[6] = p->opt.rtol;
+  b[7] = p->opt.atol;
+  b[8] = p->opt.max_step;
+  b[9] = (double)p->opt.max_steps;
+  b[10] = p->opt.sing_min;
+  double* v = b + SNAP_HEAD;
+  const double* src[5] = {p->x, p->xd, p->tau, p->x0, p->xd0};
+  for (int k = 0; k < 5; ++k, v += p->nd) memcpy(v, src[k], sizeof(double) * p->nd);
+  memcpy(v, p->par, sizeof(double) * p->np);
+}
+
+int plant_snapshot_load(fmu_plant* p, const double* b) {
+  int started = b[1] != 0, dirty = b[2] != 0;
+  p->tol_override = b[4];
+  p->opt.method = (int)b[5];
+  p->opt.rtol = b[6];
+  p->opt.atol = b[7];
+  p->opt.max_step = b[8];
+  p->opt.max_steps = (long)b[9];
+  p->opt.sing_min = b[10];
+  const double* v = b + SNAP_HEAD;
+  double* dst[5] = {p->x, p->xd, p->tau, p->x0, p->xd0};
+  for (int k = 0; k < 5; ++k, v += p->nd) memcpy(dst[k], v, sizeof(double) * p->nd);
+  memcpy(p->par, v, sizeof(double) * p->np);
+  p->t = b[0];
+  p->valid = 0;
+  p->started = 0;
+  p->dirty = 1;
+  if (!started) return PKM_OK;
+  /* The snapshot's parameters and settings were in force when it was taken: put them
+   * back into the core (a no-op when unchanged) and restart CVODE at its state. */
+  int s = apply(p);
+  if (s) return s;
+  if (p->cs && (s = pkm_sim_reset(p->sim, p->t, p->x, p->xd)))
+    return fail(p, s, "CVODE reset at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+  p->started = 1;
+  p->dirty = dirty;
+  return PKM_OK;
+}
