@@ -1,0 +1,155 @@
+// 6-PUS robot (seeds 000 and 001): private interface shared by sixpus.cpp (parameters,
+// compile, registration, 6-PUS specific C functions), sixpus_kinematics.cpp and
+// sixpus_dynamics.cpp.  See docs/6pus.md for the equations and conventions.
+//
+// Notation (all in the world frame unless said otherwise):
+//   pose x = (p, a), p = (x, y, z), a = (rx, ry, rz), R = Rx(rx) Ry(ry) Rz(rz)
+//   omega = E(a) a_dot                          (platform angular velocity)
+//   leg i: rP = R p_i,  P = p + rP,  S = S0 + q s,  w = P - S,  |w| = L,  c = s.w
+//   twist nu = (p_dot, omega) = T xd,  T = blockdiag(I, E)
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <string>
+
+#include "common/robot.hpp"
+
+namespace pkm {
+namespace sixpus {
+
+using V3 = Eigen::Vector3d;
+using M3 = Eigen::Matrix3d;
+using V6 = Eigen::Matrix<double, 6, 1>;
+using M6 = Eigen::Matrix<double, 6, 6>;
+using M6r = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+
+constexpr int NLEG = 6;
+
+struct Model final : RobotModel {
+  V3 p_local[NLEG];  // platform attachment points in the platform frame [m]
+  V3 S0[NLEG];       // slider position at q = 0 [m]
+  V3 s[NLEG];        // rail directions (unit within 1e-6, used as given) [1]
+  double ss[NLEG];   // s.s
+  double L[NLEG];
+  double branch[NLEG];  // +1: slider on the -s side of P (s.w > 0), -1: on the +s side
+  double m_leg[NLEG], m_slider[NLEG];
+  double qmin[NLEG], qmax[NLEG];
+  double m_platform;
+  V3 I_platform;  // principal moments about the platform frame origin (= its CoM) [kg m2]
+  double m_payload;
+  V3 c_payload;  // payload offset in the platform frame [m]
+  V3 g;          // gravity [m/s2]
+  double r_char;  // mean |p_i|: length scale of the rotation columns in measures[1] [m]
+  double home[6];
+};
+
+// Position-level state of one leg at a pose.
+struct Leg {
+  V3 rP;     // R p_i
+  V3 w;      // P - S
+  double q;  // stroke
+  double c;  // s.w
+};
+
+// Rotation and angular-velocity map of a pose.
+struct Frame {
+  M3 R;
+  M3 E;  // omega = E a_dot
+  double sx, cx, sy, cy;
+};
+
+inline void frame_of(const double* x, Frame& f) {
+  const double sx = std::sin(x[3]), cx = std::cos(x[3]);
+  const double sy = std::sin(x[4]), cy = std::cos(x[4]);
+  const double sz = std::sin(x[5]), cz = std::cos(x[5]);
+  f.sx = sx, f.cx = cx, f.sy = sy, f.cy = cy;
+  f.R << cy * cz, -cy * sz, sy,                       //
+      sx * sy * cz + cx * sz, -sx * sy * sz + cx * cz, -sx * cy,  //
+      -cx * sy * cz + sx * sz, cx * sy * sz + sx * cz, cx * cy;
+  f.E << 1, 0, sy,  //
+      0, cx, -sx * cy,  //
+      0, sx, cx * cy;
+}
+
+// dE/dt for the Euler-angle rates ad.
+inline M3 Edot_of(const Frame& f, const double* ad) {
+  M3 Ed;
+  Ed << 0, 0, f.cy * ad[1],  //
+      0, -f.sx * ad[0], -f.cx * f.cy * ad[0] + f.sx * f.sy * ad[1],  //
+      0, f.cx * ad[0], -f.sx * f.cy * ad[0] - f.cx * f.sy * ad[1];
+  return Ed;
+}
+
+// How strictly inverse kinematics treats a leg.
+enum class Strokes { check, ignore };
+
+// Closed-form inverse kinematics of every leg (seed 000 eq. 2.17a/b).  Throws
+// PKM_ERR_UNREACHABLE / PKM_ERR_SINGULAR naming the leg and the pose, and with
+// Strokes::check PKM_ERR_JOINT_LIMIT naming the leg and the stroke.
+void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes strokes);
+
+// Pose as text for error messages.
+std::string pose_text(const double* x);
+
+// Twist-space Jacobian rows: qd_i = jt_i . nu with jt_i = (w, rP x w) / c.
+inline V6 twist_row(const Leg& l) {
+  V6 j;
+  j.head<3>() = l.w / l.c;
+  j.tail<3>() = l.rP.cross(l.w) / l.c;
+  return j;
+}
+
+// Leg velocities at (x, xd): P_dot, qd, w_dot.
+struct LegRates {
+  V3 Pd, wd;
+  double qd;
+};
+inline void leg_rates(const Model& m, int i, const Leg& l, const V3& pd, const V3& om, LegRates& r) {
+  r.Pd = pd + om.cross(l.rP);
+  r.qd = l.w.dot(r.Pd) / l.c;
+  r.wd = r.Pd - r.qd * m.s[i];
+}
+
+const Model& model_of(const RobotModel& rm);
+
+class SixPus final : public Robot {
+ public:
+  const char* name() const override { return "6pus"; }
+  int ndof() const override { return 6; }
+  std::vector<ParamSpec> param_specs(const std::string& set) const override;
+  std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
+                                      const std::vector<double>& values) const override;
+  void home(const RobotModel&, double* x) const override;
+  // Rail friction, rotor inertia and the sensor model are the drive layer's
+  // (dynamics/drive.hpp): its parameters are "rail[i].coulomb", "rail[i].viscous", ...
+  const char* joint_prefix() const override { return "rail"; }
+  const char* joint_noun() const override { return "slider"; }
+  bool joints_angular() const override { return false; }
+
+  void ik(const RobotModel&, RobotData&, const double* x, double* q) const override;
+  void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx, double* Jq,
+                 double* J) const override;
+  void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
+                    double* Jdot) const override;
+  void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
+  void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
+          const pkm_fk_options& opt, double* x, pkm_fk_info& info) const override;
+  void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
+                          const double* xdd, double* qdd) const override;
+
+  void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                        const double* xdd, double* tau) const override;
+  void mass_matrix(const RobotModel&, RobotData&, const double* x, double* M) const override;
+  void forward_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                        const double* tau, double* xdd) const override;
+  void energy(const RobotModel&, RobotData&, const double* x, const double* xd, double* kinetic,
+              double* potential) const override;
+};
+
+// J = Jq^-1 Jx (row-major) and measures; shared by singularity() and compile().
+void jacobian_of(const Model& m, const Frame& f, const Leg* legs, M6r& J);
+void singularity_measures(const Model& m, const Frame& f, const Leg* legs, double* measures);
+
+}  // namespace sixpus
+}  // namespace pkm
