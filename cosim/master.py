@@ -146,9 +146,10 @@ class CorePlant(Plant):
 class FMUPlant(Plant):
     """A Co-Simulation FMU driven through fmpy (``fmpy.fmi2.FMU2Slave``).
 
-    Variables are addressed by name; the names follow the FMU's
-    ``modelDescription.xml`` (``tau[i]`` inputs, ``q[i]``/``qd[i]`` joint outputs, the
-    pose and its rate, the initial pose parameters), see ``NAMES``.
+    Variables are addressed by name, as in the FMU's ``modelDescription.xml``:
+    ``tau[i]`` inputs, ``q[i]``/``qd[i]`` joint outputs, the pose coordinates
+    (6-PUS ``x, y, z, rx, ry, rz``), their rates (``xd``...), the initial pose and rate
+    parameters (``x0``..., ``xd0``...), see ``NAMES`` and ``POSE``.
 
     Parameters
     ----------
@@ -159,22 +160,17 @@ class FMUPlant(Plant):
     rtol, atol : float, optional
         CVODE tolerances inside the FMU (set if the FMU exposes them).
     names : dict, optional
-        Overrides of ``NAMES`` (format strings with ``{i}``, 1-based).
+        Overrides of the names of a channel (``"tau"``, ``"q"``, ``"qd"``, ``"x"``,
+        ``"xd"``, ``"x0"``, ``"xd0"``): a format string of the 1-based index ``{i}`` or
+        a list of nd names.
     """
 
     kind = "fmu"
-    #: variable names: each a format string of the 1-based coordinate index i
-    NAMES = {
-        "tau": "tau[{i}]",
-        "q": "q[{i}]",
-        "qd": "qd[{i}]",
-        "x": "pose[{i}]",
-        "xd": "twist[{i}]",
-        "x0": "pose_start[{i}]",
-        "xd0": "twist_start[{i}]",
-        "rtol": "solver.rtol",
-        "atol": "solver.atol",
-    }
+    #: variable names of the joint channels: format strings of the 1-based joint index i
+    NAMES = {"tau": "tau[{i}]", "q": "q[{i}]", "qd": "qd[{i}]", "rtol": "solver.rtol", "atol": "solver.atol"}
+    #: pose coordinate names of each robot; the FMU names the rate "<c>d", the initial
+    #: pose "<c>0" and the initial rate "<c>d0" (fmu/<robot>/variables.txt)
+    POSE = {"6pus": ["x", "y", "z", "rx", "ry", "rz"], "quattro": ["x", "y", "z", "theta"], "fourbar": ["X"]}
 
     def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = None,
                  atol: float | None = None, names: dict | None = None, instance_name: str = "plant"):
@@ -186,11 +182,13 @@ class FMUPlant(Plant):
         if self.md.coSimulation is None:
             raise MasterError(f"{self.path}: the FMU has no Co-Simulation interface")
         self.vars = {v.name: v for v in self.md.modelVariables}
-        self.names = dict(self.NAMES, **(names or {}))
         self.ndof = sum(1 for v in self.md.modelVariables if v.causality == "input")
         if self.ndof == 0:
             raise MasterError(f"{self.path}: the FMU has no inputs (expected the actuator efforts)")
         self.robot = self._robot()
+        pose = self.POSE.get(self.robot, [f"x{i}" for i in range(1, self.ndof + 1)])
+        self.names = {**self.NAMES, "x": pose, "xd": [c + "d" for c in pose], "x0": [c + "0" for c in pose],
+                      "xd0": [c + "d0" for c in pose], **(names or {})}
         self.parameters = dict(parameters or {})
         self.rtol, self.atol = rtol, atol
         self.vr = {key: self._refs(key) for key in ("tau", "q", "qd", "x", "xd", "x0", "xd0")}
@@ -206,9 +204,12 @@ class FMUPlant(Plant):
         return {6: "6pus", 4: "quattro", 1: "fourbar"}.get(self.ndof, "unknown")
 
     def _refs(self, key):
+        spec = self.names[key]
+        names = [spec.format(i=i) for i in range(1, self.ndof + 1)] if isinstance(spec, str) else list(spec)
+        if len(names) != self.ndof:
+            raise MasterError(f"{self.path}: {len(names)} names for {key}, the FMU has {self.ndof} inputs")
         refs = []
-        for i in range(1, self.ndof + 1):
-            name = self.names[key].format(i=i)
+        for name in names:
             if name not in self.vars:
                 raise MasterError(f"{self.path}: no variable {name!r} in the FMU "
                                   f"(expected for {key}; pass names={{'{key}': ...}} to map it)")
@@ -232,7 +233,7 @@ class FMUPlant(Plant):
         if self._instantiated:
             self.fmu.reset()
         else:
-            self.fmu.instantiate()
+            self.fmu.instantiate(callbacks=self._callbacks())
             self._instantiated = True
         try:
             self.fmu.setupExperiment(startTime=t0)
@@ -247,7 +248,37 @@ class FMUPlant(Plant):
             self.fmu.enterInitializationMode()
             self.fmu.exitInitializationMode()
         except Exception as e:
-            raise MasterError(f"{self.path}: initialization at t = {t0} s failed: {e}") from e
+            raise MasterError(f"{self.path}: initialization at t = {t0} s failed: {self._last_log(e)}") from e
+
+    def _callbacks(self):
+        # The FMU keeps the callbacks it was instantiated with: collect its log lines so an
+        # error can say what the FMU said (which leg, which time), not only a status.
+        from ctypes import byref
+
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+        self.log = []
+
+        def logger(env, instance, status, category, message):
+            self.log.append(message.decode(errors="replace"))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:  # fmpy's native proxy formats the printf-style arguments of the message
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(cb))
+        except Exception:
+            pass
+        self._cb = cb
+        return cb
+
+    def _last_log(self, e):
+        return f"{e}: {self.log[-1]}" if getattr(self, "log", None) else str(e)
 
     def set_input(self, tau):
         self.fmu.setReal(self.vr["tau"], [float(v) for v in tau])
@@ -256,7 +287,8 @@ class FMUPlant(Plant):
         try:
             self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         except Exception as e:
-            raise MasterError(f"{self.path}: fmi2DoStep from t = {t:.9g} s (h = {h} s) failed: {e}") from e
+            raise MasterError(f"{self.path}: fmi2DoStep from t = {t:.9g} s (h = {h} s) failed: "
+                              f"{self._last_log(e)}") from e
 
     def outputs(self):
         g = self.fmu.getReal

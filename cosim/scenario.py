@@ -245,14 +245,31 @@ def build_controller(sc: Scenario, model, x0):
 
 
 def fmu_path(sc: Scenario) -> Path:
-    """The .fmu of the scenario: ``[fmu] path`` or the one the build produced."""
+    """The .fmu of the scenario: ``[fmu] path``, else the one the build produced."""
     p = sc.spec["fmu"].get("path")
     if p:
         p = Path(p)
         return p if p.is_absolute() else REPO / p
-    from . import fmu as fmu_mod
+    return built_fmu(sc.spec["robot"])
 
-    return Path(fmu_mod.fmu_path(sc.spec["robot"]))
+
+def built_fmu(robot: str) -> Path:
+    """The Co-Simulation FMU of ``robot`` from the CMake build (``cosim.fmu`` knows where)."""
+    try:
+        from . import fmu as fmu_mod
+    except ImportError:
+        fmu_mod = None
+    if fmu_mod is not None and hasattr(fmu_mod, "fmu_path"):
+        return Path(fmu_mod.fmu_path(robot))
+    from ._native import library_path
+
+    build = library_path().parent.parent
+    ident = {"6pus": "PKM_6PUS", "quattro": "PKM_QUATTRO", "fourbar": "PKM_FOURBAR"}.get(robot, robot)
+    path = build / "fmu" / f"{ident}.fmu"
+    if not path.exists():
+        raise ScenarioError(f"the FMU of robot {robot} is not built ({path} is missing): build the project "
+                            f"(./scripts/bootstrap.sh) or give [fmu] path in the scenario")
+    return path
 
 
 def build_plant(sc: Scenario, true_model, truth: dict):
