@@ -1,0 +1,343 @@
+"""Kinematic calibration from ``pkm-recording/1`` files, with identifiability analysis.
+
+The calibration reads a recording (never the simulator's internals), builds the
+calibration problem of its robot on the nominal model named by the sidecar, analyses
+which parameters the data can identify, estimates them with one of the solvers, and
+verifies the accuracy gain on held-out poses.
+
+* 6-PUS (seed 000): each row is a held pose: joint readings ``q1..q6`` and the pose
+  ``x, y, z, rx, ry, rz`` measured by an external tracker.  Error model: 10 parameters
+  per leg (platform point in the platform frame, rail origin, leg length, rail
+  direction), 60 in all; 54 calibrated coordinates because each rail direction keeps
+  |s| = 1 (see :mod:`cosim.calibration_problems`).
+* Four-bar (seed 002): ``q1`` = crank angle theta, pose column ``X`` = measured output.
+
+Example
+-------
+>>> from cosim.calibration import calibrate
+>>> res = calibrate("scenarios/calibration_6pus_campaign.csv", solver="gauss-newton", holdout=0.25)
+>>> print(res.text())                       # identifiability, estimates +- SE, accuracy
+>>> res.save("out/")                        # figures and the calibrated parameters (JSON)
+
+Submodules: :mod:`~cosim.calibration_ident` (identifiability),
+:mod:`~cosim.calibration_solvers` (solvers), :mod:`~cosim.calibration_problems`
+(residuals and Jacobians from the core), :mod:`~cosim.calibration_design` (pose
+selection), :mod:`~cosim.calibration_data` (synthetic campaigns),
+:mod:`~cosim.calibration_seed` (the seeds' examples).
+"""
+from __future__ import annotations
+
+import json
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .calibration_ident import IdentifiabilityReport, identifiability
+from .calibration_problems import (
+    SIXPUS_ERROR_MODEL,
+    CalibrationDataError,
+    CalibrationWarning,
+    FourbarProblem,
+    Problem,
+    SixpusProblem,
+)
+from .calibration_solvers import METHODS, Solution, solve
+from .core import Model
+from .recording import Recording, read_recording
+
+__all__ = [
+    "calibrate",
+    "CalibrationResult",
+    "Accuracy",
+    "problem_from_recording",
+    "accuracy",
+    "split_holdout",
+    "CalibrationDataError",
+    "CalibrationWarning",
+    "METHODS",
+    "MODELS",
+]
+
+#: which parameters are estimated: the structural model (seed 000 3.1.1), the prediction
+#: model (3.1.2: all parameters, truncated SVD) or all parameters ("full", refuses a
+#: rank-deficient set)
+MODELS = ("structural", "prediction", "full")
+
+
+def _rows_of(rec: Recording, rows):
+    return np.arange(len(rec)) if rows is None else np.asarray(rows)
+
+
+def _labels(rec: Recording, idx):
+    return [f"row {k + 2} (t = {rec.time[k]:g} s)" for k in idx]
+
+
+def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreachable: str = "drop") -> Problem:
+    """The calibration problem of a recording (or of some of its rows).
+
+    Parameters
+    ----------
+    rec : Recording or path
+    rows : array_like of int, optional
+        Data rows to use (0-based; default all).
+    nominal : Model, optional
+        Nominal model (default: the sidecar's robot with its parameter overrides).
+    unreachable : {"drop", "raise"}
+        6-PUS poses the nominal model cannot reach: dropped with a warning, or an error.
+    """
+    if not isinstance(rec, Recording):
+        rec = read_recording(rec)
+    idx = _rows_of(rec, rows)
+    where = str(rec.path) if rec.path else "recording"
+    if rec.pose is None:
+        raise CalibrationDataError(
+            f"{where}: no pose columns ({', '.join(rec.pose_columns)}): a calibration campaign must record the "
+            f"measured pose (or output) next to the joint readings")
+    if nominal is None:
+        try:
+            nominal = Model(rec.robot, params=rec.parameters)
+        except Exception as e:
+            raise CalibrationDataError(f"{where}: the sidecar's parameters do not make a valid {rec.robot} model: "
+                                       f"{e}") from None
+    if rec.robot == "6pus":
+        return SixpusProblem(rec.pose[idx], rec.q[idx], nominal, row_labels=_labels(rec, idx), unreachable=unreachable)
+    if rec.robot == "fourbar":
+        return FourbarProblem(rec.q[idx, 0], rec.pose[idx, 0], nominal, row_labels=_labels(rec, idx))
+    raise CalibrationDataError(f"{where}: calibration of robot {rec.robot!r} is not implemented (6pus, fourbar)")
+
+
+def split_holdout(n: int, fraction: float, seed: int = 0):
+    """Random split of n rows into (calibration, held-out) index arrays."""
+    if not 0.0 <= fraction < 1.0:
+        raise ValueError(f"holdout fraction must be in [0, 1), got {fraction}")
+    perm = np.random.default_rng(seed).permutation(n)
+    nh = int(round(fraction * n))
+    return np.sort(perm[nh:]), np.sort(perm[:nh])
+
+
+@dataclass
+class Accuracy:
+    """Model accuracy on a set of poses, nominal vs calibrated.
+
+    6-PUS: ``position`` is the RMS over poses of |p_FK(q_measured) - p_measured| [m],
+    ``orientation`` the RMS of the Euler-angle difference norm [rad], ``joint`` the RMS of
+    q_measured - q_IK(pose_measured) [m].  Four-bar: ``position`` is the RMS of the output
+    error X_measured - X(theta) [m], the others are 0.
+    """
+
+    n: int
+    position: tuple  # (nominal, calibrated)
+    orientation: tuple
+    joint: tuple
+    per_pose: np.ndarray  # (n, 2) per-pose position error, nominal and calibrated [m]
+    excluded: list = field(default_factory=list)  # poses left out (forward kinematics failed)
+
+    @property
+    def gain(self) -> float:
+        """position RMS nominal / calibrated"""
+        return float(self.position[0] / self.position[1]) if self.position[1] > 0 else float("inf")
+
+
+def accuracy(problem: Problem, p_cal) -> Accuracy:
+    """Accuracy of the nominal (``problem.p0``) and calibrated (``p_cal``) models on the
+    problem's poses.
+
+    A 6-PUS pose whose measured joints a model cannot assemble (its forward kinematics
+    fails: a badly wrong model near the edge of the workspace) is left out of the RMS
+    values of both models and named in ``Accuracy.excluded``.
+    """
+    if isinstance(problem, SixpusProblem):
+        res, ok = [], np.ones(len(problem.q), bool)
+        for p in (problem.p0, p_cal):
+            m = problem.nominal.copy()
+            m.set_params(problem.model_params(p))
+            x, st = m.fk(problem.q, x_guess=problem.pose, errors="status")
+            ok &= st == 0
+            res.append((m, x))
+        if not ok.any():
+            raise CalibrationDataError("forward kinematics of the measured joints failed at every pose: the models "
+                                       "cannot assemble the recorded joint readings")
+        out = []
+        for m, x in res:
+            dp = np.linalg.norm(x[ok, :3] - problem.pose[ok, :3], axis=1)
+            da = np.linalg.norm(x[ok, 3:] - problem.pose[ok, 3:], axis=1)
+            dq = problem.q[ok] - m.ik(problem.pose[ok])
+            out.append((dp, da, dq))
+        rms = lambda v: float(np.sqrt(np.mean(v ** 2)))  # noqa: E731
+        return Accuracy(int(ok.sum()), (rms(out[0][0]), rms(out[1][0])), (rms(out[0][1]), rms(out[1][1])),
+                        (rms(out[0][2]), rms(out[1][2])), np.column_stack([out[0][0], out[1][0]]),
+                        [l for l, k in zip(problem.pose_labels, ok) if not k])
+    e0, e1 = problem.residual(problem.p0), problem.residual(p_cal)
+    rms0, rms1 = float(np.sqrt(np.mean(e0 ** 2))), float(np.sqrt(np.mean(e1 ** 2)))
+    return Accuracy(e0.size, (rms0, rms1), (0.0, 0.0), (0.0, 0.0), np.column_stack([np.abs(e0), np.abs(e1)]))
+
+
+@dataclass
+class CalibrationResult:
+    """Everything a calibration run found; ``text()`` is the report."""
+
+    robot: str
+    source: str
+    problem: Problem
+    model_kind: str
+    identifiability: IdentifiabilityReport
+    error_model: IdentifiabilityReport | None  # the seed's 60-column analysis (6-PUS)
+    solution: Solution
+    calibration_accuracy: Accuracy
+    holdout_accuracy: Accuracy | None
+    warnings: list = field(default_factory=list)
+
+    @property
+    def calibrated_params(self) -> dict:
+        """Core parameter values of the calibrated model."""
+        return self.problem.model_params(self.solution.p)
+
+    def calibrated_model(self) -> Model:
+        m = self.problem.nominal.copy()
+        m.set_params(self.calibrated_params)
+        return m
+
+    def text(self) -> str:
+        s, idr = self.solution, self.identifiability
+        L = [f"Calibration of {self.robot} from {self.source}"]
+        L.append(f"  {self.problem.nmeas} equations from {self.calibration_accuracy.n} poses"
+                 + (f", {self.holdout_accuracy.n} poses held out" if self.holdout_accuracy else ", no pose held out"))
+        if self.error_model is not None:
+            L.append("")
+            L.append("Seed 000 error model (60 parameters, |s| not kept): per leg")
+            for b in self.error_model.blocks:
+                dropped = ", ".join(c.parameter.split(".")[-1] for c in b.combinations)
+                L.append(f"  [{b.label}] rank {b.rank}/10, cond {b.cond_scaled:.3g} -> {b.cond_after:.3g} after "
+                         f"dropping {dropped or 'nothing'}")
+            L.append("  the radial rail-direction combination (ds along s, column -q) is a stroke scale the unit "
+                     "rail direction cannot represent: calibrated coordinates keep |s| = 1 (9 per leg)")
+        L.append("")
+        L.append(idr.text())
+        L.append("")
+        L.append(f"Solver {s.method} ({self.model_kind} model): {s.iterations} iteration(s), {s.nfev} residual "
+                 f"evaluations, {s.seconds * 1e3:.1f} ms, {'converged' if s.converged else 'NOT converged'}: "
+                 f"{s.message}")
+        sig = ", ".join(f"{v * 1e6:.3g}" for v in np.atleast_1d(s.sigma))
+        L.append(f"  residual RMS {s.rms_before * 1e6:.4g} um -> {s.rms_after * 1e6:.4g} um; residual sigma "
+                 f"[um] {sig}; {s.rank} identified directions")
+        L.append("")
+        L.append(f"  {'parameter':<16} {'nominal':>12} {'estimate':>12} {'delta':>10} {'SE':>9}  unit")
+        for j, n in enumerate(s.names):
+            u = self.problem.units[j]
+            f, unit = (1e3, "mm") if u == "m" else (1e3, "1e-3")
+            if s.free[j]:
+                L.append(f"  {n:<16} {s.p0[j] * f:12.5f} {s.p[j] * f:12.5f} {s.dp[j] * f:+10.5f} "
+                         f"{s.se[j] * f:9.5f}  {unit}")
+            else:
+                L.append(f"  {n:<16} {s.p0[j] * f:12.5f} {'(fixed)':>12} {'':>10} {'':>9}  {unit}")
+        L.append("")
+        for label, a in (("calibration poses", self.calibration_accuracy), ("held-out poses", self.holdout_accuracy)):
+            if a is None:
+                continue
+            if self.robot == "6pus":
+                L.append(f"Accuracy on {label} ({a.n}): position RMS {a.position[0] * 1e6:.4g} um -> "
+                         f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
+                         f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
+                         f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} um")
+            else:
+                L.append(f"Accuracy on {label} ({a.n}): output RMS {a.position[0] * 1e6:.4g} um -> "
+                         f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x)")
+        for w in self.warnings:
+            L.append("warning: " + w)
+        return "\n".join(L)
+
+    def save(self, outdir) -> list:
+        """Figures (PNG) and the calibrated parameters (JSON) into ``outdir``; returns the paths."""
+        from .calibration_plots import plot_result
+
+        out = Path(outdir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = plot_result(self, out)
+        pj = out / "calibrated_parameters.json"
+        pj.write_text(json.dumps({"robot": self.robot, "source": self.source, "method": self.solution.method,
+                                  "model": self.model_kind, "parameters": self.calibrated_params,
+                                  "standard_errors": {n: v[3] for n, v in self.solution.estimates().items()}},
+                                 indent=2))
+        (out / "calibration_report.txt").write_text(self.text() + "\n")
+        return paths + [pj, out / "calibration_report.txt"]
+
+
+def calibrate(recording, solver: str = "gauss-newton", model: str = "structural", holdout: float = 0.0,
+              cond_max: float = 100.0, seed: int = 0, nominal: Model | None = None, **solver_options) -> CalibrationResult:
+    """Calibrate a robot's geometry from a recording.
+
+    Parameters
+    ----------
+    recording : path or Recording
+        A ``pkm-recording/1`` calibration campaign.
+    solver : {"pinv", "pinv-iter", "gauss-newton", "lm", "golden"}
+    model : {"structural", "prediction", "full"}
+        Structural: estimate the parameters kept by the condition-number loop (the others
+        stay nominal, their effect absorbed by the identifiable combinations); prediction:
+        all parameters by truncated SVD (rcond = 1/cond_max); full: all parameters, an
+        error if the data cannot identify them all.
+    holdout : float
+        Fraction of the poses kept out of the calibration to verify it.
+    cond_max : float
+        Condition-number limit (seed 000: 100).
+    seed : int
+        Seed of the held-out split.
+    nominal : Model, optional
+        Nominal model (default: from the sidecar).
+    **solver_options
+        Passed to :func:`cosim.calibration_solvers.solve` (tol, max_iter, width, basis...).
+
+    Raises
+    ------
+    CalibrationDataError
+        Too few poses, no pose columns, a rank-deficient set with ``model="full"``...
+    """
+    if model not in MODELS:
+        raise ValueError(f"unknown model {model!r} (known: {', '.join(MODELS)})")
+    if solver not in METHODS:
+        raise ValueError(f"unknown solver {solver!r} (known: {', '.join(METHODS)})")
+    rec = recording if isinstance(recording, Recording) else read_recording(recording)
+    source = str(rec.path) if rec.path else "<recording>"
+    cal_idx, hold_idx = split_holdout(len(rec), holdout, seed)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CalibrationWarning)
+        prob = problem_from_recording(rec, cal_idx, nominal)
+        hold = problem_from_recording(rec, hold_idx, nominal) if hold_idx.size else None
+    msgs = [str(w.message) for w in caught]
+    J0 = prob.jacobian(prob.p0)
+    idr = identifiability(J0, prob.names, prob.units, cond_max=cond_max, blocks=prob.blocks)
+    msgs += idr.warnings
+    err_model = None
+    if isinstance(prob, SixpusProblem):
+        units = ["1" if n.split(".")[-1] in ("sx", "sy", "sz") else "m" for n in SIXPUS_ERROR_MODEL]
+        err_model = identifiability(prob.error_model_jacobian(), SIXPUS_ERROR_MODEL, units, cond_max=cond_max,
+                                    blocks=prob.blocks_60())
+    rcond = 1e-10
+    if model == "structural":
+        free = idr.retained_mask()
+    elif model == "prediction":
+        free = np.ones(len(prob.names), bool)
+        rcond = 1.0 / cond_max
+    else:
+        if idr.not_identifiable or any(b.rank < len(b.names) for b in idr.blocks):
+            bad = ", ".join(idr.not_identifiable) or "(see the null directions)"
+            raise CalibrationDataError(
+                f"{source}: rank-deficient pose set: the data cannot identify every parameter "
+                f"(not identifiable: {bad}); use model='structural' or 'prediction', or measure more varied poses")
+        free = np.ones(len(prob.names), bool)
+    sol = solve(prob, solver, free=free, rcond=rcond, **solver_options)
+    if not sol.converged:
+        msgs.append(f"solver {solver} did not converge: {sol.message}")
+    acc_cal = accuracy(prob, sol.p)
+    acc_hold = accuracy(hold, sol.p) if hold is not None else None
+    for label, a in (("calibration", acc_cal), ("held-out", acc_hold)):
+        if a is not None and a.excluded:
+            msgs.append(f"{len(a.excluded)} {label} pose(s) left out of the accuracy figures because a model cannot "
+                        f"assemble their measured joints: " + "; ".join(a.excluded[:5]))
+    if hold is None:
+        msgs.append("no pose held out: the accuracy gain is measured on the calibration poses themselves")
+    for m in msgs:
+        warnings.warn(m, CalibrationWarning, stacklevel=2)
+    return CalibrationResult(rec.robot, source, prob, model, idr, err_model, sol, acc_cal, acc_hold, msgs)

@@ -1,0 +1,365 @@
+"""Calibration problems: measured data + a nominal core model = residuals and Jacobians.
+
+A problem maps a vector ``p`` of calibrated parameters (the solver's coordinates) to the
+predicted measurements ``predict(p)`` and their Jacobian ``jacobian(p)``; the residual is
+``y - predict(p)``.  All physics comes from the core (:class:`cosim.core.Model`); a problem
+only chooses which parameters move and stacks the core's outputs.
+
+* :class:`FourbarProblem` (seed 002): y = X of the coupler mid point at crank angles
+  theta; p = the four link lengths; columns from ``pkm_fourbar_output``.
+* :class:`SixpusProblem` (seed 000 ch. 4): y = the slider strokes q_i read at held poses
+  whose pose was measured by a tracker; predict(p) = the inverse kinematics of the model
+  with parameters p at the measured pose; columns from ``pkm_6pus_calib_rows`` with the
+  platform points in the platform frame (constant over poses), so dq = q_measured -
+  q_IK_nominal(measured pose) = J d(eta) (seed eq. 4.3-4.9).
+* :class:`LinearProblem`: a fixed J and dy (e.g. a table typed from a seed).
+
+The 6-PUS rail direction.  The error model of seed 000 (eq. 4.1) has 10 parameters per
+leg, 3 of them the rail direction s, and its columns are the derivatives without keeping
+|s| = 1.  The radial one, ds along s, has column dq/ds . s = -q: a stroke scale error, which
+a unit rail direction cannot represent (the core requires |s| = 1).  So the calibrated
+coordinates keep the two components of s other than its largest one (sy, sz for rails
+along x) and compute that one from |s| = 1; the Jacobian is the chain rule of the seed's
+columns through that constraint, and the update stays exactly on |s| = 1.  Per leg 9
+calibrated coordinates, 54 in all; the seed's 60-parameter analysis is still available
+(:meth:`SixpusProblem.error_model_jacobian`).
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._native import ArgumentError, PkmError, lib, ptr, raise_for
+
+__all__ = [
+    "CalibrationDataError",
+    "CalibrationWarning",
+    "Problem",
+    "LinearProblem",
+    "FourbarProblem",
+    "SixpusProblem",
+    "SIXPUS_ERROR_MODEL",
+    "sixpus_leg_names",
+    "calib_rows",
+]
+
+PKM_FRAME_WORLD, PKM_FRAME_PLATFORM = 0, 1
+
+
+class CalibrationDataError(ValueError):
+    """Calibration data cannot be used: too few poses, unreachable poses, NaN..."""
+
+
+class CalibrationWarning(UserWarning):
+    """Calibration can go on, but something about the data deserves attention."""
+
+
+def sixpus_leg_names(i: int) -> list[str]:
+    """The 10 error-model parameters of leg i (1-based), in seed 000 eq. 4.1 order
+    [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz], as core parameter names."""
+    return [f"leg[{i}].px", f"leg[{i}].py", f"leg[{i}].pz", f"rail[{i}].S0x", f"rail[{i}].S0y",
+            f"rail[{i}].S0z", f"leg[{i}].L", f"rail[{i}].sx", f"rail[{i}].sy", f"rail[{i}].sz"]
+
+
+#: the 60-parameter error model of seed 000 (eq. 4.2), leg by leg
+SIXPUS_ERROR_MODEL = [n for i in range(1, 7) for n in sixpus_leg_names(i)]
+
+
+def calib_rows(model, x, frame: int = PKM_FRAME_PLATFORM) -> np.ndarray:
+    """Regression rows dq_i/d eta_i of the core at pose(s) x: shape (..., 6, 10)."""
+    x = np.ascontiguousarray(np.asarray(x, dtype=float))
+    flat = x.reshape(-1, 6)
+    out = np.empty((flat.shape[0], 6, 10))
+    for k in range(flat.shape[0]):
+        row = np.ascontiguousarray(flat[k])
+        s = lib.pkm_6pus_calib_rows(model._m, model._d, ptr(row), int(frame), ptr(out[k]))
+        if s != 0:
+            raise_for(s, f"pose {k}: {lib.pkm_data_error(model._d).decode()}")
+    return out.reshape(x.shape[:-1] + (6, 10))
+
+
+class Problem:
+    """Base class: see the module docstring.
+
+    Attributes
+    ----------
+    robot : str
+    names, units : list of str
+        The calibrated coordinates.
+    p0 : ndarray
+        Their nominal values.
+    y : ndarray, shape (m,)
+        The measurements.
+    row_labels : list of str
+        Where each measurement comes from (recording row, time, leg), for messages.
+    blocks : list of (label, rows, cols) or None
+        Independent blocks of the (block-diagonal) Jacobian.
+    prior : ndarray
+        Expected size of each parameter's error (search intervals, pose design).
+    """
+
+    robot = ""
+    names: list
+    units: list
+    p0: np.ndarray
+    y: np.ndarray
+    row_labels: list
+    blocks = None
+    prior: np.ndarray
+
+    def predict(self, p) -> np.ndarray:
+        raise NotImplementedError
+
+    def jacobian(self, p) -> np.ndarray:
+        raise NotImplementedError
+
+    def residual(self, p) -> np.ndarray:
+        return self.y - self.predict(p)
+
+    def model_params(self, p) -> dict:
+        """Core parameter values for calibrated coordinates p."""
+        return dict(zip(self.names, map(float, p)))
+
+    @property
+    def nmeas(self) -> int:
+        return int(self.y.size)
+
+
+class LinearProblem(Problem):
+    """A linear model dy = J dp around p0 (e.g. the seed's printed tables)."""
+
+    def __init__(self, J, dy, names, units=None, p0=None, blocks=None, prior=None):
+        self.J = np.asarray(J, float)
+        self.y = np.asarray(dy, float)
+        self.names = list(names)
+        self.units = list(units) if units is not None else [""] * len(self.names)
+        self.p0 = np.zeros(len(self.names)) if p0 is None else np.asarray(p0, float)
+        self.blocks = blocks
+        self.prior = np.ones(len(self.names)) if prior is None else np.asarray(prior, float)
+        self.row_labels = [f"row {k}" for k in range(self.y.size)]
+
+    def predict(self, p):
+        return self.J @ (np.asarray(p, float) - self.p0)
+
+    def jacobian(self, p):
+        return self.J
+
+
+def _check_finite(a, what, columns):
+    a = np.asarray(a, float)
+    bad = np.argwhere(~np.isfinite(a.reshape(a.shape[0], -1)))
+    if bad.size:
+        r, c = bad[0]
+        raise CalibrationDataError(f"{what}: row {r}, column {columns[c]!r} is not a finite number")
+    return a
+
+
+class FourbarProblem(Problem):
+    """Four-bar (seed 002): outputs X [m] measured at crank angles theta [rad].
+
+    Parameters
+    ----------
+    theta, X : array_like, shape (n,)
+    model : cosim.core.Model
+        The nominal ``"fourbar"`` model (copied; the copy is moved by ``predict``).
+    row_labels : list of str, optional
+    """
+
+    robot = "fourbar"
+
+    def __init__(self, theta, X, model, row_labels=None):
+        from .fourbar import LENGTHS
+
+        theta = _check_finite(np.atleast_1d(theta), "four-bar crank angles", ["theta"]).ravel()
+        X = _check_finite(np.atleast_1d(X), "four-bar outputs", ["X"]).ravel()
+        if theta.shape != X.shape:
+            raise CalibrationDataError(f"{theta.size} crank angles but {X.size} outputs")
+        self.model = model.copy()
+        self.nominal = model.copy()
+        self.theta, self.y = theta, X
+        self.names = list(LENGTHS)
+        self.units = ["m"] * 4
+        self.p0 = np.array([model.param(n) for n in self.names])
+        self.prior = np.full(4, 1e-3)
+        self.row_labels = row_labels or [f"theta = {np.degrees(t):.6g} deg" for t in theta]
+        if theta.size < 4:
+            raise CalibrationDataError(
+                f"too few poses: {theta.size} crank angle(s) for 4 link lengths; at least 4 distinct angles are needed")
+        self._p = None
+
+    def _set(self, p):
+        p = np.asarray(p, float)
+        if self._p is None or not np.array_equal(p, self._p):
+            self.model.set_params(self.model_params(p))
+            self._p = p.copy()
+
+    def predict(self, p):
+        from .fourbar import output
+
+        self._set(p)
+        return output(self.model, self.theta, jacobian=False)
+
+    def jacobian(self, p):
+        from .fourbar import output
+
+        self._set(p)
+        return output(self.model, self.theta)[1]
+
+
+@dataclass
+class _Dep:
+    leg: int
+    dep: int  # index 0..2 of the dependent rail-direction component
+    sign: float
+
+
+class SixpusProblem(Problem):
+    """6-PUS (seed 000 ch. 4): slider strokes q read at held poses measured by a tracker.
+
+    Parameters
+    ----------
+    pose : array_like, shape (n, 6)
+        Measured poses (x, y, z [m], rx, ry, rz [rad]).
+    q : array_like, shape (n, 6)
+        Joint readings [m].
+    model : cosim.core.Model
+        The nominal ``"6pus"`` model (copied).
+    row_labels : list of str, optional
+        One label per pose (e.g. "row 12 (t = 11 s)").
+    unreachable : {"drop", "raise"}
+        What to do with poses the nominal model cannot reach: drop them with a
+        :class:`CalibrationWarning` naming them, or raise.
+    min_poses : int, optional
+        Poses required (default: the 9 calibrated coordinates of a leg).
+    """
+
+    robot = "6pus"
+
+    def __init__(self, pose, q, model, row_labels=None, unreachable="drop", min_poses=None):
+        cols = ["x", "y", "z", "rx", "ry", "rz"]
+        pose = _check_finite(np.asarray(pose, float).reshape(-1, 6), "6-PUS measured poses", cols)
+        q = _check_finite(np.asarray(q, float).reshape(-1, 6), "6-PUS joint readings", [f"q{i}" for i in range(1, 7)])
+        if pose.shape != q.shape:
+            raise CalibrationDataError(f"{pose.shape[0]} poses but {q.shape[0]} joint readings")
+        labels = list(row_labels) if row_labels is not None else [f"pose {k}" for k in range(pose.shape[0])]
+        self.model = model.copy()
+        self.nominal = model.copy()
+        # the dependent rail-direction component of each leg: its largest at nominal
+        self._deps = []
+        names, units = [], []
+        for i in range(1, 7):
+            s = np.array([model.param(f"rail[{i}].s{c}") for c in "xyz"])
+            dep = int(np.argmax(np.abs(s)))
+            self._deps.append(_Dep(i, dep, 1.0 if s[dep] > 0 else -1.0))
+            for k, n in enumerate(sixpus_leg_names(i)):
+                if k >= 7 and k - 7 == dep:
+                    continue
+                names.append(n)
+                units.append("1" if k >= 7 else "m")
+        self.names, self.units = names, units
+        self.p0 = np.array([model.param(n) for n in names])
+        self.prior = np.array([1e-2 if u == "1" else 1e-3 for u in units])
+        # poses the nominal model cannot reach carry no usable equation
+        _, status = self.nominal.ik(pose, errors="status")
+        bad = np.flatnonzero(status != 0)
+        if bad.size:
+            msgs = []
+            for k in bad[:5]:
+                try:
+                    self.nominal.ik(pose[k])
+                except PkmError as e:
+                    msgs.append(f"{labels[k]}: {e}")
+            text = (f"{bad.size} of {pose.shape[0]} measured poses are not reachable by the nominal model: "
+                    + "; ".join(msgs) + (" ..." if bad.size > 5 else ""))
+            if unreachable == "raise":
+                raise CalibrationDataError(text)
+            warnings.warn(text + " (dropped)", CalibrationWarning, stacklevel=2)
+            keep = status == 0
+            pose, q = pose[keep], q[keep]
+            labels = [l for l, k in zip(labels, keep) if k]
+        need = 9 if min_poses is None else int(min_poses)
+        if pose.shape[0] < need:
+            raise CalibrationDataError(
+                f"too few poses: {pose.shape[0]} usable pose(s) give {pose.shape[0]} equations per leg, but each leg "
+                f"has 9 calibrated parameters (10 in seed 000's error model minus the unit rail direction); "
+                f"measure at least {need} distinct poses")
+        self.pose, self.q = pose, q
+        self.pose_labels = labels
+        self.y = q.reshape(-1)
+        self.row_labels = [f"{labels[k]}, leg {i + 1}" for k in range(pose.shape[0]) for i in range(6)]
+        n = pose.shape[0]
+        self.blocks = [(f"leg {i + 1}", np.arange(i, 6 * n, 6), np.arange(9 * i, 9 * i + 9)) for i in range(6)]
+        self._p = None
+
+    # --------------------------------------------------------------- parameters
+    def model_params(self, p) -> dict:
+        """Core parameter values (the 60 of the error model) for calibrated coordinates p."""
+        p = np.asarray(p, float)
+        out = {}
+        for b, d in enumerate(self._deps):
+            v = p[9 * b:9 * b + 9]
+            out.update(zip(sixpus_leg_names(d.leg)[:7], map(float, v[:7])))
+            others = [k for k in range(3) if k != d.dep]
+            s = np.zeros(3)
+            s[others] = v[7:9]
+            rest = 1.0 - float(s[others] @ s[others])
+            if not rest > 0:
+                raise ArgumentError(f"rail {d.leg}: direction components {v[7:9]} leave no unit vector", "PKM_ERR_PARAMETER")
+            s[d.dep] = d.sign * np.sqrt(rest)
+            out.update({f"rail[{d.leg}].s{c}": float(s[k]) for k, c in enumerate("xyz")})
+        return out
+
+    def _set(self, p):
+        p = np.asarray(p, float)
+        if self._p is None or not np.array_equal(p, self._p):
+            self.model.set_params(self.model_params(p))
+            self._p = p.copy()
+
+    # ----------------------------------------------------------------- physics
+    def predict(self, p):
+        self._set(p)
+        qp, status = self.model.ik(self.pose, errors="status")
+        if np.any(status != 0):
+            k = int(np.flatnonzero(status != 0)[0])
+            try:
+                self.model.ik(self.pose[k])
+            except PkmError as e:
+                raise CalibrationDataError(
+                    f"{self.pose_labels[k]}: the model with the current parameter estimate cannot reach the "
+                    f"measured pose ({e}); the estimate has diverged or the data are inconsistent") from None
+        return qp.reshape(-1)
+
+    def error_model_jacobian(self, p=None, frame: int = PKM_FRAME_PLATFORM) -> np.ndarray:
+        """The seed's 60-column regression matrix (eq. 4.6) at parameters p (default p0).
+
+        Rows are (pose, leg) in the order of ``y``; columns :data:`SIXPUS_ERROR_MODEL`.
+        """
+        self._set(self.p0 if p is None else p)
+        rows = calib_rows(self.model, self.pose, frame)  # (n, 6, 10)
+        n = self.pose.shape[0]
+        J = np.zeros((6 * n, 60))
+        for i in range(6):
+            J[i::6, 10 * i:10 * i + 10] = rows[:, i, :]
+        return J
+
+    def jacobian(self, p):
+        J60 = self.error_model_jacobian(p)
+        p = np.asarray(p, float)
+        J = np.empty((J60.shape[0], 54))
+        for b, d in enumerate(self._deps):
+            c = J60[:, 10 * b:10 * b + 10]
+            others = [k for k in range(3) if k != d.dep]
+            s = np.zeros(3)
+            s[others] = p[9 * b + 7:9 * b + 9]
+            s[d.dep] = d.sign * np.sqrt(1.0 - s[others] @ s[others])
+            J[:, 9 * b:9 * b + 7] = c[:, :7]
+            for j, k in enumerate(others):
+                # d s_dep / d s_k = -s_k / s_dep keeps |s| = 1
+                J[:, 9 * b + 7 + j] = c[:, 7 + k] - c[:, 7 + d.dep] * s[k] / s[d.dep]
+        return J
+
+    def blocks_60(self):
+        n = self.pose.shape[0]
+        return [(f"leg {i + 1}", np.arange(i, 6 * n, 6), np.arange(10 * i, 10 * i + 10)) for i in range(6)]
