@@ -546,18 +546,32 @@ fmi2Status fmi2EnterEventMode(fmi2Component comp) {
   return fmi2OK;
 }
 
+/* Where a state event lands, the indicator is zero up to the importer's root finding. */
+#define LIMIT_TOL 1e-9
+
+/* In Model Exchange the importer owns time: at the edge of the usable workspace the
+ * FMU can only ask it to stop (terminateSimulation), saying why, where and when. */
+static int reached_limit(instance* c, const char* fn) {
+  if (!plant_check_limits(c->plant, LIMIT_TOL)) return 0;
+  c->terminated = 1;
+  c->last_successful_time = plant_time(c->plant);
+  logmsg(c, fmi2Warning, LOG_WARNING, "%s: stopping the simulation: %s", fn, plant_error(c->plant));
+  return 1;
+}
+
 fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo* info) {
   instance* c = (instance*)comp;
   if (bad_call(c, "fmi2NewDiscreteStates", S_EVENT)) return fmi2Error;
   if (!info) return error(c, "fmi2NewDiscreteStates", "eventInfo is NULL");
-  /* The plant has no discrete states and no time events. */
+  /* The plant has no discrete states and no time events; a state event is a limit. */
+  int stop = c->terminated || reached_limit(c, "fmi2NewDiscreteStates");
   info->newDiscreteStatesNeeded = fmi2False;
-  info->terminateSimulation = c->terminated ? fmi2True : fmi2False;
+  info->terminateSimulation = stop ? fmi2True : fmi2False;
   info->nominalsOfContinuousStatesChanged = fmi2False;
   info->valuesOfContinuousStatesChanged = fmi2False;
   info->nextEventTimeDefined = fmi2False;
   info->nextEventTime = 0;
-  return fmi2OK;
+  return stop ? fmi2Warning : fmi2OK;
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component comp) {
@@ -575,18 +589,11 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
   if (!enterEventMode || !terminateSimulation)
     return error(c, "fmi2CompletedIntegratorStep", "NULL output argument");
   *enterEventMode = fmi2False;
-  *terminateSimulation = fmi2False;
-  /* The importer's solver owns time in ME: the plant can only say that the accepted
-   * state left the usable workspace, and ask it to stop there. */
-  if (plant_check_state(c->plant)) {
-    *terminateSimulation = fmi2True;
-    c->terminated = 1;
-    c->last_successful_time = plant_time(c->plant);
-    logmsg(c, fmi2Discard, LOG_DISCARD, "fmi2CompletedIntegratorStep: %s", plant_error(c->plant));
-    return fmi2Discard;
-  }
-  c->last_successful_time = plant_time(c->plant);
-  return fmi2OK;
+  /* Also catches an importer that steps past a limit without locating the event. */
+  int stop = reached_limit(c, "fmi2CompletedIntegratorStep");
+  *terminateSimulation = stop ? fmi2True : fmi2False;
+  if (!stop) c->last_successful_time = plant_time(c->plant);
+  return stop ? fmi2Warning : fmi2OK;
 }
 
 fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real time) {
@@ -623,10 +630,15 @@ fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t
 
 fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real eventIndicators[], size_t ni) {
   instance* c = (instance*)comp;
-  (void)eventIndicators;
   if (bad_call(c, "fmi2GetEventIndicators", S_ME_VALUES)) return fmi2Error;
-  if (ni != 0) return error(c, "fmi2GetEventIndicators", "%zu event indicators asked for, the model has 0", ni);
-  return fmi2OK;
+  if (!eventIndicators && ni > 0) return error(c, "fmi2GetEventIndicators", "eventIndicators is NULL");
+  if (c->state == S_INIT && ensure_started(c, "fmi2GetEventIndicators") != fmi2OK) return fmi2Error;
+  int s = plant_get_indicators(c->plant, eventIndicators, ni);
+  if (s == PKM_OK) return fmi2OK;
+  if (s == PKM_ERR_ARGUMENT || s == PKM_ERR_PARAMETER || s == PKM_ERR_INTERNAL)
+    return error(c, "fmi2GetEventIndicators", "%s", plant_error(c->plant));
+  logmsg(c, fmi2Discard, LOG_DISCARD, "fmi2GetEventIndicators: %s", plant_error(c->plant));
+  return fmi2Discard;
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx) {

@@ -76,6 +76,11 @@ typedef struct fmu_model_desc {
   int nparam;             /* core parameters in the table (all of them)                  */
   int nvars;
   const fmu_var* vars;    /* vars[k].vr == k + 1                                         */
+  /* Core parameter numbers of each joint's lower / upper limit [ndof] (from the table's
+   * @joint-limits line), or NULL: Model Exchange then has no stroke-limit events. */
+  const int* qmin_param;
+  const int* qmax_param;
+  int nindicators;        /* 1 (singularity margin) + 2 ndof if limits are given          */
 } fmu_model_desc;
 
 /* Defined by the model folder (fmu/<robot>/model.c). */
@@ -121,9 +126,13 @@ void plant_set_time(fmu_plant* p, double t);
 int plant_set_states(fmu_plant* p, const double* s, size_t n);
 int plant_get_states(const fmu_plant* p, double* s, size_t n);
 int plant_get_derivatives(fmu_plant* p, double* ds, size_t n);
-/* Checks an accepted ME step: PKM_OK, or PKM_ERR_SINGULAR / the core's IK status when
- * the pose left the usable workspace (the importer should stop there). */
-int plant_check_state(fmu_plant* p);
+/* Event indicators z[nindicators], each > 0 inside the usable workspace:
+ * z[0] = singularity.direct - solver.singMin, then per joint i q_i - qmin_i, qmax_i - q_i. */
+int plant_get_indicators(fmu_plant* p, double* z, size_t n);
+/* PKM_OK, or the status (PKM_ERR_SINGULAR, PKM_ERR_JOINT_LIMIT, the core's IK status)
+ * and a message naming the joint, the limit and the time when an indicator is <= tol:
+ * the pose reached the edge of the usable workspace and the importer should stop. */
+int plant_check_limits(fmu_plant* p, double tol);
 
 /* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate). */
 size_t plant_snapshot_size(const fmu_plant* p); /* in doubles */

@@ -415,11 +415,52 @@ int plant_get_derivatives(fmu_plant* p, double* ds, size_t n) {
   return PKM_OK;
 }
 
-int plant_check_state(fmu_plant* p) {
-  p->valid &= ~(unsigned)(V_KIN | V_SING);
-  int s = check_pose(p, "pose");
-  if (!s) p->valid |= V_SING; /* check_pose filled q and sing, qd is not computed */
-  return s;
+int plant_get_indicators(fmu_plant* p, double* z, size_t n) {
+  const fmu_model_desc* D = p->desc;
+  if (n != (size_t)D->nindicators)
+    return fail(p, PKM_ERR_ARGUMENT, "%zu event indicators asked for, the model has %d", n, D->nindicators);
+  int s = ensure(p, V_SING, "event indicator");
+  if (s) return s;
+  z[0] = p->sing[1] - p->opt_applied.sing_min;
+  if (!D->qmin_param) return PKM_OK;
+  s = ensure(p, V_KIN, "event indicator");
+  if (s == PKM_ERR_JOINT_LIMIT) {
+    /* Past a limit the core gives no stroke.  Root finding only needs the sign, and
+     * every indicator of a pose past a limit being negative still brackets the crossing
+     * (the message of plant_check_limits then names the leg). */
+    for (int i = 0; i < 2 * p->nd; ++i) z[1 + i] = -1.0;
+    return PKM_OK;
+  }
+  if (s) return s;
+  for (int i = 0; i < p->nd; ++i) {
+    z[1 + 2 * i] = p->q[i] - pkm_param_get(p->m, D->qmin_param[i]);
+    z[2 + 2 * i] = pkm_param_get(p->m, D->qmax_param[i]) - p->q[i];
+  }
+  return PKM_OK;
+}
+
+int plant_check_limits(fmu_plant* p, double tol) {
+  const fmu_model_desc* D = p->desc;
+  int s = ensure(p, V_SING, "singularity check");
+  if (s) return s;
+  if (p->sing[1] - p->opt_applied.sing_min <= tol)
+    return fail(p, PKM_ERR_SINGULAR,
+                "direct (type 2) singularity: %s = %.6g reached %s = %.6g at t = %.10g s",
+                var_name(p, FMU_CH_SING, 1), p->sing[1], var_name(p, FMU_CH_SOLVER_SING_MIN, 0),
+                p->opt_applied.sing_min, p->t);
+  if (!D->qmin_param) return PKM_OK;
+  if ((s = ensure(p, V_KIN, "stroke-limit check"))) return s;
+  for (int i = 0; i < p->nd; ++i) {
+    for (int w = 0; w < 2; ++w) {
+      int par = w ? D->qmax_param[i] : D->qmin_param[i];
+      double lim = pkm_param_get(p->m, par), margin = w ? lim - p->q[i] : p->q[i] - lim;
+      if (margin <= tol)
+        return fail(p, PKM_ERR_JOINT_LIMIT, "joint %d reached its %s limit %s = %.6g %s at t = %.10g s (%s = %.10g)",
+                    i + 1, w ? "upper" : "lower", pkm_param_name(p->m, par), lim, pkm_param_unit(p->m, par), p->t,
+                    var_name(p, FMU_CH_Q, i), p->q[i]);
+    }
+  }
+  return PKM_OK;
 }
 
 /* ------------------------------------------------------------------ snapshot */

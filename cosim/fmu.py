@@ -1,0 +1,328 @@
+"""The plant FMUs (FMI 2.0, Model Exchange + Co-Simulation) built by ``fmu/``.
+
+The FMUs wrap the reference core: they contain no physics of their own.  This module
+finds the built ``.fmu``, validates and simulates it with fmpy, and offers
+:class:`FMUInstance`, a small stepping wrapper over ``fmpy.fmi2.FMU2Slave`` /
+``FMU2Model`` that addresses variables by name.  See ``docs/fmu.md``.
+
+Units are SI: time [s], pose [m, rad], efforts [N or N m].
+
+Example
+-------
+>>> from cosim import fmu
+>>> path = fmu.fmu_path("6pus")              # build/fmu/PKM_6PUS.fmu
+>>> fmu.validate(path)
+[]
+>>> res = fmu.simulate(path, stop_time=0.1, tau=[1.0] * 6, outputs=["z", "q[1]"])
+>>> res["z"][-1]
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["FMU_IDS", "fmu_path", "build", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
+
+REPO = Path(__file__).resolve().parent.parent
+
+#: model identifier (and .fmu file name) of each robot's plant FMU
+FMU_IDS = {"6pus": "PKM_6PUS", "quattro": "PKM_QUATTRO"}
+
+
+class FMUError(RuntimeError):
+    """An FMI call failed; ``log`` holds the FMU's log lines of that instance."""
+
+    def __init__(self, message: str, log: list[str] | None = None):
+        super().__init__(message)
+        self.log = list(log or [])
+
+
+def build_dir() -> Path:
+    """The CMake build directory: ``$PKM_BUILD_DIR`` or ``<repo>/build``."""
+    return Path(os.environ.get("PKM_BUILD_DIR", REPO / "build"))
+
+
+def fmu_path(robot: str = "6pus", build: str | Path | None = None) -> Path:
+    """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu``; raises if it is not built."""
+    ident = FMU_IDS.get(robot, robot)
+    p = Path(build or build_dir()) / "fmu" / f"{ident}.fmu"
+    if not p.exists():
+        raise FileNotFoundError(f"{p} is not built: run ./scripts/bootstrap.sh (or cmake --build "
+                                f"{p.parent.parent} --target {ident}_fmu)")
+    return p
+
+
+def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -> Path:
+    """Build (or bring up to date) one FMU with CMake and return its path."""
+    ident = FMU_IDS.get(robot, robot)
+    b = Path(build or build_dir())
+    if not (b / "CMakeCache.txt").exists():
+        subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release"], check=True)
+    subprocess.run(["cmake", "--build", str(b), "--target", f"{ident}_fmu", "-j", str(jobs)], check=True)
+    return fmu_path(robot, b)
+
+
+def validate(path: str | Path) -> list[str]:
+    """fmpy's validation of the FMU (schema, names, model structure, units): a list of problems."""
+    from fmpy.validation import validate_fmu
+
+    return validate_fmu(str(path))
+
+
+def variable_names(path_or_md) -> dict[str, list[str]]:
+    """Names of the plant's vector variables, found from the model structure.
+
+    Returns a dict with ``tau`` (inputs), ``x`` and ``xd`` (the continuous states: pose
+    and pose rate, in state order), ``xdd`` (their second derivatives), ``x0`` and ``xd0``
+    (the initial-state parameters: state name + ``0``), ``q`` and ``qd``.
+    """
+    from fmpy import read_model_description
+
+    md = path_or_md if hasattr(path_or_md, "modelVariables") else read_model_description(str(path_or_md))
+    nx = len(md.derivatives) // 2
+    der = [u.variable for u in md.derivatives]
+    names = {
+        "tau": [v.name for v in md.modelVariables if v.causality == "input"],
+        "x": [d.derivative.name for d in der[:nx]],
+        "xd": [d.name for d in der[:nx]],
+        "xdd": [d.name for d in der[nx:]],
+    }
+    names["x0"] = [n + "0" for n in names["x"]]
+    names["xd0"] = [n + "0" for n in names["xd"]]
+    names["q"] = [f"q[{i}]" for i in range(1, nx + 1)]
+    names["qd"] = [f"qd[{i}]" for i in range(1, nx + 1)]
+    return names
+
+
+def simulate(path, fmi_type: str = "CoSimulation", stop_time: float = 1.0, step: float = 1e-3,
+             tau=None, params: dict | None = None, x0=None, xd0=None, rtol: float | None = None,
+             outputs: list[str] | None = None, logger=None):
+    """Simulate the FMU with ``fmpy.simulate_fmu`` under a constant actuator effort.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.fmu`` (see :func:`fmu_path`).
+    fmi_type : {"CoSimulation", "ModelExchange"}
+        CS integrates with CVODE inside the FMU; ME with fmpy's own CVode.
+    stop_time, step : float
+        End time and communication (output) step [s].
+    tau : array_like, optional
+        Constant actuator efforts [N or N m], one per actuator (default 0).
+    params : dict, optional
+        Start values by FMU variable name (robot parameters, ``solver.*``...).
+    x0, xd0 : array_like, optional
+        Initial pose [m, rad] and pose rate (default: home pose at rest).
+    rtol : float, optional
+        Relative tolerance: fmpy's CVode (ME), or passed to the FMU by
+        fmi2SetupExperiment (CS, replaces ``solver.rtol``).
+    outputs : list of str, optional
+        Variables to record (default: the pose).
+
+    Returns
+    -------
+    numpy structured array with a ``time`` field and one field per output.
+    """
+    from fmpy import simulate_fmu
+
+    names = variable_names(path)
+    start = dict(params or {})
+    if tau is not None:
+        start.update(zip(names["tau"], np.broadcast_to(np.asarray(tau, float), (len(names["tau"]),)).tolist()))
+    if x0 is not None:
+        start.update(zip(names["x0"], np.asarray(x0, float).tolist()))
+    if xd0 is not None:
+        start.update(zip(names["xd0"], np.asarray(xd0, float).tolist()))
+    kw = {"logger": logger} if logger is not None else {}
+    return simulate_fmu(str(path), fmi_type=fmi_type, stop_time=stop_time, output_interval=step,
+                        start_values=start, relative_tolerance=rtol, output=outputs or names["x"], **kw)
+
+
+class FMUInstance:
+    """One instance of a plant FMU, stepped by hand (Co-Simulation or Model Exchange).
+
+    Variables are addressed by name (``"tau[1]"``, ``"z"``, ``"leg[1].L"``...) or by the
+    keys of :func:`variable_names` (``"x"``, ``"tau"``...) for whole vectors.  Every log
+    line of the instance is kept in :attr:`log` (``"<status> [<category>] <message>"``),
+    and a failing call raises :class:`FMUError` carrying them.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.fmu``.
+    kind : {"CoSimulation", "ModelExchange"}
+    name : str
+        Instance name (shows in the log).
+    params : dict, optional
+        Start values by name, set before initialization.
+    start_time : float
+        Initial time [s].
+    initialize : bool
+        Run setupExperiment / initialization now (default); with False, call
+        :meth:`initialize` after setting values.
+    """
+
+    def __init__(self, path, kind: str = "CoSimulation", name: str = "plant", params: dict | None = None,
+                 start_time: float = 0.0, initialize: bool = True, tolerance: float | None = None,
+                 unzip_dir: str | None = None):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Model, FMU2Slave
+
+        self.path = str(path)
+        self.md = read_model_description(self.path)
+        self.kind = kind
+        self.names = variable_names(self.md)
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self._own_unzip = unzip_dir is None
+        self._unzip = unzip_dir or extract(self.path)
+        self.log: list[str] = []
+        cls, ident = ((FMU2Slave, self.md.coSimulation.modelIdentifier) if kind == "CoSimulation"
+                      else (FMU2Model, self.md.modelExchange.modelIdentifier))
+        self.fmu = cls(guid=self.md.guid, unzipDirectory=self._unzip, modelIdentifier=ident, instanceName=name)
+        self._alive = False
+        try:
+            self.fmu.instantiate(loggingOn=False, callbacks=self._callbacks())
+        except Exception as e:
+            raise FMUError(f"fmi2Instantiate of {self.path} failed: "
+                           f"{self.log[-1] if self.log else e}", self.log) from e
+        self.time = start_time
+        self._tolerance = tolerance
+        self._alive = True
+        for k, v in (params or {}).items():
+            self.set(k, v)
+        if initialize:
+            self.initialize()
+
+    # the log ---------------------------------------------------------------
+    def _callbacks(self):
+        # The FMU copies the callbacks at instantiation: the logger must be ours from the
+        # start.  Lines are kept (not printed) so callers and tests can read them.
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+        def logger(env, instance, status, category, message):
+            st = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"][status] if 0 <= status <= 5 else str(status)
+            self.log.append(f"{st} [{category.decode()}] {message.decode()}")
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:  # fmpy's native proxy applies the printf arguments ctypes cannot pass
+            from ctypes import byref
+
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(cb))
+        except Exception:
+            pass
+        self._cb = cb  # keep the callbacks alive as long as the instance
+        return cb
+
+    def _call(self, what, fn, *args):
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return fn(*args)
+        except FMICallException as e:
+            last = self.log[-1] if self.log else "(no log line)"
+            raise FMUError(f"{what} failed (status {e.status}): {last}", self.log) from e
+
+    # values ----------------------------------------------------------------
+    def _refs(self, key):
+        names = self.names[key] if key in self.names else [key]
+        vs = []
+        for n in names:
+            if n not in self.vars:
+                raise KeyError(f"{self.path}: no variable {n!r}")
+            vs.append(self.vars[n])
+        return vs
+
+    def set(self, key, value):
+        vs = self._refs(key)
+        vals = np.broadcast_to(np.asarray(value, float), (len(vs),))
+        for v, x in zip(vs, vals):
+            if v.type == "Integer":
+                self._call(f"setInteger({v.name})", self.fmu.setInteger, [v.valueReference], [int(x)])
+            else:
+                self._call(f"setReal({v.name})", self.fmu.setReal, [v.valueReference], [float(x)])
+
+    def get(self, key):
+        """Value(s) of a variable name or a vector key (returns an array for vectors)."""
+        vs = self._refs(key)
+        out = []
+        for v in vs:
+            if v.type == "Integer":
+                out += self._call(f"getInteger({v.name})", self.fmu.getInteger, [v.valueReference])
+            else:
+                out += self._call(f"getReal({v.name})", self.fmu.getReal, [v.valueReference])
+        return np.array(out) if key in self.names else out[0]
+
+    # life cycle --------------------------------------------------------------
+    def initialize(self):
+        tol = self._tolerance
+        self._call("setupExperiment", self.fmu.setupExperiment, tol, self.time)
+        self._call("enterInitializationMode", self.fmu.enterInitializationMode)
+        self._call("exitInitializationMode", self.fmu.exitInitializationMode)
+        if self.kind == "ModelExchange":
+            self.fmu.newDiscreteStates()
+            self.fmu.enterContinuousTimeMode()
+
+    def step(self, h: float, tau=None):
+        """Co-Simulation: hold ``tau`` (if given) and advance by ``h`` [s]."""
+        if tau is not None:
+            self.set("tau", tau)
+        self._call(f"doStep(t={self.time!r}, h={h!r})", self.fmu.doStep, self.time, h)
+        self.time += h
+
+    def last_successful_time(self) -> float:
+        from fmpy.fmi2 import fmi2LastSuccessfulTime
+
+        return self.fmu.getRealStatus(fmi2LastSuccessfulTime)
+
+    # FMU state ----------------------------------------------------------------
+    def get_state(self):
+        return self._call("getFMUstate", self.fmu.getFMUState)
+
+    def set_state(self, state, time: float | None = None):
+        self._call("setFMUstate", self.fmu.setFMUState, state)
+        if time is not None:
+            self.time = time
+
+    def free_state(self, state):
+        self.fmu.freeFMUState(state)
+
+    def serialize(self, state) -> bytes:
+        return bytes(self._call("serializeFMUstate", self.fmu.serializeFMUState, state))
+
+    def deserialize(self, data: bytes):
+        return self._call("deSerializeFMUstate", self.fmu.deSerializeFMUState, bytearray(data))
+
+    def close(self):
+        if getattr(self, "_alive", False):
+            try:
+                self.fmu.terminate()
+            except Exception:
+                pass  # terminate is not allowed from every state; freeing always is
+            self.fmu.freeInstance()
+            self._alive = False
+        if getattr(self, "_own_unzip", False) and getattr(self, "_unzip", None):
+            shutil.rmtree(self._unzip, ignore_errors=True)
+            self._unzip = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
