@@ -78,9 +78,9 @@ std::vector<ParamSpec> SixPus::param_specs(const std::string& set) const {
     v.push_back({idx("rail", i, "S0x"), "m", "x of the slider of " + leg + " at stroke q = 0", s0x, -10, 10});
     v.push_back({idx("rail", i, "S0y"), "m", "y of the slider of " + leg + " at stroke q = 0", kRailY[i], -10, 10});
     v.push_back({idx("rail", i, "S0z"), "m", "z of the slider of " + leg + " at stroke q = 0", 0.0, -10, 10});
-    v.push_back({idx("rail", i, "sx"), "1", "x of the rail direction of " + leg + " (unit vector)", 1.0, -1, 1});
-    v.push_back({idx("rail", i, "sy"), "1", "y of the rail direction of " + leg + " (unit vector)", 0.0, -1, 1});
-    v.push_back({idx("rail", i, "sz"), "1", "z of the rail direction of " + leg + " (unit vector)", 0.0, -1, 1});
+    v.push_back({idx("rail", i, "sx"), "1", "x of the rail direction of " + leg + " (unit vector; the set checks |s| = 1 within 1e-6)", 1.0, -2, 2});
+    v.push_back({idx("rail", i, "sy"), "1", "y of the rail direction of " + leg + " (unit vector; the set checks |s| = 1 within 1e-6)", 0.0, -2, 2});
+    v.push_back({idx("rail", i, "sz"), "1", "z of the rail direction of " + leg + " (unit vector; the set checks |s| = 1 within 1e-6)", 0.0, -2, 2});
     v.push_back({idx("rail", i, "qmin"), "m", "lower stroke limit of " + leg, 0.0, -10, 10});
     v.push_back({idx("rail", i, "qmax"), "m", "upper stroke limit of " + leg, kQmax, -10, 10});
     v.push_back({idx("slider", i, "m"), "kg", "mass of the slider carriage of " + leg, 0.12, 0, 1e6});
@@ -250,7 +250,7 @@ int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x, double
     legs_at(sm, x, f, legs, Strokes::ignore);
     for (int i = 0; i < NLEG; ++i) {
       const V3 Pw = V3(x[0], x[1], x[2]) + legs[i].rP;
-      const V3 Sw = Pw - legs[i].w;
+      const V3 Sw = sm.S0[i] + legs[i].q * sm.s[i];
       for (int k = 0; k < 3; ++k) {
         P[3 * i + k] = Pw[k];
         S[3 * i + k] = Sw[k];

@@ -26,15 +26,17 @@ void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes
     // |d - q s|^2 = L^2:  ss q^2 - 2 b q + |d|^2 - L^2 = 0,  and s.w = b - q ss = branch sqrt(disc).
     const double b = m.s[i].dot(d);
     const double disc = b * b - m.ss[i] * (d.squaredNorm() - m.L[i] * m.L[i]);
-    const double eps = 1e-9 * m.L[i];
-    if (!(disc >= eps * eps)) {
-      if (disc < -eps * eps) {
+    // disc = (s.w)^2 carries rounding of order 1e-16 |d|^2: a leg is taken as exactly
+    // perpendicular to its rail when |s.w| < 1e-6 L.
+    const double tol = 1e-12 * m.L[i] * m.L[i];
+    if (!(disc >= tol)) {
+      if (disc < -tol) {
         const double perp = std::sqrt(std::max(0.0, d.squaredNorm() - b * b / m.ss[i]));
         throw Error(PKM_ERR_UNREACHABLE, "leg " + std::to_string(i + 1) + " cannot reach the " + pose_text(x) +
                                              ": its platform point is " + g6(perp) +
                                              " m from the rail axis, more than the leg length " + g6(m.L[i]) + " m");
       }
-      if (disc >= -eps * eps)
+      if (disc >= -tol)
         throw Error(PKM_ERR_SINGULAR, "leg " + std::to_string(i + 1) + " is perpendicular to its rail at the " +
                                           pose_text(x) + " (s.w = " + g6(std::sqrt(std::max(0.0, disc))) +
                                           " m): inverse-kinematic (type-1) singularity, the two roots meet");
