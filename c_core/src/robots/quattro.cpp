@@ -49,8 +49,11 @@ void pose_kinematics(const Model& m, const double* x, Pose& p, bool check_limits
       throw Error(PKM_ERR_UNREACHABLE,
                   arm_name(i) + ": pose out of reach (RAD < 0: the forearm sphere misses the elbow circle, |K|/R = " +
                       fmt(R > 0 ? std::fabs(K) / R : INFINITY, 4) + ")");
+    // The seed keeps the larger x_B for arm 1 (smaller for arm 3, y_B for arms 2 and 4):
+    // the elbow out, which with C below the motor plane (s < 0) is the root gam - del.
+    // The elbow-in root lies beyond the joint range everywhere in the workspace.
     const double gam = std::atan2(-s, r), del = std::acos(K / R);
-    double q = gam - m.branch[i] * del;
+    double q = gam - del;
     q = std::atan2(std::sin(q), std::cos(q));
     if (check_limits && (q <= m.qmin || q >= m.qmax))
       throw Error(PKM_ERR_JOINT_LIMIT, arm_name(i) + ": q = " + fmt(q / kDeg, 5) + " deg outside the joint range [" +
@@ -154,15 +157,6 @@ double potential_energy(const Model& m, const Pose& p) {
   return V;
 }
 
-Eigen::Vector4d friction(const Model& m, const Eigen::Vector4d& qd) {
-  Eigen::Vector4d f;
-  for (int i = 0; i < N; ++i) {
-    const double sgn = qd[i] > 0 ? 1.0 : (qd[i] < 0 ? -1.0 : 0.0);
-    f[i] = m.coulomb[i] * sgn + m.viscous[i] * qd[i];
-  }
-  return f;
-}
-
 Eigen::Vector4d solve_JT(const Pose& p, const Eigen::Vector4d& f, const char* what) {
   // J^T = Jx^T Jq^-1, so J^-T f = Jq (Jx^-T f).
   Eigen::PartialPivLU<Eigen::Matrix4d> lu(p.Jx.transpose());
@@ -252,14 +246,6 @@ class Quattro final : public Robot {
           "nominal motor torque; i * tau is the arm-side limit of the alfa indices (119.5 N m)");
     t.add("joint.q_min", "rad", -51 * kDeg, -kPi, kPi, "lower end of the arm range (seed -51 deg, upwards)");
     t.add("joint.q_max", "rad", 123 * kDeg, -kPi, kPi, "upper end of the arm range (seed +123 deg, downwards)");
-    for (int i = 1; i <= N; ++i) {
-      const std::string p = "joint[" + std::to_string(i) + "].";
-      t.add(p + "coulomb", "N.m", 0.0, 0, big, "Coulomb friction torque at arm joint (arm side; seed f_s = 0)");
-      t.add(p + "viscous", "N.m.s/rad", 0.0, 0, big, "viscous friction at arm joint (arm side; seed f_v = 0)");
-    }
-    for (int i = 1; i <= N; ++i)
-      t.add("arm[" + std::to_string(i) + "].branch", "1", 1.0, -1, 1,
-            "IK root: +1 elbow out (the seed's larger/smaller root, ch. 1.4.1), -1 elbow in");
     t.add("gravity.x", "m/s2", 0.0, -100, 100, "gravity acceleration, x component");
     t.add("gravity.y", "m/s2", 0.0, -100, 100, "gravity acceleration, y component");
     t.add("gravity.z", "m/s2", -9.81, -100, 100, "gravity acceleration, z component");
@@ -297,15 +283,6 @@ class Quattro final : public Robot {
     m->qmin = get("joint.q_min");
     m->qmax = get("joint.q_max");
     m->grav = Eigen::Vector3d(get("gravity.x"), get("gravity.y"), get("gravity.z"));
-    for (int i = 0; i < N; ++i) {
-      const std::string k = "[" + std::to_string(i + 1) + "]";
-      m->coulomb[i] = get("joint" + k + ".coulomb");
-      m->viscous[i] = get("joint" + k + ".viscous");
-      const double br = get("arm" + k + ".branch");
-      if (br != 1.0 && br != -1.0)
-        throw Error(PKM_ERR_PARAMETER, "arm" + k + ".branch = " + fmt(br) + " must be +1 or -1");
-      m->branch[i] = (int)br;
-    }
     if (!(m->qmin < m->qmax))
       throw Error(PKM_ERR_PARAMETER, "joint.q_min = " + fmt(m->qmin) + " rad must be below joint.q_max = " +
                                          fmt(m->qmax) + " rad");
@@ -404,8 +381,9 @@ class Quattro final : public Robot {
     pose_kinematics(m, x, p);
     Eigen::Map<const Eigen::Vector4d> v(xd), a(xdd);
     const Eigen::Matrix4d Jd = quattro::jacobian_dot(m, p, v);
-    const Eigen::Vector4d qd = p.J * v, qdd = p.J * a + Jd * v;
-    // Arm side directly in joint space; the platform side as a task-space force mapped by
+    const Eigen::Vector4d qdd = p.J * a + Jd * v;
+    // Joint friction (the seed's f_s, f_v) is the drive layer's joint[i].coulomb/.viscous,
+    // added by the C API (dynamics/drive.hpp).  Arm side directly in joint space; the platform side as a task-space force mapped by
     // J^-T (virtual power), so a near-singular J only touches what passes through it.
     Eigen::Vector4d fp = Eigen::Vector4d::Zero();
     const double w2 = v[3] * v[3];
@@ -416,7 +394,7 @@ class Quattro final : public Robot {
     }
     fp[3] += m.tool_ratio * m.tool_ratio * m.Jload * a[3];
     Eigen::Map<Eigen::Vector4d> out(tau);
-    out = m.Ieq * qdd + arm_gravity(m, p) + friction(m, qd) + solve_JT(p, fp, "inverse dynamics");
+    out = m.Ieq * qdd + arm_gravity(m, p) + solve_JT(p, fp, "inverse dynamics");
   }
 
   void mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const override {

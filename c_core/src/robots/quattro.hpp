@@ -33,8 +33,6 @@ struct Model final : RobotModel {
   double I1_gimre;   // link-1 inertia about A_i used by the GIMRE (seed ch. 4.4.2)
   double mA, mB;     // platform point masses at M34 (tool side) and M12 (seed ch. 5.2)
   double qmin, qmax;
-  std::array<double, N> coulomb{}, viscous{};
-  std::array<int, N> branch{};
   Eigen::Vector3d grav;
   std::array<Eigen::Vector3d, N> u;       // horizontal direction of arm i
   std::array<Eigen::Vector3d, N> A;       // motor axis point A_i
@@ -64,7 +62,7 @@ Eigen::Matrix4d jacobian_dot(const Model& m, const Pose& p, const Eigen::Vector4
 // Simplified dynamic model of seed ch. 5 (rigid platform points, forearm mass split).
 Eigen::Matrix4d mass_matrix(const Model& m, const Pose& p);
 // Task-space velocity force h_v(x, xd) (Coriolis/centrifugal): J^T (M-part) such that
-// J^T tau = M xdd + h_v + grad V + J^T tau_friction.
+// J^T tau = M xdd + h_v + grad V (friction is the drive layer's).
 Eigen::Vector4d velocity_force(const Model& m, const Pose& p, const Eigen::Vector4d& xd,
                                const Eigen::Matrix4d* Jdot = nullptr);
 // dV/dq of the arm-side bodies (link 1 and the forearm mass at the elbow) [N m].
@@ -72,8 +70,6 @@ Eigen::Vector4d arm_gravity(const Model& m, const Pose& p);
 // Task-space gradient of the potential energy of everything (arm side mapped by J^T).
 Eigen::Vector4d gravity_force(const Model& m, const Pose& p);
 double potential_energy(const Model& m, const Pose& p);
-// Joint friction torque at qd [N m] (Coulomb sign(qd), 0 at qd = 0, plus viscous).
-Eigen::Vector4d friction(const Model& m, const Eigen::Vector4d& qd);
 // y = J^-T f; throws PKM_ERR_SINGULAR at a direct (parallel) singularity.
 Eigen::Vector4d solve_JT(const Pose& p, const Eigen::Vector4d& f, const char* what);
 // Generalized inertia matrix reduced to the end effector (seed ch. 4), no motor rotors.

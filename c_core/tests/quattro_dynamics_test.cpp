@@ -1,0 +1,207 @@
+// Quattro (seed 003 ch. 5) dynamics through the C API, checked against independent facts:
+// the gravity load is the gradient of the potential energy, the velocity terms are those
+// of Lagrange's equations for the mass matrix (finite differences of M), forward dynamics
+// inverts inverse dynamics, and a free motion conserves T + V.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pkm/pkm.h"
+
+namespace {
+
+struct QuattroDyn : ::testing::TestWithParam<const char*> {
+  pkm_model* m = nullptr;
+  pkm_data* d = nullptr;
+  char err[512] = {0};
+  void SetUp() override {
+    m = pkm_model_create("quattro", GetParam(), err, sizeof err);
+    ASSERT_NE(m, nullptr) << err;
+    // A payload makes the platform-side terms and the tool-spin inertia matter.
+    set("payload.m", 0.5);
+    set("payload.J", 2e-3);
+    d = pkm_data_create(m);
+    ASSERT_NE(d, nullptr);
+  }
+  void TearDown() override {
+    pkm_data_destroy(d);
+    pkm_model_destroy(m);
+  }
+  void set(const char* name, double v) {
+    ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, name), v, err, sizeof err), PKM_OK) << err;
+    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
+  }
+  std::vector<std::vector<double>> poses() {
+    return {{0.0, 0.0, -0.95, 0.0}, {0.12, -0.05, -1.0, 0.1}, {-0.2, 0.15, -0.9, -0.2}, {0.05, 0.25, -1.1, 0.3}};
+  }
+  double V(const double* x) {
+    double T, Vv, z[4] = {0, 0, 0, 0};
+    EXPECT_EQ(pkm_energy(m, d, x, z, &T, &Vv), PKM_OK) << pkm_data_error(d);
+    return Vv;
+  }
+  void M(const double* x, double* out) { ASSERT_EQ(pkm_mass_matrix(m, d, x, out), PKM_OK) << pkm_data_error(d); }
+  void J(const double* x, double* out) {
+    ASSERT_EQ(pkm_jacobians(m, d, x, nullptr, nullptr, out), PKM_OK) << pkm_data_error(d);
+  }
+};
+
+TEST_P(QuattroDyn, GravityLoadIsTheGradientOfThePotential) {
+  const double h = 1e-6;
+  for (auto& x : poses()) {
+    double g[4], Jm[16];
+    ASSERT_EQ(pkm_gravity_load(m, d, x.data(), g), PKM_OK) << pkm_data_error(d);
+    J(x.data(), Jm);
+    for (int j = 0; j < 4; ++j) {  // J^T g = dV/dx (virtual work)
+      std::vector<double> xp = x, xm = x;
+      xp[j] += h;
+      xm[j] -= h;
+      const double fd = (V(xp.data()) - V(xm.data())) / (2 * h);
+      double JTg = 0;
+      for (int i = 0; i < 4; ++i) JTg += Jm[4 * i + j] * g[i];
+      EXPECT_NEAR(JTg, fd, 1e-6 * std::max(1.0, std::fabs(fd))) << "coordinate " << j;
+    }
+  }
+}
+
+TEST_P(QuattroDyn, HoldingTorqueLiftsTheArms) {
+  // Seed 003 writes the gravity terms with the sign of the load (+g m_b lg cos q_r);
+  // the effort that holds the robot is the opposite: upwards, i.e. negative q.
+  double g[4];
+  const double x[4] = {0, 0, -0.95, 0};
+  ASSERT_EQ(pkm_gravity_load(m, d, x, g), PKM_OK);
+  for (int i = 0; i < 4; ++i) EXPECT_LT(g[i], 0.0) << "arm " << i + 1;
+}
+
+TEST_P(QuattroDyn, InverseDynamicsFollowsLagrangeForTheMassMatrix) {
+  // J^T (ID(x, xd, xdd) - ID(x, 0, 0)) = M xdd + Mdot xd - 1/2 d(xd' M xd)/dx.
+  const double xd[4] = {0.8, -0.5, 1.2, 3.0}, xdd[4] = {4.0, 2.0, -6.0, 10.0}, h = 1e-6;
+  const double zero[4] = {0, 0, 0, 0};
+  for (auto& x : poses()) {
+    double t1[4], t0[4], Mm[16], Jm[16];
+    ASSERT_EQ(pkm_inverse_dynamics(m, d, x.data(), xd, xdd, t1), PKM_OK) << pkm_data_error(d);
+    ASSERT_EQ(pkm_inverse_dynamics(m, d, x.data(), zero, zero, t0), PKM_OK);
+    M(x.data(), Mm);
+    J(x.data(), Jm);
+    double Mdot[16], dT[4];
+    {
+      std::vector<double> xp = x, xm = x;
+      for (int j = 0; j < 4; ++j) {
+        xp[j] += h * xd[j];
+        xm[j] -= h * xd[j];
+      }
+      double Mp[16], Mq[16];
+      M(xp.data(), Mp);
+      M(xm.data(), Mq);
+      for (int k = 0; k < 16; ++k) Mdot[k] = (Mp[k] - Mq[k]) / (2 * h);
+    }
+    for (int j = 0; j < 4; ++j) {
+      std::vector<double> xp = x, xm = x;
+      xp[j] += h;
+      xm[j] -= h;
+      double Mp[16], Mq[16];
+      M(xp.data(), Mp);
+      M(xm.data(), Mq);
+      double qp = 0, qm = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+          qp += xd[a] * Mp[4 * a + b] * xd[b];
+          qm += xd[a] * Mq[4 * a + b] * xd[b];
+        }
+      dT[j] = 0.5 * (qp - qm) / (2 * h);
+    }
+    for (int j = 0; j < 4; ++j) {
+      double lhs = 0, rhs = -dT[j];
+      for (int i = 0; i < 4; ++i) {
+        lhs += Jm[4 * i + j] * (t1[i] - t0[i]);
+        rhs += Mm[4 * j + i] * xdd[i] + Mdot[4 * j + i] * xd[i];
+      }
+      EXPECT_NEAR(lhs, rhs, 1e-6 * std::max(1.0, std::fabs(rhs))) << "coordinate " << j;
+    }
+  }
+}
+
+TEST_P(QuattroDyn, MassMatrixIsSymmetricPositiveAndCarriesTheRotors) {
+  for (auto& x : poses()) {
+    double Mm[16];
+    M(x.data(), Mm);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) EXPECT_NEAR(Mm[4 * a + b], Mm[4 * b + a], 1e-12);
+    // Leading principal minors > 0 (Sylvester).
+    double m11 = Mm[0], m22 = Mm[0] * Mm[5] - Mm[1] * Mm[4];
+    EXPECT_GT(m11, 0);
+    EXPECT_GT(m22, 0);
+  }
+  // Doubling the rotor inertia adds ratio^2 J_m J^T J.
+  const double x[4] = {0.05, -0.1, -1.0, 0.1};
+  double M1[16], M2[16], Jm[16];
+  M(x, M1);
+  J(x, Jm);
+  const double Jrot = pkm_param_get(m, pkm_param_index(m, "motor.J"));
+  const double r = pkm_param_get(m, pkm_param_index(m, "gear.ratio"));
+  set("motor.J", 2 * Jrot);
+  pkm_data_destroy(d);
+  d = pkm_data_create(m);
+  M(x, M2);
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      double JtJ = 0;
+      for (int i = 0; i < 4; ++i) JtJ += Jm[4 * i + a] * Jm[4 * i + b];
+      EXPECT_NEAR(M2[4 * a + b] - M1[4 * a + b], r * r * Jrot * JtJ, 1e-9 * (1 + std::fabs(M1[4 * a + b])));
+    }
+}
+
+TEST_P(QuattroDyn, ForwardDynamicsInvertsInverseDynamics) {
+  const double xd[4] = {0.3, 0.6, -0.9, 1.0}, xdd[4] = {-5.0, 8.0, 3.0, -20.0};
+  for (auto& x : poses()) {
+    double tau[4], back[4];
+    ASSERT_EQ(pkm_inverse_dynamics(m, d, x.data(), xd, xdd, tau), PKM_OK) << pkm_data_error(d);
+    ASSERT_EQ(pkm_forward_dynamics(m, d, x.data(), xd, tau, back), PKM_OK) << pkm_data_error(d);
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(back[j], xdd[j], 1e-8 * std::max(1.0, std::fabs(xdd[j])));
+  }
+}
+
+TEST_P(QuattroDyn, FreeMotionConservesEnergy) {
+  // No input, no friction: T + V is constant.  RK4 on the core's forward dynamics.
+  std::vector<double> x = {0.02, -0.03, -0.97, 0.05}, v = {0.4, -0.3, 0.5, 1.0};
+  auto E = [&](const std::vector<double>& xx, const std::vector<double>& vv) {
+    double T, Vv;
+    EXPECT_EQ(pkm_energy(m, d, xx.data(), vv.data(), &T, &Vv), PKM_OK);
+    return T + Vv;
+  };
+  auto f = [&](const std::vector<double>& xx, const std::vector<double>& vv, std::vector<double>& a) {
+    const double tau[4] = {0, 0, 0, 0};
+    a.assign(4, 0);
+    ASSERT_EQ(pkm_forward_dynamics(m, d, xx.data(), vv.data(), tau, a.data()), PKM_OK) << pkm_data_error(d);
+  };
+  const double E0 = E(x, v), dt = 2e-4;
+  double Tscale = 0;
+  {
+    double T, Vv;
+    pkm_energy(m, d, x.data(), v.data(), &T, &Vv);
+    Tscale = T;
+  }
+  for (int s = 0; s < 500; ++s) {
+    std::vector<double> a1, a2, a3, a4, xt(4), vt(4);
+    f(x, v, a1);
+    for (int j = 0; j < 4; ++j) xt[j] = x[j] + 0.5 * dt * v[j], vt[j] = v[j] + 0.5 * dt * a1[j];
+    std::vector<double> v2 = vt;
+    f(xt, vt, a2);
+    for (int j = 0; j < 4; ++j) xt[j] = x[j] + 0.5 * dt * v2[j], vt[j] = v[j] + 0.5 * dt * a2[j];
+    std::vector<double> v3 = vt;
+    f(xt, vt, a3);
+    for (int j = 0; j < 4; ++j) xt[j] = x[j] + dt * v3[j], vt[j] = v[j] + dt * a3[j];
+    std::vector<double> v4 = vt;
+    f(xt, vt, a4);
+    for (int j = 0; j < 4; ++j) {
+      x[j] += dt / 6 * (v[j] + 2 * v2[j] + 2 * v3[j] + v4[j]);
+      v[j] += dt / 6 * (a1[j] + 2 * a2[j] + 2 * a3[j] + a4[j]);
+    }
+  }
+  EXPECT_NEAR(E(x, v), E0, 1e-8 * std::max(1.0, Tscale));
+}
+
+INSTANTIATE_TEST_SUITE_P(Sets, QuattroDyn, ::testing::Values("default", "appendix_a"));
+
+}  // namespace
