@@ -478,8 +478,8 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     seed : int, optional
         Seed of the noise generator.
     progress : bool, optional
-        Show a tqdm progress bar; by default it appears when the run lasts more than
-        two seconds of wall time.
+        Show a tqdm progress bar; by default it appears on a terminal when the run
+        lasts more than two seconds of wall time.
 
     Returns
     -------
@@ -526,7 +526,8 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
 
     start = _time.perf_counter()
     k = 0
-    bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=(progress is False), leave=False,
+    # default: a bar only on a terminal and only once the run has taken two seconds
+    bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
                desc=f"{plant.kind} {reference.name}".strip())
     try:
         plant.initialize(float(t[0]), x0, xd0)

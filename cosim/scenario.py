@@ -2,7 +2,8 @@
 
 A scenario file names the robot, the parameter overrides of the model the controller
 believes in (``[parameters]``) and of the plant that plays the real robot
-(``[plant_parameters]``, ``[plant_scale]``), the controller and its gains, the
+(``[plant_parameters]`` values, ``[plant_scale]`` factors, ``[plant_offset]`` additive
+errors, all on top of the nominal), the controller and its gains, the
 reference, the duration and communication step, the sensor noise and the outputs.
 ``run_scenario`` runs it against the Co-Simulation FMU or the core (``plant``), then
 writes beside each other in the output directory:
@@ -40,7 +41,7 @@ from .master import CorePlant, FMUPlant, MasterError, make_reference, run
 REPO = Path(__file__).resolve().parent.parent
 
 _TOP_KEYS = {"name", "description", "robot", "param_set", "plant", "duration", "step", "seed", "parameters",
-             "plant_parameters", "plant_scale", "integrator", "controller", "reference", "initial", "noise",
+             "plant_parameters", "plant_scale", "plant_offset", "integrator", "controller", "reference", "initial", "noise",
              "output", "fmu"}
 
 
@@ -135,10 +136,11 @@ def _check(spec, path):
     for sec in ("controller", "reference"):
         if not isinstance(spec.get(sec), dict):
             fail(sec, "missing section")
-    for sec in ("parameters", "plant_parameters", "plant_scale", "integrator", "initial", "noise", "output", "fmu"):
+    for sec in ("parameters", "plant_parameters", "plant_scale", "plant_offset", "integrator", "initial", "noise",
+                "output", "fmu"):
         if not isinstance(spec.setdefault(sec, {}), dict):
             fail(sec, "must be a table")
-    for sec in ("parameters", "plant_parameters", "plant_scale"):
+    for sec in ("parameters", "plant_parameters", "plant_scale", "plant_offset"):
         for k, v in spec[sec].items():
             if not isinstance(v, (int, float)) or isinstance(v, bool):
                 fail(f"{sec}.{k}", f"must be a number, got {v!r}")
@@ -182,6 +184,8 @@ def build_models(sc: Scenario):
     truth = dict(sc.spec["plant_parameters"])
     for k, f in sc.spec["plant_scale"].items():
         truth[k] = nominal.param(k) * f
+    for k, d in sc.spec["plant_offset"].items():
+        truth[k] = truth.get(k, nominal.param(k)) + d
     if truth:
         true.set_params(truth)
     return nominal, true, truth
@@ -312,7 +316,8 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     step, dur = float(sc.spec["step"]), float(sc.spec["duration"])
     ref = make_reference(nominal, traj, step=step, duration=dur)
     init = sc.spec["initial"]
-    x0 = _angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad")) if "pose" in init else ref.x[0]
+    # start at rest where the reference starts (before a step at t = 0, not after it)
+    x0 = _angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad")) if "pose" in init else traj.knots[0]
     ctrl, design = build_controller(sc, nominal, x0)
     noise = sc.spec["noise"]
     p = build_plant(sc, true, truth)
@@ -430,7 +435,7 @@ def step_response_metrics(sc, res, model, traj, ctrl) -> dict:
         except ctl.ControllerError as e:
             pose_info[names[i]] = {"error": str(e)}
     joint_info = []
-    q0, q1 = res["qref"][0], res["qref"][-1]
+    q0, q1 = model.ik(x0), res["qref"][-1]
     qstart = res["q_true"][0]
     for j in range(model.ndof):
         if abs(q1[j] - q0[j]) < 1e-9:
