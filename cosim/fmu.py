@@ -145,8 +145,9 @@ def simulate(path, fmi_type: str = "CoSimulation", stop_time: float = 1.0, step:
 class FMUInstance:
     """One instance of a plant FMU, stepped by hand (Co-Simulation or Model Exchange).
 
-    Variables are addressed by name (``"tau[1]"``, ``"z"``, ``"leg[1].L"``...) or by the
-    keys of :func:`variable_names` (``"x"``, ``"tau"``...) for whole vectors.  Every log
+    Variables are addressed by name (``"tau[1]"``, ``"z"``, ``"leg[1].L"``...) with
+    :meth:`get` / :meth:`set`, whole vectors by the keys of :func:`variable_names`
+    (``"x"``, ``"tau"``...) with :meth:`vector` / :meth:`set_vector`.  Every log
     line of the instance is kept in :attr:`log` (``"<status> [<category>] <message>"``),
     and a failing call raises :class:`FMUError` carrying them.
 
@@ -207,20 +208,14 @@ class FMUInstance:
 
         def logger(env, instance, status, category, message):
             st = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"][status] if 0 <= status <= 5 else str(status)
-            self.log.append(f"{st} [{category.decode()}] {message.decode()}")
+            # The message is a printf format without arguments (the PKM FMUs pre-format and
+            # escape '%'); fmpy's formatting proxy is process-global, so it is not used here.
+            self.log.append(f"{st} [{category.decode()}] {message.decode().replace('%%', '%')}")
 
         cb = fmi2CallbackFunctions()
         cb.logger = fmi2CallbackLoggerTYPE(logger)
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:  # fmpy's native proxy applies the printf arguments ctypes cannot pass
-            from ctypes import byref
-
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(cb))
-        except Exception:
-            pass
         self._cb = cb  # keep the callbacks alive as long as the instance
         return cb
 
@@ -234,34 +229,36 @@ class FMUInstance:
             raise FMUError(f"{what} failed (status {e.status}): {last}", self.log) from e
 
     # values ----------------------------------------------------------------
-    def _refs(self, key):
-        names = self.names[key] if key in self.names else [key]
-        vs = []
-        for n in names:
-            if n not in self.vars:
-                raise KeyError(f"{self.path}: no variable {n!r}")
-            vs.append(self.vars[n])
-        return vs
+    def _var(self, name):
+        if name not in self.vars:
+            raise KeyError(f"{self.path}: no variable {name!r}")
+        return self.vars[name]
 
-    def set(self, key, value):
-        vs = self._refs(key)
-        vals = np.broadcast_to(np.asarray(value, float), (len(vs),))
-        for v, x in zip(vs, vals):
-            if v.type == "Integer":
-                self._call(f"setInteger({v.name})", self.fmu.setInteger, [v.valueReference], [int(x)])
-            else:
-                self._call(f"setReal({v.name})", self.fmu.setReal, [v.valueReference], [float(x)])
+    def set(self, name: str, value):
+        """Set one variable by name (an Integer variable takes int(value))."""
+        v = self._var(name)
+        if v.type == "Integer":
+            self._call(f"setInteger({v.name})", self.fmu.setInteger, [v.valueReference], [int(value)])
+        else:
+            self._call(f"setReal({v.name})", self.fmu.setReal, [v.valueReference], [float(value)])
 
-    def get(self, key):
-        """Value(s) of a variable name or a vector key (returns an array for vectors)."""
-        vs = self._refs(key)
-        out = []
-        for v in vs:
-            if v.type == "Integer":
-                out += self._call(f"getInteger({v.name})", self.fmu.getInteger, [v.valueReference])
-            else:
-                out += self._call(f"getReal({v.name})", self.fmu.getReal, [v.valueReference])
-        return np.array(out) if key in self.names else out[0]
+    def get(self, name: str):
+        """Value of one variable by name."""
+        v = self._var(name)
+        if v.type == "Integer":
+            return self._call(f"getInteger({v.name})", self.fmu.getInteger, [v.valueReference])[0]
+        return self._call(f"getReal({v.name})", self.fmu.getReal, [v.valueReference])[0]
+
+    def set_vector(self, key: str, values):
+        """Set a vector of :func:`variable_names` (``"tau"``, ``"x0"``...) in one call."""
+        refs = [self._var(n).valueReference for n in self.names[key]]
+        vals = np.broadcast_to(np.asarray(values, float), (len(refs),)).tolist()
+        self._call(f"setReal({key})", self.fmu.setReal, refs, vals)
+
+    def vector(self, key: str) -> np.ndarray:
+        """A vector of :func:`variable_names` (``"x"``, ``"q"``...) as an array."""
+        refs = [self._var(n).valueReference for n in self.names[key]]
+        return np.array(self._call(f"getReal({key})", self.fmu.getReal, refs))
 
     # life cycle --------------------------------------------------------------
     def initialize(self):
@@ -276,7 +273,7 @@ class FMUInstance:
     def step(self, h: float, tau=None):
         """Co-Simulation: hold ``tau`` (if given) and advance by ``h`` [s]."""
         if tau is not None:
-            self.set("tau", tau)
+            self.set_vector("tau", tau)
         self._call(f"doStep(t={self.time!r}, h={h!r})", self.fmu.doStep, self.time, h)
         self.time += h
 
@@ -301,7 +298,29 @@ class FMUInstance:
         return bytes(self._call("serializeFMUstate", self.fmu.serializeFMUState, state))
 
     def deserialize(self, data: bytes):
-        return self._call("deSerializeFMUstate", self.fmu.deSerializeFMUState, bytearray(data))
+        return self._call("deSerializeFMUstate", self.fmu.deSerializeFMUstate, bytes(data))
+
+    # Model Exchange ----------------------------------------------------------------
+    def _vec_call(self, what, fn, x):
+        import ctypes
+
+        return self._call(what, fn, x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), x.size)
+
+    def continuous_states(self) -> np.ndarray:
+        """Model Exchange: the state vector (x, xd) [m, rad, m/s, rad/s]."""
+        x = np.zeros(2 * len(self.names["x"]))
+        self._vec_call("getContinuousStates", self.fmu.getContinuousStates, x)
+        return x
+
+    def set_continuous_states(self, x):
+        x = np.ascontiguousarray(x, float)
+        self._vec_call("setContinuousStates", self.fmu.setContinuousStates, x)
+
+    def derivatives(self) -> np.ndarray:
+        """Model Exchange: d(x, xd)/dt = (xd, xdd)."""
+        dx = np.zeros(2 * len(self.names["x"]))
+        self._vec_call("getDerivatives", self.fmu.getDerivatives, dx)
+        return dx
 
     def close(self):
         if getattr(self, "_alive", False):

@@ -1,0 +1,152 @@
+"""Bad input never crashes the host: each case returns an error status with a log line
+that says what and where, and the process can instantiate the FMU again."""
+import numpy as np
+import pytest
+
+from cosim import fmu
+
+H = 1e-3
+
+
+def _fresh_instance_works(fmu_file, hold):
+    with fmu.FMUInstance(fmu_file, name="after") as f:
+        for _ in range(5):
+            f.step(H, tau=hold)
+        assert np.all(np.isfinite(f.vector("x")))
+        assert not [line for line in f.log if not line.startswith("OK")]
+
+
+@pytest.mark.parametrize("name, value, words", [
+    ("leg[1].L", -0.116, ["leg[1].L", "-0.116"]),
+    ("platform.m", 0.0, ["platform.m", "0"]),
+    ("leg[3].L", float("nan"), ["leg[3].L", "nan"]),
+    ("solver.rtol", -1.0, ["solver.rtol", "-1"]),
+    ("z0", 0.5, ["initial pose", "leg"]),
+])
+def test_bad_start_value_fails_initialization(fmu_file, hold, name, value, words):
+    f = fmu.FMUInstance(fmu_file, params={name: value}, initialize=False)
+    with pytest.raises(fmu.FMUError) as e:
+        f.initialize()
+    line = f.log[-1]
+    assert line.startswith("Error [logStatusError] fmi2ExitInitializationMode:"), line
+    for w in words:
+        assert w in line, line
+    assert e.value.log == f.log
+    # Nothing else works on a failed instance until a reset: the state machine says so.
+    with pytest.raises(fmu.FMUError):
+        f.step(H)
+    assert "not allowed in state 'error'" in f.log[-1]
+    f.close()
+    _fresh_instance_works(fmu_file, hold)
+
+
+def test_reset_after_a_bad_parameter(fmu_file, hold):
+    f = fmu.FMUInstance(fmu_file, params={"platform.m": 0.0}, initialize=False)
+    with pytest.raises(fmu.FMUError):
+        f.initialize()
+    f.fmu.reset()  # back to instantiated, with every start value restored
+    assert f.get("platform.m") == 0.35
+    f.initialize()
+    f.step(H, tau=hold)
+    f.close()
+
+
+def test_nan_input(fmu_file, hold):
+    with fmu.FMUInstance(fmu_file) as f:
+        f.step(H, tau=hold)
+        bad = hold.copy()
+        bad[2] = np.nan
+        with pytest.raises(fmu.FMUError):
+            f.step(H, tau=bad)
+        line = f.log[-1]
+        assert "tau[3]" in line and "nan" in line and "t = 0.001 s" in line and "not finite" in line, line
+    _fresh_instance_works(fmu_file, hold)
+
+
+def test_parameter_is_fixed_after_initialization(fmu_file):
+    with fmu.FMUInstance(fmu_file) as f:
+        with pytest.raises(fmu.FMUError):
+            f.set("leg[1].L", 0.12)
+        assert "leg[1].L is fixed" in f.log[-1]
+
+
+def test_wrong_guid_is_refused(fmu_file):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu_file))
+    d = extract(str(fmu_file))
+    s = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=d,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x")
+    with pytest.raises(Exception, match="instantiate"):
+        s.instantiate()
+
+
+def _discarded_step(fmu_file, tau):
+    f = fmu.FMUInstance(fmu_file)
+    with pytest.raises(fmu.FMUError) as e:
+        for _ in range(1000):
+            f.step(H, tau=tau)
+    return f, e.value
+
+
+def test_stroke_limit_during_a_step(fmu_file, model, hold):
+    tau = model.gravity_load(model.home())
+    tau[0] -= 5.0  # drive slider 1 to its lower stop
+    f, err = _discarded_step(fmu_file, tau)
+    line = f.log[-1]
+    assert line.startswith("Discard [logStatusDiscard] fmi2DoStep"), line
+    assert "leg 1" in line and "rail[1].qmin" in line and "t = 0.07" in line, line
+    # The state stays at the event: readable, consistent, at the reported time.
+    t_event = f.last_successful_time()
+    assert f.time < t_event < f.time + H  # inside the step that was discarded
+    assert abs(f.get("q[1]")) < 1e-9
+    # A step failed: the importer must roll back or stop, it cannot go on.
+    with pytest.raises(fmu.FMUError):
+        f.step(H, tau=tau)
+    assert "not allowed in state 'step failed'" in f.log[-1]
+    f.close()
+    _fresh_instance_works(fmu_file, hold)
+
+
+def test_pose_goes_singular_during_a_step(fmu_file, model, hold):
+    tau = model.gravity_load(model.home()) + np.array([0.3, -0.2, 0.1, 0.25, -0.15, 0.05])
+    f, err = _discarded_step(fmu_file, tau)
+    line = f.log[-1]
+    assert line.startswith("Discard [logStatusDiscard] fmi2DoStep"), line
+    assert "singularity" in line and "t = 0.2" in line, line
+    assert f.get("singularity.direct") == pytest.approx(f.get("solver.singMin"), rel=1e-3)
+    f.close()
+    _fresh_instance_works(fmu_file, hold)
+
+
+def test_model_exchange_stops_at_the_stroke_limit(fmu_file, model, hold):
+    # ME: fmpy's solver locates the state event; the FMU asks it to stop there, saying why.
+    tau = model.gravity_load(model.home())
+    tau[0] -= 5.0
+    log = []
+    r = fmu.simulate(fmu_file, fmi_type="ModelExchange", stop_time=0.3, step=H, tau=tau, rtol=1e-10,
+                     outputs=["q[1]"], logger=lambda *a: log.append(a))
+    lines = [a[4].decode() for a in log]
+    assert any("stopping the simulation" in s and "leg 1" in s for s in lines), lines
+    # Stopped at the stroke limit, at the time Co-Simulation finds it.
+    f, _ = _discarded_step(fmu_file, tau)
+    assert r["time"][-1] < 0.3
+    assert r["q[1]"][-1] < 2e-3
+    assert f.last_successful_time() > r["time"][-1]
+    f.close()
+
+
+# fmpy's CVode cannot retry after fmi2Discard from the derivatives: its callback raises
+# inside ctypes (an "unraisable" warning), then CVode fails, which is the error expected.
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_model_exchange_singular_pose_is_an_error_not_a_crash(fmu_file, model, hold):
+    tau = model.gravity_load(model.home()) + np.array([0.3, -0.2, 0.1, 0.25, -0.15, 0.05])
+    log = []
+    with pytest.raises(Exception):
+        fmu.simulate(fmu_file, fmi_type="ModelExchange", stop_time=0.3, step=H, tau=tau, rtol=1e-10,
+                     logger=lambda *a: log.append(a))
+    lines = [(a[2], a[4].decode()) for a in log]
+    # fmi2Discard (2) from the dynamics or a stop request (1, Warning), each saying where and when.
+    assert any(st in (1, 2) and "t = 0.2" in s for st, s in lines), lines
+    _fresh_instance_works(fmu_file, hold)
