@@ -158,7 +158,9 @@ class FMUPlant(Plant):
     parameters : dict, optional
         Start values by variable name, set before initialization (the "true" robot).
     rtol, atol : float, optional
-        CVODE tolerances inside the FMU (set if the FMU exposes them).
+        CVODE tolerances inside the FMU (parameters ``solver.rtol``, ``solver.atol``);
+        the defaults are :class:`CorePlant`'s, so both plants integrate alike.  None
+        keeps the FMU's own start values.
     names : dict, optional
         Overrides of the names of a channel (``"tau"``, ``"q"``, ``"qd"``, ``"x"``,
         ``"xd"``, ``"x0"``, ``"xd0"``): a format string of the 1-based index ``{i}`` or
@@ -172,8 +174,8 @@ class FMUPlant(Plant):
     #: pose "<c>0" and the initial rate "<c>d0" (fmu/<robot>/variables.txt)
     POSE = {"6pus": ["x", "y", "z", "rx", "ry", "rz"], "quattro": ["x", "y", "z", "theta"], "fourbar": ["X"]}
 
-    def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = None,
-                 atol: float | None = None, names: dict | None = None, instance_name: str = "plant"):
+    def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = 1e-10,
+                 atol: float | None = 1e-12, names: dict | None = None, instance_name: str = "plant"):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 

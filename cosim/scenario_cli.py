@@ -21,9 +21,9 @@ def print_summary(out, file=None) -> None:
     f = file or sys.stdout
     m = out.metrics
     res = out.result
+    c = m["controller"]
     print(f"scenario {m['scenario']}: robot {m['robot']}, plant {m['plant']['kind']}, controller "
-          f"{m['controller']['type']} (kp {m['controller']['kp']} {m['controller']['kp_unit']}, "
-          f"kd {m['controller']['kd']} {m['controller']['kd_unit']})", file=f)
+          f"{c['type']} (kp {_g(c['kp'])} {c['kp_unit']}, kd {_g(c['kd'])} {c['kd_unit']})", file=f)
     print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall",
           file=f)
     if "steady_state" in m:
@@ -32,12 +32,19 @@ def print_summary(out, file=None) -> None:
             if "RiseTime" in v:
                 print(f"  step of {k} by {v['Amplitude'] * 1e3:+.2f} mm: rise {v['RiseTime'] * 1e3:.1f} ms, "
                       f"settling (2 %) {v['SettlingTime'] * 1e3:.1f} ms, overshoot {v['Overshoot']:.2f} %", file=f)
+        pred = m.get("predicted_step_info")
+        if pred:
+            j = max(range(len(pred)), key=lambda i: pred[i]["mass"])
+            p = pred[j]
+            print(f"  python-control, decoupled joint {j + 1} (m = {p['mass']:.3f} kg, wn = {p['wn']:.1f} rad/s, "
+                  f"zeta = {p['damping']:.2f}): rise {p['RiseTime'] * 1e3:.1f} ms, settling {p['SettlingTime'] * 1e3:.1f} ms, "
+                  f"overshoot {p['Overshoot']:.2f} %", file=f)
         print("  steady-state joint error qref - q [mm]: " + " ".join(f"{e * 1e3:+.4f}" for e in ss["joint_error"]),
               file=f)
         if "predicted_joint_error_equilibrium" in ss:
             print("  predicted Kp^-1 g                 [mm]: "
                   + " ".join(f"{e * 1e3:+.4f}" for e in ss["predicted_joint_error_equilibrium"])
-                  + f"   (max relative difference {ss['prediction_relative_error'] * 100:.3f} %)", file=f)
+                  + f"   (max relative difference {ss['prediction_relative_error']:.2e})", file=f)
         else:
             print(f"  max |e_ss| = {ss['joint_error_max']:.3g} m (predicted 0 with gravity compensation)", file=f)
         pe = ss["pose_error"]
@@ -49,12 +56,17 @@ def print_summary(out, file=None) -> None:
               file=f)
     if "poses" in m:
         errs = [p["position_error"] for p in m["poses"]]
-        print(f"  {m['held_poses']} held poses, {sum(p['rows'] for p in m['poses'])} rows while held; position error "
-              f"at hold: max {max(errs) * 1e6:.3g} um" if errs else "  no held poses", file=f)
+        print(f"  {m['held_poses']} held poses, {sum(p['rows'] for p in m['poses'])} rows while held (column label); "
+              f"true position vs commanded at the holds: max {max(errs) * 1e6:.3g} um (the plant's own geometry)"
+              if errs else "  no held poses", file=f)
     if m["saturated_samples"]:
         print(f"  actuator saturation active at {m['saturated_samples']} samples", file=f)
     for k, p in out.files.items():
         print(f"  {k}: {p}", file=f)
+
+
+def _g(v):
+    return f"{v:.4g}" if isinstance(v, float) else str([float(f"{x:.4g}") for x in v])
 
 
 @command("run", "run a co-simulation scenario (TOML) against the FMU or the core; export recording, metrics, figure")

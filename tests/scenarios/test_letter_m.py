@@ -27,3 +27,17 @@ def test_computed_torque_traces_the_m_and_feels_a_heavier_platform():
     # the plant was heavier, the controller's model was not
     assert heavy.metrics["plant_parameters"]["platform.m"] == 0.35 * 1.2
     assert "platform.m" not in nominal.metrics["plant_parameters"]
+
+
+def test_pen_point_uses_the_core_pose_convention():
+    """tool_point must rotate like the core: compare with the core's platform points."""
+    from cosim._native import lib, ptr
+    from cosim.core import Model
+
+    m = Model("6pus")
+    x = np.array([0.004, -0.003, 0.08, 0.05, -0.04, 0.07])
+    P, S = np.empty((6, 3)), np.empty((6, 3))
+    assert lib.pkm_6pus_leg_points(m._m, m._d, ptr(x), ptr(P), ptr(S)) == 0
+    for i in range(6):
+        local = [m.param(f"leg[{i + 1}].{c}") for c in ("px", "py", "pz")]
+        np.testing.assert_allclose(tr.tool_point(x, local)[0], P[i], atol=1e-15)
