@@ -1,0 +1,81 @@
+"""Adept Cycle times predicted by the torque-limited time-optimal model through the core,
+against the measured Tables 6.1-6.5 (the only real robot data of the project)."""
+import numpy as np
+import pytest
+
+from cosim import cycle_time as ct
+from cosim.core import Model
+
+
+@pytest.fixture(scope="module")
+def cmp61():
+    return ct.compare(param_set="appendix_a", tables=["6.1"], n=200).table("6.1")
+
+
+def test_measured_tables_are_loaded():
+    meas = ct.load_measured()
+    assert sorted(meas) == ["6.1", "6.2", "6.3", "6.4", "6.5"]
+    t = meas["6.1"]
+    assert t.cycle == "standard" and t.layout == "centred_x0" and len(t.z) == 15
+    assert t.z[np.argmin(t.t10)] == pytest.approx(-1.000)
+
+
+def test_table_6_1_minimum_height_within_50_mm(cmp61):
+    # Acceptance (issue 6): the predicted minimum within 50 mm of the measured one.
+    assert abs(cmp61.z_min_pred - cmp61.z_min_meas) <= 0.050, cmp61.summary()
+
+
+def test_table_6_1_rank_correlation_at_least_0_7(cmp61):
+    assert cmp61.spearman >= 0.7, cmp61.summary()
+
+
+def test_table_6_1_absolute_level_gap_is_reported_not_hidden(cmp61):
+    # SPEC 3.2: the controller's profile and settling set the level; the model is a
+    # torque-limited optimum, so it must be well below the measurement.
+    assert 2.0 < cmp61.level_ratio < 3.5, cmp61.summary()
+    assert 0.3 < cmp61.predicted_t10.mean() / 10 < 0.5
+
+
+def test_text_values_miss_the_measured_minimum():
+    # The default set (platform 0.262 kg) predicts the fastest cycle near -1100 mm: it does
+    # not reproduce Table 6.1.  Documented, and checked so it cannot change silently.
+    c = ct.compare(param_set="default", tables=["6.1"], n=100).table("6.1")
+    assert abs(c.z_min_pred - c.z_min_meas) > 0.050 or c.spearman < 0.7, c.summary()
+
+
+def test_profile_respects_the_torque_limit_through_the_core():
+    m = Model("quattro", "appendix_a")
+    lim = m.param("gear.ratio") * m.param("motor.tau_nominal")
+    _, profs = ct.cycle_time(m, z=-1.0, detail=True, n=200)
+    for p in profs:
+        x = p.x0[None, :] + p.s[:, None] * p.u[None, :]
+        xd = p.sd[:, None] * p.u[None, :]
+        sdd = np.gradient(p.sd ** 2, p.s) / 2
+        tau = m.inverse_dynamics(x, xd, sdd[:, None] * p.u[None, :])
+        inner = slice(2, -2)  # the one-sided gradient at the ends is not the planned value
+        assert np.abs(tau[inner]).max() <= lim * 1.02
+        # Time-optimal: some arm is at its limit almost everywhere along the segment.
+        sat = (np.abs(p.tau).max(axis=1) >= lim * (1 - 1e-6)).mean()
+        assert sat > 0.9
+        assert p.sd[0] == 0 and p.sd[-1] == 0
+
+
+def test_planned_segment_replays_through_forward_dynamics():
+    m = Model("quattro", "appendix_a")
+    _, profs = ct.cycle_time(m, z=-1.0, detail=True, n=200)
+    p = profs[0]  # the 25 mm lift
+    t, x, tau = ct.simulate_segment(m, p, dt=2e-4)
+    end = p.x0 + p.s[-1] * p.u
+    assert np.allclose(x[-1, :3], end[:3], atol=2e-5)
+    assert t[-1] == pytest.approx(p.duration)
+
+
+def test_waypoints_follow_the_layout():
+    m = Model("quattro", "appendix_a")
+    w = ct.cycle_waypoints(m, -1.0, "standard", "start_x75")
+    assert w.shape == (7, 4)
+    path = np.sum(np.linalg.norm(np.diff(w[:, :3], axis=0), axis=1))
+    assert path == pytest.approx(0.710)
+    assert np.allclose(w[0], w[-1])
+    with pytest.raises(ValueError, match="unknown layout"):
+        ct.cycle_waypoints(m, -1.0, "standard", "diagonal")

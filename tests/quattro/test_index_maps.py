@@ -1,0 +1,119 @@
+"""Quattro index maps (seed 003 ch. 3-5): the stated results, each with the parameter set
+that reproduces it, and the map API.  Features are read on the robot axis x = y = 0 (the
+seed's x-z sections are symmetric about it) on a 1 mm z grid unless stated otherwise."""
+import numpy as np
+import pytest
+
+from cosim import quattro
+from cosim.quattro_cli import axis_feature
+
+TOL = 0.030  # m, the acceptance tolerance of issue 6
+# The default set's tool offset is 75 mm; the seed's maps use offset 0 (ch. 3.3), so the
+# default set is evaluated with platform.offset = 0 to compare with the figures.
+SEED_MAPS = {"platform.offset": 0.0}
+
+
+def test_best_translational_manipulability_near_z_1170_appendix_a():
+    # Fig. 3.2: P_T = (0, 0, -1170) mm; listing values (appendix_a): -1167 mm.
+    z = axis_feature("appendix_a", "mu_T", "max")
+    assert abs(z - (-1.170)) <= TOL, z
+
+
+def test_best_translational_manipulability_also_with_the_text_values():
+    z = axis_feature("default", "mu_T", "max", SEED_MAPS)
+    assert abs(z - (-1.170)) <= TOL, z
+
+
+def test_horizontal_isotropy_point_near_z_920_default():
+    # Fig. 3.3: P_xy = (0, 0, -920) mm is where mu_Dxy ~ 1 (the seed takes values about 1
+    # as direction-independent); mu_xy grows monotonically downwards, it has no interior max.
+    z = axis_feature("default", "mu_xy", "=1", SEED_MAPS)
+    assert abs(z - (-0.920)) <= TOL, z
+    z_app = axis_feature("appendix_a", "mu_xy", "=1")
+    assert abs(z_app - (-0.920)) <= TOL, z_app
+
+
+def test_vertical_channel_centred_near_z_1020():
+    # Fig. 3.4 / 3.5c: the channel of mu_z with its centre P_z = (0, 0, -1020) mm.  The
+    # eigenvalue variant peaks there; on the axis the sub-matrix variant equals it.
+    for ps, params in (("default", SEED_MAPS), ("appendix_a", None)):
+        for name in ("mu_z_eig", "mu_z"):
+            z = axis_feature(ps, name, "max", params)
+            assert abs(z - (-1.020)) <= TOL, (ps, name, z)
+
+
+def test_vertical_channel_is_lateral_for_the_submatrix_variant():
+    # Seed ch. 3.4: the sub-matrix mu_z reaches its peaks at the outside of the channel,
+    # the eigenvalue variant keeps its maximum at the centre (ch. 3.5).
+    mp = quattro.index_map(param_set="appendix_a")
+    best_sub = mp.argbest("mu_z")
+    best_eig = mp.argbest("mu_z_eig")
+    assert np.hypot(best_sub[0], best_sub[1]) > 0.3
+    assert np.hypot(best_eig[0], best_eig[1]) < 1e-9 and abs(best_eig[2] + 1.02) <= TOL
+
+
+def test_least_mass_index_near_z_1100():
+    # Fig. 5.6: kat smallest at z = -1100 mm.
+    for ps, params in (("appendix_a", None), ("default", SEED_MAPS)):
+        z = axis_feature(ps, "kat", "min", params)
+        assert abs(z - (-1.100)) <= TOL, (ps, z)
+
+
+def test_best_horizontal_acceleration_near_z_850_appendix_a_on_the_seed_grid():
+    # Fig. 5.9: alfa_x largest at z = -850 mm.  appendix_a puts it at -820 mm on the seed's
+    # own 10 mm grid (refined: -819.6 mm, 30.4 mm away): at the edge of the tolerance.
+    mp = quattro.index_map(x=[0.0], y=[0.0], param_set="appendix_a")  # seed grid: 51 z in 10 mm steps
+    z = mp.argbest("alfa_x")[2]
+    assert abs(z - (-0.850)) <= TOL + 1e-9, z
+    fine = axis_feature("appendix_a", "alfa_x", "max")
+    assert abs(fine - (-0.8196)) < 0.002, fine
+
+
+def test_text_values_do_not_reproduce_the_horizontal_acceleration_maximum():
+    # With the text's platform mass (0.262 kg, vs 2.62 kg in Appendix A) the rotors dominate
+    # and alfa_x keeps growing downwards to -1185 mm: Fig. 5.9 is not reproduced by the
+    # default set.  This test documents that; it fails if the model changes that fact.
+    z = axis_feature("default", "alfa_x", "max", SEED_MAPS)
+    assert z < -1.1, z
+
+
+def test_best_vertical_acceleration_at_the_channel_centre():
+    # Fig. 5.8: alfa_z largest on the axis around P_z.
+    z = axis_feature("appendix_a", "alfa_z", "max")
+    assert abs(z - (-1.020)) <= TOL, z
+
+
+def test_map_shapes_status_and_nans():
+    mp = quattro.index_map(x=np.linspace(-0.5, 0.5, 5), y=[0.0, 0.2], z=[-0.95, -1.25, -1.5],
+                           param_set="appendix_a")
+    assert set(mp.names()) == set(quattro.index_names()) and len(mp.names()) == 22
+    for name in mp.names():
+        v = mp[name]
+        assert v.shape == (5, 2, 3)
+        assert np.all(np.isfinite(v[mp.status == 0]))
+        assert np.all(np.isnan(v[mp.status != 0]))
+    assert (mp.status[:, :, 2] == -3).all()          # z = -1.5 m is out of reach everywhere
+    assert mp.status[2, 0, 0] == 0
+    units = quattro.index_units()
+    assert units["alfa_x"] == "m/s2" and units["kat"] == "kg"
+
+
+def test_whole_default_grid_is_one_call_and_has_a_reachable_core():
+    mp = quattro.index_map(param_set="appendix_a")
+    assert mp.status.shape == (21, 21, 51)
+    frac = (mp.status == 0).mean()
+    assert 0.5 < frac < 1.0
+    assert mp.seconds < 5.0  # the 1 s target is a benchmark (cosim quattro bench), not a test
+
+
+def test_adept_frame_conversion_round_trip():
+    x, y = quattro.adept_to_model(0.075, 0.0)
+    assert np.allclose([x, y], [-0.075 / np.sqrt(2)] * 2)
+    xa, ya = quattro.model_to_adept(x, y)
+    assert np.allclose([xa, ya], [0.075, 0.0])
+
+
+def test_wrong_pose_shape_is_an_error():
+    m = quattro.model("appendix_a")
+    with pytest.raises(ValueError, match="4 coordinates"):
+        quattro.indices(m, np.zeros((3, 3)))
