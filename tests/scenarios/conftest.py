@@ -99,3 +99,9 @@ def toy():
 @pytest.fixture
 def toy_plant(toy):
     return ToyPlant(toy)
+
+
+@pytest.fixture
+def failing_toy_plant(toy):
+    """A toy plant that fails when a step would pass t = 0.0505 s."""
+    return ToyPlant(toy, fail_at=0.0505)
