@@ -52,6 +52,8 @@ __all__ = [
     "CalibrationResult",
     "Accuracy",
     "problem_from_recording",
+    "measurements",
+    "Measurements",
     "accuracy",
     "split_holdout",
     "CalibrationDataError",
@@ -66,46 +68,98 @@ __all__ = [
 MODELS = ("structural", "prediction", "full")
 
 
-def _rows_of(rec: Recording, rows):
-    return np.arange(len(rec)) if rows is None else np.asarray(rows)
+@dataclass
+class Measurements:
+    """The (pose, joints) pairs a calibration uses, taken from a recording."""
+
+    robot: str
+    pose: np.ndarray  # (n, npose) measured pose / output
+    q: np.ndarray  # (n, nd) joint readings
+    labels: list  # where each comes from (rows, time)
+    parameters: dict  # nominal overrides of the sidecar
+    source: str
+    averaged: bool = False
+
+    def __len__(self) -> int:
+        return len(self.q)
 
 
-def _labels(rec: Recording, idx):
-    return [f"row {k + 2} (t = {rec.time[k]:g} s)" for k in idx]
-
-
-def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreachable: str = "drop") -> Problem:
-    """The calibration problem of a recording (or of some of its rows).
+def measurements(rec, use: str = "auto") -> Measurements:
+    """The measurements of a recording.
 
     Parameters
     ----------
     rec : Recording or path
-    rows : array_like of int, optional
-        Data rows to use (0-based; default all).
-    nominal : Model, optional
-        Nominal model (default: the sidecar's robot with its parameter overrides).
-    unreachable : {"drop", "raise"}
-        6-PUS poses the nominal model cannot reach: dropped with a warning, or an error.
+    use : {"auto", "held", "rows"}
+        ``"rows"``: every row is a measurement (q and the pose at the same instant are
+        related by the kinematics whether the robot moves or not).  ``"held"``: the
+        recording has a ``label`` column tagging the rows of each held pose (> 0; 0 while
+        moving, as the scenario exports write it); each hold gives one measurement, the
+        mean of its second half (settled; averaging divides the sensor noise).
+        ``"auto"``: ``"held"`` if there is a ``label`` column, else ``"rows"``.
     """
     if not isinstance(rec, Recording):
         rec = read_recording(rec)
-    idx = _rows_of(rec, rows)
     where = str(rec.path) if rec.path else "recording"
     if rec.pose is None:
         raise CalibrationDataError(
             f"{where}: no pose columns ({', '.join(rec.pose_columns)}): a calibration campaign must record the "
             f"measured pose (or output) next to the joint readings")
+    if use not in ("auto", "held", "rows"):
+        raise ValueError(f"use must be 'auto', 'held' or 'rows', got {use!r}")
+    lab = rec.extra.get("label")
+    if use == "held" and lab is None:
+        raise CalibrationDataError(f"{where}: no 'label' column tagging the held poses (use='rows' takes every row)")
+    if use == "rows" or (use == "auto" and lab is None):
+        return Measurements(rec.robot, rec.pose, rec.q, [f"row {k + 2} (t = {rec.time[k]:g} s)" for k in
+                                                         range(len(rec))], rec.parameters, where)
+    pose, q, labels = [], [], []
+    for k in sorted(set(np.asarray(lab).tolist()) - {0.0}):
+        rows = np.flatnonzero(lab == k)
+        last = rows[len(rows) // 2:]
+        pose.append(rec.pose[last].mean(axis=0))
+        q.append(rec.q[last].mean(axis=0))
+        labels.append(f"hold {k:g} (rows {last[0] + 2}-{last[-1] + 2}, t = {rec.time[last[0]]:g}-"
+                      f"{rec.time[last[-1]]:g} s)")
+    if not pose:
+        raise CalibrationDataError(f"{where}: the 'label' column tags no held pose (all 0)")
+    return Measurements(rec.robot, np.array(pose), np.array(q), labels, rec.parameters, where, averaged=True)
+
+
+def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreachable: str = "drop",
+                           min_poses: int | None = None, use: str = "auto") -> Problem:
+    """The calibration problem of a recording (or of some of its measurements).
+
+    Parameters
+    ----------
+    rec : Recording, Measurements or path
+    rows : array_like of int, optional
+        Measurements to use (0-based; default all).
+    nominal : Model, optional
+        Nominal model (default: the sidecar's robot with its parameter overrides).
+    unreachable : {"drop", "raise"}
+        6-PUS poses the nominal model cannot reach: dropped with a warning, or an error.
+    min_poses : int, optional
+        Poses required (default: enough to calibrate; 1 for a verification set).
+    use : {"auto", "held", "rows"}
+        See :func:`measurements`.
+    """
+    meas = rec if isinstance(rec, Measurements) else measurements(rec, use)
+    idx = np.arange(len(meas)) if rows is None else np.asarray(rows)
     if nominal is None:
         try:
-            nominal = Model(rec.robot, params=rec.parameters)
+            nominal = Model(meas.robot, params=meas.parameters)
         except Exception as e:
-            raise CalibrationDataError(f"{where}: the sidecar's parameters do not make a valid {rec.robot} model: "
-                                       f"{e}") from None
-    if rec.robot == "6pus":
-        return SixpusProblem(rec.pose[idx], rec.q[idx], nominal, row_labels=_labels(rec, idx), unreachable=unreachable)
-    if rec.robot == "fourbar":
-        return FourbarProblem(rec.q[idx, 0], rec.pose[idx, 0], nominal, row_labels=_labels(rec, idx))
-    raise CalibrationDataError(f"{where}: calibration of robot {rec.robot!r} is not implemented (6pus, fourbar)")
+            raise CalibrationDataError(f"{meas.source}: the sidecar's parameters do not make a valid {meas.robot} "
+                                       f"model: {e}") from None
+    labels = [meas.labels[k] for k in idx]
+    if meas.robot == "6pus":
+        return SixpusProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, unreachable=unreachable,
+                             min_poses=min_poses)
+    if meas.robot == "fourbar":
+        return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
+                              min_poses=4 if min_poses is None else min_poses)
+    raise CalibrationDataError(f"{meas.source}: calibration of robot {meas.robot!r} is not implemented (6pus, fourbar)")
 
 
 def split_holdout(n: int, fraction: float, seed: int = 0):
@@ -151,8 +205,7 @@ def accuracy(problem: Problem, p_cal) -> Accuracy:
     if isinstance(problem, SixpusProblem):
         res, ok = [], np.ones(len(problem.q), bool)
         for p in (problem.p0, p_cal):
-            m = problem.nominal.copy()
-            m.set_params(problem.model_params(p))
+            m = problem.working_model(p)
             x, st = m.fk(problem.q, x_guess=problem.pose, errors="status")
             ok &= st == 0
             res.append((m, x))
@@ -188,6 +241,7 @@ class CalibrationResult:
     calibration_accuracy: Accuracy
     holdout_accuracy: Accuracy | None
     warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
     @property
     def calibrated_params(self) -> dict:
@@ -201,7 +255,7 @@ class CalibrationResult:
 
     def text(self) -> str:
         s, idr = self.solution, self.identifiability
-        L = [f"Calibration of {self.robot} from {self.source}"]
+        L = [f"Calibration of {self.robot} from {self.source}"] + [f"  {n}" for n in self.notes]
         L.append(f"  {self.problem.nmeas} equations from {self.calibration_accuracy.n} poses"
                  + (f", {self.holdout_accuracy.n} poses held out" if self.holdout_accuracy else ", no pose held out"))
         if self.error_model is not None:
@@ -265,7 +319,8 @@ class CalibrationResult:
 
 
 def calibrate(recording, solver: str = "gauss-newton", model: str = "structural", holdout: float = 0.0,
-              cond_max: float = 100.0, seed: int = 0, nominal: Model | None = None, **solver_options) -> CalibrationResult:
+              cond_max: float = 100.0, seed: int = 0, nominal: Model | None = None, use: str = "auto",
+              **solver_options) -> CalibrationResult:
     """Calibrate a robot's geometry from a recording.
 
     Parameters
@@ -286,6 +341,8 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         Seed of the held-out split.
     nominal : Model, optional
         Nominal model (default: from the sidecar).
+    use : {"auto", "held", "rows"}
+        Which rows make the measurements (see :func:`measurements`).
     **solver_options
         Passed to :func:`cosim.calibration_solvers.solve` (tol, max_iter, width, basis...).
 
@@ -298,14 +355,17 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         raise ValueError(f"unknown model {model!r} (known: {', '.join(MODELS)})")
     if solver not in METHODS:
         raise ValueError(f"unknown solver {solver!r} (known: {', '.join(METHODS)})")
-    rec = recording if isinstance(recording, Recording) else read_recording(recording)
-    source = str(rec.path) if rec.path else "<recording>"
-    cal_idx, hold_idx = split_holdout(len(rec), holdout, seed)
+    meas = measurements(recording, use)
+    source = meas.source
+    cal_idx, hold_idx = split_holdout(len(meas), holdout, seed)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CalibrationWarning)
-        prob = problem_from_recording(rec, cal_idx, nominal)
-        hold = problem_from_recording(rec, hold_idx, nominal) if hold_idx.size else None
+        prob = problem_from_recording(meas, cal_idx, nominal)
+        hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1) if hold_idx.size else None
     msgs = [str(w.message) for w in caught]
+    notes = []
+    if meas.averaged:
+        notes.append(f"{len(meas)} held poses (label column), each the mean of its settled second half")
     J0 = prob.jacobian(prob.p0)
     idr = identifiability(J0, prob.names, prob.units, cond_max=cond_max, blocks=prob.blocks)
     msgs += idr.warnings
@@ -330,6 +390,9 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     sol = solve(prob, solver, free=free, rcond=rcond, **solver_options)
     if not sol.converged:
         msgs.append(f"solver {solver} did not converge: {sol.message}")
+    if np.any(np.isinf(sol.se)):
+        msgs.append("as many parameters as equations in some block: no redundancy, the standard errors are unknown "
+                    "(inf); measure more poses")
     acc_cal = accuracy(prob, sol.p)
     acc_hold = accuracy(hold, sol.p) if hold is not None else None
     for label, a in (("calibration", acc_cal), ("held-out", acc_hold)):
@@ -340,4 +403,4 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         msgs.append("no pose held out: the accuracy gain is measured on the calibration poses themselves")
     for m in msgs:
         warnings.warn(m, CalibrationWarning, stacklevel=2)
-    return CalibrationResult(rec.robot, source, prob, model, idr, err_model, sol, acc_cal, acc_hold, msgs)
+    return CalibrationResult(meas.robot, source, prob, model, idr, err_model, sol, acc_cal, acc_hold, msgs, notes)

@@ -67,14 +67,32 @@ def sixpus_leg_names(i: int) -> list[str]:
 SIXPUS_ERROR_MODEL = [n for i in range(1, 7) for n in sixpus_leg_names(i)]
 
 
+_CALIB_ROWS = None
+
+
+def _calib_rows_fn():
+    """pkm_6pus_calib_rows with untyped pointers: plain integer addresses make the
+    per-pose loop a few times faster than typed ctypes pointers."""
+    global _CALIB_ROWS
+    if _CALIB_ROWS is None:
+        import ctypes as C
+
+        lib.pkm_6pus_calib_rows  # loads the library (and raises if the function is missing)
+        proto = C.CFUNCTYPE(C.c_int, C.c_void_p, C.c_void_p, C.c_void_p, C.c_int, C.c_void_p)
+        _CALIB_ROWS = proto(("pkm_6pus_calib_rows", lib._lib))
+    return _CALIB_ROWS
+
+
 def calib_rows(model, x, frame: int = PKM_FRAME_PLATFORM) -> np.ndarray:
     """Regression rows dq_i/d eta_i of the core at pose(s) x: shape (..., 6, 10)."""
-    x = np.ascontiguousarray(np.asarray(x, dtype=float))
-    flat = x.reshape(-1, 6)
+    x = np.asarray(x, dtype=float)
+    flat = np.ascontiguousarray(x.reshape(-1, 6))
     out = np.empty((flat.shape[0], 6, 10))
+    fn = _calib_rows_fn()
+    m, d = model._m.value, model._d.value
+    xa, oa = flat.ctypes.data, out.ctypes.data
     for k in range(flat.shape[0]):
-        row = np.ascontiguousarray(flat[k])
-        s = lib.pkm_6pus_calib_rows(model._m, model._d, ptr(row), int(frame), ptr(out[k]))
+        s = fn(m, d, xa + 48 * k, int(frame), oa + 480 * k)
         if s != 0:
             raise_for(s, f"pose {k}: {lib.pkm_data_error(model._d).decode()}")
     return out.reshape(x.shape[:-1] + (6, 10))
@@ -165,11 +183,13 @@ class FourbarProblem(Problem):
     model : cosim.core.Model
         The nominal ``"fourbar"`` model (copied; the copy is moved by ``predict``).
     row_labels : list of str, optional
+    min_poses : int
+        Angles required (4 for a calibration; fewer for a verification set).
     """
 
     robot = "fourbar"
 
-    def __init__(self, theta, X, model, row_labels=None):
+    def __init__(self, theta, X, model, row_labels=None, min_poses: int = 4):
         from .fourbar import LENGTHS
 
         theta = _check_finite(np.atleast_1d(theta), "four-bar crank angles", ["theta"]).ravel()
@@ -184,9 +204,10 @@ class FourbarProblem(Problem):
         self.p0 = np.array([model.param(n) for n in self.names])
         self.prior = np.full(4, 1e-3)
         self.row_labels = row_labels or [f"theta = {np.degrees(t):.6g} deg" for t in theta]
-        if theta.size < 4:
+        if theta.size < min_poses:
             raise CalibrationDataError(
-                f"too few poses: {theta.size} crank angle(s) for 4 link lengths; at least 4 distinct angles are needed")
+                f"too few poses: {theta.size} crank angle(s) for 4 link lengths; at least {min_poses} distinct "
+                f"angles are needed")
         self._p = None
 
     def _set(self, p):
@@ -244,8 +265,8 @@ class SixpusProblem(Problem):
         if pose.shape != q.shape:
             raise CalibrationDataError(f"{pose.shape[0]} poses but {q.shape[0]} joint readings")
         labels = list(row_labels) if row_labels is not None else [f"pose {k}" for k in range(pose.shape[0])]
-        self.model = model.copy()
         self.nominal = model.copy()
+        self.model = self.working_model()
         # the dependent rail-direction component of each leg: its largest at nominal
         self._deps = []
         names, units = [], []
@@ -262,13 +283,13 @@ class SixpusProblem(Problem):
         self.p0 = np.array([model.param(n) for n in names])
         self.prior = np.array([1e-2 if u == "1" else 1e-3 for u in units])
         # poses the nominal model cannot reach carry no usable equation
-        _, status = self.nominal.ik(pose, errors="status")
+        _, status = self.model.ik(pose, errors="status")
         bad = np.flatnonzero(status != 0)
         if bad.size:
             msgs = []
             for k in bad[:5]:
                 try:
-                    self.nominal.ik(pose[k])
+                    self.model.ik(pose[k])
                 except PkmError as e:
                     msgs.append(f"{labels[k]}: {e}")
             text = (f"{bad.size} of {pose.shape[0]} measured poses are not reachable by the nominal model: "
@@ -294,6 +315,21 @@ class SixpusProblem(Problem):
         self._p = None
 
     # --------------------------------------------------------------- parameters
+    def working_model(self, p=None):
+        """A copy of the nominal model with parameters p and without stroke limits.
+
+        The stroke range is a limit of the machine, not geometry: the joints were read,
+        so a model that predicts a stroke a hair outside the range must still compare.
+        """
+        m = self.nominal.copy()
+        lim = {}
+        for i in range(1, 7):
+            lim[f"rail[{i}].qmin"], lim[f"rail[{i}].qmax"] = -1.0, 1.0
+        m.set_params(lim)
+        if p is not None:
+            m.set_params(self.model_params(p))
+        return m
+
     def model_params(self, p) -> dict:
         """Core parameter values (the 60 of the error model) for calibrated coordinates p."""
         p = np.asarray(p, float)

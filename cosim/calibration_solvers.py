@@ -30,7 +30,8 @@ model of seed 000 3.1.2; the default keeps everything numerically non-zero.
 Standard errors: ``sigma^2 = ||r||^2 / (m - k)`` (k = the number of identified
 directions) and ``cov = sigma^2 (J^T J)^+`` at the solution, per independent block if the
 problem has blocks (each 6-PUS leg has its own residual variance).  Fixed (not free)
-parameters have a standard error of 0.
+parameters have a standard error of 0; a block with no more equations than identified
+directions has no noise estimate: its standard errors are ``inf``.
 """
 from __future__ import annotations
 
@@ -133,11 +134,15 @@ def _covariance(J, r, rcond, fblocks):
         rank_total += k
         dof = len(rows) - k
         rb = r[rows]
-        s2 = float(rb @ rb) / dof if dof > 0 else float("nan")
-        sig.append(np.sqrt(s2) if dof > 0 else 0.0)
+        if dof <= 0:
+            # no redundant equation: the residual says nothing about the noise
+            sig.append(np.inf)
+            cov[np.ix_(ix, ix)] = np.diag(np.full(len(ix), np.inf))
+            continue
+        s2 = float(rb @ rb) / dof
+        sig.append(np.sqrt(s2))
         V = Vt[keep].T * (1.0 / s[keep])
-        Cb = (h[:, None] * V) @ (h[:, None] * V).T * (s2 if dof > 0 else 0.0)
-        cov[np.ix_(ix, ix)] = Cb
+        cov[np.ix_(ix, ix)] = (h[:, None] * V) @ (h[:, None] * V).T * s2
     return np.array(sig), cov, rank_total
 
 

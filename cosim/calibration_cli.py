@@ -1,0 +1,69 @@
+"""``cosim calibrate``: kinematic calibration from a recording, the benchmark, the seed examples."""
+from __future__ import annotations
+
+import sys
+import warnings
+
+from .cli import command
+
+
+def _configure(p):
+    p.add_argument("recording", nargs="?", help="pkm-recording/1 calibration campaign (CSV with its JSON sidecar)")
+    p.add_argument("--solver", default="gauss-newton",
+                   choices=["pinv", "pinv-iter", "gauss-newton", "lm", "golden"],
+                   help="estimation method (default gauss-newton)")
+    p.add_argument("--model", default="structural", choices=["structural", "prediction", "full"],
+                   help="which parameters to estimate: structural (the cond < limit subset, seed 000 3.1.1), "
+                        "prediction (all, truncated SVD, 3.1.2), full (all; refuses a rank-deficient set)")
+    p.add_argument("--holdout", type=float, default=0.25, metavar="FRACTION",
+                   help="fraction of the poses kept out to verify the calibration (default 0.25)")
+    p.add_argument("--cond-max", type=float, default=100.0, help="condition-number limit (default 100)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
+    p.add_argument("--out", metavar="DIR", help="write figures, the report and the calibrated parameters here")
+    p.add_argument("--bench", action="store_true",
+                   help="benchmark: 60-parameter 6-PUS calibration on --poses poses against a finite-difference "
+                        "baseline (SPEC 7)")
+    p.add_argument("--poses", type=int, default=1000, help="poses of the benchmark (default 1000)")
+    p.add_argument("--design", action="store_true",
+                   help="pose selection study: D-optimal poses vs seed 000's ten and random ones")
+    p.add_argument("--seed-examples", action="store_true",
+                   help="seed 002's four-bar (rounding and cond(A)) and seed 000's leg-1 table, reproduced")
+
+
+@command("calibrate", "kinematic calibration from a recording: identifiability, estimates +- SE, accuracy gain")
+def cmd_calibrate(args):
+    if args.bench:
+        from .calibration_bench import benchmark
+
+        print(benchmark(args.poses))
+        return 0
+    if args.design:
+        from .calibration_bench import design_study
+
+        print(design_study())
+        return 0
+    if args.seed_examples:
+        from .calibration_seed import fourbar_seed_study, sixpus_seed_leg1
+
+        print(fourbar_seed_study()["text"])
+        print()
+        print("Seed 000, Table 4.22 (leg 1, world frame, ten poses):")
+        print(sixpus_seed_leg1().text())
+        return 0
+    if not args.recording:
+        print("cosim calibrate: error: give a recording (or --bench, --design, --seed-examples)", file=sys.stderr)
+        return 2
+    from .calibration import CalibrationWarning, calibrate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report
+        res = calibrate(args.recording, solver=args.solver, model=args.model, holdout=args.holdout,
+                        cond_max=args.cond_max, seed=args.seed)
+    print(res.text())
+    if args.out:
+        for p in res.save(args.out):
+            print(f"wrote {p}")
+    return 0
+
+
+cmd_calibrate.configure = _configure
