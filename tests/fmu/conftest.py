@@ -35,16 +35,18 @@ def hold(model):
 
 @pytest.fixture(scope="session")
 def core_run():
-    """The function ``run(model, taus, h, x0, xd0, rtol) -> (t, x, xd)`` below."""
+    """The function ``run(model, taus, h, x0, xd0, rtol, atol) -> (t, x, xd)`` below."""
     return _core_run
 
 
-def _core_run(model, taus, h=H, x0=None, xd0=None, rtol=None):
+def _core_run(model, taus, h=H, x0=None, xd0=None, rtol=None, atol=None):
     """States (t, x, xd) after each step of pkm_sim driven directly, the input held per step."""
     o = pkm_sim_options()
     lib.pkm_sim_default_options(C.byref(o))
     if rtol is not None:
         o.rtol = rtol
+    if atol is not None:
+        o.atol = atol
     err = C.create_string_buffer(1024)
     sim = C.c_void_p(lib.pkm_sim_create(model._m, C.byref(o), err, len(err)))
     assert sim.value, err.value.decode()

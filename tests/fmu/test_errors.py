@@ -137,16 +137,25 @@ def test_model_exchange_stops_at_the_stroke_limit(fmu_file, model, hold):
     f.close()
 
 
-# fmpy's CVode cannot retry after fmi2Discard from the derivatives: its callback raises
-# inside ctypes (an "unraisable" warning), then CVode fails, which is the error expected.
+# The dynamics cannot be evaluated past the reach of leg 1: fmi2GetDerivatives returns
+# fmi2Discard.  fmpy's CVode callback raises inside ctypes on it (an "unraisable" warning)
+# and hands CVode an undefined flag: CVode then either fails (an exception here) or retries
+# a smaller step, reaches the singularity margin and is asked to stop.  Both are fine for
+# the host; the FMU's part, the status and the log lines, is checked in both.
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
 def test_model_exchange_singular_pose_is_an_error_not_a_crash(fmu_file, model, hold):
     tau = model.gravity_load(model.home()) + np.array([0.3, -0.2, 0.1, 0.25, -0.15, 0.05])
     log = []
-    with pytest.raises(Exception):
-        fmu.simulate(fmu_file, fmi_type="ModelExchange", stop_time=0.3, step=H, tau=tau, rtol=1e-10,
-                     logger=lambda *a: log.append(a))
+    try:
+        r = fmu.simulate(fmu_file, fmi_type="ModelExchange", stop_time=0.3, step=H, tau=tau, rtol=1e-10,
+                         logger=lambda *a: log.append(a))
+    except Exception:
+        r = None
     lines = [(a[2], a[4].decode()) for a in log]
-    # fmi2Discard (2) from the dynamics or a stop request (1, Warning), each saying where and when.
-    assert any(st in (1, 2) and "t = 0.2" in s for st, s in lines), lines
+    assert any(st == 2 and s.startswith("fmi2GetDerivatives: forward dynamics at t = 0.2395") and "leg 1" in s
+               for st, s in lines), lines
+    if r is not None:  # CVode recovered: it must have stopped at the singularity, told why
+        assert r["time"][-1] < 0.24
+        assert any(st == 1 and "stopping the simulation: direct (type 2) singularity" in s and "t = 0.2395" in s
+                   for st, s in lines), lines
     _fresh_instance_works(fmu_file, hold)

@@ -11,12 +11,15 @@ T = 0.3
 N = int(round(T / H))
 POSE = ["x", "y", "z", "rx", "ry", "rz"]
 RATE = ["xd", "yd", "zd", "rxd", "ryd", "rzd"]
-RTOL = 1e-10  # all three integrations at the same tolerance (CVODE in the core, in the FMU, in fmpy)
+# All three integrations (CVODE in the core, in the FMU, fmpy's CVode) converged: the plant
+# is open-loop unstable and pkm_sim restarts at every step, so at the default tolerances
+# (rtol 1e-8, atol 1e-10) the core itself is only ~5e-5 from the converged rate here.
+RTOL = 1e-12
 
 
 @pytest.fixture(scope="module")
 def reference(model, hold, core_run):
-    t, x, xd = core_run(model, np.tile(hold, (N, 1)), rtol=RTOL)
+    t, x, xd = core_run(model, np.tile(hold, (N, 1)), rtol=RTOL, atol=RTOL)
     # The drift must be large enough for the comparison to mean something.
     assert np.max(np.abs(x[-1] - model.home())) > 1e-3
     return t, x, xd
@@ -26,7 +29,7 @@ def reference(model, hold, core_run):
 def test_fmpy_simulation_agrees_with_the_core(fmu_file, hold, reference, kind):
     t, x, xd = reference
     # CS: the FMU's CVODE gets the tolerance as a parameter; ME: fmpy's CVode gets it.
-    params = {"solver.rtol": RTOL} if kind == "CoSimulation" else None
+    params = {"solver.rtol": RTOL, "solver.atol": RTOL} if kind == "CoSimulation" else None
     rtol = RTOL if kind == "ModelExchange" else None
     r = fmu.simulate(fmu_file, fmi_type=kind, stop_time=T, step=H, tau=hold, rtol=rtol, params=params,
                      outputs=POSE + RATE)
