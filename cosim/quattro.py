@@ -6,6 +6,7 @@ grid arguments may be given in metres.
 
 Example
 -------
+>>> import numpy as np
 >>> from cosim import quattro
 >>> mp = quattro.index_map(x=[0.0], y=[0.0], z=np.linspace(-1.26, -0.76, 51),
 ...                        param_set="appendix_a")
