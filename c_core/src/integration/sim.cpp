@@ -1,0 +1,715 @@
+// CVODE integration of the task-space state y = [x; xd] (2 nd values):
+//   dy/dt = [xd; forward_dynamics(x, xd, tau)],   tau held constant over an advance.
+//
+// Design choices (docs/integration.md explains them at length):
+//  * One SUNContext, vector, solver set and CVODE memory per Sim: no global state, so
+//    any number of simulators may run in one process (one thread each).
+//  * Every advance calls CVodeReInit from the committed state, so an advance is a pure
+//    function of (t, x, xd, tau, options): rollback + re-advance is bit-for-bit equal.
+//  * Stop conditions are CVODE root functions, found once at construction: the stroke /
+//    joint limits named in the model parameters and the direct-singularity measure.
+//    CVODE evaluates them once per step (not per RHS call) and locates the crossing.
+//  * No exception crosses CVODE's C frames: callbacks catch, record the failure and
+//    return CVODE's recoverable (1) or unrecoverable (-1) code.
+//  * The RHS calls the robot's forward dynamics directly (arguments were checked on the
+//    way in), with no allocation.
+#include "integration/sim.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdlib>
+#include <iomanip>
+#include <sstream>
+
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include "common/guard.hpp"
+
+namespace pkm {
+
+namespace {
+
+std::string num(double v, int precision = 10) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+std::string flag_name(int flag) {
+  char* s = CVodeGetReturnFlagName(flag);
+  std::string out = s ? s : ("CVODE flag " + std::to_string(flag));
+  std::free(s);
+  return out;
+}
+
+// Robot failures a smaller step may avoid (a trial state just outside the workspace):
+// CVODE is told to retry.  Anything else stops the integration at once.
+bool recoverable(int status) {
+  return status == PKM_ERR_UNREACHABLE || status == PKM_ERR_SINGULAR || status == PKM_ERR_NO_CONVERGENCE ||
+         status == PKM_ERR_JOINT_LIMIT;
+}
+
+bool callback_flag(int flag) {
+  return flag == CV_RHSFUNC_FAIL || flag == CV_FIRST_RHSFUNC_ERR || flag == CV_REPTD_RHSFUNC_ERR ||
+         flag == CV_UNREC_RHSFUNC_ERR || flag == CV_RTFUNC_FAIL || flag == CV_CONV_FAILURE ||
+         flag == CV_LSETUP_FAIL || flag == CV_NLS_FAIL;
+}
+
+// How far (in joint units, or in the singularity measure) a state given to reset may lie
+// beyond a stop boundary: a state saved at a stop is there by round-off.
+constexpr double kResetSlack = 1e-12;
+
+// How far back (simulated seconds) the actuator delay line is kept for rollbacks.
+constexpr double kHistory = 1.0;
+
+// The singularity root is evaluated at every step only within kSingGuard x sing_min.
+constexpr double kSingGuard = 100.0;
+
+}  // namespace
+
+// ----------------------------------------------------------------- construction
+
+static void check_options(const pkm_sim_options& o) {
+  auto bad = [](const std::string& what) { throw Error(PKM_ERR_ARGUMENT, "pkm_sim options: " + what); };
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS)
+    bad("method = " + std::to_string(o.method) + " is neither PKM_BDF (0) nor PKM_ADAMS (1)");
+  if (!(std::isfinite(o.rtol) && o.rtol > 0 && o.rtol < 1))
+    bad("rtol = " + num(o.rtol) + " must be in (0, 1)");
+  if (!(std::isfinite(o.atol) && o.atol > 0)) bad("atol = " + num(o.atol) + " must be finite and > 0");
+  if (!(std::isfinite(o.max_step) && o.max_step >= 0))
+    bad("max_step = " + num(o.max_step) + " s must be finite and >= 0 (0 = unlimited)");
+  if (o.max_steps <= 0) bad("max_steps = " + std::to_string(o.max_steps) + " must be > 0");
+  if (!(std::isfinite(o.sing_min) && o.sing_min >= 0 && o.sing_min < 1))
+    bad("sing_min = " + num(o.sing_min) + " must be in [0, 1) (0 = no singularity stop)");
+}
+
+void Sim::check_cvode(int flag, const char* call) const {
+  if (flag < 0)
+    throw Error(PKM_ERR_INTEGRATION, std::string("CVODE set-up: ") + call + " failed with " + flag_name(flag) +
+                                         (cv_msg_.empty() ? "" : ": " + cv_msg_));
+}
+
+Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
+  require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+  check_options(opt);
+  require(m->compiled != nullptr, PKM_ERR_PARAMETER,
+          "the model's parameters were changed and not validated: call pkm_model_validate before pkm_sim_create");
+  opt_ = opt;
+  try {
+    model_ = pkm_model_copy(m);
+    require(model_ != nullptr, PKM_ERR_INTERNAL, "out of memory copying the model");
+    robot_ = model_->robot;
+    nd_ = robot_->ndof();
+    find_limits();
+    open_limits();
+    data_ = pkm_data_create(model_);
+    require(data_ != nullptr, PKM_ERR_INTERNAL, "out of memory creating the work data");
+    rm_ = &prepare(model_, data_);
+    rd_ = data_->rd.get();
+    const int n2 = 2 * nd_;
+
+    y_.assign(n2, 0.0);
+    require(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
+    tau_.assign(nd_, 0.0);
+    applied_.assign(nd_, 0.0);
+    delay_ = model_->drive ? model_->drive->actuator_delay : 0.0;
+    q_.assign(nd_, 0.0);
+    robot_->home(*rm_, y_.data());
+    if (opt_.sing_min > 0) {
+      double meas[2];
+      try {
+        robot_->singularity(*rm_, *rd_, y_.data(), meas);
+        sing_root_ = true;
+      } catch (const Error& e) {
+        if (e.status != PKM_ERR_UNSUPPORTED) throw;
+      }
+    }
+    // Roots: the stroke margins, the singularity measure above sing_min, and the sign of
+    // det J, which flips when the motion passes through a direct singularity (a dip of
+    // the measure below sing_min and back within one CVODE step shows no sign change of
+    // the measure itself).
+    nstop_ = (int)limits_.size() + (sing_root_ ? 1 : 0);
+    nroots_ = nstop_ + (sing_root_ ? 1 : 0);
+    g_.assign(nroots_, 0.0);
+
+    if (SUNContext_Create(nullptr, &ctx_) != 0 || !ctx_)
+      throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
+    nv_ = N_VNew_Serial(n2, ctx_);
+    nv_back_ = N_VNew_Serial(n2, ctx_);
+    require(nv_ != nullptr && nv_back_ != nullptr, PKM_ERR_INTERNAL,
+            "CVODE set-up: N_VNew_Serial failed (out of memory)");
+    double* v = N_VGetArrayPointer(nv_);
+    for (int i = 0; i < n2; ++i) v[i] = y_[i];
+
+    cvode_ = CVodeCreate(opt_.method == PKM_BDF ? CV_BDF : CV_ADAMS, ctx_);
+    require(cvode_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: CVodeCreate failed (out of memory)");
+    check_cvode(CVodeSetErrHandlerFn(cvode_, err_cb, this), "CVodeSetErrHandlerFn");
+    check_cvode(CVodeInit(cvode_, rhs_cb, 0.0, nv_), "CVodeInit");
+    check_cvode(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
+    check_cvode(CVodeSStolerances(cvode_, opt_.rtol, opt_.atol), "CVodeSStolerances");
+    if (opt_.method == PKM_BDF) {
+      // Newton iteration with a dense direct solver; no Jacobian function is given, so
+      // CVODE builds it by difference quotients of the RHS (2 nd extra RHS calls).
+      A_ = SUNDenseMatrix(n2, n2, ctx_);
+      require(A_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNDenseMatrix failed");
+      ls_ = SUNLinSol_Dense(nv_, A_, ctx_);
+      require(ls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNLinSol_Dense failed");
+      check_cvode(CVodeSetLinearSolver(cvode_, ls_, A_), "CVodeSetLinearSolver");
+    } else {
+      // Adams for non-stiff motion: fixed-point (functional) iteration needs no Jacobian.
+      nls_ = SUNNonlinSol_FixedPoint(nv_, 0, ctx_);
+      require(nls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNNonlinSol_FixedPoint failed");
+      check_cvode(CVodeSetNonlinearSolver(cvode_, nls_), "CVodeSetNonlinearSolver");
+    }
+    check_cvode(CVodeSetMaxStep(cvode_, opt_.max_step), "CVodeSetMaxStep");
+    check_cvode(CVodeSetMaxNumSteps(cvode_, opt_.max_steps), "CVodeSetMaxNumSteps");
+    if (nroots_ > 0) {
+      check_cvode(CVodeRootInit(cvode_, nroots_, root_cb), "CVodeRootInit");
+      // Only a margin going from positive to negative is a stop; moving back inside is not.
+      std::vector<int> dir(nroots_, -1);
+      if (sing_root_) dir[nroots_ - 1] = 0;  // det J may change sign either way
+      check_cvode(CVodeSetRootDirection(cvode_, dir.data()), "CVodeSetRootDirection");
+      check_cvode(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
+    }
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+Sim::~Sim() { release(); }
+
+void Sim::release() {
+  if (cvode_) CVodeFree(&cvode_);
+  if (nls_) SUNNonlinSolFree(nls_);
+  if (ls_) SUNLinSolFree(ls_);
+  if (A_) SUNMatDestroy(A_);
+  if (nv_) N_VDestroy(nv_);
+  if (nv_back_) N_VDestroy(nv_back_);
+  if (ctx_) SUNContext_Free(&ctx_);
+  if (data_) pkm_data_destroy(data_);
+  if (model_) pkm_model_destroy(model_);
+  cvode_ = nullptr;
+  nls_ = nullptr;
+  ls_ = nullptr;
+  A_ = nullptr;
+  nv_ = nullptr;
+  nv_back_ = nullptr;
+  ctx_ = nullptr;
+  data_ = nullptr;
+  model_ = nullptr;
+}
+
+// Limits are looked up by name so the integrator needs no robot-specific code:
+// "<prefix>[i].qmin" / "<prefix>[i].qmax" for actuated joint i = 1..nd.
+void Sim::find_limits() {
+  static const char* prefixes[][2] = {{"rail", "leg"}, {"leg", "leg"}, {"arm", "arm"}, {"joint", "joint"}};
+  for (int j = 0; j < nd_; ++j) {
+    for (int upper = 0; upper < 2; ++upper) {
+      for (const auto& p : prefixes) {
+        std::string name = std::string(p[0]) + "[" + std::to_string(j + 1) + "]." + (upper ? "qmax" : "qmin");
+        int idx = pkm_param_index(model_, name.c_str());
+        if (idx < 0) continue;
+        double v = pkm_param_get(model_, idx);
+        // A limit set to a huge value means "no limit".
+        if (std::isfinite(v) && std::fabs(v) < 1e100)
+          limits_.push_back({j, upper != 0, v, name, pkm_param_unit(model_, idx), p[1]});
+        break;
+      }
+    }
+  }
+}
+
+// The sim enforces the limits itself, as root functions that locate the crossing time.
+// A robot's inverse kinematics may refuse strokes outside [qmin, qmax] (the 6-PUS does);
+// the root function must see the stroke just past the limit to find the crossing, and a
+// trial step of CVODE may go there too.  So the sim's private model copy gets each limit
+// parameter opened to the end of its valid range; the limits found above stay the stops.
+void Sim::open_limits() {
+  if (limits_.empty()) return;
+  std::vector<double> saved = model_->values;
+  for (const JointLimit& L : limits_) {
+    const int idx = pkm_param_index(model_, L.param.c_str());
+    const ParamSpec& spec = model_->specs[idx];
+    const double wide = L.upper ? std::min(spec.hi, 1e6) : std::max(spec.lo, -1e6);
+    model_->values[idx] = wide;
+  }
+  char err[512];
+  if (pkm_model_validate(model_, err, sizeof err) != PKM_OK) {
+    // The robot does not accept open limits: keep them; a crossing may then be reported
+    // as the robot's own joint-limit error from inside the step instead of a root.
+    model_->values = saved;
+    if (pkm_model_validate(model_, err, sizeof err) != PKM_OK)
+      throw Error(PKM_ERR_PARAMETER, std::string("the model copy does not validate: ") + err);
+  }
+}
+
+// ------------------------------------------------------------------- callbacks
+
+int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
+  Sim& s = *static_cast<Sim*>(self);
+  const double* Y = N_VGetArrayPointer(y);
+  double* F = N_VGetArrayPointer(ydot);
+  const int n = s.nd_;
+  for (int i = 0; i < 2 * n; ++i) {
+    if (!std::isfinite(Y[i])) {
+      s.cb_status_ = PKM_ERR_INTEGRATION;
+      s.cb_time_ = t;
+      s.cb_msg_ = "the trial state y[" + std::to_string(i) + "] is not finite";
+      return 1;
+    }
+  }
+  try {
+    for (int i = 0; i < n; ++i) F[i] = Y[n + i];
+    // Mechanics plus the drive layer (joint friction, rotor inertia).
+    total_forward_dynamics(s.model_, s.data_, Y, Y + n, s.applied_.data(), F + n);
+  } catch (const Error& e) {
+    s.cb_status_ = e.status;
+    s.cb_time_ = t;
+    s.cb_msg_ = std::string("forward dynamics: ") + e.what();
+    return recoverable(e.status) ? 1 : -1;
+  } catch (const std::exception& e) {
+    s.cb_status_ = PKM_ERR_INTERNAL;
+    s.cb_time_ = t;
+    s.cb_msg_ = std::string("forward dynamics: internal error: ") + e.what();
+    return -1;
+  } catch (...) {
+    s.cb_status_ = PKM_ERR_INTERNAL;
+    s.cb_time_ = t;
+    s.cb_msg_ = "forward dynamics: unknown exception";
+    return -1;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(F[n + i])) {
+      s.cb_status_ = PKM_ERR_SINGULAR;
+      s.cb_time_ = t;
+      s.cb_msg_ = "forward dynamics returned a non-finite acceleration xdd[" + std::to_string(i) + "]";
+      return 1;
+    }
+  }
+  return 0;
+}
+
+void Sim::roots(const double* y, double* g) {
+  int k = 0;
+  if (!limits_.empty()) {
+    robot_->ik(*rm_, *rd_, y, q_.data());
+    for (const JointLimit& L : limits_) g[k++] = L.upper ? L.value - q_[L.joint] : q_[L.joint] - L.value;
+  }
+  if (sing_root_) {
+    if (sing_exact_) {
+      double meas[2];
+      robot_->singularity(*rm_, *rd_, y, meas);
+      g[k++] = meas[1] - opt_.sing_min;
+    } else {
+      g[k++] = 1.0;  // far from the threshold for this segment (see segment())
+    }
+    g[k++] = det_j(y);
+  }
+}
+
+double Sim::det_j(const double* y) {
+  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
+  Mat J(nd_, nd_);
+  robot_->jacobians(*rm_, *rd_, y, nullptr, nullptr, J.data());
+  return Eigen::PartialPivLU<Mat>(J).determinant();
+}
+
+int Sim::root_cb(double t, N_Vector y, double* g, void* self) {
+  Sim& s = *static_cast<Sim*>(self);
+  try {
+    s.roots(N_VGetArrayPointer(y), g);
+  } catch (const Error& e) {
+    s.cb_status_ = e.status;
+    s.cb_time_ = t;
+    s.cb_msg_ = std::string("stop-condition check: ") + e.what();
+    return -1;
+  } catch (...) {
+    s.cb_status_ = PKM_ERR_INTERNAL;
+    s.cb_time_ = t;
+    s.cb_msg_ = "stop-condition check: unknown exception";
+    return -1;
+  }
+  for (int k = 0; k < s.nroots_; ++k)
+    if (!std::isfinite(g[k])) {
+      s.cb_status_ = PKM_ERR_SINGULAR;
+      s.cb_time_ = t;
+      s.cb_msg_ = "stop-condition check: a joint value or singularity measure is not finite";
+      return -1;
+    }
+  return 0;
+}
+
+void Sim::err_cb(int code, const char* module, const char* fn, char* msg, void* self) {
+  if (code >= 0) return;  // warnings (e.g. t + h == t) are not failures
+  Sim& s = *static_cast<Sim*>(self);
+  try {
+    s.cv_msg_ = std::string(module ? module : "CVODE") + "/" + (fn ? fn : "?") + ": " + (msg ? msg : "");
+  } catch (...) {
+  }
+}
+
+// -------------------------------------------------------------------- messages
+
+std::string Sim::root_message(int k, const double* g, double t, bool at_start) const {
+  std::ostringstream os;
+  os.precision(10);
+  if (k < (int)limits_.size()) {
+    const JointLimit& L = limits_[k];
+    const double q = L.upper ? L.value - g[k] : L.value + g[k];
+    const char* kind = L.noun == "leg" ? "stroke limit" : "joint limit";
+    os << L.noun << " " << (L.joint + 1) << (at_start ? " is at or beyond its " : " reached its ") << kind << " "
+       << L.param << " = " << L.value << " " << L.unit << " at t = " << t << " s (q" << (L.joint + 1) << " = " << q
+       << " " << L.unit << ")";
+  } else {
+    const double meas = g[k] + opt_.sing_min;
+    if (at_start)
+      os << "direct (type 2) singularity: measure " << std::setprecision(4) << meas << " <= sing_min = " << opt_.sing_min
+         << std::setprecision(10) << " at t = " << t << " s";
+    else
+      os << "direct (type 2) singularity: measure " << std::scientific << std::setprecision(6) << meas
+         << std::defaultfloat << std::setprecision(10) << " reached sing_min = " << opt_.sing_min << " at t = " << t << " s";
+  }
+  if (at_start) os << "; the simulation cannot go on from this state: reset it to one inside the limits";
+  return os.str();
+}
+
+static int root_status(const Sim&, bool is_limit) { return is_limit ? PKM_ERR_JOINT_LIMIT : PKM_ERR_SINGULAR; }
+
+// -------------------------------------------------------------------- the API
+
+void Sim::reset(double t0, const double* x, const double* xd) {
+  require(std::isfinite(t0), PKM_ERR_ARGUMENT, "reset: t0 = " + num(t0) + " is not finite");
+  check_finite(x, nd_, "reset: pose x");
+  check_finite(xd, nd_, "reset: pose velocity xd");
+  std::vector<double> y(2 * nd_);
+  for (int i = 0; i < nd_; ++i) {
+    y[i] = x[i];
+    y[nd_ + i] = xd[i];
+  }
+  try {
+    roots(y.data(), g_.data());
+  } catch (const Error& e) {
+    throw Error(e.status, std::string("reset: ") + e.what());
+  }
+  for (int k = 0; k < nstop_; ++k) {
+    if (g_[k] < -kResetSlack) {
+      const bool lim = k < (int)limits_.size();
+      std::ostringstream os;
+      os.precision(10);
+      if (lim) {
+        const JointLimit& L = limits_[k];
+        os << "reset: " << L.noun << " " << (L.joint + 1) << " stroke q" << (L.joint + 1) << " = "
+           << (L.upper ? L.value - g_[k] : L.value + g_[k]) << " " << L.unit << " is beyond its limit " << L.param
+           << " = " << L.value << " " << L.unit;
+      } else {
+        os << "reset: the pose is too close to a direct (type 2) singularity (measure " << std::setprecision(3)
+           << g_[k] + opt_.sing_min << " < sing_min = " << opt_.sing_min << ")";
+      }
+      throw Error(root_status(*this, lim), os.str());
+    }
+  }
+  t_ = t0;
+  y_.swap(y);
+  // Commands issued at or after t0 belong to the future being rolled back.
+  while (!history_.empty() && history_.back().s >= t0) history_.pop_back();
+}
+
+void Sim::set_input(const double* tau) {
+  check_finite(tau, nd_, "input tau");
+  double sat[6];
+  // Saturation (drive parameters <j>[i].effort_max) acts on the command itself.
+  if (model_->drive)
+    actuator_effort(*model_->drive, tau, sat);
+  else
+    for (int i = 0; i < nd_; ++i) sat[i] = tau[i];
+  for (int i = 0; i < nd_; ++i) tau_[i] = sat[i];
+}
+
+void Sim::command_at(double t, double* tau) const {
+  if (history_.empty() || t < history_.front().s) {
+    // Before the first recorded command (the start of the run) nothing was commanded.
+    for (int i = 0; i < nd_; ++i) tau[i] = 0.0;
+    return;
+  }
+  size_t k = history_.size() - 1;
+  while (k > 0 && history_[k].s > t) --k;
+  for (int i = 0; i < nd_; ++i) tau[i] = history_[k].tau[i];
+}
+
+void Sim::get_state(double* t, double* x, double* xd) const {
+  if (t) *t = t_;
+  for (int i = 0; i < nd_; ++i) {
+    if (x) x[i] = y_[i];
+    if (xd) xd[i] = y_[nd_ + i];
+  }
+}
+
+// CVODE reports a root at the near side of its final bracket, where the margin has
+// already turned <= 0 (a stroke a few 1e-16 m past its limit).  Stepping back by CVODE's
+// root tolerance, on the interpolant of the last step, gives a state still inside every
+// limit, so that the caller's inverse kinematics, a reset to it and the recorded q all
+// work there.  The stop time moves by ~1e-14 s.
+void Sim::stop_inside(double t_start) {
+  double h = 0, tcur = t_;
+  CVodeGetLastStep(cvode_, &h);
+  CVodeGetCurrentTime(cvode_, &tcur);
+  const double ttol = (std::fabs(t_) + std::fabs(h)) * DBL_EPSILON * 100;
+  const double* b = N_VGetArrayPointer(nv_back_);
+  for (int j = 0; j < 8; ++j) {
+    const double tb = t_ - ttol * double(1 << j);
+    if (!(tb > t_start) || tb < tcur - std::fabs(h)) return;
+    if (CVodeGetDky(cvode_, tb, 0, nv_back_) != CV_SUCCESS) return;
+    try {
+      roots(b, g_.data());
+    } catch (const Error&) {
+      continue;
+    }
+    bool inside = true;
+    for (int k = 0; k < nstop_; ++k) inside = inside && g_[k] > 0;
+    if (inside) {
+      for (int i = 0; i < 2 * nd_; ++i) inside = inside && std::isfinite(b[i]);
+      if (!inside) return;
+      for (int i = 0; i < 2 * nd_; ++i) y_[i] = b[i];
+      t_ = tb;
+      return;
+    }
+  }
+}
+
+// Bisection on the interpolant of the last step for the first time the measure falls
+// to sing_min before the det J root at t_: the stop state is then the last one with
+// measure > sing_min, like a stop found by the measure's own root.
+void Sim::stop_before_singularity(double t_start) {
+  double h = 0, tcur = t_;
+  CVodeGetLastStep(cvode_, &h);
+  CVodeGetCurrentTime(cvode_, &tcur);
+  double lo = std::max(t_start, tcur - std::fabs(h)), hi = t_;
+  const double* b = N_VGetArrayPointer(nv_back_);
+  auto above = [&](double t) {
+    if (CVodeGetDky(cvode_, t, 0, nv_back_) != CV_SUCCESS) return false;
+    try {
+      return measure_at(b) > opt_.sing_min;
+    } catch (const Error&) {
+      return false;
+    }
+  };
+  if (!above(lo)) return;  // keep CVODE's crossing point
+  for (int it = 0; it < 200 && hi - lo > 4 * DBL_EPSILON * std::max(1.0, std::fabs(hi)); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (above(mid))
+      lo = mid;
+    else
+      hi = mid;
+  }
+  if (CVodeGetDky(cvode_, lo, 0, nv_back_) != CV_SUCCESS) return;
+  for (int i = 0; i < 2 * nd_; ++i)
+    if (!std::isfinite(b[i])) return;
+  for (int i = 0; i < 2 * nd_; ++i) y_[i] = b[i];
+  t_ = lo;
+}
+
+void Sim::advance(double t_end) {
+  require(std::isfinite(t_end), PKM_ERR_ARGUMENT, "advance: t_end = " + num(t_end) + " is not finite");
+  require(t_end >= t_, PKM_ERR_ARGUMENT,
+          "advance: t_end = " + num(t_end, 17) + " s is before the current time t = " + num(t_, 17) + " s");
+  if (t_end == t_) return;
+
+  // A state on or beyond a stop boundary cannot be advanced: CVODE only sees sign
+  // changes, so it would miss a crossing that already happened.
+  try {
+    roots(y_.data(), g_.data());
+  } catch (const Error& e) {
+    throw Error(e.status, std::string(e.what()) + " at t = " + num(t_) + " s");
+  }
+  for (int k = 0; k < nstop_; ++k)
+    if (g_[k] <= 0) throw Error(root_status(*this, k < (int)limits_.size()), root_message(k, g_.data(), t_, true));
+
+  if (!(delay_ > 0)) {
+    applied_ = tau_;
+    segment(t_end);
+    return;
+  }
+
+  // With an actuator delay the applied effort switches wherever a past command's start
+  // plus the delay falls inside the interval: integrate piecewise, restarting CVODE at
+  // each switch so no step straddles a discontinuity.
+  while (!history_.empty() && history_.back().s >= t_) history_.pop_back();
+  Command c;
+  c.s = t_;
+  for (int i = 0; i < nd_; ++i) c.tau[i] = tau_[i];
+  history_.push_back(c);
+  while (t_ < t_end) {
+    double b = t_end;
+    for (const Command& h : history_) {
+      const double sw = h.s + delay_;
+      if (sw > t_ && sw < b) b = sw;
+    }
+    command_at(0.5 * (t_ + b) - delay_, applied_.data());
+    segment(b);
+  }
+  // Forget commands no rollback within kHistory seconds can need.
+  const double keep_from = t_ - delay_ - kHistory;
+  size_t first = 0;
+  while (first + 1 < history_.size() && history_[first + 1].s <= keep_from) ++first;
+  if (first > 0) history_.erase(history_.begin(), history_.begin() + first);
+}
+
+// The singularity measure costs an SVD, more than the forward dynamics; as a root
+// function it is evaluated at every CVODE step.  Far from the threshold it is not
+// needed there: a segment that starts with the measure above kSingGuard x sing_min runs
+// with the singularity root switched off, and if it ends (or stops) below that guard it
+// is run again from the same start with the root on, which then locates a crossing
+// exactly.  Both runs are deterministic functions of (t, x, xd, tau, options), so the
+// reproducibility guarantee holds.  What this gives up: a dip below sing_min and back
+// above the guard inside one segment goes unseen.
+void Sim::segment(double t_end) {
+  if (!sing_root_) {
+    integrate(t_end);
+    return;
+  }
+  const double guard = std::min(0.5, kSingGuard * opt_.sing_min);
+  sing_exact_ = true;
+  double meas_start = measure_at(y_.data());
+  if (meas_start < guard) {
+    integrate(t_end);
+    return;
+  }
+  const double t0 = t_;
+  std::vector<double>& y0 = y_save_;
+  y0 = y_;
+  sing_exact_ = false;
+  bool again = false;
+  try {
+    integrate(t_end);
+    again = measure_at(y_.data()) < guard;
+  } catch (const Error&) {
+    // A stop or failure with the root off: if it happened near the threshold, a missed
+    // singularity may be the cause; otherwise the stop stands.
+    double m_end = -1.0;
+    try {
+      m_end = measure_at(y_.data());
+    } catch (const Error&) {
+    }
+    if (m_end >= guard) {
+      sing_exact_ = true;
+      throw;
+    }
+    again = true;
+  }
+  sing_exact_ = true;
+  if (!again) return;
+  t_ = t0;
+  y_ = y0;
+  integrate(t_end);
+}
+
+double Sim::measure_at(const double* y) {
+  double meas[2];
+  robot_->singularity(*rm_, *rd_, y, meas);
+  return meas[1];
+}
+
+void Sim::integrate(double t_end) {
+  // An interval CVODE cannot resolve (tout too close to t0) only moves the clock: the
+  // state changes by |xd| * dt ~ 1e-16 relative, below any tolerance.
+  if (t_end - t_ < 4 * DBL_EPSILON * std::max(std::fabs(t_), std::fabs(t_end))) {
+    t_ = t_end;
+    return;
+  }
+
+  const int n2 = 2 * nd_;
+  double* v = N_VGetArrayPointer(nv_);
+  for (int i = 0; i < n2; ++i) v[i] = y_[i];
+  cb_status_ = 0;
+  cb_msg_.clear();
+  cv_msg_.clear();
+  check_cvode(CVodeReInit(cvode_, t_, nv_), "CVodeReInit");
+  check_cvode(CVodeSetStopTime(cvode_, t_end), "CVodeSetStopTime");
+
+  double tret = t_;
+  const int flag = CVode(cvode_, t_end, nv_, &tret, CV_NORMAL);
+
+  long nst = 0, nfe = 0, nfeLS = 0, nje = 0, netf = 0, nncf = 0;
+  CVodeGetNumSteps(cvode_, &nst);
+  CVodeGetNumRhsEvals(cvode_, &nfe);
+  CVodeGetNumErrTestFails(cvode_, &netf);
+  CVodeGetNumNonlinSolvConvFails(cvode_, &nncf);
+  if (opt_.method == PKM_BDF) {
+    CVodeGetNumLinRhsEvals(cvode_, &nfeLS);
+    CVodeGetNumJacEvals(cvode_, &nje);
+  }
+  stats_.steps += nst;
+  stats_.rhs_evals += nfe + nfeLS;
+  stats_.jac_evals += nje;
+  stats_.error_test_fails += netf;
+  stats_.nonlin_conv_fails += nncf;
+
+  v = N_VGetArrayPointer(nv_);
+  bool finite = true;
+  for (int i = 0; i < n2; ++i) finite = finite && std::isfinite(v[i]);
+
+  if (flag == CV_SUCCESS || flag == CV_TSTOP_RETURN) {
+    require(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(t_end) + " s");
+    for (int i = 0; i < n2; ++i) y_[i] = v[i];
+    t_ = t_end;
+    return;
+  }
+
+  if (flag == CV_ROOT_RETURN) {
+    require(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(tret) + " s");
+    std::vector<int> found(nroots_, 0);
+    CVodeGetRootInfo(cvode_, found.data());
+    int k = 0;
+    while (k < nroots_ && found[k] == 0) ++k;
+    if (k == nroots_) k = 0;
+    const double t_start = t_;
+    for (int i = 0; i < n2; ++i) y_[i] = v[i];
+    t_ = tret;
+    if (k == nstop_) {
+      // det J changed sign: the motion crossed a direct singularity inside the last step.
+      // Stop where the measure first reached sing_min, found on CVODE's interpolant.
+      const double t_cross = t_;
+      stop_before_singularity(t_start);
+      k = nstop_ - 1;
+      try {
+        roots(y_.data(), g_.data());
+      } catch (const Error&) {
+        for (int j = 0; j < nroots_; ++j) g_[j] = 0.0;
+      }
+      throw Error(PKM_ERR_SINGULAR, root_message(k, g_.data(), t_, false) + " (the motion crosses the singularity at t = " +
+                                        num(t_cross) + " s)");
+    }
+    stop_inside(t_start);
+    try {
+      roots(y_.data(), g_.data());
+    } catch (const Error&) {
+      // The root values at the stop are only for the message; keep CVODE's crossing.
+      for (int j = 0; j < nroots_; ++j) g_[j] = 0.0;
+    }
+    throw Error(root_status(*this, k < (int)limits_.size()), root_message(k, g_.data(), t_, false));
+  }
+
+  // A failure: keep the farthest state CVODE reached, if it is a valid one.
+  if (finite && tret > t_ && tret <= t_end) {
+    for (int i = 0; i < n2; ++i) y_[i] = v[i];
+    t_ = tret;
+  }
+  const std::string name = flag_name(flag);
+  if (cb_status_ != 0 && callback_flag(flag)) {
+    throw Error(cb_status_, cb_msg_ + " at t = " + num(cb_time_) + " s (CVODE stopped with " + name +
+                                "; state kept at t = " + num(t_) + " s)");
+  }
+  std::string msg = "CVODE failed with " + name + " at t = " + num(t_) + " s";
+  if (!cv_msg_.empty()) msg += ": " + cv_msg_;
+  if (cb_status_ != 0) msg += " (last callback failure: " + cb_msg_ + " at t = " + num(cb_time_) + " s)";
+  throw Error(PKM_ERR_INTEGRATION, msg);
+}
+
+}  // namespace pkm

@@ -1,0 +1,137 @@
+// CVODE integration of a robot's task-space state (x, xd) under a zero-order-hold
+// input tau: the implementation behind pkm_sim (see integration/sim_api.cpp and
+// docs/integration.md).
+//
+// The simulator is written against the Robot interface only, so it serves every robot
+// that provides forward_dynamics (directly or through the generic form).  Its stop
+// conditions come from the model's named parameters (stroke / joint limits) and from
+// the robot's singularity measure, both found at construction.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_matrix.h>
+#include <sundials/sundials_nonlinearsolver.h>
+
+#include "common/handles.hpp"
+#include "dynamics/drive.hpp"
+
+namespace pkm {
+
+// One actuated-joint limit found among the model parameters: the root function
+// g = q_j - value (lower) or value - q_j (upper) stops the integration at g = 0.
+struct JointLimit {
+  int joint;          // 0-based actuated joint
+  bool upper;         // qmax (true) or qmin (false)
+  double value;       // [m or rad]
+  std::string param;  // its parameter name, e.g. "rail[3].qmax"
+  std::string unit;   // its unit
+  std::string noun;   // "leg", "arm" or "joint" (how the message names the joint)
+};
+
+class Sim {
+ public:
+  // Copies the model (later changes of the caller's model do not reach the sim) and
+  // validates the options; throws Error naming the bad option.  The initial state is
+  // the robot's home pose at rest, t = 0, tau = 0.
+  Sim(const pkm_model* m, const pkm_sim_options& opt);
+  ~Sim();
+  Sim(const Sim&) = delete;
+  Sim& operator=(const Sim&) = delete;
+
+  // Throws Error (state unchanged) on a non-finite, unreachable, out-of-limit or singular state.
+  void reset(double t0, const double* x, const double* xd);
+  void set_input(const double* tau);
+  // Integrates to t_end; on a stop or failure, keeps the state where it stopped and
+  // throws Error with the status and a message naming the leg and the time.
+  void advance(double t_end);
+  void get_state(double* t, double* x, double* xd) const;
+  const pkm_sim_stats& stats() const { return stats_; }
+  int ndof() const { return nd_; }
+
+  std::string error;  // message of the last failure (pkm_sim_error)
+
+ private:
+  static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* self);
+  static int root_cb(double t, N_Vector y, double* g, void* self);
+  static void err_cb(int code, const char* module, const char* fn, char* msg, void* self);
+
+  void release();  // frees the CVODE objects and the model copy (idempotent)
+  void find_limits();
+  void open_limits();
+  void stop_inside(double t_start);
+  // Fills g[nroots_]; throws Error from the robot (unreachable pose...).
+  void roots(const double* y, double* g);
+  // The message of root k crossing zero at time t, with the state y there.
+  std::string root_message(int k, const double* g, double t, bool at_start) const;
+  void check_cvode(int flag, const char* call) const;
+  // The command issued at time t, from the delay line (zero before the first one).
+  void command_at(double t, double* tau) const;
+  // Integrates one segment [t_, b] with a constant applied effort; throws on a stop.
+  // segment() decides whether the singularity root is needed, integrate() runs CVODE.
+  void segment(double b);
+  void integrate(double b);
+  double measure_at(const double* y);  // direct-singularity measure (robot's measures[1])
+  double det_j(const double* y);       // det J = det(Jq^-1 Jx): changes sign through a direct singularity
+  void stop_before_singularity(double t_start);
+
+  pkm_model* model_ = nullptr;  // owned copy
+  pkm_data* data_ = nullptr;    // owned work data
+  const Robot* robot_ = nullptr;
+  const RobotModel* rm_ = nullptr;
+  RobotData* rd_ = nullptr;
+  int nd_ = 0;
+  pkm_sim_options opt_{};
+
+  std::vector<JointLimit> limits_;
+  bool sing_root_ = false;  // the robot provides singularity measures and sing_min > 0
+  bool sing_exact_ = true;  // the singularity root is evaluated (else reported far away)
+  std::vector<double> y_save_;  // segment start, for a re-run with the singularity root on
+  int nstop_ = 0;   // roots that are stop conditions: limits, then the singularity measure
+  int nroots_ = 0;  // nstop_ plus the det J sign root
+
+  double t_ = 0.0;
+  std::vector<double> y_;    // state [x, xd], 2 nd
+  std::vector<double> tau_;      // held command (after saturation), nd
+  std::vector<double> applied_;  // effort reaching the mechanism in the current segment, nd
+
+  // Actuator delay line (drive parameter actuator.delay > 0): the command held over each
+  // past advance, from its start time s_k; the mechanism feels the command issued at
+  // t - delay.  Kept for kHistory seconds so that rollbacks within it replay exactly.
+  struct Command {
+    double s;
+    double tau[6];
+  };
+  std::vector<Command> history_;
+  double delay_ = 0.0;
+  std::vector<double> q_;    // work buffer for the root function
+  std::vector<double> g_;    // work buffer for root values
+
+  // Failure recorded inside a CVODE callback (no exception may cross CVODE's C frames).
+  int cb_status_ = 0;
+  double cb_time_ = 0.0;
+  std::string cb_msg_;
+  std::string cv_msg_;  // last message of CVODE's error handler
+
+  pkm_sim_stats stats_{};
+
+  SUNContext ctx_ = nullptr;
+  N_Vector nv_ = nullptr;
+  N_Vector nv_back_ = nullptr;  // state interpolated just before a root
+  SUNMatrix A_ = nullptr;
+  SUNLinearSolver ls_ = nullptr;
+  SUNNonlinearSolver nls_ = nullptr;
+  void* cvode_ = nullptr;
+};
+
+}  // namespace pkm
+
+struct pkm_sim {
+  pkm::Sim sim;
+  pkm_sim(const pkm_model* m, const pkm_sim_options& o) : sim(m, o) {}
+};
