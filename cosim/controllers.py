@@ -201,7 +201,17 @@ class ComputedTorque(PDGravity):
 
 # -------------------------------------------------------------------- factories
 
-def pd(*, ndof: int = 6, kp, kd, saturation=None) -> JointController:
+def _pd_units(joint):
+    if joint not in ("m", "rad"):
+        raise ControllerError(f"joint unit must be 'm' (sliders) or 'rad' (revolute joints), got {joint!r}")
+    return ("N/m", "N s/m") if joint == "m" else ("N m/rad", "N m s/rad")
+
+
+def _joint_of(model):
+    return "rad" if getattr(model, "robot", "6pus") in ("quattro", "fourbar") else "m"
+
+
+def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m") -> JointController:
     """Decentralised PD in joint space: ``tau = Kp (qref - q) + Kd (qdref - qd)``.
 
     Parameters
@@ -214,9 +224,12 @@ def pd(*, ndof: int = 6, kp, kd, saturation=None) -> JointController:
         Derivative gain [N s/m or N m s/rad].
     saturation : float or array_like, shape (nd,), optional
         Largest effort magnitude per actuator [N or N m]; efforts are clipped.
+    joint : {"m", "rad"}
+        Unit of the joints (sliders or revolute), for the gains' units.
     """
-    return PD(ndof=ndof, kp=_gain(kp, ndof, "kp", "N/m"), kd=_gain(kd, ndof, "kd", "N s/m"),
-              saturation=_limit(saturation, ndof), kind="pd")
+    u = _pd_units(joint)
+    return PD(ndof=ndof, kp=_gain(kp, ndof, "kp", u[0]), kd=_gain(kd, ndof, "kd", u[1]),
+              saturation=_limit(saturation, ndof), kind="pd", units=u)
 
 
 def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> JointController:
@@ -236,8 +249,9 @@ def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> 
     if gravity not in ("measured", "reference"):
         raise ControllerError(f"gravity must be 'measured' or 'reference', got {gravity!r}")
     nd = model.ndof
-    c = PDGravity(model, gravity, ndof=nd, kp=_gain(kp, nd, "kp", "N/m"), kd=_gain(kd, nd, "kd", "N s/m"),
-                  saturation=_limit(saturation, nd), kind="pd_gravity")
+    u = _pd_units(_joint_of(model))
+    c = PDGravity(model, gravity, ndof=nd, kp=_gain(kp, nd, "kp", u[0]), kd=_gain(kd, nd, "kd", u[1]),
+                  saturation=_limit(saturation, nd), kind="pd_gravity", units=u)
     c.info = {"gravity": gravity}
     return c
 
@@ -275,6 +289,19 @@ def joint_mass(model, x) -> np.ndarray:
     The core gives the task-space mass matrix ``Mx`` (kinetic energy ``xd' Mx xd / 2``)
     and ``J`` (``qd = J xd``); the same kinetic energy in joint velocities is
     ``qd' Mq qd / 2``.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The robot model.
+    x : array_like, shape (nd,)
+        Pose [m, rad].
+
+    Returns
+    -------
+    ndarray, shape (nd, nd)
+        Symmetric joint-space mass matrix; its diagonal is the effective mass of each
+        actuator with the others held.
     """
     J = model.jacobian(x)
     Mx = model.mass_matrix(x)
@@ -286,8 +313,18 @@ def joint_mass(model, x) -> np.ndarray:
 def double_integrator(mass: float, dt: float | None = None):
     """The decoupled joint ``m qdd = tau - g`` as a state-space system.
 
-    States ``[q, qd]``; inputs ``[tau, g]``; output ``q``.  Discretised with a
-    zero-order hold when ``dt`` [s] is given (exact for a piecewise-constant tau).
+    Parameters
+    ----------
+    mass : float
+        Effective joint mass [kg or kg m^2].
+    dt : float, optional
+        Sampling period [s]: discretised with a zero-order hold (``control.c2d``), exact
+        for a piecewise-constant tau; continuous if None.
+
+    Returns
+    -------
+    control.StateSpace
+        States ``[q, qd]``, inputs ``[tau, g]``, output ``q``.
     """
     if not (mass > 0 and np.isfinite(mass)):
         raise ControllerError(f"the effective joint mass must be positive, got {mass}")
@@ -299,9 +336,23 @@ def double_integrator(mass: float, dt: float | None = None):
 def closed_loop(mass: float, kp: float, kd: float, dt: float | None = None, gravity_comp: bool = False):
     """PD loop around one joint, inputs ``[qref, g]``, outputs ``[q, e = qref - q]``.
 
-    ``tau = kp (qref - q) - kd qd (+ g if gravity_comp)``, sampled at ``dt`` [s] with
-    the plant discretised by zero-order hold (exact for the sampled loop), or
-    continuous when ``dt`` is None.
+    ``tau = kp (qref - q) - kd qd (+ g if gravity_comp)`` on :func:`double_integrator`.
+
+    Parameters
+    ----------
+    mass : float
+        Effective joint mass [kg or kg m^2].
+    kp, kd : float
+        Gains [N/m, N s/m] (or per radian).
+    dt : float, optional
+        Sampling period [s] (plant discretised by zero-order hold: exact for the
+        sampled loop); continuous if None.
+    gravity_comp : bool
+        Feed the gravity load forward (PD + G).
+
+    Returns
+    -------
+    control.StateSpace
     """
     plant = double_integrator(mass, dt)
     A, B = np.asarray(plant.A), np.asarray(plant.B)
@@ -386,6 +437,15 @@ def _horizon(wn, damping, dt):
 def analyse_pd(*, mass: float, kp: float, kd: float, dt: float | None = 1e-3) -> dict:
     """What python-control predicts for given PD gains on the decoupled joint.
 
+    Parameters
+    ----------
+    mass : float
+        Effective joint mass [kg or kg m^2].
+    kp, kd : float
+        Gains [N/m, N s/m] (or per radian).
+    dt : float, optional
+        Sampling period [s]; continuous if None.
+
     Returns a dict with the natural frequency ``wn`` [rad/s], ``damping`` [-],
     closed-loop ``poles``, ``stable``, the step metrics (``RiseTime``, ``SettlingTime``
     [s], ``Overshoot`` [%] ...) and ``gravity_compliance``: the steady-state error per
@@ -411,8 +471,23 @@ def predicted_steady_state_error(model, x, kp) -> np.ndarray:
     """``e_ss = Kp^-1 g(x)`` [m or rad]: where a PD loop settles under gravity (SPEC 4).
 
     At rest ``qd = 0`` and the efforts balance the gravity load ``g(x)`` from the core,
-    so ``Kp (qref - q) = g``.  ``x`` is the pose where the robot settles (the reference
-    pose to first order; iterate with the settled pose for more).
+    so ``Kp (qref - q) = g``.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The robot model (its gravity load).
+    x : array_like, shape (nd,)
+        The pose where the robot settles [m, rad]: the reference pose gives the
+        first-order estimate (:func:`cosim.scenario.predicted_equilibrium_error`
+        solves for the settled pose).
+    kp : float or array_like
+        Proportional gain [N/m or N m/rad].
+
+    Returns
+    -------
+    ndarray, shape (nd,)
+        ``qref - q`` at rest.
     """
     nd = model.ndof
     K = _gain(kp, nd, "kp", "N/m")

@@ -88,6 +88,11 @@ class ScenarioResult:
 def load_scenario(path) -> Scenario:
     """Read and check a scenario TOML file.
 
+    Parameters
+    ----------
+    path : str or Path
+        The ``.toml`` file (format: docs/scenarios.md).
+
     Raises
     ------
     ScenarioError
@@ -106,7 +111,15 @@ def load_scenario(path) -> Scenario:
 
 
 def scenario_from_dict(spec: dict, name: str = "scenario") -> Scenario:
-    """A scenario from an in-memory dict with the layout of the TOML file."""
+    """A scenario from an in-memory dict with the layout of the TOML file.
+
+    Parameters
+    ----------
+    spec : dict
+        Content with the layout of the TOML file.
+    name : str
+        Name if ``spec`` has none.
+    """
     spec = copy.deepcopy(spec)
     spec.setdefault("name", name)
     return Scenario(_check(spec, None), None)
@@ -238,7 +251,7 @@ def build_controller(sc: Scenario, model, x0):
         kp, kd = c["kp"], c["kd"]
     sat = c.get("saturation")
     if kind == "pd":
-        ctrl = ctl.pd(ndof=model.ndof, kp=kp, kd=kd, saturation=sat)
+        ctrl = ctl.pd(ndof=model.ndof, kp=kp, kd=kd, saturation=sat, joint=ctl._joint_of(model))
     elif kind == "pd_gravity":
         ctrl = ctl.pd_gravity(model, kp=kp, kd=kd, saturation=sat, gravity=c.get("gravity", "measured"))
     else:
@@ -459,6 +472,22 @@ def predicted_equilibrium_error(model, x_ref, kp, iterations: int = 20) -> np.nd
     the reference pose; the robot settles ``e`` away from it, where the load differs a
     little.  This fixed point (forward kinematics of ``qref - e``, gravity load there)
     is the exact static prediction; it converges because ``Kp^-1 dg/dq`` is small.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The controller's model (kinematics and gravity load).
+    x_ref : array_like, shape (nd,)
+        Reference pose [m, rad]; ``qref = ik(x_ref)``.
+    kp : float or array_like
+        Proportional gain [N/m or N m/rad].
+    iterations : int
+        Largest number of fixed-point iterations.
+
+    Returns
+    -------
+    ndarray, shape (nd,)
+        ``qref - q`` at the equilibrium [m or rad].
     """
     nd = model.ndof
     K = ctl._gain(kp, nd, "kp", "N/m")

@@ -164,6 +164,15 @@ def step(x0, x1, t_step: float = 0.0, name: str = "step") -> Trajectory:
 
     At ``t == t_step`` the reference is already ``x1``.  Velocity and acceleration
     references are zero (the controller sees the whole step as an error).
+
+    Parameters
+    ----------
+    x0, x1 : array_like, shape (nd,)
+        Pose before and after the step [m, rad].
+    t_step : float
+        Time of the step [s].
+    name : str
+        Description.
     """
     x0, x1 = np.asarray(x0, float), np.asarray(x1, float)
     if x0.shape != x1.shape:
@@ -231,8 +240,19 @@ def letter_m_corners(center=(0.0, 0.0), width: float = 0.03, height: float = 0.0
                      middle_depth: float = 0.5):
     """The five corners of a block letter "M" in the x-y plane [m].
 
-    Bottom-left, top-left, the middle vertex (``middle_depth`` of the height below the
-    top), top-right, bottom-right; centred on ``center``.
+    Parameters
+    ----------
+    center : (float, float)
+        Centre of the letter's bounding box [m].
+    width, height : float
+        Size of the bounding box [m].
+    middle_depth : float
+        How far below the top the middle vertex lies, as a fraction of the height.
+
+    Returns
+    -------
+    ndarray, shape (5, 2)
+        Bottom-left, top-left, middle vertex, top-right, bottom-right.
     """
     cx, cy = center
     w, h = width / 2, height / 2
@@ -257,6 +277,25 @@ def letter_m(center=(0.0, 0.0), z: float = 0.075, width: float = 0.03, height: f
     (rx, ry, rz) [rad].  The seed gives no size or speed; the defaults (30 x 30 mm,
     0.4 s per stroke: mean 75 mm/s on the verticals, 53 mm/s on the diagonals, peak
     15/8 of the mean) are documented in docs/scenarios.md.
+
+    Parameters
+    ----------
+    center : (float, float)
+        Centre of the letter [m].
+    z : float
+        Platform height [m].
+    width, height : float
+        Size of the letter [m].
+    segment_time : float
+        Duration of each of the four strokes [s].
+    hold_time : float
+        Rest before the first and after the last stroke [s].
+    middle_depth : float
+        Depth of the middle vertex below the top, as a fraction of the height.
+    orientation : (float, float, float)
+        Platform orientation (rx, ry, rz) [rad], constant.
+    t0 : float
+        Start time [s].
     """
     corners = letter_m_corners(center, width, height, middle_depth)
     poses = np.column_stack([corners, np.full(len(corners), z), np.tile(orientation, (len(corners), 1))])
@@ -282,6 +321,8 @@ def pose_set(poses, move_time: float = 0.5, hold_time: float = 0.5, start=None, 
         Where the robot starts (default: the first pose, held from ``t0``).
     t0 : float
         Start time [s].
+    name : str
+        Description.
 
     The hold at pose ``k`` (1-based) carries the label ``k`` (see
     :meth:`Trajectory.label`); moves and the start carry 0.
