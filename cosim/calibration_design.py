@@ -25,7 +25,7 @@ import numpy as np
 
 from .calibration_ident import column_scale
 
-__all__ = ["observability", "select_poses", "pose_rows"]
+__all__ = ["observability", "select_poses", "pose_rows", "common_scale", "sixpus_seed_comparison"]
 
 
 def pose_rows(problem, p=None) -> tuple[np.ndarray, list]:
@@ -44,6 +44,13 @@ def pose_rows(problem, p=None) -> tuple[np.ndarray, list]:
     for b, (_, rows, cols) in enumerate(problem.blocks):
         A[:, b, 0, :] = J[np.ix_(rows, cols)]
     return A, [b[0] for b in problem.blocks]
+
+
+def common_scale(A) -> list:
+    """Column scales of every candidate's rows, per block: the scale :func:`select_poses`
+    uses, and the one to pass to :func:`observability` to compare sets."""
+    A = np.asarray(A, float)
+    return [column_scale(A[:, b].reshape(-1, A.shape[-1])) for b in range(A.shape[1])]
 
 
 def observability(A, idx=None, scale=None) -> dict:
@@ -102,7 +109,7 @@ def select_poses(A, n: int, start=None, exchange: bool = True, max_passes: int =
     nc, nb, nr, ncol = A.shape
     if n > nc:
         raise ValueError(f"cannot choose {n} poses among {nc} candidates")
-    h = np.array([column_scale(A[:, b].reshape(-1, ncol)) for b in range(nb)])
+    h = np.array(common_scale(A))
     As = A * h[None, :, None, :]
     eps = ridge * np.mean(np.einsum("kbrc,kbrc->b", As, As)) / ncol
 

@@ -44,6 +44,10 @@ __all__ = [
 #: relative singular value below which a direction counts as not identifiable at all
 #: (rank deficiency), as opposed to merely ill-conditioned (cond_max)
 RANK_RTOL = 1e-8
+#: relative singular value below which a direction is flagged as nearly not identifiable:
+#: at the level of the perturbation that measurement noise puts into the regressors
+#: themselves (J is evaluated at measured poses)
+NEAR_RANK_RTOL = 1e-3
 
 
 def column_scale(J: np.ndarray) -> np.ndarray:
@@ -269,6 +273,15 @@ def _block(J, names, units, label, cond_max, rank_rtol) -> BlockReport:
     null, _ = _null_basis(Vt, s, h, names, rank_rtol)
     if rank < n:
         warnings.append(f"rank-deficient: the measurements determine only {rank} of {n} parameter combinations")
+    near = [k for k in range(rank) if s[k] < NEAR_RANK_RTOL * s[0]]
+    if near:
+        dirs = []
+        for k in near:
+            v = Vt[k] * h
+            v = v / np.abs(v).max()
+            dirs.append(" ".join(f"{v[i]:+.2f}*{names[i]}" for i in np.argsort(-np.abs(v)) if abs(v[i]) > 0.2))
+        warnings.append(f"nearly rank-deficient: {len(near)} direction(s) with mu/mu_1 < {NEAR_RANK_RTOL:g}, "
+                        f"barely above the noise in the regressors (practically not identifiable): " + "; ".join(dirs))
 
     # Structural model: the condition-number elimination loop (3.1.1).
     keep = list(range(n))

@@ -27,9 +27,11 @@ Linear steps are solved by SVD of the column-scaled Jacobian (seed 000 eq. 3.13)
 singular values below ``rcond * mu_1`` discarded: ``rcond = 1/cond_max`` is the prediction
 model of seed 000 3.1.2; the default keeps everything numerically non-zero.
 
-Standard errors: ``sigma^2 = ||r||^2 / (m - k)`` (k = the number of identified
-directions) and ``cov = sigma^2 (J^T J)^+`` at the solution, per independent block if the
-problem has blocks (each 6-PUS leg has its own residual variance).  Fixed (not free)
+Standard errors at the solution, per independent block if the problem has blocks: by
+default the heteroscedasticity-consistent sandwich estimate (HC2), because the noise of
+the equations differs from pose to pose (see ``_covariance``); ``se="ols"`` gives the
+classical ``sigma^2 (J^T J)^+`` with ``sigma^2 = ||r||^2 / (m - k)`` (k = the number of
+identified directions).  Fixed (not free)
 parameters have a standard error of 0; a block with no more equations than identified
 directions has no noise estimate: its standard errors are ``inf``.
 """
@@ -120,8 +122,16 @@ def _step(J, r, rcond, fblocks):
     return dp, rank
 
 
-def _covariance(J, r, rcond, fblocks):
-    """Per-block sigma and the covariance (J^T J)^+ sigma^2 of the free parameters."""
+def _covariance(J, r, rcond, fblocks, se="hc2"):
+    """Per-block sigma and the covariance of the free parameters.
+
+    ``se="ols"``: sigma^2 (J^T J)^+, right when every equation has the same noise.
+    ``se="hc2"``: the heteroscedasticity-consistent (sandwich) estimate
+    J^+ diag(r_i^2 / (1 - h_i)) J^+T, h_i the leverage of equation i (MacKinnon and
+    White's HC2, unbiased when the variances happen to be equal).  The 6-PUS needs it: tracker noise reaches the strokes through the
+    inverse-kinematic Jacobian, which differs from pose to pose (much larger near the
+    edge of a leg's reach), so the equations do not share one variance.
+    """
     nfree = J.shape[1]
     cov = np.zeros((nfree, nfree))
     sig, rank_total = [], 0
@@ -141,8 +151,14 @@ def _covariance(J, r, rcond, fblocks):
             continue
         s2 = float(rb @ rb) / dof
         sig.append(np.sqrt(s2))
-        V = Vt[keep].T * (1.0 / s[keep])
-        cov[np.ix_(ix, ix)] = (h[:, None] * V) @ (h[:, None] * V).T * s2
+        G = h[:, None] * (Vt[keep].T * (1.0 / s[keep]))  # parameters per unit of U^T r
+        Uk = U[:, keep]
+        if se == "ols":
+            cov[np.ix_(ix, ix)] = G @ G.T * s2
+        else:
+            lev = np.sum(Uk ** 2, axis=1)
+            w = rb ** 2 / np.maximum(1.0 - lev, 1e-12)
+            cov[np.ix_(ix, ix)] = G @ ((Uk.T * w) @ Uk) @ G.T
     return np.array(sig), cov, rank_total
 
 
@@ -167,7 +183,7 @@ def _golden_1d(f, a, b, tol, fa_cache=None):
 
 def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond: float = 1e-10,
           tol: float = 1e-10, max_iter: int = 50, width=None, basis: str = "parameters",
-          max_sweeps: int = 200) -> Solution:
+          max_sweeps: int = 200, se: str = "hc2") -> Solution:
     """Estimate the free parameters of a calibration problem.
 
     Parameters
@@ -190,6 +206,8 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
         Golden search half-intervals (default ``2 * problem.prior``).
     basis : {"parameters", "svd"}
         Golden search directions.
+    se : {"hc2", "ols"}
+        Standard-error estimate (see the module docstring).
 
     Returns
     -------
@@ -197,6 +215,8 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     """
     if method not in METHODS:
         raise ValueError(f"unknown calibration method {method!r} (known: {', '.join(METHODS)})")
+    if se not in ("hc2", "ols"):
+        raise ValueError(f"se must be 'hc2' or 'ols', got {se!r}")
     t0 = time.perf_counter()
     n = len(problem.names)
     p0 = np.asarray(problem.p0 if p_start is None else p_start, float).copy()
@@ -321,7 +341,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
         L, r = cost_at(p)
 
     J = problem.jacobian(p)[:, fi]
-    sigma, cov, rank = _covariance(J, r, rcond, fblocks)
+    sigma, cov, rank = _covariance(J, r, rcond, fblocks, se)
     se = np.zeros(n)
     se[fi] = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return Solution(method=method, names=list(problem.names), p0=p0, p=p, free=mask, iterations=it, nfev=nfev,

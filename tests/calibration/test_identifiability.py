@@ -1,0 +1,165 @@
+"""Identifiability analysis (seed 000 ch. 3.1 and 4.2)."""
+import warnings
+
+import numpy as np
+import pytest
+
+from cosim.calibration_ident import column_scale, identifiability
+from cosim.calibration_problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem,
+                                        calib_rows)
+from cosim.core import Model
+
+# Seed 000 Table 4.22, typed from the thesis: leg 1 at the ten poses of Tables 4.2-4.20,
+# columns [X, Y, Z, Sx, Sy, Sz, L, sx, sy, sz].
+TABLE_4_22 = np.array([
+    [1, 0.1019, 1.0824, -1, -0.1019, -1.0824, -1.4771, -0.0550, -0.0056, -0.0595],
+    [1, 0.1121, 1.0738, -1, -0.1121, -1.0738, -1.4716, -0.0542, -0.0061, -0.0582],
+    [1, 1.0480, 1.6470, -1, -1.0480, -1.6470, -2.1934, -0.1319, -0.1383, -0.2173],
+    [1, 0.1086, 0.8269, -1, -0.1086, -0.8269, -1.3021, -0.0634, -0.0069, -0.0524],
+    [1, 0.2630, 0.3440, -1, -0.2630, -0.3440, -1.0897, -0.0419, -0.0110, -0.0144],
+    [1, 0.9434, 0.2043, -1, -0.9434, -0.2043, -1.3899, -0.0446, -0.0421, -0.0091],
+    [1, 0.1389, 0.6173, -1, -0.1389, -0.6173, -1.1834, -0.0026, -0.0004, -0.0016],
+    [1, 0.2260, 1.6368, -1, -0.2260, -1.6368, -1.9314, -0.0518, -0.0117, -0.0848],
+    [1, 0.0489, 1.5925, -1, -0.0489, -1.5925, -1.8811, -0.0312, -0.0015, -0.0498],
+    [1, -0.3401, 0.6347, -1, 0.3401, -0.6347, -1.2323, -0.0893, -0.0304, -0.0567],
+])
+NAMES = ["X", "Y", "Z", "Sx", "Sy", "Sz", "L", "sx", "sy", "sz"]
+# Seed 000 Tables 4.2-4.20: the poses (x, y, z [m], rx, ry, rz [deg]).
+POSES_DEG = np.array([[0, 0, 0.085, 0, 0, 0], [0, 0, 0.085, 1, 1, 1], [0.05, 0.05, 0.09, 1, 4, -3],
+                      [0.02, 0, 0.075, -1, 1, 2], [0.015, 0.02, 0.04, 0, 4, 0], [-0.01, 0.07, 0.018, 5, 4, 1],
+                      [-0.04, 0.01, 0.065, -4, 3, -5], [-0.023, -0.019, 0.1, 0, 2, -3],
+                      [-0.038, -0.009, 0.1, 5, 5, 5], [0.05, -0.04, 0.063, 2, 5, 0]])
+
+
+def test_seed_table_rail_origin_not_identifiable_with_platform_point():
+    rep = identifiability(TABLE_4_22, NAMES)
+    b = rep.blocks[0]
+    assert b.rank == 7
+    # QR in the error-model order: R_44, R_55, R_66 ~ 1e-16 (seed 000 ch. 4.2)
+    assert np.all(b.qr_diag[3:6] < 1e-12) and np.all(b.qr_diag[[0, 1, 2, 6, 7, 8, 9]] > 1e-4)
+    assert sorted(b.not_identifiable) == ["Sx", "Sy", "Sz"]
+    # found from the null space, with the combination: moving P and S0 together is invisible
+    combos = [set(v) for v in b.null_space]
+    assert sorted(map(sorted, combos)) == [["Sx", "X"], ["Sy", "Y"], ["Sz", "Z"]]
+    for v in b.null_space:
+        np.testing.assert_allclose(sorted(v.values()), [1.0, 1.0], atol=1e-9)
+    # what the structural model estimates: X - Sx etc.
+    for c in b.combinations:
+        if c.parameter in ("Sx", "Sy", "Sz"):
+            assert c.residual < 1e-9
+            key = c.parameter.replace("S", "").upper()
+            assert c.coefficients[key] == pytest.approx(-1.0, abs=1e-9)
+    assert b.cond_after < 100
+    assert "not identifiable" in rep.text()
+
+
+def _seed_poses_rows(frame):
+    model = Model("6pus")
+    x = np.column_stack([POSES_DEG[:, :3], np.radians(POSES_DEG[:, 3:])])
+    rows, ok = [], []
+    for k in range(10):
+        try:
+            rows.append(calib_rows(model, x[k], frame)[0])  # leg 1
+            ok.append(k)
+        except Exception:  # another leg of this robot cannot reach the pose
+            pass
+    return np.array(rows), ok
+
+
+def test_core_rows_at_seed_poses_world_frame_same_conclusion():
+    J, ok = _seed_poses_rows(PKM_FRAME_WORLD)
+    assert len(ok) >= 8
+    b = identifiability(J, NAMES).blocks[0]
+    assert sorted(b.not_identifiable) == ["Sx", "Sy", "Sz"]
+    assert b.rank == 7
+
+
+def test_platform_frame_makes_rail_origin_identifiable_in_principle():
+    # with the platform point constant in the platform frame, rotations separate it from
+    # the rail origin: no exact null direction between them any more
+    J, ok = _seed_poses_rows(PKM_FRAME_PLATFORM)
+    b = identifiability(J, NAMES).blocks[0]
+    assert b.rank == min(len(ok), 10)
+    assert not any(set(v) <= {"X", "Y", "Z", "Sx", "Sy", "Sz"} for v in b.null_space)
+
+
+def test_elimination_drops_the_dominant_parameter_and_reports_the_combination():
+    rng = np.random.default_rng(3)
+    J = rng.normal(size=(40, 4))
+    J = np.column_stack([J, J[:, 1] - 2.0 * J[:, 2] + 1e-4 * rng.normal(size=40)])  # near-dependent column
+    rep = identifiability(J, list("abcde"))
+    b = rep.blocks[0]
+    assert b.rank == 5 and b.cond_scaled > 100
+    assert [e.dropped for e in b.eliminations] == ["e"]
+    assert b.cond_after < 100 and b.retained == list("abcd")
+    (c,) = b.combinations
+    assert c.coefficients["b"] == pytest.approx(1.0, abs=1e-3)
+    assert c.coefficients["c"] == pytest.approx(-2.0, abs=1e-3)
+    assert 0 < c.residual < 1e-3 and b.ill_conditioned == ["e"]
+
+
+def test_combination_values_equal_the_structural_estimates_in_a_linear_model():
+    rng = np.random.default_rng(4)
+    J = rng.normal(size=(30, 3))
+    J = np.column_stack([J, J[:, 0] + J[:, 2]])  # d = a + c: not identifiable
+    truth = {"a": 0.3, "b": -0.2, "c": 0.5, "d": 0.7}
+    y = J @ np.array([truth[k] for k in "abcd"])
+    rep = identifiability(J, list("abcd"))
+    assert rep.not_identifiable == ["d"]
+    keep = rep.retained_mask()
+    est = np.linalg.lstsq(J[:, keep], y, rcond=None)[0]
+    want = rep.combination_values(truth)
+    np.testing.assert_allclose(est, [want[n] for n in rep.retained], atol=1e-12)
+    assert want["a"] == pytest.approx(0.3 + 0.7) and want["c"] == pytest.approx(0.5 + 0.7)
+
+
+def test_column_scaling_makes_units_irrelevant():
+    rng = np.random.default_rng(5)
+    J = rng.normal(size=(20, 4))
+    D = np.diag([1e-3, 1.0, 1e3, 7.0])
+    a = identifiability(J, list("abcd")).blocks[0]
+    b = identifiability(J @ D, list("abcd")).blocks[0]
+    np.testing.assert_allclose(a.singular_values, b.singular_values, rtol=1e-10)
+    assert b.cond_unscaled > 1e5 > a.cond_scaled
+    np.testing.assert_allclose(column_scale(np.array([[0.0, 3.0], [0.0, 4.0]])), [1.0, 0.2])
+
+
+def test_prediction_model_keeps_the_well_conditioned_directions():
+    rng = np.random.default_rng(6)
+    U, _ = np.linalg.qr(rng.normal(size=(30, 4)))
+    V, _ = np.linalg.qr(rng.normal(size=(4, 4)))
+    J = U @ np.diag([1.0, 0.5, 0.1, 1e-4]) @ V.T
+    b = identifiability(J / np.linalg.norm(J, axis=0), list("abcd")).blocks[0]
+    assert b.prediction_kept == 3 and len(b.prediction_dropped) == 1
+
+
+def test_bad_matrix_is_an_error_naming_row_and_column():
+    J = np.ones((5, 3))
+    J[3, 1] = np.nan
+    with pytest.raises(ValueError, match="row 3, column 'b'"):
+        identifiability(J, list("abc"))
+    with pytest.raises(ValueError, match="3 columns but 2"):
+        identifiability(np.ones((5, 3)), list("ab"))
+
+
+def test_too_few_equations_warn():
+    b = identifiability(np.random.default_rng(0).normal(size=(3, 5)), list("abcde")).blocks[0]
+    assert any("only 3 equations for 5 parameters" in w for w in b.warnings)
+    assert b.rank == 3
+
+
+def test_sixpus_block_structure_one_leg_per_block():
+    m = Model("6pus")
+    x = np.tile(m.home(), (12, 1))
+    rng = np.random.default_rng(1)
+    x[:, :2] += rng.uniform(-0.01, 0.01, (12, 2))
+    x[:, 3:] += np.radians(rng.uniform(-4, 4, (12, 3)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CalibrationWarning)
+        P = SixpusProblem(x, m.ik(x), m)
+    J = P.jacobian(P.p0)
+    for b, (_, rows, cols) in enumerate(P.blocks):
+        other = np.setdiff1d(np.arange(J.shape[1]), cols)
+        assert np.all(J[np.ix_(rows, other)] == 0)  # seed 000 eq. 4.7
+    rep = identifiability(J, P.names, P.units, blocks=P.blocks)
+    assert [b.label for b in rep.blocks] == [f"leg {i}" for i in range(1, 7)]
