@@ -143,6 +143,47 @@ class CorePlant(Plant):
         return {"kind": "core", **self.options}
 
 
+class CoreDrive:
+    """The plant's drive and sensor model from the core, applied by the master.
+
+    The plants integrate the mechanics and clip the effort at ``effort_max`` inside;
+    what the robot's own controller logs is computed here from the plant's parameters,
+    the same way for the FMU and the core plant: the effort actually applied
+    (``pkm_actuator_effort``: saturation) and the joint readings
+    (``pkm_measure_joints``: encoder offset, backlash, transmission compliance).
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The plant's ("true") model.
+    """
+
+    def __init__(self, model):
+        from ._native import lib
+
+        self.model, self._lib = model, lib
+        self.ndof = model.ndof
+        self._buf = np.empty(model.ndof)
+
+    def _call(self, fn, *arrays):
+        from ._native import ptr, raise_for
+
+        args = [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
+        out = np.empty(self.ndof)
+        st = fn(self.model._m, self.model._d, *[ptr(a) for a in args], ptr(out))
+        if st != 0:
+            raise_for(st, self._lib.pkm_data_error(self.model._d).decode())
+        return out
+
+    def applied(self, tau_cmd):
+        """Effort reaching the mechanism [N or N m] for the commanded one."""
+        return self._call(self._lib.pkm_actuator_effort, tau_cmd)
+
+    def measure(self, x, xd, tau):
+        """Encoder readings [m or rad] at (x, xd) under the applied effort tau."""
+        return self._call(self._lib.pkm_measure_joints, x, xd, tau)
+
+
 class FMUPlant(Plant):
     """A Co-Simulation FMU driven through fmpy (``fmpy.fmi2.FMU2Slave``).
 
@@ -396,7 +437,9 @@ class RunResult:
 
     ``data`` is a structured array, one row per communication point, with the fields
     of ``units``: ``time``; ``q``, ``qd`` (joint readings, with sensor noise),
-    ``q_true``, ``qd_true``; ``tau`` (efforts applied over the following step);
+    ``q_true``, ``qd_true``; ``tau_cmd`` (the controller's command, held over the
+    following step) and ``tau`` (the effort applied: the command after the drive's
+    saturation);
     ``qref``, ``qdref``; ``x`` (true pose), ``x_meas`` (the pose an external tracker
     sees: true pose + noise), ``xd``, ``xref``; ``label`` (reference segment tag).
     ``result["q"]`` is a field.
@@ -428,20 +471,24 @@ class RunResult:
 
         Joint readings ``q``/``qd`` as the encoders give them, ``tau`` the efforts
         applied, ``qref``, and the pose columns from the external tracker
-        (``x_meas``); the segment label goes in an extra column ``label``.
+        (``x_meas``); the segment label goes in an extra column ``label``, and the
+        commands in ``tau_cmd<i>`` when the drive saturated them.
         """
         from .recording import Recording
 
         d = self.data
+        extra = {"label": d["label"].astype(float)}
+        if np.any(d["tau_cmd"] != d["tau"]):  # saturated: keep what the controller asked for too
+            extra.update({f"tau_cmd{i + 1}": d["tau_cmd"][:, i].copy() for i in range(d["tau"].shape[1])})
         return Recording(robot=self.robot, time=d["time"].copy(), q=d["q"].copy(), qd=d["qd"].copy(),
                          tau=d["tau"].copy(), qref=d["qref"].copy(), pose=d["x_meas"].copy(),
-                         extra={"label": d["label"].astype(float)}, parameters=dict(parameters or {}),
+                         extra=extra, parameters=dict(parameters or {}),
                          controller=dict(self.controller), notes=notes)
 
 
 def _dtype(nd):
     f = [("time", "f8")]
-    for name in ("q", "qd", "q_true", "qd_true", "tau", "qref", "qdref", "x", "x_meas", "xd", "xref"):
+    for name in ("q", "qd", "q_true", "qd_true", "tau", "tau_cmd", "qref", "qdref", "x", "x_meas", "xd", "xref"):
         f.append((name, "f8", (nd,)))
     f.append(("label", "i4"))
     return np.dtype(f)
@@ -451,12 +498,12 @@ def _units(robot, nd):
     j = JOINT_UNIT.get(robot, "m or rad")
     pose = POSE_UNITS.get(robot, ["m or rad"] * nd)
     return {"time": "s", "q": j, "qd": f"{j}/s", "q_true": j, "qd_true": f"{j}/s",
-            "tau": EFFORT_UNIT.get(j, "N or N m"), "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
+            "tau": EFFORT_UNIT.get(j, "N or N m"), "tau_cmd": EFFORT_UNIT.get(j, "N or N m"), "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
             "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
-        pose_noise=0.0, seed: int | None = 0, progress: bool | None = None) -> RunResult:
+        pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None) -> RunResult:
     """Step ``plant`` and ``controller`` together over the reference's time grid.
 
     Parameters
@@ -479,6 +526,11 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         [m, rad].
     seed : int, optional
         Seed of the noise generator.
+    drive : CoreDrive, optional
+        The plant's drive and sensor model: the recorded ``tau`` is the effort it
+        applies (saturation) and the joint readings go through its encoder model
+        (offset, backlash, compliance) before the noise.  Without it the readings are
+        the plant's joints and ``tau`` the command.
     progress : bool, optional
         Show a tqdm progress bar; by default it appears on a terminal when the run
         lasts more than two seconds of wall time.
@@ -536,14 +588,18 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         y = plant.outputs()
         if hasattr(controller, "reset"):
             controller.reset(float(t[0]), y.q, y.x)
+        tau_applied = np.zeros(nd)   # effort acting just before the sample (compliance)
         for k in range(n):
-            qm = y.q + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else y.q
+            q_read = drive.measure(y.x, y.xd, tau_applied) if drive is not None else y.q
+            qm = q_read + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else q_read
             qdm = y.qd + rng.normal(0.0, 1.0, nd) * sig_qd if np.any(sig_qd) else y.qd
             xm = y.x + rng.normal(0.0, 1.0, nd) * sig_x if np.any(sig_x) else y.x
             tau = np.asarray(controller(float(t[k]), qm, qdm, reference.at(k)), float)
+            tau_applied = drive.applied(tau) if drive is not None else tau
             row = data[k]
             row["q"], row["qd"], row["q_true"], row["qd_true"] = qm, qdm, y.q, y.qd
-            row["x"], row["x_meas"], row["xd"], row["tau"] = y.x, xm, y.xd, tau
+            row["x"], row["x_meas"], row["xd"] = y.x, xm, y.xd
+            row["tau"], row["tau_cmd"] = tau_applied, tau
             if k == n - 1:
                 break
             plant.set_input(tau)

@@ -36,7 +36,7 @@ import numpy as np
 
 from . import controllers as ctl
 from . import trajectories as tr
-from .master import CorePlant, FMUPlant, MasterError, make_reference, run
+from .master import CoreDrive, CorePlant, FMUPlant, MasterError, make_reference, run
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -336,7 +336,8 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     p = build_plant(sc, true, truth)
     try:
         res = run(p, ctrl, ref, x0=x0, q_noise=noise.get("q", 0.0), qd_noise=noise.get("qd", 0.0),
-                  pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], progress=progress)
+                  pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], drive=CoreDrive(true),
+                  progress=progress)
     finally:
         p.close()
     metrics = compute_metrics(sc, res, nominal, traj, ctrl, design)
