@@ -15,6 +15,9 @@ def _configure(p):
     p.add_argument("--model", default="structural", choices=["structural", "prediction", "full"],
                    help="which parameters to estimate: structural (the cond < limit subset, seed 000 3.1.1), "
                         "prediction (all, truncated SVD, 3.1.2), full (all; refuses a rank-deficient set)")
+    p.add_argument("--basis", default="svd", choices=["svd", "parameters"],
+                   help="golden search directions: principal axes of the scaled Jacobian (default) or the parameters "
+                        "one at a time as in seed 002 (slow on ill-conditioned problems)")
     p.add_argument("--holdout", type=float, default=0.25, metavar="FRACTION",
                    help="fraction of the poses kept out to verify the calibration (default 0.25)")
     p.add_argument("--cond-max", type=float, default=100.0, help="condition-number limit (default 100)")
@@ -57,8 +60,9 @@ def cmd_calibrate(args):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report
+        opts = {"basis": args.basis} if args.solver == "golden" else {}
         res = calibrate(args.recording, solver=args.solver, model=args.model, holdout=args.holdout,
-                        cond_max=args.cond_max, seed=args.seed)
+                        cond_max=args.cond_max, seed=args.seed, **opts)
     print(res.text())
     if args.out:
         for p in res.save(args.out):

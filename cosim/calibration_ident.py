@@ -261,7 +261,8 @@ def _block(J, names, units, label, cond_max, rank_rtol) -> BlockReport:
     if zero:
         warnings.append("zero columns (these parameters have no effect on the measurements): " + ", ".join(zero))
     s_un = np.linalg.svd(J, compute_uv=False) if m and n else np.zeros(0)
-    _, s, Vt = np.linalg.svd(Js, full_matrices=True) if m and n else (None, np.zeros(0), np.eye(n))
+    # V must span all n columns (null space included); U is not needed at all
+    _, s, Vt = np.linalg.svd(Js, full_matrices=m < n) if m and n else (None, np.zeros(0), np.eye(n))
     rank = int(np.sum(s > rank_rtol * s[0])) if s.size else 0
     # QR in the error-model order (seed 000 ch. 4.2) and with pivoting
     R = sla.qr(Js, mode="r")[0] if m and n else np.zeros((0, n))
