@@ -173,3 +173,19 @@ def test_step_response_matches_an_independent_integrator(model):
     assert err_x < 1e-6 and err_xd < 1e-6
     # The step did move the robot (the comparison is not between two robots at rest).
     assert res.q[-1, 0] - res.q[0, 0] > 1e-3
+
+
+def test_core_bench_reports_every_spec7_row():
+    """`cosim bench core` is a command, not a test; this only checks that its C++ part runs
+    and reports each SPEC 7 quantity with a finite value and a verdict."""
+    from cosim.benchmark_cli import _run_cpp, core_table
+
+    rows = _run_cpp(quick=True)
+    assert {"ik_ns", "fk_us", "id_ns", "fd_ns", "sim_bdf_1ms", "sim_adams_1ms"} <= set(rows)
+    for r in rows.values():
+        assert np.isfinite(r["value"]) and r["value"] > 0, r
+        assert r["pass"] == (r["value"] >= r["target"] if r["higher_is_better"] else r["value"] <= r["target"])
+    assert "0 failed" in rows["fk_us"]["note"]
+    table = core_table(rows, {"ik_ns": {"python": 1.0, "baseline": 2.0, "baseline_what": "loop"}})
+    assert "PASS" in table or "MISS" in table
+    assert all(r["label"] in table for r in rows.values())
