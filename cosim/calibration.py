@@ -366,14 +366,18 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     notes = []
     if meas.averaged:
         notes.append(f"{len(meas)} held poses (label column), each the mean of its settled second half")
-    J0 = prob.jacobian(prob.p0)
+    # analyse the matrix the solver works with (weighted rows), so that the structural
+    # model's combinations are exactly what the estimates represent
+    J0 = prob.wjacobian(prob.p0)
     idr = identifiability(J0, prob.names, prob.units, cond_max=cond_max, blocks=prob.blocks)
     msgs += idr.warnings
     err_model = None
     if isinstance(prob, SixpusProblem):
         units = ["1" if n.split(".")[-1] in ("sx", "sy", "sz") else "m" for n in SIXPUS_ERROR_MODEL]
-        err_model = identifiability(prob.error_model_jacobian(), SIXPUS_ERROR_MODEL, units, cond_max=cond_max,
-                                    blocks=prob.blocks_60())
+        J60 = prob.error_model_jacobian()
+        if prob.weights is not None:
+            J60 = prob.weights[:, None] * J60
+        err_model = identifiability(J60, SIXPUS_ERROR_MODEL, units, cond_max=cond_max, blocks=prob.blocks_60())
     rcond = 1e-10
     if model == "structural":
         free = idr.retained_mask()

@@ -34,7 +34,7 @@ def pose_rows(problem, p=None) -> tuple[np.ndarray, list]:
     Returns ``A`` of shape (npose, nblock, nrow_per_block, ncol_per_block) and the block
     labels; for the 6-PUS one row per leg and pose, for the four-bar one block of one row.
     """
-    J = problem.jacobian(problem.p0 if p is None else p)
+    J = problem.wjacobian(problem.p0 if p is None else p)  # rows weighted as the solver weighs them
     if problem.blocks is None:
         return J[:, None, None, :], ["all"]
     nb = len(problem.blocks)

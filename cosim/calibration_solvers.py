@@ -1,7 +1,7 @@
 """Calibration solvers with one interface (seed 002 ch. 2-3, seed 000 eq. 3.6).
 
-``solve(problem, method, free=..., ...)`` minimises ``L = ||y - predict(p)||^2`` over the
-free parameters and returns a :class:`Solution` with standard errors, so that the methods
+``solve(problem, method, free=..., ...)`` minimises ``L = ||w (y - predict(p))||^2`` over
+the free parameters (w: the problem's row weights, 1 if it has none) and returns a :class:`Solution` with standard errors, so that the methods
 can be compared on the same problem:
 
 ``"pinv"``
@@ -62,7 +62,7 @@ class Solution:
     free: np.ndarray  # bool mask of the estimated parameters
     iterations: int
     nfev: int
-    cost: list  # L = ||r||^2 after each iteration, starting with L(p0)
+    cost: list  # L = ||w r||^2 after each iteration, starting with L(p0) (w: the problem's row weights)
     converged: bool
     message: str
     se: np.ndarray  # standard errors (0 for fixed parameters)
@@ -70,7 +70,8 @@ class Solution:
     sigma: np.ndarray  # residual standard deviation (per block, or one value)
     rank: int  # identified directions
     seconds: float
-    residual: np.ndarray = field(repr=False, default=None)
+    residual: np.ndarray = field(repr=False, default=None)  # y - f(p), unweighted
+    rms0: float = 0.0  # RMS of the unweighted residual at p0
 
     @property
     def dp(self) -> np.ndarray:
@@ -78,11 +79,13 @@ class Solution:
 
     @property
     def rms_before(self) -> float:
-        return float(np.sqrt(self.cost[0] / max(self.residual.size, 1)))
+        """RMS of the (unweighted) residual at the start [measurement units]."""
+        return self.rms0
 
     @property
     def rms_after(self) -> float:
-        return float(np.sqrt(self.cost[-1] / max(self.residual.size, 1)))
+        """RMS of the (unweighted) residual at the solution."""
+        return float(np.sqrt(np.mean(self.residual ** 2))) if self.residual.size else 0.0
 
     def estimates(self) -> dict:
         """name -> (nominal, estimate, estimate - nominal, standard error) of free parameters."""
@@ -243,7 +246,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     def cost_at(p):
         nonlocal nfev
         nfev += 1
-        r = problem.residual(p)
+        r = problem.wresidual(p)
         return float(r @ r), r
 
     p = p0.copy()
@@ -255,7 +258,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     if method in ("pinv", "pinv-iter", "gauss-newton"):
         iters = 1 if method == "pinv" else max_iter
         for it in range(1, iters + 1):
-            J = problem.jacobian(p)[:, fi]
+            J = problem.wjacobian(p)[:, fi]
             dp, rank = _step(J, r, rcond, fblocks)
             alpha = 1.0
             if method == "gauss-newton":
@@ -290,10 +293,10 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
         def fun(x):
             nonlocal nfev
             nfev += 1
-            return -problem.residual(_set(p0, fi, x))
+            return -problem.wresidual(_set(p0, fi, x))
 
         def jac(x):
-            return problem.jacobian(_set(p0, fi, x))[:, fi]
+            return problem.wjacobian(_set(p0, fi, x))[:, fi]
 
         res = least_squares(fun, p0[fi], jac=jac, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15,
                             gtol=1e-15, max_nfev=max(100, 20 * max_iter))
@@ -306,7 +309,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     else:  # golden
         w = 2.0 * prior if width is None else np.broadcast_to(np.asarray(width, float), (n,)).copy()
         if basis == "svd":
-            J0 = problem.jacobian(p0)[:, fi]
+            J0 = problem.wjacobian(p0)[:, fi]
             h = column_scale(J0)
             _, s, Vt = np.linalg.svd(J0 * h, full_matrices=False)
             D = (h[:, None] * Vt.T)  # columns: principal directions in parameter units
@@ -340,13 +343,16 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
             message = f"not converged after {max_sweeps} sweeps (coordinate search on an ill-conditioned cost)"
         L, r = cost_at(p)
 
-    J = problem.jacobian(p)[:, fi]
+    J = problem.wjacobian(p)[:, fi]
+    r_plain = problem.residual(p)
+    r0 = problem.residual(p0)
     sigma, cov, rank = _covariance(J, r, rcond, fblocks, se)
     se = np.zeros(n)
     se[fi] = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return Solution(method=method, names=list(problem.names), p0=p0, p=p, free=mask, iterations=it, nfev=nfev,
                     cost=costs, converged=converged, message=message, se=se, cov=cov, sigma=sigma, rank=rank,
-                    seconds=time.perf_counter() - t0, residual=r)
+                    seconds=time.perf_counter() - t0, residual=r_plain,
+                    rms0=float(np.sqrt(np.mean(r0 ** 2))) if r0.size else 0.0)
 
 
 def _with(p, idx, d):
