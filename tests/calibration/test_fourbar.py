@@ -134,3 +134,19 @@ def test_nan_output_is_an_error_naming_the_row():
     X[2] = np.nan
     with pytest.raises(CalibrationDataError, match="row 2"):
         FourbarProblem(THETA, X, Model("fourbar"))
+
+
+def test_seed_direct_search_evaluated_the_prediction_not_the_residual():
+    # Seed 002 ch. 4 / appendix, first golden step on dl1 in [0.25, 0.35]: its dXp,A and
+    # dXp,B (typed below) are A (delta, 0, 0, 0) at delta_1A = 0.2882 and delta_1B =
+    # 0.3118 (the 35 deg entry of dXp,A, 0.3115, should read 0.3315), and L is their
+    # squared norm: the predicted change, not the residual dX - A delta.  That cost is
+    # smallest at delta = 0, which is why the thesis' interval moved away from the true
+    # 0.30 ("[0.2500, 0.2882] does not contain the value").  Our search minimises the
+    # residual (test_golden_* above).
+    dxa_seed = np.array([0.3557, 0.3115, 0.3055, 0.2787, 0.2516, 0.2244, 0.1971])
+    dxb_seed = np.array([0.3848, 0.3586, 0.3305, 0.3015, 0.2722, 0.2424, 0.2132])
+    np.testing.assert_allclose((A_SEED[:, 0] * 0.2882)[[0, 2, 3, 4, 5, 6]], dxa_seed[[0, 2, 3, 4, 5, 6]], atol=1e-4)
+    np.testing.assert_allclose(A_SEED[:, 0] * 0.3118, dxb_seed, atol=5e-4)  # 55 deg: 0.2428 printed 0.2424
+    assert dxa_seed @ dxa_seed == pytest.approx(0.5471, abs=1e-4)
+    assert dxb_seed @ dxb_seed == pytest.approx(0.6551, abs=1e-4)
