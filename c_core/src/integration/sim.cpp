@@ -206,22 +206,44 @@ void Sim::release() {
   model_ = nullptr;
 }
 
-// Limits are looked up by name so the integrator needs no robot-specific code:
-// "<prefix>[i].qmin" / "<prefix>[i].qmax" for actuated joint i = 1..nd.
+// Limits are looked up by name so the integrator needs no robot-specific code: for
+// actuated joint i = 1..nd, "<prefix>[i].qmin" / ".q_min" (and max), else a limit shared
+// by all joints, "<prefix>.qmin" / ".q_min" (the Quattro's joint.q_min).
 void Sim::find_limits() {
   static const char* prefixes[][2] = {{"rail", "leg"}, {"leg", "leg"}, {"arm", "arm"}, {"joint", "joint"}};
+  static const char* suffixes[2][2] = {{"qmin", "q_min"}, {"qmax", "q_max"}};
+  auto value_of = [&](const std::string& name, double& v, std::string& unit) {
+    const int idx = pkm_param_index(model_, name.c_str());
+    if (idx < 0) return false;
+    v = pkm_param_get(model_, idx);
+    unit = pkm_param_unit(model_, idx);
+    return true;
+  };
   for (int j = 0; j < nd_; ++j) {
     for (int upper = 0; upper < 2; ++upper) {
-      for (const auto& p : prefixes) {
-        std::string name = std::string(p[0]) + "[" + std::to_string(j + 1) + "]." + (upper ? "qmax" : "qmin");
-        int idx = pkm_param_index(model_, name.c_str());
-        if (idx < 0) continue;
-        double v = pkm_param_get(model_, idx);
-        // A limit set to a huge value means "no limit".
-        if (std::isfinite(v) && std::fabs(v) < 1e100)
-          limits_.push_back({j, upper != 0, v, name, pkm_param_unit(model_, idx), p[1]});
-        break;
-      }
+      bool found = false;
+      double v = 0;
+      std::string unit;
+      for (const auto& p : prefixes)
+        for (const char* suf : suffixes[upper])
+          if (!found) {
+            const std::string name = std::string(p[0]) + "[" + std::to_string(j + 1) + "]." + suf;
+            if (value_of(name, v, unit)) {
+              found = true;
+              // A limit set to a huge value means "no limit".
+              if (std::isfinite(v) && std::fabs(v) < 1e100) limits_.push_back({j, upper != 0, v, name, unit, p[1]});
+            }
+          }
+      for (const auto& p : prefixes)
+        for (const char* suf : suffixes[upper])
+          if (!found) {
+            const std::string name = std::string(p[0]) + "." + suf;
+            if (value_of(name, v, unit)) {
+              found = true;
+              if (std::isfinite(v) && std::fabs(v) < 1e100)
+                limits_.push_back({j, upper != 0, v, name, unit, robot_->joint_noun()});
+            }
+          }
     }
   }
 }
@@ -363,7 +385,7 @@ std::string Sim::root_message(int k, const double* g, double t, bool at_start) c
   if (k < (int)limits_.size()) {
     const JointLimit& L = limits_[k];
     const double q = L.upper ? L.value - g[k] : L.value + g[k];
-    const char* kind = L.noun == "leg" ? "stroke limit" : "joint limit";
+    const char* kind = robot_->joints_angular() ? "joint limit" : "stroke limit";
     os << L.noun << " " << (L.joint + 1) << (at_start ? " is at or beyond its " : " reached its ") << kind << " "
        << L.param << " = " << L.value << " " << L.unit << " at t = " << t << " s (q" << (L.joint + 1) << " = " << q
        << " " << L.unit << ")";
