@@ -520,8 +520,12 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], s
   fmu_state head;
   memcpy(&head, bytes, sizeof head); /* bytes need not be aligned */
   if (!state_ok(c, "fmi2DeSerializeFMUstate", &head, size)) return fmi2Error;
-  fmu_state* s = (fmu_state*)malloc(size);
-  if (!s) return error(c, "fmi2DeSerializeFMUstate", "out of memory");
+  /* A state of ours handed back for overwriting is reused (same model: same size). */
+  fmu_state* s = (fmu_state*)*FMUstate;
+  if (!s || memcmp(s->magic, STATE_MAGIC, 8) != 0 || s->nplant != head.nplant) {
+    s = (fmu_state*)malloc(size);
+    if (!s) return error(c, "fmi2DeSerializeFMUstate", "out of memory");
+  }
   memcpy(s, bytes, size);
   *FMUstate = s;
   return fmi2OK;
