@@ -109,10 +109,17 @@ class Simulator:
         err = C.create_string_buffer(1024)
         h = lib.pkm_sim_create(model._m, C.byref(opt), err, len(err))
         if not h:
+            # pkm_sim_create reports by message only; map it to the status it stands for.
             msg = err.value.decode()
-            if "parameter" in msg and "validated" in msg:
-                raise_for(-2, msg)
-            raise_for(-1 if msg.startswith("pkm_sim options") else -7, msg)
+            if msg.startswith("pkm_sim options") or "is NULL" in msg:
+                status = -1  # PKM_ERR_ARGUMENT
+            elif "validate" in msg:
+                status = -2  # PKM_ERR_PARAMETER
+            elif msg.startswith("CVODE"):
+                status = -7  # PKM_ERR_INTEGRATION
+            else:
+                status = -9  # PKM_ERR_INTERNAL
+            raise_for(status, msg)
         self._s = C.c_void_p(h)
         self._x = np.empty(self.ndof)
         self._xd = np.empty(self.ndof)

@@ -1,5 +1,8 @@
 // CVODE integration of the task-space state y = [x; xd] (2 nd values):
-//   dy/dt = [xd; forward_dynamics(x, xd, tau)],   tau held constant over an advance.
+//   dy/dt = [xd; FD(x, xd, tau_applied)],
+// FD the total forward dynamics (robot mechanics + drive friction and rotor inertia),
+// tau_applied the saturated command held over an advance (zero-order hold), or with an
+// actuator delay the command issued `delay` earlier.
 //
 // Design choices (docs/integration.md explains them at length):
 //  * One SUNContext, vector, solver set and CVODE memory per Sim: no global state, so
@@ -7,11 +10,12 @@
 //  * Every advance calls CVodeReInit from the committed state, so an advance is a pure
 //    function of (t, x, xd, tau, options): rollback + re-advance is bit-for-bit equal.
 //  * Stop conditions are CVODE root functions, found once at construction: the stroke /
-//    joint limits named in the model parameters and the direct-singularity measure.
-//    CVODE evaluates them once per step (not per RHS call) and locates the crossing.
+//    joint limits named in the model parameters, the direct-singularity measure and the
+//    sign of det J.  CVODE evaluates them once per step (not per RHS call) and locates
+//    the crossing; the costly measure only near its threshold (see segment()).
 //  * No exception crosses CVODE's C frames: callbacks catch, record the failure and
 //    return CVODE's recoverable (1) or unrecoverable (-1) code.
-//  * The RHS calls the robot's forward dynamics directly (arguments were checked on the
+//  * The RHS calls the total forward dynamics directly (arguments were checked on the
 //    way in), with no allocation.
 #include "integration/sim.hpp"
 
@@ -589,13 +593,18 @@ void Sim::advance(double t_end) {
 // with the singularity root switched off, and if it ends (or stops) below that guard it
 // is run again from the same start with the root on, which then locates a crossing
 // exactly.  Both runs are deterministic functions of (t, x, xd, tau, options), so the
-// reproducibility guarantee holds.  What this gives up: a dip below sing_min and back
-// above the guard inside one segment goes unseen.
+// reproducibility guarantee holds.  A pass through a singularity inside the segment is
+// still caught by the det J root, which stays on; what goes unseen is a dip of the
+// measure below sing_min without J changing sign, back above the guard within a segment.
 void Sim::segment(double t_end) {
   if (!sing_root_) {
     integrate(t_end);
     return;
   }
+  struct Restore {
+    bool& flag;
+    ~Restore() { flag = true; }
+  } restore{sing_exact_};
   const double guard = std::min(0.5, kSingGuard * opt_.sing_min);
   sing_exact_ = true;
   double meas_start = measure_at(y_.data());
