@@ -127,7 +127,7 @@ def measurements(rec, use: str = "auto") -> Measurements:
 
 
 def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreachable: str = "drop",
-                           min_poses: int | None = None, use: str = "auto") -> Problem:
+                           min_poses: int | None = None, use: str = "auto", weighting: str = "tracker") -> Problem:
     """The calibration problem of a recording (or of some of its measurements).
 
     Parameters
@@ -143,6 +143,8 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
         Poses required (default: enough to calibrate; 1 for a verification set).
     use : {"auto", "held", "rows"}
         See :func:`measurements`.
+    weighting : {"tracker", "none"}
+        6-PUS equation weights (see :class:`~cosim.calibration_problems.SixpusProblem`).
     """
     meas = rec if isinstance(rec, Measurements) else measurements(rec, use)
     idx = np.arange(len(meas)) if rows is None else np.asarray(rows)
@@ -155,7 +157,7 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
     labels = [meas.labels[k] for k in idx]
     if meas.robot == "6pus":
         return SixpusProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, unreachable=unreachable,
-                             min_poses=min_poses)
+                             min_poses=min_poses, weighting=weighting)
     if meas.robot == "fourbar":
         return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
                               min_poses=4 if min_poses is None else min_poses)
@@ -320,7 +322,7 @@ class CalibrationResult:
 
 def calibrate(recording, solver: str = "gauss-newton", model: str = "structural", holdout: float = 0.0,
               cond_max: float = 100.0, seed: int = 0, nominal: Model | None = None, use: str = "auto",
-              **solver_options) -> CalibrationResult:
+              weighting: str = "tracker", **solver_options) -> CalibrationResult:
     """Calibrate a robot's geometry from a recording.
 
     Parameters
@@ -343,6 +345,8 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         Nominal model (default: from the sidecar).
     use : {"auto", "held", "rows"}
         Which rows make the measurements (see :func:`measurements`).
+    weighting : {"tracker", "none"}
+        6-PUS: weight the equations by their expected noise (default) or not.
     **solver_options
         Passed to :func:`cosim.calibration_solvers.solve` (tol, max_iter, width, basis...).
 
@@ -360,8 +364,9 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     cal_idx, hold_idx = split_holdout(len(meas), holdout, seed)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CalibrationWarning)
-        prob = problem_from_recording(meas, cal_idx, nominal)
-        hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1) if hold_idx.size else None
+        prob = problem_from_recording(meas, cal_idx, nominal, weighting=weighting)
+        hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1, weighting=weighting) \
+            if hold_idx.size else None
     msgs = [str(w.message) for w in caught]
     notes = []
     if meas.averaged:
