@@ -11,6 +11,7 @@
 #include <memory>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pkm/pkm.h"
@@ -313,6 +314,34 @@ TEST(Sim, InterleavedSimulatorsMatchEachRunAlone) {
   }
   // The two robots differ, so the test would notice a mix-up.
   EXPECT_GT(max_diff(a.back(), b.back()), 1e-6);
+}
+
+// Simulators in concurrent threads (one each) share no state: each thread's trajectory
+// equals the same run done alone, to the bit.
+TEST(Sim, SimulatorsInParallelThreadsMatchEachRunAlone) {
+  constexpr int kThreads = 4;
+  auto run = [](int which, State* out) {
+    ModelPtr m = make_model({{"platform.m", 0.3 + 0.05 * which}});
+    pkm_sim_options o = defaults();
+    o.method = which % 2 ? PKM_ADAMS : PKM_BDF;
+    SimPtr s = make_sim(m.get(), o);
+    double x[N], xd[N] = {0.01 * which, -0.01, 0.0, 0.02, 0.0, -0.03}, tau[N];
+    home_of(m.get(), x);
+    some_input(m.get(), x, tau);
+    pkm_sim_reset(s.get(), 0.0, x, xd);
+    pkm_sim_set_input(s.get(), tau);
+    for (int k = 1; k <= 50; ++k) pkm_sim_advance(s.get(), 1e-3 * k);
+    *out = state_of(s.get());
+  };
+  State alone[kThreads], together[kThreads];
+  for (int i = 0; i < kThreads; ++i) run(i, &alone[i]);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < kThreads; ++i) threads.emplace_back(run, i, &together[i]);
+  for (auto& t : threads) t.join();
+  for (int i = 0; i < kThreads; ++i) {
+    EXPECT_EQ(alone[i].t, 0.05) << i;
+    EXPECT_TRUE(same_bits(alone[i], together[i])) << "thread " << i;
+  }
 }
 
 TEST(Sim, KeepsItsOwnCopyOfTheModel) {
