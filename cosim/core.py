@@ -319,3 +319,39 @@ class Model:
 
         e = self._loop(one, [x, xd], ["x", "xd"], (2,))
         return e[..., 0], e[..., 1]
+
+    # ------------------------------------------------------------- 6-PUS specific
+    def _require_6pus(self, what: str) -> None:
+        if self.robot != "6pus":
+            raise ArgumentError(f"{what} is a 6-PUS function; this model is {self.robot!r}", "PKM_ERR_ARGUMENT")
+
+    def calib_rows(self, x, frame: str = "world"):
+        """6-PUS calibration regression rows, shape (..., 6, 10): dq_i / d eta_i per leg.
+
+        eta_i = [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (seed 000 eq. 4.1).  ``frame="world"``
+        differentiates with respect to the world position of the platform point (the seed's
+        tables), ``"platform"`` with respect to ``leg[i].px/py/pz``.  Stroke limits are not
+        applied (the rows are geometry); an unreachable or singular pose raises.
+        """
+        self._require_6pus("calib_rows")
+        frames = {"world": 0, "platform": 1}
+        if frame not in frames:
+            raise ArgumentError(f"frame must be 'world' or 'platform', got {frame!r}", "PKM_ERR_ARGUMENT")
+        f = frames[frame]
+
+        def one(m, d, xp, out):
+            return lib.pkm_6pus_calib_rows(m, d, xp, f, out)
+
+        return self._loop(one, [x], ["x"], (6, 10))
+
+    def leg_points(self, x):
+        """6-PUS world positions ``(P, S)`` of the platform points and sliders, each (..., 6, 3) [m]."""
+        self._require_6pus("leg_points")
+
+        def one(m, d, xp, out):
+            base = C.cast(out, C.c_void_p).value
+            return lib.pkm_6pus_leg_points(m, d, xp, C.cast(base, C.POINTER(C.c_double)),
+                                           C.cast(base + 18 * 8, C.POINTER(C.c_double)))
+
+        ps = self._loop(one, [x], ["x"], (2, 6, 3))
+        return ps[..., 0, :, :], ps[..., 1, :, :]

@@ -247,6 +247,29 @@ TEST_F(SixPus, FkFromHomeForPosesNearIt) {
   EXPECT_LT(worst, 1e-10);
 }
 
+TEST_F(SixPus, FastIkAgreesWithTheGeneralLegComputation) {
+  // pkm_ik has its own branch-free path (SPEC 7 speed); the leg points, Jacobians and
+  // dynamics use the general one.  They agree to rounding, on both sides of the 0.8 rad
+  // switch between the series and the library sine in the fast path.
+  wide_strokes();
+  int n = 0;
+  for (int t = 0; t < 20000 && n < 2000; ++t) {
+    Vec6 x;
+    x << uni(-0.02, 0.02), uni(-0.02, 0.02), uni(0.06, 0.1), rad(uni(-5, 5)), rad(uni(-5, 5)), uni(-1.0, 1.0);
+    if (t % 2) std::swap(x[3], x[5]);
+    Vec6 q;
+    double P[18], S[18];
+    const int s1 = pkm_ik(m, d, x.data(), q.data());
+    const int s2 = pkm_6pus_leg_points(m, d, x.data(), P, S);
+    ASSERT_EQ(s1, s2) << x.transpose();
+    if (s1 != PKM_OK) continue;
+    ++n;
+    for (int i = 0; i < 6; ++i)
+      EXPECT_NEAR(q[i], S[3 * i] - param("rail[" + std::to_string(i + 1) + "].S0x"), 1e-15) << x.transpose();
+  }
+  EXPECT_GT(n, 500);
+}
+
 TEST_F(SixPus, BatchedIkAgreesWithSingleCallsAndMarksFailures) {
   const int n = 2000;
   std::vector<double> X(6 * n), Q(6 * n);

@@ -122,12 +122,16 @@ std::unique_ptr<RobotModel> SixPus::compile(const std::vector<ParamSpec>& specs,
     m->S0[i] = V3(get(idx("rail", i, "S0x")), get(idx("rail", i, "S0y")), get(idx("rail", i, "S0z")));
     m->s[i] = V3(get(idx("rail", i, "sx")), get(idx("rail", i, "sy")), get(idx("rail", i, "sz")));
     m->ss[i] = m->s[i].squaredNorm();
+    m->inv_ss[i] = 1.0 / m->ss[i];
     m->qmin[i] = get(idx("rail", i, "qmin"));
     m->qmax[i] = get(idx("rail", i, "qmax"));
     m->m_slider[i] = get(idx("slider", i, "m"));
     rsum += m->p_local[i].norm();
 
     if (!(m->L[i] > 0)) bad(idx("leg", i, "L") + " = " + num(m->L[i]) + " m must be > 0");
+    // (s.w)^2 carries rounding of order 1e-16 |d|^2: a leg counts as exactly
+    // perpendicular to its rail when |s.w| < 1e-6 L.
+    m->disc_tol[i] = 1e-12 * m->L[i] * m->L[i];
     if (m->branch[i] != 1.0 && m->branch[i] != -1.0)
       bad(idx("leg", i, "branch") + " = " + num(m->branch[i]) +
           " must be +1 or -1 (which inverse-kinematics root, seed 000 eq. 2.17a/b)");
@@ -143,6 +147,14 @@ std::unique_ptr<RobotModel> SixPus::compile(const std::vector<ParamSpec>& specs,
     if (m->m_slider[i] < 0) bad(idx("slider", i, "m") + " = " + num(m->m_slider[i]) + " kg must be >= 0");
   }
   m->r_char = rsum / NLEG;
+  for (int i = 0; i < NLEG; ++i) {
+    auto& a = m->soa;
+    a.px[i] = m->p_local[i].x(), a.py[i] = m->p_local[i].y(), a.pz[i] = m->p_local[i].z();
+    a.S0x[i] = m->S0[i].x(), a.S0y[i] = m->S0[i].y(), a.S0z[i] = m->S0[i].z();
+    a.sx[i] = m->s[i].x(), a.sy[i] = m->s[i].y(), a.sz[i] = m->s[i].z();
+    a.ss[i] = m->ss[i];
+    a.L2[i] = m->L[i] * m->L[i];
+  }
   if (!(m->r_char > 0)) bad("the platform points leg[i].px/py/pz all coincide with the platform origin");
 
   m->m_platform = get("platform.m");

@@ -42,6 +42,13 @@ struct Model final : RobotModel {
   V3 g;          // gravity [m/s2]
   double r_char;  // mean |p_i|: length scale of the rotation columns in measures[1] [m]
   double home[6];
+  double inv_ss[NLEG];    // 1 / s.s
+  double disc_tol[NLEG];  // a leg is perpendicular to its rail when (s.w)^2 < disc_tol
+  // The same geometry as plain arrays over the legs, for the vectorised IK hot path.
+  struct {
+    double px[NLEG], py[NLEG], pz[NLEG], S0x[NLEG], S0y[NLEG], S0z[NLEG], sx[NLEG], sy[NLEG], sz[NLEG];
+    double ss[NLEG], L2[NLEG];
+  } soa;
 };
 
 // Position-level state of one leg at a pose.
@@ -58,6 +65,25 @@ struct Frame {
   M3 E;  // omega = E a_dot
   double sx, cx, sy, cy;
 };
+
+// sin and cos of a platform angle for the IK hot path.  For |a| <= 0.8 rad the Taylor
+// series to a^17 / a^16 is exact to rounding (remainder < 1e-18) and several times
+// cheaper than the library call, which would otherwise be a third of the cost of
+// inverse kinematics.  (The other functions use the library: the integrator's results
+// are kept bit-for-bit as they were.)
+inline void sin_cos_small(double a, double& s, double& c) {
+  if (std::abs(a) <= 0.8) {
+    const double a2 = a * a;
+    s = a * (1 + a2 * (-1.0 / 6 + a2 * (1.0 / 120 + a2 * (-1.0 / 5040 + a2 * (1.0 / 362880 +
+        a2 * (-1.0 / 39916800 + a2 * (1.0 / 6227020800 + a2 * (-1.0 / 1307674368000 +
+        a2 * (1.0 / 355687428096000)))))))));
+    c = 1 + a2 * (-0.5 + a2 * (1.0 / 24 + a2 * (-1.0 / 720 + a2 * (1.0 / 40320 + a2 * (-1.0 / 3628800 +
+        a2 * (1.0 / 479001600 + a2 * (-1.0 / 87178291200 + a2 * (1.0 / 20922789888000))))))));
+  } else {
+    s = std::sin(a);
+    c = std::cos(a);
+  }
+}
 
 inline void frame_of(const double* x, Frame& f) {
   const double sx = std::sin(x[3]), cx = std::cos(x[3]);
@@ -88,6 +114,16 @@ enum class Strokes { check, ignore };
 // PKM_ERR_UNREACHABLE / PKM_ERR_SINGULAR naming the leg and the pose, and with
 // Strokes::check PKM_ERR_JOINT_LIMIT naming the leg and the stroke.
 void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes strokes);
+
+// Vector from the rail origin to the platform point, d = p + R p_i - S0, and R p_i;
+// written out so that every caller gets the same bits.
+inline void leg_vectors(const Model& m, int i, const double* x, const M3& R, V3& rP, V3& d) {
+  const V3& pl = m.p_local[i];
+  for (int k = 0; k < 3; ++k) {
+    rP[k] = R(k, 0) * pl[0] + R(k, 1) * pl[1] + R(k, 2) * pl[2];
+    d[k] = (x[k] + rP[k]) - m.S0[i][k];
+  }
+}
 
 // Pose as text for error messages.
 std::string pose_text(const double* x);

@@ -18,17 +18,14 @@ std::string g6(double v) {
 }  // namespace
 
 void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes strokes) {
-  const V3 p(x[0], x[1], x[2]);
   for (int i = 0; i < NLEG; ++i) {
     Leg& l = legs[i];
-    l.rP = f.R * m.p_local[i];
-    const V3 d = p + l.rP - m.S0[i];
+    V3 d;
+    leg_vectors(m, i, x, f.R, l.rP, d);
     // |d - q s|^2 = L^2:  ss q^2 - 2 b q + |d|^2 - L^2 = 0,  and s.w = b - q ss = branch sqrt(disc).
     const double b = m.s[i].dot(d);
     const double disc = b * b - m.ss[i] * (d.squaredNorm() - m.L[i] * m.L[i]);
-    // disc = (s.w)^2 carries rounding of order 1e-16 |d|^2: a leg is taken as exactly
-    // perpendicular to its rail when |s.w| < 1e-6 L.
-    const double tol = 1e-12 * m.L[i] * m.L[i];
+    const double tol = m.disc_tol[i];
     if (!(disc >= tol)) {
       if (disc < -tol) {
         const double perp = std::sqrt(std::max(0.0, d.squaredNorm() - b * b / m.ss[i]));
@@ -43,7 +40,7 @@ void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes
       throw Error(PKM_ERR_ARGUMENT, "leg " + std::to_string(i + 1) + ": non-finite geometry at the " + pose_text(x));
     }
     l.c = m.branch[i] * std::sqrt(disc);
-    l.q = (b - l.c) / m.ss[i];
+    l.q = (b - l.c) * m.inv_ss[i];
     l.w = d - l.q * m.s[i];
     if (strokes == Strokes::check && (l.q < m.qmin[i] || l.q > m.qmax[i]))
       throw Error(PKM_ERR_JOINT_LIMIT, "leg " + std::to_string(i + 1) + " stroke q = " + g6(l.q) +
@@ -52,13 +49,40 @@ void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes
   }
 }
 
+// The batched hot path (SPEC 7: <= 100 ns per pose): branch-free loops over the legs
+// on plain arrays, which the compiler vectorises; any failure is handed to legs_at for
+// its message.
 void SixPus::ik(const RobotModel& rm, RobotData&, const double* x, double* q) const {
   const Model& m = model_of(rm);
-  Frame f;
-  frame_of(x, f);
-  Leg legs[NLEG];
-  legs_at(m, x, f, legs, Strokes::check);
-  for (int i = 0; i < NLEG; ++i) q[i] = legs[i].q;
+  const auto& a = m.soa;
+  double sx, cx, sy, cy, sz, cz;
+  sin_cos_small(x[3], sx, cx);
+  sin_cos_small(x[4], sy, cy);
+  sin_cos_small(x[5], sz, cz);
+  const double r00 = cy * cz, r01 = -cy * sz, r02 = sy;
+  const double r10 = sx * sy * cz + cx * sz, r11 = -sx * sy * sz + cx * cz, r12 = -sx * cy;
+  const double r20 = -cx * sy * cz + sx * sz, r21 = cx * sy * sz + sx * cz, r22 = cx * cy;
+  double b[NLEG], disc[NLEG];
+  for (int i = 0; i < NLEG; ++i) {
+    const double dx = (x[0] + (r00 * a.px[i] + r01 * a.py[i] + r02 * a.pz[i])) - a.S0x[i];
+    const double dy = (x[1] + (r10 * a.px[i] + r11 * a.py[i] + r12 * a.pz[i])) - a.S0y[i];
+    const double dz = (x[2] + (r20 * a.px[i] + r21 * a.py[i] + r22 * a.pz[i])) - a.S0z[i];
+    b[i] = a.sx[i] * dx + a.sy[i] * dy + a.sz[i] * dz;
+    disc[i] = b[i] * b[i] - a.ss[i] * ((dx * dx + dy * dy + dz * dz) - a.L2[i]);
+  }
+  int bad = 0;
+  for (int i = 0; i < NLEG; ++i) {
+    bad |= !(disc[i] >= m.disc_tol[i]);
+    q[i] = (b[i] - m.branch[i] * std::sqrt(std::max(disc[i], 0.0))) * m.inv_ss[i];
+    bad |= !(q[i] >= m.qmin[i] && q[i] <= m.qmax[i]);
+  }
+  if (bad) {
+    Frame f;
+    frame_of(x, f);
+    Leg legs[NLEG];
+    legs_at(m, x, f, legs, Strokes::check);  // throws, naming the leg
+    for (int i = 0; i < NLEG; ++i) q[i] = legs[i].q;  // a rounding-level borderline case
+  }
 }
 
 void jacobian_of(const Model&, const Frame& f, const Leg* legs, M6r& J) {
