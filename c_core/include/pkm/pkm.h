@@ -228,16 +228,24 @@ typedef struct pkm_sim_stats {
 typedef struct pkm_sim pkm_sim;
 
 PKM_API void pkm_sim_default_options(pkm_sim_options* opt);
+/* Copies m (later parameter changes of m do not reach the sim) and starts at the home
+ * pose at rest, t = 0, tau = 0.  opt NULL: defaults.  NULL on error, the reason (e.g.
+ * the bad option) in err.  See docs/integration.md. */
 PKM_API pkm_sim* pkm_sim_create(const pkm_model* m, const pkm_sim_options* opt, char* err,
                                 size_t errlen);
 PKM_API void pkm_sim_destroy(pkm_sim* s);
+/* Refuses (state unchanged) a non-finite, unreachable, beyond-limit or singular state;
+ * keeps the held input. */
 PKM_API int pkm_sim_reset(pkm_sim* s, double t0, const double* x, const double* xd);
+/* Holds tau[nd] from now on, saturated at <j>[i].effort_max; with actuator.delay > 0
+ * the mechanism feels each command that much later. */
 PKM_API int pkm_sim_set_input(pkm_sim* s, const double* tau);
 /* Integrates to t_end.  On a stroke/joint limit, a singularity or a CVODE failure,
  * stops at the event time with the state there and returns the status; the message
  * names the leg and the time. */
 PKM_API int pkm_sim_advance(pkm_sim* s, double t_end);
 PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd);
+/* CVODE counters summed over every advance since pkm_sim_create. */
 PKM_API int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats);
 PKM_API const char* pkm_sim_error(const pkm_sim* s);
 
