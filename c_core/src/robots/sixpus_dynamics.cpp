@@ -99,7 +99,9 @@ void twist_mass(const Model& m, const State& st, M6& Mt) {
   Mt.topRightCorner<3, 3>() = -H;
   Mt.bottomLeftCorner<3, 3>() = H;
   Mt.bottomRightCorner<3, 3>() = Irot;
-  // Slider (translating with the rail) and the rest of each leg: qd_i = jt.nu, s.v_P = u.nu.
+  // Slider (translating with the rail) and the rest of each leg, with qd_i = j.nu and
+  // s.v_P = u.nu:  c1 j j' + c2 (j u' + u j') = j v' + v j'  for v = c1/2 j + c2 u.
+  M6 Jc, Vc;
   for (int i = 0; i < NLEG; ++i) {
     const Leg& l = st.legs[i];
     const V6 j = twist_row(l);
@@ -108,9 +110,12 @@ void twist_mass(const Model& m, const State& st, M6& Mt) {
     u.tail<3>() = l.rP.cross(m.s[i]);
     const double c1 = (m.m_slider[i] + m.m_leg[i] / 3) * m.ss[i];
     const double c2 = m.m_leg[i] / 6;
-    Mt.noalias() += c1 * j * j.transpose();
-    Mt.noalias() += c2 * (j * u.transpose() + u * j.transpose());
+    Jc.col(i) = j;
+    Vc.col(i) = (0.5 * c1) * j + c2 * u;
   }
+  M6 A;
+  A.noalias() = Jc * Vc.transpose();
+  Mt += A + A.transpose();
 }
 
 // Euler-angle rates from the angular velocity: a_dot = E^-1 omega.
