@@ -1,0 +1,433 @@
+"""Model-discrepancy engine: where a recording and the core disagree, which missing
+physics explains it, with what parameters, and how much better the model gets.
+
+>>> from cosim.discrepancy import diagnose
+>>> d = diagnose("recording.csv", out="report/")      # doctest: +SKIP
+>>> print(d.conclusion)                                # doctest: +SKIP
+missing physics: Coulomb friction, joint 3 (rail[3].coulomb = 0.0312 +- 0.0011 N)
+
+Pipeline: residuals (:mod:`.residuals`), candidate effects (:mod:`.effects`),
+selection and intervals (:mod:`.selection`), localisation (:mod:`.localisation`),
+modelling and held-out fit (:func:`heldout_fit`), replay (:mod:`.plant`), report
+(:mod:`.report`).  Blind cases and the benchmark: :mod:`.blind`.  See
+docs/discrepancy.md.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
+from .residuals import DiagnosisError, Pipeline
+
+__all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
+
+#: |delta BIC| below which two explanations are called a tie (equally good)
+TIE_MARGIN = 2.0
+
+
+@dataclass
+class Diagnosis:
+    """The answer of :func:`diagnose`.
+
+    Attributes
+    ----------
+    recording : str
+        The recording's path (or "recording").
+    robot : str
+        Robot of the recording.
+    conclusion : str
+        One sentence: "no missing physics found", "missing physics: ...", or "cannot
+        diagnose: ..." (nothing testable).
+    effects : list of dict
+        Selected effects, most important first: ``key``, ``name``, ``joint`` (1-based
+        or None), ``params`` ({core name: {value, ci95, unit, nominal}}), ``delta_bic``,
+        ``importance``, ``lookalikes`` (alternatives, with ``statement``).
+    theta : dict
+        Every fitted core parameter (the plant overrides that model the effects).
+    heldout : dict
+        Fit on the held-out part before/after: per channel ``rms_before``,
+        ``rms_after``, ``nrmse_before``, ``nrmse_after``; ``gain`` (noise-normalised RMS
+        ratio on the affected channels), ``gain_windows`` (the same over the samples
+        where the nominal residual is out of its noise band), ``affected`` channels.
+    localisation : dict
+        Per channel: windows (start, end, peak, phase mix), phase enrichment,
+        workspace region.
+    not_excited : list of str
+        Effects this recording cannot reveal, and what motion or data is missing.
+    unavailable : list of str
+        Effects not tested at all (robot model lacks them, or no tracker columns).
+    replay : dict or None
+        Closed-loop replay of the held-out part with the nominal and the fitted plant.
+    files : dict
+        Report and figure paths (when ``out`` was given).
+    """
+
+    recording: str
+    robot: str
+    conclusion: str
+    effects: list
+    theta: dict
+    heldout: dict
+    localisation: dict
+    not_excited: list
+    unavailable: list
+    channels: list
+    noise: dict
+    replay: dict | None = None
+    timings: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+    steps: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+
+    def named(self) -> list:
+        """Effect keys in the order they are named (most important first)."""
+        out = []
+        for e in self.effects:
+            if e["key"] not in out:
+                out.append(e["key"])
+        return out
+
+    def ties(self, key: str) -> list:
+        """Effect keys declared equally good as the first group of ``key``."""
+        for e in self.effects:
+            if e["key"] == key:
+                return [a["effect"] for a in e["lookalikes"] if a["delta_bic"] < TIE_MARGIN]
+        return []
+
+    def plant_parameters(self) -> dict:
+        """Core/FMU parameters that put the fitted effects into the plant."""
+        return dict(self.theta)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
+                                               "localisation", "not_excited", "unavailable", "channels", "noise",
+                                               "replay", "timings", "files", "steps", "settings")}
+
+    def to_json(self, indent: int | None = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent, default=_json_default)
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(type(o).__name__)
+
+
+def _load(recording):
+    from ..recording import Recording, read_recording
+
+    if isinstance(recording, Recording):
+        return recording
+    return read_recording(recording)
+
+
+def _model_for(rec, model):
+    from ..core import Model
+
+    if model is None:
+        m = Model(rec.robot)
+        if rec.parameters:
+            m.set_params(rec.parameters)
+        return m
+    if isinstance(model, (str, Path)) and Path(model).exists():
+        spec = json.loads(Path(model).read_text())
+        params = spec.get("parameters", spec)
+        params = {k: (v["value"] if isinstance(v, dict) else v) for k, v in params.items()}
+        m = Model(spec.get("robot", rec.robot), spec.get("param_set"))
+        m.set_params(params)
+        return m
+    if isinstance(model, str):
+        m = Model(rec.robot, model)
+        if rec.parameters:
+            m.set_params(rec.parameters)
+        return m
+    return model
+
+
+def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
+             train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
+             max_effects: int = 6, verbose: bool = False) -> Diagnosis:
+    """Diagnose a recording against the core model.
+
+    Parameters
+    ----------
+    recording : str, Path or cosim.recording.Recording
+        A ``pkm-recording/1`` CSV (with its sidecar) or a recording object.
+    model : cosim.core.Model, str or Path, optional
+        The model to test: a Model, a named parameter set ("default", "appendix_a"),
+        or a JSON parameter file (``cosim params <robot> --json``).  Default: the
+        robot's default set with the sidecar's parameter overrides.
+    out : str or Path, optional
+        Directory for the Markdown report and its figures.
+    window : float
+        Smoothing window of the residuals [s].
+    threshold : float
+        BIC decrease an effect must bring to be named (calibrated on clean cases).
+    train_fraction : float
+        Fraction of the recording used for the fit; the rest is held out.
+    effects : iterable of str, optional
+        Restrict the library to these effect keys.
+    replay : bool
+        Re-simulate the held-out part in closed loop with the nominal and the fitted
+        plant (needs the controller in the sidecar and ``qref`` columns).
+    figures : bool
+        Draw the figures (with ``out``).
+    max_effects : int
+        Largest number of effect groups named.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    cosim.recording.RecordingError
+        Malformed file (names the file, row, column).
+    DiagnosisError
+        A recording the engine cannot use (too short, not uniformly sampled, no
+        dynamics for the robot, ...): says what is missing.
+    """
+    from ._threads import one_blas_thread
+    from .localisation import localise
+    from .selection import Engine
+
+    t0 = time.perf_counter()
+    rec = _load(recording)
+    mdl = _model_for(rec, model)
+    timings = {}
+    with one_blas_thread():
+        pipe = Pipeline(rec, mdl, window=window)
+        groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
+        _check_motion(pipe)
+        t1 = time.perf_counter()
+        eng = Engine(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
+                     verbose=verbose)
+        t2 = time.perf_counter()
+        sel = eng.run()
+        t3 = time.perf_counter()
+        held = heldout_fit(eng, sel)
+        loc = localise(eng, sel)
+        t4 = time.perf_counter()
+    timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, heldout_localisation=t4 - t3)
+    effects_out = _effects(eng, sel)
+    not_excited = _not_excited(eng, sel)
+    conclusion = _conclusion(effects_out, not_excited, eng)
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
+                  held, loc, not_excited,
+                  [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
+                  {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
+                   "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
+                  steps=sel.steps,
+                  settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
+                            "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
+                            "smoothing_samples": pipe.window})
+    if replay:
+        t5 = time.perf_counter()
+        d.replay = _replay(rec, eng, sel)
+        timings["replay"] = time.perf_counter() - t5
+    if out is not None:
+        from .report import write_report
+
+        t6 = time.perf_counter()
+        d.files = write_report(d, eng, sel, Path(out), figures=figures)
+        timings["report"] = time.perf_counter() - t6
+    timings["total"] = time.perf_counter() - t0
+    d.timings = timings
+    return d
+
+
+def _check_motion(pipe):
+    """A recording that does not move cannot excite any dynamic effect: say so."""
+    if np.all(np.abs(pipe.qd_s[pipe.idx]) < 1e-9):
+        raise DiagnosisError(f"{pipe.where}: the joints do not move (all rates below 1e-9): a standstill "
+                             f"recording cannot excite friction, inertia, delays or any other dynamic effect; "
+                             f"record a motion with accelerations, constant-velocity phases and reversals")
+
+
+def heldout_fit(eng, sel) -> dict:
+    """Residuals on the held-out samples before (nominal) and after (fitted) modelling.
+
+    RMS over the samples each channel uses (a joint's rest phases, where its friction
+    and backlash depend on a rate below the reading noise, are left out, as in the
+    fit); ``rms_all_*`` over every held-out sample."""
+    test = eng.test
+    Rb = eng.R({})[test]
+    Ra = eng.R(sel.theta)[test] if sel.theta else Rb
+    use = eng.use[test] > 0
+    pipe = eng.pipe
+    chans = pipe.channels
+    nd = pipe.nd
+    scale = np.concatenate([np.sqrt(np.mean(pipe.tau_s[pipe.idx[test]] ** 2, axis=0)),
+                            np.std(pipe.q[pipe.idx[test]], axis=0)])[: len(chans)]
+
+    def rms(a):
+        return np.sqrt(np.sum(a**2 * use, axis=0) / np.maximum(use.sum(axis=0), 1))
+
+    rb, ra = rms(Rb), rms(Ra)
+    contrib = rms(Rb - Ra)
+    sig = sel.sigma
+    affected = [i for i in range(len(chans)) if contrib[i] > sig[i]]
+    pick = affected or list(range(len(chans)))
+    gain = float(np.sqrt(np.sum((rb[pick] / sig[pick]) ** 2) / max(np.sum((ra[pick] / sig[pick]) ** 2), 1e-300)))
+    # The same ratio over the held-out samples where the nominal residual leaves its
+    # noise band (the localised windows): an effect that acts in a few phases (Stribeck
+    # at slow reversals) is diluted by the noise of the other samples in the RMS above.
+    band = (np.abs(Rb) > 3.0 * sig) & use
+    num = sum(np.sum((Rb[band[:, i], i] / sig[i]) ** 2) for i in pick)
+    den = sum(np.sum((Ra[band[:, i], i] / sig[i]) ** 2) for i in pick)
+    gain_w = float(np.sqrt(num / den)) if den > 0 else float("nan")
+    rb_all, ra_all = np.sqrt(np.mean(Rb**2, axis=0)), np.sqrt(np.mean(Ra**2, axis=0))
+    per = {c: {"rms_before": float(rb[i]), "rms_after": float(ra[i]), "nrmse_before": float(rb[i] / scale[i]),
+               "nrmse_after": float(ra[i] / scale[i]), "noise": float(sig[i]),
+               "rms_all_before": float(rb_all[i]), "rms_all_after": float(ra_all[i]),
+               "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
+    tt = pipe.t[pipe.idx[test]]
+    return {"channels": per, "gain": gain if sel.selected else 1.0,
+            "gain_windows": gain_w if sel.selected else 1.0,
+            "window_fraction": float(band[:, pick].mean()) if pick else 0.0,
+            "affected": [chans[i] for i in affected],
+            "samples": int(test.sum()), "start": float(tt[0]) if test.any() else None,
+            "end": float(tt[-1]) if test.any() else None, "nd": nd}
+
+
+def _unit(pipe, i):
+    ang = pipe.model.robot != "6pus"
+    if i < pipe.nd:
+        return "N m" if ang else "N"
+    return "rad" if ang else "m"
+
+
+def _units(mdl):
+    return {p.name: p.unit for p in mdl.param_info()}
+
+
+def _effects(eng, sel) -> list:
+    units = _units(eng.model)
+    out = []
+    for a in sel.selected:
+        g = a.group
+        params = {p: {"value": float(a.values[p]), "ci95": float(a.ci.get(p, float("nan"))),
+                      "nominal": float(eng.nominal[p]), "unit": units.get(p, "")} for p in g.params}
+        looks = []
+        for c in a.lookalikes:
+            if c["delta_bic"] < TIE_MARGIN:
+                st = (f"{c['name']} explains the data as well (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): the two cannot be told apart with this data; "
+                      f"{separating_motion(g.key, c['effect'])} would separate them")
+            elif c["delta_bic"] < eng.lookalike_margin:
+                st = (f"{c['name']} is a weaker alternative (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): not told apart with confidence; "
+                      f"{separating_motion(g.key, c['effect'])} would separate them")
+            else:
+                st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f})")
+            looks.append(dict(c, statement=st))
+        out.append({"key": g.key, "name": g.effect.name, "group": g.label, "title": g.title,
+                    "joint": None if g.joint is None else g.joint + 1, "family": g.effect.family,
+                    "params": params, "delta_bic": a.delta_bic, "importance": a.importance,
+                    "plant": g.effect.plant.replace("{j}", _prefix(eng.model)),
+                    "lookalikes": looks, "derived": _derived(g, a.values, eng)})
+    return out
+
+
+def _prefix(model):
+    from .effects import joint_prefix
+
+    return joint_prefix(model)
+
+
+def _derived(g, values, eng) -> dict:
+    """Quantities a reader wants besides the core parameters (tilt angle, ...)."""
+    if g.key == "gravity_tilt":
+        gx, gy = values.get("gravity.x", 0.0), values.get("gravity.y", 0.0)
+        gz = eng.nominal.get("gravity.z", -9.81)
+        return {"tilt_deg": math.degrees(math.atan2(math.hypot(gx, gy), abs(gz))),
+                "azimuth_deg": math.degrees(math.atan2(gy, gx))}
+    if g.key == "payload" and "payload.x" in values:
+        return {"offset_mm": [1e3 * values[f"payload.{c}"] for c in "xyz"]}
+    return {}
+
+
+def _not_excited(eng, sel) -> list:
+    """Effects whose smallest detectable size exceeds their reference size."""
+    chosen = {a.group.label for a in sel.selected}
+    by_effect = {}
+    for lab, (size, ref) in sel.detectability.items():
+        g = eng.options[lab][0].group
+        if lab in chosen or not np.isfinite(ref) or ref <= 0 or not (size > ref):
+            continue
+        by_effect.setdefault(g.key, []).append((g, size, ref))
+    out = []
+    units = _units(eng.model)
+    for key, items in by_effect.items():
+        e = BY_KEY[key]
+        unit = units.get(items[0][0].params[0], "")
+        where = ", ".join(f"joint {g.joint + 1}" for g, _, _ in items if g.joint is not None)
+        worst = max(items, key=lambda it: it[1] / it[2])
+        out.append(f"{e.name}{' (' + where + ')' if where else ''}: this recording cannot reveal it below "
+                   f"{worst[1]:.3g} {unit} (a small one is {worst[2]:.3g} {unit}); it needs {e.requires}")
+    return out
+
+
+def _conclusion(effects, not_excited, eng) -> str:
+    if effects:
+        parts = []
+        for e in effects:
+            vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
+            parts.append(f"{e['title']} ({vals})")
+        return "missing physics: " + ", ".join(parts)
+    testable = len(eng.options) - len(not_excited)
+    if testable <= 0 or len(not_excited) >= len({o[0].group.key for o in eng.options.values()}):
+        return "cannot diagnose: the recording excites none of the effects of the library (see 'not excited')"
+    return "no missing physics found"
+
+
+def _replay(rec, eng, sel):
+    """Closed-loop replay of the held-out part: the core plant (nominal, then fitted)
+    driven by the recorded controller and reference, against the recorded motion."""
+    from .plant import closed_loop, controller_from, reference_from_recording
+
+    if rec.qref is None:
+        return {"skipped": "the recording has no qref columns (the reference is needed to replay)"}
+    mdl = eng.model
+    pipe = eng.pipe
+    test = eng.test
+    k0 = int(pipe.idx[test][0]) if test.any() else None
+    if k0 is None:
+        return {"skipped": "no held-out samples"}
+    try:
+        ref = reference_from_recording(rec, mdl)
+    except Exception as e:  # noqa: BLE001 - reported, not fatal
+        return {"skipped": f"the reference could not be mapped to poses: {e}"}
+    out = {"start": float(rec.time[k0]), "runs": {}}
+    for name, theta in (("nominal", {}), ("fitted", sel.theta)):
+        ctrl, why = controller_from(rec.controller, mdl)
+        if ctrl is None:
+            return {"skipped": why}
+        plant = mdl.copy()
+        if theta:
+            plant.set_params(theta)
+        x0 = pipe.x_f[k0]
+        xd0 = pipe.xd_f[k0]
+        try:
+            res = closed_loop(plant, ctrl, ref, x0=x0, xd0=xd0, start=k0, rtol=1e-8, atol=1e-10)
+        except Exception as e:  # noqa: BLE001 - a failing replay is reported
+            out["runs"][name] = {"error": str(e)}
+            continue
+        s = slice(k0, k0 + len(res.time))
+        dq = res.q - rec.q[s]
+        dt_ = res.tau - rec.tau[s]
+        out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq**2, axis=0)).tolist(),
+                             "rms_tau": np.sqrt(np.mean(dt_**2, axis=0)).tolist(),
+                             "time": res.time, "q": res.q, "tau": res.tau}
+    return out

@@ -1,0 +1,409 @@
+"""Blind cases: recordings with hidden effects, their answer keys, and the benchmark.
+
+A case is a closed-loop recording (:func:`cosim.discrepancy.plant.closed_loop`) of a
+core plant in which one or two effects of the library are set (the "hidden" physics)
+while the recording's sidecar gives the nominal model only.  The controller (PD +
+gravity compensation or computed torque, designed on the nominal model) tracks an
+exciting trajectory (:mod:`cosim.discrepancy.excitation`), so the positions track well
+and the signature is in the effort and the readings.  The answer key goes to a
+separate directory; :func:`cosim.discrepancy.diagnose` reads only the recording.
+
+Magnitudes, noise and the controller come from ``scenarios/blind/config.toml``.
+
+Example
+-------
+>>> from cosim.discrepancy import blind
+>>> rec_path, key_path = blind.make_case(blind.CaseSpec("c1", "6pus", ["coulomb"], seed=1),
+...                                      out_dir="/tmp/blind", key_dir="/tmp/blind_keys")
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+import tomllib
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .effects import BY_KEY, joint_prefix
+
+REPO = Path(__file__).resolve().parents[2]
+CONFIG = REPO / "scenarios" / "blind" / "config.toml"
+
+#: effect types the generator can hide, per robot (those with magnitudes in the config)
+TYPES = ["coulomb", "viscous", "stribeck", "rotor_inertia", "payload", "platform_mass", "platform_inertia",
+         "gravity_tilt", "actuator_delay", "sensor_delay", "saturation", "encoder_offset", "backlash",
+         "compliance", "geometry"]
+
+
+def load_config(path=None) -> dict:
+    """The generator configuration (TOML)."""
+    with open(path or CONFIG, "rb") as f:
+        return tomllib.load(f)
+
+
+def types_for(robot: str, cfg: dict) -> list:
+    eff = cfg["effects"][robot]
+    out = []
+    for t in TYPES:
+        key = {"payload": "payload_m"}.get(t, t)
+        if key in eff:
+            out.append(t)
+    return out
+
+
+@dataclass
+class CaseSpec:
+    """What to hide in one case (``hidden`` effect types, [] for a clean case)."""
+
+    case: str
+    robot: str
+    hidden: list
+    seed: int
+    controller: str | None = None
+
+
+@dataclass
+class Hidden:
+    """One hidden effect in an answer key."""
+
+    type: str
+    params: dict                       # core parameter -> true value
+    joints: list = field(default_factory=list)  # 1-based, [] for global effects
+    nominal: dict = field(default_factory=dict)  # core parameter -> nominal value
+
+
+def _uniform(rng, lohi):
+    lo, hi = lohi
+    return float(rng.uniform(lo, hi))
+
+
+def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
+    """Draw one hidden effect of type ``kind`` for ``model`` (magnitudes from cfg)."""
+    eff = cfg["effects"][model.robot]
+    gen = cfg["general"]
+    nd = model.ndof
+    pre = joint_prefix(model)
+    nominal = model.params()
+    sign = float(rng.choice([-1.0, 1.0]))
+
+    def joints():
+        if rng.uniform() < gen.get("all_joints", 0.0) and kind not in ("saturation", "backlash", "geometry",
+                                                                        "stribeck"):
+            return list(range(1, nd + 1))
+        return [int(rng.integers(1, nd + 1))]
+
+    if kind in ("coulomb", "viscous", "rotor_inertia", "backlash", "compliance"):
+        js = joints()
+        p = {f"{pre}[{j}].{kind}": _uniform(rng, eff[kind]) for j in js}
+        return Hidden(kind, p, js, {k: nominal[k] for k in p})
+    if kind == "encoder_offset":
+        js = joints()
+        p = {f"{pre}[{j}].encoder_offset": float(rng.choice([-1, 1])) * _uniform(rng, eff[kind]) for j in js}
+        return Hidden(kind, p, js, {k: nominal[k] for k in p})
+    if kind == "stribeck":
+        j = int(rng.integers(1, nd + 1))
+        p = {f"{pre}[{j}].stribeck": _uniform(rng, eff["stribeck"]),
+             f"{pre}[{j}].stribeck_v": _uniform(rng, eff["stribeck_v"])}
+        return Hidden(kind, p, [j], {k: nominal[k] for k in p})
+    if kind == "saturation":
+        j = int(rng.integers(1, nd + 1))
+        p = {f"{pre}[{j}].effort_max": _uniform(rng, eff["saturation"]) * float(tau_peak[j - 1])}
+        return Hidden(kind, p, [j], {k: nominal[k] for k in p})
+    if kind == "payload":
+        p = {"payload.m": _uniform(rng, eff["payload_m"])}
+        if "payload_xy" in eff:
+            r = eff["payload_xy"]
+            p["payload.x"] = float(rng.uniform(-r, r))
+            p["payload.y"] = float(rng.uniform(-r, r))
+            p["payload.z"] = _uniform(rng, eff["payload_z"])
+        return Hidden(kind, p, [], {k: nominal[k] for k in p})
+    if kind == "platform_mass":
+        p = {"platform.m": nominal["platform.m"] * (1 + sign * _uniform(rng, eff[kind]))}
+        return Hidden(kind, p, [], {k: nominal[k] for k in p})
+    if kind == "platform_inertia":
+        names = ("platform.Ixx", "platform.Iyy", "platform.Izz")
+        for _ in range(100):  # principal moments of a rigid body obey the triangle inequality
+            p = {k: nominal[k] * (1 + float(rng.choice([-1, 1])) * _uniform(rng, eff[kind])) for k in names}
+            a, b, c = (p[k] for k in names)
+            if a + b >= c and a + c >= b and b + c >= a:
+                break
+        return Hidden(kind, p, [], {k: nominal[k] for k in p})
+    if kind == "gravity_tilt":
+        a = math.radians(_uniform(rng, eff[kind]))
+        az = float(rng.uniform(0, 2 * math.pi))
+        g = math.sqrt(sum(nominal[f"gravity.{c}"] ** 2 for c in "xyz"))
+        p = {"gravity.x": g * math.sin(a) * math.cos(az), "gravity.y": g * math.sin(a) * math.sin(az),
+             "gravity.z": -g * math.cos(a)}
+        return Hidden(kind, p, [], {k: nominal[k] for k in p})
+    if kind in ("actuator_delay", "sensor_delay"):
+        name = kind.replace("_", ".")
+        return Hidden(kind, {name: _uniform(rng, eff[kind])}, [], {name: nominal[name]})
+    if kind == "geometry":
+        if model.robot == "6pus":
+            j = int(rng.integers(1, nd + 1))
+            name = f"leg[{j}].L"
+            js = [j]
+        else:
+            name, js = "forearm.c", []
+        return Hidden(kind, {name: nominal[name] + sign * _uniform(rng, eff[kind])}, js, {name: nominal[name]})
+    raise ValueError(f"the generator cannot hide effect type {kind!r}")
+
+
+def _controller(kind, model, cfg, dt):
+    from .. import controllers as ctl
+
+    wn = 2 * math.pi * cfg["general"].get("bandwidth_hz", 8.0)
+    if kind == "computed_torque":
+        return ctl.computed_torque(model, kp=wn**2, kd=2 * wn)
+    mass = float(ctl.joint_mass(model, model.home()).diagonal().max())
+    return ctl.pd_gravity(model, kp=mass * wn**2, kd=2 * wn * mass)
+
+
+def simulate_case(spec: CaseSpec, cfg: dict | None = None):
+    """Simulate one case: returns ``(recording, hidden effects, info)``."""
+    from ..core import Model
+    from ..master import make_reference
+    from ..recording import Recording
+    from .excitation import excitation
+    from .plant import closed_loop
+
+    cfg = cfg or load_config()
+    gen = cfg["general"]
+    rng = np.random.default_rng(spec.seed)
+    nominal = Model(spec.robot)
+    dt = 1.0 / gen["rate"]
+    lead = gen.get("lead_in", 0.5)
+    traj = excitation(nominal, gen["duration"], seed=spec.seed, lead_in=lead)
+    ref = make_reference(nominal, traj, step=dt, duration=round(traj.duration / dt) * dt)
+    # A saturation level relative to the smaller of the peak efforts before and after the
+    # 70 % mark: the limit is reached in the fitted and in the held-out part alike.
+    k0 = int(round(lead / dt))
+    tau_ff = np.abs(nominal.inverse_dynamics(ref.x[k0:], ref.xd[k0:], ref.xdd[k0:]))
+    cut = int(0.7 * len(tau_ff))
+    tau_peak = np.minimum(tau_ff[:cut].max(axis=0), tau_ff[cut:].max(axis=0))
+    hidden = [sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]
+    plant = nominal.copy()
+    for h in hidden:
+        plant.set_params(h.params)
+    kind = spec.controller or str(rng.choice(gen.get("controllers", ["pd_gravity"])))
+    ctrl = _controller(kind, nominal, cfg, dt)
+    noise = cfg["noise"][spec.robot]
+    res = closed_loop(plant, ctrl, ref, noise=noise, seed=spec.seed + 7919)
+    s = slice(k0, None)
+    rec = Recording(spec.robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau[s].copy(),
+                    qref=ref.q[s].copy(), pose=res.pose[s].copy(),
+                    extra={"label": ref.label[s].astype(float)},
+                    controller=dict(ctrl.describe(), rate_hz=gen["rate"]),
+                    notes=f"blind case {spec.case}: closed-loop recording of a plant that may hide effects the "
+                          f"model lacks (the answer key is elsewhere)")
+    info = {"controller": kind, "noise": noise, "tau_peak": tau_peak.tolist(), "trajectory": traj.name}
+    return rec, hidden, info
+
+
+def make_case(spec: CaseSpec, out_dir, key_dir, cfg: dict | None = None):
+    """Write the case's recording to ``out_dir/<case>.csv`` (+ sidecar) and its answer
+    key to ``key_dir/<case>.json``; returns both paths."""
+    from ..recording import write_recording
+
+    out_dir, key_dir = Path(out_dir), Path(key_dir)
+    if out_dir.resolve() == key_dir.resolve():
+        raise ValueError("the answer keys must go to a directory apart from the recordings")
+    rec, hidden, info = simulate_case(spec, cfg)
+    csv, _ = write_recording(out_dir / f"{spec.case}.csv", rec)
+    key_dir.mkdir(parents=True, exist_ok=True)
+    key = {"case": spec.case, "robot": spec.robot, "seed": spec.seed, "recording": str(csv),
+           "effects": [asdict(h) for h in hidden], **info}
+    kp = key_dir / f"{spec.case}.json"
+    kp.write_text(json.dumps(key, indent=2))
+    return csv, kp
+
+
+def plan(n_effect: int, n_clean: int, seed: int, robots=("6pus",), cfg: dict | None = None) -> list:
+    """Case specs: ``n_effect`` cases cycling over the effect types of each robot (so
+    every type gets its share), a fraction with a second non-look-alike effect, and
+    ``n_clean`` clean cases; robots alternate."""
+    cfg = cfg or load_config()
+    rng = np.random.default_rng(seed)
+    specs = []
+    queues = {r: [] for r in robots}
+    for k in range(n_effect):
+        r = robots[k % len(robots)]
+        if not queues[r]:
+            queues[r] = list(rng.permutation(types_for(r, cfg)))
+        first = str(queues[r].pop())
+        hidden = [first]
+        if rng.uniform() < cfg["general"].get("two_effects", 0.0):
+            others = [t for t in types_for(r, cfg) if t != first and t not in BY_KEY[first].lookalikes
+                      and first not in BY_KEY[t].lookalikes]
+            hidden.append(str(rng.choice(others)))
+        specs.append(CaseSpec(f"case{k + 1:03d}", r, hidden, int(rng.integers(1, 2**31 - 1))))
+    for k in range(n_clean):
+        r = robots[k % len(robots)]
+        specs.append(CaseSpec(f"clean{k + 1:03d}", r, [], int(rng.integers(1, 2**31 - 1))))
+    return specs
+
+
+# ------------------------------------------------------------------- scoring
+
+def _param_error(h: dict, values: dict) -> float:
+    """Relative error of the estimated change of the hidden parameters (vector norm);
+    for delays/saturation levels/... the parameter itself."""
+    names = list(h["params"])
+    true = np.array([h["params"][n] - h["nominal"].get(n, 0.0) for n in names])
+    est = np.array([values.get(n, h["nominal"].get(n, 0.0)) - h["nominal"].get(n, 0.0) for n in names])
+    if h["type"] == "stribeck":  # amplitude only; the velocity is reported apart
+        true, est = true[:1], est[:1]
+    if h["type"] == "saturation":
+        true = np.array([h["params"][n] for n in names])
+        est = np.array([values.get(n, 0.0) for n in names])
+    if h["type"] == "gravity_tilt":
+        keep = [i for i, n in enumerate(names) if n != "gravity.z"]
+        true, est = true[keep], est[keep]
+    if h["type"] == "payload":
+        true, est = true[:1], est[:1]
+    nrm = np.linalg.norm(true)
+    return float(np.linalg.norm(est - true) / nrm) if nrm > 0 else float("nan")
+
+
+def score(diag, key: dict) -> dict:
+    """Compare a diagnosis with the answer key of its case."""
+    hidden = [h["type"] for h in key["effects"]]
+    named = diag.named()
+    values = diag.theta
+    out = {"case": key["case"], "robot": key["robot"], "hidden": hidden, "named": named,
+           "first": named[0] if named else "none"}
+    if not hidden:
+        out["clean_ok"] = not named
+        return out
+    out["first_ok"] = bool(named) and named[0] in hidden
+    ties = diag.ties(named[0]) if named else []
+    out["first_ok_or_tie"] = out["first_ok"] or any(t in hidden for t in ties)
+    out["all_found"] = all(t in named for t in hidden)
+    errs = {}
+    for h in key["effects"]:
+        errs[h["type"]] = _param_error(h, values)
+        if h["type"] == "payload" and "payload.x" in h["params"]:
+            est = [values.get(f"payload.{c}", 0.0) for c in "xyz"]
+            true = [h["params"][f"payload.{c}"] for c in "xyz"]
+            out["payload_offset_error_mm"] = float(np.linalg.norm(np.subtract(est, true)) * 1e3)
+    out["param_error"] = errs
+    out["param_ok"] = all(e <= 0.15 for e in errs.values())
+    out["gain"] = diag.heldout.get("gain", float("nan"))
+    out["gain_windows"] = diag.heldout.get("gain_windows", float("nan"))
+    out["gain_ok"] = bool(out["gain"] >= 5.0)
+    out["gain_windows_ok"] = bool(out["gain_windows"] >= 5.0)
+    return out
+
+
+def _run_one(args):
+    spec, out_dir, key_dir, diag_kw, report = args
+    from . import diagnose
+
+    t0 = time.perf_counter()
+    csv, kp = make_case(spec, out_dir, key_dir)
+    t1 = time.perf_counter()
+    d = diagnose(csv, out=(Path(out_dir) / f"{spec.case}_report") if report else None, **diag_kw)
+    t2 = time.perf_counter()
+    key = json.loads(Path(kp).read_text())
+    s = score(d, key)
+    s.update({"t_generate": t1 - t0, "t_diagnose": t2 - t1, "conclusion": d.conclusion})
+    return s
+
+
+def benchmark(n: int = 40, seed: int = 1, n_clean: int = 10, robots=("6pus",), out_dir="results/blind",
+              jobs: int = 1, report: bool = False, progress=print, **diag_kw) -> dict:
+    """Generate and diagnose ``n`` effect cases and ``n_clean`` clean cases; score them.
+
+    Returns a dict with the per-case scores (``cases``) and the summary figures; the
+    recordings go to ``out_dir/cases``, the keys to ``out_dir/keys``.
+    """
+    out_dir = Path(out_dir)
+    specs = plan(n, n_clean, seed, tuple(robots))
+    args = [(s, out_dir / "cases", out_dir / "keys", diag_kw, report) for s in specs]
+    rows = []
+    if jobs > 1:
+        import multiprocessing as mp
+
+        with mp.get_context("spawn").Pool(jobs) as pool:
+            for r in pool.imap(_run_one, args):
+                rows.append(r)
+                progress(_line(r))
+    else:
+        for a in args:
+            r = _run_one(a)
+            rows.append(r)
+            progress(_line(r))
+    summary = summarize(rows)
+    (out_dir / "benchmark.json").write_text(json.dumps({"cases": rows, "summary": summary}, indent=2,
+                                                       default=float))
+    return {"cases": rows, "summary": summary}
+
+
+def _line(r):
+    if not r["hidden"]:
+        return f"{r['case']:>9} {r['robot']:>7}  clean -> {','.join(r['named']) or 'none':<28} " \
+               f"{'ok' if r['clean_ok'] else 'FALSE ALARM'}  ({r['t_diagnose']:.1f} s)"
+    errs = " ".join(f"{k}:{v * 100:.1f}%" for k, v in r["param_error"].items())
+    return (f"{r['case']:>9} {r['robot']:>7}  {'+'.join(r['hidden']):<28} -> {','.join(r['named'][:3]) or 'none':<34}"
+            f" {'ok' if r['first_ok'] else ('tie' if r['first_ok_or_tie'] else 'WRONG')}  err {errs}  "
+            f"gain {r['gain']:.1f}  ({r['t_diagnose']:.1f} s)")
+
+
+def summarize(rows) -> dict:
+    eff = [r for r in rows if r["hidden"]]
+    clean = [r for r in rows if not r["hidden"]]
+    types = sorted({r["hidden"][0] for r in eff})
+    confusion = {}
+    for r in eff:
+        confusion.setdefault(r["hidden"][0], {}).setdefault(r["first"], 0)
+        confusion[r["hidden"][0]][r["first"]] += 1
+    per_type = {}
+    for t in types:
+        rs = [r for r in eff if r["hidden"][0] == t]
+        errs = [r["param_error"][t] for r in rs]
+        per_type[t] = {"cases": len(rs), "first_ok": sum(r["first_ok"] for r in rs),
+                       "param_ok": sum(r["param_error"][t] <= 0.15 for r in rs),
+                       "median_param_error": float(np.nanmedian(errs)),
+                       "median_gain": float(np.nanmedian([r["gain"] for r in rs]))}
+    f = lambda k: (sum(bool(r[k]) for r in eff) / len(eff)) if eff else float("nan")  # noqa: E731
+    return {
+        "effect_cases": len(eff), "clean_cases": len(clean), "effect_types": len(types),
+        "first_named_right": f("first_ok"), "first_named_right_or_tie": f("first_ok_or_tie"),
+        "all_hidden_found": f("all_found"),
+        "param_within_15pct": (sum(r["param_error"][r["hidden"][0]] <= 0.15 for r in eff) / len(eff)) if eff else
+        float("nan"),
+        "gain_at_least_5x": f("gain_ok"),
+        "median_gain": float(np.nanmedian([r["gain"] for r in eff])) if eff else float("nan"),
+        "clean_no_missing_physics": (sum(r["clean_ok"] for r in clean) / len(clean)) if clean else float("nan"),
+        "median_diagnose_s": float(np.median([r["t_diagnose"] for r in rows])) if rows else float("nan"),
+        "per_type": per_type, "confusion": confusion,
+    }
+
+
+def format_summary(summary: dict) -> str:
+    """The benchmark summary as text: rates, the confusion matrix, per-type figures."""
+    s = summary
+    lines = [
+        f"effect cases: {s['effect_cases']} over {s['effect_types']} primary types; clean cases: {s['clean_cases']}",
+        f"right effect named first:          {s['first_named_right'] * 100:5.1f} %  "
+        f"(counting declared ties: {s['first_named_right_or_tie'] * 100:.1f} %)",
+        f"every hidden effect named:         {s['all_hidden_found'] * 100:5.1f} %",
+        f"parameter within 15 %:             {s['param_within_15pct'] * 100:5.1f} %",
+        f"held-out residual reduced >= 5x:   {s['gain_at_least_5x'] * 100:5.1f} %  (median gain {s['median_gain']:.1f}x)",
+        f"clean cases, no missing physics:   {s['clean_no_missing_physics'] * 100:5.1f} %",
+        f"median diagnosis time:             {s['median_diagnose_s']:.2f} s",
+        "",
+        "per primary hidden type: cases, named first, parameter within 15 %, median parameter error, median gain",
+    ]
+    for t, v in s["per_type"].items():
+        lines.append(f"  {t:<17} {v['cases']:>3} {v['first_ok']:>4} {v['param_ok']:>4}   "
+                     f"{v['median_param_error'] * 100:7.1f} %  {v['median_gain']:7.1f}x")
+    cols = sorted({c for row in s["confusion"].values() for c in row})
+    lines += ["", "confusion (rows: hidden, columns: named first)",
+              " " * 18 + " ".join(f"{c[:8]:>8}" for c in cols)]
+    for t, row in s["confusion"].items():
+        lines.append(f"  {t:<16}" + " ".join(f"{row.get(c, 0):>8}" for c in cols))
+    return "\n".join(lines)

@@ -1,0 +1,280 @@
+"""The library of missing-physics effects the engine knows (SPEC 6).
+
+Each :class:`Effect` is a named physical term with its core parameter(s), unit, the
+residual family it shows in, how its regressor is built, the sign it may take, the
+motion that excites it, the effects it can be confused with, and how it enters the
+plant.  Every regressor comes from the core: it is the change of the residual
+pipeline (:mod:`cosim.discrepancy.residuals`) when the effect's core parameter is
+moved, by finite differences, so no equation is re-derived here.
+
+``<j>`` below is the robot's joint prefix ("rail" for the 6-PUS, "joint" for the
+Quattro and the four-bar) and ``i`` the 1-based joint.  The families:
+
+* ``effort``: tau_recorded - ID_core(motion) (N or N m);
+* ``kinematic``: q_recorded - (sensor model of the core at the tracker pose) (m or
+  rad), only when the recording has tracker pose columns.
+
+Kinds of regressor:
+
+* ``linear``: the core's residual is linear in the parameter (friction amplitudes,
+  masses, inertias, gravity components, encoder offset, compliance, backlash gap): one
+  one-sided difference gives the exact column;
+* ``stribeck``: linear amplitude, the Stribeck velocity by a profile grid;
+* ``payload``: linear in (m, m c) at m = 0, then Gauss-Newton on (m, c) through the core;
+* ``geometry``: central differences of the core's IK (and of the dynamics at the
+  moved pose), identifiable subspace by SVD;
+* ``delay``: a profile over the delay (the recorded signals shifted in time);
+* ``saturation``: a profile over the effort limit (the core's ``pkm_actuator_effort``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One missing-physics term of the library.
+
+    Attributes
+    ----------
+    key : str
+        Short identifier (``"coulomb"``).
+    name : str
+        Human name (``"Coulomb friction"``).
+    family : str
+        ``"effort"``, ``"kinematic"`` or ``"both"``.
+    scope : str
+        ``"joint"`` (one group per actuated joint) or ``"global"``.
+    params : tuple of str
+        Core parameter templates (``"{j}[{i}].coulomb"``); for the 6-PUS/Quattro
+        variants see ``robot_params``.
+    kind : str
+        Regressor kind (see the module docstring).
+    sign : str
+        ``">=0"`` (a physical magnitude) or ``"any"`` (an error of a nominal value).
+    requires : str
+        What data and motion excite it (said when they are missing).
+    lookalikes : tuple of str
+        Keys of effects whose signature can be confused with this one.
+    plant : str
+        How the fitted effect enters the plant (core / FMU parameter or variant).
+    regressor : str
+        The signature, in words.
+    robot_params : dict
+        Per-robot override of ``params``.
+    """
+
+    key: str
+    name: str
+    family: str
+    scope: str
+    params: tuple
+    kind: str
+    sign: str
+    requires: str
+    lookalikes: tuple = ()
+    plant: str = ""
+    regressor: str = ""
+    robot_params: dict = field(default_factory=dict)
+
+    def templates(self, robot: str) -> tuple:
+        return tuple(self.robot_params.get(robot, self.params))
+
+
+LIBRARY = [
+    Effect("coulomb", "Coulomb friction", "effort", "joint", ("{j}[{i}].coulomb",), "linear", ">=0",
+           "motion of the joint in both directions (velocity reversals)",
+           ("stribeck", "viscous", "saturation"),
+           "core/FMU parameter {j}[i].coulomb (inside the inverse and forward dynamics)",
+           "F_c sgn(qd_i) on the effort of joint i"),
+    Effect("viscous", "viscous friction", "effort", "joint", ("{j}[{i}].viscous",), "linear", ">=0",
+           "a range of joint speeds (slow and fast motion of the joint)",
+           ("coulomb", "actuator_delay"),
+           "core/FMU parameter {j}[i].viscous",
+           "b qd_i on the effort of joint i"),
+    Effect("stribeck", "Stribeck friction", "effort", "joint", ("{j}[{i}].stribeck", "{j}[{i}].stribeck_v"),
+           "stribeck", ">=0",
+           "slow velocity reversals (joint speeds below and well above the Stribeck velocity)",
+           ("coulomb",),
+           "core/FMU parameters {j}[i].stribeck and {j}[i].stribeck_v",
+           "F_s exp(-(qd_i/v_s)^2) sgn(qd_i) on the effort of joint i"),
+    Effect("rotor_inertia", "actuator (rotor) inertia", "effort", "joint", ("{j}[{i}].rotor_inertia",),
+           "linear", ">=0",
+           "joint accelerations",
+           ("platform_mass", "actuator_delay"),
+           "core/FMU parameter {j}[i].rotor_inertia (added to the mass matrix)",
+           "J_r qdd_i on the effort of joint i (for the 6-PUS the same as a slider-mass error)"),
+    Effect("payload", "payload (mass and offset)", "effort", "global", ("payload.m", "payload.x", "payload.y",
+                                                                          "payload.z"),
+           "payload", ">=0",
+           "platform accelerations and rotations (an off-centre payload shows in moments)",
+           ("platform_mass", "platform_inertia", "gravity_tilt"),
+           "core/FMU parameters payload.m, payload.x/y/z",
+           "d ID / d payload.m and d ID / d(m c) by central differences of the core",
+           robot_params={"quattro": ("payload.m",)}),
+    Effect("platform_mass", "platform mass error", "effort", "global", ("platform.m",), "linear", "any",
+           "vertical motion or accelerations of the platform",
+           ("payload", "gravity_tilt"),
+           "core/FMU parameter platform.m",
+           "d ID / d platform.m"),
+    Effect("platform_inertia", "platform inertia error", "effort", "global",
+           ("platform.Ixx", "platform.Iyy", "platform.Izz"), "linear", "any",
+           "angular accelerations of the platform about x, y and z",
+           ("payload",),
+           "core/FMU parameters platform.Ixx, .Iyy, .Izz",
+           "d ID / d platform.I**"),
+    Effect("gravity_tilt", "gravity direction tilt", "effort", "global", ("gravity.x", "gravity.y"), "linear",
+           "any",
+           "poses spread over the workspace (the tilt shows as a horizontal load that moves with the pose)",
+           ("payload", "platform_mass"),
+           "core/FMU parameters gravity.x, gravity.y (the base is tilted)",
+           "d ID / d gravity.x, d ID / d gravity.y"),
+    Effect("actuator_delay", "actuator time delay", "effort", "global", ("actuator.delay",), "delay", ">=0",
+           "changing efforts (accelerations)",
+           ("sensor_delay", "rotor_inertia", "viscous"),
+           "core/FMU parameter actuator.delay (the integrator delays the applied effort)",
+           "tau_rec(t) - tau_rec(t - d): about d dtau/dt"),
+    Effect("sensor_delay", "sensor lag (delayed joint readings)", "both", "global", ("sensor.delay",), "delay",
+           ">=0",
+           "tracker pose columns and motion (without a tracker it looks exactly like an actuator delay)",
+           ("actuator_delay",),
+           "core/FMU parameter sensor.delay (the joint readings are delayed)",
+           "effort: about d dtau/dt; kinematic: -d qd"),
+    Effect("saturation", "actuator saturation", "effort", "joint", ("{j}[{i}].effort_max",), "saturation", ">=0",
+           "commanded efforts reaching the limit",
+           ("coulomb",),
+           "core/FMU parameter {j}[i].effort_max (|tau| clipped)",
+           "tau_cmd - clip(tau_cmd, +-L) where the command exceeds L"),
+    Effect("encoder_offset", "encoder offset", "kinematic", "joint", ("{j}[{i}].encoder_offset",), "linear", "any",
+           "tracker pose columns",
+           ("geometry",),
+           "core/FMU parameter {j}[i].encoder_offset (sensor model)",
+           "a constant on joint reading i"),
+    Effect("backlash", "backlash / dead zone at reversal", "kinematic", "joint", ("{j}[{i}].backlash",), "linear",
+           ">=0",
+           "tracker pose columns and velocity reversals of the joint",
+           ("encoder_offset", "sensor_delay"),
+           "core/FMU parameter {j}[i].backlash (sensor model)",
+           "b/2 sgn(qd_i) on joint reading i"),
+    Effect("compliance", "joint elasticity (transmission compliance)", "kinematic", "joint",
+           ("{j}[{i}].compliance",), "linear", ">=0",
+           "tracker pose columns and varying efforts on the joint",
+           ("encoder_offset", "geometry"),
+           "core/FMU parameter {j}[i].compliance (sensor model: deflection c tau)",
+           "c tau_i on joint reading i"),
+    Effect("geometry", "geometric (kinematic) parameter error", "kinematic", "joint", ("leg[{i}].L",), "geometry",
+           "any",
+           "tracker pose columns and poses spread over the workspace",
+           ("encoder_offset", "compliance"),
+           "core/FMU geometry parameters (6-PUS leg[i].L; Quattro arm/forearm/base/platform lengths)",
+           "dIK/dp by central differences of the core's inverse kinematics",
+           robot_params={"quattro": ("base.a", "arm.b_r", "forearm.c", "platform.d")}),
+]
+
+BY_KEY = {e.key: e for e in LIBRARY}
+
+#: parameters the pipeline treats as geometry (the pose must be recomputed)
+GEOMETRY_KINDS = ("geometry",)
+
+#: which motion separates two look-alikes (unordered pairs)
+SEPARATING_MOTION = {
+    frozenset(("coulomb", "stribeck")): "slow velocity reversals (joint speeds below the Stribeck velocity, then "
+                                        "well above it)",
+    frozenset(("coulomb", "viscous")): "constant-velocity phases at two or more different speeds",
+    frozenset(("coulomb", "saturation")): "moves whose commanded effort stays well below the actuator limit",
+    frozenset(("coulomb", "backlash")): "a tracker (pose columns) with velocity reversals: backlash shows in the "
+                                        "joint readings, friction in the effort",
+    frozenset(("stribeck", "backlash")): "a tracker (pose columns) with slow velocity reversals",
+    frozenset(("payload", "platform_mass")): "platform rotations with an off-centre payload (its moments), or "
+                                             "weighing the platform",
+    frozenset(("payload", "platform_inertia")): "translational accelerations (a payload adds mass, an inertia "
+                                                "error does not)",
+    frozenset(("payload", "gravity_tilt")): "vertical accelerations (a payload has inertia, a tilt does not)",
+    frozenset(("platform_mass", "gravity_tilt")): "vertical accelerations and horizontal poses spread widely",
+    frozenset(("actuator_delay", "sensor_delay")): "a tracker (pose columns): a sensor lag shows as q_rec - "
+                                                   "IK(tracker) = -d qd, an actuator delay does not",
+    frozenset(("actuator_delay", "rotor_inertia")): "accelerations at several frequencies (a delay grows with "
+                                                    "frequency, an inertia with acceleration)",
+    frozenset(("actuator_delay", "viscous")): "constant-velocity phases (no effort change, so no delay signature)",
+    frozenset(("rotor_inertia", "platform_mass")): "moves of single joints (a rotor inertia acts on one joint only)",
+    frozenset(("encoder_offset", "geometry")): "poses spread over the workspace (an offset is constant, a length "
+                                               "error varies with the pose)",
+    frozenset(("compliance", "encoder_offset")): "efforts that change sign on the joint",
+    frozenset(("compliance", "geometry")): "the same poses reached with different loads",
+    frozenset(("backlash", "encoder_offset")): "velocity reversals of the joint",
+    frozenset(("backlash", "sensor_delay")): "reversals at different speeds (a lag scales with the speed, "
+                                             "backlash does not)",
+}
+
+
+def separating_motion(a: str, b: str) -> str:
+    return SEPARATING_MOTION.get(frozenset((a, b)), "motion that excites the two signatures differently")
+
+
+def joint_prefix(model) -> str:
+    """The drive-parameter prefix of a model's joints ("rail" or "joint")."""
+    names = set(model.param_names())
+    for p in ("rail", "joint"):
+        if f"{p}[1].coulomb" in names:
+            return p
+    return "joint"
+
+
+@dataclass(eq=False)
+class Group:
+    """One candidate of the selection: an effect on one joint (or global).
+
+    ``params`` are the resolved core parameter names; ``joint`` is 0-based or None.
+    """
+
+    effect: Effect
+    joint: int | None
+    params: tuple
+
+    @property
+    def key(self) -> str:
+        return self.effect.key
+
+    @property
+    def label(self) -> str:
+        return self.effect.key + ("" if self.joint is None else f"[{self.joint + 1}]")
+
+    @property
+    def title(self) -> str:
+        return self.effect.name + ("" if self.joint is None else f", joint {self.joint + 1}")
+
+
+def groups_for(model, has_pose: bool, effects=None):
+    """Candidate groups of the library for a model.
+
+    Returns ``(groups, unavailable)``: the groups whose core parameters the model has
+    and whose data is there, and a list of ``(effect, reason)`` for the others.
+    """
+    names = set(model.param_names())
+    pre = joint_prefix(model)
+    nd = model.ndof
+    groups, unavailable = [], []
+    for e in LIBRARY:
+        if effects is not None and e.key not in effects:
+            continue
+        if e.family == "kinematic" and not has_pose:
+            unavailable.append((e, "the recording has no tracker pose columns; this effect shows in the joint "
+                                   "readings against an external pose measurement"))
+            continue
+        tpl = e.templates(model.robot)
+        if e.scope == "joint" and any("{i}" in t for t in tpl):
+            made = []
+            for i in range(nd):
+                ps = tuple(t.format(j=pre, i=i + 1) for t in tpl)
+                if all(p in names for p in ps):
+                    made.append(Group(e, i, ps))
+            if not made:
+                unavailable.append((e, f"the {model.robot} model has no parameter {tpl[0].format(j=pre, i=1)}"))
+            groups += made
+        else:
+            ps = tuple(p for p in (t.format(j=pre, i=1) for t in tpl) if p in names)
+            if not ps:
+                unavailable.append((e, f"the {model.robot} model has none of {', '.join(tpl)}"))
+                continue
+            groups.append(Group(e, None, ps))
+    return groups, unavailable

@@ -1,0 +1,216 @@
+"""Exciting task-space trajectories for discrepancy recordings.
+
+A trajectory is a sequence of cycles; each cycle moves to a new centre pose, stands
+still, then runs three bursts around the centre, each faded in and out with a
+minimum-jerk window so the pose, rate and acceleration stay continuous:
+
+1. ``multisine``: two sines per pose coordinate (one and two periods per burst): accelerations, velocity
+   reversals at speed, rotations (platform inertia, payload offset);
+2. ``sweep``: a rounded triangle wave along a random direction: constant-velocity
+   legs at a few speeds joined by quick reversals (Coulomb vs viscous);
+3. ``slow``: a small, slow oscillation: joint speeds of a few mm/s (or mrad/s) through
+   many reversals (Stribeck, backlash).
+
+Every cycle therefore holds standstill, acceleration peaks, constant velocity and
+velocity reversals, and any 30 % of a recording of a few cycles holds most of them
+(the held-out part of a diagnosis).  The derivatives are central differences of the
+closed-form pose (step 1e-4 s: relative error ~1e-8).  The trajectory is checked
+against the core (every pose reachable, strokes inside their range, away from
+singularities) and shrunk until it is.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: per robot: centre range, burst amplitudes and slow amplitude per pose coordinate
+PROFILES = {
+    "6pus": {
+        "centre": [0.006, 0.006, 0.005, 0.03, 0.03, 0.03],
+        "centre_offset": [0.0, 0.0, -0.004, 0.0, 0.0, 0.0],
+        "amp": [0.008, 0.008, 0.005, 0.07, 0.07, 0.08],
+        "slow": [0.0006, 0.0006, 0.0004, 0.006, 0.006, 0.006],
+    },
+    "quattro": {
+        "centre": [0.05, 0.05, 0.04, 0.1],
+        "centre_offset": [0.0, 0.0, 0.0, 0.0],
+        "amp": [0.07, 0.07, 0.04, 0.15],
+        "slow": [0.002, 0.002, 0.0015, 0.01],
+    },
+}
+
+LABELS = {"move": 1, "hold": 2, "multisine": 3, "sweep": 4, "slow": 5}
+
+
+def _ramp(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u**3 * (10 - 15 * u + 6 * u**2)
+
+
+def _window(tau, T, r):
+    """C2 window on [0, T]: 0 -> 1 over r, 1 -> 0 over the last r."""
+    return _ramp(tau / r) * _ramp((T - tau) / r)
+
+
+@dataclass
+class Excitation:
+    """A closed-form pose trajectory (``evaluate``, ``label``, ``name``: the interface of
+    :class:`cosim.trajectories.Trajectory` that :func:`cosim.master.make_reference` uses)."""
+
+    home: np.ndarray
+    segments: list
+    duration: float
+    name: str = "excitation"
+
+    @property
+    def ndof(self):
+        return len(self.home)
+
+    def pose(self, t):
+        t = np.atleast_1d(np.asarray(t, float))
+        x = np.tile(self.home, (len(t), 1))
+        for seg in self.segments:
+            kind, a, b = seg["kind"], seg["t0"], seg["t1"]
+            sel = (t >= a) & (t < b) if kind != "hold_end" else t >= a
+            if not np.any(sel):
+                continue
+            tau = t[sel] - a
+            T = b - a
+            c = seg["c"]
+            if kind == "move":
+                s = _ramp(tau / T)[:, None]
+                x[sel] = seg["c0"] + s * (c - seg["c0"])
+            elif kind in ("hold", "hold_end"):
+                x[sel] = c
+            else:
+                w = _window(tau, T, seg["ramp"])[:, None]
+                if kind == "multisine":
+                    A, f, ph = seg["A"], seg["f"], seg["ph"]
+                    off = np.zeros((len(tau), self.ndof))
+                    for m in range(f.shape[1]):
+                        off += A[:, m] * (np.sin(2 * np.pi * f[:, m] * tau[:, None] + ph[:, m]) - np.sin(ph[:, m]))
+                elif kind == "sweep":
+                    k = seg["round"]
+                    tri = np.arcsin(k * np.sin(2 * np.pi * tau / seg["period"])) / np.arcsin(k)
+                    off = tri[:, None] * seg["dir"]
+                else:  # slow
+                    off = np.sin(2 * np.pi * seg["freq"] * tau)[:, None] * seg["dir"]
+                x[sel] = c + w * off
+        return x
+
+    def evaluate(self, t):
+        t = np.atleast_1d(np.asarray(t, float))
+        h = 1e-4
+        x = self.pose(t)
+        xp, xm = self.pose(t + h), self.pose(t - h)
+        return x, (xp - xm) / (2 * h), (xp - 2 * x + xm) / h**2
+
+    def label(self, t):
+        t = np.atleast_1d(np.asarray(t, float))
+        out = np.zeros(len(t), dtype=int)
+        for seg in self.segments:
+            sel = (t >= seg["t0"]) & (t < seg["t1"])
+            out[sel] = LABELS.get(seg["kind"], 2)
+        return out
+
+
+def excitation(model, duration: float, seed: int = 0, scale: float = 1.0, lead_in: float = 0.5) -> Excitation:
+    """A random exciting trajectory of ``duration`` seconds for ``model`` (see module doc).
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The robot (6-PUS or Quattro); its home pose is the centre of the workspace used.
+    duration : float
+        Length [s] after the lead-in.
+    seed : int
+        Random seed (centres, frequencies, phases, directions).
+    scale : float
+        Amplitude factor (shrunk automatically if a pose is unreachable).
+    lead_in : float
+        Initial standstill at home [s] (lets a delayed actuator fill its history).
+    """
+    if model.robot not in PROFILES:
+        raise ValueError(f"no excitation profile for robot {model.robot!r} (known: {', '.join(PROFILES)})")
+    for attempt in range(8):
+        traj = _build(model, duration, seed, scale * 0.85**attempt, lead_in)
+        problem = check_trajectory(model, traj)
+        if problem is None:
+            return traj
+    raise ValueError(f"could not fit an excitation of {model.robot} inside its workspace: {problem}")
+
+
+def _build(model, duration, seed, scale, lead_in):
+    rng = np.random.default_rng(seed)
+    prof = PROFILES[model.robot]
+    home = model.home()
+    nd = len(home)
+    cr = np.asarray(prof["centre"]) * scale
+    amp = np.asarray(prof["amp"]) * scale
+    slow = np.asarray(prof["slow"])
+    segs = [{"kind": "hold", "t0": 0.0, "t1": lead_in, "c": home}]
+    t, c_prev = lead_in, home
+    end = lead_in + duration
+    done = False
+    while not done:
+        c = home + np.asarray(prof["centre_offset"]) + rng.uniform(-1, 1, nd) * cr
+        plan = [("move", 0.3), ("hold", 0.25), ("multisine", 1.3), ("sweep", 1.0), ("slow", 0.7)]
+        for kind, T in plan:
+            if t + T > end + 1e-9:
+                done = True  # only whole segments: the pose never jumps
+                break
+            seg = {"kind": kind, "t0": t, "t1": t + T, "c": c, "ramp": min(0.15, T / 2.5)}
+            if kind == "move":
+                seg["c0"] = c_prev
+            elif kind == "multisine":
+                # Whole periods in the burst: the offset returns to zero by itself and the
+                # fade-out window only rounds the derivatives.
+                seg["f"] = np.tile([1.0 / T, 2.0 / T], (nd, 1))
+                seg["ph"] = rng.uniform(0, 2 * np.pi, (nd, 2))
+                seg["A"] = amp[:, None] * rng.uniform(0.35, 0.6, (nd, 2))
+            elif kind == "sweep":
+                d = rng.normal(size=nd)
+                seg["dir"] = amp * 0.8 * d / np.abs(d).max()
+                seg["period"] = T / rng.choice([1, 2])
+                seg["round"] = 0.9
+            elif kind == "slow":
+                d = rng.choice([-1.0, 1.0], nd) * rng.uniform(0.6, 1.0, nd)
+                seg["dir"] = slow * d
+                seg["freq"] = 1.0 / T
+            segs.append(seg)
+            t += T
+            if kind == "move":
+                c_prev = c
+    segs.append({"kind": "hold_end", "t0": t, "t1": t + 1e9, "c": c_prev})
+    return Excitation(home, segs, end, name=f"excitation(seed={seed})")
+
+
+def check_trajectory(model, traj, step: float = 2e-3):
+    """None if every pose of ``traj`` is reachable, inside the joint ranges and away
+    from singularities; else the first problem (with its time)."""
+    t = np.arange(0.0, traj.duration + step, step)
+    x = traj.pose(t)
+    q, status = model.ik(x, errors="status")
+    bad = np.flatnonzero(status != 0)
+    if bad.size:
+        return f"pose at t = {t[bad[0]]:.3f} s is unreachable"
+    names = set(model.param_names())
+    if "rail[1].qmin" in names:
+        lo = np.array([model.param(f"rail[{i + 1}].qmin") for i in range(model.ndof)])
+        hi = np.array([model.param(f"rail[{i + 1}].qmax") for i in range(model.ndof)])
+    elif "joint.q_min" in names:
+        lo = np.full(model.ndof, model.param("joint.q_min"))
+        hi = np.full(model.ndof, model.param("joint.q_max"))
+    else:
+        lo, hi = np.full(model.ndof, -np.inf), np.full(model.ndof, np.inf)
+    span = np.where(np.isfinite(hi - lo), hi - lo, 1.0)
+    out = (q < lo + 0.05 * span) | (q > hi - 0.05 * span)
+    if np.any(out):
+        k = int(np.argmax(np.any(out, axis=1)))
+        return f"a joint leaves its range at t = {t[k]:.3f} s"
+    sing = model.singularity(x[::10])
+    if np.any(sing < 0.02):
+        k = int(np.argmax(np.any(sing < 0.02, axis=1)))
+        return f"pose near a singularity at t = {t[10 * k]:.3f} s"
+    return None

@@ -1,0 +1,259 @@
+"""Closed-loop runs of a core plant with its drive and sensor models: the blind-case
+generator's plant and the engine's replay.
+
+The core's integrator (``pkm_sim``) integrates the mechanics with friction and rotor
+inertia and, when this build of the core does it, applies the actuator saturation
+(``<j>[i].effort_max``) and delay (``actuator.delay``) to the held command.  The
+sensors are applied here, around the integrator, by the core's
+``pkm_measure_joints`` (encoder offset, backlash, compliance) and a time shift of the
+readings (``sensor.delay``).  If the integrator of this build does not apply the
+actuator saturation or delay (:func:`integrator_applies`), they are applied here by
+the core's ``pkm_actuator_effort`` and by splitting each step at the instant the
+delayed command switches.  No physics is computed in Python.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from ..controllers import Reference
+from ..simulate import Simulator
+from . import _corecalls as cc
+
+_APPLIES: dict = {}
+
+
+def integrator_applies(model) -> dict:
+    """Which actuator effects this build's integrator applies: ``{"saturation": bool,
+    "delay": bool}`` (probed once per robot with two tiny runs)."""
+    key = model.robot
+    if key in _APPLIES:
+        return _APPLIES[key]
+    from .effects import joint_prefix
+
+    pre = joint_prefix(model)
+    x0 = model.home()
+    out = {}
+    base = model.copy()
+    base.set_params({"gravity.x": 0.0, "gravity.y": 0.0, "gravity.z": 0.0})
+    for what, params, tau in (("saturation", {f"{pre}[1].effort_max": 1e-6}, 1.0),
+                              ("delay", {"actuator.delay": 0.5}, 1.0)):
+        m = base.copy()
+        m.set_params(params)
+        sim = Simulator(m, sing_min=0.0)
+        sim.reset(0.0, x0)
+        u = np.zeros(model.ndof)
+        u[0] = tau
+        sim.set_input(u)
+        sim.advance(1e-3)
+        free = Simulator(base, sing_min=0.0)
+        free.reset(0.0, x0)
+        free.set_input(u)
+        free.advance(1e-3)
+        moved = np.abs(sim.state[1] - x0).max()
+        moved_free = np.abs(free.state[1] - x0).max()
+        out[what] = bool(moved < 1e-3 * moved_free)
+    _APPLIES[key] = out
+    return out
+
+
+def controller_from(desc: dict, model):
+    """Rebuild the recorded controller from its sidecar description.
+
+    ``desc`` is what ``cosim.controllers.JointController.describe()`` writes:
+    ``{"type": "pd" | "pd_gravity" | "computed_torque", "kp", "kd", ...}``.
+    ``model`` is the model the controller believes in (the nominal one).
+    Returns None (and the reason) when it cannot be rebuilt.
+    """
+    from .. import controllers as ctl
+
+    if not desc or "type" not in desc:
+        return None, "the sidecar has no controller description"
+    kind = desc["type"]
+    try:
+        kp, kd = np.asarray(desc["kp"], float), np.asarray(desc["kd"], float)
+    except (KeyError, TypeError, ValueError):
+        return None, "the controller description has no numeric kp/kd"
+    sat = desc.get("saturation")
+    if kind == "pd":
+        return ctl.pd(ndof=model.ndof, kp=kp, kd=kd, saturation=sat), ""
+    if kind == "pd_gravity":
+        return ctl.pd_gravity(model, kp=kp, kd=kd, saturation=sat, gravity=desc.get("gravity", "measured")), ""
+    if kind == "computed_torque":
+        return ctl.computed_torque(model, kp=kp, kd=kd, saturation=sat), ""
+    return None, f"controller type {kind!r} is not one the engine can rebuild"
+
+
+@dataclass
+class JointReference:
+    """A joint (and pose) reference on the sample grid, indexable like the master's."""
+
+    time: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    x: np.ndarray | None = None
+    xd: np.ndarray | None = None
+    xdd: np.ndarray | None = None
+
+    def at(self, k) -> Reference:
+        x = None if self.x is None else self.x[k]
+        xd = None if self.xd is None else self.xd[k]
+        xdd = None if self.xdd is None else self.xdd[k]
+        return Reference(self.q[k], self.qd[k], self.qdd[k], x, xd, xdd)
+
+
+def reference_from_recording(rec, model) -> JointReference:
+    """The joint reference of a recording: ``qref`` and its derivatives (a short
+    Savitzky-Golay differentiator: the reference is smooth), the reference pose by the
+    core's forward kinematics."""
+    t = rec.time
+    dt = (t[-1] - t[0]) / (len(t) - 1)
+    qd = savgol_filter(rec.qref, 9, 4, deriv=1, delta=dt, axis=0)
+    qdd = savgol_filter(rec.qref, 9, 4, deriv=2, delta=dt, axis=0)
+    guess = rec.pose if rec.pose is not None else np.broadcast_to(model.home(), rec.qref.shape)
+    x = model.fk(rec.qref, x_guess=np.ascontiguousarray(guess))
+    return JointReference(t, rec.qref, qd, qdd, x)
+
+
+@dataclass
+class LoopResult:
+    """A closed-loop run, one row per sample: readings ``q``, ``qd`` (what the
+    controller saw, noise included), ``tau`` (commanded), ``pose`` (tracker), true
+    ``x``, ``xd``, ``q_true``."""
+
+    time: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    tau: np.ndarray
+    pose: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    q_true: np.ndarray
+
+
+def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
+                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11) -> LoopResult:
+    """Run ``controller`` on the core plant ``plant`` over the reference samples.
+
+    Parameters
+    ----------
+    plant : cosim.core.Model
+        The true robot, drive and sensor parameters included.
+    controller : callable
+        ``controller(t, q, qd, ref) -> tau`` (:mod:`cosim.controllers`).
+    ref : JointReference or cosim.master.ReferenceTable
+        Reference on the sample grid (its time step is the controller's period).
+    x0, xd0 : array_like, optional
+        Initial true pose and rate (default: the reference pose of sample ``start``, at rest).
+    noise : dict, optional
+        Standard deviations of white noise: ``q`` (readings), ``qd``, ``tau`` (added to
+        the recorded command, not to the applied one), ``pose`` (tracker, per coordinate).
+    seed : int, optional
+        Noise seed.
+    start : int
+        First reference sample of the run.
+
+    Returns
+    -------
+    LoopResult
+    """
+    t = np.asarray(ref.time, float)[start:]
+    n, nd = len(t), plant.ndof
+    dt = float(t[1] - t[0])
+    noise = noise or {}
+    rng = np.random.default_rng(seed)
+    sig = {k: np.broadcast_to(np.asarray(noise.get(k, 0.0), float), (nd,)) for k in ("q", "qd", "tau", "pose")}
+    applies = integrator_applies(plant)
+    delay = plant.param("actuator.delay")
+    s_delay = plant.param("sensor.delay")
+    own_sat = not applies["saturation"]
+    own_delay = delay > 0 and not applies["delay"]
+    sim_model = plant
+    if own_delay or own_sat:
+        from .effects import joint_prefix
+
+        sim_model = plant.copy()
+        pre = joint_prefix(plant)
+        over = {}
+        if own_delay:
+            over["actuator.delay"] = 0.0
+        if own_sat:
+            over.update({f"{pre}[{i + 1}].effort_max": 0.0 for i in range(nd)})
+        sim_model.set_params(over)
+    sim = Simulator(sim_model, rtol=rtol, atol=atol)
+    if x0 is None:
+        x0 = ref.x[start] if getattr(ref, "x", None) is not None else plant.fk(ref.q[start])
+    sim.reset(float(t[0]), np.asarray(x0, float), xd0)
+    if hasattr(controller, "reset"):
+        controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
+
+    out = {k: np.zeros((n, nd)) for k in ("q", "qd", "tau", "pose", "x", "xd", "q_true")}
+    meas = np.zeros((n, nd))  # true sensor readings (before delay and noise)
+    qd_true = np.zeros((n, nd))
+    cmds = []  # (time, command)
+
+    def command_at(s):
+        if not cmds or s < cmds[0][0] - 1e-12:
+            return np.zeros(nd)
+        k = len(cmds) - 1
+        while k > 0 and cmds[k][0] > s + 1e-12:
+            k -= 1
+        return cmds[k][1]
+
+    def applied_at(s):
+        c = command_at(s - delay)[None, :]
+        return cc.actuator_effort(plant, c)[0]
+
+    for k in range(n):
+        _, x, xd = sim.state
+        tau_now = applied_at(t[k])
+        meas[k] = cc.measure_joints(plant, x[None], xd[None], tau_now[None])[0]
+        qd_true[k] = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
+        if s_delay > 0:
+            s = (t[k] - s_delay - t[0]) / dt
+            if s <= 0:
+                qr, qdr = meas[0], qd_true[0]
+            else:
+                i0 = int(np.floor(s))
+                f = s - i0
+                qr = meas[i0] * (1 - f) + meas[min(i0 + 1, k)] * f
+                qdr = qd_true[i0] * (1 - f) + qd_true[min(i0 + 1, k)] * f
+        else:
+            qr, qdr = meas[k], qd_true[k]
+        if np.any(sig["q"]):
+            qr = qr + rng.normal(size=nd) * sig["q"]
+        if np.any(sig["qd"]):
+            qdr = qdr + rng.normal(size=nd) * sig["qd"]
+        cmd = np.asarray(controller(float(t[k]), qr, qdr, ref.at(start + k)), float)
+        cmds.append((float(t[k]), cmd))
+        if len(cmds) > 4 + int(delay / dt) * 2:
+            cmds.pop(0)
+        out["q"][k], out["qd"][k] = qr, qdr
+        out["tau"][k] = cmd + (rng.normal(size=nd) * sig["tau"] if np.any(sig["tau"]) else 0.0)
+        out["pose"][k] = x + (rng.normal(size=nd) * sig["pose"] if np.any(sig["pose"]) else 0.0)
+        out["x"][k], out["xd"][k] = x, xd
+        out["q_true"][k] = plant.ik(x)
+        if k == n - 1:
+            break
+        if not (own_delay or own_sat):
+            sim.set_input(cmd)
+            sim.advance(float(t[k + 1]))
+            continue
+        # The applied effort switches when a delayed command arrives: split the step there.
+        edges = [float(t[k])]
+        if own_delay:
+            for (s, _) in cmds:
+                e = s + delay
+                if t[k] < e < t[k + 1] - 1e-12:
+                    edges.append(e)
+        edges.append(float(t[k + 1]))
+        for a, b in zip(edges[:-1], edges[1:]):
+            u = command_at(0.5 * (a + b) - (delay if own_delay else 0.0))
+            if own_sat:
+                u = cc.actuator_effort(plant, u[None])[0]
+            sim.set_input(u)
+            sim.advance(b)
+    return LoopResult(t, out["q"], out["qd"], out["tau"], out["pose"], out["x"], out["xd"], out["q_true"])

@@ -1,0 +1,316 @@
+"""The diagnosis as a Markdown report with figures (matplotlib, Agg backend).
+
+``report.md`` answers the three questions in order: where (localisation), why
+(attribution, look-alikes, what the recording cannot show), how much better (held-out
+fit before/after, replay), then the method settings.  Figures:
+
+* ``residuals.png``: every residual channel against time, nominal and fitted model,
+  the noise band and the localised windows, the held-out part marked;
+* ``velocity.png``: effort residual against the joint rate, coloured by motion phase
+  (the signature of friction: a step for Coulomb, a slope for viscous, a bump at low
+  speed for Stribeck);
+* ``workspace.png``: the poses of the recording coloured by the residual;
+* ``heldout.png``: held-out overlay of the recorded and modelled effort/readings;
+* ``replay.png``: closed-loop replay of the held-out part (when it was run).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+PHASE_COLOURS = ["#7f7f7f", "#d62728", "#ff7f0e", "#2ca02c", "#1f77b4"]
+
+
+def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
+    """Write ``report.md``, ``diagnosis.json`` and the figures into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    files = {}
+    if figures:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        files["residuals"] = _fig_residuals(d, eng, sel, out / "residuals.png")
+        files["velocity"] = _fig_velocity(d, eng, out / "velocity.png")
+        files["workspace"] = _fig_workspace(d, eng, out / "workspace.png")
+        files["heldout"] = _fig_heldout(d, eng, sel, out / "heldout.png")
+        if d.replay and d.replay.get("runs"):
+            files["replay"] = _fig_replay(d, eng, out / "replay.png")
+    files["json"] = str(out / "diagnosis.json")
+    md = out / "report.md"
+    files["report"] = str(md)
+    d.files = files
+    (out / "diagnosis.json").write_text(_strip_arrays(d))
+    md.write_text(markdown(d, files))
+    return files
+
+
+def _strip_arrays(d) -> str:
+    dd = d.to_dict()
+    if dd.get("replay") and dd["replay"].get("runs"):
+        dd["replay"] = {**dd["replay"], "runs": {k: {kk: vv for kk, vv in v.items() if kk not in ("time", "q", "tau")}
+                                                 for k, v in dd["replay"]["runs"].items()}}
+    from . import _json_default
+
+    return json.dumps(dd, indent=2, default=_json_default)
+
+
+def markdown(d, files: dict) -> str:
+    L = [f"# Discrepancy diagnosis: {Path(d.recording).name}", ""]
+    L += [f"**{d.conclusion}**", ""]
+    s = d.settings
+    L += [f"Robot `{d.robot}`, {s['samples']} samples at {1 / s['dt']:.4g} Hz "
+          f"({s['samples'] * s['dt']:.3g} s); residuals smoothed over {s['smoothing_samples']} samples "
+          f"({s['window'] * 1e3:.0f} ms), decimated by {s['decimation']}; the last "
+          f"{(1 - s['train_fraction']) * 100:.0f} % of the recording is held out of the fit.", ""]
+
+    L += ["## Where the model goes wrong", ""]
+    loc = d.localisation
+    if loc["summary"]:
+        L += [f"- {x}" for x in loc["summary"]]
+    else:
+        L += ["- every residual channel stays inside its noise band (3 sigma)"]
+    L += ["", "| channel | RMS | noise (1 sigma) | out of band | windows (start-end s, main phase) |",
+          "| --- | --- | --- | --- | --- |"]
+    for name, c in loc["channels"].items():
+        w = c["windows"]
+        ws = "; ".join(f"{x['start']:.2f}-{x['end']:.2f} ({max(x['phases'], key=x['phases'].get)})" for x in w[:4])
+        if len(w) > 4:
+            ws += f"; ... ({len(w)} windows)"
+        L.append(f"| {name} | {c['rms']:.3g} | {c['noise']:.3g} | {c['out_of_band'] * 100:.0f} % | {ws or '-'} |")
+    L.append("")
+    for key, title in (("residuals", "Residual channels"), ("velocity", "Effort residual against joint rate"),
+                       ("workspace", "Residual over the workspace")):
+        if key in files:
+            L += [f"![{title}]({Path(files[key]).name})", ""]
+
+    L += ["## Why: the missing physics", ""]
+    if d.effects:
+        L += ["| rank | effect | core parameter | fitted value | 95 % interval | unit | delta BIC | importance |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+        for r, e in enumerate(d.effects, 1):
+            for k, (p, v) in enumerate(e["params"].items()):
+                L.append(f"| {r if k == 0 else ''} | {e['title'] if k == 0 else ''} | `{p}` | {v['value']:.5g} | "
+                         f"+- {v['ci95']:.2g} | {v['unit']} | {e['delta_bic']:.1f} | {e['importance']:.1f} |")
+        L.append("")
+        for e in d.effects:
+            if e["derived"]:
+                L.append(f"- {e['title']}: " + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["derived"].items()))
+            for a in e["lookalikes"]:
+                L.append(f"- {e['title']} vs {a['statement']}")
+        L += ["", "Plant parameters that put the fitted effects into the model (core / FMU names):", "",
+              "```json", json.dumps(d.theta, indent=2), "```", ""]
+    else:
+        L += ["No effect of the library is supported by the data "
+              f"(an effect must lower the BIC by more than {s['threshold']:g})." if "cannot" not in d.conclusion
+              else "Nothing could be tested.", ""]
+    if d.steps:
+        L += ["Forward selection: " + " -> ".join(f"{x['group']} ({x['delta_bic']:.0f})" for x in d.steps), ""]
+    if d.not_excited:
+        L += ["Not excited by this recording:", ""] + [f"- {x}" for x in d.not_excited] + [""]
+    if d.unavailable:
+        L += ["Not tested:", ""] + [f"- {x}" for x in d.unavailable] + [""]
+
+    L += ["## How much better: held-out fit", ""]
+    h = d.heldout
+    L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. Gain (noise-normalised RMS, affected "
+          f"channels {', '.join(h['affected']) or '-'}): **{h['gain']:.1f}x** over all samples, "
+          f"**{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band.", "",
+          "| channel | RMS before | RMS after | NRMSE before | NRMSE after | noise |", "| --- | --- | --- | --- | --- | --- |"]
+    for name, c in h["channels"].items():
+        L.append(f"| {name} | {c['rms_before']:.3g} | {c['rms_after']:.3g} | {c['nrmse_before'] * 100:.2f} % | "
+                 f"{c['nrmse_after'] * 100:.2f} % | {c['noise']:.3g} {c['unit']} |")
+    L.append("")
+    if "heldout" in files:
+        L += ["![Held-out overlay](heldout.png)", ""]
+    rp = d.replay
+    if rp:
+        if rp.get("skipped"):
+            L += [f"Replay not run: {rp['skipped']}.", ""]
+        else:
+            L += [f"Closed-loop replay of the held-out part from t = {rp['start']:.2f} s (core plant, recorded "
+                  f"controller and reference): RMS of the effort difference to the recording", "",
+                  "| plant | " + " | ".join(f"tau{i + 1}" for i in range(len(_first_run(rp)))) + " |",
+                  "| --- |" + " --- |" * len(_first_run(rp))]
+            for name, run in rp["runs"].items():
+                if "error" in run:
+                    L.append(f"| {name} | failed: {run['error']} |")
+                else:
+                    L.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in run["rms_tau"]) + " |")
+            L.append("")
+            if "replay" in files:
+                L += ["![Replay](replay.png)", ""]
+    L += ["## Method", "",
+          "Residuals: effort = recorded command (zero-order hold, smoothed) minus the core's inverse dynamics of "
+          "the recorded motion (smoothed identically); readings = recorded joints minus the core's sensor model at "
+          "the tracker pose.  Every regressor is a finite difference of these residuals over a core parameter.  "
+          f"Selection: forward BIC over effect groups with N_eff = {d.noise['n_eff']:.0f} effectively independent "
+          "samples; intervals from the final Jacobian.  See docs/discrepancy.md.", ""]
+    t = d.timings
+    L.append("Timings [s]: " + ", ".join(f"{k} {v:.2f}" for k, v in t.items()))
+    return "\n".join(L) + "\n"
+
+
+def _first_run(rp):
+    for run in rp["runs"].values():
+        if "rms_tau" in run:
+            return run["rms_tau"]
+    return []
+
+
+def _fmt(v):
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(f"{x:.3g}" for x in v) + ")"
+    return f"{v:.3g}"
+
+
+# -------------------------------------------------------------------- figures
+
+def _fig_residuals(d, eng, sel, path):
+    import matplotlib.pyplot as plt
+
+    pipe = eng.pipe
+    t = pipe.t[pipe.idx]
+    R0 = eng.R0
+    Rf = eng.R(sel.theta) if sel.theta else R0
+    C = R0.shape[1]
+    fig, axes = plt.subplots(C, 1, figsize=(11, 1.25 * C + 1), sharex=True, squeeze=False)
+    split = t[eng.test][0] if eng.test.any() else None
+    for c, ax in enumerate(axes[:, 0]):
+        name = pipe.channels[c]
+        s = sel.sigma[c]
+        scale = 1e3 if c >= pipe.nd and pipe.model.robot == "6pus" else 1.0
+        ax.plot(t, R0[:, c] * scale, color="0.6", lw=0.8, label="nominal model")
+        if sel.theta:
+            ax.plot(t, Rf[:, c] * scale, color="C0", lw=0.8, label="fitted model")
+        ax.axhspan(-3 * s * scale, 3 * s * scale, color="C2", alpha=0.12, lw=0)
+        for w in d.localisation["channels"][name]["windows"]:
+            ax.axvspan(w["start"], w["end"], color="C1", alpha=0.18, lw=0)
+        if split is not None:
+            ax.axvline(split, color="k", ls="--", lw=0.8)
+        unit = d.heldout["channels"][name]["unit"]
+        ax.set_ylabel(f"{name}\n[{'mm' if scale == 1e3 else unit}]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=2)
+    axes[0, 0].set_title("residuals (green: +-3 sigma noise band, orange: windows out of band, dashed: start of "
+                         "the held-out part)", fontsize=9)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return str(path)
+
+
+def _fig_velocity(d, eng, path):
+    import matplotlib.pyplot as plt
+
+    from .localisation import PHASES, phases
+
+    pipe = eng.pipe
+    pos = pipe.idx
+    qd, qdd = pipe.qd_s[pos], pipe.qdd_s[pos]
+    ph = phases(qd, qdd)
+    nd = pipe.nd
+    cols = 3 if nd > 4 else 2
+    rows = int(np.ceil(nd / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3 * rows), squeeze=False)
+    for j in range(rows * cols):
+        ax = axes[j // cols, j % cols]
+        if j >= nd:
+            ax.axis("off")
+            continue
+        for k, name in enumerate(PHASES):
+            m = ph[:, j] == k
+            ax.scatter(qd[m, j], eng.R0[m, j], s=3, color=PHASE_COLOURS[k], label=name)
+        ax.set_title(f"joint {j + 1}", fontsize=9)
+        ax.set_xlabel("joint rate", fontsize=8)
+        ax.set_ylabel(f"effort residual [{d.heldout['channels'][pipe.channels[j]]['unit']}]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0, 0].legend(fontsize=6, markerscale=3)
+    fig.suptitle("effort residual of the nominal model against the joint rate, by motion phase", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return str(path)
+
+
+def _fig_workspace(d, eng, path):
+    import matplotlib.pyplot as plt
+
+    pipe = eng.pipe
+    x = pipe.x_s[pipe.idx]
+    sig = np.asarray([d.noise["sigma"][c] for c in pipe.channels])
+    z = np.max(np.abs(eng.R0) / sig[None, :], axis=1)
+    cols = pipe.rec.pose_columns
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    order = np.argsort(z)
+    for ax, (a, b) in zip(axes, ((0, 1), (0, 2))):
+        sc = ax.scatter(x[order, a], x[order, b], c=z[order], s=4, cmap="viridis", vmin=0, vmax=max(6, np.percentile(z, 99)))
+        ax.set_xlabel(f"{cols[a]} [m]")
+        ax.set_ylabel(f"{cols[b]} [m]")
+    fig.colorbar(sc, ax=axes, label="largest |residual| / noise")
+    fig.suptitle("where in the workspace the nominal model is wrong", fontsize=10)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return str(path)
+
+
+def _fig_heldout(d, eng, sel, path):
+    import matplotlib.pyplot as plt
+
+    pipe = eng.pipe
+    test = eng.test
+    pos = pipe.idx[test]
+    t = pipe.t[pos]
+    Rb = eng.R0[test]
+    Ra = eng.R(sel.theta)[test] if sel.theta else Rb
+    names = d.heldout["affected"][:4] or pipe.channels[:1]
+    fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.4 * len(names)), squeeze=False)
+    for r, name in enumerate(names):
+        c = pipe.channels.index(name)
+        rec = pipe.tau_s[pos, c] if c < pipe.nd else pipe.q_s[pos, c - pipe.nd]
+        ax = axes[r, 0]
+        ax.plot(t, rec, color="k", lw=1.2, label="recorded (smoothed)")
+        ax.plot(t, rec - Rb[:, c], color="0.6", lw=0.9, label="nominal model")
+        ax.plot(t, rec - Ra[:, c], color="C0", lw=0.9, ls="--", label="fitted model")
+        ax.set_ylabel(name, fontsize=8)
+        ax = axes[r, 1]
+        ax.plot(t, Rb[:, c], color="0.6", lw=0.8, label="before")
+        ax.plot(t, Ra[:, c], color="C0", lw=0.8, label="after")
+        ax.set_ylabel(f"residual {name}", fontsize=8)
+    axes[0, 0].legend(fontsize=7)
+    axes[0, 1].legend(fontsize=7)
+    axes[0, 0].set_title("held-out part: recording and models", fontsize=9)
+    axes[0, 1].set_title(f"held-out residual (gain {d.heldout['gain']:.1f}x)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return str(path)
+
+
+def _fig_replay(d, eng, path):
+    import matplotlib.pyplot as plt
+
+    rec = eng.pipe.rec
+    runs = {k: v for k, v in d.replay["runs"].items() if "tau" in v}
+    if not runs:
+        return None
+    nd = eng.pipe.nd
+    show = [eng.pipe.channels.index(c) for c in d.heldout["affected"] if eng.pipe.channels.index(c) < nd][:3] or [0]
+    fig, axes = plt.subplots(len(show), 1, figsize=(11, 2.4 * len(show)), squeeze=False)
+    any_run = next(iter(runs.values()))
+    k0 = int(np.searchsorted(rec.time, any_run["time"][0]))
+    for r, j in enumerate(show):
+        ax = axes[r, 0]
+        n = len(any_run["time"])
+        ax.plot(rec.time[k0:k0 + n], rec.tau[k0:k0 + n, j], color="k", lw=0.8, label="recorded")
+        for (name, run), col in zip(runs.items(), ("0.6", "C0")):
+            ax.plot(run["time"], run["tau"][:, j], color=col, lw=0.8, label=f"replay, {name} plant")
+        ax.set_ylabel(f"tau{j + 1}", fontsize=8)
+    axes[0, 0].legend(fontsize=7)
+    axes[0, 0].set_title("closed-loop replay of the held-out part: commanded effort", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return str(path)

@@ -1,0 +1,377 @@
+"""Residuals of a recording against the core: the effort and kinematic families.
+
+What the recorded columns mean (``pkm-recording/1``, docs/discrepancy.md):
+
+* ``q<i>``: the joint readings (encoders), i.e. the core's sensor model
+  ``pkm_measure_joints`` of the true state, possibly delayed (``sensor.delay``);
+* ``qd<i>``: the joint-rate readings (a velocity sensor: true rate, same delay);
+* ``tau<i>``: the effort the controller *commanded*, held over the following sample
+  (zero-order hold).  What reaches the mechanism may differ: the actuator clips it
+  (``<j>[i].effort_max``) and delays it (``actuator.delay``);
+* pose columns, if present: an external tracker measuring the true pose.
+
+Effort residual, for a model with parameters theta (sample time t)::
+
+    r_eff(t) = S[sat(tau)](t - d_a) - S[ID(x, xd, xdd)](t + d_s)
+
+``S`` is a zero-phase Savitzky-Golay smoother (``window``, ``polyorder``); ``x =
+FK(q)``, ``xd = pose_velocity(x, qd)`` and ``xdd = pose_acceleration(x, xd, qdd)`` at
+every sample, with ``qdd`` from a short (5-sample) Savitzky-Golay differentiator of
+the recorded rates.  The inverse dynamics is evaluated sample by sample and then
+smoothed exactly like the effort, so the two sides see the same linear filter: the
+mass matrix varies with the pose and friction is discontinuous in the rate, and
+smoothing the motion before the inverse dynamics instead would leave a bias at every
+jerk peak (measured: ten times the one of this form on a clean closed-loop run).  The
+noise of the short differentiator is high-frequency and the smoother removes it.
+Everything is the core's: FK, pose velocity and acceleration, inverse dynamics,
+saturation.
+
+Kinematic residual (with tracker pose)::
+
+    r_kin(t) = S[q_rec](t) - S[measure_joints(pose, xd, tau_applied)](t - d_s)
+
+Residuals are evaluated on decimated interior samples (every ``step``-th sample,
+away from the ends where the smoother extrapolates).  A parameter change of the model
+(dict of core parameter names) changes the residual through the core only; the
+engine's regressors are finite differences of :meth:`Pipeline.evaluate`.
+"""
+from __future__ import annotations
+
+import ctypes as C
+import math
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from .._native import ParameterError, PkmError, UnsupportedError, lib, raise_for
+from . import _corecalls as cc
+
+
+class DiagnosisError(ValueError):
+    """A recording (or model) the engine cannot diagnose; the message says what is missing."""
+
+
+#: parameters of the actuator (applied to the recorded command) and of the sensors
+ACTUATOR_KEYS = (".effort_max", "actuator.delay")
+SENSOR_KEYS = (".encoder_offset", ".backlash", ".compliance", "sensor.delay")
+
+
+def _is(name, keys):
+    return any(name.endswith(k) or name == k for k in keys)
+
+
+@dataclass
+class Residual:
+    """Residual channels at the pipeline's sample positions: ``eff`` (m, nd) [N or N m],
+    ``kin`` (m, nd) [m or rad] or None."""
+
+    eff: np.ndarray
+    kin: np.ndarray | None
+
+    def stack(self) -> np.ndarray:
+        """Channels side by side: (m, nd) or (m, 2 nd)."""
+        return self.eff if self.kin is None else np.hstack([self.eff, self.kin])
+
+
+def _at(a, pos):
+    """Linear interpolation of rows of a (n, c) at fractional row positions pos (m,)."""
+    i0 = np.floor(pos).astype(int)
+    f = (pos - i0)[:, None]
+    i0 = np.clip(i0, 0, len(a) - 2)
+    return a[i0] * (1.0 - f) + a[i0 + 1] * f
+
+
+class _Scratch:
+    """A model copy whose parameters are moved away from the nominal ones and back."""
+
+    def __init__(self, model, nominal):
+        self.m = model.copy()
+        self.nominal = nominal
+        self.current = {}
+        self._err = C.create_string_buffer(1024)
+
+    def _set1(self, name, value):
+        i = lib.pkm_param_index(self.m._m, name.encode())
+        if i < 0:
+            raise ParameterError(f"{self.m.robot} has no parameter named {name!r}", "PKM_ERR_PARAMETER")
+        raise_for(lib.pkm_param_set(self.m._m, i, float(value), self._err, len(self._err)), self._err.value.decode())
+
+    def set(self, params):
+        try:
+            changed = False
+            for k in [k for k in self.current if k not in params]:
+                self._set1(k, self.nominal[k])
+                del self.current[k]
+                changed = True
+            for k, v in params.items():
+                if self.current.get(k) != v:
+                    self._set1(k, v)
+                    self.current[k] = v
+                    changed = True
+            if changed:
+                raise_for(lib.pkm_model_validate(self.m._m, self._err, len(self._err)), self._err.value.decode())
+        except PkmError:
+            for k in list(self.current):
+                self._set1(k, self.nominal[k])
+            self.current = {}
+            lib.pkm_model_validate(self.m._m, self._err, len(self._err))
+            raise
+        return self.m
+
+
+class Pipeline:
+    """The residual pipeline of one recording against one model.
+
+    Parameters
+    ----------
+    rec : cosim.recording.Recording
+        The recording.
+    model : cosim.core.Model
+        The nominal model (the engineer's belief); not modified.
+    geometry : iterable of str, optional
+        Core parameters that move the pose computed from the joints (default: those of
+        the library's geometry effect); a change of one of them recomputes the pose.
+    window : float
+        Length of the Savitzky-Golay window [s] (odd number of samples, >= 7).
+    polyorder : int
+        Polynomial order of the smoother.
+    step : int, optional
+        Decimation of the residual samples (default: window / 5).
+    zoh : bool
+        The recorded effort is a zero-order-hold command (applied from its sample to the
+        next): its value at a sample time is the mean of the held values on both sides.
+    max_delay : float
+        Largest delay the engine considers [s] (sets the margin at the ends).
+
+    Raises
+    ------
+    DiagnosisError
+        Too short, non-uniformly sampled, wrong robot, a robot without dynamics, or
+        joints whose forward kinematics fails (says at which time).
+    """
+
+    def __init__(self, rec, model, *, window: float = 0.05, polyorder: int = 3, step: int | None = None,
+                 zoh: bool = True, max_delay: float = 0.02, geometry=None):
+        where = str(rec.path) if rec.path else "recording"
+        if rec.robot != model.robot:
+            raise DiagnosisError(f"{where}: recording of robot {rec.robot!r}, model of {model.robot!r}")
+        self.rec, self.model, self.where = rec, model, where
+        t = np.asarray(rec.time, float)
+        n, nd = len(t), model.ndof
+        if n < 3:
+            raise DiagnosisError(f"{where}: {n} samples; a diagnosis needs a recording of at least a second")
+        dt = (t[-1] - t[0]) / (n - 1)
+        jitter = np.abs(np.diff(t) - dt).max()
+        if jitter > 0.01 * dt:
+            k = int(np.argmax(np.abs(np.diff(t) - dt)))
+            raise DiagnosisError(f"{where}: the sampling is not uniform (rows {k + 2}-{k + 3}: step "
+                                 f"{t[k + 1] - t[k]:.6g} s, mean {dt:.6g} s); resample it to a constant step")
+        w = int(round(window / dt)) | 1
+        w = max(w, 7)
+        self.dt, self.n, self.nd, self.window, self.polyorder = dt, n, nd, w, polyorder
+        self.step = step or max(1, int(round(w / 5)))
+        self.max_shift = int(math.ceil(max_delay / dt)) + 2
+        margin = w // 2 + self.max_shift
+        need = 2 * margin + 20 * self.step
+        if n < need:
+            raise DiagnosisError(
+                f"{where}: {n} samples ({t[-1] - t[0]:.3g} s at {1 / dt:.4g} Hz) are too few: the smoothing window "
+                f"is {w} samples and the delays searched reach {max_delay * 1e3:.3g} ms, so at least {need} samples "
+                f"({need * dt:.3g} s) are needed")
+        self.idx = np.arange(margin, n - margin, self.step)
+        self.t = t
+        try:
+            model.inverse_dynamics(model.home(), np.zeros(nd), np.zeros(nd))
+        except UnsupportedError:
+            raise DiagnosisError(f"{where}: the {model.robot} model of the core has no inverse dynamics, so the "
+                                 f"effort residual cannot be formed") from None
+        self.zoh = zoh
+        tau = np.asarray(rec.tau, float)
+        if zoh:
+            tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
+        self.tau_c = tau
+        self.q = np.asarray(rec.q, float)
+        self.qd = np.asarray(rec.qd, float)
+        self.pose = None if rec.pose is None else np.asarray(rec.pose, float)
+        self._smooth_args = dict(window_length=w, polyorder=polyorder, axis=0, mode="interp")
+        self.q_s = self.S(self.q)
+        self.qd_s = self.S(self.qd)
+        self.qdd_s = self.S(self.qd, deriv=1)
+        self.tau_s = self.S(self.tau_c)
+        qdd_l = savgol_filter(self.qd, 5, 2, deriv=1, delta=dt, axis=0, mode="interp")
+        # Rate-reading noise (the 5-point quadratic fit leaves 0.717 sigma of white noise)
+        # and the samples whose smoothing window is mostly at rest: there the friction
+        # (and the backlash side) depend on a rate below what the readings resolve, so
+        # they are left out of the fit of that joint's channels.
+        qd_l = savgol_filter(self.qd, 5, 2, axis=0, mode="interp")
+        self.qd_noise = 1.4826 * np.median(np.abs(self.qd - qd_l), axis=0) / 0.717
+        slow = (np.abs(qd_l) < 3.0 * self.qd_noise).astype(float)
+        self.usable = self.S(slow)[self.idx] < 0.2
+
+        # Pose, rate and acceleration of every sample (for the inverse dynamics) and of
+        # the smoothed joints (descriptors of the motion, geometry corrections).
+        self.x_f = self._fk(model, self.q, self.pose)
+        self.xd_f = cc.pose_velocity(model, self.x_f, self.qd, times=t)
+        self.xdd_f = cc.pose_acceleration(model, self.x_f, self.xd_f, qdd_l, times=t)
+        self.x_s = self._fk(model, self.q_s, self.x_f)
+        if self.pose is not None:
+            self.xd_p = cc.pose_velocity(model, self.pose, self.qd, times=t)
+        self.nominal = model.params()
+        if geometry is None:
+            from .effects import groups_for
+
+            geometry = [p for g in groups_for(model, True)[0] if g.effect.kind == "geometry" for p in g.params]
+        self.geometry = frozenset(geometry)
+        self._scratch = _Scratch(model, self.nominal)
+        self._cache: OrderedDict = OrderedDict()
+
+    # ------------------------------------------------------------------ helpers
+    def S(self, a, deriv: int = 0):
+        """Zero-phase Savitzky-Golay smoothing (deriv=1: its time derivative)."""
+        return savgol_filter(a, deriv=deriv, delta=self.dt, **self._smooth_args)
+
+    @property
+    def has_pose(self) -> bool:
+        return self.pose is not None
+
+    @property
+    def channels(self) -> list:
+        names = [f"tau{i + 1}" for i in range(self.nd)]
+        if self.has_pose:
+            names += [f"q{i + 1}" for i in range(self.nd)]
+        return names
+
+    def _fk(self, model, q, guess):
+        t = self.t
+        if guess is None:
+            # A chain of solves on a coarse grid, each from the previous pose, gives
+            # every sample a guess close to its pose.
+            coarse = np.arange(0, len(q), 20)
+            xs = np.empty((len(coarse), model.ndof))
+            g = model.home()
+            for k, i in enumerate(coarse):
+                try:
+                    g = model.fk(q[i], x_guess=g)
+                except PkmError as e:
+                    raise DiagnosisError(f"{self.where}: forward kinematics of the recorded joints failed at t = "
+                                         f"{t[i]:.6g} s (row {i + 2}): {e}") from None
+                xs[k] = g
+            guess = np.column_stack([np.interp(np.arange(len(q)), coarse, xs[:, c]) for c in range(model.ndof)])
+        x, status = model.fk(q, x_guess=guess, errors="status")
+        bad = np.flatnonzero(status != 0)
+        if bad.size:
+            i = int(bad[0])
+            try:
+                model.fk(q[i], x_guess=guess[i])
+            except PkmError as e:
+                raise DiagnosisError(f"{self.where}: forward kinematics of the recorded joints failed at t = "
+                                     f"{t[i]:.6g} s (row {i + 2}): {e}") from None
+        return x
+
+    def model_for(self, params: dict):
+        """The nominal model with ``params`` set: one scratch copy whose parameters are
+        set through the C API (a fresh ``Model.copy`` per evaluation would cost more
+        than the evaluation itself).  Valid until the next call."""
+        if not params:
+            return self.model
+        return self._scratch.set(params)
+
+    def _cached(self, key, fn):
+        v = self._cache.get(key)
+        if v is None:
+            v = fn()
+            self._cache[key] = v
+            if len(self._cache) > 64:
+                self._cache.popitem(last=False)
+        return v
+
+    def split(self, train_fraction: float = 0.7):
+        """Boolean masks (train, held-out) over the sample positions: the last part of
+        the recording is held out of the fit."""
+        t = self.t[self.idx]
+        cut = self.t[0] + train_fraction * (self.t[-1] - self.t[0])
+        return t < cut, t >= cut
+
+    # --------------------------------------------------------------- evaluation
+    def evaluate(self, params: dict | None = None, positions=None) -> Residual:
+        """Residuals of the model with ``params`` (core names -> values) set.
+
+        ``positions`` are sample indices (default: the decimated interior samples).
+        """
+        params = {k: float(v) for k, v in (params or {}).items() if self.nominal.get(k) != float(v)}
+        m = self.model_for(params)
+        pos = self.idx if positions is None else np.asarray(positions)
+        d_a = m.param("actuator.delay") / self.dt
+        d_s = m.param("sensor.delay") / self.dt
+        if max(d_a, d_s) > self.max_shift - 2:
+            raise DiagnosisError(f"a delay of {max(d_a, d_s) * self.dt * 1e3:.3g} ms is beyond the "
+                                 f"{(self.max_shift - 2) * self.dt * 1e3:.3g} ms the pipeline was built for")
+        dyn = tuple(sorted((k, v) for k, v in params.items() if not _is(k, ACTUATOR_KEYS + SENSOR_KEYS)))
+        act = tuple(sorted((k, v) for k, v in params.items() if k.endswith(".effort_max")))
+        sens = tuple(sorted((k, v) for k, v in params.items() if _is(k, SENSOR_KEYS) and k != "sensor.delay"))
+        geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
+
+        A = self._cached(("A", act), lambda: self._applied(m, act))
+        B = self._cached(("B", dyn), lambda: self.S(m.inverse_dynamics(self.x_f, self.xd_f, self.xdd_f)))
+        p_m = pos + d_s
+        eff = _at(A[1], pos - d_a) - _at(B, p_m)
+        if geo or sens:
+            eff -= self._pose_term(m, np.clip(np.round(p_m).astype(int), 0, self.n - 1), bool(sens))
+        kin = None
+        if self.has_pose:
+            compliant = any(k.endswith(".compliance") and v != 0 for k, v in sens) or any(
+                k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
+            key = ("K", sens, geo) + ((act, round(d_a, 9)) if compliant else ())
+            K = self._cached(key, lambda: self._readings(m, A[0], d_a))
+            kin = self.q_s[pos] - _at(K, pos - d_s)
+        return Residual(eff, kin)
+
+    def _is_geometry(self, name):
+        return name in self.geometry
+
+    def _applied(self, m, act):
+        """Effort applied by the actuators for the recorded command: (raw, smoothed)."""
+        if not act:
+            return self.tau_c, self.tau_s
+        raw = cc.actuator_effort(m, self.tau_c, times=self.t)
+        return raw, self.S(raw)
+
+    def pose_term(self, params: dict, positions=None):
+        """Change of the effort residual when the pose is recomputed for a model with
+        ``params`` (geometry and sensor parameters); (m, nd)."""
+        params = {k: float(v) for k, v in params.items() if self.nominal.get(k) != float(v)}
+        m = self.model_for(params)
+        pos = self.idx if positions is None else np.asarray(positions)
+        sens = any(_is(k, SENSOR_KEYS) and k != "sensor.delay" for k in params)
+        return -self._pose_term(m, pos, sens)
+
+    def _pose_term(self, m, i, sensors: bool):
+        """Change of the inverse dynamics when the pose of the smoothed joints is
+        recomputed with the model's geometry and, with ``sensors``, from the joints
+        corrected for the model's sensor errors (decimated samples: a smooth term)."""
+        x0 = self.x_s[i]
+        q, qd, qdd = self.q_s[i], self.qd_s[i], self.qdd_s[i]
+        xd0 = cc.pose_velocity(self.model, x0, qd)
+        if sensors:
+            # reading = q + e(q, qd, tau): one fixed-point step from the nominal pose
+            # (e is the sensor error, at most a few 1e-4 of the stroke).
+            e = cc.measure_joints(m, x0, xd0, self.tau_s[i]) - m.ik(x0)
+            q = q - e
+        x = m.fk(q, x_guess=x0)
+        xd = cc.pose_velocity(m, x, qd)
+        xdd0 = cc.pose_acceleration(self.model, x0, xd0, qdd)
+        xdd = cc.pose_acceleration(m, x, xd, qdd)
+        return m.inverse_dynamics(x, xd, xdd) - m.inverse_dynamics(x0, xd0, xdd0)
+
+    def _readings(self, m, applied, d_a):
+        """Smoothed joint readings the model's sensors give at the tracker poses."""
+        tau = applied if d_a == 0 else _at(applied, np.clip(np.arange(self.n) - d_a, 0, self.n - 1))
+        return self.S(cc.measure_joints(m, self.pose, self.xd_p, tau, times=self.t))
+
+    # ------------------------------------------------------------ descriptors
+    def motion(self, positions=None):
+        """Smoothed joint rate and acceleration and the pose at the sample positions."""
+        pos = self.idx if positions is None else positions
+        return self.qd_s[pos], self.qdd_s[pos], self.x_s[pos]

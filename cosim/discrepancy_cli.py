@@ -1,0 +1,167 @@
+"""CLI of the model-discrepancy engine.
+
+* ``cosim diagnose <recording> [--model M] [--out DIR]``: where, why, how much better;
+* ``cosim blind-benchmark --cases N --seed S [--clean M] [--robot R]``: blind cases with
+  hidden effects, diagnosed and scored against their answer keys;
+* ``cosim blind-case --robot R --effect E [--effect E2] --seed S``: one blind case;
+* ``cosim discrepancy-demo``: simulate, hide an effect, diagnose it, show the gain.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from .cli import command
+
+
+def _diag_configure(p):
+    p.add_argument("recording", help="pkm-recording/1 CSV (its JSON sidecar beside it)")
+    p.add_argument("--model", default=None,
+                   help="model to test: a named parameter set or a JSON parameter file (cosim params R --json); "
+                        "default: the robot's default set with the sidecar's overrides")
+    p.add_argument("--out", default=None, help="report directory (default: results/diagnosis/<recording name>)")
+    p.add_argument("--threshold", type=float, default=10.0, help="BIC decrease an effect must bring (default 10)")
+    p.add_argument("--window", type=float, default=0.05, help="smoothing window [s] (default 0.05)")
+    p.add_argument("--effects", default=None, help="comma-separated effect keys to test (default: the library)")
+    p.add_argument("--no-replay", action="store_true", help="skip the closed-loop replay of the held-out part")
+    p.add_argument("--no-figures", action="store_true", help="write the report without figures")
+    p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
+
+
+@command("diagnose", "model-discrepancy diagnosis of a recording: where, which missing physics, how much better")
+def cmd_diagnose(args):
+    from .discrepancy import diagnose
+
+    out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
+    d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
+                 effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
+                 figures=not args.no_figures)
+    if args.json:
+        from .discrepancy.report import _strip_arrays
+
+        print(_strip_arrays(d))
+        return 0
+    print_diagnosis(d)
+    print(f"\nreport: {d.files.get('report')}")
+    return 0
+
+
+cmd_diagnose.configure = _diag_configure
+
+
+def print_diagnosis(d, file=sys.stdout):
+    p = lambda *a: print(*a, file=file)  # noqa: E731
+    p(f"{d.recording} ({d.robot}): {d.conclusion}")
+    if d.localisation["summary"]:
+        p("\nwhere:")
+        for s in d.localisation["summary"]:
+            p(f"  {s}")
+    if d.effects:
+        p("\nwhy (most important first):")
+        for e in d.effects:
+            vals = ", ".join(f"{k} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for k, v in e["params"].items())
+            p(f"  {e['title']}: {vals}  (delta BIC {e['delta_bic']:.0f})")
+            for a in e["lookalikes"]:
+                if a["delta_bic"] < 10:
+                    p(f"    vs {a['statement']}")
+    for title, items in (("not excited by this recording", d.not_excited), ("not tested", d.unavailable)):
+        if items:
+            p(f"\n{title}:")
+            for x in items:
+                p(f"  {x}")
+    h = d.heldout
+    p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower "
+      f"({h['gain_windows']:.1f}x in the windows out of band) on {', '.join(h['affected']) or '-'}")
+    for name in h["affected"]:
+        c = h["channels"][name]
+        p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} "
+          f"(NRMSE {c['nrmse_before'] * 100:.2f} % -> {c['nrmse_after'] * 100:.2f} %, noise {c['noise']:.2g})")
+    if d.replay and d.replay.get("runs"):
+        for name, run in d.replay["runs"].items():
+            if "rms_tau" in run:
+                p(f"  replay, {name} plant: effort RMS difference " + " ".join(f"{v:.3g}" for v in run["rms_tau"]))
+    p(f"\n(diagnosed in {d.timings.get('total', 0):.2f} s)")
+
+
+def _bench_configure(p):
+    p.add_argument("--cases", type=int, default=40, help="effect cases (default 40)")
+    p.add_argument("--clean", type=int, default=10, help="clean cases (default 10)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the case plan (default 1)")
+    p.add_argument("--robot", choices=["6pus", "quattro", "both"], default="6pus")
+    p.add_argument("--out", default="results/blind", help="output directory (default results/blind)")
+    p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
+    p.add_argument("--report", action="store_true", help="write a diagnosis report per case")
+    p.add_argument("--threshold", type=float, default=10.0)
+
+
+@command("blind-benchmark", "blind benchmark: recordings with hidden effects, diagnosed and scored against keys")
+def cmd_blind_benchmark(args):
+    from .discrepancy import blind
+
+    robots = ("6pus", "quattro") if args.robot == "both" else (args.robot,)
+    t0 = time.perf_counter()
+    res = blind.benchmark(args.cases, args.seed, args.clean, robots, args.out, jobs=args.jobs, report=args.report,
+                          threshold=args.threshold, replay=False)
+    text = blind.format_summary(res["summary"])
+    print()
+    print(text)
+    print(f"\n{len(res['cases'])} cases in {time.perf_counter() - t0:.0f} s; recordings in {args.out}/cases, "
+          f"answer keys in {args.out}/keys, scores in {args.out}/benchmark.json")
+    (Path(args.out) / "summary.txt").write_text(text + "\n")
+    return 0
+
+
+cmd_blind_benchmark.configure = _bench_configure
+
+
+def _case_configure(p):
+    p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
+    p.add_argument("--effect", action="append", default=[], help="effect type to hide (repeatable; none: clean)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--name", default=None, help="case name (default: from the effects and seed)")
+    p.add_argument("--out", default="results/blind/cases", help="recording directory")
+    p.add_argument("--keys", default="results/blind/keys", help="answer-key directory (kept apart)")
+
+
+@command("blind-case", "write one blind case: a recording with hidden effects and its answer key apart")
+def cmd_blind_case(args):
+    from .discrepancy import blind
+
+    name = args.name or f"{args.robot}_{'+'.join(args.effect) or 'clean'}_{args.seed}"
+    csv, key = blind.make_case(blind.CaseSpec(name, args.robot, list(args.effect), args.seed), args.out, args.keys)
+    print(f"recording: {csv}\nanswer key: {key}")
+    return 0
+
+
+cmd_blind_case.configure = _case_configure
+
+
+def _demo_configure(p):
+    p.add_argument("--out", default="results/discrepancy_demo", help="output directory")
+    p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
+    p.add_argument("--effect", default="coulomb", help="effect to hide (default coulomb)")
+    p.add_argument("--seed", type=int, default=3)
+
+
+@command("discrepancy-demo", "end-to-end demo: simulate a plant with a hidden effect, diagnose it, show the gain")
+def cmd_discrepancy_demo(args):
+    from .discrepancy import blind, diagnose
+
+    out = Path(args.out)
+    print(f"1. simulating a closed-loop {args.robot} run whose plant hides: {args.effect} ...")
+    csv, key = blind.make_case(blind.CaseSpec(f"demo_{args.effect}", args.robot, [args.effect], args.seed),
+                               out / "recording", out / "answer_key")
+    print(f"   recording {csv} (the answer key is kept apart in {key})")
+    print("2. diagnosing it against the nominal model ...")
+    d = diagnose(csv, out=out / "report")
+    print_diagnosis(d)
+    truth = json.loads(Path(key).read_text())["effects"]
+    print("\n3. the answer key:", "; ".join(f"{h['type']}: " + ", ".join(f"{k} = {v:.4g}" for k, v in h["params"].items())
+                                           for h in truth))
+    print(f"report: {d.files.get('report')}")
+    return 0
+
+
+cmd_discrepancy_demo.configure = _demo_configure
