@@ -6,31 +6,18 @@
 #include <string>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-double rad(double deg) { return deg * kPi / 180.0; }
+using pkm_test::rad;
 
-struct Fourbar : ::testing::Test {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[512] = {0};
-  void SetUp() override {
-    m = pkm_model_create("fourbar", nullptr, err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
-    d = pkm_data_create(m);
-    ASSERT_NE(d, nullptr);
-  }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
+struct Fourbar : pkm_test::ModelFixture<> {
+  void SetUp() override { open("fourbar"); }
   void set_lengths_mm(const double* l) {
     const char* names[4] = {"link[1].l", "link[2].l", "link[3].l", "link[4].l"};
-    for (int j = 0; j < 4; ++j)
-      ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, names[j]), l[j] * 1e-3, err, sizeof err), PKM_OK) << err;
-    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
+    for (int j = 0; j < 4; ++j) set(names[j], l[j] * 1e-3);
+    validate();
   }
   double X_mm(double theta_deg, double* dX = nullptr) {
     double X = NAN;

@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-using ModelPtr = std::unique_ptr<pkm_model, decltype(&pkm_model_destroy)>;
-using DataPtr = std::unique_ptr<pkm_data, decltype(&pkm_data_destroy)>;
+using pkm_test::DataPtr;
+using pkm_test::make_data;
+using pkm_test::ModelPtr;
 using SimPtr = std::unique_ptr<pkm_sim, decltype(&pkm_sim_destroy)>;
 
 constexpr int N = 6;
@@ -29,19 +31,8 @@ struct State {
   double x[N], xd[N];
 };
 
-ModelPtr make_model(std::vector<std::pair<std::string, double>> params = {}) {
-  char err[1024] = "";
-  ModelPtr m(pkm_model_create("6pus", nullptr, err, sizeof err), &pkm_model_destroy);
-  EXPECT_NE(m, nullptr) << err;
-  if (!m) return m;
-  for (const auto& p : params) {
-    const int i = pkm_param_index(m.get(), p.first.c_str());
-    EXPECT_GE(i, 0) << "no parameter " << p.first;
-    EXPECT_EQ(pkm_param_set(m.get(), i, p.second, err, sizeof err), PKM_OK) << err;
-  }
-  EXPECT_EQ(pkm_model_validate(m.get(), err, sizeof err), PKM_OK) << err;
-  return m;
-}
+// Every simulator test here runs the 6-PUS.
+ModelPtr make_model(const pkm_test::Params& params = {}) { return pkm_test::make_model("6pus", nullptr, params); }
 
 pkm_sim_options defaults() {
   pkm_sim_options o;
@@ -84,7 +75,7 @@ double time_in(const std::string& msg) {
 
 // A motion with some of everything: held efforts near the gravity load plus a push.
 void some_input(const pkm_model* m, const double* x, double* tau) {
-  DataPtr d(pkm_data_create(m), &pkm_data_destroy);
+  DataPtr d = make_data(m);
   ASSERT_EQ(pkm_gravity_load(m, d.get(), x, tau), PKM_OK) << pkm_data_error(d.get());
   const double push[N] = {0.3, -0.2, 0.1, 0.25, -0.15, 0.05};
   for (int i = 0; i < N; ++i) tau[i] += push[i];
@@ -204,7 +195,7 @@ TEST(SimArgs, NonFiniteInputsAreArgumentErrorsAndChangeNothing) {
 
 TEST(SimArgs, ResetRefusesUnreachableAndOutOfStrokeStates) {
   ModelPtr m = make_model();
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   SimPtr s = make_sim(m.get(), defaults());
   double x[N], xd[N] = {0, 0, 0, 0, 0, 0}, q[N];
   home_of(m.get(), x);
@@ -367,7 +358,7 @@ TEST(Sim, GravityLoadHoldsTheRobotStill) {
   SimPtr s = make_sim(m.get(), defaults());
   double x[N], tau[N];
   home_of(m.get(), x);
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   ASSERT_EQ(pkm_gravity_load(m.get(), d.get(), x, tau), PKM_OK);
   ASSERT_EQ(pkm_sim_set_input(s.get(), tau), PKM_OK);
   ASSERT_EQ(pkm_sim_advance(s.get(), 0.2), PKM_OK) << pkm_sim_error(s.get());
@@ -385,7 +376,7 @@ TEST(Sim, GravityLoadHoldsTheRobotStill) {
 // Total energy with no gravity, no friction and no input over 10 s.
 TEST(Sim, EnergyIsConservedWithoutGravityFrictionOrInput) {
   ModelPtr m = make_model({{"gravity.z", 0.0}});
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   pkm_sim_options o = defaults();
   o.rtol = 1e-10;
   o.atol = 1e-12;
@@ -416,10 +407,10 @@ TEST(Sim, EnergyIsConservedWithoutGravityFrictionOrInput) {
 }
 
 TEST(Sim, ViscousFrictionOnlyDissipates) {
-  std::vector<std::pair<std::string, double>> p = {{"gravity.z", 0.0}};
+  pkm_test::Params p = {{"gravity.z", 0.0}};
   for (int i = 1; i <= N; ++i) p.push_back({"rail[" + std::to_string(i) + "].viscous", 5.0});
   ModelPtr m = make_model(p);
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   SimPtr s = make_sim(m.get(), defaults());
   double x[N];
   home_of(m.get(), x);
@@ -441,10 +432,10 @@ TEST(Sim, ViscousFrictionOnlyDissipates) {
 // With the default 170 mm rails a free fall reaches the direct singularity first (see
 // the next test); with 80 mm rails the platform must stop at a stroke limit.
 TEST(Sim, FallsUnderGravityAndStopsAtAStrokeLimit) {
-  std::vector<std::pair<std::string, double>> p;
+  pkm_test::Params p;
   for (int i = 1; i <= N; ++i) p.push_back({"rail[" + std::to_string(i) + "].qmax", 0.08});
   ModelPtr m = make_model(p);
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   SimPtr s = make_sim(m.get(), defaults());
   int status = PKM_OK;
   for (int k = 1; k <= 200 && status == PKM_OK; ++k) status = pkm_sim_advance(s.get(), 0.01 * k);
@@ -481,7 +472,7 @@ TEST(Sim, FallsUnderGravityAndStopsAtAStrokeLimit) {
 // the legs lie flat and cannot hold the platform: a direct singularity (measure -> 0).
 TEST(Sim, FallsThroughTheRailPlaneToADirectSingularity) {
   ModelPtr m = make_model();
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   const pkm_sim_options o = defaults();
   SimPtr s = make_sim(m.get(), o);
   int status = PKM_OK;
@@ -510,7 +501,7 @@ TEST(Sim, FallsThroughTheRailPlaneToADirectSingularity) {
 // crossing: no CVODE step ends inside, so only the sign change of det J can catch it.
 TEST(Sim, CatchesASingularityCrossedWithinOneStep) {
   ModelPtr m = make_model();
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   pkm_sim_options o = defaults();
   o.sing_min = 1e-6;
   SimPtr s = make_sim(m.get(), o);
@@ -532,7 +523,7 @@ TEST(Sim, CatchesASingularityCrossedWithinOneStep) {
 // velocity down the measure's gradient, the motion must stop where measure = sing_min.
 TEST(Sim, StopsAtTheDirectSingularityThreshold) {
   ModelPtr m = make_model({{"gravity.z", 0.0}});
-  DataPtr d(pkm_data_create(m.get()), &pkm_data_destroy);
+  DataPtr d = make_data(m.get());
   double x[N], meas[2];
   home_of(m.get(), x);
   ASSERT_EQ(pkm_singularity(m.get(), d.get(), x, meas), PKM_OK);
@@ -613,7 +604,7 @@ TEST(Sim, CvodeFailureNamesTheFlagAndTheTime) {
 // ------------------------------------------------------------- drive layer
 
 TEST(SimDrive, SaturationClipsTheCommand) {
-  std::vector<std::pair<std::string, double>> p;
+  pkm_test::Params p;
   for (int i = 1; i <= N; ++i) p.push_back({"rail[" + std::to_string(i) + "].effort_max", 2.0});
   ModelPtr sat = make_model(p), plain = make_model();
   SimPtr a = make_sim(sat.get(), defaults()), b = make_sim(plain.get(), defaults());

@@ -9,29 +9,19 @@
 #include <vector>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-struct QuattroDyn : ::testing::TestWithParam<const char*> {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[512] = {0};
+struct QuattroDyn : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
   void SetUp() override {
-    m = pkm_model_create("quattro", GetParam(), err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
+    create_model("quattro", GetParam());
+    if (!m) return;
     // A payload makes the platform-side terms and the tool-spin inertia matter.
     set("payload.m", 0.5);
     set("payload.J", 2e-3);
-    d = pkm_data_create(m);
-    ASSERT_NE(d, nullptr);
-  }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
-  void set(const char* name, double v) {
-    ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, name), v, err, sizeof err), PKM_OK) << err;
-    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
+    validate();
+    create_data();
   }
   std::vector<std::vector<double>> poses() {
     return {{0.0, 0.0, -0.95, 0.0}, {0.12, -0.05, -1.0, 0.1}, {-0.2, 0.15, -0.9, -0.2}, {0.05, 0.25, -1.1, 0.3}};
@@ -138,9 +128,10 @@ TEST_P(QuattroDyn, MassMatrixIsSymmetricPositiveAndCarriesTheRotors) {
   double M1[16], M2[16], Jm[16];
   M(x, M1);
   J(x, Jm);
-  const double Jrot = pkm_param_get(m, pkm_param_index(m, "motor.J"));
-  const double r = pkm_param_get(m, pkm_param_index(m, "gear.ratio"));
+  const double Jrot = param("motor.J");
+  const double r = param("gear.ratio");
   set("motor.J", 2 * Jrot);
+  validate();
   pkm_data_destroy(d);
   d = pkm_data_create(m);
   M(x, M2);

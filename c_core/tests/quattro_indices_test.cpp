@@ -9,25 +9,14 @@
 #include <string>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
 using Mat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
 
-struct QuattroIdx : ::testing::TestWithParam<const char*> {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[512] = {0};
-  void SetUp() override {
-    m = pkm_model_create("quattro", GetParam(), err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
-    d = pkm_data_create(m);
-  }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
-  double P(const char* n) { return pkm_param_get(m, pkm_param_index(m, n)); }
+struct QuattroIdx : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
+  void SetUp() override { open("quattro", GetParam()); }
   int col(const char* name) {
     for (int i = 0; i < PKM_QUATTRO_NINDEX; ++i)
       if (std::string(pkm_quattro_index_name(i)) == name) return i;
@@ -46,7 +35,7 @@ TEST_P(QuattroIdx, NamesAndUnits) {
 
 TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
   const double xs[3][4] = {{0, 0, -1.0, 0}, {0.15, -0.1, -0.92, 0}, {-0.1, 0.2, -1.12, 0.2}};
-  const double br = P("arm.b_r"), lim = P("gear.ratio") * P("motor.tau_nominal");
+  const double br = param("arm.b_r"), lim = param("gear.ratio") * param("motor.tau_nominal");
   for (auto& x : xs) {
     double out[PKM_QUATTRO_NINDEX];
     int st = -99;
@@ -60,7 +49,7 @@ TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
     EXPECT_NEAR(out[col("mu_T")], 1 / std::sqrt((JT.transpose() * JT).determinant()), 1e-10);
     EXPECT_NEAR(out[col("mu_z")], 1 / JD.col(2).norm(), 1e-10);
     // Eigenvalue variant on the z axis equals the sub-matrix one there (seed ch. 3.5).
-    if (x[0] == 0 && x[1] == 0 && P("platform.offset") == 0) {
+    if (x[0] == 0 && x[1] == 0 && param("platform.offset") == 0) {
       EXPECT_NEAR(out[col("mu_z_eig")], out[col("mu_z")], 1e-9);
       EXPECT_NEAR(out[col("mu_T_eig")], out[col("mu_T")], 1e-9);
     }
@@ -102,7 +91,8 @@ TEST_P(QuattroIdx, GimreIsTheKineticEnergyOfLinksAndPlatform) {
   ASSERT_EQ(pkm_quattro_points(m, d, xm, nullptr, Bm, Cm), PKM_OK);
   ASSERT_EQ(pkm_ik(m, d, xp, qp), PKM_OK);
   ASSERT_EQ(pkm_ik(m, d, xm, qm), PKM_OK);
-  const double mb = P("arm.m"), lg = P("arm.lg"), br = P("arm.b_r"), mc = P("forearm.m"), mp = P("platform.m");
+  const double mb = param("arm.m"), lg = param("arm.lg"), br = param("arm.b_r"), mc = param("forearm.m"),
+               mp = param("platform.m");
   const double I1 = mb * lg * lg + mb * (br * br / 3 - br * lg + lg * lg);
   double T = 0;
   for (int i = 0; i < 4; ++i) {

@@ -8,34 +8,14 @@
 #include <vector>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using pkm_test::kPi;
 
-struct Quattro : ::testing::TestWithParam<const char*> {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[512] = {0};
-  void SetUp() override {
-    m = pkm_model_create("quattro", GetParam(), err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
-    d = pkm_data_create(m);
-    ASSERT_NE(d, nullptr);
-  }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
-  double P(const char* name) {
-    int i = pkm_param_index(m, name);
-    EXPECT_GE(i, 0) << name;
-    return pkm_param_get(m, i);
-  }
-  void set(const char* name, double v) {
-    ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, name), v, err, sizeof err), PKM_OK) << err;
-    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
-  }
+struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
+  void SetUp() override { open("quattro", GetParam()); }
   // Poses spread over the useful workspace (tool point, theta), all reachable.
   std::vector<std::vector<double>> poses() {
     return {{0.0, 0.0, -0.95, 0.0}, {0.12, -0.05, -1.0, 0.1}, {-0.2, 0.15, -0.9, -0.2},
@@ -44,8 +24,9 @@ struct Quattro : ::testing::TestWithParam<const char*> {
   // Seed eqs. 2.6-2.9: F_i(q, x) = |C_i - B_i|^2 - c^2 with the seed's coordinates
   // x0 = x + offset cos(pi/4 + th), y0 = ..., z0 = z + base + ee (ch. 1.5).
   void seed_closure(const double* q, const double* x, double* F) {
-    const double a = P("base.a"), base = P("base.h"), br = P("arm.b_r"), rb = P("arm.r_b"), c = P("forearm.c"),
-                 dd = P("platform.d"), off = P("platform.offset"), ee = P("tool.length");
+    const double a = param("base.a"), base = param("base.h"), br = param("arm.b_r"), rb = param("arm.r_b"),
+                 c = param("forearm.c"), dd = param("platform.d"), off = param("platform.offset"),
+                 ee = param("tool.length");
     const double b = std::sqrt(br * br + rb * rb), th = x[3], ps = kPi / 4 + th, r2 = std::sqrt(2.0) / 2;
     const double x0 = x[0] + off * std::cos(ps), y0 = x[1] + off * std::sin(ps), z0 = x[2] + base + ee;
     const double cp = dd / 2 * std::cos(ps), sp = dd / 2 * std::sin(ps), h = dd / 2 * r2;
@@ -60,16 +41,16 @@ struct Quattro : ::testing::TestWithParam<const char*> {
 TEST_P(Quattro, ParameterSetsCarryTheSeedValues) {
   EXPECT_EQ(pkm_model_ndof(m), 4);
   const bool app = std::string(GetParam()) == "appendix_a";
-  EXPECT_DOUBLE_EQ(P("base.a"), app ? 0.28 : 0.275);
-  EXPECT_DOUBLE_EQ(P("base.h"), app ? 0.20 : 0.19);
-  EXPECT_DOUBLE_EQ(P("platform.m"), app ? 2.62 : 0.262);
-  EXPECT_DOUBLE_EQ(P("arm.m"), app ? 1.85 : 1.45);
-  EXPECT_DOUBLE_EQ(P("platform.offset"), app ? 0.0 : 0.075);
-  EXPECT_DOUBLE_EQ(P("arm.b_r"), 0.375);
-  EXPECT_DOUBLE_EQ(P("forearm.c"), 0.825);
-  EXPECT_DOUBLE_EQ(P("gear.ratio") * P("motor.tau_nominal"), 119.5);
-  EXPECT_NEAR(P("joint.q_min") * 180 / kPi, -51, 1e-12);
-  EXPECT_NEAR(P("joint.q_max") * 180 / kPi, 123, 1e-12);
+  EXPECT_DOUBLE_EQ(param("base.a"), app ? 0.28 : 0.275);
+  EXPECT_DOUBLE_EQ(param("base.h"), app ? 0.20 : 0.19);
+  EXPECT_DOUBLE_EQ(param("platform.m"), app ? 2.62 : 0.262);
+  EXPECT_DOUBLE_EQ(param("arm.m"), app ? 1.85 : 1.45);
+  EXPECT_DOUBLE_EQ(param("platform.offset"), app ? 0.0 : 0.075);
+  EXPECT_DOUBLE_EQ(param("arm.b_r"), 0.375);
+  EXPECT_DOUBLE_EQ(param("forearm.c"), 0.825);
+  EXPECT_DOUBLE_EQ(param("gear.ratio") * param("motor.tau_nominal"), 119.5);
+  EXPECT_NEAR(param("joint.q_min") * 180 / kPi, -51, 1e-12);
+  EXPECT_NEAR(param("joint.q_max") * 180 / kPi, 123, 1e-12);
 }
 
 TEST_P(Quattro, IkSatisfiesTheSeedClosureEquations) {
@@ -229,7 +210,7 @@ TEST_P(Quattro, JointRangeNamesTheArmAndAngle) {
   double q[4];
   int found = 0;
   for (double z0 = -0.50; z0 < -0.38 && !found; z0 += 0.001) {
-    const double x[4] = {0.0, 0.0, z0 - P("base.h"), 0.0};
+    const double x[4] = {0.0, 0.0, z0 - param("base.h"), 0.0};
     int s = pkm_ik(m, d, x, q);
     if (s == PKM_ERR_JOINT_LIMIT) {
       found = 1;

@@ -8,42 +8,24 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <string>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-double rad(double deg) { return deg * kPi / 180.0; }
+using pkm_test::central_difference;
+using pkm_test::rad;
 
 using Mat6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-struct Dyn : ::testing::Test {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[1024] = {0};
-  std::mt19937_64 rng{777};
-
+struct Dyn : pkm_test::ModelFixture<> {
   void SetUp() override {
-    m = pkm_model_create("6pus", nullptr, err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
-    d = pkm_data_create(m);
-    ASSERT_NE(d, nullptr);
+    rng.seed(777);
+    open("6pus");
   }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
-  double uni(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
-  void set(const std::string& name, double v) {
-    int i = pkm_param_index(m, name.c_str());
-    ASSERT_GE(i, 0) << name;
-    ASSERT_EQ(pkm_param_set(m, i, v, err, sizeof err), PKM_OK) << err;
-  }
-  void validate() { ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err; }
   // A payload off the platform centre (the offset makes its rotation matter).
   void payload() {
     set("payload.m", 0.2);
@@ -178,7 +160,7 @@ TEST_F(Dyn, PowerBalanceAlongATrajectory) {
       return KE(xs, xds) + PE(xs);
     };
     // Richardson extrapolation of central differences: error O(h^4).
-    const double d1 = (E(h) - E(-h)) / (2 * h), d2 = (E(2 * h) - E(-2 * h)) / (4 * h);
+    const double d1 = central_difference(E, h), d2 = central_difference(E, 2 * h);
     const double dEdt = (4 * d1 - d2) / 3;
     const double power = tau.dot(qd);
     // Scale: the largest single term of the power.
@@ -199,7 +181,7 @@ TEST_F(Dyn, GravityLoadIsTheVirtualWorkOfThePotential) {
     Vec6 x = pose(), g, dPE;
     ASSERT_EQ(pkm_gravity_load(m, d, x.data(), g.data()), PKM_OK);
     const double h = 1e-6;
-    for (int k = 0; k < 6; ++k) dPE[k] = (PE(x + h * Vec6::Unit(k)) - PE(x - h * Vec6::Unit(k))) / (2 * h);
+    for (int k = 0; k < 6; ++k) dPE[k] = central_difference([&](double s) { return PE(x + s * Vec6::Unit(k)); }, h);
     EXPECT_LT(rel(J(x).transpose() * g, dPE), 1e-6);
   }
 }

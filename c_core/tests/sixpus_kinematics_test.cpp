@@ -8,48 +8,24 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "pkm/pkm.h"
+#include "test_support.hpp"
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-double rad(double deg) { return deg * kPi / 180.0; }
+using pkm_test::central_difference;
+using pkm_test::rad;
 
 using Mat6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-struct SixPus : ::testing::Test {
-  pkm_model* m = nullptr;
-  pkm_data* d = nullptr;
-  char err[1024] = {0};
-  std::mt19937_64 rng{12345};
-
+struct SixPus : pkm_test::ModelFixture<> {
   void SetUp() override {
-    m = pkm_model_create("6pus", nullptr, err, sizeof err);
-    ASSERT_NE(m, nullptr) << err;
-    d = pkm_data_create(m);
-    ASSERT_NE(d, nullptr);
-  }
-  void TearDown() override {
-    pkm_data_destroy(d);
-    pkm_model_destroy(m);
-  }
-  double uni(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
-  int idx(const std::string& name) {
-    int i = pkm_param_index(m, name.c_str());
-    EXPECT_GE(i, 0) << name;
-    return i;
-  }
-  double param(const std::string& name) { return pkm_param_get(m, idx(name)); }
-  // Sets a parameter and validates the set; returns the validation status.
-  int set(const std::string& name, double v) {
-    int s = pkm_param_set(m, idx(name), v, err, sizeof err);
-    if (s != PKM_OK) return s;
-    return pkm_model_validate(m, err, sizeof err);
+    rng.seed(12345);
+    open("6pus");
   }
   Vec6 home() {
     Vec6 x;
@@ -76,10 +52,10 @@ struct SixPus : ::testing::Test {
   // at poses whose strokes may leave the default range.
   void wide_strokes() {
     for (int i = 1; i <= 6; ++i) {
-      ASSERT_EQ(pkm_param_set(m, idx("rail[" + std::to_string(i) + "].qmin"), -1.0, err, sizeof err), PKM_OK);
-      ASSERT_EQ(pkm_param_set(m, idx("rail[" + std::to_string(i) + "].qmax"), 1.0, err, sizeof err), PKM_OK);
+      set("rail[" + std::to_string(i) + "].qmin", -1.0);
+      set("rail[" + std::to_string(i) + "].qmax", 1.0);
     }
-    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
+    validate();
   }
   // A random pose that IK accepts (reachable, within strokes).
   Vec6 random_valid_pose(double xy = 0.05, double zlo = 0.02, double zhi = 0.10, double deg = 5) {
@@ -104,11 +80,11 @@ double rel_err(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double floor 
 
 TEST_F(SixPus, ParameterTableNamesUnitsAndReferenceGeometry) {
   EXPECT_EQ(pkm_model_ndof(m), 6);
-  EXPECT_STREQ(pkm_param_unit(m, idx("leg[1].L")), "m");
-  EXPECT_STREQ(pkm_param_unit(m, idx("platform.Ixx")), "kg m2");
-  EXPECT_STREQ(pkm_param_unit(m, idx("gravity.z")), "m/s2");
-  EXPECT_STREQ(pkm_param_unit(m, idx("rail[6].sx")), "1");
-  EXPECT_GT(std::string(pkm_param_description(m, idx("leg[3].branch"))).size(), 10u);
+  EXPECT_STREQ(pkm_param_unit(m, index_of("leg[1].L")), "m");
+  EXPECT_STREQ(pkm_param_unit(m, index_of("platform.Ixx")), "kg m2");
+  EXPECT_STREQ(pkm_param_unit(m, index_of("gravity.z")), "m/s2");
+  EXPECT_STREQ(pkm_param_unit(m, index_of("rail[6].sx")), "1");
+  EXPECT_GT(std::string(pkm_param_description(m, index_of("leg[3].branch"))).size(), 10u);
   // SPEC 3.1 / Table 4.1 values.
   EXPECT_EQ(param("rail[1].S0x"), -0.085);
   EXPECT_EQ(param("rail[1].S0y"), 0.020);
@@ -152,10 +128,10 @@ TEST_F(SixPus, HomePoseAndStrokes) {
 
 TEST_F(SixPus, ParameterRangesAndSetChecksNameTheParameter) {
   // Own range: checked by pkm_param_set.
-  EXPECT_EQ(pkm_param_set(m, idx("leg[2].L"), -0.1, err, sizeof err), PKM_ERR_PARAMETER);
+  EXPECT_EQ(pkm_param_set(m, index_of("leg[2].L"), -0.1, err, sizeof err), PKM_ERR_PARAMETER);
   EXPECT_NE(std::string(err).find("leg[2].L"), std::string::npos) << err;
-  EXPECT_EQ(pkm_param_set(m, idx("slider[4].m"), -1.0, err, sizeof err), PKM_ERR_PARAMETER);
-  EXPECT_EQ(pkm_param_set(m, idx("leg[1].branch"), 2.0, err, sizeof err), PKM_ERR_PARAMETER);
+  EXPECT_EQ(pkm_param_set(m, index_of("slider[4].m"), -1.0, err, sizeof err), PKM_ERR_PARAMETER);
+  EXPECT_EQ(pkm_param_set(m, index_of("leg[1].branch"), 2.0, err, sizeof err), PKM_ERR_PARAMETER);
 
   // Whole-set checks: each names the parameter(s), and the model refuses to compute
   // until a valid set is validated.
@@ -177,12 +153,12 @@ TEST_F(SixPus, ParameterRangesAndSetChecksNameTheParameter) {
   const Vec6 h = home();
   for (const auto& c : cases) {
     const double old = param(c.name);
-    EXPECT_EQ(set(c.name, c.value), PKM_ERR_PARAMETER) << c.name;
+    EXPECT_EQ(try_set(c.name, c.value), PKM_ERR_PARAMETER) << c.name;
     EXPECT_NE(std::string(err).find(c.mentions), std::string::npos) << c.name << ": " << err;
     Vec6 q, x;
     EXPECT_EQ(pkm_ik(m, d, h.data(), q.data()), PKM_ERR_PARAMETER) << c.name;
     EXPECT_EQ(pkm_model_home(m, x.data()), PKM_ERR_PARAMETER) << c.name;
-    EXPECT_EQ(set(c.name, old), PKM_OK) << c.name << ": " << err;
+    EXPECT_EQ(try_set(c.name, old), PKM_OK) << c.name << ": " << err;
   }
   Vec6 x = home();
   ik(x);
@@ -196,8 +172,8 @@ TEST_F(SixPus, RailsProportionalToPlatformPointsAreRejectedAsArchitectureSingula
     const double py = param("leg" + l + ".py"), px = param("leg" + l + ".px");
     const double br = param("leg" + l + ".branch");
     const double wx = br * std::sqrt(0.116 * 0.116 - 0.085 * 0.085);
-    ASSERT_EQ(pkm_param_set(m, idx("rail" + l + ".S0y"), py, err, sizeof err), PKM_OK);
-    ASSERT_EQ(pkm_param_set(m, idx("rail" + l + ".S0x"), px - wx - 0.055, err, sizeof err), PKM_OK);
+    ASSERT_EQ(pkm_param_set(m, index_of("rail" + l + ".S0y"), py, err, sizeof err), PKM_OK);
+    ASSERT_EQ(pkm_param_set(m, index_of("rail" + l + ".S0x"), px - wx - 0.055, err, sizeof err), PKM_OK);
   }
   EXPECT_EQ(pkm_model_validate(m, err, sizeof err), PKM_ERR_PARAMETER);
   EXPECT_NE(std::string(err).find("singular"), std::string::npos) << err;
@@ -326,7 +302,7 @@ TEST_F(SixPus, LegPerpendicularToItsRailIsSingularAndTheMeasureGoesToZero) {
   // platform rises: at R = I, x = y = 0, w = (wx, 0.008, z) and wx = 0 at
   // z = sqrt(L^2 - 0.008^2), where the other legs still reach.
   const double L = 0.086;
-  ASSERT_EQ(set("leg[1].L", L), PKM_OK) << err;
+  ASSERT_EQ(try_set("leg[1].L", L), PKM_OK) << err;
   const double zs = std::sqrt(L * L - 0.008 * 0.008);
   Vec6 x = home(), q;
   x[2] = zs;
@@ -426,7 +402,7 @@ TEST_F(SixPus, JacobianDotMatchesFiniteDifferencesAlongTheVelocity) {
     Mat6 Jd;
     ASSERT_EQ(pkm_jacobian_dot(m, d, x.data(), xd.data(), Jd.data()), PKM_OK);
     const double h = 1e-6;
-    Mat6 fd = (J(x + h * xd) - J(x - h * xd)) / (2 * h);
+    Mat6 fd = central_difference([&](double s) { return J(x + s * xd); }, h);
     EXPECT_LT(rel_err(Jd, fd), 1e-6) << "pose " << x.transpose();
   }
 }
@@ -469,21 +445,17 @@ TEST_F(SixPus, CalibrationRowsMatchFiniteDifferences) {
     ASSERT_EQ(pkm_6pus_calib_rows(m, d, x.data(), PKM_FRAME_PLATFORM, P.data()), PKM_OK);
     // World platform point: moving the pose by dp moves every P_i by dp.
     const double h = 1e-6;
-    for (int k = 0; k < 3; ++k) {
-      Vec6 xp = x, xm = x;
-      xp[k] += h;
-      xm[k] -= h;
-      fdW.col(k) = (ik(xp) - ik(xm)) / (2 * h);
-    }
+    for (int k = 0; k < 3; ++k)
+      fdW.col(k) = central_difference([&](double s) { return ik(x + s * Vec6::Unit(k)); }, h);
     // Parameter columns: perturb the parameter itself (rail directions by 1e-7 so |s|
     // stays within the 1e-6 unit-length tolerance).
     auto dparam = [&](const std::string& name, double hh) {
       const double v0 = param(name);
-      EXPECT_EQ(set(name, v0 + hh), PKM_OK) << err;
+      EXPECT_EQ(try_set(name, v0 + hh), PKM_OK) << err;
       Vec6 qp = ik(x);
-      EXPECT_EQ(set(name, v0 - hh), PKM_OK) << err;
+      EXPECT_EQ(try_set(name, v0 - hh), PKM_OK) << err;
       Vec6 qm = ik(x);
-      EXPECT_EQ(set(name, v0), PKM_OK) << err;
+      EXPECT_EQ(try_set(name, v0), PKM_OK) << err;
       return Vec6((qp - qm) / (2 * hh));
     };
     fdP.setZero();
@@ -538,9 +510,8 @@ struct SeedTables : SixPus {
   void SetUp() override {
     SixPus::SetUp();
     wide_strokes();
-    for (int i = 2; i <= 6; ++i)
-      ASSERT_EQ(pkm_param_set(m, idx("leg[" + std::to_string(i) + "].L"), 0.3, err, sizeof err), PKM_OK);
-    ASSERT_EQ(pkm_model_validate(m, err, sizeof err), PKM_OK) << err;
+    for (int i = 2; i <= 6; ++i) set("leg[" + std::to_string(i) + "].L", 0.3);
+    validate();
     ASSERT_EQ(param("leg[1].L"), 0.116);
     ASSERT_EQ(param("rail[1].S0x"), -0.085);
   }
