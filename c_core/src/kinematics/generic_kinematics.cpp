@@ -31,25 +31,16 @@ void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const doubl
     if (!dx.allFinite())
       throw Error(PKM_ERR_SINGULAR, "forward kinematics: singular Jacobian at iteration " + std::to_string(it));
     // Backtrack if the full step leaves the workspace or does not reduce the residual.
-    double step = 1.0;
-    bool accepted = false;
-    for (int ls = 0; ls < 30; ++ls, step *= 0.5) {
+    double rt = 0;
+    const bool accepted = backtracking_step(rn, opt.tol, [&](double step) {
       xt = x + step * dx;
-      try {
-        ik(rm, rd, xt.data(), qt.data());
-      } catch (const Error&) {
-        continue;
-      }
-      double rt = (qt - qv).cwiseAbs().maxCoeff();
-      if (rt < rn || rt <= opt.tol) {
-        x = xt;
-        r = qt - qv;
-        rn = rt;
-        accepted = true;
-        break;
-      }
-    }
+      ik(rm, rd, xt.data(), qt.data());
+      return rt = (qt - qv).cwiseAbs().maxCoeff();
+    });
     if (!accepted) break;
+    x = xt;
+    r = qt - qv;
+    rn = rt;
   }
   info.iterations = it;
   info.residual = rn;

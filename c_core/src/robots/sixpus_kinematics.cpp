@@ -3,6 +3,7 @@
 // acceleration.  Equations in docs/6pus.md.
 #include <sstream>
 
+#include "kinematics/generic_kinematics.hpp"
 #include "robots/sixpus.hpp"
 
 namespace pkm {
@@ -202,29 +203,21 @@ void SixPus::fk(const RobotModel& rm, RobotData&, const double* q, const double*
         throw Error(PKM_ERR_SINGULAR, "forward kinematics: singular Jacobian at iteration " + std::to_string(it) +
                                           " near the " + pose_text(x.data()));
     }
-    // Halve the step while it leaves the workspace or does not reduce the residual.
-    double step = 1.0;
-    bool accepted = false;
-    for (int ls = 0; ls < 30; ++ls, step *= 0.5) {
+    // Halve the step while it leaves the workspace or does not reduce the residual; the
+    // accepted trial's frame and legs serve the next Jacobian.
+    Frame ft;
+    Leg lt[NLEG];
+    double rtn = 0;
+    const bool accepted = backtracking_step(rn, opt.tol, [&](double step) {
       xt = x + step * dx;
-      Frame ft;
-      Leg lt[NLEG];
       frame_of(xt.data(), ft);
-      try {
-        legs_at(m, xt.data(), ft, lt, Strokes::ignore);
-      } catch (const Error&) {
-        continue;
-      }
+      legs_at(m, xt.data(), ft, lt, Strokes::ignore);
       for (int i = 0; i < NLEG; ++i) rt[i] = lt[i].q - q[i];
-      const double rtn = rt.cwiseAbs().maxCoeff();
-      if (rtn < rn || rtn <= opt.tol) {
-        x = xt, r = rt, rn = rtn, f = ft;
-        for (int i = 0; i < NLEG; ++i) legs[i] = lt[i];
-        accepted = true;
-        break;
-      }
-    }
+      return rtn = rt.cwiseAbs().maxCoeff();
+    });
     if (!accepted) break;
+    x = xt, r = rt, rn = rtn, f = ft;
+    for (int i = 0; i < NLEG; ++i) legs[i] = lt[i];
   }
   info.iterations = it;
   info.residual = rn;
