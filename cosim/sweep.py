@@ -875,6 +875,7 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                       f"{rec.get('error')}"[:400])
 
     own_client = own_cluster = None
+    lost = 0
     index = {}  # key of each future in flight -> its case
     try:
         if workers == 0 and client is None and scheduler is None:
@@ -884,7 +885,7 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                 rec["index"] = c.index
                 record(rec)
         elif todo_run:
-            from distributed import as_completed
+            from distributed import CancelledError, as_completed
 
             t0 = time.perf_counter()
             if client is None:
@@ -899,8 +900,10 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
             if fmu:
                 fmu_arg = {k: v for k, v in fmu.items() if k != "bytes"}
                 # one copy per worker, not one per task; workers write it to their cache
-                fmu_data = client.scatter(fmu["bytes"], broadcast=True, hash=True)
-            base_f = client.scatter([base], broadcast=True, hash=True)[0]
+                fmu_data = client.scatter(fmu["bytes"], broadcast=True, hash=False)
+            # hash=False: a key of its own per call, so that the release of a previous
+            # call's copy (same content) cannot delete the data this call depends on
+            base_f = client.scatter([base], broadcast=True, hash=False)[0]
             prefix = f"sweep-{spec.fingerprint()}-"
 
             def submit(c):
@@ -915,7 +918,15 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                 c, _ = index.pop(fut.key)
                 try:
                     rec = fut.result()
-                except Exception as e:  # the worker died (a crash in a C library...) or was lost
+                except CancelledError as e:  # not the case's doing: leave it pending for a resume
+                    lost += 1
+                    bar.write(f"case {c.index} [{c.id}] was cancelled by the cluster ({e}); it stays pending")
+                    fut.release()
+                    nxt = next(it, None)
+                    if nxt is not None:
+                        ac.add(submit(nxt))
+                    continue
+                except Exception as e:  # the worker died while running it (a crash in a C library...)
                     rec = {"case_id": c.id, "params": c.params, "status": "error", "results": {},
                            "error_type": type(e).__name__, "error": f"the case did not come back from its worker: {e}",
                            "seconds": None, "worker": None}
