@@ -35,7 +35,6 @@ Example
 """
 from __future__ import annotations
 
-import copy
 import csv
 import hashlib
 import json
@@ -940,7 +939,8 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
         bar.close()
         f.close()
         if index and client is not None and own_client is None:
-            client.cancel([fu for _, fu in index.values()])  # interrupted: the caller's cluster should not go on with them
+            # interrupted: the caller's cluster should not go on with them
+            client.cancel([fu for _, fu in index.values()])
         if own_client is not None:
             own_client.close()
         if own_cluster is not None:

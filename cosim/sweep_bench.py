@@ -88,10 +88,15 @@ def run(kind: str, cases: int = 100, workers: int = 2, progress: bool = False) -
     with tempfile.TemporaryDirectory(prefix="pkm-sweep-bench-") as tmp:
         tmp = Path(tmp)
         warm = spec_from_dict({**spec.to_dict(), "grid": {}, "cases": [spec.case_list()[0].params]})
-        run_sweep(warm, out=tmp / "warm", workers=0, progress=False)
-        t0 = time.perf_counter()
-        serial = run_sweep(spec, out=tmp / "serial", workers=0, progress=progress)
-        t_serial = time.perf_counter() - t0
+        from threadpoolctl import threadpool_limits
+
+        # one BLAS thread, as in the workers (Dask's nannies set OMP_NUM_THREADS=1...),
+        # so that the speed-up compares processes, not BLAS threading
+        with threadpool_limits(limits=1):
+            run_sweep(warm, out=tmp / "warm", workers=0, progress=False)
+            t0 = time.perf_counter()
+            serial = run_sweep(spec, out=tmp / "serial", workers=0, progress=progress)
+            t_serial = time.perf_counter() - t0
         t0 = time.perf_counter()
         client, cluster, desc = _start_client(None, workers)
         try:
@@ -133,11 +138,14 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     kinds = ["calibration", "scenario"] if a.kind == "both" else [a.kind]
     print(f"sweep benchmark: {a.cases} cases per kind, serial loop vs LocalCluster of {a.workers} worker processes "
-          f"(1 thread each) on a machine with {os.cpu_count()} cores; start-up = cluster start + imports on workers")
+          f"(1 thread each) on a machine with {os.cpu_count()} cores; start-up = cluster start + imports on workers; "
+          f"load average before: {os.getloadavg()[0]:.2f}")
     rows = []
     for k in kinds:
         rows.append(run(k, a.cases, a.workers, a.progress))
         print(format_rows(rows[-1:]).splitlines()[-1] if rows[:-1] else format_rows(rows), flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.2f} (other processes on the machine slow the 2-worker run more "
+          f"than the serial one)")
     return 0 if all(r["identical"] and not r["failed"] for r in rows) else 1
 
 

@@ -266,7 +266,8 @@ class CalibrationKind(Kind):
         if not result.ok:
             return ""
         L = ["calibration trials (median over the cases that ran):"]
-        for name, unit, f in (("holdout.position_rms_nominal", "um", 1e6), ("holdout.position_rms_calibrated", "um", 1e6),
+        for name, unit, f in (("holdout.position_rms_nominal", "um", 1e6),
+                              ("holdout.position_rms_calibrated", "um", 1e6),
                               ("truth.position_rms_calibrated", "um", 1e6), ("truth.gain", "x", 1.0)):
             v = result.column(name)
             if np.isfinite(v).any():
