@@ -84,6 +84,7 @@ class Diagnosis:
     files: dict = field(default_factory=dict)
     steps: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    refused: list = field(default_factory=list)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -106,8 +107,8 @@ class Diagnosis:
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
-                                               "localisation", "not_excited", "unavailable", "channels", "noise",
-                                               "replay", "timings", "files", "steps", "settings")}
+                                               "localisation", "not_excited", "unavailable", "refused", "channels",
+                                               "noise", "replay", "timings", "files", "steps", "settings")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=_json_default)
@@ -227,7 +228,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
                   {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
                    "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
-                  steps=sel.steps,
+                  steps=sel.steps, refused=[f"{k}: {v}" for k, v in sel.refused.items()],
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window})
@@ -235,6 +236,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t5 = time.perf_counter()
         d.replay = _replay(rec, eng, sel)
         timings["replay"] = time.perf_counter() - t5
+    timings["diagnosis"] = time.perf_counter() - t0
+    d.timings = timings
     if out is not None:
         from .report import write_report
 
@@ -242,7 +245,6 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         d.files = write_report(d, eng, sel, Path(out), figures=figures)
         timings["report"] = time.perf_counter() - t6
     timings["total"] = time.perf_counter() - t0
-    d.timings = timings
     return d
 
 
@@ -274,9 +276,11 @@ def heldout_fit(eng, sel) -> dict:
         return np.sqrt(np.sum(a**2 * use, axis=0) / np.maximum(use.sum(axis=0), 1))
 
     rb, ra = rms(Rb), rms(Ra)
-    contrib = rms(Rb - Ra)
     sig = sel.sigma
-    affected = [i for i in range(len(chans)) if contrib[i] > sig[i]]
+    # Channels the fitted effects act on: their contribution exceeds twice the noise on
+    # at least 2 % of the held-out samples (a Stribeck term acts at reversals only).
+    acts = (np.abs(Rb - Ra) > 2.0 * sig) & use
+    affected = [i for i in range(len(chans)) if acts[:, i].mean() >= 0.02]
     pick = affected or list(range(len(chans)))
     gain = float(np.sqrt(np.sum((rb[pick] / sig[pick]) ** 2) / max(np.sum((ra[pick] / sig[pick]) ** 2), 1e-300)))
     # The same ratio over the held-out samples where the nominal residual leaves its
@@ -292,6 +296,10 @@ def heldout_fit(eng, sel) -> dict:
                "rms_all_before": float(rb_all[i]), "rms_all_after": float(ra_all[i]),
                "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
     tt = pipe.t[pipe.idx[test]]
+    if sel.selected and not affected:
+        # The fitted effects change nothing on the held-out part beyond the noise (a
+        # saturation never reached there): no gain can be measured.
+        gain = gain_w = float("nan")
     return {"channels": per, "gain": gain if sel.selected else 1.0,
             "gain_windows": gain_w if sel.selected else 1.0,
             "window_fraction": float(band[:, pick].mean()) if pick else 0.0,

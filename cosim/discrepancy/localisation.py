@@ -94,10 +94,13 @@ def localise(eng, sel, k: float = 3.0) -> dict:
                        "windows": wins, "phase_enrichment": enrich}
         if out.mean() > 0.02:
             top = sorted(enrich.items(), key=lambda kv: -kv[1])[:2]
+            if top[0][1] < 1.3:
+                where = "throughout the motion (no phase stands out)"
+            else:
+                where = f"most at {top[0][0]} (x{top[0][1]:.1f} over chance)" + (
+                    f" and {top[1][0]} (x{top[1][1]:.1f})" if top[1][1] > 1.3 else "")
             summary.append(f"{name}: out of its noise band {out.mean() * 100:.0f} % of the time in {len(wins)} "
-                           f"window(s), most at {top[0][0]} (x{top[0][1]:.1f} over chance)"
-                           + (f" and {top[1][0]} (x{top[1][1]:.1f})" if top[1][1] > 1.2 else "")
-                           + f"; {after.mean() * 100:.0f} % after the fit")
+                           f"window(s), {where}; {after.mean() * 100:.0f} % after the fit")
     ws = _workspace(pipe, x, R0, sig, flagged_any)
     if ws.get("summary"):
         summary.append(ws["summary"])

@@ -31,12 +31,13 @@ def integrator_applies(model) -> dict:
     key = model.robot
     if key in _APPLIES:
         return _APPLIES[key]
+    from ..core import Model
     from .effects import joint_prefix
 
     pre = joint_prefix(model)
     x0 = model.home()
     out = {}
-    base = model.copy()
+    base = Model(model.robot)  # the default set: no delay, no saturation
     base.set_params({"gravity.x": 0.0, "gravity.y": 0.0, "gravity.z": 0.0})
     for what, params, tau in (("saturation", {f"{pre}[1].effort_max": 1e-6}, 1.0),
                               ("delay", {"actuator.delay": 0.5}, 1.0)):

@@ -111,6 +111,8 @@ def markdown(d, files: dict) -> str:
         L += ["Not excited by this recording:", ""] + [f"- {x}" for x in d.not_excited] + [""]
     if d.unavailable:
         L += ["Not tested:", ""] + [f"- {x}" for x in d.unavailable] + [""]
+    if d.refused:
+        L += ["Refused although the residual pointed at them:", ""] + [f"- {x}" for x in d.refused] + [""]
 
     L += ["## How much better: held-out fit", ""]
     h = d.heldout

@@ -34,12 +34,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._native import ParameterError
 from .effects import Group
 from .residuals import DiagnosisError
 
 #: effects whose core parameter acts on its own joint's channels only
 LOCAL = {"coulomb", "viscous", "stribeck", "rotor_inertia", "saturation", "encoder_offset", "backlash",
          "compliance"}
+#: effects whose Jacobian is taken as the regressor columns at the nominal model: the
+#: residual is linear in them, or nearly (geometry: errors of 1e-3 of a length change the
+#: inverse kinematics at second order, 1e-6)
+LINEARISED = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
+              "encoder_offset", "backlash", "compliance", "geometry"}
 #: core parameters that cannot be negative
 _NONNEGATIVE = (".coulomb", ".viscous", ".stribeck", ".stribeck_v", ".rotor_inertia", ".backlash", ".compliance",
                 ".effort_max", "payload.m", ".delay")
@@ -69,17 +75,29 @@ class Scales:
                    pipe.model.robot != "6pus")
 
 
+#: a typical joint speed of each robot [m/s or rad/s] (sizes a 'small' viscous friction)
+TYPICAL_RATE = {"6pus": 0.05, "quattro": 1.0}
+
+
+def _joint_mass(model):
+    """Diagonal of the joint-space mass matrix at home, J^-T M J^-1 (core)."""
+    x = model.home()
+    Jinv = np.linalg.inv(model.jacobian(x))
+    return np.diag(Jinv.T @ model.mass_matrix(x) @ Jinv)
+
+
 def reference_size(group: Group, sc: Scales, model) -> float:
     """A 'small but relevant' magnitude of the effect, in its parameter's unit (what
-    the detectability check compares with)."""
+    the detectability check compares with).  Set by the robot, not by the recording's
+    motion: a recording that hardly moves must come out as not exciting."""
     k, i = group.key, group.joint
     qref = 1e-3 if sc.angular else 5e-5  # 1 mrad / 50 um on a joint reading
     if k in ("coulomb", "stribeck"):
         return 0.02 * sc.effort[i]
     if k == "viscous":
-        return 0.02 * sc.effort[i] / sc.rate[i]
+        return 0.02 * sc.effort[i] / TYPICAL_RATE.get(model.robot, 0.1)
     if k == "rotor_inertia":
-        return 0.02 * sc.effort[i] / sc.accel[i]
+        return 0.05 * float(_joint_mass(model)[i])
     if k in ("payload", "platform_mass"):
         return 0.1 * max(model.param("platform.m"), 0.05)
     if k == "platform_inertia":
@@ -109,9 +127,12 @@ class Option:
     offset: np.ndarray | None
     hyper: dict
     k: int
+    expand: list | None = None   # the per-joint groups of an all-joints option
 
     def native(self, coef, nominal):
         g, e = self.group, self.group.key
+        if self.expand is not None:
+            return {gg.params[0]: nominal[gg.params[0]] + c for gg, c in zip(self.expand, coef)}
         p = g.params
         if e == "payload" and len(p) == 4:
             m = nominal[p[0]] + coef[0]
@@ -154,8 +175,9 @@ class Selection:
     phi: np.ndarray           # variance inflation per channel
     steps: list               # log of the forward steps
     candidates: dict          # group label -> best delta BIC at the last step (evidence against)
-    detectability: dict       # group label -> (min detectable size, reference size, unit text)
+    detectability: dict       # group label -> (min detectable size, reference size)
     threshold: float
+    refused: dict = field(default_factory=dict)  # group label -> why it was refused
 
 
 class Engine:
@@ -180,6 +202,8 @@ class Engine:
         self.use = np.tile(pipe.usable, (1, self.C // self.nd)).astype(float)
         self.W = self.use.copy()
         self.options = {}
+        self._instrument_cols = {}
+        self.instruments = {}
         self._build_options()
 
     # ---------------------------------------------------------------- plumbing
@@ -228,6 +252,35 @@ class Engine:
             return 0.01 * sc.effort[i]
         return 0.05 * abs(val) if val != 0 else 1e-3
 
+    def _one_sided(self, g, p, R0):
+        """(R(p + h) - R0) / h, stepping down instead when the core refuses p + h (a
+        principal moment of inertia beyond the sum of the other two...)."""
+        h = self._step(g, p)
+        try:
+            return (self.R({p: self.nominal[p] + h}) - R0) / h
+        except ParameterError:
+            return (self.R({p: self.nominal[p] - h}) - R0) / -h
+
+    def _delay_change(self, name, value, theta, Rbase):
+        """Change of the residual when the delay ``name`` goes from its value in theta
+        to ``value``: the effort channels from the reference effort (an instrument free
+        of the rate noise, when the recording has qref), the readings exactly."""
+        R = self.R(dict(theta, **{name: value}))
+        out = R - Rbase
+        cur = theta.get(name, self.nominal[name])
+        sig = self.pipe.delay_signature(name, value)
+        if sig is not None:
+            base = self.pipe.delay_signature(name, cur)
+            out[:, :self.nd] = sig - base
+        return out
+
+    def _try_R(self, theta):
+        """R(theta), or None when theta is not a valid parameter set of the core."""
+        try:
+            return self.R(theta)
+        except ParameterError:
+            return None
+
     # ------------------------------------------------------------- candidates
     def _build_options(self):
         R0, nd = self.R0, self.nd
@@ -253,8 +306,7 @@ class Engine:
                 for g in gs:
                     cols = np.zeros((m, self.C, len(g.params)))
                     for j, p in enumerate(g.params):
-                        h = self._step(g, p)
-                        cols[:, :, j] = (self.R({p: self.nominal[p] + h}) - R0) / h
+                        cols[:, :, j] = self._one_sided(g, p, R0)
                     self.options[g.label] = [Option(g, cols, None, {}, len(g.params))]
             elif key == "payload":
                 g = gs[0]
@@ -310,6 +362,9 @@ class Engine:
                     off = self.R({p: self.nominal[p] + d}) - R0
                     opts.append(Option(g, None, off, {"params": {p: self.nominal[p] + d}}, 1))
                 self.options[g.label] = opts
+                if self.pipe.tau_ref_s is not None:
+                    h = 0.25e-3
+                    self._instrument_cols[g.label] = self._delay_change(p, self.nominal[p] + h, {}, R0) / h
             elif key == "saturation":
                 tmax = np.abs(self.pipe.tau_c).max(axis=0)
                 opts = {g.label: [] for g in gs}
@@ -347,10 +402,14 @@ class Engine:
                 res = (y - X @ beta).reshape(self.C, -1).T / w
                 sig = np.maximum(np.sqrt(np.sum(res**2 * used, axis=0) / np.maximum(used.sum(axis=0), 1)), 1e-15)
         phi = np.array([_inflation(res[used[:, c], c], self.pipe.window, self.pipe.step) for c in range(self.C)])
-        # A floor: channels whose residual is pure round-off (a noiseless simulation)
-        # must not weigh 1e10 times more than the others.
-        floor = 1e-9 * np.array([np.abs(self.pipe.tau_s).max()] * self.nd + [1e-3] * (self.C - self.nd))
-        return np.maximum(sig, floor), phi
+        return np.maximum(sig, self.floor()), phi
+
+    def floor(self):
+        """Smallest noise level a channel is given: the accuracy of the pipeline itself
+        (integration tolerance, smoothing round-off: 2e-5 of the effort on noiseless
+        closed-loop runs), so a noiseless recording does not turn round-off into physics."""
+        eff = 1e-4 * self.sc.effort
+        return np.concatenate([eff, np.full(self.C - self.nd, 1e-8)])
 
     # ---------------------------------------------------------------- select
     def run(self) -> Selection:
@@ -360,8 +419,10 @@ class Engine:
         self.W = self.w[None, :] * self.use
         n = (self.use[self.train] > 0).sum(axis=0)
         self.n_eff = float(np.sum(n / phi))
+        self.instruments = {lab: self.vec(c) for lab, c in self._instrument_cols.items()}
         logn = math.log(self.n_eff)
         selected, theta, steps = [], {}, []
+        self.refused = {}
         y = self.vec(self.R0)
         chi2_nom = chi2 = float(y @ y)
         if self.verbose:
@@ -375,19 +436,14 @@ class Engine:
             y_perp = y - Q @ (Q.T @ y)
             best = None
             last_best = {}
-            for lab, opts in self.options.items():
-                if any(a.group.label == lab for a in selected):
+            taken = {a.group.label for a in selected}
+            for lab, opts in list(self.options.items()) + list(self._joint_sets(taken).items()):
+                if lab in taken:
                     continue
-                gbest = None
-                for o in opts:
-                    c2, coef = self._try(o, Q, y_perp, J, y)
-                    if c2 is None:
-                        continue
-                    dbic = c2 - chi2 + o.k * logn
-                    if gbest is None or dbic < gbest[0]:
-                        gbest = (dbic, o, c2)
-                if gbest is None:
+                c2, o2 = self._best_option(opts, Q, y_perp, J, y)
+                if c2 is None:
                     continue
+                gbest = (c2 - chi2 + o2.k * logn, o2, c2)
                 last_best[lab] = gbest[0]
                 if best is None or gbest[0] < best[0]:
                     best = gbest
@@ -395,28 +451,139 @@ class Engine:
                 break
             dbic, opt, c2 = best
             coef_all = self._coef(opt, J, y)
-            theta = self._apply(theta, names, coef_all, opt)
-            selected.append(Attribution(opt.group, {}, {}, float(dbic)))
+            new = self._apply(theta, names, coef_all, opt)
+            if self._try_R(new) is None:
+                # The fit is not a valid parameter set of the core: refuse the group.
+                self.refused[opt.group.label] = "its fitted parameters are not a valid parameter set of the core"
+                self.options.pop(opt.group.label, None)
+                for g in opt.expand or []:
+                    self.options.pop(g.label, None)
+                continue
+            theta = new
+            for g in opt.expand or [opt.group]:
+                selected.append(Attribution(g, {}, {}, float(dbic)))
             theta = self.refine(selected, theta)
             if self.verbose:
                 print(f"  + {opt.group.label}: dBIC {dbic:.1f} -> {theta}")
             steps.append({"group": opt.group.label, "delta_bic": float(dbic),
                           "chi2": float(self._chi2(theta))})
-            # A group refined to the edge of its physical range contributes nothing.
-            for a in list(selected):
-                if a.group.effect.sign == ">=0" and all(theta.get(p, self.nominal[p]) <= 0 for p in a.group.params[:1]):
-                    selected.remove(a)
-                    for p in a.group.params:
-                        theta.pop(p, None)
+            selected, theta = self._prune(selected, theta, logn)
         chi2_final = self._chi2(theta)
         sel = Selection(selected, theta, chi2_nom, chi2_final, self.n_eff, sig, phi, steps, last_best, {},
-                        self.threshold)
+                        self.threshold, dict(self.refused))
         self.finish(sel)
         return sel
 
+    def _joint_sets(self, taken):
+        """All-joints candidates: a per-joint effect on every joint not yet selected (a
+        friction or an offset on every rail enters in one step instead of a greedy chain
+        that another multi-parameter group could cut short)."""
+        out = {}
+        by_key = {}
+        for lab, opts in self.options.items():
+            g = opts[0].group
+            if g.joint is None or lab in taken or len(opts) != 1 or g.key not in LINEARISED:
+                continue
+            by_key.setdefault(g.key, []).append(opts[0])
+        for key, opts in by_key.items():
+            if len(opts) < 2:
+                continue
+            cols = np.concatenate([o.cols for o in opts], axis=2)
+            groups = [o.group for o in opts]
+            pseudo = Group(groups[0].effect, None, tuple(g.params[0] for g in groups))
+            out[f"{key}[all]"] = [Option(pseudo, cols, None, {}, len(opts), expand=groups)]
+        return out
+
+    def _prune(self, selected, theta, logn):
+        """Backward elimination: drop groups at the edge of their physical range, then,
+        one at a time, the group whose removal costs less BIC than the threshold."""
+        for a in list(selected):
+            if a.group.effect.sign == ">=0" and all(theta.get(p, self.nominal[p]) <= 0 for p in a.group.params[:1]):
+                selected.remove(a)
+                for p in a.group.params:
+                    theta.pop(p, None)
+        while len(selected) > 1:
+            chi2 = self._chi2(theta)
+            worst = None
+            for a in selected:
+                imp, th = self._without(selected, theta, a)
+                cost = imp - self._k(a.group) * logn
+                if worst is None or cost < worst[0]:
+                    worst = (cost, a, th)
+            if worst[0] >= self.threshold:
+                break
+            selected = [b for b in selected if b is not worst[1]]
+            theta = self.refine(selected, worst[2])
+            if self.verbose:
+                print(f"  - {worst[1].group.label}: removal costs {worst[0]:.1f} in BIC")
+        return selected, theta
+
+    def _without(self, selected, theta, a):
+        """chi-square increase when group a is removed (the others refitted, linearised)
+        and the parameters of that refit."""
+        rest = [b for b in selected if b is not a]
+        th = {k: v for k, v in theta.items() if k not in a.group.params}
+        Rt = self._try_R(th)
+        if Rt is None:
+            return float("inf"), theta
+        y = self.vec(Rt)
+        Jr, names = self.jacobian(rest, th)
+        if Jr.shape[1]:
+            d = -np.linalg.lstsq(Jr, y, rcond=None)[0]
+            y = y + Jr @ d
+            th2 = self._clip({**th, **{n: th.get(n, self.nominal[n]) + dv for n, dv in zip(names, d)}})
+            th = th2 if self._try_R(th2) is not None else th
+        return float(y @ y) - self._chi2(theta), th
+
+    def _best_option(self, opts, Q, y_perp, J, y):
+        """(chi-square, option) of the best way the group can enter, or (None, None)."""
+        g = opts[0].group
+        if g.key in ("actuator_delay", "sensor_delay") and g.label in self.instruments:
+            return self._try_delay(opts, Q, y_perp)
+        best = (None, None)
+        for o in opts:
+            c2, _, o2 = self._try(o, Q, y_perp, J, y)
+            if c2 is not None and (best[0] is None or c2 < best[0]):
+                best = (c2, o2)
+        return best
+
+    def _try_delay(self, opts, Q, y_perp):
+        """A delay by instrumental variables: the delay d where the instrument (the
+        reference effort's signature, free of rate noise) is orthogonal to the exact
+        residual, then the exact chi-square there.  Least squares on the recorded
+        command would instead fit the closed loop's reaction to the rate noise (a
+        spurious delay of about M/kd times the noise share of the effort changes)."""
+        z = self.instruments[opts[0].group.label]
+        z = z - Q @ (Q.T @ z)
+        ds, f, c2 = [0.0], [float(z @ y_perp)], [float(y_perp @ y_perp)]
+        for o in opts:
+            off = self.vec(o.offset)
+            t = y_perp + (off - Q @ (Q.T @ off))
+            ds.append(list(o.hyper["params"].values())[0] - self.nominal[o.group.params[0]])
+            f.append(float(z @ t))
+            c2.append(float(t @ t))
+        best = (None, None)
+        for i in range(len(ds) - 1):
+            if f[i] == 0 or np.sign(f[i]) == np.sign(f[i + 1]):
+                continue
+            a = f[i] / (f[i] - f[i + 1])  # linear interpolation of the root
+            d = ds[i] + a * (ds[i + 1] - ds[i])
+            if d <= 0:
+                continue
+            lo = opts[i - 1].offset if i > 0 else np.zeros_like(opts[0].offset)
+            off = (1 - a) * lo + a * opts[i].offset
+            t = y_perp + (self.vec(off) - Q @ (Q.T @ self.vec(off)))
+            chi = float(t @ t)
+            if best[0] is None or chi < best[0]:
+                p = opts[0].group.params[0]
+                best = (chi, Option(opts[0].group, None, off, {"params": {p: self.nominal[p] + d}}, 1))
+        return best
+
     def _try(self, o, Q, y_perp, J, y):
-        """chi-square of the current model plus option o, and the option's coefficients
-        (parameter changes); (None, None) if the fit has a non-physical sign.
+        """chi-square of the current model plus option o, its coefficients (parameter
+        changes) and the option actually fitted; (None, None, o) if the fit has a
+        non-physical sign.  An all-joints option of a non-negative effect keeps the
+        joints whose coefficient is positive (active set).
 
         The residual after a change is ``y + offset + X c`` (+ ``J d`` for the current
         parameters, projected out through Q)."""
@@ -425,14 +592,25 @@ class Engine:
             off = self.vec(o.offset)
             t = t + (off - Q @ (Q.T @ off))
         if o.cols is None:
-            return float(t @ t), np.zeros(0)
+            return float(t @ t), np.zeros(0), o
         X = self.vec_cols(o.cols)
         Xp = X - Q @ (Q.T @ X)
-        coef = -np.linalg.lstsq(Xp, t, rcond=None)[0]
+        keep = np.arange(X.shape[1])
+        while True:
+            coef = -np.linalg.lstsq(Xp[:, keep], t, rcond=None)[0]
+            if o.expand is None or o.group.effect.sign != ">=0" or np.all(coef >= 0):
+                break
+            keep = keep[coef >= 0]
+            if len(keep) == 0:
+                return None, None, o
+        if o.expand is not None and len(keep) < X.shape[1]:
+            if len(keep) < 2:
+                return None, None, o
+            o = Option(o.group, o.cols[:, :, keep], None, o.hyper, len(keep), [o.expand[i] for i in keep])
         if not o.sign_ok(coef):
-            return None, None
-        r = t + Xp @ coef
-        return float(r @ r), coef
+            return None, None, o
+        r = t + Xp[:, keep] @ coef
+        return float(r @ r), coef, o
 
     def _coef(self, o, J, y):
         """Joint fit: changes of the current parameters, then the option's coefficients."""
@@ -478,7 +656,7 @@ class Engine:
         names, cols = [], []
         for a in selected:
             g = a.group
-            if g.key in LINEAR or (g.key == "payload" and len(g.params) == 1):
+            if g.key in LINEARISED or (g.key == "payload" and len(g.params) == 1):
                 o = self.options[g.label][0]
                 for j, p in enumerate(g.params):
                     names.append(p)
@@ -489,11 +667,25 @@ class Engine:
                     continue  # no payload yet: its offset does nothing
                 v = theta.get(p, self.nominal[p])
                 h = self._fd_step(g, p, v)
-                hi = dict(theta, **{p: v + h})
-                if p.endswith(_NONNEGATIVE) and v - h < 0:
-                    col = (self.R(hi) - self.R(theta)) / h  # at the bound: one-sided
+                if p.endswith(".delay"):
+                    # Gauss-Newton with this column solves J' r = 0 with the reference
+                    # signature as J: an instrumental-variable estimate of the delay.
+                    Rb = self.R(theta)
+                    lo = max(v - h, 0.0)
+                    col = (self._delay_change(p, v + h, theta, Rb) - self._delay_change(p, lo, theta, Rb)) / (v + h - lo)
+                    names.append(p)
+                    cols.append(self.vec(col, mask=mask))
+                    continue
+                Rhi = self._try_R(dict(theta, **{p: v + h}))
+                Rlo = None if p.endswith(_NONNEGATIVE) and v - h < 0 else self._try_R(dict(theta, **{p: v - h}))
+                if Rhi is not None and Rlo is not None:
+                    col = (Rhi - Rlo) / (2 * h)
+                elif Rhi is not None:
+                    col = (Rhi - self.R(theta)) / h  # at a bound: one-sided
+                elif Rlo is not None:
+                    col = (self.R(theta) - Rlo) / h
                 else:
-                    col = (self.R(hi) - self.R(dict(theta, **{p: v - h}))) / (2 * h)
+                    col = np.zeros_like(self.R0)
                 names.append(p)
                 cols.append(self.vec(col, mask=mask))
         if not cols:
@@ -518,7 +710,8 @@ class Engine:
 
     def refine(self, selected, theta, iterations: int = 4):
         """Gauss-Newton on the exact residual over the selected native parameters."""
-        if all(a.group.key in LINEAR for a in selected):
+        if all(a.group.key in LINEARISED or (a.group.key == "payload" and len(a.group.params) == 1)
+               for a in selected):
             return theta
         chi2 = self._chi2(theta)
         for _ in range(iterations):
@@ -531,7 +724,11 @@ class Engine:
             for scale in (1.0, 0.5, 0.25):
                 cand = self._clip({**theta, **{n: theta.get(n, self.nominal[n]) + scale * dv
                                               for n, dv in zip(names, d)}})
-                c2 = self._chi2(cand)
+                Rc = self._try_R(cand)
+                if Rc is None:
+                    continue
+                yc = self.vec(Rc)
+                c2 = float(yc @ yc)
                 if c2 < chi2:
                     improved = chi2 - c2 > 1e-6 * chi2
                     theta, chi2 = cand, c2
@@ -547,7 +744,7 @@ class Engine:
         r = self.R(theta)[self.train]
         used = self.use[self.train] > 0
         sig = np.maximum(np.sqrt(np.sum(r**2 * used, axis=0) / np.maximum(used.sum(axis=0), 1)), 1e-15)
-        sel.sigma = np.minimum(sig, self.sig * 10)
+        sel.sigma = np.maximum(np.minimum(sig, self.sig * 10), self.floor())
         # Intervals from the final Jacobian.
         if sel.selected:
             J, names = self.jacobian(sel.selected, theta)
@@ -561,13 +758,7 @@ class Engine:
                 a.ci = {p: float(ci.get(p, float("nan"))) for p in a.group.params}
             # Importance: chi-square increase when the group is removed (others refitted).
             for a in sel.selected:
-                rest = [b for b in sel.selected if b is not a]
-                th = {k: v for k, v in theta.items() if k not in a.group.params}
-                y = self.vec(self.R(th))
-                Jr, _ = self.jacobian(rest, th)
-                if Jr.shape[1]:
-                    y = y - Jr @ np.linalg.lstsq(Jr, y, rcond=None)[0]
-                a.importance = float(y @ y - sel.chi2_final)
+                a.importance = self._without(sel.selected, theta, a)[0]
             sel.selected.sort(key=lambda a: -a.importance)
             self.lookalikes(sel)
         sel.detectability = self.detectability(sel)
@@ -594,12 +785,8 @@ class Engine:
                 same_place = g.joint is None or a.group.joint is None or g.joint == a.group.joint
                 if not same_place:
                     continue
-                best = None
-                for o in opts:
-                    c2, _ = self._try(o, Q, y_perp, J, y)
-                    if c2 is not None and (best is None or c2 < best[0]):
-                        best = (c2, o)
-                if best is None:
+                best = self._best_option(opts, Q, y_perp, J, y)
+                if best[0] is None:
                     continue
                 bic_alt = best[0] + (k_rest + best[1].k) * logn
                 dbic = bic_alt - bic_final

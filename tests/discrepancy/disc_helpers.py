@@ -1,0 +1,70 @@
+"""Helpers of the discrepancy-engine tests: plants with hidden effects, closed-loop runs."""
+import copy
+
+import numpy as np
+
+from cosim.core import Model
+from cosim.discrepancy import blind
+from cosim.discrepancy.excitation import excitation
+from cosim.discrepancy.plant import closed_loop
+from cosim.master import make_reference
+from cosim.recording import Recording
+
+
+#: hidden effects of the combined noiseless runs (one plant holding many effects)
+COMBINED = {
+    "6pus": {"rail[1].coulomb": 0.03, "rail[2].viscous": 0.5, "rail[3].rotor_inertia": 0.05,
+             "rail[1].stribeck": 0.03, "rail[1].stribeck_v": 0.004, "rail[4].backlash": 5e-5,
+             "rail[2].compliance": 8e-5, "rail[3].encoder_offset": 6e-5, "payload.m": 0.05, "payload.x": 0.01,
+             "payload.y": -0.008, "payload.z": 0.01, "gravity.x": 0.1, "gravity.y": -0.08,
+             "actuator.delay": 0.003, "sensor.delay": 0.002, "leg[4].L": 0.1162, "platform.Izz": 0.00062,
+             "platform.m": 0.38},
+    "quattro": {"joint[1].coulomb": 0.3, "joint[2].viscous": 0.1, "joint[3].rotor_inertia": 0.025,
+                "joint[1].stribeck": 0.3, "joint[1].stribeck_v": 0.02, "joint[4].backlash": 1e-3,
+                "joint[2].compliance": 8e-5, "joint[3].encoder_offset": 1.2e-3, "payload.m": 0.1,
+                "gravity.x": 0.1, "gravity.y": -0.08, "actuator.delay": 0.003, "sensor.delay": 0.002,
+                "forearm.c": 0.826, "platform.m": 0.314},
+}
+
+
+def run(robot, hidden=None, duration=3.0, seed=5, noise=None, scale=1.0):
+    """A closed-loop recording of a plant with ``hidden`` parameters (PD + gravity
+    compensation designed on the nominal model), after a 0.5 s lead-in."""
+    cfg = blind.load_config()
+    m = Model(robot)
+    traj = excitation(m, duration, seed=seed, scale=scale)
+    ref = make_reference(m, traj, step=1e-3, duration=round(traj.duration / 1e-3) * 1e-3)
+    plant = m.copy()
+    if hidden:
+        plant.set_params(hidden)
+    ctrl = blind._controller("pd_gravity", m, cfg, 1e-3)
+    res = closed_loop(plant, ctrl, ref, noise=noise, seed=seed)
+    k0 = 500
+    return Recording(robot, res.time[k0:], res.q[k0:], res.qd[k0:], res.tau[k0:], qref=ref.q[k0:],
+                     pose=res.pose[k0:], controller=ctrl.describe())
+
+
+#: the fixed-seed blind subset: (robot, hidden types, seed)
+SUBSET = [
+    ("6pus", ["coulomb"], 101),
+    ("6pus", ["payload"], 102),
+    ("6pus", ["actuator_delay"], 103),
+    ("6pus", ["encoder_offset"], 104),
+    ("6pus", ["saturation"], 105),
+    ("6pus", ["stribeck"], 106),
+    ("6pus", [], 107),
+    ("6pus", [], 108),
+    ("quattro", ["rotor_inertia"], 109),
+    ("quattro", [], 110),
+]
+
+
+def strip_pose(rec):
+    """The same recording without its tracker columns."""
+    r = copy.copy(rec)
+    r.pose = None
+    return r
+
+
+def rms(a, axis=0):
+    return np.sqrt(np.mean(np.asarray(a) ** 2, axis=axis))
