@@ -51,16 +51,12 @@ def bench_spec(kind: str, cases: int = 100):
     raise ValueError(f"unknown benchmark kind {kind!r}")
 
 
-def _warm(kind):
-    # import the kind's modules once per process, so the timing compares running cases
-    from .sweep_kinds import get_kind  # noqa: F401
+def _warm(kind, base, params):
+    # one real case in each worker before timing, as the serial loop gets one: the first
+    # case of a process pays the imports and first calls (about 2 s for a scenario run)
+    from .sweep import run_case
 
-    if kind == "scenario":
-        import cosim.scenario  # noqa: F401
-    else:
-        import cosim.calibration  # noqa: F401
-        import cosim.calibration_data  # noqa: F401
-    return True
+    return run_case(kind, base, params, "warm-up")["status"]
 
 
 def _same(a, b) -> tuple:
@@ -92,7 +88,7 @@ def run(kind: str, cases: int = 100, workers: int = 2, progress: bool = False, r
     """
     from threadpoolctl import threadpool_limits
 
-    from .sweep import _start_client
+    from .sweep import _prepare, _start_client
 
     spec = bench_spec(kind, cases)
     t_serial, t_par, overhead = [], [], []
@@ -102,7 +98,10 @@ def run(kind: str, cases: int = 100, workers: int = 2, progress: bool = False, r
         t0 = time.perf_counter()
         client, cluster, desc = _start_client(None, workers)
         try:
-            client.run(_warm, kind)
+            base, _ = _prepare(spec, spec.case_list())
+            warm_status = client.run(_warm, kind, base, spec.case_list()[0].params)
+            if set(warm_status.values()) != {"ok"}:
+                raise RuntimeError(f"the warm-up case failed on a worker: {warm_status}")
             t_start = time.perf_counter() - t0
             for k in range(max(1, repeat)):
                 # one BLAS thread, as in the workers (Dask's nannies set OMP_NUM_THREADS=1...),
@@ -156,7 +155,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     kinds = ["calibration", "scenario"] if a.kind == "both" else [a.kind]
     print(f"sweep benchmark: {a.cases} cases per kind, serial loop vs LocalCluster of {a.workers} worker processes "
-          f"(1 thread each) on a machine with {os.cpu_count()} cores; start-up = cluster start + imports on workers; "
+          f"(1 thread each) on a machine with {os.cpu_count()} cores; start-up = cluster start + one warm-up case per worker; "
           f"best of {a.repeat} alternated runs; load average before: {os.getloadavg()[0]:.2f}")
     rows = []
     for k in kinds:
