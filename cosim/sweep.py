@@ -625,6 +625,10 @@ class SweepResult:
         Cases run by this call, found already done, left without a result.
     seconds : float
         Wall time of this call (cluster start-up included).
+    startup : float
+        Time to start (or reach) the cluster.
+    interrupted : bool
+        The call was stopped by Ctrl-C (KeyboardInterrupt); what finished is kept.
     cluster : str
         Where the cases ran ("serial", the LocalCluster or the scheduler address).
     summary : str
@@ -641,6 +645,7 @@ class SweepResult:
     seconds: float = 0.0
     startup: float = 0.0
     cluster: str = "serial"
+    interrupted: bool = False
     summary: str = ""
     files: dict = field(default_factory=dict)
 
@@ -670,6 +675,8 @@ class SweepResult:
             L.append(f"  FAILED case {r['index']} [{r['case_id']}] ({p}): {r.get('error_type')}: {r.get('error')}")
         if len(self.failed) > 10:
             L.append(f"  ... {len(self.failed) - 10} more failed cases in the table")
+        if self.interrupted:
+            L.append(f"  interrupted: {self.pending} case(s) pending; run again with --resume (resume=True)")
         if self.summary:
             L += ["", self.summary]
         for k, p in self.files.items():
@@ -874,7 +881,7 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                       f"{rec.get('error')}"[:400])
 
     own_client = own_cluster = None
-    lost = 0
+    interrupted = False
     index = {}  # key of each future in flight -> its case
     try:
         if workers == 0 and client is None and scheduler is None:
@@ -918,7 +925,6 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                 try:
                     rec = fut.result()
                 except CancelledError as e:  # not the case's doing: leave it pending for a resume
-                    lost += 1
                     bar.write(f"case {c.index} [{c.id}] was cancelled by the cluster ({e}); it stays pending")
                     fut.release()
                     nxt = next(it, None)
@@ -935,6 +941,8 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
                 nxt = next(it, None)
                 if nxt is not None:
                     ac.add(submit(nxt))
+    except KeyboardInterrupt:  # Ctrl-C: keep what finished, write the table, say how to go on
+        interrupted = True
     finally:
         bar.close()
         f.close()
@@ -948,7 +956,8 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
     records = read_records(out)
     rows = _rows(spec, records)
     res = SweepResult(spec, out, rows, records, ran=ran, skipped=skipped, pending=len(cases) - len(rows),
-                      seconds=time.perf_counter() - t_start, startup=startup, cluster=cluster_desc)
+                      seconds=time.perf_counter() - t_start, startup=startup, cluster=cluster_desc,
+                      interrupted=interrupted)
     res.files["results"] = out / RESULTS
     res.files["table"] = write_table(out / TABLE, spec, rows)
     try:

@@ -66,6 +66,14 @@ def test_failed_cases_are_kept_unless_retried(tmp_path):
     assert len(again.rows) == 4 and again.rows[2]["status"] == "error"
 
 
+def test_ctrl_c_keeps_what_finished_and_writes_the_table(tmp_path):
+    spec = _product_spec(tmp_path / "log.jsonl", n=5, interrupt_a=2)
+    res = run_sweep(spec, out=tmp_path / "out", workers=0, progress=False)
+    assert res.interrupted and (res.ran, res.pending) == (2, 3)
+    assert "interrupted: 3 case(s) pending" in res.text()
+    assert res.files["table"].read_text().count("\n") == 3
+
+
 def _alive(pid):
     try:
         os.kill(pid, 0)
