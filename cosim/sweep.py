@@ -821,7 +821,8 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
     retry_failed : bool
         With ``resume``, run again the cases recorded as failed.
     max_cases : int, optional
-        Stop after this many cases have finished (the others stay pending: resume later).
+        Run only the first ``max_cases`` cases still to do (the others stay pending: a
+        deliberate partial run, resumed later).
     progress : bool, optional
         tqdm progress bar (default: on a terminal).
     window : int, optional
