@@ -129,6 +129,8 @@ class ScenarioKind(Kind):
                         f"of {', '.join(_SECTIONS)}")
         if spec.plan is not None:
             fail("plan", "a scenario sweep has no [plan]")
+        if "fmu.path" in spec.param_names():
+            fail("fmu.path", "one FMU per sweep (shipped once to the workers): set it in [base]")
         if not _resolve(spec.base["scenario"], spec).exists():
             fail("base.scenario", f"file {spec.base['scenario']} not found")
 

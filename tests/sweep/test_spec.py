@@ -102,6 +102,8 @@ def test_grid_times_random():
     ({"kind": "scenario", "base": {"scenario": "scenarios/6pus_step_pd.toml"}, "grid": {"controler.kp": [1.0]}},
      "controler.kp"),
     ({"kind": "scenario", "base": {"scenario": "scenarios/no_such_file.toml"}}, "base.scenario"),
+    ({"kind": "scenario", "base": {"scenario": "scenarios/6pus_step_pd.toml"}, "grid": {"fmu.path": ["a.fmu"]}},
+     "fmu.path"),
     ({"kind": "function", "base": {"function": "no_colon"}}, "base.function"),
     ({"kind": "calibration", "results": {"include": "steady*"}}, "results.include"),
 ])
