@@ -74,4 +74,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run as `python -m cosim.cli`: plugins register on the importable module cosim.cli,
+    # not on this __main__ copy, so dispatch through it.
+    from cosim.cli import main as _main
+
+    sys.exit(_main())
