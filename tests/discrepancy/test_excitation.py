@@ -1,0 +1,37 @@
+"""The exciting trajectories of the blind cases: continuous, inside the workspace, with
+every motion phase in the fitted and in the held-out part."""
+import numpy as np
+import pytest
+
+from cosim.core import Model
+from cosim.discrepancy.excitation import LABELS, check_trajectory, excitation
+
+
+@pytest.mark.parametrize("robot", ["6pus", "quattro"])
+def test_excitation_is_smooth_reachable_and_varied(robot):
+    m = Model(robot)
+    tr = excitation(m, 9.0, seed=3)
+    assert check_trajectory(m, tr) is None
+    t = np.arange(0.0, tr.duration, 1e-3)
+    x, xd, xdd = tr.evaluate(t)
+    # derivatives agree with differences of the pose (the closed form has no jumps)
+    np.testing.assert_allclose(np.gradient(x, t, axis=0)[1:-1], xd[1:-1], atol=2e-3 * np.abs(xd).max())
+    np.testing.assert_allclose(np.gradient(xd, t, axis=0)[2:-2], xdd[2:-2], atol=2e-2 * np.abs(xdd).max())
+    assert np.abs(np.diff(x, axis=0)).max() <= 1.01e-3 * np.abs(xd).max()  # no step larger than the rate allows
+    lab = tr.label(t)
+    held = t >= tr.duration - 0.3 * 9.0
+    for part in (~held, held):
+        kinds = set(lab[part])
+        assert {LABELS["multisine"], LABELS["sweep"]} <= kinds or {LABELS["sweep"], LABELS["slow"]} <= kinds
+    q = m.ik(x)
+    qd = np.gradient(q, t, axis=0)
+    # every joint reverses its motion many times
+    rev = (np.diff(np.sign(qd[np.abs(qd).max(axis=1) > 0]), axis=0) != 0).sum(axis=0)
+    assert np.all(rev >= 10), rev
+
+
+def test_excitation_is_reproducible_and_seeded():
+    m = Model("6pus")
+    a, b, c = (excitation(m, 4.0, seed=s).pose(np.linspace(0, 4, 50)) for s in (1, 1, 2))
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a - c).max() > 1e-3
