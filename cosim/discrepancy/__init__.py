@@ -184,7 +184,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     figures : bool
         Draw the figures (with ``out``).
     max_effects : int
-        Largest number of effect groups named.
+        Largest number of entries of the forward selection (an all-joints entry names
+        one group per joint).
 
     Returns
     -------
@@ -222,7 +223,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, heldout_localisation=t4 - t3)
     effects_out = _effects(eng, sel)
     not_excited = _not_excited(eng, sel)
-    conclusion = _conclusion(effects_out, not_excited, eng)
+    conclusion = _conclusion(effects_out, not_excited, eng, sel)
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
                   held, loc, not_excited,
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
@@ -387,15 +388,15 @@ def _not_excited(eng, sel) -> list:
     return out
 
 
-def _conclusion(effects, not_excited, eng) -> str:
+def _conclusion(effects, not_excited, eng, sel) -> str:
     if effects:
         parts = []
         for e in effects:
             vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
             parts.append(f"{e['title']} ({vals})")
         return "missing physics: " + ", ".join(parts)
-    testable = len(eng.options) - len(not_excited)
-    if testable <= 0 or len(not_excited) >= len({o[0].group.key for o in eng.options.values()}):
+    excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
+    if not excited:
         return "cannot diagnose: the recording excites none of the effects of the library (see 'not excited')"
     return "no missing physics found"
 

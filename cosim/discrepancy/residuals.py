@@ -12,7 +12,7 @@ What the recorded columns mean (``pkm-recording/1``, docs/discrepancy.md):
 
 Effort residual, for a model with parameters theta (sample time t)::
 
-    r_eff(t) = S[sat(tau)](t - d_a) - S[ID(x, xd, xdd)](t + d_s)
+    r_eff(t) = S[sat(tau)](t - d_a - d_s) - S[ID(x, xd, xdd)](t)
 
 ``S`` is a zero-phase Savitzky-Golay smoother (``window``, ``polyorder``); ``x =
 FK(q)``, ``xd = pose_velocity(x, qd)`` and ``xdd = pose_acceleration(x, xd, qdd)`` at
@@ -260,10 +260,7 @@ class Pipeline:
             return None
         pos = self.idx if positions is None else np.asarray(positions)
         T = self.tau_ref_s
-        s = d / self.dt
-        if name == "actuator.delay":
-            return _at(T, pos - s) - T[pos]
-        return -(_at(T, pos + s) - T[pos])
+        return _at(T, pos - d / self.dt) - T[pos]
 
     # ------------------------------------------------------------------ helpers
     def S(self, a, deriv: int = 0):
@@ -353,8 +350,12 @@ class Pipeline:
 
         A = self._cached(("A", act), lambda: self._applied(m, act))
         B = self._cached(("B", dyn), lambda: self.S(m.inverse_dynamics(self.x_f, self.xd_f, self.xdd_f)))
-        p_m = pos + d_s
-        eff = _at(A[1], pos - d_a) - _at(B, p_m)
+        # Readings lagging by d_s show the motion of t - d_s, driven by the command of
+        # t - d_s - d_a: the residual is labelled by the recorded motion's sample, so an
+        # actuator delay and a sensor lag give the same effort residual (they are the same
+        # closed loop) and differ only in the readings against the tracker.
+        p_m = pos
+        eff = _at(A[1], pos - d_a - d_s) - B[pos]
         if geo or sens:
             eff -= self._pose_term(m, np.clip(np.round(p_m).astype(int), 0, self.n - 1), bool(sens))
         kin = None

@@ -388,6 +388,16 @@ class Engine:
         """Per-channel noise level and variance inflation from the fit with every
         linear candidate column (first option of each group)."""
         cols = [o[0].cols for o in self.options.values() if o[0].cols is not None]
+        # Profile effects enter linearised: a delay by its smallest-step change, a
+        # saturation by its change at a middle level (an unmodelled 5 ms delay would
+        # otherwise pass for noise ten times the real one and hide a second effect).
+        for opts in self.options.values():
+            o = opts[0]
+            if o.cols is None and o.group.key in ("actuator_delay", "sensor_delay"):
+                d = list(o.hyper["params"].values())[0] - self.nominal[o.group.params[0]]
+                cols.append((o.offset / d)[:, :, None])
+            elif o.cols is None:
+                cols.append(opts[len(opts) // 2].offset[:, :, None])
         r = self.R0[self.train]
         sig = np.maximum(1.4826 * np.median(np.abs(r - np.median(r, axis=0)), axis=0), 1e-15)
         res = r
@@ -413,22 +423,47 @@ class Engine:
 
     # ---------------------------------------------------------------- select
     def run(self) -> Selection:
+        """Forward selection with backward elimination; one more pass with the noise of
+        the selected model when it differs from the first estimate by more than 25 %."""
         sig, phi = self.noise_model()
+        options = dict(self.options)
+        for _ in range(2):
+            self._weights(sig, phi)
+            selected, theta, steps, last_best, chi2_nom = self._select()
+            r = self.R(theta)[self.train]
+            used = self.use[self.train] > 0
+            sig_f = np.maximum(np.sqrt(np.sum(r**2 * used, axis=0) / np.maximum(used.sum(axis=0), 1)),
+                               self.floor())
+            if np.all(np.abs(np.log(sig_f / sig)) < math.log(1.25)):
+                break
+            phi = np.array([_inflation(r[used[:, c], c], self.pipe.window, self.pipe.step)
+                            for c in range(self.C)])
+            sig = sig_f
+            self.options = dict(options)
+        chi2_final = self._chi2(theta)
+        sel = Selection(selected, theta, chi2_nom, chi2_final, self.n_eff, self.sig, self.phi, steps, last_best,
+                        {}, self.threshold, dict(self.refused))
+        self.finish(sel)
+        return sel
+
+    def _weights(self, sig, phi):
         self.sig, self.phi = sig, phi
         self.w = 1.0 / (sig * np.sqrt(phi))
         self.W = self.w[None, :] * self.use
         n = (self.use[self.train] > 0).sum(axis=0)
         self.n_eff = float(np.sum(n / phi))
         self.instruments = {lab: self.vec(c) for lab, c in self._instrument_cols.items()}
+
+    def _select(self):
         logn = math.log(self.n_eff)
         selected, theta, steps = [], {}, []
         self.refused = {}
         y = self.vec(self.R0)
         chi2_nom = chi2 = float(y @ y)
         if self.verbose:
-            print(f"  noise {sig}, phi {phi}, N_eff {self.n_eff:.0f}, chi2 {chi2:.1f}")
+            print(f"  noise {self.sig}, phi {self.phi}, N_eff {self.n_eff:.0f}, chi2 {chi2:.1f}")
         last_best = {}
-        while len(selected) < self.max_groups:
+        while len(steps) < self.max_groups:  # entries (an all-joints entry adds several groups)
             J, names = self.jacobian(selected, theta)
             y = self.vec(self.R(theta))
             chi2 = float(y @ y)
@@ -481,11 +516,7 @@ class Engine:
                     self.refused[a.group.label] = (f"fitted size {size:.3g} is below a tenth of a small one "
                                                    f"({ref:.3g}): negligible")
                     theta = self.refine(selected, theta)
-        chi2_final = self._chi2(theta)
-        sel = Selection(selected, theta, chi2_nom, chi2_final, self.n_eff, sig, phi, steps, last_best, {},
-                        self.threshold, dict(self.refused))
-        self.finish(sel)
-        return sel
+        return selected, theta, steps, last_best, chi2_nom
 
     def _magnitude(self, g, theta):
         """Size of a group's fitted change, in the unit of its reference size."""
@@ -584,6 +615,7 @@ class Engine:
             f.append(float(z @ t))
             c2.append(float(t @ t))
         best = (None, None)
+        p = opts[0].group.params[0]
         for i in range(len(ds) - 1):
             if f[i] == 0 or np.sign(f[i]) == np.sign(f[i + 1]):
                 continue
@@ -596,7 +628,6 @@ class Engine:
             t = y_perp + (self.vec(off) - Q @ (Q.T @ self.vec(off)))
             chi = float(t @ t)
             if best[0] is None or chi < best[0]:
-                p = opts[0].group.params[0]
                 best = (chi, Option(opts[0].group, None, off, {"params": {p: self.nominal[p] + d}}, 1))
         return best
 
