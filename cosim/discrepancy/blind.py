@@ -352,9 +352,13 @@ def _run_one(args):
     except RuntimeError as e:  # the generator gave up on this case: reported, not scored
         return {"case": spec.case, "robot": spec.robot, "hidden": list(spec.hidden), "generation_failed": str(e)}
     t1 = time.perf_counter()
-    d = diagnose(csv, out=(Path(out_dir) / f"{spec.case}_report") if report else None, **diag_kw)
-    t2 = time.perf_counter()
     key = json.loads(Path(kp).read_text())
+    try:
+        d = diagnose(csv, out=(Path(out_dir) / f"{spec.case}_report") if report else None, **diag_kw)
+    except Exception as e:  # noqa: BLE001 - a failed diagnosis is a failed case, not a stop
+        return {"case": spec.case, "robot": spec.robot, "hidden": [h["type"] for h in key["effects"]],
+                "diagnosis_failed": f"{type(e).__name__}: {e}"}
+    t2 = time.perf_counter()
     s = score(d, key)
     s.update({"t_generate": t1 - t0, "t_diagnose": t2 - t1, "conclusion": d.conclusion})
     return s
@@ -393,6 +397,9 @@ def benchmark(n: int = 40, seed: int = 1, n_clean: int = 10, robots=("6pus",), o
 def _line(r):
     if "generation_failed" in r:
         return f"{r['case']:>9} {r['robot']:>7}  {'+'.join(r['hidden']):<28} NOT GENERATED: {r['generation_failed']}"
+    if "diagnosis_failed" in r:
+        return f"{r['case']:>9} {r['robot']:>7}  {'+'.join(r['hidden']) or 'clean':<28} DIAGNOSIS FAILED: " \
+               f"{r['diagnosis_failed']}"
     if not r["hidden"]:
         return f"{r['case']:>9} {r['robot']:>7}  clean -> {','.join(r['named']) or 'none':<28} " \
                f"{'ok' if r['clean_ok'] else 'FALSE ALARM'}  ({r['t_diagnose']:.1f} s)"
@@ -405,6 +412,12 @@ def _line(r):
 def summarize(rows) -> dict:
     failed = [r for r in rows if "generation_failed" in r]
     rows = [r for r in rows if "generation_failed" not in r]
+    # A diagnosis that raised counts as a wrong answer (nothing named, no gain).
+    rows = [r if "diagnosis_failed" not in r else
+            dict(r, named=[], first="failed", first_ok=False, first_ok_or_tie=False, all_found=False,
+                 clean_ok=False, param_error={h: float("inf") for h in r["hidden"]}, gain=float("nan"),
+                 gain_windows=float("nan"), gain_ok=False, gain_windows_ok=False, gain_measurable=False,
+                 t_diagnose=float("nan"), t_generate=float("nan")) for r in rows]
     eff = [r for r in rows if r["hidden"]]
     clean = [r for r in rows if not r["hidden"]]
     types = sorted({r["hidden"][0] for r in eff})
@@ -437,8 +450,9 @@ def summarize(rows) -> dict:
         "median_gain": float(np.median([r["gain"] for r in meas])) if meas else float("nan"),
         "median_gain_windows": float(np.median([r["gain_windows"] for r in meas])) if meas else float("nan"),
         "clean_no_missing_physics": (sum(r["clean_ok"] for r in clean) / len(clean)) if clean else float("nan"),
-        "median_diagnose_s": float(np.median([r["t_diagnose"] for r in rows])) if rows else float("nan"),
-        "max_diagnose_s": float(np.max([r["t_diagnose"] for r in rows])) if rows else float("nan"),
+        "median_diagnose_s": float(np.nanmedian([r["t_diagnose"] for r in rows])) if rows else float("nan"),
+        "max_diagnose_s": float(np.nanmax([r["t_diagnose"] for r in rows])) if rows else float("nan"),
+        "diagnosis_failed": [r["case"] for r in rows if "diagnosis_failed" in r],
         "per_type": per_type, "confusion": confusion, "not_generated": [r["case"] for r in failed],
     }
 
@@ -448,7 +462,8 @@ def format_summary(summary: dict) -> str:
     s = summary
     lines = [
         f"effect cases: {s['effect_cases']} over {s['effect_types']} primary types; clean cases: {s['clean_cases']}"
-        + (f"; not generated: {', '.join(s['not_generated'])}" if s.get("not_generated") else ""),
+        + (f"; not generated: {', '.join(s['not_generated'])}" if s.get("not_generated") else "")
+        + (f"; diagnosis failed: {', '.join(s['diagnosis_failed'])}" if s.get("diagnosis_failed") else ""),
         f"right effect named first:          {s['first_named_right'] * 100:5.1f} %  "
         f"(counting declared ties: {s['first_named_right_or_tie'] * 100:.1f} %)",
         f"every hidden effect named:         {s['all_hidden_found'] * 100:5.1f} %",

@@ -464,7 +464,10 @@ class Engine:
             print(f"  noise {self.sig}, phi {self.phi}, N_eff {self.n_eff:.0f}, chi2 {chi2:.1f}")
         last_best = {}
         while len(steps) < self.max_groups:  # entries (an all-joints entry adds several groups)
-            J, names = self.jacobian(selected, theta)
+            # Delays already in the model are held (their instrumental estimate is
+            # refreshed by refine); least squares would pull them to the noise-biased value.
+            J, names = self.jacobian([a for a in selected if not (a.group.key.endswith("_delay")
+                                                                  and a.group.label in self.instruments)], theta)
             y = self.vec(self.R(theta))
             chi2 = float(y @ y)
             Q = np.linalg.qr(J)[0] if J.shape[1] else np.zeros((len(y), 0))
@@ -720,11 +723,8 @@ class Engine:
                 v = theta.get(p, self.nominal[p])
                 h = self._fd_step(g, p, v)
                 if p.endswith(".delay"):
-                    # Gauss-Newton with this column solves J' r = 0 with the reference
-                    # signature as J: an instrumental-variable estimate of the delay.
-                    Rb = self.R(theta)
-                    lo = max(v - h, 0.0)
-                    col = (self._delay_change(p, v + h, theta, Rb) - self._delay_change(p, lo, theta, Rb)) / (v + h - lo)
+                    lo, hi = max(v - h, 0.0), min(v + h, (self.pipe.max_shift - 2) * self.pipe.dt)
+                    col = (self.R(dict(theta, **{p: hi})) - self.R(dict(theta, **{p: lo}))) / (hi - lo)
                     names.append(p)
                     cols.append(self.vec(col, mask=mask))
                     continue
@@ -760,10 +760,36 @@ class Engine:
             return 2e-3
         return self._step(g, p)
 
-    def refine(self, selected, theta, iterations: int = 4):
-        """Gauss-Newton on the exact residual over the selected native parameters."""
-        if all(a.group.key in LINEARISED or (a.group.key == "payload" and len(a.group.params) == 1)
-               for a in selected):
+    def refine(self, selected, theta, iterations: int = 3):
+        """Refine the selected parameters on the exact residual: Gauss-Newton (least
+        squares) over all but the delays, then each delay again by its instrumental root
+        with the others fixed; a few rounds."""
+        delays = [a for a in selected if a.group.key in ("actuator_delay", "sensor_delay")
+                  and a.group.label in self.instruments]
+        others = [a for a in selected if a not in delays]
+        linear = all(a.group.key in LINEARISED or (a.group.key == "payload" and len(a.group.params) == 1)
+                     for a in others)
+        if linear and not delays:
+            return theta
+        for _ in range(iterations if delays else 1):
+            before = dict(theta)
+            theta = self._gauss_newton(others, theta, 1 if linear else 4)
+            for a in delays:
+                p = a.group.params[0]
+                rest = {k: v for k, v in theta.items() if k != p}
+                y = self.vec(self.R(rest))
+                _, opt = self._try_delay(self.options[a.group.label], np.zeros((len(y), 0)), y)
+                if opt is not None:
+                    theta = dict(rest, **opt.hyper["params"])
+            if all(abs(theta.get(k, 0.0) - before.get(k, 0.0)) <= 1e-9 * max(abs(before.get(k, 0.0)), 1e-12)
+                   for k in set(theta) | set(before)):
+                break
+        return theta
+
+    def _gauss_newton(self, selected, theta, iterations):
+        """Gauss-Newton on the exact residual over the native parameters of ``selected``
+        (the others held), with step halving."""
+        if not selected:
             return theta
         chi2 = self._chi2(theta)
         for _ in range(iterations):
