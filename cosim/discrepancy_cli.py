@@ -51,7 +51,10 @@ def cmd_diagnose(args):
 cmd_diagnose.configure = _diag_configure
 
 
-def print_diagnosis(d, file=sys.stdout):
+def print_diagnosis(d, file=None):
+    # sys.stdout is looked up at call time: a default bound at import would keep a stream
+    # that a test harness (or a redirect) has since closed.
+    file = file or sys.stdout
     p = lambda *a: print(*a, file=file)  # noqa: E731
     p(f"{d.recording} ({d.robot}): {d.conclusion}")
     if d.localisation["summary"]:
