@@ -373,20 +373,25 @@ class ReferenceTable:
 
     ``time`` (n,) [s]; ``q, qd, qdd`` (n, nd) joint reference from the controller's
     model; ``x, xd, xdd`` (n, nd) pose reference; ``label`` (n,) int segment tags.
+    The pose fields and labels may be None for a joint-only reference (e.g. one
+    rebuilt from a recording's ``qref``); :func:`run` needs ``x`` and ``label``.
     """
 
     time: np.ndarray
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    xdd: np.ndarray
-    label: np.ndarray
+    x: np.ndarray | None = None
+    xd: np.ndarray | None = None
+    xdd: np.ndarray | None = None
+    label: np.ndarray | None = None
     name: str = ""
 
     def at(self, k) -> Reference:
-        return Reference(self.q[k], self.qd[k], self.qdd[k], self.x[k], self.xd[k], self.xdd[k])
+        def pick(a):
+            return None if a is None else a[k]
+
+        return Reference(self.q[k], self.qd[k], self.qdd[k], pick(self.x), pick(self.xd), pick(self.xdd))
 
 
 def make_reference(model, trajectory, *, step: float = 1e-3, duration: float, t0: float = 0.0) -> ReferenceTable:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..controllers import Reference
+from ..master import ReferenceTable
 from ..simulate import Simulator
 from . import _corecalls as cc
 
@@ -87,26 +87,7 @@ def controller_from(desc: dict, model):
     return None, f"controller type {kind!r} is not one the engine can rebuild"
 
 
-@dataclass
-class JointReference:
-    """A joint (and pose) reference on the sample grid, indexable like the master's."""
-
-    time: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
-    x: np.ndarray | None = None
-    xd: np.ndarray | None = None
-    xdd: np.ndarray | None = None
-
-    def at(self, k) -> Reference:
-        x = None if self.x is None else self.x[k]
-        xd = None if self.xd is None else self.xd[k]
-        xdd = None if self.xdd is None else self.xdd[k]
-        return Reference(self.q[k], self.qd[k], self.qdd[k], x, xd, xdd)
-
-
-def reference_from_recording(rec, model) -> JointReference:
+def reference_from_recording(rec, model) -> ReferenceTable:
     """The joint reference of a recording: ``qref`` and its derivatives (a short
     Savitzky-Golay differentiator: the reference is smooth), the reference pose by the
     core's forward kinematics."""
@@ -116,7 +97,7 @@ def reference_from_recording(rec, model) -> JointReference:
     qdd = savgol_filter(rec.qref, 9, 4, deriv=2, delta=dt, axis=0)
     guess = rec.pose if rec.pose is not None else np.broadcast_to(model.home(), rec.qref.shape)
     x = model.fk(rec.qref, x_guess=np.ascontiguousarray(guess))
-    return JointReference(t, rec.qref, qd, qdd, x)
+    return ReferenceTable(t, rec.qref, qd, qdd, x)
 
 
 @dataclass
@@ -145,7 +126,7 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         The true robot, drive and sensor parameters included.
     controller : callable
         ``controller(t, q, qd, ref) -> tau`` (:mod:`cosim.controllers`).
-    ref : JointReference or cosim.master.ReferenceTable
+    ref : cosim.master.ReferenceTable
         Reference on the sample grid (its time step is the controller's period).
     x0, xd0 : array_like, optional
         Initial true pose and rate (default: the reference pose of sample ``start``, at rest).
