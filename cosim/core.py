@@ -27,6 +27,7 @@ from ._native import (
     ArgumentError,
     ParameterError,
     PkmError,
+    fast,
     lib,
     pkm_fk_info,
     pkm_fk_options,
@@ -194,16 +195,28 @@ class Model:
             return out.reshape(shape)
         return out.reshape(shape), status.reshape(shape[:-1])
 
-    def _loop(self, fn, inputs, names, out_shape):
-        """Per-item C call for functions without a batched form."""
+    def _loop(self, name, inputs, names, out_shape, *, extra=(), out_parts=1, times=None, what="item"):
+        """Per-item C call ``name(m, d, *inputs[k], *extra, *out_parts[k])`` for functions
+        without a batched form; raises the core's error for the first failing item, naming
+        the item (and its time if ``times`` is given)."""
+        f = fast(name)
         arrs = [self._arr(a, n) for a, n in zip(inputs, names)]
         shape = np.broadcast_shapes(*[a.shape for a in arrs])
         flat = [np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, self.ndof)) for a in arrs]
         n = flat[0].shape[0]
         out = np.empty((n,) + out_shape)
+        m, d = self._m, self._d
+        istride = 8 * self.ndof
+        osize = 8 * (out.size // n if n else 0)
+        part = osize // out_parts
+        base = [a.ctypes.data for a in flat]
+        obase = out.ctypes.data
         for k in range(n):
-            o = out[k]
-            self._check(fn(self._m, self._d, *[ptr(a[k]) for a in flat], ptr(o)))
+            o = obase + k * osize
+            s = f(m, d, *[b + k * istride for b in base], *extra, *[o + j * part for j in range(out_parts)])
+            if s:
+                when = f" (t = {times[k]:.6g} s)" if times is not None else ""
+                raise_for(s, f"{what} {k}{when}: {lib.pkm_data_error(d).decode()}")
         return out.reshape(shape[:-1] + out_shape)
 
     # ---------------------------------------------------------------- kinematics
@@ -266,31 +279,28 @@ class Model:
         """J(x), shape (..., nd, nd): qd = J xd."""
         n = self.ndof
 
-        def one(m, d, xp, out):
-            return lib.pkm_jacobians(m, d, xp, None, None, out)
-
-        return self._loop(one, [x], ["x"], (n, n))
+        return self._loop("pkm_jacobians", [x], ["x"], (n, n), extra=(None, None))
 
     def jacobian_dot(self, x, xd):
         """dJ/dt along (x, xd), shape (..., nd, nd)."""
         n = self.ndof
-        return self._loop(lib.pkm_jacobian_dot, [x, xd], ["x", "xd"], (n, n))
+        return self._loop("pkm_jacobian_dot", [x, xd], ["x", "xd"], (n, n))
 
     def singularity(self, x):
         """Singularity measures (..., 2) in [0, 1]: [inverse-kinematic, direct]; 0 = singular."""
-        return self._loop(lib.pkm_singularity, [x], ["x"], (2,))
+        return self._loop("pkm_singularity", [x], ["x"], (2,))
 
     def joint_velocity(self, x, xd):
-        return self._loop(lib.pkm_joint_velocity, [x, xd], ["x", "xd"], (self.ndof,))
+        return self._loop("pkm_joint_velocity", [x, xd], ["x", "xd"], (self.ndof,))
 
     def pose_velocity(self, x, qd):
-        return self._loop(lib.pkm_pose_velocity, [x, qd], ["x", "qd"], (self.ndof,))
+        return self._loop("pkm_pose_velocity", [x, qd], ["x", "qd"], (self.ndof,))
 
     def joint_acceleration(self, x, xd, xdd):
-        return self._loop(lib.pkm_joint_acceleration, [x, xd, xdd], ["x", "xd", "xdd"], (self.ndof,))
+        return self._loop("pkm_joint_acceleration", [x, xd, xdd], ["x", "xd", "xdd"], (self.ndof,))
 
     def pose_acceleration(self, x, xd, qdd):
-        return self._loop(lib.pkm_pose_acceleration, [x, xd, qdd], ["x", "xd", "qdd"], (self.ndof,))
+        return self._loop("pkm_pose_acceleration", [x, xd, qdd], ["x", "xd", "qdd"], (self.ndof,))
 
     # ------------------------------------------------------------------ dynamics
     def inverse_dynamics(self, x, xd, xdd, errors: str = "raise"):
@@ -304,20 +314,15 @@ class Model:
     def mass_matrix(self, x):
         """Task-space mass matrix, shape (..., nd, nd): kinetic energy = xd' M xd / 2."""
         n = self.ndof
-        return self._loop(lib.pkm_mass_matrix, [x], ["x"], (n, n))
+        return self._loop("pkm_mass_matrix", [x], ["x"], (n, n))
 
     def gravity_load(self, x):
         """Actuator efforts that hold the robot still at x, shape (..., nd)."""
-        return self._loop(lib.pkm_gravity_load, [x], ["x"], (self.ndof,))
+        return self._loop("pkm_gravity_load", [x], ["x"], (self.ndof,))
 
     def energy(self, x, xd):
         """(kinetic, potential) energy [J], each shape (...)."""
-
-        def one(m, d, xp, xdp, out):
-            return lib.pkm_energy(m, d, xp, xdp, C.cast(out, C.POINTER(C.c_double)),
-                                  C.cast(C.cast(out, C.c_void_p).value + 8, C.POINTER(C.c_double)))
-
-        e = self._loop(one, [x, xd], ["x", "xd"], (2,))
+        e = self._loop("pkm_energy", [x, xd], ["x", "xd"], (2,), out_parts=2)
         return e[..., 0], e[..., 1]
 
     # ------------------------------------------------------------- 6-PUS specific
@@ -338,20 +343,10 @@ class Model:
         if frame not in frames:
             raise ArgumentError(f"frame must be 'world' or 'platform', got {frame!r}", "PKM_ERR_ARGUMENT")
         f = frames[frame]
-
-        def one(m, d, xp, out):
-            return lib.pkm_6pus_calib_rows(m, d, xp, f, out)
-
-        return self._loop(one, [x], ["x"], (6, 10))
+        return self._loop("pkm_6pus_calib_rows", [x], ["x"], (6, 10), extra=(f,))
 
     def leg_points(self, x):
         """6-PUS world positions ``(P, S)`` of the platform points and sliders, each (..., 6, 3) [m]."""
         self._require_6pus("leg_points")
-
-        def one(m, d, xp, out):
-            base = C.cast(out, C.c_void_p).value
-            return lib.pkm_6pus_leg_points(m, d, xp, C.cast(base, C.POINTER(C.c_double)),
-                                           C.cast(base + 18 * 8, C.POINTER(C.c_double)))
-
-        ps = self._loop(one, [x], ["x"], (2, 6, 3))
+        ps = self._loop("pkm_6pus_leg_points", [x], ["x"], (2, 6, 3), out_parts=2)
         return ps[..., 0, :, :], ps[..., 1, :, :]
