@@ -180,6 +180,15 @@ class Problem:
         """Core parameter values for calibrated coordinates p."""
         return dict(zip(self.names, map(float, p)))
 
+    _p = None  # the coordinates last written into self.model
+
+    def _set(self, p):
+        """Write coordinates p into the problem's core model (skipped if unchanged)."""
+        p = np.asarray(p, float)
+        if self._p is None or not np.array_equal(p, self._p):
+            _set_params_fast(self.model, self.model_params(p))
+            self._p = p.copy()
+
     @property
     def nmeas(self) -> int:
         return int(self.y.size)
@@ -249,12 +258,6 @@ class FourbarProblem(Problem):
                 f"too few poses: {theta.size} crank angle(s) for 4 link lengths; at least {min_poses} distinct "
                 f"angles are needed")
         self._p = None
-
-    def _set(self, p):
-        p = np.asarray(p, float)
-        if self._p is None or not np.array_equal(p, self._p):
-            _set_params_fast(self.model, self.model_params(p))
-            self._p = p.copy()
 
     def predict(self, p):
         from .fourbar import output
@@ -403,12 +406,6 @@ class SixpusProblem(Problem):
             s[d.dep] = d.sign * np.sqrt(rest)
             out.update({f"rail[{d.leg}].s{c}": float(s[k]) for k, c in enumerate("xyz")})
         return out
-
-    def _set(self, p):
-        p = np.asarray(p, float)
-        if self._p is None or not np.array_equal(p, self._p):
-            _set_params_fast(self.model, self.model_params(p))
-            self._p = p.copy()
 
     # ----------------------------------------------------------------- physics
     def predict(self, p):
