@@ -249,6 +249,74 @@ PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd
 PKM_API int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats);
 PKM_API const char* pkm_sim_error(const pkm_sim* s);
 
+/* ================================================================= control */
+/* Sampled joint-space controllers (docs/scenarios.md), the same laws as cosim.controllers.
+ * At each sample t_k the controller reads the joint readings q, qd [m or rad, per s] and
+ * the reference (qref, qdref, qddref, and the reference pose xref if known) and returns the
+ * efforts tau [N or N m] held until the next sample; e = qref - q, ed = qdref - qd.
+ *
+ *  PKM_CTRL_PD                tau = Kp e + Kd ed
+ *  PKM_CTRL_PD_GRAVITY        tau = Kp e + Kd ed + g(x), g = pkm_gravity_load at x: the pose
+ *                             of the measured joints by pkm_fk from the previous sample's pose
+ *                             (gravity_at_reference = 0) or xref (1)
+ *  PKM_CTRL_COMPUTED_TORQUE   qdd_cmd = qddref + Kd ed + Kp e, tau = ID(x, xd, xdd) with x by FK,
+ *                             xd = pose velocity of qd, xdd = pose acceleration of qdd_cmd
+ *  PKM_CTRL_PID               tau = Kp e + Ki i + Kd d (+ g(x) if gravity_feedforward), with the
+ *                             integral i_k = i_{k-1} + dt e_k (frozen while the output is saturated
+ *                             and e pushes further into the limit: anti-windup) and the filtered
+ *                             derivative of e by backward difference, d_k = (Tf d_{k-1} + (e_k -
+ *                             e_{k-1})) / (Tf + dt) (Tf = deriv_filter [s]; the first sample has d = 0)
+ *  PKM_CTRL_LTI               any discrete LTI controller on the error (e.g. a python-control design
+ *                             after c2d at dt): xc_{k+1} = A xc_k + B e_k, tau = C xc_k + D e_k
+ *                             (+ g(x) if gravity_feedforward)
+ * Every kind then clips tau at +-saturation[i] (if given). */
+typedef enum pkm_ctrl_kind {
+  PKM_CTRL_PD = 0,
+  PKM_CTRL_PD_GRAVITY = 1,
+  PKM_CTRL_COMPUTED_TORQUE = 2,
+  PKM_CTRL_PID = 3,
+  PKM_CTRL_LTI = 4
+} pkm_ctrl_kind;
+
+typedef struct pkm_ctrl_spec {
+  int kind;                 /* pkm_ctrl_kind                                              */
+  double dt;                /* sample period [s] (> 0)                                    */
+  const double* kp;         /* [nd,nd] (PD, PD_GRAVITY, PID: N/m or N m/rad; CT: 1/s^2)   */
+  const double* kd;         /* [nd,nd] (N s/m or N m s/rad; CT: 1/s)                      */
+  const double* ki;         /* [nd,nd] PID only (N/(m s) or N m/(rad s)), may be NULL     */
+  double deriv_filter;      /* PID: derivative filter time constant Tf [s] (>= 0)         */
+  const double* saturation; /* [nd] largest |tau_i| [N or N m] (> 0), or NULL for none   */
+  int gravity_at_reference; /* PD_GRAVITY: 1 = g at xref instead of the measured pose     */
+  int gravity_feedforward;  /* PID, LTI: 1 = add g(x) at the measured pose                */
+  int nx;                   /* LTI: controller states (>= 0, <= 64)                       */
+  const double *A, *B, *C, *D; /* LTI: A[nx,nx], B[nx,nd], C[nd,nx], D[nd,nd]            */
+} pkm_ctrl_spec;
+
+typedef struct pkm_ctrl pkm_ctrl;
+
+/* Copies the spec's arrays and a copy of m (for g, FK and ID).  NULL on error, the reason
+ * (which field, which entry) in err. */
+PKM_API pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* err,
+                                  size_t errlen);
+PKM_API void pkm_ctrl_destroy(pkm_ctrl* c);
+/* Starts a run: clears integrator, filter and LTI states, the saturation counter; x0 (may
+ * be NULL: the home pose) seeds the forward kinematics of the measured joints. */
+PKM_API int pkm_ctrl_reset(pkm_ctrl* c, const double* x0);
+/* One sample at time t: tau[nd] from the readings and the reference (qddref and xref may
+ * be NULL where the kind does not need them).  A non-finite reading, a failed FK or ID
+ * returns the status and a message naming the joint and the time (pkm_ctrl_error). */
+PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd,
+                            const double* qref, const double* qdref, const double* qddref,
+                            const double* xref, double* tau);
+/* Samples at which the saturation clipped an effort since the last reset. */
+PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
+PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
+/* Everything that determines the controller's future outputs (states, last error, pose
+ * guess), as doubles, for FMU get/set state. */
+PKM_API size_t pkm_ctrl_state_size(const pkm_ctrl* c);
+PKM_API int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf);
+PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
+
 /* ====================================================== 6-PUS specific (seed 000) */
 
 enum { PKM_FRAME_WORLD = 0, PKM_FRAME_PLATFORM = 1 };
