@@ -1,0 +1,361 @@
+// Sampled joint-space controllers (pkm.h "control"): the laws of cosim.controllers in
+// C++, so that a closed loop can run without leaving the core (pkm_sim_run_loop) and a
+// controller FMU can carry the same law.  The model-based parts (gravity load, forward
+// kinematics of the measured joints, inverse dynamics) call the core's own C API on a
+// private model copy and work data, so the controller believes in exactly the physics
+// the plant has, unless the caller gives it another model.
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "common/guard.hpp"
+
+using namespace pkm;
+
+namespace {
+
+constexpr int kMaxStates = 64;
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+const char* kind_name(int kind) {
+  switch (kind) {
+    case PKM_CTRL_PD: return "pd";
+    case PKM_CTRL_PD_GRAVITY: return "pd_gravity";
+    case PKM_CTRL_COMPUTED_TORQUE: return "computed_torque";
+    case PKM_CTRL_PID: return "pid";
+    case PKM_CTRL_LTI: return "lti";
+    default: return "?";
+  }
+}
+
+using MatX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using VecX = Eigen::VectorXd;
+
+MatX copy_matrix(const double* p, int rows, int cols, const char* field, bool required) {
+  if (!p) {
+    if (required) throw Error(PKM_ERR_ARGUMENT, std::string("controller spec: ") + field + " is NULL");
+    return MatX::Zero(rows, cols);
+  }
+  MatX out = Eigen::Map<const MatX>(p, rows, cols);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j)
+      if (!std::isfinite(out(i, j)))
+        throw Error(PKM_ERR_ARGUMENT, std::string("controller spec: ") + field + "[" + std::to_string(i) + "," +
+                                          std::to_string(j) + "] is not finite (" + num(out(i, j)) + ")");
+  return out;
+}
+
+void check_gain(const MatX& g, const char* field) {
+  for (int i = 0; i < g.rows(); ++i)
+    if (g(i, i) < 0)
+      throw Error(PKM_ERR_ARGUMENT, std::string("controller spec: ") + field + " of joint " + std::to_string(i + 1) +
+                                        " is negative (" + num(g(i, i)) + "): the loop would be unstable");
+}
+
+}  // namespace
+
+struct pkm_ctrl {
+  pkm_model* model = nullptr;
+  pkm_data* data = nullptr;
+  int nd = 0;
+  int kind = PKM_CTRL_PD;
+  double dt = 0;
+  MatX kp, kd, ki, A, B, C, D;
+  VecX sat;  // empty: no saturation
+  double tf = 0;
+  bool gravity_ref = false, gravity_ff = false;
+  int nx = 0;
+
+  // state
+  VecX integral, deriv, e_prev, xc, x_guess;
+  bool have_prev = false, have_guess = false;
+  long saturated = 0;
+  std::string error;
+
+  ~pkm_ctrl() {
+    if (data) pkm_data_destroy(data);
+    if (model) pkm_model_destroy(model);
+  }
+
+  void fail_core(int s, double t, const std::string& what) {
+    throw Error(s, std::string(kind_name(kind)) + " at t = " + num(t) + " s: " + what + ": " + pkm_data_error(data));
+  }
+
+  // Pose of the measured joints by forward kinematics from the last pose (or the
+  // reference pose, or home), as cosim.controllers.PDGravity.pose.
+  void measured_pose(double t, const double* q, const double* xref, double* x) {
+    std::vector<double> guess(nd);
+    if (have_guess)
+      for (int i = 0; i < nd; ++i) guess[i] = x_guess[i];
+    else if (xref)
+      for (int i = 0; i < nd; ++i) guess[i] = xref[i];
+    else
+      pkm_model_home(model, guess.data());
+    const int s = pkm_fk(model, data, q, guess.data(), nullptr, x, nullptr);
+    if (s != PKM_OK) fail_core(s, t, "forward kinematics of the measured joints failed");
+    for (int i = 0; i < nd; ++i) x_guess[i] = x[i];
+    have_guess = true;
+  }
+
+  void add_gravity(double t, const double* x, double* tau) {
+    std::vector<double> g(nd);
+    const int s = pkm_gravity_load(model, data, x, g.data());
+    if (s != PKM_OK) fail_core(s, t, "gravity load");
+    for (int i = 0; i < nd; ++i) tau[i] += g[i];
+  }
+
+  void update(double t, const double* q, const double* qd, const double* qref, const double* qdref,
+              const double* qddref, const double* xref, double* tau) {
+    const char* kn = kind_name(kind);
+    auto check = [&](const double* v, const char* name, bool required) {
+      if (!v) {
+        if (required) throw Error(PKM_ERR_ARGUMENT, std::string(kn) + " at t = " + num(t) + " s: " + name + " is NULL");
+        return;
+      }
+      for (int i = 0; i < nd; ++i)
+        if (!std::isfinite(v[i]))
+          throw Error(PKM_ERR_ARGUMENT, std::string(kn) + " at t = " + num(t) + " s: " + name + " of joint " +
+                                            std::to_string(i + 1) + " is " + num(v[i]));
+    };
+    require(std::isfinite(t), PKM_ERR_ARGUMENT, std::string(kn) + ": sample time t is not finite");
+    check(q, "q", true);
+    check(qd, "qd", true);
+    check(qref, "qref", true);
+    check(qdref, "qdref", true);
+    check(qddref, "qddref", false);
+    check(xref, "xref", false);
+    check_out(tau, "tau");
+    Eigen::Map<const VecX> Q(q, nd), QD(qd, nd), QR(qref, nd), QDR(qdref, nd);
+    const VecX e = QR - Q, ed = QDR - QD;
+    VecX u(nd);
+    std::vector<double> x(nd);
+    switch (kind) {
+      case PKM_CTRL_PD:
+        u = kp * e + kd * ed;
+        break;
+      case PKM_CTRL_PD_GRAVITY:
+        u = kp * e + kd * ed;
+        if (gravity_ref) {
+          require(xref != nullptr, PKM_ERR_ARGUMENT,
+                  std::string(kn) + " at t = " + num(t) + " s: gravity at the reference pose needs xref");
+          for (int i = 0; i < nd; ++i) x[i] = xref[i];
+        } else {
+          measured_pose(t, q, xref, x.data());
+        }
+        add_gravity(t, x.data(), u.data());
+        break;
+      case PKM_CTRL_COMPUTED_TORQUE: {
+        measured_pose(t, q, xref, x.data());
+        VecX qdd = kd * ed + kp * e;
+        if (qddref) qdd += Eigen::Map<const VecX>(qddref, nd);
+        std::vector<double> xd(nd), xdd(nd);
+        int s = pkm_pose_velocity(model, data, x.data(), qd, xd.data());
+        if (s != PKM_OK) fail_core(s, t, "pose velocity");
+        s = pkm_pose_acceleration(model, data, x.data(), xd.data(), qdd.data(), xdd.data());
+        if (s != PKM_OK) fail_core(s, t, "pose acceleration");
+        s = pkm_inverse_dynamics(model, data, x.data(), xd.data(), xdd.data(), u.data());
+        if (s != PKM_OK) fail_core(s, t, "inverse dynamics");
+        break;
+      }
+      case PKM_CTRL_PID: {
+        if (have_prev)
+          deriv = (tf * deriv + (e - e_prev)) / (tf + dt);
+        else
+          deriv.setZero();
+        const VecX trial_integral = integral + dt * e;
+        u = kp * e + ki * trial_integral + kd * deriv;
+        if (gravity_ff) {
+          measured_pose(t, q, xref, x.data());
+          add_gravity(t, x.data(), u.data());
+        }
+        // Anti-windup (conditional integration): a joint whose output is saturated keeps
+        // its integral where the error would drive it further into the limit.
+        VecX next = trial_integral;
+        if (sat.size())
+          for (int i = 0; i < nd; ++i)
+            if ((u[i] > sat[i] && e[i] > 0) || (u[i] < -sat[i] && e[i] < 0)) next[i] = integral[i];
+        if (sat.size() && next != trial_integral) {
+          u = kp * e + ki * next + kd * deriv;
+          if (gravity_ff) add_gravity(t, x.data(), u.data());
+        }
+        integral = next;
+        e_prev = e;
+        have_prev = true;
+        break;
+      }
+      case PKM_CTRL_LTI: {
+        u = D * e;
+        if (nx > 0) {
+          u += C * xc;
+          xc = (A * xc + B * e).eval();
+        }
+        if (gravity_ff) {
+          measured_pose(t, q, xref, x.data());
+          add_gravity(t, x.data(), u.data());
+        }
+        break;
+      }
+      default:
+        throw Error(PKM_ERR_INTERNAL, "unknown controller kind");
+    }
+    bool clipped = false;
+    for (int i = 0; i < nd; ++i) {
+      double v = u[i];
+      if (sat.size()) {
+        const double c = std::clamp(v, -sat[i], sat[i]);
+        clipped = clipped || c != v;
+        v = c;
+      }
+      if (!std::isfinite(v))
+        throw Error(PKM_ERR_ARGUMENT, std::string(kn) + " at t = " + num(t) + " s: the effort of joint " +
+                                          std::to_string(i + 1) + " is not finite (" + num(v) + ")");
+      tau[i] = v;
+    }
+    if (clipped) ++saturated;
+  }
+
+  void reset(const double* x0) {
+    integral.setZero(nd);
+    deriv.setZero(nd);
+    e_prev.setZero(nd);
+    xc.setZero(nx);
+    x_guess.setZero(nd);
+    have_prev = false;
+    have_guess = false;
+    saturated = 0;
+    if (x0) {
+      check_finite(x0, nd, "reset: pose x0");
+      for (int i = 0; i < nd; ++i) x_guess[i] = x0[i];
+      have_guess = true;
+    }
+  }
+
+  // Layout: integral[nd], deriv[nd], e_prev[nd], x_guess[nd], xc[nx], have_prev,
+  // have_guess, saturated.
+  size_t state_size() const { return 4 * (size_t)nd + nx + 3; }
+  void save(double* b) const {
+    size_t k = 0;
+    for (const VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
+      for (int i = 0; i < v->size(); ++i) b[k++] = (*v)[i];
+    b[k++] = have_prev ? 1.0 : 0.0;
+    b[k++] = have_guess ? 1.0 : 0.0;
+    b[k++] = (double)saturated;
+  }
+  void load(const double* b) {
+    const size_t n = state_size();
+    for (size_t k = 0; k < n; ++k)
+      require(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "controller state: entry " + std::to_string(k) + " is not finite");
+    size_t k = 0;
+    for (VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
+      for (int i = 0; i < v->size(); ++i) (*v)[i] = b[k++];
+    have_prev = b[k++] != 0.0;
+    have_guess = b[k++] != 0.0;
+    saturated = (long)b[k++];
+  }
+};
+
+extern "C" {
+
+pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* err, size_t errlen) {
+  pkm_ctrl* out = nullptr;
+  guard_err(err, errlen, [&] {
+    require(m != nullptr, PKM_ERR_ARGUMENT, "controller: model is NULL");
+    require(spec != nullptr, PKM_ERR_ARGUMENT, "controller: spec is NULL");
+    require(m->compiled != nullptr, PKM_ERR_PARAMETER,
+            "controller: the model's parameters were changed and not validated: call pkm_model_validate first");
+    const pkm_ctrl_spec& s = *spec;
+    require(s.kind >= PKM_CTRL_PD && s.kind <= PKM_CTRL_LTI, PKM_ERR_ARGUMENT,
+            "controller spec: kind = " + std::to_string(s.kind) +
+                " is not one of PKM_CTRL_PD (0), _PD_GRAVITY (1), _COMPUTED_TORQUE (2), _PID (3), _LTI (4)");
+    require(std::isfinite(s.dt) && s.dt > 0, PKM_ERR_ARGUMENT,
+            "controller spec: dt = " + num(s.dt) + " s must be finite and > 0");
+    auto c = std::make_unique<pkm_ctrl>();
+    const int nd = pkm_model_ndof(m);
+    c->nd = nd;
+    c->kind = s.kind;
+    c->dt = s.dt;
+    const bool lti = s.kind == PKM_CTRL_LTI;
+    c->kp = copy_matrix(s.kp, nd, nd, "kp", !lti);
+    c->kd = copy_matrix(s.kd, nd, nd, "kd", !lti);
+    c->ki = copy_matrix(s.ki, nd, nd, "ki", false);
+    if (!lti) {
+      check_gain(c->kp, "kp");
+      check_gain(c->kd, "kd");
+      check_gain(c->ki, "ki");
+    }
+    require(std::isfinite(s.deriv_filter) && s.deriv_filter >= 0, PKM_ERR_ARGUMENT,
+            "controller spec: deriv_filter = " + num(s.deriv_filter) + " s must be finite and >= 0");
+    c->tf = s.deriv_filter;
+    if (s.saturation) {
+      c->sat.resize(nd);
+      for (int i = 0; i < nd; ++i) {
+        require(std::isfinite(s.saturation[i]) && s.saturation[i] > 0, PKM_ERR_ARGUMENT,
+                "controller spec: saturation of joint " + std::to_string(i + 1) + " must be a positive effort, got " +
+                    num(s.saturation[i]));
+        c->sat[i] = s.saturation[i];
+      }
+    }
+    c->gravity_ref = s.gravity_at_reference != 0;
+    c->gravity_ff = s.gravity_feedforward != 0;
+    if (lti) {
+      require(s.nx >= 0 && s.nx <= kMaxStates, PKM_ERR_ARGUMENT,
+              "controller spec: nx = " + std::to_string(s.nx) + " must be in [0, " + std::to_string(kMaxStates) + "]");
+      c->nx = s.nx;
+      c->A = copy_matrix(s.A, s.nx, s.nx, "A", s.nx > 0);
+      c->B = copy_matrix(s.B, s.nx, nd, "B", s.nx > 0);
+      c->C = copy_matrix(s.C, nd, s.nx, "C", s.nx > 0);
+      c->D = copy_matrix(s.D, nd, nd, "D", false);
+    }
+    c->model = pkm_model_copy(m);
+    require(c->model != nullptr, PKM_ERR_INTERNAL, "controller: out of memory copying the model");
+    c->data = pkm_data_create(c->model);
+    require(c->data != nullptr, PKM_ERR_INTERNAL, "controller: out of memory creating the work data");
+    c->reset(nullptr);
+    out = c.release();
+  });
+  return out;
+}
+
+void pkm_ctrl_destroy(pkm_ctrl* c) { delete c; }
+
+int pkm_ctrl_reset(pkm_ctrl* c, const double* x0) {
+  if (!c) return PKM_ERR_ARGUMENT;
+  c->error.clear();
+  return guard_into(c->error, [&] { c->reset(x0); });
+}
+
+int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd, const double* qref,
+                    const double* qdref, const double* qddref, const double* xref, double* tau) {
+  if (!c) return PKM_ERR_ARGUMENT;
+  c->error.clear();
+  return guard_into(c->error, [&] { c->update(t, q, qd, qref, qdref, qddref, xref, tau); });
+}
+
+long pkm_ctrl_saturated(const pkm_ctrl* c) { return c ? c->saturated : 0; }
+
+const char* pkm_ctrl_error(const pkm_ctrl* c) { return c ? c->error.c_str() : "controller is NULL"; }
+
+size_t pkm_ctrl_state_size(const pkm_ctrl* c) { return c ? c->state_size() : 0; }
+
+int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf) {
+  if (!c || !buf) return PKM_ERR_ARGUMENT;
+  c->save(buf);
+  return PKM_OK;
+}
+
+int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf) {
+  if (!c || !buf) return PKM_ERR_ARGUMENT;
+  c->error.clear();
+  return guard_into(c->error, [&] { c->load(buf); });
+}
+
+}  // extern "C"
