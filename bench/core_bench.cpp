@@ -100,7 +100,7 @@ struct Ctl {
 };
 
 // Simulates t_end seconds with the input updated every dt; returns (wall time of the
-// advances only, wall time with the controller, CVODE stats).
+// advances only, wall time with the controller, integrator stats).
 struct SimRun {
   double wall_sim = 0, wall_total = 0;
   pkm_sim_stats stats{};
@@ -260,10 +260,12 @@ int main(int argc, char** argv) {
     const char* label;
     int method;
     double dt;
-  } cases[] = {{"sim_bdf_1ms", "CVODE BDF, PD control, 1 ms updates", PKM_BDF, 1e-3},
-               {"sim_adams_1ms", "CVODE Adams, PD control, 1 ms updates", PKM_ADAMS, 1e-3},
-               {"sim_bdf_10ms", "CVODE BDF, PD control, 10 ms updates", PKM_BDF, 1e-2},
-               {"sim_adams_10ms", "CVODE Adams, PD control, 10 ms updates", PKM_ADAMS, 1e-2}};
+  } cases[] = {{"sim_erk_1ms", "explicit RK (default), PD+G, 1 ms updates", PKM_ERK, 1e-3},
+               {"sim_erk_10ms", "explicit RK (default), PD+G, 10 ms updates", PKM_ERK, 1e-2},
+               {"sim_bdf_1ms", "CVODE BDF, PD+G, 1 ms updates", PKM_BDF, 1e-3},
+               {"sim_adams_1ms", "CVODE Adams, PD+G, 1 ms updates", PKM_ADAMS, 1e-3},
+               {"sim_bdf_10ms", "CVODE BDF, PD+G, 10 ms updates", PKM_BDF, 1e-2},
+               {"sim_adams_10ms", "CVODE Adams, PD+G, 10 ms updates", PKM_ADAMS, 1e-2}};
   for (const Case& c : cases) {
     SimRun r = run_controlled(m, d, c.method, T, c.dt);
     char note[256];
@@ -276,7 +278,7 @@ int main(int argc, char** argv) {
     SimRun r = run_free(m, Tf);
     char note[256];
     std::snprintf(note, sizeof note, "%.0f steps, %.0f RHS per sim s", r.stats.steps / Tf, r.stats.rhs_evals / Tf);
-    add("sim_bdf_free", "CVODE BDF, free motion (g = 0), one 1 s advance", "sim s/wall s", Tf / r.wall_sim, 1000,
+    add("sim_erk_free", "explicit RK, free motion (g = 0), one 1 s advance", "sim s/wall s", Tf / r.wall_sim, 1000,
         true, note);
   }
 

@@ -107,6 +107,34 @@ class pkm_sim_stats(C.Structure):
     ]
 
 
+class pkm_ctrl_spec(C.Structure):
+    _fields_ = [
+        ("kind", C.c_int),
+        ("dt", C.c_double),
+        ("kp", c_double_p),
+        ("kd", c_double_p),
+        ("ki", c_double_p),
+        ("deriv_filter", C.c_double),
+        ("saturation", c_double_p),
+        ("gravity_at_reference", C.c_int),
+        ("gravity_feedforward", C.c_int),
+        ("nx", C.c_int),
+        ("A", c_double_p),
+        ("B", c_double_p),
+        ("C", c_double_p),
+        ("D", c_double_p),
+    ]
+
+
+class pkm_loop_reference(C.Structure):
+    _fields_ = [("n", C.c_size_t), ("t0", C.c_double), ("dt", C.c_double), ("t", c_double_p), ("q", c_double_p),
+                ("qd", c_double_p), ("qdd", c_double_p), ("x", c_double_p), ("tau_before", c_double_p)]
+
+
+class pkm_loop_record(C.Structure):
+    _fields_ = [(name, c_double_p) for name in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")]
+
+
 def library_path() -> Path:
     if os.environ.get("PKM_LIB"):
         return Path(os.environ["PKM_LIB"])
@@ -172,6 +200,20 @@ _SIGNATURES = {
     "pkm_sim_get_state": (I, [P, D, D, D]),
     "pkm_sim_get_stats": (I, [P, C.POINTER(pkm_sim_stats)]),
     "pkm_sim_error": (CH, [P]),
+    "pkm_ctrl_create": (P, [P, C.POINTER(pkm_ctrl_spec), C.c_char_p, S]),
+    "pkm_ctrl_destroy": (None, [P]),
+    "pkm_ctrl_reset": (I, [P, D]),
+    "pkm_ctrl_update": (I, [P, C.c_double, D, D, D, D, D, D, D]),
+    "pkm_ctrl_saturated": (C.c_long, [P]),
+    "pkm_ctrl_error": (CH, [P]),
+    "pkm_ctrl_state_size": (S, [P]),
+    "pkm_ctrl_state_save": (I, [P, D]),
+    "pkm_ctrl_state_load": (I, [P, D]),
+    "pkm_closed_loop": (I, [P, P, C.POINTER(pkm_loop_reference), D, D, I, C.POINTER(pkm_loop_record),
+                            C.POINTER(C.c_size_t)]),
+    "pkm_sim_state_size": (S, [P]),
+    "pkm_sim_state_save": (I, [P, D]),
+    "pkm_sim_state_load": (I, [P, D, S]),
     "pkm_6pus_calib_rows": (I, [P, P, D, I, D]),
     "pkm_6pus_leg_points": (I, [P, P, D, D, D]),
     "pkm_fourbar_output": (I, [P, P, C.c_double, D, D]),

@@ -95,7 +95,7 @@ class Plant:
 
 
 class CorePlant(Plant):
-    """The core integrated directly by CVODE: the reference plant.
+    """The core integrated directly (pkm_sim): the reference plant.
 
     Parameters
     ----------
@@ -103,15 +103,16 @@ class CorePlant(Plant):
         The plant's model (its parameters are the "true" robot).
     rtol, atol : float
         CVODE tolerances (relative; absolute on the task-space state [m, rad, m/s, rad/s]).
-    method : {"bdf", "adams"}
-        CVODE linear multistep method.
+    method : {"erk", "bdf", "adams"}
+        Integration method (:class:`cosim.simulate.Simulator`): explicit Runge-Kutta
+        (default) or CVODE's BDF / Adams.
     max_step : float
         Largest internal step [s] (0: unlimited).
     """
 
     kind = "core"
 
-    def __init__(self, model, rtol: float = 1e-10, atol: float = 1e-12, method: str = "bdf",
+    def __init__(self, model, rtol: float = 1e-10, atol: float = 1e-12, method: str = "erk",
                  max_step: float = 0.0):
         from .simulate import Simulator
 

@@ -292,9 +292,15 @@ def built_fmu(robot: str) -> Path:
 def build_plant(sc: Scenario, true_model, truth: dict):
     integ = sc.spec["integrator"]
     rtol, atol = float(integ.get("rtol", 1e-10)), float(integ.get("atol", 1e-12))
+    from .simulate import METHOD_CODES, default_options
+
+    method = integ.get("method", default_options()["method"])
+    if method not in METHOD_CODES:
+        raise ScenarioError(f"[integrator] method = {method!r}: use one of {sorted(METHOD_CODES)}")
     if sc.spec["plant"] == "core":
-        return CorePlant(true_model, rtol=rtol, atol=atol, method=integ.get("method", "bdf"))
-    params = {**sc.spec["parameters"], **truth}
+        return CorePlant(true_model, rtol=rtol, atol=atol, method=method)
+    # the FMU's solver.method is the core's method code (pkm.h pkm_lmm)
+    params = {"solver.method": METHOD_CODES[method], **sc.spec["parameters"], **truth}
     return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"))
 
 

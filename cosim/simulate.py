@@ -36,7 +36,10 @@ from ._native import ArgumentError, PkmError, lib, pkm_sim_options, pkm_sim_stat
 
 __all__ = ["Simulator", "SimResult", "simulate", "default_options"]
 
-_METHODS = {"bdf": 0, "adams": 1}
+_METHODS = {"bdf": 0, "adams": 1, "erk": 2}
+_METHOD_NAMES = {v: k for k, v in _METHODS.items()}
+#: integration method names and their pkm.h codes (pkm_lmm; the FMUs' solver.method)
+METHOD_CODES = dict(_METHODS)
 
 
 def default_options() -> dict:
@@ -44,7 +47,7 @@ def default_options() -> dict:
     o = pkm_sim_options()
     lib.pkm_sim_default_options(C.byref(o))
     return {
-        "method": "bdf" if o.method == 0 else "adams",
+        "method": _METHOD_NAMES[o.method],
         "rtol": o.rtol,
         "atol": o.atol,
         "max_step": o.max_step,
@@ -54,17 +57,20 @@ def default_options() -> dict:
 
 
 class Simulator:
-    """A CVODE integration of one robot's task-space state under a held input.
+    """An integration of one robot's task-space state under a held input.
 
     Parameters
     ----------
     model : cosim.core.Model
         The robot.  The simulator copies it: later ``model.set_params`` calls do not
         change a simulator that already exists.
-    method : {"bdf", "adams"}
-        CVODE's linear multistep method: BDF with Newton iteration and a dense
-        difference-quotient Jacobian (stiff-safe, the default), or Adams with
-        fixed-point iteration (non-stiff motion).
+    method : {"erk", "bdf", "adams"}
+        ``"erk"`` (default): explicit Runge-Kutta 5(4) (Dormand-Prince) that keeps its
+        step size from one ``advance`` to the next, about one step per millisecond
+        under a 1 kHz controller; for non-stiff motion.  ``"bdf"``: CVODE's BDF with
+        Newton iteration and a dense difference-quotient Jacobian (stiff-safe: use it
+        with Coulomb friction and a small ``drive.v_eps``).  ``"adams"``: CVODE's
+        Adams with fixed-point iteration.
     rtol : float
         Relative tolerance of the local error (dimensionless).
     atol : float
@@ -81,9 +87,11 @@ class Simulator:
     Notes
     -----
     After ``Simulator(model)`` the state is the model's home pose at rest at t = 0 s
-    with a zero input.  Every ``advance`` restarts CVODE from the current state, so
-    its result depends only on (t, x, xd, tau, options): restoring a saved state with
-    ``reset`` and advancing again reproduces the same numbers bit for bit.
+    with a zero input.  The result of an ``advance`` depends only on the simulator's
+    state (:meth:`save_state`: t, x, xd, the held input, the explicit method's next
+    step size and the actuator-delay history) and the options: restoring a saved
+    state with :meth:`load_state` and advancing again reproduces the same numbers bit
+    for bit.  ``reset`` starts afresh (the explicit method chooses a new first step).
 
     Examples
     --------
@@ -96,7 +104,7 @@ class Simulator:
     >>> t, x, xd = sim.state
     """
 
-    def __init__(self, model, method: str = "bdf", rtol: float = 1e-8, atol: float = 1e-10,
+    def __init__(self, model, method: str = "erk", rtol: float = 1e-8, atol: float = 1e-10,
                  max_step: float = 0.0, max_steps: int = 100000, sing_min: float = 1e-4):
         if method not in _METHODS:
             raise ArgumentError(f"method must be one of {sorted(_METHODS)}, got {method!r}", "PKM_ERR_ARGUMENT")
@@ -167,6 +175,19 @@ class Simulator:
         integration stopped and the exception's message names the leg and the time.
         """
         self._check(lib.pkm_sim_advance(self._s, float(t_end)))
+
+    def save_state(self) -> np.ndarray:
+        """The simulator's whole state as a 1-D array (``pkm_sim_state_save``), for
+        :meth:`load_state` on this or another simulator of the same model and options."""
+        buf = np.empty(int(lib.pkm_sim_state_size(self._s)))
+        self._check(lib.pkm_sim_state_save(self._s, ptr(buf)))
+        return buf
+
+    def load_state(self, state) -> None:
+        """Restore a state from :meth:`save_state`; a damaged or foreign one raises
+        ``ArgumentError`` and changes nothing."""
+        buf = np.ascontiguousarray(state, dtype=float).ravel()
+        self._check(lib.pkm_sim_state_load(self._s, ptr(buf), buf.size))
 
     @property
     def state(self):

@@ -214,3 +214,75 @@ TEST(Controller, BadSpecsAndReadingsAreNamed) {
   EXPECT_NE(std::string(pkm_ctrl_error(c.c)).find("forward kinematics of the measured joints"), std::string::npos)
       << pkm_ctrl_error(c.c);
 }
+
+// The compiled loop is the same sequence as stepping the sim and the controller by hand
+// (what an FMU-based master does): the same numbers, bit for bit.
+TEST(ClosedLoop, EqualsTheLoopSteppedByHandAndKeepsTheRowsBeforeAFailure) {
+  auto m = make_model("6pus");
+  auto d = make_data(m.get());
+  auto kp = diag(6, 300), kd = diag(6, 30);
+  auto s = spec_of(PKM_CTRL_PD_GRAVITY, kp, kd);
+  char err[512] = "";
+  const int nd = 6;
+  const size_t n = 200;
+  double home[6];
+  pkm_model_home(m.get(), home);
+  std::vector<double> qref(n * nd), qdref(n * nd, 0.0), xref(n * nd);
+  for (size_t k = 0; k < n; ++k) {
+    double x[6];
+    for (int i = 0; i < nd; ++i) x[i] = home[i];
+    x[2] += 0.01 * std::min(1.0, k / 50.0);
+    ASSERT_EQ(pkm_ik(m.get(), d.get(), x, &qref[k * nd]), PKM_OK);
+    for (int i = 0; i < nd; ++i) xref[k * nd + i] = x[i];
+  }
+  pkm_loop_reference ref{n, 0.0, 1e-3, nullptr, qref.data(), qdref.data(), nullptr, xref.data(), nullptr};
+  std::vector<double> q(n * nd), x(n * nd), tau(n * nd);
+  pkm_loop_record rec{};
+  rec.q = q.data(), rec.x = x.data(), rec.tau_cmd = tau.data();
+  pkm_sim* sim = pkm_sim_create(m.get(), nullptr, err, sizeof err);
+  CtrlPtr c{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
+  ASSERT_NE(sim, nullptr);
+  ASSERT_EQ(pkm_ctrl_reset(c.c, home), PKM_OK);
+  size_t done = 0;
+  ASSERT_EQ(pkm_closed_loop(sim, c.c, &ref, nullptr, nullptr, 0, &rec, &done), PKM_OK) << pkm_sim_error(sim);
+  EXPECT_EQ(done, n);
+
+  pkm_sim* hand = pkm_sim_create(m.get(), nullptr, err, sizeof err);
+  CtrlPtr c2{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
+  ASSERT_EQ(pkm_ctrl_reset(c2.c, home), PKM_OK);
+  for (size_t k = 0; k < n; ++k) {
+    double t, xs[6], xds[6], qs[6], qds[6], u[6];
+    pkm_sim_get_state(hand, &t, xs, xds);
+    ASSERT_EQ(pkm_ik(m.get(), d.get(), xs, qs), PKM_OK);
+    ASSERT_EQ(pkm_joint_velocity(m.get(), d.get(), xs, xds, qds), PKM_OK);
+    ASSERT_EQ(pkm_ctrl_update(c2.c, k * 1e-3, qs, qds, &qref[k * nd], &qdref[k * nd], nullptr, &xref[k * nd], u),
+              PKM_OK);
+    for (int i = 0; i < nd; ++i) {
+      ASSERT_EQ(q[k * nd + i], qs[i]) << "sample " << k;
+      ASSERT_EQ(x[k * nd + i], xs[i]) << "sample " << k;
+      ASSERT_EQ(tau[k * nd + i], u[i]) << "sample " << k;
+    }
+    pkm_sim_set_input(hand, u);
+    ASSERT_EQ(pkm_sim_advance(hand, k * 1e-3 + 1e-3), PKM_OK);
+  }
+  // The platform follows the 10 mm lift (kp = 300 N/m: still 1-2 mm short after 0.2 s).
+  EXPECT_GT(x[(n - 1) * nd + 2], home[2] + 0.008);
+
+  // A reference beyond the stroke limit: the loop stops at the limit, names the leg and
+  // the time, and keeps the rows before the failing sample.
+  // A PD far too weak to hold the platform: it falls until the sim stops it (through the
+  // rail plane to a direct singularity, with this geometry).
+  auto weak_kp = diag(6, 1.0), weak_kd = diag(6, 0.1);
+  auto weak = spec_of(PKM_CTRL_PD, weak_kp, weak_kd);
+  CtrlPtr c3{pkm_ctrl_create(m.get(), &weak, err, sizeof err)};
+  ASSERT_EQ(pkm_sim_reset(sim, 0.0, home, std::vector<double>(6, 0.0).data()), PKM_OK);
+  const int st = pkm_closed_loop(sim, c3.c, &ref, nullptr, nullptr, 0, &rec, &done);
+  EXPECT_EQ(st, PKM_ERR_SINGULAR) << pkm_sim_error(sim);
+  const std::string msg = pkm_sim_error(sim);
+  EXPECT_NE(msg.find("closed loop stopped at sample " + std::to_string(done)), std::string::npos) << msg;
+  EXPECT_NE(msg.find("direct (type 2) singularity"), std::string::npos) << msg;
+  EXPECT_GT(done, 0u);
+  EXPECT_LT(done, n);
+  pkm_sim_destroy(sim);
+  pkm_sim_destroy(hand);
+}

@@ -85,7 +85,7 @@ void some_input(const pkm_model* m, const double* x, double* tau) {
 
 TEST(SimOptions, DefaultsAreTheDocumentedOnes) {
   pkm_sim_options o = defaults();
-  EXPECT_EQ(o.method, PKM_BDF);
+  EXPECT_EQ(o.method, PKM_ERK);
   EXPECT_EQ(o.rtol, 1e-8);
   EXPECT_EQ(o.atol, 1e-10);
   EXPECT_EQ(o.max_step, 0.0);
@@ -267,6 +267,68 @@ TEST(Sim, RollbackReproducesTheTrajectoryBitForBit) {
       EXPECT_TRUE(same_bits(first[k - 21], state_of(fresh.get()))) << "method " << method << ", step " << k;
     }
   }
+}
+
+// The explicit method carries its step size from one advance to the next, so a rollback
+// goes through the saved state (pkm_sim_state_save/load), not pkm_sim_reset.
+TEST(Sim, ExplicitMethodRollbackThroughTheSavedStateIsBitForBit) {
+  ModelPtr m = make_model();
+  pkm_sim_options o = defaults();
+  ASSERT_EQ(o.method, PKM_ERK);
+  SimPtr s = make_sim(m.get(), o);
+  double x[N], xd[N] = {0.01, -0.02, 0.005, 0.05, -0.03, 0.08}, tau[N];
+  home_of(m.get(), x);
+  some_input(m.get(), x, tau);
+  ASSERT_EQ(pkm_sim_reset(s.get(), 0.0, x, xd), PKM_OK) << pkm_sim_error(s.get());
+  ASSERT_EQ(pkm_sim_set_input(s.get(), tau), PKM_OK);
+  for (int k = 1; k <= 20; ++k) ASSERT_EQ(pkm_sim_advance(s.get(), 1e-3 * k), PKM_OK) << pkm_sim_error(s.get());
+  std::vector<double> saved(pkm_sim_state_size(s.get()));
+  ASSERT_EQ(pkm_sim_state_save(s.get(), saved.data()), PKM_OK);
+  std::vector<State> first;
+  for (int k = 21; k <= 40; ++k) {
+    tau[k % N] += 0.01;
+    ASSERT_EQ(pkm_sim_set_input(s.get(), tau), PKM_OK);
+    ASSERT_EQ(pkm_sim_advance(s.get(), 1e-3 * k), PKM_OK) << pkm_sim_error(s.get());
+    first.push_back(state_of(s.get()));
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    SimPtr fresh = make_sim(m.get(), o);
+    pkm_sim* target = pass == 0 ? s.get() : fresh.get();
+    for (int k = 21; k <= 40; ++k) tau[k % N] -= 0.01;
+    ASSERT_EQ(pkm_sim_state_load(target, saved.data(), saved.size()), PKM_OK) << pkm_sim_error(target);
+    for (int k = 21; k <= 40; ++k) {
+      tau[k % N] += 0.01;
+      ASSERT_EQ(pkm_sim_set_input(target, tau), PKM_OK);
+      ASSERT_EQ(pkm_sim_advance(target, 1e-3 * k), PKM_OK) << pkm_sim_error(target);
+      EXPECT_TRUE(same_bits(first[k - 21], state_of(target))) << (pass ? "fresh sim" : "same sim") << ", step " << k;
+    }
+  }
+  // A damaged or foreign state is refused and changes nothing.
+  const State before = state_of(s.get());
+  std::vector<double> bad = saved;
+  bad[3] = NAN;
+  EXPECT_EQ(pkm_sim_state_load(s.get(), bad.data(), bad.size()), PKM_ERR_ARGUMENT);
+  EXPECT_NE(std::string(pkm_sim_error(s.get())).find("not finite"), std::string::npos) << pkm_sim_error(s.get());
+  EXPECT_EQ(pkm_sim_state_load(s.get(), saved.data(), saved.size() - 1), PKM_ERR_ARGUMENT);
+  EXPECT_TRUE(same_bits(before, state_of(s.get())));
+}
+
+TEST(Sim, ExplicitMethodOutOfStepsNamesTheTimeAndKeepsTheState) {
+  ModelPtr m = make_model();
+  pkm_sim_options o = defaults();
+  o.max_steps = 5;
+  o.max_step = 1e-4;
+  SimPtr s = make_sim(m.get(), o);
+  ASSERT_EQ(pkm_sim_advance(s.get(), 0.05), PKM_ERR_INTEGRATION);
+  const std::string msg = pkm_sim_error(s.get());
+  EXPECT_NE(msg.find("max_steps = 5"), std::string::npos) << msg;
+  const State st = state_of(s.get());
+  EXPECT_NEAR(time_in(msg), st.t, 1e-9) << msg;
+  EXPECT_NEAR(st.t, 5e-4, 1e-12);
+  double xs[N];
+  home_of(m.get(), xs);
+  EXPECT_LT(xs[2] - st.x[2], 1e-5);  // fell a little under gravity, from home
+  EXPECT_GT(xs[2] - st.x[2], 0.0);
 }
 
 TEST(Sim, InterleavedSimulatorsMatchEachRunAlone) {
@@ -586,6 +648,7 @@ TEST(Sim, BdfAndAdamsAgree) {
 TEST(Sim, CvodeFailureNamesTheFlagAndTheTime) {
   ModelPtr m = make_model();
   pkm_sim_options o = defaults();
+  o.method = PKM_BDF;
   o.max_steps = 5;
   SimPtr s = make_sim(m.get(), o);
   double x[N], xd[N] = {0.01, -0.02, 0.005, 0.05, -0.03, 0.08};
@@ -643,17 +706,26 @@ TEST(SimDrive, ActuatorDelayShiftsTheCommand) {
   EXPECT_LT(max_diff(sa, sb), 1e-12);
   EXPECT_EQ(sa.t, sb.t);
 
-  // Rollback with a delay replays the commands issued before the rollback point.
+  // Rollback with a delay replays the commands issued before the rollback point: the
+  // saved state carries the delay line (and the explicit method's step size), also into
+  // a fresh simulator.
   ASSERT_EQ(pkm_sim_reset(a.get(), 0.0, x, zero), PKM_OK);
   ASSERT_EQ(pkm_sim_set_input(a.get(), tau1), PKM_OK);
   ASSERT_EQ(pkm_sim_advance(a.get(), 0.015), PKM_OK);
-  const State mid = state_of(a.get());
+  std::vector<double> mid(pkm_sim_state_size(a.get()));
+  ASSERT_EQ(pkm_sim_state_save(a.get(), mid.data()), PKM_OK);
   ASSERT_EQ(pkm_sim_set_input(a.get(), tau2), PKM_OK);
   ASSERT_EQ(pkm_sim_advance(a.get(), 0.04), PKM_OK);
   const State end1 = state_of(a.get());
-  ASSERT_EQ(pkm_sim_reset(a.get(), mid.t, mid.x, mid.xd), PKM_OK);
+  ASSERT_EQ(pkm_sim_state_load(a.get(), mid.data(), mid.size()), PKM_OK) << pkm_sim_error(a.get());
+  ASSERT_EQ(pkm_sim_set_input(a.get(), tau2), PKM_OK);
   ASSERT_EQ(pkm_sim_advance(a.get(), 0.04), PKM_OK);
   EXPECT_TRUE(same_bits(end1, state_of(a.get())));
+  SimPtr fresh = make_sim(late.get(), defaults());
+  ASSERT_EQ(pkm_sim_state_load(fresh.get(), mid.data(), mid.size()), PKM_OK) << pkm_sim_error(fresh.get());
+  ASSERT_EQ(pkm_sim_set_input(fresh.get(), tau2), PKM_OK);
+  ASSERT_EQ(pkm_sim_advance(fresh.get(), 0.04), PKM_OK);
+  EXPECT_TRUE(same_bits(end1, state_of(fresh.get())));
 }
 
 }  // namespace

@@ -134,10 +134,14 @@ int plant_get_indicators(fmu_plant* p, double* z, size_t n);
  * the pose reached the edge of the usable workspace and the importer should stop. */
 int plant_check_limits(fmu_plant* p, double tol);
 
-/* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate). */
-size_t plant_snapshot_size(const fmu_plant* p); /* in doubles */
+/* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate),
+ * the integrator's own state included.  Its size (in doubles) varies with that state
+ * (the actuator-delay history): plant_snapshot_size now, never below
+ * plant_snapshot_min_size; plant_snapshot_load checks the n values it is given. */
+size_t plant_snapshot_size(const fmu_plant* p);
+size_t plant_snapshot_min_size(const fmu_plant* p);
 void plant_snapshot_save(const fmu_plant* p, double* buf);
-int plant_snapshot_load(fmu_plant* p, const double* buf);
+int plant_snapshot_load(fmu_plant* p, const double* buf, size_t n);
 
 #ifdef __cplusplus
 }

@@ -311,9 +311,9 @@ static int apply(fmu_plant* p) {
 
   pkm_sim_options o = p->opt;
   if (p->tol_override > 0) o.rtol = p->tol_override;
-  if (o.method != PKM_BDF && o.method != PKM_ADAMS)
-    return fail(p, PKM_ERR_PARAMETER, "%s = %d: use %d (BDF) or %d (Adams)",
-                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_BDF, PKM_ADAMS);
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK)
+    return fail(p, PKM_ERR_PARAMETER, "%s = %d: use %d (explicit Runge-Kutta), %d (BDF) or %d (Adams)",
+                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_ERK, PKM_BDF, PKM_ADAMS);
   if (!(o.rtol > 0) || !(o.atol > 0))
     return fail(p, PKM_ERR_PARAMETER, "%s = %g and %s = %g must both be > 0", var_name(p, FMU_CH_SOLVER_RTOL, 0),
                 o.rtol, var_name(p, FMU_CH_SOLVER_ATOL, 0), o.atol);
@@ -466,10 +466,20 @@ int plant_check_limits(fmu_plant* p, double tol) {
 /* ------------------------------------------------------------------ snapshot */
 
 /* Layout (doubles): t, started, dirty, model_ok, tol_override, 6 solver settings,
- * x, xd, tau, x0, xd0 (nd each), par (np). */
+ * x, xd, tau, x0, xd0 (nd each), par (np), then the length n_sim of the integrator's
+ * own state and that state (pkm_sim_state_save: held input, the explicit method's next
+ * step size, the actuator-delay history), so a restored state advances exactly as the
+ * original did. */
 enum { SNAP_HEAD = 11 };
 
-size_t plant_snapshot_size(const fmu_plant* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np); }
+static size_t snapshot_fixed(const fmu_plant* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np + 1); }
+
+size_t plant_snapshot_min_size(const fmu_plant* p) { return snapshot_fixed(p); }
+
+size_t plant_snapshot_size(const fmu_plant* p) {
+  const size_t nsim = (p->cs && p->sim && p->started) ? pkm_sim_state_size(p->sim) : 0;
+  return snapshot_fixed(p) + nsim;
+}
 
 void plant_snapshot_save(const fmu_plant* p, double* b) {
   b[0] = p->t;
@@ -487,9 +497,19 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   const double* src[5] = {p->x, p->xd, p->tau, p->x0, p->xd0};
   for (int k = 0; k < 5; ++k, v += p->nd) memcpy(v, src[k], sizeof(double) * p->nd);
   memcpy(v, p->par, sizeof(double) * p->np);
+  v += p->np;
+  const size_t nsim = (p->cs && p->sim && p->started) ? pkm_sim_state_size(p->sim) : 0;
+  v[0] = (double)nsim;
+  if (nsim) pkm_sim_state_save(p->sim, v + 1);
 }
 
-int plant_snapshot_load(fmu_plant* p, const double* b) {
+int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+  const size_t fixed = snapshot_fixed(p);
+  if (n < fixed || b[fixed - 1] < 0 || (size_t)b[fixed - 1] != n - fixed)
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs %zu + %g", n, fixed,
+                n >= fixed ? b[fixed - 1] : 0.0);
+  const size_t nsim = n - fixed;
+  const double* simstate = b + fixed;
   int started = b[1] != 0, dirty = b[2] != 0;
   p->tol_override = b[4];
   p->opt.method = (int)b[5];
@@ -508,11 +528,16 @@ int plant_snapshot_load(fmu_plant* p, const double* b) {
   p->dirty = 1;
   if (!started) return PKM_OK;
   /* The snapshot's parameters and settings were in force when it was taken: put them
-   * back into the core (a no-op when unchanged) and restart CVODE at its state. */
+   * back into the core (a no-op when unchanged) and restore the integrator's state. */
   int s = apply(p);
   if (s) return s;
-  if (p->cs && (s = pkm_sim_reset(p->sim, p->t, p->x, p->xd)))
-    return fail(p, s, "CVODE reset at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+  if (p->cs) {
+    if (nsim)
+      s = pkm_sim_state_load(p->sim, simstate, nsim);
+    else
+      s = pkm_sim_reset(p->sim, p->t, p->x, p->xd);
+    if (s) return fail(p, s, "restoring the integrator at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+  }
   p->started = 1;
   p->dirty = dirty;
   return PKM_OK;

@@ -206,10 +206,17 @@ PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
 
 /* =============================================================== integration */
 
-typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1 } pkm_lmm;
+/* Integration methods.  PKM_ERK, the default: an explicit Runge-Kutta 5(4) pair
+ * (Dormand-Prince) whose whole state is (t, x, xd) plus the step size it proposes next,
+ * so nothing is lost at a communication point (a 1 ms loop costs about one step per
+ * millisecond); for non-stiff motion.  PKM_BDF: CVODE's variable-order BDF with a dense
+ * Newton solver, for stiff settings (e.g. Coulomb friction with a small drive.v_eps).
+ * PKM_ADAMS: CVODE's Adams-Moulton.  CVODE restarts at every advance.
+ * docs/integration.md compares them (speed, accuracy, when to use which). */
+typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1, PKM_ERK = 2 } pkm_lmm;
 
 typedef struct pkm_sim_options {
-  int method;        /* PKM_BDF (stiff, default) or PKM_ADAMS                     */
+  int method;        /* PKM_ERK (default), PKM_BDF or PKM_ADAMS                    */
   double rtol;       /* relative tolerance (default 1e-8)                         */
   double atol;       /* absolute tolerance (default 1e-10)                        */
   double max_step;   /* largest internal step, s (0 = unlimited)                  */
@@ -221,10 +228,11 @@ typedef struct pkm_sim_stats {
   long steps, rhs_evals, jac_evals, error_test_fails, nonlin_conv_fails;
 } pkm_sim_stats;
 
-/* A CVODE integration of the task-space state (x, xd) under a zero-order-hold input
- * tau.  Each pkm_sim_advance restarts CVODE from the current state, so the result of
- * an advance depends only on (t, x, xd, tau, options): rolling a state back and
- * advancing again reproduces the trajectory bit for bit. */
+/* An integration of the task-space state (x, xd) under a zero-order-hold input tau.
+ * The result of an advance depends only on the sim's state (pkm_sim_state_save: t, x,
+ * xd, the held tau, the explicit method's next step size, the actuator-delay history)
+ * and the options: loading a saved state and advancing again reproduces the trajectory
+ * bit for bit, also in another sim of the same model and options. */
 typedef struct pkm_sim pkm_sim;
 
 PKM_API void pkm_sim_default_options(pkm_sim_options* opt);
@@ -245,7 +253,18 @@ PKM_API int pkm_sim_set_input(pkm_sim* s, const double* tau);
  * names the leg and the time. */
 PKM_API int pkm_sim_advance(pkm_sim* s, double t_end);
 PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd);
-/* CVODE counters summed over every advance since pkm_sim_create. */
+/* The sim's whole state as doubles, for rollback (FMU get/set/serialize state):
+ * pkm_sim_state_size values (it varies with the actuator-delay history), saved by
+ * pkm_sim_state_save and restored by pkm_sim_state_load, which checks the layout, the
+ * robot's size and the state itself as pkm_sim_reset does (a refused state leaves the
+ * sim unchanged).  pkm_sim_reset, in contrast, starts afresh: the explicit method then
+ * chooses its first step again. */
+PKM_API size_t pkm_sim_state_size(const pkm_sim* s);
+PKM_API int pkm_sim_state_save(const pkm_sim* s, double* buf);
+PKM_API int pkm_sim_state_load(pkm_sim* s, const double* buf, size_t n);
+/* Integration counters summed over every advance since pkm_sim_create (steps, RHS
+ * evaluations, error-test failures; for PKM_ERK nonlin_conv_fails counts steps retried
+ * because a trial state left the workspace). */
 PKM_API int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats);
 PKM_API const char* pkm_sim_error(const pkm_sim* s);
 
@@ -316,6 +335,41 @@ PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
 PKM_API size_t pkm_ctrl_state_size(const pkm_ctrl* c);
 PKM_API int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf);
 PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
+
+/* ============================================================== closed loop */
+/* A whole sampled closed loop in one call (the way MuJoCo's rollout runs many steps):
+ * plant s, controller c and a reference table, in the order of cosim.master.run.  At
+ * each sample k = 0..n-1 (time t_k):
+ *   1. readings: q_k = the plant's joints, or with measure = 1 the sensor model
+ *      (pkm_measure_joints at the effort applied before the sample), plus q_noise[k];
+ *      qd_k = the plant's joint rates plus qd_noise[k] (noise arrays may be NULL);
+ *   2. tau_k = pkm_ctrl_update(c, t_k, q_k, qd_k, reference row k);
+ *   3. the row is recorded; the plant then holds tau_k (pkm_sim_set_input: saturation,
+ *      actuator delay) and advances to t_k + dt (not after the last sample).
+ * The plant starts from its current state, at time t0.  On a failure (controller, limit,
+ * singularity, integration) the loop stops, *n_done says how many rows were recorded
+ * (the rows before the failure), and the status is returned with the message, naming
+ * the time, in pkm_sim_error(s). */
+typedef struct pkm_loop_reference {
+  size_t n;                 /* samples (>= 1)                                            */
+  double t0, dt;            /* time of sample 0 and the period [s]                        */
+  const double* t;          /* [n] sample times [s], or NULL for t0 + k dt; the plant
+                               advances from t_k to t_k + dt                             */
+  const double *q, *qd;     /* [n,nd] joint reference and its rate                        */
+  const double *qdd, *x;    /* [n,nd] joint acceleration and pose reference, may be NULL */
+  const double* tau_before; /* [nd] effort applied before sample 0 (for the sensor model's
+                               compliance), NULL for none: lets a loop go on in pieces  */
+} pkm_loop_reference;
+
+typedef struct pkm_loop_record {
+  /* [n,nd] each, any may be NULL: readings the controller saw, the plant's true joints,
+   * pose and pose rate at the sample, the command and the effort applied (saturated). */
+  double *q, *qd, *q_true, *qd_true, *x, *xd, *tau_cmd, *tau;
+} pkm_loop_record;
+
+PKM_API int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference* ref,
+                            const double* q_noise, const double* qd_noise, int measure,
+                            pkm_loop_record* out, size_t* n_done);
 
 /* ====================================================== 6-PUS specific (seed 000) */
 

@@ -76,6 +76,13 @@ class Robot {
                             double* Jdot) const;
   virtual void singularity(const RobotModel&, RobotData&, const double* x,
                            double* measures) const;
+  // What the integrator checks at every step, cheaply: a lower bound of the direct
+  // singularity measure (measures[1]; a bound above a threshold proves the measure is
+  // above it, so the exact measure is needed only near its threshold) and a value whose
+  // sign flips when the motion passes through a direct singularity (det J).  Default:
+  // the exact measure and det J from an LU of J (kinematics/generic_kinematics.cpp).
+  virtual void direct_singularity_guard(const RobotModel&, RobotData&, const double* x,
+                                        double* measure_bound, double* det_j) const;
   // Overridable generic algorithms (defaults in kinematics/ and dynamics/).
   virtual void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
                   const pkm_fk_options& opt, double* x, pkm_fk_info& info) const;

@@ -81,8 +81,8 @@ constexpr double kSingGuard = 100.0;
 
 static void check_options(const pkm_sim_options& o) {
   auto bad = [](const std::string& what) { throw Error(PKM_ERR_ARGUMENT, "pkm_sim options: " + what); };
-  if (o.method != PKM_BDF && o.method != PKM_ADAMS)
-    bad("method = " + std::to_string(o.method) + " is neither PKM_BDF (0) nor PKM_ADAMS (1)");
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK)
+    bad("method = " + std::to_string(o.method) + " is none of PKM_BDF (0), PKM_ADAMS (1), PKM_ERK (2)");
   if (!(std::isfinite(o.rtol) && o.rtol > 0 && o.rtol < 1))
     bad("rtol = " + num(o.rtol) + " must be in (0, 1)");
   if (!(std::isfinite(o.atol) && o.atol > 0)) bad("atol = " + num(o.atol) + " must be finite and > 0");
@@ -141,7 +141,9 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     nstop_ = (int)limits_.size() + (sing_root_ ? 1 : 0);
     nroots_ = nstop_ + (sing_root_ ? 1 : 0);
     g_.assign(nroots_, 0.0);
+    g_cached_.assign(nroots_ + 1, 0.0);
 
+    if (opt_.method == PKM_ERK) return;  // the explicit method needs no CVODE objects
     if (SUNContext_Create(nullptr, &ctx_) != 0 || !ctx_)
       throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
     nv_ = N_VNew_Serial(n2, ctx_);
@@ -443,6 +445,8 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   }
   t_ = t0;
   y_.swap(y);
+  h_next_ = 0.0;  // a new start: the explicit method chooses its first step afresh
+  guard_cached_ = false;
   // Commands issued at or after t0 belong to the future being rolled back.
   while (!history_.empty() && history_.back().s >= t0) history_.pop_back();
 }
@@ -548,9 +552,18 @@ void Sim::advance(double t_end) {
   if (t_end == t_) return;
 
   // A state on or beyond a stop boundary cannot be advanced: CVODE only sees sign
-  // changes, so it would miss a crossing that already happened.
+  // changes, so it would miss a crossing that already happened.  (The explicit method
+  // checked the state it ended on already: its guard values are kept.)
   try {
-    roots(y_.data(), g_.data());
+    if (opt_.method == PKM_ERK) {
+      if (!guard_cached_) {
+        erk_guard(y_.data(), g_cached_.data(), det_cached_, bound_cached_);
+        guard_cached_ = true;
+      }
+      std::copy(g_cached_.begin(), g_cached_.begin() + nstop_, g_.begin());
+    } else {
+      roots(y_.data(), g_.data());
+    }
   } catch (const Error& e) {
     throw Error(e.status, std::string(e.what()) + " at t = " + num(t_) + " s");
   }
@@ -597,6 +610,10 @@ void Sim::advance(double t_end) {
 // still caught by the det J root, which stays on; what goes unseen is a dip of the
 // measure below sing_min without J changing sign, back above the guard within a segment.
 void Sim::segment(double t_end) {
+  if (opt_.method == PKM_ERK) {
+    erk_segment(t_end);
+    return;
+  }
   if (!sing_root_) {
     integrate(t_end);
     return;

@@ -53,8 +53,18 @@ class Sim {
   void get_state(double* t, double* x, double* xd) const;
   const pkm_sim_stats& stats() const { return stats_; }
   int ndof() const { return nd_; }
+  // Everything that determines the future of the sim (pkm_sim_state_*): t, state, held
+  // input, the explicit method's next step size and the actuator-delay history it needs.
+  size_t state_size() const;
+  void state_save(double* buf) const;
+  void state_load(const double* buf, size_t n);
 
   std::string error;  // message of the last failure (pkm_sim_error)
+
+  // The sim's own model copy and work data (for the closed loop's joint readings).
+  const pkm_model* model() const { return model_; }
+  pkm_data* data() const { return data_; }
+  const double* held_input() const { return tau_.data(); }
 
  private:
   static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* self);
@@ -76,6 +86,18 @@ class Sim {
   // segment() decides whether the singularity root is needed, integrate() runs CVODE.
   void segment(double b);
   void integrate(double b);
+  // The explicit Runge-Kutta path (integration/erk.cpp): one segment [t_, b] with a
+  // constant applied effort, steps carried across advances through h_next_.
+  void erk_segment(double b);
+  bool erk_rhs(double t, const double* y, double* f);  // false: a recoverable failure (cb_*)
+  double erk_initial_step(double t_end, const double* f0);
+  // Stop-condition values at y (limits, then the singularity margin) and the det J sign
+  // value; the exact singularity measure only where the cheap bound is near sing_min.
+  void erk_guard(const double* y, double* g, double& det, double& bound);
+  // First violation of a stop condition inside the accepted step [t0, t0 + h] (Hermite
+  // interpolant of y0, f0, y1, f1): stops there and throws.
+  [[noreturn]] void erk_stop(double t0, double h, const double* y0, const double* f0, const double* y1,
+                             const double* f1, double det0);
   double measure_at(const double* y);  // direct-singularity measure (robot's measures[1])
   double det_j(const double* y);       // det J = det(Jq^-1 Jx): changes sign through a direct singularity
   void stop_before_singularity(double t_start);
@@ -119,6 +141,12 @@ class Sim {
   std::string cv_msg_;  // last message of CVODE's error handler
 
   pkm_sim_stats stats_{};
+  double h_next_ = 0.0;  // explicit method: step size proposed for the next step (0: choose one)
+  // Explicit method: stop-condition values and det J at the state it ended on (valid
+  // until the state changes otherwise), so the next advance need not recompute them.
+  bool guard_cached_ = false;
+  double det_cached_ = 1.0, bound_cached_ = 1.0;
+  std::vector<double> g_cached_;
 
   SUNContext ctx_ = nullptr;
   N_Vector nv_ = nullptr;

@@ -20,7 +20,7 @@ extern "C" {
 
 void pkm_sim_default_options(pkm_sim_options* opt) {
   if (!opt) return;
-  opt->method = PKM_BDF;
+  opt->method = PKM_ERK;
   opt->rtol = 1e-8;
   opt->atol = 1e-10;
   opt->max_step = 0.0;
@@ -65,6 +65,18 @@ int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats) {
   if (!s || !stats) return PKM_ERR_ARGUMENT;
   *stats = s->sim.stats();
   return PKM_OK;
+}
+
+size_t pkm_sim_state_size(const pkm_sim* s) { return s ? s->sim.state_size() : 0; }
+
+int pkm_sim_state_save(const pkm_sim* s, double* buf) {
+  if (!s || !buf) return PKM_ERR_ARGUMENT;
+  s->sim.state_save(buf);
+  return PKM_OK;
+}
+
+int pkm_sim_state_load(pkm_sim* s, const double* buf, size_t n) {
+  return sim_guard(s, [&] { s->sim.state_load(buf, n); });
 }
 
 const char* pkm_sim_error(const pkm_sim* s) { return s ? s->sim.error.c_str() : "sim is NULL"; }

@@ -12,6 +12,16 @@ namespace pkm {
 using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
 using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
+void Robot::direct_singularity_guard(const RobotModel& rm, RobotData& rd, const double* x, double* measure_bound,
+                                     double* det_j) const {
+  double meas[2];
+  singularity(rm, rd, x, meas);
+  *measure_bound = meas[1];
+  Mat J(ndof(), ndof());
+  jacobians(rm, rd, x, nullptr, nullptr, J.data());
+  *det_j = Eigen::PartialPivLU<Mat>(J).determinant();
+}
+
 void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const double* x_guess,
                const pkm_fk_options& opt, double* x_out, pkm_fk_info& info) const {
   const int n = ndof();

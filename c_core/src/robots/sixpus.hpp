@@ -169,6 +169,8 @@ class SixPus final : public Robot {
   void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
                     double* Jdot) const override;
   void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
+  void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
+                                double* det_j) const override;
   void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
           const pkm_fk_options& opt, double* x, pkm_fk_info& info) const override;
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,

@@ -1,0 +1,381 @@
+// The explicit Runge-Kutta path of pkm_sim (method PKM_ERK, the default): Dormand and
+// Prince's embedded 5(4) pair (J. Comput. Appl. Math. 6, 1980), local extrapolation,
+// an error-per-step controller, and stop conditions checked at every accepted step.
+//
+// Why a one-step method (docs/integration.md): under a controller the input changes at
+// every communication point, and CVODE's multistep history restarts there, at order 1
+// with a fresh initial step (12 steps per 1 ms).  A one-step method loses nothing at a
+// restart: its whole state is (t, y) plus the step size it proposes next.  That step
+// size is part of the sim's state (pkm_sim_state_save), so a rollback followed by a
+// re-advance repeats the same steps and reproduces the trajectory bit for bit.
+//
+// Stop conditions, per accepted step: the joint limits from the inverse kinematics of
+// the new state (cheap), and for the direct singularity the robot's cheap guard (a lower
+// bound of the measure and the sign of det J from one LU); the exact measure (an SVD) is
+// evaluated only when the bound is below kSingGuard x sing_min.  A violation inside a
+// step is located by bisection on the cubic Hermite interpolant of the step.
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <sstream>
+
+#include "common/guard.hpp"
+#include "integration/sim.hpp"
+
+namespace pkm {
+
+namespace {
+
+// Dormand-Prince 5(4) coefficients (FSAL: the 7th stage is f at the new point).
+constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
+constexpr double a21 = 1.0 / 5;
+constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
+constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
+constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
+constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176,
+                 a65 = -5103.0 / 18656;
+constexpr double b1 = 35.0 / 384, b3 = 500.0 / 1113, b4 = 125.0 / 192, b5 = -2187.0 / 6784, b6 = 11.0 / 84;
+// b - b_hat (fifth- minus fourth-order weights), for the error estimate.
+constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200,
+                 e6 = 22.0 / 525, e7 = -1.0 / 40;
+
+constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
+constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
+constexpr int kMaxN = 12;
+
+std::string num(double v, int precision = 10) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+// Cubic Hermite interpolant of a step at theta in [0, 1].
+void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
+             double* y) {
+  const double t = theta, t1 = theta - 1.0;
+  for (int i = 0; i < n; ++i)
+    y[i] = (1 - t) * y0[i] + t * y1[i] + t * t1 * ((1 - 2 * t) * (y1[i] - y0[i]) + t1 * h * f0[i] + t * h * f1[i]);
+}
+
+}  // namespace
+
+bool Sim::erk_rhs(double t, const double* y, double* f) {
+  const int n = nd_;
+  for (int i = 0; i < 2 * n; ++i)
+    if (!std::isfinite(y[i])) {
+      cb_status_ = PKM_ERR_INTEGRATION;
+      cb_time_ = t;
+      cb_msg_ = "the trial state y[" + std::to_string(i) + "] is not finite";
+      return false;
+    }
+  for (int i = 0; i < n; ++i) f[i] = y[n + i];
+  try {
+    total_forward_dynamics(model_, data_, y, y + n, applied_.data(), f + n);
+  } catch (const Error& e) {
+    cb_status_ = e.status;
+    cb_time_ = t;
+    cb_msg_ = std::string("forward dynamics: ") + e.what();
+    if (e.status == PKM_ERR_UNREACHABLE || e.status == PKM_ERR_SINGULAR || e.status == PKM_ERR_NO_CONVERGENCE ||
+        e.status == PKM_ERR_JOINT_LIMIT)
+      return false;
+    throw Error(e.status, cb_msg_ + " at t = " + num(t) + " s");
+  }
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(f[n + i])) {
+      cb_status_ = PKM_ERR_SINGULAR;
+      cb_time_ = t;
+      cb_msg_ = "forward dynamics returned a non-finite acceleration xdd[" + std::to_string(i) + "]";
+      return false;
+    }
+  return true;
+}
+
+// Hairer, Norsett and Wanner's starting step (Solving ODEs I, II.4): from the sizes of y,
+// f and an estimate of f's change, capped by the segment and max_step.
+double Sim::erk_initial_step(double t_end, const double* f0) {
+  const int n2 = 2 * nd_;
+  double d0 = 0, d1 = 0;
+  for (int i = 0; i < n2; ++i) {
+    const double sc = opt_.atol + opt_.rtol * std::fabs(y_[i]);
+    d0 += (y_[i] / sc) * (y_[i] / sc);
+    d1 += (f0[i] / sc) * (f0[i] / sc);
+  }
+  d0 = std::sqrt(d0 / n2);
+  d1 = std::sqrt(d1 / n2);
+  double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+  h0 = std::min(h0, t_end - t_);
+  double y1[kMaxN], f1[kMaxN];
+  for (int i = 0; i < n2; ++i) y1[i] = y_[i] + h0 * f0[i];
+  double h1;
+  if (!erk_rhs(t_ + h0, y1, f1)) {
+    h1 = h0;
+  } else {
+    double d2 = 0;
+    for (int i = 0; i < n2; ++i) {
+      const double sc = opt_.atol + opt_.rtol * std::fabs(y_[i]);
+      d2 += ((f1[i] - f0[i]) / sc) * ((f1[i] - f0[i]) / sc);
+    }
+    d2 = std::sqrt(d2 / n2) / h0;
+    const double dm = std::max(d1, d2);
+    h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5);
+  }
+  ++stats_.rhs_evals;
+  double h = std::min(100 * h0, h1);
+  if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
+  return h;
+}
+
+void Sim::erk_guard(const double* y, double* g, double& det, double& bound) {
+  int k = 0;
+  if (!limits_.empty()) {
+    robot_->ik(*rm_, *rd_, y, q_.data());
+    for (const JointLimit& L : limits_) g[k++] = L.upper ? L.value - q_[L.joint] : q_[L.joint] - L.value;
+  }
+  det = 1.0;
+  bound = 1.0;
+  if (sing_root_) {
+    robot_->direct_singularity_guard(*rm_, *rd_, y, &bound, &det);
+    const double guard = std::min(0.5, kSingGuard * opt_.sing_min);
+    g[k++] = bound >= guard ? bound - opt_.sing_min : measure_at(y) - opt_.sing_min;
+  }
+}
+
+void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, const double* y1, const double* f1,
+                   double det0) {
+  const int n2 = 2 * nd_;
+  double y[kMaxN], g[64];
+  // violated(theta): some stop margin <= 0 or det J of the other sign than at the start.
+  auto violated = [&](double theta, int* which, bool* crossed) {
+    hermite(n2, theta, h, y0, f0, y1, f1, y);
+    double det = det0, bound = 0;
+    try {
+      erk_guard(y, g, det, bound);
+    } catch (const Error&) {
+      if (which) *which = -1;
+      return true;  // outside the workspace: past the stop
+    }
+    for (int k = 0; k < nstop_; ++k)
+      if (g[k] <= 0) {
+        if (which) *which = k;
+        return true;
+      }
+    if (sing_root_ && (det > 0) != (det0 > 0)) {
+      if (which) *which = nstop_ - 1;
+      if (crossed) *crossed = true;
+      return true;
+    }
+    return false;
+  };
+  double lo = 0.0, hi = 1.0;
+  for (int it = 0; it < 200 && (hi - lo) * h > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t0 + h)); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (violated(mid, nullptr, nullptr))
+      hi = mid;
+    else
+      lo = mid;
+  }
+  int which = -1;
+  bool crossed = false;
+  violated(hi, &which, &crossed);
+  const double t_hi = t0 + hi * h;
+  // The state kept is the last one inside every limit.
+  hermite(n2, lo, h, y0, f0, y1, f1, y);
+  for (int i = 0; i < n2; ++i) y_[i] = y[i];
+  t_ = t0 + lo * h;
+  double det = det0, bound = 0;
+  try {
+    erk_guard(y_.data(), g, det, bound);
+  } catch (const Error&) {
+    for (int k = 0; k < nroots_; ++k) g[k] = 0.0;
+  }
+  if (which < 0) which = nstop_ > 0 ? nstop_ - 1 : 0;
+  const bool is_limit = which < (int)limits_.size();
+  std::string msg = root_message(which, g, t_, false);
+  if (crossed) msg += " (the motion crosses the singularity at t = " + num(t_hi) + " s)";
+  throw Error(is_limit ? PKM_ERR_JOINT_LIMIT : PKM_ERR_SINGULAR, msg);
+}
+
+void Sim::erk_segment(double t_end) {
+  if (t_end - t_ < 4 * DBL_EPSILON * std::max(std::fabs(t_), std::fabs(t_end))) {
+    t_ = t_end;
+    return;
+  }
+  const int n2 = 2 * nd_;
+  cb_status_ = 0;
+  cb_msg_.clear();
+  double y0[kMaxN], f0[kMaxN], k2[kMaxN], k3[kMaxN], k4[kMaxN], k5[kMaxN], k6[kMaxN], k7[kMaxN], y1[kMaxN],
+      ys[kMaxN], g[64];
+  for (int i = 0; i < n2; ++i) y0[i] = y_[i];
+  if (!erk_rhs(t_, y0, f0)) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
+  ++stats_.rhs_evals;
+  if (!guard_cached_) {
+    erk_guard(y0, g_cached_.data(), det_cached_, bound_cached_);
+    guard_cached_ = true;
+  }
+  double det0 = det_cached_, bound0 = bound_cached_;
+  guard_cached_ = false;  // y_ changes below
+
+  double h = h_next_ > 0 ? h_next_ : erk_initial_step(t_end, f0);
+  if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
+  long steps = 0;
+  while (t_ < t_end) {
+    if (steps >= opt_.max_steps)
+      throw Error(PKM_ERR_INTEGRATION,
+                  "explicit Runge-Kutta: max_steps = " + std::to_string(opt_.max_steps) + " steps reached at t = " +
+                      num(t_) + " s before t = " + num(t_end) +
+                      " s (a stiff motion, e.g. joint friction with a small drive.v_eps: use solver method BDF)");
+    const double rest = t_end - t_;
+    const bool last = h >= rest * (1 - 1e-12);
+    const double hh = last ? rest : h;
+    if (!(hh > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t_)))) {
+      std::string msg = "explicit Runge-Kutta: the step size fell to " + num(hh) + " s at t = " + num(t_) + " s";
+      if (cb_status_ != 0) {
+        msg = cb_msg_ + " at t = " + num(cb_time_) + " s (" + msg + ")";
+        throw Error(cb_status_, msg);
+      }
+      throw Error(PKM_ERR_INTEGRATION, msg);
+    }
+    ++steps;
+    bool ok = true;
+    int evals = 0;
+    auto stage = [&](double c, double* k, auto&& combine) {
+      if (!ok) return;
+      for (int i = 0; i < n2; ++i) ys[i] = y0[i] + hh * combine(i);
+      ok = erk_rhs(t_ + c * hh, ys, k);
+      ++evals;
+    };
+    stage(c2, k2, [&](int i) { return a21 * f0[i]; });
+    stage(c3, k3, [&](int i) { return a31 * f0[i] + a32 * k2[i]; });
+    stage(c4, k4, [&](int i) { return a41 * f0[i] + a42 * k2[i] + a43 * k3[i]; });
+    stage(c5, k5, [&](int i) { return a51 * f0[i] + a52 * k2[i] + a53 * k3[i] + a54 * k4[i]; });
+    stage(1.0, k6, [&](int i) { return a61 * f0[i] + a62 * k2[i] + a63 * k3[i] + a64 * k4[i] + a65 * k5[i]; });
+    if (ok) {
+      for (int i = 0; i < n2; ++i)
+        y1[i] = y0[i] + hh * (b1 * f0[i] + b3 * k3[i] + b4 * k4[i] + b5 * k5[i] + b6 * k6[i]);
+      ok = erk_rhs(t_ + hh, y1, k7);
+      ++evals;
+    }
+    stats_.rhs_evals += evals;
+    if (!ok) {
+      // A trial state outside the workspace (or a non-finite one): a smaller step.
+      ++stats_.nonlin_conv_fails;
+      h = hh * 0.25;
+      continue;
+    }
+    double err = 0;
+    for (int i = 0; i < n2; ++i) {
+      const double e = hh * (e1 * f0[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
+      const double sc = opt_.atol + opt_.rtol * std::max(std::fabs(y0[i]), std::fabs(y1[i]));
+      err += (e / sc) * (e / sc);
+    }
+    err = std::sqrt(err / n2);
+    const double fac = err > 0 ? std::clamp(kSafety * std::pow(err, -0.2), kFacMin, kFacMax) : kFacMax;
+    if (!(err <= 1.0)) {
+      ++stats_.error_test_fails;
+      h = hh * std::min(1.0, fac);
+      continue;
+    }
+    // Accepted: stop conditions at the new point.
+    double det1 = det0, bound1 = bound0;
+    bool stop = false;
+    try {
+      erk_guard(y1, g, det1, bound1);
+      for (int k = 0; k < nstop_; ++k) stop = stop || g[k] <= 0;
+      stop = stop || (sing_root_ && (det1 > 0) != (det0 > 0));
+    } catch (const Error&) {
+      stop = true;  // the new point is outside the workspace: locate where it left
+    }
+    ++stats_.steps;
+    if (stop) erk_stop(t_, hh, y0, f0, y1, k7, det0);
+    t_ = last ? t_end : t_ + hh;
+    for (int i = 0; i < n2; ++i) {
+      y0[i] = y1[i];
+      f0[i] = k7[i];
+      y_[i] = y1[i];  // the committed state is always the last accepted one
+    }
+    // A step shortened to land on t_end says little about the next one: keep the larger.
+    const double h_new = hh * fac;
+    h = last ? std::max(h, h_new) : h_new;
+    if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
+    // Approaching a direct singularity, no step may skip over it (det J could change
+    // sign twice within one step): while the singularity bound falls, the next step
+    // covers at most half the time the bound would take to reach zero at its last rate.
+    if (sing_root_ && bound1 < bound0) {
+      const double reach = bound1 / ((bound0 - bound1) / hh);
+      h = std::min(h, std::max(0.5 * reach, 1e-9));
+    }
+    det0 = det1;
+    bound0 = bound1;
+  }
+  h_next_ = h;
+  if (steps > 0) {
+    std::copy(g, g + nroots_, g_cached_.begin());
+    det_cached_ = det0;
+    bound_cached_ = bound0;
+    guard_cached_ = true;
+  }
+}
+
+// ------------------------------------------------------------------------ state
+
+size_t Sim::state_size() const {
+  // version, nd, t, y[2 nd], tau[nd], h_next, history count, history entries (1 + nd each)
+  size_t needed = 0;
+  for (size_t k = 0; k < history_.size(); ++k)
+    if (k + 1 == history_.size() || history_[k + 1].s > t_ - delay_) ++needed;
+  return 5 + 3 * (size_t)nd_ + needed * (1 + (size_t)nd_);
+}
+
+void Sim::state_save(double* b) const {
+  size_t k = 0;
+  b[k++] = 1.0;  // layout version
+  b[k++] = nd_;
+  b[k++] = t_;
+  for (int i = 0; i < 2 * nd_; ++i) b[k++] = y_[i];
+  for (int i = 0; i < nd_; ++i) b[k++] = tau_[i];
+  b[k++] = h_next_;
+  // Only the commands that can still act at or after t (the last one issued before
+  // t - delay and every later one).
+  size_t first = history_.size();
+  for (size_t j = 0; j < history_.size(); ++j)
+    if (j + 1 == history_.size() || history_[j + 1].s > t_ - delay_) {
+      first = j;
+      break;
+    }
+  b[k++] = (double)(history_.size() - first);
+  for (size_t j = first; j < history_.size(); ++j) {
+    b[k++] = history_[j].s;
+    for (int i = 0; i < nd_; ++i) b[k++] = history_[j].tau[i];
+  }
+}
+
+void Sim::state_load(const double* b, size_t n) {
+  require(b != nullptr, PKM_ERR_ARGUMENT, "state: buffer is NULL");
+  require(n >= 5 + 3 * (size_t)nd_ && b[0] == 1.0 && b[1] == nd_, PKM_ERR_ARGUMENT,
+          "state: not a pkm_sim state of this robot (layout version 1, " + std::to_string(nd_) + " joints)");
+  for (size_t k = 0; k < n; ++k)
+    require(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "state: entry " + std::to_string(k) + " is not finite");
+  const double nh_value = b[4 + 3 * nd_];
+  require(nh_value >= 0 && nh_value < 1e9 && nh_value == std::floor(nh_value), PKM_ERR_ARGUMENT,
+          "state: a history length of " + num(nh_value) + " entries is not a count");
+  const size_t nh = (size_t)nh_value;
+  require(n == 5 + 3 * (size_t)nd_ + nh * (1 + (size_t)nd_), PKM_ERR_ARGUMENT,
+          "state: " + std::to_string(n) + " values do not match the history length it declares");
+  require(b[3 + 3 * nd_] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
+  const double t = b[2];
+  std::vector<double> x(b + 3, b + 3 + nd_), xd(b + 3 + nd_, b + 3 + 2 * nd_);
+  reset(t, x.data(), xd.data());  // checks the state as any reset does; clears h_next_
+  for (int i = 0; i < nd_; ++i) tau_[i] = b[3 + 2 * nd_ + i];
+  h_next_ = b[3 + 3 * nd_];
+  history_.clear();
+  size_t k = 5 + 3 * (size_t)nd_;
+  for (size_t j = 0; j < nh; ++j) {
+    Command c{};
+    c.s = b[k++];
+    for (int i = 0; i < nd_; ++i) c.tau[i] = b[k++];
+    history_.push_back(c);
+  }
+}
+
+}  // namespace pkm

@@ -1,0 +1,103 @@
+// pkm_closed_loop: plant + sampled controller + reference table in one call, the same
+// sequence as the Python master (cosim.master.run), so that a 1 kHz loop pays no
+// per-sample cost outside C (no Python call, no FMI call) and the two paths can be
+// compared sample by sample.
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "common/guard.hpp"
+#include "integration/sim.hpp"
+
+using namespace pkm;
+
+namespace {
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+void put(double* dst, size_t k, int nd, const double* src) {
+  if (dst)
+    for (int i = 0; i < nd; ++i) dst[k * nd + i] = src[i];
+}
+
+}  // namespace
+
+extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference* ref, const double* q_noise,
+                               const double* qd_noise, int measure, pkm_loop_record* out, size_t* n_done) {
+  if (n_done) *n_done = 0;
+  if (!s) return PKM_ERR_ARGUMENT;
+  Sim& sim = s->sim;
+  sim.error.clear();
+  size_t k = 0;
+  double t_k = 0;
+  int status = guard_into(sim.error, [&] {
+    require(c != nullptr, PKM_ERR_ARGUMENT, "closed loop: controller is NULL");
+    require(ref != nullptr && ref->q != nullptr && ref->qd != nullptr, PKM_ERR_ARGUMENT,
+            "closed loop: the reference (q and qd) is NULL");
+    require(ref->n >= 1, PKM_ERR_ARGUMENT, "closed loop: the reference has no sample");
+    require(std::isfinite(ref->t0) && std::isfinite(ref->dt) && ref->dt > 0, PKM_ERR_ARGUMENT,
+            "closed loop: t0 = " + num(ref->t0) + " s and dt = " + num(ref->dt) + " s must be finite, dt > 0");
+    const int nd = sim.ndof();
+    const pkm_model* m = sim.model();
+    pkm_data* d = sim.data();
+    double t, x[6], xd[6], q[6], qd[6], qr[6], qdr[6], tau[6], applied[6], prev_applied[6] = {0, 0, 0, 0, 0, 0};
+    if (ref->tau_before) {
+      check_finite(ref->tau_before, nd, "closed loop: tau_before");
+      for (int i = 0; i < nd; ++i) prev_applied[i] = ref->tau_before[i];
+    }
+    sim.get_state(&t, x, xd);
+    for (k = 0; k < ref->n; ++k) {
+      t_k = ref->t ? ref->t[k] : ref->t0 + (double)k * ref->dt;
+      require(std::isfinite(t_k), PKM_ERR_ARGUMENT, "closed loop: sample time " + std::to_string(k) + " is not finite");
+      // The plant's joints at the sample (pkm_ik / pkm_joint_velocity on the sim's model).
+      int st = pkm_ik(m, d, x, q);
+      if (st == PKM_OK) st = pkm_joint_velocity(m, d, x, xd, qd);
+      if (st != PKM_OK) throw Error(st, std::string("plant outputs: ") + pkm_data_error(d));
+      double qm[6], qdm[6];
+      if (measure) {
+        st = pkm_measure_joints(m, d, x, xd, prev_applied, qm);
+        if (st != PKM_OK) throw Error(st, std::string("sensor model: ") + pkm_data_error(d));
+      } else {
+        for (int i = 0; i < nd; ++i) qm[i] = q[i];
+      }
+      for (int i = 0; i < nd; ++i) {
+        if (q_noise) qm[i] += q_noise[k * nd + i];
+        qdm[i] = qd[i] + (qd_noise ? qd_noise[k * nd + i] : 0.0);
+        qr[i] = ref->q[k * nd + i];
+        qdr[i] = ref->qd[k * nd + i];
+      }
+      st = pkm_ctrl_update(c, t_k, qm, qdm, qr, qdr, ref->qdd ? ref->qdd + k * nd : nullptr,
+                           ref->x ? ref->x + k * nd : nullptr, tau);
+      if (st != PKM_OK) throw Error(st, pkm_ctrl_error(c));
+      st = pkm_actuator_effort(m, d, tau, applied);
+      if (st != PKM_OK) throw Error(st, std::string("actuator: ") + pkm_data_error(d));
+      if (out) {
+        put(out->q, k, nd, qm);
+        put(out->qd, k, nd, qdm);
+        put(out->q_true, k, nd, q);
+        put(out->qd_true, k, nd, qd);
+        put(out->x, k, nd, x);
+        put(out->xd, k, nd, xd);
+        put(out->tau_cmd, k, nd, tau);
+        put(out->tau, k, nd, applied);
+      }
+      if (n_done) *n_done = k + 1;
+      for (int i = 0; i < nd; ++i) prev_applied[i] = applied[i];
+      if (k + 1 == ref->n) break;
+      sim.set_input(tau);
+      sim.advance(t_k + ref->dt);
+      sim.get_state(&t, x, xd);
+    }
+  });
+  if (status != PKM_OK) {
+    // The rows before the failing sample are the result; say where the loop stopped.
+    if (n_done) *n_done = k;
+    sim.error = "closed loop stopped at sample " + std::to_string(k) + " (t = " + num(t_k) + " s): " + sim.error;
+  }
+  return status;
+}
