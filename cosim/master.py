@@ -461,6 +461,10 @@ class RunResult:
     reference_name: str = ""
     noise: dict = field(default_factory=dict)
     saturated: int = 0
+    #: which loop ran: "compiled" (pkm_closed_loop, one C call) or "python" (sample by sample)
+    loop: str = "python"
+    #: why the Python loop ran when it did ("" for the compiled loop)
+    loop_note: str = ""
 
     def __getitem__(self, name):
         return self.data[name]
@@ -508,8 +512,20 @@ def _units(robot, nd):
             "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 
+def _compiled_path(plant, controller, drive, h):
+    """``(CompiledController, "")`` when the loop can run in the core, else ``(None, reason)``."""
+    from .closed_loop import compile_controller
+
+    if not isinstance(plant, CorePlant):
+        return None, f"the plant is {type(plant).__name__} (the compiled loop integrates the core plant)"
+    if drive is not None and not (isinstance(drive, CoreDrive) and drive.model.params() == plant.model.params()):
+        return None, "the drive's model is not the plant's"
+    return compile_controller(controller, model=plant.model, dt=h)
+
+
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
-        pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None) -> RunResult:
+        pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
+        compiled: bool | None = None) -> RunResult:
     """Step ``plant`` and ``controller`` together over the reference's time grid.
 
     Parameters
@@ -540,10 +556,18 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     progress : bool, optional
         Show a tqdm progress bar; by default it appears on a terminal when the run
         lasts more than two seconds of wall time.
+    compiled : bool, optional
+        Run the whole loop inside the core (:mod:`cosim.closed_loop`: one C call, no
+        Python per sample).  By default it does whenever it can: a
+        :class:`CorePlant` and a controller the core implements (PD, PD + gravity,
+        computed torque, PID, LTI); otherwise the Python loop runs and
+        ``RunResult.loop_note`` says why.  ``True`` raises if it cannot, ``False``
+        forces the Python loop.
 
     Returns
     -------
     RunResult
+        ``loop`` says which loop ran ("compiled" or "python").
 
     Raises
     ------
@@ -580,9 +604,16 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
     noise = {"q": sig_q.tolist(), "qd": sig_qd.tolist(), "pose": sig_x.tolist(), "seed": seed}
 
-    def result(rows, wall):
+    def result(rows, wall, loop="python", note="", saturated=None):
+        sat = getattr(controller, "saturated", 0) if saturated is None else saturated
         return RunResult(data[:rows], units, plant.robot, plant.describe(), ctrl_desc, h, wall, reference.name,
-                         noise, getattr(controller, "saturated", 0))
+                         noise, sat, loop, note)
+
+    cc, note = (None, "compiled=False") if compiled is False else _compiled_path(plant, controller, drive, h)
+    if compiled and cc is None:
+        raise MasterError(f"the loop cannot run compiled: {note}")
+    if cc is not None:
+        return _run_compiled(plant, cc, reference, data, result, x0, xd0, rng, sig_q, sig_qd, sig_x, drive, progress)
 
     start = _time.perf_counter()
     k = 0
@@ -617,4 +648,55 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         raise MasterError(f"{plant.kind} run stopped at t = {t[k]:.6g} s: {e}", result(k, _time.perf_counter() - start)) \
             from e
     bar.close()
-    return result(n, _time.perf_counter() - start)
+    return result(n, _time.perf_counter() - start, "python", note)
+
+
+def _run_compiled(plant, cc, reference, data, result, x0, xd0, rng, sig_q, sig_qd, sig_x, drive, progress):
+    """The loop of :func:`run` inside the core (``pkm_closed_loop``), same sequence and noise."""
+    from tqdm import tqdm
+
+    from .closed_loop import run_compiled
+
+    t = reference.time
+    n, nd = len(t), plant.ndof
+    h = float(t[1] - t[0])
+    # The Python loop draws, at every sample, the q, qd and pose noise in this order.
+    groups = [s for s in (sig_q, sig_qd, sig_x) if np.any(s)]
+    z = rng.normal(0.0, 1.0, (n, len(groups) * nd)) if groups else np.zeros((n, 0))
+    cols, noise = 0, {}
+    for name, s in (("q", sig_q), ("qd", sig_qd), ("x", sig_x)):
+        if np.any(s):
+            noise[name] = z[:, cols:cols + nd] * s
+            cols += nd
+    start = _time.perf_counter()
+    bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
+               desc=f"{plant.kind} {reference.name} (compiled)".strip())
+    try:
+        plant.initialize(float(t[0]), x0, xd0)
+        y = plant.outputs()
+        cc.reset(y.x)
+        if hasattr(plant, "sim"):
+            sim = plant.sim
+        qdd = getattr(reference, "qdd", None)
+        rows, done, status, message = run_compiled(
+            sim, cc, time=t, dt=h, qref=reference.q, qdref=reference.qd, qddref=qdd, xref=reference.x,
+            q_noise=noise.get("q"), qd_noise=noise.get("qd"), measure=drive is not None, chunk=2000,
+            on_chunk=lambda k: bar.update(k - bar.n))
+    except Exception as e:
+        bar.close()
+        raise MasterError(f"{plant.kind} run stopped at t = {t[0]:.6g} s: {e}", result(0, _time.perf_counter() - start,
+                                                                                     "compiled")) from e
+    bar.close()
+    wall = _time.perf_counter() - start
+    for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau"):
+        data[f][:done] = rows[f][:done]
+    data["x_meas"][:done] = data["x"][:done] + (noise["x"][:done] if "x" in noise else 0.0)
+    res = result(done, wall, "compiled", "", cc.saturated)
+    if status != 0:
+        from ._native import STATUS, PkmError
+
+        name, cls = STATUS.get(status, ("PKM_ERR_UNKNOWN", PkmError))
+        cause = (cls or PkmError)(message, name)
+        k = min(done, n - 1)
+        raise MasterError(f"{plant.kind} run stopped at t = {t[k]:.6g} s: {message}", res) from cause
+    return res

@@ -116,6 +116,39 @@ class LoopResult:
     q_true: np.ndarray
 
 
+def _compiled(plant, sim, controller, ref, start, t, x0, xd0, sig, rng, delay):
+    """:func:`closed_loop` through the core's compiled loop (same draws of the noise), or
+    None when the controller or the sensor model needs the Python loop."""
+    from ..closed_loop import compile_controller, run_compiled
+    from .effects import joint_prefix
+
+    nd = plant.ndof
+    if delay > 0 and any(plant.param(f"{joint_prefix(plant)}[{i + 1}].compliance") != 0 for i in range(nd)):
+        return None  # compliance reads the delayed effort: the Python loop models that
+    n, dt = len(t), float(t[1] - t[0])
+    cc_, _ = compile_controller(controller, model=plant, dt=dt)
+    if cc_ is None:
+        return None
+    groups = [k for k in ("q", "qd", "tau", "pose") if np.any(sig[k])]
+    z = rng.normal(size=(n, len(groups) * nd)) if groups else np.zeros((n, 0))
+    draw = {k: z[:, i * nd:(i + 1) * nd] * sig[k] for i, k in enumerate(groups)}
+    sim.reset(float(t[0]), x0, xd0)
+    cc_.reset(x0)
+    sl = slice(start, start + n)
+    qdd = getattr(ref, "qdd", None)
+    rows, done, status, message = run_compiled(
+        sim, cc_, time=t, dt=dt, qref=ref.q[sl], qdref=ref.qd[sl], qddref=None if qdd is None else qdd[sl],
+        xref=None if getattr(ref, "x", None) is None else ref.x[sl], q_noise=draw.get("q"), qd_noise=draw.get("qd"),
+        measure=True)
+    if status != 0:
+        from ..closed_loop import raise_status
+
+        raise_status(status, message)
+    tau = rows["tau_cmd"] + draw.get("tau", 0.0)
+    pose = rows["x"] + draw.get("pose", 0.0)
+    return LoopResult(t, rows["q"], rows["qd"], tau, pose, rows["x"], rows["xd"], rows["q_true"])
+
+
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
                 start: int = 0, rtol: float = 1e-9, atol: float = 1e-11) -> LoopResult:
     """Run ``controller`` on the core plant ``plant`` over the reference samples.
@@ -168,6 +201,11 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     sim = Simulator(sim_model, rtol=rtol, atol=atol)
     if x0 is None:
         x0 = ref.x[start] if getattr(ref, "x", None) is not None else plant.fk(ref.q[start])
+    if not (own_delay or own_sat) and s_delay == 0:
+        # The whole loop inside the core when the controller is one it implements.
+        fast = _compiled(plant, sim, controller, ref, start, t, np.asarray(x0, float), xd0, sig, rng, delay)
+        if fast is not None:
+            return fast
     sim.reset(float(t[0]), np.asarray(x0, float), xd0)
     if hasattr(controller, "reset"):
         controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
