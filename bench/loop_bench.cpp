@@ -202,9 +202,11 @@ int main(int argc, char** argv) {
     double wall, err, closure, steps_per_ms, rhs_per_ms;
   };
   std::vector<Row> rows;
-  for (int method : {PKM_ERK, PKM_BDF}) {
-    const char* mname = method == PKM_ERK ? "explicit RK (default)" : "CVODE BDF (before)";
-    const char* mkey = method == PKM_ERK ? "erk" : "bdf";
+  for (int method : {PKM_ERK, PKM_ERK23, PKM_BDF}) {
+    const char* mname = method == PKM_ERK     ? "explicit RK 5(4) (default)"
+                        : method == PKM_ERK23 ? "explicit RK 3(2)"
+                                              : "CVODE BDF (before)";
+    const char* mkey = method == PKM_ERK ? "erk" : method == PKM_ERK23 ? "erk23" : "bdf";
     for (int loop = 0; loop < 2; ++loop) {
       std::vector<double> walls;
       Run last;

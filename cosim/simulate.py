@@ -36,7 +36,7 @@ from ._native import ArgumentError, PkmError, lib, pkm_sim_options, pkm_sim_stat
 
 __all__ = ["Simulator", "SimResult", "simulate", "default_options"]
 
-_METHODS = {"bdf": 0, "adams": 1, "erk": 2}
+_METHODS = {"bdf": 0, "adams": 1, "erk": 2, "erk23": 3}
 _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 #: integration method names and their pkm.h codes (pkm_lmm; the FMUs' solver.method)
 METHOD_CODES = dict(_METHODS)
@@ -64,10 +64,12 @@ class Simulator:
     model : cosim.core.Model
         The robot.  The simulator copies it: later ``model.set_params`` calls do not
         change a simulator that already exists.
-    method : {"erk", "bdf", "adams"}
+    method : {"erk", "erk23", "bdf", "adams"}
         ``"erk"`` (default): explicit Runge-Kutta 5(4) (Dormand-Prince) that keeps its
         step size from one ``advance`` to the next, about one step per millisecond
-        under a 1 kHz controller; for non-stiff motion.  ``"bdf"``: CVODE's BDF with
+        under a 1 kHz controller; for non-stiff motion.  ``"erk23"``: the Bogacki-Shampine
+        3(2) pair, 4 instead of 7 forward-dynamics calls a step: faster at loose
+        tolerances (docs/integration.md has the error / speed table).  ``"bdf"``: CVODE's BDF with
         Newton iteration and a dense difference-quotient Jacobian (stiff-safe: use it
         with Coulomb friction and a small ``drive.v_eps``).  ``"adams"``: CVODE's
         Adams with fixed-point iteration.

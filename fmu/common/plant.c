@@ -311,9 +311,10 @@ static int apply(fmu_plant* p) {
 
   pkm_sim_options o = p->opt;
   if (p->tol_override > 0) o.rtol = p->tol_override;
-  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK)
-    return fail(p, PKM_ERR_PARAMETER, "%s = %d: use %d (explicit Runge-Kutta), %d (BDF) or %d (Adams)",
-                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_ERK, PKM_BDF, PKM_ADAMS);
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK && o.method != PKM_ERK23)
+    return fail(p, PKM_ERR_PARAMETER,
+                "%s = %d: use %d (explicit Runge-Kutta 5(4)), %d (explicit Runge-Kutta 3(2)), %d (BDF) or %d (Adams)",
+                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_ERK, PKM_ERK23, PKM_BDF, PKM_ADAMS);
   if (!(o.rtol > 0) || !(o.atol > 0))
     return fail(p, PKM_ERR_PARAMETER, "%s = %g and %s = %g must both be > 0", var_name(p, FMU_CH_SOLVER_RTOL, 0),
                 o.rtol, var_name(p, FMU_CH_SOLVER_ATOL, 0), o.atol);

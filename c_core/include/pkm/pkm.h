@@ -209,14 +209,15 @@ PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
 /* Integration methods.  PKM_ERK, the default: an explicit Runge-Kutta 5(4) pair
  * (Dormand-Prince) whose whole state is (t, x, xd) plus the step size it proposes next,
  * so nothing is lost at a communication point (a 1 ms loop costs about one step per
- * millisecond); for non-stiff motion.  PKM_BDF: CVODE's variable-order BDF with a dense
+ * millisecond); for non-stiff motion.  PKM_ERK23: the Bogacki-Shampine 3(2) pair, 4
+ * forward-dynamics calls a step instead of 7, for loose tolerances (rtol ~1e-5).  PKM_BDF: CVODE's variable-order BDF with a dense
  * Newton solver, for stiff settings (e.g. Coulomb friction with a small drive.v_eps).
  * PKM_ADAMS: CVODE's Adams-Moulton.  CVODE restarts at every advance.
  * docs/integration.md compares them (speed, accuracy, when to use which). */
-typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1, PKM_ERK = 2 } pkm_lmm;
+typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1, PKM_ERK = 2, PKM_ERK23 = 3 } pkm_lmm;
 
 typedef struct pkm_sim_options {
-  int method;        /* PKM_ERK (default), PKM_BDF or PKM_ADAMS                    */
+  int method;        /* PKM_ERK (default), PKM_ERK23, PKM_BDF or PKM_ADAMS         */
   double rtol;       /* relative tolerance (default 1e-8)                         */
   double atol;       /* absolute tolerance (default 1e-10)                        */
   double max_step;   /* largest internal step, s (0 = unlimited)                  */

@@ -26,18 +26,39 @@ namespace pkm {
 
 namespace {
 
-// Dormand-Prince 5(4) coefficients (FSAL: the 7th stage is f at the new point).
-constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
-constexpr double a21 = 1.0 / 5;
-constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
-constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
-constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
-constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176,
-                 a65 = -5103.0 / 18656;
-constexpr double b1 = 35.0 / 384, b3 = 500.0 / 1113, b4 = 125.0 / 192, b5 = -2187.0 / 6784, b6 = 11.0 / 84;
-// b - b_hat (fifth- minus fourth-order weights), for the error estimate.
-constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200,
-                 e6 = 22.0 / 525, e7 = -1.0 / 40;
+// An embedded explicit Runge-Kutta pair with the first-same-as-last property: stage s-1
+// is f at the new point (and the next step's first stage when the input stays), the
+// solution uses b over the first s-1 stages, the error estimate e = b - b_hat over all s.
+struct Tableau {
+  int s;
+  double c[7];
+  double a[7][7];
+  double b[7];
+  double e[7];
+  double expo;  // step-size exponent: -1 / (order of the embedded estimate + 1)
+};
+
+// Dormand and Prince's 5(4) pair (J. Comput. Appl. Math. 6, 1980).
+constexpr Tableau kDP54{7,
+                        {0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1},
+                        {{0},
+                         {1.0 / 5},
+                         {3.0 / 40, 9.0 / 40},
+                         {44.0 / 45, -56.0 / 15, 32.0 / 9},
+                         {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+                         {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
+                         {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}},
+                        {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84, 0},
+                        {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40},
+                        -1.0 / 5};
+
+// Bogacki and Shampine's 3(2) pair (Appl. Math. Lett. 2, 1989): three new stages a step.
+constexpr Tableau kBS32{4,
+                        {0, 1.0 / 2, 3.0 / 4, 1},
+                        {{0}, {1.0 / 2}, {0, 3.0 / 4}, {2.0 / 9, 1.0 / 3, 4.0 / 9}},
+                        {2.0 / 9, 1.0 / 3, 4.0 / 9, 0},
+                        {2.0 / 9 - 7.0 / 24, 1.0 / 3 - 1.0 / 4, 4.0 / 9 - 1.0 / 3, -1.0 / 8},
+                        -1.0 / 3};
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
@@ -118,7 +139,7 @@ double Sim::erk_initial_step(double t_end, const double* f0) {
     }
     d2 = std::sqrt(d2 / n2) / h0;
     const double dm = std::max(d1, d2);
-    h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5);
+    h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, opt_.method == PKM_ERK23 ? 1.0 / 3 : 1.0 / 5);
   }
   ++stats_.rhs_evals;
   double h = std::min(100 * h0, h1);
@@ -204,8 +225,9 @@ void Sim::erk_segment(double t_end) {
   const int n2 = 2 * nd_;
   cb_status_ = 0;
   cb_msg_.clear();
-  double y0[kMaxN], f0[kMaxN], k2[kMaxN], k3[kMaxN], k4[kMaxN], k5[kMaxN], k6[kMaxN], k7[kMaxN], y1[kMaxN],
-      ys[kMaxN], g[64];
+  const Tableau& tb = opt_.method == PKM_ERK23 ? kBS32 : kDP54;
+  double y0[kMaxN], k[7][kMaxN], y1[kMaxN], ys[kMaxN], g[64];
+  double* f0 = k[0];
   for (int i = 0; i < n2; ++i) y0[i] = y_[i];
   if (!erk_rhs(t_, y0, f0)) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
   ++stats_.rhs_evals;
@@ -239,21 +261,22 @@ void Sim::erk_segment(double t_end) {
     ++steps;
     bool ok = true;
     int evals = 0;
-    auto stage = [&](double c, double* k, auto&& combine) {
-      if (!ok) return;
-      for (int i = 0; i < n2; ++i) ys[i] = y0[i] + hh * combine(i);
-      ok = erk_rhs(t_ + c * hh, ys, k);
+    for (int j = 1; ok && j < tb.s - 1; ++j) {
+      for (int i = 0; i < n2; ++i) {
+        double acc = 0;
+        for (int l = 0; l < j; ++l) acc += tb.a[j][l] * k[l][i];
+        ys[i] = y0[i] + hh * acc;
+      }
+      ok = erk_rhs(t_ + tb.c[j] * hh, ys, k[j]);
       ++evals;
-    };
-    stage(c2, k2, [&](int i) { return a21 * f0[i]; });
-    stage(c3, k3, [&](int i) { return a31 * f0[i] + a32 * k2[i]; });
-    stage(c4, k4, [&](int i) { return a41 * f0[i] + a42 * k2[i] + a43 * k3[i]; });
-    stage(c5, k5, [&](int i) { return a51 * f0[i] + a52 * k2[i] + a53 * k3[i] + a54 * k4[i]; });
-    stage(1.0, k6, [&](int i) { return a61 * f0[i] + a62 * k2[i] + a63 * k3[i] + a64 * k4[i] + a65 * k5[i]; });
+    }
     if (ok) {
-      for (int i = 0; i < n2; ++i)
-        y1[i] = y0[i] + hh * (b1 * f0[i] + b3 * k3[i] + b4 * k4[i] + b5 * k5[i] + b6 * k6[i]);
-      ok = erk_rhs(t_ + hh, y1, k7);
+      for (int i = 0; i < n2; ++i) {
+        double acc = 0;
+        for (int l = 0; l < tb.s - 1; ++l) acc += tb.b[l] * k[l][i];
+        y1[i] = y0[i] + hh * acc;
+      }
+      ok = erk_rhs(t_ + hh, y1, k[tb.s - 1]);
       ++evals;
     }
     stats_.rhs_evals += evals;
@@ -265,12 +288,14 @@ void Sim::erk_segment(double t_end) {
     }
     double err = 0;
     for (int i = 0; i < n2; ++i) {
-      const double e = hh * (e1 * f0[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
+      double e = 0;
+      for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
+      e *= hh;
       const double sc = opt_.atol + opt_.rtol * std::max(std::fabs(y0[i]), std::fabs(y1[i]));
       err += (e / sc) * (e / sc);
     }
     err = std::sqrt(err / n2);
-    const double fac = err > 0 ? std::clamp(kSafety * std::pow(err, -0.2), kFacMin, kFacMax) : kFacMax;
+    const double fac = err > 0 ? std::clamp(kSafety * std::pow(err, tb.expo), kFacMin, kFacMax) : kFacMax;
     if (!(err <= 1.0)) {
       ++stats_.error_test_fails;
       h = hh * std::min(1.0, fac);
@@ -287,11 +312,12 @@ void Sim::erk_segment(double t_end) {
       stop = true;  // the new point is outside the workspace: locate where it left
     }
     ++stats_.steps;
-    if (stop) erk_stop(t_, hh, y0, f0, y1, k7, det0);
+    double* f1 = k[tb.s - 1];
+    if (stop) erk_stop(t_, hh, y0, f0, y1, f1, det0);
     t_ = last ? t_end : t_ + hh;
     for (int i = 0; i < n2; ++i) {
       y0[i] = y1[i];
-      f0[i] = k7[i];
+      f0[i] = f1[i];
       y_[i] = y1[i];  // the committed state is always the last accepted one
     }
     // A step shortened to land on t_end says little about the next one: keep the larger.

@@ -81,8 +81,8 @@ constexpr double kSingGuard = 100.0;
 
 static void check_options(const pkm_sim_options& o) {
   auto bad = [](const std::string& what) { throw Error(PKM_ERR_ARGUMENT, "pkm_sim options: " + what); };
-  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK)
-    bad("method = " + std::to_string(o.method) + " is none of PKM_BDF (0), PKM_ADAMS (1), PKM_ERK (2)");
+  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK && o.method != PKM_ERK23)
+    bad("method = " + std::to_string(o.method) + " is none of PKM_BDF (0), PKM_ADAMS (1), PKM_ERK (2), PKM_ERK23 (3)");
   if (!(std::isfinite(o.rtol) && o.rtol > 0 && o.rtol < 1))
     bad("rtol = " + num(o.rtol) + " must be in (0, 1)");
   if (!(std::isfinite(o.atol) && o.atol > 0)) bad("atol = " + num(o.atol) + " must be finite and > 0");
@@ -143,7 +143,7 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     g_.assign(nroots_, 0.0);
     g_cached_.assign(nroots_ + 1, 0.0);
 
-    if (opt_.method == PKM_ERK) return;  // the explicit method needs no CVODE objects
+    if (opt_.method == PKM_ERK || opt_.method == PKM_ERK23) return;  // explicit methods need no CVODE objects
     if (SUNContext_Create(nullptr, &ctx_) != 0 || !ctx_)
       throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
     nv_ = N_VNew_Serial(n2, ctx_);
@@ -555,7 +555,7 @@ void Sim::advance(double t_end) {
   // changes, so it would miss a crossing that already happened.  (The explicit method
   // checked the state it ended on already: its guard values are kept.)
   try {
-    if (opt_.method == PKM_ERK) {
+    if (explicit_method()) {
       if (!guard_cached_) {
         erk_guard(y_.data(), g_cached_.data(), det_cached_, bound_cached_);
         guard_cached_ = true;
@@ -610,7 +610,7 @@ void Sim::advance(double t_end) {
 // still caught by the det J root, which stays on; what goes unseen is a dip of the
 // measure below sing_min without J changing sign, back above the guard within a segment.
 void Sim::segment(double t_end) {
-  if (opt_.method == PKM_ERK) {
+  if (explicit_method()) {
     erk_segment(t_end);
     return;
   }

@@ -53,6 +53,7 @@ class Sim {
   void get_state(double* t, double* x, double* xd) const;
   const pkm_sim_stats& stats() const { return stats_; }
   int ndof() const { return nd_; }
+  bool explicit_method() const { return opt_.method == PKM_ERK || opt_.method == PKM_ERK23; }
   // Everything that determines the future of the sim (pkm_sim_state_*): t, state, held
   // input, the explicit method's next step size and the actuator-delay history it needs.
   size_t state_size() const;
