@@ -208,7 +208,7 @@ def _pd_units(joint):
 
 
 def _joint_of(model):
-    return "rad" if getattr(model, "robot", "6pus") in ("quattro", "fourbar") else "m"
+    return model.joint_unit
 
 
 def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m") -> JointController:

@@ -35,7 +35,8 @@ from ._native import (
     raise_for,
 )
 
-__all__ = ["Model", "ParamInfo", "PkmError", "ParameterError", "ArgumentError"]
+__all__ = ["Model", "ParamInfo", "RobotFacts", "robots", "robot_facts", "PkmError", "ParameterError",
+           "ArgumentError"]
 
 
 @dataclass(frozen=True)
@@ -52,13 +53,67 @@ def _errbuf():
     return C.create_string_buffer(1024)
 
 
+def robots() -> list[str]:
+    """Names of the robots compiled into the core (``pkm_robot_name``), e.g. ``["6pus", ...]``."""
+    return [lib.pkm_robot_name(i).decode() for i in range(lib.pkm_robot_count())]
+
+
+@dataclass(frozen=True)
+class RobotFacts:
+    """What the core says of a robot (``pkm.h`` "robot facts"); nothing in Python restates it.
+
+    Attributes
+    ----------
+    name : str
+        Robot name (``pkm_model_create``).
+    ndof : int
+        Actuated joints = pose coordinates.
+    param_sets : tuple of str
+        Named parameter sets, ``"default"`` first.
+    pose_names, pose_units : tuple of str
+        Pose coordinates (``"x"``, ..., ``"theta"``) and their units (``"m"``, ``"rad"``).
+    joint_unit, effort_unit : str
+        Unit of the joint coordinates q (``"m"`` or ``"rad"``) and of the efforts
+        (``"N"`` or ``"N m"``).
+    joint_noun, joint_prefix : str
+        How messages name an actuated joint, and the drive parameters' prefix
+        (``"rail"`` -> ``"rail[i].coulomb"``).
+    """
+
+    name: str
+    ndof: int
+    param_sets: tuple
+    pose_names: tuple
+    pose_units: tuple
+    joint_unit: str
+    effort_unit: str
+    joint_noun: str
+    joint_prefix: str
+
+    @property
+    def angular_joints(self) -> bool:
+        """True for revolute actuated joints (q in rad, efforts in N m)."""
+        return self.joint_unit == "rad"
+
+
+_FACTS: dict = {}
+
+
+def robot_facts(robot: str) -> RobotFacts:
+    """The :class:`RobotFacts` of a robot by name (raises ``ArgumentError`` naming the known ones)."""
+    f = _FACTS.get(robot)
+    if f is None:
+        f = _FACTS[robot] = Model(robot).facts
+    return f
+
+
 class Model:
     """A robot model (constant parameters) with its own work data.
 
     Parameters
     ----------
-    robot : {"6pus", "quattro", "fourbar"}
-        Robot kind.
+    robot : str
+        Robot kind, one of :func:`robots` ("6pus", "quattro", "fourbar").
     param_set : str, optional
         Named parameter set ("default"; the Quattro also has "appendix_a").
     params : dict, optional
@@ -72,12 +127,13 @@ class Model:
 
     def __init__(self, robot: str = "6pus", param_set: str | None = None, params: dict | None = None):
         err = _errbuf()
-        h = lib.pkm_model_create(robot.encode(), param_set.encode() if param_set else None, err, len(err))
-        if not h:
-            msg = err.value.decode()
-            cls = ParameterError if "parameter" in msg.lower() else ArgumentError
-            raise cls(msg, "PKM_ERR_ARGUMENT")
-        self._m = C.c_void_p(h)
+        h = C.c_void_p()
+        if not isinstance(robot, str):
+            raise ArgumentError(f"robot must be a name ({', '.join(robots())}), got {robot!r}", "PKM_ERR_ARGUMENT")
+        s = lib.pkm_model_create_status(robot.encode(), param_set.encode() if param_set else None, C.byref(h), err,
+                                        len(err))
+        raise_for(s, err.value.decode())
+        self._m = h
         self._d = C.c_void_p(lib.pkm_data_create(self._m))
         self.robot = lib.pkm_model_robot(self._m).decode()
         self.param_set = param_set or "default"
@@ -95,6 +151,37 @@ class Model:
                 lib.pkm_model_destroy(self._m)
         except Exception:  # interpreter shutdown
             pass
+
+    @property
+    def facts(self) -> RobotFacts:
+        """The robot's :class:`RobotFacts` (coordinates, units, parameter sets) from the core."""
+        m, nd, name = self._m, self.ndof, self.robot
+        return RobotFacts(
+            name=name, ndof=nd,
+            param_sets=tuple(lib.pkm_robot_param_set_name(name.encode(), i).decode()
+                             for i in range(lib.pkm_robot_param_set_count(name.encode()))),
+            pose_names=tuple(lib.pkm_model_pose_name(m, i).decode() for i in range(nd)),
+            pose_units=tuple(lib.pkm_model_pose_unit(m, i).decode() for i in range(nd)),
+            joint_unit=lib.pkm_model_joint_unit(m).decode(), effort_unit=lib.pkm_model_effort_unit(m).decode(),
+            joint_noun=lib.pkm_model_joint_noun(m).decode(), joint_prefix=lib.pkm_model_joint_prefix(m).decode())
+
+    @property
+    def joint_unit(self) -> str:
+        """Unit of the joint coordinates q: ``"m"`` (sliders) or ``"rad"`` (revolute)."""
+        return lib.pkm_model_joint_unit(self._m).decode()
+
+    def joint_limits(self):
+        """``(qmin, qmax)`` of the actuated joints [m or rad], arrays of shape (nd,); NaN
+        where the robot has no limit (the current values of the limit parameters)."""
+        lo, hi = np.full(self.ndof, np.nan), np.full(self.ndof, np.nan)
+        a, b = C.c_int(), C.c_int()
+        for i in range(self.ndof):
+            self._check(lib.pkm_model_joint_limits(self._m, i, C.byref(a), C.byref(b)))
+            if a.value >= 0:
+                lo[i] = lib.pkm_param_get(self._m, a.value)
+            if b.value >= 0:
+                hi[i] = lib.pkm_param_get(self._m, b.value)
+        return lo, hi
 
     def copy(self) -> "Model":
         """An independent model with the same parameters (and its own work data)."""

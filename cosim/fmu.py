@@ -25,12 +25,29 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FMU_IDS", "fmu_path", "build", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
+__all__ = ["FMU_IDS", "fmu_id", "fmu_path", "build", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
 
 REPO = Path(__file__).resolve().parent.parent
 
-#: model identifier (and .fmu file name) of each robot's plant FMU
-FMU_IDS = {"6pus": "PKM_6PUS", "quattro": "PKM_QUATTRO"}
+
+def fmu_id(robot: str) -> str:
+    """Model identifier (and .fmu file name) of a robot's plant FMU: ``PKM_<ROBOT>``, the
+    name fmu_gen gives a model folder's FMU (a robot without a folder has none).  An
+    identifier given as such (``"PKM_6PUS"``) is returned unchanged."""
+    return robot if robot.startswith("PKM_") else f"PKM_{robot.upper()}"
+
+
+class _FmuIds(dict):
+    """Deprecated alias of :func:`fmu_id` (one release): ``FMU_IDS[robot]``."""
+
+    def __missing__(self, robot):
+        return fmu_id(robot)
+
+    def get(self, robot, default=None):
+        return fmu_id(robot)
+
+
+FMU_IDS = _FmuIds()
 
 
 class FMUError(RuntimeError):
@@ -48,7 +65,7 @@ def build_dir() -> Path:
 
 def fmu_path(robot: str = "6pus", build: str | Path | None = None) -> Path:
     """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu``; raises if it is not built."""
-    ident = FMU_IDS.get(robot, robot)
+    ident = fmu_id(robot)
     p = Path(build or build_dir()) / "fmu" / f"{ident}.fmu"
     if not p.exists():
         raise FileNotFoundError(f"{p} is not built: run ./scripts/bootstrap.sh (or cmake --build "
@@ -58,7 +75,7 @@ def fmu_path(robot: str = "6pus", build: str | Path | None = None) -> Path:
 
 def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -> Path:
     """Build (or bring up to date) one FMU with CMake and return its path."""
-    ident = FMU_IDS.get(robot, robot)
+    ident = fmu_id(robot)
     b = Path(build or build_dir())
     if not (b / "CMakeCache.txt").exists():
         subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release"], check=True)

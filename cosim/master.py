@@ -34,10 +34,13 @@ import numpy as np
 
 from .controllers import Reference
 
-#: units of the joint and pose coordinates of each robot
-JOINT_UNIT = {"6pus": "m", "quattro": "rad", "fourbar": "rad"}
-POSE_UNITS = {"6pus": ["m", "m", "m", "rad", "rad", "rad"], "quattro": ["m", "m", "m", "rad"], "fourbar": ["m"]}
-EFFORT_UNIT = {"m": "N", "rad": "N m"}
+
+def _facts(robot):
+    """The core's facts of a robot, or None for a name the core does not know (an FMU of
+    another origin)."""
+    from .core import robot_facts, robots
+
+    return robot_facts(robot) if robot in robots() else None
 
 
 class MasterError(RuntimeError):
@@ -212,9 +215,8 @@ class FMUPlant(Plant):
     kind = "fmu"
     #: variable names of the joint channels: format strings of the 1-based joint index i
     NAMES = {"tau": "tau[{i}]", "q": "q[{i}]", "qd": "qd[{i}]", "rtol": "solver.rtol", "atol": "solver.atol"}
-    #: pose coordinate names of each robot; the FMU names the rate "<c>d", the initial
-    #: pose "<c>0" and the initial rate "<c>d0" (fmu/<robot>/variables.txt)
-    POSE = {"6pus": ["x", "y", "z", "rx", "ry", "rz"], "quattro": ["x", "y", "z", "theta"], "fourbar": ["X"]}
+    # The pose coordinates are the core's (RobotFacts.pose_names); the FMU names the rate
+    # "<c>d", the initial pose "<c>0" and the initial rate "<c>d0" (fmu/<robot>/variables.txt).
 
     def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = 1e-10,
                  atol: float | None = 1e-12, names: dict | None = None, instance_name: str = "plant"):
@@ -230,7 +232,8 @@ class FMUPlant(Plant):
         if self.ndof == 0:
             raise MasterError(f"{self.path}: the FMU has no inputs (expected the actuator efforts)")
         self.robot = self._robot()
-        pose = self.POSE.get(self.robot, [f"x{i}" for i in range(1, self.ndof + 1)])
+        facts = _facts(self.robot)
+        pose = list(facts.pose_names) if facts else [f"x{i}" for i in range(1, self.ndof + 1)]
         self.names = {**self.NAMES, "x": pose, "xd": [c + "d" for c in pose], "x0": [c + "0" for c in pose],
                       "xd0": [c + "d0" for c in pose], **(names or {})}
         self.parameters = dict(parameters or {})
@@ -242,10 +245,14 @@ class FMUPlant(Plant):
         self._instantiated = False
 
     def _robot(self):
-        for r, n in (("6pus", 6), ("quattro", 4), ("fourbar", 1)):
-            if r in self.md.modelName.lower() or r in self.md.coSimulation.modelIdentifier.lower():
+        """The core robot the FMU packs: its model identifier is ``PKM_<ROBOT>`` (fmu_gen)."""
+        from .core import robots
+
+        ident = self.md.coSimulation.modelIdentifier
+        for r in robots():
+            if ident.lower() == f"pkm_{r}":
                 return r
-        return {6: "6pus", 4: "quattro", 1: "fourbar"}.get(self.ndof, "unknown")
+        return "unknown"
 
     def _refs(self, key):
         spec = self.names[key]
@@ -505,10 +512,12 @@ def _dtype(nd):
 
 
 def _units(robot, nd):
-    j = JOINT_UNIT.get(robot, "m or rad")
-    pose = POSE_UNITS.get(robot, ["m or rad"] * nd)
+    facts = _facts(robot)
+    j = facts.joint_unit if facts else "m or rad"
+    effort = facts.effort_unit if facts else "N or N m"
+    pose = list(facts.pose_units) if facts else ["m or rad"] * nd
     return {"time": "s", "q": j, "qd": f"{j}/s", "q_true": j, "qd_true": f"{j}/s",
-            "tau": EFFORT_UNIT.get(j, "N or N m"), "tau_cmd": EFFORT_UNIT.get(j, "N or N m"), "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
+            "tau": effort, "tau_cmd": effort, "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
             "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 

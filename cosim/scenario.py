@@ -272,21 +272,13 @@ def fmu_path(sc: Scenario) -> Path:
 
 def built_fmu(robot: str) -> Path:
     """The Co-Simulation FMU of ``robot`` from the CMake build (``cosim.fmu`` knows where)."""
-    try:
-        from . import fmu as fmu_mod
-    except ImportError:
-        fmu_mod = None
-    if fmu_mod is not None and hasattr(fmu_mod, "fmu_path"):
-        return Path(fmu_mod.fmu_path(robot))
-    from ._native import library_path
+    from .fmu import fmu_path as fmu_file
 
-    build = library_path().parent.parent
-    ident = {"6pus": "PKM_6PUS", "quattro": "PKM_QUATTRO", "fourbar": "PKM_FOURBAR"}.get(robot, robot)
-    path = build / "fmu" / f"{ident}.fmu"
-    if not path.exists():
-        raise ScenarioError(f"the FMU of robot {robot} is not built ({path} is missing): build the project "
-                            f"(./scripts/bootstrap.sh) or give [fmu] path in the scenario")
-    return path
+    try:
+        return Path(fmu_file(robot))
+    except FileNotFoundError as e:
+        raise ScenarioError(f"the FMU of robot {robot} is not built ({e}): build the project "
+                            f"(./scripts/bootstrap.sh) or give [fmu] path in the scenario") from None
 
 
 def build_plant(sc: Scenario, true_model, truth: dict):

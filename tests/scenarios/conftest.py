@@ -11,6 +11,7 @@ import pytest
 
 class ToyModel:
     robot = "toy"
+    joint_unit = "m"  # sliders (the Model interface: RobotFacts.joint_unit)
 
     def __init__(self, mass=(0.5, 0.2), gravity=(1.5, -0.4)):
         self.M = np.diag(mass).astype(float)

@@ -75,7 +75,32 @@ PKM_API pkm_model* pkm_model_create(const char* robot, const char* param_set,
 PKM_API pkm_model* pkm_model_copy(const pkm_model* m);
 PKM_API void pkm_model_destroy(pkm_model* m);
 
+/* The same, returning the status (PKM_ERR_ARGUMENT: unknown robot or set, the known ones
+ * named; PKM_ERR_PARAMETER: a parameter of the set is invalid) and the model in *out. */
+PKM_API int pkm_model_create_status(const char* robot, const char* param_set, pkm_model** out,
+                                    char* err, size_t errlen);
+
+/* ------------------------------------------------------------- robot facts */
+/* What the toolkit knows of each robot, from the robot itself: the FMUs, the Python
+ * package and the tests read these instead of restating them.  Strings stay valid for
+ * the life of the process; out-of-range indices give "" (or -1). */
+PKM_API int pkm_robot_count(void);
+PKM_API const char* pkm_robot_name(int i);                          /* "6pus", ...      */
+PKM_API int pkm_robot_param_set_count(const char* robot);          /* -1: unknown      */
+PKM_API const char* pkm_robot_param_set_name(const char* robot, int i); /* "default", ... */
 PKM_API const char* pkm_model_robot(const pkm_model* m);   /* "6pus", ...          */
+/* Pose coordinate i: name ("x", "rz", "theta") and unit ("m", "rad"). */
+PKM_API const char* pkm_model_pose_name(const pkm_model* m, int i);
+PKM_API const char* pkm_model_pose_unit(const pkm_model* m, int i);
+/* Actuated joints: unit of q ("m" sliders, "rad" revolute), of the effort ("N", "N m"),
+ * the noun messages use ("slider", "arm", "joint") and the drive parameters' prefix
+ * ("rail" -> "rail[i].coulomb"). */
+PKM_API const char* pkm_model_joint_unit(const pkm_model* m);
+PKM_API const char* pkm_model_effort_unit(const pkm_model* m);
+PKM_API const char* pkm_model_joint_noun(const pkm_model* m);
+PKM_API const char* pkm_model_joint_prefix(const pkm_model* m);
+/* Parameter indices of joint i's lower and upper limit (-1 where the robot has none). */
+PKM_API int pkm_model_joint_limits(const pkm_model* m, int i, int* lower_param, int* upper_param);
 PKM_API int pkm_model_ndof(const pkm_model* m);            /* actuators = pose dim */
 
 /* Named parameters (Modelica-style dotted names, e.g. "leg[1].L", "platform.m").

@@ -51,7 +51,14 @@ const char* pkm_status_name(int s) {
 
 pkm_model* pkm_model_create(const char* robot, const char* param_set, char* err, size_t errlen) {
   pkm_model* out = nullptr;
-  pkm::guard_err(err, errlen, [&] {
+  pkm_model_create_status(robot, param_set, &out, err, errlen);
+  return out;
+}
+
+int pkm_model_create_status(const char* robot, const char* param_set, pkm_model** result, char* err,
+                            size_t errlen) {
+  pkm_model* out = nullptr;
+  const int status = pkm::guard_err(err, errlen, [&] {
     pkm::require(robot != nullptr, PKM_ERR_ARGUMENT, "robot name is NULL");
     const pkm::Robot* r = pkm::find_robot(robot);
     pkm::require(r != nullptr, PKM_ERR_ARGUMENT,
@@ -66,7 +73,64 @@ pkm_model* pkm_model_create(const char* robot, const char* param_set, char* err,
     m->drive = pkm::drive::compile(*r, m->specs, m->values);
     out = m.release();
   });
-  return out;
+  if (result) *result = out;
+  else pkm_model_destroy(out);
+  return status;
+}
+
+int pkm_robot_count(void) { return pkm::robot_count(); }
+
+const char* pkm_robot_name(int i) {
+  const pkm::Robot* r = pkm::robot_at(i);
+  return r ? r->name() : "";
+}
+
+namespace {
+// Parameter-set names per robot, kept for the life of the process (the C strings the
+// API hands out point into it).
+const std::vector<std::string>* param_sets_of(const char* robot) {
+  static std::vector<std::vector<std::string>> sets;
+  static const bool filled = [] {
+    for (int i = 0; i < pkm::robot_count(); ++i) sets.push_back(pkm::robot_at(i)->param_sets());
+    return true;
+  }();
+  (void)filled;
+  if (!robot) return nullptr;
+  for (int i = 0; i < pkm::robot_count(); ++i)
+    if (std::string(robot) == pkm::robot_at(i)->name()) return &sets[i];
+  return nullptr;
+}
+}  // namespace
+
+int pkm_robot_param_set_count(const char* robot) {
+  const auto* s = param_sets_of(robot);
+  return s ? (int)s->size() : -1;
+}
+
+const char* pkm_robot_param_set_name(const char* robot, int i) {
+  const auto* s = param_sets_of(robot);
+  return s && i >= 0 && i < (int)s->size() ? (*s)[i].c_str() : "";
+}
+
+const char* pkm_model_pose_name(const pkm_model* m, int i) {
+  return m && i >= 0 && i < m->robot->ndof() ? m->robot->pose_name(i) : "";
+}
+const char* pkm_model_pose_unit(const pkm_model* m, int i) {
+  return m && i >= 0 && i < m->robot->ndof() ? m->robot->pose_unit(i) : "";
+}
+const char* pkm_model_joint_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "rad" : "m") : ""; }
+const char* pkm_model_effort_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "N m" : "N") : ""; }
+const char* pkm_model_joint_noun(const pkm_model* m) { return m ? m->robot->joint_noun() : ""; }
+const char* pkm_model_joint_prefix(const pkm_model* m) { return m ? m->robot->joint_prefix() : ""; }
+
+int pkm_model_joint_limits(const pkm_model* m, int i, int* lower, int* upper) {
+  if (!m || i < 0 || i >= m->robot->ndof()) return PKM_ERR_ARGUMENT;
+  for (int up = 0; up < 2; ++up) {
+    const std::string name = m->robot->joint_limit_param(i, up != 0);
+    const int idx = name.empty() ? -1 : pkm_param_index(m, name.c_str());
+    if (up ? upper != nullptr : lower != nullptr) *(up ? upper : lower) = idx;
+  }
+  return PKM_OK;
 }
 
 pkm_model* pkm_model_copy(const pkm_model* m) {

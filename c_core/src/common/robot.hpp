@@ -68,6 +68,18 @@ class Robot {
   virtual const char* joint_noun() const { return "joint"; }
   virtual bool joints_angular() const { return true; }
 
+  // --- facts the rest of the toolkit reads through pkm.h (nothing outside restates them)
+  // Names of the parameter sets param_specs accepts, "default" first.
+  virtual std::vector<std::string> param_sets() const { return {"default"}; }
+  // Name and unit of pose coordinate i (0-based, i < ndof()).
+  virtual const char* pose_name(int i) const = 0;
+  virtual const char* pose_unit(int i) const = 0;
+  // The parameter holding actuated joint i's lower (upper) limit, "" if there is none;
+  // the integrator stops there (pkm_sim) and the FMUs report it.
+  virtual std::string joint_limit_param(int, bool /*upper*/) const { return ""; }
+  // How limit and singularity messages name the chain of joint i ("leg 3", "joint 2").
+  virtual const char* limb_noun() const { return joint_noun(); }
+
   // --- kinematics (x[nd] pose, q[nd] joints; matrices row-major [nd,nd])
   virtual void ik(const RobotModel&, RobotData&, const double* x, double* q) const;
   virtual void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx,
@@ -101,6 +113,8 @@ class Robot {
 
 // The robots compiled into the core (robots/registry.cpp).  nullptr if unknown.
 const Robot* find_robot(const std::string& name);
+int robot_count();
+const Robot* robot_at(int i);  // nullptr if out of range
 std::string known_robots();
 
 [[noreturn]] void unsupported(const Robot& r, const char* what);

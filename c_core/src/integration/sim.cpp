@@ -212,44 +212,19 @@ void Sim::release() {
   model_ = nullptr;
 }
 
-// Limits are looked up by name so the integrator needs no robot-specific code: for
-// actuated joint i = 1..nd, "<prefix>[i].qmin" / ".q_min" (and max), else a limit shared
-// by all joints, "<prefix>.qmin" / ".q_min" (the Quattro's joint.q_min).
+// The limits are the robot's own (Robot::joint_limit_param, the same the FMUs and the
+// Python package read through pkm_model_joint_limits); a limit set to a huge value means
+// "no limit".
 void Sim::find_limits() {
-  static const char* prefixes[][2] = {{"rail", "leg"}, {"leg", "leg"}, {"arm", "arm"}, {"joint", "joint"}};
-  static const char* suffixes[2][2] = {{"qmin", "q_min"}, {"qmax", "q_max"}};
-  auto value_of = [&](const std::string& name, double& v, std::string& unit) {
-    const int idx = pkm_param_index(model_, name.c_str());
-    if (idx < 0) return false;
-    v = pkm_param_get(model_, idx);
-    unit = pkm_param_unit(model_, idx);
-    return true;
-  };
   for (int j = 0; j < nd_; ++j) {
+    int idx[2] = {-1, -1};
+    pkm_model_joint_limits(model_, j, &idx[0], &idx[1]);
     for (int upper = 0; upper < 2; ++upper) {
-      bool found = false;
-      double v = 0;
-      std::string unit;
-      for (const auto& p : prefixes)
-        for (const char* suf : suffixes[upper])
-          if (!found) {
-            const std::string name = std::string(p[0]) + "[" + std::to_string(j + 1) + "]." + suf;
-            if (value_of(name, v, unit)) {
-              found = true;
-              // A limit set to a huge value means "no limit".
-              if (std::isfinite(v) && std::fabs(v) < 1e100) limits_.push_back({j, upper != 0, v, name, unit, p[1]});
-            }
-          }
-      for (const auto& p : prefixes)
-        for (const char* suf : suffixes[upper])
-          if (!found) {
-            const std::string name = std::string(p[0]) + "." + suf;
-            if (value_of(name, v, unit)) {
-              found = true;
-              if (std::isfinite(v) && std::fabs(v) < 1e100)
-                limits_.push_back({j, upper != 0, v, name, unit, robot_->joint_noun()});
-            }
-          }
+      if (idx[upper] < 0) continue;
+      const double v = pkm_param_get(model_, idx[upper]);
+      if (std::isfinite(v) && std::fabs(v) < 1e100)
+        limits_.push_back({j, upper != 0, v, pkm_param_name(model_, idx[upper]), pkm_param_unit(model_, idx[upper]),
+                           robot_->limb_noun()});
     }
   }
 }

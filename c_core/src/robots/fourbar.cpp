@@ -86,6 +86,8 @@ Config assemble(const double* l, double theta) {
 struct Fourbar final : Robot {
   const char* name() const override { return "fourbar"; }
   int ndof() const override { return 1; }
+  const char* pose_name(int) const override { return "theta"; }  // the crank angle (pose = joint)
+  const char* pose_unit(int) const override { return "rad"; }
 
   std::vector<ParamSpec> param_specs(const std::string& set) const override {
     if (set != "default")

@@ -214,6 +214,13 @@ class Quattro final : public Robot {
  public:
   const char* name() const override { return "quattro"; }
   int ndof() const override { return N; }
+  std::vector<std::string> param_sets() const override { return {"default", "appendix_a"}; }
+  const char* pose_name(int i) const override {
+    static const char* n[] = {"x", "y", "z", "theta"};
+    return n[i];
+  }
+  const char* pose_unit(int i) const override { return i < 3 ? "m" : "rad"; }
+  std::string joint_limit_param(int, bool upper) const override { return upper ? "joint.q_max" : "joint.q_min"; }
 
   std::vector<ParamSpec> param_specs(const std::string& set) const override {
     const bool app = set == "appendix_a";

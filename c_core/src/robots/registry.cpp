@@ -15,6 +15,9 @@ const Robot* find_robot(const std::string& name) {
   return nullptr;
 }
 
+int robot_count() { return (int)(sizeof all_robots / sizeof all_robots[0]); }
+const Robot* robot_at(int i) { return i >= 0 && i < robot_count() ? all_robots[i] : nullptr; }
+
 std::string known_robots() {
   std::string s;
   for (const Robot* r : all_robots) {

@@ -162,6 +162,15 @@ class SixPus final : public Robot {
   const char* joint_prefix() const override { return "rail"; }
   const char* joint_noun() const override { return "slider"; }
   bool joints_angular() const override { return false; }
+  const char* limb_noun() const override { return "leg"; }
+  const char* pose_name(int i) const override {
+    static const char* n[] = {"x", "y", "z", "rx", "ry", "rz"};
+    return n[i];
+  }
+  const char* pose_unit(int i) const override { return i < 3 ? "m" : "rad"; }
+  std::string joint_limit_param(int i, bool upper) const override {
+    return "rail[" + std::to_string(i + 1) + (upper ? "].qmax" : "].qmin");
+  }
 
   void ik(const RobotModel&, RobotData&, const double* x, double* q) const override;
   void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx, double* Jq,
