@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
 #include <cstddef>
 #include <cstring>
 #include <new>
@@ -53,6 +54,13 @@ int guard_err(char* err, size_t errlen, F&& f) {
   int s = guard_into(msg, f);
   if (s != PKM_OK) write_err(err, errlen, msg);
   return s;
+}
+
+// A number as messages print it (precision significant digits, shortest form).
+inline std::string num(double v, int precision = 10) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+  return buf;
 }
 
 inline void require(bool ok, int status, const std::string& msg) {

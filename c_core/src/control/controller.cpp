@@ -19,13 +19,6 @@ namespace {
 
 constexpr int kMaxStates = 64;
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
-
 const char* kind_name(int kind) {
   switch (kind) {
     case PKM_CTRL_PD: return "pd";

@@ -64,13 +64,6 @@ constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
 constexpr int kMaxN = 12;
 
-std::string num(double v, int precision = 10) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
 // Cubic Hermite interpolant of a step at theta in [0, 1].
 void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
              double* y) {

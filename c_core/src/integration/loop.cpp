@@ -13,13 +13,6 @@ using namespace pkm;
 
 namespace {
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(6);
-  os << v;
-  return os.str();
-}
-
 void put(double* dst, size_t k, int nd, const double* src) {
   if (dst)
     for (int i = 0; i < nd; ++i) dst[k * nd + i] = src[i];
@@ -41,7 +34,7 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
             "closed loop: the reference (q and qd) is NULL");
     require(ref->n >= 1, PKM_ERR_ARGUMENT, "closed loop: the reference has no sample");
     require(std::isfinite(ref->t0) && std::isfinite(ref->dt) && ref->dt > 0, PKM_ERR_ARGUMENT,
-            "closed loop: t0 = " + num(ref->t0) + " s and dt = " + num(ref->dt) + " s must be finite, dt > 0");
+            "closed loop: t0 = " + num(ref->t0, 6) + " s and dt = " + num(ref->dt, 6) + " s must be finite, dt > 0");
     const int nd = sim.ndof();
     const pkm_model* m = sim.model();
     pkm_data* d = sim.data();
@@ -97,7 +90,7 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
   if (status != PKM_OK) {
     // The rows before the failing sample are the result; say where the loop stopped.
     if (n_done) *n_done = k;
-    sim.error = "closed loop stopped at sample " + std::to_string(k) + " (t = " + num(t_k) + " s): " + sim.error;
+    sim.error = "closed loop stopped at sample " + std::to_string(k) + " (t = " + num(t_k, 6) + " s): " + sim.error;
   }
   return status;
 }

@@ -38,13 +38,6 @@ namespace pkm {
 
 namespace {
 
-std::string num(double v, int precision = 10) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
 std::string flag_name(int flag) {
   char* s = CVodeGetReturnFlagName(flag);
   std::string out = s ? s : ("CVODE flag " + std::to_string(flag));
