@@ -253,12 +253,12 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined,
   if (!isfinite(startTime) || (stopTimeDefined && !(stopTime >= startTime)))
     return error(c, "fmi2SetupExperiment", "start time %g, stop time %g: need finite start <= stop", startTime,
                  stopTime);
-  if (toleranceDefined && !(tolerance > 0))
-    return error(c, "fmi2SetupExperiment", "tolerance %g must be > 0", tolerance);
+  if (toleranceDefined && !(tolerance > 0 && tolerance < 1))
+    return error(c, "fmi2SetupExperiment", "tolerance %g is no relative tolerance: it must be in (0, 1)", tolerance);
   c->start_time = startTime;
   c->stop_time = stopTime;
   c->stop_defined = stopTimeDefined != 0;
-  /* The importer's tolerance, when given, is the CVODE relative tolerance. */
+  /* The importer's tolerance, when given, is the integrator's relative tolerance. */
   plant_set_tolerance(c->plant, toleranceDefined ? tolerance : 0.0);
   plant_set_time(c->plant, startTime);
   return fmi2OK;

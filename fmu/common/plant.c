@@ -271,6 +271,10 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
       break;
     default: return fail(p, PKM_ERR_ARGUMENT, "variable %s is not a Real", v->name);
   }
+  /* The last line of defence: no value leaves the FMU as an infinity or a NaN with OK. */
+  if (s == PKM_OK && !isfinite(*value))
+    return fail(p, PKM_ERR_ARGUMENT, "%s is not finite (%g) at t = %.9g s: an input or a state is too large", v->name,
+                *value, p->t);
   return s;
 }
 
@@ -325,7 +329,7 @@ static int apply(fmu_plant* p) {
   if (p->cs && (changed || !p->sim || !same_options(&o, &p->opt_applied))) {
     pkm_sim_destroy(p->sim);
     p->sim = pkm_sim_create(p->m, &o, cerr, sizeof cerr);
-    if (!p->sim) return fail(p, PKM_ERR_INTEGRATION, "cannot create the CVODE simulator: %s", cerr);
+    if (!p->sim) return fail(p, PKM_ERR_INTEGRATION, "cannot create the integrator: %s", cerr);
   }
   p->opt_applied = o;
   return PKM_OK;
@@ -360,7 +364,7 @@ int plant_start(fmu_plant* p, double t0) {
   memcpy(p->xd, p->xd0, sizeof(double) * p->nd);
   if ((s = check_pose(p, "initial pose"))) return s;
   if (p->cs && (s = pkm_sim_reset(p->sim, t0, p->x, p->xd)))
-    return fail(p, s, "CVODE reset at t = %.9g s: %s", t0, pkm_sim_error(p->sim));
+    return fail(p, s, "start at t = %.9g s: %s", t0, pkm_sim_error(p->sim));
   p->started = 1;
   p->dirty = 0;
   return PKM_OK;
@@ -375,7 +379,7 @@ int plant_step(fmu_plant* p, double t_end) {
   int g = pkm_sim_get_state(p->sim, &p->t, p->x, p->xd);
   p->valid = 0;
   if (s) return fail(p, s, "%s", pkm_sim_error(p->sim));
-  if (g) return fail(p, g, "reading the CVODE state: %s", pkm_sim_error(p->sim));
+  if (g) return fail(p, g, "reading the integrator state: %s", pkm_sim_error(p->sim));
   return PKM_OK;
 }
 
@@ -393,6 +397,10 @@ int plant_set_states(fmu_plant* p, const double* s, size_t n) {
     if (!isfinite(s[i]))
       return fail(p, PKM_ERR_ARGUMENT, "continuous state %d (%s) = %g at t = %.9g s is not finite", i,
                   i < p->nd ? var_name(p, FMU_CH_POSE, i) : var_name(p, FMU_CH_TWIST, i - p->nd), s[i], p->t);
+  /* A state the robot cannot be in (an energy that overflows) is refused, as a start is. */
+  double kinetic = 0, potential = 0;
+  if (pkm_energy(p->m, p->d, s, s + p->nd, &kinetic, &potential) == PKM_ERR_ARGUMENT)
+    return fail(p, PKM_ERR_ARGUMENT, "continuous states at t = %.9g s: %s", p->t, pkm_data_error(p->d));
   memcpy(p->x, s, sizeof(double) * p->nd);
   memcpy(p->xd, s + p->nd, sizeof(double) * p->nd);
   p->valid = 0;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <vector>
 
 #include "common/guard.hpp"
 
@@ -125,8 +126,50 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
   }
 }
 
+namespace {
+
+// The largest magnitude of n values, for messages that say which input is too large.
+double max_abs(const double* v, int n) {
+  double a = 0;
+  for (int i = 0; i < n; ++i) a = std::fmax(a, std::fabs(v[i]));
+  return a;
+}
+
+// Finite inputs can still overflow inside the dynamics (an effort of 1e308 N): the result
+// is then refused naming the inputs' sizes, never passed on as an infinity or a NaN.
+void require_finite_result(const double* out, int n, const char* what, const double* xd, const double* tau,
+                           int nd) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(out[i]))
+      throw Error(PKM_ERR_ARGUMENT, std::string(what) + " is not finite for finite inputs: an input is too large "
+                                                         "(largest |xd| = " + num(max_abs(xd, nd), 3) +
+                                        (tau ? ", largest |tau| = " + num(max_abs(tau, nd), 3) : std::string()) +
+                                        ")");
+}
+
+void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                         double* xdd);
+
+}  // namespace
+
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                             double* xdd) {
+  try {
+    forward_dynamics_of(m, d, x, xd, tau, xdd);
+  } catch (const Error& e) {
+    // A robot may find an overflowing load singular: say what is too large instead.
+    const int n = d->ndof;
+    if (e.status == PKM_ERR_SINGULAR && (max_abs(tau, n) > 1e150 || max_abs(xd, n) > 1e75))
+      require_finite_result(std::vector<double>(n, NAN).data(), 1, "the acceleration", xd, tau, n);
+    throw;
+  }
+  require_finite_result(xdd, d->ndof, "the acceleration", xd, tau, d->ndof);
+}
+
+namespace {
+
+void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                         double* xdd) {
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
   if (!dp.any_friction && !dp.any_rotor) {
@@ -170,6 +213,8 @@ void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
   Eigen::Map<Vec>(xdd, n) = llt.solve(M * xdd0);
 }
 
+}  // namespace
+
 void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M) {
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
@@ -188,6 +233,8 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
   m->robot->energy(rm, *d->rd, x, xd, kinetic, potential);
+  const double both[2] = {*kinetic, *potential};
+  require_finite_result(both, 2, "the energy", xd, nullptr, d->ndof);
   if (!dp.any_rotor) return;
   const int n = d->ndof;
   double J[36];
@@ -197,6 +244,7 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
     for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
     *kinetic += 0.5 * dp.rotor[i] * qd * qd;
   }
+  require_finite_result(kinetic, 1, "the kinetic energy", xd, nullptr, n);
 }
 
 void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied) {

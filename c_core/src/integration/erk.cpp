@@ -211,7 +211,9 @@ void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, cons
 }
 
 void Sim::erk_segment(double t_end) {
-  if (t_end - t_ < 4 * DBL_EPSILON * std::max(std::fabs(t_), std::fabs(t_end))) {
+  // An interval below ~1e-15 s (relative to max(1 s, t)) moves only the clock: the state
+  // would change by less than its own rounding (a denormal step is a zero step).
+  if (t_end - t_ < 4 * DBL_EPSILON * std::max({1.0, std::fabs(t_), std::fabs(t_end)})) {
     t_ = t_end;
     return;
   }

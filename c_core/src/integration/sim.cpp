@@ -411,6 +411,13 @@ void Sim::reset(double t0, const double* x, const double* xd) {
       throw Error(root_status(*this, lim), os.str());
     }
   }
+  // A start whose energy overflows (a rate of 1e200 m/s) is no state of a robot.
+  double kinetic = 0, potential = 0;
+  try {
+    total_energy(model_, data_, y.data(), y.data() + nd_, &kinetic, &potential);
+  } catch (const Error& e) {
+    throw Error(e.status, std::string("reset: ") + e.what());
+  }
   t_ = t0;
   y_.swap(y);
   h_next_ = 0.0;  // a new start: the explicit method chooses its first step afresh
@@ -635,7 +642,7 @@ double Sim::measure_at(const double* y) {
 void Sim::integrate(double t_end) {
   // An interval CVODE cannot resolve (tout too close to t0) only moves the clock: the
   // state changes by |xd| * dt ~ 1e-16 relative, below any tolerance.
-  if (t_end - t_ < 4 * DBL_EPSILON * std::max(std::fabs(t_), std::fabs(t_end))) {
+  if (t_end - t_ < 4 * DBL_EPSILON * std::max({1.0, std::fabs(t_), std::fabs(t_end)})) {
     t_ = t_end;
     return;
   }
