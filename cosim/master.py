@@ -526,7 +526,7 @@ def _compiled_path(plant, controller, drive, h):
     from .closed_loop import compile_controller
 
     if not isinstance(plant, CorePlant):
-        return None, f"the plant is {type(plant).__name__} (the compiled loop integrates the core plant)"
+        return None, f"the plant ({type(plant).__name__}) is not the core plant, the only one that runs compiled"
     if drive is not None and not (isinstance(drive, CoreDrive) and drive.model.params() == plant.model.params()):
         return None, "the drive's model is not the plant's"
     return compile_controller(controller, model=plant.model, dt=h)

@@ -24,8 +24,10 @@ def print_summary(out, file=None) -> None:
     c = m["controller"]
     print(f"scenario {m['scenario']}: robot {m['robot']}, plant {m['plant']['kind']}, controller "
           f"{c['type']} (kp {_g(c['kp'])} {c['kp_unit']}, kd {_g(c['kd'])} {c['kd_unit']})", file=f)
-    print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall",
-          file=f)
+    loop = ("compiled loop in the core" if res.loop == "compiled"
+            else f"Python loop: {res.loop_note}" if res.loop_note else "Python loop")
+    print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall"
+          f" ({loop})", file=f)
     if "steady_state" in m:
         ss = m["steady_state"]
         for k, v in m["step_info"]["pose"].items():
