@@ -18,8 +18,12 @@ def command(name, help):
 
 
 def _params_configure(p):
-    p.add_argument("robot", choices=["6pus", "quattro", "fourbar"])
-    p.add_argument("--set", dest="param_set", default=None, help="named parameter set (default: 'default')")
+    from .core import robot_facts, robots
+
+    names = robots()
+    sets = "; ".join(f"{r}: {', '.join(robot_facts(r).param_sets)}" for r in names)
+    p.add_argument("robot", choices=names, help="robot compiled into the core")
+    p.add_argument("--set", dest="param_set", default=None, help=f"named parameter set ({sets})")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
