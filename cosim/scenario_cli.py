@@ -87,3 +87,21 @@ def cmd_run(args):
 
 
 cmd_run.configure = _configure
+
+
+@command("export-ssp", "write a step scenario as an SSP archive (plant FMU + controller FMU) for other FMI tools")
+def cmd_export_ssp(args):
+    from .ssp import export_scenario_ssp
+
+    path = export_scenario_ssp(args.scenario, args.out)
+    print(f"wrote {path}: plant and controller FMUs, their connections and the set-point "
+          f"(runs in any SSP 1.0 engine, e.g. OSP libcosim; docs/fmu.md)")
+    return 0
+
+
+def _export_configure(p):
+    p.add_argument("scenario", help="scenario file (TOML) with a step reference")
+    p.add_argument("--out", required=True, help="the .ssp archive to write")
+
+
+cmd_export_ssp.configure = _export_configure

@@ -137,7 +137,9 @@ struct Table {
   std::map<std::string, std::string> head;
   std::vector<Var> vars;
   std::vector<int> qmin, qmax;  // core parameter numbers per joint (@joint-limits), or empty
-  int nindicators() const { return 1 + (qmin.empty() ? 0 : 2 * (int)qmin.size()); }
+  int nx = 0;                   // controller FMUs: states of the LTI law (@lti-states)
+  bool controller() const { return head.count("kind") && head.at("kind") == "controller"; }
+  int nindicators() const { return controller() ? 0 : 1 + (qmin.empty() ? 0 : 2 * (int)qmin.size()); }
 };
 
 // Channel name -> (is Integer); the plant's enum is fmu_channel in fmu_plant.h.
@@ -160,6 +162,27 @@ const std::map<std::string, std::pair<std::string, bool>>& channels() {
       {"solver.maxStep", {"FMU_CH_SOLVER_MAX_STEP", false}},
       {"solver.maxSteps", {"FMU_CH_SOLVER_MAX_STEPS", true}},
       {"solver.singMin", {"FMU_CH_SOLVER_SING_MIN", false}},
+      // controller FMUs (@kind controller): readings and reference in, effort out, the law
+      {"ctrl.q", {"FMU_CH_CTRL_Q", false}},
+      {"ctrl.qd", {"FMU_CH_CTRL_QD", false}},
+      {"ctrl.qref", {"FMU_CH_CTRL_QREF", false}},
+      {"ctrl.qdref", {"FMU_CH_CTRL_QDREF", false}},
+      {"ctrl.qddref", {"FMU_CH_CTRL_QDDREF", false}},
+      {"ctrl.tau", {"FMU_CH_CTRL_TAU", false}},
+      {"ctrl.kind", {"FMU_CH_CTRL_KIND", true}},
+      {"ctrl.dt", {"FMU_CH_CTRL_DT", false}},
+      {"ctrl.kp", {"FMU_CH_CTRL_KP", false}},
+      {"ctrl.kd", {"FMU_CH_CTRL_KD", false}},
+      {"ctrl.ki", {"FMU_CH_CTRL_KI", false}},
+      {"ctrl.tf", {"FMU_CH_CTRL_TF", false}},
+      {"ctrl.saturation", {"FMU_CH_CTRL_SAT", false}},
+      {"ctrl.gravityAtReference", {"FMU_CH_CTRL_GRAVITY_REF", true}},
+      {"ctrl.gravityFeedforward", {"FMU_CH_CTRL_GRAVITY_FF", true}},
+      {"ctrl.nx", {"FMU_CH_CTRL_NX", true}},
+      {"ctrl.A", {"FMU_CH_CTRL_A", false}},
+      {"ctrl.B", {"FMU_CH_CTRL_B", false}},
+      {"ctrl.C", {"FMU_CH_CTRL_C", false}},
+      {"ctrl.D", {"FMU_CH_CTRL_D", false}},
   };
   return c;
 }
@@ -200,6 +223,7 @@ Table read_table(const std::string& path, pkm_model*& model) {
         continue;
       }
       t.head[key] = val;
+      if (key == "lti-states") t.nx = std::stoi(val);
       if (key == "robot") {
         char err[1024] = "";
         const char* set = t.head.count("paramset") ? t.head["paramset"].c_str() : nullptr;
@@ -228,18 +252,35 @@ Table read_table(const std::string& path, pkm_model*& model) {
     }
     auto ci = channels().find(cname);
     if (ci == channels().end() || cname == "param") throw Fail(where() + "unknown channel '" + chan + "'");
-    bool family = name.find("{i}") != std::string::npos;
-    if (family && cindex >= 0) throw Fail(where() + "a {i} family takes the channel without an index");
+    // A family names its entries with placeholders: {i} and {j} run over the joints, {r}
+    // and {c} over the LTI states; the channel index is the entries' row-major position.
+    std::vector<std::pair<std::string, int>> ph;
+    for (size_t p = name.find('{'); p != std::string::npos; p = name.find('{', p + 1)) {
+      const std::string tok = name.substr(p, 3);
+      if (tok == "{i}" || tok == "{j}") ph.push_back({tok, nd});
+      else if (tok == "{r}" || tok == "{c}") ph.push_back({tok, t.nx});
+      else throw Fail(where() + "unknown placeholder in '" + name + "' (use {i}, {j}, {r}, {c})");
+    }
+    bool family = !ph.empty();
+    if (family && cindex >= 0) throw Fail(where() + "a family takes the channel without an index");
     if (!family && cindex < 0) cindex = 0;  // single-valued channels (solver.*)
-    int n = family ? nd : 1;
+    int n = 1;
+    for (const auto& q : ph) n *= q.second;
     for (int k = 0; k < n; ++k) {
       Var v;
       v.causality = caus;
       v.channel = cname;
       v.index = family ? k : cindex;
       v.integer = ci->second.second;
-      v.name = replace_all(name, "{i}", std::to_string(k + 1));
-      v.description = replace_all(f[4], "{i}", std::to_string(k + 1));
+      v.name = name;
+      v.description = f[4];
+      int rest = k;
+      for (size_t a = ph.size(); a-- > 0;) {
+        const int pos = rest % ph[a].second;
+        rest /= ph[a].second;
+        v.name = replace_all(v.name, ph[a].first, std::to_string(pos + 1));
+        v.description = replace_all(v.description, ph[a].first, std::to_string(pos + 1));
+      }
       v.unit = f[3];
       if (caus == "input") {
         v.has_start = true;
@@ -254,6 +295,9 @@ Table read_table(const std::string& path, pkm_model*& model) {
         else if (cname == "solver.maxStep") v.start = so.max_step;
         else if (cname == "solver.maxSteps") v.start = (double)so.max_steps;
         else if (cname == "solver.singMin") v.start = so.sing_min;
+        else if (cname == "ctrl.dt") v.start = 1e-3;
+        else if (cname == "ctrl.nx") v.start = t.nx;
+        else if (cname.rfind("ctrl.", 0) == 0) v.start = 0.0;  // gains, matrices, flags: set by the user
         else throw Fail(where() + "channel '" + cname + "' cannot be a parameter");
       }
       t.vars.push_back(v);
@@ -285,6 +329,21 @@ void check(const Table& t, int nd, const std::string& path) {
     if (!names.insert(v.name).second) throw Fail(path + ": variable name '" + v.name + "' used twice");
     if (++seen[{v.channel, v.index}] > 1 && v.channel != "param")
       throw Fail(path + ": channel " + v.channel + "[" + std::to_string(v.index) + "] used twice");
+  }
+  if (t.controller()) {
+    for (const char* ch : {"ctrl.q", "ctrl.qd", "ctrl.qref", "ctrl.qdref", "ctrl.qddref", "ctrl.tau", "ctrl.saturation"})
+      for (int k = 0; k < nd; ++k)
+        if (!seen.count({ch, k}))
+          throw Fail(path + ": channel " + std::string(ch) + "[" + std::to_string(k) + "] is missing");
+    for (const auto& v : t.vars) {
+      const bool in = v.channel == "ctrl.q" || v.channel == "ctrl.qd" || v.channel == "ctrl.qref" ||
+                      v.channel == "ctrl.qdref" || v.channel == "ctrl.qddref";
+      if (in != (v.causality == "input")) throw Fail(path + ": " + v.name + ": inputs are the readings and the reference");
+      if ((v.channel == "ctrl.tau") != (v.causality == "output")) throw Fail(path + ": " + v.name + ": the output is tau");
+      if (v.channel.rfind("ctrl.", 0) != 0 && v.channel != "param")
+        throw Fail(path + ": " + v.name + ": a controller FMU has no channel " + v.channel);
+    }
+    return;
   }
   for (const char* ch : {"tau", "pose", "twist", "accel", "pose0", "twist0"})
     for (int k = 0; k < nd; ++k)
@@ -338,8 +397,9 @@ std::string model_description(const Table& t, int nd, const std::string& guid) {
       " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\""
       " canNotUseMemoryManagementFunctions=\"true\" canBeInstantiatedOnlyOncePerProcess=\"false\""
       " needsExecutionTool=\"false\"";
-  o << "  <ModelExchange modelIdentifier=\"" << xml(id) << "\"" << common
-    << " completedIntegratorStepNotNeeded=\"false\"/>\n";
+  if (!t.controller())
+    o << "  <ModelExchange modelIdentifier=\"" << xml(id) << "\"" << common
+      << " completedIntegratorStepNotNeeded=\"false\"/>\n";
   o << "  <CoSimulation modelIdentifier=\"" << xml(id) << "\"" << common
     << " canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
        " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\"/>\n";
@@ -396,11 +456,15 @@ std::string model_description(const Table& t, int nd, const std::string& guid) {
     if (t.vars[k].causality == "output") outs.push_back(k + 1);
   for (size_t k : outs) o << "      <Unknown index=\"" << k << "\"/>\n";
   // The state vector is (pose, twist): its derivatives are (twist, accel) in that order.
-  o << "    </Outputs>\n    <Derivatives>\n";
-  for (const char* ch : {"twist", "accel"})
-    for (int k = 0; k < nd; ++k) o << "      <Unknown index=\"" << pos.at({ch, k}) << "\"/>\n";
+  o << "    </Outputs>\n";
+  if (!t.controller()) {
+    o << "    <Derivatives>\n";
+    for (const char* ch : {"twist", "accel"})
+      for (int k = 0; k < nd; ++k) o << "      <Unknown index=\"" << pos.at({ch, k}) << "\"/>\n";
+    o << "    </Derivatives>\n";
+  }
   // Every output is calculated (states from x0/xd0, derivatives included).
-  o << "    </Derivatives>\n    <InitialUnknowns>\n";
+  o << "    <InitialUnknowns>\n";
   for (size_t k : outs) o << "      <Unknown index=\"" << k << "\"/>\n";
   o << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
   return o.str();
@@ -427,6 +491,7 @@ std::string vars_header(const Table& t, int nd, int np, const std::string& guid,
     << "#define FMU_ROBOT " << cstr(t.head.at("robot")) << "\n"
     << "#define FMU_PARAM_SET " << cstr(t.head.count("paramset") ? t.head.at("paramset") : "default") << "\n"
     << "#define FMU_NDOF " << nd << "\n#define FMU_NPARAM " << np << "\n#define FMU_NVARS " << t.vars.size()
+    << "\n#define FMU_LTI_STATES " << t.nx
     << "\n\n/* Value references by name ([i] and '.' become '_'). */\nenum fmu_vr {\n";
   std::set<std::string> ids;
   for (size_t k = 0; k < t.vars.size(); ++k) {

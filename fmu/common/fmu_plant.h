@@ -53,6 +53,27 @@ typedef enum fmu_channel {
   FMU_CH_SOLVER_MAX_STEP,
   FMU_CH_SOLVER_MAX_STEPS, /* Integer */
   FMU_CH_SOLVER_SING_MIN,
+  /* controller FMUs (fmu/common/controller.c, pkm.h "control"): */
+  FMU_CH_CTRL_Q,         /* joint reading q[index], input                                */
+  FMU_CH_CTRL_QD,        /* joint rate reading qd[index], input                          */
+  FMU_CH_CTRL_QREF,      /* reference qref[index], input                                 */
+  FMU_CH_CTRL_QDREF,     /* reference rate, input                                        */
+  FMU_CH_CTRL_QDDREF,    /* reference acceleration, input                                */
+  FMU_CH_CTRL_TAU,       /* effort tau[index], output                                    */
+  FMU_CH_CTRL_KIND,      /* Integer: pkm_ctrl_kind                                       */
+  FMU_CH_CTRL_DT,        /* sample period [s]                                            */
+  FMU_CH_CTRL_KP,        /* kp[i,j], index i nd + j                                      */
+  FMU_CH_CTRL_KD,
+  FMU_CH_CTRL_KI,
+  FMU_CH_CTRL_TF,        /* derivative filter time constant [s]                          */
+  FMU_CH_CTRL_SAT,       /* saturation[index] (0: none)                                  */
+  FMU_CH_CTRL_GRAVITY_REF, /* Integer                                                    */
+  FMU_CH_CTRL_GRAVITY_FF,  /* Integer                                                    */
+  FMU_CH_CTRL_NX,        /* Integer: LTI states in use (<= the FMU's lti_states)         */
+  FMU_CH_CTRL_A,         /* A[r,c], index r lti_states + c                               */
+  FMU_CH_CTRL_B,         /* B[r,j], index r nd + j                                       */
+  FMU_CH_CTRL_C,         /* C[i,c], index i lti_states + c                               */
+  FMU_CH_CTRL_D,         /* D[i,j], index i nd + j                                       */
   FMU_CH_COUNT
 } fmu_channel;
 
@@ -81,6 +102,7 @@ typedef struct fmu_model_desc {
   const int* qmin_param;
   const int* qmax_param;
   int nindicators;        /* 1 (singularity margin) + 2 ndof if limits are given          */
+  int lti_states;         /* controller FMUs: room for LTI states (0 for plants)           */
 } fmu_model_desc;
 
 /* Defined by the model folder (fmu/<robot>/model.c). */
