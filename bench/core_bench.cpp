@@ -19,17 +19,14 @@
 #include <string>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "pkm/pkm.h"
 
 namespace {
 
-constexpr int N = 6;
-constexpr double kPi = 3.14159265358979323846;
-
-double now() {
-  using namespace std::chrono;
-  return duration<double>(steady_clock::now().time_since_epoch()).count();
-}
+using bench::kPi;
+using bench::N;
+using bench::now;
 
 struct Row {
   std::string key, label, unit;
@@ -51,10 +48,7 @@ bool pass(const Row& r) {
   return r.higher_is_better ? r.value >= r.target : r.value <= r.target;
 }
 
-[[noreturn]] void die(const std::string& what) {
-  std::fprintf(stderr, "core_bench: %s\n", what.c_str());
-  std::exit(2);
-}
+[[noreturn]] void die(const std::string& what) { bench::die("core_bench", what); }
 
 // Poses around home within the workspace SPEC 3.1 asks for (x, y +-20 mm, z 70..90 mm,
 // rotations +-3 deg), all reachable in the default layout.

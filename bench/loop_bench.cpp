@@ -19,22 +19,16 @@
 #include <string>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "pkm/pkm.h"
 
 namespace {
 
-constexpr int N = 6;
-constexpr double kPi = 3.14159265358979323846;
+using bench::kPi;
+using bench::N;
+using bench::now;
 
-double now() {
-  using namespace std::chrono;
-  return duration<double>(steady_clock::now().time_since_epoch()).count();
-}
-
-[[noreturn]] void die(const std::string& what) {
-  std::fprintf(stderr, "loop_bench: %s\n", what.c_str());
-  std::exit(2);
-}
+[[noreturn]] void die(const std::string& what) { bench::die("loop_bench", what); }
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
