@@ -310,10 +310,9 @@ def heldout_fit(eng, sel) -> dict:
 
 
 def _unit(pipe, i):
-    ang = pipe.model.robot != "6pus"
-    if i < pipe.nd:
-        return "N m" if ang else "N"
-    return "rad" if ang else "m"
+    # the core's units of the robot's joints and efforts (RobotFacts), not a robot-name test
+    facts = pipe.model.facts
+    return facts.effort_unit if i < pipe.nd else facts.joint_unit
 
 
 def _units(mdl):

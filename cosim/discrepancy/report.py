@@ -182,7 +182,7 @@ def _fig_residuals(d, eng, sel, path):
     for c, ax in enumerate(axes[:, 0]):
         name = pipe.channels[c]
         s = sel.sigma[c]
-        scale = 1e3 if c >= pipe.nd and pipe.model.robot == "6pus" else 1.0
+        scale = 1e3 if c >= pipe.nd and pipe.model.joint_unit == "m" else 1.0  # readings of sliders in mm
         ax.plot(t, R0[:, c] * scale, color="0.6", lw=0.8, label="nominal model")
         if sel.theta:
             ax.plot(t, Rf[:, c] * scale, color="C0", lw=0.8, label="fitted model")

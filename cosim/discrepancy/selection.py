@@ -72,11 +72,12 @@ class Scales:
                    np.sqrt(np.mean(pipe.qd_s[tr] ** 2, axis=0)) + 1e-12,
                    np.sqrt(np.mean(pipe.qdd_s[tr] ** 2, axis=0)) + 1e-12,
                    np.std(pipe.q[tr], axis=0) + 1e-12,
-                   pipe.model.robot != "6pus")
+                   pipe.model.facts.angular_joints)
 
 
-#: a typical joint speed of each robot [m/s or rad/s] (sizes a 'small' viscous friction)
-TYPICAL_RATE = {"6pus": 0.05, "quattro": 1.0}
+#: a typical joint speed [m/s for sliders, rad/s for revolute joints] (sizes a 'small'
+#: viscous friction), by the kind of the robot's actuated joints (RobotFacts.joint_unit)
+TYPICAL_RATE = {"m": 0.05, "rad": 1.0}
 
 
 def _joint_mass(model):
@@ -95,7 +96,7 @@ def reference_size(group: Group, sc: Scales, model) -> float:
     if k in ("coulomb", "stribeck"):
         return 0.02 * sc.effort[i]
     if k == "viscous":
-        return 0.02 * sc.effort[i] / TYPICAL_RATE.get(model.robot, 0.1)
+        return 0.02 * sc.effort[i] / TYPICAL_RATE[model.joint_unit]
     if k == "rotor_inertia":
         return 0.05 * float(_joint_mass(model)[i])
     if k in ("payload", "platform_mass"):
