@@ -664,6 +664,28 @@ TEST(SimDrive, SaturationClipsTheCommand) {
   EXPECT_TRUE(same_bits(state_of(a.get()), state_of(b.get())));
 }
 
+// The drive's dead zone: commands within +-u0 deliver nothing, larger ones lose u0, then
+// the saturation clips what is delivered; the sim integrates the delivered effort.
+TEST(SimDrive, DeadZoneRemovesTheBandThenSaturationClips) {
+  pkm_test::Params p;
+  for (int i = 1; i <= N; ++i) {
+    p.push_back({"rail[" + std::to_string(i) + "].dead_zone", 0.5});
+    p.push_back({"rail[" + std::to_string(i) + "].effort_max", 2.0});
+  }
+  ModelPtr dz = make_model(p), plain = make_model();
+  DataPtr d = make_data(dz.get());
+  const double cmd[N] = {0.3, -0.5, 0.8, -1.7, 4.0, -2.49}, want[N] = {0.0, 0.0, 0.3, -1.2, 2.0, -1.99};
+  double got[N];
+  ASSERT_EQ(pkm_actuator_effort(dz.get(), d.get(), cmd, got), PKM_OK);
+  for (int i = 0; i < N; ++i) EXPECT_NEAR(got[i], want[i], 1e-15) << "joint " << i + 1;
+  SimPtr a = make_sim(dz.get(), defaults()), b = make_sim(plain.get(), defaults());
+  ASSERT_EQ(pkm_sim_set_input(a.get(), cmd), PKM_OK);
+  ASSERT_EQ(pkm_sim_set_input(b.get(), got), PKM_OK);
+  ASSERT_EQ(pkm_sim_advance(a.get(), 0.02), PKM_OK) << pkm_sim_error(a.get());
+  ASSERT_EQ(pkm_sim_advance(b.get(), 0.02), PKM_OK) << pkm_sim_error(b.get());
+  EXPECT_TRUE(same_bits(state_of(a.get()), state_of(b.get())));
+}
+
 TEST(SimDrive, ActuatorDelayShiftsTheCommand) {
   const double delay = 0.01;
   ModelPtr late = make_model({{"actuator.delay", delay}}), now = make_model();

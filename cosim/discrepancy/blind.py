@@ -34,7 +34,7 @@ CONFIG = REPO / "scenarios" / "blind" / "config.toml"
 
 #: effect types the generator can hide, per robot (those with magnitudes in the config)
 TYPES = ["coulomb", "viscous", "stribeck", "rotor_inertia", "payload", "platform_mass", "platform_inertia",
-         "gravity_tilt", "actuator_delay", "sensor_delay", "saturation", "encoder_offset", "backlash",
+         "gravity_tilt", "actuator_delay", "sensor_delay", "saturation", "dead_zone", "encoder_offset", "backlash",
          "compliance", "geometry"]
 
 
@@ -102,7 +102,7 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
             return list(range(1, nd + 1))
         return [int(rng.integers(1, nd + 1))]
 
-    if kind in ("coulomb", "viscous", "rotor_inertia", "backlash", "compliance"):
+    if kind in ("coulomb", "viscous", "rotor_inertia", "backlash", "compliance", "dead_zone"):
         js = joints()
         p = {f"{pre}[{j}].{kind}": _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
@@ -298,7 +298,7 @@ def _param_error(h: dict, values: dict) -> float:
     est = np.array([values.get(n, h["nominal"].get(n, 0.0)) - h["nominal"].get(n, 0.0) for n in names])
     if h["type"] == "stribeck":  # amplitude only; the velocity is reported apart
         true, est = true[:1], est[:1]
-    if h["type"] == "saturation":
+    if h["type"] in ("saturation", "dead_zone"):
         true = np.array([h["params"][n] for n in names])
         est = np.array([values.get(n, 0.0) for n in names])
     if h["type"] == "gravity_tilt":

@@ -24,7 +24,8 @@ Kinds of regressor:
 * ``geometry``: central differences of the core's IK (and of the dynamics at the
   moved pose), identifiable subspace by SVD;
 * ``delay``: a profile over the delay (the recorded signals shifted in time);
-* ``saturation``: a profile over the effort limit (the core's ``pkm_actuator_effort``).
+* ``saturation``: a profile over an actuator level, the effort limit or the dead-zone
+  width (both through the core's ``pkm_actuator_effort``).
 """
 from __future__ import annotations
 
@@ -145,6 +146,11 @@ LIBRARY = [
            ("coulomb",),
            "core/FMU parameter {j}[i].effort_max (|tau| clipped)",
            "tau_cmd - clip(tau_cmd, +-L) where the command exceeds L"),
+    Effect("dead_zone", "drive dead zone", "effort", "joint", ("{j}[{i}].dead_zone",), "saturation", ">=0",
+           "commanded efforts of the joint on both sides of zero, and near it",
+           ("coulomb", "payload", "saturation"),
+           "core/FMU parameter {j}[i].dead_zone (the drive delivers nothing within +-u0 and u - u0 sgn(u) beyond)",
+           "u0 sgn(tau_cmd) where |tau_cmd| > u0, tau_cmd within the band"),
     Effect("encoder_offset", "encoder offset", "kinematic", "joint", ("{j}[{i}].encoder_offset",), "linear", "any",
            "tracker pose columns",
            ("geometry",),
@@ -182,6 +188,12 @@ SEPARATING_MOTION = {
                                         "well above it)",
     frozenset(("coulomb", "viscous")): "constant-velocity phases at two or more different speeds",
     frozenset(("coulomb", "saturation")): "moves whose commanded effort stays well below the actuator limit",
+    frozenset(("coulomb", "dead_zone")): "moves where the command changes sign while the joint keeps moving the same "
+                                         "way (friction follows the velocity, a dead zone the command)",
+    frozenset(("payload", "dead_zone")): "accelerations of the platform with the efforts far from zero (a payload "
+                                         "scales with the motion, a dead zone is a constant band)",
+    frozenset(("saturation", "dead_zone")): "efforts near zero and near the limit (a dead zone acts at small commands, "
+                                            "a saturation at large ones)",
     frozenset(("coulomb", "backlash")): "a tracker (pose columns) with velocity reversals: backlash shows in the "
                                         "joint readings, friction in the effort",
     frozenset(("stribeck", "backlash")): "a tracker (pose columns) with slow velocity reversals",

@@ -56,7 +56,7 @@ class DiagnosisError(ValueError):
 
 
 #: parameters of the actuator (applied to the recorded command) and of the sensors
-ACTUATOR_KEYS = (".effort_max", "actuator.delay")
+ACTUATOR_KEYS = (".effort_max", ".dead_zone", "actuator.delay")
 SENSOR_KEYS = (".encoder_offset", ".backlash", ".compliance", "sensor.delay")
 
 
@@ -344,7 +344,7 @@ class Pipeline:
             raise DiagnosisError(f"a delay of {max(d_a, d_s) * self.dt * 1e3:.3g} ms is beyond the "
                                  f"{(self.max_shift - 2) * self.dt * 1e3:.3g} ms the pipeline was built for")
         dyn = tuple(sorted((k, v) for k, v in params.items() if not _is(k, ACTUATOR_KEYS + SENSOR_KEYS)))
-        act = tuple(sorted((k, v) for k, v in params.items() if k.endswith(".effort_max")))
+        act = tuple(sorted((k, v) for k, v in params.items() if k.endswith((".effort_max", ".dead_zone"))))
         sens = tuple(sorted((k, v) for k, v in params.items() if _is(k, SENSOR_KEYS) and k != "sensor.delay"))
         geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
 

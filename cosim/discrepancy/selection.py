@@ -39,7 +39,7 @@ from .effects import Group
 from .residuals import DiagnosisError
 
 #: effects whose core parameter acts on its own joint's channels only
-LOCAL = {"coulomb", "viscous", "stribeck", "rotor_inertia", "saturation", "encoder_offset", "backlash",
+LOCAL = {"coulomb", "viscous", "stribeck", "rotor_inertia", "saturation", "dead_zone", "encoder_offset", "backlash",
          "compliance"}
 #: effects whose Jacobian is taken as the regressor columns at the nominal model: the
 #: residual is linear in them, or nearly (geometry: errors of 1e-3 of a length change the
@@ -109,6 +109,8 @@ def reference_size(group: Group, sc: Scales, model) -> float:
         return 2e-3
     if k == "saturation":
         return 0.9 * sc.effort[i]
+    if k == "dead_zone":
+        return 0.02 * sc.effort[i]
     if k in ("encoder_offset", "backlash"):
         return qref
     if k == "compliance":
@@ -249,7 +251,7 @@ class Engine:
             return 0.1
         if k == "geometry":
             return 1e-4 * max(abs(val), 1e-3)
-        if k == "saturation":
+        if k in ("saturation", "dead_zone"):
             return 0.01 * sc.effort[i]
         return 0.05 * abs(val) if val != 0 else 1e-3
 
@@ -366,10 +368,18 @@ class Engine:
                 if self.pipe.tau_ref_s is not None:
                     h = 0.25e-3
                     self._instrument_cols[g.label] = self._delay_change(p, self.nominal[p] + h, {}, R0) / h
-            elif key == "saturation":
-                tmax = np.abs(self.pipe.tau_c).max(axis=0)
+            elif key in ("saturation", "dead_zone"):
+                # a profile over the level: the effort limit as a fraction of the largest
+                # command, the dead-zone width as a fraction of the typical effort
+                if key == "saturation":
+                    base = np.abs(self.pipe.tau_c).max(axis=0)
+                    fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
+                else:
+                    base = np.asarray(self.sc.effort)
+                    fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
+                tmax = base
                 opts = {g.label: [] for g in gs}
-                for f in (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98):
+                for f in fracs:
                     par = {g.params[0]: f * tmax[g.joint] for g in gs}
                     D = self.R(par) - R0
                     for g in gs:
@@ -512,7 +522,7 @@ class Engine:
             for a in list(selected):
                 size = self._magnitude(a.group, theta)
                 ref = reference_size(a.group, self.sc, self.model)
-                if a.group.key != "saturation" and ref > 0 and size < 0.1 * ref:
+                if a.group.key not in ("saturation", "dead_zone") and ref > 0 and size < 0.1 * ref:
                     selected.remove(a)
                     for p in a.group.params:
                         theta.pop(p, None)
@@ -930,7 +940,7 @@ class Engine:
                 val = list(o.hyper["params"].values())[0] - self.nominal[g.params[0]]
                 nrm = np.linalg.norm(off)
                 size = need * abs(val) / nrm if nrm > 0 else float("inf")
-                if g.key == "saturation":
+                if g.key in ("saturation", "dead_zone"):
                     size = float("nan")
             out[lab] = (float(size), float(reference_size(g, self.sc, self.model)))
         return out

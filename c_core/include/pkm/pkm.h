@@ -210,7 +210,7 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
 /* ========================================================= drive and sensors */
 /* Every robot has a drive layer between its mechanics and its controller, with
  * per-joint parameters "<j>[i].coulomb", ".viscous", ".stribeck", ".stribeck_v",
- * ".rotor_inertia", ".effort_max", ".encoder_offset", ".backlash", ".compliance"
+ * ".rotor_inertia", ".effort_max", ".dead_zone", ".encoder_offset", ".backlash", ".compliance"
  * (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
  * "actuator.delay", "sensor.delay".  All default to "absent".  Friction and rotor
  * inertia are part of pkm_inverse_dynamics / pkm_forward_dynamics / pkm_mass_matrix /
@@ -221,7 +221,9 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
  * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd. */
 PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd, double* f);
-/* Effort reaching the mechanism for a commanded effort: clipped at effort_max (if > 0). */
+/* Effort reaching the mechanism for a commanded effort u: the drive's dead zone u0
+ * (dead_zone > 0: |u| <= u0 gives 0, a larger command delivers u - u0 sgn(u)), then
+ * clipped at effort_max (if > 0). */
 PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd,
                                 double* tau_applied);
 /* Joint readings at (x, xd) with applied effort tau[nd]:

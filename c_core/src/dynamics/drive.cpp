@@ -14,7 +14,7 @@ namespace drive {
 namespace {
 // Per-joint parameter names, in the order of the loop in specs() and compile().
 const char* kKeys[] = {"coulomb", "viscous", "stribeck", "stribeck_v", "rotor_inertia",
-                       "effort_max", "encoder_offset", "backlash", "compliance"};
+                       "effort_max", "encoder_offset", "backlash", "compliance", "dead_zone"};
 constexpr int kNKeys = sizeof(kKeys) / sizeof(kKeys[0]);
 
 double* field(Params& p, int k) {
@@ -27,7 +27,8 @@ double* field(Params& p, int k) {
     case 5: return p.effort_max;
     case 6: return p.encoder_offset;
     case 7: return p.backlash;
-    default: return p.compliance;
+    case 8: return p.compliance;
+    default: return p.dead_zone;
   }
 }
 
@@ -60,6 +61,9 @@ std::vector<ParamSpec> specs(const Robot& r) {
                    0.0, 0.1});
     out.push_back({joint_name(r, i, "compliance"), Q + "/" + F,
                    "transmission compliance (1/stiffness): encoder deflection per unit effort, " + who, 0.0, 0.0, 1.0});
+    out.push_back({joint_name(r, i, "dead_zone"), F,
+                   "drive dead zone: commands within +-dead_zone deliver nothing, larger ones lose dead_zone, " + who,
+                   0.0, 0.0, 1e6});
   }
   out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction and backlash", ang ? 1e-3 : 1e-4,
                  1e-9, 1.0});
@@ -249,8 +253,12 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
 
 void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied) {
   for (int i = 0; i < p.nd; ++i) {
+    // The amplifier's dead band first (a command of magnitude u delivers u - u0 beyond
+    // it, nothing within it), then the saturation of what it delivers.
+    const double u0 = p.dead_zone[i], u = tau_cmd[i];
+    const double v = u0 > 0 ? std::copysign(std::fmax(std::fabs(u) - u0, 0.0), u) : u;
     const double lim = p.effort_max[i];
-    tau_applied[i] = lim > 0 ? std::fmax(-lim, std::fmin(lim, tau_cmd[i])) : tau_cmd[i];
+    tau_applied[i] = lim > 0 ? std::fmax(-lim, std::fmin(lim, v)) : v;
   }
 }
 

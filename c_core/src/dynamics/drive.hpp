@@ -31,6 +31,7 @@ struct Params {
   double encoder_offset[kMaxJoints] = {};  // q_measured - q [m | rad]
   double backlash[kMaxJoints] = {};     // total gap; measured q leads by +-gap/2 [m | rad]
   double compliance[kMaxJoints] = {};   // transmission deflection per effort [m/N | rad/(N m)]
+  double dead_zone[kMaxJoints] = {};    // drive dead band: |u| <= u0 gives 0, else u - u0 sgn(u) [N | N m]
   double v_eps = 1e-4;                  // velocity scale of the smooth sign [m/s | rad/s]
   double actuator_delay = 0;            // [s]
   double sensor_delay = 0;              // [s]
