@@ -58,9 +58,17 @@ def _load_plugins():
                 raise
 
 
+class _Parser(argparse.ArgumentParser):
+    """Argument errors in one line (what is wrong, with the valid choices); the usage is
+    one ``--help`` away."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def main(argv=None) -> int:
     _load_plugins()
-    parser = argparse.ArgumentParser(prog="cosim", description=__doc__)
+    parser = _Parser(prog="cosim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (fn, help) in COMMANDS.items():
         p = sub.add_parser(name, help=help, description=help)
@@ -69,10 +77,11 @@ def main(argv=None) -> int:
         p.set_defaults(_fn=fn)
     args = parser.parse_args(argv)
     from ._native import PkmError
+    from .master import MasterError
 
     try:
         return int(args._fn(args) or 0)
-    except (PkmError, ValueError, FileNotFoundError) as e:
+    except (PkmError, ValueError, FileNotFoundError, MasterError) as e:
         print(f"cosim {args.command}: error: {e}", file=sys.stderr)
         return 2
 

@@ -39,7 +39,10 @@ def _configure(p):
     m = sub.add_parser("map", help="every index on the 21 x 21 x 51 grid, one figure per index")
     m.add_argument("--out", required=True, help="output directory for the figures")
     m.add_argument("--set", dest="param_set", default="appendix_a", help="parameter set (default appendix_a)")
-    m.add_argument("--index", action="append", help="only these indices (repeatable)")
+    from .quattro import index_names
+
+    m.add_argument("--index", action="append", choices=index_names(), metavar="NAME",
+                   help=f"only these indices (repeatable): {', '.join(index_names())}")
     m.add_argument("--npz", action="store_true", help="also save the arrays as quattro_maps.npz")
     b = sub.add_parser("bench", help="time of the full map against the 1 s target and a numpy baseline")
     b.add_argument("--set", dest="param_set", default="appendix_a")

@@ -175,7 +175,43 @@ def _check(spec, path):
                 fail(f"reference.{k}", "missing (the pose before and after the step)")
     if r["type"] == "poses" and not r.get("poses"):
         fail("reference.poses", "missing (a list of poses)")
+    for key in ("kp", "kd", "bandwidth_hz", "damping", "saturation"):
+        v = c.get(key)
+        if v is not None and not _numbers(v):
+            fail(f"controller.{key}", f"must be a number or a list of numbers, got {v!r}")
+    _check_pose_units(spec, fail)
     return spec
+
+
+def _numbers(v) -> bool:
+    vals = v if isinstance(v, list) else [v]
+    return bool(vals) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in vals)
+
+
+def _check_pose_units(spec, fail):
+    """A reference pose whose lengths or angles are far outside any robot's range is
+    almost always a unit slip: say which (mm for m, degrees for rad) instead of letting
+    the inverse kinematics report an unreachable pose."""
+    from .core import robot_facts, robots
+
+    if spec["robot"] not in robots():
+        fail("robot", f"unknown robot {spec['robot']!r} (known: {', '.join(robots())})")
+    units = robot_facts(spec["robot"]).pose_units
+    names = robot_facts(spec["robot"]).pose_names
+    r = spec["reference"]
+    deg = r.get("angle_unit", "rad") == "deg"
+    poses = [(k, r[k]) for k in ("from", "to", "start") if k in r]
+    poses += [(f"poses[{i}]", p) for i, p in enumerate(r.get("poses") or [])]
+    for key, pose in poses:
+        if not _numbers(pose):
+            fail(f"reference.{key}", f"must be a list of {len(units)} numbers, got {pose!r}")
+        for name, unit, v in zip(names, units, pose):
+            if unit == "m" and abs(v) > 2.0:
+                fail(f"reference.{key}", f"{name} = {v:g} m is beyond any reach of the robot: was it given in mm? "
+                                         f"(lengths are in m: {v / 1000:g})")
+            if unit == "rad" and not deg and abs(v) > 2 * 3.141592653589793:
+                fail(f"reference.{key}", f"{name} = {v:g} rad is more than a turn: was it given in degrees? "
+                                         f"(set reference.angle_unit = \"deg\" or give radians)")
 
 
 # ------------------------------------------------------------------ building

@@ -165,7 +165,7 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         else:
             name, js = "forearm.c", []
         return Hidden(kind, {name: nominal[name] + sign * _uniform(rng, eff[kind])}, js, {name: nominal[name]})
-    raise ValueError(f"the generator cannot hide effect type {kind!r}")
+    raise ValueError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
 
 
 def _controller(kind, model, cfg, dt):

@@ -1,0 +1,80 @@
+"""User mistakes on the command line: each ends with exit code 2 and an error that names
+what is wrong and where (file, field, parameter, choices), never a traceback."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SCEN = REPO / "scenarios"
+
+
+def _scenario(tmp, name, body):
+    p = tmp / name
+    p.write_text(body)
+    return str(p)
+
+
+STEP = 'robot = "6pus"\nduration = 0.5\n[controller]\ntype = "pd"\nkp = 300\nkd = 30\n[reference]\ntype = "step"\n'
+
+
+def _cases(tmp):
+    garbage = tmp / "garbage.csv"
+    garbage.write_bytes(b"\x82\x00\xff not a recording\n")
+    return [
+        (["params", "hexapod"], "invalid choice: 'hexapod'"),
+        (["params", "6pus", "--set", "nope"], "no parameter set 'nope' (known: default)"),
+        (["params", "quattro", "--set", "appendix_b"], "known: default, appendix_a"),
+        (["run", str(tmp / "missing.toml")], "scenario file not found"),
+        (["run", _scenario(tmp, "kp.toml", STEP.replace("kp = 300", 'kp = "300"')
+                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
+         "controller.kp: must be a number"),
+        (["run", _scenario(tmp, "mm.toml", STEP + "from = [0, 0, 85, 0, 0, 0]\nto = [0, 0, 90, 0, 0, 0]\n")],
+         "was it given in mm?"),
+        (["run", _scenario(tmp, "deg.toml", STEP + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.085, 0, 0, 30]\n")],
+         "was it given in degrees?"),
+        (["run", _scenario(tmp, "far.toml", STEP + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.5, 0, 0, 0]\n")],
+         "leg 1 cannot reach the pose"),
+        (["run", _scenario(tmp, "ctl.toml", STEP.replace('type = "pd"', 'type = "pid2"')
+                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
+         "controller.type: must be"),
+        (["run", _scenario(tmp, "nodur.toml", STEP.replace("duration = 0.5\n", "")
+                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")], "duration: missing"),
+        (["run", _scenario(tmp, "noto.toml", STEP + "from = [0, 0, 0.085, 0, 0, 0]\n")], "reference.to: missing"),
+        (["run", _scenario(tmp, "bot.toml", STEP.replace('"6pus"', '"hexapod"')
+                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")], "unknown robot 'hexapod'"),
+        (["run", str(SCEN / "6pus_step_pd.toml"), "--plant", "banana"], "invalid choice: 'banana'"),
+        (["run", str(SCEN / "6pus_step_pd.toml"), "--duration", "-1"], "must be a positive number of seconds"),
+        (["diagnose", str(garbage)], "garbage.csv"),
+        (["diagnose", str(tmp / "missing.csv")], "file not found"),
+        (["calibrate", str(tmp / "missing.csv")], "file not found"),
+        (["calibrate", str(garbage)], "garbage.csv"),
+        (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--holdout", "2"], "holdout fraction"),
+        (["quattro", "map", "--index", "alpha_x", "--out", str(tmp / "q")], "invalid choice: 'alpha_x'"),
+        (["quattro", "cycle", "--out", str(tmp / "q"), "--set", "nope"], "unknown parameter set 'nope'"),
+        (["discrepancy-demo", "--effect", "friction"], "it can hide: coulomb"),
+        (["blind-case", "--robot", "quattro", "--effect", "nope", "--seed", "1"], "it can hide: coulomb"),
+        (["sweep", str(tmp / "missing.toml")], "sweep spec not found"),
+        (["export-ssp", str(SCEN / "6pus_letter_m_ct.toml"), "--out", str(tmp / "x.ssp")], "set-point"),
+        (["export-ssp", str(tmp / "missing.toml"), "--out", str(tmp / "x.ssp")], "scenario file not found"),
+        (["bench", "nope"], "invalid choice: 'nope'"),
+        (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
+    ]
+
+
+def test_every_mistake_is_one_error_with_exit_code_2(tmp_path):
+    bad = []
+    for argv, expect in _cases(tmp_path):
+        p = subprocess.run([sys.executable, "-m", "cosim", *argv], cwd=REPO, capture_output=True, text=True,
+                           timeout=120)
+        err = p.stderr.strip()
+        last = err.splitlines()[-1] if err else ""
+        if p.returncode != 2 or "Traceback" in err or expect not in last or len(err.splitlines()) != 1:
+            bad.append(f"cosim {' '.join(argv)}: exit {p.returncode}, stderr: {err[-400:]!r}")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("n", [28])
+def test_the_corpus_is_large(tmp_path, n):
+    assert len(_cases(tmp_path)) >= n
