@@ -162,6 +162,7 @@ const std::map<std::string, std::pair<std::string, bool>>& channels() {
       {"solver.maxStep", {"FMU_CH_SOLVER_MAX_STEP", false}},
       {"solver.maxSteps", {"FMU_CH_SOLVER_MAX_STEPS", true}},
       {"solver.singMin", {"FMU_CH_SOLVER_SING_MIN", false}},
+      {"input.gain", {"FMU_CH_INPUT_GAIN", false}},
       // controller FMUs (@kind controller): readings and reference in, effort out, the law
       {"ctrl.q", {"FMU_CH_CTRL_Q", false}},
       {"ctrl.qd", {"FMU_CH_CTRL_QD", false}},
@@ -295,6 +296,7 @@ Table read_table(const std::string& path, pkm_model*& model) {
         else if (cname == "solver.maxStep") v.start = so.max_step;
         else if (cname == "solver.maxSteps") v.start = (double)so.max_steps;
         else if (cname == "solver.singMin") v.start = so.sing_min;
+        else if (cname == "input.gain") v.start = 1.0;
         else if (cname == "ctrl.dt") v.start = 1e-3;
         else if (cname == "ctrl.nx") v.start = t.nx;
         else if (cname.rfind("ctrl.", 0) == 0) v.start = 0.0;  // gains, matrices, flags: set by the user

@@ -33,6 +33,8 @@ struct fmu_plant {
   pkm_sim_options opt;         /* pending solver settings                    */
   pkm_sim_options opt_applied; /* settings the current sim was created with  */
   double tol_override;         /* importer's tolerance, <= 0 for none        */
+  double input_gain;           /* effort on the joint per unit of input (input.gain) */
+  double tau_eff[16];          /* input_gain x tau: what the core is given   */
   int started;                 /* plant_start succeeded since the last reset */
   int dirty;                   /* a parameter or x0/xd0 changed since then   */
   int model_ok;                /* the core model is validated                */
@@ -60,8 +62,16 @@ static const char* var_name(const fmu_plant* p, fmu_channel ch, int index) {
   return "?";
 }
 
+/* The effort the core is given: the inputs times input.gain (a Quattro driven with motor
+ * torques has input.gain = gear.ratio). */
+static const double* effort(fmu_plant* p) {
+  for (int i = 0; i < p->nd; ++i) p->tau_eff[i] = p->input_gain * p->tau[i];
+  return p->tau_eff;
+}
+
 static void set_starts(fmu_plant* p) {
   pkm_sim_default_options(&p->opt);
+  p->input_gain = 1.0;
   for (int k = 0; k < p->desc->nvars; ++k) {
     const fmu_var* v = &p->desc->vars[k];
     switch (v->channel) {
@@ -73,6 +83,7 @@ static void set_starts(fmu_plant* p) {
       case FMU_CH_SOLVER_RTOL: p->opt.rtol = v->start; break;
       case FMU_CH_SOLVER_ATOL: p->opt.atol = v->start; break;
       case FMU_CH_SOLVER_MAX_STEP: p->opt.max_step = v->start; break;
+      case FMU_CH_INPUT_GAIN: p->input_gain = v->start; break;
       case FMU_CH_SOLVER_MAX_STEPS: p->opt.max_steps = (long)v->start; break;
       case FMU_CH_SOLVER_SING_MIN: p->opt.sing_min = v->start; break;
       default: break;
@@ -190,6 +201,11 @@ int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
     case FMU_CH_SOLVER_ATOL: p->opt.atol = value; break;
     case FMU_CH_SOLVER_MAX_STEP: p->opt.max_step = value; break;
     case FMU_CH_SOLVER_SING_MIN: p->opt.sing_min = value; break;
+    case FMU_CH_INPUT_GAIN:
+      if (!(isfinite(value) && value > 0 && value < 1e6))
+        return fail(p, PKM_ERR_PARAMETER, "%s = %g must be a positive gain below 1e6", v->name, value);
+      p->input_gain = value;
+      break;
     default: return fail(p, PKM_ERR_ARGUMENT, "variable %s cannot be set", v->name);
   }
   p->dirty = 1;
@@ -226,7 +242,7 @@ static int ensure(fmu_plant* p, unsigned bit, const char* what) {
       if ((s = pkm_joint_velocity(p->m, p->d, p->x, p->xd, p->qd))) return core_fail(p, s, "joint velocity");
       break;
     case V_ACC:
-      if ((s = pkm_forward_dynamics(p->m, p->d, p->x, p->xd, p->tau, p->xdd)))
+      if ((s = pkm_forward_dynamics(p->m, p->d, p->x, p->xd, effort(p), p->xdd)))
         return core_fail(p, s, "forward dynamics");
       break;
     case V_SING:
@@ -254,6 +270,7 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
     case FMU_CH_SOLVER_ATOL: *value = p->opt.atol; break;
     case FMU_CH_SOLVER_MAX_STEP: *value = p->opt.max_step; break;
     case FMU_CH_SOLVER_SING_MIN: *value = p->opt.sing_min; break;
+    case FMU_CH_INPUT_GAIN: *value = p->input_gain; break;
     case FMU_CH_ACCEL:
       if (!(s = ensure(p, V_ACC, v->name))) *value = p->xdd[i];
       break;
@@ -373,7 +390,7 @@ int plant_start(fmu_plant* p, double t0) {
 /* ------------------------------------------------------------- co-simulation */
 
 int plant_step(fmu_plant* p, double t_end) {
-  int s = pkm_sim_set_input(p->sim, p->tau);
+  int s = pkm_sim_set_input(p->sim, effort(p));
   if (s) return fail(p, s, "input at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
   s = pkm_sim_advance(p->sim, t_end);
   int g = pkm_sim_get_state(p->sim, &p->t, p->x, p->xd);
@@ -474,12 +491,12 @@ int plant_check_limits(fmu_plant* p, double tol) {
 
 /* ------------------------------------------------------------------ snapshot */
 
-/* Layout (doubles): t, started, dirty, model_ok, tol_override, 6 solver settings,
+/* Layout (doubles): t, started, dirty, model_ok, tol_override, 6 solver settings, input gain,
  * x, xd, tau, x0, xd0 (nd each), par (np), then the length n_sim of the integrator's
  * own state and that state (pkm_sim_state_save: held input, the explicit method's next
  * step size, the actuator-delay history), so a restored state advances exactly as the
  * original did. */
-enum { SNAP_HEAD = 11 };
+enum { SNAP_HEAD = 12 };
 
 static size_t snapshot_fixed(const fmu_plant* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np + 1); }
 
@@ -502,6 +519,7 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   b[8] = p->opt.max_step;
   b[9] = (double)p->opt.max_steps;
   b[10] = p->opt.sing_min;
+  b[11] = p->input_gain;
   double* v = b + SNAP_HEAD;
   const double* src[5] = {p->x, p->xd, p->tau, p->x0, p->xd0};
   for (int k = 0; k < 5; ++k, v += p->nd) memcpy(v, src[k], sizeof(double) * p->nd);
@@ -527,6 +545,7 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   p->opt.max_step = b[8];
   p->opt.max_steps = (long)b[9];
   p->opt.sing_min = b[10];
+  p->input_gain = b[11];
   const double* v = b + SNAP_HEAD;
   double* dst[5] = {p->x, p->xd, p->tau, p->x0, p->xd0};
   for (int k = 0; k < 5; ++k, v += p->nd) memcpy(dst[k], v, sizeof(double) * p->nd);
