@@ -97,6 +97,28 @@ def _bench_configure(p):
     p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
     p.add_argument("--report", action="store_true", help="write a diagnosis report per case")
     p.add_argument("--threshold", type=float, default=10.0)
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no line per case, only the summary")
+    p.add_argument("--verbose", action="store_true", help="a line per case (the default on a terminal is a bar)")
+
+
+def _case_progress(total, quiet, verbose):
+    """A tqdm bar with the time left on a terminal (the last case's result beside it), a
+    line per case when not on a terminal or with --verbose, nothing with --quiet."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="case", disable=True if quiet or verbose else None, leave=False,
+               desc="blind benchmark")
+
+    def progress(line):
+        if quiet:
+            return
+        if bar.disable:
+            print(line, flush=True)
+            return
+        bar.update(1)
+        bar.set_postfix_str(" ".join(line.split()[:3])[:40])
+
+    return progress, bar
 
 
 @command("blind-benchmark", "blind benchmark: recordings with hidden effects, diagnosed and scored against keys")
@@ -105,8 +127,13 @@ def cmd_blind_benchmark(args):
 
     robots = ("6pus", "quattro") if args.robot == "both" else (args.robot,)
     t0 = time.perf_counter()
-    res = blind.benchmark(args.cases, args.seed, args.clean, robots, args.out, jobs=args.jobs, report=args.report,
-                          threshold=args.threshold, replay=False)
+    total = len(blind.plan(args.cases, args.clean, args.seed, robots, blind.load_config()))
+    progress, bar = _case_progress(total, args.quiet, args.verbose)
+    try:
+        res = blind.benchmark(args.cases, args.seed, args.clean, robots, args.out, jobs=args.jobs,
+                              report=args.report, threshold=args.threshold, replay=False, progress=progress)
+    finally:
+        bar.close()
     text = blind.format_summary(res["summary"])
     print()
     print(text)

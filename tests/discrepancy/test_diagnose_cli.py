@@ -30,3 +30,16 @@ def test_diagnose_command_reports_a_bad_file_without_a_traceback(tmp_path, capsy
     assert main(["diagnose", str(bad), "--out", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
     assert "cosim diagnose: error:" in err and "bad.csv" in err and "column 'qd1'" in err
+
+
+def test_blind_benchmark_progress_is_a_bar_a_line_per_case_or_nothing(capsys):
+    from cosim.discrepancy_cli import _case_progress
+
+    for quiet, verbose, want_lines in ((True, False, 0), (False, True, 2), (False, False, 2)):
+        progress, bar = _case_progress(2, quiet, verbose)
+        progress("   case01    6pus  coulomb  ok")
+        progress("   case02    6pus  clean    ok")
+        bar.close()
+        out = capsys.readouterr().out
+        # pytest's capture is no terminal: the default falls back to a line per case
+        assert len([ln for ln in out.splitlines() if "case0" in ln]) == want_lines, (quiet, verbose, out)
