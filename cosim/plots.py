@@ -28,28 +28,34 @@ def step_figure(out, path) -> Path:
     res, m = out.result, out.metrics
     t = res["time"]
     fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
-    names = ["x", "y", "z", "rx", "ry", "rz"]
-    moved = list(m.get("step_info", {}).get("pose", {}).keys()) or ["z"]
+    from .core import robot_facts
+
+    facts = robot_facts(res.robot)
+    names, units = list(facts.pose_names), list(facts.pose_units)
+    moved = list(m.get("step_info", {}).get("pose", {}).keys()) or [names[min(2, len(names) - 1)]]
+    shown = []
     for nm in moved:
         i = names.index(nm) if nm in names else 0
-        scale, unit = (1e3, "mm") if i < 3 else (np.degrees(1.0), "deg")
+        scale, unit = (1e3, "mm") if units[i] == "m" else (np.degrees(1.0), "deg")
+        shown.append(unit)
         ax[0].plot(t, res["x"][:, i] * scale, label=f"{nm} [{unit}]")
-        ax[0].plot(t, res["xref"][:, i] * scale, "--", label=f"{nm} ref")
-    ax[0].set_ylabel("pose")
+        ax[0].plot(t, res["xref"][:, i] * scale, "--", label=f"{nm} ref [{unit}]")
+    ax[0].set_ylabel(f"pose [{', '.join(dict.fromkeys(shown))}]")
     ax[0].legend(loc="best", fontsize=8)
     info = m.get("step_info", {}).get("pose", {})
     txt = "; ".join(f"{k}: rise {v.get('RiseTime', np.nan) * 1e3:.0f} ms, settle {v.get('SettlingTime', np.nan) * 1e3:.0f} ms,"
                     f" overshoot {v.get('Overshoot', np.nan):.1f} %" for k, v in info.items() if "RiseTime" in v)
     ax[0].set_title(f"{out.scenario.name}: {res.controller['type']}\n{txt}", fontsize=9)
-    e = (res["qref"] - res["q_true"]) * 1e3
+    jscale, junit = (1e3, "mm") if facts.joint_unit == "m" else (1e3, "mrad")
+    e = (res["qref"] - res["q_true"]) * jscale
     for j in range(e.shape[1]):
         ax[1].plot(t, e[:, j], label=f"e{j + 1}")
     pred = m.get("steady_state", {}).get("predicted_joint_error_equilibrium") or \
         m.get("steady_state", {}).get("predicted_joint_error")
     if pred is not None:
         for j, p in enumerate(pred):
-            ax[1].axhline(p * 1e3, color=f"C{j}", ls=":", lw=0.8)
-    ax[1].set_ylabel("joint error qref - q [mm]\n(dotted: predicted e_ss)")
+            ax[1].axhline(p * jscale, color=f"C{j}", ls=":", lw=0.8)
+    ax[1].set_ylabel(f"joint error qref - q [{junit}]\n(dotted: predicted e_ss)")
     lim = np.max(np.abs(e[len(e) // 3:])) if len(e) > 3 else 1.0
     ax[1].set_ylim(-3 * lim - 1e-6, 3 * lim + 1e-6)
     ax[1].legend(ncol=6, fontsize=7)
