@@ -62,10 +62,15 @@ def print_diagnosis(d, file=None):
         for s in d.localisation["summary"]:
             p(f"  {s}")
     if d.effects:
-        p("\nwhy (most important first):")
+        p("\nwhy (most important first; importance = chi-square increase when the term is removed):")
+        seen_bic = set()
         for e in d.effects:
             vals = ", ".join(f"{k} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for k, v in e["params"].items())
-            p(f"  {e['title']}: {vals}  (delta BIC {e['delta_bic']:.0f})")
+            # terms that entered in one selection step share its delta BIC: say it once
+            step = (f"delta BIC {e['delta_bic']:.0f}" if e["delta_bic"] not in seen_bic
+                    else "entered in the same step")
+            seen_bic.add(e["delta_bic"])
+            p(f"  {e['title']}: {vals}  (importance {e.get('importance', float('nan')):.0f}, {step})")
             for a in e["lookalikes"]:
                 if a["delta_bic"] < 10:
                     p(f"    vs {a['statement']}")

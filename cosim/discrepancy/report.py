@@ -267,8 +267,9 @@ def _fig_heldout(d, eng, sel, path):
     t = pipe.t[pos]
     Rb = eng.R0[test]
     Ra = eng.R(sel.theta)[test] if sel.theta else Rb
-    names = d.heldout["affected"][:4] or pipe.channels[:1]
-    fig, axes = plt.subplots(len(names), 2, figsize=(12, 2.4 * len(names)), squeeze=False)
+    # every affected channel (all joints of an effect on all joints), with its unit
+    names = d.heldout["affected"] or pipe.channels[:1]
+    fig, axes = plt.subplots(len(names), 2, figsize=(12, 1.9 * len(names) + 0.8), squeeze=False, sharex=True)
     for r, name in enumerate(names):
         c = pipe.channels.index(name)
         rec = pipe.tau_s[pos, c] if c < pipe.nd else pipe.q_s[pos, c - pipe.nd]
@@ -276,15 +277,18 @@ def _fig_heldout(d, eng, sel, path):
         ax.plot(t, rec, color="k", lw=1.2, label="recorded (smoothed)")
         ax.plot(t, rec - Rb[:, c], color="0.6", lw=0.9, label="nominal model")
         ax.plot(t, rec - Ra[:, c], color="C0", lw=0.9, ls="--", label="fitted model")
-        ax.set_ylabel(name, fontsize=8)
+        unit = d.heldout["channels"].get(name, {}).get("unit", "")
+        ax.set_ylabel(f"{name} [{unit}]", fontsize=8)
         ax = axes[r, 1]
         ax.plot(t, Rb[:, c], color="0.6", lw=0.8, label="before")
         ax.plot(t, Ra[:, c], color="C0", lw=0.8, label="after")
-        ax.set_ylabel(f"residual {name}", fontsize=8)
+        ax.set_ylabel(f"residual {name} [{unit}]", fontsize=8)
     axes[0, 0].legend(fontsize=7)
     axes[0, 1].legend(fontsize=7)
     axes[0, 0].set_title("held-out part: recording and models", fontsize=9)
     axes[0, 1].set_title(f"held-out residual (gain {d.heldout['gain']:.1f}x)", fontsize=9)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
