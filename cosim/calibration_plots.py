@@ -62,20 +62,51 @@ def plot_result(res, outdir) -> list:
     plt.close(fig)
     paths.append(p)
 
-    # 3. estimated parameter errors with 3 standard errors
+    # 3. estimated parameter errors with 3 standard errors, one panel per unit, the truth
+    # overlaid when the recording has an answer key beside it (<name>.truth.json)
     s = res.solution
     idx = np.flatnonzero(s.free)
-    fig, ax = plt.subplots(figsize=(max(6, 0.18 * idx.size + 3), 4))
-    ax.errorbar(np.arange(idx.size), s.dp[idx] * 1e3, yerr=3 * s.se[idx] * 1e3, fmt="o", ms=3, capsize=2)
-    ax.axhline(0, color="k", lw=0.5)
-    ax.set_xticks(np.arange(idx.size))
-    ax.set_xticklabels([s.names[j] for j in idx], rotation=90, fontsize=7)
-    ax.set_ylabel("estimate - nominal [mm or 1e-3]")
-    ax.set_title("estimated parameter errors, +-3 standard errors")
-    ax.grid(True, alpha=0.3)
+    units = list(getattr(res.problem, "units", [""] * len(s.names)))
+    truth = _truth(res)
+    nominal = dict(zip(s.names, map(float, s.p0)))
+    kinds = [("m", 1e3, "mm"), ("1", 1e3, "1e-3 (direction components)")]
+    panels = [(u, sc, lab, [j for j in idx if units[j] == u]) for u, sc, lab in kinds]
+    panels = [pn for pn in panels if pn[3]] or [("", 1.0, "", list(idx))]
+    width = max(6, 0.18 * idx.size + 3)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(width, 3.2 * len(panels) + 0.8), squeeze=False)
+    for ax, (u, scale, label, js) in zip(axes[:, 0], panels):
+        xs = np.arange(len(js))
+        ax.errorbar(xs, s.dp[js] * scale, yerr=3 * s.se[js] * scale, fmt="o", ms=3, capsize=2,
+                    label="estimate +- 3 SE")
+        if truth:
+            tv = [(truth[s.names[j]] - nominal[s.names[j]]) * scale if s.names[j] in truth else np.nan for j in js]
+            ax.plot(xs, tv, "x", color="C3", ms=6, label="truth (answer key)")
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_xticks(xs)
+        ax.set_xticklabels([s.names[j] for j in js], rotation=90, fontsize=7)
+        ax.set_ylabel(f"estimate - nominal [{label}]" if label else "estimate - nominal")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0, 0].set_title("estimated parameter errors, +-3 standard errors" + (
+        "\n(truth: single coordinates may differ where only their combinations are identifiable; "
+        "see calibration_report.txt)" if truth else ""), fontsize=10)
     fig.tight_layout()
     p = out / "calibration_estimates.png"
     fig.savefig(p, dpi=120)
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def _truth(res) -> dict:
+    """The real parameters of a recording made with an answer key beside it, else {}."""
+    import json
+
+    src = Path(str(res.source))
+    key = src.with_suffix(".truth.json")
+    if not key.exists():
+        return {}
+    try:
+        return {k: float(v) for k, v in json.loads(key.read_text()).get("real_parameters", {}).items()}
+    except (ValueError, OSError, AttributeError):
+        return {}
