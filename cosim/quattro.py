@@ -239,7 +239,9 @@ def plot_maps(mp: IndexMap, out_dir, names=None, planes_z=(-0.95, -1.05, -1.15),
     files = []
     for name in names:
         v = mp[name]
-        fig, axes = plt.subplots(1, 1 + len(planes_z), figsize=(4.2 * (1 + len(planes_z)), 3.8))
+        # constrained layout keeps each panel's labels clear of its neighbour and the colour bar
+        fig, axes = plt.subplots(1, 1 + len(planes_z), figsize=(4.4 * (1 + len(planes_z)) + 1, 4.0),
+                                 layout="constrained")
         finite = v[np.isfinite(v)]
         if finite.size == 0:
             plt.close(fig)

@@ -245,12 +245,13 @@ def _fig_workspace(d, eng, path):
     sig = np.asarray([d.noise["sigma"][c] for c in pipe.channels])
     z = np.max(np.abs(eng.R0) / sig[None, :], axis=1)
     cols = pipe.rec.pose_columns
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     order = np.argsort(z)
     for ax, (a, b) in zip(axes, ((0, 1), (0, 2))):
-        sc = ax.scatter(x[order, a], x[order, b], c=z[order], s=4, cmap="viridis", vmin=0, vmax=max(6, np.percentile(z, 99)))
-        ax.set_xlabel(f"{cols[a]} [m]")
-        ax.set_ylabel(f"{cols[b]} [m]")
+        sc = ax.scatter(x[order, a] * 1e3, x[order, b] * 1e3, c=z[order], s=4, cmap="viridis", vmin=0,
+                        vmax=max(6, np.percentile(z, 99)))
+        ax.set_xlabel(f"{cols[a]} [mm]")
+        ax.set_ylabel(f"{cols[b]} [mm]")
     fig.colorbar(sc, ax=axes, label="largest |residual| / noise")
     fig.suptitle("where in the workspace the nominal model is wrong", fontsize=10)
     fig.savefig(path, dpi=90)
