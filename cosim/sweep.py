@@ -752,7 +752,11 @@ def _start_client(scheduler, workers):
     from distributed import Client, LocalCluster
 
     if scheduler:
-        client = Client(scheduler, timeout="30s")
+        try:
+            client = Client(scheduler, timeout="5s")
+        except (OSError, TimeoutError) as e:
+            raise SweepError(f"no Dask scheduler answers at {scheduler} within 5 s ({e.__class__.__name__}): start "
+                             f"one (dask scheduler) or leave out --scheduler for a local cluster") from None
         n = sum(client.nthreads().values())
         return client, None, f"scheduler {scheduler} ({len(client.nthreads())} workers, {n} threads)"
     n = int(workers or default_workers())

@@ -203,6 +203,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     from .localisation import localise
     from .selection import Engine
 
+    for name, v, lo in (("window", window, 0.0), ("threshold", threshold, 0.0)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > lo):
+            raise DiagnosisError(f"{name} = {v!r} must be a positive number")
+    if not (0.0 < train_fraction < 1.0):
+        raise DiagnosisError(f"train_fraction = {train_fraction!r} must be in (0, 1)")
     t0 = time.perf_counter()
     rec = _load(recording)
     mdl = _model_for(rec, model)

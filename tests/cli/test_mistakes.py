@@ -60,6 +60,13 @@ def _cases(tmp):
         (["export-ssp", str(tmp / "missing.toml"), "--out", str(tmp / "x.ssp")], "scenario file not found"),
         (["bench", "nope"], "invalid choice: 'nope'"),
         (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
+        (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--solver", "bogus"], "invalid choice: 'bogus'"),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--window", "-1"], "window = -1.0 must be"),
+        (["sweep", str(SCEN / "sweeps" / "pd_gains.toml"), "--scheduler", "tcp://127.0.0.1:9", "--out",
+          str(tmp / "sw")], "no Dask scheduler answers at tcp://127.0.0.1:9"),
+        (["run", _scenario(tmp, "unit.toml", STEP.replace('type = "step"\n', 'type = "step"\nangle_unit = "grad"\n')
+                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
+         "reference.angle_unit: must be 'rad' or 'deg'"),
     ]
 
 
@@ -75,6 +82,6 @@ def test_every_mistake_is_one_error_with_exit_code_2(tmp_path):
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("n", [28])
+@pytest.mark.parametrize("n", [32])
 def test_the_corpus_is_large(tmp_path, n):
     assert len(_cases(tmp_path)) >= n
