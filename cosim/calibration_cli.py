@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from pathlib import Path
 
 from .cli import command
 
@@ -23,6 +24,7 @@ def _configure(p):
     p.add_argument("--cond-max", type=float, default=100.0, help="condition-number limit (default 100)")
     p.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
     p.add_argument("--out", metavar="DIR", help="write figures, the report and the calibrated parameters here")
+    p.add_argument("--html", action="store_true", help="with --out: also an interactive, self-contained HTML report")
     p.add_argument("--bench", action="store_true",
                    help="benchmark: 60-parameter 6-PUS calibration on --poses poses against a finite-difference "
                         "baseline (SPEC 7)")
@@ -67,6 +69,13 @@ def cmd_calibrate(args):
     if args.out:
         for p in res.save(args.out):
             print(f"wrote {p}")
+        if args.html:
+            from .report.pages import calibration_page
+
+            print(f"wrote {calibration_page(res, Path(args.out) / 'calibration_report.html')} (interactive)")
+    elif args.html:
+        print("cosim calibrate: error: --html needs --out DIR (where to write the page)", file=sys.stderr)
+        return 2
     return 0
 
 

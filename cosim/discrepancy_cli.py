@@ -28,6 +28,8 @@ def _diag_configure(p):
     p.add_argument("--no-replay", action="store_true", help="skip the closed-loop replay of the held-out part")
     p.add_argument("--no-figures", action="store_true", help="write the report without figures")
     p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
+    p.add_argument("--html", action="store_true",
+                   help="also write report.html: interactive, self-contained (3D robot, residual windows, effects)")
 
 
 @command("diagnose", "model-discrepancy diagnosis of a recording: where, which missing physics, how much better")
@@ -45,6 +47,10 @@ def cmd_diagnose(args):
         return 0
     print_diagnosis(d)
     print(f"\nreport: {d.files.get('report')}")
+    if args.html:
+        from .report.pages import diagnosis_page
+
+        print(f"interactive report: {diagnosis_page(d, out / 'report.html')}")
     return 0
 
 

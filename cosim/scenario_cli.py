@@ -1,6 +1,8 @@
 """``cosim run scenarios/<name>.toml``: run a co-simulation scenario, print its metrics."""
 from __future__ import annotations
 
+from pathlib import Path
+
 from .cli import command
 
 
@@ -12,6 +14,8 @@ def _configure(p):
     p.add_argument("--out", default=None, help="output directory (default: the file's [output] dir or results/<name>)")
     p.add_argument("--no-figures", action="store_true", help="do not write the figure")
     p.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    p.add_argument("--html", action="store_true",
+                   help="also write <name>_report.html: interactive, self-contained (3D robot in motion, errors, efforts)")
 
 
 def print_summary(out, file=None) -> None:
@@ -79,6 +83,11 @@ def cmd_run(args):
 
     out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
                        figures=False if args.no_figures else None)
+    if args.html:
+        from .report.pages import run_page
+
+        where = Path(out.files["recording"]).parent if "recording" in out.files else Path(args.out or "results")
+        out.files["interactive report"] = str(run_page(out, where / f"{out.scenario.name}_report.html"))
     if args.json:
         print(json.dumps(out.metrics, indent=2, default=_json))
     else:
@@ -105,3 +114,20 @@ def _export_configure(p):
 
 
 cmd_export_ssp.configure = _export_configure
+
+
+@command("view", "write (and print the path of) a self-contained HTML page with the robot of a recording in 3D")
+def cmd_view(args):
+    from .report import view
+
+    path = view(args.recording, out=args.out)
+    print(f"wrote {path}: open it in a browser (works offline; the slider moves the robot through the recording)")
+    return 0
+
+
+def _view_configure(p):
+    p.add_argument("recording", help="pkm-recording/1 CSV (its JSON sidecar beside it)")
+    p.add_argument("--out", default=None, help="the page to write (default: <recording>_view.html beside it)")
+
+
+cmd_view.configure = _view_configure

@@ -6,7 +6,8 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 
-apt_pkgs=(libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv)
+# chromium: the headless browser that tests the interactive HTML reports (tests/report)
+apt_pkgs=(libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv chromium)
 missing=()
 for p in "${apt_pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -1,0 +1,86 @@
+"""The interactive HTML pages: self-contained (plotly inlined, nothing fetched), the 3D view
+of the robot drawn in a real headless browser (Chromium from Debian, installed by
+scripts/bootstrap.sh), no console error, and the slider moving the robot (screenshots at
+two times differ in the 3D view)."""
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cosim.master import CorePlant, make_reference, run
+from cosim import controllers as ctl
+from cosim import trajectories as tr
+from cosim.core import Model
+from cosim.recording import write_recording
+from cosim.report import ReportError, view, write_html
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rec")
+    m = Model("6pus")
+    h = m.home()
+    ref = make_reference(m, tr.waypoints([h, h + [0.01, 0, 0.012, 0, 0, 0.05]], move_time=0.4), duration=0.6)
+    res = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), ref)
+    path = d / "lift.csv"
+    write_recording(path, res.to_recording(parameters=m.params()))
+    return path
+
+
+def test_the_page_is_self_contained(recording, tmp_path):
+    page = view(recording, out=tmp_path / "v.html")
+    text = page.read_text()
+    assert "Plotly" in text and "scatter3d" in text
+    assert not re.search(r"<script[^>]+src=", text)           # no script fetched
+    assert not re.search(r"<link[^>]+href=[\"']https?:", text)  # no stylesheet fetched
+
+
+def _shot(page, frame, out):
+    p = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+                        "--use-angle=swiftshader", "--enable-logging=stderr", "--log-level=0", "--window-size=1000,900",
+                        "--virtual-time-budget=8000", f"--screenshot={out}", f"file://{page}#frame={frame}"],
+                       capture_output=True, text=True, timeout=120)
+    console = [ln for ln in p.stderr.splitlines() if "CONSOLE" in ln]
+    return p.returncode, console
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/bootstrap.sh installs it)")
+def test_the_browser_draws_the_robot_and_the_slider_moves_it(recording, tmp_path):
+    from PIL import Image
+
+    page = view(recording, out=tmp_path / "v.html", max_frames=40).resolve()
+    shots = []
+    for frame in (0, 39):
+        png = tmp_path / f"f{frame}.png"
+        rc, console = _shot(page, frame, png)
+        assert rc == 0 and png.exists()
+        errors = [ln for ln in console if re.search(r"Uncaught|Error|Failed to load|net::ERR", ln)
+                  and "GL Driver Message" not in ln]
+        assert not errors, errors
+        shots.append(np.asarray(Image.open(png).convert("L"), float))
+    # the 3D view: below the headings, above the slider
+    a, b = (s[150:650, 0:900] for s in shots)
+    assert a.std() > 5 and b.std() > 5                 # something is drawn, not a blank canvas
+    assert np.mean(np.abs(a - b)) > 0.5, np.mean(np.abs(a - b))  # the robot moved between the two times
+
+
+def test_run_calibration_and_diagnosis_pages(recording, tmp_path):
+    from cosim.calibration import calibrate
+    from cosim.discrepancy import diagnose
+    from cosim.report.pages import calibration_page, diagnosis_page
+
+    root = Path(__file__).resolve().parents[2]
+    res = calibrate(root / "scenarios" / "calibration_6pus_campaign.csv", holdout=0.25)
+    p1 = calibration_page(res, tmp_path / "cal.html")
+    assert "accuracy" in p1.read_text() and "estimate - nominal" in p1.read_text()
+    d = diagnose(recording, figures=False, replay=False)
+    p2 = diagnosis_page(d, tmp_path / "diag.html")
+    text = p2.read_text()
+    assert "held-out residual RMS" in text and "scatter3d" in text and d.conclusion in text
+    with pytest.raises(ReportError, match="section 'bad'"):
+        write_html(tmp_path / "x.html", "t", [("bad", 3)])
