@@ -220,7 +220,55 @@ def read_recording(path, robot: str | None = None) -> Recording:
     if rname not in ROBOTS:
         raise RecordingError(side, f"unknown robot {rname!r} (known: {', '.join(ROBOTS)})")
     nd, pose_cols = ROBOTS[rname]["ndof"], ROBOTS[rname]["pose"]
+    _check_units(side, meta.get("units"), rname)
+    try:
+        rows, header = _read_rows(path)
+    except UnicodeDecodeError as e:
+        raise RecordingError(path, f"is not a text CSV file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
+                                   f"UTF-8): not a pkm-recording/1 file") from None
+    return _finish(path, side, meta, rname, nd, pose_cols, header, rows)
 
+
+def _check_units(side, units, robot):
+    """A sidecar may state its units; they must be the robot's SI units (no conversion is
+    made, so a recording in mm or degrees is refused naming the field, not misread)."""
+    if units is None:
+        return
+    if not isinstance(units, dict):
+        raise RecordingError(side, f"units must be an object of column: unit, got {units!r}")
+    from .core import robot_facts
+
+    f = robot_facts(robot)
+    want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
+            "tau": f.effort_unit}
+    for key, unit in units.items():
+        if key in want and unit != want[key]:
+            raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
+                                       f"({key} in {want[key]}); convert the column (e.g. mm -> m) and drop or fix "
+                                       f"the field")
+        if key in ("pose", "x") and isinstance(unit, list) and list(unit) != list(f.pose_units):
+            raise RecordingError(side, f"units.{key} = {unit!r}: the pose columns must be in {list(f.pose_units)}")
+
+
+def _check_pose_scale(path, robot, pose_cols, col):
+    """Pose columns far beyond any robot's reach are a unit slip (mm for m, degrees for rad):
+    say so, naming the column, instead of letting a later step fail on unreachable poses."""
+    from .core import robot_facts
+
+    f = robot_facts(robot)
+    if list(pose_cols) != list(f.pose_names):
+        return  # the tracker columns are not the pose coordinates (the four-bar's output X)
+    for c, unit in zip(pose_cols, f.pose_units):
+        big = float(np.max(np.abs(col[c])))
+        if unit == "m" and big > 2.0:
+            raise RecordingError(path, f"values up to {big:g} m: was the column written in mm? (the format is in m)",
+                                 column=c)
+        if unit == "rad" and big > 2 * math.pi:
+            raise RecordingError(path, f"values up to {big:g} rad: was the column written in degrees? (the format "
+                                       f"is in rad)", column=c)
+
+
+def _read_rows(path):
     with open(path, newline="") as f:
         reader = csv.reader(f)
         try:
@@ -244,6 +292,10 @@ def read_recording(path, robot: str | None = None) -> Recording:
                                          column=header[c])
                 vals.append(v)
             rows.append(vals)
+    return rows, header
+
+
+def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise RecordingError(path, "column appears twice in the header", row=1, column=dup)
@@ -263,7 +315,7 @@ def read_recording(path, robot: str | None = None) -> Recording:
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         k = int(bad[0]) + 1
-        raise RecordingError(path, f"time is not strictly increasing ({t[k - 1]!r} then {t[k]!r})", row=k + 2,
+        raise RecordingError(path, f"time is not strictly increasing ({t[k - 1]:.17g} then {t[k]:.17g})", row=k + 2,
                              column="time")
 
     def stack(prefix):
@@ -278,6 +330,8 @@ def read_recording(path, robot: str | None = None) -> Recording:
         missing = pose_cols[has_pose.index(False)]
         raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
     known = set(required) | {"time"} | {f"qref{i}" for i in range(1, nd + 1)} | set(pose_cols)
+    if all(has_pose):
+        _check_pose_scale(path, rname, pose_cols, col)
     return Recording(
         robot=rname,
         time=t,

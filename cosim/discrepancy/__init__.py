@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._native import PkmError
 from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
 from .residuals import DiagnosisError, Pipeline
 
@@ -135,11 +136,19 @@ def _load(recording):
 def _model_for(rec, model):
     from ..core import Model
 
-    if model is None:
-        m = Model(rec.robot)
+    def sidecar_params(m):
         if rec.parameters:
-            m.set_params(rec.parameters)
+            try:
+                m.set_params(rec.parameters)
+            except PkmError as e:
+                from ..recording import sidecar_path
+
+                where = sidecar_path(rec.path) if rec.path else "the recording's sidecar"
+                raise DiagnosisError(f"{where}: parameters: {e}") from None
         return m
+
+    if model is None:
+        return sidecar_params(Model(rec.robot))
     if isinstance(model, (str, Path)) and Path(model).exists():
         spec = json.loads(Path(model).read_text())
         params = spec.get("parameters", spec)
@@ -148,10 +157,7 @@ def _model_for(rec, model):
         m.set_params(params)
         return m
     if isinstance(model, str):
-        m = Model(rec.robot, model)
-        if rec.parameters:
-            m.set_params(rec.parameters)
-        return m
+        return sidecar_params(Model(rec.robot, model))
     return model
 
 

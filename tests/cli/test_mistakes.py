@@ -19,10 +19,43 @@ def _scenario(tmp, name, body):
 STEP = 'robot = "6pus"\nduration = 0.5\n[controller]\ntype = "pd"\nkp = 300\nkd = 30\n[reference]\ntype = "step"\n'
 
 
+def _recording_variants(tmp):
+    """Copies of a valid recording with one thing wrong each: binary content, a bad
+    parameter or a unit field in the sidecar, positions in mm."""
+    import csv
+    import json
+    import shutil
+
+    src = SCEN / "calibration_6pus_campaign"
+    out = {}
+    for name in ("binary", "badpar", "units", "mm"):
+        shutil.copy(src.with_suffix(".csv"), tmp / f"{name}.csv")
+        shutil.copy(src.with_suffix(".json"), tmp / f"{name}.json")
+        out[name] = str(tmp / f"{name}.csv")
+    (tmp / "binary.csv").write_bytes(b"\x82\x00\xff\x01\n\x02\n")
+    for name, change in (("badpar", lambda m: m.setdefault("parameters", {}).update({"leg[9].L": 0.1})),
+                         ("units", lambda m: m.update({"units": {"q": "mm"}}))):
+        meta = json.loads((tmp / f"{name}.json").read_text())
+        change(meta)
+        (tmp / f"{name}.json").write_text(json.dumps(meta))
+    rows = list(csv.reader(open(src.with_suffix(".csv"))))
+    idx = [rows[0].index(c) for c in ("x", "y", "z")]
+    with open(tmp / "mm.csv", "w", newline="") as f:
+        csv.writer(f).writerows([rows[0]] + [[str(float(v) * 1000) if i in idx else v for i, v in enumerate(r)]
+                                             for r in rows[1:]])
+    return out
+
+
 def _cases(tmp):
     garbage = tmp / "garbage.csv"
     garbage.write_bytes(b"\x82\x00\xff not a recording\n")
+    bad = _recording_variants(tmp)
     return [
+        (["diagnose", bad["binary"]], "is not a text CSV file (byte 0x82"),
+        (["calibrate", bad["binary"]], "is not a text CSV file"),
+        (["diagnose", bad["badpar"], "--no-replay", "--no-figures"], "badpar.json: parameters: 6pus has no parameter"),
+        (["diagnose", bad["units"], "--no-replay", "--no-figures"], "units.q = 'mm'"),
+        (["calibrate", bad["mm"]], "column 'x': values up to"),
         (["params", "hexapod"], "invalid choice: 'hexapod'"),
         (["params", "6pus", "--set", "nope"], "no parameter set 'nope' (known: default)"),
         (["params", "quattro", "--set", "appendix_b"], "known: default, appendix_a"),
@@ -82,6 +115,6 @@ def test_every_mistake_is_one_error_with_exit_code_2(tmp_path):
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("n", [32])
+@pytest.mark.parametrize("n", [37])
 def test_the_corpus_is_large(tmp_path, n):
     assert len(_cases(tmp_path)) >= n

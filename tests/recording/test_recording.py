@@ -13,7 +13,7 @@ def _rec(n=20, robot="6pus", nd=6, pose=True, qref=True):
     return Recording(
         robot=robot, time=t, q=rng.normal(size=(n, nd)), qd=rng.normal(size=(n, nd)),
         tau=rng.normal(size=(n, nd)), qref=rng.normal(size=(n, nd)) if qref else None,
-        pose=rng.normal(size=(n, 6)) if pose else None, extra={"x_meas": rng.normal(size=n)},
+        pose=0.01 * rng.normal(size=(n, 6)) if pose else None, extra={"x_meas": rng.normal(size=n)},  # a robot's range
         parameters={"platform.m": 0.42}, controller={"type": "pd", "Kp": [1, 2]}, notes="unit test",
     )
 
