@@ -59,8 +59,9 @@ def cmd_calibrate(args):
         print("cosim calibrate: error: give a recording (or --bench, --design, --seed-examples)", file=sys.stderr)
         return 2
     from .calibration import CalibrationWarning, calibrate
+    from .cli import working
 
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), working(f"calibrating from {Path(args.recording).name}"):
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report
         opts = {"basis": args.basis} if args.solver == "golden" else {}
         res = calibrate(args.recording, solver=args.solver, model=args.model, holdout=args.holdout,

@@ -58,6 +58,45 @@ def _load_plugins():
                 raise
 
 
+class working:
+    """``with working("diagnosing rec.csv"):`` shows, on a terminal and once the work has
+    taken two seconds, a line with the elapsed time that keeps ticking until the work is
+    done (for commands whose work has no natural count); nothing when stderr is not a
+    terminal or with ``cosim --quiet``."""
+
+    def __init__(self, what: str):
+        self.what = what
+        self._stop = None
+
+    def __enter__(self):
+        import os
+        import threading
+
+        if os.environ.get("TQDM_DISABLE") or not sys.stderr.isatty():
+            return self
+        self._stop = threading.Event()
+
+        def tick():
+            from tqdm import tqdm
+
+            if self._stop.wait(2.0):
+                return
+            bar = tqdm(total=None, desc=self.what, bar_format="{desc}: {elapsed}", leave=False)
+            while not self._stop.wait(0.5):
+                bar.refresh()
+            bar.close()
+
+        self._thread = threading.Thread(target=tick, daemon=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        if self._stop is not None:
+            self._stop.set()
+            self._thread.join(timeout=1.0)
+        return False
+
+
 class _Parser(argparse.ArgumentParser):
     """Argument errors in one line (what is wrong, with the valid choices); the usage is
     one ``--help`` away."""
@@ -69,6 +108,8 @@ class _Parser(argparse.ArgumentParser):
 def main(argv=None) -> int:
     _load_plugins()
     parser = _Parser(prog="cosim", description=__doc__)
+    parser.add_argument("--quiet", dest="global_quiet", action="store_true",
+                        help="no progress bars (they show on a terminal only, after 2 s)")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (fn, help) in COMMANDS.items():
         p = sub.add_parser(name, help=help, description=help)
@@ -76,6 +117,10 @@ def main(argv=None) -> int:
             fn.configure(p)
         p.set_defaults(_fn=fn)
     args = parser.parse_args(argv)
+    if args.global_quiet:
+        import os
+
+        os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
     from ._native import PkmError
     from .master import MasterError
 

@@ -36,10 +36,13 @@ def _diag_configure(p):
 def cmd_diagnose(args):
     from .discrepancy import diagnose
 
+    from .cli import working
+
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
-    d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
-                 effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
-                 figures=not args.no_figures)
+    with working(f"diagnosing {Path(args.recording).name}"):
+        d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
+                     effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
+                     figures=not args.no_figures)
     if args.json:
         from .discrepancy.report import _strip_arrays
 

@@ -109,8 +109,10 @@ def cmd_quattro(args):
         from pathlib import Path
 
         from . import cycle_time as ct
+        from .cli import working
 
-        cmp = ct.compare(param_set=args.param_set, n=args.n, qd_max=args.qd_max)
+        with working("timing the cycles of Tables 6.1-6.5"):
+            cmp = ct.compare(param_set=args.param_set, n=args.n, qd_max=args.qd_max)
         files = ct.plot_comparison(cmp, args.out)
         f = Path(args.out) / "quattro_cycle_times.csv"
         with open(f, "w") as fh:
