@@ -86,6 +86,9 @@ class Diagnosis:
     steps: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     refused: list = field(default_factory=list)
+    #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
+    #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
+    residual: dict = field(default_factory=dict, repr=False)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -243,7 +246,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   steps=sel.steps, refused=[f"{k}: {v}" for k, v in sel.refused.items()],
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
-                            "smoothing_samples": pipe.window})
+                            "smoothing_samples": pipe.window},
+                  residual={"time": pipe.t[pipe.idx], "before": eng.R0,
+                            "after": eng.R(sel.theta) if sel.theta else eng.R0})
     if replay:
         t5 = time.perf_counter()
         d.replay = _replay(rec, eng, sel)

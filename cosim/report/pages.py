@@ -100,13 +100,18 @@ def diagnosis_page(d, path, model=None) -> Path:
     except ReportError:
         pass
     chans = d.localisation["channels"]
-    nd = rec.q.shape[1]
-    for c in range(nd):
-        name = f"tau{c + 1}"
+    r = d.residual
+    for c, name in enumerate(d.channels):
         wins = [(w["start"], w["end"]) for w in chans.get(name, {}).get("windows", [])]
-        sections.append((f"{name}: recorded effort, shaded where the nominal model is out of its noise band",
-                         _series(rec.time, rec.tau[:, [c]], [name], d.heldout["channels"].get(name, {}).get("unit", ""),
-                                 name, wins)))
+        unit = d.heldout["channels"].get(name, {}).get("unit", "")
+        if r:
+            Y = np.column_stack([r["before"][:, c], r["after"][:, c]])
+            fig = _series(r["time"], Y, ["nominal model", "fitted model"], unit,
+                          f"{name}: residual (recording - model); shaded where the nominal model is out of its "
+                          f"noise band", wins)
+        else:
+            fig = _series(rec.time, rec.tau[:, [min(c, rec.tau.shape[1] - 1)]], [name], unit, name, wins)
+        sections.append((f"{name}", fig))
     if d.effects:
         labels, vals, errs = [], [], []
         for e in d.effects:
