@@ -13,6 +13,13 @@ from pathlib import Path
 
 from .cli import command
 
+
+def _effect_types():
+    """The effect types the blind generator can hide (for --help)."""
+    from .discrepancy.blind import TYPES
+
+    return TYPES
+
 REPO = Path(__file__).resolve().parent.parent
 DEMO_SCENARIOS = ("6pus_step_pdg.toml", "6pus_step_pd.toml")
 
@@ -20,7 +27,7 @@ DEMO_SCENARIOS = ("6pus_step_pdg.toml", "6pus_step_pd.toml")
 def _configure(p):
     p.add_argument("--out", default="results/demo", help="output directory (default: results/demo)")
     p.add_argument("--plant", choices=["core", "fmu"], default=None, help="plant (default: the scenario's)")
-    p.add_argument("--effect", default="coulomb", help="effect hidden in the discrepancy demo (default coulomb)")
+    p.add_argument("--effect", default="coulomb", help=f"effect hidden in the discrepancy demo (default coulomb): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=3, help="seed of the discrepancy demo's blind case")
 
 

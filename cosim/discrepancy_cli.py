@@ -16,6 +16,13 @@ from pathlib import Path
 from .cli import command
 
 
+def _effect_types():
+    """The effect types the blind generator can hide (for --help)."""
+    from .discrepancy.blind import TYPES
+
+    return TYPES
+
+
 def _diag_configure(p):
     p.add_argument("recording", help="pkm-recording/1 CSV (its JSON sidecar beside it)")
     p.add_argument("--model", default=None,
@@ -162,7 +169,7 @@ cmd_blind_benchmark.configure = _bench_configure
 
 def _case_configure(p):
     p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
-    p.add_argument("--effect", action="append", default=[], help="effect type to hide (repeatable; none: clean)")
+    p.add_argument("--effect", action="append", default=[], help=f"effect type to hide (repeatable; none: clean): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--name", default=None, help="case name (default: from the effects and seed)")
     p.add_argument("--out", default="results/blind/cases", help="recording directory")
@@ -185,7 +192,7 @@ cmd_blind_case.configure = _case_configure
 def _demo_configure(p):
     p.add_argument("--out", default="results/discrepancy_demo", help="output directory")
     p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
-    p.add_argument("--effect", default="coulomb", help="effect to hide (default coulomb)")
+    p.add_argument("--effect", default="coulomb", help=f"effect to hide (default coulomb): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=3)
 
 
