@@ -35,22 +35,33 @@ def test_rollback_reproduces_bit_for_bit(fmu_file, hold):
     assert np.max(np.abs(first[-1] - first[0])) > 1e-6  # it moved
 
 
-def test_serialized_state_continues_in_a_new_instance(fmu_file, hold):
-    taus = _inputs(hold, 30)
-    with fmu.FMUInstance(fmu_file, name="a", params={"platform.m": 0.42}) as a:
-        _run(a, taus[:10])
+def _continue_in_a_new_instance(fmu_file, params, taus, split, check=None):
+    """Run ``taus[:split]`` on an instance with ``params``, serialize its state, then run the
+    rest there and, from the serialized bytes, on a default instance: both trajectories."""
+    with fmu.FMUInstance(fmu_file, name="a", params=params) as a:
+        _run(a, taus[:split])
         t_mid = a.time
         s = a.get_state()
         blob = a.serialize(s)
         a.free_state(s)
-        ref = _run(a, taus[10:])
-    # A default-parameter instance takes the state, parameters included.
+        ref = _run(a, taus[split:])
     with fmu.FMUInstance(fmu_file, name="b") as b:
         s = b.deserialize(blob)
         b.set_state(s, time=t_mid)
         b.free_state(s)
+        if check:
+            check(b)
+        got = _run(b, taus[split:])
+    return ref, got
+
+
+def test_serialized_state_continues_in_a_new_instance(fmu_file, hold):
+    # A default-parameter instance takes the state, parameters included.
+    def takes_the_parameters(b):
         assert b.get("platform.m") == 0.42
-        got = _run(b, taus[10:])
+
+    ref, got = _continue_in_a_new_instance(fmu_file, {"platform.m": 0.42}, _inputs(hold, 30), 10,
+                                           takes_the_parameters)
     assert np.array_equal(ref, got)
 
 
@@ -58,20 +69,8 @@ def test_serialized_state_continues_in_a_new_instance(fmu_file, hold):
 def test_serialized_state_carries_the_actuator_delay_line_and_the_step_size(fmu_file, hold, method):
     # With a 5 ms actuator delay the commands of the last 5 ms act after the rollback
     # point: a fresh instance given only the serialized state must replay them.
-    taus = _inputs(hold, 30)
-    params = {"actuator.delay": 0.005, "solver.method": method}
-    with fmu.FMUInstance(fmu_file, name="a", params=params) as a:
-        _run(a, taus[:12])
-        t_mid = a.time
-        s = a.get_state()
-        blob = a.serialize(s)
-        a.free_state(s)
-        ref = _run(a, taus[12:])
-    with fmu.FMUInstance(fmu_file, name="b") as b:
-        s = b.deserialize(blob)
-        b.set_state(s, time=t_mid)
-        b.free_state(s)
-        got = _run(b, taus[12:])
+    ref, got = _continue_in_a_new_instance(fmu_file, {"actuator.delay": 0.005, "solver.method": method},
+                                           _inputs(hold, 30), 12)
     assert np.array_equal(ref, got)
 
 
