@@ -34,7 +34,8 @@ from .core import Model
 from .quattro import adept_to_model
 
 __all__ = ["CYCLES", "LAYOUTS", "Profile", "topp_segment", "cycle_waypoints", "cycle_time", "load_measured",
-           "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison"]
+           "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison",
+           "CYCLE_TERMS", "CycleFit", "fit_cycle_model"]
 
 # lift / travel / set-down [m] (seed ch. 3.3)
 CYCLES = {"standard": (0.025, 0.305, 0.025), "extended": (0.040, 0.700, 0.040)}
@@ -355,8 +356,12 @@ def simulate_segment(m: Model, prof: Profile, kp: float = 4.0e4, kd: float = 4.0
 
 # ---------------------------------------------------------------------- figures
 
-def plot_comparison(cmp: Comparison, out_dir, fmt: str = "png") -> list:
-    """Predicted (time of 10 cycles) vs measured against z, one panel per table."""
+def plot_comparison(cmp: Comparison, out_dir, fmt: str = "png", fit: "CycleFit | None" = None) -> list:
+    """Predicted (time of 10 cycles) vs measured against z, one panel per table.
+
+    With ``fit`` (:func:`fit_cycle_model`) the fitted model is drawn on the same axis and each
+    panel says whether its table was used for the fit or held out.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -372,10 +377,16 @@ def plot_comparison(cmp: Comparison, out_dir, fmt: str = "png") -> list:
         # one axis for both: the level gap (the model is 2-3x too fast) must stay visible
         ax.plot(zz, tc.measured_t10, "o-", color="C0", label="measured")
         ax.plot(zz, tc.predicted_t10, "s--", color="C3", label="torque-limited model")
+        role = ""
+        if fit is not None and name in fit.model_t10:
+            held = name not in fit.fit_tables
+            ax.plot(zz, fit.model_t10[name], "^-" if held else "^:", color="C2",
+                    label=f"fitted model ({'held out' if held else 'fit'}, RMS {fit.rms_pct[name]:.1f} %)")
+            role = " [HELD OUT]" if held else " [fit]"
         ax.set_xlabel("pick/place height z [mm]")
         ax.set_ylabel("time of 10 cycles [s]")
         ax.set_ylim(0, 1.08 * max(tc.measured_t10.max(), tc.predicted_t10.max()))
-        ax.set_title(f"Table {name}: {tc.cycle}, {tc.layout}\nSpearman {tc.spearman:+.2f}, "
+        ax.set_title(f"Table {name}{role}: {tc.cycle}, {tc.layout}\nSpearman {tc.spearman:+.2f}, "
                      f"measured / model x{tc.level_ratio:.2f}", fontsize=9)
         ax.axvline(tc.z_min_meas * 1e3, color="C0", lw=0.8, ls=":")
         ax.axvline(tc.z_min_pred * 1e3, color="C3", lw=0.8, ls=":")
@@ -387,3 +398,151 @@ def plot_comparison(cmp: Comparison, out_dir, fmt: str = "png") -> list:
     fig.savefig(f, dpi=110)
     plt.close(fig)
     return [f]
+
+
+# ------------------------------------------------------------ fitted cycle model
+
+# The terms of the fitted cycle model.  Each is a physical parameter with a unit:
+#   torque_fraction [-] : the controller plans its motion with this fraction of the arm torque capability
+#                         (gear.ratio * motor.tau_nominal); gravity keeps its full share, so the pose
+#                         dependence of the cycle time grows as the fraction falls.
+#   settle [s]          : fine-positioning / settling time added at each of the six stops of a cycle.
+CYCLE_TERMS = {"torque_fraction": ("-", 1.0, (0.02, 1.0)), "settle": ("s", 0.0, (0.0, 0.2))}
+
+
+@dataclass
+class CycleFit:
+    """A cycle-time model fitted on some measured tables and its prediction of all of them.
+
+    Attributes
+    ----------
+    terms : tuple of str
+        The fitted terms (keys of ``CYCLE_TERMS``); the others keep their neutral value.
+    params, intervals : dict
+        Fitted value and 95 % interval (low, high) of each term, in the units of ``CYCLE_TERMS``.
+    fit_tables : tuple of str
+    model_t10, torque_limited_t10, scale_only_t10 : dict
+        Per table, the time of 10 cycles [s]: fitted model, torque-limited model, and the torque-limited
+        model times one scale factor fitted on the same tables (the baseline the model must beat).
+    rms_pct, scale_only_rms_pct : dict
+        Per table, RMS relative error [%] of the model and of the scale-only baseline.
+    """
+
+    terms: tuple
+    params: dict
+    intervals: dict
+    fit_tables: tuple
+    measured: dict
+    model_t10: dict
+    torque_limited_t10: dict
+    scale_only_t10: dict
+    rms_pct: dict
+    scale_only_rms_pct: dict
+
+    def summary(self) -> str:
+        lines = [f"cycle model fitted on table(s) {', '.join(self.fit_tables)}:"]
+        for k in self.terms:
+            lo, hi = self.intervals[k]
+            unit = CYCLE_TERMS[k][0]
+            unit = "" if unit == "-" else f" {unit}"
+            lines.append(f"  {k} = {self.params[k]:.4g}{unit} (95 % {lo:.3g} .. {hi:.3g}{unit})")
+        for t in sorted(self.rms_pct):
+            tag = "fit" if t in self.fit_tables else "held out"
+            lines.append(f"  table {t} ({tag}): RMS error {self.rms_pct[t]:.2f} % "
+                         f"(scale-only torque-limited model {self.scale_only_rms_pct[t]:.2f} %), Spearman "
+                         f"{spearman(self.model_t10[t], self.measured[t].t10):+.2f}")
+        return "\n".join(lines)
+
+
+def _segment_times(m: Model, ms: Measured, torque_fraction: float, n: int) -> np.ndarray:
+    """Time of each of the six segments per row of one table [s], shape (rows, 6)."""
+    tau = torque_fraction * _limits(m)
+    out = np.empty((len(ms.z), 6))
+    for r, z in enumerate(ms.z):
+        w = cycle_waypoints(m, z, ms.cycle, ms.layout)
+        out[r] = [topp_segment(m, w[i], w[i + 1], n=n, tau_max=tau).duration for i in range(6)]
+    return out
+
+
+def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle"), n: int = 150,
+                    param_set: str = "appendix_a", measured=None) -> CycleFit:
+    """Fit the cycle-time model on some measured tables and predict every table.
+
+    The model of one cycle is the sum of the six time-optimal segments planned with a fraction of
+    the torque capability, plus a settling time at each of the six stops.  The parameters are fitted
+    by least squares on the relative error of the fit tables; the 95 % intervals come from the
+    Jacobian at the optimum (residual variance times (J^T J)^-1).
+
+    Parameters
+    ----------
+    fit_tables : sequence of str
+        Tables to fit on ("6.1" ... "6.5"); the others are held out.
+    terms : sequence of str
+        Terms to fit (see ``CYCLE_TERMS``); a term left out keeps its neutral value (full torque, no settling).
+    n : int
+        Grid intervals per segment of the time-optimal profile.
+    param_set : str
+        Quattro parameter set (``appendix_a`` is the one whose torque-limited trend matches the tables).
+
+    Returns
+    -------
+    CycleFit
+
+    Example
+    -------
+    >>> from cosim import cycle_time as ct
+    >>> fit = ct.fit_cycle_model(fit_tables=("6.1", "6.5"))
+    >>> print(fit.summary())
+    """
+    from scipy.optimize import least_squares
+
+    unknown = [t for t in terms if t not in CYCLE_TERMS]
+    if unknown:
+        raise ValueError(f"unknown cycle-model term {unknown[0]!r} (known: {', '.join(CYCLE_TERMS)})")
+    meas = measured or load_measured()
+    missing = [t for t in fit_tables if t not in meas]
+    if missing or not fit_tables:
+        raise ValueError(f"fit table {missing[0] if missing else '(none)'!r} is not among the measured tables "
+                         f"({', '.join(sorted(meas))})")
+    m = Model("quattro", param_set)
+    terms, fit_tables = tuple(terms), tuple(fit_tables)
+
+    def full(p):
+        v = {k: CYCLE_TERMS[k][1] for k in CYCLE_TERMS}
+        v.update(dict(zip(terms, p)))
+        return v
+
+    def predict(v, tables):
+        return {t: 10 * (_segment_times(m, meas[t], v["torque_fraction"], n).sum(axis=1) + 6 * v["settle"])
+                for t in tables}
+
+    def residual(p):
+        pr = predict(full(p), fit_tables)
+        return np.concatenate([(pr[t] - meas[t].t10) / meas[t].t10 for t in fit_tables])
+
+    params, intervals = {}, {}
+    if terms:
+        x0 = [{"torque_fraction": 0.3, "settle": 0.02}[k] for k in terms]
+        lb = [CYCLE_TERMS[k][2][0] for k in terms]
+        ub = [CYCLE_TERMS[k][2][1] for k in terms]
+        sol = least_squares(residual, x0, bounds=(lb, ub), diff_step=1e-3)
+        dof = max(sol.fun.size - len(terms), 1)
+        cov = np.linalg.pinv(sol.jac.T @ sol.jac) * float(sol.fun @ sol.fun) / dof
+        for i, k in enumerate(terms):
+            half = 1.96 * math.sqrt(max(cov[i, i], 0.0))
+            params[k] = float(sol.x[i])
+            intervals[k] = (max(params[k] - half, lb[i]), min(params[k] + half, ub[i]))
+        values = full(sol.x)
+    else:
+        values = full([])
+    tables = sorted(meas)
+    model = predict(values, tables)
+    base = predict(full([]) | {"torque_fraction": 1.0, "settle": 0.0}, tables)
+    scale = (sum(float(base[t] @ meas[t].t10) for t in fit_tables)
+             / sum(float(base[t] @ base[t]) for t in fit_tables))
+    scaled = {t: scale * base[t] for t in tables}
+
+    def rms(pr):
+        return {t: float(np.sqrt(np.mean(((pr[t] - meas[t].t10) / meas[t].t10) ** 2)) * 100) for t in tables}
+
+    return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled))

@@ -54,6 +54,9 @@ def _configure(p):
     c.add_argument("--set", dest="param_set", default="appendix_a")
     c.add_argument("--n", type=int, default=200, help="grid intervals per segment")
     c.add_argument("--qd-max", type=float, default=None, help="arm speed limit [rad/s] (default none)")
+    c.add_argument("--fit", default="6.1,6.5", metavar="TABLES",
+                   help="fit the cycle model (torque fraction + settling per stop) on these tables and predict "
+                        "the others (comma-separated, default 6.1,6.5; 'none' to skip)")
 
 
 @command("quattro", "Adept Quattro (seed 003): index maps, benchmark, stated maxima, cycle times vs measurements")
@@ -113,17 +116,32 @@ def cmd_quattro(args):
 
         with working("timing the cycles of Tables 6.1-6.5"):
             cmp = ct.compare(param_set=args.param_set, n=args.n, qd_max=args.qd_max)
-        files = ct.plot_comparison(cmp, args.out)
+        Path(args.out).mkdir(parents=True, exist_ok=True)
         f = Path(args.out) / "quattro_cycle_times.csv"
         with open(f, "w") as fh:
             fh.write("table,cycle,layout,z_mm,measured_10_cycles_s,predicted_10_cycles_s\n")
             for name, tc in sorted(cmp.tables.items()):
                 for z, a, b in zip(tc.z, tc.measured_t10, tc.predicted_t10):
                     fh.write(f"{name},{tc.cycle},{tc.layout},{z * 1e3:.0f},{a:.4f},{b:.4f}\n")
-        files.append(f)
+        tables = [f]
         for name, tc in sorted(cmp.tables.items()):
             print(tc.summary())
-        for f in files:
+        fit = None
+        if args.fit.strip().lower() != "none":
+            fit_tables = tuple(t.strip() for t in args.fit.split(",") if t.strip())
+            with working(f"fitting the cycle model on table(s) {', '.join(fit_tables)}"):
+                fit = ct.fit_cycle_model(fit_tables=fit_tables, param_set=args.param_set, n=args.n)
+            f = Path(args.out) / "quattro_cycle_model.csv"
+            with open(f, "w") as fh:
+                fh.write("table,layout,cycle,z_mm,measured_s,torque_limited_s,model_s,used_for_fit\n")
+                for name, ms in sorted(fit.measured.items()):
+                    for i, z in enumerate(ms.z):
+                        fh.write(f"{name},{ms.layout},{ms.cycle},{z * 1e3:.0f},{ms.t10[i] / 10:.5f},"
+                                 f"{fit.torque_limited_t10[name][i] / 10:.5f},{fit.model_t10[name][i] / 10:.5f},"
+                                 f"{int(name in fit.fit_tables)}\n")
+            tables.append(f)
+            print(fit.summary())
+        for f in ct.plot_comparison(cmp, args.out, fit=fit) + tables:
             print(f"wrote {f}")
         return 0
     raise ValueError(f"unknown action {args.action}")

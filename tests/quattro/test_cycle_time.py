@@ -79,3 +79,39 @@ def test_waypoints_follow_the_layout():
     assert np.allclose(w[0], w[-1])
     with pytest.raises(ValueError, match="unknown layout"):
         ct.cycle_waypoints(m, -1.0, "standard", "diagonal")
+
+
+# ------------------------------------------------ fitted cycle model (issue 16)
+
+@pytest.fixture(scope="module")
+def fit_61_65():
+    return ct.fit_cycle_model(fit_tables=("6.1", "6.5"), n=150)
+
+
+@pytest.mark.parametrize("table", ["6.2", "6.3", "6.4"])
+def test_fit_on_6_1_and_6_5_predicts_held_out_tables_within_1_5_percent(fit_61_65, table):
+    # Measured tables the fit never saw; the baseline is the torque-limited model times one
+    # scale factor fitted on the same tables.
+    assert fit_61_65.rms_pct[table] < 1.5, fit_61_65.summary()
+    assert fit_61_65.rms_pct[table] < 0.5 * fit_61_65.scale_only_rms_pct[table], fit_61_65.summary()
+
+
+def test_fitted_cycle_parameters_are_physical_and_carry_intervals(fit_61_65):
+    f, settle = fit_61_65.params["torque_fraction"], fit_61_65.params["settle"]
+    assert 0.1 < f < 0.9, fit_61_65.summary()
+    assert 0.001 < settle < 0.1, fit_61_65.summary()      # milliseconds to tens of milliseconds per stop
+    for k, v in fit_61_65.params.items():
+        lo, hi = fit_61_65.intervals[k]
+        assert lo < v < hi and (hi - lo) < 0.4 * v, (k, v, lo, hi)
+
+
+def test_fit_on_6_1_alone_extrapolates_to_the_extended_cycle_better_than_a_time_scale():
+    fit = ct.fit_cycle_model(fit_tables=("6.1",), n=150)
+    assert fit.rms_pct["6.5"] < 3.0 and fit.rms_pct["6.5"] < 0.5 * fit.scale_only_rms_pct["6.5"], fit.summary()
+
+
+def test_fit_cycle_model_rejects_unknown_terms_and_tables():
+    with pytest.raises(ValueError, match="unknown cycle-model term 'jerk'"):
+        ct.fit_cycle_model(terms=("jerk",))
+    with pytest.raises(ValueError, match="'7.1' is not among the measured tables"):
+        ct.fit_cycle_model(fit_tables=("7.1",))
