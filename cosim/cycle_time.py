@@ -35,7 +35,7 @@ from .quattro import adept_to_model
 
 __all__ = ["CYCLES", "LAYOUTS", "Profile", "topp_segment", "cycle_waypoints", "cycle_time", "load_measured",
            "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison",
-           "CYCLE_TERMS", "CycleFit", "fit_cycle_model"]
+           "CYCLE_TERMS", "CycleFit", "fit_cycle_model", "select_cycle_model"]
 
 # lift / travel / set-down [m] (seed ch. 3.3)
 CYCLES = {"standard": (0.025, 0.305, 0.025), "extended": (0.040, 0.700, 0.040)}
@@ -438,14 +438,26 @@ class CycleFit:
     scale_only_t10: dict
     rms_pct: dict
     scale_only_rms_pct: dict
+    aic: float = float("nan")
+    candidates: dict = field(default_factory=dict)   # terms -> AIC, when chosen by select_cycle_model
 
     def summary(self) -> str:
         lines = [f"cycle model fitted on table(s) {', '.join(self.fit_tables)}:"]
+        if self.candidates:
+            ranked = sorted(self.candidates.items(), key=lambda kv: kv[1])
+            lines.append("  terms chosen by AIC: " + "; ".join(
+                f"{' + '.join(k) or 'none'} {v:.1f}" for k, v in ranked))
+            left = [k for k in CYCLE_TERMS if k not in self.terms]
+            if left:
+                lines.append(f"  left out (the data do not support it): {', '.join(left)}")
         for k in self.terms:
             lo, hi = self.intervals[k]
             unit = CYCLE_TERMS[k][0]
             unit = "" if unit == "-" else f" {unit}"
-            lines.append(f"  {k} = {self.params[k]:.4g}{unit} (95 % {lo:.3g} .. {hi:.3g}{unit})")
+            bounds = CYCLE_TERMS[k][2]
+            loose = ("; not determined by these tables: the interval spans the allowed range"
+                     if lo <= bounds[0] and hi >= bounds[1] else "")
+            lines.append(f"  {k} = {self.params[k]:.4g}{unit} (95 % {lo:.3g} .. {hi:.3g}{unit}{loose})")
         for t in sorted(self.rms_pct):
             tag = "fit" if t in self.fit_tables else "held out"
             lines.append(f"  table {t} ({tag}): RMS error {self.rms_pct[t]:.2f} % "
@@ -545,4 +557,29 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
     def rms(pr):
         return {t: float(np.sqrt(np.mean(((pr[t] - meas[t].t10) / meas[t].t10) ** 2)) * 100) for t in tables}
 
-    return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled))
+    rel = np.concatenate([(model[t] - meas[t].t10) / meas[t].t10 for t in fit_tables])
+    aic = float(rel.size * math.log(max(float(rel @ rel), 1e-300) / rel.size) + 2 * len(terms))
+    return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled), aic)
+
+
+def select_cycle_model(fit_tables=("6.1", "6.5"), n: int = 150, param_set: str = "appendix_a",
+                       measured=None) -> CycleFit:
+    """Fit every non-empty combination of ``CYCLE_TERMS`` and keep the one with the lowest AIC.
+
+    AIC = N ln(RSS / N) + 2 k on the relative errors of the fit tables (N rows, k terms), the same
+    discipline as the discrepancy engine: a term enters only if it pays for itself.  The returned
+    fit lists every candidate's AIC and the terms left out.
+
+    Example
+    -------
+    >>> from cosim import cycle_time as ct
+    >>> print(ct.select_cycle_model(fit_tables=("6.1",)).summary())
+    """
+    from itertools import combinations
+
+    names = list(CYCLE_TERMS)
+    fits = [fit_cycle_model(fit_tables, c, n=n, param_set=param_set, measured=measured)
+            for r in range(1, len(names) + 1) for c in combinations(names, r)]
+    best = min(fits, key=lambda f: f.aic)
+    best.candidates = {f.terms: f.aic for f in fits}
+    return best

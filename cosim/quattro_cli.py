@@ -55,8 +55,8 @@ def _configure(p):
     c.add_argument("--n", type=int, default=200, help="grid intervals per segment")
     c.add_argument("--qd-max", type=float, default=None, help="arm speed limit [rad/s] (default none)")
     c.add_argument("--fit", default="6.1,6.5", metavar="TABLES",
-                   help="fit the cycle model (torque fraction + settling per stop) on these tables and predict "
-                        "the others (comma-separated, default 6.1,6.5; 'none' to skip)")
+                   help="fit the cycle model (torque fraction, settling per stop; terms chosen by AIC) on these "
+                        "tables and predict the others (comma-separated, default 6.1,6.5; 'none' to skip)")
 
 
 @command("quattro", "Adept Quattro (seed 003): index maps, benchmark, stated maxima, cycle times vs measurements")
@@ -130,7 +130,7 @@ def cmd_quattro(args):
         if args.fit.strip().lower() != "none":
             fit_tables = tuple(t.strip() for t in args.fit.split(",") if t.strip())
             with working(f"fitting the cycle model on table(s) {', '.join(fit_tables)}"):
-                fit = ct.fit_cycle_model(fit_tables=fit_tables, param_set=args.param_set, n=args.n)
+                fit = ct.select_cycle_model(fit_tables=fit_tables, param_set=args.param_set, n=args.n)
             f = Path(args.out) / "quattro_cycle_model.csv"
             with open(f, "w") as fh:
                 fh.write("table,layout,cycle,z_mm,measured_s,torque_limited_s,model_s,used_for_fit\n")
