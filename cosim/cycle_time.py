@@ -402,12 +402,15 @@ def plot_comparison(cmp: Comparison, out_dir, fmt: str = "png", fit: "CycleFit |
 
 # ------------------------------------------------------------ fitted cycle model
 
-# The terms of the fitted cycle model.  Each is a physical parameter with a unit:
-#   torque_fraction [-] : the controller plans its motion with this fraction of the arm torque capability
-#                         (gear.ratio * motor.tau_nominal); gravity keeps its full share, so the pose
-#                         dependence of the cycle time grows as the fraction falls.
+# The terms of the fitted cycle model: unit, neutral value, allowed range.  Each is a physical parameter:
+#   time_scale [-]      : the controller runs the torque-limited profile stretched in time by this factor
+#                         (a speed override: velocities / scale, inertial torques / scale^2, gravity unchanged).
+#   torque_fraction [-] : the controller re-plans each move time-optimally with this fraction of the arm
+#                         torque capability (gear.ratio * motor.tau_nominal); gravity keeps its full share,
+#                         so the pose dependence of the cycle time grows as the fraction falls.
 #   settle [s]          : fine-positioning / settling time added at each of the six stops of a cycle.
-CYCLE_TERMS = {"torque_fraction": ("-", 1.0, (0.02, 1.0)), "settle": ("s", 0.0, (0.0, 0.2))}
+CYCLE_TERMS = {"time_scale": ("-", 1.0, (0.5, 10.0)), "torque_fraction": ("-", 1.0, (0.02, 1.0)),
+               "settle": ("s", 0.0, (0.0, 0.2))}
 
 
 @dataclass
@@ -426,6 +429,8 @@ class CycleFit:
         model times one scale factor fitted on the same tables (the baseline the model must beat).
     rms_pct, scale_only_rms_pct : dict
         Per table, RMS relative error [%] of the model and of the scale-only baseline.
+    peak_speed, peak_acceleration : float
+        Largest tool speed [m/s] and path acceleration [m/s^2] of the fitted motion over all rows.
     """
 
     terms: tuple
@@ -438,6 +443,8 @@ class CycleFit:
     scale_only_t10: dict
     rms_pct: dict
     scale_only_rms_pct: dict
+    peak_speed: float = float("nan")
+    peak_acceleration: float = float("nan")
     aic: float = float("nan")
     candidates: dict = field(default_factory=dict)   # terms -> AIC, when chosen by select_cycle_model
 
@@ -447,7 +454,8 @@ class CycleFit:
             ranked = sorted(self.candidates.items(), key=lambda kv: kv[1])
             lines.append("  terms chosen by AIC: " + "; ".join(
                 f"{' + '.join(k) or 'none'} {v:.1f}" for k, v in ranked))
-            left = [k for k in CYCLE_TERMS if k not in self.terms]
+            tried = {k for c in self.candidates for k in c}
+            left = [k for k in CYCLE_TERMS if k in tried and k not in self.terms]
             if left:
                 lines.append(f"  left out (the data do not support it): {', '.join(left)}")
         for k in self.terms:
@@ -458,6 +466,8 @@ class CycleFit:
             loose = ("; not determined by these tables: the interval spans the allowed range"
                      if lo <= bounds[0] and hi >= bounds[1] else "")
             lines.append(f"  {k} = {self.params[k]:.4g}{unit} (95 % {lo:.3g} .. {hi:.3g}{unit}{loose})")
+        lines.append(f"  fitted motion: peak tool speed {self.peak_speed:.2f} m/s, peak path acceleration "
+                     f"{self.peak_acceleration:.0f} m/s^2")
         for t in sorted(self.rms_pct):
             tag = "fit" if t in self.fit_tables else "held out"
             lines.append(f"  table {t} ({tag}): RMS error {self.rms_pct[t]:.2f} % "
@@ -466,31 +476,37 @@ class CycleFit:
         return "\n".join(lines)
 
 
-def _segment_times(m: Model, ms: Measured, torque_fraction: float, n: int) -> np.ndarray:
-    """Time of each of the six segments per row of one table [s], shape (rows, 6)."""
+def _segment_times(m: Model, ms: Measured, torque_fraction: float, n: int):
+    """Per row of one table: the six segment times [s] (rows, 6), and the peak tool speed [m/s] and
+    path acceleration [m/s^2] over the six (rows,)."""
     tau = torque_fraction * _limits(m)
-    out = np.empty((len(ms.z), 6))
+    out, vmax, amax = np.empty((len(ms.z), 6)), np.zeros(len(ms.z)), np.zeros(len(ms.z))
     for r, z in enumerate(ms.z):
         w = cycle_waypoints(m, z, ms.cycle, ms.layout)
-        out[r] = [topp_segment(m, w[i], w[i + 1], n=n, tau_max=tau).duration for i in range(6)]
-    return out
+        for i in range(6):
+            prof = topp_segment(m, w[i], w[i + 1], n=n, tau_max=tau)
+            out[r, i] = prof.duration
+            vmax[r] = max(vmax[r], float(prof.sd.max()))
+            amax[r] = max(amax[r], float(np.abs(np.diff(prof.sd ** 2) / (2 * np.diff(prof.s))).max()))
+    return out, vmax, amax
 
 
-def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle"), n: int = 150,
+def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n: int = 150,
                     param_set: str = "appendix_a", measured=None) -> CycleFit:
     """Fit the cycle-time model on some measured tables and predict every table.
 
-    The model of one cycle is the sum of the six time-optimal segments planned with a fraction of
-    the torque capability, plus a settling time at each of the six stops.  The parameters are fitted
-    by least squares on the relative error of the fit tables; the 95 % intervals come from the
-    Jacobian at the optimum (residual variance times (J^T J)^-1).
+    The model of one cycle is ``time_scale * sum(T_i) + 6 * settle``, where T_i are the six
+    time-optimal segments planned with ``torque_fraction`` of the torque capability.  The parameters
+    are fitted by least squares on the relative error of the fit tables; the 95 % intervals come from
+    the Jacobian at the optimum (residual variance times (J^T J)^-1).
 
     Parameters
     ----------
     fit_tables : sequence of str
         Tables to fit on ("6.1" ... "6.5"); the others are held out.
     terms : sequence of str
-        Terms to fit (see ``CYCLE_TERMS``); a term left out keeps its neutral value (full torque, no settling).
+        Terms to fit (see ``CYCLE_TERMS``); a term left out keeps its neutral value
+        (no stretch, full torque, no settling).
     n : int
         Grid intervals per segment of the time-optimal profile.
     param_set : str
@@ -518,6 +534,13 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
                          f"({', '.join(sorted(meas))})")
     m = Model("quattro", param_set)
     terms, fit_tables = tuple(terms), tuple(fit_tables)
+    cache = {}
+
+    def segments(t, fraction):
+        key = (t, float(fraction))
+        if key not in cache:
+            cache[key] = _segment_times(m, meas[t], fraction, n)
+        return cache[key]
 
     def full(p):
         v = {k: CYCLE_TERMS[k][1] for k in CYCLE_TERMS}
@@ -525,7 +548,7 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
         return v
 
     def predict(v, tables):
-        return {t: 10 * (_segment_times(m, meas[t], v["torque_fraction"], n).sum(axis=1) + 6 * v["settle"])
+        return {t: 10 * (v["time_scale"] * segments(t, v["torque_fraction"])[0].sum(axis=1) + 6 * v["settle"])
                 for t in tables}
 
     def residual(p):
@@ -533,8 +556,9 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
         return np.concatenate([(pr[t] - meas[t].t10) / meas[t].t10 for t in fit_tables])
 
     params, intervals = {}, {}
+    values = full([])
     if terms:
-        x0 = [{"torque_fraction": 0.3, "settle": 0.02}[k] for k in terms]
+        x0 = [{"time_scale": 2.0, "torque_fraction": 0.3, "settle": 0.02}[k] for k in terms]
         lb = [CYCLE_TERMS[k][2][0] for k in terms]
         ub = [CYCLE_TERMS[k][2][1] for k in terms]
         sol = least_squares(residual, x0, bounds=(lb, ub), diff_step=1e-3)
@@ -545,11 +569,9 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
             params[k] = float(sol.x[i])
             intervals[k] = (max(params[k] - half, lb[i]), min(params[k] + half, ub[i]))
         values = full(sol.x)
-    else:
-        values = full([])
     tables = sorted(meas)
     model = predict(values, tables)
-    base = predict(full([]) | {"torque_fraction": 1.0, "settle": 0.0}, tables)
+    base = predict(full([]), tables) if not terms else {t: 10 * segments(t, 1.0)[0].sum(axis=1) for t in tables}
     scale = (sum(float(base[t] @ meas[t].t10) for t in fit_tables)
              / sum(float(base[t] @ base[t]) for t in fit_tables))
     scaled = {t: scale * base[t] for t in tables}
@@ -559,12 +581,17 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("torque_fraction", "settle
 
     rel = np.concatenate([(model[t] - meas[t].t10) / meas[t].t10 for t in fit_tables])
     aic = float(rel.size * math.log(max(float(rel @ rel), 1e-300) / rel.size) + 2 * len(terms))
-    return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled), aic)
+    motion = [segments(t, values["torque_fraction"]) for t in tables]
+    peak_v = max(float(mo[1].max()) for mo in motion) / values["time_scale"]
+    peak_a = max(float(mo[2].max()) for mo in motion) / values["time_scale"] ** 2
+    return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled),
+                    peak_v, peak_a, aic)
 
 
 def select_cycle_model(fit_tables=("6.1", "6.5"), n: int = 150, param_set: str = "appendix_a",
-                       measured=None) -> CycleFit:
-    """Fit every non-empty combination of ``CYCLE_TERMS`` and keep the one with the lowest AIC.
+                       measured=None, terms=tuple(CYCLE_TERMS)) -> CycleFit:
+    """Fit every non-empty combination of ``terms`` (default all of ``CYCLE_TERMS``) and keep the
+    one with the lowest AIC.
 
     AIC = N ln(RSS / N) + 2 k on the relative errors of the fit tables (N rows, k terms), the same
     discipline as the discrepancy engine: a term enters only if it pays for itself.  The returned
@@ -577,7 +604,7 @@ def select_cycle_model(fit_tables=("6.1", "6.5"), n: int = 150, param_set: str =
     """
     from itertools import combinations
 
-    names = list(CYCLE_TERMS)
+    names = list(terms)
     fits = [fit_cycle_model(fit_tables, c, n=n, param_set=param_set, measured=measured)
             for r in range(1, len(names) + 1) for c in combinations(names, r)]
     best = min(fits, key=lambda f: f.aic)

@@ -85,38 +85,48 @@ def test_waypoints_follow_the_layout():
 
 @pytest.fixture(scope="module")
 def fit_61_65():
-    return ct.select_cycle_model(fit_tables=("6.1", "6.5"), n=150)
-
-
-def test_both_cycle_terms_pay_for_themselves_on_6_1_and_6_5(fit_61_65):
-    # AIC: each single-term model is worse than the pair by more than the 2 per parameter it saves.
-    assert fit_61_65.terms == ("torque_fraction", "settle"), fit_61_65.summary()
-    assert all(fit_61_65.candidates[(k,)] > fit_61_65.aic + 10 for k in ct.CYCLE_TERMS), fit_61_65.summary()
+    return ct.fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n=150)
 
 
 @pytest.mark.parametrize("table", ["6.2", "6.3", "6.4"])
 def test_fit_on_6_1_and_6_5_predicts_held_out_tables_within_1_5_percent(fit_61_65, table):
     # Measured tables the fit never saw; the baseline is the torque-limited model times one
-    # scale factor fitted on the same tables.
+    # time scale fitted on the same tables.
     assert fit_61_65.rms_pct[table] < 1.5, fit_61_65.summary()
     assert fit_61_65.rms_pct[table] < 0.5 * fit_61_65.scale_only_rms_pct[table], fit_61_65.summary()
 
 
+@pytest.mark.parametrize("table", ["6.1", "6.2", "6.3", "6.4", "6.5"])
+def test_fitted_model_keeps_the_trend_and_the_fastest_height(fit_61_65, table):
+    meas, model = fit_61_65.measured[table], fit_61_65.model_t10[table]
+    assert ct.spearman(model, meas.t10) >= 0.85, fit_61_65.summary()
+    assert abs(meas.z[np.argmin(model)] - meas.z[np.argmin(meas.t10)]) <= 0.025 + 1e-9, fit_61_65.summary()
+
+
 def test_fitted_cycle_parameters_are_physical_and_carry_intervals(fit_61_65):
-    f, settle = fit_61_65.params["torque_fraction"], fit_61_65.params["settle"]
-    assert 0.1 < f < 0.9, fit_61_65.summary()
+    settle = fit_61_65.params["settle"]
     assert 0.001 < settle < 0.1, fit_61_65.summary()      # milliseconds to tens of milliseconds per stop
+    assert 1.0 < fit_61_65.params["time_scale"] < 5.0, fit_61_65.summary()
+    assert fit_61_65.peak_speed < 10.0 and fit_61_65.peak_acceleration < 150.0, fit_61_65.summary()  # datasheet
     for k, v in fit_61_65.params.items():
         lo, hi = fit_61_65.intervals[k]
         assert lo < v < hi and (hi - lo) < 0.4 * v, (k, v, lo, hi)
 
 
-def test_fit_on_6_1_alone_extrapolates_to_the_extended_cycle_better_than_a_time_scale():
-    fit = ct.fit_cycle_model(fit_tables=("6.1",), n=150)
-    assert fit.rms_pct["6.5"] < 3.0 and fit.rms_pct["6.5"] < 0.5 * fit.scale_only_rms_pct["6.5"], fit.summary()
-    # One standard table cannot pin the torque fraction down (settling absorbs it), and the report says so.
-    line = next(ln for ln in fit.summary().splitlines() if "torque_fraction =" in ln)
-    assert "not determined by these tables" in line, fit.summary()
+def test_aic_keeps_settling_and_leaves_the_torque_fraction_out_on_6_1_and_6_5():
+    fit = ct.select_cycle_model(fit_tables=("6.1", "6.5"), n=100)
+    assert fit.terms == ("time_scale", "settle"), fit.summary()
+    assert fit.candidates[("time_scale",)] > fit.aic + 10, fit.summary()     # settling pays for itself
+    assert "left out (the data do not support it): torque_fraction" in fit.summary()
+
+
+def test_fit_on_6_1_alone_cannot_separate_settling_from_a_time_scale():
+    # One standard table: every row has the same six stops and nearly the same move times, so a
+    # per-stop overhead and a stretch are the same to the data.  AIC keeps the time scale alone,
+    # and the extended cycle is then missed by ~11 % (the shortfall the docs report).
+    fit = ct.select_cycle_model(fit_tables=("6.1",), n=100, terms=("time_scale", "settle"))
+    assert fit.terms == ("time_scale",), fit.summary()
+    assert fit.rms_pct["6.5"] > 5.0, fit.summary()
 
 
 def test_fit_cycle_model_rejects_unknown_terms_and_tables():
