@@ -63,9 +63,12 @@ inline std::string num(double v, int precision = 10) {
   return buf;
 }
 
-inline void require(bool ok, int status, const std::string& msg) {
-  if (!ok) throw Error(status, msg);
-}
+// A check whose message is built only when it fails: a function argument would format
+// its numbers on every call, and the success path of an advance must not pay for that.
+#define PKM_REQUIRE(ok, status, msg)                    \
+  do {                                                  \
+    if (!(ok)) throw ::pkm::Error((status), (msg));     \
+  } while (0)
 
 // Inputs must be finite: a NaN in is reported, never passed on.
 inline void check_finite(const double* v, int n, const char* what) {

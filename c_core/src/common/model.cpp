@@ -59,9 +59,9 @@ int pkm_model_create_status(const char* robot, const char* param_set, pkm_model*
                             size_t errlen) {
   pkm_model* out = nullptr;
   const int status = pkm::guard_err(err, errlen, [&] {
-    pkm::require(robot != nullptr, PKM_ERR_ARGUMENT, "robot name is NULL");
+    PKM_REQUIRE(robot != nullptr, PKM_ERR_ARGUMENT, "robot name is NULL");
     const pkm::Robot* r = pkm::find_robot(robot);
-    pkm::require(r != nullptr, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(r != nullptr, PKM_ERR_ARGUMENT,
                  std::string("unknown robot '") + robot + "' (known: " + pkm::known_robots() + ")");
     auto m = std::make_unique<pkm_model>();
     m->robot = r;
@@ -166,8 +166,8 @@ double pkm_param_get(const pkm_model* m, int i) { return valid_index(m, i) ? m->
 
 int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen) {
   return pkm::guard_err(err, errlen, [&] {
-    pkm::require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
-    pkm::require(valid_index(m, i), PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+    PKM_REQUIRE(valid_index(m, i), PKM_ERR_ARGUMENT,
                  "parameter index " + std::to_string(i) + " out of range [0, " +
                      std::to_string(m->specs.size()) + ")");
     const auto& s = m->specs[i];
@@ -185,7 +185,7 @@ int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen) {
 
 int pkm_model_validate(pkm_model* m, char* err, size_t errlen) {
   return pkm::guard_err(err, errlen, [&] {
-    pkm::require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+    PKM_REQUIRE(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
     m->compiled = std::shared_ptr<const pkm::RobotModel>(m->robot->compile(m->specs, m->values));
     m->drive = pkm::drive::compile(*m->robot, m->specs, m->values);
   });

@@ -119,7 +119,7 @@ struct pkm_ctrl {
           throw Error(PKM_ERR_ARGUMENT, std::string(kn) + " at t = " + num(t) + " s: " + name + " of joint " +
                                             std::to_string(i + 1) + " is " + num(v[i]));
     };
-    require(std::isfinite(t), PKM_ERR_ARGUMENT, std::string(kn) + ": sample time t is not finite");
+    PKM_REQUIRE(std::isfinite(t), PKM_ERR_ARGUMENT, std::string(kn) + ": sample time t is not finite");
     check(q, "q", true);
     check(qd, "qd", true);
     check(qref, "qref", true);
@@ -138,7 +138,7 @@ struct pkm_ctrl {
       case PKM_CTRL_PD_GRAVITY:
         u = kp * e + kd * ed;
         if (gravity_ref) {
-          require(xref != nullptr, PKM_ERR_ARGUMENT,
+          PKM_REQUIRE(xref != nullptr, PKM_ERR_ARGUMENT,
                   std::string(kn) + " at t = " + num(t) + " s: gravity at the reference pose needs xref");
           for (int i = 0; i < nd; ++i) x[i] = xref[i];
         } else {
@@ -246,7 +246,7 @@ struct pkm_ctrl {
   void load(const double* b) {
     const size_t n = state_size();
     for (size_t k = 0; k < n; ++k)
-      require(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "controller state: entry " + std::to_string(k) + " is not finite");
+      PKM_REQUIRE(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "controller state: entry " + std::to_string(k) + " is not finite");
     size_t k = 0;
     for (VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
       for (int i = 0; i < v->size(); ++i) (*v)[i] = b[k++];
@@ -261,15 +261,15 @@ extern "C" {
 pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* err, size_t errlen) {
   pkm_ctrl* out = nullptr;
   guard_err(err, errlen, [&] {
-    require(m != nullptr, PKM_ERR_ARGUMENT, "controller: model is NULL");
-    require(spec != nullptr, PKM_ERR_ARGUMENT, "controller: spec is NULL");
-    require(m->compiled != nullptr, PKM_ERR_PARAMETER,
+    PKM_REQUIRE(m != nullptr, PKM_ERR_ARGUMENT, "controller: model is NULL");
+    PKM_REQUIRE(spec != nullptr, PKM_ERR_ARGUMENT, "controller: spec is NULL");
+    PKM_REQUIRE(m->compiled != nullptr, PKM_ERR_PARAMETER,
             "controller: the model's parameters were changed and not validated: call pkm_model_validate first");
     const pkm_ctrl_spec& s = *spec;
-    require(s.kind >= PKM_CTRL_PD && s.kind <= PKM_CTRL_LTI, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(s.kind >= PKM_CTRL_PD && s.kind <= PKM_CTRL_LTI, PKM_ERR_ARGUMENT,
             "controller spec: kind = " + std::to_string(s.kind) +
                 " is not one of PKM_CTRL_PD (0), _PD_GRAVITY (1), _COMPUTED_TORQUE (2), _PID (3), _LTI (4)");
-    require(std::isfinite(s.dt) && s.dt > 0, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(std::isfinite(s.dt) && s.dt > 0, PKM_ERR_ARGUMENT,
             "controller spec: dt = " + num(s.dt) + " s must be finite and > 0");
     auto c = std::make_unique<pkm_ctrl>();
     const int nd = pkm_model_ndof(m);
@@ -285,13 +285,13 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
       check_gain(c->kd, "kd");
       check_gain(c->ki, "ki");
     }
-    require(std::isfinite(s.deriv_filter) && s.deriv_filter >= 0, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(std::isfinite(s.deriv_filter) && s.deriv_filter >= 0, PKM_ERR_ARGUMENT,
             "controller spec: deriv_filter = " + num(s.deriv_filter) + " s must be finite and >= 0");
     c->tf = s.deriv_filter;
     if (s.saturation) {
       c->sat.resize(nd);
       for (int i = 0; i < nd; ++i) {
-        require(std::isfinite(s.saturation[i]) && s.saturation[i] > 0, PKM_ERR_ARGUMENT,
+        PKM_REQUIRE(std::isfinite(s.saturation[i]) && s.saturation[i] > 0, PKM_ERR_ARGUMENT,
                 "controller spec: saturation of joint " + std::to_string(i + 1) + " must be a positive effort, got " +
                     num(s.saturation[i]));
         c->sat[i] = s.saturation[i];
@@ -300,7 +300,7 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
     c->gravity_ref = s.gravity_at_reference != 0;
     c->gravity_ff = s.gravity_feedforward != 0;
     if (lti) {
-      require(s.nx >= 0 && s.nx <= kMaxStates, PKM_ERR_ARGUMENT,
+      PKM_REQUIRE(s.nx >= 0 && s.nx <= kMaxStates, PKM_ERR_ARGUMENT,
               "controller spec: nx = " + std::to_string(s.nx) + " must be in [0, " + std::to_string(kMaxStates) + "]");
       c->nx = s.nx;
       c->A = copy_matrix(s.A, s.nx, s.nx, "A", s.nx > 0);
@@ -309,9 +309,9 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
       c->D = copy_matrix(s.D, nd, nd, "D", false);
     }
     c->model = pkm_model_copy(m);
-    require(c->model != nullptr, PKM_ERR_INTERNAL, "controller: out of memory copying the model");
+    PKM_REQUIRE(c->model != nullptr, PKM_ERR_INTERNAL, "controller: out of memory copying the model");
     c->data = pkm_data_create(c->model);
-    require(c->data != nullptr, PKM_ERR_INTERNAL, "controller: out of memory creating the work data");
+    PKM_REQUIRE(c->data != nullptr, PKM_ERR_INTERNAL, "controller: out of memory creating the work data");
     c->reset(nullptr);
     out = c.release();
   });

@@ -372,18 +372,18 @@ void Sim::state_save(double* b) const {
 }
 
 void Sim::state_load(const double* b, size_t n) {
-  require(b != nullptr, PKM_ERR_ARGUMENT, "state: buffer is NULL");
-  require(n >= 5 + 3 * (size_t)nd_ && b[0] == 1.0 && b[1] == nd_, PKM_ERR_ARGUMENT,
+  PKM_REQUIRE(b != nullptr, PKM_ERR_ARGUMENT, "state: buffer is NULL");
+  PKM_REQUIRE(n >= 5 + 3 * (size_t)nd_ && b[0] == 1.0 && b[1] == nd_, PKM_ERR_ARGUMENT,
           "state: not a pkm_sim state of this robot (layout version 1, " + std::to_string(nd_) + " joints)");
   for (size_t k = 0; k < n; ++k)
-    require(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "state: entry " + std::to_string(k) + " is not finite");
+    PKM_REQUIRE(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "state: entry " + std::to_string(k) + " is not finite");
   const double nh_value = b[4 + 3 * nd_];
-  require(nh_value >= 0 && nh_value < 1e9 && nh_value == std::floor(nh_value), PKM_ERR_ARGUMENT,
+  PKM_REQUIRE(nh_value >= 0 && nh_value < 1e9 && nh_value == std::floor(nh_value), PKM_ERR_ARGUMENT,
           "state: a history length of " + num(nh_value) + " entries is not a count");
   const size_t nh = (size_t)nh_value;
-  require(n == 5 + 3 * (size_t)nd_ + nh * (1 + (size_t)nd_), PKM_ERR_ARGUMENT,
+  PKM_REQUIRE(n == 5 + 3 * (size_t)nd_ + nh * (1 + (size_t)nd_), PKM_ERR_ARGUMENT,
           "state: " + std::to_string(n) + " values do not match the history length it declares");
-  require(b[3 + 3 * nd_] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
+  PKM_REQUIRE(b[3 + 3 * nd_] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
   const double t = b[2];
   std::vector<double> x(b + 3, b + 3 + nd_), xd(b + 3 + nd_, b + 3 + 2 * nd_);
   reset(t, x.data(), xd.data());  // checks the state as any reset does; clears h_next_

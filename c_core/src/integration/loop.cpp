@@ -29,11 +29,11 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
   size_t k = 0;
   double t_k = 0;
   int status = guard_into(sim.error, [&] {
-    require(c != nullptr, PKM_ERR_ARGUMENT, "closed loop: controller is NULL");
-    require(ref != nullptr && ref->q != nullptr && ref->qd != nullptr, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(c != nullptr, PKM_ERR_ARGUMENT, "closed loop: controller is NULL");
+    PKM_REQUIRE(ref != nullptr && ref->q != nullptr && ref->qd != nullptr, PKM_ERR_ARGUMENT,
             "closed loop: the reference (q and qd) is NULL");
-    require(ref->n >= 1, PKM_ERR_ARGUMENT, "closed loop: the reference has no sample");
-    require(std::isfinite(ref->t0) && std::isfinite(ref->dt) && ref->dt > 0, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(ref->n >= 1, PKM_ERR_ARGUMENT, "closed loop: the reference has no sample");
+    PKM_REQUIRE(std::isfinite(ref->t0) && std::isfinite(ref->dt) && ref->dt > 0, PKM_ERR_ARGUMENT,
             "closed loop: t0 = " + num(ref->t0, 6) + " s and dt = " + num(ref->dt, 6) + " s must be finite, dt > 0");
     const int nd = sim.ndof();
     const pkm_model* m = sim.model();
@@ -46,7 +46,7 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
     sim.get_state(&t, x, xd);
     for (k = 0; k < ref->n; ++k) {
       t_k = ref->t ? ref->t[k] : ref->t0 + (double)k * ref->dt;
-      require(std::isfinite(t_k), PKM_ERR_ARGUMENT, "closed loop: sample time " + std::to_string(k) + " is not finite");
+      PKM_REQUIRE(std::isfinite(t_k), PKM_ERR_ARGUMENT, "closed loop: sample time " + std::to_string(k) + " is not finite");
       // The plant's joints at the sample (pkm_ik / pkm_joint_velocity on the sim's model).
       int st = pkm_ik(m, d, x, q);
       if (st == PKM_OK) st = pkm_joint_velocity(m, d, x, xd, qd);

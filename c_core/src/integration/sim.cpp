@@ -93,26 +93,26 @@ void Sim::check_cvode(int flag, const char* call) const {
 }
 
 Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
-  require(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
+  PKM_REQUIRE(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");
   check_options(opt);
-  require(m->compiled != nullptr, PKM_ERR_PARAMETER,
+  PKM_REQUIRE(m->compiled != nullptr, PKM_ERR_PARAMETER,
           "the model's parameters were changed and not validated: call pkm_model_validate before pkm_sim_create");
   opt_ = opt;
   try {
     model_ = pkm_model_copy(m);
-    require(model_ != nullptr, PKM_ERR_INTERNAL, "out of memory copying the model");
+    PKM_REQUIRE(model_ != nullptr, PKM_ERR_INTERNAL, "out of memory copying the model");
     robot_ = model_->robot;
     nd_ = robot_->ndof();
     find_limits();
     open_limits();
     data_ = pkm_data_create(model_);
-    require(data_ != nullptr, PKM_ERR_INTERNAL, "out of memory creating the work data");
+    PKM_REQUIRE(data_ != nullptr, PKM_ERR_INTERNAL, "out of memory creating the work data");
     rm_ = &prepare(model_, data_);
     rd_ = data_->rd.get();
     const int n2 = 2 * nd_;
 
     y_.assign(n2, 0.0);
-    require(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
+    PKM_REQUIRE(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
     tau_.assign(nd_, 0.0);
     applied_.assign(nd_, 0.0);
     delay_ = model_->drive ? model_->drive->actuator_delay : 0.0;
@@ -141,13 +141,13 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
       throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
     nv_ = N_VNew_Serial(n2, ctx_);
     nv_back_ = N_VNew_Serial(n2, ctx_);
-    require(nv_ != nullptr && nv_back_ != nullptr, PKM_ERR_INTERNAL,
+    PKM_REQUIRE(nv_ != nullptr && nv_back_ != nullptr, PKM_ERR_INTERNAL,
             "CVODE set-up: N_VNew_Serial failed (out of memory)");
     double* v = N_VGetArrayPointer(nv_);
     for (int i = 0; i < n2; ++i) v[i] = y_[i];
 
     cvode_ = CVodeCreate(opt_.method == PKM_BDF ? CV_BDF : CV_ADAMS, ctx_);
-    require(cvode_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: CVodeCreate failed (out of memory)");
+    PKM_REQUIRE(cvode_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: CVodeCreate failed (out of memory)");
     check_cvode(CVodeSetErrHandlerFn(cvode_, err_cb, this), "CVodeSetErrHandlerFn");
     check_cvode(CVodeInit(cvode_, rhs_cb, 0.0, nv_), "CVodeInit");
     check_cvode(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
@@ -156,14 +156,14 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
       // Newton iteration with a dense direct solver; no Jacobian function is given, so
       // CVODE builds it by difference quotients of the RHS (2 nd extra RHS calls).
       A_ = SUNDenseMatrix(n2, n2, ctx_);
-      require(A_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNDenseMatrix failed");
+      PKM_REQUIRE(A_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNDenseMatrix failed");
       ls_ = SUNLinSol_Dense(nv_, A_, ctx_);
-      require(ls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNLinSol_Dense failed");
+      PKM_REQUIRE(ls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNLinSol_Dense failed");
       check_cvode(CVodeSetLinearSolver(cvode_, ls_, A_), "CVodeSetLinearSolver");
     } else {
       // Adams for non-stiff motion: fixed-point (functional) iteration needs no Jacobian.
       nls_ = SUNNonlinSol_FixedPoint(nv_, 0, ctx_);
-      require(nls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNNonlinSol_FixedPoint failed");
+      PKM_REQUIRE(nls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNNonlinSol_FixedPoint failed");
       check_cvode(CVodeSetNonlinearSolver(cvode_, nls_), "CVodeSetNonlinearSolver");
     }
     check_cvode(CVodeSetMaxStep(cvode_, opt_.max_step), "CVodeSetMaxStep");
@@ -381,7 +381,7 @@ static int root_status(const Sim&, bool is_limit) { return is_limit ? PKM_ERR_JO
 // -------------------------------------------------------------------- the API
 
 void Sim::reset(double t0, const double* x, const double* xd) {
-  require(std::isfinite(t0), PKM_ERR_ARGUMENT, "reset: t0 = " + num(t0) + " is not finite");
+  PKM_REQUIRE(std::isfinite(t0), PKM_ERR_ARGUMENT, "reset: t0 = " + num(t0) + " is not finite");
   check_finite(x, nd_, "reset: pose x");
   check_finite(xd, nd_, "reset: pose velocity xd");
   std::vector<double> y(2 * nd_);
@@ -521,8 +521,8 @@ void Sim::stop_before_singularity(double t_start) {
 }
 
 void Sim::advance(double t_end) {
-  require(std::isfinite(t_end), PKM_ERR_ARGUMENT, "advance: t_end = " + num(t_end) + " is not finite");
-  require(t_end >= t_, PKM_ERR_ARGUMENT,
+  PKM_REQUIRE(std::isfinite(t_end), PKM_ERR_ARGUMENT, "advance: t_end = " + num(t_end) + " is not finite");
+  PKM_REQUIRE(t_end >= t_, PKM_ERR_ARGUMENT,
           "advance: t_end = " + num(t_end, 17) + " s is before the current time t = " + num(t_, 17) + " s");
   if (t_end == t_) return;
 
@@ -679,14 +679,14 @@ void Sim::integrate(double t_end) {
   for (int i = 0; i < n2; ++i) finite = finite && std::isfinite(v[i]);
 
   if (flag == CV_SUCCESS || flag == CV_TSTOP_RETURN) {
-    require(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(t_end) + " s");
+    PKM_REQUIRE(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(t_end) + " s");
     for (int i = 0; i < n2; ++i) y_[i] = v[i];
     t_ = t_end;
     return;
   }
 
   if (flag == CV_ROOT_RETURN) {
-    require(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(tret) + " s");
+    PKM_REQUIRE(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(tret) + " s");
     std::vector<int> found(nroots_, 0);
     CVodeGetRootInfo(cvode_, found.data());
     int k = 0;

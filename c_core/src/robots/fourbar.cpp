@@ -196,7 +196,7 @@ extern "C" int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta,
   using namespace pkm;
   return guard(d, [&] {
     const RobotModel& rm = prepare(m, d);
-    require(m->robot_name == "fourbar", PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(m->robot_name == "fourbar", PKM_ERR_ARGUMENT,
             "pkm_fourbar_output needs a 'fourbar' model, got a '" + m->robot_name + "' model");
     check_finite(&theta, 1, "crank angle theta");
     check_out(X, "X");

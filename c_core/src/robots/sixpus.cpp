@@ -226,7 +226,7 @@ int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x, int fr
     const Model& sm = sixpus_model(m, d);
     check_finite(x, 6, "pose x");
     check_out(rows, "rows");
-    require(frame == PKM_FRAME_WORLD || frame == PKM_FRAME_PLATFORM, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(frame == PKM_FRAME_WORLD || frame == PKM_FRAME_PLATFORM, PKM_ERR_ARGUMENT,
             "frame = " + std::to_string(frame) + " must be PKM_FRAME_WORLD (0) or PKM_FRAME_PLATFORM (1)");
     Frame f;
     frame_of(x, f);

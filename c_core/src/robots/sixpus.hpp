@@ -69,8 +69,7 @@ struct Frame {
 // sin and cos of a platform angle for the IK hot path.  For |a| <= 0.8 rad the Taylor
 // series to a^17 / a^16 is exact to rounding (remainder < 1e-18) and several times
 // cheaper than the library call, which would otherwise be a third of the cost of
-// inverse kinematics.  (The other functions use the library: the integrator's results
-// are kept bit-for-bit as they were.)
+// inverse kinematics and a tenth of the forward dynamics.
 inline void sin_cos_small(double a, double& s, double& c) {
   if (std::abs(a) <= 0.8) {
     const double a2 = a * a;
@@ -86,9 +85,10 @@ inline void sin_cos_small(double a, double& s, double& c) {
 }
 
 inline void frame_of(const double* x, Frame& f) {
-  const double sx = std::sin(x[3]), cx = std::cos(x[3]);
-  const double sy = std::sin(x[4]), cy = std::cos(x[4]);
-  const double sz = std::sin(x[5]), cz = std::cos(x[5]);
+  double sx, cx, sy, cy, sz, cz;
+  sin_cos_small(x[3], sx, cx);
+  sin_cos_small(x[4], sy, cy);
+  sin_cos_small(x[5], sz, cz);
   f.sx = sx, f.cx = cx, f.sy = sy, f.cy = cy;
   f.R << cy * cz, -cy * sz, sy,                       //
       sx * sy * cz + cx * sz, -sx * sy * sz + cx * cz, -sx * cy,  //
@@ -131,8 +131,9 @@ std::string pose_text(const double* x);
 // Twist-space Jacobian rows: qd_i = jt_i . nu with jt_i = (w, rP x w) / c.
 inline V6 twist_row(const Leg& l) {
   V6 j;
-  j.head<3>() = l.w / l.c;
-  j.tail<3>() = l.rP.cross(l.w) / l.c;
+  const double ic = 1.0 / l.c;
+  j.head<3>() = ic * l.w;
+  j.tail<3>() = ic * l.rP.cross(l.w);
   return j;
 }
 

@@ -80,19 +80,27 @@ void loads(const Model& m, const State& st, const V3& pdd, const V3& al, V6& Wp,
   }
 }
 
-// Twist-space mass matrix: KE = 0.5 nu' Mt nu.
-void twist_mass(const Model& m, const State& st, M6& Mt) {
+// Twist-space Jacobian rows of every leg as columns: Jc.col(i) = twist_row(leg i).
+void twist_rows(const State& st, M6& Jc) {
+  for (int i = 0; i < NLEG; ++i) Jc.col(i) = twist_row(st.legs[i]);
+}
+
+// Twist-space mass matrix: KE = 0.5 nu' Mt nu; Jc from twist_rows.
+void twist_mass(const Model& m, const State& st, const M6& Jc, M6& Mt) {
   // Platform-attached mass: the platform, the payload and one third of each leg at P.
   double mr = m.m_platform + m.m_payload;
   V3 h = m.m_payload * st.rc;
-  M3 Irot = st.Iw + m.m_payload * (st.rc.squaredNorm() * M3::Identity() - st.rc * st.rc.transpose());
+  // Point masses mp at r: sum mp (|r|^2 I - r r') = trace(G) I - G with G = sum mp r r'.
+  M3 G = m.m_payload * (st.rc * st.rc.transpose());
   for (int i = 0; i < NLEG; ++i) {
     const double mp = m.m_leg[i] / 3;
     const V3& r = st.legs[i].rP;
     mr += mp;
     h += mp * r;
-    Irot += mp * (r.squaredNorm() * M3::Identity() - r * r.transpose());
+    G.noalias() += (mp * r) * r.transpose();
   }
+  M3 Irot = st.Iw - G;
+  Irot.diagonal().array() += G.trace();
   Mt.setZero();
   Mt.topLeftCorner<3, 3>().diagonal().setConstant(mr);
   const M3 H = skew(h);
@@ -101,21 +109,50 @@ void twist_mass(const Model& m, const State& st, M6& Mt) {
   Mt.bottomRightCorner<3, 3>() = Irot;
   // Slider (translating with the rail) and the rest of each leg, with qd_i = j.nu and
   // s.v_P = u.nu:  c1 j j' + c2 (j u' + u j') = j v' + v j'  for v = c1/2 j + c2 u.
-  M6 Jc, Vc;
+  M6 Vc;
   for (int i = 0; i < NLEG; ++i) {
     const Leg& l = st.legs[i];
-    const V6 j = twist_row(l);
     V6 u;
     u.head<3>() = m.s[i];
     u.tail<3>() = l.rP.cross(m.s[i]);
     const double c1 = (m.m_slider[i] + m.m_leg[i] / 3) * m.ss[i];
     const double c2 = m.m_leg[i] / 6;
-    Jc.col(i) = j;
-    Vc.col(i) = (0.5 * c1) * j + c2 * u;
+    Vc.col(i) = (0.5 * c1) * Jc.col(i) + c2 * u;
   }
   M6 A;
   A.noalias() = Jc * Vc.transpose();
   Mt += A + A.transpose();
+}
+
+// Solves A x = b for a symmetric positive-definite 6x6 A (its lower triangle) by
+// Cholesky; false when a pivot is not positive (A not positive definite).  Fixed loops
+// the compiler unrolls: a few times faster than the general LLT at this size, and the
+// forward dynamics call it at every Runge-Kutta stage.
+bool spd_solve6(const M6& A, const V6& b, V6& x) {
+  double L[NLEG][NLEG], inv[NLEG];
+  for (int j = 0; j < 6; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 0)) return false;
+    inv[j] = 1.0 / std::sqrt(d);
+    for (int i = j + 1; i < 6; ++i) {
+      double s = A(i, j);
+      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+      L[i][j] = s * inv[j];
+    }
+  }
+  double y[6];
+  for (int i = 0; i < 6; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
+    y[i] = s * inv[i];
+  }
+  for (int i = 5; i >= 0; --i) {
+    double s = y[i];
+    for (int k = i + 1; k < 6; ++k) s -= L[k][i] * x[k];
+    x[i] = s * inv[i];
+  }
+  return true;
 }
 
 // Euler-angle rates from the angular velocity: a_dot = E^-1 omega.
@@ -161,8 +198,9 @@ void SixPus::mass_matrix(const RobotModel& rm, RobotData&, const double* x, doub
   const double zero[6] = {0, 0, 0, 0, 0, 0};
   State st;
   state_of(m, x, zero, st);
-  M6 Mt;
-  twist_mass(m, st, Mt);
+  M6 Jc, Mt;
+  twist_rows(st, Jc);
+  twist_mass(m, st, Jc, Mt);
   // Task space (Euler-angle rates): M = T^T Mt T, T = blockdiag(I, E).
   M6 T = M6::Identity();
   T.bottomRightCorner<3, 3>() = st.f.E;
@@ -179,16 +217,17 @@ void SixPus::forward_dynamics(const RobotModel& rm, RobotData&, const double* x,
   V6 W;
   double fs[NLEG];
   loads(m, st, V3::Zero(), st.Ed_ad, W, fs);
-  for (int i = 0; i < NLEG; ++i)
-    W -= twist_row(st.legs[i]) * (tau[i] - fs[i]);
-  M6 Mt;
-  twist_mass(m, st, Mt);
-  Eigen::LLT<M6> llt(Mt);
-  if (llt.info() != Eigen::Success)
+  M6 Jc, Mt;
+  twist_rows(st, Jc);
+  V6 net;
+  for (int i = 0; i < NLEG; ++i) net[i] = tau[i] - fs[i];
+  W.noalias() -= Jc * net;
+  twist_mass(m, st, Jc, Mt);
+  // Mt (T xdd) = -W.
+  V6 y;
+  if (!spd_solve6(Mt, -W, y))
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at the " +
                                       pose_text(x));
-  // Mt (T xdd) = -W.
-  const V6 y = llt.solve(-W);
   if (!y.allFinite())
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: singular mass matrix at the " + pose_text(x));
   xdd[0] = y[0], xdd[1] = y[1], xdd[2] = y[2];
