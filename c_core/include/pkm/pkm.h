@@ -236,9 +236,12 @@ PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
 /* Integration methods.  PKM_ERK, the default: an explicit Runge-Kutta 5(4) pair
  * (Dormand-Prince) whose whole state is (t, x, xd) plus the step size it proposes next,
  * so nothing is lost at a communication point (a 1 ms loop costs about one step per
- * millisecond); for non-stiff motion.  PKM_ERK23: the Bogacki-Shampine 3(2) pair, 4
- * forward-dynamics calls a step instead of 7, for loose tolerances (rtol ~1e-5).  PKM_BDF: CVODE's variable-order BDF with a dense
- * Newton solver, for stiff settings (e.g. Coulomb friction with a small drive.v_eps).
+ * millisecond, 6 forward-dynamics calls: the first stage after a new input is the last
+ * one before it plus a 6x6 product, the dynamics being affine in the effort); for
+ * non-stiff motion.  PKM_ERK23: the Bogacki-Shampine 3(2) pair, 3 calls a step, for
+ * throughput at looser tolerances (rtol 1e-6: one step per millisecond).  PKM_BDF:
+ * CVODE's variable-order BDF with a dense Newton solver, for stiff settings (e.g.
+ * Coulomb friction with a small drive.v_eps).
  * PKM_ADAMS: CVODE's Adams-Moulton.  CVODE restarts at every advance.
  * docs/integration.md compares them (speed, accuracy, when to use which). */
 typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1, PKM_ERK = 2, PKM_ERK23 = 3 } pkm_lmm;

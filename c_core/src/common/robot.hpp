@@ -109,6 +109,15 @@ class Robot {
                                 const double* tau, double* xdd) const;
   virtual void energy(const RobotModel&, RobotData&, const double* x, const double* xd,
                       double* kinetic, double* potential) const;
+  // Forward dynamics plus their response to the efforts, B = d xdd / d tau (row-major
+  // ndof x ndof), from the same factorisation.  The accelerations are affine in tau, so
+  // FD(x, xd, tau + dtau) = FD(x, xd, tau) + B dtau: the integrator carries its last
+  // stage across a change of the held input for the price of one small product.  false:
+  // the robot has no cheap B (outputs untouched).
+  virtual bool forward_dynamics_response(const RobotModel&, RobotData&, const double*, const double*,
+                                         const double*, double*, double*) const {
+    return false;
+  }
 };
 
 // The robots compiled into the core (robots/registry.cpp).  nullptr if unknown.

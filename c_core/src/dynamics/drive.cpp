@@ -156,18 +156,55 @@ void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const
 
 }  // namespace
 
-void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
-                            double* xdd) {
+namespace {
+// Runs a forward-dynamics call f(); a robot may find an overflowing load singular: then
+// the message says which input is too large instead.
+template <class F>
+void with_overflow_message(pkm_data* d, const double* xd, const double* tau, F&& f) {
   try {
-    forward_dynamics_of(m, d, x, xd, tau, xdd);
+    f();
   } catch (const Error& e) {
-    // A robot may find an overflowing load singular: say what is too large instead.
     const int n = d->ndof;
     if (e.status == PKM_ERR_SINGULAR && (max_abs(tau, n) > 1e150 || max_abs(xd, n) > 1e75))
       require_finite_result(std::vector<double>(n, NAN).data(), 1, "the acceleration", xd, tau, n);
     throw;
   }
+}
+
+// The effort that drives the mechanism: the command less joint friction.
+void net_effort(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau, double* net) {
+  const drive::Params& dp = *m->drive;
+  const int n = d->ndof;
+  for (int i = 0; i < n; ++i) net[i] = tau[i];
+  if (!dp.any_friction) return;
+  double J[36], qd[6], f[6];
+  m->robot->jacobians(*m->compiled, *d->rd, x, nullptr, nullptr, J);
+  Eigen::Map<Vec>(qd, n) = Eigen::Map<const Mat>(J, n, n) * Eigen::Map<const Vec>(xd, n);
+  drive::friction(dp, qd, f);
+  for (int i = 0; i < n; ++i) net[i] -= f[i];
+}
+}  // namespace
+
+void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                            double* xdd) {
+  with_overflow_message(d, xd, tau, [&] { forward_dynamics_of(m, d, x, xd, tau, xdd); });
   require_finite_result(xdd, d->ndof, "the acceleration", xd, tau, d->ndof);
+}
+
+bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                     const double* tau, double* xdd, double* B) {
+  // Rotor inertia changes the mass matrix the robot factorises: no cheap response then.
+  if (m->drive->any_rotor) return false;
+  bool ok = false;
+  with_overflow_message(d, xd, tau, [&] {
+    double net[6];
+    net_effort(m, d, x, xd, tau, net);
+    ok = m->robot->forward_dynamics_response(*m->compiled, *d->rd, x, xd, net, xdd, B);
+  });
+  if (!ok) return false;
+  require_finite_result(xdd, d->ndof, "the acceleration", xd, tau, d->ndof);
+  require_finite_result(B, d->ndof * d->ndof, "the acceleration's response to the efforts", xd, tau, d->ndof);
+  return true;
 }
 
 namespace {
@@ -181,17 +218,10 @@ void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const
     return;
   }
   const int n = d->ndof;
-  double J[36];
-  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
-  Eigen::Map<const Mat> Jm(J, n, n);
-  Vec qd = Jm * Eigen::Map<const Vec>(xd, n), net(n), f(n);
   // Friction and the velocity part of the rotor inertia force are efforts the actuator
   // spends before the mechanism sees any: the mechanism is driven by the net effort.
-  net = Eigen::Map<const Vec>(tau, n);
-  if (dp.any_friction) {
-    drive::friction(dp, qd.data(), f.data());
-    net -= f;
-  }
+  Vec net(n);
+  net_effort(m, d, x, xd, tau, net.data());
   if (!dp.any_rotor) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd);
     return;
@@ -199,7 +229,9 @@ void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const
   // Rotor inertia Jr qdd with qdd = J xdd + Jdot xd: the mechanism sees
   // net - Jr (J xdd + Jdot xd), so (M + J' Jr J) xdd = M xdd0 with
   // xdd0 = FD_robot(net - Jr Jdot xd).
-  double Jd[36];
+  double J[36], Jd[36];
+  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+  Eigen::Map<const Mat> Jm(J, n, n);
   m->robot->jacobian_dot(rm, *d->rd, x, xd, Jd);
   Vec jdxd = Eigen::Map<const Mat>(Jd, n, n) * Eigen::Map<const Vec>(xd, n);
   for (int i = 0; i < n; ++i) net[i] -= dp.rotor[i] * jdxd[i];

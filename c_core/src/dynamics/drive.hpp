@@ -61,6 +61,10 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
                             const double* xdd, double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* tau, double* xdd);
+// The same with B = d xdd / d tau (row-major nd x nd) when the robot offers it cheaply
+// and the drive has no rotor inertia; false otherwise (outputs untouched).
+bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                     const double* tau, double* xdd, double* B);
 void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M);
 void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* kinetic,
                   double* potential);

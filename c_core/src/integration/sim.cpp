@@ -115,6 +115,9 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     PKM_REQUIRE(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
     tau_.assign(nd_, 0.0);
     applied_.assign(nd_, 0.0);
+    fsal_f_.assign(n2, 0.0);
+    fsal_B_.assign((size_t)nd_ * nd_, 0.0);
+    reuse_input_ = explicit_method();
     delay_ = model_->drive ? model_->drive->actuator_delay : 0.0;
     q_.assign(nd_, 0.0);
     robot_->home(*rm_, y_.data());
@@ -422,6 +425,7 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   y_.swap(y);
   h_next_ = 0.0;  // a new start: the explicit method chooses its first step afresh
   guard_cached_ = false;
+  fsal_valid_ = false;
   // Commands issued at or after t0 belong to the future being rolled back.
   while (!history_.empty() && history_.back().s >= t0) history_.pop_back();
 }

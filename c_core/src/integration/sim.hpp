@@ -90,7 +90,12 @@ class Sim {
   // The explicit Runge-Kutta path (integration/erk.cpp): one segment [t_, b] with a
   // constant applied effort, steps carried across advances through h_next_.
   void erk_segment(double b);
-  bool erk_rhs(double t, const double* y, double* f);  // false: a recoverable failure (cb_*)
+  // f = (xd, FD(y, tau)), tau nullptr: zero effort; with B != nullptr also B = d xdd / d tau
+  // when the robot offers it (else reuse_input_ turns false).  false: a recoverable
+  // failure (cb_*).
+  bool erk_rhs(double t, const double* y, double* f, const double* tau, double* B = nullptr);
+  // A stage from its split: f = F + (0, B applied_), F = f at zero effort.
+  void erk_stage(const double* F, const double* B, double* f) const;
   double erk_initial_step(double t_end, const double* f0);
   // Stop-condition values at y (limits, then the singularity margin) and the det J sign
   // value; the exact singularity measure only where the cheap bound is near sing_min.
@@ -148,6 +153,15 @@ class Sim {
   bool guard_cached_ = false;
   double det_cached_ = 1.0, bound_cached_ = 1.0;
   std::vector<double> g_cached_;
+  // Explicit method: the last stage of a segment split as f(y_, 0) (fsal_f_) and B = d xdd
+  // / d tau (fsal_B_).  The accelerations are affine in the effort, so the first stage of
+  // the next segment is fsal_f_ + B applied_ whatever its input: a 6x6 product instead of
+  // a forward-dynamics call.  The split depends on y_ alone, so after a reset or a load it
+  // is recomputed to the same bits: a rollback (and a reset to a saved state) repeats
+  // the trajectory bit for bit.
+  bool reuse_input_ = false;  // the robot offers B and the drive has no rotor inertia
+  bool fsal_valid_ = false;   // fsal_f_ and fsal_B_ belong to the current y_
+  std::vector<double> fsal_f_, fsal_B_;
 
   SUNContext ctx_ = nullptr;
   N_Vector nv_ = nullptr;

@@ -193,6 +193,8 @@ class SixPus final : public Robot {
                         const double* tau, double* xdd) const override;
   void energy(const RobotModel&, RobotData&, const double* x, const double* xd, double* kinetic,
               double* potential) const override;
+  bool forward_dynamics_response(const RobotModel&, RobotData&, const double* x, const double* xd,
+                                 const double* tau, double* xdd, double* B) const override;
 };
 
 // J = Jq^-1 Jx (row-major) and measures; shared by singularity() and compile().

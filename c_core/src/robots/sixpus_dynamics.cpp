@@ -124,36 +124,54 @@ void twist_mass(const Model& m, const State& st, const M6& Jc, M6& Mt) {
   Mt += A + A.transpose();
 }
 
-// Solves A x = b for a symmetric positive-definite 6x6 A (its lower triangle) by
-// Cholesky; false when a pivot is not positive (A not positive definite).  Fixed loops
-// the compiler unrolls: a few times faster than the general LLT at this size, and the
-// forward dynamics call it at every Runge-Kutta stage.
-bool spd_solve6(const M6& A, const V6& b, V6& x) {
-  double L[NLEG][NLEG], inv[NLEG];
-  for (int j = 0; j < 6; ++j) {
-    double d = A(j, j);
-    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
-    if (!(d > 0)) return false;
-    inv[j] = 1.0 / std::sqrt(d);
-    for (int i = j + 1; i < 6; ++i) {
-      double s = A(i, j);
-      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
-      L[i][j] = s * inv[j];
+// Cholesky factor of a symmetric positive-definite 6x6 matrix (its lower triangle) and
+// solves with it.  Fixed loops the compiler unrolls: a few times faster than the general
+// LLT at this size, and the forward dynamics call it at every Runge-Kutta stage.
+struct Cholesky6 {
+  double L[NLEG][NLEG], inv[NLEG];  // inv: reciprocals of the diagonal
+  bool factor(const M6& A) {        // false: a pivot is not positive (A not positive definite)
+    for (int j = 0; j < 6; ++j) {
+      double d = A(j, j);
+      for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+      if (!(d > 0)) return false;
+      inv[j] = 1.0 / std::sqrt(d);
+      for (int i = j + 1; i < 6; ++i) {
+        double s = A(i, j);
+        for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+        L[i][j] = s * inv[j];
+      }
+    }
+    return true;
+  }
+  void solve(const V6& b, V6& x) const {
+    double y[6];
+    for (int i = 0; i < 6; ++i) {
+      double s = b[i];
+      for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
+      y[i] = s * inv[i];
+    }
+    for (int i = 5; i >= 0; --i) {
+      double s = y[i];
+      for (int k = i + 1; k < 6; ++k) s -= L[k][i] * x[k];
+      x[i] = s * inv[i];
     }
   }
-  double y[6];
-  for (int i = 0; i < 6; ++i) {
-    double s = b[i];
-    for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
-    y[i] = s * inv[i];
+  // X = A^-1 R for six right-hand sides at once (X[row][column]): the columns are
+  // independent, so the loops over them vectorise.
+  void solve_columns(const M6& R, double X[NLEG][NLEG]) const {
+    for (int i = 0; i < 6; ++i) {
+      for (int c = 0; c < 6; ++c) X[i][c] = R(i, c);
+      for (int k = 0; k < i; ++k)
+        for (int c = 0; c < 6; ++c) X[i][c] -= L[i][k] * X[k][c];
+      for (int c = 0; c < 6; ++c) X[i][c] *= inv[i];
+    }
+    for (int i = 5; i >= 0; --i) {
+      for (int k = i + 1; k < 6; ++k)
+        for (int c = 0; c < 6; ++c) X[i][c] -= L[k][i] * X[k][c];
+      for (int c = 0; c < 6; ++c) X[i][c] *= inv[i];
+    }
   }
-  for (int i = 5; i >= 0; --i) {
-    double s = y[i];
-    for (int k = i + 1; k < 6; ++k) s -= L[k][i] * x[k];
-    x[i] = s * inv[i];
-  }
-  return true;
-}
+};
 
 // Euler-angle rates from the angular velocity: a_dot = E^-1 omega.
 void rates_from_omega(const Frame& f, const double* x, const V3& w, double* ad) {
@@ -208,9 +226,10 @@ void SixPus::mass_matrix(const RobotModel& rm, RobotData&, const double* x, doub
   Mout = T.transpose() * Mt * T;
 }
 
-void SixPus::forward_dynamics(const RobotModel& rm, RobotData&, const double* x, const double* xd,
-                              const double* tau, double* xdd) const {
-  const Model& m = model_of(rm);
+namespace {
+// Forward dynamics; with B != nullptr also B = d xdd / d tau = [I 0; 0 E^-1] Mt^-1 Jc.
+void forward_dynamics_of(const Model& m, const double* x, const double* xd, const double* tau, double* xdd,
+                         double* B) {
   State st;
   state_of(m, x, xd, st);
   // Velocity-dependent and gravity load at zero pose acceleration (alpha = Edot a_dot).
@@ -223,15 +242,37 @@ void SixPus::forward_dynamics(const RobotModel& rm, RobotData&, const double* x,
   for (int i = 0; i < NLEG; ++i) net[i] = tau[i] - fs[i];
   W.noalias() -= Jc * net;
   twist_mass(m, st, Jc, Mt);
-  // Mt (T xdd) = -W.
-  V6 y;
-  if (!spd_solve6(Mt, -W, y))
+  Cholesky6 chol;
+  if (!chol.factor(Mt))
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at the " +
                                       pose_text(x));
+  // Mt (T xdd) = -W.
+  V6 y;
+  chol.solve(-W, y);
   if (!y.allFinite())
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: singular mass matrix at the " + pose_text(x));
   xdd[0] = y[0], xdd[1] = y[1], xdd[2] = y[2];
   rates_from_omega(st.f, x, V3(y[3], y[4], y[5]), xdd + 3);
+  if (!B) return;
+  double X[NLEG][NLEG];
+  chol.solve_columns(Jc, X);
+  for (int j = 0; j < NLEG; ++j) {
+    double ad[3];
+    rates_from_omega(st.f, x, V3(X[3][j], X[4][j], X[5][j]), ad);
+    for (int k = 0; k < 3; ++k) B[6 * k + j] = X[k][j], B[6 * (3 + k) + j] = ad[k];
+  }
+}
+}  // namespace
+
+void SixPus::forward_dynamics(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                              const double* tau, double* xdd) const {
+  forward_dynamics_of(model_of(rm), x, xd, tau, xdd, nullptr);
+}
+
+bool SixPus::forward_dynamics_response(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                                       const double* tau, double* xdd, double* B) const {
+  forward_dynamics_of(model_of(rm), x, xd, tau, xdd, B);
+  return true;
 }
 
 void SixPus::energy(const RobotModel& rm, RobotData&, const double* x, const double* xd, double* kinetic,
