@@ -50,12 +50,9 @@ def _load_plugins():
     # Capability modules register their own sub-commands on import.
     import importlib
 
-    for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark"):
-        try:
-            importlib.import_module(f"cosim.{mod}_cli")
-        except ModuleNotFoundError as e:
-            if e.name != f"cosim.{mod}_cli":
-                raise
+    for mod in ("demo_cli", "scenario_cli", "calibration.cli", "quattro_cli", "discrepancy_cli", "sweep.cli",
+                "benchmark_cli"):
+        importlib.import_module(f"cosim.{mod}")
 
 
 class working:

@@ -53,7 +53,7 @@ def calibration_page(res, path) -> Path:
     and after, the estimates with 3 standard errors (and the truth when known), the report."""
     import plotly.graph_objects as go
 
-    from ..calibration_plots import _truth
+    from ..calibration.plots import _truth
 
     acc = res.holdout_accuracy or res.calibration_accuracy
     which = "held-out" if res.holdout_accuracy else "calibration"

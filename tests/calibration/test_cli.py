@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from cosim.calibration_data import sixpus_campaign, sixpus_candidate_poses, sixpus_real_params, write_campaign
+from cosim.calibration.data import sixpus_campaign, sixpus_candidate_poses, sixpus_real_params, write_campaign
 from cosim.cli import main
 from cosim.core import Model
 

@@ -4,9 +4,9 @@ import warnings
 import numpy as np
 import pytest
 
-from cosim.calibration_data import sixpus_candidate_poses
-from cosim.calibration_design import common_scale, observability, pose_rows, select_poses, sixpus_seed_comparison
-from cosim.calibration_problems import CalibrationWarning, SixpusProblem
+from cosim.calibration.data import sixpus_candidate_poses
+from cosim.calibration.design import common_scale, observability, pose_rows, select_poses, sixpus_seed_comparison
+from cosim.calibration.problems import CalibrationWarning, SixpusProblem
 from cosim.core import Model
 
 

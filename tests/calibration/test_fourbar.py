@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from cosim.calibration import calibrate
-from cosim.calibration_data import fourbar_campaign
-from cosim.calibration_problems import CalibrationDataError, FourbarProblem
-from cosim.calibration_seed import fourbar_seed_study
-from cosim.calibration_solvers import _golden_1d, solve
+from cosim.calibration.data import fourbar_campaign
+from cosim.calibration.problems import CalibrationDataError, FourbarProblem
+from cosim.calibration.seed import fourbar_seed_study
+from cosim.calibration.solvers import _golden_1d, solve
 from cosim.core import Model
 from cosim.fourbar import LENGTHS, output
 
@@ -103,7 +103,7 @@ def test_thesis_rounded_inputs_explain_its_answer():
 
 
 def test_identifiability_of_the_seven_angles(problem):
-    from cosim.calibration_ident import identifiability
+    from cosim.calibration.ident import identifiability
 
     rep = identifiability(problem.jacobian(problem.p0), problem.names)
     b = rep.blocks[0]

@@ -4,8 +4,8 @@ import warnings
 import numpy as np
 import pytest
 
-from cosim.calibration_ident import column_scale, identifiability
-from cosim.calibration_problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem,
+from cosim.calibration.ident import column_scale, identifiability
+from cosim.calibration.problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem,
                                         calib_rows)
 from cosim.core import Model
 

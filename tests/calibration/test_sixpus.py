@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from cosim.calibration import calibrate, measurements, problem_from_recording
-from cosim.calibration_data import (read_truth, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params,
+from cosim.calibration.data import (read_truth, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params,
                                     write_campaign)
-from cosim.calibration_problems import (SIXPUS_ERROR_MODEL, CalibrationDataError, CalibrationWarning,
+from cosim.calibration.problems import (SIXPUS_ERROR_MODEL, CalibrationDataError, CalibrationWarning,
                                         SixpusProblem)
 from cosim.core import Model
 from cosim.recording import Recording, RecordingError, read_recording, write_recording
@@ -148,7 +148,7 @@ def test_accuracy_against_the_truth_without_tracker_noise(nominal, full, campaig
 
 def test_solvers_agree_on_the_same_problem(campaign):
     P = _quiet(problem_from_recording, campaign[0])
-    from cosim.calibration_solvers import solve
+    from cosim.calibration.solvers import solve
 
     ref = solve(P, "gauss-newton")
     for method in ("pinv-iter", "lm"):

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from cosim.calibration_problems import LinearProblem
-from cosim.calibration_solvers import METHODS, solve
+from cosim.calibration.problems import LinearProblem
+from cosim.calibration.solvers import METHODS, solve
 
 
 def _problem(seed=0, m=40, noise=0.0):

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cosim.sweep import (SweepError, SweepSpecError, case_id, flatten, load_spec, materialise_fmu, read_records,
-                         spec_from_dict, _open_results)
-from cosim.sweep_kinds import apply_scenario_override
+from cosim.sweep import SweepError, SweepSpecError, case_id, flatten, load_spec, materialise_fmu, read_records, \
+    spec_from_dict
+from cosim.sweep.runner import _open_results
+from cosim.sweep.kinds import apply_scenario_override
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -171,7 +172,7 @@ def test_results_file_survives_a_line_cut_short(tmp_path):
 
 
 def test_fmu_cache_writes_checks_and_repairs(tmp_path, monkeypatch):
-    import cosim.sweep as sw
+    import cosim.sweep.runner as sw
 
     monkeypatch.setenv("PKM_SWEEP_FMU_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(sw, "_FMU_CACHE", {})

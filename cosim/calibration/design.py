@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibration_ident import column_scale
+from .ident import column_scale
 
 __all__ = ["observability", "select_poses", "pose_rows", "common_scale", "sixpus_seed_comparison"]
 
@@ -164,7 +164,7 @@ def sixpus_seed_comparison(n: int = 10, ncand: int = 1000, seed: int = 5) -> dic
 
     Seed 000 calibrates leg 1 with the platform point in the world frame; there the rail
     origin is not identifiable and the identifiable columns are X, Y, Z, L, sx, sy, sz.
-    Its ten poses give Table 4.22 (typed in :mod:`cosim.calibration_seed`; the seed's leg 1
+    Its ten poses give Table 4.22 (typed in :mod:`cosim.calibration.seed`; the seed's leg 1
     is this robot's leg 1).  Here the same seven columns come from the core's rows
     (``PKM_FRAME_WORLD``) at ``ncand`` candidate poses, n of them are chosen D-optimally,
     and both sets are scored with a common column scale (the candidates' RMS column
@@ -175,10 +175,10 @@ def sixpus_seed_comparison(n: int = 10, ncand: int = 1000, seed: int = 5) -> dic
     """
     import warnings as _w
 
-    from .calibration_data import sixpus_candidate_poses
-    from .calibration_problems import PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem, calib_rows
-    from .calibration_seed import SEED000_TABLE_4_22
-    from .core import Model
+    from .data import sixpus_candidate_poses
+    from .problems import PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem, calib_rows
+    from .seed import SEED000_TABLE_4_22
+    from ..core import Model
 
     cols = [0, 1, 2, 6, 7, 8, 9]  # X, Y, Z, L, sx, sy, sz
     nom = Model("6pus")

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._native import ArgumentError, PkmError, lib, ptr, raise_for
+from .._native import ArgumentError, PkmError, lib, ptr, raise_for
 
 __all__ = [
     "CalibrationDataError",
@@ -239,7 +239,7 @@ class FourbarProblem(Problem):
     robot = "fourbar"
 
     def __init__(self, theta, X, model, row_labels=None, min_poses: int = 4):
-        from .fourbar import LENGTHS
+        from ..fourbar import LENGTHS
 
         theta = _check_finite(np.atleast_1d(theta), "four-bar crank angles", ["theta"]).ravel()
         X = _check_finite(np.atleast_1d(X), "four-bar outputs", ["X"]).ravel()
@@ -260,13 +260,13 @@ class FourbarProblem(Problem):
         self._p = None
 
     def predict(self, p):
-        from .fourbar import output
+        from ..fourbar import output
 
         self._set(p)
         return output(self.model, self.theta, jacobian=False)
 
     def jacobian(self, p):
-        from .fourbar import output
+        from ..fourbar import output
 
         self._set(p)
         return output(self.model, self.theta)[1]

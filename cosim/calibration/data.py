@@ -13,7 +13,7 @@ the calibration starts from), not of the real robot.
 
 Command line (writes the scenario data of ``scenarios/``)::
 
-    python -m cosim.calibration_data scenarios/
+    python -m cosim.calibration.data scenarios/
 """
 from __future__ import annotations
 
@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .calibration_problems import sixpus_leg_names
-from .core import Model
-from .recording import Recording, write_recording
+from .problems import sixpus_leg_names
+from ..core import Model
+from ..recording import Recording, write_recording
 
 __all__ = [
     "SEED000_POSES",
@@ -179,7 +179,7 @@ def sixpus_campaign(real_params: dict, poses, tracker_noise: float = 10e-6, angl
 def fourbar_campaign(real_params: dict, theta, noise: float = 0.0, rng=None, nominal_params: dict | None = None,
                      dwell: float = 1.0, notes: str = "") -> Recording:
     """A four-bar calibration recording: X of the real linkage measured at crank angles theta [rad]."""
-    from .fourbar import output
+    from ..fourbar import output
 
     rng = np.random.default_rng(rng)
     real = Model("fourbar", params=real_params)
@@ -218,7 +218,7 @@ def read_truth(csv_path) -> dict:
 def _main(argv=None):
     import argparse
 
-    ap = argparse.ArgumentParser(prog="python -m cosim.calibration_data",
+    ap = argparse.ArgumentParser(prog="python -m cosim.calibration.data",
                                  description="write the synthetic calibration campaigns of scenarios/")
     ap.add_argument("outdir", nargs="?", default="scenarios")
     a = ap.parse_args(argv)

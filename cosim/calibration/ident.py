@@ -23,7 +23,7 @@ so what is identified is the combination ``Delta eta_K + b Delta eta_d``
 (:meth:`IdentifiabilityReport.combination_values`).
 
 Everything here is linear algebra on a given J; the physics (the columns) comes from the
-core through the calibration problems of :mod:`cosim.calibration_problems`.
+core through the calibration problems of :mod:`cosim.calibration.problems`.
 """
 from __future__ import annotations
 

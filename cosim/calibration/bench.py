@@ -9,11 +9,11 @@ import warnings
 
 import numpy as np
 
-from .calibration_data import SEED000_POSES, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params
-from .calibration_design import observability, pose_rows, select_poses, sixpus_seed_comparison
-from .calibration_problems import CalibrationWarning, SixpusProblem
-from .calibration_solvers import solve
-from .core import Model
+from .data import SEED000_POSES, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params
+from .design import observability, pose_rows, select_poses, sixpus_seed_comparison
+from .problems import CalibrationWarning, SixpusProblem
+from .solvers import solve
+from ..core import Model
 
 __all__ = ["benchmark", "design_study"]
 
@@ -28,7 +28,7 @@ def _campaign(npose, seed):
 def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool = True) -> str:
     """Time to converge of the 6-PUS calibration on ``npose`` poses, single process.
 
-    Rows: the solvers of :func:`cosim.calibration_solvers.solve` with the core's analytic
+    Rows: the solvers of :func:`cosim.calibration.solvers.solve` with the core's analytic
     regression rows, and the baseline ``scipy.optimize.least_squares`` (MINPACK
     Levenberg-Marquardt) with a finite-difference Jacobian, on the same problem.  Times
     are the best of ``repeat`` runs of the solve alone (the problem, i.e. the recording's
@@ -82,8 +82,8 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
     import tempfile
     from pathlib import Path
 
-    from .calibration import calibrate
-    from .recording import write_recording
+    from .fit import calibrate
+    from ..recording import write_recording
 
     with tempfile.TemporaryDirectory() as d:
         path, _ = write_recording(Path(d) / "bench.csv", rec)
@@ -104,13 +104,13 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
 def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 5, seed: int = 5) -> str:
     """Pose selection vs hand-picked and random poses (6-PUS, seed 000's ten poses).
 
-    Scores (O1, log det, cond: see :mod:`cosim.calibration_design`) of: the seed's ten
+    Scores (O1, log det, cond: see :mod:`cosim.calibration.design`) of: the seed's ten
     poses (leg 1 only, where the core can compute its rows; the whole robot cannot reach
     them all), ``n`` random reachable poses, and ``n`` D-optimal poses chosen among
     ``ncand`` candidates; then the accuracy after calibrating ``trials`` random "real"
     robots from each set, on ``nval`` common validation poses.
     """
-    from .calibration import accuracy, calibrate
+    from .fit import accuracy, calibrate
 
     nom = Model("6pus")
     cand = sixpus_candidate_poses(nom, ncand, rng=seed)

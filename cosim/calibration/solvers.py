@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .calibration_ident import column_scale
+from .ident import column_scale
 
 __all__ = ["METHODS", "Solution", "solve"]
 
@@ -191,7 +191,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
 
     Parameters
     ----------
-    problem : cosim.calibration_problems.Problem
+    problem : cosim.calibration.problems.Problem
     method : {"pinv", "pinv-iter", "gauss-newton", "lm", "golden"}
     free : bool mask or list of names, optional
         Parameters to estimate (default all); the others stay at ``p_start``.

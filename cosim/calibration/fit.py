@@ -9,7 +9,7 @@ verifies the accuracy gain on held-out poses.
   ``x, y, z, rx, ry, rz`` measured by an external tracker.  Error model: 10 parameters
   per leg (platform point in the platform frame, rail origin, leg length, rail
   direction), 60 in all; 54 calibrated coordinates because each rail direction keeps
-  |s| = 1 (see :mod:`cosim.calibration_problems`).
+  |s| = 1 (see :mod:`cosim.calibration.problems`).
 * Four-bar (seed 002): ``q1`` = crank angle theta, pose column ``X`` = measured output.
 
 Example
@@ -19,11 +19,11 @@ Example
 >>> print(res.text())                       # identifiability, estimates +- SE, accuracy
 >>> res.save("out/")                        # figures and the calibrated parameters (JSON)
 
-Submodules: :mod:`~cosim.calibration_ident` (identifiability),
-:mod:`~cosim.calibration_solvers` (solvers), :mod:`~cosim.calibration_problems`
-(residuals and Jacobians from the core), :mod:`~cosim.calibration_design` (pose
-selection), :mod:`~cosim.calibration_data` (synthetic campaigns),
-:mod:`~cosim.calibration_seed` (the seeds' examples).
+Submodules: :mod:`~cosim.calibration.ident` (identifiability),
+:mod:`~cosim.calibration.solvers` (solvers), :mod:`~cosim.calibration.problems`
+(residuals and Jacobians from the core), :mod:`~cosim.calibration.design` (pose
+selection), :mod:`~cosim.calibration.data` (synthetic campaigns),
+:mod:`~cosim.calibration.seed` (the seeds' examples).
 """
 from __future__ import annotations
 
@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .calibration_ident import IdentifiabilityReport, identifiability
-from .calibration_problems import (
+from .ident import IdentifiabilityReport, identifiability
+from .problems import (
     SIXPUS_ERROR_MODEL,
     CalibrationDataError,
     CalibrationWarning,
@@ -43,9 +43,9 @@ from .calibration_problems import (
     Problem,
     SixpusProblem,
 )
-from .calibration_solvers import METHODS, Solution, solve
-from .core import Model
-from .recording import Recording, read_recording
+from .solvers import METHODS, Solution, solve
+from ..core import Model
+from ..recording import Recording, read_recording
 
 __all__ = [
     "calibrate",
@@ -144,7 +144,7 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
     use : {"auto", "held", "rows"}
         See :func:`measurements`.
     weighting : {"tracker", "none"}
-        6-PUS equation weights (see :class:`~cosim.calibration_problems.SixpusProblem`).
+        6-PUS equation weights (see :class:`~cosim.calibration.problems.SixpusProblem`).
     """
     meas = rec if isinstance(rec, Measurements) else measurements(rec, use)
     idx = np.arange(len(meas)) if rows is None else np.asarray(rows)
@@ -306,7 +306,7 @@ class CalibrationResult:
 
     def save(self, outdir) -> list:
         """Figures (PNG) and the calibrated parameters (JSON) into ``outdir``; returns the paths."""
-        from .calibration_plots import plot_result
+        from .plots import plot_result
 
         out = Path(outdir)
         out.mkdir(parents=True, exist_ok=True)
@@ -348,7 +348,7 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     weighting : {"tracker", "none"}
         6-PUS: weight the equations by their expected noise (default) or not.
     **solver_options
-        Passed to :func:`cosim.calibration_solvers.solve` (tol, max_iter, width, basis...).
+        Passed to :func:`cosim.calibration.solvers.solve` (tol, max_iter, width, basis...).
 
     Raises
     ------

@@ -6,7 +6,7 @@ vary: a ``[grid]`` (every combination), ``[random]`` draws with a seed, explicit
 ``[[cases]]``.  Each case is a plain dict of parameters; its *case id* is a hash of
 that dict (:func:`case_id`), so it does not depend on the order or the number of the
 other cases.  A case runs through :func:`run_case`, which calls the kind's function
-(:mod:`cosim.sweep_kinds`) and returns one record: the parameters, a flat dict of
+(:mod:`cosim.sweep.kinds`) and returns one record: the parameters, a flat dict of
 results, ``status`` (``"ok"`` or ``"error"``, with the exception's type and message:
 a failing case never stops the sweep), the wall time and the worker.
 
@@ -146,7 +146,7 @@ class SweepSpec:
 
     def case_list(self) -> list:
         """Every case of the spec, in order; duplicates (same parameters) kept once."""
-        from .sweep_kinds import get_kind
+        from .kinds import get_kind
 
         kind = get_kind(self.kind)
         points = [dict(zip(self.grid, combo)) for combo in product(*self.grid.values())] if self.grid else [{}]
@@ -224,7 +224,7 @@ def spec_from_dict(d: dict, name: str = "sweep", path=None) -> SweepSpec:
         Where relative paths of the base are resolved from (default: the working
         directory).
     """
-    from .sweep_kinds import KINDS, get_kind
+    from .kinds import KINDS, get_kind
 
     path = Path(path) if path else None
     where = str(path) if path else f"sweep {d.get('name', name)}"
@@ -492,7 +492,7 @@ def run_case(kind: str, base: dict, params: dict, cid: str, fmu: dict | None = N
     Parameters
     ----------
     kind : str
-        Kind of case (:data:`cosim.sweep_kinds.KINDS`).
+        Kind of case (:data:`cosim.sweep.kinds.KINDS`).
     base : dict
         The prepared base configuration (plain data: loaded files, no paths to read).
     params : dict
@@ -515,7 +515,7 @@ def run_case(kind: str, base: dict, params: dict, cid: str, fmu: dict | None = N
         ``seconds``, ``worker`` (host:pid); ``arrays`` and ``raw`` when the kind returns
         them (``_arrays``, ``_raw`` keys).
     """
-    from .sweep_kinds import get_kind
+    from .kinds import get_kind
 
     t0 = time.perf_counter()
     rec = {"case_id": cid, "params": params, "status": "ok", "results": {}}
@@ -768,7 +768,7 @@ def _start_client(scheduler, workers):
 
 
 def _prepare(spec: SweepSpec, cases: list):
-    from .sweep_kinds import get_kind
+    from .kinds import get_kind
 
     base, fmu_path = get_kind(spec.kind).prepare(spec, cases)
     fmu = None
@@ -844,7 +844,7 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
     """
     from tqdm import tqdm
 
-    from .sweep_kinds import get_kind
+    from .kinds import get_kind
 
     t_start = time.perf_counter()
     if not isinstance(spec, SweepSpec):
@@ -972,8 +972,8 @@ def run_sweep(spec, *, out=None, scheduler: str | None = None, workers: int | No
     return res
 
 
-def _main(argv=None):  # pragma: no cover - python -m cosim.sweep SPEC ... (same as cosim sweep)
-    from .cli import main
+def _main(argv=None):  # pragma: no cover - python -m cosim.sweep SPEC ... (same as cosim sweep; cosim/sweep/__main__.py)
+    from ..cli import main
 
     return main(["sweep", *(sys.argv[1:] if argv is None else argv)])
 

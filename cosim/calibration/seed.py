@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibration_ident import identifiability
-from .calibration_problems import FourbarProblem
-from .calibration_solvers import solve
+from .ident import identifiability
+from .problems import FourbarProblem
+from .solvers import solve
 
 __all__ = ["SEED002", "SEED000_TABLE_4_22", "fourbar_seed_study", "sixpus_seed_leg1"]
 
@@ -70,8 +70,8 @@ def fourbar_seed_study() -> dict:
     ``bound``: the first-order bound cond(A) ||d(dX)|| / ||dX|| on the relative error from
     a rounding of dX by 1e-4 mm; ``text``: the explanation as a table.
     """
-    from .core import Model
-    from .fourbar import output
+    from ..core import Model
+    from ..fourbar import output
 
     s = SEED002
     th = np.radians(s["theta_deg"])

@@ -6,7 +6,7 @@ own functions (nothing is re-derived here):
 * ``scenario``: a co-simulation scenario (:func:`cosim.scenario.run_scenario`) with
   dotted overrides of its TOML (``controller.kp``, ``plant_scale.platform.m``,
   ``reference.to[2]``...); results are its metrics;
-* ``calibration``: a synthetic calibration campaign (:mod:`cosim.calibration_data`) of
+* ``calibration``: a synthetic calibration campaign (:mod:`cosim.calibration.data`) of
   a robot with random geometric errors, calibrated (:func:`cosim.calibration.calibrate`),
   scored on held-out poses and against the true robot;
 * ``blind``: a blind case of the discrepancy engine (a closed-loop recording with hidden
@@ -135,7 +135,7 @@ class ScenarioKind(Kind):
             fail("base.scenario", f"file {spec.base['scenario']} not found")
 
     def prepare(self, spec, cases):
-        from .scenario import fmu_path, scenario_from_dict
+        from ..scenario import fmu_path, scenario_from_dict
 
         path = _resolve(spec.base["scenario"], spec)
         sc = tomllib.loads(path.read_text())
@@ -152,7 +152,7 @@ class ScenarioKind(Kind):
         return {"scenario": sc, "source": str(path)}, fmu
 
     def run(self, base, params, ctx):
-        from .scenario import run_scenario, scenario_from_dict
+        from ..scenario import run_scenario, scenario_from_dict
 
         sc = copy.deepcopy(base["scenario"])
         for k, v in params.items():
@@ -192,9 +192,9 @@ class CalibrationKind(Kind):
     keys = tuple(CALIBRATION_DEFAULTS)
 
     def run(self, base, params, ctx):
-        from . import calibration_data as cd
-        from .calibration import calibrate
-        from .core import Model
+        from ..calibration import data as cd
+        from ..calibration import calibrate
+        from ..core import Model
 
         p = {**CALIBRATION_DEFAULTS, **base, **params}
         seed, n = int(p["seed"]), int(p["n_poses"])
@@ -235,8 +235,8 @@ class CalibrationKind(Kind):
     @staticmethod
     def _truth(p, nominal, real_params, res, seed):
         """Accuracy against the real robot on noise-free poses (the truth calibration never sees)."""
-        from . import calibration_data as cd
-        from .core import Model
+        from ..calibration import data as cd
+        from ..core import Model
 
         nv = int(p["validation_poses"])
         if nv <= 0:
@@ -244,7 +244,7 @@ class CalibrationKind(Kind):
         real = Model(p["robot"], params=real_params)
         cal = res.calibrated_model()
         if p["robot"] == "fourbar":
-            from .fourbar import output
+            from ..fourbar import output
 
             th = np.radians(np.linspace(p["theta_min_deg"], p["theta_max_deg"], nv))
             x = output(real, th, jacobian=False)
@@ -300,7 +300,7 @@ class BlindKind(Kind):
                     fail(f"plan.{k}", "unknown key (known: cases, clean, seed, robots)")
 
     def plan_cases(self, plan, spec):
-        from .discrepancy import blind
+        from ..discrepancy import blind
 
         specs = blind.plan(int(plan.get("cases", 40)), int(plan.get("clean", 10)), int(plan.get("seed", 1)),
                            tuple(plan.get("robots", ["6pus"])), self._config(spec))
@@ -318,7 +318,7 @@ class BlindKind(Kind):
     def run(self, base, params, ctx):
         from dataclasses import asdict
 
-        from .discrepancy import blind, diagnose
+        from ..discrepancy import blind, diagnose
 
         p = {**BLIND_DEFAULTS, **base, **params}
         cfg = copy.deepcopy(base["_config"])
@@ -364,7 +364,7 @@ class BlindKind(Kind):
         return flat
 
     def summarize(self, result):
-        from .discrepancy import blind
+        from ..discrepancy import blind
 
         ids = {r["case_id"] for r in result.rows if r["status"] == "ok"}
         raws = [r["raw"] for r in result.records if r.get("status") == "ok" and "raw" in r and r["case_id"] in ids]
@@ -425,7 +425,7 @@ class QuattroTileKind(Kind):
         return self._unflatten(spec.base), None
 
     def _grid(self, p):
-        from .quattro import model
+        from ..quattro import model
 
         m = model(p["param_set"])
         h = m.param("base.h")
@@ -435,7 +435,7 @@ class QuattroTileKind(Kind):
         return m, x, y, z
 
     def run(self, base, params, ctx):
-        from .quattro import BETTER, index_map
+        from ..quattro import BETTER, index_map
 
         p = {**QUATTRO_DEFAULTS, **base, **params}
         m, x, y, z = self._grid(p)
@@ -466,7 +466,7 @@ class QuattroTileKind(Kind):
         return out
 
     def summarize(self, result):
-        from .quattro import BETTER
+        from ..quattro import BETTER
 
         L = []
         groups = {}

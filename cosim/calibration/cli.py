@@ -5,7 +5,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .cli import command
+from ..cli import command
 
 
 def _configure(p):
@@ -38,17 +38,17 @@ def _configure(p):
 @command("calibrate", "kinematic calibration from a recording: identifiability, estimates +- SE, accuracy gain")
 def cmd_calibrate(args):
     if args.bench:
-        from .calibration_bench import benchmark
+        from .bench import benchmark
 
         print(benchmark(args.poses))
         return 0
     if args.design:
-        from .calibration_bench import design_study
+        from .bench import design_study
 
         print(design_study())
         return 0
     if args.seed_examples:
-        from .calibration_seed import fourbar_seed_study, sixpus_seed_leg1
+        from .seed import fourbar_seed_study, sixpus_seed_leg1
 
         print(fourbar_seed_study()["text"])
         print()
@@ -58,8 +58,8 @@ def cmd_calibrate(args):
     if not args.recording:
         print("cosim calibrate: error: give a recording (or --bench, --design, --seed-examples)", file=sys.stderr)
         return 2
-    from .calibration import CalibrationWarning, calibrate
-    from .cli import working
+    from .fit import CalibrationWarning, calibrate
+    from ..cli import working
 
     with warnings.catch_warnings(), working(f"calibrating from {Path(args.recording).name}"):
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report
@@ -71,7 +71,7 @@ def cmd_calibrate(args):
         for p in res.save(args.out):
             print(f"wrote {p}")
         if args.html:
-            from .report.pages import calibration_page
+            from ..report.pages import calibration_page
 
             print(f"wrote {calibration_page(res, Path(args.out) / 'calibration_report.html')} (interactive)")
     elif args.html:
