@@ -118,6 +118,11 @@ class Robot {
                                          const double*, double*, double*) const {
     return false;
   }
+  // The generic forward dynamics (dynamics/generic_dynamics.cpp: xdd = M^-1 (J^T tau - h))
+  // and, with B != nullptr, B = M^-1 J^T from the same factor.  A robot that keeps the
+  // generic forward dynamics offers its response through this.
+  void generic_forward_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                                const double* tau, double* xdd, double* B) const;
 };
 
 // The robots compiled into the core (robots/registry.cpp).  nullptr if unknown.

@@ -13,6 +13,11 @@ using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
 void Robot::forward_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                              const double* tau, double* xdd) const {
+  generic_forward_dynamics(rm, rd, x, xd, tau, xdd, nullptr);
+}
+
+void Robot::generic_forward_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                                     const double* tau, double* xdd, double* B) const {
   const int n = ndof();
   Mat J(n, n), M(n, n);
   Vec zero = Vec::Zero(n), h0(n);
@@ -24,6 +29,7 @@ void Robot::forward_dynamics(const RobotModel& rm, RobotData& rd, const double* 
   if (llt.info() != Eigen::Success)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at this pose");
   Eigen::Map<Vec>(xdd, n) = llt.solve(rhs);
+  if (B) Eigen::Map<Mat>(B, n, n) = llt.solve(Mat(J.transpose()));  // d xdd / d tau = M^-1 J^T
 }
 
 }  // namespace pkm

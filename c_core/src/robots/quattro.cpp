@@ -404,6 +404,13 @@ class Quattro final : public Robot {
     out = m.Ieq * qdd + arm_gravity(m, p) + solve_JT(p, fp, "inverse dynamics");
   }
 
+  // The generic forward dynamics, with its effort response for the integrator.
+  bool forward_dynamics_response(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                                 const double* tau, double* xdd, double* B) const override {
+    generic_forward_dynamics(rm, rd, x, xd, tau, xdd, B);
+    return true;
+  }
+
   void mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const override {
     const Model& m = static_cast<const Model&>(rm);
     Pose p;
