@@ -58,7 +58,7 @@ import numpy as np
 __all__ = ["SweepSpec", "SweepSpecError", "SweepError", "Case", "SweepResult", "load_spec", "spec_from_dict",
            "case_id", "run_case", "run_sweep", "read_records", "flatten", "materialise_fmu", "default_workers"]
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 FORMAT = "pkm-sweep/1"
 RESULTS = "results.jsonl"
 TABLE = "results.csv"

@@ -118,3 +118,13 @@ def test_every_mistake_is_one_error_with_exit_code_2(tmp_path):
 @pytest.mark.parametrize("n", [37])
 def test_the_corpus_is_large(tmp_path, n):
     assert len(_cases(tmp_path)) >= n
+
+
+def test_a_reader_that_stops_early_gets_no_traceback():
+    # `cosim params 6pus | head -1`: the pipe is closed before the table is written.
+    cosim = Path(sys.executable).parent / "cosim"
+    p = subprocess.Popen([str(cosim), "params", "6pus"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=60) == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err

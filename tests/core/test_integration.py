@@ -181,7 +181,7 @@ def test_step_response_matches_an_independent_integrator(model):
 def test_core_bench_reports_every_spec7_row():
     """`cosim bench core` is a command, not a test; this only checks that its C++ part runs
     and reports each SPEC 7 quantity with a finite value and a verdict."""
-    from cosim.benchmark_cli import _run_cpp, core_table
+    from cosim.cli.benchmark import _run_cpp, core_table
 
     rows = _run_cpp(quick=True)
     assert {"ik_ns", "fk_us", "id_ns", "fd_ns", "sim_bdf_1ms", "sim_adams_1ms"} <= set(rows)

@@ -33,7 +33,7 @@ def test_diagnose_command_reports_a_bad_file_without_a_traceback(tmp_path, capsy
 
 
 def test_blind_benchmark_progress_is_a_bar_a_line_per_case_or_nothing(capsys):
-    from cosim.discrepancy_cli import _case_progress
+    from cosim.cli.discrepancy import _case_progress
 
     for quiet, verbose, want_lines in ((True, False, 0), (False, True, 2), (False, False, 2)):
         progress, bar = _case_progress(2, quiet, verbose)

@@ -3,7 +3,7 @@ against the measured Tables 6.1-6.5 (the only real robot data of the project).""
 import numpy as np
 import pytest
 
-from cosim import cycle_time as ct
+from cosim.quattro import cycle_time as ct
 from cosim.core import Model
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cosim import quattro
-from cosim.quattro_cli import axis_feature
+from cosim.cli.quattro import axis_feature
 
 TOL = 0.030  # m, the acceptance tolerance of issue 6
 # The default set's tool offset is 75 mm; the seed's maps use offset 0 (ch. 3.3), so the

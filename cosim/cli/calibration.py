@@ -5,7 +5,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from ..cli import command
+from .main import command
 
 
 def _configure(p):
@@ -38,17 +38,17 @@ def _configure(p):
 @command("calibrate", "kinematic calibration from a recording: identifiability, estimates +- SE, accuracy gain")
 def cmd_calibrate(args):
     if args.bench:
-        from .bench import benchmark
+        from ..calibration.bench import benchmark
 
         print(benchmark(args.poses))
         return 0
     if args.design:
-        from .bench import design_study
+        from ..calibration.bench import design_study
 
         print(design_study())
         return 0
     if args.seed_examples:
-        from .seed import fourbar_seed_study, sixpus_seed_leg1
+        from ..calibration.seed import fourbar_seed_study, sixpus_seed_leg1
 
         print(fourbar_seed_study()["text"])
         print()
@@ -58,8 +58,8 @@ def cmd_calibrate(args):
     if not args.recording:
         print("cosim calibrate: error: give a recording (or --bench, --design, --seed-examples)", file=sys.stderr)
         return 2
-    from .fit import CalibrationWarning, calibrate
-    from ..cli import working
+    from ..calibration.fit import CalibrationWarning, calibrate
+    from .main import working
 
     with warnings.catch_warnings(), working(f"calibrating from {Path(args.recording).name}"):
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report

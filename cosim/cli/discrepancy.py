@@ -13,12 +13,12 @@ import sys
 import time
 from pathlib import Path
 
-from .cli import command
+from .main import command
 
 
 def _effect_types():
     """The effect types the blind generator can hide (for --help)."""
-    from .discrepancy.blind import TYPES
+    from ..discrepancy.blind import TYPES
 
     return TYPES
 
@@ -41,9 +41,9 @@ def _diag_configure(p):
 
 @command("diagnose", "model-discrepancy diagnosis of a recording: where, which missing physics, how much better")
 def cmd_diagnose(args):
-    from .discrepancy import diagnose
+    from ..discrepancy import diagnose
 
-    from .cli import working
+    from .main import working
 
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
     with working(f"diagnosing {Path(args.recording).name}"):
@@ -51,14 +51,14 @@ def cmd_diagnose(args):
                      effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                      figures=not args.no_figures)
     if args.json:
-        from .discrepancy.report import _strip_arrays
+        from ..discrepancy.report import _strip_arrays
 
         print(_strip_arrays(d))
         return 0
     print_diagnosis(d)
     print(f"\nreport: {d.files.get('report')}")
     if args.html:
-        from .report.pages import diagnosis_page
+        from ..report.pages import diagnosis_page
 
         print(f"interactive report: {diagnosis_page(d, out / 'report.html')}")
     return 0
@@ -144,7 +144,7 @@ def _case_progress(total, quiet, verbose):
 
 @command("blind-benchmark", "blind benchmark: recordings with hidden effects, diagnosed and scored against keys")
 def cmd_blind_benchmark(args):
-    from .discrepancy import blind
+    from ..discrepancy import blind
 
     robots = ("6pus", "quattro") if args.robot == "both" else (args.robot,)
     t0 = time.perf_counter()
@@ -178,7 +178,7 @@ def _case_configure(p):
 
 @command("blind-case", "write one blind case: a recording with hidden effects and its answer key apart")
 def cmd_blind_case(args):
-    from .discrepancy import blind
+    from ..discrepancy import blind
 
     name = args.name or f"{args.robot}_{'+'.join(args.effect) or 'clean'}_{args.seed}"
     csv, key = blind.make_case(blind.CaseSpec(name, args.robot, list(args.effect), args.seed), args.out, args.keys)
@@ -198,7 +198,7 @@ def _demo_configure(p):
 
 @command("discrepancy-demo", "end-to-end demo: simulate a plant with a hidden effect, diagnose it, show the gain")
 def cmd_discrepancy_demo(args):
-    from .discrepancy import blind, diagnose
+    from ..discrepancy import blind, diagnose
 
     out = Path(args.out)
     print(f"1. simulating a closed-loop {args.robot} run whose plant hides: {args.effect} ...")

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .cli import command
+from .main import command
 
 
 def _configure(p):
@@ -79,12 +79,12 @@ def _g(v):
 def cmd_run(args):
     import json
 
-    from .scenario import _json, run_scenario
+    from ..scenario import _json, run_scenario
 
     out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
                        figures=False if args.no_figures else None)
     if args.html:
-        from .report.pages import run_page
+        from ..report.pages import run_page
 
         where = Path(out.files["recording"]).parent if "recording" in out.files else Path(args.out or "results")
         out.files["interactive report"] = str(run_page(out, where / f"{out.scenario.name}_report.html"))
@@ -100,7 +100,7 @@ cmd_run.configure = _configure
 
 @command("export-ssp", "write a step scenario as an SSP archive (plant FMU + controller FMU) for other FMI tools")
 def cmd_export_ssp(args):
-    from .ssp import export_scenario_ssp
+    from ..ssp import export_scenario_ssp
 
     path = export_scenario_ssp(args.scenario, args.out)
     print(f"wrote {path}: plant and controller FMUs, their connections and the set-point "
@@ -118,7 +118,7 @@ cmd_export_ssp.configure = _export_configure
 
 @command("view", "write (and print the path of) a self-contained HTML page with the robot of a recording in 3D")
 def cmd_view(args):
-    from .report import view
+    from ..report import view
 
     path = view(args.recording, out=args.out)
     print(f"wrote {path}: open it in a browser (works offline; the slider moves the robot through the recording)")

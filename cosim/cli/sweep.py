@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ..cli import command
+from .main import command
 
 
 def _configure(p):
@@ -34,10 +34,10 @@ def _configure(p):
 def cmd_sweep(args):
     import json
 
-    from .runner import SweepError, load_spec, run_sweep
+    from ..sweep.runner import SweepError, load_spec, run_sweep
 
     if args.bench:
-        from .bench import main as bench_main
+        from ..sweep.bench import main as bench_main
 
         return bench_main(["--cases", str(args.cases), "--kind", args.kind])
     if not args.spec:

@@ -18,7 +18,7 @@ def command(name, help):
 
 
 def _params_configure(p):
-    from .core import robot_facts, robots
+    from ..core import robot_facts, robots
 
     names = robots()
     sets = "; ".join(f"{r}: {', '.join(robot_facts(r).param_sets)}" for r in names)
@@ -29,7 +29,7 @@ def _params_configure(p):
 
 @command("params", "print a robot's parameter set with units (table or --json)")
 def cmd_params(args):
-    from .core import Model
+    from ..core import Model
 
     m = Model(args.robot, args.param_set)
     if args.json:
@@ -50,9 +50,8 @@ def _load_plugins():
     # Capability modules register their own sub-commands on import.
     import importlib
 
-    for mod in ("demo_cli", "scenario_cli", "calibration.cli", "quattro_cli", "discrepancy_cli", "sweep.cli",
-                "benchmark_cli"):
-        importlib.import_module(f"cosim.{mod}")
+    for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark"):
+        importlib.import_module(f"cosim.cli.{mod}")
 
 
 class working:
@@ -118,19 +117,17 @@ def main(argv=None) -> int:
         import os
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
-    from ._native import PkmError
-    from .master import MasterError
+    from .._native import PkmError
+    from ..master import MasterError
 
     try:
         return int(args._fn(args) or 0)
     except (PkmError, ValueError, FileNotFoundError, MasterError) as e:
         print(f"cosim {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader went away (`cosim params 6pus | head`): stop quietly, as Unix tools do.
+        import os
 
-
-if __name__ == "__main__":
-    # Run as `python -m cosim.cli`: plugins register on the importable module cosim.cli,
-    # not on this __main__ copy, so dispatch through it.
-    from cosim.cli import main as _main
-
-    sys.exit(_main())
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0

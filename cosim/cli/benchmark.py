@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli import command
+from .main import command
 
 TARGETS: dict = {}
 
@@ -57,7 +57,7 @@ cmd_bench.configure = _configure
 
 def core_bench_executable() -> Path:
     """Path of the C++ benchmark built by CMake (``$PKM_BUILD_DIR`` or ``build/``)."""
-    from ._native import REPO
+    from .._native import REPO
 
     build = Path(os.environ.get("PKM_BUILD_DIR", REPO / "build"))
     return build / "bin" / "core_bench"
@@ -115,8 +115,8 @@ def python_rows(quick: bool = False, seed: int = 1) -> dict:
     from scipy.integrate import solve_ivp
     from scipy.optimize import least_squares
 
-    from .core import Model
-    from .simulate import simulate
+    from ..core import Model
+    from ..simulate import simulate
 
     m = Model("6pus")
     rng = np.random.default_rng(seed)

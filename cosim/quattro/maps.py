@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._native import PkmError, c_double_p, c_int_p, lib, ptr, raise_for
-from .core import Model
+from .._native import PkmError, c_double_p, c_int_p, lib, ptr, raise_for
+from ..core import Model
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]

@@ -11,16 +11,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .cli import command
+from .main import command
 
 
 def _effect_types():
     """The effect types the blind generator can hide (for --help)."""
-    from .discrepancy.blind import TYPES
+    from ..discrepancy.blind import TYPES
 
     return TYPES
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 DEMO_SCENARIOS = ("6pus_step_pdg.toml", "6pus_step_pd.toml")
 
 
@@ -35,9 +35,9 @@ def _configure(p):
 def cmd_demo(args):
     import argparse
 
-    from .discrepancy_cli import cmd_discrepancy_demo
-    from .scenario import run_scenario
-    from .scenario_cli import print_summary
+    from .discrepancy import cmd_discrepancy_demo
+    from ..scenario import run_scenario
+    from .scenario import print_summary
 
     out_dir = Path(args.out)
     print("== Part 1: co-simulation scenarios (controller in Python, plant integrated by CVODE)\n")

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from .cli import command
+from .main import command
 
 # Results stated by seed 003 (SPEC 3.2) on the robot axis x = y = 0, as (index, what, z [m]).
 STATED = [
@@ -20,7 +20,7 @@ STATED = [
 
 def axis_feature(param_set: str | None, index: str, what: str, params: dict | None = None, dz: float = 0.001):
     """z [m] of an index feature on the robot axis (max, min, or where it crosses 1)."""
-    from . import quattro
+    from .. import quattro
 
     m = quattro.model(param_set, params)
     h = m.param("base.h")
@@ -39,7 +39,7 @@ def _configure(p):
     m = sub.add_parser("map", help="every index on the 21 x 21 x 51 grid, one figure per index")
     m.add_argument("--out", required=True, help="output directory for the figures")
     m.add_argument("--set", dest="param_set", default="appendix_a", help="parameter set (default appendix_a)")
-    from .quattro import index_names
+    from ..quattro import index_names
 
     m.add_argument("--index", action="append", choices=index_names(), metavar="NAME",
                    help=f"only these indices (repeatable): {', '.join(index_names())}")
@@ -62,7 +62,7 @@ def _configure(p):
 @command("quattro", "Adept Quattro (seed 003): index maps, benchmark, stated maxima, cycle times vs measurements")
 def cmd_quattro(args):
     if args.action == "map":
-        from . import quattro
+        from .. import quattro
 
         mp = quattro.index_map(param_set=args.param_set)
         files = quattro.plot_maps(mp, args.out, names=args.index)
@@ -79,7 +79,7 @@ def cmd_quattro(args):
             print(f"wrote {f}")
         return 0
     if args.action == "bench":
-        from . import quattro
+        from .. import quattro
 
         r = quattro.benchmark(args.param_set)
         if args.json:
@@ -111,8 +111,8 @@ def cmd_quattro(args):
     if args.action == "cycle":
         from pathlib import Path
 
-        from . import cycle_time as ct
-        from .cli import working
+        from ..quattro import cycle_time as ct
+        from .main import working
 
         with working("timing the cycles of Tables 6.1-6.5"):
             cmp = ct.compare(param_set=args.param_set, n=args.n, qd_max=args.qd_max)

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .core import Model
-from .quattro import adept_to_model
+from ..core import Model
+from .maps import adept_to_model
 
 __all__ = ["CYCLES", "LAYOUTS", "Profile", "topp_segment", "cycle_waypoints", "cycle_time", "load_measured",
            "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison",
@@ -49,7 +49,7 @@ LAYOUTS = {
 
 # A copy of shared/data/adept_quattro_cycle_times.csv (Tables 6.1-6.5 of seed 003) ships with the
 # project so the comparison does not depend on the checkout layout.
-DATA = Path(__file__).resolve().parent.parent / "data" / "adept_quattro_cycle_times.csv"
+DATA = Path(__file__).resolve().parents[2] / "data" / "adept_quattro_cycle_times.csv"
 
 
 @dataclass
