@@ -11,10 +11,10 @@ last bits of the controller's arithmetic).
 Example
 -------
 >>> from cosim.core import Model
->>> from cosim import controllers as ctl
+>>> from cosim import controllers as ctl, trajectories as tr
 >>> from cosim.master import CorePlant, make_reference, run
 >>> m = Model("6pus")
->>> ref = make_reference(m, lambda t: m.home() + [0, 0, 0.01 * min(t, 1.0), 0, 0, 0], duration=2.0)
+>>> ref = make_reference(m, tr.step(m.home(), m.home() + [0, 0, 0.01, 0, 0, 0]), duration=2.0)
 >>> res = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), ref)
 >>> res.loop
 'compiled'
@@ -60,6 +60,10 @@ class CompiledController:
         if kind not in KINDS:
             raise ValueError(f"controller kind {kind!r} is not one the core implements ({sorted(KINDS)})")
         self.kind = kind
+        own_dt = getattr(controller, "dt", None)
+        if own_dt is not None and abs(float(own_dt) - float(dt)) > 1e-9 * float(dt):
+            raise ValueError(f"the {kind} controller was designed for a sample period of {own_dt:g} s; the loop "
+                             f"runs at {dt:g} s")
         self.model = getattr(controller, "model", None) or model
         nd = self.model.ndof
         self.ndof = nd

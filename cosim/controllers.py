@@ -11,6 +11,8 @@ and return the actuator efforts ``tau`` [N or N m] that the plant holds constant
 * :func:`pd_gravity`: the same plus ``g(x)`` fed forward (seed 001 step 6 of algorithm 3
   with ``J^T [0 0 mg 0 0 0]``); ``x`` is the pose the core's forward kinematics gives for
   the measured ``q`` (or the reference pose).  No steady-state error.
+* :func:`pid`: PID with a filtered derivative, anti-windup and output limits (the core's
+  law, as the compiled loop and the controller FMU run it).
 * :func:`computed_torque`: ``qdd_cmd = qddref + Kd (qdref - qd) + Kp (qref - q)`` mapped
   to a pose acceleration and through the core's inverse dynamics, so the closed loop
   is a decoupled double integrator per joint when the model is exact.
@@ -199,6 +201,40 @@ class ComputedTorque(PDGravity):
             raise ControllerError(f"{self.kind} at t = {t:.6g} s: {e}") from e
 
 
+class PID(JointController):
+    """PID with a filtered derivative, anti-windup and output limits, with an optional
+    gravity feed-forward: the core's law (``pkm.h`` ``PKM_CTRL_PID``), run through a
+    compiled copy, so that a Python loop, the compiled loop and the controller FMU do the
+    same arithmetic.  Build it with :func:`pid`."""
+
+    def __init__(self, model, *, ki, deriv_filter, gravity_feedforward, dt, **kw):
+        super().__init__(**kw)
+        self.model, self.ki, self.deriv_filter = model, ki, deriv_filter
+        self.gravity_feedforward, self.dt = gravity_feedforward, dt
+        self._cc = None
+
+    def reset(self, t0, q0, x0=None):
+        super().reset(t0, q0, x0)
+        from .closed_loop import CompiledController
+
+        if self._cc is None:
+            self._cc = CompiledController(self, model=self.model, dt=self.dt)
+        self._cc.reset(x0)
+
+    def law(self, t, q, qd, ref):
+        if self._cc is None:
+            self.reset(t, q)
+        return self._cc(t, q, qd, ref)
+
+    def describe(self) -> dict:
+        d = super().describe()
+        num, den = self.units[0].split("/")
+        d.update({"ki": _tolist(self.ki), "ki_unit": f"{num}/({den} s)",
+                  "deriv_filter": self.deriv_filter, "gravity_feedforward": bool(self.gravity_feedforward),
+                  "dt": self.dt})
+        return d
+
+
 # -------------------------------------------------------------------- factories
 
 def _pd_units(joint):
@@ -254,6 +290,51 @@ def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> 
                   saturation=_limit(saturation, nd), kind="pd_gravity", units=u)
     c.info = {"gravity": gravity}
     return c
+
+
+def pid(model, *, kp, ki, kd, dt: float, deriv_filter: float = 0.0, saturation=None,
+        gravity_feedforward: bool = False) -> JointController:
+    """PID in joint space, the law of the core (``pkm.h`` ``PKM_CTRL_PID``).
+
+    ``tau = Kp e + Ki i + Kd d (+ g(x))``, ``e = qref - q``; the integral
+    ``i_k = i_{k-1} + dt e_k`` is frozen while the output is saturated and ``e`` pushes
+    further into the limit (anti-windup); ``d`` is the backward difference of ``e``
+    through a first-order filter of time constant ``deriv_filter``.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The model the controller believes in (joint count, gravity feed-forward).
+    kp, kd : float or array_like
+        As in :func:`pd` [N/m, N s/m or N m/rad, N m s/rad].
+    ki : float or array_like
+        Integral gain [N/(m s) or N m/(rad s)].
+    dt : float
+        Sample period [s] (the integral and the derivative use it).
+    deriv_filter : float
+        Derivative filter time constant Tf [s] (0: the plain backward difference).
+    saturation : float or array_like, optional
+        Largest effort magnitude per actuator [N or N m].
+    gravity_feedforward : bool
+        Add the gravity load at the pose of the measured joints.
+
+    Example
+    -------
+    >>> from cosim.core import Model
+    >>> from cosim import controllers as ctl
+    >>> m = Model("6pus")
+    >>> c = ctl.pid(m, kp=2000, ki=4000, kd=30, dt=1e-3, deriv_filter=2e-3, saturation=80)
+    """
+    nd = model.ndof
+    u = _pd_units(_joint_of(model))
+    if not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
+        raise ControllerError(f"pid: dt = {dt!r} s must be a positive number")
+    if not (isinstance(deriv_filter, (int, float)) and np.isfinite(deriv_filter) and deriv_filter >= 0):
+        raise ControllerError(f"pid: deriv_filter = {deriv_filter!r} s must be >= 0")
+    return PID(model, ki=_gain(ki, nd, "ki", u[0] + "/s"), deriv_filter=float(deriv_filter),
+               gravity_feedforward=bool(gravity_feedforward), dt=float(dt), ndof=nd,
+               kp=_gain(kp, nd, "kp", u[0]), kd=_gain(kd, nd, "kd", u[1]), saturation=_limit(saturation, nd),
+               kind="pid", units=u)
 
 
 def computed_torque(model, *, kp, kd, saturation=None) -> JointController:

@@ -158,8 +158,17 @@ def _check(spec, path):
             if not isinstance(v, (int, float)) or isinstance(v, bool):
                 fail(f"{sec}.{k}", f"must be a number, got {v!r}")
     c = spec["controller"]
-    if c.get("type") not in ("pd", "pd_gravity", "computed_torque"):
-        fail("controller.type", f"must be 'pd', 'pd_gravity' or 'computed_torque', got {c.get('type')!r}")
+    if c.get("type") not in ("pd", "pd_gravity", "computed_torque", "pid"):
+        fail("controller.type", f"must be 'pd', 'pd_gravity', 'computed_torque' or 'pid', got {c.get('type')!r}")
+    if c["type"] == "pid":
+        if "ki" not in c:
+            fail("controller.ki", "missing: a PID needs its integral gain [N/(m s) or N m/(rad s)]")
+        for k in ("deriv_filter",):
+            if k in c and not (isinstance(c[k], (int, float)) and not isinstance(c[k], bool) and c[k] >= 0):
+                fail(f"controller.{k}", f"must be a number >= 0 [s], got {c[k]!r}")
+    elif "ki" in c or "deriv_filter" in c:
+        fail("controller.ki" if "ki" in c else "controller.deriv_filter", f"only a 'pid' controller takes it "
+             f"(this one is {c['type']!r})")
     has_gains = "kp" in c or "kd" in c
     has_design = "bandwidth_hz" in c
     if has_gains == has_design or (has_gains and not ("kp" in c and "kd" in c)):
@@ -290,6 +299,10 @@ def build_controller(sc: Scenario, model, x0):
         ctrl = ctl.pd(ndof=model.ndof, kp=kp, kd=kd, saturation=sat, joint=ctl._joint_of(model))
     elif kind == "pd_gravity":
         ctrl = ctl.pd_gravity(model, kp=kp, kd=kd, saturation=sat, gravity=c.get("gravity", "measured"))
+    elif kind == "pid":
+        ctrl = ctl.pid(model, kp=kp, ki=c["ki"], kd=kd, dt=float(sc.spec["step"]),
+                       deriv_filter=float(c.get("deriv_filter", 0.0)), saturation=sat,
+                       gravity_feedforward=bool(c.get("gravity_feedforward", False)))
     else:
         ctrl = ctl.computed_torque(model, kp=kp, kd=kd, saturation=sat)
     if design is not None:
@@ -470,7 +483,7 @@ def step_response_metrics(sc, res, model, traj, ctrl) -> dict:
         out["steady_state"]["predicted_joint_error_equilibrium"] = pred_eq.tolist()
         out["steady_state"]["prediction_relative_error"] = float(np.max(np.abs(ess - pred_eq)) / denom)
         out["steady_state"]["prediction_relative_error_first_order"] = float(np.max(np.abs(ess - pred)) / denom)
-    elif kind == "pd_gravity":
+    elif kind in ("pd_gravity", "pid"):  # gravity fed forward, or integrated away
         out["steady_state"]["predicted_joint_error"] = [0.0] * model.ndof
     # python-control step metrics on the moved pose coordinates and on each joint
     moved = np.flatnonzero(np.abs(x1 - x0) > 0)

@@ -54,8 +54,13 @@ class LTIController:
         self.saturated = 0
 
     def describe(self) -> dict:
-        return {"type": "lti", "nx": int(self.A.shape[0]), "dt": self.dt,
-                "gravity_feedforward": bool(self.gravity_feedforward)}
+        """Everything needed to rebuild it (the recording sidecar's ``controller``)."""
+        d = {"type": "lti", "nx": int(self.A.shape[0]), "dt": self.dt,
+             "gravity_feedforward": bool(self.gravity_feedforward),
+             "A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(), "D": self.D.tolist()}
+        if self.saturation is not None:
+            d["saturation"] = np.asarray(self.saturation, float).tolist()
+        return d
 
     # The law is the core's (pkm_ctrl): a Python loop calls it through a compiled copy.
     def reset(self, t0, q0, x0=None):

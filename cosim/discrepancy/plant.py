@@ -63,21 +63,48 @@ def integrator_applies(model) -> dict:
 def controller_from(desc: dict, model):
     """Rebuild the recorded controller from its sidecar description.
 
-    ``desc`` is what ``cosim.controllers.JointController.describe()`` writes:
-    ``{"type": "pd" | "pd_gravity" | "computed_torque", "kp", "kd", ...}``.
-    ``model`` is the model the controller believes in (the nominal one).
-    Returns None (and the reason) when it cannot be rebuilt.
+    ``desc`` is what ``describe()`` of a controller writes:
+    ``{"type": "pd" | "pd_gravity" | "computed_torque", "kp", "kd", ...}``,
+    ``{"type": "pid", "kp", "ki", "kd", "dt", "deriv_filter", "saturation",
+    "gravity_feedforward"}`` (:func:`cosim.controllers.pid`) or ``{"type": "lti", "dt",
+    "A", "B", "C", "D", "saturation", "gravity_feedforward"}`` (a discrete LTI controller
+    on the joint error, :func:`cosim.ssp.lti_controller`).  ``model`` is the model the
+    controller believes in (the nominal one).  Returns None (and the reason) when it
+    cannot be rebuilt.
     """
     from .. import controllers as ctl
 
     if not desc or "type" not in desc:
         return None, "the sidecar has no controller description"
     kind = desc["type"]
+    sat = desc.get("saturation")
+    if kind == "lti":
+        from ..ssp import LTIController
+
+        try:
+            A, B, Cm, D = (np.atleast_2d(np.asarray(desc[k], float)) for k in ("A", "B", "C", "D"))
+            dt = float(desc["dt"])
+        except (KeyError, TypeError, ValueError) as e:
+            return None, f"the LTI controller description needs numeric A, B, C, D and dt ({e})"
+        nd, nx = model.ndof, A.shape[0]
+        if A.shape != (nx, nx) or B.shape != (nx, nd) or Cm.shape != (nd, nx) or D.shape != (nd, nd):
+            return None, (f"the LTI controller's matrices have shapes A {A.shape}, B {B.shape}, C {Cm.shape}, "
+                          f"D {D.shape}; with {nx} states and {nd} joints they must be ({nx}, {nx}), ({nx}, {nd}), "
+                          f"({nd}, {nx}), ({nd}, {nd})")
+        return LTIController(A, B, Cm, D, dt=dt, model=model, saturation=sat,
+                             gravity_feedforward=bool(desc.get("gravity_feedforward", False))), ""
+    if kind == "pid":
+        try:
+            return ctl.pid(model, kp=np.asarray(desc["kp"], float), ki=np.asarray(desc["ki"], float),
+                           kd=np.asarray(desc["kd"], float), dt=float(desc["dt"]),
+                           deriv_filter=float(desc.get("deriv_filter", 0.0)), saturation=sat,
+                           gravity_feedforward=bool(desc.get("gravity_feedforward", False))), ""
+        except (KeyError, TypeError, ValueError) as e:
+            return None, f"the PID controller description needs numeric kp, ki, kd and dt ({e})"
     try:
         kp, kd = np.asarray(desc["kp"], float), np.asarray(desc["kd"], float)
     except (KeyError, TypeError, ValueError):
         return None, "the controller description has no numeric kp/kd"
-    sat = desc.get("saturation")
     if kind == "pd":
         return ctl.pd(ndof=model.ndof, kp=kp, kd=kd, saturation=sat), ""
     if kind == "pd_gravity":

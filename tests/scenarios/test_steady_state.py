@@ -57,3 +57,16 @@ def test_pd_gravity_compensation_removes_the_error(pd_run):
     z = out.metrics["step_info"]["pose"]["z"]
     assert z["Amplitude"] == pytest.approx(0.07, abs=1e-9)
     assert 0.05 < z["RiseTime"] < 0.5 and z["SettlingTime"] < 1.0 and z["Overshoot"] < 1.0
+
+
+def test_pid_integral_removes_the_pd_steady_state_error():
+    """The shipped PID scenario: the same step and kp, kd as the PD, plus an integral; the
+    error the PD leaves (a millimetre) is integrated away."""
+    sc = load_scenario(SCEN / "6pus_step_pid.toml")
+    c = sc.spec["controller"]
+    assert (c["type"], c["kp"], c["kd"]) == ("pid", KP, 30.0) and c["ki"] > 0
+    res = run_scenario(sc, export=False, figures=False)
+    assert res.result.loop == "compiled"
+    e_pd = predicted_equilibrium_error(Model("6pus"), np.array(sc.spec["reference"]["to"]), KP)
+    e_sim = np.array(res.metrics["steady_state"]["joint_error"])
+    assert np.all(np.abs(e_sim) < 0.02 * np.abs(e_pd)), (e_sim, e_pd)
