@@ -10,7 +10,12 @@ A recording is a CSV file with a header row and a JSON sidecar of the same name:
 * any further columns are kept in ``Recording.extra``.
 
 Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar",
-"parameters": {...}, "controller": {...}, "notes": "..."}``.
+"parameters": {...}, "controller": {...}, "notes": "..."}``, optionally
+``"joint_convention": {"sign": [...], "offset": [...]}`` for a recording made in other
+joint coordinates than the model's: per joint, ``recorded = sign * model + offset``
+(``sign`` +1 or -1; ``offset`` in m or rad, default 0).  The reader converts ``q``,
+``qd``, ``qref`` and ``tau`` to the model's convention (``Recording.joint_convention``
+keeps what was declared; written recordings are in the model's convention).
 
 Scenarios export this; calibration and the discrepancy engine read it.  A bad file gets
 one :class:`RecordingError` naming the file, the row (line number in the file) and the
@@ -80,6 +85,9 @@ class Recording:
     controller: dict = field(default_factory=dict)
     notes: str = ""
     path: Path | None = None
+    #: the joint convention the file declared (``sign``, ``offset`` per joint); the arrays
+    #: are already in the model's convention.  Empty: the model's own.
+    joint_convention: dict = field(default_factory=dict)
 
     @property
     def ndof(self) -> int:
@@ -100,7 +108,7 @@ class Recording:
             None if self.qref is None else self.qref[s],
             None if self.pose is None else self.pose[s],
             {k: v[s] for k, v in self.extra.items()},
-            dict(self.parameters), dict(self.controller), self.notes, self.path,
+            dict(self.parameters), dict(self.controller), self.notes, self.path, dict(self.joint_convention),
         )
 
     def column_names(self) -> list[str]:
@@ -332,17 +340,42 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
     known = set(required) | {"time"} | {f"qref{i}" for i in range(1, nd + 1)} | set(pose_cols)
     if all(has_pose):
         _check_pose_scale(path, rname, pose_cols, col)
+    sign, offset, conv = _joint_convention(side, meta.get("joint_convention"), nd)
     return Recording(
         robot=rname,
         time=t,
-        q=stack("q"),
-        qd=stack("qd"),
-        tau=stack("tau"),
-        qref=stack("qref") if all(has_qref) else None,
+        q=sign * (stack("q") - offset),
+        qd=sign * stack("qd"),
+        tau=sign * stack("tau"),
+        qref=sign * (stack("qref") - offset) if all(has_qref) else None,
         pose=np.column_stack([col[c] for c in pose_cols]) if all(has_pose) else None,
         extra={h: col[h] for h in header if h not in known},
         parameters=meta.get("parameters") or {},
         controller=meta.get("controller") or {},
         notes=meta.get("notes", ""),
         path=path,
+        joint_convention=conv,
     )
+
+
+def _joint_convention(side, conv, nd):
+    """``(sign, offset, declared)`` of a sidecar's ``joint_convention`` (recorded = sign *
+    model + offset per joint); identity when absent.  A bad field is a RecordingError
+    naming it."""
+    if conv is None:
+        return np.ones(nd), np.zeros(nd), {}
+    if not isinstance(conv, dict) or set(conv) - {"sign", "offset"}:
+        raise RecordingError(side, 'joint_convention must be {"sign": [...], "offset": [...]} (recorded = sign * '
+                                   'model + offset per joint)')
+    out = []
+    for key, default in (("sign", 1.0), ("offset", 0.0)):
+        v = conv.get(key, [default] * nd)
+        if not isinstance(v, list) or len(v) != nd:
+            raise RecordingError(side, f"joint_convention.{key} must be a list of {nd} numbers, one per joint")
+        for i, e in enumerate(v):
+            ok = isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e)
+            if not ok or (key == "sign" and e not in (1, -1)):
+                want = "+1 or -1" if key == "sign" else "a finite number [m or rad]"
+                raise RecordingError(side, f"joint_convention.{key}[{i}] = {e!r} must be {want} (joint {i + 1})")
+        out.append(np.asarray(v, float))
+    return out[0], out[1], {"sign": out[0].tolist(), "offset": out[1].tolist()}

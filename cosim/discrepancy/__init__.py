@@ -67,6 +67,11 @@ class Diagnosis:
         Closed-loop replay of the held-out part with the nominal and the fitted plant.
     files : dict
         Report and figure paths (when ``out`` was given).
+    warnings : list of str
+        What makes the recording contradict the model as a whole (an effort that runs
+        against the model's on a joint: another joint convention, a flipped sign, a gear
+        ratio), naming the joint; when not empty, no effect is fitted and the conclusion
+        says so.
     """
 
     recording: str
@@ -86,6 +91,7 @@ class Diagnosis:
     steps: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     refused: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
     #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
     #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
     residual: dict = field(default_factory=dict, repr=False)
@@ -102,7 +108,8 @@ class Diagnosis:
         """Effect keys declared equally good as the first group of ``key``."""
         for e in self.effects:
             if e["key"] == key:
-                return [a["effect"] for a in e["lookalikes"] if a["delta_bic"] < TIE_MARGIN]
+                return [a["effect"] for a in e["lookalikes"]
+                        if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
         return []
 
     def plant_parameters(self) -> dict:
@@ -225,6 +232,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         pipe = Pipeline(rec, mdl, window=window)
         groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
         _check_motion(pipe)
+        warnings = convention_contradictions(pipe, mdl)
+        if warnings:
+            return _contradicted(rec, pipe, warnings, out, t0)
         t1 = time.perf_counter()
         eng = Engine(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
                      verbose=verbose)
@@ -238,6 +248,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     effects_out = _effects(eng, sel)
     not_excited = _not_excited(eng, sel)
     conclusion = _conclusion(effects_out, not_excited, eng, sel)
+
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
                   held, loc, not_excited,
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
@@ -263,6 +274,99 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         timings["report"] = time.perf_counter() - t6
     timings["total"] = time.perf_counter() - t0
     return d
+
+
+def _contradicted(rec, pipe, warnings, out, t0) -> Diagnosis:
+    """The answer for a recording that contradicts the model: the warnings, no effects
+    (a fit would name the convention as some physics), and a short report."""
+    conclusion = ("cannot diagnose: the recording contradicts the model: " + "; ".join(warnings))
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, [], {}, {}, {}, [], [],
+                  pipe.channels, {}, warnings=list(warnings),
+                  settings={"samples": pipe.n, "dt": pipe.dt})
+    if out is not None:
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        lines = [f"# Diagnosis of {d.recording}", "", f"**{conclusion}**", "", "## Warnings", ""]
+        lines += [f"- {w}" for w in warnings]
+        (out / "report.md").write_text("\n".join(lines) + "\n")
+        (out / "diagnosis.json").write_text(d.to_json())
+        d.files = {"report": str(out / "report.md"), "json": str(out / "diagnosis.json")}
+    d.timings = {"total": time.perf_counter() - t0}
+    return d
+
+
+_DECLARE = ('Declare it in the sidecar ("joint_convention": {"sign": [...], "offset": [...]}, recorded = sign * '
+            'model + offset)')
+
+
+def convention_contradictions(pipe, mdl) -> list:
+    """Joints the recording measures in another convention than the model's, one
+    sentence each: from the pose columns when there are any (:func:`joint_contradictions`),
+    then from the efforts (:func:`effort_contradictions`) for the joints not named yet."""
+    out = joint_contradictions(pipe, mdl)
+    named = {w.split(":")[0] for w in out}
+    return out + [w for w in effort_contradictions(pipe, mdl) if w.split(":")[0] not in named]
+
+
+def joint_contradictions(pipe, mdl) -> list:
+    """Joints whose recorded reading runs against the inverse kinematics of the recorded
+    pose (slope below 0 of the reading on it: a reversed joint coordinate) or sits far
+    from it (by more than 5 cm or 0.5 rad: an offset no encoder error explains); [] without
+    pose columns.  The library's reading effects (offset, backlash, compliance) stay far
+    inside both bounds."""
+    if pipe.pose is None or list(mdl.facts.pose_names) != list(pipe.rec.pose_columns):
+        return []
+    q_ik, status = mdl.ik(pipe.pose[pipe.idx], errors="status")
+    ok = status == 0
+    if ok.sum() < 10:
+        return []
+    q_rec, q_ik = pipe.q[pipe.idx][ok], q_ik[ok]
+    noun, out = mdl.facts.joint_noun, []
+    for i in range(q_rec.shape[1]):
+        a, b = q_rec[:, i] - q_rec[:, i].mean(), q_ik[:, i] - q_ik[:, i].mean()
+        spread = float(b @ b)
+        slope = float(a @ b) / spread if spread > 0 else 1.0
+        gap = float(np.median(q_rec[:, i] - q_ik[:, i]))
+        unit = mdl.joint_unit
+        far = abs(gap) > (0.5 if unit == "rad" else 0.05)
+        if slope < 0:
+            out.append(f"{noun} {i + 1}: the recorded reading q{i + 1} runs against the inverse kinematics of the "
+                       f"recorded pose (slope {slope:.2f}): a joint coordinate running the other way? {_DECLARE}")
+        elif far:
+            out.append(f"{noun} {i + 1}: the recorded reading q{i + 1} is {gap:.4g} {unit} from the inverse "
+                       f"kinematics of the recorded pose: another zero of the joint coordinate? {_DECLARE}")
+    return out
+
+
+def effort_contradictions(pipe, mdl) -> list:
+    """Joints whose recorded effort runs against the model's, one sentence each.
+
+    The nominal inverse dynamics along the measured motion is compared with the
+    recorded effort joint by joint (smoothed, decimated samples): a cosine below -0.5
+    (gravity load of the wrong sign, a reversed rail coordinate) or, where they agree in
+    shape (cosine above 0.9), a scale outside 0.5-2 (a gear ratio, a unit) is no missing
+    physics the library can name: it is a convention the recording does not share with
+    the model.
+    """
+    tau_m = pipe.S(mdl.inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f))[pipe.idx]
+    tau_r = pipe.tau_s[pipe.idx]
+    noun = mdl.facts.joint_noun
+    out = []
+    for i in range(tau_r.shape[1]):
+        a, b = tau_r[:, i], tau_m[:, i]
+        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+        if not (na > 0 and nb > 0):
+            continue
+        cos, scale = float(a @ b) / (na * nb), float(a @ b) / (nb * nb)
+        col = f"tau{i + 1}"
+        if cos < -0.5:
+            out.append(f"{noun} {i + 1}: the recorded effort runs against the model's (cosine {cos:.2f}, best scale "
+                       f"{scale:.2f}): was it recorded in another joint convention or with the opposite sign of "
+                       f"{col}? {_DECLARE}")
+        elif cos > 0.9 and not 0.5 < scale < 2.0:
+            out.append(f"{noun} {i + 1}: the recorded effort is the model's times {scale:.2f} (cosine {cos:.2f}): a gear "
+                       f"ratio or a unit in {col}? Convert the column to the joint's effort")
+    return out
 
 
 def _check_motion(pipe):
@@ -348,6 +452,11 @@ def _effects(eng, sel) -> list:
                 st = (f"{c['name']} explains the data as well (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f}): the two cannot be told apart with this data; "
                       f"{separating_motion(g.key, c['effect'])} would separate them")
+            elif c.get("delta_chi2", float("inf")) < TIE_MARGIN:
+                st = (f"{c['name']} fits the data as well (chi-square {c['delta_chi2']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): the same physics on this recording; only its "
+                      f"{c['extra_params']} extra parameter(s) cost it delta BIC {c['delta_bic']:+.1f}, which is no "
+                      f"evidence against it; {separating_motion(g.key, c['effect'])} would separate them")
             elif c["delta_bic"] < eng.lookalike_margin:
                 st = (f"{c['name']} is a weaker alternative (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f}): not told apart with confidence; "
@@ -408,7 +517,9 @@ def _conclusion(effects, not_excited, eng, sel) -> str:
         parts = []
         for e in effects:
             vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
-            parts.append(f"{e['title']} ({vals})")
+            tied = [a["name"] for a in e["lookalikes"]
+                    if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
+            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(tied)} fits as well]" if tied else ""))
         return "missing physics: " + ", ".join(parts)
     excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
     if not excited:

@@ -881,7 +881,11 @@ class Engine:
                 dbic = bic_alt - bic_final
                 if related or dbic < self.lookalike_margin:
                     corr = self._correlation(a.group, g, Q)
+                    # The fit apart from the parameter penalty: an alternative with more
+                    # parameters that fits exactly as well is the same physics here, not worse.
                     cands.append({"group": g.label, "effect": g.key, "name": g.title, "delta_bic": float(dbic),
+                                  "delta_chi2": float(best[0] - sel.chi2_final),
+                                  "extra_params": int(best[1].k - self._k(a.group)),
                                   "correlation": corr, "related": related})
             cands.sort(key=lambda c: c["delta_bic"])
             a.lookalikes = [c for c in cands if c["related"] or c["delta_bic"] < self.lookalike_margin][:4]
