@@ -72,6 +72,9 @@ class RobotFacts:
         Named parameter sets, ``"default"`` first.
     pose_names, pose_units : tuple of str
         Pose coordinates (``"x"``, ..., ``"theta"``) and their units (``"m"``, ``"rad"``).
+    tracker_names, tracker_units : tuple of str
+        What an external tracker measures (a recording's pose columns): the pose
+        coordinates, or what the robot measures instead (the four-bar: ``"X"`` in m).
     joint_unit, effort_unit : str
         Unit of the joint coordinates q (``"m"`` or ``"rad"``) and of the efforts
         (``"N"`` or ``"N m"``).
@@ -85,6 +88,8 @@ class RobotFacts:
     param_sets: tuple
     pose_names: tuple
     pose_units: tuple
+    tracker_names: tuple
+    tracker_units: tuple
     joint_unit: str
     effort_unit: str
     joint_noun: str
@@ -162,6 +167,8 @@ class Model:
                              for i in range(lib.pkm_robot_param_set_count(name.encode()))),
             pose_names=tuple(lib.pkm_model_pose_name(m, i).decode() for i in range(nd)),
             pose_units=tuple(lib.pkm_model_pose_unit(m, i).decode() for i in range(nd)),
+            tracker_names=tuple(lib.pkm_model_tracker_name(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
+            tracker_units=tuple(lib.pkm_model_tracker_unit(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
             joint_unit=lib.pkm_model_joint_unit(m).decode(), effort_unit=lib.pkm_model_effort_unit(m).decode(),
             joint_noun=lib.pkm_model_joint_noun(m).decode(), joint_prefix=lib.pkm_model_joint_prefix(m).decode())
 

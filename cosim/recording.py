@@ -44,12 +44,18 @@ import numpy as np
 
 FORMAT = "pkm-recording/1"
 
-#: joints and pose columns of each robot
-ROBOTS = {
-    "6pus": {"ndof": 6, "pose": ["x", "y", "z", "rx", "ry", "rz"]},
-    "quattro": {"ndof": 4, "pose": ["x", "y", "z", "theta"]},
-    "fourbar": {"ndof": 1, "pose": ["X"]},
-}
+
+def _facts(robot):
+    """The core's facts of a robot (joints, tracker columns), or None if it knows none."""
+    from .core import robot_facts, robots
+
+    return robot_facts(robot) if robot in robots() else None
+
+
+def _known():
+    from .core import robots
+
+    return ", ".join(robots())
 
 
 class RecordingError(ValueError):
@@ -70,7 +76,8 @@ class Recording:
     """One recorded (or simulated) run.
 
     Arrays have one row per sample: ``time`` (n,) [s]; ``q``, ``qd``, ``tau``, ``qref``
-    (n, nd); ``pose`` (n, npose) in the robot's pose columns (see ``ROBOTS``).
+    (n, nd); ``pose`` (n, npose) in the robot's tracker columns (the core's
+    ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar).
     """
 
     robot: str
@@ -91,11 +98,11 @@ class Recording:
 
     @property
     def ndof(self) -> int:
-        return ROBOTS[self.robot]["ndof"]
+        return _facts(self.robot).ndof
 
     @property
     def pose_columns(self) -> list[str]:
-        return ROBOTS[self.robot]["pose"]
+        return list(_facts(self.robot).tracker_names)
 
     def __len__(self) -> int:
         return len(self.time)
@@ -139,8 +146,8 @@ def sidecar_path(csv_path) -> Path:
 
 
 def _validate(rec: Recording, path) -> None:
-    if rec.robot not in ROBOTS:
-        raise RecordingError(path, f"unknown robot {rec.robot!r} (known: {', '.join(ROBOTS)})")
+    if _facts(rec.robot) is None:
+        raise RecordingError(path, f"unknown robot {rec.robot!r} (known: {_known()})")
     n, nd = len(rec.time), rec.ndof
     for name in ("q", "qd", "tau", "qref"):
         a = getattr(rec, name)
@@ -225,9 +232,10 @@ def read_recording(path, robot: str | None = None) -> Recording:
     rname = meta.get("robot", robot)
     if robot is not None and rname != robot:
         raise RecordingError(side, f"recording is of robot {rname!r}, expected {robot!r}")
-    if rname not in ROBOTS:
-        raise RecordingError(side, f"unknown robot {rname!r} (known: {', '.join(ROBOTS)})")
-    nd, pose_cols = ROBOTS[rname]["ndof"], ROBOTS[rname]["pose"]
+    facts = _facts(rname) if isinstance(rname, str) else None
+    if facts is None:
+        raise RecordingError(side, f"unknown robot {rname!r} (known: {_known()})")
+    nd, pose_cols = facts.ndof, list(facts.tracker_names)
     _check_units(side, meta.get("units"), rname)
     try:
         rows, header = _read_rows(path)
@@ -254,8 +262,8 @@ def _check_units(side, units, robot):
             raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
                                        f"({key} in {want[key]}); convert the column (e.g. mm -> m) and drop or fix "
                                        f"the field")
-        if key in ("pose", "x") and isinstance(unit, list) and list(unit) != list(f.pose_units):
-            raise RecordingError(side, f"units.{key} = {unit!r}: the pose columns must be in {list(f.pose_units)}")
+        if key in ("pose", "x") and isinstance(unit, list) and list(unit) != list(f.tracker_units):
+            raise RecordingError(side, f"units.{key} = {unit!r}: the pose columns must be in {list(f.tracker_units)}")
 
 
 def _check_pose_scale(path, robot, pose_cols, col):
@@ -263,10 +271,7 @@ def _check_pose_scale(path, robot, pose_cols, col):
     say so, naming the column, instead of letting a later step fail on unreachable poses."""
     from .core import robot_facts
 
-    f = robot_facts(robot)
-    if list(pose_cols) != list(f.pose_names):
-        return  # the tracker columns are not the pose coordinates (the four-bar's output X)
-    for c, unit in zip(pose_cols, f.pose_units):
+    for c, unit in zip(pose_cols, robot_facts(robot).tracker_units):
         big = float(np.max(np.abs(col[c])))
         if unit == "m" and big > 2.0:
             raise RecordingError(path, f"values up to {big:g} m: was the column written in mm? (the format is in m)",

@@ -56,6 +56,15 @@ TEST(RobotFacts, TheKnownRobotsFactsAreTheirs) {
   // the four-bar's pose is its crank angle
   EXPECT_STREQ(pkm_model_pose_name(four.get(), 0), "theta");
   EXPECT_STREQ(pkm_model_pose_unit(four.get(), 0), "rad");
+  // a tracker measures the pose, except on the four-bar: its coupler's mid point X [m]
+  ASSERT_EQ(pkm_model_tracker_count(six.get()), 6);
+  EXPECT_STREQ(pkm_model_tracker_name(six.get(), 3), "rx");
+  EXPECT_STREQ(pkm_model_tracker_unit(quattro.get(), 3), "rad");
+  ASSERT_EQ(pkm_model_tracker_count(four.get()), 1);
+  EXPECT_STREQ(pkm_model_tracker_name(four.get(), 0), "X");
+  EXPECT_STREQ(pkm_model_tracker_unit(four.get(), 0), "m");
+  EXPECT_STREQ(pkm_model_tracker_name(four.get(), 1), "");
+  EXPECT_EQ(pkm_model_tracker_count(nullptr), -1);
   int lo, hi;
   ASSERT_EQ(pkm_model_joint_limits(six.get(), 2, &lo, &hi), PKM_OK);
   EXPECT_STREQ(pkm_param_name(six.get(), lo), "rail[3].qmin");

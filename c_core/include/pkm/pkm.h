@@ -92,6 +92,12 @@ PKM_API const char* pkm_model_robot(const pkm_model* m);   /* "6pus", ...       
 /* Pose coordinate i: name ("x", "rz", "theta") and unit ("m", "rad"). */
 PKM_API const char* pkm_model_pose_name(const pkm_model* m, int i);
 PKM_API const char* pkm_model_pose_unit(const pkm_model* m, int i);
+/* What an external tracker measures (a recording's pose columns): count, name and unit of
+ * column i.  The pose coordinates, except where the robot measures something else (the
+ * four-bar: "X" [m], the coupler's mid point, pkm_fourbar_output). */
+PKM_API int pkm_model_tracker_count(const pkm_model* m);
+PKM_API const char* pkm_model_tracker_name(const pkm_model* m, int i);
+PKM_API const char* pkm_model_tracker_unit(const pkm_model* m, int i);
 /* Actuated joints: unit of q ("m" sliders, "rad" revolute), of the effort ("N", "N m"),
  * the noun messages use ("slider", "arm", "joint") and the drive parameters' prefix
  * ("rail" -> "rail[i].coulomb"). */

@@ -118,6 +118,13 @@ const char* pkm_model_pose_name(const pkm_model* m, int i) {
 const char* pkm_model_pose_unit(const pkm_model* m, int i) {
   return m && i >= 0 && i < m->robot->ndof() ? m->robot->pose_unit(i) : "";
 }
+int pkm_model_tracker_count(const pkm_model* m) { return m ? m->robot->tracker_count() : -1; }
+const char* pkm_model_tracker_name(const pkm_model* m, int i) {
+  return m && i >= 0 && i < m->robot->tracker_count() ? m->robot->tracker_name(i) : "";
+}
+const char* pkm_model_tracker_unit(const pkm_model* m, int i) {
+  return m && i >= 0 && i < m->robot->tracker_count() ? m->robot->tracker_unit(i) : "";
+}
 const char* pkm_model_joint_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "rad" : "m") : ""; }
 const char* pkm_model_effort_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "N m" : "N") : ""; }
 const char* pkm_model_joint_noun(const pkm_model* m) { return m ? m->robot->joint_noun() : ""; }

@@ -74,6 +74,12 @@ class Robot {
   // Name and unit of pose coordinate i (0-based, i < ndof()).
   virtual const char* pose_name(int i) const = 0;
   virtual const char* pose_unit(int i) const = 0;
+  // What an external tracker of this robot measures, one column each (recordings' pose
+  // columns): the pose coordinates unless the robot measures something else (the
+  // four-bar: the coupler's mid point X, not the crank angle).
+  virtual int tracker_count() const { return ndof(); }
+  virtual const char* tracker_name(int i) const { return pose_name(i); }
+  virtual const char* tracker_unit(int i) const { return pose_unit(i); }
   // The parameter holding actuated joint i's lower (upper) limit, "" if there is none;
   // the integrator stops there (pkm_sim) and the FMUs report it.
   virtual std::string joint_limit_param(int, bool /*upper*/) const { return ""; }

@@ -88,6 +88,10 @@ struct Fourbar final : Robot {
   int ndof() const override { return 1; }
   const char* pose_name(int) const override { return "theta"; }  // the crank angle (pose = joint)
   const char* pose_unit(int) const override { return "rad"; }
+  // A tracker measures the output point (pkm_fourbar_output), not the crank angle.
+  int tracker_count() const override { return 1; }
+  const char* tracker_name(int) const override { return "X"; }
+  const char* tracker_unit(int) const override { return "m"; }
 
   std::vector<ParamSpec> param_specs(const std::string& set) const override {
     if (set != "default")
