@@ -1,0 +1,43 @@
+"""The engine on recordings from MuJoCo, a simulator the project did not write (issue 12).
+
+A few cases of bench/foreign/mujoco_blind.py (which runs the full set: every effect type,
+clean cases, PD + gravity or PID): the robot simulated by MuJoCo with an effect hidden in
+MuJoCo's own physics (joint frictionloss) or in the drive around it (a dead zone), and a
+clean run, diagnosed blind; the truth is compared only afterwards.  Nothing of the engine
+is tuned on these cases."""
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench"
+sys.path[:0] = [str(BENCH / "foreign"), str(BENCH)]
+
+import mujoco_blind as mb  # noqa: E402
+
+from cosim.core import Model  # noqa: E402
+from cosim.discrepancy import blind, diagnose  # noqa: E402
+from cosim.recording import write_recording  # noqa: E402
+
+
+@pytest.mark.parametrize("effect, value, joint, key", [
+    (None, 0.0, 0, None),
+    ("coulomb", 0.03, 2, "rail[3].coulomb"),          # MuJoCo's soft friction (frictionloss)
+    ("dead_zone", 0.04, 4, "rail[5].dead_zone"),      # the drive passes nothing within +-0.04 N
+])
+def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, effect, value, joint, key):
+    m = Model("6pus")
+    rec, truth = mb.simulate(m, effect, value, joint, seed=21, duration=6.0,
+                             noise=blind.load_config()["noise"]["6pus"])
+    csv, side = write_recording(tmp_path / "run.csv", rec)
+    meta = json.loads(side.read_text())
+    meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-m.ik(m.home())).tolist()}  # MuJoCo's zero: home
+    side.write_text(json.dumps(meta))
+    d = diagnose(csv, figures=False, replay=False)
+    if effect is None:
+        assert d.named() == [] and d.conclusion == "no missing physics found", d.conclusion
+        return
+    assert d.named()[0] == effect, d.conclusion
+    est = d.plant_parameters()[key]
+    assert abs(est - truth[key]) < 0.15 * truth[key], (est, truth[key])
