@@ -63,6 +63,11 @@ class Diagnosis:
         Effects this recording cannot reveal, and what motion or data is missing.
     unavailable : list of str
         Effects not tested at all (robot model lacks them, or no tracker columns).
+    unexplained : list of dict
+        Residual channels that keep structure after the fit (:mod:`.structure`): what it
+        is keyed on (sign of velocity, sign of command, position, velocity,
+        acceleration), its rms against the residual's own noise, and the library effects
+        of that kind.  Reported in the conclusion, never "within noise".
     replay : dict or None
         Closed-loop replay of the held-out part with the nominal and the fitted plant.
     files : dict
@@ -92,6 +97,9 @@ class Diagnosis:
     settings: dict = field(default_factory=dict)
     refused: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    #: residual channels that keep structure after the fit (cosim.discrepancy.structure):
+    #: channel, what it is keyed on, the closest library effects, its rms against the noise
+    unexplained: list = field(default_factory=list)
     #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
     #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
     residual: dict = field(default_factory=dict, repr=False)
@@ -119,7 +127,8 @@ class Diagnosis:
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
-                                               "noise", "replay", "timings", "files", "steps", "settings")}
+                                               "noise", "replay", "timings", "files", "steps", "settings",
+                                               "warnings", "unexplained")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=_json_default)
@@ -245,9 +254,16 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         loc = localise(eng, sel)
         t4 = time.perf_counter()
     timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, heldout_localisation=t4 - t3)
+    from .structure import sentence, unexplained
+
     effects_out = _effects(eng, sel)
     not_excited = _not_excited(eng, sel)
     conclusion = _conclusion(effects_out, not_excited, eng, sel)
+    r_after = eng.R(sel.theta) if sel.theta else eng.R0
+    left = unexplained(pipe, r_after, floor=eng.floor())
+    if left:
+        conclusion = (conclusion + "; " + sentence(left) if effects_out else
+                      "no effect of the library explains the residual: " + sentence(left))
 
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
                   held, loc, not_excited,
@@ -258,8 +274,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window},
-                  residual={"time": pipe.t[pipe.idx], "before": eng.R0,
-                            "after": eng.R(sel.theta) if sel.theta else eng.R0})
+                  residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left)
     if replay:
         t5 = time.perf_counter()
         d.replay = _replay(rec, eng, sel)

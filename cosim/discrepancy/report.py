@@ -65,6 +65,14 @@ def markdown(d, files: dict) -> str:
           f"({s['window'] * 1e3:.0f} ms), decimated by {s['decimation']}; the last "
           f"{(1 - s['train_fraction']) * 100:.0f} % of the recording is held out of the fit.", ""]
 
+    if getattr(d, "unexplained", None):
+        L += ["## Structure left unexplained", "",
+              "After the fit these residual channels still follow the motion (tested against the residual's own "
+              "high-frequency noise, not the noise model the structure would inflate):", ""]
+        L += [f"- `{e['channel']}`: keyed on {e['keyed_on']}, rms {e['rms']:.3g} against noise {e['noise']:.3g} "
+              f"(chi-square {e['chi2']:.0f}); the library effects of that kind: {', '.join(e['closest'])}"
+              for e in d.unexplained]
+        L += [""]
     L += ["## Where the model goes wrong", ""]
     loc = d.localisation
     if loc["summary"]:

@@ -1,0 +1,113 @@
+"""Structure left unexplained: what the selected model leaves in the residual.
+
+After the selection, each residual channel is tested for a constant offset and for a part
+keyed on the motion of its joint: the sign of the joint velocity, the sign of the
+commanded effort, the joint position, the velocity, the acceleration.  The yardstick is the residual's own
+high-frequency noise (median absolute difference of samples one smoothing window
+apart), not the engine's noise model: an effect outside the library inflates that one
+and would pass for noise ("within noise").  A family of regressors counts when it
+explains more than ``threshold`` + k log n (chi-square in independent samples, BIC-like)
+of the residual; the report names the channel, what the structure is keyed on and the
+library effects of that kind, which came closest.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: signature -> (what it is keyed on, the library effects of that kind)
+SIGNATURES = {
+    "offset": ("nothing: a constant offset", ["encoder offset (a reading)", "dead zone under a one-signed "
+                                                 "command", "gravity tilt", "payload"]),
+    "velocity_sign": ("the sign of the joint velocity", ["Coulomb friction", "Stribeck friction", "backlash"]),
+    "command_sign": ("the sign of the commanded effort", ["dead zone", "backlash under a preload"]),
+    "position": ("the joint position", ["geometry", "payload", "gravity tilt", "encoder offset"]),
+    "velocity": ("the joint velocity", ["viscous friction", "actuator / sensor delay"]),
+    "acceleration": ("the joint acceleration", ["rotor inertia", "platform mass or inertia", "delays"]),
+}
+
+#: signatures fitted with their mean (the others are centred: the offset is tested alone)
+SIGNED = ("velocity_sign", "command_sign")
+
+#: chi-square (independent samples) a family must explain beyond k log n to be reported;
+#: set on the clean and effect cases of the engine's own generator (docs/discrepancy.md)
+THRESHOLD = 25.0
+
+
+def _families(pipe, j: int) -> dict:
+    """Regressors of joint j on the decimated samples, per signature."""
+    idx = pipe.idx
+    qd, q = pipe.qd_s[idx, j], pipe.q_s[idx, j]
+    qdd, tau = pipe.qdd_s[idx, j], pipe.tau_s[idx, j]
+    v_eps = 3.0 * max(float(pipe.qd_noise[j]), 1e-12)
+    t_eps = 0.02 * max(float(np.std(tau)), 1e-12)
+    z = (q - q.mean()) / max(float(np.std(q)), 1e-12)
+    return {
+        "velocity_sign": np.tanh(qd / v_eps)[:, None],
+        "command_sign": np.tanh(tau / t_eps)[:, None],
+        "position": np.column_stack([z, z * z, z ** 3]),
+        "velocity": np.column_stack([qd, qd * np.abs(qd)]),
+        "acceleration": qdd[:, None],
+    }
+
+
+def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
+    """Channels whose residual ``R`` (decimated samples x channels) keeps structure.
+
+    ``floor`` (per channel, optional): the smallest noise level a channel is given (the
+    engine's ``floor()``: the pipeline's own accuracy), so that the round-off of a
+    noiseless recording is not taken for structure.
+
+    Returns one dict per channel with structure: ``channel``, ``joint`` (1-based),
+    ``signature``, ``keyed_on``, ``closest`` (library effects of that kind), ``chi2``
+    (explained, in independent samples), ``rms`` (of the structured part) and ``noise``
+    (the residual's high-frequency noise), in the channel's unit.
+    """
+    R = np.asarray(R, float)
+    n = R.shape[0]
+    lag = int(math.ceil(pipe.window / pipe.step)) + 1
+    phi = max(1.0, pipe.window / pipe.step)  # correlated decimated samples per independent one
+    n_eff = n / phi
+    if n < 8 * lag or n_eff < 10:
+        return []
+    out = []
+    for c, name in enumerate(pipe.channels):
+        mean = float(R[:, c].mean())
+        r = R[:, c] - mean
+        d = r[lag:] - r[:-lag]
+        sigma = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+        if floor is not None:
+            sigma = max(sigma, float(floor[c]))
+        if not sigma > 0:
+            continue
+        best = None
+        for sig_name, F in _families(pipe, c % pipe.nd).items():
+            if sig_name in SIGNED:  # a sign carries its own mean (a one-signed command is an offset too)
+                y, X = R[:, c], F
+            else:
+                y, X = r, F - F.mean(axis=0)
+            beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+            fit = X @ beta
+            chi2 = float(fit @ fit) / sigma ** 2 / phi
+            stat = chi2 - F.shape[1] * math.log(n_eff)
+            if stat > threshold and (best is None or stat > best[0]):
+                best = (stat, sig_name, chi2, float(np.sqrt(np.mean(fit ** 2))))
+        chi2 = n * mean ** 2 / sigma ** 2 / phi  # a constant alone: the mean against its noise
+        stat = chi2 - math.log(n_eff)
+        if stat > threshold and (best is None or stat > best[0]):  # a sign that fits as well is more specific
+            best = (stat, "offset", chi2, abs(mean))
+        if best:
+            keyed, closest = SIGNATURES[best[1]]
+            out.append({"channel": name, "joint": c % pipe.nd + 1, "signature": best[1], "keyed_on": keyed,
+                        "closest": closest, "chi2": best[2], "rms": best[3], "noise": sigma})
+    out.sort(key=lambda e: -e["chi2"])
+    return out
+
+
+def sentence(items: list) -> str:
+    """One clause for the conclusion: the strongest structure per channel."""
+    parts = [f"{e['channel']} keyed on {e['keyed_on']} (rms {e['rms']:.3g} against noise {e['noise']:.3g}; closest "
+             f"library effects: {', '.join(e['closest'])})" for e in items[:3]]
+    more = f" and {len(items) - 3} more channel(s)" if len(items) > 3 else ""
+    return "structure left unexplained: " + "; ".join(parts) + more
