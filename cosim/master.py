@@ -106,9 +106,9 @@ class CorePlant(Plant):
         The plant's model (its parameters are the "true" robot).
     rtol, atol : float
         CVODE tolerances (relative; absolute on the task-space state [m, rad, m/s, rad/s]).
-    method : {"erk", "bdf", "adams"}
-        Integration method (:class:`cosim.simulate.Simulator`): explicit Runge-Kutta
-        (default) or CVODE's BDF / Adams.
+    method : {"erk", "erk23", "bdf", "adams"}
+        Integration method (:class:`cosim.simulate.Simulator`): explicit Runge-Kutta 5(4)
+        (default), 3(2) (throughput at rtol ~1e-6), or CVODE's BDF / Adams.
     max_step : float
         Largest internal step [s] (0: unlimited).
     """
@@ -119,6 +119,11 @@ class CorePlant(Plant):
                  max_step: float = 0.0):
         from .simulate import Simulator
 
+        if model.param("sensor.delay") != 0:
+            # Neither this loop nor the compiled one delays the readings: refuse, do not ignore.
+            raise MasterError(f"sensor.delay = {model.param('sensor.delay'):g} s: CorePlant reads the joints at the "
+                              f"current time and does not delay them; set it to 0 (the discrepancy replay, "
+                              f"cosim.discrepancy.plant.closed_loop, models a sensor lag)")
         self.model = model
         self.robot = model.robot
         self.ndof = model.ndof

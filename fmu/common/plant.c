@@ -329,6 +329,14 @@ static int apply(fmu_plant* p) {
     p->model_ok = (s == PKM_OK);
     if (s) return fail(p, s, "%s", cerr);
   }
+  /* The outputs are the readings now: a sensor lag is for the importer to model, so a
+   * non-zero one is refused rather than ignored without a word. */
+  int sd = pkm_param_index(p->m, "sensor.delay");
+  if (sd >= 0 && pkm_param_get(p->m, sd) != 0)
+    return fail(p, PKM_ERR_PARAMETER,
+                "sensor.delay = %g s: this FMU outputs the joints at the current time and does not delay them; set it "
+                "to 0 and delay the readings in the importer (the core's discrepancy replay models it)",
+                pkm_param_get(p->m, sd));
 
   pkm_sim_options o = p->opt;
   if (p->tol_override > 0) o.rtol = p->tol_override;

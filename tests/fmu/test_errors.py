@@ -22,6 +22,7 @@ def _fresh_instance_works(fmu_file, hold):
     ("leg[3].L", float("nan"), ["leg[3].L", "nan"]),
     ("solver.rtol", -1.0, ["solver.rtol", "-1"]),
     ("z0", 0.5, ["initial pose", "leg"]),
+    ("sensor.delay", 0.002, ["sensor.delay = 0.002 s", "does not delay"]),  # refused, not ignored
 ])
 def test_bad_start_value_fails_initialization(fmu_file, hold, name, value, words):
     f = fmu.FMUInstance(fmu_file, params={name: value}, initialize=False)
