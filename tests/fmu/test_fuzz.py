@@ -25,6 +25,8 @@ def test_fuzzed_fmu_never_crashes_nor_returns_a_non_finite_value_with_ok(robot, 
     stats = json.loads(p.stdout.strip().splitlines()[-1])
     assert stats["cases"] == 2000
     assert stats["refused"] > 500, stats          # the hostile values were exercised and refused
-    assert stats["calls"] > 10 * stats["cases"]   # each case made a sequence of calls
+    # each case made a sequence of calls (~10 a case; fewer since a non-zero sensor.delay, one of the fuzzed
+    # parameters, is refused at initialization)
+    assert stats["calls"] > 9 * stats["cases"]
     assert stats["ok_nonfinite"] == 0, stats["examples"]
     assert p.returncode == 0
