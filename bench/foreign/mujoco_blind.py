@@ -20,7 +20,8 @@ case's answer (kept in this process, never written beside the recording) is comp
 with the effect named first.  Nothing here tunes the engine: the magnitudes are the
 ranges of ``scenarios/blind/config.toml``, the generator is not the engine's plant.
 Prints a table per case and the summary (right effect first, parameter within 15 %,
-clean cases called clean).  ``--hold-out`` diagnoses each effect case with its type taken
+clean cases called clean).  ``--two`` hides two effects at once (PAIRS, never two declared
+look-alikes) and counts the cases where both are named.  ``--hold-out`` diagnoses each effect case with its type taken
 out of the library and counts the cases where "structure left unexplained" is reported.
 """
 from __future__ import annotations
@@ -69,11 +70,21 @@ def euler_xyz(R):
     return math.atan2(-R[1, 2], R[2, 2]), ry, math.atan2(-R[0, 1], R[0, 0])
 
 
-def case_xml(m: Model, effect: str | None, value: float, joint: int, rng) -> tuple[str, dict]:
-    """MJCF of the nominal robot with ``effect`` hidden in MuJoCo's physics; the truth."""
-    xml = mujoco_xml(m)
+def case_xml(m: Model, hidden: list, rng) -> tuple[str, dict]:
+    """MJCF of the nominal robot with the ``hidden`` effects ((type, value, joint) each) that
+    live in MuJoCo's physics; the truth."""
+    xml, truth = mujoco_xml(m), {}
+    for effect, value, joint in hidden:
+        xml = _hide(xml, m, effect, value, joint, rng, truth)
+    # stiff loop closure: MuJoCo's default connect (time constant 20 ms) sags by ~1 mm
+    xml = xml.replace('"/>\n    <connect', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n    <connect')
+    xml = xml.replace('"/>\n  </equality>', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n  </equality>')
+    xml = xml.replace("<option ", '<option timestep="0.0001" integrator="implicitfast" ')
+    return xml, truth
+
+
+def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict) -> str:
     p = m.params()
-    truth = {}
     j = joint
     rail = f'<joint name="rail{j}" type="slide"'
     if effect in ("coulomb", "viscous", "rotor_inertia"):
@@ -98,11 +109,7 @@ def case_xml(m: Model, effect: str | None, value: float, joint: int, rng) -> tup
         xml = xml.replace(f'<option gravity="{p["gravity.x"]} {p["gravity.y"]} {p["gravity.z"]}"/>',
                           f'<option gravity="{gx:.17g} {gy:.17g} {gz:.17g}"/>')
         truth.update({"gravity.x": gx, "gravity.y": gy})
-    # stiff loop closure: MuJoCo's default connect (time constant 20 ms) sags by ~1 mm
-    xml = xml.replace('"/>\n    <connect', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n    <connect')
-    xml = xml.replace('"/>\n  </equality>', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n  </equality>')
-    xml = xml.replace("<option ", '<option timestep="0.0001" integrator="implicitfast" ')
-    return xml, truth
+    return xml
 
 
 def controller(kind: str, m: Model):
@@ -120,11 +127,14 @@ def controller(kind: str, m: Model):
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity"):
-    """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth)."""
+    """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
+    ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
+    ``(type, value, joint)`` to hide several at once."""
     import mujoco
 
     rng = np.random.default_rng(seed)
-    xml, truth = case_xml(m, effect, value, joint, rng)
+    hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
+    xml, truth = case_xml(m, hidden, rng)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -138,15 +148,17 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     ctrl.reset(0.0, q0, m.home())
     offset = np.zeros(6)
     delay = dead = 0.0
-    if effect == "encoder_offset":
-        offset[joint] = value
-        truth[EFFECTS[effect][1].format(j=joint + 1)] = value
-    elif effect == "actuator_delay":
-        delay = value
-        truth["actuator.delay"] = value
-    elif effect == "dead_zone":
-        dead = value
-        truth[EFFECTS[effect][1].format(j=joint + 1)] = value
+    dead_joint = 0
+    for eff, val, jnt in hidden:
+        if eff == "encoder_offset":
+            offset[jnt] = val
+            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
+        elif eff == "actuator_delay":
+            delay = val
+            truth["actuator.delay"] = val
+        elif eff == "dead_zone":
+            dead, dead_joint = val, jnt
+            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
     n = len(ref.time)
     rows = {k: np.empty((n, 6)) for k in ("q", "qd", "tau", "pose")}
     issued = []  # (time, command) for the delay line
@@ -173,8 +185,8 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
                     break
             if dead > 0:
                 cmd = cmd.copy()
-                u = cmd[joint]
-                cmd[joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
+                u = cmd[dead_joint]
+                cmd[dead_joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
             data.ctrl[:] = cmd
             mujoco.mj_step(model, data)
         if len(issued) > 20:
@@ -188,19 +200,62 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     return rec, truth
 
 
-def plan(seed: int, n_clean: int):
-    """The cases: every effect type once (joint and magnitude drawn), then the clean ones."""
+#: pairs hidden together with --two (no pair of declared look-alikes)
+PAIRS = [("coulomb", "payload"), ("viscous", "gravity_tilt"), ("dead_zone", "rotor_inertia"),
+         ("encoder_offset", "actuator_delay"), ("platform_mass", "dead_zone"), ("rotor_inertia", "coulomb")]
+
+
+def _draw(effect, cfg, rng):
+    lo, hi = cfg[EFFECTS[effect][0]]
+    v = rng.uniform(lo, hi)
+    if effect in ("platform_mass", "encoder_offset"):
+        v *= rng.choice([-1, 1])
+    return float(v)
+
+
+def plan(seed: int, n_clean: int, two: bool = False):
+    """The cases: every effect type once (joint and magnitude drawn), or with ``two`` the
+    PAIRS (two effects at once, on different joints), then the clean ones."""
     cfg = blind.load_config()["effects"]["6pus"]
     rng = np.random.default_rng(seed)
     cases = []
-    for i, (effect, (key, _)) in enumerate(EFFECTS.items()):
-        lo, hi = cfg[key]
-        v = rng.uniform(lo, hi)
-        if effect in ("platform_mass", "encoder_offset"):
-            v *= rng.choice([-1, 1])
-        cases.append((effect, float(v), int(rng.integers(6)), seed * 100 + i))
+    if two:
+        for i, pair in enumerate(PAIRS):
+            joints = rng.choice(6, size=2, replace=False)
+            cases.append(([(e, _draw(e, cfg, rng), int(j)) for e, j in zip(pair, joints)], 0.0, 0, seed * 100 + i))
+    else:
+        for i, effect in enumerate(EFFECTS):
+            cases.append((effect, _draw(effect, cfg, rng), int(rng.integers(6)), seed * 100 + i))
     cases += [(None, 0.0, 0, seed * 100 + 50 + i) for i in range(n_clean)]
     return cases
+
+
+def _pair(m, hidden, seed, a, noise, rows):
+    """A case hiding two effects: both must be named, each parameter within 15 %."""
+    name = "+".join(e for e, _, _ in hidden) + f"_{seed}"
+    rec, truth = simulate(m, hidden, 0.0, 0, seed, a.duration, noise, a.controller)
+    csv, side = write_recording(a.out / f"{name}.csv", rec)
+    meta = json.loads(side.read_text())
+    meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-m.ik(m.home())).tolist()}
+    side.write_text(json.dumps(meta, indent=1))
+    d = diagnose(csv, figures=False, replay=False)
+    named = d.named()
+    found = [e for e, _, _ in hidden if e in named or any(e in d.ties(k) for k in named)]
+    est, nominal = d.plant_parameters(), m.params()
+    n_par = ok_par = 0
+    for e, _, j in hidden:
+        key = EFFECTS[e][1]
+        if key is None:
+            continue
+        key = key.format(j=j + 1)
+        n_par += 1
+        if key in est:
+            ok_par += abs(est[key] - truth[key]) < 0.15 * abs(truth[key] - nominal.get(key, 0.0))
+    rows.append({"case": name, "hidden": "+".join(e for e, _, _ in hidden), "named": named,
+                 "ok": len(found) == len(hidden), "first_ok": bool(named) and named[0] in [e for e, _, _ in hidden],
+                 "params_ok": int(ok_par), "params_n": n_par, "conclusion": d.conclusion})
+    print(f"{name:34s} named {', '.join(named[:4]) or 'none':40s} {'ok ' if rows[-1]['ok'] else 'MISS'}  "
+          f"params {ok_par}/{n_par}", flush=True)
 
 
 def main(argv=None) -> int:
@@ -211,6 +266,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=REPO / "results" / "foreign", help="where the recordings go")
     ap.add_argument("--controller", choices=["pd_gravity", "pid"], default="pd_gravity",
                     help="the recordings' controller (default pd_gravity)")
+    ap.add_argument("--two", action="store_true", help="hide two effects at once (PAIRS) instead of one")
     ap.add_argument("--hold-out", choices=["type", "family"], default=None,
                     help="diagnose each effect case with its type (or its type and the type's declared "
                          "look-alikes) taken out of the library: the check of 'structure left unexplained' (a case "
@@ -220,7 +276,10 @@ def main(argv=None) -> int:
     noise = blind.load_config()["noise"]["6pus"]
     a.out.mkdir(parents=True, exist_ok=True)
     rows, t_start = [], time.perf_counter()
-    for effect, value, joint, seed in plan(a.seed, a.clean):
+    for effect, value, joint, seed in plan(a.seed, a.clean, a.two):
+        if isinstance(effect, list):
+            _pair(m, effect, seed, a, noise, rows)
+            continue
         name = f"{effect or 'clean'}_{seed}"
         rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller)
         csv, side = write_recording(a.out / f"{name}.csv", rec)
@@ -258,8 +317,16 @@ def main(argv=None) -> int:
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
               f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  ({wall:.1f} s)", flush=True)
+    if a.two:
+        pairs = [r for r in rows if "+" in r["hidden"]]
+        print(f"\ntwo effects at once: both named {sum(r['ok'] for r in pairs)}/{len(pairs)}, the first named one of "
+              f"the two {sum(r['first_ok'] for r in pairs)}/{len(pairs)}, parameters within 15 % "
+              f"{sum(r['params_ok'] for r in pairs)}/{sum(r['params_n'] for r in pairs)}")
+        rows = [r for r in rows if "+" not in r["hidden"]]
     eff = [r for r in rows if r["hidden"] != "clean"]
     clean = [r for r in rows if r["hidden"] == "clean"]
+    if not rows:
+        return 0
     comparable = [r for r in eff if r["param_error"] is not None]
     print(f"\nMuJoCo {__import__('mujoco').__version__}, controller {a.controller}, seed {a.seed}: {len(eff)} effect "
           f"cases over {len(eff)} types, {len(clean)} clean; {time.perf_counter() - t_start:.0f} s")
