@@ -46,10 +46,14 @@ FORMAT = "pkm-recording/1"
 
 
 def _facts(robot):
-    """The core's facts of a robot (joints, tracker columns), or None if it knows none."""
-    from .core import robot_facts, robots
+    """The core's facts of a robot (joints, tracker columns; cached by the core module), or
+    None if it knows none."""
+    from .core import PkmError, robot_facts
 
-    return robot_facts(robot) if robot in robots() else None
+    try:
+        return robot_facts(robot)
+    except (PkmError, TypeError):
+        return None
 
 
 def _known():

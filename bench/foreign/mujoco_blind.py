@@ -213,6 +213,16 @@ def _draw(effect, cfg, rng):
     return float(v)
 
 
+def write_case(m: Model, rec: Recording, path) -> Path:
+    """Write a run (MuJoCo's joint coordinates, zero at home) with that convention declared
+    in its sidecar: recorded = model - q0.  Returns the CSV path."""
+    csv, side = write_recording(path, rec)
+    meta = json.loads(side.read_text())
+    meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-m.ik(m.home())).tolist()}
+    side.write_text(json.dumps(meta, indent=1))
+    return csv
+
+
 def plan(seed: int, n_clean: int, two: bool = False):
     """The cases: every effect type once (joint and magnitude drawn), or with ``two`` the
     PAIRS (two effects at once, on different joints), then the clean ones."""
@@ -234,10 +244,7 @@ def _pair(m, hidden, seed, a, noise, rows):
     """A case hiding two effects: both must be named, each parameter within 15 %."""
     name = "+".join(e for e, _, _ in hidden) + f"_{seed}"
     rec, truth = simulate(m, hidden, 0.0, 0, seed, a.duration, noise, a.controller)
-    csv, side = write_recording(a.out / f"{name}.csv", rec)
-    meta = json.loads(side.read_text())
-    meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-m.ik(m.home())).tolist()}
-    side.write_text(json.dumps(meta, indent=1))
+    csv = write_case(m, rec, a.out / f"{name}.csv")
     d = diagnose(csv, figures=False, replay=False)
     named = d.named()
     found = [e for e, _, _ in hidden if e in named or any(e in d.ties(k) for k in named)]
@@ -282,11 +289,7 @@ def main(argv=None) -> int:
             continue
         name = f"{effect or 'clean'}_{seed}"
         rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller)
-        csv, side = write_recording(a.out / f"{name}.csv", rec)
-        meta = json.loads(side.read_text())
-        q0 = m.ik(m.home())
-        meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-q0).tolist()}
-        side.write_text(json.dumps(meta, indent=1))
+        csv = write_case(m, rec, a.out / f"{name}.csv")
         t0 = time.perf_counter()
         library = None
         if a.hold_out and effect:

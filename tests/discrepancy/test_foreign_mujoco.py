@@ -5,7 +5,6 @@ clean cases, PD + gravity or PID): the robot simulated by MuJoCo with an effect 
 MuJoCo's own physics (joint frictionloss) or in the drive around it (a dead zone), and a
 clean run, diagnosed blind; the truth is compared only afterwards.  Nothing of the engine
 is tuned on these cases."""
-import json
 import sys
 from pathlib import Path
 
@@ -18,7 +17,6 @@ import mujoco_blind as mb  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
-from cosim.recording import write_recording  # noqa: E402
 
 
 @pytest.mark.parametrize("effect, value, joint, key", [
@@ -30,10 +28,7 @@ def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, effect, value, joint, k
     m = Model("6pus")
     rec, truth = mb.simulate(m, effect, value, joint, seed=21, duration=6.0,
                              noise=blind.load_config()["noise"]["6pus"])
-    csv, side = write_recording(tmp_path / "run.csv", rec)
-    meta = json.loads(side.read_text())
-    meta["joint_convention"] = {"sign": [1.0] * 6, "offset": (-m.ik(m.home())).tolist()}  # MuJoCo's zero: home
-    side.write_text(json.dumps(meta))
+    csv = mb.write_case(m, rec, tmp_path / "run.csv")  # MuJoCo's joint zero is home: declared in the sidecar
     d = diagnose(csv, figures=False, replay=False)
     if effect is None:
         assert d.named() == [] and d.conclusion == "no missing physics found", d.conclusion
