@@ -431,6 +431,17 @@ class CycleFit:
         Per table, RMS relative error [%] of the model and of the scale-only baseline.
     peak_speed, peak_acceleration : float
         Largest tool speed [m/s] and path acceleration [m/s^2] of the fitted motion over all rows.
+    interval_method : str
+        ``"profile likelihood"`` (every term linear: each term scanned over its allowed range with the
+        others re-fitted, kept where the likelihood-ratio statistic stays below 3.84) or ``"jacobian"``
+        (the linearised covariance, used when the torque fraction is fitted).
+    held_out_band : dict
+        Per held-out table, (low, high) of the model's mean relative error [%] over every parameter
+        set the fit tables do not reject (profile likelihood only).  A band that excludes 0 means the
+        fit tables rule out what the held-out table measured: the model misses something between them.
+    extrapolated : dict
+        Per held-out table whose cycle (move lengths) no fit table has, a sentence saying so: a per-stop
+        and a per-move term are only told apart by tables of different move lengths.
     """
 
     terms: tuple
@@ -447,6 +458,9 @@ class CycleFit:
     peak_acceleration: float = float("nan")
     aic: float = float("nan")
     candidates: dict = field(default_factory=dict)   # terms -> AIC, when chosen by select_cycle_model
+    interval_method: str = "jacobian"
+    held_out_band: dict = field(default_factory=dict)
+    extrapolated: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         lines = [f"cycle model fitted on table(s) {', '.join(self.fit_tables)}:"]
@@ -468,11 +482,20 @@ class CycleFit:
             lines.append(f"  {k} = {self.params[k]:.4g}{unit} (95 % {lo:.3g} .. {hi:.3g}{unit}{loose})")
         lines.append(f"  fitted motion: peak tool speed {self.peak_speed:.2f} m/s, peak path acceleration "
                      f"{self.peak_acceleration:.0f} m/s^2")
+        lines.append(f"  intervals: {self.interval_method}")
         for t in sorted(self.rms_pct):
             tag = "fit" if t in self.fit_tables else "held out"
+            band = ""
+            if t in self.held_out_band:
+                lo, hi = self.held_out_band[t]
+                verdict = "contains" if lo <= 0.0 <= hi else "EXCLUDES"
+                band = (f"; mean error over the parameters the fit tables allow {lo:+.1f} .. {hi:+.1f} % "
+                        f"({verdict} the measurement)")
             lines.append(f"  table {t} ({tag}): RMS error {self.rms_pct[t]:.2f} % "
                          f"(scale-only torque-limited model {self.scale_only_rms_pct[t]:.2f} %), Spearman "
-                         f"{spearman(self.model_t10[t], self.measured[t].t10):+.2f}")
+                         f"{spearman(self.model_t10[t], self.measured[t].t10):+.2f}{band}")
+            if t in self.extrapolated:
+                lines.append(f"    extrapolated: {self.extrapolated[t]}")
         return "\n".join(lines)
 
 
@@ -566,11 +589,24 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n
         cov = np.linalg.pinv(sol.jac.T @ sol.jac) * float(sol.fun @ sol.fun) / dof
         for i, k in enumerate(terms):
             half = 1.96 * math.sqrt(max(cov[i, i], 0.0))
-            params[k] = float(sol.x[i])
+            # a term pressed against its bound is reported at it (settle 0, not 4e-16 s)
+            params[k] = float(min(max(sol.x[i], lb[i]), ub[i]))
+            if abs(params[k] - lb[i]) < 1e-9 * (ub[i] - lb[i]):
+                params[k] = lb[i]
             intervals[k] = (max(params[k] - half, lb[i]), min(params[k] + half, ub[i]))
         values = full(sol.x)
     tables = sorted(meas)
     model = predict(values, tables)
+    method, band = "jacobian", {}
+    if terms and "torque_fraction" not in terms:
+        intervals, band = _profile_intervals(terms, params, fit_tables, tables, meas,
+                                             {t: segments(t, 1.0)[0].sum(axis=1) for t in tables})
+        method = "profile likelihood"
+    fit_cycles = {meas[t].cycle for t in fit_tables}
+    extrapolated = {t: (f"its {meas[t].cycle} cycle ({_moves_mm(meas[t].cycle)} mm moves) is in no fit table "
+                        f"({', '.join(sorted(fit_cycles))} only): how the time grows with move length is not "
+                        f"measured by the fit")
+                    for t in tables if t not in fit_tables and meas[t].cycle not in fit_cycles}
     base = predict(full([]), tables) if not terms else {t: 10 * segments(t, 1.0)[0].sum(axis=1) for t in tables}
     scale = (sum(float(base[t] @ meas[t].t10) for t in fit_tables)
              / sum(float(base[t] @ base[t]) for t in fit_tables))
@@ -585,7 +621,72 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n
     peak_v = max(float(mo[1].max()) for mo in motion) / values["time_scale"]
     peak_a = max(float(mo[2].max()) for mo in motion) / values["time_scale"] ** 2
     return CycleFit(terms, params, intervals, fit_tables, meas, model, base, scaled, rms(model), rms(scaled),
-                    peak_v, peak_a, aic)
+                    peak_v, peak_a, aic, interval_method=method, held_out_band=band, extrapolated=extrapolated)
+
+
+def _moves_mm(cycle: str) -> str:
+    return "/".join(f"{v * 1e3:.0f}" for v in CYCLES[cycle])
+
+
+# 95 % point of chi-square with one degree of freedom: the likelihood-ratio threshold of a profile interval.
+_CHI2_1_95 = 3.841
+
+
+def _profile_intervals(terms, params, fit_tables, tables, meas, sums, samples: int = 41):
+    """Profile-likelihood intervals of the linear terms (time_scale, settle) and the held-out bands.
+
+    With the torque fraction fixed the model of one row is linear, ``10 (scale S + 6 settle)`` with S
+    the sum of the six torque-limited move times, so every profile point is an exact 1-D least-squares
+    fit.  A term is moved away from its optimum with the other re-fitted (clipped to its range); the
+    interval ends where N ln(RSS / RSS_min) reaches 3.84, or at the allowed range.  Unlike the Jacobian
+    this stays honest at a bound (a settle of zero) and where the fit tables barely constrain a term.
+    The band of a held-out table is its mean relative error over the parameter sets inside the
+    intervals, widened by 1.96 times the fit's residual scatter over the root of the table's rows.
+    """
+    from scipy.optimize import brentq
+
+    rel = {t: 10 * sums[t] / meas[t].t10 for t in tables}           # d(pred / meas) / d scale
+    per_stop = {t: 60.0 / meas[t].t10 for t in tables}               # d(pred / meas) / d settle
+    cols = {"time_scale": np.concatenate([rel[t] for t in fit_tables]),
+            "settle": np.concatenate([per_stop[t] for t in fit_tables])}
+    n = cols["time_scale"].size
+
+    def profile(k, v):
+        # residual = scale A_s + settle A_c - 1: fix term k at v, solve the other in closed form, clip to range
+        vals = {name: CYCLE_TERMS[name][1] for name in cols}
+        vals[k] = v
+        base = sum(vals[name] * cols[name] for name in cols) - 1.0
+        for name in terms:
+            if name != k:
+                col = cols[name]
+                lo, hi = CYCLE_TERMS[name][2]
+                step = float(np.clip(vals[name] - (col @ base) / (col @ col), lo, hi)) - vals[name]
+                base = base + step * col
+                vals[name] += step
+        return float(base @ base), vals
+
+    rss_min = min(profile(k, params[k])[0] for k in terms)
+
+    def excess(k, v):
+        return n * math.log(max(profile(k, v)[0], 1e-300) / max(rss_min, 1e-300)) - _CHI2_1_95
+
+    intervals, accepted = {}, []
+    for k in terms:
+        lo, hi = CYCLE_TERMS[k][2]
+        p = params[k]
+        ends = [brentq(lambda v: excess(k, v), edge, p, xtol=1e-9) if edge != p and excess(k, edge) > 0 else edge
+                for edge in (lo, hi)]
+        intervals[k] = (float(ends[0]), float(ends[1]))
+        accepted += [profile(k, float(v))[1] for v in np.linspace(ends[0], ends[1], samples)]
+    sigma = math.sqrt(rss_min / max(n - len(terms), 1))
+    band = {}
+    for t in tables:
+        if t in fit_tables:
+            continue
+        errs = [float(np.mean(v["time_scale"] * rel[t] + v["settle"] * per_stop[t] - 1.0)) for v in accepted]
+        widen = 1.96 * sigma / math.sqrt(len(rel[t]))
+        band[t] = (100 * (min(errs) - widen), 100 * (max(errs) + widen))
+    return intervals, band
 
 
 def select_cycle_model(fit_tables=("6.1", "6.5"), n: int = 150, param_set: str = "appendix_a",
