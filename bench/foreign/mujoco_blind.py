@@ -11,7 +11,10 @@ filtered derivative and output limits), along the engine's exciting trajectory, 
 sensor noise.  One effect per case is hidden *in MuJoCo's physics or in the drive
 around it*, not in the core: joint ``frictionloss`` (MuJoCo's soft Coulomb friction),
 joint ``damping``, joint ``armature`` (rotor inertia), a payload body on the platform, a
-heavier platform, tilted gravity, a command delay, an encoder offset, a dead zone.  The
+heavier platform, tilted gravity, a command delay, an encoder offset, a dead zone, and, as
+two bodies (drive with the encoder and the motor, carriage with the leg) joined through the
+rail, a backlash (a gap with stiff faces: the contact side is whatever the transmitted force
+makes it) or an elasticity (a spring).  The
 recording is written in MuJoCo's joint coordinates (zero at home) with the convention
 declared in the sidecar (``joint_convention``), so the reader converts it.
 
@@ -61,7 +64,16 @@ EFFECTS = {
     "actuator_delay": ("actuator_delay", "actuator.delay"),
     "encoder_offset": ("encoder_offset", "rail[{j}].encoder_offset"),
     "dead_zone": ("dead_zone", "rail[{j}].dead_zone"),
+    # two bodies: the drive (encoder, motor) and the carriage, joined by a dead-band spring / a spring
+    "backlash": ("backlash", "rail[{j}].backlash"),
+    "compliance": ("compliance", "rail[{j}].compliance"),
 }
+
+#: the drive body of a two-body rail [kg] (motor rotor and nut: heavy enough that the 1 kHz PD does
+#: not kick it across the gap; the recording's sidecar declares it, as a datasheet would, as the
+#: rail's rotor inertia), the contact stiffness of the gap's faces [N/m] and the damping ratio of
+#: the contact and of the spring
+DRIVE_MASS, CONTACT_K, DAMPING_RATIO = 0.05, 1e6, 0.3
 
 
 def euler_xyz(R):
@@ -101,6 +113,22 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
         new = p["platform.m"] * (1 + value)
         xml = xml.replace(f'mass="{p["platform.m"]:.17g}"', f'mass="{new:.17g}"', 1)
         truth["platform.m"] = new
+    elif effect in ("backlash", "compliance"):
+        # the rail's body becomes the drive (motor and encoder on its joint, a small mass) and the
+        # carriage rides on it through a relative slide joint whose force is applied per step
+        start = xml.index(f'<body name="slider{j}"')
+        head = xml[start:xml.index("<geom", start)]
+        axis = head.split('axis="')[1].split('"')[0]
+        pos = head.split('pos="')[1].split('"')[0]
+        new_head = (f'<body name="drive{j}" pos="{pos}">\n      <joint name="rail{j}" type="slide" axis="{axis}"/>\n'
+                    f'      <geom type="box" size="0.004 0.004 0.004" mass="{DRIVE_MASS}" contype="0" '
+                    f'conaffinity="0"/>\n    <body name="slider{j}">\n      <joint name="gap{j}" type="slide" '
+                    f'axis="{axis}"/>\n      ')
+        xml = xml[:start] + new_head + xml[start + len(head):]
+        leg = xml.index(f'<body name="leg{j}"', start)
+        close = xml.index("\n    </body>", leg)
+        xml = xml[:close] + "\n    </body></body>" + xml[close + len("\n    </body>"):]
+        truth[EFFECTS[effect][1].format(j=j + 1)] = value
     elif effect == "gravity_tilt":
         az = rng.uniform(0, 2 * math.pi)
         g = abs(p["gravity.z"])
@@ -136,6 +164,9 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
     xml, truth = case_xml(m, hidden, rng)
     model = mujoco.MjModel.from_xml_string(xml)
+    gaps = [(model.joint(f"gap{j}").qposadr[0], model.joint(f"gap{j}").dofadr[0], eff, val)
+            for eff, val, j in hidden if eff in ("backlash", "compliance")]
+    substeps = SUBSTEPS
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     rails = [model.joint(f"rail{i}").qposadr[0] for i in range(6)]
@@ -176,8 +207,8 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         rows["q"][k], rows["qd"][k], rows["tau"][k], rows["pose"][k] = q_read, qd_read, tau, pose
         rows["tau"][k] += rng.normal(0, sig["tau"], 6)
         issued.append((t, tau.copy()))
-        for s in range(SUBSTEPS):
-            ts = t + s * DT / SUBSTEPS
+        for s in range(substeps):
+            ts = t + s * DT / substeps
             cmd = np.zeros(6)
             for ti, c in reversed(issued):
                 if ti <= ts - delay + 1e-12:
@@ -188,16 +219,34 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
                 u = cmd[dead_joint]
                 cmd[dead_joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
             data.ctrl[:] = cmd
+            for adr, dof, eff, val in gaps:
+                data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)
         if len(issued) > 20:
             issued = issued[-20:]
     k0 = int(round(0.5 / DT))  # after the lead-in standstill, as the engine's own generator
     s = slice(k0, n)
     # written in MuJoCo's joint coordinates: zero at home (recorded = model - q0)
+    known = {f"rail[{j + 1}].rotor_inertia": DRIVE_MASS for eff, _, j in hidden if eff in ("backlash", "compliance")}
     rec = Recording("6pus", ref.time[s] - ref.time[k0], rows["q"][s] - q0, rows["qd"][s], rows["tau"][s],
-                    qref=ref.q[s] - q0, pose=rows["pose"][s], controller=ctrl.describe(),
+                    qref=ref.q[s] - q0, pose=rows["pose"][s], controller=ctrl.describe(), parameters=known,
                     notes="MuJoCo run (bench/foreign/mujoco_blind.py)")
     return rec, truth
+
+
+def gap_force(effect: str, value: float, gap: float, rate: float) -> float:
+    """Force on the carriage relative to the drive [N] (gap = carriage - drive [m]): a spring of
+    compliance ``value`` [m/N], or, for a backlash of total gap ``value`` [m], nothing inside the
+    band and stiff, damped faces at +-value/2.  The encoder reads the drive, so it reads the
+    carriage -(gap): + value/2 on the side the transmitted force pushes to, + force x compliance."""
+    k = 1.0 / value if effect == "compliance" else CONTACT_K
+    c = 2 * DAMPING_RATIO * math.sqrt(k * DRIVE_MASS)
+    if effect == "compliance":
+        return -k * gap - c * rate
+    half = 0.5 * value
+    if abs(gap) <= half:
+        return 0.0
+    return -k * (gap - math.copysign(half, gap)) - c * rate
 
 
 #: pairs hidden together with --two (no pair of declared look-alikes)
@@ -305,6 +354,13 @@ def main(argv=None) -> int:
         named = d.named()
         first = named[0] if named else None
         ok = first == effect or (effect is not None and first is not None and effect in d.ties(first))
+        # a gap on a joint whose effort keeps one sign is a constant offset of b/2 on this recording:
+        # right when the engine says so (offset b/2 within 10 %, backlash listed as not excited there)
+        same = (effect == "backlash" and first == "encoder_offset"
+                and any(x.startswith("backlash") and f"joint {joint + 1})" in x for x in d.not_excited))
+        if same:
+            key_off = f"rail[{joint + 1}].encoder_offset"
+            ok = abs(d.plant_parameters().get(key_off, 0.0) - value / 2) < 0.1 * value / 2
         if a.hold_out and effect:
             ok = bool(d.unexplained)  # its type is not in the library: the structure must be reported
         est = d.plant_parameters()
@@ -315,11 +371,13 @@ def main(argv=None) -> int:
             perr = abs(est[key] - truth[key]) / max(abs(truth[key] - nominal), 1e-12)
         rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1,
                      "named": first or "none", "ok": bool(ok if effect else first is None), "param_error": perr,
+                     "same_physics": bool(same),
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
-              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  ({wall:.1f} s)", flush=True)
+              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  ({wall:.1f} s)"
+              f"{'  [one-signed effort: the gap is an offset b/2]' if same else ''}", flush=True)
     if a.two:
         pairs = [r for r in rows if "+" in r["hidden"]]
         print(f"\ntwo effects at once: both named {sum(r['ok'] for r in pairs)}/{len(pairs)}, the first named one of "
@@ -336,7 +394,8 @@ def main(argv=None) -> int:
     if a.hold_out:
         print(f"type held out of the library, structure reported: {sum(r['ok'] for r in eff)}/{len(eff)}")
     else:
-        print(f"right effect named first:  {sum(r['ok'] for r in eff)}/{len(eff)}")
+        print(f"right effect named first:  {sum(r['ok'] for r in eff)}/{len(eff)} (of which a gap read as the offset "
+              f"it is on a one-signed joint: {sum(r.get('same_physics', False) and r['ok'] for r in eff)})")
     print(f"parameter within 15 %:     {sum(r['param_error'] < 0.15 for r in comparable)}/{len(comparable)} "
           f"comparable")
     print(f"clean cases called clean:  {sum(r['ok'] for r in clean)}/{len(clean)}")

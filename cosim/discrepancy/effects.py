@@ -156,16 +156,16 @@ LIBRARY = [
            ("geometry",),
            "core/FMU parameter {j}[i].encoder_offset (sensor model)",
            "a constant on joint reading i"),
-    Effect("backlash", "backlash / dead zone at reversal", "kinematic", "joint", ("{j}[{i}].backlash",), "linear",
-           ">=0",
-           "tracker pose columns and velocity reversals of the joint",
-           ("encoder_offset", "sensor_delay"),
+    Effect("backlash", "backlash (transmission gap, contact side set by the transmitted effort)", "kinematic", "joint",
+           ("{j}[{i}].backlash",), "linear", ">=0",
+           "tracker pose columns and sign changes of the joint's effort",
+           ("encoder_offset", "compliance"),
            "core/FMU parameter {j}[i].backlash (sensor model)",
-           "b/2 sgn(qd_i) on joint reading i"),
+           "b/2 sgn(tau_i) on joint reading i (encoder on the drive side)"),
     Effect("compliance", "joint elasticity (transmission compliance)", "kinematic", "joint",
            ("{j}[{i}].compliance",), "linear", ">=0",
            "tracker pose columns and varying efforts on the joint",
-           ("encoder_offset", "geometry"),
+           ("encoder_offset", "geometry", "backlash"),
            "core/FMU parameter {j}[i].compliance (sensor model: deflection c tau)",
            "c tau_i on joint reading i"),
     Effect("geometry", "geometric (kinematic) parameter error", "kinematic", "joint", ("leg[{i}].L",), "geometry",
@@ -194,9 +194,9 @@ SEPARATING_MOTION = {
                                          "scales with the motion, a dead zone is a constant band)",
     frozenset(("saturation", "dead_zone")): "efforts near zero and near the limit (a dead zone acts at small commands, "
                                             "a saturation at large ones)",
-    frozenset(("coulomb", "backlash")): "a tracker (pose columns) with velocity reversals: backlash shows in the "
+    frozenset(("coulomb", "backlash")): "a tracker (pose columns) with effort sign changes: backlash shows in the "
                                         "joint readings, friction in the effort",
-    frozenset(("stribeck", "backlash")): "a tracker (pose columns) with slow velocity reversals",
+    frozenset(("stribeck", "backlash")): "a tracker (pose columns) with slow effort sign changes",
     frozenset(("payload", "platform_mass")): "platform rotations with an off-centre payload (its moments), or "
                                              "weighing the platform",
     frozenset(("payload", "platform_inertia")): "translational accelerations (a payload adds mass, an inertia "
@@ -213,7 +213,9 @@ SEPARATING_MOTION = {
                                                "error varies with the pose)",
     frozenset(("compliance", "encoder_offset")): "efforts that change sign on the joint",
     frozenset(("compliance", "geometry")): "the same poses reached with different loads",
-    frozenset(("backlash", "encoder_offset")): "velocity reversals of the joint",
+    frozenset(("backlash", "encoder_offset")): "sign changes of the joint's effort (against gravity and with it)",
+    frozenset(("backlash", "compliance")): "efforts of both signs and of several sizes (a gap jumps at the sign "
+                                           "change, an elasticity grows with the effort)",
     frozenset(("backlash", "sensor_delay")): "reversals at different speeds (a lag scales with the speed, "
                                              "backlash does not)",
 }

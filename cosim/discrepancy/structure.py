@@ -20,8 +20,8 @@ import numpy as np
 SIGNATURES = {
     "offset": ("nothing: a constant offset", ["encoder offset (a reading)", "dead zone under a one-signed "
                                                  "command", "gravity tilt", "payload"]),
-    "velocity_sign": ("the sign of the joint velocity", ["Coulomb friction", "Stribeck friction", "backlash"]),
-    "command_sign": ("the sign of the commanded effort", ["dead zone", "backlash under a preload"]),
+    "velocity_sign": ("the sign of the joint velocity", ["Coulomb friction", "Stribeck friction"]),
+    "command_sign": ("the sign of the commanded effort", ["dead zone", "backlash"]),
     "position": ("the joint position", ["geometry", "payload", "gravity tilt", "encoder offset"]),
     "velocity": ("the joint velocity", ["viscous friction", "actuator / sensor delay"]),
     "acceleration": ("the joint acceleration", ["rotor inertia", "platform mass or inertia", "delays"]),

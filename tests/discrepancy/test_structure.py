@@ -22,7 +22,7 @@ def _case(tmp_path, effects, seed):
 
 @pytest.mark.parametrize("hidden, seed, keyed", [
     ("dead_zone", 501, "command_sign"),
-    ("backlash", 504, "velocity_sign"),
+    ("backlash", 505, "command_sign"),   # joint 6, whose effort changes sign: the contact side follows it
     ("rotor_inertia", 505, "acceleration"),
     ("viscous", 502, "velocity"),
     ("stribeck", 506, "velocity_sign"),

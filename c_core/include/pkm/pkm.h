@@ -217,7 +217,7 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
 /* Every robot has a drive layer between its mechanics and its controller, with
  * per-joint parameters "<j>[i].coulomb", ".viscous", ".stribeck", ".stribeck_v",
  * ".rotor_inertia", ".effort_max", ".dead_zone", ".encoder_offset", ".backlash", ".compliance"
- * (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
+ * (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps", "drive.f_eps",
  * "actuator.delay", "sensor.delay".  All default to "absent".  Friction and rotor
  * inertia are part of pkm_inverse_dynamics / pkm_forward_dynamics / pkm_mass_matrix /
  * pkm_energy; saturation, delays and the sensor model are applied by pkm_sim and by
@@ -233,7 +233,9 @@ PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd
 PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd,
                                 double* tau_applied);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
- * q_meas = q + encoder_offset + backlash/2 sgn(qd) + compliance tau. */
+ * q_meas = q + encoder_offset + backlash/2 sgn(tau) + compliance tau: the encoder is on the drive
+ * side, the carriage leans on the side of the gap the transmitted effort tau pushes it to
+ * (smooth sign tanh(tau / drive.f_eps)), and the transmission deflects by compliance tau. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, const double* tau, double* q_meas);
 

@@ -57,16 +57,20 @@ std::vector<ParamSpec> specs(const Robot& r) {
                    0.0, 0.0, 1e9});
     out.push_back({joint_name(r, i, "encoder_offset"), Q, "encoder offset: measured minus true joint position, " + who,
                    0.0, -1.0, 1.0});
-    out.push_back({joint_name(r, i, "backlash"), Q, "backlash: total transmission gap seen at reversal, " + who, 0.0,
-                   0.0, 0.1});
+    out.push_back({joint_name(r, i, "backlash"), Q,
+                   "backlash: total transmission gap; the encoder reads +-gap/2 by the sign of the transmitted effort, " +
+                       who,
+                   0.0, 0.0, 0.1});
     out.push_back({joint_name(r, i, "compliance"), Q + "/" + F,
                    "transmission compliance (1/stiffness): encoder deflection per unit effort, " + who, 0.0, 0.0, 1.0});
     out.push_back({joint_name(r, i, "dead_zone"), F,
                    "drive dead zone: commands within +-dead_zone deliver nothing, larger ones lose dead_zone, " + who,
                    0.0, 0.0, 1e6});
   }
-  out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction and backlash", ang ? 1e-3 : 1e-4,
-                 1e-9, 1.0});
+  out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction", ang ? 1e-3 : 1e-4, 1e-9, 1.0});
+  out.push_back({"drive.f_eps", F,
+                 "effort scale of the smooth sign that picks the backlash contact side (the transmitted effort's)",
+                 ang ? 0.05 : 0.01, 1e-9, 1e3});
   out.push_back({"actuator.delay", "s", "time delay between commanded and applied actuator effort", 0.0, 0.0, 1.0});
   out.push_back({"sensor.delay", "s", "time delay of the joint readings", 0.0, 0.0, 1.0});
   return out;
@@ -84,6 +88,7 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
   for (int i = 0; i < p->nd; ++i)
     for (int k = 0; k < kNKeys; ++k) field(*p, k)[i] = get(joint_name(r, i, kKeys[k]));
   p->v_eps = get("drive.v_eps");
+  p->f_eps = get("drive.f_eps");
   p->actuator_delay = get("actuator.delay");
   p->sensor_delay = get("sensor.delay");
   for (int i = 0; i < p->nd; ++i) {
@@ -305,7 +310,10 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   for (int i = 0; i < n; ++i) {
     double qd = 0;
     for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
-    q_meas[i] += dp.encoder_offset[i] + 0.5 * dp.backlash[i] * drive::smooth_sign(qd, dp.v_eps) +
+    // The encoder sits on the drive side of the transmission: the carriage leans on the
+    // side of the gap the transmitted effort pushes it to (under a gravity preload that is
+    // not the side of the velocity), and the transmission deflects by compliance * tau.
+    q_meas[i] += dp.encoder_offset[i] + 0.5 * dp.backlash[i] * drive::smooth_sign(tau[i], dp.f_eps) +
                  dp.compliance[i] * tau[i];
   }
 }

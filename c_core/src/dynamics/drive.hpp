@@ -32,7 +32,8 @@ struct Params {
   double backlash[kMaxJoints] = {};     // total gap; measured q leads by +-gap/2 [m | rad]
   double compliance[kMaxJoints] = {};   // transmission deflection per effort [m/N | rad/(N m)]
   double dead_zone[kMaxJoints] = {};    // drive dead band: |u| <= u0 gives 0, else u - u0 sgn(u) [N | N m]
-  double v_eps = 1e-4;                  // velocity scale of the smooth sign [m/s | rad/s]
+  double v_eps = 1e-4;                  // velocity scale of the friction's smooth sign [m/s | rad/s]
+  double f_eps = 0.01;                  // effort scale of the backlash side's smooth sign [N | N m]
   double actuator_delay = 0;            // [s]
   double sensor_delay = 0;              // [s]
   bool any_friction = false, any_rotor = false;
@@ -45,7 +46,7 @@ std::vector<ParamSpec> specs(const Robot& r);
 std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpec>& specs,
                                       const std::vector<double>& values);
 
-// Smooth sign, tanh(v / eps): friction and backlash switch over a velocity scale eps so
+// Smooth sign, tanh(v / eps): friction (and the backlash side, over an effort scale) switch over a scale eps so
 // the dynamics stay Lipschitz for the integrator; sign(0) = 0, so a robot at rest
 // feels no friction force.
 double smooth_sign(double v, double eps);
@@ -71,7 +72,7 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
 // Effort that reaches the mechanism for a commanded effort (saturation).
 void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied);
 // Joint readings of the sensors at state (x, xd) with the applied effort tau:
-// q + encoder offset + backlash/2 * smooth_sign(qd) + compliance * tau.
+// q + encoder offset + backlash/2 * smooth_sign(tau) + compliance * tau (encoder on the drive side).
 void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                     double* q_meas);
 
