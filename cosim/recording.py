@@ -42,6 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .jsonable import jsonable
+
 FORMAT = "pkm-recording/1"
 
 
@@ -186,16 +188,8 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
             "controller": rec.controller, "notes": rec.notes}
     side = sidecar_path(path)
-    side.write_text(json.dumps(meta, indent=2, default=_json_default))
+    side.write_text(json.dumps(meta, indent=2, default=jsonable))
     return path, side
-
-
-def _json_default(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    raise TypeError(f"cannot write {type(o).__name__} to JSON")
 
 
 def read_recording(path, robot: str | None = None) -> Recording:

@@ -36,6 +36,7 @@ import numpy as np
 
 from . import controllers as ctl
 from . import trajectories as tr
+from .jsonable import jsonable
 from .master import CoreDrive, CorePlant, FMUPlant, MasterError, make_reference, run
 
 REPO = Path(__file__).resolve().parent.parent
@@ -418,18 +419,8 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
     rec = out.result.to_recording(parameters=sc.spec["parameters"], notes=notes)
     csv_path, side = write_recording(d / f"{sc.name}.csv", rec)
     mpath = d / f"{sc.name}_metrics.json"
-    mpath.write_text(json.dumps(out.metrics, indent=2, default=_json))
+    mpath.write_text(json.dumps(out.metrics, indent=2, default=jsonable))
     return {"recording": csv_path, "sidecar": side, "metrics": mpath}
-
-
-def _json(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, complex):
-        return str(o)
-    raise TypeError(type(o).__name__)
 
 
 # ------------------------------------------------------------------- metrics

@@ -79,7 +79,8 @@ def _g(v):
 def cmd_run(args):
     import json
 
-    from ..scenario import _json, run_scenario
+    from ..jsonable import jsonable
+    from ..scenario import run_scenario
 
     out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
                        figures=False if args.no_figures else None)
@@ -89,7 +90,7 @@ def cmd_run(args):
         where = Path(out.files["recording"]).parent if "recording" in out.files else Path(args.out or "results")
         out.files["interactive report"] = str(run_page(out, where / f"{out.scenario.name}_report.html"))
     if args.json:
-        print(json.dumps(out.metrics, indent=2, default=_json))
+        print(json.dumps(out.metrics, indent=2, default=jsonable))
     else:
         print_summary(out)
     return 0

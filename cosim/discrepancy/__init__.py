@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .._native import PkmError
+from ..jsonable import jsonable
 from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
 from .residuals import DiagnosisError, Pipeline
 
@@ -131,17 +132,9 @@ class Diagnosis:
                                                "warnings", "unexplained")}
 
     def to_json(self, indent: int | None = 2) -> str:
-        return json.dumps(self.to_dict(), indent=indent, default=_json_default)
+        return json.dumps(self.to_dict(), indent=indent, default=jsonable)
 
 
-def _json_default(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer, np.bool_)):
-        return o.item()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(type(o).__name__)
 
 
 def _load(recording):

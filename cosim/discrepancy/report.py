@@ -51,9 +51,9 @@ def _strip_arrays(d) -> str:
     if dd.get("replay") and dd["replay"].get("runs"):
         dd["replay"] = {**dd["replay"], "runs": {k: {kk: vv for kk, vv in v.items() if kk not in ("time", "q", "tau")}
                                                  for k, v in dd["replay"]["runs"].items()}}
-    from . import _json_default
+    from ..jsonable import jsonable
 
-    return json.dumps(dd, indent=2, default=_json_default)
+    return json.dumps(dd, indent=2, default=jsonable)
 
 
 def markdown(d, files: dict) -> str:
