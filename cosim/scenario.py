@@ -175,8 +175,8 @@ def _check(spec, path):
     if has_gains == has_design or (has_gains and not ("kp" in c and "kd" in c)):
         fail("controller", "give either kp and kd, or bandwidth_hz (and optionally damping)")
     r = spec["reference"]
-    if r.get("type") not in ("step", "letter_m", "poses"):
-        fail("reference.type", f"must be 'step', 'letter_m' or 'poses', got {r.get('type')!r}")
+    if r.get("type") not in ("step", "letter_m", "poses", "excitation"):
+        fail("reference.type", f"must be 'step', 'letter_m', 'poses' or 'excitation', got {r.get('type')!r}")
     if r.get("angle_unit", "rad") not in ("rad", "deg"):
         fail("reference.angle_unit", "must be 'rad' or 'deg'")
     if r["type"] == "step":
@@ -262,6 +262,13 @@ def build_trajectory(sc: Scenario, model):
             if v.shape != (nd,):
                 raise ScenarioError(f"{sc.path or 'scenario'}: reference.{k}: needs {nd} pose coordinates")
         return tr.step(x0, x1, t_step=float(r.get("t_step", 0.0)), name="step")
+    if kind == "excitation":
+        # the discrepancy engine's exciting trajectory (any robot: amplitudes from the core's reach)
+        from .discrepancy.excitation import excitation
+
+        lead_in = float(r.get("lead_in", 0.5))
+        return excitation(model, float(sc.spec["duration"]) - lead_in, seed=int(r.get("seed", sc.spec.get("seed", 0))),
+                          scale=float(r.get("scale", 1.0)), lead_in=lead_in)
     if kind == "letter_m":
         return tr.letter_m(center=tuple(r.get("center", (0.0, 0.0))), z=float(r.get("z", 0.075)),
                            width=float(r.get("width", 0.03)), height=float(r.get("height", 0.03)),
@@ -275,6 +282,13 @@ def build_trajectory(sc: Scenario, model):
     start = _angles(r["start"], unit) if "start" in r else None
     return tr.pose_set(poses, move_time=float(r.get("move_time", 0.5)), hold_time=float(r.get("hold_time", 0.5)),
                        start=start, name="pose set")
+
+
+def _start_pose(traj):
+    """Where the robot starts: a piecewise trajectory's first knot (before a step at t = 0),
+    else the pose at t = 0."""
+    knots = getattr(traj, "knots", None)
+    return knots[0] if knots is not None else traj.evaluate(0.0)[0][0]
 
 
 def build_controller(sc: Scenario, model, x0):
@@ -378,7 +392,7 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     ref = make_reference(nominal, traj, step=step, duration=dur)
     init = sc.spec["initial"]
     # start at rest where the reference starts (before a step at t = 0, not after it)
-    x0 = _angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad")) if "pose" in init else traj.knots[0]
+    x0 = _angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad")) if "pose" in init else _start_pose(traj)
     ctrl, design = build_controller(sc, nominal, x0)
     noise = sc.spec["noise"]
     p = build_plant(sc, true, truth)
@@ -441,6 +455,10 @@ def compute_metrics(sc: Scenario, res, model, traj, ctrl, design=None) -> dict:
         m.update(step_response_metrics(sc, res, model, traj, ctrl))
     elif kind == "letter_m":
         m.update(tracking_metrics(sc, res))
+    elif kind == "excitation":
+        e = res["xref"] - res["x"]
+        m["excitation"] = {"pose_error_rms": np.sqrt(np.mean(e ** 2, axis=0)).tolist(),
+                           "effort_max": np.max(np.abs(res["tau"]), axis=0).tolist()}
     else:
         m.update(pose_set_metrics(sc, res))
     return m
@@ -478,7 +496,7 @@ def step_response_metrics(sc, res, model, traj, ctrl) -> dict:
         out["steady_state"]["predicted_joint_error"] = [0.0] * model.ndof
     # python-control step metrics on the moved pose coordinates and on each joint
     moved = np.flatnonzero(np.abs(x1 - x0) > 0)
-    names = ["x", "y", "z", "rx", "ry", "rz"] if model.ndof == 6 else [f"x{i + 1}" for i in range(model.ndof)]
+    names = model.facts.pose_names
     pose_info = {}
     for i in moved:
         y = res["x"][after, i]

@@ -40,6 +40,7 @@ from .problems import (
     CalibrationDataError,
     CalibrationWarning,
     FourbarProblem,
+    JointProblem,
     Problem,
     SixpusProblem,
 )
@@ -161,7 +162,11 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
     if meas.robot == "fourbar":
         return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
                               min_poses=4 if min_poses is None else min_poses)
-    raise CalibrationDataError(f"{meas.source}: calibration of robot {meas.robot!r} is not implemented (6pus, fourbar)")
+    if meas.pose is None or meas.pose.shape[1] != nominal.ndof:
+        raise CalibrationDataError(f"{meas.source}: calibrating {meas.robot!r} needs tracker columns of its pose "
+                                   f"({', '.join(nominal.facts.pose_names)})")
+    return JointProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels,
+                        min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses)
 
 
 def split_holdout(n: int, fraction: float, seed: int = 0):
@@ -275,9 +280,10 @@ class CalibrationResult:
         L.append(f"Solver {s.method} ({self.model_kind} model): {s.iterations} iteration(s), {s.nfev} residual "
                  f"evaluations, {s.seconds * 1e3:.1f} ms, {'converged' if s.converged else 'NOT converged'}: "
                  f"{s.message}")
+        mu = "u" + self.problem.measurement_unit  # um or urad
         sig = ", ".join(f"{v * 1e6:.3g}" for v in np.atleast_1d(s.sigma))
-        L.append(f"  residual RMS {s.rms_before * 1e6:.4g} um -> {s.rms_after * 1e6:.4g} um; residual sigma "
-                 f"[um] {sig}; {s.rank} identified directions")
+        L.append(f"  residual RMS {s.rms_before * 1e6:.4g} {mu} -> {s.rms_after * 1e6:.4g} {mu}; residual sigma "
+                 f"[{mu}] {sig}; {s.rank} identified directions")
         L.append("")
         L.append(f"  {'parameter':<16} {'nominal':>12} {'estimate':>12} {'delta':>10} {'SE':>9}  unit")
         for j, n in enumerate(s.names):
@@ -298,8 +304,9 @@ class CalibrationResult:
                          f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
                          f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} um")
             else:
-                L.append(f"Accuracy on {label} ({a.n}): output RMS {a.position[0] * 1e6:.4g} um -> "
-                         f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x)")
+                what = "joint" if isinstance(self.problem, JointProblem) else "output"
+                L.append(f"Accuracy on {label} ({a.n}): {what} RMS {a.position[0] * 1e6:.4g} {mu} -> "
+                         f"{a.position[1] * 1e6:.4g} {mu} (gain {a.gain:.3g}x)")
         for w in self.warnings:
             L.append("warning: " + w)
         return "\n".join(L)

@@ -12,6 +12,10 @@ only chooses which parameters move and stacks the core's outputs.
   with parameters p at the measured pose; columns from ``pkm_6pus_calib_rows`` with the
   platform points in the platform frame (constant over poses), so dq = q_measured -
   q_IK_nominal(measured pose) = J d(eta) (seed eq. 4.3-4.9).
+* :class:`JointProblem` (any other robot the core knows): y = the joint readings at held
+  poses measured by a tracker; predict(p) = the core's inverse kinematics at the measured pose
+  with the geometric parameters p (every length parameter of the robot that moves a joint);
+  columns by central differences of that inverse kinematics.
 * :class:`LinearProblem`: a fixed J and dy (e.g. a table typed from a seed).
 
 The 6-PUS rail direction.  The error model of seed 000 (eq. 4.1) has 10 parameters per
@@ -40,6 +44,7 @@ __all__ = [
     "LinearProblem",
     "FourbarProblem",
     "SixpusProblem",
+    "JointProblem",
     "SIXPUS_ERROR_MODEL",
     "sixpus_leg_names",
     "calib_rows",
@@ -156,6 +161,7 @@ class Problem:
     blocks = None
     prior: np.ndarray
     weights = None  # per-equation weights (1 / expected noise, relative), or None
+    measurement_unit = "m"  # unit of y (the joint unit for a JointProblem)
 
     def predict(self, p) -> np.ndarray:
         raise NotImplementedError
@@ -453,3 +459,85 @@ class SixpusProblem(Problem):
     def blocks_60(self):
         n = self.pose.shape[0]
         return [(f"leg {i + 1}", np.arange(i, 6 * n, 6), np.arange(10 * i, 10 * i + 10)) for i in range(6)]
+
+
+class JointProblem(Problem):
+    """Any robot: joint readings q at held poses whose pose a tracker measured.
+
+    The calibrated coordinates are the robot's geometric parameters as the core lists them:
+    every parameter in metres outside the drive layer and gravity whose change moves a joint
+    at these poses.  predict(p) is the core's inverse kinematics with those values; the
+    columns are central differences of it (a robot needs nothing written for calibration).
+
+    Parameters
+    ----------
+    pose : array_like, shape (n, nd)
+        Measured poses, in the robot's pose coordinates (``Model.facts.pose_names``).
+    q : array_like, shape (n, nd)
+        Joint readings.
+    model : cosim.core.Model
+        The nominal model (copied).
+    row_labels : list of str, optional
+    min_poses : int, optional
+        Poses required (default: enough equations for the parameters).
+    """
+
+    def __init__(self, pose, q, model, row_labels=None, min_poses: int | None = None):
+        nd = model.ndof
+        names = model.facts.pose_names
+        self.pose = _check_finite(np.atleast_2d(pose), "measured poses", list(names))
+        self.q = _check_finite(np.atleast_2d(q), "joint readings", [f"q{i + 1}" for i in range(nd)])
+        if self.pose.shape != self.q.shape or self.pose.shape[1] != nd:
+            raise CalibrationDataError(f"{self.pose.shape[0]} poses of {self.pose.shape[1]} coordinates and "
+                                       f"{self.q.shape[0]} joint readings of {self.q.shape[1]}: both need {nd}")
+        self.robot = model.robot
+        self.measurement_unit = model.facts.joint_unit
+        self.model, self.nominal = model.copy(), model.copy()
+        self.y = self.q.ravel()
+        prefix = model.facts.joint_prefix + "["
+        cand = [i for i in model.param_info() if i.unit == "m" and not i.name.startswith(prefix)
+                and not i.name.startswith(("gravity.", "drive.", "actuator.", "sensor."))]
+        self._p = None
+        base = self._ik(model)
+        keep = []
+        for info in cand:
+            h = 1e-6 * max(abs(info.value), 1e-3)
+            trial = model.copy()
+            try:
+                trial.set_params({info.name: info.value + h})
+                moved = np.max(np.abs(self._ik(trial) - base)) > 1e-9 * h
+            except PkmError:
+                moved = False
+            if moved:
+                keep.append(info)
+        if not keep:
+            raise CalibrationDataError(f"robot {self.robot!r}: no length parameter moves a joint at these poses")
+        self.names = [i.name for i in keep]
+        self.units = ["m"] * len(keep)
+        self.p0 = np.array([i.value for i in keep])
+        self.prior = np.full(len(keep), 1e-3)
+        self.pose_labels = row_labels or [f"pose {k + 1}" for k in range(self.pose.shape[0])]
+        self.row_labels = [f"{lab}, joint {j + 1}" for lab in self.pose_labels for j in range(nd)]
+        need = len(keep) // nd + 1 if min_poses is None else min_poses
+        if self.pose.shape[0] < need:
+            raise CalibrationDataError(f"too few poses: {self.pose.shape[0]} for {len(keep)} parameters "
+                                       f"({', '.join(self.names)}); at least {need} are needed")
+
+    def _ik(self, model):
+        return np.asarray(model.ik(self.pose), float).reshape(self.pose.shape)
+
+    def predict(self, p):
+        self._set(p)
+        return self._ik(self.model).ravel()
+
+    def jacobian(self, p):
+        p = np.asarray(p, float)
+        J = np.empty((self.y.size, p.size))
+        for j in range(p.size):
+            h = 1e-6 * max(abs(p[j]), 1e-3)
+            up, dn = p.copy(), p.copy()
+            up[j] += h
+            dn[j] -= h
+            J[:, j] = (self.predict(up) - self.predict(dn)) / (2 * h)
+        self._set(p)
+        return J

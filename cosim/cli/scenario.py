@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..core import robot_facts
 from .main import command
 
 
@@ -16,6 +17,11 @@ def _configure(p):
     p.add_argument("--json", action="store_true", help="print the metrics as JSON")
     p.add_argument("--html", action="store_true",
                    help="also write <name>_report.html: interactive, self-contained (3D robot in motion, errors, efforts)")
+
+
+def _small(unit: str):
+    """(scale, unit) to print a small quantity of ``unit``: metres in mm, radians in mrad."""
+    return {"m": (1e3, "mm"), "rad": (1e3, "mrad")}.get(unit, (1.0, unit))
 
 
 def print_summary(out, file=None) -> None:
@@ -32,29 +38,38 @@ def print_summary(out, file=None) -> None:
             else f"Python loop: {res.loop_note}" if res.loop_note else "Python loop")
     print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall"
           f" ({loop})", file=f)
+    facts = robot_facts(m["robot"])
+    pose_unit = dict(zip(facts.pose_names, facts.pose_units))
+    # lengths in mm / um, angles in mrad / urad: the sizes a step and its errors have
+    jscale, jname = _small(facts.joint_unit)
     if "steady_state" in m:
         ss = m["steady_state"]
         for k, v in m["step_info"]["pose"].items():
             if "RiseTime" in v:
-                print(f"  step of {k} by {v['Amplitude'] * 1e3:+.2f} mm: rise {v['RiseTime'] * 1e3:.1f} ms, "
+                sc, un = _small(pose_unit[k])
+                print(f"  step of {k} by {v['Amplitude'] * sc:+.2f} {un}: rise {v['RiseTime'] * 1e3:.1f} ms, "
                       f"settling (2 %) {v['SettlingTime'] * 1e3:.1f} ms, overshoot {v['Overshoot']:.2f} %", file=f)
         pred = m.get("predicted_step_info")
         if pred:
             j = max(range(len(pred)), key=lambda i: pred[i]["mass"])
             p = pred[j]
-            print(f"  python-control, decoupled joint {j + 1} (m = {p['mass']:.3f} kg, wn = {p['wn']:.1f} rad/s, "
+            inertia = "kg m2" if facts.angular_joints else "kg"
+            print(f"  python-control, decoupled joint {j + 1} (m = {p['mass']:.3g} {inertia}, wn = {p['wn']:.1f} rad/s, "
                   f"zeta = {p['damping']:.2f}): rise {p['RiseTime'] * 1e3:.1f} ms, settling {p['SettlingTime'] * 1e3:.1f} ms, "
                   f"overshoot {p['Overshoot']:.2f} %", file=f)
-        print("  steady-state joint error qref - q [mm]: " + " ".join(f"{e * 1e3:+.4f}" for e in ss["joint_error"]),
-              file=f)
+        print(f"  steady-state joint error qref - q [{jname}]: "
+              + " ".join(f"{e * jscale:+.4f}" for e in ss["joint_error"]), file=f)
         if "predicted_joint_error_equilibrium" in ss:
-            print("  predicted Kp^-1 g                 [mm]: "
-                  + " ".join(f"{e * 1e3:+.4f}" for e in ss["predicted_joint_error_equilibrium"])
+            print(f"  predicted Kp^-1 g                 [{jname}]: "
+                  + " ".join(f"{e * jscale:+.4f}" for e in ss["predicted_joint_error_equilibrium"])
                   + f"   (max relative difference {ss['prediction_relative_error']:.2e})", file=f)
         else:
-            print(f"  max |e_ss| = {ss['joint_error_max']:.3g} m (predicted 0 with gravity compensation)", file=f)
+            print(f"  max |e_ss| = {ss['joint_error_max']:.3g} {facts.joint_unit} (predicted 0 with gravity "
+                  f"compensation)", file=f)
         pe = ss["pose_error"]
-        print(f"  steady-state pose error: x y z [um] {pe[0] * 1e6:+.3f} {pe[1] * 1e6:+.3f} {pe[2] * 1e6:+.3f}", file=f)
+        print("  steady-state pose error: " + ", ".join(
+            f"{n} {e * 1e3 * _small(u)[0]:+.3f} {'u' + u if u in ('m', 'rad') else u}"
+            for n, u, e in zip(facts.pose_names, facts.pose_units, pe)), file=f)
     if "tracking" in m:
         tr = m["tracking"]
         print(f"  pen-point tracking error: RMS {tr['pen_error_rms'] * 1e6:.4g} um, max {tr['pen_error_max'] * 1e6:.4g} um "

@@ -131,8 +131,6 @@ def excitation(model, duration: float, seed: int = 0, scale: float = 1.0, lead_i
     lead_in : float
         Initial standstill at home [s] (lets a delayed actuator fill its history).
     """
-    if model.robot not in PROFILES:
-        raise ValueError(f"no excitation profile for robot {model.robot!r} (known: {', '.join(PROFILES)})")
     for attempt in range(8):
         traj = _build(model, duration, seed, scale * 0.85**attempt, lead_in)
         problem = check_trajectory(model, traj)
@@ -143,7 +141,7 @@ def excitation(model, duration: float, seed: int = 0, scale: float = 1.0, lead_i
 
 def _build(model, duration, seed, scale, lead_in):
     rng = np.random.default_rng(seed)
-    prof = PROFILES[model.robot]
+    prof = PROFILES.get(model.robot) or derived_profile(model)
     home = model.home()
     nd = len(home)
     cr = np.asarray(prof["centre"]) * scale
@@ -186,6 +184,49 @@ def _build(model, duration, seed, scale, lead_in):
     return Excitation(home, segs, end, name=f"excitation(seed={seed})")
 
 
+def derived_profile(model) -> dict:
+    """The excitation profile of a robot without a table in ``PROFILES``, from the core alone.
+
+    Per pose coordinate, the reach from home: the largest offset (both ways, the smaller one)
+    at which the core still reaches the pose inside the joint ranges and away from
+    singularities, probed on a doubling then halving search.  Centres span 15 % of it,
+    bursts 30 %, the slow oscillation 1.5 % (the two tables above are of that order of
+    their robots' reach).
+    """
+    home = np.asarray(model.home(), float)
+    units = model.facts.pose_units
+    lo, hi = (np.asarray(v, float) for v in model.joint_limits())
+
+    def fine(x):
+        q, st = model.ik(x[None, :], errors="status")
+        if st[0] != 0:
+            return False
+        span = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
+        if np.any(q[0] < lo + 0.1 * span) or np.any(q[0] > hi - 0.1 * span):
+            return False
+        return bool(np.all(model.singularity(x[None, :])[0] > 0.1))
+
+    reach = np.empty(len(home))
+    for i, u in enumerate(units):
+        best = np.inf
+        for sign in (1.0, -1.0):
+            d = 1e-3 if u == "m" else 1e-2
+            ok = 0.0
+            while d < 1e3 and fine(home + sign * d * np.eye(len(home))[i]):
+                ok, d = d, 2 * d
+            bad = d
+            for _ in range(20):
+                mid = 0.5 * (ok + bad)
+                ok, bad = (mid, bad) if fine(home + sign * mid * np.eye(len(home))[i]) else (ok, mid)
+            best = min(best, ok)
+        if not best > 0:
+            raise ValueError(f"{model.robot}: pose coordinate {model.facts.pose_names[i]} cannot move from home "
+                             f"without leaving the workspace; no excitation possible")
+        reach[i] = best
+    return {"centre": 0.15 * reach, "centre_offset": np.zeros(len(home)), "amp": 0.30 * reach,
+            "slow": 0.015 * reach}
+
+
 def check_trajectory(model, traj, step: float = 2e-3):
     """None if every pose of ``traj`` is reachable, inside the joint ranges and away
     from singularities; else the first problem (with its time)."""
@@ -195,15 +236,8 @@ def check_trajectory(model, traj, step: float = 2e-3):
     bad = np.flatnonzero(status != 0)
     if bad.size:
         return f"pose at t = {t[bad[0]]:.3f} s is unreachable"
-    names = set(model.param_names())
-    if "rail[1].qmin" in names:
-        lo = np.array([model.param(f"rail[{i + 1}].qmin") for i in range(model.ndof)])
-        hi = np.array([model.param(f"rail[{i + 1}].qmax") for i in range(model.ndof)])
-    elif "joint.q_min" in names:
-        lo = np.full(model.ndof, model.param("joint.q_min"))
-        hi = np.full(model.ndof, model.param("joint.q_max"))
-    else:
-        lo, hi = np.full(model.ndof, -np.inf), np.full(model.ndof, np.inf)
+    lo, hi = model.joint_limits()  # the core's facts (-inf / inf where a robot has none)
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     span = np.where(np.isfinite(hi - lo), hi - lo, 1.0)
     out = (q < lo + 0.05 * span) | (q > hi - 0.05 * span)
     if np.any(out):

@@ -252,14 +252,22 @@ def _fig_workspace(d, eng, path):
     x = pipe.x_s[pipe.idx]
     sig = np.asarray([d.noise["sigma"][c] for c in pipe.channels])
     z = np.max(np.abs(eng.R0) / sig[None, :], axis=1)
-    cols = pipe.rec.pose_columns
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    facts = eng.model.facts
+    nd = x.shape[1]
+    # the pose coordinates in mm / mrad; a one-coordinate robot is drawn against time
+    scale = [1e3] * nd
+    label = [f"{n} [{'mm' if u == 'm' else 'm' + u if u == 'rad' else u}]"
+             for n, u in zip(facts.pose_names, facts.pose_units)]
+    pairs = [(0, 1), (0, 2)] if nd >= 3 else [(0, 1)] if nd == 2 else [(None, 0)]
+    fig, axes = plt.subplots(1, len(pairs), figsize=(5.5 * len(pairs), 4.2), layout="constrained", squeeze=False)
+    axes = axes[0]
     order = np.argsort(z)
-    for ax, (a, b) in zip(axes, ((0, 1), (0, 2))):
-        sc = ax.scatter(x[order, a] * 1e3, x[order, b] * 1e3, c=z[order], s=4, cmap="viridis", vmin=0,
+    for ax, (a, b) in zip(axes, pairs):
+        xa = pipe.t[pipe.idx][order] if a is None else x[order, a] * scale[a]
+        sc = ax.scatter(xa, x[order, b] * scale[b], c=z[order], s=4, cmap="viridis", vmin=0,
                         vmax=max(6, np.percentile(z, 99)))
-        ax.set_xlabel(f"{cols[a]} [mm]")
-        ax.set_ylabel(f"{cols[b]} [mm]")
+        ax.set_xlabel("time [s]" if a is None else label[a])
+        ax.set_ylabel(label[b])
     fig.colorbar(sc, ax=axes, label="largest |residual| / noise")
     fig.suptitle("where in the workspace the nominal model is wrong", fontsize=10)
     fig.savefig(path, dpi=90)

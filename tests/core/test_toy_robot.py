@@ -1,0 +1,135 @@
+"""A new robot touches the core and nothing in Python (issue 13).
+
+``libpkm_toy.so`` is the core plus one robot written only in the core's test tree
+(``c_core/tests/robots/slider_crank.cpp``: a vertical slider-crank, one joint).  With
+``PKM_LIB`` pointing at it, the CLI must list its parameters, run a step scenario (PD, whose
+steady-state error must match Kp^-1 g), run a calibration campaign and calibrate the robot's
+lengths from the recording, and diagnose a recording in which the plant hides a friction the
+model lacks: all from the core's facts, with no Python edit (checked: the package never names
+the robot)."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+TOY = Path(os.environ.get("PKM_BUILD_DIR", REPO / "build")) / "lib" / "libpkm_toy.so"
+COSIM = [sys.executable, "-m", "cosim"]
+
+def cosim(*args, cwd):
+    assert TOY.exists(), f"{TOY} is missing: cmake builds it with the core (target pkm_toy)"
+    env = dict(os.environ, PKM_LIB=str(TOY))
+    r = subprocess.run([*COSIM, *map(str, args)], cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return r.stdout
+
+
+def test_the_package_never_names_the_toy_robot():
+    hits = [p for p in (REPO / "cosim").rglob("*.py") if "slider_crank" in p.read_text()]
+    assert hits == [], hits
+
+
+def test_params(tmp_path):
+    out = cosim("params", "slider_crank", cwd=tmp_path)
+    for name in ("crank.r", "rod.l", "slider.m", "crank.I", "joint[1].coulomb"):
+        assert name in out, out
+
+
+STEP = """
+name = "toy_step_pd"
+robot = "slider_crank"
+plant = "core"
+duration = 1.5
+step = 0.001
+[controller]
+type = "pd"
+kp = 5.0
+kd = 0.2
+[reference]
+type = "step"
+from = [0.1414]
+to = [0.150]
+t_step = 0.1
+[output]
+settle_window = 0.2
+figures = false
+"""
+
+
+def test_step_scenario_settles_at_kp_inverse_g(tmp_path):
+    (tmp_path / "step.toml").write_text(STEP)
+    out = cosim("run", "step.toml", "--out", "o", cwd=tmp_path)
+    assert "step of z by +" in out and "predicted Kp^-1 g" in out, out
+    ss = json.loads((tmp_path / "o" / "toy_step_pd_metrics.json").read_text())["steady_state"]
+    assert abs(ss["joint_error"][0]) > 1e-3                       # rad: gravity pulls the slider down
+    assert ss["prediction_relative_error"] < 1e-3, ss
+
+
+CAMPAIGN = """
+name = "toy_campaign"
+robot = "slider_crank"
+plant = "core"
+duration = 4.4
+step = 0.001
+seed = 3
+[plant_offset]
+"rod.l" = 0.0004
+"crank.r" = -0.0002
+[controller]
+type = "pd_gravity"
+kp = 5.0
+kd = 0.2
+[reference]
+type = "poses"
+move_time = 0.25
+hold_time = 0.3
+poses = [[0.110], [0.125], [0.140], [0.150], [0.160], [0.170], [0.180], [0.190]]
+[noise]
+q = 1e-6
+pose = [1e-6]
+[output]
+figures = false
+"""
+
+
+def test_calibration_finds_the_robots_length_errors(tmp_path):
+    (tmp_path / "cal.toml").write_text(CAMPAIGN)
+    cosim("run", "cal.toml", "--out", "o", cwd=tmp_path)
+    report = cosim("calibrate", "o/toy_campaign.csv", "--out", "c", cwd=tmp_path)
+    est = json.loads((tmp_path / "c" / "calibrated_parameters.json").read_text())["parameters"]
+    assert abs(est["rod.l"] - (0.15 + 0.0004)) < 2e-6, report      # within 0.5 % of the error
+    assert abs(est["crank.r"] - (0.05 - 0.0002)) < 2e-6, report
+    assert "held-out poses" in report and "urad" in report, report
+
+
+BLIND = """
+name = "toy_blind"
+robot = "slider_crank"
+plant = "core"
+duration = 9.5
+step = 0.001
+seed = 5
+[plant_offset]
+"joint[1].coulomb" = 0.004
+[controller]
+type = "pd_gravity"
+bandwidth_hz = 8.0
+[reference]
+type = "excitation"
+[noise]
+q = 2e-6
+pose = [5e-6]
+[output]
+figures = false
+"""
+
+
+def test_diagnose_names_the_hidden_friction(tmp_path):
+    (tmp_path / "blind.toml").write_text(BLIND)
+    cosim("run", "blind.toml", "--out", "o", cwd=tmp_path)
+    side = json.loads((tmp_path / "o" / "toy_blind.json").read_text())
+    assert "joint[1].coulomb" not in json.dumps(side)                # the sidecar does not give it away
+    d = json.loads(cosim("diagnose", "o/toy_blind.csv", "--out", "d", "--json", cwd=tmp_path))
+    assert d["effects"] and d["effects"][0]["key"] == "coulomb", d["conclusion"]
+    assert abs(d["theta"]["joint[1].coulomb"] - 0.004) < 0.1 * 0.004, d["theta"]
