@@ -233,9 +233,11 @@ PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd
 PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd,
                                 double* tau_applied);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
- * q_meas = q + encoder_offset + backlash/2 sgn(tau) + compliance tau: the encoder is on the drive
- * side, the carriage leans on the side of the gap the transmitted effort tau pushes it to
- * (smooth sign tanh(tau / drive.f_eps)), and the transmission deflects by compliance tau. */
+ * q_meas = q + encoder_offset + backlash/2 sgn(c) + compliance c, with c the effort the
+ * transmission carries: tau less the drive side's own friction and rotor inertia (rotor qdd,
+ * qdd from the forward dynamics at (x, xd, tau)).  The encoder is on the drive side, the
+ * carriage leans on the side of the gap c pushes it to (smooth sign tanh(c / drive.f_eps)),
+ * and the transmission deflects by compliance c. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, const double* tau, double* q_meas);
 

@@ -304,17 +304,36 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
   const int n = d->ndof;
+  bool flexible = false;
+  for (int i = 0; i < n; ++i) flexible |= dp.backlash[i] != 0 || dp.compliance[i] != 0;
+  // The effort the transmission carries: the applied one less what the drive side spends on
+  // its own friction and rotor inertia (computed only when a gap or an elasticity reads it).
+  double carried[6];
+  for (int i = 0; i < n; ++i) carried[i] = tau[i];
+  if (flexible && (dp.any_friction || dp.any_rotor)) {
+    double J[36], qd[6], f[6], xdd[6], qdd[6];
+    m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
+    for (int i = 0; i < n; ++i) {
+      qd[i] = 0;
+      for (int j = 0; j < n; ++j) qd[i] += J[i * n + j] * xd[j];
+    }
+    if (dp.any_friction) {
+      drive::friction(dp, qd, f);
+      for (int i = 0; i < n; ++i) carried[i] -= f[i];
+    }
+    if (dp.any_rotor) {
+      total_forward_dynamics(m, d, x, xd, tau, xdd);
+      m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd);
+      for (int i = 0; i < n; ++i) carried[i] -= dp.rotor[i] * qdd[i];
+    }
+  }
   m->robot->ik(rm, *d->rd, x, q_meas);
-  double J[36];
-  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
   for (int i = 0; i < n; ++i) {
-    double qd = 0;
-    for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
     // The encoder sits on the drive side of the transmission: the carriage leans on the
-    // side of the gap the transmitted effort pushes it to (under a gravity preload that is
-    // not the side of the velocity), and the transmission deflects by compliance * tau.
-    q_meas[i] += dp.encoder_offset[i] + 0.5 * dp.backlash[i] * drive::smooth_sign(tau[i], dp.f_eps) +
-                 dp.compliance[i] * tau[i];
+    // side of the gap the carried effort pushes it to (under a gravity preload that is
+    // not the side of the velocity), and the transmission deflects by compliance * effort.
+    q_meas[i] += dp.encoder_offset[i] + 0.5 * dp.backlash[i] * drive::smooth_sign(carried[i], dp.f_eps) +
+                 dp.compliance[i] * carried[i];
   }
 }
 

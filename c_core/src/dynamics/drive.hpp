@@ -72,7 +72,8 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
 // Effort that reaches the mechanism for a commanded effort (saturation).
 void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_applied);
 // Joint readings of the sensors at state (x, xd) with the applied effort tau:
-// q + encoder offset + backlash/2 * smooth_sign(tau) + compliance * tau (encoder on the drive side).
+// q + encoder offset + backlash/2 * smooth_sign(c) + compliance * c (encoder on the drive side), c the
+// effort the transmission carries: tau less the drive's friction and rotor inertia force.
 void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                     double* q_meas);
 
