@@ -119,11 +119,6 @@ class CorePlant(Plant):
                  max_step: float = 0.0):
         from .simulate import Simulator
 
-        if model.param("sensor.delay") != 0:
-            # Neither this loop nor the compiled one delays the readings: refuse, do not ignore.
-            raise MasterError(f"sensor.delay = {model.param('sensor.delay'):g} s: CorePlant reads the joints at the "
-                              f"current time and does not delay them; set it to 0 (the discrepancy replay, "
-                              f"cosim.discrepancy.plant.closed_loop, models a sensor lag)")
         self.model = model
         self.robot = model.robot
         self.ndof = model.ndof
@@ -173,6 +168,7 @@ class CoreDrive:
         self.model, self._lib = model, lib
         self.ndof = model.ndof
         self._buf = np.empty(model.ndof)
+        self._line = []  # the readings' delay line (sensor.delay)
 
     def _call(self, fn, *arrays):
         from ._native import ptr, raise_for
@@ -183,6 +179,29 @@ class CoreDrive:
         if st != 0:
             raise_for(st, self._lib.pkm_data_error(self.model._d).decode())
         return out
+
+    def delayed(self, t, q, qd):
+        """The readings the sensors deliver at time t [s] (``sensor.delay``): the readings
+        recorded at t, interpolated linearly between the samples around t - delay (the first
+        sample's before it).  The same delay line as the core's closed loop
+        (``Sim::delayed_reading``); :meth:`reset_delay` empties it."""
+        d = self.model.param("sensor.delay")
+        if not d > 0:
+            return q, qd
+        line = self._line
+        line.append((float(t), np.array(q, float), np.array(qd, float)))
+        s = t - d
+        while len(line) > 1 and line[1][0] <= s:
+            line.pop(0)
+        (ta, qa, qda) = line[0]
+        if s <= ta or len(line) == 1:
+            return qa.copy(), qda.copy()
+        tb, qb, qdb = line[1]
+        f = (s - ta) / (tb - ta)
+        return qa * (1 - f) + qb * f, qda * (1 - f) + qdb * f
+
+    def reset_delay(self):
+        self._line = []
 
     def applied(self, tau_cmd):
         """Effort reaching the mechanism [N or N m] for the commanded one."""
@@ -640,10 +659,15 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         if hasattr(controller, "reset"):
             controller.reset(float(t[0]), y.q, y.x)
         tau_applied = np.zeros(nd)   # effort acting just before the sample (compliance)
+        if drive is not None:
+            drive.reset_delay()
         for k in range(n):
             q_read = drive.measure(y.x, y.xd, tau_applied) if drive is not None else y.q
+            qd_read = y.qd
+            if drive is not None:
+                q_read, qd_read = drive.delayed(float(t[k]), q_read, qd_read)
             qm = q_read + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else q_read
-            qdm = y.qd + rng.normal(0.0, 1.0, nd) * sig_qd if np.any(sig_qd) else y.qd
+            qdm = qd_read + rng.normal(0.0, 1.0, nd) * sig_qd if np.any(sig_qd) else qd_read
             xm = y.x + rng.normal(0.0, 1.0, nd) * sig_x if np.any(sig_x) else y.x
             tau = np.asarray(controller(float(t[k]), qm, qdm, reference.at(k)), float)
             tau_applied = drive.applied(tau) if drive is not None else tau

@@ -357,6 +357,8 @@ def build_plant(sc: Scenario, true_model, truth: dict):
         return CorePlant(true_model, rtol=rtol, atol=atol, method=method)
     # the FMU's solver.method is the core's method code (pkm.h pkm_lmm)
     params = {"solver.method": METHOD_CODES[method], **sc.spec["parameters"], **truth}
+    # the FMU outputs the joints of its current time; the master delays the readings (CoreDrive)
+    params.pop("sensor.delay", None)
     return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"))
 
 

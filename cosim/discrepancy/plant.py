@@ -4,9 +4,9 @@ generator's plant and the engine's replay.
 The core's integrator (``pkm_sim``) integrates the mechanics with friction and rotor
 inertia and, when this build of the core does it, applies the actuator saturation
 (``<j>[i].effort_max``) and delay (``actuator.delay``) to the held command.  The
-sensors are applied here, around the integrator, by the core's
-``pkm_measure_joints`` (encoder offset, backlash, compliance) and a time shift of the
-readings (``sensor.delay``).  If the integrator of this build does not apply the
+sensors are applied by the core's ``pkm_measure_joints`` (encoder offset, backlash,
+compliance) and the readings' delay line (``sensor.delay``: the core's closed loop, or
+:meth:`cosim.master.CoreDrive.delayed` with the same rule when this loop runs in Python).  If the integrator of this build does not apply the
 actuator saturation or delay (:func:`integrator_applies`), they are applied here by
 the core's ``pkm_actuator_effort`` and by splitting each step at the instant the
 delayed command switches.  No physics is computed in Python.
@@ -210,7 +210,6 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     sig = {k: np.broadcast_to(np.asarray(noise.get(k, 0.0), float), (nd,)) for k in ("q", "qd", "tau", "pose")}
     applies = integrator_applies(plant)
     delay = plant.param("actuator.delay")
-    s_delay = plant.param("sensor.delay")
     own_sat = not applies["saturation"]
     own_delay = delay > 0 and not applies["delay"]
     sim_model = plant
@@ -228,7 +227,7 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     sim = Simulator(sim_model, rtol=rtol, atol=atol)
     if x0 is None:
         x0 = ref.x[start] if getattr(ref, "x", None) is not None else plant.fk(ref.q[start])
-    if not (own_delay or own_sat) and s_delay == 0:
+    if not (own_delay or own_sat):
         # The whole loop inside the core when the controller is one it implements.
         fast = _compiled(plant, sim, controller, ref, start, t, np.asarray(x0, float), xd0, sig, rng, delay)
         if fast is not None:
@@ -237,6 +236,9 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     if hasattr(controller, "reset"):
         controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
 
+    from ..master import CoreDrive
+
+    line = CoreDrive(plant)
     out = {k: np.zeros((n, nd)) for k in ("q", "qd", "tau", "pose", "x", "xd", "q_true")}
     meas = np.zeros((n, nd))  # true sensor readings (before delay and noise)
     qd_true = np.zeros((n, nd))
@@ -259,17 +261,7 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         tau_now = applied_at(t[k])
         meas[k] = cc.measure_joints(plant, x[None], xd[None], tau_now[None])[0]
         qd_true[k] = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
-        if s_delay > 0:
-            s = (t[k] - s_delay - t[0]) / dt
-            if s <= 0:
-                qr, qdr = meas[0], qd_true[0]
-            else:
-                i0 = int(np.floor(s))
-                f = s - i0
-                qr = meas[i0] * (1 - f) + meas[min(i0 + 1, k)] * f
-                qdr = qd_true[i0] * (1 - f) + qd_true[min(i0 + 1, k)] * f
-        else:
-            qr, qdr = meas[k], qd_true[k]
+        qr, qdr = line.delayed(float(t[k]), meas[k], qd_true[k])  # sensor.delay, as in the core's loop
         if np.any(sig["q"]):
             qr = qr + rng.normal(size=nd) * sig["q"]
         if np.any(sig["qd"]):

@@ -94,10 +94,3 @@ def test_a_failure_stops_both_loops_at_the_same_sample_with_the_same_rows():
     head = str(slow).split(":")[0]
     assert str(fast).startswith(head), (str(fast), str(slow))
     assert "singularity" in str(fast) and "singularity" in str(slow)
-
-
-def test_a_sensor_lag_is_refused_not_ignored():
-    m = Model("6pus")
-    m.set_params({"sensor.delay": 0.003})
-    with pytest.raises(MasterError, match=r"sensor.delay = 0.003 s: CorePlant .* does not delay"):
-        CorePlant(m)

@@ -38,3 +38,21 @@ def test_saturation_and_encoder_offset_in_both_plants(tmp_path):
     fmu = _run(tmp_path / "fmu", "fmu")
     np.testing.assert_allclose(fmu["x"], core["x"], rtol=0, atol=1e-10)
     np.testing.assert_allclose(fmu["q"], core["q"], rtol=0, atol=1e-10)
+
+
+def test_a_sensor_lag_is_applied_the_same_with_the_fmu_and_the_core_plant(tmp_path):
+    # sensor.delay: the FMU outputs the joints of its own time; the master delays the readings
+    # for it as the core's compiled loop does for the core plant.
+    runs = {}
+    for plant in ("core", "fmu"):
+        sc = load_scenario(SCEN / "6pus_step_pdg.toml").with_overrides(duration=0.3)
+        sc.spec["plant_parameters"] = {"sensor.delay": 0.003}
+        runs[plant] = run_scenario(sc, plant=plant, out_dir=tmp_path / plant, figures=False).result
+    core, fmu = runs["core"], runs["fmu"]
+    assert core.loop == "compiled" and fmu.loop == "python"
+    np.testing.assert_allclose(fmu["q"], core["q"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fmu["x"], core["x"], rtol=0, atol=1e-10)
+    k = np.searchsorted(core["time"], 0.1)
+    # the readings at 0.1 s are the joints of 0.097 s
+    np.testing.assert_allclose(core["q"][k], core["q_true"][k - 3], rtol=0, atol=1e-12)
+    assert np.max(np.abs(core["q"][k] - core["q_true"][k])) > 1e-5

@@ -382,8 +382,11 @@ PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
  * plant s, controller c and a reference table, in the order of cosim.master.run.  At
  * each sample k = 0..n-1 (time t_k):
  *   1. readings: q_k = the plant's joints, or with measure = 1 the sensor model
- *      (pkm_measure_joints at the effort applied before the sample), plus q_noise[k];
- *      qd_k = the plant's joint rates plus qd_noise[k] (noise arrays may be NULL);
+ *      (pkm_measure_joints at the effort applied before the sample), and qd_k = the
+ *      plant's joint rates; with sensor.delay = d > 0, both are those of t_k - d,
+ *      interpolated linearly between the samples around it (the first sample's before
+ *      it; the sim keeps the line across calls, pkm_sim_reset drops what follows t0);
+ *      then plus q_noise[k] and qd_noise[k] (noise arrays may be NULL);
  *   2. tau_k = pkm_ctrl_update(c, t_k, q_k, qd_k, reference row k);
  *   3. the row is recorded; the plant then holds tau_k (pkm_sim_set_input: saturation,
  *      actuator delay) and advances to t_k + dt (not after the last sample).

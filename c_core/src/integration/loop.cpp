@@ -58,9 +58,11 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
       } else {
         for (int i = 0; i < nd; ++i) qm[i] = q[i];
       }
+      for (int i = 0; i < nd; ++i) qdm[i] = qd[i];
+      sim.delayed_reading(t_k, qm, qdm);  // sensor.delay: the readings of t_k - delay
       for (int i = 0; i < nd; ++i) {
         if (q_noise) qm[i] += q_noise[k * nd + i];
-        qdm[i] = qd[i] + (qd_noise ? qd_noise[k * nd + i] : 0.0);
+        if (qd_noise) qdm[i] += qd_noise[k * nd + i];
         qr[i] = ref->q[k * nd + i];
         qdr[i] = ref->qd[k * nd + i];
       }

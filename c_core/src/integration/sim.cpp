@@ -428,6 +428,32 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   fsal_valid_ = false;
   // Commands issued at or after t0 belong to the future being rolled back.
   while (!history_.empty() && history_.back().s >= t0) history_.pop_back();
+  while (!readings.empty() && readings.back().t >= t0) readings.pop_back();
+}
+
+void Sim::delayed_reading(double t, double* q, double* qd) {
+  const double d = model_->drive ? model_->drive->sensor_delay : 0.0;
+  if (!(d > 0)) return;
+  Reading r{};
+  r.t = t;
+  for (int i = 0; i < nd_; ++i) r.q[i] = q[i], r.qd[i] = qd[i];
+  readings.push_back(r);
+  const double s = t - d;
+  // Keep one sample at or before the oldest time a later call can ask for (s grows).
+  size_t drop = 0;
+  while (drop + 1 < readings.size() && readings[drop + 1].t <= s) ++drop;
+  if (drop > 0) readings.erase(readings.begin(), readings.begin() + (long)drop);
+  const Reading& a = readings.front();
+  if (s <= a.t || readings.size() == 1) {
+    for (int i = 0; i < nd_; ++i) q[i] = a.q[i], qd[i] = a.qd[i];
+    return;
+  }
+  const Reading& b = readings[1];
+  const double f = (s - a.t) / (b.t - a.t);
+  for (int i = 0; i < nd_; ++i) {
+    q[i] = a.q[i] * (1 - f) + b.q[i] * f;
+    qd[i] = a.qd[i] * (1 - f) + b.qd[i] * f;
+  }
 }
 
 void Sim::set_input(const double* tau) {

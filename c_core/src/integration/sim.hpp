@@ -67,6 +67,18 @@ class Sim {
   pkm_data* data() const { return data_; }
   const double* held_input() const { return tau_.data(); }
 
+  // The closed loop's delay line of joint readings (drive parameter sensor.delay > 0): the
+  // reading and rate of past samples; reset() drops those at or after its t0 (a rollback),
+  // as it does for the actuator delay line.
+  struct Reading {
+    double t;
+    double q[6], qd[6];
+  };
+  std::vector<Reading> readings;
+  // The reading and rate at time t (delayed): recorded at t, interpolated linearly between
+  // the samples around t - sensor.delay (the first sample's before it).  Records the sample.
+  void delayed_reading(double t, double* q, double* qd);
+
  private:
   static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* self);
   static int root_cb(double t, N_Vector y, double* g, void* self);
