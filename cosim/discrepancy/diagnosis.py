@@ -1,0 +1,592 @@
+"""The diagnosis (part 5 of the engine): residuals -> candidate effects -> selection and
+inference (:mod:`.selection`) -> localisation -> held-out fit -> the answer, a
+:class:`Diagnosis`, with its conclusion, ties, structure left unexplained and warnings.
+:func:`diagnose` is re-exported by :mod:`cosim.discrepancy`.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._native import PkmError
+from ..jsonable import jsonable
+from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
+from .residuals import DiagnosisError, Pipeline
+
+__all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
+
+#: |delta BIC| below which two explanations are called a tie (equally good)
+TIE_MARGIN = 2.0
+
+
+@dataclass
+class Diagnosis:
+    """The answer of :func:`diagnose`.
+
+    Attributes
+    ----------
+    recording : str
+        The recording's path (or "recording").
+    robot : str
+        Robot of the recording.
+    conclusion : str
+        One sentence: "no missing physics found", "missing physics: ...", or "cannot
+        diagnose: ..." (nothing testable).
+    effects : list of dict
+        Selected effects, most important first: ``key``, ``name``, ``joint`` (1-based
+        or None), ``params`` ({core name: {value, ci95, unit, nominal}}), ``delta_bic``,
+        ``importance``, ``lookalikes`` (alternatives, with ``statement``).
+    theta : dict
+        Every fitted core parameter (the plant overrides that model the effects).
+    heldout : dict
+        Fit on the held-out part before/after: per channel ``rms_before``,
+        ``rms_after``, ``nrmse_before``, ``nrmse_after``; ``gain`` (noise-normalised RMS
+        ratio on the affected channels), ``gain_windows`` (the same over the samples
+        where the nominal residual is out of its noise band), ``affected`` channels.
+    localisation : dict
+        Per channel: windows (start, end, peak, phase mix), phase enrichment,
+        workspace region.
+    not_excited : list of str
+        Effects this recording cannot reveal, and what motion or data is missing.
+    unavailable : list of str
+        Effects not tested at all (robot model lacks them, or no tracker columns).
+    unexplained : list of dict
+        Residual channels that keep structure after the fit (:mod:`.structure`): what it
+        is keyed on (sign of velocity, sign of command, position, velocity,
+        acceleration), its rms against the residual's own noise, and the library effects
+        of that kind.  Reported in the conclusion, never "within noise".
+    replay : dict or None
+        Closed-loop replay of the held-out part with the nominal and the fitted plant.
+    files : dict
+        Report and figure paths (when ``out`` was given).
+    warnings : list of str
+        What makes the recording contradict the model as a whole (an effort that runs
+        against the model's on a joint: another joint convention, a flipped sign, a gear
+        ratio), naming the joint; when not empty, no effect is fitted and the conclusion
+        says so.
+    """
+
+    recording: str
+    robot: str
+    conclusion: str
+    effects: list
+    theta: dict
+    heldout: dict
+    localisation: dict
+    not_excited: list
+    unavailable: list
+    channels: list
+    noise: dict
+    replay: dict | None = None
+    timings: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+    steps: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+    refused: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    #: residual channels that keep structure after the fit (cosim.discrepancy.structure):
+    #: channel, what it is keyed on, the closest library effects, its rms against the noise
+    unexplained: list = field(default_factory=list)
+    #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
+    #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
+    residual: dict = field(default_factory=dict, repr=False)
+
+    def named(self) -> list:
+        """Effect keys in the order they are named (most important first)."""
+        out = []
+        for e in self.effects:
+            if e["key"] not in out:
+                out.append(e["key"])
+        return out
+
+    def ties(self, key: str) -> list:
+        """Effect keys declared equally good as the first group of ``key``."""
+        for e in self.effects:
+            if e["key"] == key:
+                return [a["effect"] for a in e["lookalikes"]
+                        if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
+        return []
+
+    def plant_parameters(self) -> dict:
+        """Core/FMU parameters that put the fitted effects into the plant."""
+        return dict(self.theta)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
+                                               "localisation", "not_excited", "unavailable", "refused", "channels",
+                                               "noise", "replay", "timings", "files", "steps", "settings",
+                                               "warnings", "unexplained")}
+
+    def to_json(self, indent: int | None = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent, default=jsonable)
+
+
+
+
+def _load(recording):
+    from ..recording import Recording, read_recording
+
+    if isinstance(recording, Recording):
+        return recording
+    return read_recording(recording)
+
+
+def _model_for(rec, model):
+    from ..core import Model
+
+    def sidecar_params(m):
+        if rec.parameters:
+            try:
+                m.set_params(rec.parameters)
+            except PkmError as e:
+                from ..recording import sidecar_path
+
+                where = sidecar_path(rec.path) if rec.path else "the recording's sidecar"
+                raise DiagnosisError(f"{where}: parameters: {e}") from None
+        return m
+
+    if model is None:
+        return sidecar_params(Model(rec.robot))
+    if isinstance(model, (str, Path)) and Path(model).exists():
+        spec = json.loads(Path(model).read_text())
+        params = spec.get("parameters", spec)
+        params = {k: (v["value"] if isinstance(v, dict) else v) for k, v in params.items()}
+        m = Model(spec.get("robot", rec.robot), spec.get("param_set"))
+        m.set_params(params)
+        return m
+    if isinstance(model, str):
+        return sidecar_params(Model(rec.robot, model))
+    return model
+
+
+def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
+             train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
+             max_effects: int = 6, verbose: bool = False) -> Diagnosis:
+    """Diagnose a recording against the core model.
+
+    Parameters
+    ----------
+    recording : str, Path or cosim.recording.Recording
+        A ``pkm-recording/1`` CSV (with its sidecar) or a recording object.
+    model : cosim.core.Model, str or Path, optional
+        The model to test: a Model, a named parameter set ("default", "appendix_a"),
+        or a JSON parameter file (``cosim params <robot> --json``).  Default: the
+        robot's default set with the sidecar's parameter overrides.
+    out : str or Path, optional
+        Directory for the Markdown report and its figures.
+    window : float
+        Smoothing window of the residuals [s].
+    threshold : float
+        BIC decrease an effect must bring to be named (calibrated on clean cases).
+    train_fraction : float
+        Fraction of the recording used for the fit; the rest is held out.
+    effects : iterable of str, optional
+        Restrict the library to these effect keys.
+    replay : bool
+        Re-simulate the held-out part in closed loop with the nominal and the fitted
+        plant (needs the controller in the sidecar and ``qref`` columns).
+    figures : bool
+        Draw the figures (with ``out``).
+    max_effects : int
+        Largest number of entries of the forward selection (an all-joints entry names
+        one group per joint).
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    cosim.recording.RecordingError
+        Malformed file (names the file, row, column).
+    DiagnosisError
+        A recording the engine cannot use (too short, not uniformly sampled, no
+        dynamics for the robot, ...): says what is missing.
+    """
+    from ._threads import one_blas_thread
+    from .localisation import localise
+    from .selection import Engine
+
+    for name, v, lo in (("window", window, 0.0), ("threshold", threshold, 0.0)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > lo):
+            raise DiagnosisError(f"{name} = {v!r} must be a positive number")
+    if not (0.0 < train_fraction < 1.0):
+        raise DiagnosisError(f"train_fraction = {train_fraction!r} must be in (0, 1)")
+    t0 = time.perf_counter()
+    rec = _load(recording)
+    mdl = _model_for(rec, model)
+    timings = {}
+    with one_blas_thread():
+        pipe = Pipeline(rec, mdl, window=window)
+        groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
+        groups, one_signed = _drop_unseen_gaps(groups, pipe)
+        _check_motion(pipe)
+        warnings = convention_contradictions(pipe, mdl)
+        if warnings:
+            return _contradicted(rec, pipe, warnings, out, t0)
+        t1 = time.perf_counter()
+        eng = Engine(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
+                     verbose=verbose)
+        t2 = time.perf_counter()
+        sel = eng.run()
+        t3 = time.perf_counter()
+        held = heldout_fit(eng, sel)
+        loc = localise(eng, sel)
+        t4 = time.perf_counter()
+    timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, heldout_localisation=t4 - t3)
+    from .structure import sentence, unexplained
+
+    effects_out = _effects(eng, sel)
+    not_excited = _not_excited(eng, sel) + one_signed
+    conclusion = _conclusion(effects_out, not_excited, eng, sel)
+    r_after = eng.R(sel.theta) if sel.theta else eng.R0
+    left = unexplained(pipe, r_after, floor=eng.floor())
+    if left:
+        conclusion = (conclusion + "; " + sentence(left) if effects_out else
+                      "no effect of the library explains the residual: " + sentence(left))
+
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
+                  held, loc, not_excited,
+                  [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
+                  {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
+                   "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
+                  steps=sel.steps, refused=[f"{k}: {v}" for k, v in sel.refused.items()],
+                  settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
+                            "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
+                            "smoothing_samples": pipe.window},
+                  residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left)
+    if replay:
+        t5 = time.perf_counter()
+        d.replay = _replay(rec, eng, sel)
+        timings["replay"] = time.perf_counter() - t5
+    timings["diagnosis"] = time.perf_counter() - t0
+    d.timings = timings
+    if out is not None:
+        from .report import write_report
+
+        t6 = time.perf_counter()
+        d.files = write_report(d, eng, sel, Path(out), figures=figures)
+        timings["report"] = time.perf_counter() - t6
+    timings["total"] = time.perf_counter() - t0
+    return d
+
+
+def _contradicted(rec, pipe, warnings, out, t0) -> Diagnosis:
+    """The answer for a recording that contradicts the model: the warnings, no effects
+    (a fit would name the convention as some physics), and a short report."""
+    conclusion = ("cannot diagnose: the recording contradicts the model: " + "; ".join(warnings))
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, [], {}, {}, {}, [], [],
+                  pipe.channels, {}, warnings=list(warnings),
+                  settings={"samples": pipe.n, "dt": pipe.dt})
+    if out is not None:
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        lines = [f"# Diagnosis of {d.recording}", "", f"**{conclusion}**", "", "## Warnings", ""]
+        lines += [f"- {w}" for w in warnings]
+        (out / "report.md").write_text("\n".join(lines) + "\n")
+        (out / "diagnosis.json").write_text(d.to_json())
+        d.files = {"report": str(out / "report.md"), "json": str(out / "diagnosis.json")}
+    d.timings = {"total": time.perf_counter() - t0}
+    return d
+
+
+_DECLARE = ('Declare it in the sidecar ("joint_convention": {"sign": [...], "offset": [...]}, recorded = sign * '
+            'model + offset)')
+
+
+def convention_contradictions(pipe, mdl) -> list:
+    """Joints the recording measures in another convention than the model's, one
+    sentence each: from the pose columns when there are any (:func:`joint_contradictions`),
+    then from the efforts (:func:`effort_contradictions`) for the joints not named yet."""
+    out = joint_contradictions(pipe, mdl)
+    named = {w.split(":")[0] for w in out}
+    return out + [w for w in effort_contradictions(pipe, mdl) if w.split(":")[0] not in named]
+
+
+def joint_contradictions(pipe, mdl) -> list:
+    """Joints whose recorded reading runs against the inverse kinematics of the recorded
+    pose (slope below 0 of the reading on it: a reversed joint coordinate) or sits far
+    from it (by more than 5 cm or 0.5 rad: an offset no encoder error explains); [] without
+    pose columns.  The library's reading effects (offset, backlash, compliance) stay far
+    inside both bounds."""
+    if pipe.pose is None or list(mdl.facts.pose_names) != list(pipe.rec.pose_columns):
+        return []
+    q_ik, status = mdl.ik(pipe.pose[pipe.idx], errors="status")
+    ok = status == 0
+    if ok.sum() < 10:
+        return []
+    q_rec, q_ik = pipe.q[pipe.idx][ok], q_ik[ok]
+    noun, out = mdl.facts.joint_noun, []
+    for i in range(q_rec.shape[1]):
+        a, b = q_rec[:, i] - q_rec[:, i].mean(), q_ik[:, i] - q_ik[:, i].mean()
+        spread = float(b @ b)
+        slope = float(a @ b) / spread if spread > 0 else 1.0
+        gap = float(np.median(q_rec[:, i] - q_ik[:, i]))
+        unit = mdl.joint_unit
+        far = abs(gap) > (0.5 if unit == "rad" else 0.05)
+        if slope < 0:
+            out.append(f"{noun} {i + 1}: the recorded reading q{i + 1} runs against the inverse kinematics of the "
+                       f"recorded pose (slope {slope:.2f}): a joint coordinate running the other way? {_DECLARE}")
+        elif far:
+            out.append(f"{noun} {i + 1}: the recorded reading q{i + 1} is {gap:.4g} {unit} from the inverse "
+                       f"kinematics of the recorded pose: another zero of the joint coordinate? {_DECLARE}")
+    return out
+
+
+def effort_contradictions(pipe, mdl) -> list:
+    """Joints whose recorded effort runs against the model's, one sentence each.
+
+    The nominal inverse dynamics along the measured motion is compared with the
+    recorded effort joint by joint (smoothed, decimated samples): a cosine below -0.5
+    (gravity load of the wrong sign, a reversed rail coordinate) or, where they agree in
+    shape (cosine above 0.9), a scale outside 0.5-2 (a gear ratio, a unit) is no missing
+    physics the library can name: it is a convention the recording does not share with
+    the model.
+    """
+    tau_m = pipe.S(mdl.inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f))[pipe.idx]
+    tau_r = pipe.tau_s[pipe.idx]
+    noun = mdl.facts.joint_noun
+    out = []
+    for i in range(tau_r.shape[1]):
+        a, b = tau_r[:, i], tau_m[:, i]
+        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+        if not (na > 0 and nb > 0):
+            continue
+        cos, scale = float(a @ b) / (na * nb), float(a @ b) / (nb * nb)
+        col = f"tau{i + 1}"
+        if cos < -0.5:
+            out.append(f"{noun} {i + 1}: the recorded effort runs against the model's (cosine {cos:.2f}, best scale "
+                       f"{scale:.2f}): was it recorded in another joint convention or with the opposite sign of "
+                       f"{col}? {_DECLARE}")
+        elif cos > 0.9 and not 0.5 < scale < 2.0:
+            out.append(f"{noun} {i + 1}: the recorded effort is the model's times {scale:.2f} (cosine {cos:.2f}): a gear "
+                       f"ratio or a unit in {col}? Convert the column to the joint's effort")
+    return out
+
+
+def _check_motion(pipe):
+    """A recording that does not move cannot excite any dynamic effect: say so."""
+    if np.all(np.abs(pipe.qd_s[pipe.idx]) < 1e-9):
+        raise DiagnosisError(f"{pipe.where}: the joints do not move (all rates below 1e-9): a standstill "
+                             f"recording cannot excite friction, inertia, delays or any other dynamic effect; "
+                             f"record a motion with accelerations, constant-velocity phases and reversals")
+
+
+def heldout_fit(eng, sel) -> dict:
+    """Residuals on the held-out samples before (nominal) and after (fitted) modelling.
+
+    RMS over the samples each channel uses (a joint's rest phases, where its friction
+    and backlash depend on a rate below the reading noise, are left out, as in the
+    fit); ``rms_all_*`` over every held-out sample."""
+    test = eng.test
+    Rb = eng.R({})[test]
+    Ra = eng.R(sel.theta)[test] if sel.theta else Rb
+    use = eng.use[test] > 0
+    pipe = eng.pipe
+    chans = pipe.channels
+    nd = pipe.nd
+    scale = np.concatenate([np.sqrt(np.mean(pipe.tau_s[pipe.idx[test]] ** 2, axis=0)),
+                            np.std(pipe.q[pipe.idx[test]], axis=0)])[: len(chans)]
+
+    def rms(a):
+        return np.sqrt(np.sum(a**2 * use, axis=0) / np.maximum(use.sum(axis=0), 1))
+
+    rb, ra = rms(Rb), rms(Ra)
+    sig = sel.sigma
+    # Channels the fitted effects act on: their contribution exceeds twice the noise on
+    # at least 2 % of the held-out samples (a Stribeck term acts at reversals only).
+    acts = (np.abs(Rb - Ra) > 2.0 * sig) & use
+    affected = [i for i in range(len(chans)) if acts[:, i].mean() >= 0.02]
+    pick = affected or list(range(len(chans)))
+    gain = float(np.sqrt(np.sum((rb[pick] / sig[pick]) ** 2) / max(np.sum((ra[pick] / sig[pick]) ** 2), 1e-300)))
+    # The same ratio over the held-out samples where the nominal residual leaves its
+    # noise band (the localised windows): an effect that acts in a few phases (Stribeck
+    # at slow reversals) is diluted by the noise of the other samples in the RMS above.
+    band = (np.abs(Rb) > 3.0 * sig) & use
+    num = sum(np.sum((Rb[band[:, i], i] / sig[i]) ** 2) for i in pick)
+    den = sum(np.sum((Ra[band[:, i], i] / sig[i]) ** 2) for i in pick)
+    gain_w = float(np.sqrt(num / den)) if den > 0 else float("nan")
+    rb_all, ra_all = np.sqrt(np.mean(Rb**2, axis=0)), np.sqrt(np.mean(Ra**2, axis=0))
+    per = {c: {"rms_before": float(rb[i]), "rms_after": float(ra[i]), "nrmse_before": float(rb[i] / scale[i]),
+               "nrmse_after": float(ra[i] / scale[i]), "noise": float(sig[i]),
+               "rms_all_before": float(rb_all[i]), "rms_all_after": float(ra_all[i]),
+               "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
+    tt = pipe.t[pipe.idx[test]]
+    if sel.selected and not affected:
+        # The fitted effects change nothing on the held-out part beyond the noise (a
+        # saturation never reached there): no gain can be measured.
+        gain = gain_w = float("nan")
+    return {"channels": per, "gain": gain if sel.selected else 1.0,
+            "gain_windows": gain_w if sel.selected else 1.0,
+            "window_fraction": float(band[:, pick].mean()) if pick else 0.0,
+            "affected": [chans[i] for i in affected],
+            "samples": int(test.sum()), "start": float(tt[0]) if test.any() else None,
+            "end": float(tt[-1]) if test.any() else None, "nd": nd}
+
+
+def _unit(pipe, i):
+    # the core's units of the robot's joints and efforts (RobotFacts), not a robot-name test
+    facts = pipe.model.facts
+    return facts.effort_unit if i < pipe.nd else facts.joint_unit
+
+
+def _units(mdl):
+    return {p.name: p.unit for p in mdl.param_info()}
+
+
+def _effects(eng, sel) -> list:
+    units = _units(eng.model)
+    out = []
+    for a in sel.selected:
+        g = a.group
+        params = {p: {"value": float(a.values[p]), "ci95": float(a.ci.get(p, float("nan"))),
+                      "nominal": float(eng.nominal[p]), "unit": units.get(p, "")} for p in g.params}
+        looks = []
+        for c in a.lookalikes:
+            if c["delta_bic"] < TIE_MARGIN:
+                st = (f"{c['name']} explains the data as well (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): the two cannot be told apart with this data; "
+                      f"{separating_motion(g.key, c['effect'])} would separate them")
+            elif c.get("delta_chi2", float("inf")) < TIE_MARGIN:
+                st = (f"{c['name']} fits the data as well (chi-square {c['delta_chi2']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): the same physics on this recording; only its "
+                      f"{c['extra_params']} extra parameter(s) cost it delta BIC {c['delta_bic']:+.1f}, which is no "
+                      f"evidence against it; {separating_motion(g.key, c['effect'])} would separate them")
+            elif c["delta_bic"] < eng.lookalike_margin:
+                st = (f"{c['name']} is a weaker alternative (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f}): not told apart with confidence; "
+                      f"{separating_motion(g.key, c['effect'])} would separate them")
+            else:
+                st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
+                      f"{c['correlation']:.2f})")
+            looks.append(dict(c, statement=st))
+        out.append({"key": g.key, "name": g.effect.name, "group": g.label, "title": g.title,
+                    "joint": None if g.joint is None else g.joint + 1, "family": g.effect.family,
+                    "params": params, "delta_bic": a.delta_bic, "importance": a.importance,
+                    "plant": g.effect.plant.replace("{j}", _prefix(eng.model)),
+                    "lookalikes": looks, "derived": _derived(g, a.values, eng)})
+    return out
+
+
+def _prefix(model):
+    from .effects import joint_prefix
+
+    return joint_prefix(model)
+
+
+def _derived(g, values, eng) -> dict:
+    """Quantities a reader wants besides the core parameters (tilt angle, ...)."""
+    if g.key == "gravity_tilt":
+        gx, gy = values.get("gravity.x", 0.0), values.get("gravity.y", 0.0)
+        gz = eng.nominal.get("gravity.z", -9.81)
+        return {"tilt_deg": math.degrees(math.atan2(math.hypot(gx, gy), abs(gz))),
+                "azimuth_deg": math.degrees(math.atan2(gy, gx))}
+    if g.key == "payload" and "payload.x" in values:
+        return {"offset_mm": [1e3 * values[f"payload.{c}"] for c in "xyz"]}
+    return {}
+
+
+#: smallest share of a joint's samples on the minority side of its effort for a backlash gap
+#: to be told from a constant offset (2 %: 0.18 s of a 9 s recording on the other face)
+GAP_MINORITY = 0.02
+
+
+def _drop_unseen_gaps(groups, pipe):
+    """Backlash groups of joints whose effort keeps one sign: the carriage never leaves its
+    face, the gap reads as a constant offset b/2 (the same physics on this recording), so its
+    size cannot be measured.  Returns the remaining groups and the 'not excited' sentences."""
+    tau = np.asarray(pipe.tau_c, float)
+    neg = np.mean(tau < 0.0, axis=0)
+    minority = np.minimum(neg, 1.0 - neg)
+    keep, said = [], []
+    for g in groups:
+        if g.key == "backlash" and g.joint is not None and minority[g.joint] < GAP_MINORITY:
+            said.append(f"{BY_KEY['backlash'].name} (joint {g.joint + 1}): its effort keeps one sign on "
+                        f"{100 * (1 - minority[g.joint]):.1f} % of the samples, so a gap reads as a constant "
+                        f"offset of half its size (the encoder offset covers it); it needs efforts of both signs "
+                        f"on that joint")
+            continue
+        keep.append(g)
+    return keep, said
+
+
+def _not_excited(eng, sel) -> list:
+    """Effects whose smallest detectable size exceeds their reference size."""
+    chosen = {a.group.label for a in sel.selected}
+    by_effect = {}
+    for lab, (size, ref) in sel.detectability.items():
+        g = eng.options[lab][0].group
+        if lab in chosen or not np.isfinite(ref) or ref <= 0 or not (size > ref):
+            continue
+        by_effect.setdefault(g.key, []).append((g, size, ref))
+    out = []
+    units = _units(eng.model)
+    for key, items in by_effect.items():
+        e = BY_KEY[key]
+        unit = units.get(items[0][0].params[0], "")
+        where = ", ".join(f"joint {g.joint + 1}" for g, _, _ in items if g.joint is not None)
+        worst = max(items, key=lambda it: it[1] / it[2])
+        out.append(f"{e.name}{' (' + where + ')' if where else ''}: this recording cannot reveal it below "
+                   f"{worst[1]:.3g} {unit} (a small one is {worst[2]:.3g} {unit}); it needs {e.requires}")
+    return out
+
+
+def _conclusion(effects, not_excited, eng, sel) -> str:
+    if effects:
+        parts = []
+        for e in effects:
+            vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
+            tied = [a["name"] for a in e["lookalikes"]
+                    if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
+            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(tied)} fits as well]" if tied else ""))
+        return "missing physics: " + ", ".join(parts)
+    excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
+    if not excited:
+        return "cannot diagnose: the recording excites none of the effects of the library (see 'not excited')"
+    return "no missing physics found"
+
+
+def _replay(rec, eng, sel):
+    """Closed-loop replay of the held-out part: the core plant (nominal, then fitted)
+    driven by the recorded controller and reference, against the recorded motion."""
+    from .plant import closed_loop, controller_from, reference_from_recording
+
+    if rec.qref is None:
+        return {"skipped": "the recording has no qref columns (the reference is needed to replay)"}
+    mdl = eng.model
+    pipe = eng.pipe
+    test = eng.test
+    k0 = int(pipe.idx[test][0]) if test.any() else None
+    if k0 is None:
+        return {"skipped": "no held-out samples"}
+    try:
+        ref = reference_from_recording(rec, mdl)
+    except Exception as e:  # noqa: BLE001 - reported, not fatal
+        return {"skipped": f"the reference could not be mapped to poses: {e}"}
+    out = {"start": float(rec.time[k0]), "runs": {}}
+    for name, theta in (("nominal", {}), ("fitted", sel.theta)):
+        ctrl, why = controller_from(rec.controller, mdl)
+        if ctrl is None:
+            return {"skipped": why}
+        plant = mdl.copy()
+        if theta:
+            plant.set_params(theta)
+        x0 = pipe.x_f[k0]
+        xd0 = pipe.xd_f[k0]
+        try:
+            res = closed_loop(plant, ctrl, ref, x0=x0, xd0=xd0, start=k0, rtol=1e-8, atol=1e-10)
+        except Exception as e:  # noqa: BLE001 - a failing replay is reported
+            out["runs"][name] = {"error": str(e)}
+            continue
+        s = slice(k0, k0 + len(res.time))
+        dq = res.q - rec.q[s]
+        dt_ = res.tau - rec.tau[s]
+        out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq**2, axis=0)).tolist(),
+                             "rms_tau": np.sqrt(np.mean(dt_**2, axis=0)).tolist(),
+                             "time": res.time, "q": res.q, "tau": res.tau}
+    return out

@@ -1,0 +1,330 @@
+"""Regressors of the attribution (part 1 of the engine, see :mod:`.selection`).
+
+Every candidate group (an effect on a joint, or a global effect) gets its columns from the
+residual pipeline by finite differences over its core parameters at the nominal model:
+one-sided for the parameters the core's residual is linear in (friction amplitudes, masses,
+inertias, gravity, encoder offset, gap, compliance), central for the others (payload offset,
+geometry).  Drive-layer and sensor parameters act on their own joint only (pkm.h), so one
+evaluation with the parameter moved on every joint gives the columns of all joints.
+Non-linear hyper-parameters are profiled on a grid: the Stribeck velocity (linear amplitude
+per grid value), the delays and the saturation level (the exact residual change per grid
+value, no free amplitude).  Also the recording's scales and each effect's reference size.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._native import ParameterError
+from .effects import Group
+
+#: effects whose core parameter acts on its own joint's channels only
+LOCAL = {"coulomb", "viscous", "stribeck", "rotor_inertia", "saturation", "dead_zone", "encoder_offset", "backlash",
+         "compliance"}
+#: effects whose Jacobian is taken as the regressor columns at the nominal model: the
+#: residual is linear in them, or nearly (geometry: errors of 1e-3 of a length change the
+#: inverse kinematics at second order, 1e-6)
+LINEARISED = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
+              "encoder_offset", "backlash", "compliance", "geometry"}
+#: core parameters that cannot be negative
+_NONNEGATIVE = (".coulomb", ".viscous", ".stribeck", ".stribeck_v", ".rotor_inertia", ".backlash", ".compliance",
+                ".effort_max", "payload.m", ".delay")
+#: effects whose residual is linear in the core parameter
+LINEAR = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
+          "encoder_offset", "backlash", "compliance"}
+
+
+@dataclass
+class Scales:
+    """Typical magnitudes of the recording, per joint (used for finite-difference steps
+    and the reference size of each effect)."""
+
+    effort: np.ndarray   # RMS of the smoothed effort [N or N m]
+    rate: np.ndarray     # RMS of the joint rate
+    accel: np.ndarray    # RMS of the joint acceleration
+    travel: np.ndarray   # standard deviation of the joint position
+    angular: bool        # joints in rad
+
+    @classmethod
+    def of(cls, pipe):
+        tr = pipe.idx
+        return cls(np.sqrt(np.mean(pipe.tau_s[tr] ** 2, axis=0)) + 1e-12,
+                   np.sqrt(np.mean(pipe.qd_s[tr] ** 2, axis=0)) + 1e-12,
+                   np.sqrt(np.mean(pipe.qdd_s[tr] ** 2, axis=0)) + 1e-12,
+                   np.std(pipe.q[tr], axis=0) + 1e-12,
+                   pipe.model.facts.angular_joints)
+
+
+#: a typical joint speed [m/s for sliders, rad/s for revolute joints] (sizes a 'small'
+#: viscous friction), by the kind of the robot's actuated joints (RobotFacts.joint_unit)
+TYPICAL_RATE = {"m": 0.05, "rad": 1.0}
+
+
+def _joint_mass(model):
+    """Diagonal of the joint-space mass matrix at home, J^-T M J^-1 (core)."""
+    x = model.home()
+    Jinv = np.linalg.inv(model.jacobian(x))
+    return np.diag(Jinv.T @ model.mass_matrix(x) @ Jinv)
+
+
+def reference_size(group: Group, sc: Scales, model) -> float:
+    """A 'small but relevant' magnitude of the effect, in its parameter's unit (what
+    the detectability check compares with).  Set by the robot, not by the recording's
+    motion: a recording that hardly moves must come out as not exciting."""
+    k, i = group.key, group.joint
+    qref = 1e-3 if sc.angular else 5e-5  # 1 mrad / 50 um on a joint reading
+    if k in ("coulomb", "stribeck"):
+        return 0.02 * sc.effort[i]
+    if k == "viscous":
+        return 0.02 * sc.effort[i] / TYPICAL_RATE[model.joint_unit]
+    if k == "rotor_inertia":
+        return 0.05 * float(_joint_mass(model)[i])
+    if k in ("payload", "platform_mass"):
+        return 0.1 * max(model.param("platform.m"), 0.05)
+    if k == "platform_inertia":
+        return 0.2 * model.param("platform.Izz") if "platform.Izz" in model.param_names() else 1e-4
+    if k == "gravity_tilt":
+        return 9.81 * math.sin(math.radians(0.5))
+    if k in ("actuator_delay", "sensor_delay"):
+        return 2e-3
+    if k == "saturation":
+        return 0.9 * sc.effort[i]
+    if k == "dead_zone":
+        return 0.02 * sc.effort[i]
+    if k in ("encoder_offset", "backlash"):
+        return qref
+    if k == "compliance":
+        return qref / sc.effort[i]
+    if k == "geometry":
+        return 1e-3 * abs(model.param(group.params[0]))
+    return 0.0
+
+
+@dataclass
+class Option:
+    """One way a group can enter: linear columns (m, C, k) and/or a fixed offset (m, C)
+    of the residual, with the native parameters a coefficient vector maps to."""
+
+    group: Group
+    cols: np.ndarray | None
+    offset: np.ndarray | None
+    hyper: dict
+    k: int
+    expand: list | None = None   # the per-joint groups of an all-joints option
+
+    def native(self, coef, nominal):
+        g, e = self.group, self.group.key
+        if self.expand is not None:
+            return {gg.params[0]: nominal[gg.params[0]] + c for gg, c in zip(self.expand, coef)}
+        p = g.params
+        if e == "payload" and len(p) == 4:
+            m = nominal[p[0]] + coef[0]
+            c = coef[1:4] / coef[0] if coef[0] > 1e-9 else np.zeros(3)
+            return {p[0]: m, p[1]: nominal[p[1]] + c[0], p[2]: nominal[p[2]] + c[1], p[3]: nominal[p[3]] + c[2]}
+        if e == "stribeck":
+            return {p[0]: nominal[p[0]] + coef[0], p[1]: self.hyper["v"]}
+        if self.cols is None:
+            return dict(self.hyper["params"])
+        return {name: nominal[name] + c for name, c in zip(self.hyper.get("names", p), coef)}
+
+    def sign_ok(self, coef) -> bool:
+        if self.group.effect.sign != ">=0" or coef is None or len(coef) == 0:
+            return True
+        return bool(coef[0] >= 0)
+
+
+class Regressors:
+    """The engine's residual evaluations and candidate columns (mixed into :class:`Engine`)."""
+
+    def R(self, theta):
+        return self.pipe.evaluate(theta).stack()
+
+    def vec(self, Rm, mask=None, w=None):
+        """Weighted residual channels of the rows in ``mask``, one channel after the other."""
+        mask = self.train if mask is None else mask
+        W = (self.W if w is None else w * self.use)[mask]
+        return (Rm[mask] * W).T.reshape(-1)
+
+    def vec_cols(self, cols, mask=None, w=None):
+        mask = self.train if mask is None else mask
+        W = (self.W if w is None else w * self.use)[mask]
+        c = cols[mask] * W[:, :, None]
+        return c.transpose(1, 0, 2).reshape(-1, cols.shape[2])
+
+    def _channels(self, group):
+        i, fam = group.joint, group.effect.family
+        ch = []
+        if fam in ("effort", "both"):
+            ch.append(i)
+        if fam in ("kinematic", "both") and self.C > self.nd:
+            ch.append(self.nd + i)
+        return ch
+
+    def _step(self, group, name):
+        sc, k, i = self.sc, group.key, group.joint
+        val = self.nominal[name]
+        if k in ("coulomb", "stribeck"):
+            return 0.05 * sc.effort[i]
+        if k == "viscous":
+            return 0.05 * sc.effort[i] / sc.rate[i]
+        if k == "rotor_inertia":
+            return 0.05 * sc.effort[i] / sc.accel[i]
+        if k in ("encoder_offset", "backlash"):
+            return 1e-3 * sc.travel[i]
+        if k == "compliance":
+            return 1e-3 * sc.travel[i] / sc.effort[i]
+        if name.startswith("gravity."):
+            return 0.1
+        if k == "geometry":
+            return 1e-4 * max(abs(val), 1e-3)
+        if k in ("saturation", "dead_zone"):
+            return 0.01 * sc.effort[i]
+        return 0.05 * abs(val) if val != 0 else 1e-3
+
+    def _one_sided(self, g, p, R0):
+        """(R(p + h) - R0) / h, stepping down instead when the core refuses p + h (a
+        principal moment of inertia beyond the sum of the other two...)."""
+        h = self._step(g, p)
+        try:
+            return (self.R({p: self.nominal[p] + h}) - R0) / h
+        except ParameterError:
+            return (self.R({p: self.nominal[p] - h}) - R0) / -h
+
+    def _delay_change(self, name, value, theta, Rbase):
+        """Change of the residual when the delay ``name`` goes from its value in theta
+        to ``value``: the effort channels from the reference effort (an instrument free
+        of the rate noise, when the recording has qref), the readings exactly."""
+        R = self.R(dict(theta, **{name: value}))
+        out = R - Rbase
+        cur = theta.get(name, self.nominal[name])
+        sig = self.pipe.delay_signature(name, value)
+        if sig is not None:
+            base = self.pipe.delay_signature(name, cur)
+            out[:, :self.nd] = sig - base
+        return out
+
+    def _try_R(self, theta):
+        """R(theta), or None when theta is not a valid parameter set of the core."""
+        try:
+            return self.R(theta)
+        except ParameterError:
+            return None
+
+    # ------------------------------------------------------------- candidates
+
+    def _build_options(self):
+        R0, nd = self.R0, self.nd
+        m = R0.shape[0]
+        by_key = {}
+        for g in self.groups:
+            by_key.setdefault(g.key, []).append(g)
+        for key, gs in by_key.items():
+            if key in LINEAR and key in LOCAL:
+                steps = {g.params[0]: self._step(g, g.params[0]) for g in gs}
+                D = self.R({p: self.nominal[p] + h for p, h in steps.items()}) - R0
+                for g in gs:
+                    col = np.zeros((m, self.C, 1))
+                    h = steps[g.params[0]]
+                    for c in self._channels(g):
+                        col[:, c, 0] = D[:, c] / h
+                    if g.effect.family == "kinematic":
+                        # A sensor error also moves the pose the dynamics is evaluated at:
+                        # that part reaches every effort channel, so it is taken per joint.
+                        col[:, :self.nd, 0] = self.pipe.pose_term({g.params[0]: self.nominal[g.params[0]] + h}) / h
+                    self.options[g.label] = [Option(g, col, None, {}, 1)]
+            elif key in LINEAR or (key == "payload" and len(gs[0].params) == 1):
+                for g in gs:
+                    cols = np.zeros((m, self.C, len(g.params)))
+                    for j, p in enumerate(g.params):
+                        cols[:, :, j] = self._one_sided(g, p, R0)
+                    self.options[g.label] = [Option(g, cols, None, {}, len(g.params))]
+            elif key == "payload":
+                g = gs[0]
+                pm = g.params[0]
+                mref = max(0.1 * self.nominal.get("platform.m", 0.1), 1e-3)
+                cols = np.zeros((m, self.C, 4))
+                Rm = self.R({pm: self.nominal[pm] + mref})
+                cols[:, :, 0] = (Rm - R0) / mref
+                hc = 0.01
+                for j, p in enumerate(g.params[1:]):
+                    Rp = self.R({pm: self.nominal[pm] + mref, p: self.nominal[p] + hc})
+                    Rn = self.R({pm: self.nominal[pm] + mref, p: self.nominal[p] - hc})
+                    cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
+                self.options[g.label] = [Option(g, cols, None, {}, 4)]
+            elif key == "geometry":
+                for g in gs:
+                    cols = np.zeros((m, self.C, len(g.params)))
+                    for j, p in enumerate(g.params):
+                        h = self._step(g, p)
+                        cols[:, :, j] = (self.R({p: self.nominal[p] + h}) - self.R({p: self.nominal[p] - h})) / (2 * h)
+                    vw = self.vec_cols(cols, w=np.ones(self.C) / np.maximum(np.std(R0[self.train], axis=0), 1e-15))
+                    s = np.linalg.svd(vw, compute_uv=False)
+                    rank = int(np.sum(s > 1e-6 * s[0])) if s[0] > 0 else 0
+                    if rank == 0:
+                        continue
+                    self.options[g.label] = [Option(g, cols, None, {"rank": rank}, rank)]
+            elif key == "stribeck":
+                v = float(np.median(self.sc.rate))
+                # A Stribeck velocity below a few times the rate noise is not resolvable.
+                vmin = max(0.02 * v, 5.0 * float(np.median(self.pipe.qd_noise)))
+                grid = np.geomspace(vmin, max(0.5 * v, 2 * vmin), 9)
+                opts = {g.label: [] for g in gs}
+                for vs in grid:
+                    steps = {g: self._step(g, g.params[0]) for g in gs}
+                    par = {}
+                    for g, h in steps.items():
+                        par[g.params[0]] = self.nominal[g.params[0]] + h
+                        par[g.params[1]] = vs
+                    D = self.R(par) - R0
+                    for g in gs:
+                        col = np.zeros((m, self.C, 1))
+                        for c in self._channels(g):
+                            col[:, c, 0] = D[:, c] / steps[g]
+                        opts[g.label].append(Option(g, col, None, {"v": float(vs)}, 2))
+                self.options.update(opts)
+            elif key in ("actuator_delay", "sensor_delay"):
+                g = gs[0]
+                p = g.params[0]
+                dmax = (self.pipe.max_shift - 2) * self.pipe.dt
+                grid = np.arange(0.25e-3, dmax + 1e-12, 0.25e-3)
+                opts = []
+                for d in grid:
+                    off = self.R({p: self.nominal[p] + d}) - R0
+                    opts.append(Option(g, None, off, {"params": {p: self.nominal[p] + d}}, 1))
+                self.options[g.label] = opts
+                if self.pipe.tau_ref_s is not None:
+                    h = 0.25e-3
+                    self._instrument_cols[g.label] = self._delay_change(p, self.nominal[p] + h, {}, R0) / h
+            elif key in ("saturation", "dead_zone"):
+                # a profile over the level: the effort limit as a fraction of the largest
+                # command, the dead-zone width as a fraction of the typical effort
+                if key == "saturation":
+                    base = np.abs(self.pipe.tau_c).max(axis=0)
+                    fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
+                else:
+                    base = np.asarray(self.sc.effort)
+                    fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
+                tmax = base
+                opts = {g.label: [] for g in gs}
+                for f in fracs:
+                    par = {g.params[0]: f * tmax[g.joint] for g in gs}
+                    D = self.R(par) - R0
+                    for g in gs:
+                        off = np.zeros((m, self.C))
+                        for c in self._channels(g):
+                            off[:, c] = D[:, c]
+                        if np.any(off[self.train] != 0):
+                            opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]}}, 1))
+                for lab, o in opts.items():
+                    if o:
+                        self.options[lab] = o
+            if self.verbose:
+                print(f"  columns of {key}: done")
+
+    # ------------------------------------------------------------ noise model
+
+    def _k(self, g):
+        o = self.options.get(g.label)
+        return o[0].k if o else len(g.params)
