@@ -248,6 +248,23 @@ class Model:
             lib.pkm_model_validate(self._m, err, len(err))
             raise
 
+    def set_params_unchecked(self, values: dict) -> None:
+        """Set parameters by name and validate, without saving the previous values first.
+
+        For a working model rewritten at every evaluation (a calibration's direct search, the
+        discrepancy engine's finite differences): several times cheaper than
+        :meth:`set_params`.  On failure the model is left invalid (the next call rewrites it)
+        and ``ParameterError`` names the cause.
+        """
+        idx = self.__dict__.setdefault("_fast_index", {})
+        err = _errbuf()
+        for name, v in values.items():
+            i = idx.get(name)
+            if i is None:
+                i = idx[name] = self._index(name)
+            raise_for(lib.pkm_param_set(self._m, i, float(v), err, len(err)), err.value.decode())
+        raise_for(lib.pkm_model_validate(self._m, err, len(err)), err.value.decode())
+
     def to_json(self, indent: int | None = 2) -> str:
         """The parameter set as JSON: ``{"robot", "param_set", "parameters": {name: {value, unit, description}}}``."""
         return json.dumps(
@@ -476,6 +493,22 @@ class Model:
         if g is not None:
             return g
         return self._loop("pkm_gravity_load", [x], ["x"], (self.ndof,))
+
+    def measure_joints(self, x, xd, tau):
+        """Joint readings of the model's sensors at (x, xd) with applied effort tau, shape
+        (..., nd) (``pkm_measure_joints``: encoder offset, backlash, compliance)."""
+        q = self._single("pkm_measure_joints", (x, xd, tau), (self.ndof,))
+        if q is not None:
+            return q
+        return self._loop("pkm_measure_joints", [x, xd, tau], ["x", "xd", "tau"], (self.ndof,))
+
+    def actuator_effort(self, tau_cmd):
+        """Effort reaching the mechanism for a commanded one, shape (..., nd) (``pkm_actuator_effort``:
+        dead zone, saturation)."""
+        u = self._single("pkm_actuator_effort", (tau_cmd,), (self.ndof,))
+        if u is not None:
+            return u
+        return self._loop("pkm_actuator_effort", [tau_cmd], ["tau_cmd"], (self.ndof,))
 
     def energy(self, x, xd):
         """(kinetic, potential) energy [J], each shape (...)."""

@@ -163,22 +163,9 @@ class CoreDrive:
     """
 
     def __init__(self, model):
-        from ._native import lib
-
-        self.model, self._lib = model, lib
+        self.model = model
         self.ndof = model.ndof
-        self._buf = np.empty(model.ndof)
         self._line = []  # the readings' delay line (sensor.delay)
-
-    def _call(self, fn, *arrays):
-        from ._native import ptr, raise_for
-
-        args = [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
-        out = np.empty(self.ndof)
-        st = fn(self.model._m, self.model._d, *[ptr(a) for a in args], ptr(out))
-        if st != 0:
-            raise_for(st, self._lib.pkm_data_error(self.model._d).decode())
-        return out
 
     def delayed(self, t, q, qd):
         """The readings the sensors deliver at time t [s] (``sensor.delay``): the readings
@@ -205,11 +192,11 @@ class CoreDrive:
 
     def applied(self, tau_cmd):
         """Effort reaching the mechanism [N or N m] for the commanded one."""
-        return self._call(self._lib.pkm_actuator_effort, tau_cmd)
+        return self.model.actuator_effort(np.asarray(tau_cmd, float))
 
     def measure(self, x, xd, tau):
         """Encoder readings [m or rad] at (x, xd) under the applied effort tau."""
-        return self._call(self._lib.pkm_measure_joints, x, xd, tau)
+        return self.model.measure_joints(np.asarray(x, float), np.asarray(xd, float), np.asarray(tau, float))
 
 
 class FMUPlant(Plant):

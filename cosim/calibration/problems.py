@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._native import ArgumentError, PkmError, lib, ptr, raise_for
+from .._native import ArgumentError, PkmError, lib, raise_for
 
 __all__ = [
     "CalibrationDataError",
@@ -104,30 +104,9 @@ def calib_rows(model, x, frame: int = PKM_FRAME_PLATFORM) -> np.ndarray:
 
 
 def _set_params_fast(model, values: dict) -> None:
-    """Set parameters of a working model and validate, through the C API directly.
-
-    ``Model.set_params`` saves every parameter first to roll back on failure; a
-    calibration's working model is fully rewritten at each evaluation, so that is not
-    needed, and skipping it makes an evaluation several times cheaper (the direct search
-    makes tens of thousands).  On failure the model is left invalid (the next call
-    rewrites it) and ParameterError names the cause.
-    """
-    import ctypes as C
-
-    idx = getattr(model, "_calib_index", None)
-    if idx is None:
-        idx = model._calib_index = {}
-    err = C.create_string_buffer(512)
-    for name, v in values.items():
-        i = idx.get(name)
-        if i is None:
-            i = idx[name] = model._index(name)
-        s = lib.pkm_param_set(model._m, i, float(v), err, len(err))
-        if s != 0:
-            raise_for(s, err.value.decode())
-    s = lib.pkm_model_validate(model._m, err, len(err))
-    if s != 0:
-        raise_for(s, err.value.decode())
+    """Set the parameters of a working model (rewritten at each evaluation; the direct search
+    makes tens of thousands): :meth:`cosim.core.Model.set_params_unchecked`."""
+    model.set_params_unchecked(values)
 
 
 class Problem:

@@ -39,7 +39,6 @@ engine's regressors are finite differences of :meth:`Pipeline.evaluate`.
 """
 from __future__ import annotations
 
-import ctypes as C
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -47,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .._native import ParameterError, PkmError, UnsupportedError, lib, raise_for
+from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
 
 
@@ -92,33 +91,22 @@ class _Scratch:
         self.m = model.copy()
         self.nominal = nominal
         self.current = {}
-        self._err = C.create_string_buffer(1024)
-
-    def _set1(self, name, value):
-        i = lib.pkm_param_index(self.m._m, name.encode())
-        if i < 0:
-            raise ParameterError(f"{self.m.robot} has no parameter named {name!r}", "PKM_ERR_PARAMETER")
-        raise_for(lib.pkm_param_set(self.m._m, i, float(value), self._err, len(self._err)), self._err.value.decode())
 
     def set(self, params):
+        change = {k: self.nominal[k] for k in self.current if k not in params}
+        change.update({k: v for k, v in params.items() if self.current.get(k) != v})
+        if not change:
+            return self.m
         try:
-            changed = False
-            for k in [k for k in self.current if k not in params]:
-                self._set1(k, self.nominal[k])
-                del self.current[k]
-                changed = True
-            for k, v in params.items():
-                if self.current.get(k) != v:
-                    self._set1(k, v)
-                    self.current[k] = v
-                    changed = True
-            if changed:
-                raise_for(lib.pkm_model_validate(self.m._m, self._err, len(self._err)), self._err.value.decode())
+            self.m.set_params_unchecked(change)
+            self.current = dict(params)
         except PkmError:
-            for k in list(self.current):
-                self._set1(k, self.nominal[k])
+            back = {k: self.nominal[k] for k in set(self.current) | set(change)}
             self.current = {}
-            lib.pkm_model_validate(self.m._m, self._err, len(self._err))
+            try:
+                self.m.set_params_unchecked(back)
+            except PkmError:
+                pass
             raise
         return self.m
 
