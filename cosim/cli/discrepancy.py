@@ -167,8 +167,15 @@ def cmd_blind_benchmark(args):
 cmd_blind_benchmark.configure = _bench_configure
 
 
+def _robots():
+    from ..core import robots
+
+    return list(robots())
+
+
 def _case_configure(p):
-    p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
+    p.add_argument("--robot", choices=_robots(), default="6pus",
+                   help="robot (any the core knows; effect sizes from scenarios/blind/config.toml or derived)")
     p.add_argument("--effect", action="append", default=[], help=f"effect type to hide (repeatable; none: clean): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--name", default=None, help="case name (default: from the effects and seed)")

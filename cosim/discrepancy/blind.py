@@ -44,6 +44,58 @@ def load_config(path=None) -> dict:
         return tomllib.load(f)
 
 
+def with_robot(cfg: dict, model) -> dict:
+    """``cfg`` with effect sizes and noise for ``model``'s robot: the configuration's own
+    ``[effects.<robot>]`` / ``[noise.<robot>]``, or, for a robot it does not list, sizes derived
+    from the core (:func:`derived_sizes`)."""
+    if model.robot in cfg.get("effects", {}) and model.robot in cfg.get("noise", {}):
+        return cfg
+    effects, noise = derived_sizes(model)
+    out = dict(cfg)
+    out["effects"] = {**cfg.get("effects", {}), model.robot: effects}
+    out["noise"] = {**cfg.get("noise", {}), model.robot: noise}
+    return out
+
+
+def derived_sizes(model) -> tuple[dict, dict]:
+    """Effect sizes and sensor noise for a robot the configuration does not list, from the core.
+
+    Along 4 s of the robot's exciting motion (:func:`cosim.discrepancy.excitation.excitation`),
+    per joint: RMS effort E (inverse dynamics), RMS rate V, joint travel Q (standard deviation)
+    and the joint-space mass at home m.  The sizes are the 6-PUS configuration's, relative:
+    friction 2-6 % of E, rotor inertia 10-25 % of m, dead zone 3-8 % of E, offsets and gaps
+    0.2-1 % of Q, an elasticity deflecting 0.2-1 % of Q under E; noise 1e-4 Q on the readings,
+    4e-3 V on the rates, 7e-3 E on the efforts, 5e-4 of the motion's amplitude on the tracker.
+    Only effects whose parameters the robot has are listed.
+    """
+    from .. import controllers as ctl
+    from ..master import make_reference
+    from .excitation import excitation
+
+    traj = excitation(model, 4.0, seed=0)
+    ref = make_reference(model, traj, step=1e-3, duration=round(traj.duration / 1e-3) * 1e-3)
+    tau = model.inverse_dynamics(ref.x, ref.xd, ref.xdd)
+    E = float(np.sqrt(np.mean(tau ** 2)))
+    V = float(np.sqrt(np.mean(ref.qd ** 2)))
+    Q = float(np.mean(np.std(ref.q, axis=0)))
+    m = float(np.max(np.diag(ctl.joint_mass(model, model.home()))))
+    names = set(model.param_names())
+    e = {"coulomb": [0.02 * E, 0.06 * E], "viscous": [0.02 * E / V, 0.06 * E / V],
+         "stribeck": [0.04 * E, 0.08 * E], "stribeck_v": [0.04 * V, 0.12 * V],
+         "rotor_inertia": [0.1 * m, 0.25 * m], "actuator_delay": [0.002, 0.006], "sensor_delay": [0.002, 0.006],
+         "saturation": [0.8, 0.92], "encoder_offset": [0.002 * Q, 0.01 * Q], "backlash": [0.002 * Q, 0.01 * Q],
+         "compliance": [0.002 * Q / E, 0.01 * Q / E], "dead_zone": [0.03 * E, 0.08 * E]}
+    if "platform.m" in names:
+        e["platform_mass"] = [0.06, 0.15]
+    if "payload.m" in names and "platform.m" in names:
+        e["payload_m"] = [0.1 * model.param("platform.m"), 0.2 * model.param("platform.m")]
+    if {"gravity.x", "gravity.y"} <= names:
+        e["gravity_tilt"] = [0.4, 1.2]
+    amp = np.std(ref.x, axis=0)
+    noise = {"q": 1e-4 * Q, "qd": 4e-3 * V, "tau": 7e-3 * E, "pose": (5e-4 * amp).tolist()}
+    return e, noise
+
+
 def types_for(robot: str, cfg: dict) -> list:
     eff = cfg["effects"][robot]
     out = []
@@ -191,9 +243,9 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
 
     from .._native import PkmError
 
-    cfg = cfg or load_config()
-    gen = cfg["general"]
     nominal = Model(spec.robot)
+    cfg = with_robot(cfg or load_config(), nominal)
+    gen = cfg["general"]
     dt = 1.0 / gen["rate"]
     lead = gen.get("lead_in", 0.5)
     k0 = int(round(lead / dt))
@@ -267,7 +319,11 @@ def plan(n_effect: int, n_clean: int, seed: int, robots=("6pus",), cfg: dict | N
     """Case specs: ``n_effect`` cases cycling over the effect types of each robot (so
     every type gets its share), a fraction with a second non-look-alike effect, and
     ``n_clean`` clean cases; robots alternate."""
+    from ..core import Model
+
     cfg = cfg or load_config()
+    for r in robots:
+        cfg = with_robot(cfg, Model(r))
     rng = np.random.default_rng(seed)
     specs = []
     queues = {r: [] for r in robots}

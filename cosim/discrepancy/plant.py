@@ -38,7 +38,8 @@ def integrator_applies(model) -> dict:
     x0 = model.home()
     out = {}
     base = Model(model.robot)  # the default set: no delay, no saturation
-    base.set_params({"gravity.x": 0.0, "gravity.y": 0.0, "gravity.z": 0.0})
+    names = set(base.param_names())
+    base.set_params({k: 0.0 for k in ("gravity.x", "gravity.y", "gravity.z") if k in names})
     for what, params, tau in (("saturation", {f"{pre}[1].effort_max": 1e-6}, 1.0),
                               ("delay", {"actuator.delay": 0.5}, 1.0)):
         m = base.copy()

@@ -133,3 +133,15 @@ def test_diagnose_names_the_hidden_friction(tmp_path):
     d = json.loads(cosim("diagnose", "o/toy_blind.csv", "--out", "d", "--json", cwd=tmp_path))
     assert d["effects"] and d["effects"][0]["key"] == "coulomb", d["conclusion"]
     assert abs(d["theta"]["joint[1].coulomb"] - 0.004) < 0.1 * 0.004, d["theta"]
+
+
+def test_blind_case_generator_and_diagnosis(tmp_path):
+    # the generator sizes effects and noise from the core for a robot its configuration does
+    # not list; the key stays in its own directory until the diagnosis is done
+    cosim("blind-case", "--robot", "slider_crank", "--effect", "viscous", "--seed", "3", "--name", "toy",
+          "--out", "cases", "--keys", "keys", cwd=tmp_path)
+    d = json.loads(cosim("diagnose", "cases/toy.csv", "--no-figures", "--out", "d", "--json", cwd=tmp_path))
+    key = json.loads((tmp_path / "keys" / "toy.json").read_text())["effects"][0]
+    assert key["type"] == "viscous" and d["effects"][0]["key"] == "viscous", d["conclusion"]
+    true = key["params"]["joint[1].viscous"]
+    assert abs(d["theta"]["joint[1].viscous"] - true) < 0.1 * true, (d["theta"], true)
