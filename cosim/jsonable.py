@@ -3,14 +3,17 @@
 diagnoses alike."""
 from __future__ import annotations
 
+from dataclasses import asdict, is_dataclass
 from pathlib import Path
 
 import numpy as np
 
 
 def jsonable(o):
-    """``default=`` hook of :func:`json.dumps`: arrays become lists, numpy scalars Python numbers,
+    """``default=`` hook of :func:`json.dumps`: dataclasses become dicts, arrays lists, numpy scalars Python numbers,
     paths strings, complex numbers their text (a pole 0.5+1j is written "(0.5+1j)")."""
+    if is_dataclass(o) and not isinstance(o, type):
+        return asdict(o)
     if isinstance(o, np.ndarray):
         return o.tolist()
     if isinstance(o, np.generic):

@@ -17,6 +17,7 @@ from .._native import PkmError
 from ..jsonable import jsonable
 from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
 from .residuals import DiagnosisError, Pipeline
+from .results import Alternative, FoundEffect, ParamEstimate
 
 __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 
@@ -37,10 +38,11 @@ class Diagnosis:
     conclusion : str
         One sentence: "no missing physics found", "missing physics: ...", or "cannot
         diagnose: ..." (nothing testable).
-    effects : list of dict
+    effects : list of :class:`~cosim.discrepancy.results.FoundEffect`
         Selected effects, most important first: ``key``, ``name``, ``joint`` (1-based
-        or None), ``params`` ({core name: {value, ci95, unit, nominal}}), ``delta_bic``,
-        ``importance``, ``lookalikes`` (alternatives, with ``statement``).
+        or None), ``params`` ({core name: :class:`~cosim.discrepancy.results.ParamEstimate`:
+        value, ci95, nominal, unit}), ``delta_bic``, ``importance``, ``lookalikes``
+        (:class:`~cosim.discrepancy.results.Alternative`, with ``statement``).
     theta : dict
         Every fitted core parameter (the plant overrides that model the effects).
     heldout : dict
@@ -55,7 +57,7 @@ class Diagnosis:
         Effects this recording cannot reveal, and what motion or data is missing.
     unavailable : list of str
         Effects not tested at all (robot model lacks them, or no tracker columns).
-    unexplained : list of dict
+    unexplained : list of :class:`~cosim.discrepancy.results.Structure`
         Residual channels that keep structure after the fit (:mod:`.structure`): what it
         is keyed on (sign of velocity, sign of command, position, velocity,
         acceleration), its rms against the residual's own noise, and the library effects
@@ -444,8 +446,8 @@ def _effects(eng, sel) -> list:
     out = []
     for a in sel.selected:
         g = a.group
-        params = {p: {"value": float(a.values[p]), "ci95": float(a.ci.get(p, float("nan"))),
-                      "nominal": float(eng.nominal[p]), "unit": units.get(p, "")} for p in g.params}
+        params = {p: ParamEstimate(float(a.values[p]), float(a.ci.get(p, float("nan"))), float(eng.nominal[p]),
+                                   units.get(p, "")) for p in g.params}
         looks = []
         for c in a.lookalikes:
             if c["delta_bic"] < TIE_MARGIN:
@@ -464,12 +466,10 @@ def _effects(eng, sel) -> list:
             else:
                 st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f})")
-            looks.append(dict(c, statement=st))
-        out.append({"key": g.key, "name": g.effect.name, "group": g.label, "title": g.title,
-                    "joint": None if g.joint is None else g.joint + 1, "family": g.effect.family,
-                    "params": params, "delta_bic": a.delta_bic, "importance": a.importance,
-                    "plant": g.effect.plant.replace("{j}", _prefix(eng.model)),
-                    "lookalikes": looks, "derived": _derived(g, a.values, eng)})
+            looks.append(Alternative(**c, statement=st))
+        out.append(FoundEffect(g.key, g.effect.name, g.label, g.title, None if g.joint is None else g.joint + 1,
+                               g.effect.family, params, a.delta_bic, a.importance,
+                               g.effect.plant.replace("{j}", _prefix(eng.model)), looks, _derived(g, a.values, eng)))
     return out
 
 

@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from .results import Structure
+
 #: signature -> (what it is keyed on, the library effects of that kind)
 SIGNATURES = {
     "offset": ("nothing: a constant offset", ["encoder offset (a reading)", "dead zone under a one-signed "
@@ -99,9 +101,8 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
             best = (stat, "offset", chi2, abs(mean))
         if best:
             keyed, closest = SIGNATURES[best[1]]
-            out.append({"channel": name, "joint": c % pipe.nd + 1, "signature": best[1], "keyed_on": keyed,
-                        "closest": closest, "chi2": best[2], "rms": best[3], "noise": sigma})
-    out.sort(key=lambda e: -e["chi2"])
+            out.append(Structure(name, c % pipe.nd + 1, best[1], keyed, list(closest), best[2], best[3], sigma))
+    out.sort(key=lambda e: -e.chi2)
     return out
 
 
