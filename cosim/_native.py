@@ -232,6 +232,11 @@ _SIGNATURES = {
     "pkm_6pus_calib_rows": (I, [P, P, D, I, D]),
     "pkm_6pus_leg_points": (I, [P, P, D, D, D]),
     "pkm_fourbar_output": (I, [P, P, C.c_double, D, D]),
+    "pkm_quattro_index_name": (CH, [I]),
+    "pkm_quattro_index_unit": (CH, [I]),
+    "pkm_quattro_indices": (I, [P, P, S, D, D, c_int_p]),
+    "pkm_quattro_gimre": (I, [P, P, D, D]),
+    "pkm_quattro_points": (I, [P, P, D, D, D, D]),
 }
 
 

@@ -16,24 +16,16 @@ Example
 """
 from __future__ import annotations
 
-import ctypes as C
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._native import PkmError, c_double_p, c_int_p, lib, ptr, raise_for
+from .._native import PkmError, c_int_p, lib, ptr, raise_for
 from ..core import Model
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]
-
-lib.register("pkm_quattro_index_name", C.c_char_p, [C.c_int])
-lib.register("pkm_quattro_index_unit", C.c_char_p, [C.c_int])
-lib.register("pkm_quattro_indices", C.c_int, [C.c_void_p, C.c_void_p, C.c_size_t, c_double_p, c_double_p, c_int_p])
-lib.register("pkm_quattro_gimre", C.c_int, [C.c_void_p, C.c_void_p, c_double_p, c_double_p])
-lib.register("pkm_quattro_points", C.c_int, [C.c_void_p, C.c_void_p, c_double_p, c_double_p, c_double_p,
-                                             c_double_p])
 
 NINDEX = 22  # PKM_QUATTRO_NINDEX in pkm.h
 
