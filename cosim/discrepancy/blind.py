@@ -139,8 +139,10 @@ def _uniform(rng, lohi):
 def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
     """Draw one hidden effect of type ``kind`` for ``model`` (magnitudes from cfg).
 
-    ``tau_peak`` is (peak feed-forward effort, largest gravity load) per joint over the
-    reference, for the saturation level."""
+    ``tau_peak`` is (peak feed-forward effort, largest gravity load[, share of the samples on
+    the minority side of the effort's sign]) per joint over the reference: the saturation
+    level, and the joints a backlash can be put on (a gap shows only where the effort the
+    transmission carries changes sign; elsewhere it is an offset of b/2)."""
     eff = cfg["effects"][model.robot]
     gen = cfg["general"]
     nd = model.ndof
@@ -154,6 +156,14 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
             return list(range(1, nd + 1))
         return [int(rng.integers(1, nd + 1))]
 
+    if kind == "backlash" and len(tau_peak) > 2:
+        rng.uniform()  # the all-joints draw of joints(), kept so the other draws stay as they were
+        ok = [j for j in range(nd) if tau_peak[2][j] >= 0.05]
+        if not ok:
+            raise _Redraw("no joint's effort changes sign along this trajectory: a gap would read as an offset")
+        j = int(rng.choice(ok)) + 1
+        p = {f"{pre}[{j}].backlash": _uniform(rng, eff[kind])}
+        return Hidden(kind, p, [j], {k: nominal[k] for k in p})
     if kind in ("coulomb", "viscous", "rotor_inertia", "backlash", "compliance", "dead_zone"):
         js = joints()
         p = {f"{pre}[{j}].{kind}": _uniform(rng, eff[kind]) for j in js}
@@ -171,7 +181,7 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         # tau_peak = (peak effort, largest gravity load) per joint: a limit below the
         # gravity load would drop the robot, so the level stays above it, on a joint whose
         # peaks are well above its gravity load.
-        peak, static = tau_peak
+        peak, static = tau_peak[:2]
         ok = [j for j in range(nd) if peak[j] > 1.25 * static[j]]
         if not ok:
             raise _Redraw("no joint's peak effort is well above its gravity load on this trajectory")
@@ -262,10 +272,12 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
         ref = make_reference(nominal, traj, step=dt, duration=round(traj.duration / dt) * dt)
         # A saturation level relative to the smaller of the peak efforts before and after
         # the 70 % mark: the limit is reached in the fitted and in the held-out part alike.
-        tau_ff = np.abs(nominal.inverse_dynamics(ref.x[k0:], ref.xd[k0:], ref.xdd[k0:]))
+        signed = nominal.inverse_dynamics(ref.x[k0:], ref.xd[k0:], ref.xdd[k0:])
+        tau_ff = np.abs(signed)
         cut = int(0.7 * len(tau_ff))
+        neg = np.mean(signed < 0, axis=0)
         tau_peak = (np.minimum(tau_ff[:cut].max(axis=0), tau_ff[cut:].max(axis=0)),
-                    np.abs(nominal.gravity_load(ref.x[k0::50])).max(axis=0))
+                    np.abs(nominal.gravity_load(ref.x[k0::50])).max(axis=0), np.minimum(neg, 1 - neg))
         try:
             hidden = [sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]
         except _Redraw as e:
