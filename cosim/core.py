@@ -27,10 +27,16 @@ from ._native import (
     ArgumentError,
     ParameterError,
     PkmError,
+    c_int_p,
     fast,
     lib,
+    pkm_ctrl_spec,
     pkm_fk_info,
     pkm_fk_options,
+    pkm_loop_record,
+    pkm_loop_reference,
+    pkm_sim_options,
+    pkm_sim_stats,
     ptr,
     raise_for,
 )
@@ -56,6 +62,22 @@ def _errbuf():
 def robots() -> list[str]:
     """Names of the robots compiled into the core (``pkm_robot_name``), e.g. ``["6pus", ...]``."""
     return [lib.pkm_robot_name(i).decode() for i in range(lib.pkm_robot_count())]
+
+
+#: PKM_QUATTRO_NINDEX in pkm.h
+_QUATTRO_NINDEX = 22
+
+
+def quattro_index_names() -> list[str]:
+    """Names of the Quattro performance indices, in the column order of
+    :meth:`Model.quattro_indices` (``pkm_quattro_index_name``)."""
+    return [lib.pkm_quattro_index_name(i).decode() for i in range(_QUATTRO_NINDEX)]
+
+
+def quattro_index_units() -> dict[str, str]:
+    """Unit of each Quattro performance index by name (``pkm_quattro_index_unit``)."""
+    return {lib.pkm_quattro_index_name(i).decode(): lib.pkm_quattro_index_unit(i).decode()
+            for i in range(_QUATTRO_NINDEX)}
 
 
 @dataclass(frozen=True)
@@ -533,10 +555,374 @@ class Model:
         if frame not in frames:
             raise ArgumentError(f"frame must be 'world' or 'platform', got {frame!r}", "PKM_ERR_ARGUMENT")
         f = frames[frame]
-        return self._loop("pkm_6pus_calib_rows", [x], ["x"], (6, 10), extra=(f,))
+        return self._loop("pkm_6pus_calib_rows", [x], ["x"], (6, 10), extra=(f,), what="pose")
 
     def leg_points(self, x):
         """6-PUS world positions ``(P, S)`` of the platform points and sliders, each (..., 6, 3) [m]."""
         self._require_6pus("leg_points")
         ps = self._loop("pkm_6pus_leg_points", [x], ["x"], (2, 6, 3), out_parts=2)
         return ps[..., 0, :, :], ps[..., 1, :, :]
+
+    # ------------------------------------------------------------- four-bar specific
+    def fourbar_output(self, theta, jacobian: bool = True):
+        """Four-bar coupler mid-point X [m] at crank angle(s) theta [rad], and dX/d(l1..l4)
+        [m/m] of shape ``theta.shape + (4,)`` if ``jacobian`` (``pkm_fourbar_output``)."""
+        if self.robot != "fourbar":
+            raise ArgumentError(f"fourbar_output needs a 'fourbar' model, got {self.robot!r}", "PKM_ERR_ARGUMENT")
+        th = np.asarray(theta, dtype=float)
+        flat = th.reshape(-1)
+        X = np.empty(flat.shape)
+        J = np.empty(flat.shape + (4,))
+        out = np.empty(1)
+        for k, t in enumerate(flat):
+            row = J[k] if jacobian else None
+            self._check(lib.pkm_fourbar_output(self._m, self._d, float(t), ptr(out), ptr(row)))
+            X[k] = out[0]
+        X = X.reshape(th.shape)
+        return X if not jacobian else (X, J.reshape(th.shape + (4,)))
+
+    # ------------------------------------------------------------- Quattro specific
+    def _require_quattro(self, what: str) -> None:
+        if self.robot != "quattro":
+            raise ArgumentError(f"{what} is a Quattro function; this model is {self.robot!r}", "PKM_ERR_ARGUMENT")
+
+    def quattro_indices(self, poses) -> tuple[np.ndarray, np.ndarray]:
+        """Performance indices of poses (..., 4) -> (values (..., n_index), status (...)), one
+        core call (``pkm_quattro_indices``); names and units in :func:`quattro_index_names`."""
+        self._require_quattro("quattro_indices")
+        x = np.ascontiguousarray(poses, dtype=np.float64)
+        if x.shape[-1:] != (4,):
+            raise ArgumentError(f"poses must have 4 coordinates (x, y, z, theta) in the last axis, got {x.shape}",
+                                "PKM_ERR_ARGUMENT")
+        flat = x.reshape(-1, 4)
+        n = flat.shape[0]
+        nidx = len(quattro_index_names())
+        out = np.empty((n, nidx))
+        status = np.zeros(n, dtype=np.intc)
+        lib.pkm_quattro_indices(self._m, self._d, n, ptr(flat), ptr(out), status.ctypes.data_as(c_int_p))
+        return out.reshape(x.shape[:-1] + (nidx,)), status.reshape(x.shape[:-1])
+
+    def quattro_gimre(self, x) -> np.ndarray:
+        """Quattro generalized inertia matrix reduced to the end effector, (4, 4) at pose x
+        [kg, kg m, kg m^2] (``pkm_quattro_gimre``)."""
+        self._require_quattro("quattro_gimre")
+        xv = np.ascontiguousarray(x, dtype=np.float64)
+        N = np.empty((4, 4))
+        self._check(lib.pkm_quattro_gimre(self._m, self._d, ptr(xv), ptr(N)))
+        return N
+
+    def quattro_points(self, x) -> dict:
+        """Quattro world points A, B, C (4, 3) [m] of the four arms at pose x (motor axis,
+        elbow, platform joint) (``pkm_quattro_points``)."""
+        self._require_quattro("quattro_points")
+        xv = np.ascontiguousarray(x, dtype=np.float64)
+        A, B, Cp = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
+        self._check(lib.pkm_quattro_points(self._m, self._d, ptr(xv), ptr(A), ptr(B), ptr(Cp)))
+        return {"A": A, "B": B, "C": Cp}
+
+
+# ----------------------------------------------------------------- integration
+_METHODS = {"bdf": 0, "adams": 1, "erk": 2, "erk23": 3}
+_METHOD_NAMES = {v: k for k, v in _METHODS.items()}
+#: integration method names and their pkm.h codes (pkm_lmm; the FMUs' solver.method)
+METHOD_CODES = dict(_METHODS)
+
+
+def default_options() -> dict:
+    """The core's default integrator options (``pkm_sim_default_options``) as a dict."""
+    o = pkm_sim_options()
+    lib.pkm_sim_default_options(C.byref(o))
+    return {
+        "method": _METHOD_NAMES[o.method],
+        "rtol": o.rtol,
+        "atol": o.atol,
+        "max_step": o.max_step,
+        "max_steps": o.max_steps,
+        "sing_min": o.sing_min,
+    }
+
+
+class Simulator:
+    """An integration of one robot's task-space state under a held input.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The robot.  The simulator copies it: later ``model.set_params`` calls do not
+        change a simulator that already exists.
+    method : {"erk", "erk23", "bdf", "adams"}
+        ``"erk"`` (default): explicit Runge-Kutta 5(4) (Dormand-Prince) that keeps its
+        step size from one ``advance`` to the next, about one step per millisecond
+        under a 1 kHz controller; for non-stiff motion.  ``"erk23"``: the Bogacki-Shampine
+        3(2) pair, 4 instead of 7 forward-dynamics calls a step: faster at loose
+        tolerances (docs/integration.md has the error / speed table).  ``"bdf"``: CVODE's BDF with
+        Newton iteration and a dense difference-quotient Jacobian (stiff-safe: use it
+        with Coulomb friction and a small ``drive.v_eps``).  ``"adams"``: CVODE's
+        Adams with fixed-point iteration.
+    rtol : float
+        Relative tolerance of the local error (dimensionless).
+    atol : float
+        Absolute tolerance of the local error, applied to every state component
+        [m, rad, m/s, rad/s].
+    max_step : float
+        Largest internal step [s]; 0 means unlimited.
+    max_steps : int
+        Largest number of internal steps within one ``advance``.
+    sing_min : float
+        The integration stops when the direct-singularity measure (``Model.singularity``
+        column 1, in [0, 1]) falls below this value; 0 disables the check.
+
+    Notes
+    -----
+    After ``Simulator(model)`` the state is the model's home pose at rest at t = 0 s
+    with a zero input.  The result of an ``advance`` depends only on the simulator's
+    state (:meth:`save_state`: t, x, xd, the held input, the explicit method's next
+    step size and the actuator-delay history) and the options: restoring a saved
+    state with :meth:`load_state` and advancing again reproduces the same numbers bit
+    for bit.  ``reset`` starts afresh (the explicit method chooses a new first step).
+
+    Examples
+    --------
+    >>> from cosim.core import Model
+    >>> m = Model("6pus")
+    >>> sim = Simulator(m)
+    >>> sim.reset(0.0, m.home(), [0.01, 0, 0, 0, 0, 0])
+    >>> sim.set_input(m.gravity_load(m.home()))
+    >>> sim.advance(0.1)
+    >>> t, x, xd = sim.state
+    """
+
+    def __init__(self, model, method: str = "erk", rtol: float = 1e-8, atol: float = 1e-10,
+                 max_step: float = 0.0, max_steps: int = 100000, sing_min: float = 1e-4):
+        if method not in _METHODS:
+            raise ArgumentError(f"method must be one of {sorted(_METHODS)}, got {method!r}", "PKM_ERR_ARGUMENT")
+        self.model = model
+        self.ndof = model.ndof
+        self.options = {"method": method, "rtol": float(rtol), "atol": float(atol), "max_step": float(max_step),
+                        "max_steps": int(max_steps), "sing_min": float(sing_min)}
+        opt = pkm_sim_options(_METHODS[method], float(rtol), float(atol), float(max_step), int(max_steps),
+                              float(sing_min))
+        err = C.create_string_buffer(1024)
+        h = lib.pkm_sim_create(model._m, C.byref(opt), err, len(err))
+        if not h:
+            # pkm_sim_create reports by message only; map it to the status it stands for.
+            msg = err.value.decode()
+            if msg.startswith("pkm_sim options") or "is NULL" in msg:
+                status = -1  # PKM_ERR_ARGUMENT
+            elif "validate" in msg:
+                status = -2  # PKM_ERR_PARAMETER
+            elif msg.startswith("CVODE"):
+                status = -7  # PKM_ERR_INTEGRATION
+            else:
+                status = -9  # PKM_ERR_INTERNAL
+            raise_for(status, msg)
+        self._s = C.c_void_p(h)
+        self._x = np.empty(self.ndof)
+        self._xd = np.empty(self.ndof)
+        self._t = C.c_double(0.0)
+
+    def __del__(self):
+        try:
+            if getattr(self, "_s", None):
+                lib.pkm_sim_destroy(self._s)
+                self._s = None
+        except Exception:  # interpreter shutdown
+            pass
+
+    def _check(self, status: int) -> None:
+        if status != 0:
+            raise_for(status, lib.pkm_sim_error(self._s).decode())
+
+    def _vec(self, v, name: str) -> np.ndarray:
+        a = np.ascontiguousarray(v, dtype=np.float64)
+        if a.shape != (self.ndof,):
+            raise ArgumentError(f"{name} must have shape ({self.ndof},), got {a.shape}", "PKM_ERR_ARGUMENT")
+        return a
+
+    def reset(self, t0: float, x, xd=None) -> None:
+        """Set the time t0 [s], pose x [m, rad] and pose rate xd [m/s, rad/s] (default 0).
+
+        Raises the core's error (``UnreachableError``, ``JointLimitError``,
+        ``SingularError``, ``ArgumentError``) if the state is not a valid start; the
+        simulator keeps its previous state then.
+        """
+        x = self._vec(x, "x")
+        xd = np.zeros(self.ndof) if xd is None else self._vec(xd, "xd")
+        self._check(lib.pkm_sim_reset(self._s, float(t0), ptr(x), ptr(xd)))
+
+    def set_input(self, tau) -> None:
+        """Hold the actuator efforts tau [N or N m], shape (nd,), from now on."""
+        tau = self._vec(tau, "tau")
+        self._check(lib.pkm_sim_set_input(self._s, ptr(tau)))
+
+    def advance(self, t_end: float) -> None:
+        """Integrate to t_end [s] with the held input.
+
+        On a stroke limit (``JointLimitError``), a direct singularity (``SingularError``)
+        or a CVODE failure (``IntegrationError``), the state stays where the
+        integration stopped and the exception's message names the leg and the time.
+        """
+        self._check(lib.pkm_sim_advance(self._s, float(t_end)))
+
+    def save_state(self) -> np.ndarray:
+        """The simulator's whole state as a 1-D array (``pkm_sim_state_save``), for
+        :meth:`load_state` on this or another simulator of the same model and options."""
+        buf = np.empty(int(lib.pkm_sim_state_size(self._s)))
+        self._check(lib.pkm_sim_state_save(self._s, ptr(buf)))
+        return buf
+
+    def load_state(self, state) -> None:
+        """Restore a state from :meth:`save_state`; a damaged or foreign one raises
+        ``ArgumentError`` and changes nothing."""
+        buf = np.ascontiguousarray(state, dtype=float).ravel()
+        self._check(lib.pkm_sim_state_load(self._s, ptr(buf), buf.size))
+
+    @property
+    def state(self):
+        """``(t, x, xd)``: time [s], pose [m, rad], pose rate [m/s, rad/s] (copies)."""
+        self._check(lib.pkm_sim_get_state(self._s, C.byref(self._t), ptr(self._x), ptr(self._xd)))
+        return float(self._t.value), self._x.copy(), self._xd.copy()
+
+    @property
+    def stats(self) -> dict:
+        """CVODE counters summed over all advances since creation: steps, rhs_evals
+        (including those of the difference-quotient Jacobian), jac_evals,
+        error_test_fails, nonlin_conv_fails."""
+        st = pkm_sim_stats()
+        self._check(lib.pkm_sim_get_stats(self._s, C.byref(st)))
+        return {name: int(getattr(st, name)) for name, _ in pkm_sim_stats._fields_}
+
+
+# --------------------------------------------------------- compiled controllers
+#: controller kinds the core implements (pkm.h pkm_ctrl_kind)
+KINDS = {"pd": 0, "pd_gravity": 1, "computed_torque": 2, "pid": 3, "lti": 4}
+
+
+def _mat(a, shape):
+    if a is None:
+        return None
+    m = np.ascontiguousarray(np.asarray(a, dtype=float).reshape(shape))
+    return m
+
+
+class CompiledController:
+    """A controller of :mod:`cosim.controllers` as a core ``pkm_ctrl``.
+
+    Parameters
+    ----------
+    controller : cosim.controllers.JointController
+        PD, PD + gravity, computed torque (or a PID / LTI controller with the
+        attributes ``ki``, ``deriv_filter``, ``A``, ``B``, ``C``, ``D``).
+    model : cosim.core.Model
+        The model the controller believes in, when the controller has none of its own
+        (PD needs none: the plant's model is given).
+    dt : float
+        Sample period [s].
+    """
+
+    def __init__(self, controller, *, model, dt: float):
+        kind = getattr(controller, "kind", None)
+        if kind not in KINDS:
+            raise ValueError(f"controller kind {kind!r} is not one the core implements ({sorted(KINDS)})")
+        self.kind = kind
+        own_dt = getattr(controller, "dt", None)
+        if own_dt is not None and abs(float(own_dt) - float(dt)) > 1e-9 * float(dt):
+            raise ValueError(f"the {kind} controller was designed for a sample period of {own_dt:g} s; the loop "
+                             f"runs at {dt:g} s")
+        self.model = getattr(controller, "model", None) or model
+        nd = self.model.ndof
+        self.ndof = nd
+        keep = {}
+
+        def arr(name, shape):
+            a = _mat(getattr(controller, name, None), shape)
+            keep[name] = a
+            return ptr(a)
+
+        spec = pkm_ctrl_spec()
+        spec.kind = KINDS[kind]
+        spec.dt = float(dt)
+        spec.kp = arr("kp", (nd, nd))
+        spec.kd = arr("kd", (nd, nd))
+        spec.ki = arr("ki", (nd, nd))
+        spec.deriv_filter = float(getattr(controller, "deriv_filter", 0.0) or 0.0)
+        sat = getattr(controller, "saturation", None)
+        if sat is not None:
+            sat = np.ascontiguousarray(np.broadcast_to(np.asarray(sat, float), (nd, nd)).diagonal()
+                                       if np.ndim(sat) == 2 else np.broadcast_to(np.asarray(sat, float), (nd,)))
+        keep["saturation"] = sat
+        spec.saturation = ptr(sat)
+        spec.gravity_at_reference = int(getattr(controller, "gravity", "measured") == "reference")
+        spec.gravity_feedforward = int(bool(getattr(controller, "gravity_feedforward", False)))
+        if kind == "lti":
+            A = np.asarray(controller.A, float)
+            spec.nx = A.shape[0]
+            spec.A = arr("A", (spec.nx, spec.nx))
+            spec.B = arr("B", (spec.nx, nd))
+            spec.C = arr("C", (nd, spec.nx))
+            spec.D = arr("D", (nd, nd))
+        self._keep = keep
+        err = C.create_string_buffer(1024)
+        h = lib.pkm_ctrl_create(self.model._m, C.byref(spec), err, len(err))
+        if not h:
+            raise ValueError(f"{kind} controller: {err.value.decode()}")
+        self._c = C.c_void_p(h)
+
+    def __del__(self):
+        try:
+            if getattr(self, "_c", None):
+                lib.pkm_ctrl_destroy(self._c)
+                self._c = None
+        except Exception:  # interpreter shutdown
+            pass
+
+    def reset(self, x0=None) -> None:
+        """Clear the controller's states; ``x0`` seeds the forward kinematics [m, rad]."""
+        x = None if x0 is None else np.ascontiguousarray(x0, dtype=float)
+        self._check(lib.pkm_ctrl_reset(self._c, ptr(x)))
+
+    def __call__(self, t, q, qd, ref) -> np.ndarray:
+        """One sample, as the Python controllers: ``tau`` [N or N m] from readings and reference."""
+        a = [np.ascontiguousarray(v, dtype=float) if v is not None else None
+             for v in (q, qd, ref.q, ref.qd, ref.qdd, ref.x)]
+        tau = np.empty(self.ndof)
+        self._check(lib.pkm_ctrl_update(self._c, float(t), *[ptr(v) for v in a], ptr(tau)))
+        return tau
+
+    @property
+    def saturated(self) -> int:
+        """Samples at which the saturation clipped an effort since the last reset."""
+        return int(lib.pkm_ctrl_saturated(self._c))
+
+    def _check(self, status):
+        if status != 0:
+            raise_for(status, lib.pkm_ctrl_error(self._c).decode())
+
+
+#: the recorded channels of ``pkm_closed_loop`` (pkm_loop_record), in its order
+LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")
+
+
+def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, ref: dict, rows: dict,
+                     k0: int, k1: int, tau_before=None, q_noise=None, qd_noise=None,
+                     measure: bool = False) -> tuple[int, int, str]:
+    """One ``pkm_closed_loop`` call over samples ``k0:k1`` (see
+    :func:`cosim.closed_loop.run_compiled`, which chains calls).
+
+    ``ref`` maps ``q, qd, qdd, x`` to C-contiguous (n, nd) arrays (``qdd``, ``x`` may be
+    None); ``rows`` maps :data:`LOOP_FIELDS` to (n, nd) arrays that receive the samples.
+    Returns ``(status, samples done in this call, message)``.
+    """
+    m = k1 - k0
+
+    def at(a):
+        return None if a is None else ptr(a[k0:k1])
+
+    before = None if tau_before is None else np.ascontiguousarray(tau_before, dtype=float)
+    spec = pkm_loop_reference(m, float(t[k0]), float(dt), at(t), at(ref["q"]), at(ref["qd"]), at(ref.get("qdd")),
+                              at(ref.get("x")), ptr(before))
+    rec = pkm_loop_record(*[at(rows[f]) for f in LOOP_FIELDS])
+    done = C.c_size_t(0)
+    st = lib.pkm_closed_loop(sim._s, ctrl._c, C.byref(spec), at(q_noise), at(qd_noise), int(bool(measure)),
+                             C.byref(rec), C.byref(done))
+    return st, int(done.value), (lib.pkm_sim_error(sim._s).decode() if st else "")

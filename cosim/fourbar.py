@@ -1,6 +1,6 @@
 """Four-bar linkage of seed 002: output X of the coupler mid point and its link-length Jacobian.
 
-A thin binding of ``pkm_fourbar_output`` (the core computes everything).  Lengths are the
+The core's ``pkm_fourbar_output`` through :meth:`cosim.core.Model.fourbar_output` (the core computes everything).  Lengths are the
 model parameters ``link[1].l`` .. ``link[4].l`` [m]; the crank angle theta [rad] is the
 pose and the joint.
 
@@ -16,9 +16,6 @@ Example
 """
 from __future__ import annotations
 
-import numpy as np
-
-from ._native import ArgumentError, lib, ptr
 
 __all__ = ["LENGTHS", "output"]
 
@@ -52,18 +49,4 @@ def output(model, theta, jacobian: bool = True):
     SingularError
         A dead point (coupler and rocker aligned) where dX/dl is unbounded.
     """
-    if model.robot != "fourbar":
-        raise ArgumentError(f"cosim.fourbar.output needs a 'fourbar' model, got {model.robot!r}", "PKM_ERR_ARGUMENT")
-    th = np.asarray(theta, dtype=float)
-    flat = th.reshape(-1)
-    X = np.empty(flat.shape)
-    J = np.empty(flat.shape + (4,))
-    out = np.empty(1)
-    for k, t in enumerate(flat):
-        row = J[k] if jacobian else None
-        model._check(lib.pkm_fourbar_output(model._m, model._d, float(t), ptr(out), ptr(row)))
-        X[k] = out[0]
-    X = X.reshape(th.shape)
-    if not jacobian:
-        return X
-    return X, J.reshape(th.shape + (4,))
+    return model.fourbar_output(theta, jacobian=jacobian)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._native import ArgumentError, PkmError, lib, raise_for
+from .._native import ArgumentError, PkmError
 
 __all__ = [
     "CalibrationDataError",
@@ -72,35 +72,10 @@ def sixpus_leg_names(i: int) -> list[str]:
 SIXPUS_ERROR_MODEL = [n for i in range(1, 7) for n in sixpus_leg_names(i)]
 
 
-_CALIB_ROWS = None
-
-
-def _calib_rows_fn():
-    """pkm_6pus_calib_rows with untyped pointers: plain integer addresses make the
-    per-pose loop a few times faster than typed ctypes pointers."""
-    global _CALIB_ROWS
-    if _CALIB_ROWS is None:
-        import ctypes as C
-
-        lib.pkm_6pus_calib_rows  # loads the library (and raises if the function is missing)
-        proto = C.CFUNCTYPE(C.c_int, C.c_void_p, C.c_void_p, C.c_void_p, C.c_int, C.c_void_p)
-        _CALIB_ROWS = proto(("pkm_6pus_calib_rows", lib._lib))
-    return _CALIB_ROWS
-
-
 def calib_rows(model, x, frame: int = PKM_FRAME_PLATFORM) -> np.ndarray:
-    """Regression rows dq_i/d eta_i of the core at pose(s) x: shape (..., 6, 10)."""
-    x = np.asarray(x, dtype=float)
-    flat = np.ascontiguousarray(x.reshape(-1, 6))
-    out = np.empty((flat.shape[0], 6, 10))
-    fn = _calib_rows_fn()
-    m, d = model._m.value, model._d.value
-    xa, oa = flat.ctypes.data, out.ctypes.data
-    for k in range(flat.shape[0]):
-        s = fn(m, d, xa + 48 * k, int(frame), oa + 480 * k)
-        if s != 0:
-            raise_for(s, f"pose {k}: {lib.pkm_data_error(model._d).decode()}")
-    return out.reshape(x.shape[:-1] + (6, 10))
+    """Regression rows dq_i/d eta_i of the core at pose(s) x: shape (..., 6, 10)
+    (:meth:`cosim.core.Model.calib_rows`; ``frame`` is ``PKM_FRAME_WORLD`` or ``PKM_FRAME_PLATFORM``)."""
+    return model.calib_rows(x, ("world", "platform")[int(frame)])
 
 
 def _set_params_fast(model, values: dict) -> None:

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._native import PkmError, c_int_p, lib, ptr, raise_for
-from ..core import Model
+from .._native import PkmError
+from ..core import Model, quattro_index_names, quattro_index_units
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]
@@ -38,12 +38,12 @@ BETTER = {"mu_T": "max", "mu_xy": "max", "mu_z": "max", "mu_T_eig": "max", "mu_x
 
 def index_names() -> list[str]:
     """Names of the index columns, in the order of ``pkm_quattro_indices``."""
-    return [lib.pkm_quattro_index_name(i).decode() for i in range(NINDEX)]
+    return quattro_index_names()
 
 
 def index_units() -> dict[str, str]:
     """Unit of each index by name."""
-    return {lib.pkm_quattro_index_name(i).decode(): lib.pkm_quattro_index_unit(i).decode() for i in range(NINDEX)}
+    return quattro_index_units()
 
 
 def model(param_set: str | None = None, params: dict | None = None) -> Model:
@@ -105,15 +105,7 @@ class IndexMap:
 
 def indices(m: Model, poses) -> tuple[np.ndarray, np.ndarray]:
     """Indices of poses (..., 4) -> (values (..., NINDEX), status (...)); one core call."""
-    x = np.ascontiguousarray(poses, dtype=np.float64)
-    if x.shape[-1:] != (4,):
-        raise ValueError(f"poses must have 4 coordinates (x, y, z, theta) in the last axis, got {x.shape}")
-    flat = x.reshape(-1, 4)
-    n = flat.shape[0]
-    out = np.empty((n, NINDEX))
-    status = np.zeros(n, dtype=np.intc)
-    lib.pkm_quattro_indices(m._m, m._d, n, ptr(flat), ptr(out), status.ctypes.data_as(c_int_p))
-    return out.reshape(x.shape[:-1] + (NINDEX,)), status.reshape(x.shape[:-1])
+    return m.quattro_indices(poses)
 
 
 def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None = None,
@@ -155,20 +147,12 @@ def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None 
 
 def gimre(m: Model, x) -> np.ndarray:
     """Generalized inertia matrix reduced to the end effector N (4, 4) at pose x [kg, kg m, kg m^2]."""
-    xv = np.ascontiguousarray(x, dtype=np.float64)
-    N = np.empty((4, 4))
-    s = lib.pkm_quattro_gimre(m._m, m._d, ptr(xv), ptr(N))
-    raise_for(s, lib.pkm_data_error(m._d).decode())
-    return N
+    return m.quattro_gimre(x)
 
 
 def points(m: Model, x) -> dict:
     """World points A, B, C (4, 3) [m] of the four arms at pose x (motor axis, elbow, platform joint)."""
-    xv = np.ascontiguousarray(x, dtype=np.float64)
-    A, B, Cp = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
-    s = lib.pkm_quattro_points(m._m, m._d, ptr(xv), ptr(A), ptr(B), ptr(Cp))
-    raise_for(s, lib.pkm_data_error(m._d).decode())
-    return {"A": A, "B": B, "C": Cp}
+    return m.quattro_points(x)
 
 
 # The Adept platform x axis is the model diagonal (-1, -1)/sqrt(2) (seed ch. 5.7: the model
