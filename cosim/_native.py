@@ -168,6 +168,7 @@ _SIGNATURES = {
     "pkm_model_joint_noun": (CH, [P]),
     "pkm_model_joint_prefix": (CH, [P]),
     "pkm_model_joint_limits": (I, [P, I, c_int_p, c_int_p]),
+    "pkm_model_geometry_param": (CH, [P, I]),
     "pkm_model_copy": (P, [P]),
     "pkm_model_destroy": (None, [P]),
     "pkm_model_robot": (CH, [P]),

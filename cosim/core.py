@@ -103,6 +103,10 @@ class RobotFacts:
     joint_noun, joint_prefix : str
         How messages name an actuated joint, and the drive parameters' prefix
         (``"rail"`` -> ``"rail[i].coulomb"``).
+    geometry_params : tuple of str
+        The parameters a geometric error is described by (``pkm_model_geometry_param``:
+        the 6-PUS ``leg[i].L``, one per joint); empty where the robot names none (then
+        :meth:`Model.geometry_params` derives them).
     """
 
     name: str
@@ -116,6 +120,7 @@ class RobotFacts:
     effort_unit: str
     joint_noun: str
     joint_prefix: str
+    geometry_params: tuple = ()
 
     @property
     def angular_joints(self) -> bool:
@@ -192,7 +197,49 @@ class Model:
             tracker_names=tuple(lib.pkm_model_tracker_name(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
             tracker_units=tuple(lib.pkm_model_tracker_unit(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
             joint_unit=lib.pkm_model_joint_unit(m).decode(), effort_unit=lib.pkm_model_effort_unit(m).decode(),
-            joint_noun=lib.pkm_model_joint_noun(m).decode(), joint_prefix=lib.pkm_model_joint_prefix(m).decode())
+            joint_noun=lib.pkm_model_joint_noun(m).decode(), joint_prefix=lib.pkm_model_joint_prefix(m).decode(),
+            geometry_params=tuple(self._geometry_declared()))
+
+    def _geometry_declared(self) -> list[str]:
+        names, i = [], 0
+        while True:
+            n = lib.pkm_model_geometry_param(self._m, i).decode()
+            if not n:
+                return names
+            names.append(n)
+            i += 1
+
+    def geometry_params(self, poses=None, declared: bool = True) -> list[str]:
+        """Names of the geometric parameters of this robot.
+
+        With ``declared`` (default) the ones the core names (:attr:`RobotFacts.geometry_params`)
+        if it names any; otherwise every length parameter [m] outside the drive layer,
+        gravity and payload whose change moves a joint at ``poses`` (shape (n, nd); default
+        the home pose): a central difference of the core's inverse kinematics, so a robot
+        needs nothing written for it.
+        """
+        if declared:
+            names = self._geometry_declared()
+            if names:
+                return names
+        x = np.atleast_2d(self.home() if poses is None else np.asarray(poses, float))
+        base = np.asarray(self.ik(x), float)
+        prefix = self.facts.joint_prefix + "["
+        keep = []
+        for info in self.param_info():
+            if info.unit != "m" or info.name.startswith(prefix) or info.name.startswith(
+                    ("gravity.", "drive.", "actuator.", "sensor.", "payload.")):
+                continue
+            h = 1e-6 * max(abs(info.value), 1e-3)
+            trial = self.copy()
+            try:
+                trial.set_params({info.name: info.value + h})
+                moved = np.max(np.abs(np.asarray(trial.ik(x), float) - base)) > 1e-9 * h
+            except PkmError:
+                moved = False
+            if moved:
+                keep.append(info.name)
+        return keep
 
     @property
     def joint_unit(self) -> str:

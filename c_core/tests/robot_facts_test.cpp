@@ -65,6 +65,16 @@ TEST(RobotFacts, TheKnownRobotsFactsAreTheirs) {
   EXPECT_STREQ(pkm_model_tracker_unit(four.get(), 0), "m");
   EXPECT_STREQ(pkm_model_tracker_name(four.get(), 1), "");
   EXPECT_EQ(pkm_model_tracker_count(nullptr), -1);
+  // the parameters of a geometric error: per leg on the 6-PUS, the arm chain's lengths on
+  // the Quattro (forearm first), none named on the four-bar
+  EXPECT_STREQ(pkm_model_geometry_param(six.get(), 0), "leg[1].L");
+  EXPECT_STREQ(pkm_model_geometry_param(six.get(), 5), "leg[6].L");
+  EXPECT_STREQ(pkm_model_geometry_param(six.get(), 6), "");
+  EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 0), "forearm.c");
+  EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 4), "");
+  EXPECT_STREQ(pkm_model_geometry_param(four.get(), 0), "");
+  EXPECT_STREQ(pkm_model_geometry_param(six.get(), -1), "");
+  EXPECT_STREQ(pkm_model_geometry_param(nullptr, 0), "");
   int lo, hi;
   ASSERT_EQ(pkm_model_joint_limits(six.get(), 2, &lo, &hi), PKM_OK);
   EXPECT_STREQ(pkm_param_name(six.get(), lo), "rail[3].qmin");

@@ -448,22 +448,9 @@ class JointProblem(Problem):
         self.measurement_unit = model.facts.joint_unit
         self.model, self.nominal = model.copy(), model.copy()
         self.y = self.q.ravel()
-        prefix = model.facts.joint_prefix + "["
-        cand = [i for i in model.param_info() if i.unit == "m" and not i.name.startswith(prefix)
-                and not i.name.startswith(("gravity.", "drive.", "actuator.", "sensor."))]
         self._p = None
-        base = self._ik(model)
-        keep = []
-        for info in cand:
-            h = 1e-6 * max(abs(info.value), 1e-3)
-            trial = model.copy()
-            try:
-                trial.set_params({info.name: info.value + h})
-                moved = np.max(np.abs(self._ik(trial) - base)) > 1e-9 * h
-            except PkmError:
-                moved = False
-            if moved:
-                keep.append(info)
+        info = {i.name: i for i in model.param_info()}
+        keep = [info[n] for n in model.geometry_params(self.pose, declared=False)]
         if not keep:
             raise CalibrationDataError(f"robot {self.robot!r}: no length parameter moves a joint at these poses")
         self.names = [i.name for i in keep]

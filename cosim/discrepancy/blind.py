@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .effects import BY_KEY, joint_prefix
+from .effects import BY_KEY, geometry_layout, joint_prefix
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIG = REPO / "scenarios" / "blind" / "config.toml"
@@ -220,12 +220,16 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         name = kind.replace("_", ".")
         return Hidden(kind, {name: _uniform(rng, eff[kind])}, [], {name: nominal[name]})
     if kind == "geometry":
-        if model.robot == "6pus":
+        # The parameters the core names for a geometric error: one per joint (a joint is
+        # drawn), else the first of the robot's list (derived lists: a random one).
+        geo, per_joint = geometry_layout(model)
+        if per_joint:
             j = int(rng.integers(1, nd + 1))
-            name = f"leg[{j}].L"
-            js = [j]
+            name, js = geo[j - 1], [j]
+        elif model.facts.geometry_params:
+            name, js = geo[0], []
         else:
-            name, js = "forearm.c", []
+            name, js = geo[int(rng.integers(len(geo)))], []
         return Hidden(kind, {name: nominal[name] + sign * _uniform(rng, eff[kind])}, js, {name: nominal[name]})
     raise ValueError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
 

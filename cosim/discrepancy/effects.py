@@ -29,7 +29,7 @@ Kinds of regressor:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 
 @dataclass(frozen=True)
@@ -47,8 +47,8 @@ class Effect:
     scope : str
         ``"joint"`` (one group per actuated joint) or ``"global"``.
     params : tuple of str
-        Core parameter templates (``"{j}[{i}].coulomb"``); for the 6-PUS/Quattro
-        variants see ``robot_params``.
+        Core parameter templates (``"{j}[{i}].coulomb"``); empty for the geometry effect,
+        whose parameters the core names (:meth:`cosim.core.Model.geometry_params`).
     kind : str
         Regressor kind (see the module docstring).
     sign : str
@@ -61,8 +61,6 @@ class Effect:
         How the fitted effect enters the plant (core / FMU parameter or variant).
     regressor : str
         The signature, in words.
-    robot_params : dict
-        Per-robot override of ``params``.
     """
 
     key: str
@@ -76,10 +74,6 @@ class Effect:
     lookalikes: tuple = ()
     plant: str = ""
     regressor: str = ""
-    robot_params: dict = field(default_factory=dict)
-
-    def templates(self, robot: str) -> tuple:
-        return tuple(self.robot_params.get(robot, self.params))
 
 
 LIBRARY = [
@@ -111,8 +105,7 @@ LIBRARY = [
            "platform accelerations and rotations (an off-centre payload shows in moments)",
            ("platform_mass", "platform_inertia", "gravity_tilt"),
            "core/FMU parameters payload.m, payload.x/y/z",
-           "d ID / d payload.m and d ID / d(m c) by central differences of the core",
-           robot_params={"quattro": ("payload.m",)}),
+           "d ID / d payload.m and d ID / d(m c) by central differences of the core"),
     Effect("platform_mass", "platform mass error", "effort", "global", ("platform.m",), "linear", "any",
            "vertical motion or accelerations of the platform",
            ("payload", "gravity_tilt"),
@@ -168,13 +161,13 @@ LIBRARY = [
            ("encoder_offset", "geometry", "backlash"),
            "core/FMU parameter {j}[i].compliance (sensor model: deflection c tau)",
            "c tau_i on joint reading i"),
-    Effect("geometry", "geometric (kinematic) parameter error", "kinematic", "joint", ("leg[{i}].L",), "geometry",
+    Effect("geometry", "geometric (kinematic) parameter error", "kinematic", "joint", (), "geometry",
            "any",
            "tracker pose columns and poses spread over the workspace",
            ("encoder_offset", "compliance"),
-           "core/FMU geometry parameters (6-PUS leg[i].L; Quattro arm/forearm/base/platform lengths)",
-           "dIK/dp by central differences of the core's inverse kinematics",
-           robot_params={"quattro": ("base.a", "arm.b_r", "forearm.c", "platform.d")}),
+           "core/FMU geometry parameters as the core names them (pkm_model_geometry_param: 6-PUS leg[i].L; "
+           "Quattro forearm/base/arm/platform lengths; else every length that moves a joint)",
+           "dIK/dp by central differences of the core's inverse kinematics"),
 ]
 
 BY_KEY = {e.key: e for e in LIBRARY}
@@ -258,6 +251,13 @@ class Group:
         return self.effect.name + ("" if self.joint is None else f", joint {self.joint + 1}")
 
 
+def geometry_layout(model) -> tuple[list, bool]:
+    """The geometry effect's parameters for ``model`` and whether there is one per joint
+    (n-th name indexed ``[n]``, as the 6-PUS ``leg[n].L``)."""
+    geo = model.geometry_params()
+    return geo, len(geo) == model.ndof and all(f"[{i + 1}]" in n for i, n in enumerate(geo))
+
+
 def groups_for(model, has_pose: bool, effects=None):
     """Candidate groups of the library for a model.
 
@@ -275,7 +275,18 @@ def groups_for(model, has_pose: bool, effects=None):
             unavailable.append((e, "the recording has no tracker pose columns; this effect shows in the joint "
                                    "readings against an external pose measurement"))
             continue
-        tpl = e.templates(model.robot)
+        if e.kind == "geometry":
+            # The core names them (one per joint where the error is per joint), or they are
+            # every length that moves a joint.
+            geo, per_joint = geometry_layout(model)
+            if per_joint:
+                groups += [Group(e, i, (n,)) for i, n in enumerate(geo)]
+            elif geo:
+                groups.append(Group(e, None, tuple(geo)))
+            else:
+                unavailable.append((e, f"the {model.robot} model has no length parameter that moves a joint"))
+            continue
+        tpl = e.params
         if e.scope == "joint" and any("{i}" in t for t in tpl):
             made = []
             for i in range(nd):

@@ -30,6 +30,21 @@ def test_the_package_never_names_the_toy_robot():
     assert hits == [], hits
 
 
+
+def test_geometry_parameters_come_from_the_core_or_its_inverse_kinematics(tmp_path):
+    # The toy names no geometry parameters (pkm_model_geometry_param gives ""): the
+    # package takes the lengths that move its joint, which are the crank and the rod
+    # (not the slider mass, not gravity); the geometry effect is one group of both.
+    code = ("from cosim.core import Model\n"
+            "from cosim.discrepancy.effects import geometry_layout, groups_for\n"
+            "m = Model('slider_crank')\n"
+            "g = [x.params for x in groups_for(m, True)[0] if x.effect.key == 'geometry']\n"
+            "print(list(m.facts.geometry_params), geometry_layout(m), g)\n")
+    env = dict(os.environ, PKM_LIB=str(TOY))
+    r = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[] (['crank.r', 'rod.l'], False) [('crank.r', 'rod.l')]", r.stdout
+
 def test_params(tmp_path):
     out = cosim("params", "slider_crank", cwd=tmp_path)
     for name in ("crank.r", "rod.l", "slider.m", "crank.I", "joint[1].coulomb"):
@@ -65,6 +80,32 @@ def test_step_scenario_settles_at_kp_inverse_g(tmp_path):
     assert abs(ss["joint_error"][0]) > 1e-3                       # rad: gravity pulls the slider down
     assert ss["prediction_relative_error"] < 1e-3, ss
 
+
+
+EXCITATION = """
+name = "toy_excitation"
+robot = "slider_crank"
+plant = "core"
+duration = 2.0
+step = 0.001
+[controller]
+type = "pd_gravity"
+kp = 5.0
+kd = 0.2
+[reference]
+type = "excitation"
+seed = 2
+"""
+
+
+def test_excitation_scenario_draws_its_figure(tmp_path):
+    # An excitation reference on a robot the package never heard of: the trajectory comes
+    # from the core's reach, and the figure shows every pose coordinate (it used to stop
+    # with a KeyError on the reference type).
+    (tmp_path / "exc.toml").write_text(EXCITATION)
+    out = cosim("run", "exc.toml", "--out", "o", cwd=tmp_path)
+    png = tmp_path / "o" / "toy_excitation.png"
+    assert png.exists() and png.stat().st_size > 10_000, out
 
 CAMPAIGN = """
 name = "toy_campaign"

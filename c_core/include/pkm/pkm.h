@@ -105,6 +105,10 @@ PKM_API const char* pkm_model_joint_unit(const pkm_model* m);
 PKM_API const char* pkm_model_effort_unit(const pkm_model* m);
 PKM_API const char* pkm_model_joint_noun(const pkm_model* m);
 PKM_API const char* pkm_model_joint_prefix(const pkm_model* m);
+/* Parameter i of those a geometric (kinematic) error is described by ("leg[1].L", ...;
+ * one per joint when the error is per joint), "" past the end or where the robot names
+ * none (then every length parameter outside the drive layer that moves a joint is). */
+PKM_API const char* pkm_model_geometry_param(const pkm_model* m, int i);
 /* Parameter indices of joint i's lower and upper limit (-1 where the robot has none). */
 PKM_API int pkm_model_joint_limits(const pkm_model* m, int i, int* lower_param, int* upper_param);
 PKM_API int pkm_model_ndof(const pkm_model* m);            /* actuators = pose dim */

@@ -125,6 +125,11 @@ const char* pkm_model_tracker_name(const pkm_model* m, int i) {
 const char* pkm_model_tracker_unit(const pkm_model* m, int i) {
   return m && i >= 0 && i < m->robot->tracker_count() ? m->robot->tracker_unit(i) : "";
 }
+const char* pkm_model_geometry_param(const pkm_model* m, int i) {
+  if (!m || i < 0) return "";
+  const char* n = m->robot->geometry_param(i);
+  return n ? n : "";
+}
 const char* pkm_model_joint_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "rad" : "m") : ""; }
 const char* pkm_model_effort_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "N m" : "N") : ""; }
 const char* pkm_model_joint_noun(const pkm_model* m) { return m ? m->robot->joint_noun() : ""; }

@@ -83,6 +83,12 @@ class Robot {
   // The parameter holding actuated joint i's lower (upper) limit, "" if there is none;
   // the integrator stops there (pkm_sim) and the FMUs report it.
   virtual std::string joint_limit_param(int, bool /*upper*/) const { return ""; }
+  // The parameters a geometric (kinematic) error of this robot is described by, in order
+  // (the discrepancy engine's geometry effect and the blind generator read them); nullptr
+  // past the end.  One per actuated joint, indexed like the joints, makes a per-joint
+  // effect.  None: the toolkit takes every length parameter outside the drive layer that
+  // moves a joint (what the generic calibration fits).
+  virtual const char* geometry_param(int) const { return nullptr; }
   // How limit and singularity messages name the chain of joint i ("leg 3", "joint 2").
   virtual const char* limb_noun() const { return joint_noun(); }
 

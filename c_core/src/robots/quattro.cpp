@@ -221,6 +221,12 @@ class Quattro final : public Robot {
   }
   const char* pose_unit(int i) const override { return i < 3 ? "m" : "rad"; }
   std::string joint_limit_param(int, bool upper) const override { return upper ? "joint.q_max" : "joint.q_min"; }
+  // The four lengths of the arm chain, the forearm (the longest, the one most often off
+  // after a rebuild) first: the blind generator perturbs the first.
+  const char* geometry_param(int i) const override {
+    static const char* n[] = {"forearm.c", "base.a", "arm.b_r", "platform.d"};
+    return i >= 0 && i < 4 ? n[i] : nullptr;
+  }
 
   std::vector<ParamSpec> param_specs(const std::string& set) const override {
     const bool app = set == "appendix_a";

@@ -172,6 +172,12 @@ class SixPus final : public Robot {
   std::string joint_limit_param(int i, bool upper) const override {
     return "rail[" + std::to_string(i + 1) + (upper ? "].qmax" : "].qmin");
   }
+  // A geometric error is a leg-length error, leg by leg (seed 000: the rod lengths are
+  // the parameters a rebuild most often gets wrong).
+  const char* geometry_param(int i) const override {
+    static const char* n[] = {"leg[1].L", "leg[2].L", "leg[3].L", "leg[4].L", "leg[5].L", "leg[6].L"};
+    return i >= 0 && i < 6 ? n[i] : nullptr;
+  }
 
   void ik(const RobotModel&, RobotData&, const double* x, double* q) const override;
   void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx, double* Jq,
