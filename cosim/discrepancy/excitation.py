@@ -20,25 +20,38 @@ singularities) and shrunk until it is.
 """
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
-#: per robot: centre range, burst amplitudes and slow amplitude per pose coordinate
-PROFILES = {
-    "6pus": {
-        "centre": [0.006, 0.006, 0.005, 0.03, 0.03, 0.03],
-        "centre_offset": [0.0, 0.0, -0.004, 0.0, 0.0, 0.0],
-        "amp": [0.008, 0.008, 0.005, 0.07, 0.07, 0.08],
-        "slow": [0.0003, 0.0003, 0.0002, 0.003, 0.003, 0.003],
-    },
-    "quattro": {
-        "centre": [0.05, 0.05, 0.04, 0.1],
-        "centre_offset": [0.0, 0.0, 0.0, 0.0],
-        "amp": [0.07, 0.07, 0.04, 0.15],
-        "slow": [0.001, 0.001, 0.0008, 0.005],
-    },
-}
+#: tuned excitation profiles by robot (a data file; robots without one get derived_profile)
+PROFILE_FILE = Path(__file__).resolve().parents[2] / "scenarios" / "blind" / "excitation.toml"
+
+
+@lru_cache(maxsize=1)
+def tuned_profiles() -> dict:
+    """The hand-tuned profiles of :data:`PROFILE_FILE` by robot name ({} if the file is absent)."""
+    if not PROFILE_FILE.exists():
+        return {}
+    with open(PROFILE_FILE, "rb") as f:
+        return tomllib.load(f)
+
+
+def profile(model) -> dict:
+    """The excitation profile of ``model``: its table in :data:`PROFILE_FILE`, else
+    :func:`derived_profile`.  A table must give every key for every pose coordinate."""
+    prof = tuned_profiles().get(model.robot)
+    if prof is None:
+        return derived_profile(model)
+    for key in ("centre", "centre_offset", "amp", "slow"):
+        if len(prof.get(key, ())) != model.ndof:
+            raise ValueError(f"{PROFILE_FILE}: [{model.robot}] {key} needs {model.ndof} values (one per pose "
+                             f"coordinate), got {len(prof.get(key, ()))}")
+    return prof
+
 
 LABELS = {"move": 1, "hold": 2, "multisine": 3, "sweep": 4, "slow": 5}
 
@@ -141,7 +154,7 @@ def excitation(model, duration: float, seed: int = 0, scale: float = 1.0, lead_i
 
 def _build(model, duration, seed, scale, lead_in):
     rng = np.random.default_rng(seed)
-    prof = PROFILES.get(model.robot) or derived_profile(model)
+    prof = profile(model)
     home = model.home()
     nd = len(home)
     cr = np.asarray(prof["centre"]) * scale
@@ -185,13 +198,13 @@ def _build(model, duration, seed, scale, lead_in):
 
 
 def derived_profile(model) -> dict:
-    """The excitation profile of a robot without a table in ``PROFILES``, from the core alone.
+    """The excitation profile of a robot without a table in :data:`PROFILE_FILE`, from the core alone.
 
     Per pose coordinate, the reach from home: the largest offset (both ways, the smaller one)
     at which the core still reaches the pose inside the joint ranges and away from
     singularities, probed on a doubling then halving search.  Centres span 15 % of it,
-    bursts 30 %, the slow oscillation 1.5 % (the two tables above are of that order of
-    their robots' reach).
+    bursts 30 %, the slow oscillation 1.5 % (the tuned tables are of that order of their
+    robots' reach).
     """
     home = np.asarray(model.home(), float)
     units = model.facts.pose_units

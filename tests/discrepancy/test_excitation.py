@@ -35,3 +35,20 @@ def test_excitation_is_reproducible_and_seeded():
     a, b, c = (excitation(m, 4.0, seed=s).pose(np.linspace(0, 4, 50)) for s in (1, 1, 2))
     np.testing.assert_array_equal(a, b)
     assert np.abs(a - c).max() > 1e-3
+
+
+def test_a_tuned_profile_of_the_wrong_length_is_refused_naming_the_file(monkeypatch):
+    from cosim.discrepancy import excitation as ex
+
+    bad = {"6pus": {"centre": [0.01] * 5, "centre_offset": [0.0] * 6, "amp": [0.01] * 6, "slow": [0.001] * 6}}
+    monkeypatch.setattr(ex, "tuned_profiles", lambda: bad)
+    with pytest.raises(ValueError, match=r"excitation.toml: \[6pus\] centre needs 6 values .* got 5"):
+        ex.profile(Model("6pus"))
+
+
+def test_the_tuned_profiles_are_data_and_other_robots_get_theirs_from_the_core():
+    from cosim.discrepancy import excitation as ex
+
+    assert set(ex.tuned_profiles()) == {"6pus", "quattro"}
+    four = Model("fourbar")
+    assert ex.profile(four)["amp"].shape == (1,)
