@@ -18,12 +18,19 @@ def _plt():
 def scenario_figure(out, path) -> Path:
     """Write the figure of a scenario run (layout by reference type) to ``path``."""
     kind = out.scenario.spec["reference"]["type"]
-    fn = {"step": step_figure, "letter_m": tracking_figure, "poses": pose_set_figure}[kind]
+    # Any other reference (an excitation) is shown as motion: every pose coordinate.
+    fn = {"step": step_figure, "letter_m": tracking_figure, "poses": pose_set_figure}.get(kind, motion_figure)
     return fn(out, path)
 
 
-def step_figure(out, path) -> Path:
-    """Moved pose coordinates vs reference, joint errors vs predicted e_ss, efforts."""
+def motion_figure(out, path) -> Path:
+    """Every pose coordinate vs its reference, joint tracking errors, efforts."""
+    return step_figure(out, path, coords="all")
+
+
+def step_figure(out, path, coords: str = "moved") -> Path:
+    """Moved pose coordinates (``coords="all"``: every one) vs reference, joint errors vs
+    predicted e_ss, efforts."""
     plt = _plt()
     res, m = out.result, out.metrics
     t = res["time"]
@@ -33,6 +40,8 @@ def step_figure(out, path) -> Path:
     facts = robot_facts(res.robot)
     names, units = list(facts.pose_names), list(facts.pose_units)
     moved = list(m.get("step_info", {}).get("pose", {}).keys()) or [names[min(2, len(names) - 1)]]
+    if coords == "all":
+        moved = names
     shown = []
     for nm in moved:
         i = names.index(nm) if nm in names else 0
