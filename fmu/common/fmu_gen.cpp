@@ -310,7 +310,20 @@ Table read_table(const std::string& path, pkm_model*& model) {
   if (t.head.count("joint-limits")) {
     auto f = split(replace_all(t.head["joint-limits"], "\t", " "), ' ');
     f.erase(std::remove(f.begin(), f.end(), std::string()), f.end());
-    if (f.size() != 2) throw Fail(path + ": @joint-limits needs two parameter names with {i} (lower, upper)");
+    if (f.size() == 1 && f[0] == "core") {
+      // The core's own fact (pkm_model_joint_limits): the table does not restate the names.
+      for (int k = 0; k < nd; ++k) {
+        int lo = -1, hi = -1;
+        if (pkm_model_joint_limits(model, k, &lo, &hi) != PKM_OK || lo < 0 || hi < 0)
+          throw Fail(path + ": @joint-limits core: the robot declares no limit parameters for joint " +
+                     std::to_string(k + 1) + " (drop the line for a robot without joint limits)");
+        t.qmin.push_back(lo);
+        t.qmax.push_back(hi);
+      }
+      return t;
+    }
+    if (f.size() != 2)
+      throw Fail(path + ": @joint-limits needs 'core' or two parameter names with {i} (lower, upper)");
     for (int k = 0; k < nd; ++k)
       for (int w = 0; w < 2; ++w) {
         std::string name = replace_all(f[w], "{i}", std::to_string(k + 1));

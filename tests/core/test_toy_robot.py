@@ -107,6 +107,35 @@ def test_excitation_scenario_draws_its_figure(tmp_path):
     png = tmp_path / "o" / "toy_excitation.png"
     assert png.exists() and png.stat().st_size > 10_000, out
 
+
+def _recording(path):
+    import numpy as np
+
+    lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    return lines[0].split(","), np.genfromtxt(lines[1:], delimiter=",")
+
+
+def test_the_toy_fmu_validates_and_runs_the_step_like_the_core_plant(tmp_path):
+    # The FMU side of a new robot is one folder (c_core/tests/robots/slider_crank_fmu:
+    # variables.txt + model.c); the scenario finds its FMU by the robot's name.
+    import numpy as np
+
+    fmu_file = TOY.parent.parent / "fmu" / "PKM_SLIDER_CRANK.fmu"
+    assert fmu_file.exists(), f"{fmu_file} is missing: cmake builds it with the FMUs (target PKM_SLIDER_CRANK_fmu)"
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(fmu_file)) == []
+    (tmp_path / "core.toml").write_text(STEP)
+    (tmp_path / "fmu.toml").write_text(STEP.replace('plant = "core"', 'plant = "fmu"')
+                                       .replace('name = "toy_step_pd"', 'name = "toy_step_fmu"'))
+    cosim("run", "core.toml", "--out", "o", cwd=tmp_path)
+    out = cosim("run", "fmu.toml", "--out", "o", cwd=tmp_path)
+    assert "predicted Kp^-1 g" in out, out
+    hc, c = _recording(tmp_path / "o" / "toy_step_pd.csv")
+    hf, f = _recording(tmp_path / "o" / "toy_step_fmu.csv")
+    assert hc == hf and c.shape == f.shape == (1501, len(hc))
+    np.testing.assert_allclose(f, c, rtol=0, atol=1e-10)
+
 CAMPAIGN = """
 name = "toy_campaign"
 robot = "slider_crank"

@@ -71,7 +71,8 @@ def _fmu_gen():
 
 @pytest.mark.parametrize("edit, message", [
     (lambda s: s.replace("output    | zdd ", "#"), "accel[2] is missing"),
-    (lambda s: s.replace("rail[{i}].qmax", "rail[{i}].qtop"), "no parameter 'rail[1].qtop'"),
+    (lambda s: s.replace("@joint-limits core", "@joint-limits rail[{i}].qmin rail[{i}].qtop"),
+     "no parameter 'rail[1].qtop'"),
     (lambda s: s.replace("| twist[0]  |", "| pose[0]   |"), "pose[0] used twice"),
     (lambda s: s.replace("| q         |", "| qq        |"), "unknown channel 'qq'"),
 ])
@@ -83,6 +84,21 @@ def test_generator_rejects_an_inconsistent_table(tmp_path, edit, message):
     assert r.returncode == 1
     assert message in r.stderr and str(table) in r.stderr, r.stderr
     assert not (tmp_path / "md.xml").exists()
+
+
+def test_joint_limits_come_from_the_core_and_a_robot_without_them_is_told(tmp_path):
+    # "@joint-limits core" reads pkm_model_joint_limits: the 6-PUS header lists rail[i].qmin /
+    # .qmax (checked above through the 13 event indicators); the toy slider-crank has none,
+    # and a table that asks for them is refused naming the joint.
+    exe = fmu.build_dir() / "bin" / "fmu_gen_toy"
+    assert exe.exists(), f"{exe} is not built"
+    src = REPO / "c_core/tests/robots/slider_crank_fmu/variables.txt"
+    table = tmp_path / "variables.txt"
+    table.write_text(src.read_text().replace("@paramset    default", "@paramset    default\n@joint-limits core"))
+    r = subprocess.run([str(exe), str(table), str(tmp_path / "md.xml"), str(tmp_path / "v.h")],
+                       capture_output=True, text=True)
+    assert r.returncode == 1
+    assert "declares no limit parameters for joint 1" in r.stderr and str(table) in r.stderr, r.stderr
 
 
 def test_generator_is_deterministic(tmp_path):
