@@ -55,6 +55,12 @@ class ParamInfo:
     description: str
 
 
+def _fk_options(tol, max_iter, damping) -> pkm_fk_options:
+    # A field left to the core: tol and max_iter <= 0, damping < 0 (pkm.h pkm_fk_options).
+    return pkm_fk_options(0.0 if tol is None else float(tol), 0 if max_iter is None else int(max_iter),
+                          -1.0 if damping is None else float(damping))
+
+
 def _errbuf():
     return C.create_string_buffer(1024)
 
@@ -463,16 +469,18 @@ class Model:
                 return q
         return self._batch(lib.pkm_ik_batch, [x], ["x"], errors)
 
-    def fk(self, q, x_guess=None, tol: float = 1e-13, max_iter: int = 50, damping: float = 1e-9,
-           errors: str = "raise"):
+    def fk(self, q, x_guess=None, tol: float | None = None, max_iter: int | None = None,
+           damping: float | None = None, errors: str = "raise"):
         """Forward kinematics by damped Newton from ``x_guess`` (default: home pose).
 
-        Raises ``ConvergenceError`` rather than return a pose it did not converge to.
+        ``tol`` [m or rad], ``max_iter`` and ``damping`` default to the core's
+        (``pkm_fk_options`` in pkm.h: 1e-13, 50, 1e-9).  Raises ``ConvergenceError`` rather
+        than return a pose it did not converge to.
         """
         q = self._arr(q, "q")
         if x_guess is None:
             x_guess = self.home()
-        opt = pkm_fk_options(tol, max_iter, damping)
+        opt = _fk_options(tol, max_iter, damping)
         arrs = [np.ascontiguousarray(np.broadcast_to(a, np.broadcast_shapes(q.shape, np.shape(x_guess))))
                 .reshape(-1, self.ndof) for a in (q, self._arr(x_guess, "x_guess"))]
         n = arrs[0].shape[0]
@@ -486,13 +494,13 @@ class Model:
             return out.reshape(shape)
         return out.reshape(shape), status.reshape(shape[:-1])
 
-    def fk_info(self, q, x_guess=None, tol: float = 1e-13, max_iter: int = 50):
-        """Single forward kinematics solve returning ``(x, iterations, residual)``."""
+    def fk_info(self, q, x_guess=None, tol: float | None = None, max_iter: int | None = None):
+        """Single forward kinematics solve returning ``(x, iterations, residual)`` (defaults as :meth:`fk`)."""
         q = np.ascontiguousarray(self._arr(q, "q"))
         xg = np.ascontiguousarray(self._arr(self.home() if x_guess is None else x_guess, "x_guess"))
         x = np.empty(self.ndof)
         info = pkm_fk_info()
-        opt = pkm_fk_options(tol, max_iter, 1e-9)
+        opt = _fk_options(tol, max_iter, None)
         self._check(lib.pkm_fk(self._m, self._d, ptr(q), ptr(xg), C.byref(opt), ptr(x), C.byref(info)))
         return x, info.iterations, info.residual
 

@@ -147,6 +147,7 @@ PKM_API int pkm_ik(const pkm_model* m, pkm_data* d, const double* x, double* q);
 PKM_API int pkm_ik_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
                          double* q, int* status);
 
+/* A field tol <= 0, max_iter <= 0 or damping < 0 (or opt == NULL) takes the default. */
 typedef struct pkm_fk_options {
   double tol;       /* residual tolerance on the constraint, m (default 1e-13)   */
   int max_iter;     /* Newton iterations (default 50)                            */
