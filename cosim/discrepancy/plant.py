@@ -2,14 +2,15 @@
 generator's plant and the engine's replay.
 
 The core's integrator (``pkm_sim``) integrates the mechanics with friction and rotor
-inertia and, when this build of the core does it, applies the actuator saturation
-(``<j>[i].effort_max``) and delay (``actuator.delay``) to the held command.  The
-sensors are applied by the core's ``pkm_measure_joints`` (encoder offset, backlash,
-compliance) and the readings' delay line (``sensor.delay``: the core's closed loop, or
-:meth:`cosim.master.CoreDrive.delayed` with the same rule when this loop runs in Python).  If the integrator of this build does not apply the
-actuator saturation or delay (:func:`integrator_applies`), they are applied here by
-the core's ``pkm_actuator_effort`` and by splitting each step at the instant the
-delayed command switches.  No physics is computed in Python.
+inertia and applies the actuator dead zone, saturation (``<j>[i].effort_max``) and delay
+(``actuator.delay``) to the held command.  The sensors are applied by the core's
+``pkm_measure_joints`` (encoder offset, backlash, compliance) and the readings' delay line
+(``sensor.delay``: the core's closed loop, or :meth:`cosim.master.CoreDrive.delayed` with
+the same rule when this loop runs in Python).  The loop runs inside the core
+(``pkm_closed_loop``) when the controller is one the core implements; the Python loop
+here serves Python controllers and a compliance under an actuator delay (the reading
+deflects under the delayed effort, which the compiled loop does not model).  No physics
+is computed in Python.
 """
 from __future__ import annotations
 
@@ -21,45 +22,6 @@ from scipy.signal import savgol_filter
 from ..master import ReferenceTable
 from ..simulate import Simulator
 from . import _corecalls as cc
-
-_APPLIES: dict = {}
-
-
-def integrator_applies(model) -> dict:
-    """Which actuator effects this build's integrator applies: ``{"saturation": bool,
-    "delay": bool}`` (probed once per robot with two tiny runs)."""
-    key = model.robot
-    if key in _APPLIES:
-        return _APPLIES[key]
-    from ..core import Model
-    from .effects import joint_prefix
-
-    pre = joint_prefix(model)
-    x0 = model.home()
-    out = {}
-    base = Model(model.robot)  # the default set: no delay, no saturation
-    names = set(base.param_names())
-    base.set_params({k: 0.0 for k in ("gravity.x", "gravity.y", "gravity.z") if k in names})
-    for what, params, tau in (("saturation", {f"{pre}[1].effort_max": 1e-6}, 1.0),
-                              ("delay", {"actuator.delay": 0.5}, 1.0)):
-        m = base.copy()
-        m.set_params(params)
-        sim = Simulator(m, sing_min=0.0)
-        sim.reset(0.0, x0)
-        u = np.zeros(model.ndof)
-        u[0] = tau
-        sim.set_input(u)
-        sim.advance(1e-3)
-        free = Simulator(base, sing_min=0.0)
-        free.reset(0.0, x0)
-        free.set_input(u)
-        free.advance(1e-3)
-        moved = np.abs(sim.state[1] - x0).max()
-        moved_free = np.abs(free.state[1] - x0).max()
-        out[what] = bool(moved < 1e-3 * moved_free)
-    _APPLIES[key] = out
-    return out
-
 
 def controller_from(desc: dict, model):
     """Rebuild the recorded controller from its sidecar description.
@@ -209,30 +171,14 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     noise = noise or {}
     rng = np.random.default_rng(seed)
     sig = {k: np.broadcast_to(np.asarray(noise.get(k, 0.0), float), (nd,)) for k in ("q", "qd", "tau", "pose")}
-    applies = integrator_applies(plant)
     delay = plant.param("actuator.delay")
-    own_sat = not applies["saturation"]
-    own_delay = delay > 0 and not applies["delay"]
-    sim_model = plant
-    if own_delay or own_sat:
-        from .effects import joint_prefix
-
-        sim_model = plant.copy()
-        pre = joint_prefix(plant)
-        over = {}
-        if own_delay:
-            over["actuator.delay"] = 0.0
-        if own_sat:
-            over.update({f"{pre}[{i + 1}].effort_max": 0.0 for i in range(nd)})
-        sim_model.set_params(over)
-    sim = Simulator(sim_model, rtol=rtol, atol=atol)
+    sim = Simulator(plant, rtol=rtol, atol=atol)
     if x0 is None:
         x0 = ref.x[start] if getattr(ref, "x", None) is not None else plant.fk(ref.q[start])
-    if not (own_delay or own_sat):
-        # The whole loop inside the core when the controller is one it implements.
-        fast = _compiled(plant, sim, controller, ref, start, t, np.asarray(x0, float), xd0, sig, rng, delay)
-        if fast is not None:
-            return fast
+    # The whole loop inside the core when the controller is one it implements.
+    fast = _compiled(plant, sim, controller, ref, start, t, np.asarray(x0, float), xd0, sig, rng, delay)
+    if fast is not None:
+        return fast
     sim.reset(float(t[0]), np.asarray(x0, float), xd0)
     if hasattr(controller, "reset"):
         controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
@@ -278,22 +224,6 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         out["q_true"][k] = plant.ik(x)
         if k == n - 1:
             break
-        if not (own_delay or own_sat):
-            sim.set_input(cmd)
-            sim.advance(float(t[k + 1]))
-            continue
-        # The applied effort switches when a delayed command arrives: split the step there.
-        edges = [float(t[k])]
-        if own_delay:
-            for (s, _) in cmds:
-                e = s + delay
-                if t[k] < e < t[k + 1] - 1e-12:
-                    edges.append(e)
-        edges.append(float(t[k + 1]))
-        for a, b in zip(edges[:-1], edges[1:]):
-            u = command_at(0.5 * (a + b) - (delay if own_delay else 0.0))
-            if own_sat:
-                u = cc.actuator_effort(plant, u[None])[0]
-            sim.set_input(u)
-            sim.advance(b)
+        sim.set_input(cmd)
+        sim.advance(float(t[k + 1]))
     return LoopResult(t, out["q"], out["qd"], out["tau"], out["pose"], out["x"], out["xd"], out["q_true"])
