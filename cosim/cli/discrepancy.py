@@ -113,7 +113,8 @@ def _bench_configure(p):
     p.add_argument("--cases", type=int, default=40, help="effect cases (default 40)")
     p.add_argument("--clean", type=int, default=10, help="clean cases (default 10)")
     p.add_argument("--seed", type=int, default=1, help="seed of the case plan (default 1)")
-    p.add_argument("--robot", choices=["6pus", "quattro", "both"], default="6pus")
+    p.add_argument("--robot", choices=_robots() + ["both"], default="6pus",
+                   help="robot (any the core knows), or 'both': every robot scenarios/blind/config.toml lists")
     p.add_argument("--out", default="results/blind", help="output directory (default results/blind)")
     p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
     p.add_argument("--report", action="store_true", help="write a diagnosis report per case")
@@ -146,7 +147,7 @@ def _case_progress(total, quiet, verbose):
 def cmd_blind_benchmark(args):
     from ..discrepancy import blind
 
-    robots = ("6pus", "quattro") if args.robot == "both" else (args.robot,)
+    robots = tuple(blind.load_config()["effects"]) if args.robot == "both" else (args.robot,)
     t0 = time.perf_counter()
     total = len(blind.plan(args.cases, args.clean, args.seed, robots, blind.load_config()))
     progress, bar = _case_progress(total, args.quiet, args.verbose)
@@ -198,7 +199,7 @@ cmd_blind_case.configure = _case_configure
 
 def _demo_configure(p):
     p.add_argument("--out", default="results/discrepancy_demo", help="output directory")
-    p.add_argument("--robot", choices=["6pus", "quattro"], default="6pus")
+    p.add_argument("--robot", choices=_robots(), default="6pus", help="robot (any the core knows)")
     p.add_argument("--effect", default="coulomb", help=f"effect to hide (default coulomb): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=3)
 
