@@ -33,7 +33,7 @@ REPO = Path(__file__).resolve().parents[2]
 CONFIG = REPO / "scenarios" / "blind" / "config.toml"
 
 #: effect types the generator can hide, per robot (those with magnitudes in the config)
-TYPES = ["coulomb", "viscous", "stribeck", "rotor_inertia", "payload", "platform_mass", "platform_inertia",
+TYPES = ["coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "payload", "platform_mass", "platform_inertia",
          "gravity_tilt", "actuator_delay", "sensor_delay", "saturation", "dead_zone", "encoder_offset", "backlash",
          "compliance", "geometry"]
 
@@ -82,6 +82,7 @@ def derived_sizes(model) -> tuple[dict, dict]:
     names = set(model.param_names())
     e = {"coulomb": [0.02 * E, 0.06 * E], "viscous": [0.02 * E / V, 0.06 * E / V],
          "stribeck": [0.04 * E, 0.08 * E], "stribeck_v": [0.04 * V, 0.12 * V],
+         "smooth_coulomb": [0.03 * E, 0.07 * E], "smooth_coulomb_v": [0.05 * V, 0.15 * V],
          "rotor_inertia": [0.1 * m, 0.25 * m], "actuator_delay": [0.002, 0.006], "sensor_delay": [0.002, 0.006],
          "saturation": [0.8, 0.92], "encoder_offset": [0.002 * Q, 0.01 * Q], "backlash": [0.002 * Q, 0.01 * Q],
          "compliance": [0.002 * Q / E, 0.01 * Q / E], "dead_zone": [0.03 * E, 0.08 * E]}
@@ -172,10 +173,11 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         js = joints()
         p = {f"{pre}[{j}].encoder_offset": float(rng.choice([-1, 1])) * _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
-    if kind == "stribeck":
+    if kind in ("stribeck", "smooth_coulomb"):
+        # an amplitude and a velocity scale, on one joint
+        amp, vel = {"stribeck": ("stribeck", "stribeck_v"), "smooth_coulomb": ("coulomb", "coulomb_v")}[kind]
         j = int(rng.integers(1, nd + 1))
-        p = {f"{pre}[{j}].stribeck": _uniform(rng, eff["stribeck"]),
-             f"{pre}[{j}].stribeck_v": _uniform(rng, eff["stribeck_v"])}
+        p = {f"{pre}[{j}].{amp}": _uniform(rng, eff[kind]), f"{pre}[{j}].{vel}": _uniform(rng, eff[kind + "_v"])}
         return Hidden(kind, p, [j], {k: nominal[k] for k in p})
     if kind == "saturation":
         # tau_peak = (peak effort, largest gravity load) per joint: a limit below the
@@ -368,7 +370,7 @@ def _param_error(h: dict, values: dict) -> float:
     names = list(h["params"])
     true = np.array([h["params"][n] - h["nominal"].get(n, 0.0) for n in names])
     est = np.array([values.get(n, h["nominal"].get(n, 0.0)) - h["nominal"].get(n, 0.0) for n in names])
-    if h["type"] == "stribeck":  # amplitude only; the velocity is reported apart
+    if h["type"] in ("stribeck", "smooth_coulomb"):  # amplitude only; the velocity is reported apart
         true, est = true[:1], est[:1]
     if h["type"] in ("saturation", "dead_zone"):
         true = np.array([h["params"][n] for n in names])

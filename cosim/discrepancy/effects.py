@@ -79,7 +79,7 @@ class Effect:
 LIBRARY = [
     Effect("coulomb", "Coulomb friction", "effort", "joint", ("{j}[{i}].coulomb",), "linear", ">=0",
            "motion of the joint in both directions (velocity reversals)",
-           ("stribeck", "viscous", "saturation"),
+           ("stribeck", "viscous", "saturation", "smooth_coulomb"),
            "core/FMU parameter {j}[i].coulomb (inside the inverse and forward dynamics)",
            "F_c sgn(qd_i) on the effort of joint i"),
     Effect("viscous", "viscous friction", "effort", "joint", ("{j}[{i}].viscous",), "linear", ">=0",
@@ -93,6 +93,12 @@ LIBRARY = [
            ("coulomb",),
            "core/FMU parameters {j}[i].stribeck and {j}[i].stribeck_v",
            "F_s exp(-(qd_i/v_s)^2) sgn(qd_i) on the effort of joint i"),
+    Effect("smooth_coulomb", "friction that fades at low speed (Coulomb with a velocity scale)", "effort", "joint",
+           ("{j}[{i}].coulomb", "{j}[{i}].coulomb_v"), "stribeck", ">=0",
+           "slow motion of the joint (speeds around the velocity scale) and fast motion",
+           ("coulomb", "viscous", "stribeck"),
+           "core/FMU parameters {j}[i].coulomb and {j}[i].coulomb_v",
+           "F_c tanh(qd_i / v_c) on the effort of joint i (full friction only above a few v_c)"),
     Effect("rotor_inertia", "actuator (rotor) inertia", "effort", "joint", ("{j}[{i}].rotor_inertia",),
            "linear", ">=0",
            "joint accelerations",
@@ -177,6 +183,12 @@ GEOMETRY_KINDS = ("geometry",)
 
 #: which motion separates two look-alikes (unordered pairs)
 SEPARATING_MOTION = {
+    frozenset(("coulomb", "smooth_coulomb")): "slow motion of the joint, at speeds of the order of the velocity scale "
+                                              "(a step friction is full there, a fading one is not)",
+    frozenset(("viscous", "smooth_coulomb")): "constant-velocity phases at two or more speeds well above the velocity "
+                                              "scale (viscous friction keeps growing, a fading Coulomb is flat)",
+    frozenset(("stribeck", "smooth_coulomb")): "slow motion of the joint (a Stribeck peak is largest at low speed, a "
+                                               "fading friction smallest)",
     frozenset(("coulomb", "stribeck")): "slow velocity reversals (joint speeds below the Stribeck velocity, then "
                                         "well above it)",
     frozenset(("coulomb", "viscous")): "constant-velocity phases at two or more different speeds",

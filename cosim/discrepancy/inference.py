@@ -66,7 +66,7 @@ class Inference:
     def _fd_step(self, g, p, v):
         if p.endswith(".delay"):
             return 0.2e-3
-        if p.endswith(".stribeck_v"):
+        if p.endswith((".stribeck_v", ".coulomb_v")):
             return 0.05 * max(v, 1e-9)
         if p.endswith(".effort_max"):
             return 0.005 * max(v, 1e-9)

@@ -21,15 +21,17 @@ from .._native import ParameterError
 from .effects import Group
 
 #: effects whose core parameter acts on its own joint's channels only
-LOCAL = {"coulomb", "viscous", "stribeck", "rotor_inertia", "saturation", "dead_zone", "encoder_offset", "backlash",
+LOCAL = {"coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "saturation", "dead_zone", "encoder_offset", "backlash",
          "compliance"}
 #: effects whose Jacobian is taken as the regressor columns at the nominal model: the
 #: residual is linear in them, or nearly (geometry: errors of 1e-3 of a length change the
 #: inverse kinematics at second order, 1e-6)
 LINEARISED = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
               "encoder_offset", "backlash", "compliance", "geometry"}
+#: effects of an amplitude (linear) and a velocity scale (a profile grid): (amplitude, velocity)
+VELOCITY_SCALED = {"stribeck", "smooth_coulomb"}
 #: core parameters that cannot be negative
-_NONNEGATIVE = (".coulomb", ".viscous", ".stribeck", ".stribeck_v", ".rotor_inertia", ".backlash", ".compliance",
+_NONNEGATIVE = (".coulomb", ".coulomb_v", ".viscous", ".stribeck", ".stribeck_v", ".rotor_inertia", ".backlash", ".compliance",
                 ".effort_max", "payload.m", ".delay")
 #: effects whose residual is linear in the core parameter
 LINEAR = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
@@ -75,7 +77,7 @@ def reference_size(group: Group, sc: Scales, model) -> float:
     motion: a recording that hardly moves must come out as not exciting."""
     k, i = group.key, group.joint
     qref = 1e-3 if sc.angular else 5e-5  # 1 mrad / 50 um on a joint reading
-    if k in ("coulomb", "stribeck"):
+    if k in ("coulomb", "stribeck", "smooth_coulomb"):
         return 0.02 * sc.effort[i]
     if k == "viscous":
         return 0.02 * sc.effort[i] / TYPICAL_RATE[model.joint_unit]
@@ -123,7 +125,7 @@ class Option:
             m = nominal[p[0]] + coef[0]
             c = coef[1:4] / coef[0] if coef[0] > 1e-9 else np.zeros(3)
             return {p[0]: m, p[1]: nominal[p[1]] + c[0], p[2]: nominal[p[2]] + c[1], p[3]: nominal[p[3]] + c[2]}
-        if e == "stribeck":
+        if e in VELOCITY_SCALED:
             return {p[0]: nominal[p[0]] + coef[0], p[1]: self.hyper["v"]}
         if self.cols is None:
             return dict(self.hyper["params"])
@@ -162,10 +164,19 @@ class Regressors:
             ch.append(self.nd + i)
         return ch
 
+    def velocity_grid(self) -> np.ndarray:
+        """The velocity scales tried for a Stribeck or fading friction [m/s or rad/s]: 9
+        points from a few times the rate noise (a smaller scale is not resolvable) to half
+        the median RMS joint speed (a larger one is friction proportional to speed over the
+        recording: viscous friction)."""
+        v = float(np.median(self.sc.rate))
+        vmin = max(0.02 * v, 5.0 * float(np.median(self.pipe.qd_noise)))
+        return np.geomspace(vmin, max(0.5 * v, 2 * vmin), 9)
+
     def _step(self, group, name):
         sc, k, i = self.sc, group.key, group.joint
         val = self.nominal[name]
-        if k in ("coulomb", "stribeck"):
+        if k in ("coulomb", "stribeck", "smooth_coulomb"):
             return 0.05 * sc.effort[i]
         if k == "viscous":
             return 0.05 * sc.effort[i] / sc.rate[i]
@@ -265,11 +276,8 @@ class Regressors:
                     if rank == 0:
                         continue
                     self.options[g.label] = [Option(g, cols, None, {"rank": rank}, rank)]
-            elif key == "stribeck":
-                v = float(np.median(self.sc.rate))
-                # A Stribeck velocity below a few times the rate noise is not resolvable.
-                vmin = max(0.02 * v, 5.0 * float(np.median(self.pipe.qd_noise)))
-                grid = np.geomspace(vmin, max(0.5 * v, 2 * vmin), 9)
+            elif key in VELOCITY_SCALED:
+                grid = self.velocity_grid()
                 opts = {g.label: [] for g in gs}
                 for vs in grid:
                     steps = {g: self._step(g, g.params[0]) for g in gs}

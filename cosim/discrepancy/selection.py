@@ -41,8 +41,8 @@ import numpy as np
 from .effects import Group
 from .inference import Inference
 from .noise import NoiseModel, _inflation  # noqa: F401  (re-exported)
-from .regressors import (LINEAR, LINEARISED, LOCAL, TYPICAL_RATE, _NONNEGATIVE, Option, Regressors,  # noqa: F401
-                         Scales, _joint_mass, reference_size)
+from .regressors import (LINEAR, LINEARISED, LOCAL, TYPICAL_RATE, VELOCITY_SCALED, _NONNEGATIVE, Option,  # noqa: F401
+                         Regressors, Scales, _joint_mass, reference_size)
 from .residuals import DiagnosisError
 
 
@@ -149,8 +149,11 @@ class Engine(Regressors, NoiseModel, Inference):
             best = None
             last_best = {}
             taken = {a.group.label for a in selected}
+            # A group that shares a parameter with a selected one (a fading and a step
+            # Coulomb friction of one joint) would fight over it: the first one in stays.
+            held = {p for a in selected for p in a.group.params}
             for lab, opts in list(self.options.items()) + list(self._joint_sets(taken).items()):
-                if lab in taken:
+                if lab in taken or held & set(opts[0].group.params):
                     continue
                 c2, o2 = self._best_option(opts, Q, y_perp, J, y)
                 if c2 is None:
@@ -185,20 +188,29 @@ class Engine(Regressors, NoiseModel, Inference):
             for a in list(selected):
                 size = self._magnitude(a.group, theta)
                 ref = reference_size(a.group, self.sc, self.model)
+                why = None
                 if a.group.key not in ("saturation", "dead_zone") and ref > 0 and size < 0.1 * ref:
+                    why = f"fitted size {size:.3g} is below a tenth of a small one ({ref:.3g}): negligible"
+                elif a.group.key == "smooth_coulomb":
+                    # A fading friction whose scale left the grid upwards never reaches its
+                    # full value on this recording: it is friction proportional to speed.
+                    vc, top = theta.get(a.group.params[1], 0.0), float(self.velocity_grid()[-1])
+                    if vc > 1.5 * top:
+                        why = (f"its velocity scale {vc:.3g} is above the joint speeds it could saturate at "
+                               f"({top:.3g}): on this recording it is a friction proportional to speed")
+                if why:
                     selected.remove(a)
                     for p in a.group.params:
                         theta.pop(p, None)
                     self.options.pop(a.group.label, None)
-                    self.refused[a.group.label] = (f"fitted size {size:.3g} is below a tenth of a small one "
-                                                   f"({ref:.3g}): negligible")
+                    self.refused[a.group.label] = why
                     theta = self.refine(selected, theta)
         return selected, theta, steps, last_best, chi2_nom
 
     def _magnitude(self, g, theta):
         """Size of a group's fitted change, in the unit of its reference size."""
         p = g.params
-        if g.key in ("payload", "stribeck"):
+        if g.key == "payload" or g.key in VELOCITY_SCALED:
             p = p[:1]
         d = np.array([theta.get(n, self.nominal[n]) - self.nominal[n] for n in p])
         return float(np.linalg.norm(d))
@@ -365,7 +377,7 @@ class Engine(Regressors, NoiseModel, Inference):
         out = dict(theta)
         for k, v in theta.items():
             if k.endswith(_NONNEGATIVE):
-                out[k] = max(v, 1e-9 if k.endswith(".stribeck_v") else 0.0)
+                out[k] = max(v, 1e-9 if k.endswith((".stribeck_v", ".coulomb_v")) else 0.0)
         if "actuator.delay" in out or "sensor.delay" in out:
             dmax = (self.pipe.max_shift - 2) * self.pipe.dt
             for k in ("actuator.delay", "sensor.delay"):

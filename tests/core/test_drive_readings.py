@@ -42,3 +42,23 @@ def test_the_gap_side_follows_the_effort_not_the_velocity():
             tau = np.full(6, effort_sign * 0.5)
             dq = cc.measure_joints(m, x[None], xd[None], tau[None])[0] - m.ik(x)
             assert abs(dq[0] - effort_sign * b / 2) < 1e-12, dq
+
+
+def test_coulomb_velocity_scale_makes_friction_fade_at_low_speed():
+    # rail[3].coulomb_v = 5 mm/s: F tanh(v / 5 mm/s), so 10 % of F at 0.5 mm/s and 76 % at
+    # 5 mm/s; the other rails keep the numerical scale drive.v_eps (full F at 1 mm/s).
+    F, vc = 0.04, 5e-3
+    m = Model("6pus", params={f"rail[{i}].coulomb": F for i in range(1, 7)} | {"rail[3].coulomb_v": vc})
+    eps = m.param("drive.v_eps")
+    for v in (5e-4, 5e-3, 3e-2, -2e-3):
+        f = cc.per_sample(m, "pkm_joint_friction", np.full((1, 6), v))[0]
+        np.testing.assert_allclose(f[2], F * np.tanh(v / vc), rtol=1e-12)
+        np.testing.assert_allclose(f[[0, 1, 3, 4, 5]], F * np.tanh(v / eps), rtol=1e-12)
+    # the inverse dynamics carry it: the effort changes by exactly the friction's change
+    x, xd = _state(m)
+    base = Model("6pus", params={f"rail[{i}].coulomb": F for i in range(1, 7)})
+    qd = m.joint_velocity(x, xd)
+    d_tau = m.inverse_dynamics(x, xd, np.zeros(6)) - base.inverse_dynamics(x, xd, np.zeros(6))
+    expect = np.zeros(6)
+    expect[2] = F * (np.tanh(qd[2] / vc) - np.tanh(qd[2] / eps))
+    np.testing.assert_allclose(d_tau, expect, atol=1e-12)

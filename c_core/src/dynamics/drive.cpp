@@ -14,7 +14,7 @@ namespace drive {
 namespace {
 // Per-joint parameter names, in the order of the loop in specs() and compile().
 const char* kKeys[] = {"coulomb", "viscous", "stribeck", "stribeck_v", "rotor_inertia",
-                       "effort_max", "encoder_offset", "backlash", "compliance", "dead_zone"};
+                       "effort_max", "encoder_offset", "backlash", "compliance", "dead_zone", "coulomb_v"};
 constexpr int kNKeys = sizeof(kKeys) / sizeof(kKeys[0]);
 
 double* field(Params& p, int k) {
@@ -28,7 +28,8 @@ double* field(Params& p, int k) {
     case 6: return p.encoder_offset;
     case 7: return p.backlash;
     case 8: return p.compliance;
-    default: return p.dead_zone;
+    case 9: return p.dead_zone;
+    default: return p.coulomb_v;
   }
 }
 
@@ -66,6 +67,10 @@ std::vector<ParamSpec> specs(const Robot& r) {
     out.push_back({joint_name(r, i, "dead_zone"), F,
                    "drive dead zone: commands within +-dead_zone deliver nothing, larger ones lose dead_zone, " + who,
                    0.0, 0.0, 1e6});
+    out.push_back({joint_name(r, i, "coulomb_v"), V,
+                   "velocity scale of the Coulomb friction, tanh(v / coulomb_v): friction that fades below it "
+                   "(0: drive.v_eps, a numerical regularisation), " + who,
+                   0.0, 0.0, 1e3});
   }
   out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction", ang ? 1e-3 : 1e-4, 1e-9, 1.0});
   out.push_back({"drive.f_eps", F,
@@ -104,7 +109,9 @@ void friction(const Params& p, const double* qd, double* f) {
   for (int i = 0; i < p.nd; ++i) {
     const double v = qd[i];
     const double r = v / p.stribeck_v[i];
-    f[i] = (p.coulomb[i] + p.stribeck[i] * std::exp(-r * r)) * smooth_sign(v, p.v_eps) + p.viscous[i] * v;
+    const double vc = p.coulomb_v[i] > 0 ? p.coulomb_v[i] : p.v_eps;
+    f[i] = p.coulomb[i] * smooth_sign(v, vc) + p.stribeck[i] * std::exp(-r * r) * smooth_sign(v, p.v_eps) +
+           p.viscous[i] * v;
   }
 }
 

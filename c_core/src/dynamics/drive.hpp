@@ -32,6 +32,7 @@ struct Params {
   double backlash[kMaxJoints] = {};     // total gap; measured q leads by +-gap/2 [m | rad]
   double compliance[kMaxJoints] = {};   // transmission deflection per effort [m/N | rad/(N m)]
   double dead_zone[kMaxJoints] = {};    // drive dead band: |u| <= u0 gives 0, else u - u0 sgn(u) [N | N m]
+  double coulomb_v[kMaxJoints] = {};    // velocity scale of this joint's Coulomb sign; 0: v_eps [m/s | rad/s]
   double v_eps = 1e-4;                  // velocity scale of the friction's smooth sign [m/s | rad/s]
   double f_eps = 0.01;                  // effort scale of the backlash side's smooth sign [N | N m]
   double actuator_delay = 0;            // [s]
@@ -39,6 +40,11 @@ struct Params {
   bool any_friction = false, any_rotor = false;
 };
 
+// Friction of joint i at velocity v:
+//   coulomb tanh(v / vc) + stribeck exp(-(v / stribeck_v)^2) tanh(v / v_eps) + viscous v,
+// vc = coulomb_v if set, else v_eps.  v_eps is a numerical regularisation (far below any
+// speed of interest); a coulomb_v of millimetres per second is physics: friction that fades
+// at low speed, as in drives with lubricated contacts or soft-friction simulators.
 // Parameter specs appended to every robot's table: "<prefix>[i].coulomb" ..., with the
 // prefix and units of the robot's actuated joints.
 std::vector<ParamSpec> specs(const Robot& r);
