@@ -81,13 +81,12 @@ def step_figure(out, path, coords: str = "moved") -> Path:
 
 def tracking_figure(out, path) -> Path:
     """The traced path (reference vs actual pen point), the pen error over time, efforts."""
-    from .trajectories import tool_point
+    from .trajectories import pen_point
 
     plt = _plt()
     res, m = out.result, out.metrics
     tool = m["tracking"]["tool_offset"]
-    pen = tool_point(res["x"], tool) if res.robot == "6pus" else res["x"][:, :3]
-    ref = tool_point(res["xref"], tool) if res.robot == "6pus" else res["xref"][:, :3]
+    pen, ref = pen_point(res.robot, res["x"], tool), pen_point(res.robot, res["xref"], tool)
     err = np.linalg.norm(pen - ref, axis=1)
     fig = plt.figure(figsize=(10, 8))
     a0 = fig.add_subplot(2, 2, 1)

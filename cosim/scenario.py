@@ -566,10 +566,7 @@ def predicted_equilibrium_error(model, x_ref, kp, iterations: int = 20) -> np.nd
 def tracking_metrics(sc, res) -> dict:
     """Pen-point tracking error of a traced path (true pose vs reference pose)."""
     tool = sc.spec["output"].get("tool", [0.0, 0.0, 0.0])
-    if res.robot != "6pus":
-        pen, pen_ref = res["x"][:, :3], res["xref"][:, :3]
-    else:
-        pen, pen_ref = tr.tool_point(res["x"], tool), tr.tool_point(res["xref"], tool)
+    pen, pen_ref = tr.pen_point(res.robot, res["x"], tool), tr.pen_point(res.robot, res["xref"], tool)
     err = np.linalg.norm(pen - pen_ref, axis=1)
     ej = res["qref"] - res["q_true"]
     return {"tracking": {

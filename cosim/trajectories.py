@@ -388,3 +388,26 @@ def tool_point(x, offset=(0.0, 0.0, 0.0)):
     """
     x = np.atleast_2d(np.asarray(x, float))
     return x[:, :3] + rotation(x[:, 3:6]) @ np.asarray(offset, float)
+
+
+def pen_point(robot: str, x, offset=(0.0, 0.0, 0.0)):
+    """The traced point of poses of a robot, shape (n, k) [m].
+
+    Parameters
+    ----------
+    robot : str
+        Robot name: its pose names and units come from the core.
+    x : array_like, shape (n, nd)
+        Poses [m, rad].
+    offset : array_like, shape (3,)
+        Tool point in platform coordinates [m], used where the pose carries the rotations
+        rx, ry, rz (:func:`tool_point`); otherwise the pose's position coordinates (those in
+        metres) are the traced point.
+    """
+    from .core import robot_facts
+
+    f = robot_facts(robot)
+    x = np.atleast_2d(np.asarray(x, float))
+    if tuple(f.pose_names[:6]) == ("x", "y", "z", "rx", "ry", "rz"):
+        return tool_point(x, offset)
+    return x[:, [i for i, u in enumerate(f.pose_units) if u == "m"][:3]]
