@@ -119,6 +119,9 @@ def _bench_configure(p):
     p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
     p.add_argument("--report", action="store_true", help="write a diagnosis report per case")
     p.add_argument("--threshold", type=float, default=10.0)
+    p.add_argument("--hold-out", action="store_true",
+                   help="diagnose each effect case with its hidden types taken out of the library and score whether "
+                        "'structure left unexplained' is reported")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no line per case, only the summary")
     p.add_argument("--verbose", action="store_true", help="a line per case (the default on a terminal is a bar)")
 
@@ -153,7 +156,8 @@ def cmd_blind_benchmark(args):
     progress, bar = _case_progress(total, args.quiet, args.verbose)
     try:
         res = blind.benchmark(args.cases, args.seed, args.clean, robots, args.out, jobs=args.jobs,
-                              report=args.report, threshold=args.threshold, replay=False, progress=progress)
+                              report=args.report, threshold=args.threshold, replay=False, progress=progress,
+                              hold_out=args.hold_out)
     finally:
         bar.close()
     text = blind.format_summary(res["summary"])

@@ -416,9 +416,43 @@ def score(diag, key: dict) -> dict:
     return out
 
 
+#: held out together with a hidden type: a fading friction whose scale is below the rate
+#: noise is the step friction itself (the generator's step is tanh(qd / drive.v_eps))
+HOLD_OUT_WITH = {"coulomb": ("smooth_coulomb",)}
+
+
+def same_physics_stand_in(kind: str, changes: dict, diag) -> bool:
+    """With the type ``kind`` held out of the library, is the effect named first the same
+    physics on this recording, at the size the truth implies?  Then no structure can
+    remain and none is owed.  ``changes``: the hidden parameters' true changes from nominal.
+
+    Two exact equivalences: a heavier platform is a payload at the platform's centre (its
+    mass the platform's extra mass within 10 %, its offset under 1 cm); a gap on a joint whose
+    effort keeps one sign (all but the engine's ``GAP_MINORITY`` of the samples) is an
+    encoder offset of b/2 (within 10 %)."""
+    from ..recording import read_recording
+    from .diagnosis import GAP_MINORITY
+
+    est, named = diag.plant_parameters(), diag.named()
+    first = named[0] if named else None
+    if kind == "platform_mass" and first == "payload":
+        dm = changes["platform.m"]
+        off = math.sqrt(sum(est.get(f"payload.{c}", 0.0) ** 2 for c in "xyz"))
+        return abs(est.get("payload.m", 0.0) - dm) < 0.1 * abs(dm) and off < 0.01
+    if kind == "backlash" and first == "encoder_offset" and len(changes) == 1:
+        (name, b), = changes.items()
+        joint = int(name.split("[")[1].split("]")[0])
+        tau = np.asarray(read_recording(diag.recording).tau, float)[:, joint - 1]
+        one_signed = min(np.mean(tau < 0), np.mean(tau > 0)) < GAP_MINORITY
+        off = est.get(name.replace(".backlash", ".encoder_offset"), 0.0)
+        return bool(one_signed and abs(abs(off) - b / 2) < 0.1 * b / 2)
+    return False
+
+
 def _run_one(args):
-    spec, out_dir, key_dir, diag_kw, report, cfg = args
+    spec, out_dir, key_dir, diag_kw, report, cfg, hold_out = args
     from . import diagnose
+    from .effects import LIBRARY
 
     t0 = time.perf_counter()
     try:
@@ -427,6 +461,10 @@ def _run_one(args):
         return {"case": spec.case, "robot": spec.robot, "hidden": list(spec.hidden), "generation_failed": str(e)}
     t1 = time.perf_counter()
     key = json.loads(Path(kp).read_text())
+    hidden = {h["type"] for h in key["effects"]}
+    if hold_out and hidden:  # the hidden types taken out of the library: the structure must show
+        out = hidden | {k for h in hidden for k in HOLD_OUT_WITH.get(h, ())}
+        diag_kw = dict(diag_kw, effects=[e.key for e in LIBRARY if e.key not in out])
     try:
         d = diagnose(csv, out=(Path(out_dir) / f"{spec.case}_report") if report else None, **diag_kw)
     except Exception as e:  # noqa: BLE001 - a failed diagnosis is a failed case, not a stop
@@ -434,13 +472,23 @@ def _run_one(args):
                 "diagnosis_failed": f"{type(e).__name__}: {e}"}
     t2 = time.perf_counter()
     s = score(d, key)
-    s.update({"t_generate": t1 - t0, "t_diagnose": t2 - t1, "conclusion": d.conclusion})
+    s.update({"t_generate": t1 - t0, "t_diagnose": t2 - t1, "conclusion": d.conclusion,
+              "held_out": bool(hold_out and hidden), "structure": [e["signature"] for e in d.unexplained]})
+    if s["held_out"]:
+        h = key["effects"][0]
+        s["stand_in"] = (not s["structure"] and len(key["effects"]) == 1 and same_physics_stand_in(
+            h["type"], {k: v - h["nominal"].get(k, 0.0) for k, v in h["params"].items()}, d))
     return s
 
 
 def benchmark(n: int = 40, seed: int = 1, n_clean: int = 10, robots=("6pus",), out_dir="results/blind",
-              jobs: int = 1, report: bool = False, progress=print, cfg: dict | None = None, **diag_kw) -> dict:
+              jobs: int = 1, report: bool = False, progress=print, cfg: dict | None = None, hold_out: bool = False,
+              **diag_kw) -> dict:
     """Generate and diagnose ``n`` effect cases and ``n_clean`` clean cases; score them.
+
+    With ``hold_out``, each effect case is diagnosed with its hidden types taken out of
+    the library, and the score is whether "structure left unexplained" is reported
+    (``summary["structure_when_held_out"]``); the clean cases are diagnosed as usual.
 
     Returns a dict with the per-case scores (``cases``) and the summary figures; the
     recordings go to ``out_dir/cases``, the keys to ``out_dir/keys``.
@@ -448,7 +496,7 @@ def benchmark(n: int = 40, seed: int = 1, n_clean: int = 10, robots=("6pus",), o
     out_dir = Path(out_dir)
     cfg = cfg or load_config()
     specs = plan(n, n_clean, seed, tuple(robots), cfg)
-    args = [(s, out_dir / "cases", out_dir / "keys", diag_kw, report, cfg) for s in specs]
+    args = [(s, out_dir / "cases", out_dir / "keys", diag_kw, report, cfg, hold_out) for s in specs]
     rows = []
     if jobs > 1:
         import multiprocessing as mp
@@ -477,6 +525,12 @@ def _line(r):
     if not r["hidden"]:
         return f"{r['case']:>9} {r['robot']:>7}  clean -> {','.join(r['named']) or 'none':<28} " \
                f"{'ok' if r['clean_ok'] else 'FALSE ALARM'}  ({r['t_diagnose']:.1f} s)"
+    if r.get("held_out"):
+        return (f"{r['case']:>9} {r['robot']:>7}  {'+'.join(r['hidden']):<28} held out -> "
+                f"{','.join(r['named'][:3]) or 'none':<34} "
+                f"{'structure: ' + ','.join(r['structure']) if r['structure'] else 'NO STRUCTURE'}"
+                f"{' (its same-physics stand-in, at the right size)' if r.get('stand_in') else ''}  "
+                f"({r['t_diagnose']:.1f} s)")
     errs = " ".join(f"{k}:{v * 100:.1f}%" for k, v in r["param_error"].items())
     return (f"{r['case']:>9} {r['robot']:>7}  {'+'.join(r['hidden']):<28} -> {','.join(r['named'][:3]) or 'none':<34}"
             f" {'ok' if r['first_ok'] else ('tie' if r['first_ok_or_tie'] else 'WRONG')}  err {errs}  "
@@ -510,6 +564,12 @@ def summarize(rows) -> dict:
                        "param_ok": sum(r["param_error"][t] <= 0.15 for r in rs),
                        "median_param_error": float(np.median(errs)),
                        "median_gain": float(np.median(gains)) if gains else float("nan")}
+    held = [r for r in eff if r.get("held_out")]
+    for t in types:
+        rs = [r for r in held if r["hidden"][0] == t]
+        if rs:
+            per_type[t]["structure_when_held_out"] = sum(bool(r["structure"]) for r in rs)
+            per_type[t]["stand_in"] = sum(bool(r.get("stand_in")) for r in rs)
     f = lambda k: (sum(bool(r[k]) for r in eff) / len(eff)) if eff else float("nan")  # noqa: E731
     meas = [r for r in eff if r.get("gain_measurable", True)]
     g = lambda k: (sum(bool(r[k]) for r in meas) / len(meas)) if meas else float("nan")  # noqa: E731
@@ -528,12 +588,30 @@ def summarize(rows) -> dict:
         "max_diagnose_s": float(np.nanmax([r["t_diagnose"] for r in rows])) if rows else float("nan"),
         "diagnosis_failed": [r["case"] for r in rows if "diagnosis_failed" in r],
         "per_type": per_type, "confusion": confusion, "not_generated": [r["case"] for r in failed],
+        "structure_when_held_out": (sum(bool(r["structure"]) for r in held) / len(held)) if held else None,
+        "stand_in_when_held_out": (sum(bool(r.get("stand_in")) for r in held) / len(held)) if held else None,
     }
 
 
 def format_summary(summary: dict) -> str:
     """The benchmark summary as text: rates, the confusion matrix, per-type figures."""
     s = summary
+    if s.get("structure_when_held_out") is not None:
+        lines = [f"effect cases: {s['effect_cases']} over {s['effect_types']} primary types, each diagnosed with "
+                 f"its hidden types held out of the library; clean cases: {s['clean_cases']}",
+                 f"structure left unexplained reported: {s['structure_when_held_out'] * 100:5.1f} %",
+                 f"else its same-physics stand-in named at the right size: "
+                 f"{s['stand_in_when_held_out'] * 100:.1f} %",
+                 f"clean cases, no missing physics:     {s['clean_no_missing_physics'] * 100:5.1f} %"
+                 if s["clean_cases"] else "clean cases, no missing physics:     none run",
+                 f"diagnosis time:                      median {s['median_diagnose_s']:.2f} s, max "
+                 f"{s['max_diagnose_s']:.2f} s", "",
+                 "per primary hidden type: cases, structure reported, same-physics stand-in, named first instead"]
+        for t, v in s["per_type"].items():
+            firsts = sorted(s["confusion"].get(t, {}))  # held out: the row is the hidden type
+            lines.append(f"  {t:<17} {v['cases']:>3} {v.get('structure_when_held_out', 0):>4} {v.get('stand_in', 0):>4}   "
+                         f"{', '.join(firsts) or '-'}")
+        return "\n".join(lines)
     lines = [
         f"effect cases: {s['effect_cases']} over {s['effect_types']} primary types; clean cases: {s['clean_cases']}"
         + (f"; not generated: {', '.join(s['not_generated'])}" if s.get("not_generated") else "")

@@ -118,7 +118,7 @@ class Option:
 
     def native(self, coef, nominal):
         g, e = self.group, self.group.key
-        if self.expand is not None:
+        if self.expand is not None and self.cols is not None:
             return {gg.params[0]: nominal[gg.params[0]] + c for gg, c in zip(self.expand, coef)}
         p = g.params
         if e == "payload" and len(p) == 4:
@@ -226,7 +226,7 @@ class Regressors:
     # ------------------------------------------------------------- candidates
 
     def _build_options(self):
-        R0, nd = self.R0, self.nd
+        R0 = self.R0
         m = R0.shape[0]
         by_key = {}
         for g in self.groups:
@@ -324,7 +324,8 @@ class Regressors:
                         for c in self._channels(g):
                             off[:, c] = D[:, c]
                         if np.any(off[self.train] != 0):
-                            opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]}}, 1))
+                            opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]},
+                                                                       "fraction": f}, 1))
                 for lab, o in opts.items():
                     if o:
                         self.options[lab] = o

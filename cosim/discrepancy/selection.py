@@ -191,13 +191,16 @@ class Engine(Regressors, NoiseModel, Inference):
                 why = None
                 if a.group.key not in ("saturation", "dead_zone") and ref > 0 and size < 0.1 * ref:
                     why = f"fitted size {size:.3g} is below a tenth of a small one ({ref:.3g}): negligible"
-                elif a.group.key == "smooth_coulomb":
-                    # A fading friction whose scale left the grid upwards never reaches its
-                    # full value on this recording: it is friction proportional to speed.
-                    vc, top = theta.get(a.group.params[1], 0.0), float(self.velocity_grid()[-1])
-                    if vc > 1.5 * top:
-                        why = (f"its velocity scale {vc:.3g} is above the joint speeds it could saturate at "
-                               f"({top:.3g}): on this recording it is a friction proportional to speed")
+                elif a.group.key in VELOCITY_SCALED:
+                    # A velocity scale that left the grid upwards is not resolved by this recording:
+                    # a fading friction never reaches its full value (friction proportional to
+                    # speed), a Stribeck peak never fades (a constant friction: Coulomb).
+                    v, top = theta.get(a.group.params[1], 0.0), float(self.velocity_grid()[-1])
+                    if v > 1.5 * top:
+                        what = ("a friction proportional to speed" if a.group.key == "smooth_coulomb" else
+                                "a friction that never fades, Coulomb friction")
+                        why = (f"its velocity scale {v:.3g} is above the joint speeds of the recording "
+                               f"({top:.3g}): on this recording it is {what}")
                 if why:
                     selected.remove(a)
                     for p in a.group.params:
@@ -233,6 +236,28 @@ class Engine(Regressors, NoiseModel, Inference):
             groups = [o.group for o in opts]
             pseudo = Group(groups[0].effect, None, tuple(g.params[0] for g in groups))
             out[f"{key}[all]"] = [Option(pseudo, cols, None, {}, len(opts), expand=groups)]
+        # A dead zone on every drive: the same width (as a fraction of each joint's typical
+        # effort) enters on all at once, then refine sets each width; one joint at a time, a
+        # payload's moments would take the common part first.  A drive's dead zone acts on
+        # its own effort channel only, so the all-joints offset is the sum of the joints' own.
+        by_frac = {}
+        for lab, opts in self.options.items():
+            g = opts[0].group
+            if g.key != "dead_zone" or g.joint is None or lab in taken:
+                continue
+            for o in opts:
+                by_frac.setdefault(o.hyper["fraction"], []).append(o)
+        dz = []
+        for f, opts in sorted(by_frac.items()):
+            if len(opts) < 2:
+                continue
+            groups = [o.group for o in opts]
+            pseudo = Group(groups[0].effect, None, tuple(g.params[0] for g in groups))
+            params = {k: v for o in opts for k, v in o.hyper["params"].items()}
+            dz.append(Option(pseudo, None, sum(o.offset for o in opts), {"params": params, "fraction": f},
+                             len(opts), expand=groups))
+        if dz:
+            out["dead_zone[all]"] = dz
         return out
 
     def _prune(self, selected, theta, logn):

@@ -2,7 +2,7 @@
 
 After the selection, each residual channel is tested for a constant offset and for a part
 keyed on the motion of its joint: the sign of the joint velocity, the sign of the
-commanded effort, the joint position, the velocity, the acceleration.  The yardstick is the residual's own
+commanded effort, the joint position, the velocity, the acceleration; when none of those, on the platform pose.  The yardstick is the residual's own
 high-frequency noise (median absolute difference of samples one smoothing window
 apart), not the engine's noise model: an effect outside the library inflates that one
 and would pass for noise ("within noise").  A family of regressors counts when it
@@ -25,6 +25,7 @@ SIGNATURES = {
     "velocity_sign": ("the sign of the joint velocity", ["Coulomb friction", "Stribeck friction"]),
     "command_sign": ("the sign of the commanded effort", ["dead zone", "backlash"]),
     "position": ("the joint position", ["geometry", "payload", "gravity tilt", "encoder offset"]),
+    "pose": ("the platform pose", ["geometry", "gravity tilt", "payload", "encoder offset"]),
     "velocity": ("the joint velocity", ["viscous friction", "actuator / sensor delay"]),
     "acceleration": ("the joint acceleration", ["rotor inertia", "platform mass or inertia", "delays"]),
 }
@@ -49,9 +50,17 @@ def _families(pipe, j: int) -> dict:
         "velocity_sign": np.tanh(qd / v_eps)[:, None],
         "command_sign": np.tanh(tau / t_eps)[:, None],
         "position": np.column_stack([z, z * z, z ** 3]),
+        # a length error of a leg moves its joint by a pose-dependent amount: linear in the pose
+        "pose": _standardised(pipe.x_s[idx]),
         "velocity": np.column_stack([qd, qd * np.abs(qd)]),
         "acceleration": qdd[:, None],
     }
+
+
+def _standardised(X):
+    X = np.asarray(X, float)
+    s = X.std(axis=0)
+    return (X - X.mean(axis=0))[:, s > 0] / s[s > 0]
 
 
 def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
@@ -83,8 +92,7 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
             sigma = max(sigma, float(floor[c]))
         if not sigma > 0:
             continue
-        best = None
-        for sig_name, F in _families(pipe, c % pipe.nd).items():
+        def scored(sig_name, F):
             if sig_name in SIGNED:  # a sign carries its own mean (a one-signed command is an offset too)
                 y, X = R[:, c], F
             else:
@@ -92,13 +100,25 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
             beta, *_ = np.linalg.lstsq(X, y, rcond=None)
             fit = X @ beta
             chi2 = float(fit @ fit) / sigma ** 2 / phi
-            stat = chi2 - F.shape[1] * math.log(n_eff)
-            if stat > threshold and (best is None or stat > best[0]):
-                best = (stat, sig_name, chi2, float(np.sqrt(np.mean(fit ** 2))))
+            return chi2 - F.shape[1] * math.log(n_eff), sig_name, chi2, float(np.sqrt(np.mean(fit ** 2)))
+
+        families = _families(pipe, c % pipe.nd)
+        pose = families.pop("pose")
+        best = None
+        for sig_name, F in families.items():
+            cand = scored(sig_name, F)
+            if cand[0] > threshold and (best is None or cand[0] > best[0]):
+                best = cand
         chi2 = n * mean ** 2 / sigma ** 2 / phi  # a constant alone: the mean against its noise
         stat = chi2 - math.log(n_eff)
         if stat > threshold and (best is None or stat > best[0]):  # a sign that fits as well is more specific
             best = (stat, "offset", chi2, abs(mean))
+        if best is None and pose.shape[1]:
+            # the joint's own motion keys nothing: the pose as a whole (a length error of a leg
+            # moves its joint by a pose-dependent amount) is the last, least specific family
+            cand = scored("pose", pose)
+            if cand[0] > threshold:
+                best = cand
         if best:
             keyed, closest = SIGNATURES[best[1]]
             out.append(Structure(name, c % pipe.nd + 1, best[1], keyed, list(closest), best[2], best[3], sigma))

@@ -43,3 +43,17 @@ def test_blind_benchmark_progress_is_a_bar_a_line_per_case_or_nothing(capsys):
         out = capsys.readouterr().out
         # pytest's capture is no terminal: the default falls back to a line per case
         assert len([ln for ln in out.splitlines() if "case0" in ln]) == want_lines, (quiet, verbose, out)
+
+
+def test_blind_benchmark_hold_out_diagnoses_each_case_without_its_type(tmp_path, capsys):
+    out = tmp_path / "bench"
+    assert main(["blind-benchmark", "--cases", "2", "--clean", "0", "--seed", "3", "--hold-out", "--quiet",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "structure left unexplained reported:" in text
+    res = json.loads((out / "benchmark.json").read_text())
+    rows = res["cases"]
+    assert len(rows) == 2 and all(r["held_out"] for r in rows)
+    for r in rows:
+        assert not set(r["hidden"]) & set(r["named"]), r  # the hidden types were not in the library
+    assert res["summary"]["structure_when_held_out"] == sum(bool(r["structure"]) for r in rows) / 2
