@@ -1,6 +1,7 @@
 """The discrepancy engine on recordings from MuJoCo, a simulator the project did not write.
 
     .venv/bin/python bench/foreign/mujoco_blind.py [--clean 4] [--seed 11] [--duration 9] [--out results/foreign]
+        [--controller pid] [--two] [--hold-out type] [--only backlash,clean] [--any-rail]
 
 Each case is a 6-PUS run in MuJoCo (PyPI ``mujoco``; bench/requirements.txt): a model
 built from the core's nominal parameters (free platform, six slide joints with their
@@ -49,6 +50,7 @@ from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.excitation import excitation  # noqa: E402
 from cosim.master import make_reference  # noqa: E402
+from cosim.discrepancy.diagnosis import GAP_MINORITY  # noqa: E402
 from cosim.recording import Recording, write_recording  # noqa: E402
 
 DT, SUBSTEPS = 1e-3, 10  # controller / recording period, MuJoCo steps per period (0.1 ms)
@@ -293,6 +295,18 @@ def plan(seed: int, n_clean: int, two: bool = False):
     return cases
 
 
+def gap_joint(m: Model, seed: int, duration: float, joint: int) -> int:
+    """The rail a backlash is put on: the drawn one if its feed-forward effort along this
+    case's trajectory changes sign (the engine's GAP_MINORITY of the samples on the minority
+    side, or more), else the next one that does (a gap on a one-signed rail is an offset of
+    b/2 there, whatever its size: no recording can measure it).  The drawn rail when none does."""
+    traj = excitation(m, duration, seed=seed)
+    ref = make_reference(m, traj, step=DT, duration=round(traj.duration / DT) * DT)
+    neg = np.mean(m.inverse_dynamics(ref.x, ref.xd, ref.xdd) < 0, axis=0)
+    ok = [j for j in range(6) if min(neg[j], 1 - neg[j]) >= GAP_MINORITY]
+    return joint if joint in ok or not ok else min(ok, key=lambda j: (j - joint) % 6)
+
+
 def _pair(m, hidden, seed, a, noise, rows):
     """A case hiding two effects: both must be named, each parameter within 15 %."""
     name = "+".join(e for e, _, _ in hidden) + f"_{seed}"
@@ -332,7 +346,16 @@ def main(argv=None) -> int:
                     help="diagnose each effect case with its type (or its type and the type's declared "
                          "look-alikes) taken out of the library: the check of 'structure left unexplained' (a case "
                          "counts when structure is reported)")
+    ap.add_argument("--any-rail", action="store_true",
+                    help="put a backlash on the drawn rail even where its effort keeps one sign (by default it "
+                         "moves to a rail whose effort changes sign, where a gap can be measured)")
+    ap.add_argument("--only", default=None, metavar="TYPE[,TYPE]",
+                    help="run only these cases of the plan (effect types, or 'clean'); the others are drawn as usual")
     a = ap.parse_args(argv)
+    only = None if a.only is None else set(a.only.split(","))
+    if only and not only <= set(EFFECTS) | {"clean"}:
+        ap.error(f"--only: unknown type(s) {', '.join(sorted(only - set(EFFECTS) - {'clean'}))}; "
+                 f"known: {', '.join(EFFECTS)}, clean")
     m = Model("6pus")
     noise = blind.load_config()["noise"]["6pus"]
     a.out.mkdir(parents=True, exist_ok=True)
@@ -342,6 +365,10 @@ def main(argv=None) -> int:
             _pair(m, effect, seed, a, noise, rows)
             continue
         name = f"{effect or 'clean'}_{seed}"
+        if only and (effect or "clean") not in only:
+            continue
+        if effect == "backlash" and not a.any_rail:
+            joint = gap_joint(m, seed, a.duration, joint)
         try:
             rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller)
         except ControllerError as e:  # the drawn case drove a rail off its stroke: not a recording

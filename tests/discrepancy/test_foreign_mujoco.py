@@ -38,3 +38,11 @@ def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, effect, value, joint, k
     assert d.named()[0] == effect, d.conclusion
     est = d.plant_parameters()[key]
     assert abs(est - truth[key]) < 0.10 * truth[key], (est, truth[key])
+
+
+def test_a_gap_is_put_on_a_rail_whose_effort_changes_sign():
+    # case 1109 of the full set draws rail 1, which carries the platform's weight one way
+    # throughout (a gap there is an offset of b/2, not measurable): it moves to rail 6
+    m = Model("6pus")
+    assert mb.gap_joint(m, 1109, 9.0, 0) == 5
+    assert mb.gap_joint(m, 1109, 9.0, 5) == 5  # a rail whose effort changes sign stays
