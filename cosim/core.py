@@ -571,21 +571,33 @@ class Model:
             return g
         return self._loop("pkm_gravity_load", [x], ["x"], (self.ndof,))
 
-    def measure_joints(self, x, xd, tau):
+    def _batch_or_loop(self, fn, name, inputs, names, times, what):
+        """The core's batched form; when a row fails, the per-item call raises its error
+        naming the row (and its time, given ``times``)."""
+        out, status = self._batch(getattr(lib, fn), inputs, names, errors="status")
+        if np.any(status):
+            self._loop(name, inputs, names, (self.ndof,), times=times, what=what)
+        return out
+
+    def measure_joints(self, x, xd, tau, times=None, what="item"):
         """Joint readings of the model's sensors at (x, xd) with applied effort tau, shape
-        (..., nd) (``pkm_measure_joints``: encoder offset, backlash, compliance)."""
+        (..., nd) (``pkm_measure_joints``: encoder offset, backlash, compliance).  A failing
+        row is named in the error (with its time from ``times``, if given)."""
         q = self._single("pkm_measure_joints", (x, xd, tau), (self.ndof,))
         if q is not None:
             return q
-        return self._loop("pkm_measure_joints", [x, xd, tau], ["x", "xd", "tau"], (self.ndof,))
+        return self._batch_or_loop("pkm_measure_joints_batch", "pkm_measure_joints", [x, xd, tau],
+                                   ["x", "xd", "tau"], times, what)
 
-    def actuator_effort(self, tau_cmd):
+    def actuator_effort(self, tau_cmd, times=None, what="item"):
         """Effort reaching the mechanism for a commanded one, shape (..., nd) (``pkm_actuator_effort``:
-        dead zone, saturation)."""
+        dead zone, saturation).  A failing row is named in the error (with its time from
+        ``times``, if given)."""
         u = self._single("pkm_actuator_effort", (tau_cmd,), (self.ndof,))
         if u is not None:
             return u
-        return self._loop("pkm_actuator_effort", [tau_cmd], ["tau_cmd"], (self.ndof,))
+        return self._batch_or_loop("pkm_actuator_effort_batch", "pkm_actuator_effort", [tau_cmd], ["tau_cmd"],
+                                   times, what)
 
     def energy(self, x, xd):
         """(kinetic, potential) energy [J], each shape (...)."""

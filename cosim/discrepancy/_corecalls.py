@@ -1,4 +1,5 @@
-"""Per-sample calls of core functions that have no batched form, over a whole recording.
+"""Per-sample calls of core functions over a whole recording (the batched form where the
+core has one).
 
 Thin layer over ``cosim.core.Model``'s per-item loop (integer addresses, about 1 us a
 sample), adding the sample's time to the error of the first failing sample.  Nothing here
@@ -10,8 +11,6 @@ _NAMES = {
     "pkm_pose_velocity": ["x", "qd"],
     "pkm_pose_acceleration": ["x", "xd", "qdd"],
     "pkm_joint_velocity": ["x", "xd"],
-    "pkm_measure_joints": ["x", "xd", "tau"],
-    "pkm_actuator_effort": ["tau_cmd"],
     "pkm_joint_friction": ["qd"],
 }
 
@@ -38,9 +37,9 @@ def pose_acceleration(model, x, xd, qdd, times=None):
 def measure_joints(model, x, xd, tau, times=None):
     """Joint readings (n, nd) of the model's sensors at (x, xd) with applied effort tau
     (core ``pkm_measure_joints``: encoder offset, backlash, compliance)."""
-    return per_sample(model, "pkm_measure_joints", x, xd, tau, times=times)
+    return model.measure_joints(x, xd, tau, times=times, what="sample")
 
 
 def actuator_effort(model, tau_cmd, times=None):
     """Effort reaching the mechanism for commanded efforts (n, nd) (core saturation)."""
-    return per_sample(model, "pkm_actuator_effort", tau_cmd, times=times)
+    return model.actuator_effort(tau_cmd, times=times, what="sample")

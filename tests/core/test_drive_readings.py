@@ -3,8 +3,9 @@ side of the transmission, so a gap and an elasticity read the effort the transmi
 the applied effort less the drive's own friction and rotor-inertia force (issue 12: MuJoCo's
 two-body rails showed the difference), and the gap's side follows that effort, not the velocity."""
 import numpy as np
+import pytest
 
-from cosim.core import Model
+from cosim.core import Model, PkmError
 from cosim.discrepancy import _corecalls as cc
 
 
@@ -62,3 +63,20 @@ def test_coulomb_velocity_scale_makes_friction_fade_at_low_speed():
     expect = np.zeros(6)
     expect[2] = F * (np.tanh(qd[2] / vc) - np.tanh(qd[2] / eps))
     np.testing.assert_allclose(d_tau, expect, atol=1e-12)
+
+
+def test_the_batched_readings_and_actuator_efforts_equal_the_per_sample_calls_and_name_a_bad_row():
+    m = Model("6pus")
+    m.set_params({"rail[2].dead_zone": 0.03, "rail[3].effort_max": 1.0, "rail[1].backlash": 2e-5,
+                  "rail[4].compliance": 1e-5, "rail[5].encoder_offset": 1e-5})
+    rng = np.random.default_rng(0)
+    tau = rng.normal(0, 1, (500, 6))
+    x = m.home() + rng.normal(0, 1e-3, (500, 6))
+    xd = rng.normal(0, 1e-2, (500, 6))
+    per_u = np.array([m.actuator_effort(t) for t in tau])       # one C call per row
+    per_q = np.array([m.measure_joints(a, b, t) for a, b, t in zip(x, xd, tau)])
+    assert np.array_equal(m.actuator_effort(tau), per_u)          # one batched C call
+    assert np.array_equal(m.measure_joints(x, xd, tau), per_q)
+    tau[77, 3] = np.nan
+    with pytest.raises(PkmError, match=r"sample 77 \(t = 0\.077 s\): commanded effort tau_cmd\[3\] is not finite"):
+        m.actuator_effort(tau, times=np.arange(500) * 1e-3, what="sample")

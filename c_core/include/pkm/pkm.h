@@ -237,6 +237,8 @@ PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd
  * clipped at effort_max (if > 0). */
 PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* tau_cmd,
                                 double* tau_applied);
+PKM_API int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                      const double* tau_cmd, double* tau_applied, int* status);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
  * q_meas = q + encoder_offset + backlash/2 sgn(c) + compliance c, with c the effort the
  * transmission carries: tau less the drive side's own friction and rotor inertia (rotor qdd,
@@ -245,6 +247,9 @@ PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* t
  * and the transmission deflects by compliance c. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, const double* tau, double* q_meas);
+PKM_API int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                     const double* x, const double* xd, const double* tau,
+                                     double* q_meas, int* status);
 
 /* =============================================================== integration */
 

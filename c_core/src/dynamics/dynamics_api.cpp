@@ -129,4 +129,38 @@ int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x, const d
   });
 }
 
+int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n, const double* tau_cmd,
+                              double* tau_applied, int* status) {
+  int s = guard(d, [&] {
+    prepare(m, d);
+    check_out(tau_cmd, "tau_cmd");
+    check_out(tau_applied, "tau_applied");
+  });
+  if (s != PKM_OK) return s;
+  const int nd = d->ndof;
+  return run_batch(d, n, status, tau_applied, nd, [&](size_t k) {
+    check_finite(tau_cmd + k * nd, nd, "commanded effort tau_cmd");
+    actuator_effort(*m->drive, tau_cmd + k * nd, tau_applied + k * nd);
+  });
+}
+
+int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
+                             const double* tau, double* q_meas, int* status) {
+  int s = guard(d, [&] {
+    prepare(m, d);
+    check_out(x, "x");
+    check_out(xd, "xd");
+    check_out(tau, "tau");
+    check_out(q_meas, "q_meas");
+  });
+  if (s != PKM_OK) return s;
+  const int nd = d->ndof;
+  return run_batch(d, n, status, q_meas, nd, [&](size_t k) {
+    check_finite(x + k * nd, nd, "pose x");
+    check_finite(xd + k * nd, nd, "pose velocity xd");
+    check_finite(tau + k * nd, nd, "applied effort tau");
+    measure_joints(m, d, x + k * nd, xd + k * nd, tau + k * nd, q_meas + k * nd);
+  });
+}
+
 }  // extern "C"
