@@ -269,7 +269,6 @@ class Engine(Regressors, NoiseModel, Inference):
                 for p in a.group.params:
                     theta.pop(p, None)
         while len(selected) > 1:
-            chi2 = self._chi2(theta)
             worst = None
             for a in selected:
                 imp, th = self._without(selected, theta, a)
