@@ -533,14 +533,18 @@ class Model:
     def joint_velocity(self, x, xd):
         return self._loop("pkm_joint_velocity", [x, xd], ["x", "xd"], (self.ndof,))
 
-    def pose_velocity(self, x, qd):
-        return self._loop("pkm_pose_velocity", [x, qd], ["x", "qd"], (self.ndof,))
+    def pose_velocity(self, x, qd, times=None, what="item"):
+        """Pose rates xd, shape (..., nd), of joint rates qd at poses x (``pkm_pose_velocity``)."""
+        return self._batch_or_loop("pkm_pose_velocity_batch", "pkm_pose_velocity", [x, qd], ["x", "qd"], times,
+                                   what)
 
     def joint_acceleration(self, x, xd, xdd):
         return self._loop("pkm_joint_acceleration", [x, xd, xdd], ["x", "xd", "xdd"], (self.ndof,))
 
-    def pose_acceleration(self, x, xd, qdd):
-        return self._loop("pkm_pose_acceleration", [x, xd, qdd], ["x", "xd", "qdd"], (self.ndof,))
+    def pose_acceleration(self, x, xd, qdd, times=None, what="item"):
+        """Pose accelerations xdd, shape (..., nd) (``pkm_pose_acceleration``)."""
+        return self._batch_or_loop("pkm_pose_acceleration_batch", "pkm_pose_acceleration", [x, xd, qdd],
+                                   ["x", "xd", "qdd"], times, what)
 
     # ------------------------------------------------------------------ dynamics
     def inverse_dynamics(self, x, xd, xdd, errors: str = "raise"):

@@ -8,8 +8,6 @@ computes physics.
 from __future__ import annotations
 
 _NAMES = {
-    "pkm_pose_velocity": ["x", "qd"],
-    "pkm_pose_acceleration": ["x", "xd", "qdd"],
     "pkm_joint_velocity": ["x", "xd"],
     "pkm_joint_friction": ["qd"],
 }
@@ -26,12 +24,12 @@ def per_sample(model, name, *inputs, what="sample", times=None):
 
 def pose_velocity(model, x, qd, times=None):
     """Pose rates xd (n, nd) of joint rates qd at poses x (core ``pkm_pose_velocity``)."""
-    return per_sample(model, "pkm_pose_velocity", x, qd, times=times)
+    return model.pose_velocity(x, qd, times=times, what="sample")
 
 
 def pose_acceleration(model, x, xd, qdd, times=None):
     """Pose accelerations (n, nd) (core ``pkm_pose_acceleration``)."""
-    return per_sample(model, "pkm_pose_acceleration", x, xd, qdd, times=times)
+    return model.pose_acceleration(x, xd, qdd, times=times, what="sample")
 
 
 def measure_joints(model, x, xd, tau, times=None):

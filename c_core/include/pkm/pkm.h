@@ -192,6 +192,11 @@ PKM_API int pkm_joint_acceleration(const pkm_model* m, pkm_data* d, const double
                                    const double* xd, const double* xdd, double* qdd);
 PKM_API int pkm_pose_acceleration(const pkm_model* m, pkm_data* d, const double* x,
                                   const double* xd, const double* qdd, double* xdd);
+PKM_API int pkm_pose_velocity_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
+                                    const double* qd, double* xd, int* status);
+PKM_API int pkm_pose_acceleration_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                        const double* x, const double* xd, const double* qdd,
+                                        double* xdd, int* status);
 
 /* ================================================================== dynamics */
 

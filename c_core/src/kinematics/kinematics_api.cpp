@@ -150,4 +150,42 @@ int pkm_pose_acceleration(const pkm_model* m, pkm_data* d, const double* x, cons
   });
 }
 
+int pkm_pose_velocity_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* qd,
+                            double* xd, int* status) {
+  const RobotModel* rm = nullptr;
+  int s = guard(d, [&] {
+    rm = &prepare(m, d);
+    check_out(x, "x");
+    check_out(qd, "qd");
+    check_out(xd, "xd");
+  });
+  if (s != PKM_OK) return s;
+  const int nd = d->ndof;
+  return run_batch(d, n, status, xd, nd, [&](size_t k) {
+    check_finite(x + k * nd, nd, "pose x");
+    check_finite(qd + k * nd, nd, "joint velocity qd");
+    pose_velocity(*d->robot, *rm, *d->rd, x + k * nd, qd + k * nd, xd + k * nd);
+  });
+}
+
+int pkm_pose_acceleration_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
+                                const double* qdd, double* xdd, int* status) {
+  const RobotModel* rm = nullptr;
+  int s = guard(d, [&] {
+    rm = &prepare(m, d);
+    check_out(x, "x");
+    check_out(xd, "xd");
+    check_out(qdd, "qdd");
+    check_out(xdd, "xdd");
+  });
+  if (s != PKM_OK) return s;
+  const int nd = d->ndof;
+  return run_batch(d, n, status, xdd, nd, [&](size_t k) {
+    check_finite(x + k * nd, nd, "pose x");
+    check_finite(xd + k * nd, nd, "pose velocity xd");
+    check_finite(qdd + k * nd, nd, "joint acceleration qdd");
+    pose_acceleration(*d->robot, *rm, *d->rd, x + k * nd, xd + k * nd, qdd + k * nd, xdd + k * nd);
+  });
+}
+
 }  // extern "C"
