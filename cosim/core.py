@@ -713,6 +713,17 @@ def default_options() -> dict:
     }
 
 
+def _release(obj, attr: str, destroy: str) -> None:
+    """Destroy the core handle ``obj.<attr>`` once (for ``__del__``; quiet at interpreter shutdown)."""
+    try:
+        h = getattr(obj, attr, None)
+        if h:
+            getattr(lib, destroy)(h)
+            setattr(obj, attr, None)
+    except Exception:  # interpreter shutdown
+        pass
+
+
 class Simulator:
     """An integration of one robot's task-space state under a held input.
 
@@ -793,12 +804,7 @@ class Simulator:
         self._t = C.c_double(0.0)
 
     def __del__(self):
-        try:
-            if getattr(self, "_s", None):
-                lib.pkm_sim_destroy(self._s)
-                self._s = None
-        except Exception:  # interpreter shutdown
-            pass
+        _release(self, "_s", "pkm_sim_destroy")
 
     def _check(self, status: int) -> None:
         if status != 0:
@@ -940,12 +946,7 @@ class CompiledController:
         self._c = C.c_void_p(h)
 
     def __del__(self):
-        try:
-            if getattr(self, "_c", None):
-                lib.pkm_ctrl_destroy(self._c)
-                self._c = None
-        except Exception:  # interpreter shutdown
-            pass
+        _release(self, "_c", "pkm_ctrl_destroy")
 
     def reset(self, x0=None) -> None:
         """Clear the controller's states; ``x0`` seeds the forward kinematics [m, rad]."""

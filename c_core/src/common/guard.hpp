@@ -6,8 +6,10 @@
 #include <cstdio>
 #include <cstddef>
 #include <cstring>
+#include <initializer_list>
 #include <new>
 #include <string>
+#include <utility>
 
 #include "common/handles.hpp"
 
@@ -106,6 +108,28 @@ int run_batch(pkm_data* d, size_t n, int* status, double* out, int out_stride, F
     }
   }
   return first;
+}
+
+// Row k of a batch of rows of nd values, refused unless finite (the message names ``what``).
+inline const double* row_at(const double* a, size_t k, int nd, const char* what) {
+  const double* r = a + k * nd;
+  check_finite(r, nd, what);
+  return r;
+}
+
+// A batched entry point over rows of nd values: the model prepared once and the arrays
+// refused if NULL (one guard, in the order given), then row(rm, k) for each row through
+// run_batch, the output out having nd values a row.
+template <class Row>
+int prepared_batch(const pkm_model* m, pkm_data* d, size_t n, int* status, double* out,
+                   std::initializer_list<std::pair<const void*, const char*>> arrays, Row&& row) {
+  const RobotModel* rm = nullptr;
+  int s = guard(d, [&] {
+    rm = &prepare(m, d);
+    for (const auto& a : arrays) check_out(a.first, a.second);
+  });
+  if (s != PKM_OK) return s;
+  return run_batch(d, n, status, out, d->ndof, [&](size_t k) { row(*rm, k); });
 }
 
 }  // namespace pkm

@@ -20,20 +20,12 @@ int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const
 
 int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                                const double* xdd, double* tau, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(x, "x");
-    check_out(xd, "xd");
-    check_out(xdd, "xdd");
-    check_out(tau, "tau");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, tau, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    check_finite(xd + k * nd, nd, "pose velocity xd");
-    check_finite(xdd + k * nd, nd, "pose acceleration xdd");
-    total_inverse_dynamics(m, d, x + k * nd, xd + k * nd, xdd + k * nd, tau + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
+                        [&](const RobotModel&, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    total_inverse_dynamics(m, d, xk, xdk, row_at(xdd, k, nd, "pose acceleration xdd"), tau + k * nd);
   });
 }
 
@@ -51,20 +43,12 @@ int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const
 
 int pkm_forward_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                                const double* tau, double* xdd, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(x, "x");
-    check_out(xd, "xd");
-    check_out(tau, "tau");
-    check_out(xdd, "xdd");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, xdd, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    check_finite(xd + k * nd, nd, "pose velocity xd");
-    check_finite(tau + k * nd, nd, "actuator effort tau");
-    total_forward_dynamics(m, d, x + k * nd, xd + k * nd, tau + k * nd, xdd + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, xdd, {{x, "x"}, {xd, "xd"}, {tau, "tau"}, {xdd, "xdd"}},
+                        [&](const RobotModel&, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    total_forward_dynamics(m, d, xk, xdk, row_at(tau, k, nd, "actuator effort tau"), xdd + k * nd);
   });
 }
 
@@ -131,35 +115,21 @@ int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x, const d
 
 int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n, const double* tau_cmd,
                               double* tau_applied, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(tau_cmd, "tau_cmd");
-    check_out(tau_applied, "tau_applied");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, tau_applied, nd, [&](size_t k) {
-    check_finite(tau_cmd + k * nd, nd, "commanded effort tau_cmd");
-    actuator_effort(*m->drive, tau_cmd + k * nd, tau_applied + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, tau_applied, {{tau_cmd, "tau_cmd"}, {tau_applied, "tau_applied"}},
+                        [&](const RobotModel&, size_t k) {
+    actuator_effort(*m->drive, row_at(tau_cmd, k, nd, "commanded effort tau_cmd"), tau_applied + k * nd);
   });
 }
 
 int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                              const double* tau, double* q_meas, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(x, "x");
-    check_out(xd, "xd");
-    check_out(tau, "tau");
-    check_out(q_meas, "q_meas");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, q_meas, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    check_finite(xd + k * nd, nd, "pose velocity xd");
-    check_finite(tau + k * nd, nd, "applied effort tau");
-    measure_joints(m, d, x + k * nd, xd + k * nd, tau + k * nd, q_meas + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, q_meas, {{x, "x"}, {xd, "xd"}, {tau, "tau"}, {q_meas, "q_meas"}},
+                        [&](const RobotModel&, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    measure_joints(m, d, xk, xdk, row_at(tau, k, nd, "applied effort tau"), q_meas + k * nd);
   });
 }
 

@@ -25,17 +25,9 @@ int pkm_ik(const pkm_model* m, pkm_data* d, const double* x, double* q) {
 }
 
 int pkm_ik_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, double* q, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(x, "x");
-    check_out(q, "q");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  const RobotModel& rm = *m->compiled;
-  return run_batch(d, n, status, q, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    d->robot->ik(rm, *d->rd, x + k * nd, q + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, q, {{x, "x"}, {q, "q"}}, [&](const RobotModel& rm, size_t k) {
+    d->robot->ik(rm, *d->rd, row_at(x, k, nd, "pose x"), q + k * nd);
   });
 }
 
@@ -54,21 +46,14 @@ int pkm_fk(const pkm_model* m, pkm_data* d, const double* q, const double* x_gue
 
 int pkm_fk_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q, const double* x_guess,
                  const pkm_fk_options* opt, double* x, int* status) {
-  int s = guard(d, [&] {
-    prepare(m, d);
-    check_out(q, "q");
-    check_out(x_guess, "x_guess");
-    check_out(x, "x");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  const RobotModel& rm = *m->compiled;
+  const int nd = d ? d->ndof : 0;
   const pkm_fk_options o = fk_defaults(opt);
-  return run_batch(d, n, status, x, nd, [&](size_t k) {
-    check_finite(q + k * nd, nd, "joints q");
-    check_finite(x_guess + k * nd, nd, "pose guess x_guess");
+  return prepared_batch(m, d, n, status, x, {{q, "q"}, {x_guess, "x_guess"}, {x, "x"}},
+                        [&](const RobotModel& rm, size_t k) {
+    const double* qk = row_at(q, k, nd, "joints q");
+    const double* gk = row_at(x_guess, k, nd, "pose guess x_guess");
     pkm_fk_info info{0, 0.0};
-    d->robot->fk(rm, *d->rd, q + k * nd, x_guess + k * nd, o, x + k * nd, info);
+    d->robot->fk(rm, *d->rd, qk, gk, o, x + k * nd, info);
   });
 }
 
@@ -152,39 +137,22 @@ int pkm_pose_acceleration(const pkm_model* m, pkm_data* d, const double* x, cons
 
 int pkm_pose_velocity_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* qd,
                             double* xd, int* status) {
-  const RobotModel* rm = nullptr;
-  int s = guard(d, [&] {
-    rm = &prepare(m, d);
-    check_out(x, "x");
-    check_out(qd, "qd");
-    check_out(xd, "xd");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, xd, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    check_finite(qd + k * nd, nd, "joint velocity qd");
-    pose_velocity(*d->robot, *rm, *d->rd, x + k * nd, qd + k * nd, xd + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, xd, {{x, "x"}, {qd, "qd"}, {xd, "xd"}},
+                        [&](const RobotModel& rm, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    pose_velocity(*d->robot, rm, *d->rd, xk, row_at(qd, k, nd, "joint velocity qd"), xd + k * nd);
   });
 }
 
 int pkm_pose_acceleration_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                                 const double* qdd, double* xdd, int* status) {
-  const RobotModel* rm = nullptr;
-  int s = guard(d, [&] {
-    rm = &prepare(m, d);
-    check_out(x, "x");
-    check_out(xd, "xd");
-    check_out(qdd, "qdd");
-    check_out(xdd, "xdd");
-  });
-  if (s != PKM_OK) return s;
-  const int nd = d->ndof;
-  return run_batch(d, n, status, xdd, nd, [&](size_t k) {
-    check_finite(x + k * nd, nd, "pose x");
-    check_finite(xd + k * nd, nd, "pose velocity xd");
-    check_finite(qdd + k * nd, nd, "joint acceleration qdd");
-    pose_acceleration(*d->robot, *rm, *d->rd, x + k * nd, xd + k * nd, qdd + k * nd, xdd + k * nd);
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, xdd, {{x, "x"}, {xd, "xd"}, {qdd, "qdd"}, {xdd, "xdd"}},
+                        [&](const RobotModel& rm, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    pose_acceleration(*d->robot, rm, *d->rd, xk, xdk, row_at(qdd, k, nd, "joint acceleration qdd"), xdd + k * nd);
   });
 }
 
