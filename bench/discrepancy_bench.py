@@ -11,12 +11,18 @@ then, each timed (best of --repeat):
 * + replay: with the closed-loop replay of the held-out part (two core simulations);
 * + report: with the Markdown report and its five figures.
 
+With --per-row, the diagnosis is also timed with the core's per-row loop in place of its
+batched calls over the samples (actuator effort, sensor readings, pose rates), the two
+alternated, medians of --repeat: the same-run baseline of the batched calls.
+
 Usage: PKM_BUILD_DIR=build .venv/bin/python bench/discrepancy_bench.py [--repeat 3] [--robot 6pus quattro]
+       [--per-row]
 """
 from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import sys
 import tempfile
 import time
@@ -45,10 +51,46 @@ def best(fn, repeat):
     return min(times), out
 
 
+#: Model methods with a batched core call over the samples -> (per-row core function, its inputs)
+PER_ROW = {"actuator_effort": ("pkm_actuator_effort", ["tau_cmd"]),
+           "measure_joints": ("pkm_measure_joints", ["x", "xd", "tau"]),
+           "pose_velocity": ("pkm_pose_velocity", ["x", "qd"]),
+           "pose_acceleration": ("pkm_pose_acceleration", ["x", "xd", "qdd"])}
+
+
+def _batched_vs_per_row(fn, repeat):
+    """Wall times of fn with the per-row core loop and with the batched calls, alternated."""
+    batched = {k: getattr(Model, k) for k in PER_ROW}
+
+    def looped(name, inputs):
+        return lambda self, *a, times=None, what="item": self._loop(name, list(a), inputs, (self.ndof,),
+                                                                     times=times, what=what)
+
+    loop, batch = [], []
+    try:
+        for _ in range(repeat):
+            for k, (name, inputs) in PER_ROW.items():
+                setattr(Model, k, looped(name, inputs))
+            t = time.perf_counter()
+            fn()
+            loop.append(time.perf_counter() - t)
+            for k, f in batched.items():
+                setattr(Model, k, f)
+            t = time.perf_counter()
+            fn()
+            batch.append(time.perf_counter() - t)
+    finally:
+        for k, f in batched.items():
+            setattr(Model, k, f)
+    return loop, batch
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--robot", nargs="+", default=["6pus", "quattro"])
+    ap.add_argument("--per-row", action="store_true",
+                    help="also time the diagnosis with per-row core calls instead of the batched ones (alternated)")
     args = ap.parse_args(argv)
     try:
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # single core
@@ -57,7 +99,7 @@ def main(argv=None):
     cfg = blind.load_config()
     cfg["general"]["duration"] = 10.0
     cfg["general"]["two_effects"] = 0.0
-    rows = []
+    rows, per_row = [], {}
     with tempfile.TemporaryDirectory() as tmp, threadpool_limits(1, user_api="blas"):
         for robot in args.robot:
             spec = blind.CaseSpec(f"bench_{robot}", robot, HIDDEN[robot], seed=2024)
@@ -70,6 +112,8 @@ def main(argv=None):
             t_r, _ = best(lambda: diagnose(csv, replay=True), args.repeat)
             t_o, _ = best(lambda: diagnose(csv, replay=True, out=Path(tmp) / "rep"), 1)
             rows.append((robot, n, t_gen, base, t_d, t_r, t_o, ", ".join(d.named()) or "none"))
+            if args.per_row:
+                per_row[robot] = _batched_vs_per_row(lambda: diagnose(csv, replay=False), args.repeat)
     print(f"{'robot':<8} {'samples':>7} {'generate':>9} {'baseline':>9} {'diagnose':>9} {'+replay':>9} "
           f"{'+report':>9}  target  named")
     ok = True
@@ -78,6 +122,10 @@ def main(argv=None):
         ok &= dd < TARGET
         print(f"{robot:<8} {n:>7} {g:>8.2f}s {b:>8.2f}s {dd:>8.2f}s {r:>8.2f}s {o:>8.2f}s  {flag:<6}  {named}")
     print(f"(single core, best of {args.repeat}; target: diagnose < {TARGET:g} s for a 10 s, 1 kHz recording)")
+    for robot, (loop, batch) in per_row.items():
+        print(f"{robot}: diagnose with per-row core calls median {statistics.median(loop):.2f} s "
+              f"({min(loop):.2f}-{max(loop):.2f}), batched median {statistics.median(batch):.2f} s "
+              f"({min(batch):.2f}-{max(batch):.2f}); alternated, {args.repeat} each")
     return 0 if ok else 1
 
 
