@@ -88,6 +88,16 @@ PKM_API int pkm_robot_count(void);
 PKM_API const char* pkm_robot_name(int i);                          /* "6pus", ...      */
 PKM_API int pkm_robot_param_set_count(const char* robot);          /* -1: unknown      */
 PKM_API const char* pkm_robot_param_set_name(const char* robot, int i); /* "default", ... */
+/* One line saying what the robot is, and the description file it was compiled from ("" for
+ * the robots written in C++, or for an unknown robot).  Besides the names pkm_robot_name
+ * lists, every robot function and pkm_model_create take a path to a description file
+ * (docs/robots.md). */
+PKM_API const char* pkm_robot_title(const char* robot);
+PKM_API const char* pkm_robot_file(const char* robot);
+/* Compiles a description given as text (an FMU carries its robot's description this way);
+ * the robot then answers to its name.  file names it in messages.  PKM_ERR_ARGUMENT with
+ * "file:line: ..." for a bad description. */
+PKM_API int pkm_robot_register_description(const char* text, const char* file, char* err, size_t errlen);
 PKM_API const char* pkm_model_robot(const pkm_model* m);   /* "6pus", ...          */
 /* Pose coordinate i: name ("x", "rz", "theta") and unit ("m", "rad"). */
 PKM_API const char* pkm_model_pose_name(const pkm_model* m, int i);

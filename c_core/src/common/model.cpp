@@ -1,8 +1,11 @@
 // C API: models, data and named parameters.
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <sstream>
 
 #include "common/guard.hpp"
+#include "description/described_robot.hpp"
 #include "dynamics/drive.hpp"
 
 using pkm::Error;
@@ -68,6 +71,9 @@ int pkm_model_create_status(const char* robot, const char* param_set, pkm_model*
     m->robot_name = r->name();
     m->specs = r->param_specs(param_set ? param_set : "default");
     for (auto& s : pkm::drive::specs(*r)) m->specs.push_back(std::move(s));
+    for (const auto& o : r->param_overrides(param_set ? param_set : "default"))
+      for (auto& s : m->specs)
+        if (s.name == o.first) s.value = o.second;
     for (const auto& s : m->specs) m->values.push_back(s.value);
     m->compiled = std::shared_ptr<const pkm::RobotModel>(r->compile(m->specs, m->values));
     m->drive = pkm::drive::compile(*r, m->specs, m->values);
@@ -80,27 +86,56 @@ int pkm_model_create_status(const char* robot, const char* param_set, pkm_model*
 
 int pkm_robot_count(void) { return pkm::robot_count(); }
 
-const char* pkm_robot_name(int i) {
-  const pkm::Robot* r = pkm::robot_at(i);
-  return r ? r->name() : "";
-}
+const char* pkm_robot_name(int i) { return pkm::robot_name_at(i); }
 
 namespace {
 // Parameter-set names per robot, kept for the life of the process (the C strings the
 // API hands out point into it).
 const std::vector<std::string>* param_sets_of(const char* robot) {
-  static std::vector<std::vector<std::string>> sets;
-  static const bool filled = [] {
-    for (int i = 0; i < pkm::robot_count(); ++i) sets.push_back(pkm::robot_at(i)->param_sets());
-    return true;
-  }();
-  (void)filled;
+  static std::mutex mu;
+  static std::map<const pkm::Robot*, std::vector<std::string>> sets;
   if (!robot) return nullptr;
-  for (int i = 0; i < pkm::robot_count(); ++i)
-    if (std::string(robot) == pkm::robot_at(i)->name()) return &sets[i];
-  return nullptr;
+  const pkm::Robot* r = nullptr;
+  try {
+    r = pkm::find_robot(robot);
+  } catch (const pkm::Error&) {
+    return nullptr;
+  }
+  if (!r) return nullptr;
+  std::lock_guard<std::mutex> lock(mu);
+  auto it = sets.find(r);
+  if (it == sets.end()) it = sets.emplace(r, r->param_sets()).first;
+  return &it->second;
 }
 }  // namespace
+
+namespace {
+const pkm::Robot* robot_or_null(const char* robot) {
+  if (!robot) return nullptr;
+  try {
+    return pkm::find_robot(robot);
+  } catch (const pkm::Error&) {
+    return nullptr;
+  }
+}
+}  // namespace
+
+int pkm_robot_register_description(const char* text, const char* file, char* err, size_t errlen) {
+  return pkm::guard_err(err, errlen, [&] {
+    PKM_REQUIRE(text != nullptr, PKM_ERR_ARGUMENT, "description text is NULL");
+    pkm::described::register_description(text, file ? file : "<description>");
+  });
+}
+
+const char* pkm_robot_title(const char* robot) {
+  const pkm::Robot* r = robot_or_null(robot);
+  return r ? r->title() : "";
+}
+
+const char* pkm_robot_file(const char* robot) {
+  const pkm::Robot* r = robot_or_null(robot);
+  return r ? r->source_file() : "";
+}
 
 int pkm_robot_param_set_count(const char* robot) {
   const auto* s = param_sets_of(robot);

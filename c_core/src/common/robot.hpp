@@ -13,6 +13,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pkm/pkm.h"
@@ -48,6 +49,10 @@ class Robot {
  public:
   virtual ~Robot() = default;
   virtual const char* name() const = 0;
+  // One line saying what the robot is, and the description file it was compiled from
+  // ("" for the robots written in C++).
+  virtual const char* title() const { return ""; }
+  virtual const char* source_file() const { return ""; }
   virtual int ndof() const = 0;
 
   // Parameter table of a named set ("default", ...); throws Error(PKM_ERR_ARGUMENT)
@@ -71,6 +76,9 @@ class Robot {
   // --- facts the rest of the toolkit reads through pkm.h (nothing outside restates them)
   // Names of the parameter sets param_specs accepts, "default" first.
   virtual std::vector<std::string> param_sets() const { return {"default"}; }
+  // Values a parameter set gives to parameters outside the robot's own table (the drive
+  // layer's, e.g. "rail[1].coulomb"), applied after the drive layer adds them.
+  virtual std::vector<std::pair<std::string, double>> param_overrides(const std::string&) const { return {}; }
   // Name and unit of pose coordinate i (0-based, i < ndof()).
   virtual const char* pose_name(int i) const = 0;
   virtual const char* pose_unit(int i) const = 0;
@@ -137,10 +145,13 @@ class Robot {
                                 const double* tau, double* xdd, double* B) const;
 };
 
-// The robots compiled into the core (robots/registry.cpp).  nullptr if unknown.
+// The robots compiled into the core and the descriptions in the search path
+// (robots/registry.cpp, description/described_robot.hpp).  find_robot also takes a path to
+// a description file; nullptr if unknown, Error if the description is bad.
 const Robot* find_robot(const std::string& name);
 int robot_count();
-const Robot* robot_at(int i);  // nullptr if out of range
+const Robot* robot_at(int i);  // nullptr if out of range (or a bad description)
+const char* robot_name_at(int i);  // "" if out of range
 std::string known_robots();
 
 [[noreturn]] void unsupported(const Robot& r, const char* what);

@@ -85,6 +85,7 @@ Config assemble(const double* l, double theta) {
 
 struct Fourbar final : Robot {
   const char* name() const override { return "fourbar"; }
+  const char* title() const override { return "four-bar linkage (seed 002), hand-written"; }
   int ndof() const override { return 1; }
   const char* pose_name(int) const override { return "theta"; }  // the crank angle (pose = joint)
   const char* pose_unit(int) const override { return "rad"; }

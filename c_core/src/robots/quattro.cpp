@@ -213,6 +213,7 @@ struct ParamTable {
 class Quattro final : public Robot {
  public:
   const char* name() const override { return "quattro"; }
+  const char* title() const override { return "Adept Quattro s650H 4-RUU (seed 003), hand-written"; }
   int ndof() const override { return N; }
   std::vector<std::string> param_sets() const override { return {"default", "appendix_a"}; }
   const char* pose_name(int i) const override {

@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "common/robot.hpp"
+#include "description/described_robot.hpp"
 
 namespace pkm {
 
@@ -26,23 +27,42 @@ const std::vector<const Robot*>& all_robots() {
 }
 }  // namespace
 
+// Names of the descriptions in the search path (robots/robots.list), read once.
+const std::vector<std::string>& described_names() {
+  static const std::vector<std::string> names = described::bundled_descriptions();
+  return names;
+}
+
 const Robot* find_robot(const std::string& name) {
   for (const Robot* r : all_robots())
     if (r && name == r->name()) return r;
-  return nullptr;
+  return described::load_described(name);  // nullptr if it is no description either
 }
 
-int robot_count() { return (int)all_robots().size(); }
-const Robot* robot_at(int i) { return i >= 0 && i < robot_count() ? all_robots()[i] : nullptr; }
+int robot_count() { return (int)(all_robots().size() + described_names().size()); }
+
+const Robot* robot_at(int i) {
+  const int nb = (int)all_robots().size();
+  if (i >= 0 && i < nb) return all_robots()[i];
+  if (i < nb || i >= robot_count()) return nullptr;
+  try {
+    return described::load_described(described_names()[i - nb]);
+  } catch (const Error&) {
+    return nullptr;  // a bad description is reported where it is used
+  }
+}
+
+const char* robot_name_at(int i) {
+  const int nb = (int)all_robots().size();
+  if (i >= 0 && i < nb) return all_robots()[i]->name();
+  if (i >= nb && i < robot_count()) return described_names()[i - nb].c_str();
+  return "";
+}
 
 std::string known_robots() {
   std::string s;
-  for (const Robot* r : all_robots()) {
-    if (!r) continue;
-    if (!s.empty()) s += ", ";
-    s += r->name();
-  }
-  return s;
+  for (int i = 0; i < robot_count(); ++i) s += (s.empty() ? "" : ", ") + std::string(robot_name_at(i));
+  return s + " or a path to a description file";
 }
 
 }  // namespace pkm

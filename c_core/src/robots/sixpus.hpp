@@ -13,6 +13,7 @@
 #include <cmath>
 #include <string>
 
+#include "common/fast_math.hpp"
 #include "common/robot.hpp"
 
 namespace pkm {
@@ -65,24 +66,6 @@ struct Frame {
   M3 E;  // omega = E a_dot
   double sx, cx, sy, cy;
 };
-
-// sin and cos of a platform angle for the IK hot path.  For |a| <= 0.8 rad the Taylor
-// series to a^17 / a^16 is exact to rounding (remainder < 1e-18) and several times
-// cheaper than the library call, which would otherwise be a third of the cost of
-// inverse kinematics and a tenth of the forward dynamics.
-inline void sin_cos_small(double a, double& s, double& c) {
-  if (std::abs(a) <= 0.8) {
-    const double a2 = a * a;
-    s = a * (1 + a2 * (-1.0 / 6 + a2 * (1.0 / 120 + a2 * (-1.0 / 5040 + a2 * (1.0 / 362880 +
-        a2 * (-1.0 / 39916800 + a2 * (1.0 / 6227020800 + a2 * (-1.0 / 1307674368000 +
-        a2 * (1.0 / 355687428096000)))))))));
-    c = 1 + a2 * (-0.5 + a2 * (1.0 / 24 + a2 * (-1.0 / 720 + a2 * (1.0 / 40320 + a2 * (-1.0 / 3628800 +
-        a2 * (1.0 / 479001600 + a2 * (-1.0 / 87178291200 + a2 * (1.0 / 20922789888000))))))));
-  } else {
-    s = std::sin(a);
-    c = std::cos(a);
-  }
-}
 
 inline void frame_of(const double* x, Frame& f) {
   double sx, cx, sy, cy, sz, cz;
@@ -153,6 +136,7 @@ const Model& model_of(const RobotModel& rm);
 class SixPus final : public Robot {
  public:
   const char* name() const override { return "6pus"; }
+  const char* title() const override { return "6-PUS laser-cutting platform (seeds 000, 001), hand-written"; }
   int ndof() const override { return 6; }
   std::vector<ParamSpec> param_specs(const std::string& set) const override;
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,

@@ -1,0 +1,934 @@
+// The algorithms of every description-compiled robot (described_robot.hpp has the model).
+#include "description/described_robot.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <unordered_map>
+
+#include "description/jet.hpp"
+#include "dynamics/drive.hpp"
+
+namespace pkm {
+namespace described {
+
+namespace {
+
+using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
+using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+using V3 = Eigen::Vector3d;
+using M3 = Eigen::Matrix3d;
+
+const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+
+const Model& model_of(const RobotModel& rm) { return static_cast<const Model&>(rm); }
+
+std::string g6(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+std::string pose_text(const Model& m, const double* x) {
+  std::ostringstream os;
+  os.precision(6);
+  os << "pose (";
+  for (int j = 0; j < m.n; ++j) os << (j ? ", " : "") << kCoordNames[m.coord[j]];
+  os << ") = (";
+  for (int j = 0; j < m.n; ++j) os << (j ? ", " : "") << x[j];
+  os << ")";
+  return os.str();
+}
+
+enum class Check { none, limits };
+using TT = Taylor2;
+
+// A 3-vector of any scalar.
+template <class T>
+struct P3 {
+  T x, y, z;
+};
+template <class T> inline P3<T> operator+(const P3<T>& a, const P3<T>& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+template <class T> inline P3<T> operator-(const P3<T>& a, const P3<T>& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+template <class T> inline P3<T> operator*(const T& s, const P3<T>& a) { return {s * a.x, s * a.y, s * a.z}; }
+template <class T> inline P3<T> operator-(const P3<T>& a, const V3& b) { return {a.x - b.x(), a.y - b.y(), a.z - b.z()}; }
+template <class T> inline P3<T> operator+(const V3& b, const P3<T>& a) { return {a.x + b.x(), a.y + b.y(), a.z + b.z()}; }
+template <class T> inline T dot(const P3<T>& a, const P3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+template <class T> inline T dot(const V3& a, const P3<T>& b) { return a.x() * b.x + a.y() * b.y + a.z() * b.z; }
+template <class T> inline P3<T> along(const T& s, const V3& v) { return {s * v.x(), s * v.y(), s * v.z()}; }
+
+// Leg geometry as a function of its platform point P, closed form: the joint value q and
+// the leg's body points.  Only the values decide (reachability, limits); derivatives ride
+// along.  Every leg's points depend on the pose through P alone, so the Jacobians are
+// (d points / d P) times the platform point's Jacobian, 3 variables per leg whatever n.
+template <class T>
+__attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, const P3<T>& P, T& q, P3<T>* out, Check check, const double* xval) {
+  using std::acos;
+  using std::atan2;
+  using std::sqrt;
+  const LegModel& l = m.legs[i];
+  auto unreachable = [&](const std::string& why) {
+    throw Error(PKM_ERR_UNREACHABLE, "leg " + std::to_string(i + 1) + " cannot reach " + pose_text(m, xval) + ": " + why);
+  };
+  const P3<T> d = P - l.base;
+  out[1] = P;
+  if (l.type->joint == Joint::rail) {
+    // |d - q s|^2 = L^2 with d = P - S0: ss q^2 - 2 b q + |d|^2 - L^2 = 0.
+    const T b = dot(l.dir, d);
+    const T disc = b * b - l.ss * (dot(d, d) - l.L * l.L);
+    if (!(value_of(disc) >= l.disc_tol))
+      unreachable(value_of(disc) < -l.disc_tol ? "the rod is too short to meet the rail"
+                                               : "the rod is perpendicular to its rail (inverse-kinematic singularity)");
+    q = l.inv_ss * (b - l.branch * sqrt(disc));
+    out[0] = l.base + along(q, l.dir);
+  } else if (l.type->joint == Joint::arm) {
+    // alpha cos q + beta sin q = K with d = P - A in the (u, w) frame of the arm.
+    const T al = dot(l.u, d), be = dot(l.w, d);
+    const T K = (0.5 / l.r) * (dot(d, d) + (l.r * l.r - l.L * l.L));
+    const T rho = sqrt(al * al + be * be);
+    const double c = value_of(K) / value_of(rho);
+    if (!(std::abs(c) <= 1 - 1e-12))
+      unreachable(std::abs(c) > 1 ? "the rod's sphere misses the elbow circle (|K| / rho = " + g6(std::abs(c)) + ")"
+                                  : "the rod is in line with the arm (inverse-kinematic singularity)");
+    q = atan2(be, al) + l.branch * acos(K / rho);
+    T sq, cq;
+    sin_cos(q, sq, cq);
+    const P3<T> e = along(cq, l.u) + along(sq, l.w);
+    out[0] = l.base + T(l.r) * e;   // elbow B
+    out[2] = l.base + T(l.rc) * e;  // arm centre of mass
+  } else {
+    q = sqrt(dot(d, d));
+    if (!(value_of(q) > 1e-9)) unreachable("the platform point is on the strut's base joint");
+    const P3<T> nn = (T(1.0) / q) * d;
+    out[0] = {T(l.base.x()), T(l.base.y()), T(l.base.z())};
+    out[2] = l.base + T(l.l_cyl) * nn;  // cylinder end
+    out[3] = P - T(l.l_pis) * nn;       // piston end
+  }
+  if (check == Check::limits) {
+    const double qv = value_of(q);
+    if (qv < l.qmin || qv > l.qmax)
+      throw Error(PKM_ERR_JOINT_LIMIT, "leg " + std::to_string(i + 1) + " joint q = " + g6(qv) + " outside [" +
+                                           g6(l.qmin) + ", " + g6(l.qmax) + "] at " + pose_text(m, xval));
+  }
+}
+
+// Fixed 6 columns (zero beyond n): fixed-size products are several times faster than
+// dynamic ones at these sizes; the n x n blocks are taken where a solve needs them.
+using M36 = Eigen::Matrix<double, 3, 6>;
+using M6 = Eigen::Matrix<double, 6, 6>;
+using V6 = Eigen::Matrix<double, 6, 1>;
+
+// The platform at a pose: rotation, and the maps of the coordinate rates to its
+// translational and angular velocity (p_dot = Jt xd, omega = Jw xd).
+struct Platform {
+  M3 R, E;
+  V3 p;
+  M36 Jt, Jw;
+  double x6[6];
+  double sx, cx, sy, cy;  // sines and cosines of rx, ry (E and its rate)
+};
+
+// With rates = false only R and p (what inverse kinematics needs).
+void platform_of(const Model& m, const double* x, Platform& pf, bool rates = true) {
+  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
+  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = x[j];
+  double sx, cx, sy, cy, sz, cz;
+  sin_cos(pf.x6[3], sx, cx);
+  sin_cos(pf.x6[4], sy, cy);
+  sin_cos(pf.x6[5], sz, cz);
+  pf.sx = sx, pf.cx = cx, pf.sy = sy, pf.cy = cy;
+  pf.R << cy * cz, -(cy * sz), sy, sx * sy * cz + cx * sz, cx * cz - sx * sy * sz, -(sx * cy),
+      sx * sz - cx * sy * cz, cx * sy * sz + sx * cz, cx * cy;
+  pf.p = V3(pf.x6[0], pf.x6[1], pf.x6[2]);
+  if (!rates) return;
+  pf.E << 1, 0, sy, 0, cx, -sx * cy, 0, sx, cx * cy;  // omega = E (rx, ry, rz)_dot
+  pf.Jt.setZero();
+  pf.Jw.setZero();
+  for (int j = 0; j < m.n; ++j) {
+    if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
+    else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
+  }
+}
+
+// Column j of T: a unit translation, or a column of E for an angle.  T' v for a twist-space
+// vector v (a wrench, or a row of twist-space coefficients), without the full product.
+inline V6 t_transpose(const Model& m, const Platform& pf, const V6& v) {
+  V6 out = V6::Zero();
+  for (int j = 0; j < m.n; ++j) {
+    const int c = m.coord[j];
+    out[j] = c < 3 ? v[c] : pf.E.col(c - 3).dot(v.tail<3>());
+  }
+  return out;
+}
+// T' Mt T for a symmetric twist-space matrix Mt.
+inline M6 t_congruence(const Model& m, const Platform& pf, const M6& Mt) {
+  Eigen::Matrix<double, 6, 6> MtT;  // columns j < n: Mt T e_j
+  for (int j = 0; j < m.n; ++j) {
+    const int c = m.coord[j];
+    MtT.col(j) = c < 3 ? V6(Mt.col(c)) : V6(Mt.rightCols<3>() * pf.E.col(c - 3));
+  }
+  M6 M = M6::Zero();
+  for (int j = 0; j < m.n; ++j) M.col(j) = t_transpose(m, pf, MtT.col(j));
+  return M;
+}
+
+// A twist-space row (f, rP x f): the power of a force f at a platform point rP is
+// row . (p_dot, omega).
+inline V6 twist_row(const V3& f, const V3& rP) {
+  V6 r;
+  r << f, rP.cross(f);
+  return r;
+}
+
+inline M3 skew(const V3& v) {
+  M3 S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
+// Jacobian of a point fixed on the platform at world offset rP from its origin.
+inline M36 point_jacobian(const Platform& pf, const V3& rP) { return pf.Jt - skew(rP) * pf.Jw; }
+
+// Velocity and acceleration of the platform (origin and angular) at (x, xd, xdd).
+struct PlatformMotion {
+  V3 v, om, a, al;
+};
+void platform_motion(const Model& m, const Platform& pf, const double* xd, const double* xdd, PlatformMotion& pm) {
+  V6 v = V6::Zero();
+  for (int j = 0; j < m.n; ++j) v[j] = xd[j];
+  pm.v = pf.Jt * v;
+  pm.om = pf.Jw * v;
+  pm.a.setZero();
+  pm.al.setZero();
+  if (xdd) {
+    V6 a = V6::Zero();
+    for (int j = 0; j < m.n; ++j) a[j] = xdd[j];
+    pm.a = pf.Jt * a;
+    pm.al = pf.Jw * a;
+  }
+  if (m.rotates) {
+    // alpha = E a_dd + E_dot a_d (E_dot from the angle rates of the coordinates)
+    double r6[6] = {0, 0, 0, 0, 0, 0};
+    for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
+    const double sx = pf.sx, cx = pf.cx, sy = pf.sy, cy = pf.cy;
+    const double ax = r6[3], ay = r6[4];
+    M3 Ed;
+    Ed << 0, 0, cy * ay, 0, -sx * ax, -cx * cy * ax + sx * sy * ay, 0, cx * ax, -sx * cy * ax - cx * sy * ay;
+    pm.al += Ed * V3(r6[3], r6[4], r6[5]);
+  }
+}
+
+// One leg, differentiated with respect to its platform point: the first derivatives in
+// closed form per joint kind (implicit differentiation of the leg's closure), which the
+// tests hold against the forward-mode derivatives (jacobian_dot uses those).
+struct LegGrad {
+  Eigen::RowVector3d dq;  // dq / dP
+  M3 D[4];                // d point / dP
+  double pos[4][3];
+  double q;
+  V3 rP;
+  V3 t;  // rails and arms: d S / dq (D[0] = t dq)
+};
+
+// points = false: only q and dq/dP (the Jacobian).
+void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGrad& lg, Check check,
+              bool points = true) {
+  const LegModel& l = m.legs[i];
+  lg.rP = pf.R * l.p;
+  const V3 P = pf.p + lg.rP;
+  P3<double> pts[4];
+  leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
+  for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
+  const V3 w = P - V3(pts[0].x, pts[0].y, pts[0].z);  // rod (strut) vector from its proximal joint to P
+  if (l.type->joint == Joint::strut) {
+    const V3 n = w / lg.q;
+    lg.dq = n.transpose();
+    if (points) {
+      const M3 Pn = (M3::Identity() - n * n.transpose()) / lg.q;  // d n / dP
+      lg.D[0].setZero();
+      lg.D[2] = l.l_cyl * Pn;
+      lg.D[3] = M3::Identity() - l.l_pis * Pn;
+      lg.D[1].setIdentity();
+    }
+  } else {
+    // |P - S(q)| = L: w . (dP - t dq) = 0 with t = dS/dq.
+    V3 t = l.dir;
+    if (l.type->joint == Joint::arm) {
+      double sq, cq;
+      sin_cos(lg.q, sq, cq);
+      t = l.r * (cq * l.w - sq * l.u);
+    }
+    lg.dq = w.transpose() / w.dot(t);
+    lg.t = t;  // D[0] = t dq, an arm's centre of mass (rc / r) t dq: leg_mass and leg_force use t
+  }
+}
+
+// One leg's joint and point accelerations for its platform point's velocity vP and
+// acceleration aP, in closed form per joint kind (the second derivative of the closure;
+// joint_acceleration gets the same from forward-mode Taylor coefficients, and the tests
+// hold the two together).
+struct LegMotion {
+  double qdd;
+  V3 acc[4];
+};
+void leg_motion(const Model& m, int i, const LegGrad& lg, const V3& vP, const V3& aP, LegMotion& lm) {
+  const LegModel& l = m.legs[i];
+  const V3 P(lg.pos[1][0], lg.pos[1][1], lg.pos[1][2]);
+  const V3 w = P - V3(lg.pos[0][0], lg.pos[0][1], lg.pos[0][2]);
+  const double qd = lg.dq.dot(vP);
+  lm.acc[1] = aP;
+  if (l.type->joint == Joint::rail) {
+    // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
+    const V3 wd = vP - qd * l.dir;
+    lm.qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+    lm.acc[0] = lm.qdd * l.dir;
+  } else if (l.type->joint == Joint::arm) {
+    // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
+    double sq, cq;
+    sin_cos(lg.q, sq, cq);
+    const V3 e = cq * l.u + sq * l.w, t = l.r * (cq * l.w - sq * l.u);
+    const V3 wd = vP - qd * t;
+    lm.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+    lm.acc[0] = lm.qdd * t - (l.r * qd * qd) * e;
+    lm.acc[2] = (l.rc / l.r) * lm.acc[0];
+  } else {
+    // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
+    const double q = lg.q;
+    const V3 n = w / q, nd = (vP - qd * n) / q;
+    lm.qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
+    const V3 ndd = (aP - lm.qdd * n - (2 * qd) * nd) / q;
+    lm.acc[0].setZero();
+    lm.acc[2] = l.l_cyl * ndd;
+    lm.acc[3] = aP - l.l_pis * ndd;
+  }
+}
+
+// The leg's inertia seen at its platform point: KE = 1/2 vP' MP vP.  Rails and arms
+// move their body points along one direction t per unit q (D = k t dq, rank one), which
+// the sums use; struts take the general form.
+M3 leg_mass(const LegModel& l, const LegGrad& lg) {
+  M3 MP;
+  if (l.type->joint != Joint::strut) {
+    const V3& t = lg.t;
+    const double k = l.type->joint == Joint::arm ? l.rc / l.r : 1.0;
+    const double mr = l.m_rod;
+    const double c = (l.m_body * k * k + mr / 3) * t.squaredNorm() + l.I_arm;
+    const V3 g = lg.dq.transpose();
+    MP.noalias() = c * g * g.transpose() + (mr / 6) * (g * t.transpose() + t * g.transpose());
+    MP.diagonal().array() += mr / 3;
+    return MP;
+  }
+  MP.setZero();
+  for (int k = 0; k < l.nmass; ++k) MP.noalias() += l.mass[k].m * lg.D[l.mass[k].a].transpose() * lg.D[l.mass[k].a];
+  for (int k = 0; k < l.nrod; ++k) {
+    const Rod& r = l.rod[k];
+    const M3& A = lg.D[r.a];
+    const M3& B = lg.D[r.b];
+    const M3 C = A.transpose() * B;
+    MP.noalias() += (r.m / 3) * (A.transpose() * A + B.transpose() * B) + (r.m / 6) * (C + C.transpose());
+  }
+  return MP;
+}
+
+// The leg's inertia-and-gravity load seen at its platform point (virtual power).
+V3 leg_force(const Model& m, const LegModel& l, const LegGrad& lg, const LegMotion& lm) {
+  if (l.type->joint != Joint::strut) {
+    // D_body = k t dq, D_S = t dq, D_P = I: the loads at S and the body act through t.dq.
+    const bool arm = l.type->joint == Joint::arm;
+    const double k = arm ? l.rc / l.r : 1.0, mr = l.m_rod;
+    const V3& aS = lm.acc[0];
+    const V3& aP = lm.acc[1];
+    const V3 Fb = l.m_body * (lm.acc[arm ? 2 : 0] - m.g);
+    const V3 Fs = (mr / 3) * aS + (mr / 6) * aP - (mr / 2) * m.g;
+    const V3 Fp = (mr / 6) * aS + (mr / 3) * aP - (mr / 2) * m.g;
+    const double along = k * lg.t.dot(Fb) + lg.t.dot(Fs) + l.I_arm * lm.qdd;
+    return Fp + along * lg.dq.transpose();
+  }
+  V3 f = V3::Zero();
+  for (int k = 0; k < l.nmass; ++k)
+    f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (lm.acc[l.mass[k].a] - m.g));
+  for (int k = 0; k < l.nrod; ++k) {
+    const Rod& r = l.rod[k];
+    const V3 Fa = (r.m / 3) * lm.acc[r.a] + (r.m / 6) * lm.acc[r.b] - (r.m / 2) * m.g;
+    const V3 Fb = (r.m / 6) * lm.acc[r.a] + (r.m / 3) * lm.acc[r.b] - (r.m / 2) * m.g;
+    f.noalias() += lg.D[r.a].transpose() * Fa + lg.D[r.b].transpose() * Fb;
+  }
+  if (l.I_arm != 0) f += (l.I_arm * lm.qdd) * lg.dq.transpose();
+  return f;
+}
+
+// Everything of a pose the dynamics need, and the motion-dependent part.
+struct State {
+  Platform pf;
+  LegGrad lg[kMaxLegs];
+  M6 J;  // dq/dx (zero beyond n)
+};
+void state_of(const Model& m, const double* x, State& st, bool points = true) {
+  platform_of(m, x, st.pf);
+  st.J.setZero();
+  for (int i = 0; i < m.n; ++i) {
+    leg_grad(m, i, st.pf, x, st.lg[i], Check::none, points);
+    st.J.row(i) = t_transpose(m, st.pf, twist_row(st.lg[i].dq.transpose(), st.lg[i].rP)).transpose();
+  }
+}
+
+// Adds A' MP A for A = [I, -[r]x] (a point at r on the platform, twist space).
+inline void add_point_inertia(M6& Mt, const M3& MP, const V3& r) {
+  const M3 S = skew(r);
+  const M3 MS = MP * S;
+  Mt.topLeftCorner<3, 3>() += MP;
+  Mt.topRightCorner<3, 3>() -= MS;
+  Mt.bottomLeftCorner<3, 3>() -= MS.transpose();  // S MP = -(MP S)'
+  Mt.bottomRightCorner<3, 3>().noalias() -= S * MS;
+}
+
+// Task-space mass matrix M = T' Mt T, Mt the twist-space inertia of every body.
+M6 mass_of(const Model& m, const State& st) {
+  const Platform& pf = st.pf;
+  M6 Mt = M6::Zero();
+  Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
+  if (m.rotates) Mt.bottomRightCorner<3, 3>() = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
+  if (m.m_payload != 0) add_point_inertia(Mt, m.m_payload * M3::Identity(), pf.R * m.c_payload);
+  for (int i = 0; i < m.n; ++i) add_point_inertia(Mt, leg_mass(m.legs[i], st.lg[i]), st.lg[i].rP);
+  return t_congruence(m, pf, Mt);
+}
+
+// Generalised inertia-and-gravity force Q (J^T tau = Q) at (x, xd, xdd).
+V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
+  const Platform& pf = st.pf;
+  PlatformMotion pm;
+  platform_motion(m, pf, xd, xdd, pm);
+  // The loads as one wrench about the platform origin, W = (force, moment); Q = T^T W.
+  V6 W;
+  W << m.m_platform * (pm.a - m.g), V3::Zero();
+  if (m.rotates) {
+    const M3 Iw = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
+    W.tail<3>() = Iw * pm.al + pm.om.cross(Iw * pm.om);
+  }
+  if (m.m_payload != 0) {
+    const V3 rc = pf.R * m.c_payload;
+    const V3 ac = pm.a + pm.al.cross(rc) + pm.om.cross(pm.om.cross(rc));
+    W += twist_row(m.m_payload * (ac - m.g), rc);
+  }
+  for (int i = 0; i < m.n; ++i) {
+    const V3& rP = st.lg[i].rP;
+    const V3 vP = pm.v + pm.om.cross(rP);
+    const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
+    LegMotion lm;
+    leg_motion(m, i, st.lg[i], vP, aP, lm);
+    W += twist_row(leg_force(m, m.legs[i], st.lg[i], lm), rP);
+  }
+  return t_transpose(m, pf, W);
+}
+
+// tau from J^T tau = Q (the n x n blocks).
+template <class MatT, class VecT>
+void solve_jt_n(const Model& m, const MatT& JT, const VecT& Q, const double* x, double* tau) {
+  Eigen::PartialPivLU<MatT> lu(JT);
+  const auto d = lu.matrixLU().diagonal().cwiseAbs();
+  if (!(d.minCoeff() > 1e-13 * std::max(1.0, d.maxCoeff())))
+    throw Error(PKM_ERR_SINGULAR, "direct (parallel) singularity at " + pose_text(m, x) + ": J is singular");
+  const VecT t = lu.solve(Q);
+  for (int i = 0; i < m.n; ++i) tau[i] = t[i];
+}
+void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double* tau) {
+  if (m.n == 6) solve_jt_n(m, M6(J.transpose()), Q, x, tau);
+  else solve_jt_n(m, Mat(J.topLeftCorner(m.n, m.n).transpose()), Vec(Q.head(m.n)), x, tau);
+}
+
+// xdd = M^-1 (J^T tau - h) and B = M^-1 J^T (the n x n blocks).
+template <class MatT, class VecT>
+void forward_n(const Model& m, const MatT& M, const MatT& JT, const VecT& rhs, const double* x, double* xdd, double* B) {
+  Eigen::LLT<MatT> llt(M);
+  if (llt.info() != Eigen::Success)
+    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
+  const VecT a = llt.solve(rhs);
+  for (int i = 0; i < m.n; ++i) xdd[i] = a[i];
+  if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(JT);
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ the Robot
+
+std::vector<std::string> DescribedRobot::param_sets() const {
+  std::vector<std::string> out;
+  for (const auto& s : d_.sets) out.push_back(s.first);
+  return out;
+}
+
+namespace {
+const std::vector<Override>* set_of(const Description& d, const std::string& set) {
+  for (const auto& s : d.sets)
+    if (s.first == set) return &s.second;
+  std::string known;
+  for (const auto& s : d.sets) known += (known.empty() ? "" : ", ") + s.first;
+  throw Error(PKM_ERR_ARGUMENT, d.name + " has no parameter set '" + set + "' (known: " + known + ")");
+}
+}  // namespace
+
+std::vector<ParamSpec> DescribedRobot::param_specs(const std::string& set) const {
+  std::vector<ParamSpec> v = d_.params;
+  for (const auto& o : *set_of(d_, set))
+    for (auto& s : v)
+      if (s.name == o.name) s.value = o.value;
+  return v;
+}
+
+std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(const std::string& set) const {
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& o : *set_of(d_, set)) out.emplace_back(o.name, o.value);
+  return out;
+}
+
+std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>& specs,
+                                                    const std::vector<double>& values) const {
+  std::unordered_map<std::string, double> val;
+  for (size_t k = 0; k < specs.size() && k < values.size(); ++k) val[specs[k].name] = values[k];
+  auto get = [&](const std::string& name) {
+    auto it = val.find(name);
+    if (it == val.end()) throw Error(PKM_ERR_PARAMETER, d_.name + " parameter " + name + " is missing from the set");
+    if (!std::isfinite(it->second))
+      throw Error(PKM_ERR_PARAMETER, d_.name + " parameter " + name + " is not finite (" + g6(it->second) + ")");
+    return it->second;
+  };
+  auto name = [](const char* group, int i, const char* field) {
+    return std::string(group) + "[" + std::to_string(i + 1) + "]." + field;
+  };
+  auto vec = [&](const char* group, int i, const char* f0) {
+    return V3(get(name(group, i, (std::string(f0) + "x").c_str())), get(name(group, i, (std::string(f0) + "y").c_str())),
+              get(name(group, i, (std::string(f0) + "z").c_str())));
+  };
+  auto bad = [&](const std::string& msg) { throw Error(PKM_ERR_PARAMETER, d_.name + ": " + msg); };
+  auto m = std::make_unique<Model>();
+  m->n = ndof();
+  for (int j = 0; j < m->n; ++j) m->coord[j] = d_.coords[j];
+  for (int k = 3; k < 6; ++k)
+    m->rotates |= std::find(d_.coords.begin(), d_.coords.end(), k) != d_.coords.end();
+  double rsum = 0;
+  for (int i = 0; i < m->n; ++i) {
+    LegModel l;
+    l.type = d_.legs[i];
+    const Joint j = l.type->joint;
+    if (j == Joint::strut) {
+      l.base = vec("leg", i, "b");
+      l.p = vec("leg", i, "p");
+      l.qmin = get(name("strut", i, "qmin")), l.qmax = get(name("strut", i, "qmax"));
+      l.m_cyl = get(name("cylinder", i, "m")), l.l_cyl = get(name("cylinder", i, "l"));
+      l.m_pis = get(name("piston", i, "m")), l.l_pis = get(name("piston", i, "l"));
+      l.npt = 4, l.nrod = 2;
+      l.rod[0] = {0, 2, l.m_cyl};
+      l.rod[1] = {3, 1, l.m_pis};
+    } else {
+      l.L = get(name("leg", i, "L"));
+      l.p = V3(get(name("leg", i, "px")), get(name("leg", i, "py")), get(name("leg", i, "pz")));
+      l.branch = get(name("leg", i, "branch"));
+      l.m_rod = get(name("leg", i, "m"));
+      if (!(l.L > 0)) bad(name("leg", i, "L") + " = " + g6(l.L) + " m must be > 0");
+      if (l.branch != 1.0 && l.branch != -1.0) bad(name("leg", i, "branch") + " = " + g6(l.branch) + " must be +1 or -1");
+      l.disc_tol = 1e-12 * l.L * l.L;
+      if (j == Joint::rail) {
+        l.base = vec("rail", i, "S0");
+        l.dir = vec("rail", i, "s");
+        l.ss = l.dir.squaredNorm();
+        l.inv_ss = 1.0 / l.ss;
+        if (std::abs(std::sqrt(l.ss) - 1) > 1e-6) bad("rail " + std::to_string(i + 1) + " direction is not a unit vector");
+        l.qmin = get(name("rail", i, "qmin")), l.qmax = get(name("rail", i, "qmax"));
+        l.m_body = get(name("slider", i, "m"));
+        l.npt = 2, l.nmass = 1, l.nrod = 1;
+        l.mass[0] = {0, l.m_body};
+        l.rod[0] = {0, 1, l.m_rod};
+      } else {
+        l.base = vec("arm", i, "A");
+        l.dir = vec("arm", i, "k");
+        l.u = vec("arm", i, "u");
+        if (std::abs(l.dir.norm() - 1) > 1e-6 || std::abs(l.u.norm() - 1) > 1e-6 || std::abs(l.dir.dot(l.u)) > 1e-6)
+          bad("arm " + std::to_string(i + 1) + ": axis and arm direction must be perpendicular unit vectors");
+        l.w = l.dir.cross(l.u);
+        l.r = get(name("arm", i, "r"));
+        l.m_body = get(name("arm", i, "mass"));
+        l.rc = get(name("arm", i, "rc"));
+        l.I_arm = get(name("arm", i, "I"));
+        l.qmin = get(name("arm", i, "qmin")), l.qmax = get(name("arm", i, "qmax"));
+        l.npt = 3, l.nmass = 1, l.nrod = 1;
+        l.mass[0] = {2, l.m_body};
+        l.rod[0] = {0, 1, l.m_rod};
+      }
+    }
+    if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
+    rsum += l.p.norm();
+    m->legs.push_back(l);
+  }
+  m->m_platform = get("platform.m");
+  m->I_platform = V3(get("platform.Ixx"), get("platform.Iyy"), get("platform.Izz"));
+  m->m_payload = get("payload.m");
+  m->c_payload = V3(get("payload.x"), get("payload.y"), get("payload.z"));
+  m->g = V3(get("gravity.x"), get("gravity.y"), get("gravity.z"));
+  m->r_char = rsum > 0 ? rsum / m->n : 1.0;
+  for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
+  // The home pose must be reachable, within the joint limits and away from singularities.
+  RobotData rd;
+  double q[6], meas[2];
+  try {
+    ik(*m, rd, m->home, q);
+    singularity(*m, rd, m->home, meas);
+  } catch (const Error& e) {
+    bad(std::string("the home pose is not valid: ") + e.what());
+  }
+  // A home pose this close to a singularity (measures < 1e-3; well-designed robots have
+  // 0.1-1 there) is no place to start a simulation or a calibration from.
+  if (!(meas[0] > 1e-3))
+    bad("inverse-kinematic (serial) singularity at the home pose: a rod is (nearly) perpendicular to its joint's motion "
+        "(measure " + g6(meas[0]) + " < 1e-3)");
+  if (!(meas[1] > 1e-3))
+    bad("architecture (direct) singularity at the home pose: the legs do not constrain the platform there "
+        "(1 / cond J = " + g6(meas[1]) + " < 1e-3)");
+  return m;
+}
+
+void DescribedRobot::home(const RobotModel& rm, double* x) const {
+  const Model& m = model_of(rm);
+  for (int j = 0; j < m.n; ++j) x[j] = m.home[j];
+}
+
+const char* DescribedRobot::joint_prefix() const {
+  return d_.joint == Joint::rail ? "rail" : d_.joint == Joint::arm ? "arm" : "strut";
+}
+const char* DescribedRobot::joint_noun() const {
+  return d_.joint == Joint::rail ? "slider" : d_.joint == Joint::arm ? "arm" : "strut";
+}
+const char* DescribedRobot::pose_name(int i) const { return kCoordNames[d_.coords[i]]; }
+const char* DescribedRobot::pose_unit(int i) const { return d_.coords[i] < 3 ? "m" : "rad"; }
+std::string DescribedRobot::joint_limit_param(int i, bool upper) const {
+  return std::string(joint_prefix()) + "[" + std::to_string(i + 1) + (upper ? "].qmax" : "].qmin");
+}
+const char* DescribedRobot::geometry_param(int i) const {
+  return i >= 0 && i < (int)geometry_names_.size() ? geometry_names_[i].c_str() : nullptr;
+}
+
+void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, double* q) const {
+  const Model& m = model_of(rm);
+  Platform pf;
+  platform_of(m, x, pf, false);
+  for (int i = 0; i < m.n; ++i) {
+    const V3 P = pf.p + pf.R * m.legs[i].p;
+    P3<double> pts[4];
+    leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q[i], pts, Check::limits, x);
+  }
+}
+
+void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x, double* Jx, double* Jq,
+                               double* J) const {
+  const Model& m = model_of(rm);
+  State st;
+  state_of(m, x, st, false);
+  const int n = m.n;
+  if (J)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) J[n * i + j] = st.J(i, j);
+  if (!Jx && !Jq) return;
+  for (int i = 0; i < n; ++i) {
+    // Constraint f_i = (|P - S(q)|^2 - L^2) / 2 (a strut: (|P - B|^2 - q^2) / 2):
+    // Jx = df/dx at fixed q, Jq = -df/dq, so that Jx xd = Jq qd.
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    const V3 w(lg.pos[1][0] - lg.pos[0][0], lg.pos[1][1] - lg.pos[0][1], lg.pos[1][2] - lg.pos[0][2]);
+    double jq;
+    if (l.type->joint == Joint::rail) jq = w.dot(l.dir);
+    else if (l.type->joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
+    else jq = lg.q;
+    const V6 jx = t_transpose(m, st.pf, twist_row(w, lg.rP));
+    for (int j = 0; j < n; ++j) {
+      if (Jx) Jx[n * i + j] = jx[j];
+      if (Jq) Jq[n * i + j] = (i == j) ? jq : 0.0;
+    }
+  }
+}
+
+void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                                  double* Jdot) const {
+  // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first from the
+  // gradient of q along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.
+  const Model& m = model_of(rm);
+  Platform pf;
+  platform_of(m, x, pf);
+  PlatformMotion pm;
+  platform_motion(m, pf, xd, nullptr, pm);
+  M36 Jwd = M36::Zero();  // d/dt of Jw: the columns of E_dot
+  if (m.rotates) {
+    double r6[6] = {0, 0, 0, 0, 0, 0};
+    for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
+    const double sx = pf.sx, cx = pf.cx, sy = pf.sy, cy = pf.cy;
+    M3 Ed;
+    Ed << 0, 0, cy * r6[4], 0, -sx * r6[3], -cx * cy * r6[3] + sx * sy * r6[4], 0, cx * r6[3],
+        -sx * cy * r6[3] - cx * sy * r6[4];
+    for (int j = 0; j < m.n; ++j)
+      if (m.coord[j] >= 3) Jwd.col(j) = Ed.col(m.coord[j] - 3);
+  }
+  using GT = Grad<3, TT>;
+  for (int i = 0; i < m.n; ++i) {
+    const V3 rP = pf.R * m.legs[i].p;
+    const V3 P = pf.p + rP, vP = pm.v + pm.om.cross(rP);
+    const P3<GT> Pg{GT::variable(TT(P.x(), vP.x(), 0), 0), GT::variable(TT(P.y(), vP.y(), 0), 1),
+                    GT::variable(TT(P.z(), vP.z(), 0), 2)};
+    GT q;
+    P3<GT> pts[4];
+    leg_geometry(m, i, Pg, q, pts, Check::none, x);
+    Eigen::RowVector3d dq, dqd;
+    for (int k = 0; k < 3; ++k) dq[k] = q.d[k].v, dqd[k] = q.d[k].d1;
+    const M36 JP = point_jacobian(pf, rP);
+    const M36 JPd = -skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
+    const Eigen::Matrix<double, 1, 6> row = dqd * JP + dq * JPd;
+    for (int j = 0; j < m.n; ++j) Jdot[m.n * i + j] = row[j];
+  }
+}
+
+void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const double* x, double* measures) const {
+  const Model& m = model_of(rm);
+  const int n = m.n;
+  Mat Jx(n, n), Jq(n, n), J(n, n);
+  jacobians(rm, rd, x, Jx.data(), Jq.data(), J.data());
+  // Inverse-kinematic: the cosine between the rod and its joint's motion, worst leg.
+  double t1 = 1.0;
+  for (int i = 0; i < n; ++i) {
+    const LegModel& l = m.legs[i];
+    if (l.type->joint == Joint::rail) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * std::sqrt(l.ss)));
+    if (l.type->joint == Joint::arm) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * l.r));
+  }
+  // Direct: 1 / cond of J with the rotation columns scaled by the platform radius.
+  for (int j = 0; j < n; ++j)
+    if (m.coord[j] >= 3) J.col(j) /= m.r_char;
+  Eigen::JacobiSVD<Mat> svd(J);
+  const auto& sv = svd.singularValues();
+  measures[0] = t1;
+  measures[1] = (sv[0] > 0) ? sv[n - 1] / sv[0] : 0.0;
+}
+
+void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                                        const double* xdd, double* qdd) const {
+  // Forward-mode Taylor coefficients of the leg closure along P(t) = P + t vP + t^2/2 aP
+  // (independent of leg_motion's closed forms, which the tests compare with this).
+  const Model& m = model_of(rm);
+  Platform pf;
+  platform_of(m, x, pf);
+  PlatformMotion pm;
+  platform_motion(m, pf, xd, xdd, pm);
+  for (int i = 0; i < m.n; ++i) {
+    const V3 rP = pf.R * m.legs[i].p;
+    const V3 P = pf.p + rP, vP = pm.v + pm.om.cross(rP);
+    const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
+    const P3<TT> Pt{TT(P.x(), vP.x(), aP.x()), TT(P.y(), vP.y(), aP.y()), TT(P.z(), vP.z(), aP.z())};
+    TT q;
+    P3<TT> pts[4];
+    leg_geometry(m, i, Pt, q, pts, Check::none, x);
+    qdd[i] = q.d2;
+  }
+}
+
+void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                                      const double* xdd, double* tau) const {
+  const Model& m = model_of(rm);
+  State st;
+  state_of(m, x, st);
+  solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
+}
+
+void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const {
+  const Model& m = model_of(rm);
+  State st;
+  state_of(m, x, st);
+  Eigen::Map<Mat>(M, m.n, m.n) = mass_of(m, st).topLeftCorner(m.n, m.n);
+}
+
+bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+                                               const double* tau, double* xdd, double* B) const {
+  // M xdd = J^T tau - h with h = Q(x, xd, xdd = 0).
+  const Model& m = model_of(rm);
+  const int n = m.n;
+  State st;
+  state_of(m, x, st);
+  const V6 h = generalised_force(m, st, xd, nullptr);
+  V6 t = V6::Zero();
+  for (int i = 0; i < n; ++i) t[i] = tau[i];
+  const V6 rhs = st.J.transpose() * t - h;
+  const M6 M = mass_of(m, st);
+  if (n == 6) forward_n(m, M, M6(st.J.transpose()), rhs, x, xdd, B);
+  else forward_n(m, Mat(M.topLeftCorner(n, n)), Mat(st.J.topLeftCorner(n, n).transpose()), Vec(rhs.head(n)), x, xdd, B);
+  return true;
+}
+
+void DescribedRobot::forward_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                                      const double* tau, double* xdd) const {
+  forward_dynamics_response(rm, rd, x, xd, tau, xdd, nullptr);
+}
+
+void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, const double* xd, double* kinetic,
+                            double* potential) const {
+  const Model& m = model_of(rm);
+  State st;
+  state_of(m, x, st);
+  V6 v = V6::Zero();
+  for (int j = 0; j < m.n; ++j) v[j] = xd[j];
+  *kinetic = 0.5 * v.dot(mass_of(m, st) * v);
+  auto height = [&](const double* p) { return -m.g.dot(V3(p[0], p[1], p[2])); };
+  double V = -m.g.dot(st.pf.p) * m.m_platform;
+  const V3 c = st.pf.p + st.pf.R * m.c_payload;
+  V += m.m_payload * height(c.data());
+  for (int i = 0; i < m.n; ++i) {
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    for (int k = 0; k < l.nmass; ++k) V += l.mass[k].m * height(lg.pos[l.mass[k].a]);
+    for (int k = 0; k < l.nrod; ++k) V += 0.5 * l.rod[k].m * (height(lg.pos[l.rod[k].a]) + height(lg.pos[l.rod[k].b]));
+  }
+  *potential = V;
+}
+
+// ------------------------------------------------------------------ loading
+
+namespace {
+
+std::string read_file(const std::string& path, bool& ok) {
+  std::ifstream f(path, std::ios::binary);
+  ok = bool(f);
+  if (!ok) return "";
+  std::ostringstream os;
+  os << f.rdbuf();
+  return os.str();
+}
+
+std::vector<std::string> search_dirs() {
+  std::vector<std::string> dirs;
+  if (const char* env = std::getenv("PKM_ROBOT_PATH")) {
+    std::string s(env), cur;
+    for (char c : s + ":") {
+      if (c == ':') {
+        if (!cur.empty()) dirs.push_back(cur);
+        cur.clear();
+      } else {
+        cur += c;
+      }
+    }
+  }
+#ifdef PKM_ROBOTS_DIR
+  dirs.push_back(PKM_ROBOTS_DIR);
+#endif
+  return dirs;
+}
+
+bool is_path(const std::string& s) {
+  return s.find('/') != std::string::npos ||
+         (s.size() > 5 && s.compare(s.size() - 5, 5, ".toml") == 0);
+}
+
+// Robots made so far, by file text (a changed file gives a new robot; old models keep theirs).
+std::mutex g_mu;
+std::map<std::string, std::unique_ptr<DescribedRobot>>& cache() {
+  static std::map<std::string, std::unique_ptr<DescribedRobot>> c;
+  return c;
+}
+
+const Robot* make(const std::string& path, const std::string& text) {
+  std::lock_guard<std::mutex> lock(g_mu);
+  auto& c = cache();
+  const std::string key = path + '\n' + text;
+  auto it = c.find(key);
+  if (it != c.end()) return it->second.get();
+  static int serial = 0;
+  auto r = std::make_unique<DescribedRobot>(read_description(text, path), ++serial);
+  const Description& d = r->description();
+  // Every named value must be a parameter of the robot or of its drive layer.
+  auto drive_specs = drive::specs(*r);
+  for (const auto& s : d.sets)
+    for (const auto& o : s.second) {
+      bool found = false;
+      for (const auto& p : d.params) found |= p.name == o.name;
+      for (const auto& p : drive_specs) found |= p.name == o.name;
+      if (!found)
+        throw Error(PKM_ERR_ARGUMENT, path + ":" + std::to_string(o.line) + ": '" + o.name +
+                                          "' is not a parameter of " + d.name + " (cosim params --robot " + path +
+                                          " lists them)");
+    }
+  // The default set must compile: home reachable, no singularity there.
+  for (const auto& s : d.sets) {
+    auto specs = r->param_specs(s.first);
+    std::vector<double> vals;
+    for (const auto& p : specs) vals.push_back(p.value);
+    try {
+      r->compile(specs, vals);
+    } catch (const Error& e) {
+      // Name the home line and, for a leg's failure, the [[leg]] table it came from.
+      std::string msg = e.what(), where;
+      const auto k = msg.find("leg ");
+      if (k != std::string::npos) {
+        const int leg = std::atoi(msg.c_str() + k + 4);
+        if (leg >= 1 && leg <= (int)d.leg_lines.size())
+          where = " (leg " + std::to_string(leg) + " is the [[leg]] on line " + std::to_string(d.leg_lines[leg - 1]) + ")";
+      }
+      throw Error(PKM_ERR_ARGUMENT, path + ":" + std::to_string(d.home_line) + ": parameter set '" + s.first + "': " +
+                                        msg + where);
+    }
+  }
+  const Robot* out = r.get();
+  c.emplace(key, std::move(r));
+  return out;
+}
+
+}  // namespace
+
+const Robot* load_described(const std::string& name) {
+  std::string path;
+  if (is_path(name)) {
+    path = name;
+  } else {
+    for (const auto& dir : search_dirs()) {
+      bool ok = false;
+      read_file(dir + "/" + name + ".toml", ok);
+      if (ok) {
+        path = dir + "/" + name + ".toml";
+        break;
+      }
+    }
+    if (path.empty()) {
+      // A robot loaded from a path earlier answers to its name too (the newest of that name).
+      std::lock_guard<std::mutex> lock(g_mu);
+      const Robot* found = nullptr;
+      for (const auto& kv : cache())
+        if (kv.second->description().name == name && (!found || kv.second->serial() > static_cast<const DescribedRobot*>(found)->serial()))
+          found = kv.second.get();
+      return found;
+    }
+  }
+  bool ok = false;
+  const std::string text = read_file(path, ok);
+  if (!ok) throw Error(PKM_ERR_ARGUMENT, "cannot read robot description " + path);
+  return make(path, text);
+}
+
+const Robot* register_description(const std::string& text, const std::string& file) { return make(file, text); }
+
+std::vector<std::string> bundled_descriptions() {
+  std::vector<std::string> out;
+  for (const auto& dir : search_dirs()) {
+    // A short listing without <filesystem>'s exceptions: try the index file robots.list.
+    bool ok = false;
+    const std::string list = read_file(dir + "/robots.list", ok);
+    if (!ok) continue;
+    std::istringstream is(list);
+    std::string line;
+    while (std::getline(is, line)) {
+      const auto h = line.find('#');
+      if (h != std::string::npos) line = line.substr(0, h);
+      line.erase(0, line.find_first_not_of(" \t\r"));
+      line.erase(line.find_last_not_of(" \t\r") + 1);
+      if (!line.empty() && std::find(out.begin(), out.end(), line) == out.end()) out.push_back(line);
+    }
+  }
+  return out;
+}
+
+}  // namespace described
+}  // namespace pkm

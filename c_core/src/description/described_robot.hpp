@@ -1,0 +1,180 @@
+// A robot compiled from a description file (docs/robots.md): the description becomes a
+// parameter table like a hand-written robot's, and one set of algorithms serves every
+// described robot.
+//
+// Model.  The platform moves along a declared subset of the pose (x, y, z, rx, ry, rz),
+// R = Rx(rx) Ry(ry) Rz(rz), the others held at 0 by the legs.  Every leg joins the base to
+// a platform point P_i and has one actuated joint q_i of one of three kinds:
+//  * rail:  a slider S = S0 + q s on a prismatic rail at the base, then a rod |P - S| = L
+//           (PUS, PSS, P(SS)2, planar PRR);
+//  * arm:   a revolute arm at the base, elbow B = A + r (cos q u + sin q (k x u)), then a
+//           rod |P - B| = L (RUS, RSS, R(SS)2 of Delta robots, planar RRR);
+//  * strut: an actuated prismatic strut of length q = |P - B| between a base point and P
+//           (UPS, SPS of Gough-Stewart platforms).
+// Bodies: the platform (mass, principal inertias), a payload point, per leg a slider point
+// mass, an arm (mass at its centre of mass + inertia about it), uniform slender rods
+// (a parallelogram's rod pair is one rod of their total mass: its rods translate), a
+// strut's cylinder and piston as uniform slender tubes.
+//
+// Algorithms.  The positions of all body points are written once as a template of the
+// pose (closed-form inverse kinematics per leg); forward-mode differentiation
+// (description/jet.hpp) gives the Jacobians and the accelerations exactly.  Dynamics by
+// virtual power: J^T tau = sum_b J_b^T (inertia and gravity force of b).
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "common/robot.hpp"
+#include "description/toml_lite.hpp"
+
+namespace pkm {
+namespace described {
+
+enum class Joint { rail, arm, strut };
+
+// A leg architecture: which actuated joint, and what the Grubler-Kutzbach count sees
+// (bodies, joints, their freedoms, idle freedoms such as a rod's spin between two
+// spherical joints).
+struct LegType {
+  const char* name;
+  Joint joint;
+  int bodies, joints, freedoms, idle;
+  bool planar;  // a planar chain (only with planar robots)
+  const char* what;
+};
+const LegType* find_leg_type(const std::string& name);
+std::string leg_type_names();
+
+constexpr int kMaxLegs = 6;
+
+// Mass elements of a leg over its body points (local indices; point 1 is always P).
+struct PointMass {
+  int a;
+  double m;
+};
+struct Rod {  // uniform slender rod between points a and b
+  int a, b;
+  double m;
+};
+
+struct LegModel {
+  const LegType* type = nullptr;
+  Eigen::Vector3d p;  // platform point in the platform frame [m]
+  Eigen::Vector3d base;  // rail: S0; arm: axis point A; strut: base point B [m]
+  Eigen::Vector3d dir;   // rail: s; arm: axis k (unit) [1]
+  Eigen::Vector3d u, w;  // arm: arm direction at q = 0 and k x u
+  double L = 0, r = 0, branch = 1, ss = 1, inv_ss = 1;
+  double m_rod = 0, m_body = 0, I_arm = 0, rc = 0;  // slider or arm mass, arm inertia and CoM distance
+  double m_cyl = 0, l_cyl = 0, m_pis = 0, l_pis = 0;
+  double qmin = 0, qmax = 0;
+  double disc_tol = 0;
+  int npt = 0, nmass = 0, nrod = 0;  // body points: rail S, P; arm B, P, C; strut B, P, cylinder end, piston end
+  PointMass mass[2];
+  Rod rod[2];
+};
+
+struct Model final : RobotModel {
+  int n = 0;
+  int coord[6];    // pose index (0..5) of free coordinate j
+  bool rotates = false;  // some rotation is a coordinate
+  std::vector<LegModel> legs;
+  double m_platform = 0;
+  Eigen::Vector3d I_platform, c_payload, g;
+  double m_payload = 0;
+  double r_char = 1;
+  double home[6];
+};
+
+// A parameter value by name, from [defaults] or [sets.NAME], with its line.
+struct Override {
+  std::string name;
+  double value;
+  int line;
+};
+
+// What a description file declares, checked, with the parameter table it defines.
+struct Description {
+  std::string file, name, title, source, text;
+  std::vector<int> coords;              // pose indices of the platform's coordinates
+  std::vector<const LegType*> legs;
+  std::vector<int> leg_lines;
+  std::vector<ParamSpec> params;        // defaults from the file
+  std::vector<std::pair<std::string, std::vector<Override>>> sets;  // "default" first
+  std::vector<double> home;
+  int home_line = 0;
+  Joint joint = Joint::rail;
+  bool planar = false;
+  int mobility = 0;  // Grubler-Kutzbach count
+};
+
+// Reads and checks a description; throws Error(PKM_ERR_ARGUMENT, "file:line: field: what").
+Description read_description(const std::string& text, const std::string& file);
+
+class DescribedRobot final : public Robot {
+ public:
+  DescribedRobot(Description d, int serial) : d_(std::move(d)), serial_(serial) {
+    // A geometric error is a rod-length error, leg by leg (a strut has no rod: its length
+    // is the joint, so the toolkit takes every length parameter instead).
+    if (d_.joint != Joint::strut)
+      for (int k = 0; k < ndof(); ++k) geometry_names_.push_back("leg[" + std::to_string(k + 1) + "].L");
+  }
+  const Description& description() const { return d_; }
+  int serial() const { return serial_; }  // order of loading
+  const char* name() const override { return d_.name.c_str(); }
+  const char* title() const override { return d_.title.c_str(); }
+  const char* source_file() const override { return d_.file.c_str(); }
+  int ndof() const override { return (int)d_.coords.size(); }
+  std::vector<std::string> param_sets() const override;
+  std::vector<ParamSpec> param_specs(const std::string& set) const override;
+  std::vector<std::pair<std::string, double>> param_overrides(const std::string& set) const override;
+  std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
+                                      const std::vector<double>& values) const override;
+  void home(const RobotModel&, double* x) const override;
+  const char* joint_prefix() const override;
+  const char* joint_noun() const override;
+  bool joints_angular() const override { return d_.joint == Joint::arm; }
+  const char* limb_noun() const override { return "leg"; }
+  const char* pose_name(int i) const override;
+  const char* pose_unit(int i) const override;
+  std::string joint_limit_param(int i, bool upper) const override;
+  const char* geometry_param(int i) const override;
+
+  void ik(const RobotModel&, RobotData&, const double* x, double* q) const override;
+  void jacobians(const RobotModel&, RobotData&, const double* x, double* Jx, double* Jq,
+                 double* J) const override;
+  void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
+                    double* Jdot) const override;
+  void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
+  void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
+                          const double* xdd, double* qdd) const override;
+  void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                        const double* xdd, double* tau) const override;
+  void mass_matrix(const RobotModel&, RobotData&, const double* x, double* M) const override;
+  void forward_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,
+                        const double* tau, double* xdd) const override;
+  bool forward_dynamics_response(const RobotModel&, RobotData&, const double* x, const double* xd,
+                                 const double* tau, double* xdd, double* B) const override;
+  void energy(const RobotModel&, RobotData&, const double* x, const double* xd, double* kinetic,
+              double* potential) const override;
+
+ private:
+  Description d_;
+  int serial_;
+  std::vector<std::string> geometry_names_;
+};
+
+// The robot a name or path stands for: a path to a description file (contains '/' or
+// ends in ".toml"), or the name of a description in the search path (PKM_ROBOT_PATH,
+// then the project's robots/ folder).  nullptr if it is neither; throws Error naming the
+// file and line if the description is bad.  Robots stay alive for the process; a file
+// whose text changed gives a new robot.
+const Robot* load_described(const std::string& name_or_path);
+// Compiles a description from its text (file names it in messages).
+const Robot* register_description(const std::string& text, const std::string& file);
+// Names of the descriptions in the search path, sorted.
+std::vector<std::string> bundled_descriptions();
+
+}  // namespace described
+}  // namespace pkm

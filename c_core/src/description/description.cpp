@@ -1,0 +1,377 @@
+// Reading a robot description (docs/robots.md): fields, units, checks with file, line and
+// field in every message, the parameter table, the Grubler-Kutzbach mobility count.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "description/described_robot.hpp"
+#include "dynamics/drive.hpp"
+
+namespace pkm {
+namespace described {
+
+namespace {
+
+// bodies, joints, freedoms, idle: what the Grubler-Kutzbach count sees of one leg.
+const LegType kLegTypes[] = {
+    {"PUS", Joint::rail, 2, 3, 6, 0, false, "slider on a rail at the base, universal joint, rod, spherical joint"},
+    {"PSS", Joint::rail, 2, 3, 7, 1, false, "slider on a rail, rod between two spherical joints"},
+    {"P(SS)2", Joint::rail, 3, 5, 13, 2, false, "slider on a rail, parallelogram of two rods (linear Delta)"},
+    {"PRR", Joint::rail, 2, 3, 3, 0, true, "planar: slider on a rail, rod between two revolute joints"},
+    {"RUS", Joint::arm, 2, 3, 6, 0, false, "revolute arm at the base, universal joint, rod, spherical joint"},
+    {"RSS", Joint::arm, 2, 3, 7, 1, false, "revolute arm, rod between two spherical joints"},
+    {"R(SS)2", Joint::arm, 3, 5, 13, 2, false, "revolute arm, parallelogram of two rods (Delta)"},
+    {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints"},
+    {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint"},
+    {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint"},
+};
+
+const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+std::string idx(const char* group, int i, const char* field) {
+  return std::string(group) + "[" + std::to_string(i + 1) + "]." + field;
+}
+
+struct Reader {
+  const toml::Document& doc;
+  [[noreturn]] void fail(int line, const std::string& what) const {
+    throw Error(PKM_ERR_ARGUMENT, doc.file + ":" + std::to_string(line) + ": " + what);
+  }
+  // The keys a table may have; anything else is refused naming the known ones (typos).
+  void only(const toml::Table& t, const std::vector<std::string>& known, const std::string& where) const {
+    for (const auto& kv : t.keys)
+      if (std::find(known.begin(), known.end(), kv.first) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        fail(kv.second.line, where + ": unknown field '" + kv.first + "' (known: " + list + ")");
+      }
+  }
+  const toml::Value& need(const toml::Table& t, const std::string& key, const std::string& where,
+                          const std::string& what) const {
+    const toml::Value* v = t.find(key);
+    if (!v) fail(t.line, where + ": field '" + key + "' is missing (" + what + ")");
+    return *v;
+  }
+  std::string text(const toml::Table& t, const std::string& key, const std::string& where, const std::string& what,
+                   bool required = true) const {
+    const toml::Value* v = t.find(key);
+    if (!v) {
+      if (required) need(t, key, where, what);
+      return "";
+    }
+    if (v->kind != toml::Value::String) fail(v->line, where + "." + key + " must be a string (" + what + ")");
+    return v->str;
+  }
+  double number(const toml::Value& v, const std::string& field) const {
+    if (v.kind != toml::Value::Number) fail(v.line, field + " must be a number, got " + v.kind_name());
+    return v.num;
+  }
+  std::vector<double> numbers(const toml::Value& v, const std::string& field, size_t n) const {
+    if (v.kind != toml::Value::Array || v.items.size() != n)
+      fail(v.line, field + " must be an array of " + std::to_string(n) + " numbers");
+    std::vector<double> out;
+    for (const auto& it : v.items) out.push_back(number(it, field));
+    return out;
+  }
+};
+
+// Rotation about the world z axis by angle a applied to (x, y, z).
+std::vector<double> rot_z(const std::vector<double>& v, double a) {
+  return {std::cos(a) * v[0] - std::sin(a) * v[1], std::sin(a) * v[0] + std::cos(a) * v[1], v[2]};
+}
+
+}  // namespace
+
+const LegType* find_leg_type(const std::string& name) {
+  for (const LegType& t : kLegTypes)
+    if (name == t.name) return &t;
+  return nullptr;
+}
+
+std::string leg_type_names() {
+  std::string s;
+  for (const LegType& t : kLegTypes) s += (s.empty() ? "" : ", ") + std::string(t.name);
+  return s;
+}
+
+Description read_description(const std::string& text, const std::string& file) {
+  const toml::Document doc = toml::parse(text, file);
+  Reader rd{doc};
+  Description d;
+  d.file = file;
+  d.text = text;
+
+  // Tables the format knows.
+  for (const toml::Table& t : doc.tables) {
+    if (t.name.empty()) {
+      if (!t.keys.empty())
+        rd.fail(t.keys.front().second.line, "field '" + t.keys.front().first + "' outside any [table] (start with [robot])");
+      continue;
+    }
+    const bool known = t.name == "robot" || t.name == "gravity" || t.name == "platform" || t.name == "payload" ||
+                       t.name == "leg" || t.name == "defaults" || t.name.rfind("sets.", 0) == 0;
+    if (!known)
+      rd.fail(t.line, "unknown table [" + t.name +
+                          "] (known: [robot], [gravity], [platform], [payload], [[leg]], [defaults], [sets.NAME])");
+    if (t.name == "leg" && !t.array) rd.fail(t.line, "legs are declared as [[leg]] (one per leg), not [leg]");
+    if (t.name != "leg" && t.array) rd.fail(t.line, "[[" + t.name + "]] must be written [" + t.name + "]");
+  }
+
+  // [robot]
+  const auto robots = doc.named("robot");
+  if (robots.empty()) rd.fail(1, "[robot] table is missing (name, coordinates, home)");
+  const toml::Table& rt = *robots.front();
+  rd.only(rt, {"name", "title", "source", "coordinates", "home"}, "[robot]");
+  d.name = rd.text(rt, "name", "robot", "the robot's name, what --robot takes");
+  if (d.name.empty() || d.name.find_first_of(" /\\\t") != std::string::npos)
+    rd.fail(rt.find("name")->line, "robot.name '" + d.name + "' must be one word without spaces or slashes");
+  d.title = rd.text(rt, "title", "robot", "", false);
+  d.source = rd.text(rt, "source", "robot", "", false);
+  const toml::Value& cv = rd.need(rt, "coordinates", "robot", "the platform's degrees of freedom, e.g. [\"x\", \"y\", \"z\"]");
+  if (cv.kind != toml::Value::Array || cv.items.empty() || cv.items.size() > 6)
+    rd.fail(cv.line, "robot.coordinates must be an array of 1 to 6 names out of x, y, z, rx, ry, rz");
+  for (const auto& it : cv.items) {
+    int k = -1;
+    for (int j = 0; j < 6; ++j)
+      if (it.kind == toml::Value::String && it.str == kCoordNames[j]) k = j;
+    if (k < 0) rd.fail(cv.line, "robot.coordinates: '" + it.str + "' is not one of x, y, z, rx, ry, rz");
+    if (std::find(d.coords.begin(), d.coords.end(), k) != d.coords.end())
+      rd.fail(cv.line, "robot.coordinates: '" + it.str + "' is given twice");
+    d.coords.push_back(k);
+  }
+  const int n = (int)d.coords.size();
+  const toml::Value& hv = rd.need(rt, "home", "robot", "the home pose, one value per coordinate [m, rad]");
+  const std::vector<double> home_as_written = rd.numbers(hv, "robot.home", (size_t)n);
+  d.home_line = hv.line;
+  // The pose runs in the order x y z rx ry rz whatever order the file lists them in.
+  std::vector<int> order(n);
+  for (int j = 0; j < n; ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return d.coords[a] < d.coords[b]; });
+  std::vector<int> sorted;
+  for (int j : order) sorted.push_back(d.coords[j]), d.home.push_back(home_as_written[j]);
+  d.coords = sorted;
+
+  // [gravity], [platform], [payload]
+  double g[3] = {0, 0, -9.81};
+  if (auto gt = doc.named("gravity"); !gt.empty()) {
+    rd.only(*gt[0], {"vector"}, "[gravity]");
+    auto gv = rd.numbers(rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]"), "gravity.vector", 3);
+    std::copy(gv.begin(), gv.end(), g);
+  }
+  const auto pts = doc.named("platform");
+  if (pts.empty()) rd.fail(rt.line, "[platform] table is missing (mass, inertia)");
+  const toml::Table& pt = *pts[0];
+  rd.only(pt, {"mass", "inertia"}, "[platform]");
+  const double pm = rd.number(rd.need(pt, "mass", "platform", "platform mass [kg]"), "platform.mass");
+  const auto pI = rd.numbers(rd.need(pt, "inertia", "platform",
+                                     "principal inertias [Ixx, Iyy, Izz] about its centre of mass [kg m2]"),
+                             "platform.inertia", 3);
+  if (pm < 0) rd.fail(pt.find("mass")->line, "platform.mass = " + num(pm) + " kg must be >= 0");
+  for (double v : pI)
+    if (v < 0) rd.fail(pt.find("inertia")->line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
+  double pay_m = 0;
+  std::vector<double> pay_c = {0, 0, 0};
+  if (auto yt = doc.named("payload"); !yt.empty()) {
+    rd.only(*yt[0], {"mass", "position"}, "[payload]");
+    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass");
+    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3);
+    if (pay_m < 0) rd.fail(yt[0]->find("mass")->line, "payload.mass = " + num(pay_m) + " kg must be >= 0");
+  }
+
+  // [[leg]]: expanded copies, each with the line of its table.
+  struct LegIn {
+    const toml::Table* t;
+    const LegType* type;
+    double angle;
+    int copy;
+  };
+  std::vector<LegIn> legs;
+  for (const toml::Table* t : doc.named("leg")) {
+    const std::string tn = rd.text(*t, "type", "leg", "the leg architecture (" + leg_type_names() + ")");
+    const LegType* lt = find_leg_type(tn);
+    if (!lt) rd.fail(t->find("type")->line, "leg type '" + tn + "' is not known (known: " + leg_type_names() + ")");
+    int copies = 1;
+    if (auto v = t->find("copies")) {
+      const double c = rd.number(*v, "leg.copies");
+      if (c < 1 || c > kMaxLegs || c != std::floor(c))
+        rd.fail(v->line, "leg.copies = " + num(c) + " must be a whole number from 1 to " + std::to_string(kMaxLegs));
+      copies = (int)c;
+    }
+    const double pi = std::acos(-1.0);
+    for (int k = 0; k < copies; ++k) legs.push_back({t, lt, 2 * pi * k / copies, k});
+  }
+  if (legs.empty()) rd.fail(rt.line, "no [[leg]] is declared");
+  if ((int)legs.size() != n)
+    rd.fail(legs.back().t->line, std::to_string(legs.size()) + " legs for " + std::to_string(n) +
+                                     " coordinates: the toolkit needs one actuated leg per degree of freedom");
+
+  // Planar or spatial.
+  bool any_planar = false, all_planar = true;
+  for (const auto& l : legs) any_planar |= l.type->planar, all_planar &= l.type->planar;
+  if (any_planar && !all_planar) rd.fail(legs.front().t->line, "planar legs (PRR, RRR) and spatial legs are mixed");
+  d.planar = all_planar;
+  if (d.planar)
+    for (int k : d.coords)
+      if (k != 0 && k != 1 && k != 5)
+        rd.fail(cv.line, std::string("a planar robot moves in x, y, rz; '") + kCoordNames[k] + "' is not planar");
+
+  // Grubler-Kutzbach: lambda (n_bodies - n_joints - 1) + sum f - idle.
+  const int lambda = d.planar ? 3 : 6;
+  int nb = 2, nj = 0, f = 0;
+  for (const auto& l : legs) {
+    nb += l.type->bodies, nj += l.type->joints, f += l.type->freedoms - l.type->idle;
+    if (l.type->joint != legs.front().type->joint)
+      rd.fail(l.t->line, "legs with different actuated joints (rail, arm, strut) are not supported in one robot");
+  }
+  d.joint = legs.front().type->joint;
+  d.mobility = lambda * (nb - nj - 1) + f;
+  if (d.mobility != n) {
+    std::ostringstream os;
+    os << "mobility mismatch: the Grubler-Kutzbach count of these legs is " << d.mobility << " = " << lambda << " x ("
+       << nb << " bodies - " << nj << " joints - 1) + " << f << " joint freedoms (idle spins removed), but "
+       << n << " coordinates are declared";
+    rd.fail(cv.line, os.str());
+  }
+
+  // Parameter table, leg by leg (names as the hand-written 6-PUS names its own).
+  auto& P = d.params;
+  auto add = [&](const std::string& name, const char* unit, const std::string& desc, double v, double lo, double hi,
+                 int line) {
+    if (v < lo || v > hi)
+      rd.fail(line, name + " = " + num(v) + " " + unit + " is outside [" + num(lo) + ", " + num(hi) + "] (" + desc + ")");
+    P.push_back({name, unit, desc, v, lo, hi});
+  };
+  for (int i = 0; i < n; ++i) {
+    const LegIn& l = legs[i];
+    const toml::Table& t = *l.t;
+    const std::string where = "leg " + std::to_string(i + 1) + (l.copy ? " (copy " + std::to_string(l.copy) + " of the [[leg]] on line " + std::to_string(t.line) + ")" : "");
+    const Joint j = l.type->joint;
+    std::vector<std::string> known = {"type", "copies", "platform_point", "stroke"};
+    if (j == Joint::rail) for (auto k : {"rail_origin", "rail_direction", "slider_mass", "rod_length", "rod_mass", "branch"}) known.push_back(k);
+    if (j == Joint::arm) for (auto k : {"axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_inertia", "rod_length", "rod_mass", "branch"}) known.push_back(k);
+    if (j == Joint::strut) for (auto k : {"base_point", "cylinder_mass", "cylinder_length", "piston_mass", "piston_length"}) known.push_back(k);
+    rd.only(t, known, where);
+    auto vec = [&](const char* key, const char* what) {
+      const toml::Value& v = rd.need(t, key, where, what);
+      return rot_z(rd.numbers(v, std::string("leg.") + key, 3), l.angle);
+    };
+    auto scalar = [&](const char* key, const char* what, double lo, double hi, const char* unit) {
+      const toml::Value& v = rd.need(t, key, where, what);
+      const double x = rd.number(v, std::string("leg.") + key);
+      if (x < lo || x > hi)
+        rd.fail(v.line, where + ": " + key + " = " + num(x) + " " + unit + " must be " +
+                            (lo > 0 ? "> 0" : hi < 1e300 ? "in [" + num(lo) + ", " + num(hi) + "]" : ">= " + num(lo)) +
+                            " (" + what + ")");
+      return x;
+    };
+    auto line_of = [&](const char* key) { return t.find(key) ? t.find(key)->line : t.line; };
+    const auto p = vec("platform_point", "the leg's attachment point in the platform frame [m]");
+    const auto stroke = rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]"), "leg.stroke", 2);
+    if (!(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
+    const std::string leg = "leg " + std::to_string(i + 1);
+    if (j == Joint::rail || j == Joint::arm) {
+      const double L = scalar("rod_length", "rod length between its two joints [m]", 1e-9, 1e300, "m");
+      add(idx("leg", i, "L"), "m", "length of " + leg + " (rod between its two joints)", L, 1e-9, 1e3, line_of("rod_length"));
+      add(idx("leg", i, "px"), "m", "x of the platform attachment point of " + leg + ", platform frame", p[0], -1e3, 1e3, line_of("platform_point"));
+      add(idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + ", platform frame", p[1], -1e3, 1e3, line_of("platform_point"));
+      add(idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + ", platform frame", p[2], -1e3, 1e3, line_of("platform_point"));
+      double br = 1;
+      if (t.find("branch")) {
+        br = rd.number(*t.find("branch"), "leg.branch");
+        if (br != 1 && br != -1) rd.fail(line_of("branch"), where + ": branch = " + num(br) + " must be +1 or -1 (which inverse-kinematics root)");
+      }
+      add(idx("leg", i, "branch"), "1", "inverse-kinematics root of " + leg + " (+1 or -1, docs/robots.md)", br, -1, 1, line_of("branch"));
+      add(idx("leg", i, "m"), "kg", "mass of the rod(s) of " + leg + " (uniform slender rods)",
+          scalar("rod_mass", "mass of the rod, or of both rods of a parallelogram [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("rod_mass"));
+    }
+    if (j == Joint::rail) {
+      const auto S0 = vec("rail_origin", "slider position at q = 0 [m]");
+      const auto s = vec("rail_direction", "unit rail direction, q grows along it");
+      const double sn = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+      if (std::abs(sn - 1) > 1e-6) rd.fail(line_of("rail_direction"), where + ": rail_direction has length " + num(sn) + ", must be a unit vector");
+      const char* c[3] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("S0") + c[k]).c_str()), "m", std::string(c[k]) + " of the slider of " + leg + " at stroke q = 0", S0[k], -1e3, 1e3, line_of("rail_origin"));
+      for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("s") + c[k]).c_str()), "1", std::string(c[k]) + " of the rail direction of " + leg + " (unit vector)", s[k], -2, 2, line_of("rail_direction"));
+      add(idx("rail", i, "qmin"), "m", "lower stroke limit of " + leg, stroke[0], -1e3, 1e3, line_of("stroke"));
+      add(idx("rail", i, "qmax"), "m", "upper stroke limit of " + leg, stroke[1], -1e3, 1e3, line_of("stroke"));
+      add(idx("slider", i, "m"), "kg", "mass of the slider carriage of " + leg,
+          scalar("slider_mass", "slider carriage mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("slider_mass"));
+    } else if (j == Joint::arm) {
+      const auto A = vec("axis_point", "a point of the motor axis [m]");
+      const auto k_ = vec("axis", "unit motor axis; q turns the arm about it by the right-hand rule");
+      const auto u = vec("arm_direction", "unit arm direction at q = 0, perpendicular to the axis");
+      const double kn = std::sqrt(k_[0] * k_[0] + k_[1] * k_[1] + k_[2] * k_[2]);
+      const double un = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      if (std::abs(kn - 1) > 1e-6) rd.fail(line_of("axis"), where + ": axis has length " + num(kn) + ", must be a unit vector");
+      if (std::abs(un - 1) > 1e-6) rd.fail(line_of("arm_direction"), where + ": arm_direction has length " + num(un) + ", must be a unit vector");
+      if (std::abs(k_[0] * u[0] + k_[1] * u[1] + k_[2] * u[2]) > 1e-6) rd.fail(line_of("arm_direction"), where + ": arm_direction must be perpendicular to the axis");
+      const char* c[3] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("A") + c[k]).c_str()), "m", std::string(c[k]) + " of the motor axis point of " + leg, A[k], -1e3, 1e3, line_of("axis_point"));
+      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("k") + c[k]).c_str()), "1", std::string(c[k]) + " of the motor axis of " + leg + " (unit vector)", k_[k], -2, 2, line_of("axis"));
+      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("u") + c[k]).c_str()), "1", std::string(c[k]) + " of the arm direction of " + leg + " at q = 0 (unit, perpendicular to the axis)", u[k], -2, 2, line_of("arm_direction"));
+      add(idx("arm", i, "r"), "m", "arm length of " + leg + " (motor axis to elbow joint)",
+          scalar("arm_length", "motor axis to elbow [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("arm_length"));
+      add(idx("arm", i, "mass"), "kg", "arm mass of " + leg, scalar("arm_mass", "arm mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("arm_mass"));
+      add(idx("arm", i, "rc"), "m", "distance from the motor axis to the arm's centre of mass along the arm, " + leg,
+          scalar("arm_com", "axis to the arm's centre of mass [m]", -1e3, 1e3, "m"), -1e3, 1e3, line_of("arm_com"));
+      add(idx("arm", i, "I"), "kg m2", "arm inertia about its centre of mass, about an axis parallel to the motor axis, " + leg,
+          scalar("arm_inertia", "arm inertia about its centre of mass [kg m2]", 0, 1e6, "kg m2"), 0, 1e6, line_of("arm_inertia"));
+      add(idx("arm", i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, line_of("stroke"));
+      add(idx("arm", i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, line_of("stroke"));
+    } else {
+      const auto B = vec("base_point", "the strut's base joint [m]");
+      const char* c[3] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k) add(idx("leg", i, (std::string("b") + c[k]).c_str()), "m", std::string(c[k]) + " of the base joint of " + leg, B[k], -1e3, 1e3, line_of("base_point"));
+      for (int k = 0; k < 3; ++k) add(idx("leg", i, (std::string("p") + c[k]).c_str()), "m", std::string(c[k]) + " of the platform attachment point of " + leg + ", platform frame", p[k], -1e3, 1e3, line_of("platform_point"));
+      if (!(stroke[0] > 0)) rd.fail(line_of("stroke"), where + ": a strut's stroke is its length between the joints; min = " + num(stroke[0]) + " m must be > 0");
+      add(idx("strut", i, "qmin"), "m", "shortest length of the strut of " + leg, stroke[0], 1e-9, 1e3, line_of("stroke"));
+      add(idx("strut", i, "qmax"), "m", "longest length of the strut of " + leg, stroke[1], 1e-9, 1e3, line_of("stroke"));
+      add(idx("cylinder", i, "m"), "kg", "cylinder mass of " + leg + " (uniform tube from the base joint)", scalar("cylinder_mass", "cylinder mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("cylinder_mass"));
+      add(idx("cylinder", i, "l"), "m", "cylinder length of " + leg, scalar("cylinder_length", "cylinder length [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("cylinder_length"));
+      add(idx("piston", i, "m"), "kg", "piston mass of " + leg + " (uniform rod ending at the platform joint)", scalar("piston_mass", "piston mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("piston_mass"));
+      add(idx("piston", i, "l"), "m", "piston length of " + leg, scalar("piston_length", "piston length [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("piston_length"));
+    }
+    d.legs.push_back(l.type);
+    d.leg_lines.push_back(t.line);
+  }
+  add("platform.m", "kg", "platform mass (its centre of mass is the platform frame origin)", pm, 0, 1e6, pt.find("mass")->line);
+  add("platform.Ixx", "kg m2", "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, pt.find("inertia")->line);
+  add("platform.Iyy", "kg m2", "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, pt.find("inertia")->line);
+  add("platform.Izz", "kg m2", "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, pt.find("inertia")->line);
+  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pt.line);
+  add("payload.x", "m", "x of the payload in the platform frame", pay_c[0], -1e3, 1e3, pt.line);
+  add("payload.y", "m", "y of the payload in the platform frame", pay_c[1], -1e3, 1e3, pt.line);
+  add("payload.z", "m", "z of the payload in the platform frame", pay_c[2], -1e3, 1e3, pt.line);
+  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, pt.line);
+  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, pt.line);
+  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, pt.line);
+
+  // [defaults] and [sets.NAME]: values by parameter name (checked against the table and
+  // the drive layer's names once the robot exists, in load_described).
+  auto overrides = [&](const toml::Table& t) {
+    std::vector<Override> out;
+    for (const auto& kv : t.keys) out.push_back({kv.first, rd.number(kv.second, t.name + "." + kv.first), kv.second.line});
+    return out;
+  };
+  d.sets.emplace_back("default", std::vector<Override>{});
+  if (auto dt = doc.named("defaults"); !dt.empty()) d.sets[0].second = overrides(*dt[0]);
+  for (const toml::Table& t : doc.tables)
+    if (t.name.rfind("sets.", 0) == 0) {
+      auto o = d.sets[0].second;  // a set starts from the defaults
+      for (auto& kv : overrides(t)) o.push_back(kv);
+      d.sets.emplace_back(t.name.substr(5), o);
+    }
+  return d;
+}
+
+}  // namespace described
+}  // namespace pkm

@@ -1,0 +1,227 @@
+"""Robots compiled from description files (robots/*.toml, docs/robots.md).
+
+The 6-PUS description against the hand-written 6-PUS (1000 random poses and rates, 1e-10),
+the closed-form derivatives of every leg kind against forward-mode differentiation and
+finite differences, energy conservation, and one clear error per kind of bad description.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cosim.core import Model, robots
+from cosim._native import ArgumentError
+
+REPO = Path(__file__).resolve().parents[2]
+LISTED = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
+LISTED = [n for n in LISTED if n]
+NEW = [n for n in LISTED if n != "6pus_described"]
+
+
+def rel(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.abs(a - b).max() / max(1e-300, np.abs(a).max())
+
+
+def samples(m, n, seed):
+    """Poses near home (up to 10 mm, 3 deg, inside the strokes), rates and accelerations."""
+    rng = np.random.default_rng(seed)
+    ang = np.array([u == "rad" for u in m.facts.pose_units])
+    step = np.where(ang, 0.05, 0.01)
+    X = np.empty((0, m.ndof))
+    while len(X) < n:
+        cand = m.home() + rng.uniform(-1, 1, (4 * n, m.ndof)) * step
+        _, status = m.ik(cand, errors="status")
+        X = np.vstack([X, cand[status == 0]])
+        step = step * 0.7
+    X = X[:n]
+    XD = rng.normal(size=(n, m.ndof)) * np.where(ang, 0.3, 0.05)
+    XDD = rng.normal(size=(n, m.ndof)) * np.where(ang, 3.0, 1.0)
+    return X, XD, XDD
+
+
+def test_every_listed_description_is_listed_by_the_core():
+    names = robots()
+    assert {"6pus", "quattro", "fourbar"} <= set(names)
+    assert set(LISTED) <= set(names)
+    assert {"hexapod_ups", "delta_clavel", "planar_3rrr", "linear_delta"} <= set(LISTED)
+
+
+def test_6pus_description_has_the_hand_written_parameter_table():
+    a, b = Model("6pus"), Model("6pus_described")
+    ia, ib = a.param_info(), b.param_info()
+    assert [p.name for p in ia] == [p.name for p in ib]
+    assert [p.unit for p in ia] == [p.unit for p in ib]
+    assert a.params() == b.params()
+    assert a.facts.pose_names == b.facts.pose_names and a.joint_unit == b.joint_unit
+
+
+def test_6pus_description_equals_the_hand_written_model():
+    a, b = Model("6pus"), Model("6pus_described")
+    X, XD, XDD = samples(a, 1000, seed=7)
+    assert rel(a.ik(X), b.ik(X)) < 1e-10
+    assert rel(a.inverse_dynamics(X, XD, XDD), b.inverse_dynamics(X, XD, XDD)) < 1e-10
+    T = a.inverse_dynamics(X, XD, XDD)
+    assert rel(a.forward_dynamics(X, XD, T), b.forward_dynamics(X, XD, T)) < 1e-10
+    for x, xd, xdd in zip(X[::10], XD[::10], XDD[::10]):  # the per-pose functions at 100 of them
+        for fa, fb in zip(a.jacobians(x), b.jacobians(x)):
+            assert rel(fa, fb) < 1e-10
+        assert rel(a.jacobian_dot(x, xd), b.jacobian_dot(x, xd)) < 1e-10
+        assert rel(a.mass_matrix(x), b.mass_matrix(x)) < 1e-10
+        assert rel(a.joint_acceleration(x, xd, xdd), b.joint_acceleration(x, xd, xdd)) < 1e-10
+        assert rel(np.array(a.energy(x, xd)), np.array(b.energy(x, xd))) < 1e-10
+        assert rel(a.singularity(x), b.singularity(x)) < 1e-10
+
+
+@pytest.mark.parametrize("name", NEW)
+def test_closed_form_derivatives_agree_with_forward_mode_and_finite_differences(name):
+    m = Model(name)
+    X, XD, XDD = samples(m, 40, seed=3)
+    h = 1e-6
+    for x, xd, xdd in zip(X, XD, XDD):
+        J = m.jacobian(x)
+        # J (closed form) against central differences of the inverse kinematics
+        Jfd = np.column_stack([(m.ik(x + h * e) - m.ik(x - h * e)) / (2 * h) for e in np.eye(m.ndof)])
+        assert np.abs(J - Jfd).max() < 1e-6 * max(1.0, np.abs(J).max())
+        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (Jdot forward-mode too)
+        qdd = m.joint_acceleration(x, xd, xdd)
+        assert rel(qdd, J @ xdd + m.jacobian_dot(x, xd) @ xd) < 1e-10
+        # Jx xd = Jq qd
+        Jx, Jq, _ = m.jacobians(x)
+        assert rel(Jx @ xd, Jq @ (J @ xd)) < 1e-10
+        # inverse and forward dynamics invert each other; M is symmetric positive definite
+        tau = m.inverse_dynamics(x, xd, xdd)
+        assert rel(xdd, m.forward_dynamics(x, xd, tau)) < 1e-9
+        M = m.mass_matrix(x)
+        assert np.allclose(M, M.T, rtol=0, atol=1e-12 * np.abs(M).max())
+        assert np.linalg.eigvalsh(M).min() > 0
+
+
+@pytest.mark.parametrize("name", NEW)
+def test_power_balance(name):
+    """d/dt (kinetic + potential) = tau . qd along any motion (closed forms consistent with the energy)."""
+    m = Model(name)
+    X, XD, XDD = samples(m, 10, seed=5)
+    h = 1e-5
+    for x, xd, xdd in zip(X, XD, XDD):
+        def e(s):
+            k, p = m.energy(x + s * xd + 0.5 * s * s * xdd, xd + s * xdd)
+            return k + p
+        dE = (e(h) - e(-h)) / (2 * h)
+        power = m.inverse_dynamics(x, xd, xdd) @ (m.jacobian(x) @ xd)
+        assert abs(dE - power) < 1e-6 * max(1.0, abs(power))
+
+
+@pytest.mark.parametrize("name", NEW)
+def test_energy_drift_over_ten_seconds(name):
+    """No gravity, friction or input: the energy stays put (< 1e-8 relative over 10 s)."""
+    from cosim.core import Simulator
+
+    m = Model(name)
+    m.set_params({"gravity.x": 0.0, "gravity.y": 0.0, "gravity.z": 0.0})
+    rng = np.random.default_rng(2)
+    ang = np.array([u == "rad" for u in m.facts.pose_units])
+    xd = rng.normal(size=m.ndof) * np.where(ang, 2e-3, 4e-4)  # slow enough to stay inside the strokes
+    # 1 ms steps at most: 10,000 steps, as many as a 1 kHz co-simulation takes
+    sim = Simulator(m, method="erk", rtol=1e-12, atol=1e-15, max_step=1e-3)
+    sim.reset(0.0, m.home(), xd)
+    k0 = sum(m.energy(m.home(), xd))
+    sim.advance(10.0)
+    _, x1, xd1 = sim.state
+    k1 = sum(m.energy(x1, xd1))
+    assert np.abs(x1 - m.home()).max() > 1e-3 and sim.stats["steps"] >= 10000  # it did move
+    assert abs(k1 - k0) / k0 < 1e-8
+
+
+# ------------------------------------------------------------------ bad descriptions
+
+GOOD = """[robot]
+name = "tiny_delta"
+coordinates = ["x", "y", "z"]
+home = [0.0, 0.0, 0.2]
+
+[platform]
+mass = 0.1
+inertia = [1e-4, 1e-4, 2e-4]
+
+[[leg]]
+type = "P(SS)2"
+copies = 3
+rail_origin = [0.15, 0.0, 0.0]
+rail_direction = [0.0, 0.0, 1.0]
+slider_mass = 0.05
+rod_length = 0.2
+rod_mass = 0.02
+platform_point = [0.03, 0.0, 0.0]
+branch = -1
+stroke = [0.0, 0.6]
+"""
+
+
+def write(tmp_path, text, name="robot.toml"):
+    f = tmp_path / name
+    f.write_text(text)
+    return str(f)
+
+
+def test_a_good_description_loads_by_path(tmp_path):
+    f = write(tmp_path, GOOD)
+    m = Model(f)
+    assert m.robot == "tiny_delta" and m.ndof == 3
+    assert m.facts.pose_names == ("x", "y", "z")
+    assert m.joint_unit == "m"
+    q = m.ik(m.home())
+    assert np.allclose(q, q[0])  # three identical legs at 120 deg
+    # a changed file is a new robot; models made from the old text keep theirs
+    m2 = Model(write(tmp_path, GOOD.replace("rod_length = 0.2", "rod_length = 0.21")))
+    assert m2.param("leg[1].L") == 0.21 and m.param("leg[1].L") == 0.2
+
+
+def test_defaults_and_parameter_sets(tmp_path):
+    f = write(tmp_path, GOOD + '\n[defaults]\n"rail[2].coulomb" = 1.5\n\n[sets.heavy]\n"payload.m" = 0.4\n')
+    m = Model(f)
+    assert m.param("rail[2].coulomb") == 1.5 and m.param("payload.m") == 0.0
+    h = Model(f, param_set="heavy")
+    assert h.param("payload.m") == 0.4 and h.param("rail[2].coulomb") == 1.5
+    assert m.facts.param_sets == ("default", "heavy")
+
+
+BAD = [
+    # (what, edit of GOOD, the line the error must name, words it must contain)
+    ("unknown joint type", lambda s: s.replace('type = "P(SS)2"', 'type = "PXS"'), 11, ["PXS", "known", "UPS"]),
+    ("negative length", lambda s: s.replace("rod_length = 0.2", "rod_length = -0.2"), 16, ["rod_length", "> 0"]),
+    ("missing inertia", lambda s: s.replace("inertia = [1e-4, 1e-4, 2e-4]\n", ""), 6, ["inertia", "missing"]),
+    ("mobility mismatch", lambda s: s.replace('"P(SS)2"', '"PSS"'), 3, ["Grubler-Kutzbach", "is 6", "3 coordinates"]),
+    ("unreachable home", lambda s: s.replace("home = [0.0, 0.0, 0.2]", "home = [0.5, 0.0, 0.2]"), 4,
+     ["home pose", "cannot reach", "leg 1", "line 10"]),
+    ("architecture singularity at home", lambda s: s.replace("home = [0.0, 0.0, 0.2]", "home = [0.0, 0.0, 0.0]")
+     .replace("rod_length = 0.2", "rod_length = 0.12"), 4, ["singularity", "home"]),
+    ("typo in a field", lambda s: s.replace("slider_mass", "slidr_mass"), 15, ["slidr_mass", "known"]),
+    ("syntax", lambda s: s.replace("mass = 0.1", "mass = 0.1 0.2"), 7, ["unexpected"]),
+    ("inline table", lambda s: s.replace("mass = 0.1", "mass = {value = 0.1}"), 7, ["inline tables"]),
+    ("not a number", lambda s: s.replace("mass = 0.1", 'mass = "heavy"'), 7, ["platform.mass", "number"]),
+    ("unknown parameter in a set", lambda s: s + '\n[defaults]\n"rail[7].coulomb" = 1\n', 23, ["rail[7].coulomb",
+                                                                                              "not a parameter"]),
+    ("legs and coordinates", lambda s: s.replace("copies = 3", "copies = 2"), 10, ["2 legs", "3 coordinates"]),
+    ("non-unit rail", lambda s: s.replace("rail_direction = [0.0, 0.0, 1.0]", "rail_direction = [0.0, 0.0, 2.0]"),
+     14, ["rail_direction", "unit"]),
+]
+
+
+@pytest.mark.parametrize("what,edit,line,words", BAD, ids=[b[0] for b in BAD])
+def test_bad_description_gives_one_clear_error(tmp_path, what, edit, line, words):
+    f = write(tmp_path, edit(GOOD))
+    with pytest.raises(ArgumentError) as e:
+        Model(f)
+    msg = str(e.value)
+    assert f"{f}:{line}:" in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+    assert "\n" not in msg
+
+
+def test_unknown_robot_names_the_descriptions_and_paths():
+    with pytest.raises(ArgumentError, match=r"unknown robot 'nope'.*linear_delta.*path to a description"):
+        Model("nope")
+    with pytest.raises(ArgumentError, match=r"cannot read robot description /no/such.toml"):
+        Model("/no/such.toml")
