@@ -92,6 +92,10 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
   fmu_plant* p = (fmu_plant*)calloc(1, sizeof *p);
   if (!p) return NULL;
   p->desc = desc;
+  if (desc->description && pkm_robot_register_description(desc->description, desc->robot, err, errlen) != PKM_OK) {
+    free(p);
+    return NULL;
+  }
   p->m = pkm_model_create(desc->robot, desc->param_set, err, errlen);
   if (!p->m) {
     free(p);

@@ -71,6 +71,10 @@ std::string xml(const std::string& s) {
 std::string cstr(const std::string& s) {
   std::string o = "\"";
   for (char c : s) {
+    if (c == '\n') {
+      o += "\\n\" \\\n    \"";  // a long text as one literal per line (it may be a macro's)
+      continue;
+    }
     if (c == '"' || c == '\\') o += '\\';
     o += c;
   }
@@ -138,6 +142,8 @@ struct Table {
   std::vector<Var> vars;
   std::vector<int> qmin, qmax;  // core parameter numbers per joint (@joint-limits), or empty
   int nx = 0;                   // controller FMUs: states of the LTI law (@lti-states)
+  std::string robot_name;       // the core's name of @robot (a description file's robot.name)
+  std::string description;      // @robot given as a description file: its text, packed into the FMU
   bool controller() const { return head.count("kind") && head.at("kind") == "controller"; }
   int nindicators() const { return controller() ? 0 : 1 + (qmin.empty() ? 0 : 2 * (int)qmin.size()); }
 };
@@ -226,10 +232,20 @@ Table read_table(const std::string& path, pkm_model*& model) {
       t.head[key] = val;
       if (key == "lti-states") t.nx = std::stoi(val);
       if (key == "robot") {
+        // A description file (docs/robots.md): the FMU carries its text and compiles it when
+        // instantiated, so the binary needs no file and no code of the robot.
+        if (val.find('/') != std::string::npos || (val.size() > 5 && val.compare(val.size() - 5, 5, ".toml") == 0)) {
+          std::ifstream df(val);
+          if (!df) throw Fail(where() + "cannot read the robot description " + val);
+          std::stringstream ds;
+          ds << df.rdbuf();
+          t.description = ds.str();
+        }
         char err[1024] = "";
         const char* set = t.head.count("paramset") ? t.head["paramset"].c_str() : nullptr;
         model = pkm_model_create(val.c_str(), set, err, sizeof err);
         if (!model) throw Fail(where() + "robot '" + val + "': " + err);
+        t.robot_name = pkm_model_robot(model);
         nd = pkm_model_ndof(model);
         home.assign(nd, 0.0);
         int st = pkm_model_home(model, home.data());
@@ -254,13 +270,15 @@ Table read_table(const std::string& path, pkm_model*& model) {
     auto ci = channels().find(cname);
     if (ci == channels().end() || cname == "param") throw Fail(where() + "unknown channel '" + chan + "'");
     // A family names its entries with placeholders: {i} and {j} run over the joints, {r}
-    // and {c} over the LTI states; the channel index is the entries' row-major position.
+    // and {c} over the LTI states, {p} over the pose coordinates (replaced by their names:
+    // x, rz, ...); the channel index is the entries' row-major position.  In the unit and
+    // description, {u} is the pose coordinate's unit, {qu} / {eu} the joints' / efforts'.
     std::vector<std::pair<std::string, int>> ph;
     for (size_t p = name.find('{'); p != std::string::npos; p = name.find('{', p + 1)) {
       const std::string tok = name.substr(p, 3);
-      if (tok == "{i}" || tok == "{j}") ph.push_back({tok, nd});
+      if (tok == "{i}" || tok == "{j}" || tok == "{p}") ph.push_back({tok, nd});
       else if (tok == "{r}" || tok == "{c}") ph.push_back({tok, t.nx});
-      else throw Fail(where() + "unknown placeholder in '" + name + "' (use {i}, {j}, {r}, {c})");
+      else throw Fail(where() + "unknown placeholder in '" + name + "' (use {i}, {j}, {p}, {r}, {c})");
     }
     bool family = !ph.empty();
     if (family && cindex >= 0) throw Fail(where() + "a family takes the channel without an index");
@@ -279,10 +297,19 @@ Table read_table(const std::string& path, pkm_model*& model) {
       for (size_t a = ph.size(); a-- > 0;) {
         const int pos = rest % ph[a].second;
         rest /= ph[a].second;
-        v.name = replace_all(v.name, ph[a].first, std::to_string(pos + 1));
-        v.description = replace_all(v.description, ph[a].first, std::to_string(pos + 1));
+        const std::string label = ph[a].first == "{p}" ? pkm_model_pose_name(model, pos) : std::to_string(pos + 1);
+        v.name = replace_all(v.name, ph[a].first, label);
+        v.description = replace_all(v.description, ph[a].first, label);
+        if (ph[a].first == "{p}") {
+          v.unit = replace_all(f[3], "{u}", pkm_model_pose_unit(model, pos));
+          v.description = replace_all(v.description, "{u}", pkm_model_pose_unit(model, pos));
+        }
       }
-      v.unit = f[3];
+      if (v.unit.empty()) v.unit = f[3];
+      for (auto* s : {&v.unit, &v.description}) {
+        *s = replace_all(*s, "{qu}", pkm_model_joint_unit(model));
+        *s = replace_all(*s, "{eu}", pkm_model_effort_unit(model));
+      }
       if (caus == "input") {
         v.has_start = true;
         v.start = 0.0;
@@ -503,7 +530,10 @@ std::string vars_header(const Table& t, int nd, int np, const std::string& guid,
     << "#ifndef PKM_FMU_VARS_H\n#define PKM_FMU_VARS_H\n\n#include \"fmu_plant.h\"\n\n"
     << "#define FMU_IDENTIFIER " << cstr(t.head.at("identifier")) << "\n"
     << "#define FMU_GUID " << cstr(guid) << "\n"
-    << "#define FMU_ROBOT " << cstr(t.head.at("robot")) << "\n"
+    << "#define FMU_ROBOT " << cstr(t.robot_name) << "\n"
+    << "/* The robot's description (docs/robots.md), compiled by the core when the FMU is\n"
+    << " * instantiated; NULL for the robots written in C++. */\n"
+    << "#define FMU_DESCRIPTION " << (t.description.empty() ? "NULL" : cstr(t.description)) << "\n"
     << "#define FMU_PARAM_SET " << cstr(t.head.count("paramset") ? t.head.at("paramset") : "default") << "\n"
     << "#define FMU_NDOF " << nd << "\n#define FMU_NPARAM " << np << "\n#define FMU_NVARS " << t.vars.size()
     << "\n#define FMU_LTI_STATES " << t.nx

@@ -104,6 +104,7 @@ typedef struct fmu_model_desc {
   const int* qmax_param;
   int nindicators;        /* 1 (singularity margin) + 2 ndof if limits are given          */
   int lti_states;         /* controller FMUs: room for LTI states (0 for plants)           */
+  const char* description; /* a described robot's description text (docs/robots.md), or NULL */
 } fmu_model_desc;
 
 /* Defined by the model folder (fmu/<robot>/model.c). */

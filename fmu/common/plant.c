@@ -100,6 +100,12 @@ static void set_starts(fmu_plant* p) {
 
 fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
   char cerr[1024] = "";
+  /* A described robot: the FMU carries its description; the core compiles it once. */
+  if (desc->description &&
+      pkm_robot_register_description(desc->description, desc->robot, cerr, sizeof cerr) != PKM_OK) {
+    snprintf(err, errlen, "cannot compile the description of robot '%s': %s", desc->robot, cerr);
+    return NULL;
+  }
   pkm_model* m = pkm_model_create(desc->robot, desc->param_set, cerr, sizeof cerr);
   if (!m) {
     snprintf(err, errlen, "cannot create the core model of robot '%s': %s", desc->robot, cerr);
