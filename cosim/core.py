@@ -113,6 +113,9 @@ class RobotFacts:
         The parameters a geometric error is described by (``pkm_model_geometry_param``:
         the 6-PUS ``leg[i].L``, one per joint); empty where the robot names none (then
         :meth:`Model.geometry_params` derives them).
+    title, file : str
+        One line saying what the robot is, and the description file it was compiled from
+        (``""`` for the robots written in C++; docs/robots.md).
     """
 
     name: str
@@ -127,6 +130,8 @@ class RobotFacts:
     joint_noun: str
     joint_prefix: str
     geometry_params: tuple = ()
+    title: str = ""
+    file: str = ""
 
     @property
     def angular_joints(self) -> bool:
@@ -135,6 +140,21 @@ class RobotFacts:
 
 
 _FACTS: dict = {}
+
+
+def _remember_description(path: str, name: str) -> None:
+    """A robot made from a description file answers to its name in this process (the core
+    keeps it); for the processes this one starts (sweep workers, FMU builds) its folder
+    joins ``PKM_ROBOT_PATH``, where the core looks for ``<name>.toml``."""
+    import os
+
+    p = os.path.abspath(path)
+    if os.path.basename(p) != f"{name}.toml":
+        return  # found by name only where the file is named after the robot
+    d = os.path.dirname(p)
+    dirs = [x for x in os.environ.get("PKM_ROBOT_PATH", "").split(os.pathsep) if x]
+    if d not in dirs:
+        os.environ["PKM_ROBOT_PATH"] = os.pathsep.join([d] + dirs)
 
 
 def robot_facts(robot: str) -> RobotFacts:
@@ -174,6 +194,9 @@ class Model:
         self._m = h
         self._d = C.c_void_p(lib.pkm_data_create(self._m))
         self.robot = lib.pkm_model_robot(self._m).decode()
+        self.source = robot  # the name or description file it was made from
+        if self.robot != robot:
+            _remember_description(robot, self.robot)
         self.param_set = param_set or "default"
         self.ndof = int(lib.pkm_model_ndof(self._m))
         self._slots = {}
@@ -193,11 +216,12 @@ class Model:
     @property
     def facts(self) -> RobotFacts:
         """The robot's :class:`RobotFacts` (coordinates, units, parameter sets) from the core."""
-        m, nd, name = self._m, self.ndof, self.robot
+        m, nd, name, src = self._m, self.ndof, self.robot, self.source.encode()
         return RobotFacts(
             name=name, ndof=nd,
-            param_sets=tuple(lib.pkm_robot_param_set_name(name.encode(), i).decode()
-                             for i in range(lib.pkm_robot_param_set_count(name.encode()))),
+            param_sets=tuple(lib.pkm_robot_param_set_name(src, i).decode()
+                             for i in range(lib.pkm_robot_param_set_count(src))),
+            title=lib.pkm_robot_title(src).decode(), file=lib.pkm_robot_file(src).decode(),
             pose_names=tuple(lib.pkm_model_pose_name(m, i).decode() for i in range(nd)),
             pose_units=tuple(lib.pkm_model_pose_unit(m, i).decode() for i in range(nd)),
             tracker_names=tuple(lib.pkm_model_tracker_name(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
@@ -267,7 +291,7 @@ class Model:
 
     def copy(self) -> "Model":
         """An independent model with the same parameters (and its own work data)."""
-        return Model(self.robot, self.param_set, self.params())
+        return Model(self.source, self.param_set, self.params())
 
     def __repr__(self) -> str:
         return f"Model({self.robot!r}, ndof={self.ndof}, nparam={len(self.param_names())})"

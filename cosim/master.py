@@ -38,9 +38,13 @@ from .controllers import Reference
 def _facts(robot):
     """The core's facts of a robot, or None for a name the core does not know (an FMU of
     another origin)."""
-    from .core import robot_facts, robots
+    from ._native import PkmError
+    from .core import robot_facts
 
-    return robot_facts(robot) if robot in robots() else None
+    try:
+        return robot_facts(robot)
+    except PkmError:
+        return None
 
 
 class MasterError(RuntimeError):

@@ -31,11 +31,29 @@ def test_the_cheap_readme_commands_are_in_the_readme_and_run():
         assert p.returncode == 0, f"{cmd}: {p.stderr[-1000:]}"
 
 
-def test_every_python_block_of_the_readme_runs():
+def _my_robot(tmp_path):
+    """The README's "Describe your own robot" file, written where its examples can read it."""
+    toml = next(b for b in _blocks("toml") if 'name = "my_delta"' in b)
+    f = tmp_path / "my_delta.toml"
+    f.write_text(toml)
+    return f
+
+
+def test_the_readme_robot_description_loads_and_lists_its_parameters(tmp_path):
+    f = _my_robot(tmp_path)
+    shell = "\n".join(_blocks("bash"))
+    assert ".venv/bin/cosim params my_delta.toml" in shell
+    p = subprocess.run([sys.executable, "-m", "cosim", "params", str(f)], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "rail[1].coulomb" in p.stdout and "leg[3].L" in p.stdout
+
+
+def test_every_python_block_of_the_readme_runs(tmp_path):
     blocks = _blocks("python")
     assert len(blocks) >= 4
     subprocess.run(CHEAP[0], shell=True, cwd=REPO, check=True, capture_output=True, timeout=300)
-    code = "\n".join(blocks)
+    code = "\n".join(blocks).replace('"my_delta.toml"', repr(str(_my_robot(tmp_path))))
     p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     assert "compiled" in p.stdout  # the closed-loop example says which loop ran

@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from .main import command
+from .main import command, robot_arg
 
 
 def _effect_types():
@@ -113,7 +113,7 @@ def _bench_configure(p):
     p.add_argument("--cases", type=int, default=40, help="effect cases (default 40)")
     p.add_argument("--clean", type=int, default=10, help="clean cases (default 10)")
     p.add_argument("--seed", type=int, default=1, help="seed of the case plan (default 1)")
-    p.add_argument("--robot", choices=_robots() + ["both"], default="6pus",
+    p.add_argument("--robot", type=_robot_or_both, default="6pus",
                    help="robot (any the core knows), or 'both': every robot scenarios/blind/config.toml lists")
     p.add_argument("--out", default="results/blind", help="output directory (default results/blind)")
     p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
@@ -172,14 +172,12 @@ def cmd_blind_benchmark(args):
 cmd_blind_benchmark.configure = _bench_configure
 
 
-def _robots():
-    from ..core import robots
-
-    return list(robots())
+def _robot_or_both(value):
+    return value if value == "both" else robot_arg(value)
 
 
 def _case_configure(p):
-    p.add_argument("--robot", choices=_robots(), default="6pus",
+    p.add_argument("--robot", type=robot_arg, default="6pus",
                    help="robot (any the core knows; effect sizes from scenarios/blind/config.toml or derived)")
     p.add_argument("--effect", action="append", default=[], help=f"effect type to hide (repeatable; none: clean): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=1)
@@ -203,7 +201,7 @@ cmd_blind_case.configure = _case_configure
 
 def _demo_configure(p):
     p.add_argument("--out", default="results/discrepancy_demo", help="output directory")
-    p.add_argument("--robot", choices=_robots(), default="6pus", help="robot (any the core knows)")
+    p.add_argument("--robot", type=robot_arg, default="6pus", help="robot (any the core knows)")
     p.add_argument("--effect", default="coulomb", help=f"effect to hide (default coulomb): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=3)
 

@@ -17,12 +17,23 @@ def command(name, help):
     return deco
 
 
+def robot_arg(value: str) -> str:
+    """argparse type of every ``--robot``: a robot the core lists, or a path to a
+    description file (checked when the command makes the model, with the file's line)."""
+    from ..core import robots
+
+    if value in robots() or value.endswith(".toml") or "/" in value:
+        return value
+    raise argparse.ArgumentTypeError(
+        f"unknown robot {value!r} (known: {', '.join(robots())}; or a path to a description file, docs/robots.md)")
+
+
 def _params_configure(p):
     from ..core import robot_facts, robots
 
     names = robots()
     sets = "; ".join(f"{r}: {', '.join(robot_facts(r).param_sets)}" for r in names)
-    p.add_argument("robot", choices=names, help="robot compiled into the core")
+    p.add_argument("robot", type=robot_arg, help=f"robot name ({', '.join(names)}) or a description file")
     p.add_argument("--set", dest="param_set", default=None, help=f"named parameter set ({sets})")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
@@ -44,6 +55,36 @@ def cmd_params(args):
 
 
 cmd_params.configure = _params_configure
+
+
+def _robots_configure(p):
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+@command("robots", "list the robots: the ones written in C++ and the descriptions in robots/ and PKM_ROBOT_PATH")
+def cmd_robots(args):
+    import json
+
+    from ..core import robot_facts, robots
+
+    rows = []
+    for r in robots():
+        f = robot_facts(r)
+        rows.append({"name": r, "coordinates": " ".join(f.pose_names), "joints": f"{f.ndof} {f.joint_noun}{'s' if f.ndof > 1 else ''} [{f.joint_unit}]",
+                     "sets": ", ".join(f.param_sets), "file": f.file or "(C++)", "title": f.title})
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    cols = ["name", "coordinates", "joints", "file", "title"]
+    w = {c: max(len(c), *(len(r[c]) for r in rows)) for c in cols[:-1]}
+    print("  ".join(f"{c:<{w[c]}}" for c in cols[:-1]) + "  title")
+    for r in rows:
+        print("  ".join(f"{r[c]:<{w[c]}}" for c in cols[:-1]) + "  " + r["title"])
+    print("\nEvery command's --robot also takes a path to a description file (docs/robots.md).")
+    return 0
+
+
+cmd_robots.configure = _robots_configure
 
 
 def _load_plugins():

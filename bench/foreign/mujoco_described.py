@@ -1,0 +1,756 @@
+"""The core's dynamics of a described robot checked against MuJoCo built from the same file.
+
+    .venv/bin/python bench/foreign/mujoco_described.py ROBOT_OR_FILE [ROBOT_OR_FILE ...]
+        [--seconds 4] [--seed 1] [--timestep 1e-4] [--integrator RK4] [--solref 0.0005]
+        [--solimp "0.9999 0.9999 0.001 0.5 2"] [--pd-hz 15] [--blind] [--verbose]
+
+ROBOT_OR_FILE is a description name (robots/NAME.toml, as ``Model(NAME)`` takes it) or a
+path to a description file; ``all`` stands for every name of robots/robots.list.  ``--blind``
+also runs the check on bench/foreign/mujoco_blind.py's clean 6-PUS model (the hand-written
+core model "6pus": free platform, capsule legs), for comparison.
+
+Independence.  This script reads the TOML itself (``tomllib``), expands ``copies`` itself,
+applies the file's ``[defaults]`` by parameter name itself, solves every leg's inverse
+kinematics in closed form itself and lays MuJoCo's model out at the home pose from that.
+MuJoCo (PyPI ``mujoco``) then does all the dynamics: nothing of the geometry, the masses or
+the motion comes from the core.  The core is asked only, at the end, for ``ik(home)`` and for
+``inverse_dynamics`` along the platform motion MuJoCo produced.
+
+The MuJoCo model (MJCF, SI units, no geoms, no contacts):
+  * the platform: one body, with a joint per *declared* coordinate only (slides x, y, z along
+    the world axes, then hinges rx, ry, rz about the body's own axes in that order, so that
+    R = Rx(rx) Ry(ry) Rz(rz) as in the description; the undeclared coordinates are not joints,
+    so they are held at 0), its mass and principal inertias at the frame origin, a payload
+    point body;
+  * every leg its own chain from the world, the actuated joint's ``ref`` being its home value
+    (so qpos of that joint *is* the description's q):
+      - rail (PUS, PSS, P(SS)2, PRR): a slide joint along the rail carrying the slider (point
+        mass at S), then the rod: a ball joint at S, a uniform slender rod of mass m between S
+        and P (inertia m L^2/12 across, ``AXIAL`` times that along);
+      - arm (RUS, RSS, R(SS)2, RRR): a hinge about k through A carrying the arm (its mass at
+        arm_com along the arm, arm_inertia about its centre of mass, isotropic: only the part
+        about k ever moves), then the rod on a ball joint at the elbow B, as above;
+      - strut (UPS, SPS): a ball joint at B carrying the cylinder (uniform slender tube of
+        cylinder_length from B), a slide joint along it carrying the piston (uniform slender
+        rod of piston_length ending at P);
+    a parallelogram (P(SS)2, R(SS)2) is one rod of the pair's mass on the centre line: the
+    platform joints hold the orientation the parallelograms hold;
+  * each leg closed at its platform point by a ``connect`` equality between a site at the
+    rod's (piston's) end and a site on the platform, stiff (``--solref``, solimp 0.9999);
+  * motors (gear 1) on the actuated joints; the drive layer's rotor inertia and viscous
+    friction from ``[defaults]`` as the joint's ``armature`` and ``damping`` (any other drive
+    parameter is set to 0 in the core for the comparison, and said so).
+The joints are driven by a PD written here (no feed-forward), gains from MuJoCo's own
+joint-space inertia at home (probed: unit efforts in, accelerations out), tracking the joint
+trajectory of a platform trajectory around home (three sines per declared coordinate,
+0.5-3 Hz, faded in over 0.5 s, sized to a few mm / degrees and kept inside the strokes).
+Every 1 ms: ``mj_forward`` at the current state, then the platform coordinates (qpos), their
+rates (qvel) and accelerations (qacc) and the applied efforts (actuator_force) are recorded.
+
+Integrator.  RK4 by default.  ``implicitfast`` (and Euler) integrate joint damping
+implicitly while the constraint forces are those of the plain mass matrix; the mismatch
+leaves each step a constraint-velocity error that the connect's stabilisation (-b v - k r)
+removes as a spurious acceleration worth timestep x damping x qdd of effort: a residual of
+exactly h c qdd on a joint with viscous friction c (found by regression on a 6-SPS with
+viscous drives: 1e-2 % of the effort at h = 0.1 ms; 1e-5 % with RK4).  Without damping,
+implicitfast gives about 1e-3 % (proportional to the timestep), RK4 1e-5 to 1e-4 %.
+
+Compared: the core's ``inverse_dynamics(x, xd, xdd)`` along that record against MuJoCo's
+efforts (RMS of effort, of the residual, their ratio; also over the inertial part, effort
+minus the core's gravity load), the connect closure error, the home joints (this script's
+IK, which MuJoCo's model is laid out with and whose closure MuJoCo confirms) against
+``m.ik(home)``, and MuJoCo's actuated joints against ``m.ik`` of MuJoCo's platform poses.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO))
+
+COORDS = ("x", "y", "z", "rx", "ry", "rz")
+RAIL, ARM, STRUT = "rail", "arm", "strut"
+LEG_JOINT = {"PUS": RAIL, "PSS": RAIL, "P(SS)2": RAIL, "PRR": RAIL,
+             "RUS": ARM, "RSS": ARM, "R(SS)2": ARM, "RRR": ARM,
+             "UPS": STRUT, "SPS": STRUT}
+AXIAL = 1e-4        # a slender rod's inertia about its own axis, as a fraction of m L^2/12
+TINY = 1e-12        # floor of masses and inertias MuJoCo must see as positive
+DT_REC = 1e-3       # recording period [s]
+RAMP = 0.5          # fade-in of the excitation [s]; also what the "late" columns drop
+
+
+# ------------------------------------------------------------------ the description
+
+@dataclass
+class Leg:
+    type: str
+    joint: str
+    p: np.ndarray                  # platform point, platform frame [m]
+    stroke: tuple
+    L: float = 0.0                 # rod length (rail, arm)
+    m_rod: float = 0.0
+    branch: float = 1.0
+    base: np.ndarray = None        # rail origin S0 / axis point A / strut base B
+    dir: np.ndarray = None         # rail direction s / motor axis k
+    u: np.ndarray = None           # arm direction at q = 0
+    m_body: float = 0.0            # slider or arm mass
+    r: float = 0.0                 # arm length
+    rc: float = 0.0                # arm centre of mass distance
+    I_arm: float = 0.0
+    m_cyl: float = 0.0
+    l_cyl: float = 0.0
+    m_pis: float = 0.0
+    l_pis: float = 0.0
+
+
+@dataclass
+class Robot:
+    name: str
+    file: Path
+    coords: list                   # pose indices, sorted
+    home: np.ndarray               # per declared coordinate, in the order of coords
+    gravity: np.ndarray
+    m_platform: float
+    I_platform: np.ndarray
+    m_payload: float
+    c_payload: np.ndarray
+    legs: list
+    drive: dict = field(default_factory=dict)   # [defaults] of the drive layer, by name
+
+    @property
+    def n(self) -> int:
+        return len(self.coords)
+
+    @property
+    def kind(self) -> str:
+        return "+".join(sorted({l.type for l in self.legs}))
+
+
+def resolve(name_or_file: str) -> Path:
+    """The description file a name or path stands for (as the core: a path if it has a '/' or
+    ends in .toml, else NAME.toml in PKM_ROBOT_PATH's folders, then robots/)."""
+    if "/" in name_or_file or name_or_file.endswith(".toml"):
+        p = Path(name_or_file)
+        return p if p.is_absolute() else (Path.cwd() / p)
+    dirs = [Path(d) for d in os.environ.get("PKM_ROBOT_PATH", "").split(os.pathsep) if d] + [REPO / "robots"]
+    for d in dirs:
+        if (d / f"{name_or_file}.toml").is_file():
+            return d / f"{name_or_file}.toml"
+    raise SystemExit(f"no description {name_or_file}.toml in {', '.join(map(str, dirs))}")
+
+
+def listed_robots() -> list[str]:
+    """The names of robots/robots.list (comments and blank lines skipped)."""
+    f = REPO / "robots" / "robots.list"
+    if not f.is_file():
+        return []
+    return [s.split("#")[0].strip() for s in f.read_text().splitlines() if s.split("#")[0].strip()]
+
+
+def _rz(v, a):
+    c, s = math.cos(a), math.sin(a)
+    v = np.asarray(v, float)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]])
+
+
+def read(path: Path) -> Robot:
+    """The robot a description file declares, read here (not by the core)."""
+    doc = tomllib.loads(path.read_text())
+    rob = doc["robot"]
+    names = list(rob["coordinates"])
+    home_by = dict(zip(names, rob["home"]))
+    coords = sorted(COORDS.index(c) for c in names)
+    # flat parameter table named as the format's [defaults] names them (docs: parameter names)
+    P: dict[str, float] = {}
+    types: list[str] = []
+    k = 0
+    for t in doc["leg"]:
+        copies = int(t.get("copies", 1))
+        for c in range(copies):
+            a = 2 * math.pi * c / copies
+            i = k + 1
+            k += 1
+            typ = t["type"]
+            types.append(typ)
+            joint = LEG_JOINT[typ]
+            for key, pre in (("platform_point", f"leg[{i}].p"),):
+                for ax, v in zip("xyz", _rz(t[key], a)):
+                    P[pre + ax] = v
+            lo, hi = t["stroke"]
+            if joint in (RAIL, ARM):
+                P[f"leg[{i}].L"] = t["rod_length"]
+                P[f"leg[{i}].m"] = t["rod_mass"]
+                P[f"leg[{i}].branch"] = float(t.get("branch", 1))
+            if joint == RAIL:
+                for ax, v in zip("xyz", _rz(t["rail_origin"], a)):
+                    P[f"rail[{i}].S0{ax}"] = v
+                for ax, v in zip("xyz", _rz(t["rail_direction"], a)):
+                    P[f"rail[{i}].s{ax}"] = v
+                P[f"rail[{i}].qmin"], P[f"rail[{i}].qmax"] = lo, hi
+                P[f"slider[{i}].m"] = t["slider_mass"]
+            elif joint == ARM:
+                for key, pre in (("axis_point", "A"), ("axis", "k"), ("arm_direction", "u")):
+                    for ax, v in zip("xyz", _rz(t[key], a)):
+                        P[f"arm[{i}].{pre}{ax}"] = v
+                P[f"arm[{i}].r"] = t["arm_length"]
+                P[f"arm[{i}].mass"] = t["arm_mass"]
+                P[f"arm[{i}].rc"] = t["arm_com"]
+                P[f"arm[{i}].I"] = t["arm_inertia"]
+                P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"] = lo, hi
+            else:
+                for ax, v in zip("xyz", _rz(t["base_point"], a)):
+                    P[f"leg[{i}].b{ax}"] = v
+                P[f"strut[{i}].qmin"], P[f"strut[{i}].qmax"] = lo, hi
+                P[f"cylinder[{i}].m"], P[f"cylinder[{i}].l"] = t["cylinder_mass"], t["cylinder_length"]
+                P[f"piston[{i}].m"], P[f"piston[{i}].l"] = t["piston_mass"], t["piston_length"]
+    plat = doc["platform"]
+    P["platform.m"] = plat["mass"]
+    P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"] = plat["inertia"]
+    pay = doc.get("payload", {})
+    P["payload.m"] = pay.get("mass", 0.0)
+    P["payload.x"], P["payload.y"], P["payload.z"] = pay.get("position", [0.0, 0.0, 0.0])
+    P["gravity.x"], P["gravity.y"], P["gravity.z"] = doc.get("gravity", {}).get("vector", [0.0, 0.0, -9.81])
+    drive = {}
+    for key, v in doc.get("defaults", {}).items():
+        if key in P:
+            P[key] = float(v)
+        else:
+            drive[key] = float(v)  # the drive layer's (friction, rotor inertia, ...): handled in build()
+    legs = []
+    for i, typ in enumerate(types, 1):
+        joint = LEG_JOINT[typ]
+        v3 = lambda pre: np.array([P[pre + ax] for ax in "xyz"])  # noqa: E731
+        if joint == RAIL:
+            leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"rail[{i}].qmin"], P[f"rail[{i}].qmax"]),
+                      L=P[f"leg[{i}].L"], m_rod=P[f"leg[{i}].m"], branch=P[f"leg[{i}].branch"],
+                      base=v3(f"rail[{i}].S0"), dir=v3(f"rail[{i}].s"), m_body=P[f"slider[{i}].m"])
+        elif joint == ARM:
+            leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"]),
+                      L=P[f"leg[{i}].L"], m_rod=P[f"leg[{i}].m"], branch=P[f"leg[{i}].branch"],
+                      base=v3(f"arm[{i}].A"), dir=v3(f"arm[{i}].k"), u=v3(f"arm[{i}].u"),
+                      m_body=P[f"arm[{i}].mass"], r=P[f"arm[{i}].r"], rc=P[f"arm[{i}].rc"], I_arm=P[f"arm[{i}].I"])
+        else:
+            leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"strut[{i}].qmin"], P[f"strut[{i}].qmax"]),
+                      base=v3(f"leg[{i}].b"), m_cyl=P[f"cylinder[{i}].m"], l_cyl=P[f"cylinder[{i}].l"],
+                      m_pis=P[f"piston[{i}].m"], l_pis=P[f"piston[{i}].l"])
+        legs.append(leg)
+    return Robot(rob["name"], path, coords, np.array([home_by[COORDS[c]] for c in coords], float),
+                 np.array([P["gravity.x"], P["gravity.y"], P["gravity.z"]]), P["platform.m"],
+                 np.array([P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"]]), P["payload.m"],
+                 np.array([P["payload.x"], P["payload.y"], P["payload.z"]]), legs, drive)
+
+
+# ------------------------------------------------------------------ kinematics (this script's own)
+
+def full_pose(rob: Robot, x: np.ndarray) -> np.ndarray:
+    """(N, 6) poses from (N, n) declared coordinates (the others 0)."""
+    x = np.atleast_2d(x)
+    X = np.zeros((len(x), 6))
+    X[:, rob.coords] = x
+    return X
+
+
+def rotation(X: np.ndarray) -> np.ndarray:
+    """R = Rx(rx) Ry(ry) Rz(rz), (N, 3, 3)."""
+    def rot(axis, a):
+        c, s = np.cos(a), np.sin(a)
+        R = np.zeros((len(a), 3, 3))
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        R[:, axis, axis] = 1
+        R[:, i, i], R[:, j, j], R[:, i, j], R[:, j, i] = c, c, -s, s
+        return R
+    return rot(0, X[:, 3]) @ rot(1, X[:, 4]) @ rot(2, X[:, 5])
+
+
+def leg_ik(leg: Leg, P: np.ndarray) -> np.ndarray:
+    """Joint values of one leg whose platform point is at P (N, 3); NaN where unreachable."""
+    d = P - leg.base
+    if leg.joint == RAIL:
+        # |d - q s| = L, s unit; branch +1 puts the slider on the -s side of P: the smaller root
+        b = d @ leg.dir
+        disc = b * b - (np.einsum("ij,ij->i", d, d) - leg.L ** 2)
+        with np.errstate(invalid="ignore"):
+            return b - leg.branch * np.sqrt(disc)
+    if leg.joint == ARM:
+        # |d - r (cos q u + sin q w)| = L: alpha cos q + beta sin q = K; branch picks the root
+        # as the description format defines it (q = atan2(beta, alpha) + branch acos(K / rho))
+        w = np.cross(leg.dir, leg.u)
+        al, be = d @ leg.u, d @ w
+        K = (np.einsum("ij,ij->i", d, d) + leg.r ** 2 - leg.L ** 2) / (2 * leg.r)
+        with np.errstate(invalid="ignore"):
+            return np.arctan2(be, al) + leg.branch * np.arccos(K / np.hypot(al, be))
+    return np.linalg.norm(d, axis=1)
+
+
+def platform_points(rob: Robot, x: np.ndarray) -> np.ndarray:
+    """(N, legs, 3) world platform points at declared coordinates x (N, n)."""
+    X = full_pose(rob, x)
+    R = rotation(X)
+    p = np.array([l.p for l in rob.legs])
+    return X[:, None, :3] + np.einsum("nij,lj->nli", R, p)
+
+
+def ik(rob: Robot, x) -> np.ndarray:
+    """(N, n) joints of poses x (N, n)."""
+    P = platform_points(rob, np.atleast_2d(x))
+    return np.column_stack([leg_ik(l, P[:, i]) for i, l in enumerate(rob.legs)])
+
+
+def elbow(leg: Leg, q: float) -> np.ndarray:
+    w = np.cross(leg.dir, leg.u)
+    return leg.base + leg.r * (math.cos(q) * leg.u + math.sin(q) * w)
+
+
+# ------------------------------------------------------------------ MJCF
+
+def _v(a) -> str:
+    return " ".join(f"{float(c):.17g}" for c in a)
+
+
+def _rod_inertia(m: float, n: np.ndarray, length: float) -> str:
+    """fullinertia of a uniform slender rod of mass m and length along unit n, about its centre."""
+    It = max(m * length ** 2 / 12, TINY)
+    I = It * (np.eye(3) - np.outer(n, n)) + AXIAL * It * np.outer(n, n)
+    return f'mass="{max(m, TINY):.17g}" fullinertia="{_v([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"'
+
+
+def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: str) -> tuple[str, np.ndarray]:
+    """The MJCF of the robot at home, and the home joints (this script's IK) it is laid out with."""
+    q0 = ik(rob, rob.home[None])[0]
+    if not np.all(np.isfinite(q0)):
+        bad = np.where(~np.isfinite(q0))[0] + 1
+        raise SystemExit(f"{rob.name}: home is unreachable by this script's IK (legs {bad})")
+    P0 = platform_points(rob, rob.home[None])[0]
+    armature = {j: rob.drive.get(f"{pre}[{j + 1}].rotor_inertia", 0.0) for j in range(rob.n)
+                for pre in ("rail", "arm", "strut") if f"{pre}[{j + 1}].rotor_inertia" in rob.drive}
+    damping = {j: rob.drive.get(f"{pre}[{j + 1}].viscous", 0.0) for j in range(rob.n)
+               for pre in ("rail", "arm", "strut") if f"{pre}[{j + 1}].viscous" in rob.drive}
+
+    def extra(j):
+        s = ""
+        if armature.get(j):
+            s += f' armature="{armature[j]:.17g}"'
+        if damping.get(j):
+            s += f' damping="{damping[j]:.17g}"'
+        return s
+
+    legs = []
+    for i, (l, q, P) in enumerate(zip(rob.legs, q0, P0)):
+        if l.joint == RAIL:
+            S = l.base + q * l.dir
+            a = P - S
+            legs.append(f"""
+    <body name="slider{i}" pos="{_v(S)}">
+      <joint name="q{i}" type="slide" axis="{_v(l.dir)}" ref="{q:.17g}"{extra(i)}/>
+      <inertial pos="0 0 0" mass="{max(l.m_body, TINY):.17g}" diaginertia="{TINY} {TINY} {TINY}"/>
+      <body name="rod{i}">
+        <joint name="s{i}" type="ball"/>
+        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L)}/>
+        <site name="end{i}" pos="{_v(a)}"/>
+      </body>
+    </body>""")
+        elif l.joint == ARM:
+            B = elbow(l, q)
+            e = (B - l.base) / l.r
+            a = P - B
+            Ia = max(l.I_arm, TINY)
+            legs.append(f"""
+    <body name="arm{i}" pos="{_v(l.base)}">
+      <joint name="q{i}" type="hinge" axis="{_v(l.dir)}" ref="{q:.17g}"{extra(i)}/>
+      <inertial pos="{_v(l.rc * e)}" mass="{max(l.m_body, TINY):.17g}" diaginertia="{Ia:.17g} {Ia:.17g} {Ia:.17g}"/>
+      <body name="rod{i}" pos="{_v(B - l.base)}">
+        <joint name="s{i}" type="ball"/>
+        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L)}/>
+        <site name="end{i}" pos="{_v(a)}"/>
+      </body>
+    </body>""")
+        else:
+            n = (P - l.base) / q
+            legs.append(f"""
+    <body name="cylinder{i}" pos="{_v(l.base)}">
+      <joint name="s{i}" type="ball"/>
+      <inertial pos="{_v(n * l.l_cyl / 2)}" {_rod_inertia(l.m_cyl, n, l.l_cyl)}/>
+      <body name="piston{i}">
+        <joint name="q{i}" type="slide" axis="{_v(n)}" ref="{q:.17g}"{extra(i)}/>
+        <inertial pos="{_v(n * (q - l.l_pis / 2))}" {_rod_inertia(l.m_pis, n, l.l_pis)}/>
+        <site name="end{i}" pos="{_v(n * q)}"/>
+      </body>
+    </body>""")
+    axes = {0: "1 0 0", 1: "0 1 0", 2: "0 0 1"}
+    pj = "".join(f'\n      <joint name="{COORDS[c]}" type="{"slide" if c < 3 else "hinge"}" axis="{axes[c % 3]}"/>'
+                 for c in rob.coords)  # slides first (world axes), then rx, ry, rz: R = Rx Ry Rz
+    # inertias about axes the platform cannot turn about play no part: raised (to the sum of the
+    # others) so that MuJoCo's triangle inequality holds whatever the file gives for them
+    Ip = np.maximum(rob.I_platform, TINY)
+    for a in range(3):
+        if 3 + a not in rob.coords:
+            Ip[a] = max(Ip[a], Ip.sum() - Ip[a])
+    sites = "".join(f'\n      <site name="p{i}" pos="{_v(l.p)}"/>' for i, l in enumerate(rob.legs))
+    payload = ""
+    if rob.m_payload > 0:
+        payload = (f'\n      <body name="payload" pos="{_v(rob.c_payload)}"><inertial pos="0 0 0" '
+                   f'mass="{rob.m_payload:.17g}" diaginertia="{TINY} {TINY} {TINY}"/></body>')
+    eq = "".join(f'\n    <connect site1="end{i}" site2="p{i}" solref="{solref:.17g} 1" solimp="{solimp}"/>'
+                 for i in range(rob.n))
+    act = "".join(f'\n    <motor name="m{i}" joint="q{i}" gear="1"/>' for i in range(rob.n))
+    xml = f"""<mujoco model="{rob.name}">
+  <compiler angle="radian" inertiafromgeom="false" balanceinertia="false"/>
+  <option timestep="{timestep:.17g}" integrator="{integrator}" gravity="{_v(rob.gravity)}"
+          tolerance="1e-12" iterations="200">
+    <flag contact="disable"/>
+  </option>
+  <worldbody>{''.join(legs)}
+    <body name="platform" pos="0 0 0">{pj}
+      <inertial pos="0 0 0" mass="{max(rob.m_platform, TINY):.17g}" diaginertia="{_v(Ip)}"/>{sites}{payload}
+    </body>
+  </worldbody>
+  <equality>{eq}
+  </equality>
+  <actuator>{act}
+  </actuator>
+</mujoco>"""
+    return xml, q0
+
+
+# ------------------------------------------------------------------ the run
+
+def excitation(rob: Robot, t: np.ndarray, seed: int, scale: float = 1.0) -> np.ndarray:
+    """Platform coordinates (N, n) around home: three sines per coordinate (0.5-3 Hz, random
+    phases), faded in over RAMP; total amplitude per coordinate ``scale`` x (3 % of the mean
+    leg span at home, base joint to platform point, for a translation; 4 deg for a rotation)."""
+    rng = np.random.default_rng(seed)
+    size = leg_span(rob)
+    ramp = np.where(t < RAMP, 0.5 * (1 - np.cos(np.pi * np.clip(t / RAMP, 0, 1))), 1.0)
+    x = np.tile(rob.home, (len(t), 1))
+    for j, c in enumerate(rob.coords):
+        amp = scale * (0.03 * size if c < 3 else math.radians(4.0))
+        w = rng.uniform(0.5, 1.0, 3)
+        w *= amp / w.sum()
+        f = rng.uniform(0.5, 3.0, 3)
+        ph = rng.uniform(0, 2 * np.pi, 3)
+        x[:, j] += ramp * (w[None] * np.sin(2 * np.pi * f[None] * t[:, None] + ph[None])).sum(axis=1)
+    return x
+
+
+def leg_span(rob: Robot) -> float:
+    """Mean distance from a leg's first joint at home (the slider, the arm's axis point, the
+    strut's base) to its platform point [m]: the robot's size."""
+    q0 = ik(rob, rob.home[None])[0]
+    P0 = platform_points(rob, rob.home[None])[0]
+    d = []
+    for l, q, P in zip(rob.legs, q0, P0):
+        base = l.base + q * l.dir if l.joint == RAIL else l.base
+        d.append(np.linalg.norm(P - base))
+    return float(np.mean(d))
+
+
+def fitted_excitation(rob: Robot, t, seed):
+    """The excitation scaled down until every joint stays 10 % of its stroke inside its limits
+    (and every leg reachable) along it."""
+    scale = 1.0
+    lo = np.array([l.stroke[0] for l in rob.legs])
+    hi = np.array([l.stroke[1] for l in rob.legs])
+    margin = 0.1 * (hi - lo)
+    for _ in range(30):
+        x = excitation(rob, t, seed, scale)
+        q = ik(rob, x)
+        if np.all(np.isfinite(q)) and np.all(q >= lo + margin) and np.all(q <= hi - margin):
+            return x, q, scale
+        scale *= 0.7
+    raise SystemExit(f"{rob.name}: no excitation around home stays inside the strokes")
+
+
+@dataclass
+class Result:
+    robot: str
+    kind: str
+    n: int
+    unit: str
+    seconds: float
+    scale: float
+    t: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    tau: np.ndarray          # MuJoCo's applied efforts
+    tau_core: np.ndarray     # the core's inverse dynamics along x, xd, xdd
+    tau_grav: np.ndarray     # the core's gravity load along x
+    closure: np.ndarray      # max connect gap per record [m]
+    q: np.ndarray            # MuJoCo's actuated joints
+    q_core: np.ndarray       # the core's ik(x)
+    qd: np.ndarray           # MuJoCo's actuated joint rates
+    qd_core: np.ndarray      # the core's J(x) xd
+    home_q: np.ndarray       # this script's IK at home (MuJoCo's layout)
+    home_q_core: np.ndarray
+    home_closure: float
+    wall: float
+    notes: list
+
+    def figures(self, t0: float = 0.0) -> dict:
+        k = self.t >= t0 - 1e-12
+        e, r = self.tau[k], self.tau[k] - self.tau_core[k]
+        dyn = self.tau[k] - self.tau_grav[k]
+        rms = lambda a: float(np.sqrt(np.mean(a ** 2)))  # noqa: E731
+        per = np.sqrt(np.mean(r ** 2, axis=0)) / np.sqrt(np.mean(e ** 2, axis=0))
+        return {"effort": rms(e), "residual": rms(r), "pct": 100 * rms(r) / rms(e),
+                "worst_joint_pct": 100 * float(per.max()), "inertial": rms(dyn),
+                "pct_inertial": 100 * rms(r) / max(rms(dyn), 1e-300),
+                "closure": float(self.closure[k].max()),
+                "q_err": float(np.abs(self.q[k] - self.q_core[k]).max()),
+                "qd_err": float(np.abs(self.qd[k] - self.qd_core[k]).max())}
+
+
+def _gains(model, data, av, f_pd: float):
+    """PD gains (matrices) from MuJoCo's joint-space inertia at the current state, Mq = (d qdd /
+    d tau)^-1 probed with unit efforts: Kp = Mq wn^2, Kd = Mq 2 zeta wn (zeta 0.9)."""
+    import mujoco
+
+    n = len(av)
+    data.ctrl[:] = 0
+    mujoco.mj_forward(model, data)
+    a0 = data.qacc[av].copy()
+    G = np.empty((n, n))
+    for j in range(n):
+        data.ctrl[:] = 0
+        data.ctrl[j] = 1.0
+        mujoco.mj_forward(model, data)
+        G[:, j] = data.qacc[av] - a0
+    data.ctrl[:] = 0
+    Mq = np.linalg.inv(G)
+    Mq = 0.5 * (Mq + Mq.T)
+    wn = 2 * np.pi * f_pd
+    return Mq * wn ** 2, Mq * 2 * 0.9 * wn
+
+
+def _drive(model, data, q_of, av, pose_of, gap, qref, qdref, Kp, Kd, nrec: int, sub: int, name: str) -> dict:
+    """The PD (every MuJoCo step, no feed-forward) along qref; every ``sub`` steps mj_forward at
+    the state and a record: platform (x, xd, xdd) by ``pose_of()``, efforts, joints, closure."""
+    import mujoco
+
+    n = len(av)
+    rec = {k: np.empty((nrec, n)) for k in ("x", "xd", "xdd", "tau", "q", "qd")}
+    closure = np.empty(nrec)
+    step = 0
+    for k in range(nrec):
+        for _ in range(sub if k else 0):
+            data.ctrl[:] = Kp @ (qref[step] - q_of()) + Kd @ (qdref[step] - data.qvel[av])
+            mujoco.mj_step(model, data)
+            step += 1
+        # the effort of this instant, then the state's accelerations under it
+        data.ctrl[:] = Kp @ (qref[step] - q_of()) + Kd @ (qdref[step] - data.qvel[av])
+        mujoco.mj_forward(model, data)
+        rec["x"][k], rec["xd"][k], rec["xdd"][k] = pose_of()
+        rec["tau"][k] = data.actuator_force
+        rec["q"][k], rec["qd"][k] = q_of(), data.qvel[av]
+        closure[k] = gap()
+        if not np.all(np.isfinite(data.qpos)):
+            raise SystemExit(f"{name}: MuJoCo diverged at t = {k * DT_REC:.3f} s")
+    rec["closure"] = closure
+    return rec
+
+
+def _compare(m, rec, name, kind, seconds, scale, home_q, home_q_core, home_closure, wall, notes) -> Result:
+    """The core along MuJoCo's record."""
+    nrec = len(rec["x"])
+    tau_core = m.inverse_dynamics(rec["x"], rec["xd"], rec["xdd"])
+    tau_grav = m.gravity_load(rec["x"])
+    q_core = m.ik(rec["x"])
+    qd_core = np.einsum("nij,nj->ni", m.jacobian(rec["x"]), rec["xd"])
+    return Result(name, kind, m.ndof, m.facts.effort_unit, seconds, scale, np.arange(nrec) * DT_REC, rec["x"],
+                  rec["xd"], rec["xdd"], rec["tau"], tau_core, tau_grav, rec["closure"], rec["q"], q_core, rec["qd"],
+                  qd_core, home_q, home_q_core, home_closure, time.perf_counter() - wall, notes)
+
+
+def _reference(rob: Robot, seconds: float, seed: int, timestep: float):
+    """Joint reference at every MuJoCo step from the platform excitation (this script's IK)."""
+    sub = int(round(DT_REC / timestep))
+    nrec = int(round(seconds / DT_REC)) + 1
+    ts = np.arange((nrec - 1) * sub + 2) * timestep
+    _, qref, scale = fitted_excitation(rob, ts, seed)
+    return qref, np.gradient(qref, timestep, axis=0), scale, nrec, sub
+
+
+def run(robot: str, seconds: float = 4.0, seed: int = 1, timestep: float = 1e-4, integrator: str = "RK4",
+        solref: float = 5e-4, solimp: str = "0.9999 0.9999 0.001 0.5 2", f_pd: float = 15.0) -> Result:
+    """One run: MuJoCo from the description, the core's inverse dynamics along its motion."""
+    import mujoco
+
+    from cosim.core import Model
+
+    wall = time.perf_counter()
+    path = resolve(robot)
+    rob = read(path)
+    notes = []
+    xml, q0 = mjcf(rob, timestep, integrator, solref, solimp)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    pq = [model.joint(COORDS[c]).qposadr[0] for c in rob.coords]
+    pv = [model.joint(COORDS[c]).dofadr[0] for c in rob.coords]
+    aq = [model.joint(f"q{i}").qposadr[0] for i in range(rob.n)]
+    av = [model.joint(f"q{i}").dofadr[0] for i in range(rob.n)]
+    ends = [model.site(f"end{i}").id for i in range(rob.n)]
+    plats = [model.site(f"p{i}").id for i in range(rob.n)]
+    data.qpos[pq] = rob.home
+    mujoco.mj_forward(model, data)
+    gap = lambda: float(np.max(np.linalg.norm(data.site_xpos[ends] - data.site_xpos[plats], axis=1)))  # noqa: E731
+    home_closure = gap()
+    home_q = data.qpos[aq].copy()
+
+    # the core: the same file, asked only for ik(home) and the inverse dynamics
+    m = Model(robot if not ("/" in robot or robot.endswith(".toml")) else str(path))
+    # the drive layer's Coulomb and Stribeck friction (in the core's inverse dynamics) have no
+    # counterpart here: off in the core too; its sensor and actuator effects are not dynamics
+    unmodelled = {k: v for k, v in rob.drive.items() if v != 0 and k.endswith((".coulomb", ".stribeck"))}
+    if unmodelled:
+        notes.append(f"drive friction not in MuJoCo, set to 0 in the core: {', '.join(sorted(unmodelled))}")
+        m.set_params({k: 0.0 for k in unmodelled})
+    home_q_core = m.ik(m.home())
+    if np.max(np.abs(m.home() - rob.home)) > 1e-12:
+        notes.append(f"home differs: core {m.home()} vs file {rob.home}")
+
+    Kp, Kd = _gains(model, data, av, f_pd)
+    qref, qdref, scale, nrec, sub = _reference(rob, seconds, seed, timestep)
+    if scale < 1:
+        notes.append(f"excitation scaled by {scale:.3g} to keep the strokes")
+    rec = _drive(model, data, lambda: data.qpos[aq], av,
+                 lambda: (data.qpos[pq], data.qvel[pv], data.qacc[pv]), gap, qref, qdref, Kp, Kd, nrec, sub, rob.name)
+    return _compare(m, rec, rob.name, rob.kind, seconds, scale, home_q, home_q_core, home_closure, wall, notes)
+
+
+def euler_xyz(R):
+    """(rx, ry, rz) with R = Rx(rx) Ry(ry) Rz(rz)."""
+    ry = math.asin(max(-1.0, min(1.0, R[0, 2])))
+    return np.array([math.atan2(-R[1, 2], R[2, 2]), ry, math.atan2(-R[0, 1], R[0, 0])])
+
+
+def free_pose(qpos, qvel, qacc):
+    """A free joint's state as the core's (x, y, z, rx, ry, rz), rates and accelerations: MuJoCo's
+    linear parts are the world-frame origin's, its angular ones in the body frame."""
+    import mujoco
+
+    R = np.empty(9)
+    mujoco.mju_quat2Mat(R, qpos[3:7])
+    R = R.reshape(3, 3)
+    r = euler_xyz(R)
+    sx, cx, sy, cy = math.sin(r[0]), math.cos(r[0]), math.sin(r[1]), math.cos(r[1])
+    E = np.array([[1, 0, sy], [0, cx, -sx * cy], [0, sx, cx * cy]])  # omega = E r_dot
+    rd = np.linalg.solve(E, R @ qvel[3:6])
+    ax, ay = rd[0], rd[1]
+    Ed = np.array([[0, 0, cy * ay], [0, -sx * ax, -cx * cy * ax + sx * sy * ay],
+                   [0, cx * ax, -sx * cy * ax - cx * sy * ay]])
+    rdd = np.linalg.solve(E, R @ qacc[3:6] - Ed @ rd)  # alpha_world = R d(omega_body)/dt
+    return np.r_[qpos[:3], r], np.r_[qvel[:3], rd], np.r_[qacc[:3], rdd]
+
+
+def run_blind(seconds: float = 4.0, seed: int = 1, integrator: str | None = None, f_pd: float = 15.0) -> Result:
+    """The same check on bench/foreign/mujoco_blind.py's clean MuJoCo 6-PUS (built from the
+    hand-written core model "6pus"'s parameters: free platform, capsule legs, connect at
+    solref 0.0002, implicitfast at 0.1 ms), driven along the same excitation (that of
+    robots/6pus_described.toml, the same robot) by the same PD."""
+    import mujoco
+
+    sys.path.insert(0, str(REPO / "bench"))
+    sys.path.insert(0, str(REPO / "bench" / "foreign"))
+    from mujoco_blind import case_xml
+
+    from cosim.core import Model
+
+    wall = time.perf_counter()
+    m = Model("6pus")
+    xml, _ = case_xml(m, [], np.random.default_rng(0))
+    model = mujoco.MjModel.from_xml_string(xml)
+    if integrator:
+        model.opt.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + integrator.upper())
+    data = mujoco.MjData(model)
+    aq = [model.joint(f"rail{i}").qposadr[0] for i in range(6)]
+    av = [model.joint(f"rail{i}").dofadr[0] for i in range(6)]
+    ends = [model.site(f"end{i}").id for i in range(6)]
+    plats = [model.site(f"p{i}").id for i in range(6)]
+    fq = model.joint(model.body("platform").jntadr[0]).qposadr[0]
+    fv = model.joint(model.body("platform").jntadr[0]).dofadr[0]
+    q0 = m.ik(m.home())  # mujoco_blind's convention: its joints are zero at home
+    mujoco.mj_forward(model, data)
+    gap = lambda: float(np.max(np.linalg.norm(data.site_xpos[ends] - data.site_xpos[plats], axis=1)))  # noqa: E731
+    home_closure = gap()
+    rob = read(resolve("6pus_described"))
+    Kp, Kd = _gains(model, data, av, f_pd)
+    qref, qdref, scale, nrec, sub = _reference(rob, seconds, seed, model.opt.timestep)
+    rec = _drive(model, data, lambda: q0 + data.qpos[aq], av,
+                 lambda: free_pose(data.qpos[fq:fq + 7], data.qvel[fv:fv + 6], data.qacc[fv:fv + 6]), gap,
+                 qref, qdref, Kp, Kd, nrec, sub, "mujoco_blind")
+    integ = mujoco.mjtIntegrator(model.opt.integrator).name.removeprefix("mjINT_")
+    notes = [f"mujoco_blind's MJCF: free platform, capsule legs, its solref/solimp, {integ} at "
+             f"{model.opt.timestep:g} s"]
+    return _compare(m, rec, "6pus (mujoco_blind model)", "PUS", seconds, scale, q0, q0, home_closure, wall, notes)
+
+
+def report(res: Result, verbose: bool = False) -> None:
+    a, b = res.figures(0.0), res.figures(RAMP)
+    print(f"\n{res.robot} ({res.kind}, {res.n} legs, {res.seconds:g} s, excitation x{res.scale:.3g}, "
+          f"{res.wall:.1f} s wall)")
+    if "mujoco_blind" in res.robot:
+        print(f"  home joints: mujoco_blind lays its model out with the core's ik(home) (closure "
+              f"{res.home_closure:.1e} m)")
+    else:
+        print(f"  home joints: this script's IK (MuJoCo's layout, closure {res.home_closure:.1e} m) vs core "
+              f"ik(home): max |diff| {np.max(np.abs(res.home_q - res.home_q_core)):.1e}")
+    u = res.unit
+    print(f"  {'':14s} {'effort RMS':>12s} {'residual RMS':>13s} {'resid/effort':>12s} {'worst joint':>11s} "
+          f"{'inertial RMS':>12s} {'resid/inert':>11s} {'max closure':>11s} {'max |q - ik|':>12s} "
+          f"{'max |qd - J xd|':>15s}")
+    for label, f in (("whole run", a), (f"after {RAMP:g} s", b)):
+        print(f"  {label:14s} {f['effort']:9.4g} {u:2s} {f['residual']:10.3g} {u:2s} {f['pct']:10.2e} % "
+              f"{f['worst_joint_pct']:9.2e} % {f['inertial']:9.4g} {u:2s} {f['pct_inertial']:9.2e} % "
+              f"{f['closure']:9.2e} m {f['q_err']:10.2e}   {f['qd_err']:12.2e}")
+    for n in res.notes:
+        print(f"  note: {n}")
+    if verbose:
+        k = res.t >= RAMP
+        r = res.tau[k] - res.tau_core[k]
+        print("  per joint: effort RMS, residual RMS, mean residual")
+        for j in range(res.n):
+            print(f"    {j + 1}: {np.sqrt(np.mean(res.tau[k, j] ** 2)):10.4g} {np.sqrt(np.mean(r[:, j] ** 2)):10.3g} "
+                  f"{np.mean(r[:, j]):10.3g}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("robots", nargs="*", help="description names or files; 'all' = robots/robots.list")
+    ap.add_argument("--seconds", type=float, default=4.0)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--timestep", type=float, default=1e-4)
+    ap.add_argument("--integrator", default="RK4", choices=["RK4", "implicitfast", "implicit", "Euler"],
+                    help="MuJoCo's integrator (default RK4; see the docstring on implicitfast and joint damping)")
+    ap.add_argument("--blind", action="store_true",
+                    help="also run the check on mujoco_blind.py's clean 6-PUS model (hand-written core model '6pus')")
+    ap.add_argument("--solref", type=float, default=5e-4, help="connect time constant [s] (default 5e-4)")
+    ap.add_argument("--solimp", default="0.9999 0.9999 0.001 0.5 2")
+    ap.add_argument("--pd-hz", type=float, default=15.0, help="PD bandwidth [Hz] (default 15)")
+    ap.add_argument("--verbose", action="store_true")
+    a = ap.parse_args(argv)
+    names = [n for r in a.robots for n in (listed_robots() if r == "all" else [r])]
+    import mujoco
+
+    print(f"MuJoCo {mujoco.__version__}, timestep {a.timestep:g} s, {a.integrator}, connect solref {a.solref:g} 1, "
+          f"solimp {a.solimp}, seed {a.seed}")
+    for name in names:
+        report(run(name, a.seconds, a.seed, a.timestep, a.integrator, a.solref, a.solimp, a.pd_hz), a.verbose)
+    if a.blind:  # its own integrator (implicitfast), then RK4
+        report(run_blind(a.seconds, a.seed, None, a.pd_hz), a.verbose)
+        report(run_blind(a.seconds, a.seed, "RK4", a.pd_hz), a.verbose)
+    if not names and not a.blind:
+        ap.error("name a robot (or 'all'), or give --blind")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
