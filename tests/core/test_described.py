@@ -225,3 +225,38 @@ def test_unknown_robot_names_the_descriptions_and_paths():
         Model("nope")
     with pytest.raises(ArgumentError, match=r"cannot read robot description /no/such.toml"):
         Model("/no/such.toml")
+
+
+def test_mangled_descriptions_never_crash(tmp_path):
+    """600 random edits of a good description (bytes dropped, duplicated, swapped, numbers
+    replaced by huge, tiny, negative or non-numbers): each loads or gives one PkmError line."""
+    from cosim._native import PkmError
+
+    rng = np.random.default_rng(11)
+    base = GOOD + '\n[defaults]\n"rail[2].coulomb" = 1.5\n'
+    junk = ["1e308", "-1e308", "1e-320", "nan", "inf", "-0", '"x"', "[", "]", "[1, 2", "{", "=", "\n", "#", '"',
+            "[[leg]]", "[robot]", "copies = 7", "type = \"UPS\"", "0x10", "1_000", "+", "\\"]
+    loaded = refused = 0
+    for k in range(600):
+        s = list(base)
+        for _ in range(rng.integers(1, 4)):
+            i = int(rng.integers(0, len(s)))
+            op = rng.integers(0, 4)
+            if op == 0:
+                del s[i:i + int(rng.integers(1, 8))]
+            elif op == 1:
+                s[i:i] = list(junk[int(rng.integers(0, len(junk)))])
+            elif op == 2:
+                j = int(rng.integers(0, len(s)))
+                s[i], s[j] = s[j], s[i]
+            else:
+                s[i:i] = s[i:i + int(rng.integers(1, 20))]
+        f = write(tmp_path, "".join(s), name=f"m{k}.toml")
+        try:
+            m = Model(f)
+            m.ik(m.home())
+            loaded += 1
+        except PkmError as e:
+            assert str(e) and "\n" not in str(e), repr(str(e))
+            refused += 1
+    assert loaded + refused == 600 and refused > 300

@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "description/jet.hpp"
+#include "kinematics/generic_kinematics.hpp"
 #include "dynamics/drive.hpp"
 
 namespace pkm {
@@ -706,6 +707,19 @@ void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const doub
   const auto& sv = svd.singularValues();
   measures[0] = t1;
   measures[1] = (sv[0] > 0) ? sv[n - 1] / sv[0] : 0.0;
+}
+
+void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, const double* x,
+                                              double* measure_bound, double* det_j) const {
+  // The J of state_of (no points), scaled as in singularity(), one LU.
+  const Model& m = model_of(rm);
+  State st;
+  state_of(m, x, st, false);
+  M6 A = st.J;
+  for (int j = 0; j < m.n; ++j)
+    if (m.coord[j] >= 3) A.col(j) /= m.r_char;
+  if (m.n == 6) lu_singularity_guard(A, measure_bound, det_j);
+  else lu_singularity_guard(Mat(A.topLeftCorner(m.n, m.n)), measure_bound, det_j);
 }
 
 void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const double* x, const double* xd,

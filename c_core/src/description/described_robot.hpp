@@ -147,6 +147,8 @@ class DescribedRobot final : public Robot {
   void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
                     double* Jdot) const override;
   void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
+  void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
+                                double* det_j) const override;
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
                           const double* xdd, double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,

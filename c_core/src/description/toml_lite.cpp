@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 
 #include "common/robot.hpp"
@@ -32,6 +33,15 @@ std::vector<const Table*> Document::named(const std::string& name) const {
 }
 
 namespace {
+
+// A character as a message shows it.
+std::string shown(char c) {
+  if (c == '\n') return "the end of the line";
+  if (c == '\0') return "the end of the file";
+  if (c == '\t') return "a tab";
+  if ((unsigned char)c < 32 || (unsigned char)c >= 127) return "a non-ASCII or control byte";
+  return std::string("'") + c + "'";
+}
 
 struct Parser {
   const std::string& s;
@@ -70,7 +80,7 @@ struct Parser {
   void end_of_line() {
     blanks();
     if (end()) return;
-    if (s[i] != '\n') fail(std::string("unexpected '") + s[i] + "' after the value (one key = value per line)");
+    if (s[i] != '\n') fail("unexpected " + shown(s[i]) + " after the value (one key = value per line)");
     ++i, ++line;
   }
   std::string quoted() {
@@ -84,7 +94,7 @@ struct Parser {
         if (c == '"' || c == '\\') out += c;
         else if (c == 'n') out += '\n';
         else if (c == 't') out += '\t';
-        else fail(std::string("unknown escape \\") + c + " in a string");
+        else fail("unknown escape \\" + shown(c) + " in a string");
         ++i;
       } else {
         out += s[i++];
@@ -99,7 +109,7 @@ struct Parser {
     if (peek() == '"') return quoted();
     std::string out;
     while (!end() && (std::isalnum((unsigned char)s[i]) || s[i] == '_' || s[i] == '-' || s[i] == '.')) out += s[i++];
-    if (out.empty()) fail(std::string("expected a key, found '") + peek() + "'");
+    if (out.empty()) fail("expected a key, found " + shown(peek()));
     return out;
   }
   Value value() {
@@ -124,7 +134,7 @@ struct Parser {
           ++i;
           space();
         } else if (peek() != ']') {
-          fail(std::string("expected ',' or ']' in an array, found '") + peek() + "'");
+          fail("expected ',' or ']' in an array, found " + shown(peek()));
         }
       }
       ++i;
@@ -140,7 +150,7 @@ struct Parser {
                               s[j] == '_'))
         ++j;
       std::string tok = s.substr(i, j - i);
-      if (tok.empty()) fail(std::string("expected a value, found '") + c + "'");
+      if (tok.empty()) fail("expected a value, found " + shown(c));
       std::string digits;
       for (char ch : tok)
         if (ch != '_') digits += ch;
@@ -150,8 +160,10 @@ struct Parser {
       errno = 0;
       char* endp = nullptr;
       const double x = std::strtod(digits.c_str(), &endp);
-      if (endp != digits.c_str() + digits.size() || errno == ERANGE)
+      if (endp != digits.c_str() + digits.size())
         fail("'" + tok + "' is not a number (strings are written in double quotes)");
+      if (errno == ERANGE && (x == 0 || std::abs(x) > 1))
+        fail("'" + tok + "' is out of the range of a double");
       v.kind = Value::Number;
       v.num = x;
       i = j;

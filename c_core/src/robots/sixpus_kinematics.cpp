@@ -222,16 +222,7 @@ void SixPus::direct_singularity_guard(const RobotModel& rm, RobotData&, const do
   M6r A;
   jacobian_of(m, f, legs, A);
   A.rightCols<3>() /= m.r_char;
-  Eigen::PartialPivLU<M6r> lu(A);
-  *det_j = lu.determinant();
-  const auto d = lu.matrixLU().diagonal().cwiseAbs();
-  if (!(d.minCoeff() > 1e-14 * d.maxCoeff())) {
-    *measure_bound = 0.0;
-    return;
-  }
-  const double inv_norm = lu.inverse().norm();
-  const double bound = 1.0 / (A.norm() * inv_norm);
-  *measure_bound = std::isfinite(bound) ? bound : 0.0;
+  lu_singularity_guard(A, measure_bound, det_j);
 }
 
 void SixPus::fk(const RobotModel& rm, RobotData&, const double* q, const double* x_guess,
