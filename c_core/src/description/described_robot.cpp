@@ -368,12 +368,13 @@ struct State {
   LegGrad lg[kMaxLegs];
   M6 J;  // dq/dx (zero beyond n)
 };
-void state_of(const Model& m, const double* x, State& st, bool points = true) {
+// rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
+void state_of(const Model& m, const double* x, State& st, bool points = true, bool rows = true) {
   platform_of(m, x, st.pf);
-  st.J.setZero();
+  if (rows) st.J.setZero();
   for (int i = 0; i < m.n; ++i) {
     leg_grad(m, i, st.pf, x, st.lg[i], Check::none, points);
-    st.J.row(i) = t_transpose(m, st.pf, twist_row(st.lg[i].dq.transpose(), st.lg[i].rP)).transpose();
+    if (rows) st.J.row(i) = t_transpose(m, st.pf, twist_row(st.lg[i].dq.transpose(), st.lg[i].rP)).transpose();
   }
 }
 
@@ -443,13 +444,13 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
 
 // xdd = M^-1 (J^T tau - h) and B = M^-1 J^T (the n x n blocks).
 template <class MatT, class VecT>
-void forward_n(const Model& m, const MatT& M, const MatT& JT, const VecT& rhs, const double* x, double* xdd, double* B) {
+void forward_n(const Model& m, const MatT& M, const MatT* JT, const VecT& rhs, const double* x, double* xdd, double* B) {
   Eigen::LLT<MatT> llt(M);
   if (llt.info() != Eigen::Success)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
   const VecT a = llt.solve(rhs);
   for (int i = 0; i < m.n; ++i) xdd[i] = a[i];
-  if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(JT);
+  if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(*JT);
 }
 
 }  // namespace
@@ -764,14 +765,19 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&,
   const Model& m = model_of(rm);
   const int n = m.n;
   State st;
-  state_of(m, x, st);
+  state_of(m, x, st, true, B != nullptr);
   const V6 h = generalised_force(m, st, xd, nullptr);
-  V6 t = V6::Zero();
-  for (int i = 0; i < n; ++i) t[i] = tau[i];
-  const V6 rhs = st.J.transpose() * t - h;
+  V6 w = V6::Zero();  // J^T tau = T' sum_i tau_i (dq_i, rP_i x dq_i)
+  for (int i = 0; i < n; ++i) w += tau[i] * twist_row(st.lg[i].dq.transpose(), st.lg[i].rP);
+  const V6 rhs = t_transpose(m, st.pf, w) - h;
   const M6 M = mass_of(m, st);
-  if (n == 6) forward_n(m, M, M6(st.J.transpose()), rhs, x, xdd, B);
-  else forward_n(m, Mat(M.topLeftCorner(n, n)), Mat(st.J.topLeftCorner(n, n).transpose()), Vec(rhs.head(n)), x, xdd, B);
+  if (n == 6) {
+    const M6 JT = B ? M6(st.J.transpose()) : M6();
+    forward_n(m, M, B ? &JT : nullptr, rhs, x, xdd, B);
+  } else {
+    const Mat JT = B ? Mat(st.J.topLeftCorner(n, n).transpose()) : Mat();
+    forward_n(m, Mat(M.topLeftCorner(n, n)), B ? &JT : nullptr, Vec(rhs.head(n)), x, xdd, B);
+  }
   return true;
 }
 
