@@ -260,3 +260,14 @@ def test_mangled_descriptions_never_crash(tmp_path):
             assert str(e) and "\n" not in str(e), repr(str(e))
             refused += 1
     assert loaded + refused == 600 and refused > 300
+
+
+def test_cosim_robots_lists_every_robot_with_its_file():
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "cosim", "robots"], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    for name in ["6pus", "quattro", "fourbar", *LISTED]:
+        assert any(line.split()[0] == name for line in p.stdout.splitlines() if line.strip()), name
+    assert "robots/delta_clavel.toml" in p.stdout and "3 arms [rad]" in p.stdout and "(C++)" in p.stdout
