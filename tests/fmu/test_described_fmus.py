@@ -68,3 +68,29 @@ def test_described_fmu_integrates_like_the_core_plant(name, tmp_path):
     core = np.array(core)
     assert np.abs(fmu[-1] - fmu[0]).max() > 1e-5  # it moved
     np.testing.assert_allclose(fmu, core, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", LISTED)
+def test_described_controller_fmu_validates(name):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    f = FMU_DIR / f"PKM_{name.upper()}_CTRL.fmu"
+    assert f.exists(), f"{f} is missing: cmake builds a controller FMU per robots/robots.list entry"
+    assert validate_fmu(str(f)) == []
+    m = Model(name)
+    v = {x.name: x for x in read_model_description(str(f)).modelVariables}
+    assert v["q[1]"].unit == m.joint_unit and v["tau[1]"].unit == m.facts.effort_unit
+
+
+def test_a_described_scenario_exports_as_ssp(tmp_path):
+    import subprocess
+    import sys
+    import zipfile
+
+    out = tmp_path / "d.ssp"
+    p = subprocess.run([sys.executable, "-m", "cosim", "export-ssp", "scenarios/described/delta_clavel_step_pdg.toml",
+                        "--out", str(out)], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    names = zipfile.ZipFile(out).namelist()
+    assert any("PKM_DELTA_CLAVEL.fmu" in n for n in names) and any("PKM_DELTA_CLAVEL_CTRL.fmu" in n for n in names)
