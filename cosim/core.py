@@ -254,11 +254,11 @@ class Model:
                 return names
         x = np.atleast_2d(self.home() if poses is None else np.asarray(poses, float))
         base = np.asarray(self.ik(x), float)
-        prefix = self.facts.joint_prefix + "["
         keep = []
         for info in self.param_info():
-            if info.unit != "m" or info.name.startswith(prefix) or info.name.startswith(
-                    ("gravity.", "drive.", "actuator.", "sensor.", "payload.")):
+            # (the drive layer's lengths, a backlash or an encoder offset, do not move the
+            # inverse kinematics; a rail's origin or an arm's length do, and are kept)
+            if info.unit != "m" or info.name.startswith(("gravity.", "drive.", "actuator.", "sensor.", "payload.")):
                 continue
             h = 1e-6 * max(abs(info.value), 1e-3)
             trial = self.copy()

@@ -58,6 +58,23 @@ def _facts(robot):
         return None
 
 
+def _described(side, name, file):
+    """The facts of a robot the core does not know by name, from the description file the
+    sidecar names (the core then knows it by name for the rest of the process)."""
+    from .core import Model, PkmError
+
+    if not Path(file).exists():
+        raise RecordingError(side, f"robot {name!r} is not one the core knows and its description file {file} "
+                                   f"is gone (known: {_known()}; or set PKM_ROBOT_PATH, docs/robots.md)")
+    try:
+        m = Model(file)
+    except PkmError as e:
+        raise RecordingError(side, f"robot {name!r}: its description file {file} does not load: {e}") from None
+    if m.robot != name:
+        raise RecordingError(side, f"the description file {file} is of robot {m.robot!r}, the recording of {name!r}")
+    return _facts(name)
+
+
 def _known():
     from .core import robots
 
@@ -187,6 +204,11 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[
                fmt=float_format)
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
             "controller": rec.controller, "notes": rec.notes}
+    facts = _facts(rec.robot)
+    if facts is not None and facts.file:
+        # a robot compiled from a description file: where it came from, so that a process
+        # that does not know the name (a file given by path) can still read the recording
+        meta["robot_file"] = str(Path(facts.file).resolve())
     side = sidecar_path(path)
     side.write_text(json.dumps(meta, indent=2, default=jsonable))
     return path, side
@@ -231,6 +253,8 @@ def read_recording(path, robot: str | None = None) -> Recording:
     if robot is not None and rname != robot:
         raise RecordingError(side, f"recording is of robot {rname!r}, expected {robot!r}")
     facts = _facts(rname) if isinstance(rname, str) else None
+    if facts is None and isinstance(rname, str) and isinstance(meta.get("robot_file"), str):
+        facts = _described(side, rname, meta["robot_file"])
     if facts is None:
         raise RecordingError(side, f"unknown robot {rname!r} (known: {_known()})")
     nd, pose_cols = facts.ndof, list(facts.tracker_names)

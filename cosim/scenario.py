@@ -202,10 +202,13 @@ def _check_pose_units(spec, fail):
     """A reference pose whose lengths or angles are far outside any robot's range is
     almost always a unit slip: say which (mm for m, degrees for rad) instead of letting
     the inverse kinematics report an unreachable pose."""
-    from .core import robot_facts, robots
+    from ._native import PkmError
+    from .core import robot_facts
 
-    if spec["robot"] not in robots():
-        fail("robot", f"unknown robot {spec['robot']!r} (known: {', '.join(robots())})")
+    try:  # a robot name, or a description file (its own errors name their line)
+        robot_facts(spec["robot"])
+    except PkmError as e:
+        fail("robot", str(e))
     units = robot_facts(spec["robot"]).pose_units
     names = robot_facts(spec["robot"]).pose_names
     r = spec["reference"]
@@ -226,10 +229,20 @@ def _check_pose_units(spec, fail):
 
 # ------------------------------------------------------------------ building
 
-def _angles(pose, unit):
+def _angles(pose, unit, units=None):
+    """The pose(s) in radians: with ``unit = "deg"`` the coordinates whose unit is ``"rad"``
+    (``units``: the robot's pose units from the core; default the 6-PUS layout x y z rx ry rz)
+    are converted."""
     p = np.array(pose, dtype=float)
-    if unit == "deg" and p.shape[-1] == 6:
-        p[..., 3:] = np.radians(p[..., 3:])
+    if unit != "deg":
+        return p
+    if units is None:
+        if p.shape[-1] == 6:
+            p[..., 3:] = np.radians(p[..., 3:])
+        return p
+    if p.shape[-1] == len(units):
+        rad = [i for i, u in enumerate(units) if u == "rad"]
+        p[..., rad] = np.radians(p[..., rad])
     return p
 
 
@@ -250,6 +263,16 @@ def build_models(sc: Scenario):
     return nominal, true, truth
 
 
+def _letter_m(r, unit, model):
+    return tr.letter_m(center=tuple(r.get("center", (0.0, 0.0))), z=float(r.get("z", 0.075)),
+                       width=float(r.get("width", 0.03)), height=float(r.get("height", 0.03)),
+                       segment_time=float(r.get("segment_time", 0.4)),
+                       hold_time=float(r.get("hold_time", 0.1)),
+                       middle_depth=float(r.get("middle_depth", 0.5)),
+                       orientation=_angles([0, 0, 0, *r.get("orientation", (0, 0, 0))], unit)[3:],
+                       coordinates=model.facts.pose_names)
+
+
 def build_trajectory(sc: Scenario, model):
     """The pose reference of the scenario."""
     r = sc.spec["reference"]
@@ -257,7 +280,8 @@ def build_trajectory(sc: Scenario, model):
     kind = r["type"]
     nd = model.ndof
     if kind == "step":
-        x0, x1 = _angles(r["from"], unit), _angles(r["to"], unit)
+        units = model.facts.pose_units
+        x0, x1 = _angles(r["from"], unit, units), _angles(r["to"], unit, units)
         for k, v in (("from", x0), ("to", x1)):
             if v.shape != (nd,):
                 raise ScenarioError(f"{sc.path or 'scenario'}: reference.{k}: needs {nd} pose coordinates")
@@ -270,16 +294,15 @@ def build_trajectory(sc: Scenario, model):
         return excitation(model, float(sc.spec["duration"]) - lead_in, seed=int(r.get("seed", sc.spec.get("seed", 0))),
                           scale=float(r.get("scale", 1.0)), lead_in=lead_in)
     if kind == "letter_m":
-        return tr.letter_m(center=tuple(r.get("center", (0.0, 0.0))), z=float(r.get("z", 0.075)),
-                           width=float(r.get("width", 0.03)), height=float(r.get("height", 0.03)),
-                           segment_time=float(r.get("segment_time", 0.4)),
-                           hold_time=float(r.get("hold_time", 0.1)),
-                           middle_depth=float(r.get("middle_depth", 0.5)),
-                           orientation=_angles([0, 0, 0, *r.get("orientation", (0, 0, 0))], unit)[3:])
-    poses = _angles(r["poses"], unit)
+        try:
+            return _letter_m(r, unit, model)
+        except ValueError as e:
+            raise ScenarioError(f"{sc.path or 'scenario'}: reference.type = 'letter_m': {e}") from None
+    units = model.facts.pose_units
+    poses = _angles(r["poses"], unit, units)
     if poses.ndim != 2 or poses.shape[1] != nd:
         raise ScenarioError(f"{sc.path or 'scenario'}: reference.poses: each pose needs {nd} coordinates")
-    start = _angles(r["start"], unit) if "start" in r else None
+    start = _angles(r["start"], unit, units) if "start" in r else None
     return tr.pose_set(poses, move_time=float(r.get("move_time", 0.5)), hold_time=float(r.get("hold_time", 0.5)),
                        start=start, name="pose set")
 
@@ -394,7 +417,8 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     ref = make_reference(nominal, traj, step=step, duration=dur)
     init = sc.spec["initial"]
     # start at rest where the reference starts (before a step at t = 0, not after it)
-    x0 = _angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad")) if "pose" in init else _start_pose(traj)
+    x0 = (_angles(init["pose"], sc.spec["reference"].get("angle_unit", "rad"), nominal.facts.pose_units)
+          if "pose" in init else _start_pose(traj))
     ctrl, design = build_controller(sc, nominal, x0)
     noise = sc.spec["noise"]
     p = build_plant(sc, true, truth)
@@ -492,8 +516,13 @@ def step_response_metrics(sc, res, model, traj, ctrl) -> dict:
         denom = np.max(np.abs(pred_eq))
         out["steady_state"]["predicted_joint_error"] = pred.tolist()
         out["steady_state"]["predicted_joint_error_equilibrium"] = pred_eq.tolist()
-        out["steady_state"]["prediction_relative_error"] = float(np.max(np.abs(ess - pred_eq)) / denom)
-        out["steady_state"]["prediction_relative_error_first_order"] = float(np.max(np.abs(ess - pred)) / denom)
+        out["steady_state"]["prediction_absolute_error"] = float(np.max(np.abs(ess - pred_eq)))
+        # relative to the predicted error; undefined (None) where gravity loads no joint
+        # (a planar robot in a horizontal plane: the prediction is 0, the absolute error tells)
+        out["steady_state"]["prediction_relative_error"] = (float(np.max(np.abs(ess - pred_eq)) / denom)
+                                                            if denom > 0 else None)
+        out["steady_state"]["prediction_relative_error_first_order"] = (float(np.max(np.abs(ess - pred)) / denom)
+                                                                        if denom > 0 else None)
     elif kind in ("pd_gravity", "pid"):  # gravity fed forward, or integrated away
         out["steady_state"]["predicted_joint_error"] = [0.0] * model.ndof
     # python-control step metrics on the moved pose coordinates and on each joint
@@ -581,7 +610,13 @@ def tracking_metrics(sc, res) -> dict:
 
 
 def pose_set_metrics(sc, res) -> dict:
-    """Per held pose: rows, final pose error, tracker scatter."""
+    """Per held pose: rows, final pose error (``position_error``: the norm over the pose
+    coordinates in metres, as the core names their units), tracker scatter; over the whole
+    run (``motion``): the joint and pose tracking errors and the largest effort."""
+    from .core import robot_facts
+
+    units = robot_facts(sc.spec["robot"]).pose_units
+    lengths = [i for i, u in enumerate(units) if u == "m"]
     poses = []
     lab = res["label"]
     for k in sorted(set(lab.tolist()) - {0}):
@@ -590,7 +625,14 @@ def pose_set_metrics(sc, res) -> dict:
         err = (res["xref"][last] - res["x"][last]).mean(axis=0)
         poses.append({"label": int(k), "rows": int(len(rows)), "t_start": float(res["time"][rows[0]]),
                       "t_end": float(res["time"][rows[-1]]), "pose_ref": res["xref"][rows[0]].tolist(),
-                      "pose_error": err.tolist(), "position_error": float(np.linalg.norm(err[:3])),
+                      "pose_error": err.tolist(), "position_error": float(np.linalg.norm(err[lengths])),
                       "tracker_std": res["x_meas"][last].std(axis=0).tolist(),
                       "joint_speed_max": float(np.max(np.abs(res["qd_true"][last])))})
-    return {"poses": poses, "held_poses": len(poses)}
+    ej = res["qref"] - res["q_true"]
+    ex = res["xref"] - res["x"]
+    motion = {"joint_error_rms": np.sqrt(np.mean(ej ** 2, axis=0)).tolist(),
+              "joint_error_max": float(np.max(np.abs(ej))),
+              "joint_error_max_time": float(res["time"][int(np.argmax(np.max(np.abs(ej), axis=1)))]),
+              "pose_error_rms": np.sqrt(np.mean(ex ** 2, axis=0)).tolist(),
+              "effort_max": np.max(np.abs(res["tau"]), axis=0).tolist()}
+    return {"poses": poses, "held_poses": len(poses), "motion": motion}

@@ -284,7 +284,7 @@ def export_scenario_ssp(scenario, path) -> Path:
     nominal, true, truth = build_models(sc)
     traj = build_trajectory(sc, nominal)
     init = sc.spec["initial"]
-    x0 = _angles(init["pose"], r.get("angle_unit", "rad")) if "pose" in init else traj.knots[0]
+    x0 = _angles(init["pose"], r.get("angle_unit", "rad"), nominal.facts.pose_units) if "pose" in init else traj.knots[0]
     target = traj.knots[-1]
     ctrl, _ = build_controller(sc, nominal, x0)
     return export_ssp(path, model=true, controller=ctrl, qref=nominal.ik(target), dt=float(sc.spec["step"]),

@@ -267,7 +267,7 @@ def letter_m_corners(center=(0.0, 0.0), width: float = 0.03, height: float = 0.0
 
 def letter_m(center=(0.0, 0.0), z: float = 0.075, width: float = 0.03, height: float = 0.03,
              segment_time: float = 0.4, hold_time: float = 0.1, middle_depth: float = 0.5,
-             orientation=(0.0, 0.0, 0.0), t0: float = 0.0) -> Trajectory:
+             orientation=(0.0, 0.0, 0.0), t0: float = 0.0, coordinates=None) -> Trajectory:
     """The laser-cut letter "M" (seed 001 sec. 8.1, 8.9) traced at constant height.
 
     Four straight strokes through :func:`letter_m_corners`, each a rest-to-rest
@@ -296,9 +296,20 @@ def letter_m(center=(0.0, 0.0), z: float = 0.075, width: float = 0.03, height: f
         Platform orientation (rx, ry, rz) [rad], constant.
     t0 : float
         Start time [s].
+    coordinates : sequence of str, optional
+        The robot's pose coordinates (``Model.facts.pose_names``), a subset of
+        x y z rx ry rz in any order: the poses keep those (a Delta's x y z, a planar robot's
+        x y rz). Default: all six.
     """
     corners = letter_m_corners(center, width, height, middle_depth)
     poses = np.column_stack([corners, np.full(len(corners), z), np.tile(orientation, (len(corners), 1))])
+    if coordinates is not None:
+        full = ("x", "y", "z", "rx", "ry", "rz")
+        other = [c for c in coordinates if c not in full]
+        if other or not {"x", "y"} <= set(coordinates):
+            raise ValueError(f"the letter M is traced in x and y by a robot with coordinates among "
+                             f"{' '.join(full)}; this one has {' '.join(coordinates)}")
+        poses = poses[:, [full.index(c) for c in coordinates]]
     hold = np.zeros(len(poses))
     hold[-1] = hold_time
     traj = waypoints(poses, segment_time, hold, t0=t0, start_hold=hold_time,

@@ -32,6 +32,9 @@ __all__ = [
     "sixpus_candidate_poses",
     "sixpus_campaign",
     "fourbar_campaign",
+    "real_params",
+    "candidate_poses",
+    "joint_campaign",
     "write_campaign",
     "read_truth",
 ]
@@ -193,6 +196,93 @@ def fourbar_campaign(real_params: dict, theta, noise: float = 0.0, rng=None, nom
         pose=X[:, None], parameters=dict(nominal_params or {}),
         notes=(notes or "four-bar calibration campaign (synthetic): crank angle q1 = theta, X measured") +
         f"; measurement noise {noise:g} m",
+    )
+
+
+def real_params(nominal: Model, max_length: float = 0.5e-3, rng=None, names=None, poses=None) -> dict:
+    """A "real" robot for any model: its geometric parameters with errors uniform in
+    +-``max_length`` [m].
+
+    ``names`` (names or shell patterns, e.g. ``["leg[*].L"]``) chooses the parameters;
+    default every length that moves a joint at ``poses`` (default: home), as the generic
+    calibration fits them (:func:`cosim.calibration.problems.geometry_candidates`).
+    Returns the overrides ``{name: value}``.
+    """
+    from .problems import _select, geometry_candidates
+
+    rng = np.random.default_rng(rng)
+    x = nominal.home()[None, :] if poses is None else np.atleast_2d(poses)
+    geo = geometry_candidates(nominal, x)
+    chosen = geo if names is None else _select(nominal, geo, list(names))
+    return {n: nominal.param(n) + float(rng.uniform(-max_length, max_length)) for n in chosen}
+
+
+def candidate_poses(model: Model, n: int, rng=None, fraction: float = 0.5, joint_margin: float = 0.05,
+                    min_singularity: float = 0.05) -> np.ndarray:
+    """Up to n random poses of any robot that ``model`` reaches comfortably.
+
+    Uniform in a box about home of ``fraction`` of the robot's reach along each pose
+    coordinate (the core's reach, as the discrepancy engine's excitation probes it:
+    :func:`cosim.discrepancy.excitation.derived_profile`); kept if every joint is at least
+    ``joint_margin`` of its range inside it and both singularity measures are above
+    ``min_singularity``.
+    """
+    from ..discrepancy.excitation import derived_profile
+
+    rng = np.random.default_rng(rng)
+    home = np.asarray(model.home(), float)
+    reach = np.asarray(derived_profile(model)["amp"], float) / 0.30
+    lo, hi = (np.asarray(v, float) for v in model.joint_limits())
+    span = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
+    out, tries = [], 0
+    while sum(len(o) for o in out) < n and tries < 50:
+        tries += 1
+        m = max(4 * n, 100)
+        X = home + rng.uniform(-1.0, 1.0, (m, home.size)) * fraction * reach
+        q, st = model.ik(X, errors="status")
+        ok = st == 0
+        with np.errstate(invalid="ignore"):
+            ok[ok] &= np.all(~(q[ok] < lo + joint_margin * span) & ~(q[ok] > hi - joint_margin * span), axis=1)
+        X = X[ok]
+        if X.size:
+            X = X[np.all(model.singularity(X) > min_singularity, axis=1)]
+        out.append(X)
+    return np.concatenate(out)[:n]
+
+
+def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: float = 10e-6,
+                   angle_noise: float | None = None, encoder_noise: float = 0.0, rng=None, dwell: float = 1.0,
+                   notes: str = "") -> Recording:
+    """A calibration recording of any robot: the real robot (``nominal`` with ``real_params``)
+    held at ``poses``, its joints read (its inverse kinematics at the true pose, plus
+    ``encoder_noise``) and the pose measured by a tracker (``tracker_noise`` [m] on the
+    coordinates in metres, ``angle_noise`` [rad] on those in radians; default
+    ``tracker_noise`` / 0.1 m: a tracker seeing points 10 cm apart).  Poses the real robot
+    cannot reach are skipped (counted in the notes).  The sidecar names the nominal model
+    (its robot and parameter set overrides), never the real one."""
+    rng = np.random.default_rng(rng)
+    real = nominal.copy()
+    real.set_params(real_params)
+    nd = nominal.ndof
+    poses = np.asarray(poses, float).reshape(-1, nd)
+    q, st = real.ik(poses, errors="status")
+    skipped = int(np.sum(st != 0))
+    poses, q = poses[st == 0], q[st == 0]
+    n = poses.shape[0]
+    if angle_noise is None:
+        angle_noise = tracker_noise / 0.1
+    sd = np.array([tracker_noise if u == "m" else angle_noise for u in nominal.facts.pose_units])
+    meas = poses + rng.normal(0.0, 1.0, poses.shape) * sd
+    qm = q + (rng.normal(0.0, encoder_noise, q.shape) if encoder_noise > 0 else 0.0)
+    base = Model(nominal.source, nominal.param_set)
+    overrides = {k: v for k, v in nominal.params().items() if v != base.param(k)}
+    return Recording(
+        robot=nominal.robot, time=np.arange(n) * dwell, q=qm, qd=np.zeros_like(q), tau=_tau_hold(real, poses),
+        pose=meas, parameters=overrides,
+        notes=(notes or f"{nominal.robot} calibration campaign (synthetic): the robot is held at each pose; q are "
+               f"its joint readings, the pose columns what an external tracker measured")
+        + f"; tracker noise {tracker_noise:g} m and {angle_noise:g} rad, encoder noise {encoder_noise:g}"
+        + (f"; {skipped} planned pose(s) skipped (out of the real robot's reach)" if skipped else ""),
     )
 
 

@@ -128,7 +128,8 @@ def measurements(rec, use: str = "auto") -> Measurements:
 
 
 def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreachable: str = "drop",
-                           min_poses: int | None = None, use: str = "auto", weighting: str = "tracker") -> Problem:
+                           min_poses: int | None = None, use: str = "auto", weighting: str = "tracker",
+                           params=None) -> Problem:
     """The calibration problem of a recording (or of some of its measurements).
 
     Parameters
@@ -146,6 +147,10 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
         See :func:`measurements`.
     weighting : {"tracker", "none"}
         6-PUS equation weights (see :class:`~cosim.calibration.problems.SixpusProblem`).
+    params : list of str, optional
+        The parameters to calibrate, by name or shell pattern (``["leg[*].L"]``), for the
+        robots calibrated by :class:`~cosim.calibration.problems.JointProblem` (default: every
+        length that moves a joint).  The 6-PUS and the four-bar have their fixed error models.
     """
     meas = rec if isinstance(rec, Measurements) else measurements(rec, use)
     idx = np.arange(len(meas)) if rows is None else np.asarray(rows)
@@ -156,6 +161,9 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
             raise CalibrationDataError(f"{meas.source}: the sidecar's parameters do not make a valid {meas.robot} "
                                        f"model: {e}") from None
     labels = [meas.labels[k] for k in idx]
+    if params and meas.robot in ("6pus", "fourbar"):
+        raise CalibrationDataError(f"{meas.source}: the {meas.robot} calibration has its own error model; choosing "
+                                   f"the parameters (params) is for the other robots")
     if meas.robot == "6pus":
         return SixpusProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, unreachable=unreachable,
                              min_poses=min_poses, weighting=weighting)
@@ -166,7 +174,7 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
         raise CalibrationDataError(f"{meas.source}: calibrating {meas.robot!r} needs tracker columns of its pose "
                                    f"({', '.join(nominal.facts.pose_names)})")
     return JointProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels,
-                        min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses)
+                        min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses, params=params)
 
 
 def split_holdout(n: int, fraction: float, seed: int = 0):
@@ -229,9 +237,42 @@ def accuracy(problem: Problem, p_cal) -> Accuracy:
         return Accuracy(int(ok.sum()), (rms(out[0][0]), rms(out[1][0])), (rms(out[0][1]), rms(out[1][1])),
                         (rms(out[0][2]), rms(out[1][2])), np.column_stack([out[0][0], out[1][0]]),
                         [l for l, k in zip(problem.pose_labels, ok) if not k])
+    if isinstance(problem, JointProblem):
+        return _joint_accuracy(problem, p_cal)
     e0, e1 = problem.residual(problem.p0), problem.residual(p_cal)
     rms0, rms1 = float(np.sqrt(np.mean(e0 ** 2))), float(np.sqrt(np.mean(e1 ** 2)))
     return Accuracy(e0.size, (rms0, rms1), (0.0, 0.0), (0.0, 0.0), np.column_stack([np.abs(e0), np.abs(e1)]))
+
+
+def _joint_accuracy(problem, p_cal) -> Accuracy:
+    """Accuracy of a :class:`JointProblem`: the core's forward kinematics of the measured joints
+    against the measured pose (position over the pose coordinates in metres, orientation over
+    those in radians, as the core names their units) and the joint residual, per pose.  A robot
+    whose pose has no length coordinate is scored by its joint residual alone."""
+    units = problem.nominal.facts.pose_units
+    lin = [i for i, u in enumerate(units) if u == "m"]
+    ang = [i for i, u in enumerate(units) if u == "rad"]
+    nd, n = problem.q.shape[1], problem.q.shape[0]
+    rms = lambda v: float(np.sqrt(np.mean(v ** 2))) if v.size else 0.0  # noqa: E731
+    dq = [(problem.q - problem.predict(p).reshape(n, nd)) for p in (problem.p0, p_cal)]
+    if not lin:
+        per = np.column_stack([np.linalg.norm(d, axis=1) for d in dq])
+        return Accuracy(n, (rms(dq[0]), rms(dq[1])), (0.0, 0.0), (rms(dq[0]), rms(dq[1])), per)
+    ok = np.ones(n, bool)
+    xs = []
+    for p in (problem.p0, p_cal):
+        problem._set(p)
+        x, st = problem.model.fk(problem.q, x_guess=problem.pose, errors="status")
+        ok &= np.asarray(st) == 0
+        xs.append(np.asarray(x, float))
+    if not ok.any():
+        raise CalibrationDataError("forward kinematics of the measured joints failed at every pose: the models "
+                                   "cannot assemble the recorded joint readings")
+    dp = [np.linalg.norm(x[ok][:, lin] - problem.pose[ok][:, lin], axis=1) for x in xs]
+    da = [np.linalg.norm(x[ok][:, ang] - problem.pose[ok][:, ang], axis=1) for x in xs]
+    dj = [d[ok] for d in dq]
+    return Accuracy(int(ok.sum()), (rms(dp[0]), rms(dp[1])), (rms(da[0]), rms(da[1])), (rms(dj[0]), rms(dj[1])),
+                    np.column_stack(dp), [lab for lab, k in zip(problem.pose_labels, ok) if not k])
 
 
 @dataclass
@@ -303,6 +344,17 @@ class CalibrationResult:
                          f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
                          f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
                          f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} um")
+            elif isinstance(self.problem, JointProblem):
+                units = self.problem.nominal.facts.pose_units
+                jo = (f"joint RMS {a.joint[0] * 1e6:.4g} {mu} -> {a.joint[1] * 1e6:.4g} {mu}")
+                if "m" not in units:
+                    L.append(f"Accuracy on {label} ({a.n}): {jo} (gain {a.gain:.3g}x)")
+                    continue
+                ori = (f"; orientation RMS {a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad"
+                       if "rad" in units else "")
+                L.append(f"Accuracy on {label} ({a.n}): position RMS (forward kinematics of the joints vs the "
+                         f"tracker) {a.position[0] * 1e6:.4g} um -> {a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x)"
+                         f"{ori}; {jo}")
             else:
                 what = "joint" if isinstance(self.problem, JointProblem) else "output"
                 L.append(f"Accuracy on {label} ({a.n}): {what} RMS {a.position[0] * 1e6:.4g} {mu} -> "
@@ -329,7 +381,7 @@ class CalibrationResult:
 
 def calibrate(recording, solver: str = "gauss-newton", model: str = "structural", holdout: float = 0.0,
               cond_max: float = 100.0, seed: int = 0, nominal: Model | None = None, use: str = "auto",
-              weighting: str = "tracker", **solver_options) -> CalibrationResult:
+              weighting: str = "tracker", params=None, **solver_options) -> CalibrationResult:
     """Calibrate a robot's geometry from a recording.
 
     Parameters
@@ -354,6 +406,9 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         Which rows make the measurements (see :func:`measurements`).
     weighting : {"tracker", "none"}
         6-PUS: weight the equations by their expected noise (default) or not.
+    params : list of str, optional
+        Robots other than the 6-PUS and the four-bar: the parameters to calibrate, by name or
+        shell pattern (``["leg[*].L"]``); default every length parameter that moves a joint.
     **solver_options
         Passed to :func:`cosim.calibration.solvers.solve` (tol, max_iter, width, basis...).
 
@@ -371,8 +426,10 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     cal_idx, hold_idx = split_holdout(len(meas), holdout, seed)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CalibrationWarning)
-        prob = problem_from_recording(meas, cal_idx, nominal, weighting=weighting)
-        hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1, weighting=weighting) \
+        prob = problem_from_recording(meas, cal_idx, nominal, weighting=weighting, params=params)
+        # the held-out poses are scored with the calibrated coordinates, whatever moves a joint there
+        hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1, weighting=weighting,
+                                      params=prob.names if isinstance(prob, JointProblem) else params) \
             if hold_idx.size else None
     msgs = [str(w.message) for w in caught]
     notes = []

@@ -27,14 +27,22 @@ def plot_result(res, outdir) -> list:
     # 1. accuracy per pose, nominal vs calibrated
     acc = res.holdout_accuracy or res.calibration_accuracy
     which = "held-out" if res.holdout_accuracy else "calibration"
+    from .problems import JointProblem
+
+    if res.robot == "6pus" or (isinstance(res.problem, JointProblem) and "m" in res.problem.nominal.facts.pose_units):
+        what = "position error |p_FK(q) - p_measured|"
+    elif isinstance(res.problem, JointProblem):
+        what = "joint error |q - q_IK(pose)|"
+    else:
+        what = "output error |X - X_model|"
+    unit = "urad" if what.startswith("joint") and res.problem.measurement_unit == "rad" else "um"
     fig, ax = plt.subplots(figsize=(8, 4))
     k = np.arange(acc.n)
-    ax.semilogy(k, acc.per_pose[:, 0] * unit_scale, "o", ms=4, label=f"nominal (RMS {acc.position[0] * 1e6:.3g} um)")
+    ax.semilogy(k, acc.per_pose[:, 0] * unit_scale, "o", ms=4, label=f"nominal (RMS {acc.position[0] * 1e6:.3g} {unit})")
     ax.semilogy(k, acc.per_pose[:, 1] * unit_scale, "s", ms=4,
-                label=f"calibrated (RMS {acc.position[1] * 1e6:.3g} um)")
-    what = "position error |p_FK(q) - p_measured|" if res.robot == "6pus" else "output error |X - X_model|"
+                label=f"calibrated (RMS {acc.position[1] * 1e6:.3g} {unit})")
     ax.set_xlabel(f"{which} pose")
-    ax.set_ylabel(f"{what} [um]")
+    ax.set_ylabel(f"{what} [{unit}]")
     ax.set_title(f"{res.robot} calibration ({res.solution.method}): accuracy gain {acc.gain:.3g}x on {which} poses")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)

@@ -415,13 +415,106 @@ class SixpusProblem(Problem):
         return [(f"leg {i + 1}", np.arange(i, 6 * n, 6), np.arange(10 * i, 10 * i + 10)) for i in range(6)]
 
 
+#: parameter groups that are never geometry (the joint's own drive parameters are told apart by
+#: the inverse kinematics: they do not move a joint)
+_NOT_GEOMETRY = ("gravity.", "drive.", "actuator.", "sensor.", "payload.")
+
+
+def geometry_candidates(model, poses) -> list:
+    """Every length parameter [m] of ``model`` (outside gravity, payload and the drive and
+    sensor layers) whose change moves a joint of the core's inverse kinematics at ``poses``:
+    a central difference of the IK per parameter, all poses in one call.
+
+    Unlike :meth:`cosim.core.Model.geometry_params` (``declared=False``) it keeps the
+    parameters named after the joint (a described robot's ``arm[i].Ax``, ``arm[i].r``,
+    ``rail[i].S0x``): the drive parameters under the same prefix (friction, offsets,
+    limits) do not move the inverse kinematics, so the difference leaves them out.
+    """
+    x = np.atleast_2d(np.asarray(poses, float))
+    base = np.asarray(model.ik(x), float)
+    trial = model.copy()
+    keep = []
+    for info in model.param_info():
+        if info.unit != "m" or info.name.startswith(_NOT_GEOMETRY):
+            continue
+        h = 1e-6 * max(abs(info.value), 1e-3)
+        try:
+            trial.set_params({info.name: info.value + h})
+            moved = np.max(np.abs(np.asarray(trial.ik(x), float) - base)) > 1e-9 * h
+        except PkmError:
+            moved = False
+        finally:
+            trial.set_params({info.name: info.value})
+        if moved:
+            keep.append(info.name)
+    return keep
+
+
+def _select(model, candidates, patterns):
+    """The names of ``candidates`` (or of any parameter of the model) matching ``patterns``
+    (names or shell patterns: ``leg[*].L``; square brackets are literal)."""
+    import fnmatch
+
+    every = model.param_names()
+    out = []
+    for pat in patterns:
+        hit = [n for n in every if fnmatch.fnmatchcase(n, _literal_brackets(pat))]
+        if not hit:
+            raise CalibrationDataError(f"{model.robot} has no parameter matching {pat!r} (its geometric "
+                                       f"parameters: {', '.join(candidates)})")
+        out += [n for n in hit if n not in out]
+    return out
+
+
+def _literal_brackets(pat: str) -> str:
+    """A shell pattern whose square brackets match themselves (``leg[1].L``, ``leg[*].L``)."""
+    return "".join({"[": "[[]", "]": "[]]"}.get(c, c) for c in pat)
+
+
+def _joint_blocks(J, nd):
+    """Independent blocks of a joint-space regression matrix: the joints and parameters
+    connected through non-zero columns (a described robot's legs, one block each)."""
+    npose = J.shape[0] // nd
+    scale = np.abs(J).max() or 1.0
+    touch = np.abs(J).reshape(npose, nd, -1).max(axis=0) > 1e-12 * scale  # (joint, parameter)
+    parent = list(range(nd))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for c in range(touch.shape[1]):
+        js = np.flatnonzero(touch[:, c])
+        for j in js[1:]:
+            parent[find(j)] = find(js[0])
+    groups = {}
+    for j in range(nd):
+        groups.setdefault(find(j), []).append(j)
+    if len(groups) == 1:
+        return None
+    blocks = []
+    for js in groups.values():
+        cols = np.flatnonzero(touch[js].any(axis=0))
+        if cols.size == 0:
+            continue
+        rows = np.array([k * nd + j for k in range(npose) for j in js])
+        label = f"joint {js[0] + 1}" if len(js) == 1 else "joints " + ", ".join(str(j + 1) for j in js)
+        blocks.append((label, rows, cols))
+    return blocks
+
+
 class JointProblem(Problem):
     """Any robot: joint readings q at held poses whose pose a tracker measured.
 
     The calibrated coordinates are the robot's geometric parameters as the core lists them:
-    every parameter in metres outside the drive layer and gravity whose change moves a joint
-    at these poses.  predict(p) is the core's inverse kinematics with those values; the
-    columns are central differences of it (a robot needs nothing written for calibration).
+    every parameter in metres outside the drive layer, gravity and payload whose change moves
+    a joint at these poses (:func:`geometry_candidates`), or the ones ``params`` names.
+    predict(p) is the core's inverse kinematics with those values; the columns are central
+    differences of it (a robot needs nothing written for calibration).  The rows of a joint
+    that shares no parameter with the others (a leg of a described robot) form an
+    independent block of the identifiability analysis and of the solvers.
 
     Parameters
     ----------
@@ -434,9 +527,12 @@ class JointProblem(Problem):
     row_labels : list of str, optional
     min_poses : int, optional
         Poses required (default: enough equations for the parameters).
+    params : list of str, optional
+        The parameters to calibrate, by name or shell pattern (``["leg[*].L"]``); default
+        every geometric one.
     """
 
-    def __init__(self, pose, q, model, row_labels=None, min_poses: int | None = None):
+    def __init__(self, pose, q, model, row_labels=None, min_poses: int | None = None, params=None):
         nd = model.ndof
         names = model.facts.pose_names
         self.pose = _check_finite(np.atleast_2d(pose), "measured poses", list(names))
@@ -450,19 +546,24 @@ class JointProblem(Problem):
         self.y = self.q.ravel()
         self._p = None
         info = {i.name: i for i in model.param_info()}
-        keep = [info[n] for n in model.geometry_params(self.pose, declared=False)]
-        if not keep:
+        geo = geometry_candidates(model, self.pose)
+        chosen = geo if params is None else _select(model, geo, params)
+        if not chosen:
             raise CalibrationDataError(f"robot {self.robot!r}: no length parameter moves a joint at these poses")
+        keep = [info[n] for n in chosen]
         self.names = [i.name for i in keep]
-        self.units = ["m"] * len(keep)
+        self.units = [i.unit for i in keep]
         self.p0 = np.array([i.value for i in keep])
-        self.prior = np.full(len(keep), 1e-3)
+        self.prior = np.array([1e-3 if i.unit == "m" else max(1e-3, 1e-2 * abs(i.value)) for i in keep])
         self.pose_labels = row_labels or [f"pose {k + 1}" for k in range(self.pose.shape[0])]
         self.row_labels = [f"{lab}, joint {j + 1}" for lab in self.pose_labels for j in range(nd)]
         need = len(keep) // nd + 1 if min_poses is None else min_poses
         if self.pose.shape[0] < need:
             raise CalibrationDataError(f"too few poses: {self.pose.shape[0]} for {len(keep)} parameters "
                                        f"({', '.join(self.names)}); at least {need} are needed")
+        self.blocks = _joint_blocks(self.jacobian(self.p0), nd)
+        if self.blocks is not None and sum(len(b[2]) for b in self.blocks) != len(self.names):
+            self.blocks = None  # a parameter that moves no joint here: analyse the whole matrix
 
     def _ik(self, model):
         return np.asarray(model.ik(self.pose), float).reshape(self.pose.shape)

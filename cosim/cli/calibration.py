@@ -21,6 +21,10 @@ def _configure(p):
                         "one at a time as in seed 002 (slow on ill-conditioned problems)")
     p.add_argument("--holdout", type=float, default=0.25, metavar="FRACTION",
                    help="fraction of the poses kept out to verify the calibration (default 0.25)")
+    p.add_argument("--params", metavar="NAMES",
+                   help="robots calibrated generically (not the 6-PUS or the four-bar): the parameters to fit, "
+                        "comma-separated names or shell patterns, e.g. 'leg[*].L' (default: every length "
+                        "parameter that moves a joint)")
     p.add_argument("--cond-max", type=float, default=100.0, help="condition-number limit (default 100)")
     p.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
     p.add_argument("--out", metavar="DIR", help="write figures, the report and the calibrated parameters here")
@@ -64,8 +68,9 @@ def cmd_calibrate(args):
     with warnings.catch_warnings(), working(f"calibrating from {Path(args.recording).name}"):
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report
         opts = {"basis": args.basis} if args.solver == "golden" else {}
+        params = [n.strip() for n in args.params.split(",") if n.strip()] if args.params else None
         res = calibrate(args.recording, solver=args.solver, model=args.model, holdout=args.holdout,
-                        cond_max=args.cond_max, seed=args.seed, **opts)
+                        cond_max=args.cond_max, seed=args.seed, params=params, **opts)
     print(res.text())
     if args.out:
         for p in res.save(args.out):

@@ -62,7 +62,10 @@ def print_summary(out, file=None) -> None:
         if "predicted_joint_error_equilibrium" in ss:
             print(f"  predicted Kp^-1 g                 [{jname}]: "
                   + " ".join(f"{e * jscale:+.4f}" for e in ss["predicted_joint_error_equilibrium"])
-                  + f"   (max relative difference {ss['prediction_relative_error']:.2e})", file=f)
+                  + (f"   (max relative difference {ss['prediction_relative_error']:.2e})"
+                     if ss.get("prediction_relative_error") is not None else
+                     f"   (gravity loads no joint; max difference {ss['prediction_absolute_error'] * jscale:.3g} "
+                     f"{jname})"), file=f)
         else:
             print(f"  max |e_ss| = {ss['joint_error_max']:.3g} {facts.joint_unit} (predicted 0 with gravity "
                   f"compensation)", file=f)
@@ -80,6 +83,12 @@ def print_summary(out, file=None) -> None:
         print(f"  {m['held_poses']} held poses, {sum(p['rows'] for p in m['poses'])} rows while held (column label); "
               f"true position vs commanded at the holds: max {max(errs) * 1e6:.3g} um (the plant's own geometry)"
               if errs else "  no held poses", file=f)
+    if "motion" in m:
+        mo = m["motion"]
+        print(f"  tracking over the run: joint error RMS [{jname}] "
+              + " ".join(f"{e * jscale:.4g}" for e in mo["joint_error_rms"])
+              + f", max {mo['joint_error_max'] * jscale:.4g} {jname} at t = {mo['joint_error_max_time']:.3f} s; "
+              f"largest effort {max(mo['effort_max']):.3g} {res.units['tau']}", file=f)
     if m["saturated_samples"]:
         print(f"  actuator saturation active at {m['saturated_samples']} samples", file=f)
     for k, p in out.files.items():
@@ -147,3 +156,69 @@ def _view_configure(p):
 
 
 cmd_view.configure = _view_configure
+
+
+def _axis(value: str):
+    """NAME=START:STOP:N (a grid axis) or NAME=VALUE (a fixed coordinate)."""
+    import argparse
+
+    name, _, rest = value.partition("=")
+    try:
+        parts = [float(v) for v in rest.split(":")]
+    except ValueError:
+        parts = []
+    if not name or len(parts) not in (1, 3) or (len(parts) == 3 and (parts[2] < 1 or parts[2] != int(parts[2]))):
+        raise argparse.ArgumentTypeError(f"{value!r}: give NAME=START:STOP:N (an axis) or NAME=VALUE (m, rad)")
+    return name.strip(), parts
+
+
+def _indices_configure(p):
+    from .main import robot_arg
+
+    p.add_argument("--robot", type=robot_arg, required=True, help="robot (any the core knows, or a description file)")
+    p.add_argument("--axis", type=_axis, action="append", default=[], metavar="NAME=START:STOP:N",
+                   help="a swept pose coordinate, e.g. x=-0.2:0.2:21 [m, rad] (repeatable)")
+    p.add_argument("--at", type=_axis, action="append", default=[], metavar="NAME=VALUE",
+                   help="a coordinate held at a value (default: home's)")
+    p.add_argument("--out", metavar="DIR", help="write indices.npz (the grids) and indices.json (the summary) here")
+
+
+@command("indices", "performance indices any robot has (singularity measures, speed transmission, inertia, "
+                    "gravity effort) on a grid of poses, from the core")
+def cmd_indices(args):
+    import json
+    import sys
+
+    import numpy as np
+
+    from ..core import Model
+    from ..indices import index_map
+
+    if not args.axis:
+        print("cosim indices: error: give at least one --axis NAME=START:STOP:N", file=sys.stderr)
+        return 2
+    axes = {}
+    for name, parts in args.axis:
+        if len(parts) != 3:
+            print(f"cosim indices: error: --axis {name}: give START:STOP:N", file=sys.stderr)
+            return 2
+        axes[name] = np.linspace(parts[0], parts[1], int(parts[2]))
+    fixed = {name: parts[0] for name, parts in args.at}
+    try:
+        mp = index_map(Model(args.robot), fixed=fixed, **axes)
+    except ValueError as e:
+        print(f"cosim indices: error: {e}", file=sys.stderr)
+        return 2
+    print(mp.summary())
+    if args.out:
+        d = Path(args.out)
+        d.mkdir(parents=True, exist_ok=True)
+        np.savez(d / "indices.npz", **{f"axis_{k}": v for k, v in mp.axes.items()}, **mp.values)
+        (d / "indices.json").write_text(json.dumps({"robot": mp.robot, "fixed": mp.fixed, "units": mp.units,
+                                                    "axes": {k: v.tolist() for k, v in mp.axes.items()},
+                                                    "summary": mp.summary()}, indent=2))
+        print(f"wrote {d / 'indices.npz'} and {d / 'indices.json'}")
+    return 0
+
+
+cmd_indices.configure = _indices_configure

@@ -163,21 +163,26 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         if not ok:
             raise _Redraw("no joint's effort changes sign along this trajectory: a gap would read as an offset")
         j = int(rng.choice(ok)) + 1
-        p = {f"{pre}[{j}].backlash": _uniform(rng, eff[kind])}
+        name = f"{pre}[{j}].backlash"
+        p = {name: nominal[name] + _uniform(rng, eff[kind])}
         return Hidden(kind, p, [j], {k: nominal[k] for k in p})
+    # The drawn sizes are what the model lacks: added to the nominal value (a description's
+    # defaults may give a drive parameter, e.g. a reflected rotor inertia, that is not 0).
     if kind in ("coulomb", "viscous", "rotor_inertia", "backlash", "compliance", "dead_zone"):
         js = joints()
-        p = {f"{pre}[{j}].{kind}": _uniform(rng, eff[kind]) for j in js}
+        p = {f"{pre}[{j}].{kind}": nominal[f"{pre}[{j}].{kind}"] + _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
     if kind == "encoder_offset":
         js = joints()
-        p = {f"{pre}[{j}].encoder_offset": float(rng.choice([-1, 1])) * _uniform(rng, eff[kind]) for j in js}
+        p = {f"{pre}[{j}].encoder_offset": nominal[f"{pre}[{j}].encoder_offset"]
+             + float(rng.choice([-1, 1])) * _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
     if kind in ("stribeck", "smooth_coulomb"):
-        # an amplitude and a velocity scale, on one joint
+        # an amplitude (added to the nominal one) and a velocity scale, on one joint
         amp, vel = {"stribeck": ("stribeck", "stribeck_v"), "smooth_coulomb": ("coulomb", "coulomb_v")}[kind]
         j = int(rng.integers(1, nd + 1))
-        p = {f"{pre}[{j}].{amp}": _uniform(rng, eff[kind]), f"{pre}[{j}].{vel}": _uniform(rng, eff[kind + "_v"])}
+        p = {f"{pre}[{j}].{amp}": nominal[f"{pre}[{j}].{amp}"] + _uniform(rng, eff[kind]),
+             f"{pre}[{j}].{vel}": _uniform(rng, eff[kind + "_v"])}
         return Hidden(kind, p, [j], {k: nominal[k] for k in p})
     if kind == "saturation":
         # tau_peak = (peak effort, largest gravity load) per joint: a limit below the
@@ -294,7 +299,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
             plant.set_params(h.params)
         kind = spec.controller or str(rng.choice(gen.get("controllers", ["pd_gravity"])))
         ctrl = _controller(kind, nominal, cfg, dt)
-        noise = cfg["noise"][spec.robot]
+        noise = cfg["noise"][nominal.robot]
         try:
             res = closed_loop(plant, ctrl, ref, noise=noise, seed=seed + 7919)
             break
@@ -304,7 +309,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
     else:
         raise RuntimeError(f"blind case {spec.case}: no closed-loop run succeeded: " + "; ".join(failures))
     s = slice(k0, None)
-    rec = Recording(spec.robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau[s].copy(),
+    rec = Recording(nominal.robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau[s].copy(),
                     qref=ref.q[s].copy(), pose=res.pose[s].copy(),
                     extra={"label": ref.label[s].astype(float)},
                     controller=dict(ctrl.describe(), rate_hz=gen["rate"]),

@@ -231,7 +231,12 @@ def separating_motion(a: str, b: str) -> str:
 
 
 def joint_prefix(model) -> str:
-    """The drive-parameter prefix of a model's joints ("rail" or "joint")."""
+    """The drive-parameter prefix of a model's joints, as the core names it
+    (``pkm_model_joint_prefix``: "rail" for the 6-PUS, "joint" for the Quattro, "arm" or
+    "strut" for described robots)."""
+    pre = model.facts.joint_prefix
+    if pre and f"{pre}[1].coulomb" in set(model.param_names()):
+        return pre
     names = set(model.param_names())
     for p in ("rail", "joint"):
         if f"{p}[1].coulomb" in names:

@@ -202,7 +202,9 @@ def derived_profile(model) -> dict:
 
     Per pose coordinate, the reach from home: the largest offset (both ways, the smaller one)
     at which the core still reaches the pose inside the joint ranges and away from
-    singularities, probed on a doubling then halving search.  Centres span 15 % of it,
+    singularities, probed on a doubling then halving search; an angle is probed up to half a
+    turn (beyond it the orientation repeats: a planar robot's rotation or a crank that turns
+    round would otherwise get amplitudes of many turns).  Centres span 15 % of it,
     bursts 30 %, the slow oscillation 1.5 % (the tuned tables are of that order of their
     robots' reach).
     """
@@ -222,13 +224,18 @@ def derived_profile(model) -> dict:
     reach = np.empty(len(home))
     for i, u in enumerate(units):
         best = np.inf
+        # an angle beyond half a turn is the same orientation again: the search stops there
+        limit = np.pi if u == "rad" else 1e3
         for sign in (1.0, -1.0):
             d = 1e-3 if u == "m" else 1e-2
             ok = 0.0
-            while d < 1e3 and fine(home + sign * d * np.eye(len(home))[i]):
+            e = np.eye(len(home))[i]
+            while d < limit and fine(home + sign * d * e):
                 ok, d = d, 2 * d
-            bad = d
-            for _ in range(20):
+            bad = min(d, limit)
+            if bad == limit and fine(home + sign * limit * e):
+                ok = bad
+            for _ in range(20 if ok < bad else 0):
                 mid = 0.5 * (ok + bad)
                 ok, bad = (mid, bad) if fine(home + sign * mid * np.eye(len(home))[i]) else (ok, mid)
             best = min(best, ok)

@@ -35,9 +35,12 @@ def run_page(out, path) -> Path:
     model = Model(res.robot)
     J = [f"q{i + 1}" for i in range(facts.ndof)]
     err = (res["qref"] - res["q_true"]) * (1e3 if facts.joint_unit == "m" else 1e3)
+    try:
+        view = mechanism_figure(model, res.time, res["x"], title=f"{out.scenario.name}: {res.robot}")
+    except ReportError as e:  # a robot the report cannot draw: the page goes on without the 3D view
+        view = f"no 3D view: {e}"
     sections = [
-        ("the robot in motion (true pose)", mechanism_figure(model, res.time, res["x"],
-                                                               title=f"{out.scenario.name}: {res.robot}")),
+        ("the robot in motion (true pose)", view),
         ("joint errors", _series(res.time, err, [f"e{i + 1}" for i in range(facts.ndof)],
                                  f"qref - q [{'mm' if facts.joint_unit == 'm' else 'mrad'}]", "tracking error")),
         ("efforts", _series(res.time, res["tau"], [f"tau{i + 1}" for i in range(facts.ndof)],

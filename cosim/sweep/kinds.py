@@ -168,7 +168,7 @@ class ScenarioKind(Kind):
 # --------------------------------------------------------------- calibration
 
 CALIBRATION_DEFAULTS = {
-    "robot": "6pus",            # "6pus" or "fourbar"
+    "robot": "6pus",            # any robot: the 6-PUS and the four-bar have their own campaigns, the others the generic one
     "seed": 1,                  # the real robot, its poses and the noise
     "n_poses": 60,              # measured poses (6-PUS: random in the seed 000 workspace; four-bar: crank angles)
     "tracker_noise": 10e-6,     # m, standard deviation of the measured position (four-bar: of X)
@@ -184,7 +184,14 @@ CALIBRATION_DEFAULTS = {
     "cond_max": 100.0,
     "weighting": "tracker",
     "validation_poses": 100,    # noise-free poses of the real robot the calibrated model is scored on
+    "params": "",               # generic robots: parameters calibrated (comma-separated names / patterns; "": all)
+    "error_params": "",         # generic robots: parameters of the real robot that differ ("": every geometric one)
+    "pose_fraction": 0.5,       # generic robots: poses in this fraction of the core's reach about home
 }
+
+
+def _names(v):
+    return [n.strip() for n in v.split(",") if n.strip()] if isinstance(v, str) else list(v or [])
 
 
 class CalibrationKind(Kind):
@@ -212,10 +219,15 @@ class CalibrationKind(Kind):
                     for k in nominal.param_names() if re.fullmatch(r"link\[\d\]\.l", k)}
             theta = np.radians(np.linspace(p["theta_min_deg"], p["theta_max_deg"], n))
             rec = cd.fourbar_campaign(real, theta, noise=p["tracker_noise"], rng=[seed, 3])
-        else:
-            raise ValueError(f"calibration trials support robot '6pus' or 'fourbar', got {p['robot']!r}")
+        else:  # any other robot: its geometric parameters from the core, poses in its reach
+            real = cd.real_params(nominal, max_length=p["max_length"], rng=[seed, 1],
+                                  names=_names(p["error_params"]) or None)
+            poses = cd.candidate_poses(nominal, n, rng=[seed, 2], fraction=p["pose_fraction"])
+            rec = cd.joint_campaign(nominal, real, poses, tracker_noise=p["tracker_noise"],
+                                    angle_noise=None if p["angle_noise"] < 0 else p["angle_noise"],
+                                    encoder_noise=p["encoder_noise"], rng=[seed, 3])
         res = calibrate(rec, solver=p["solver"], model=p["model"], holdout=p["holdout"], cond_max=p["cond_max"],
-                        seed=seed, weighting=p["weighting"])
+                        seed=seed, weighting=p["weighting"], params=_names(p["params"]) or None)
         s = res.solution
         out = {"poses": int(len(rec.time)), "equations": int(res.problem.nmeas), "parameters": len(s.names),
                "estimated": int(np.sum(s.free)), "rank": int(s.rank), "converged": bool(s.converged),
@@ -226,7 +238,7 @@ class CalibrationKind(Kind):
                 continue
             out.update({f"{label}.poses": a.n, f"{label}.position_rms_nominal": a.position[0],
                         f"{label}.position_rms_calibrated": a.position[1], f"{label}.gain": a.gain})
-            if p["robot"] == "6pus":
+            if p["robot"] != "fourbar" and {"m", "rad"} <= set(nominal.facts.pose_units):
                 out.update({f"{label}.orientation_rms_nominal": a.orientation[0],
                             f"{label}.orientation_rms_calibrated": a.orientation[1]})
         out.update(self._truth(p, nominal, real, res, seed))
@@ -236,12 +248,12 @@ class CalibrationKind(Kind):
     def _truth(p, nominal, real_params, res, seed):
         """Accuracy against the real robot on noise-free poses (the truth calibration never sees)."""
         from ..calibration import data as cd
-        from ..core import Model
 
         nv = int(p["validation_poses"])
         if nv <= 0:
             return {}
-        real = Model(p["robot"], params=real_params)
+        real = nominal.copy()
+        real.set_params(real_params)
         cal = res.calibrated_model()
         if p["robot"] == "fourbar":
             from ..fourbar import output
@@ -251,14 +263,16 @@ class CalibrationKind(Kind):
             e0 = output(nominal, th, jacobian=False) - x
             e1 = output(cal, th, jacobian=False) - x
         else:
-            X = cd.sixpus_candidate_poses(nominal, nv, rng=[seed, 4])
+            X = (cd.sixpus_candidate_poses(nominal, nv, rng=[seed, 4]) if p["robot"] == "6pus"
+                 else cd.candidate_poses(nominal, nv, rng=[seed, 4], fraction=p["pose_fraction"]))
             q, st = real.ik(X, errors="status")
             X, q = X[st == 0], q[st == 0]
+            lin = [i for i, u in enumerate(nominal.facts.pose_units) if u == "m"]
             errs = []
             for m in (nominal, cal):
                 xf, st2 = m.fk(q, x_guess=X, errors="status")
                 ok = st2 == 0
-                errs.append(np.where(ok, np.linalg.norm(xf[:, :3] - X[:, :3], axis=1), np.nan))
+                errs.append(np.where(ok, np.linalg.norm(xf[:, lin] - X[:, lin], axis=1), np.nan))
             e0, e1 = errs
         rms = lambda v: float(np.sqrt(np.nanmean(np.square(v))))  # noqa: E731
         return {"truth.poses": int(np.sum(np.isfinite(e1))), "truth.position_rms_nominal": rms(e0),

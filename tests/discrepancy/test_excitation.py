@@ -7,7 +7,7 @@ from cosim.core import Model
 from cosim.discrepancy.excitation import LABELS, check_trajectory, excitation
 
 
-@pytest.mark.parametrize("robot", ["6pus", "quattro"])
+@pytest.mark.parametrize("robot", ["6pus", "quattro", "hexapod_ups", "delta_clavel", "planar_3rrr", "linear_delta"])
 def test_excitation_is_smooth_reachable_and_varied(robot):
     m = Model(robot)
     tr = excitation(m, 9.0, seed=3)
