@@ -67,9 +67,11 @@ PKM_API const char* pkm_status_name(int status);
 typedef struct pkm_model pkm_model;
 typedef struct pkm_data pkm_data;
 
-/* Create a model of robot "6pus", "quattro" or "fourbar" with a named parameter set
- * (NULL or "default"; the Quattro also has "appendix_a").  Returns NULL on error
- * and writes the reason into err[errlen]. */
+/* Create a model of a robot: "6pus", "quattro", "fourbar" (written in C++), a description
+ * the core finds by name (PKM_ROBOT_PATH, then the project's robots/: "delta_clavel", ...)
+ * or a path to a description file (docs/robots.md), with a named parameter set (NULL or
+ * "default"; the Quattro also has "appendix_a").  Returns NULL on error and writes the
+ * reason into err[errlen] (a bad description: "file:line: field: what"). */
 PKM_API pkm_model* pkm_model_create(const char* robot, const char* param_set,
                                     char* err, size_t errlen);
 PKM_API pkm_model* pkm_model_copy(const pkm_model* m);
