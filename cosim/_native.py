@@ -159,6 +159,7 @@ _SIGNATURES = {
     "pkm_robot_param_set_count": (I, [CH]),
     "pkm_robot_param_set_name": (CH, [CH, I]),
     "pkm_robot_title": (CH, [CH]),
+    "pkm_chain_points": (I, [P, P, D, D]),
     "pkm_robot_file": (CH, [CH]),
     "pkm_model_pose_name": (CH, [P, I]),
     "pkm_model_pose_unit": (CH, [P, I]),

@@ -554,6 +554,13 @@ class Model:
         """Singularity measures (..., 2) in [0, 1]: [inverse-kinematic, direct]; 0 = singular."""
         return self._loop("pkm_singularity", [x], ["x"], (2,))
 
+    def chain_points(self, x):
+        """Where each leg is at pose(s) x, for drawing: (..., nd, 3, 3) [m, world], per leg its
+        base joint, its moving proximal joint (slider, elbow, cylinder end) and its platform
+        joint.  Robots compiled from a description (docs/robots.md); the robots written in
+        C++ raise ``UnsupportedError`` (``leg_points``, ``cosim.quattro.points``)."""
+        return self._loop("pkm_chain_points", [x], ["x"], (self.ndof, 3, 3))
+
     def joint_velocity(self, x, xd):
         return self._loop("pkm_joint_velocity", [x, xd], ["x", "xd"], (self.ndof,))
 

@@ -53,10 +53,19 @@ def _segments(model, x):
                 "forearms": [np.array([B[i], C[i]]) for i in range(4)],
                 "platform": [np.vstack([C, C[:1]])]}
         return segs, {"motors": A, "elbows": B}
-    raise ReportError(f"the report cannot draw robot {model.robot!r} (6pus, quattro)")
+    from .._native import UnsupportedError
+
+    try:  # a robot compiled from a description: its legs from the core
+        c = model.chain_points(x)
+    except UnsupportedError:
+        raise ReportError(f"the report cannot draw robot {model.robot!r} (6pus, quattro, or a described robot)") from None
+    segs = {"links": [np.array([c[i, 0], c[i, 1]]) for i in range(len(c))],
+            "legs": [np.array([c[i, 1], c[i, 2]]) for i in range(len(c))],
+            "platform": [np.vstack([c[:, 2], c[:1, 2]])]}
+    return segs, {"base joints": c[:, 0], "joints": c[:, 1]}
 
 
-_COLORS = {"rails": "#888888", "legs": "#1f77b4", "platform": "#d62728", "arms": "#1f77b4", "forearms": "#2ca02c"}
+_COLORS = {"links": "#888888", "rails": "#888888", "legs": "#1f77b4", "platform": "#d62728", "arms": "#1f77b4", "forearms": "#2ca02c"}
 
 
 def _traces(model, x):

@@ -271,3 +271,33 @@ def test_cosim_robots_lists_every_robot_with_its_file():
     for name in ["6pus", "quattro", "fourbar", *LISTED]:
         assert any(line.split()[0] == name for line in p.stdout.splitlines() if line.strip()), name
     assert "robots/delta_clavel.toml" in p.stdout and "3 arms [rad]" in p.stdout and "(C++)" in p.stdout
+
+
+@pytest.mark.parametrize("name", NEW)
+def test_chain_points_draw_the_legs_the_kinematics_solve(name):
+    """Base joint, moving joint and platform joint of each leg: a rod's length is L, the
+    platform joints are the platform points, the base joints the description's."""
+    m = Model(name)
+    X, _, _ = samples(m, 5, seed=9)
+    p = m.params()
+    for x in X:
+        c = m.chain_points(x)
+        assert c.shape == (m.ndof, 3, 3)
+        q = m.ik(x)
+        for i in range(m.ndof):
+            if m.facts.joint_prefix == "strut":
+                assert np.linalg.norm(c[i, 2] - c[i, 0]) == pytest.approx(q[i], abs=1e-12)
+                assert np.allclose(c[i, 0], [p[f"leg[{i + 1}].b{k}"] for k in "xyz"], atol=1e-15)
+            else:
+                assert np.linalg.norm(c[i, 2] - c[i, 1]) == pytest.approx(p[f"leg[{i + 1}].L"], abs=1e-12)
+    from cosim.report import mechanism_figure
+
+    fig = mechanism_figure(m, np.array([0.0, 1.0]), np.vstack([X[0], X[1]]))
+    assert {t.name for t in fig.data} >= {"links", "legs", "platform"}
+
+
+def test_the_robots_written_in_cpp_have_no_chain_points():
+    from cosim._native import UnsupportedError
+
+    with pytest.raises(UnsupportedError, match="chain points"):
+        Model("fourbar").chain_points(Model("fourbar").home())

@@ -195,6 +195,12 @@ PKM_API int pkm_jacobian_dot(const pkm_model* m, pkm_data* d, const double* x,
 PKM_API int pkm_singularity(const pkm_model* m, pkm_data* d, const double* x,
                             double* measures);
 
+/* Where each leg's chain is at pose x, for drawing it: pts[nd,3,3], per leg its fixed base
+ * joint (a rail's origin, an arm's axis point, a strut's base joint), its moving proximal
+ * joint (the slider, the elbow, the cylinder's end) and its platform joint [m, world].
+ * PKM_ERR_UNSUPPORTED for the robots written in C++ (they have their own calls). */
+PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, double* pts);
+
 /* Velocity and acceleration kinematics. */
 PKM_API int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, double* qd);

@@ -13,6 +13,9 @@ void Robot::jacobian_dot(const RobotModel&, RobotData&, const double*, const dou
 void Robot::singularity(const RobotModel&, RobotData&, const double*, double*) const {
   unsupported(*this, "singularity measures");
 }
+void Robot::chain_points(const RobotModel&, RobotData&, const double*, double*) const {
+  unsupported(*this, "chain points (the robots written in C++ have their own calls)");
+}
 void Robot::inverse_dynamics(const RobotModel&, RobotData&, const double*, const double*, const double*,
                              double*) const {
   unsupported(*this, "inverse dynamics");

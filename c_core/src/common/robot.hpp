@@ -108,6 +108,9 @@ class Robot {
                             double* Jdot) const;
   virtual void singularity(const RobotModel&, RobotData&, const double* x,
                            double* measures) const;
+  // Each leg's base joint, moving proximal joint and platform joint (pts[nd,3,3]) for
+  // drawing; default: unsupported.
+  virtual void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const;
   // What the integrator checks at every step, cheaply: a lower bound of the direct
   // singularity measure (measures[1]; a bound above a threshold proves the measure is
   // above it, so the exact measure is needed only near its threshold) and a value whose

@@ -550,6 +550,10 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
         l.u = vec("arm", i, "u");
         if (std::abs(l.dir.norm() - 1) > 1e-6 || std::abs(l.u.norm() - 1) > 1e-6 || std::abs(l.dir.dot(l.u)) > 1e-6)
           bad("arm " + std::to_string(i + 1) + ": axis and arm direction must be perpendicular unit vectors");
+        // Used as exact unit vectors (a file's rounded directions, within 1e-6 of unit and
+        // perpendicular, would otherwise make the arm r |u| long and the closure inexact).
+        l.dir.normalize();
+        l.u = (l.u - l.u.dot(l.dir) * l.dir).normalized();
         l.w = l.dir.cross(l.u);
         l.r = get(name("arm", i, "r"));
         l.m_body = get(name("arm", i, "mass"));
@@ -708,6 +712,26 @@ void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const doub
   const auto& sv = svd.singularValues();
   measures[0] = t1;
   measures[1] = (sv[0] > 0) ? sv[n - 1] / sv[0] : 0.0;
+}
+
+void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double* x, double* pts) const {
+  const Model& m = model_of(rm);
+  Platform pf;
+  platform_of(m, x, pf, false);
+  for (int i = 0; i < m.n; ++i) {
+    const LegModel& l = m.legs[i];
+    const V3 P = pf.p + pf.R * l.p;
+    P3<double> p[4];
+    double q;
+    leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q, p, Check::none, x);
+    const P3<double> moving = l.type->joint == Joint::strut ? p[2] : p[0];  // a strut: its cylinder's end
+    const P3<double> rows[3] = {{l.base.x(), l.base.y(), l.base.z()}, moving, p[1]};
+    for (int r = 0; r < 3; ++r) {
+      pts[9 * i + 3 * r + 0] = rows[r].x;
+      pts[9 * i + 3 * r + 1] = rows[r].y;
+      pts[9 * i + 3 * r + 2] = rows[r].z;
+    }
+  }
 }
 
 void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, const double* x,

@@ -149,6 +149,7 @@ class DescribedRobot final : public Robot {
   void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
+  void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
                           const double* xdd, double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,

@@ -84,6 +84,15 @@ int pkm_singularity(const pkm_model* m, pkm_data* d, const double* x, double* me
   });
 }
 
+int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, double* pts) {
+  return guard(d, [&] {
+    const RobotModel& rm = prepare(m, d);
+    check_finite(x, d->ndof, "pose x");
+    check_out(pts, "pts");
+    d->robot->chain_points(rm, *d->rd, x, pts);
+  });
+}
+
 int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* qd) {
   return guard(d, [&] {
     const RobotModel& rm = prepare(m, d);
