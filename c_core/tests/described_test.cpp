@@ -3,6 +3,8 @@
 // its errors with file and line, and forward kinematics of an arm robot.
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -12,27 +14,14 @@ using namespace pkm_test;
 
 namespace {
 
-const char* kTinyDelta = R"([robot]
-name = "c_tiny_delta"
-coordinates = ["x", "y", "z"]
-home = [0.0, 0.0, 0.2]
-
-[platform]
-mass = 0.1
-inertia = [1e-4, 1e-4, 2e-4]
-
-[[leg]]
-type = "P(SS)2"
-copies = 3
-rail_origin = [0.15, 0.0, 0.0]
-rail_direction = [0.0, 0.0, 1.0]
-slider_mass = 0.05
-rod_length = 0.2
-rod_mass = 0.02
-platform_point = [0.03, 0.0, 0.0]
-branch = -1
-stroke = [0.0, 0.6]
-)";
+// The small linear Delta the tests of described robots share (its file names it tiny_delta).
+std::string tiny_delta() {
+  std::ifstream f(PKM_TEST_DIR "/robots/tiny_delta.toml");
+  std::stringstream s;
+  s << f.rdbuf();
+  EXPECT_FALSE(s.str().empty()) << PKM_TEST_DIR "/robots/tiny_delta.toml";
+  return s.str();
+}
 
 }  // namespace
 
@@ -71,8 +60,8 @@ TEST(Described, SixPusDescriptionEqualsTheHandWrittenModel) {
 
 TEST(Described, RegisteredFromTextAnswersToItsNameAndFkInvertsIk) {
   char err[512] = "";
-  ASSERT_EQ(pkm_robot_register_description(kTinyDelta, "tiny.toml", err, sizeof err), PKM_OK) << err;
-  auto m = make_model("c_tiny_delta");
+  ASSERT_EQ(pkm_robot_register_description(tiny_delta().c_str(), "tiny.toml", err, sizeof err), PKM_OK) << err;
+  auto m = make_model("tiny_delta");
   ASSERT_TRUE(m);
   EXPECT_EQ(pkm_model_ndof(m.get()), 3);
   EXPECT_STREQ(pkm_model_pose_name(m.get(), 2), "z");
@@ -89,10 +78,10 @@ TEST(Described, RegisteredFromTextAnswersToItsNameAndFkInvertsIk) {
 
 TEST(Described, ErrorsNameTheFileAndLine) {
   char err[512] = "";
-  std::string bad = kTinyDelta;
+  std::string bad = tiny_delta();
   bad.replace(bad.find("rod_length = 0.2"), 16, "rod_length = -0.2");
   EXPECT_EQ(pkm_robot_register_description(bad.c_str(), "bad.toml", err, sizeof err), PKM_ERR_ARGUMENT);
-  EXPECT_NE(std::strstr(err, "bad.toml:16:"), nullptr) << err;
+  EXPECT_NE(std::strstr(err, "bad.toml:18:"), nullptr) << err;  // two header comment lines
   EXPECT_NE(std::strstr(err, "rod_length"), nullptr) << err;
   pkm_model* m = pkm_model_create("no/such/file.toml", nullptr, err, sizeof err);
   EXPECT_EQ(m, nullptr);

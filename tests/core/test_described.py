@@ -135,27 +135,10 @@ def test_energy_drift_over_ten_seconds(name):
 
 # ------------------------------------------------------------------ bad descriptions
 
-GOOD = """[robot]
-name = "tiny_delta"
-coordinates = ["x", "y", "z"]
-home = [0.0, 0.0, 0.2]
-
-[platform]
-mass = 0.1
-inertia = [1e-4, 1e-4, 2e-4]
-
-[[leg]]
-type = "P(SS)2"
-copies = 3
-rail_origin = [0.15, 0.0, 0.0]
-rail_direction = [0.0, 0.0, 1.0]
-slider_mass = 0.05
-rod_length = 0.2
-rod_mass = 0.02
-platform_point = [0.03, 0.0, 0.0]
-branch = -1
-stroke = [0.0, 0.6]
-"""
+# The good description the bad ones are edited from (shared with c_core/tests/described_test.cpp);
+# its header comment is dropped so that the lines the errors must name count from [robot].
+GOOD = "".join(l for l in (REPO / "c_core" / "tests" / "robots" / "tiny_delta.toml").read_text().splitlines(True)
+               if not l.startswith("#"))
 
 
 def write(tmp_path, text, name="robot.toml"):

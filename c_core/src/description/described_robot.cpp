@@ -924,32 +924,24 @@ const Robot* make(const std::string& path, const std::string& text) {
 }  // namespace
 
 const Robot* load_described(const std::string& name) {
-  std::string path;
-  if (is_path(name)) {
-    path = name;
-  } else {
-    for (const auto& dir : search_dirs()) {
-      bool ok = false;
-      read_file(dir + "/" + name + ".toml", ok);
-      if (ok) {
-        path = dir + "/" + name + ".toml";
-        break;
-      }
-    }
-    if (path.empty()) {
-      // A robot loaded from a path earlier answers to its name too (the newest of that name).
-      std::lock_guard<std::mutex> lock(g_mu);
-      const Robot* found = nullptr;
-      for (const auto& kv : cache())
-        if (kv.second->description().name == name && (!found || kv.second->serial() > static_cast<const DescribedRobot*>(found)->serial()))
-          found = kv.second.get();
-      return found;
-    }
-  }
   bool ok = false;
-  const std::string text = read_file(path, ok);
-  if (!ok) throw Error(PKM_ERR_ARGUMENT, "cannot read robot description " + path);
-  return make(path, text);
+  if (is_path(name)) {
+    const std::string text = read_file(name, ok);
+    if (!ok) throw Error(PKM_ERR_ARGUMENT, "cannot read robot description " + name);
+    return make(name, text);
+  }
+  for (const auto& dir : search_dirs()) {
+    const std::string path = dir + "/" + name + ".toml";
+    const std::string text = read_file(path, ok);
+    if (ok) return make(path, text);
+  }
+  // A robot loaded from a path earlier answers to its name too (the newest of that name).
+  std::lock_guard<std::mutex> lock(g_mu);
+  const DescribedRobot* found = nullptr;
+  for (const auto& kv : cache())
+    if (kv.second->description().name == name && (!found || kv.second->serial() > found->serial()))
+      found = kv.second.get();
+  return found;
 }
 
 const Robot* register_description(const std::string& text, const std::string& file) { return make(file, text); }
