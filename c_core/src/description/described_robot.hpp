@@ -96,7 +96,7 @@ struct Override {
 
 // What a description file declares, checked, with the parameter table it defines.
 struct Description {
-  std::string file, name, title, source, text;
+  std::string file, name, title, source;
   std::vector<int> coords;              // pose indices of the platform's coordinates
   std::vector<const LegType*> legs;
   std::vector<int> leg_lines;

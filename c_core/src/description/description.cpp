@@ -2,8 +2,6 @@
 // field in every message, the parameter table, the Grubler-Kutzbach mobility count.
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <set>
 #include <sstream>
 
 #include "description/described_robot.hpp"
@@ -108,7 +106,6 @@ Description read_description(const std::string& text, const std::string& file) {
   Reader rd{doc};
   Description d;
   d.file = file;
-  d.text = text;
 
   // Tables the format knows.
   for (const toml::Table& t : doc.tables) {
