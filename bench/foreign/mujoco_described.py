@@ -84,6 +84,9 @@ LEG_JOINT = {"PUS": RAIL, "PSS": RAIL, "P(SS)2": RAIL, "PRR": RAIL,
              "UPS": STRUT, "SPS": STRUT}
 AXIAL = 1e-4        # a slender rod's inertia about its own axis, as a fraction of m L^2/12
 TINY = 1e-12        # floor of masses and inertias MuJoCo must see as positive
+COUNTER = 1.0       # inertia of an articulated platform's counter-turning attachment bodies [kg m2]: they do
+                    # not turn (the equality holds them at -rz against the articulation), so it adds no
+                    # energy; a large one keeps them from turning while the soft equality takes up its load
 DT_REC = 1e-3       # recording period [s]
 RAMP = 0.5          # fade-in of the excitation [s]; also what the "late" columns drop
 
@@ -110,6 +113,9 @@ class Leg:
     l_cyl: float = 0.0
     m_pis: float = 0.0
     l_pis: float = 0.0
+    f: np.ndarray = field(default_factory=lambda: np.zeros(3))  # articulated: fixed offset of p [m]
+    com_angle: float = 0.0         # arm: its centre of mass's angle from the arm line [rad]
+    lumped: bool = False           # rod mass half at each joint instead of uniform
 
 
 @dataclass
@@ -125,6 +131,10 @@ class Robot:
     c_payload: np.ndarray
     legs: list
     drive: dict = field(default_factory=dict)   # [defaults] of the drive layer, by name
+    articulated: bool = False      # two translating end bars, their axis turned by rz
+    rz0: float = 0.0               # articulated: axis direction at rz = 0 [rad]
+    ends: float = 0.0              # articulated: end bars' distance from the centre [m]
+    c_platform: np.ndarray = field(default_factory=lambda: np.zeros(3))  # centre, axis frame [m]
 
     @property
     def n(self) -> int:
@@ -172,6 +182,7 @@ def read(path: Path) -> Robot:
     # flat parameter table named as the format's [defaults] names them (docs: parameter names)
     P: dict[str, float] = {}
     types: list[str] = []
+    lumped: dict[int, bool] = {}
     k = 0
     for t in doc["leg"]:
         copies = int(t.get("copies", 1))
@@ -185,6 +196,9 @@ def read(path: Path) -> Robot:
             for key, pre in (("platform_point", f"leg[{i}].p"),):
                 for ax, v in zip("xyz", _rz(t[key], a)):
                     P[pre + ax] = v
+            for ax, v in zip("xyz", t.get("platform_offset", [0.0, 0.0, 0.0])):
+                P[f"leg[{i}].f{ax}"] = v
+            lumped[i] = t.get("rod_model", "uniform") == "lumped"
             lo, hi = t["stroke"]
             if joint in (RAIL, ARM):
                 P[f"leg[{i}].L"] = t["rod_length"]
@@ -205,6 +219,7 @@ def read(path: Path) -> Robot:
                 P[f"arm[{i}].mass"] = t["arm_mass"]
                 P[f"arm[{i}].rc"] = t["arm_com"]
                 P[f"arm[{i}].I"] = t["arm_inertia"]
+                P[f"arm[{i}].com_angle"] = t.get("arm_com_angle", 0.0)
                 P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"] = lo, hi
             else:
                 for ax, v in zip("xyz", _rz(t["base_point"], a)):
@@ -215,6 +230,10 @@ def read(path: Path) -> Robot:
     plat = doc["platform"]
     P["platform.m"] = plat["mass"]
     P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"] = plat["inertia"]
+    articulated = plat.get("kind", "rigid") == "articulated"
+    if articulated:
+        P["platform.axis_angle"], P["platform.ends"] = plat["axis_angle"], plat["ends"]
+        P["platform.cx"], P["platform.cy"], P["platform.cz"] = plat["centre"]
     pay = doc.get("payload", {})
     P["payload.m"] = pay.get("mass", 0.0)
     P["payload.x"], P["payload.y"], P["payload.z"] = pay.get("position", [0.0, 0.0, 0.0])
@@ -237,16 +256,21 @@ def read(path: Path) -> Robot:
             leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"]),
                       L=P[f"leg[{i}].L"], m_rod=P[f"leg[{i}].m"], branch=P[f"leg[{i}].branch"],
                       base=v3(f"arm[{i}].A"), dir=v3(f"arm[{i}].k"), u=v3(f"arm[{i}].u"),
-                      m_body=P[f"arm[{i}].mass"], r=P[f"arm[{i}].r"], rc=P[f"arm[{i}].rc"], I_arm=P[f"arm[{i}].I"])
+                      m_body=P[f"arm[{i}].mass"], r=P[f"arm[{i}].r"], rc=P[f"arm[{i}].rc"], I_arm=P[f"arm[{i}].I"],
+                      com_angle=P[f"arm[{i}].com_angle"])
         else:
             leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"strut[{i}].qmin"], P[f"strut[{i}].qmax"]),
                       base=v3(f"leg[{i}].b"), m_cyl=P[f"cylinder[{i}].m"], l_cyl=P[f"cylinder[{i}].l"],
                       m_pis=P[f"piston[{i}].m"], l_pis=P[f"piston[{i}].l"])
+        leg.f = v3(f"leg[{i}].f")
+        leg.lumped = lumped[i]
         legs.append(leg)
+    art = dict(articulated=True, rz0=P["platform.axis_angle"], ends=P["platform.ends"],
+               c_platform=np.array([P["platform.cx"], P["platform.cy"], P["platform.cz"]])) if articulated else {}
     return Robot(rob["name"], path, coords, np.array([home_by[COORDS[c]] for c in coords], float),
                  np.array([P["gravity.x"], P["gravity.y"], P["gravity.z"]]), P["platform.m"],
                  np.array([P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"]]), P["payload.m"],
-                 np.array([P["payload.x"], P["payload.y"], P["payload.z"]]), legs, drive)
+                 np.array([P["payload.x"], P["payload.y"], P["payload.z"]]), legs, drive, **art)
 
 
 # ------------------------------------------------------------------ kinematics (this script's own)
@@ -294,9 +318,11 @@ def leg_ik(leg: Leg, P: np.ndarray) -> np.ndarray:
 def platform_points(rob: Robot, x: np.ndarray) -> np.ndarray:
     """(N, legs, 3) world platform points at declared coordinates x (N, n)."""
     X = full_pose(rob, x)
+    X[:, 5] += rob.rz0  # an articulated platform's axis direction at rz = 0 (else 0)
     R = rotation(X)
     p = np.array([l.p for l in rob.legs])
-    return X[:, None, :3] + np.einsum("nij,lj->nli", R, p)
+    f = np.array([l.f for l in rob.legs])
+    return X[:, None, :3] + np.einsum("nij,lj->nli", R, p) + f[None]
 
 
 def ik(rob: Robot, x) -> np.ndarray:
@@ -316,9 +342,10 @@ def _v(a) -> str:
     return " ".join(f"{float(c):.17g}" for c in a)
 
 
-def _rod_inertia(m: float, n: np.ndarray, length: float) -> str:
-    """fullinertia of a uniform slender rod of mass m and length along unit n, about its centre."""
-    It = max(m * length ** 2 / 12, TINY)
+def _rod_inertia(m: float, n: np.ndarray, length: float, lumped: bool = False) -> str:
+    """fullinertia of a uniform slender rod of mass m and length along unit n, about its centre
+    (lumped: half the mass at each end)."""
+    It = max(m * length ** 2 / (4 if lumped else 12), TINY)
     I = It * (np.eye(3) - np.outer(n, n)) + AXIAL * It * np.outer(n, n)
     return f'mass="{max(m, TINY):.17g}" fullinertia="{_v([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"'
 
@@ -354,13 +381,14 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
       <inertial pos="0 0 0" mass="{max(l.m_body, TINY):.17g}" diaginertia="{TINY} {TINY} {TINY}"/>
       <body name="rod{i}">
         <joint name="s{i}" type="ball"/>
-        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L)}/>
+        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L, l.lumped)}/>
         <site name="end{i}" pos="{_v(a)}"/>
       </body>
     </body>""")
         elif l.joint == ARM:
             B = elbow(l, q)
             e = (B - l.base) / l.r
+            e = math.cos(l.com_angle) * e + math.sin(l.com_angle) * np.cross(l.dir, e)  # towards the centre of mass
             a = P - B
             Ia = max(l.I_arm, TINY)
             legs.append(f"""
@@ -369,7 +397,7 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
       <inertial pos="{_v(l.rc * e)}" mass="{max(l.m_body, TINY):.17g}" diaginertia="{Ia:.17g} {Ia:.17g} {Ia:.17g}"/>
       <body name="rod{i}" pos="{_v(B - l.base)}">
         <joint name="s{i}" type="ball"/>
-        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L)}/>
+        <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L, l.lumped)}/>
         <site name="end{i}" pos="{_v(a)}"/>
       </body>
     </body>""")
@@ -401,6 +429,14 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
                    f'mass="{rob.m_payload:.17g}" diaginertia="{TINY} {TINY} {TINY}"/></body>')
     eq = "".join(f'\n    <connect site1="end{i}" site2="p{i}" solref="{solref:.17g} 1" solimp="{solimp}"/>'
                  for i in range(rob.n))
+    if rob.articulated:
+        platform, more_eq = _articulated_platform(rob, Ip, payload, solref, solimp)
+        eq += more_eq
+    else:
+        platform = f"""
+    <body name="platform" pos="0 0 0">{pj}
+      <inertial pos="0 0 0" mass="{max(rob.m_platform, TINY):.17g}" diaginertia="{_v(Ip)}"/>{sites}{payload}
+    </body>"""
     act = "".join(f'\n    <motor name="m{i}" joint="q{i}" gear="1"/>' for i in range(rob.n))
     xml = f"""<mujoco model="{rob.name}">
   <compiler angle="radian" inertiafromgeom="false" balanceinertia="false"/>
@@ -408,10 +444,7 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
           tolerance="1e-12" iterations="200">
     <flag contact="disable"/>
   </option>
-  <worldbody>{''.join(legs)}
-    <body name="platform" pos="0 0 0">{pj}
-      <inertial pos="0 0 0" mass="{max(rob.m_platform, TINY):.17g}" diaginertia="{_v(Ip)}"/>{sites}{payload}
-    </body>
+  <worldbody>{''.join(legs)}{platform}
   </worldbody>
   <equality>{eq}
   </equality>
@@ -419,6 +452,38 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
   </actuator>
 </mujoco>"""
     return xml, q0
+
+
+def _articulated_platform(rob: Robot, Ip, payload: str, solref: float, solimp: str) -> tuple[str, str]:
+    """An articulated platform as MuJoCo bodies: a translating frame at the pose point (slides
+    x, y, z), in it the articulation body turned by the hinge rz (from rz0) carrying the end
+    bars' point masses, the payload and the platform inertia; each leg's attachment on a body
+    at its turning point that a hinge turns back by -rz (a joint equality), so that its fixed
+    offset keeps its direction: p_i = pose + Rz(rz0 + rz) a_i + f_i."""
+    ends = "".join(f"""
+        <body name="end{k}" pos="{_v(rob.c_platform + np.array([sgn * rob.ends, 0.0, 0.0]))}">
+          <inertial pos="0 0 0" mass="{max(0.5 * rob.m_platform, TINY):.17g}" diaginertia="{TINY} {TINY} {TINY}"/>
+        </body>""" for k, sgn in enumerate((1.0, -1.0)))
+    attach = "".join(f"""
+        <body name="attach{i}" pos="{_v(l.p)}" euler="0 0 {-rob.rz0:.17g}">
+          <joint name="c{i}" type="hinge" axis="0 0 1"/>
+          <inertial pos="0 0 0" mass="{TINY}" diaginertia="{COUNTER} {COUNTER} {COUNTER}"/>
+          <site name="p{i}" pos="{_v(l.f)}"/>
+        </body>""" for i, l in enumerate(rob.legs))
+    xml = f"""
+    <body name="platform" pos="0 0 0">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="y" type="slide" axis="0 1 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <inertial pos="0 0 0" mass="{TINY}" diaginertia="{TINY} {TINY} {TINY}"/>
+      <body name="articulation" euler="0 0 {rob.rz0:.17g}">
+        <joint name="rz" type="hinge" axis="0 0 1"/>
+        <inertial pos="0 0 0" mass="{TINY}" diaginertia="{_v(Ip)}"/>{ends}{attach}{payload}
+      </body>
+    </body>"""
+    eq = "".join(f'\n    <joint joint1="c{i}" joint2="rz" polycoef="0 -1 0 0 0" solref="{solref:.17g} 1" solimp="{solimp}"/>'
+                 for i in range(rob.n))
+    return xml, eq
 
 
 # ------------------------------------------------------------------ the run

@@ -100,7 +100,12 @@ __attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, c
     sin_cos(q, sq, cq);
     const P3<T> e = along(cq, l.u) + along(sq, l.w);
     out[0] = l.base + T(l.r) * e;   // elbow B
-    out[2] = l.base + T(l.rc) * e;  // arm centre of mass
+    if (l.com_s == 0) {
+      out[2] = l.base + T(l.rc) * e;  // arm centre of mass
+    } else {                          // off the arm line by an angle: e(q + phi)
+      const P3<T> ep = along(-sq, l.u) + along(cq, l.w);
+      out[2] = l.base + (T(l.rc * l.com_c) * e + T(l.rc * l.com_s) * ep);
+    }
   } else {
     q = sqrt(dot(d, d));
     if (!(value_of(q) > 1e-9)) unreachable("the platform point is on the strut's base joint");
@@ -140,7 +145,7 @@ void platform_of(const Model& m, const double* x, Platform& pf, bool rates = tru
   double sx, cx, sy, cy, sz, cz;
   sin_cos(pf.x6[3], sx, cx);
   sin_cos(pf.x6[4], sy, cy);
-  sin_cos(pf.x6[5], sz, cz);
+  sin_cos(pf.x6[5] + m.rz0, sz, cz);
   pf.sx = sx, pf.cx = cx, pf.sy = sy, pf.cy = cy;
   pf.R << cy * cz, -(cy * sz), sy, sx * sy * cz + cx * sz, cx * cz - sx * sy * sz, -(sx * cy),
       sx * sz - cx * sy * cz, cx * sy * sz + sx * cz, cx * cy;
@@ -232,7 +237,8 @@ struct LegGrad {
   double pos[4][3];
   double q;
   V3 rP;
-  V3 t;  // rails and arms: d S / dq (D[0] = t dq)
+  V3 t;   // rails and arms: d S / dq (D[0] = t dq)
+  V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
 };
 
 // points = false: only q and dq/dP (the Jacobian).
@@ -240,7 +246,7 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
               bool points = true) {
   const LegModel& l = m.legs[i];
   lg.rP = pf.R * l.p;
-  const V3 P = pf.p + lg.rP;
+  const V3 P = pf.p + lg.rP + l.f;
   P3<double> pts[4];
   leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
   for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
@@ -257,14 +263,16 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
     }
   } else {
     // |P - S(q)| = L: w . (dP - t dq) = 0 with t = dS/dq.
-    V3 t = l.dir;
+    // D[0] = t dq and the slider's or arm's centre of mass tb dq: leg_mass and leg_force use them.
+    lg.t = lg.tb = l.dir;
     if (l.type->joint == Joint::arm) {
       double sq, cq;
       sin_cos(lg.q, sq, cq);
-      t = l.r * (cq * l.w - sq * l.u);
+      const V3 e = cq * l.u + sq * l.w, ep = cq * l.w - sq * l.u;
+      lg.t = l.r * ep;
+      lg.tb = l.rc * (l.com_c * ep - l.com_s * e);
     }
-    lg.dq = w.transpose() / w.dot(t);
-    lg.t = t;  // D[0] = t dq, an arm's centre of mass (rc / r) t dq: leg_mass and leg_force use t
+    lg.dq = w.transpose() / w.dot(lg.t);
   }
 }
 
@@ -295,7 +303,8 @@ void leg_motion(const Model& m, int i, const LegGrad& lg, const V3& vP, const V3
     const V3 wd = vP - qd * t;
     lm.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
     lm.acc[0] = lm.qdd * t - (l.r * qd * qd) * e;
-    lm.acc[2] = (l.rc / l.r) * lm.acc[0];
+    const V3 ep = t / l.r;
+    lm.acc[2] = lm.qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * ep);
   } else {
     // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
     const double q = lg.q;
@@ -315,12 +324,11 @@ M3 leg_mass(const LegModel& l, const LegGrad& lg) {
   M3 MP;
   if (l.type->joint != Joint::strut) {
     const V3& t = lg.t;
-    const double k = l.type->joint == Joint::arm ? l.rc / l.r : 1.0;
-    const double mr = l.m_rod;
-    const double c = (l.m_body * k * k + mr / 3) * t.squaredNorm() + l.I_arm;
+    const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
+    const double c = l.m_body * lg.tb.squaredNorm() + ms * t.squaredNorm() + l.I_arm;
     const V3 g = lg.dq.transpose();
-    MP.noalias() = c * g * g.transpose() + (mr / 6) * (g * t.transpose() + t * g.transpose());
-    MP.diagonal().array() += mr / 3;
+    MP.noalias() = c * g * g.transpose() + mx * (g * t.transpose() + t * g.transpose());
+    MP.diagonal().array() += ms;
     return MP;
   }
   MP.setZero();
@@ -338,15 +346,15 @@ M3 leg_mass(const LegModel& l, const LegGrad& lg) {
 // The leg's inertia-and-gravity load seen at its platform point (virtual power).
 V3 leg_force(const Model& m, const LegModel& l, const LegGrad& lg, const LegMotion& lm) {
   if (l.type->joint != Joint::strut) {
-    // D_body = k t dq, D_S = t dq, D_P = I: the loads at S and the body act through t.dq.
+    // D_body = tb dq, D_S = t dq, D_P = I: the loads at S and the body act through dq.
     const bool arm = l.type->joint == Joint::arm;
-    const double k = arm ? l.rc / l.r : 1.0, mr = l.m_rod;
+    const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
     const V3& aS = lm.acc[0];
     const V3& aP = lm.acc[1];
     const V3 Fb = l.m_body * (lm.acc[arm ? 2 : 0] - m.g);
-    const V3 Fs = (mr / 3) * aS + (mr / 6) * aP - (mr / 2) * m.g;
-    const V3 Fp = (mr / 6) * aS + (mr / 3) * aP - (mr / 2) * m.g;
-    const double along = k * lg.t.dot(Fb) + lg.t.dot(Fs) + l.I_arm * lm.qdd;
+    const V3 Fs = ms * aS + mx * aP - (mr / 2) * m.g;
+    const V3 Fp = mx * aS + ms * aP - (mr / 2) * m.g;
+    const double along = lg.tb.dot(Fb) + lg.t.dot(Fs) + l.I_arm * lm.qdd;
     return Fp + along * lg.dq.transpose();
   }
   V3 f = V3::Zero();
@@ -392,8 +400,13 @@ inline void add_point_inertia(M6& Mt, const M3& MP, const V3& r) {
 M6 mass_of(const Model& m, const State& st) {
   const Platform& pf = st.pf;
   M6 Mt = M6::Zero();
-  Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
-  if (m.rotates) Mt.bottomRightCorner<3, 3>() = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
+  if (!m.articulated) {
+    Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
+  } else {  // half the mass at each end bar
+    for (double s : {1.0, -1.0})
+      add_point_inertia(Mt, 0.5 * m.m_platform * M3::Identity(), pf.R * (m.c_platform + V3(s * m.ends, 0, 0)));
+  }
+  if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
   if (m.m_payload != 0) add_point_inertia(Mt, m.m_payload * M3::Identity(), pf.R * m.c_payload);
   for (int i = 0; i < m.n; ++i) add_point_inertia(Mt, leg_mass(m.legs[i], st.lg[i]), st.lg[i].rP);
   return t_congruence(m, pf, Mt);
@@ -406,16 +419,19 @@ V6 generalised_force(const Model& m, const State& st, const double* xd, const do
   platform_motion(m, pf, xd, xdd, pm);
   // The loads as one wrench about the platform origin, W = (force, moment); Q = T^T W.
   V6 W;
-  W << m.m_platform * (pm.a - m.g), V3::Zero();
+  W.setZero();
+  auto point_load = [&](double mass, const V3& rc) {
+    const V3 ac = pm.a + pm.al.cross(rc) + pm.om.cross(pm.om.cross(rc));
+    W += twist_row(mass * (ac - m.g), rc);
+  };
+  if (!m.articulated) W.head<3>() = m.m_platform * (pm.a - m.g);
+  else
+    for (double s : {1.0, -1.0}) point_load(0.5 * m.m_platform, pf.R * (m.c_platform + V3(s * m.ends, 0, 0)));
   if (m.rotates) {
     const M3 Iw = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
-    W.tail<3>() = Iw * pm.al + pm.om.cross(Iw * pm.om);
+    W.tail<3>() += Iw * pm.al + pm.om.cross(Iw * pm.om);
   }
-  if (m.m_payload != 0) {
-    const V3 rc = pf.R * m.c_payload;
-    const V3 ac = pm.a + pm.al.cross(rc) + pm.om.cross(pm.om.cross(rc));
-    W += twist_row(m.m_payload * (ac - m.g), rc);
-  }
+  if (m.m_payload != 0) point_load(m.m_payload, pf.R * m.c_payload);
   for (int i = 0; i < m.n; ++i) {
     const V3& rP = st.lg[i].rP;
     const V3 vP = pm.v + pm.om.cross(rP);
@@ -533,6 +549,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
       if (!(l.L > 0)) bad(name("leg", i, "L") + " = " + g6(l.L) + " m must be > 0");
       if (l.branch != 1.0 && l.branch != -1.0) bad(name("leg", i, "branch") + " = " + g6(l.branch) + " must be +1 or -1");
       l.disc_tol = 1e-12 * l.L * l.L;
+      if (d_.lumped_rods[i]) l.rod_self = 0.5, l.rod_cross = 0.0;
       if (j == Joint::rail) {
         l.base = vec("rail", i, "S0");
         l.dir = vec("rail", i, "s");
@@ -559,6 +576,8 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
         l.m_body = get(name("arm", i, "mass"));
         l.rc = get(name("arm", i, "rc"));
         l.I_arm = get(name("arm", i, "I"));
+        const double phi = get(name("arm", i, "com_angle"));
+        l.com_c = std::cos(phi), l.com_s = std::sin(phi);
         l.qmin = get(name("arm", i, "qmin")), l.qmax = get(name("arm", i, "qmax"));
         l.npt = 3, l.nmass = 1, l.nrod = 1;
         l.mass[0] = {2, l.m_body};
@@ -566,6 +585,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
       }
     }
     if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
+    if (d_.articulated) l.f = vec("leg", i, "f");
     rsum += l.p.norm();
     m->legs.push_back(l);
   }
@@ -575,6 +595,13 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   m->c_payload = V3(get("payload.x"), get("payload.y"), get("payload.z"));
   m->g = V3(get("gravity.x"), get("gravity.y"), get("gravity.z"));
   m->r_char = rsum > 0 ? rsum / m->n : 1.0;
+  if (d_.articulated) {
+    m->articulated = true;
+    m->rz0 = get("platform.axis_angle");
+    m->ends = get("platform.ends");
+    m->c_platform = V3(get("platform.cx"), get("platform.cy"), get("platform.cz"));
+    if (m->ends > 0) m->r_char = m->ends;  // the end bars' speed per articulation rate
+  }
   for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
   // The home pose must be reachable, within the joint limits and away from singularities.
   RobotData rd;
@@ -621,7 +648,7 @@ void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, doubl
   Platform pf;
   platform_of(m, x, pf, false);
   for (int i = 0; i < m.n; ++i) {
-    const V3 P = pf.p + pf.R * m.legs[i].p;
+    const V3 P = pf.p + pf.R * m.legs[i].p + m.legs[i].f;
     P3<double> pts[4];
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q[i], pts, Check::limits, x);
   }
@@ -678,7 +705,7 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
   using GT = Grad<3, TT>;
   for (int i = 0; i < m.n; ++i) {
     const V3 rP = pf.R * m.legs[i].p;
-    const V3 P = pf.p + rP, vP = pm.v + pm.om.cross(rP);
+    const V3 P = pf.p + rP + m.legs[i].f, vP = pm.v + pm.om.cross(rP);
     const P3<GT> Pg{GT::variable(TT(P.x(), vP.x(), 0), 0), GT::variable(TT(P.y(), vP.y(), 0), 1),
                     GT::variable(TT(P.z(), vP.z(), 0), 2)};
     GT q;
@@ -720,7 +747,7 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
   platform_of(m, x, pf, false);
   for (int i = 0; i < m.n; ++i) {
     const LegModel& l = m.legs[i];
-    const V3 P = pf.p + pf.R * l.p;
+    const V3 P = pf.p + pf.R * l.p + l.f;
     P3<double> p[4];
     double q;
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q, p, Check::none, x);
@@ -758,7 +785,7 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const 
   platform_motion(m, pf, xd, xdd, pm);
   for (int i = 0; i < m.n; ++i) {
     const V3 rP = pf.R * m.legs[i].p;
-    const V3 P = pf.p + rP, vP = pm.v + pm.om.cross(rP);
+    const V3 P = pf.p + rP + m.legs[i].f, vP = pm.v + pm.om.cross(rP);
     const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
     const P3<TT> Pt{TT(P.x(), vP.x(), aP.x()), TT(P.y(), vP.y(), aP.y()), TT(P.z(), vP.z(), aP.z())};
     TT q;
@@ -820,6 +847,7 @@ void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, c
   *kinetic = 0.5 * v.dot(mass_of(m, st) * v);
   auto height = [&](const double* p) { return -m.g.dot(V3(p[0], p[1], p[2])); };
   double V = -m.g.dot(st.pf.p) * m.m_platform;
+  if (m.articulated) V = -m.g.dot(st.pf.p + st.pf.R * m.c_platform) * m.m_platform;  // the ends' mean
   const V3 c = st.pf.p + st.pf.R * m.c_payload;
   V += m.m_payload * height(c.data());
   for (int i = 0; i < m.n; ++i) {

@@ -3,7 +3,10 @@
 // described robot.
 //
 // Model.  The platform moves along a declared subset of the pose (x, y, z, rx, ry, rz),
-// R = Rx(rx) Ry(ry) Rz(rz), the others held at 0 by the legs.  Every leg joins the base to
+// R = Rx(rx) Ry(ry) Rz(rz), the others held at 0 by the legs.  An articulated platform
+// (Adept Quattro, H4) is two translating end bars joined so that the bar-to-bar direction
+// turns with rz: its points are p + Rz(rz0 + rz) a + f, a turning with the articulation and
+// f a fixed (translating) offset; kinematically rz acts on the points a as a rotation.  Every leg joins the base to
 // a platform point P_i and has one actuated joint q_i of one of three kinds:
 //  * rail:  a slider S = S0 + q s on a prismatic rail at the base, then a rod |P - S| = L
 //           (PUS, PSS, P(SS)2, planar PRR);
@@ -11,10 +14,11 @@
 //           rod |P - B| = L (RUS, RSS, R(SS)2 of Delta robots, planar RRR);
 //  * strut: an actuated prismatic strut of length q = |P - B| between a base point and P
 //           (UPS, SPS of Gough-Stewart platforms).
-// Bodies: the platform (mass, principal inertias), a payload point, per leg a slider point
-// mass, an arm (mass at its centre of mass + inertia about it), uniform slender rods
-// (a parallelogram's rod pair is one rod of their total mass: its rods translate), a
-// strut's cylinder and piston as uniform slender tubes.
+// Bodies: the platform (mass, principal inertias; an articulated one as half its mass at
+// each end bar), a payload point, per leg a slider point mass, an arm (mass at its centre
+// of mass, which may lie off the arm line, + inertia about it), rods (uniform slender, or
+// lumped: half the mass at each joint; a parallelogram's rod pair is one rod of their
+// total mass: its rods translate), a strut's cylinder and piston as uniform slender tubes.
 //
 // Algorithms.  The positions of all body points are written once as a template of the
 // pose (closed-form inverse kinematics per leg); forward-mode differentiation
@@ -62,11 +66,14 @@ struct Rod {  // uniform slender rod between points a and b
 struct LegModel {
   const LegType* type = nullptr;
   Eigen::Vector3d p;  // platform point in the platform frame [m]
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();  // articulated platform: fixed offset of the point [m]
   Eigen::Vector3d base;  // rail: S0; arm: axis point A; strut: base point B [m]
   Eigen::Vector3d dir;   // rail: s; arm: axis k (unit) [1]
   Eigen::Vector3d u, w;  // arm: arm direction at q = 0 and k x u
   double L = 0, r = 0, branch = 1, ss = 1, inv_ss = 1;
   double m_rod = 0, m_body = 0, I_arm = 0, rc = 0;  // slider or arm mass, arm inertia and CoM distance
+  double com_c = 1, com_s = 0;      // arm: cos, sin of the centre of mass's angle from the arm line
+  double rod_self = 1.0 / 3, rod_cross = 1.0 / 6;  // rod kinetic energy (m/2)(self (|vA|^2 + |vB|^2) + 2 cross vA.vB)
   double m_cyl = 0, l_cyl = 0, m_pis = 0, l_pis = 0;
   double qmin = 0, qmax = 0;
   double disc_tol = 0;
@@ -79,8 +86,12 @@ struct Model final : RobotModel {
   int n = 0;
   int coord[6];    // pose index (0..5) of free coordinate j
   bool rotates = false;  // some rotation is a coordinate
+  bool articulated = false;
+  double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
   std::vector<LegModel> legs;
   double m_platform = 0;
+  Eigen::Vector3d c_platform = Eigen::Vector3d::Zero();  // articulated: centre (axis frame) [m]
+  double ends = 0;  // articulated: each end bar's distance from the centre along the axis [m]
   Eigen::Vector3d I_platform, c_payload, g;
   double m_payload = 0;
   double r_char = 1;
@@ -100,6 +111,9 @@ struct Description {
   std::vector<int> coords;              // pose indices of the platform's coordinates
   std::vector<const LegType*> legs;
   std::vector<int> leg_lines;
+  std::vector<bool> lumped_rods;        // per leg: rod mass lumped at its joints
+  bool articulated = false;             // [platform] kind = "articulated"
+  int redundant = 0;                    // robot.redundant_constraints
   std::vector<ParamSpec> params;        // defaults from the file
   std::vector<std::pair<std::string, std::vector<Override>>> sets;  // "default" first
   std::vector<double> home;

@@ -127,7 +127,7 @@ Description read_description(const std::string& text, const std::string& file) {
   const auto robots = doc.named("robot");
   if (robots.empty()) rd.fail(1, "[robot] table is missing (name, coordinates, home)");
   const toml::Table& rt = *robots.front();
-  rd.only(rt, {"name", "title", "source", "coordinates", "home"}, "[robot]");
+  rd.only(rt, {"name", "title", "source", "coordinates", "home", "redundant_constraints"}, "[robot]");
   d.name = rd.text(rt, "name", "robot", "the robot's name, what --robot takes");
   if (d.name.empty() || d.name.find_first_of(" /\\\t") != std::string::npos)
     rd.fail(rt.find("name")->line, "robot.name '" + d.name + "' must be one word without spaces or slashes");
@@ -146,6 +146,12 @@ Description read_description(const std::string& text, const std::string& file) {
     d.coords.push_back(k);
   }
   const int n = (int)d.coords.size();
+  if (auto v = rt.find("redundant_constraints")) {
+    const double r = rd.number(*v, "robot.redundant_constraints");
+    if (r < 0 || r > 36 || r != std::floor(r))
+      rd.fail(v->line, "robot.redundant_constraints = " + num(r) + " must be a whole number >= 0 (docs/robots.md, Mobility)");
+    d.redundant = (int)r;
+  }
   const toml::Value& hv = rd.need(rt, "home", "robot", "the home pose, one value per coordinate [m, rad]");
   const std::vector<double> home_as_written = rd.numbers(hv, "robot.home", (size_t)n);
   d.home_line = hv.line;
@@ -167,7 +173,18 @@ Description read_description(const std::string& text, const std::string& file) {
   const auto pts = doc.named("platform");
   if (pts.empty()) rd.fail(rt.line, "[platform] table is missing (mass, inertia)");
   const toml::Table& pt = *pts[0];
-  rd.only(pt, {"mass", "inertia"}, "[platform]");
+  const std::string kind = rd.text(pt, "kind", "platform", "", false);
+  if (!(kind.empty() || kind == "rigid" || kind == "articulated"))
+    rd.fail(pt.find("kind")->line, "platform.kind '" + kind + "' is not known (known: rigid, articulated)");
+  d.articulated = kind == "articulated";
+  if (d.articulated) {
+    rd.only(pt, {"kind", "mass", "inertia", "axis_angle", "ends", "centre"}, "[platform] (articulated)");
+    if (d.coords != std::vector<int>{0, 1, 2, 5})
+      rd.fail(cv.line, "an articulated platform moves in x, y, z and its articulation angle rz: robot.coordinates "
+                       "must be [\"x\", \"y\", \"z\", \"rz\"]");
+  } else {
+    rd.only(pt, {"kind", "mass", "inertia"}, "[platform]");
+  }
   const double pm = rd.number(rd.need(pt, "mass", "platform", "platform mass [kg]"), "platform.mass");
   const auto pI = rd.numbers(rd.need(pt, "inertia", "platform",
                                      "principal inertias [Ixx, Iyy, Izz] about its centre of mass [kg m2]"),
@@ -203,6 +220,9 @@ Description read_description(const std::string& text, const std::string& file) {
         rd.fail(v->line, "leg.copies = " + num(c) + " must be a whole number from 1 to " + std::to_string(kMaxLegs));
       copies = (int)c;
     }
+    if (copies > 1 && d.articulated)
+      rd.fail(t->find("copies")->line, "legs of an articulated platform are written one [[leg]] each (copies = 1): "
+                                       "their attachment points do not repeat by a rotation");
     const double pi = std::acos(-1.0);
     for (int k = 0; k < copies; ++k) legs.push_back({t, lt, 2 * pi * k / copies, k});
   }
@@ -221,21 +241,25 @@ Description read_description(const std::string& text, const std::string& file) {
       if (k != 0 && k != 1 && k != 5)
         rd.fail(cv.line, std::string("a planar robot moves in x, y, rz; '") + kCoordNames[k] + "' is not planar");
 
-  // Grubler-Kutzbach: lambda (n_bodies - n_joints - 1) + sum f - idle.
+  // Grubler-Kutzbach: lambda (n_bodies - n_joints - 1) + sum f - idle (+ the dependent
+  // constraints the description declares).  An articulated platform is two end bars and
+  // the one-freedom articulation between them.
   const int lambda = d.planar ? 3 : 6;
   int nb = 2, nj = 0, f = 0;
+  if (d.articulated) nb += 1, nj += 1, f += 1;
   for (const auto& l : legs) {
     nb += l.type->bodies, nj += l.type->joints, f += l.type->freedoms - l.type->idle;
     if (l.type->joint != legs.front().type->joint)
       rd.fail(l.t->line, "legs with different actuated joints (rail, arm, strut) are not supported in one robot");
   }
   d.joint = legs.front().type->joint;
-  d.mobility = lambda * (nb - nj - 1) + f;
+  d.mobility = lambda * (nb - nj - 1) + f + d.redundant;
   if (d.mobility != n) {
     std::ostringstream os;
     os << "mobility mismatch: the Grubler-Kutzbach count of these legs is " << d.mobility << " = " << lambda << " x ("
-       << nb << " bodies - " << nj << " joints - 1) + " << f << " joint freedoms (idle spins removed), but "
-       << n << " coordinates are declared";
+       << nb << " bodies - " << nj << " joints - 1) + " << f << " joint freedoms (idle spins removed)";
+    if (d.redundant) os << " + " << d.redundant << " redundant constraints";
+    os << ", but " << n << " coordinates are declared";
     rd.fail(cv.line, os.str());
   }
 
@@ -253,8 +277,10 @@ Description read_description(const std::string& text, const std::string& file) {
     const std::string where = "leg " + std::to_string(i + 1) + (l.copy ? " (copy " + std::to_string(l.copy) + " of the [[leg]] on line " + std::to_string(t.line) + ")" : "");
     const Joint j = l.type->joint;
     std::vector<std::string> known = {"type", "copies", "platform_point", "stroke"};
-    if (j == Joint::rail) for (auto k : {"rail_origin", "rail_direction", "slider_mass", "rod_length", "rod_mass", "branch"}) known.push_back(k);
-    if (j == Joint::arm) for (auto k : {"axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_inertia", "rod_length", "rod_mass", "branch"}) known.push_back(k);
+    if (d.articulated) known.push_back("platform_offset");
+    if (j != Joint::strut) for (auto k : {"rod_length", "rod_mass", "rod_model", "branch"}) known.push_back(k);
+    if (j == Joint::rail) for (auto k : {"rail_origin", "rail_direction", "slider_mass"}) known.push_back(k);
+    if (j == Joint::arm) for (auto k : {"axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_com_angle", "arm_inertia"}) known.push_back(k);
     if (j == Joint::strut) for (auto k : {"base_point", "cylinder_mass", "cylinder_length", "piston_mass", "piston_length"}) known.push_back(k);
     rd.only(t, known, where);
     auto vec = [&](const char* key, const char* what) {
@@ -281,6 +307,20 @@ Description read_description(const std::string& text, const std::string& file) {
       add(idx("leg", i, "px"), "m", "x of the platform attachment point of " + leg + ", platform frame", p[0], -1e3, 1e3, line_of("platform_point"));
       add(idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + ", platform frame", p[1], -1e3, 1e3, line_of("platform_point"));
       add(idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + ", platform frame", p[2], -1e3, 1e3, line_of("platform_point"));
+      if (d.articulated) {
+        std::vector<double> f0 = {0, 0, 0};
+        if (t.find("platform_offset")) f0 = rd.numbers(*t.find("platform_offset"), "leg.platform_offset", 3);
+        const char* c[3] = {"x", "y", "z"};
+        for (int k = 0; k < 3; ++k)
+          add(idx("leg", i, (std::string("f") + c[k]).c_str()), "m", std::string(c[k]) + " of the fixed (non-turning) offset of the platform attachment point of " + leg, f0[k], -1e3, 1e3, line_of("platform_offset"));
+      }
+      std::string rod_model = "uniform";
+      if (t.find("rod_model")) {
+        rod_model = rd.text(t, "rod_model", where, "uniform or lumped");
+        if (rod_model != "uniform" && rod_model != "lumped")
+          rd.fail(line_of("rod_model"), where + ": rod_model '" + rod_model + "' is not known (known: uniform, lumped)");
+      }
+      d.lumped_rods.push_back(rod_model == "lumped");
       double br = 1;
       if (t.find("branch")) {
         br = rd.number(*t.find("branch"), "leg.branch");
@@ -322,9 +362,14 @@ Description read_description(const std::string& text, const std::string& file) {
           scalar("arm_com", "axis to the arm's centre of mass [m]", -1e3, 1e3, "m"), -1e3, 1e3, line_of("arm_com"));
       add(idx("arm", i, "I"), "kg m2", "arm inertia about its centre of mass, about an axis parallel to the motor axis, " + leg,
           scalar("arm_inertia", "arm inertia about its centre of mass [kg m2]", 0, 1e6, "kg m2"), 0, 1e6, line_of("arm_inertia"));
+      double phi = 0;
+      if (t.find("arm_com_angle")) phi = rd.number(*t.find("arm_com_angle"), "leg.arm_com_angle");
+      add(idx("arm", i, "com_angle"), "rad", "angle of the arm's centre of mass from the line axis-to-elbow, positive as q, " + leg,
+          phi, -4, 4, line_of("arm_com_angle"));
       add(idx("arm", i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, line_of("stroke"));
       add(idx("arm", i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, line_of("stroke"));
     } else {
+      d.lumped_rods.push_back(false);
       const auto B = vec("base_point", "the strut's base joint [m]");
       const char* c[3] = {"x", "y", "z"};
       for (int k = 0; k < 3; ++k) add(idx("leg", i, (std::string("b") + c[k]).c_str()), "m", std::string(c[k]) + " of the base joint of " + leg, B[k], -1e3, 1e3, line_of("base_point"));
@@ -344,6 +389,18 @@ Description read_description(const std::string& text, const std::string& file) {
   add("platform.Ixx", "kg m2", "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, pt.find("inertia")->line);
   add("platform.Iyy", "kg m2", "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, pt.find("inertia")->line);
   add("platform.Izz", "kg m2", "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, pt.find("inertia")->line);
+  if (d.articulated) {
+    auto field = [&](const char* key, const char* what) -> const toml::Value& { return rd.need(pt, key, "platform", what); };
+    const double ang = rd.number(field("axis_angle", "direction of the end-to-end axis at rz = 0, from x [rad]"), "platform.axis_angle");
+    const double ends = rd.number(field("ends", "distance of each end bar from the platform centre along the axis [m]"), "platform.ends");
+    if (!(ends > 0)) rd.fail(pt.find("ends")->line, "platform.ends = " + num(ends) + " m must be > 0");
+    const auto c = rd.numbers(field("centre", "platform centre from the pose point, in the axis frame (along, across, up) [m]"), "platform.centre", 3);
+    add("platform.axis_angle", "rad", "direction of the articulated platform's end-to-end axis at rz = 0, from the x axis", ang, -10, 10, pt.find("axis_angle")->line);
+    add("platform.ends", "m", "distance of each end bar (half the platform mass each) from the platform centre along the axis", ends, 1e-9, 1e3, pt.find("ends")->line);
+    add("platform.cx", "m", "platform centre from the pose point along the axis", c[0], -1e3, 1e3, pt.find("centre")->line);
+    add("platform.cy", "m", "platform centre from the pose point across the axis", c[1], -1e3, 1e3, pt.find("centre")->line);
+    add("platform.cz", "m", "platform centre from the pose point, vertical", c[2], -1e3, 1e3, pt.find("centre")->line);
+  }
   add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pt.line);
   add("payload.x", "m", "x of the payload in the platform frame", pay_c[0], -1e3, 1e3, pt.line);
   add("payload.y", "m", "y of the payload in the platform frame", pay_c[1], -1e3, 1e3, pt.line);
