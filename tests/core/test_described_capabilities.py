@@ -261,3 +261,23 @@ def test_a_gain_sweep_on_a_described_robot(tmp_path):
     assert np.all(res.column("steady_state.prediction_relative_error") < 1e-3)
     order = np.argsort(kp)
     np.testing.assert_allclose(e[order] * kp[order], e[order][0] * kp[order][0], rtol=0.02)
+
+
+def test_the_quattro_description_runs_a_step_like_the_hand_written_quattro():
+    """A PD step of all four coordinates: the described Quattro's core plant follows the
+    hand-written one to rounding, its FMU plant follows its core plant, and the steady-state
+    error is the predicted Kp^-1 g."""
+    runs = {}
+    for robot, plant in [("quattro", "core"), ("quattro_described", "core"), ("quattro_described", "fmu")]:
+        spec = dict(name="quattro_step", robot=robot, plant=plant, duration=0.6, step=0.001, seed=1,
+                    integrator=dict(rtol=1e-10, atol=1e-12), controller=dict(type="pd", kp=2000.0, kd=60.0),
+                    reference={"type": "step", "from": [0.0, 0.0, -0.95, 0.0], "to": [0.05, 0.0, -0.9, 0.1],
+                               "t_step": 0.0},
+                    output=dict(settle_window=0.2, figures=False))
+        runs[robot, plant] = run_scenario(scenario_from_dict(spec), export=False, figures=False)
+    hand, desc, fmu = runs["quattro", "core"], runs["quattro_described", "core"], runs["quattro_described", "fmu"]
+    assert np.ptp(hand.result["q"], axis=0).min() > 2e-3  # every arm moved
+    np.testing.assert_allclose(desc.result["q"], hand.result["q"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fmu.result["q"], desc.result["q"], rtol=0, atol=1e-10)
+    ss = desc.metrics["steady_state"]
+    assert ss["prediction_relative_error"] < 1e-5 and ss["joint_error_max"] > 1e-3
