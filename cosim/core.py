@@ -892,6 +892,15 @@ class Simulator:
         return float(self._t.value), self._x.copy(), self._xd.copy()
 
     @property
+    def drive_state(self):
+        """``(theta, theta_d)``: drive-side position [m or rad] and rate per joint
+        (``pkm_sim_drive_state``): the drive body's on a joint that is two bodies
+        (``drive.two_body = 1`` with a backlash or a compliance), the joint's own otherwise."""
+        th, thd = np.empty(self.ndof), np.empty(self.ndof)
+        self._check(lib.pkm_sim_drive_state(self._s, ptr(th), ptr(thd)))
+        return th, thd
+
+    @property
     def stats(self) -> dict:
         """CVODE counters summed over all advances since creation: steps, rhs_evals
         (including those of the difference-quotient Jacobian), jac_evals,

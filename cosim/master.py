@@ -66,6 +66,7 @@ class PlantOutputs:
     qd: np.ndarray   # joint rates
     x: np.ndarray    # pose [m, rad]
     xd: np.ndarray   # pose rate
+    drive: tuple | None = None  # (theta, theta_d) of the drive bodies (drive.two_body), else None
 
 
 class Plant:
@@ -145,7 +146,8 @@ class CorePlant(Plant):
         t, x, xd = self.sim.state
         q = self.model.ik(x)
         qd = self.model.joint_velocity(x, xd)
-        return PlantOutputs(q, qd, x, xd)
+        drive = self.sim.drive_state if self.model.param("drive.two_body") == 1 else None
+        return PlantOutputs(q, qd, x, xd, drive)
 
     def describe(self):
         return {"kind": "core", **self.options}
@@ -202,6 +204,27 @@ class CoreDrive:
         """Encoder readings [m or rad] at (x, xd) under the applied effort tau."""
         return self.model.measure_joints(np.asarray(x, float), np.asarray(xd, float), np.asarray(tau, float))
 
+    def two_body_joints(self) -> np.ndarray:
+        """Boolean per joint: a drive body of its own (``drive.two_body`` and a backlash or a
+        compliance on it), whose encoder reads the drive body instead of the reading model."""
+        m, pre = self.model, self.model.facts.joint_prefix
+        if m.param("drive.two_body") != 1:
+            return np.zeros(self.ndof, bool)
+        return np.array([m.param(f"{pre}[{i + 1}].backlash") > 0 or m.param(f"{pre}[{i + 1}].compliance") > 0
+                         for i in range(self.ndof)])
+
+    def read(self, y, tau):
+        """Encoder readings and rates from a plant's outputs ``y`` under the applied effort:
+        the reading model, and on two-body joints the drive body (plus the encoder offset)."""
+        q, qd = self.measure(y.x, y.xd, tau), np.array(y.qd, float)
+        if y.drive is not None:
+            two = self.two_body_joints()
+            pre = self.model.facts.joint_prefix
+            off = np.array([self.model.param(f"{pre}[{i + 1}].encoder_offset") for i in range(self.ndof)])
+            q[two] = y.drive[0][two] + off[two]
+            qd[two] = y.drive[1][two]
+        return q, qd
+
 
 class FMUPlant(Plant):
     """A Co-Simulation FMU driven through fmpy (``fmpy.fmi2.FMU2Slave``).
@@ -254,6 +277,10 @@ class FMUPlant(Plant):
         self.parameters = dict(parameters or {})
         self.rtol, self.atol = rtol, atol
         self.vr = {key: self._refs(key) for key in ("tau", "q", "qd", "x", "xd", "x0", "xd0")}
+        # the drive bodies (drive.two_body), in FMUs that have them
+        drive = [[f"{k}[{i}]" for i in range(1, self.ndof + 1)] for k in ("q_drive", "qd_drive")]
+        self.vr_drive = ([[self.vars[n].valueReference for n in names] for names in drive]
+                         if all(n in self.vars for names in drive for n in names) else None)
         self._unzip = extract(self.path)
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
@@ -358,8 +385,11 @@ class FMUPlant(Plant):
 
     def outputs(self):
         g = self.fmu.getReal
+        drive = None
+        if self.vr_drive is not None and float(self.parameters.get("drive.two_body", 0.0)) == 1.0:
+            drive = (np.array(g(self.vr_drive[0])), np.array(g(self.vr_drive[1])))
         return PlantOutputs(np.array(g(self.vr["q"])), np.array(g(self.vr["qd"])), np.array(g(self.vr["x"])),
-                            np.array(g(self.vr["xd"])))
+                            np.array(g(self.vr["xd"])), drive)
 
     def close(self):
         if getattr(self, "fmu", None) is not None and self._instantiated:
@@ -653,8 +683,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         if drive is not None:
             drive.reset_delay()
         for k in range(n):
-            q_read = drive.measure(y.x, y.xd, tau_applied) if drive is not None else y.q
-            qd_read = y.qd
+            q_read, qd_read = drive.read(y, tau_applied) if drive is not None else (y.q, y.qd)
             if drive is not None:
                 q_read, qd_read = drive.delayed(float(t[k]), q_read, qd_read)
             qm = q_read + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else q_read

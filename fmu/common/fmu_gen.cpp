@@ -169,6 +169,8 @@ const std::map<std::string, std::pair<std::string, bool>>& channels() {
       {"solver.maxSteps", {"FMU_CH_SOLVER_MAX_STEPS", true}},
       {"solver.singMin", {"FMU_CH_SOLVER_SING_MIN", false}},
       {"input.gain", {"FMU_CH_INPUT_GAIN", false}},
+      {"q_drive", {"FMU_CH_Q_DRIVE", false}},
+      {"qd_drive", {"FMU_CH_QD_DRIVE", false}},
       // controller FMUs (@kind controller): readings and reference in, effort out, the law
       {"ctrl.q", {"FMU_CH_CTRL_Q", false}},
       {"ctrl.qd", {"FMU_CH_CTRL_QD", false}},
@@ -398,7 +400,8 @@ void check(const Table& t, int nd, const std::string& path) {
     if ((v.channel == "tau") != (v.causality == "input"))
       throw Fail(path + ": " + v.name + ": inputs are the tau channel, and only inputs");
     if ((v.channel == "pose" || v.channel == "twist" || v.channel == "accel" || v.channel == "q" ||
-         v.channel == "qd" || v.channel == "sing" || v.channel == "energy") != (v.causality == "output"))
+         v.channel == "qd" || v.channel == "q_drive" || v.channel == "qd_drive" || v.channel == "sing" ||
+         v.channel == "energy") != (v.causality == "output"))
       throw Fail(path + ": " + v.name + ": causality " + v.causality + " does not fit channel " + v.channel);
     if (v.channel == "sing" && (v.index < 0 || v.index > 1)) throw Fail(path + ": " + v.name + ": sing index 0 or 1");
     if (v.channel == "energy" && (v.index < 0 || v.index > 1))

@@ -54,6 +54,8 @@ typedef enum fmu_channel {
   FMU_CH_SOLVER_MAX_STEPS, /* Integer */
   FMU_CH_SOLVER_SING_MIN,
   FMU_CH_INPUT_GAIN,    /* effort on the joint per unit of input tau (plant parameter)  */
+  FMU_CH_Q_DRIVE,       /* drive-side position of joint index (drive.two_body), output  */
+  FMU_CH_QD_DRIVE,      /* drive-side rate of joint index, output                       */
   /* controller FMUs (fmu/common/controller.c, pkm.h "control"): */
   FMU_CH_CTRL_Q,         /* joint reading q[index], input                                */
   FMU_CH_CTRL_QD,        /* joint rate reading qd[index], input                          */

@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { V_KIN = 1, V_ACC = 2, V_SING = 4, V_ENERGY = 8 };
+enum { V_KIN = 1, V_ACC = 2, V_SING = 4, V_ENERGY = 8, V_DRIVE = 16 };
 
 struct fmu_plant {
   const fmu_model_desc* desc;
@@ -26,7 +26,7 @@ struct fmu_plant {
 
   double t;
   double *x, *xd, *tau, *x0, *xd0, *par; /* par: pending parameter values */
-  double *xdd, *q, *qd;                   /* computed on demand (valid bits) */
+  double *xdd, *q, *qd, *qdrv, *qddrv;    /* computed on demand (valid bits) */
   double sing[2], energy[2];
   unsigned valid;
 
@@ -67,6 +67,24 @@ static const char* var_name(const fmu_plant* p, fmu_channel ch, int index) {
 static const double* effort(fmu_plant* p) {
   for (int i = 0; i < p->nd; ++i) p->tau_eff[i] = p->input_gain * p->tau[i];
   return p->tau_eff;
+}
+
+/* A joint is two bodies (the drive body is a state of the integrator): drive.two_body = 1
+ * and a backlash or a compliance on it (pkm.h, drive and sensors). */
+static int two_body(const fmu_plant* p) {
+  int k = pkm_param_index(p->m, "drive.two_body");
+  if (k < 0 || pkm_param_get(p->m, k) != 1.0) return 0;
+  const char* pre = pkm_model_joint_prefix(p->m);
+  char name[96];
+  for (int i = 0; i < p->nd; ++i) {
+    const char* keys[2] = {"backlash", "compliance"};
+    for (int j = 0; j < 2; ++j) {
+      snprintf(name, sizeof name, "%s[%d].%s", pre, i + 1, keys[j]);
+      int idx = pkm_param_index(p->m, name);
+      if (idx >= 0 && pkm_param_get(p->m, idx) > 0) return 1;
+    }
+  }
+  return 0;
 }
 
 static void set_starts(fmu_plant* p) {
@@ -138,7 +156,7 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
   }
 
   fmu_plant* p = (fmu_plant*)calloc(1, sizeof *p);
-  double* buf = (double*)calloc((size_t)(8 * nd + np), sizeof(double));
+  double* buf = (double*)calloc((size_t)(10 * nd + np), sizeof(double));
   pkm_data* d = pkm_data_create(m);
   if (!p || !buf || !d) {
     snprintf(err, errlen, "out of memory");
@@ -162,7 +180,9 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
   p->xdd = p->xd0 + nd;
   p->q = p->xdd + nd;
   p->qd = p->q + nd;
-  p->par = p->qd + nd;
+  p->qdrv = p->qd + nd;
+  p->qddrv = p->qdrv + nd;
+  p->par = p->qddrv + nd;
   p->model_ok = 1;
   set_starts(p);
   return p;
@@ -248,8 +268,23 @@ static int ensure(fmu_plant* p, unsigned bit, const char* what) {
       if ((s = pkm_joint_velocity(p->m, p->d, p->x, p->xd, p->qd))) return core_fail(p, s, "joint velocity");
       break;
     case V_ACC:
-      if ((s = pkm_forward_dynamics(p->m, p->d, p->x, p->xd, effort(p), p->xdd)))
+      if (two_body(p) && p->cs && p->sim && p->started) {
+        /* the carriages feel what the transmissions carry: the integrator's own rates */
+        if ((s = pkm_sim_acceleration(p->sim, effort(p), p->xdd)))
+          return fail(p, s, "acceleration at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+      } else if ((s = pkm_forward_dynamics(p->m, p->d, p->x, p->xd, effort(p), p->xdd))) {
         return core_fail(p, s, "forward dynamics");
+      }
+      break;
+    case V_DRIVE:
+      if (p->cs && p->sim && p->started) {
+        if ((s = pkm_sim_drive_state(p->sim, p->qdrv, p->qddrv)))
+          return fail(p, s, "drive state at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+      } else {
+        if ((s = ensure(p, V_KIN, what))) return s;
+        memcpy(p->qdrv, p->q, sizeof(double) * p->nd);
+        memcpy(p->qddrv, p->qd, sizeof(double) * p->nd);
+      }
       break;
     case V_SING:
       if ((s = pkm_singularity(p->m, p->d, p->x, p->sing))) return core_fail(p, s, "singularity measure");
@@ -285,6 +320,12 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
       break;
     case FMU_CH_QD:
       if (!(s = ensure(p, V_KIN, v->name))) *value = p->qd[i];
+      break;
+    case FMU_CH_Q_DRIVE:
+      if (!(s = ensure(p, V_DRIVE, v->name))) *value = p->qdrv[i];
+      break;
+    case FMU_CH_QD_DRIVE:
+      if (!(s = ensure(p, V_DRIVE, v->name))) *value = p->qddrv[i];
       break;
     case FMU_CH_SING:
       if (!(s = ensure(p, V_SING, v->name))) *value = p->sing[i];
@@ -343,6 +384,14 @@ static int apply(fmu_plant* p) {
                 "sensor.delay = %g s: this FMU outputs the joints at the current time and does not delay them; set it "
                 "to 0 and delay the readings in the importer (the core's discrepancy replay models it)",
                 pkm_param_get(p->m, sd));
+
+  /* Two-body joints carry states of the integrator's own (the drive bodies): Model
+   * Exchange exposes the pose states only. */
+  if (!p->cs && two_body(p))
+    return fail(p, PKM_ERR_PARAMETER,
+                "drive.two_body = 1 with a backlash or a compliance set: the drive bodies are states of the "
+                "Co-Simulation FMU's own integrator, and Model Exchange has the pose states only; use Co-Simulation, "
+                "or drive.two_body = 0 (the quasi-static reading model)");
 
   pkm_sim_options o = p->opt;
   if (p->tol_override > 0) o.rtol = p->tol_override;

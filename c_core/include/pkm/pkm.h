@@ -244,9 +244,13 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
 /* ========================================================= drive and sensors */
 /* Every robot has a drive layer between its mechanics and its controller, with
  * per-joint parameters "<j>[i].coulomb", ".viscous", ".stribeck", ".stribeck_v",
- * ".rotor_inertia", ".effort_max", ".dead_zone", ".encoder_offset", ".backlash", ".compliance"
- * (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps", "drive.f_eps",
- * "actuator.delay", "sensor.delay".  All default to "absent".  Friction and rotor
+ * ".rotor_inertia", ".effort_max", ".dead_zone", ".encoder_offset", ".backlash", ".compliance",
+ * ".transmission_damping" (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
+ * "drive.f_eps", "drive.two_body", "actuator.delay", "sensor.delay".  All default to "absent".
+ * Backlash and compliance are reading models (below) unless drive.two_body = 1: then a
+ * joint with either is a drive body (rotor_inertia, the friction, the command) and the
+ * carriage joined by a spring of stiffness 1/compliance with a dead band of the gap,
+ * integrated by pkm_sim (pkm_sim_drive_state; the encoder reads the drive body).  Friction and rotor
  * inertia are part of pkm_inverse_dynamics / pkm_forward_dynamics / pkm_mass_matrix /
  * pkm_energy; saturation, delays and the sensor model are applied by pkm_sim and by
  * callers through the functions below.  The sign of the velocity is smoothed,
@@ -327,6 +331,14 @@ PKM_API int pkm_sim_set_input(pkm_sim* s, const double* tau);
  * names the leg and the time. */
 PKM_API int pkm_sim_advance(pkm_sim* s, double t_end);
 PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd);
+/* Drive-side position and rate per joint [m or rad, m/s or rad/s]: the drive body's for a
+ * joint that is two bodies (drive.two_body = 1 with a backlash or a compliance), the joint's
+ * own otherwise.  Either pointer may be NULL. */
+PKM_API int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d);
+/* Pose acceleration xdd[nd] at the sim's current state under the command tau[nd] (its dead
+ * zone and saturation applied, no delay): the forward dynamics, with a two-body joint's
+ * carriage driven by what its transmission carries. */
+PKM_API int pkm_sim_acceleration(pkm_sim* s, const double* tau, double* xdd);
 /* The sim's whole state as doubles, for rollback (FMU get/set/serialize state):
  * pkm_sim_state_size values (it varies with the actuator-delay history), saved by
  * pkm_sim_state_save and restored by pkm_sim_state_load, which checks the layout, the

@@ -13,8 +13,8 @@ namespace drive {
 
 namespace {
 // Per-joint parameter names, in the order of the loop in specs() and compile().
-const char* kKeys[] = {"coulomb", "viscous", "stribeck", "stribeck_v", "rotor_inertia",
-                       "effort_max", "encoder_offset", "backlash", "compliance", "dead_zone", "coulomb_v"};
+const char* kKeys[] = {"coulomb",    "viscous",    "stribeck",  "stribeck_v", "rotor_inertia",       "effort_max",
+                       "encoder_offset", "backlash", "compliance", "dead_zone", "coulomb_v", "transmission_damping"};
 constexpr int kNKeys = sizeof(kKeys) / sizeof(kKeys[0]);
 
 double* field(Params& p, int k) {
@@ -29,7 +29,8 @@ double* field(Params& p, int k) {
     case 7: return p.backlash;
     case 8: return p.compliance;
     case 9: return p.dead_zone;
-    default: return p.coulomb_v;
+    case 10: return p.coulomb_v;
+    default: return p.transmission_damping;
   }
 }
 
@@ -71,11 +72,17 @@ std::vector<ParamSpec> specs(const Robot& r) {
                    "velocity scale of the Coulomb friction, tanh(v / coulomb_v): friction that fades below it "
                    "(0: drive.v_eps, a numerical regularisation), " + who,
                    0.0, 0.0, 1e3});
+    out.push_back({joint_name(r, i, "transmission_damping"), F + " s/" + Q,
+                   "damping of the two-body transmission in contact (drive.two_body = 1), " + who, 0.0, 0.0, 1e9});
   }
   out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction", ang ? 1e-3 : 1e-4, 1e-9, 1.0});
   out.push_back({"drive.f_eps", F,
                  "effort scale of the smooth sign that picks the backlash contact side (the transmitted effort's)",
                  ang ? 0.05 : 0.01, 1e-9, 1e3});
+  out.push_back({"drive.two_body", "1",
+                 "1: a joint with a backlash or a compliance is a drive body (its rotor inertia and friction) and the "
+                 "carriage joined by a dead-band spring, integrated by pkm_sim; 0: both are reading models",
+                 0.0, 0.0, 1.0});
   out.push_back({"actuator.delay", "s", "time delay between commanded and applied actuator effort", 0.0, 0.0, 1.0});
   out.push_back({"sensor.delay", "s", "time delay of the joint readings", 0.0, 0.0, 1.0});
   return out;
@@ -96,6 +103,22 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
   p->f_eps = get("drive.f_eps");
   p->actuator_delay = get("actuator.delay");
   p->sensor_delay = get("sensor.delay");
+  const double tb = get("drive.two_body");
+  if (tb != 0 && tb != 1)
+    throw Error(PKM_ERR_PARAMETER, "drive.two_body = " + std::to_string(tb) + " must be 0 or 1");
+  p->two_body = tb == 1;
+  for (int i = 0; i < p->nd; ++i) {
+    if (!p->two_body_joint(i)) continue;
+    // A drive body needs an inertia, and a gap's faces a stiffness: else the two-body
+    // model has no dynamics of its own.
+    if (!(p->rotor[i] > 0))
+      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_name(r, i, "rotor_inertia") +
+                                         " must be > 0 (the drive body's inertia) where a backlash or a compliance is set");
+    if (!(p->compliance[i] > 0))
+      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_name(r, i, "compliance") +
+                                         " must be > 0 (1 / the stiffness of the transmission, or of a gap's contact "
+                                         "faces) where a backlash is set");
+  }
   for (int i = 0; i < p->nd; ++i) {
     p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0;
     p->any_rotor |= p->rotor[i] != 0;
@@ -113,6 +136,24 @@ void friction(const Params& p, const double* qd, double* f) {
     f[i] = p.coulomb[i] * smooth_sign(v, vc) + p.stribeck[i] * std::exp(-r * r) * smooth_sign(v, p.v_eps) +
            p.viscous[i] * v;
   }
+}
+
+std::shared_ptr<const Params> carriage_side(const Params& p) {
+  auto c = std::make_shared<Params>(p);
+  c->any_friction = c->any_rotor = false;
+  for (int i = 0; i < p.nd; ++i) {
+    if (p.two_body_joint(i)) c->coulomb[i] = c->viscous[i] = c->stribeck[i] = c->rotor[i] = 0.0;
+    c->any_friction |= c->coulomb[i] != 0 || c->viscous[i] != 0 || c->stribeck[i] != 0;
+    c->any_rotor |= c->rotor[i] != 0;
+  }
+  return c;
+}
+
+double transmitted_effort(const Params& p, int i, double delta, double delta_dot) {
+  const double half = 0.5 * p.backlash[i], k = 1.0 / p.compliance[i];
+  if (delta > half) return k * (delta - half) + p.transmission_damping[i] * delta_dot;
+  if (delta < -half) return k * (delta + half) + p.transmission_damping[i] * delta_dot;
+  return 0.0;
 }
 
 }  // namespace drive
@@ -163,8 +204,8 @@ void require_finite_result(const double* out, int n, const char* what, const dou
                                         ")");
 }
 
-void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
-                         double* xdd);
+void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
+                         const double* tau, double* xdd);
 
 }  // namespace
 
@@ -184,12 +225,12 @@ void with_overflow_message(pkm_data* d, const double* xd, const double* tau, F&&
 }
 
 // The effort that drives the mechanism: the command less joint friction.
-void net_effort(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau, double* net) {
-  const drive::Params& dp = *m->drive;
+void net_effort(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
+                const double* tau, double* net) {
   const int n = d->ndof;
   for (int i = 0; i < n; ++i) net[i] = tau[i];
   if (!dp.any_friction) return;
-  double J[36], qd[6], f[6];
+  double J[36], qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
   m->robot->jacobians(*m->compiled, *d->rd, x, nullptr, nullptr, J);
   Eigen::Map<Vec>(qd, n) = Eigen::Map<const Mat>(J, n, n) * Eigen::Map<const Vec>(xd, n);
   drive::friction(dp, qd, f);
@@ -199,7 +240,12 @@ void net_effort(const pkm_model* m, pkm_data* d, const double* x, const double* 
 
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                             double* xdd) {
-  with_overflow_message(d, xd, tau, [&] { forward_dynamics_of(m, d, x, xd, tau, xdd); });
+  total_forward_dynamics(m, *m->drive, d, x, xd, tau, xdd);
+}
+
+void total_forward_dynamics(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x,
+                            const double* xd, const double* tau, double* xdd) {
+  with_overflow_message(d, xd, tau, [&] { forward_dynamics_of(m, dp, d, x, xd, tau, xdd); });
   require_finite_result(xdd, d->ndof, "the acceleration", xd, tau, d->ndof);
 }
 
@@ -210,7 +256,7 @@ bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const doub
   bool ok = false;
   with_overflow_message(d, xd, tau, [&] {
     double net[6];
-    net_effort(m, d, x, xd, tau, net);
+    net_effort(m, *m->drive, d, x, xd, tau, net);
     ok = m->robot->forward_dynamics_response(*m->compiled, *d->rd, x, xd, net, xdd, B);
   });
   if (!ok) return false;
@@ -221,10 +267,9 @@ bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const doub
 
 namespace {
 
-void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
-                         double* xdd) {
+void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
+                         const double* tau, double* xdd) {
   const RobotModel& rm = *m->compiled;
-  const drive::Params& dp = *m->drive;
   if (!dp.any_friction && !dp.any_rotor) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
     return;
@@ -233,7 +278,7 @@ void forward_dynamics_of(const pkm_model* m, pkm_data* d, const double* x, const
   // Friction and the velocity part of the rotor inertia force are efforts the actuator
   // spends before the mechanism sees any: the mechanism is driven by the net effort.
   Vec net(n);
-  net_effort(m, d, x, xd, tau, net.data());
+  net_effort(m, dp, d, x, xd, tau, net.data());
   if (!dp.any_rotor) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd);
     return;

@@ -4,6 +4,16 @@
 // offset, backlash at reversal, transmission compliance; and actuator/sensor delays
 // (applied by the integrator, which keeps the history).
 //
+// Backlash and compliance have two models.  By default (drive.two_body = 0) they are the
+// readings' quasi-static model: the drive-side encoder reads q + gap/2 by the side the
+// carried effort pushes + compliance x that effort, the mechanism moving as one body.
+// With drive.two_body = 1 a joint that has a gap or a compliance is two bodies: the drive
+// (its rotor inertia, its friction, the command) and the carriage (the robot's joint),
+// joined by a spring of stiffness 1 / compliance with a dead band of the gap and damping
+// <j>[i].transmission_damping; the contact side is wherever the transmitted force puts
+// it, and the encoder reads the drive body.  The integrator (pkm_sim) carries the drive
+// bodies' positions and rates as states of its own.
+//
 // Rigid-body robots implement only their mechanics; every entry point of the C API
 // and the integrator go through the total_* functions here, so a drive effect is
 // modelled once for all robots and all its users (core, FMU, Python).
@@ -33,11 +43,15 @@ struct Params {
   double compliance[kMaxJoints] = {};   // transmission deflection per effort [m/N | rad/(N m)]
   double dead_zone[kMaxJoints] = {};    // drive dead band: |u| <= u0 gives 0, else u - u0 sgn(u) [N | N m]
   double coulomb_v[kMaxJoints] = {};    // velocity scale of this joint's Coulomb sign; 0: v_eps [m/s | rad/s]
+  double transmission_damping[kMaxJoints] = {};  // two-body transmission damping in contact [N s/m | N m s/rad]
   double v_eps = 1e-4;                  // velocity scale of the friction's smooth sign [m/s | rad/s]
   double f_eps = 0.01;                  // effort scale of the backlash side's smooth sign [N | N m]
   double actuator_delay = 0;            // [s]
   double sensor_delay = 0;              // [s]
+  bool two_body = false;                // drive.two_body: gaps and compliances as two bodies (above)
   bool any_friction = false, any_rotor = false;
+  // Joint i is two bodies: drive.two_body and a gap or a compliance on it.
+  bool two_body_joint(int i) const { return two_body && (backlash[i] > 0 || compliance[i] > 0); }
 };
 
 // Friction of joint i at velocity v:
@@ -59,6 +73,13 @@ double smooth_sign(double v, double eps);
 // Joint friction efforts f[nd] at joint velocities qd[nd] (opposing the motion when
 // subtracted from the actuator effort).
 void friction(const Params& p, const double* qd, double* f);
+// The carriage side of a two-body drive layer: the same parameters with the friction
+// and rotor inertia of every two-body joint removed (they act on its drive body).
+std::shared_ptr<const Params> carriage_side(const Params& p);
+// Effort a two-body joint's transmission carries at the drive-to-carriage deflection
+// delta = theta - q and its rate: k dz(delta) + c delta_dot in contact, 0 inside the gap
+// (k = 1 / compliance, dz the dead band of half-width backlash / 2).
+double transmitted_effort(const Params& p, int i, double delta, double delta_dot);
 
 }  // namespace drive
 
@@ -68,6 +89,9 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
                             const double* xdd, double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* tau, double* xdd);
+// The same with the drive parameters dp instead of the model's (pkm_sim: the carriage side).
+void total_forward_dynamics(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x,
+                            const double* xd, const double* tau, double* xdd);
 // The same with B = d xdd / d tau (row-major nd x nd) when the robot offers it cheaply
 // and the drive has no rotor inertia; false otherwise (outputs untouched).
 bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const double* x, const double* xd,

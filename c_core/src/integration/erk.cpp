@@ -69,7 +69,7 @@ constexpr Tableau kBS32{4,
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
-constexpr int kMaxN = 12;
+constexpr int kMaxN = 24;  // 4 x 6: pose, rates, and the drive bodies of two-body joints
 
 // Cubic Hermite interpolant of a step at theta in [0, 1].
 void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
@@ -83,7 +83,7 @@ void hermite(int n, double theta, double h, const double* y0, const double* f0, 
 
 bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, double* B) {
   const int n = nd_;
-  for (int i = 0; i < 2 * n; ++i)
+  for (int i = 0; i < ny_; ++i)
     if (!std::isfinite(y[i])) {
       cb_status_ = PKM_ERR_INTEGRATION;
       cb_time_ = t;
@@ -94,9 +94,9 @@ bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, doubl
   try {
     static const double zero[6] = {0, 0, 0, 0, 0, 0};
     if (!tau) tau = zero;
-    if (!B || !total_forward_dynamics_response(model_, data_, y, y + n, tau, f + n, B)) {
+    if (!B || !two_.empty() || !total_forward_dynamics_response(model_, data_, y, y + n, tau, f + n, B)) {
       if (B) reuse_input_ = false;  // this robot or drive has no cheap response: call FD each time
-      total_forward_dynamics(model_, data_, y, y + n, tau, f + n);
+      dynamics(y, tau, f);
     }
   } catch (const Error& e) {
     cb_status_ = e.status;
@@ -107,7 +107,7 @@ bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, doubl
       return false;
     throw Error(e.status, cb_msg_ + " at t = " + num(t) + " s");
   }
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < ny_ - n; ++i)
     if (!std::isfinite(f[n + i])) {
       cb_status_ = PKM_ERR_SINGULAR;
       cb_time_ = t;
@@ -137,7 +137,7 @@ void Sim::erk_stage(const double* F, const double* B, double* f) const {
 // Hairer, Norsett and Wanner's starting step (Solving ODEs I, II.4): from the sizes of y,
 // f and an estimate of f's change, capped by the segment and max_step.
 double Sim::erk_initial_step(double t_end, const double* f0) {
-  const int n2 = 2 * nd_;
+  const int n2 = ny_;
   double d0 = 0, d1 = 0;
   for (int i = 0; i < n2; ++i) {
     const double sc = opt_.atol + opt_.rtol * std::fabs(y_[i]);
@@ -148,7 +148,7 @@ double Sim::erk_initial_step(double t_end, const double* f0) {
   d1 = std::sqrt(d1 / n2);
   double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
   h0 = std::min(h0, t_end - t_);
-  double y1[kMaxN], f1[kMaxN];
+  double y1[kMaxN] = {}, f1[kMaxN];
   for (int i = 0; i < n2; ++i) y1[i] = y_[i] + h0 * f0[i];
   double h1;
   if (!erk_rhs(t_ + h0, y1, f1, applied_.data())) {
@@ -186,7 +186,7 @@ void Sim::erk_guard(const double* y, double* g, double& det, double& bound) {
 
 void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, const double* y1, const double* f1,
                    double det0) {
-  const int n2 = 2 * nd_;
+  const int n2 = ny_;
   double y[kMaxN], g[64];
   // violated(theta): some stop margin <= 0 or det J of the other sign than at the start.
   auto violated = [&](double theta, int* which, bool* crossed) {
@@ -246,7 +246,7 @@ void Sim::erk_segment(double t_end) {
     t_ = t_end;
     return;
   }
-  const int n2 = 2 * nd_;
+  const int n2 = ny_;
   cb_status_ = 0;
   cb_msg_.clear();
   const Tableau& tb = opt_.method == PKM_ERK23 ? kBS32 : kDP54;
@@ -398,19 +398,20 @@ void Sim::erk_segment(double t_end) {
 // ------------------------------------------------------------------------ state
 
 size_t Sim::state_size() const {
-  // version, nd, t, y[2 nd], tau[nd], h_next, history count, history entries (1 + nd each)
+  // version, nd, t, y[ny] (2 nd; 4 nd with drive bodies), tau[nd], h_next, history count,
+  // history entries (1 + nd each)
   size_t needed = 0;
   for (size_t k = 0; k < history_.size(); ++k)
     if (k + 1 == history_.size() || history_[k + 1].s > t_ - delay_) ++needed;
-  return 5 + 3 * (size_t)nd_ + needed * (1 + (size_t)nd_);
+  return 5 + (size_t)ny_ + (size_t)nd_ + needed * (1 + (size_t)nd_);
 }
 
 void Sim::state_save(double* b) const {
   size_t k = 0;
-  b[k++] = 1.0;  // layout version
+  b[k++] = two_.empty() ? 1.0 : 2.0;  // layout version: 2 with the drive bodies' states
   b[k++] = nd_;
   b[k++] = t_;
-  for (int i = 0; i < 2 * nd_; ++i) b[k++] = y_[i];
+  for (int i = 0; i < ny_; ++i) b[k++] = y_[i];
   for (int i = 0; i < nd_; ++i) b[k++] = tau_[i];
   b[k++] = h_next_;
   // Only the commands that can still act at or after t (the last one issued before
@@ -430,24 +431,28 @@ void Sim::state_save(double* b) const {
 
 void Sim::state_load(const double* b, size_t n) {
   PKM_REQUIRE(b != nullptr, PKM_ERR_ARGUMENT, "state: buffer is NULL");
-  PKM_REQUIRE(n >= 5 + 3 * (size_t)nd_ && b[0] == 1.0 && b[1] == nd_, PKM_ERR_ARGUMENT,
-          "state: not a pkm_sim state of this robot (layout version 1, " + std::to_string(nd_) + " joints)");
+  const double version = two_.empty() ? 1.0 : 2.0;
+  const size_t ny = (size_t)ny_, nd = (size_t)nd_;
+  PKM_REQUIRE(n >= 5 + ny + nd && b[0] == version && b[1] == nd_, PKM_ERR_ARGUMENT,
+          "state: not a pkm_sim state of this robot and drive layer (layout version " + num(version) + ", " +
+              std::to_string(nd_) + " joints)");
   for (size_t k = 0; k < n; ++k)
     PKM_REQUIRE(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "state: entry " + std::to_string(k) + " is not finite");
-  const double nh_value = b[4 + 3 * nd_];
+  const double nh_value = b[4 + ny + nd];
   PKM_REQUIRE(nh_value >= 0 && nh_value < 1e9 && nh_value == std::floor(nh_value), PKM_ERR_ARGUMENT,
           "state: a history length of " + num(nh_value) + " entries is not a count");
   const size_t nh = (size_t)nh_value;
-  PKM_REQUIRE(n == 5 + 3 * (size_t)nd_ + nh * (1 + (size_t)nd_), PKM_ERR_ARGUMENT,
+  PKM_REQUIRE(n == 5 + ny + nd + nh * (1 + nd), PKM_ERR_ARGUMENT,
           "state: " + std::to_string(n) + " values do not match the history length it declares");
-  PKM_REQUIRE(b[3 + 3 * nd_] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
+  PKM_REQUIRE(b[3 + ny + nd] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
   const double t = b[2];
   std::vector<double> x(b + 3, b + 3 + nd_), xd(b + 3 + nd_, b + 3 + 2 * nd_);
   reset(t, x.data(), xd.data());  // checks the state as any reset does; clears h_next_
-  for (int i = 0; i < nd_; ++i) tau_[i] = b[3 + 2 * nd_ + i];
-  h_next_ = b[3 + 3 * nd_];
+  for (size_t i = 2 * nd; i < ny; ++i) y_[i] = b[3 + i];  // the drive bodies as saved
+  for (int i = 0; i < nd_; ++i) tau_[i] = b[3 + ny + i];
+  h_next_ = b[3 + ny + nd];
   history_.clear();
-  size_t k = 5 + 3 * (size_t)nd_;
+  size_t k = 5 + ny + nd;
   for (size_t j = 0; j < nh; ++j) {
     Command c{};
     c.s = b[k++];

@@ -59,6 +59,15 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
         for (int i = 0; i < nd; ++i) qm[i] = q[i];
       }
       for (int i = 0; i < nd; ++i) qdm[i] = qd[i];
+      if (measure && sim.two_body()) {
+        // The encoder of a two-body joint reads its drive body (the reading model's gap and
+        // compliance are the bodies' physics there).
+        const pkm::drive::Params& dp = *m->drive;
+        double th[6], thd[6];
+        sim.drive_state(th, thd);
+        for (int i = 0; i < nd; ++i)
+          if (dp.two_body_joint(i)) qm[i] = th[i] + dp.encoder_offset[i], qdm[i] = thd[i];
+      }
       sim.delayed_reading(t_k, qm, qdm);  // sensor.delay: the readings of t_k - delay
       for (int i = 0; i < nd; ++i) {
         if (q_noise) qm[i] += q_noise[k * nd + i];

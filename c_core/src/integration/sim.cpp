@@ -109,7 +109,12 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     PKM_REQUIRE(data_ != nullptr, PKM_ERR_INTERNAL, "out of memory creating the work data");
     rm_ = &prepare(model_, data_);
     rd_ = data_->rd.get();
-    const int n2 = 2 * nd_;
+    if (model_->drive)
+      for (int i = 0; i < nd_; ++i)
+        if (model_->drive->two_body_joint(i)) two_.push_back(i);
+    if (!two_.empty()) carriage_ = drive::carriage_side(*model_->drive);
+    ny_ = two_.empty() ? 2 * nd_ : 4 * nd_;
+    const int n2 = ny_;
 
     y_.assign(n2, 0.0);
     PKM_REQUIRE(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
@@ -117,10 +122,14 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     applied_.assign(nd_, 0.0);
     fsal_f_.assign(n2, 0.0);
     fsal_B_.assign((size_t)nd_ * nd_, 0.0);
-    reuse_input_ = explicit_method();
+    reuse_input_ = explicit_method() && two_.empty();  // a two-body joint's effort depends on the state
     delay_ = model_->drive ? model_->drive->actuator_delay : 0.0;
     q_.assign(nd_, 0.0);
     robot_->home(*rm_, y_.data());
+    if (!two_.empty()) {  // the drive bodies at their joints, at rest
+      robot_->ik(*rm_, *rd_, y_.data(), q_.data());
+      for (int i : two_) y_[2 * nd_ + i] = q_[i];
+    }
     if (opt_.sing_min > 0) {
       double meas[2];
       try {
@@ -256,7 +265,7 @@ int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
   const double* Y = N_VGetArrayPointer(y);
   double* F = N_VGetArrayPointer(ydot);
   const int n = s.nd_;
-  for (int i = 0; i < 2 * n; ++i) {
+  for (int i = 0; i < s.ny_; ++i) {
     if (!std::isfinite(Y[i])) {
       s.cb_status_ = PKM_ERR_INTEGRATION;
       s.cb_time_ = t;
@@ -265,9 +274,8 @@ int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
     }
   }
   try {
-    for (int i = 0; i < n; ++i) F[i] = Y[n + i];
-    // Mechanics plus the drive layer (joint friction, rotor inertia).
-    total_forward_dynamics(s.model_, s.data_, Y, Y + n, s.applied_.data(), F + n);
+    // Mechanics plus the drive layer (joint friction, rotor inertia, two-body joints).
+    s.dynamics(Y, s.applied_.data(), F);
   } catch (const Error& e) {
     s.cb_status_ = e.status;
     s.cb_time_ = t;
@@ -284,7 +292,7 @@ int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
     s.cb_msg_ = "forward dynamics: unknown exception";
     return -1;
   }
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < s.ny_ - n; ++i) {
     if (!std::isfinite(F[n + i])) {
       s.cb_status_ = PKM_ERR_SINGULAR;
       s.cb_time_ = t;
@@ -293,6 +301,69 @@ int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
     }
   }
   return 0;
+}
+
+void Sim::dynamics(const double* y, const double* u, double* f) {
+  const int n = nd_;
+  for (int i = 0; i < n; ++i) f[i] = y[n + i];
+  if (two_.empty()) {
+    total_forward_dynamics(model_, data_, y, y + n, u, f + n);
+    return;
+  }
+  // Two-body joints: the carriage feels the transmitted effort, the drive body the command
+  // less that effort and its own friction.
+  double q[6], qd[6], eff[6], fr[6];
+  joints_of(y, q, qd);
+  const drive::Params& dp = *model_->drive;
+  const double* th = y + 2 * n;
+  const double* thd = y + 3 * n;
+  for (int i = 0; i < n; ++i) eff[i] = u[i];
+  drive::friction(dp, thd, fr);
+  for (int i = 0; i < n; ++i) f[2 * n + i] = 0.0, f[3 * n + i] = 0.0;
+  for (int i : two_) {
+    const double t = drive::transmitted_effort(dp, i, th[i] - q[i], thd[i] - qd[i]);
+    eff[i] = t;
+    f[2 * n + i] = thd[i];
+    f[3 * n + i] = (u[i] - t - fr[i]) / dp.rotor[i];
+  }
+  total_forward_dynamics(model_, *carriage_, data_, y, y + n, eff, f + n);
+}
+
+void Sim::joints_of(const double* y, double* q, double* qd) {
+  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
+  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+  const int n = nd_;
+  double J[36];
+  robot_->ik(*rm_, *rd_, y, q);
+  robot_->jacobians(*rm_, *rd_, y, nullptr, nullptr, J);
+  Eigen::Map<Vec>(qd, n) = Eigen::Map<const Mat>(J, n, n) * Eigen::Map<const Vec>(y + n, n);
+}
+
+void Sim::acceleration(const double* tau, double* xdd) {
+  check_finite(tau, nd_, "acceleration: tau");
+  double u[6], f[24];
+  if (model_->drive)
+    actuator_effort(*model_->drive, tau, u);
+  else
+    for (int i = 0; i < nd_; ++i) u[i] = tau[i];
+  dynamics(y_.data(), u, f);
+  for (int i = 0; i < nd_; ++i) xdd[i] = f[nd_ + i];
+}
+
+void Sim::drive_state(double* theta, double* theta_d) {
+  const int n = nd_;
+  if (two_.size() < (size_t)n) {
+    double q[6], qd[6];
+    joints_of(y_.data(), q, qd);
+    for (int i = 0; i < n; ++i) {
+      if (theta) theta[i] = q[i];
+      if (theta_d) theta_d[i] = qd[i];
+    }
+  }
+  for (int i : two_) {
+    if (theta) theta[i] = y_[2 * n + i];
+    if (theta_d) theta_d[i] = y_[3 * n + i];
+  }
 }
 
 void Sim::roots(const double* y, double* g) {
@@ -387,7 +458,7 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   PKM_REQUIRE(std::isfinite(t0), PKM_ERR_ARGUMENT, "reset: t0 = " + num(t0) + " is not finite");
   check_finite(x, nd_, "reset: pose x");
   check_finite(xd, nd_, "reset: pose velocity xd");
-  std::vector<double> y(2 * nd_);
+  std::vector<double> y(ny_, 0.0);
   for (int i = 0; i < nd_; ++i) {
     y[i] = x[i];
     y[nd_ + i] = xd[i];
@@ -418,6 +489,11 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   double kinetic = 0, potential = 0;
   try {
     total_energy(model_, data_, y.data(), y.data() + nd_, &kinetic, &potential);
+    if (!two_.empty()) {  // the drive bodies start at their joints, with their rates
+      double q[6], qd[6];
+      joints_of(y.data(), q, qd);
+      for (int i : two_) y[2 * nd_ + i] = q[i], y[3 * nd_ + i] = qd[i];
+    }
   } catch (const Error& e) {
     throw Error(e.status, std::string("reset: ") + e.what());
   }
@@ -509,9 +585,9 @@ void Sim::stop_inside(double t_start) {
     bool inside = true;
     for (int k = 0; k < nstop_; ++k) inside = inside && g_[k] > 0;
     if (inside) {
-      for (int i = 0; i < 2 * nd_; ++i) inside = inside && std::isfinite(b[i]);
+      for (int i = 0; i < ny_; ++i) inside = inside && std::isfinite(b[i]);
       if (!inside) return;
-      for (int i = 0; i < 2 * nd_; ++i) y_[i] = b[i];
+      for (int i = 0; i < ny_; ++i) y_[i] = b[i];
       t_ = tb;
       return;
     }
@@ -544,9 +620,9 @@ void Sim::stop_before_singularity(double t_start) {
       hi = mid;
   }
   if (CVodeGetDky(cvode_, lo, 0, nv_back_) != CV_SUCCESS) return;
-  for (int i = 0; i < 2 * nd_; ++i)
+  for (int i = 0; i < ny_; ++i)
     if (!std::isfinite(b[i])) return;
-  for (int i = 0; i < 2 * nd_; ++i) y_[i] = b[i];
+  for (int i = 0; i < ny_; ++i) y_[i] = b[i];
   t_ = lo;
 }
 
@@ -677,7 +753,7 @@ void Sim::integrate(double t_end) {
     return;
   }
 
-  const int n2 = 2 * nd_;
+  const int n2 = ny_;
   double* v = N_VGetArrayPointer(nv_);
   for (int i = 0; i < n2; ++i) v[i] = y_[i];
   cb_status_ = 0;

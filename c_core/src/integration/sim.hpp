@@ -51,6 +51,12 @@ class Sim {
   // throws Error with the status and a message naming the leg and the time.
   void advance(double t_end);
   void get_state(double* t, double* x, double* xd) const;
+  // Drive-side position and rate per joint: the drive body's for a two-body joint
+  // (drive.two_body), the joint's own otherwise.
+  void drive_state(double* theta, double* theta_d);
+  bool two_body() const { return !two_.empty(); }
+  // Pose acceleration at the current state under the command tau (dead zone, saturation).
+  void acceleration(const double* tau, double* xdd);
   const pkm_sim_stats& stats() const { return stats_; }
   int ndof() const { return nd_; }
   bool explicit_method() const { return opt_.method == PKM_ERK || opt_.method == PKM_ERK23; }
@@ -102,6 +108,11 @@ class Sim {
   // The explicit Runge-Kutta path (integration/erk.cpp): one segment [t_, b] with a
   // constant applied effort, steps carried across advances through h_next_.
   void erk_segment(double b);
+  // The state's rates f(y) under the applied effort u: (xd, FD) and, for the two-body
+  // joints, (theta_d, theta_dd) with the transmission's effort driving the carriage.
+  void dynamics(const double* y, const double* u, double* f);
+  // The joints q and rates qd of the robot at state y (throws like the robot's IK).
+  void joints_of(const double* y, double* q, double* qd);
   // f = (xd, FD(y, tau)), tau nullptr: zero effort; with B != nullptr also B = d xdd / d tau
   // when the robot offers it (else reuse_input_ turns false).  false: a recoverable
   // failure (cb_*).
@@ -126,6 +137,9 @@ class Sim {
   const RobotModel* rm_ = nullptr;
   RobotData* rd_ = nullptr;
   int nd_ = 0;
+  int ny_ = 0;            // state length: 2 nd, or 4 nd with two-body joints (y = [x, xd, theta, theta_d])
+  std::vector<int> two_;  // the two-body joints (drive.two_body)
+  std::shared_ptr<const drive::Params> carriage_;  // the drive layer less the two-body joints' drive bodies
   pkm_sim_options opt_{};
 
   std::vector<JointLimit> limits_;
@@ -136,7 +150,7 @@ class Sim {
   int nroots_ = 0;  // nstop_ plus the det J sign root
 
   double t_ = 0.0;
-  std::vector<double> y_;    // state [x, xd], 2 nd
+  std::vector<double> y_;    // state [x, xd] (2 nd), then [theta, theta_d] of the drive bodies (2 nd) if any
   std::vector<double> tau_;      // held command (after saturation), nd
   std::vector<double> applied_;  // effort reaching the mechanism in the current segment, nd
 

@@ -61,6 +61,19 @@ int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd) {
   return PKM_OK;
 }
 
+int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d) {
+  if (!s) return PKM_ERR_ARGUMENT;
+  return guard_into(s->sim.error, [&] { s->sim.drive_state(theta, theta_d); });
+}
+
+int pkm_sim_acceleration(pkm_sim* s, const double* tau, double* xdd) {
+  if (!s) return PKM_ERR_ARGUMENT;
+  return guard_into(s->sim.error, [&] {
+    PKM_REQUIRE(tau != nullptr && xdd != nullptr, PKM_ERR_ARGUMENT, "acceleration: tau or xdd is NULL");
+    s->sim.acceleration(tau, xdd);
+  });
+}
+
 int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats) {
   if (!s || !stats) return PKM_ERR_ARGUMENT;
   *stats = s->sim.stats();
