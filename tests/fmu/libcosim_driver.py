@@ -3,7 +3,7 @@
 Run as its own process by ``test_libcosim.py`` (a crash of a native importer must not take
 pytest down):
 
-    python libcosim_driver.py <fmu> <out.json> <n_steps> <step_s>
+    python libcosim_driver.py <fmu> <out.json> <n_steps> <step_s> [tau0 (JSON)] [outputs (JSON)]
 
 The FMU runs as a Co-Simulation slave; the actuator efforts change at every step (held
 over the step by libcosim, as by any FMI master) through an override manipulator, and a
@@ -16,11 +16,12 @@ import sys
 import numpy as np
 
 
-def input_sequence(tau0, n, h):
-    """Actuator efforts [N] held over step k = 0..n-1: a gentle sweep around tau0."""
+def input_sequence(tau0, n, h, scale=0.05):
+    """Actuator efforts [N or N m] held over step k = 0..n-1: a gentle sweep around tau0
+    (``scale`` times a fixed pattern per joint)."""
     t = np.arange(n) * h
-    w = np.array([1.0, -0.7, 0.4, 0.8, -0.5, 0.3])
-    return tau0[None, :] + 0.05 * np.sin(2 * np.pi * 5.0 * t)[:, None] * w[None, :]
+    w = np.array([1.0, -0.7, 0.4, 0.8, -0.5, 0.3])[:len(tau0)]
+    return tau0[None, :] + scale * np.sin(2 * np.pi * 5.0 * t)[:, None] * w[None, :]
 
 
 OUTPUTS = ["x", "y", "z", "rx", "ry", "rz", "q[1]", "q[2]", "q[3]", "q[4]", "q[5]", "q[6]", "zd"]
@@ -38,9 +39,11 @@ def main(fmu_path, out_path, n, h):
     md = read_model_description(fmu_path)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     start = {v.name: float(v.start) for v in md.modelVariables if v.causality == "input"}
-    tau_names = [f"tau[{i}]" for i in range(1, 7)]
+    tau_names = [f"tau[{i}]" for i in range(1, len(start) + 1)]
     tau0 = np.array(json.loads(sys.argv[5])) if len(sys.argv) > 5 else np.array([start[n] for n in tau_names])
-    taus = input_sequence(tau0, n, h)
+    outputs = json.loads(sys.argv[6]) if len(sys.argv) > 6 else OUTPUTS
+    scale = float(sys.argv[7]) if len(sys.argv) > 7 else 0.05
+    taus = input_sequence(tau0, n, h, scale)
 
     step_ns = int(round(h * 1e9))
     exe = CosimExecution.from_step_size(step_ns)
@@ -52,7 +55,7 @@ def main(fmu_path, out_path, n, h):
     exe.add_manipulator(man)
     obs = CosimObserver.create_last_value()
     exe.add_observer(obs)
-    out_refs = [vr[n] for n in OUTPUTS]
+    out_refs = [vr[n] for n in outputs]
     tau_refs = [vr[n] for n in tau_names]
 
     rows = []
@@ -64,7 +67,7 @@ def main(fmu_path, out_path, n, h):
         rows.append(obs.last_real_values(idx, out_refs))
     exe.stop()
     with open(out_path, "w") as f:
-        json.dump({"outputs": OUTPUTS, "tau": taus.tolist(), "values": rows}, f)
+        json.dump({"outputs": outputs, "tau": taus.tolist(), "values": rows}, f)
 
 
 if __name__ == "__main__":
