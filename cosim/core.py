@@ -557,8 +557,7 @@ class Model:
     def chain_points(self, x):
         """Where each leg is at pose(s) x, for drawing: (..., nd, 3, 3) [m, world], per leg its
         base joint, its moving proximal joint (slider, elbow, cylinder end) and its platform
-        joint.  Robots compiled from a description (docs/robots.md); the robots written in
-        C++ raise ``UnsupportedError`` (``leg_points``, ``cosim.quattro.points``)."""
+        joint.  Every robot but the four-bar (``UnsupportedError`` there)."""
         return self._loop("pkm_chain_points", [x], ["x"], (self.ndof, 3, 3))
 
     def joint_velocity(self, x, xd):

@@ -30,35 +30,16 @@ class ReportError(ValueError):
 
 
 def _segments(model, x):
-    """Line segments (list of (3, 2) arrays [m]) and labelled point sets of the robot at pose x."""
-    if model.robot == "6pus":
-        P, S = model.leg_points(x)
-        lo, hi = model.joint_limits()
-        p = model.params()
-        segs = {"rails": [], "legs": [], "platform": []}
-        for i in range(6):
-            s0 = np.array([p[f"rail[{i + 1}].S0{c}"] for c in "xyz"])
-            u = np.array([p[f"rail[{i + 1}].s{c}"] for c in "xyz"])
-            segs["rails"].append(np.array([s0 + lo[i] * u, s0 + hi[i] * u]))
-            segs["legs"].append(np.array([S[i], P[i]]))
-        ring = np.vstack([P, P[:1]])
-        segs["platform"] = [ring]
-        return segs, {"sliders": S, "joints": P}
-    if model.robot == "quattro":
-        from ..quattro import points
-
-        pts = points(model, x)
-        A, B, C = pts["A"], pts["B"], pts["C"]
-        segs = {"arms": [np.array([A[i], B[i]]) for i in range(4)],
-                "forearms": [np.array([B[i], C[i]]) for i in range(4)],
-                "platform": [np.vstack([C, C[:1]])]}
-        return segs, {"motors": A, "elbows": B}
+    """Line segments (list of (3, 2) arrays [m]) and labelled point sets of the robot at pose x:
+    each leg's chain as the core gives it (``Model.chain_points``: base joint, moving joint,
+    platform joint), whatever the robot."""
     from .._native import UnsupportedError
 
-    try:  # a robot compiled from a description: its legs from the core
+    try:
         c = model.chain_points(x)
     except UnsupportedError:
-        raise ReportError(f"the report cannot draw robot {model.robot!r} (6pus, quattro, or a described robot)") from None
+        raise ReportError(f"the report cannot draw robot {model.robot!r}: the core gives no chain points for it "
+                          "(every robot but the four-bar has them)") from None
     segs = {"links": [np.array([c[i, 0], c[i, 1]]) for i in range(len(c))],
             "legs": [np.array([c[i, 1], c[i, 2]]) for i in range(len(c))],
             "platform": [np.vstack([c[:, 2], c[:1, 2]])]}

@@ -198,7 +198,7 @@ PKM_API int pkm_singularity(const pkm_model* m, pkm_data* d, const double* x,
 /* Where each leg's chain is at pose x, for drawing it: pts[nd,3,3], per leg its fixed base
  * joint (a rail's origin, an arm's axis point, a strut's base joint), its moving proximal
  * joint (the slider, the elbow, the cylinder's end) and its platform joint [m, world].
- * PKM_ERR_UNSUPPORTED for the robots written in C++ (they have their own calls). */
+ * Every robot but the four-bar (PKM_ERR_UNSUPPORTED there). */
 PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, double* pts);
 
 /* Velocity and acceleration kinematics. */

@@ -371,6 +371,18 @@ class Quattro final : public Robot {
       for (int j = 0; j < N; ++j) Jdot[i * N + j] = Jd(i, j);
   }
 
+  // Each arm's motor axis point A, elbow B and platform joint C (drawing; no range check).
+  void chain_points(const RobotModel& rm, RobotData&, const double* x, double* pts) const override {
+    const Model& m = static_cast<const Model&>(rm);
+    Pose p;
+    pose_kinematics(m, x, p, false);
+    for (int i = 0; i < N; ++i) {
+      const Eigen::Vector3d* rows[3] = {&m.A[i], &p.B[i], &p.C[i]};
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) pts[9 * i + 3 * r + k] = (*rows[r])[k];
+    }
+  }
+
   void singularity(const RobotModel& rm, RobotData&, const double* x, double* measures) const override {
     const Model& m = static_cast<const Model&>(rm);
     Pose p;

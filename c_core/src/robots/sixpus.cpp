@@ -195,6 +195,23 @@ std::unique_ptr<RobotModel> SixPus::compile(const std::vector<ParamSpec>& specs,
   return m;
 }
 
+// Each leg's rail origin S0, slider S and platform joint P at pose x (pts[6][3][3]).
+static void chain_of(const Model& sm, const double* x, double* pts) {
+  Frame f;
+  frame_of(x, f);
+  Leg legs[NLEG];
+  legs_at(sm, x, f, legs, Strokes::ignore);
+  for (int i = 0; i < NLEG; ++i) {
+    const V3 rows[3] = {sm.S0[i], sm.S0[i] + legs[i].q * sm.s[i], V3(x[0], x[1], x[2]) + legs[i].rP};
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) pts[9 * i + 3 * r + k] = rows[r][k];
+  }
+}
+
+void SixPus::chain_points(const RobotModel& rm, RobotData&, const double* x, double* pts) const {
+  chain_of(model_of(rm), x, pts);
+}
+
 void SixPus::home(const RobotModel& rm, double* x) const {
   const Model& m = model_of(rm);
   for (int k = 0; k < 6; ++k) x[k] = m.home[k];
@@ -256,18 +273,13 @@ int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x, double
     check_finite(x, 6, "pose x");
     check_out(P, "P");
     check_out(S, "S");
-    Frame f;
-    frame_of(x, f);
-    Leg legs[NLEG];
-    legs_at(sm, x, f, legs, Strokes::ignore);
-    for (int i = 0; i < NLEG; ++i) {
-      const V3 Pw = V3(x[0], x[1], x[2]) + legs[i].rP;
-      const V3 Sw = sm.S0[i] + legs[i].q * sm.s[i];
+    double pts[NLEG * 9];
+    chain_of(sm, x, pts);
+    for (int i = 0; i < NLEG; ++i)
       for (int k = 0; k < 3; ++k) {
-        P[3 * i + k] = Pw[k];
-        S[3 * i + k] = Sw[k];
+        S[3 * i + k] = pts[9 * i + 3 + k];
+        P[3 * i + k] = pts[9 * i + 6 + k];
       }
-    }
   });
 }
 

@@ -169,6 +169,7 @@ class SixPus final : public Robot {
   void jacobian_dot(const RobotModel&, RobotData&, const double* x, const double* xd,
                     double* Jdot) const override;
   void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
+  void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
   void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
