@@ -304,9 +304,10 @@ Description read_description(const std::string& text, const std::string& file) {
     if (j == Joint::rail || j == Joint::arm) {
       const double L = scalar("rod_length", "rod length between its two joints [m]", 1e-9, 1e300, "m");
       add(idx("leg", i, "L"), "m", "length of " + leg + " (rod between its two joints)", L, 1e-9, 1e3, line_of("rod_length"));
-      add(idx("leg", i, "px"), "m", "x of the platform attachment point of " + leg + ", platform frame", p[0], -1e3, 1e3, line_of("platform_point"));
-      add(idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + ", platform frame", p[1], -1e3, 1e3, line_of("platform_point"));
-      add(idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + ", platform frame", p[2], -1e3, 1e3, line_of("platform_point"));
+      const std::string frame = d.articulated ? ", axis frame (turns with the articulation)" : ", platform frame";
+      add(idx("leg", i, "px"), "m", "x of the platform attachment point of " + leg + frame, p[0], -1e3, 1e3, line_of("platform_point"));
+      add(idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + frame, p[1], -1e3, 1e3, line_of("platform_point"));
+      add(idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + frame, p[2], -1e3, 1e3, line_of("platform_point"));
       if (d.articulated) {
         std::vector<double> f0 = {0, 0, 0};
         if (t.find("platform_offset")) f0 = rd.numbers(*t.find("platform_offset"), "leg.platform_offset", 3);
@@ -385,10 +386,15 @@ Description read_description(const std::string& text, const std::string& file) {
     d.legs.push_back(l.type);
     d.leg_lines.push_back(t.line);
   }
-  add("platform.m", "kg", "platform mass (its centre of mass is the platform frame origin)", pm, 0, 1e6, pt.find("mass")->line);
-  add("platform.Ixx", "kg m2", "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, pt.find("inertia")->line);
-  add("platform.Iyy", "kg m2", "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, pt.find("inertia")->line);
-  add("platform.Izz", "kg m2", "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, pt.find("inertia")->line);
+  const bool art = d.articulated;
+  add("platform.m", "kg", art ? "platform mass, half on each end bar (articulated platform)"
+                              : "platform mass (its centre of mass is the platform frame origin)", pm, 0, 1e6, pt.find("mass")->line);
+  add("platform.Ixx", "kg m2", art ? "inertia turning with the articulation, about the axis-frame x axis (no effect: rz only)"
+                                   : "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, pt.find("inertia")->line);
+  add("platform.Iyy", "kg m2", art ? "inertia turning with the articulation, about the axis-frame y axis (no effect: rz only)"
+                                   : "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, pt.find("inertia")->line);
+  add("platform.Izz", "kg m2", art ? "inertia about the articulation (a geared tool: ratio^2 x its inertia)"
+                                   : "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, pt.find("inertia")->line);
   if (d.articulated) {
     auto field = [&](const char* key, const char* what) -> const toml::Value& { return rd.need(pt, key, "platform", what); };
     const double ang = rd.number(field("axis_angle", "direction of the end-to-end axis at rz = 0, from x [rad]"), "platform.axis_angle");
@@ -402,9 +408,9 @@ Description read_description(const std::string& text, const std::string& file) {
     add("platform.cz", "m", "platform centre from the pose point, vertical", c[2], -1e3, 1e3, pt.find("centre")->line);
   }
   add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pt.line);
-  add("payload.x", "m", "x of the payload in the platform frame", pay_c[0], -1e3, 1e3, pt.line);
-  add("payload.y", "m", "y of the payload in the platform frame", pay_c[1], -1e3, 1e3, pt.line);
-  add("payload.z", "m", "z of the payload in the platform frame", pay_c[2], -1e3, 1e3, pt.line);
+  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pt.line);
+  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pt.line);
+  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pt.line);
   add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, pt.line);
   add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, pt.line);
   add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, pt.line);
