@@ -216,13 +216,18 @@ class CoreDrive:
     def read(self, y, tau):
         """Encoder readings and rates from a plant's outputs ``y`` under the applied effort:
         the reading model, and on two-body joints the drive body (plus the encoder offset)."""
-        q, qd = self.measure(y.x, y.xd, tau), np.array(y.qd, float)
-        if y.drive is not None:
+        return self.with_drive_bodies(self.measure(y.x, y.xd, tau), y.qd, y.drive)
+
+    def with_drive_bodies(self, q, qd, drive):
+        """Readings ``q`` and rates ``qd`` with the two-body joints' replaced by their drive
+        bodies ``drive = (theta, theta_d)`` (plus the encoder offset); unchanged if None."""
+        q, qd = np.array(q, float), np.array(qd, float)
+        if drive is not None:
             two = self.two_body_joints()
             pre = self.model.facts.joint_prefix
             off = np.array([self.model.param(f"{pre}[{i + 1}].encoder_offset") for i in range(self.ndof)])
-            q[two] = y.drive[0][two] + off[two]
-            qd[two] = y.drive[1][two]
+            q[two] = drive[0][two] + off[two]
+            qd[two] = drive[1][two]
         return q, qd
 
 
