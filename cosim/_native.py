@@ -213,6 +213,8 @@ _SIGNATURES = {
     "pkm_actuator_effort": (I, [P, P, D, D]),
     "pkm_actuator_effort_batch": (I, [P, P, S, D, D, c_int_p]),
     "pkm_measure_joints": (I, [P, P, D, D, D, D]),
+    "pkm_sensor_readings": (I, [P, P, D, D, D, D, D, D, D]),
+    "pkm_model_two_body_joints": (I, [P]),
     "pkm_measure_joints_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
     "pkm_sim_default_options": (None, [C.POINTER(pkm_sim_options)]),
     "pkm_sim_create": (P, [P, C.POINTER(pkm_sim_options), C.c_char_p, S]),

@@ -623,6 +623,23 @@ class Model:
         return self._batch_or_loop("pkm_measure_joints_batch", "pkm_measure_joints", [x, xd, tau],
                                    ["x", "xd", "tau"], times, what)
 
+    def sensor_readings(self, x, xd, tau, drive=None):
+        """``(q, qd)``: the sensors' joint readings and rates at one state (x, xd) [m, rad] under
+        the applied effort tau (``pkm_sensor_readings``): :meth:`measure_joints` and the joint
+        rates, and on a joint that is two bodies, given ``drive = (theta, theta_d)`` (e.g.
+        ``Simulator.drive_state``), its drive body plus the encoder offset, and its rate."""
+        v = [np.ascontiguousarray(a, dtype=np.float64) for a in (x, xd, tau)]
+        th, thd = (None, None) if drive is None else (np.ascontiguousarray(a, dtype=np.float64) for a in drive)
+        q, qd = np.empty(self.ndof), np.empty(self.ndof)
+        self._check(lib.pkm_sensor_readings(self._m, self._d, *(ptr(a) for a in v), ptr(th), ptr(thd), ptr(q),
+                                            ptr(qd)))
+        return q, qd
+
+    def two_body_joints(self) -> int:
+        """How many joints are two bodies (``drive.two_body = 1`` and a backlash or a compliance
+        on them; docs/integration.md)."""
+        return int(lib.pkm_model_two_body_joints(self._m))
+
     def actuator_effort(self, tau_cmd, times=None, what="item"):
         """Effort reaching the mechanism for a commanded one, shape (..., nd) (``pkm_actuator_effort``:
         dead zone, saturation).  A failing row is named in the error (with its time from

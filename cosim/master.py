@@ -146,7 +146,7 @@ class CorePlant(Plant):
         t, x, xd = self.sim.state
         q = self.model.ik(x)
         qd = self.model.joint_velocity(x, xd)
-        drive = self.sim.drive_state if self.model.param("drive.two_body") == 1 else None
+        drive = self.sim.drive_state if self.model.two_body_joints() else None
         return PlantOutputs(q, qd, x, xd, drive)
 
     def describe(self):
@@ -204,31 +204,13 @@ class CoreDrive:
         """Encoder readings [m or rad] at (x, xd) under the applied effort tau."""
         return self.model.measure_joints(np.asarray(x, float), np.asarray(xd, float), np.asarray(tau, float))
 
-    def two_body_joints(self) -> np.ndarray:
-        """Boolean per joint: a drive body of its own (``drive.two_body`` and a backlash or a
-        compliance on it), whose encoder reads the drive body instead of the reading model."""
-        m, pre = self.model, self.model.facts.joint_prefix
-        if m.param("drive.two_body") != 1:
-            return np.zeros(self.ndof, bool)
-        return np.array([m.param(f"{pre}[{i + 1}].backlash") > 0 or m.param(f"{pre}[{i + 1}].compliance") > 0
-                         for i in range(self.ndof)])
-
     def read(self, y, tau):
         """Encoder readings and rates from a plant's outputs ``y`` under the applied effort:
-        the reading model, and on two-body joints the drive body (plus the encoder offset)."""
-        return self.with_drive_bodies(self.measure(y.x, y.xd, tau), y.qd, y.drive)
-
-    def with_drive_bodies(self, q, qd, drive):
-        """Readings ``q`` and rates ``qd`` with the two-body joints' replaced by their drive
-        bodies ``drive = (theta, theta_d)`` (plus the encoder offset); unchanged if None."""
-        q, qd = np.array(q, float), np.array(qd, float)
-        if drive is not None:
-            two = self.two_body_joints()
-            pre = self.model.facts.joint_prefix
-            off = np.array([self.model.param(f"{pre}[{i + 1}].encoder_offset") for i in range(self.ndof)])
-            q[two] = drive[0][two] + off[two]
-            qd[two] = drive[1][two]
-        return q, qd
+        the reading model, and on a two-body joint its drive body (``y.drive``; the core's
+        ``pkm_sensor_readings``)."""
+        if y.drive is None or not self.model.two_body_joints():
+            return self.measure(y.x, y.xd, tau), y.qd
+        return self.model.sensor_readings(y.x, y.xd, tau, y.drive)
 
 
 class FMUPlant(Plant):
@@ -390,9 +372,8 @@ class FMUPlant(Plant):
 
     def outputs(self):
         g = self.fmu.getReal
-        drive = None
-        if self.vr_drive is not None and float(self.parameters.get("drive.two_body", 0.0)) == 1.0:
-            drive = (np.array(g(self.vr_drive[0])), np.array(g(self.vr_drive[1])))
+        # the drive side (its joints' own values unless a joint is two bodies)
+        drive = None if self.vr_drive is None else (np.array(g(self.vr_drive[0])), np.array(g(self.vr_drive[1])))
         return PlantOutputs(np.array(g(self.vr["q"])), np.array(g(self.vr["qd"])), np.array(g(self.vr["x"])),
                             np.array(g(self.vr["xd"])), drive)
 

@@ -186,7 +186,7 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     from ..master import CoreDrive
 
     line = CoreDrive(plant)
-    two_body = bool(line.two_body_joints().any())  # drive bodies: the encoders read them (pkm_sim_drive_state)
+    two_body = plant.two_body_joints() > 0  # drive bodies: the encoders read them (pkm_sim_drive_state)
     out = {k: np.zeros((n, nd)) for k in ("q", "qd", "tau", "pose", "x", "xd", "q_true")}
     meas = np.zeros((n, nd))  # true sensor readings (before delay and noise)
     qd_true = np.zeros((n, nd))
@@ -211,7 +211,7 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         qd_true[k] = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
         qd_read = qd_true[k]
         if two_body:
-            meas[k], qd_read = line.with_drive_bodies(meas[k], qd_true[k], sim.drive_state)
+            meas[k], qd_read = plant.sensor_readings(x, xd, tau_now, sim.drive_state)
         qr, qdr = line.delayed(float(t[k]), meas[k], qd_read)  # sensor.delay, as in the core's loop
         if np.any(sig["q"]):
             qr = qr + rng.normal(size=nd) * sig["q"]

@@ -69,24 +69,6 @@ static const double* effort(fmu_plant* p) {
   return p->tau_eff;
 }
 
-/* A joint is two bodies (the drive body is a state of the integrator): drive.two_body = 1
- * and a backlash or a compliance on it (pkm.h, drive and sensors). */
-static int two_body(const fmu_plant* p) {
-  int k = pkm_param_index(p->m, "drive.two_body");
-  if (k < 0 || pkm_param_get(p->m, k) != 1.0) return 0;
-  const char* pre = pkm_model_joint_prefix(p->m);
-  char name[96];
-  for (int i = 0; i < p->nd; ++i) {
-    const char* keys[2] = {"backlash", "compliance"};
-    for (int j = 0; j < 2; ++j) {
-      snprintf(name, sizeof name, "%s[%d].%s", pre, i + 1, keys[j]);
-      int idx = pkm_param_index(p->m, name);
-      if (idx >= 0 && pkm_param_get(p->m, idx) > 0) return 1;
-    }
-  }
-  return 0;
-}
-
 static void set_starts(fmu_plant* p) {
   pkm_sim_default_options(&p->opt);
   p->input_gain = 1.0;
@@ -268,7 +250,7 @@ static int ensure(fmu_plant* p, unsigned bit, const char* what) {
       if ((s = pkm_joint_velocity(p->m, p->d, p->x, p->xd, p->qd))) return core_fail(p, s, "joint velocity");
       break;
     case V_ACC:
-      if (two_body(p) && p->cs && p->sim && p->started) {
+      if (pkm_model_two_body_joints(p->m) > 0 && p->cs && p->sim && p->started) {
         /* the carriages feel what the transmissions carry: the integrator's own rates */
         if ((s = pkm_sim_acceleration(p->sim, effort(p), p->xdd)))
           return fail(p, s, "acceleration at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
@@ -387,7 +369,7 @@ static int apply(fmu_plant* p) {
 
   /* Two-body joints carry states of the integrator's own (the drive bodies): Model
    * Exchange exposes the pose states only. */
-  if (!p->cs && two_body(p))
+  if (!p->cs && pkm_model_two_body_joints(p->m) > 0)
     return fail(p, PKM_ERR_PARAMETER,
                 "drive.two_body = 1 with a backlash or a compliance set: the drive bodies are states of the "
                 "Co-Simulation FMU's own integrator, and Model Exchange has the pose states only; use Co-Simulation, "

@@ -274,6 +274,16 @@ PKM_API int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n,
  * and the transmission deflects by compliance c. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, const double* tau, double* q_meas);
+/* Readings and rates of the sensors at (x, xd) with applied effort tau[nd]: pkm_measure_joints's
+ * readings and the joint rates (qd_meas may be NULL); on a joint that is two bodies
+ * (drive.two_body), given its drive body theta, theta_d (pkm_sim_drive_state; either may be
+ * NULL), the encoder reads theta + encoder_offset and the rate theta_d. */
+PKM_API int pkm_sensor_readings(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* tau, const double* theta, const double* theta_d,
+                                double* q_meas, double* qd_meas);
+/* Number of joints that are two bodies: drive.two_body = 1 and a backlash or a compliance on
+ * them (0 for a model without). */
+PKM_API int pkm_model_two_body_joints(const pkm_model* m);
 PKM_API int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n,
                                      const double* x, const double* xd, const double* tau,
                                      double* q_meas, int* status);

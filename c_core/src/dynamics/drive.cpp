@@ -351,6 +351,26 @@ void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_
   }
 }
 
+void sensor_readings(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                     const double* theta, const double* theta_d, double* q_meas, double* qd_meas) {
+  const drive::Params& dp = *m->drive;
+  const int n = d->ndof;
+  measure_joints(m, d, x, xd, tau, q_meas);
+  if (qd_meas) {
+    double J[36];
+    m->robot->jacobians(*m->compiled, *d->rd, x, nullptr, nullptr, J);
+    for (int i = 0; i < n; ++i) {
+      qd_meas[i] = 0;
+      for (int j = 0; j < n; ++j) qd_meas[i] += J[i * n + j] * xd[j];
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!dp.two_body_joint(i)) continue;
+    if (theta) q_meas[i] = theta[i] + dp.encoder_offset[i];
+    if (theta_d && qd_meas) qd_meas[i] = theta_d[i];
+  }
+}
+
 void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                     double* q_meas) {
   const RobotModel& rm = *m->compiled;

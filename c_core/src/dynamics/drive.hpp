@@ -106,5 +106,10 @@ void actuator_effort(const drive::Params& p, const double* tau_cmd, double* tau_
 // effort the transmission carries: tau less the drive's friction and rotor inertia force.
 void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                     double* q_meas);
+// Readings and rates of the sensors: measure_joints's readings and the joint rates, and on a
+// two-body joint, when its drive body (theta, theta_d) is given, that body's position plus
+// the encoder offset and its rate (the encoder sits on the drive body).
+void sensor_readings(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                     const double* theta, const double* theta_d, double* q_meas, double* qd_meas);
 
 }  // namespace pkm

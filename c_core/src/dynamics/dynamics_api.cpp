@@ -113,6 +113,27 @@ int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x, const d
   });
 }
 
+int pkm_sensor_readings(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
+                        const double* theta, const double* theta_d, double* q_meas, double* qd_meas) {
+  return guard(d, [&] {
+    prepare(m, d);
+    check_finite(x, d->ndof, "pose x");
+    check_finite(xd, d->ndof, "pose velocity xd");
+    check_finite(tau, d->ndof, "applied effort tau");
+    if (theta) check_finite(theta, d->ndof, "drive body position theta");
+    if (theta_d) check_finite(theta_d, d->ndof, "drive body rate theta_d");
+    check_out(q_meas, "q_meas");
+    sensor_readings(m, d, x, xd, tau, theta, theta_d, q_meas, qd_meas);
+  });
+}
+
+int pkm_model_two_body_joints(const pkm_model* m) {
+  if (!m || !m->drive) return 0;
+  int n = 0;
+  for (int i = 0; i < m->drive->nd; ++i) n += m->drive->two_body_joint(i) ? 1 : 0;
+  return n;
+}
+
 int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n, const double* tau_cmd,
                               double* tau_applied, int* status) {
   const int nd = d ? d->ndof : 0;

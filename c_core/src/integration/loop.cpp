@@ -52,21 +52,15 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
       if (st == PKM_OK) st = pkm_joint_velocity(m, d, x, xd, qd);
       if (st != PKM_OK) throw Error(st, std::string("plant outputs: ") + pkm_data_error(d));
       double qm[6], qdm[6];
+      for (int i = 0; i < nd; ++i) qm[i] = q[i], qdm[i] = qd[i];
       if (measure) {
-        st = pkm_measure_joints(m, d, x, xd, prev_applied, qm);
-        if (st != PKM_OK) throw Error(st, std::string("sensor model: ") + pkm_data_error(d));
-      } else {
-        for (int i = 0; i < nd; ++i) qm[i] = q[i];
-      }
-      for (int i = 0; i < nd; ++i) qdm[i] = qd[i];
-      if (measure && sim.two_body()) {
-        // The encoder of a two-body joint reads its drive body (the reading model's gap and
-        // compliance are the bodies' physics there).
-        const pkm::drive::Params& dp = *m->drive;
+        // The sensor model; a two-body joint's encoder reads its drive body.
+        const bool two = sim.two_body();
         double th[6], thd[6];
-        sim.drive_state(th, thd);
-        for (int i = 0; i < nd; ++i)
-          if (dp.two_body_joint(i)) qm[i] = th[i] + dp.encoder_offset[i], qdm[i] = thd[i];
+        if (two) sim.drive_state(th, thd);
+        st = pkm_sensor_readings(m, d, x, xd, prev_applied, two ? th : nullptr, two ? thd : nullptr, qm,
+                                 two ? qdm : nullptr);
+        if (st != PKM_OK) throw Error(st, std::string("sensor model: ") + pkm_data_error(d));
       }
       sim.delayed_reading(t_k, qm, qdm);  // sensor.delay: the readings of t_k - delay
       for (int i = 0; i < nd; ++i) {
