@@ -196,6 +196,13 @@ inline M3 skew(const V3& v) {
   return S;
 }
 
+// Leg i's platform joint P = p + rP + f: rP = R p_i moves with the platform's rotation (an
+// articulated platform's articulation), f is an articulated platform's fixed offset.
+inline V3 attachment(const Model& m, const Platform& pf, int i, V3& rP) {
+  rP = pf.R * m.legs[i].p;
+  return pf.p + rP + m.legs[i].f;
+}
+
 // Jacobian of a point fixed on the platform at world offset rP from its origin.
 inline M36 point_jacobian(const Platform& pf, const V3& rP) { return pf.Jt - skew(rP) * pf.Jw; }
 
@@ -245,8 +252,7 @@ struct LegGrad {
 void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGrad& lg, Check check,
               bool points = true) {
   const LegModel& l = m.legs[i];
-  lg.rP = pf.R * l.p;
-  const V3 P = pf.p + lg.rP + l.f;
+  const V3 P = attachment(m, pf, i, lg.rP);
   P3<double> pts[4];
   leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
   for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
@@ -403,8 +409,7 @@ M6 mass_of(const Model& m, const State& st) {
   if (!m.articulated) {
     Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
   } else {  // half the mass at each end bar
-    for (double s : {1.0, -1.0})
-      add_point_inertia(Mt, 0.5 * m.m_platform * M3::Identity(), pf.R * (m.c_platform + V3(s * m.ends, 0, 0)));
+    for (const V3& e : m.end_bars) add_point_inertia(Mt, 0.5 * m.m_platform * M3::Identity(), pf.R * e);
   }
   if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
   if (m.m_payload != 0) add_point_inertia(Mt, m.m_payload * M3::Identity(), pf.R * m.c_payload);
@@ -426,7 +431,7 @@ V6 generalised_force(const Model& m, const State& st, const double* xd, const do
   };
   if (!m.articulated) W.head<3>() = m.m_platform * (pm.a - m.g);
   else
-    for (double s : {1.0, -1.0}) point_load(0.5 * m.m_platform, pf.R * (m.c_platform + V3(s * m.ends, 0, 0)));
+    for (const V3& e : m.end_bars) point_load(0.5 * m.m_platform, pf.R * e);
   if (m.rotates) {
     const M3 Iw = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
     W.tail<3>() += Iw * pm.al + pm.om.cross(Iw * pm.om);
@@ -598,9 +603,10 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   if (d_.articulated) {
     m->articulated = true;
     m->rz0 = get("platform.axis_angle");
-    m->ends = get("platform.ends");
+    const double ends = get("platform.ends");
     m->c_platform = V3(get("platform.cx"), get("platform.cy"), get("platform.cz"));
-    if (m->ends > 0) m->r_char = m->ends;  // the end bars' speed per articulation rate
+    for (int k = 0; k < 2; ++k) m->end_bars[k] = m->c_platform + V3(k ? -ends : ends, 0, 0);
+    if (ends > 0) m->r_char = ends;  // the end bars' speed per articulation rate
   }
   for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
   // The home pose must be reachable, within the joint limits and away from singularities.
@@ -648,7 +654,8 @@ void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, doubl
   Platform pf;
   platform_of(m, x, pf, false);
   for (int i = 0; i < m.n; ++i) {
-    const V3 P = pf.p + pf.R * m.legs[i].p + m.legs[i].f;
+    V3 rP;
+    const V3 P = attachment(m, pf, i, rP);
     P3<double> pts[4];
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q[i], pts, Check::limits, x);
   }
@@ -704,8 +711,8 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
   }
   using GT = Grad<3, TT>;
   for (int i = 0; i < m.n; ++i) {
-    const V3 rP = pf.R * m.legs[i].p;
-    const V3 P = pf.p + rP + m.legs[i].f, vP = pm.v + pm.om.cross(rP);
+    V3 rP;
+    const V3 P = attachment(m, pf, i, rP), vP = pm.v + pm.om.cross(rP);
     const P3<GT> Pg{GT::variable(TT(P.x(), vP.x(), 0), 0), GT::variable(TT(P.y(), vP.y(), 0), 1),
                     GT::variable(TT(P.z(), vP.z(), 0), 2)};
     GT q;
@@ -747,7 +754,8 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
   platform_of(m, x, pf, false);
   for (int i = 0; i < m.n; ++i) {
     const LegModel& l = m.legs[i];
-    const V3 P = pf.p + pf.R * l.p + l.f;
+    V3 rP;
+    const V3 P = attachment(m, pf, i, rP);
     P3<double> p[4];
     double q;
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q, p, Check::none, x);
@@ -784,8 +792,8 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const 
   PlatformMotion pm;
   platform_motion(m, pf, xd, xdd, pm);
   for (int i = 0; i < m.n; ++i) {
-    const V3 rP = pf.R * m.legs[i].p;
-    const V3 P = pf.p + rP + m.legs[i].f, vP = pm.v + pm.om.cross(rP);
+    V3 rP;
+    const V3 P = attachment(m, pf, i, rP), vP = pm.v + pm.om.cross(rP);
     const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
     const P3<TT> Pt{TT(P.x(), vP.x(), aP.x()), TT(P.y(), vP.y(), aP.y()), TT(P.z(), vP.z(), aP.z())};
     TT q;
@@ -846,8 +854,8 @@ void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, c
   for (int j = 0; j < m.n; ++j) v[j] = xd[j];
   *kinetic = 0.5 * v.dot(mass_of(m, st) * v);
   auto height = [&](const double* p) { return -m.g.dot(V3(p[0], p[1], p[2])); };
-  double V = -m.g.dot(st.pf.p) * m.m_platform;
-  if (m.articulated) V = -m.g.dot(st.pf.p + st.pf.R * m.c_platform) * m.m_platform;  // the ends' mean
+  // The platform's centre of mass: its origin, or an articulated platform's centre (the ends' mean).
+  double V = -m.g.dot(st.pf.p + st.pf.R * m.c_platform) * m.m_platform;
   const V3 c = st.pf.p + st.pf.R * m.c_payload;
   V += m.m_payload * height(c.data());
   for (int i = 0; i < m.n; ++i) {

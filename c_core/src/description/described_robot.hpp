@@ -91,7 +91,7 @@ struct Model final : RobotModel {
   std::vector<LegModel> legs;
   double m_platform = 0;
   Eigen::Vector3d c_platform = Eigen::Vector3d::Zero();  // articulated: centre (axis frame) [m]
-  double ends = 0;  // articulated: each end bar's distance from the centre along the axis [m]
+  Eigen::Vector3d end_bars[2];  // articulated: the end bars (half the mass each), axis frame [m]
   Eigen::Vector3d I_platform, c_payload, g;
   double m_payload = 0;
   double r_char = 1;
