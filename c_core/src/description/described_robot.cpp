@@ -244,6 +244,7 @@ struct LegGrad {
   double pos[4][3];
   double q;
   V3 rP;
+  V3 w;   // the rod (strut) vector from its proximal joint to P
   V3 t;   // rails and arms: d S / dq (D[0] = t dq)
   V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
 };
@@ -256,7 +257,7 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
   P3<double> pts[4];
   leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
   for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
-  const V3 w = P - V3(pts[0].x, pts[0].y, pts[0].z);  // rod (strut) vector from its proximal joint to P
+  const V3 w = lg.w = P - V3(pts[0].x, pts[0].y, pts[0].z);
   if (l.type->joint == Joint::strut) {
     const V3 n = w / lg.q;
     lg.dq = n.transpose();
@@ -292,8 +293,7 @@ struct LegMotion {
 };
 void leg_motion(const Model& m, int i, const LegGrad& lg, const V3& vP, const V3& aP, LegMotion& lm) {
   const LegModel& l = m.legs[i];
-  const V3 P(lg.pos[1][0], lg.pos[1][1], lg.pos[1][2]);
-  const V3 w = P - V3(lg.pos[0][0], lg.pos[0][1], lg.pos[0][2]);
+  const V3& w = lg.w;
   const double qd = lg.dq.dot(vP);
   lm.acc[1] = aP;
   if (l.type->joint == Joint::rail) {
@@ -676,7 +676,7 @@ void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x
     // Jx = df/dx at fixed q, Jq = -df/dq, so that Jx xd = Jq qd.
     const LegModel& l = m.legs[i];
     const LegGrad& lg = st.lg[i];
-    const V3 w(lg.pos[1][0] - lg.pos[0][0], lg.pos[1][1] - lg.pos[0][1], lg.pos[1][2] - lg.pos[0][2]);
+    const V3& w = lg.w;
     double jq;
     if (l.type->joint == Joint::rail) jq = w.dot(l.dir);
     else if (l.type->joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
