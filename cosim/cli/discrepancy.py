@@ -34,6 +34,9 @@ def _diag_configure(p):
     p.add_argument("--effects", default=None, help="comma-separated effect keys to test (default: the library)")
     p.add_argument("--no-replay", action="store_true", help="skip the closed-loop replay of the held-out part")
     p.add_argument("--no-figures", action="store_true", help="write the report without figures")
+    p.add_argument("--least-squares", action="store_true",
+                   help="fit masses, inertias and viscous friction by least squares on the measured motion instead "
+                        "of instrumental variables from the reference (biased low by rate noise; for comparison)")
     p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     p.add_argument("--html", action="store_true",
                    help="also write report.html: interactive, self-contained (3D robot, residual windows, effects)")
@@ -49,7 +52,7 @@ def cmd_diagnose(args):
     with working(f"diagnosing {Path(args.recording).name}"):
         d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
                      effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
-                     figures=not args.no_figures)
+                     figures=not args.no_figures, instruments=not args.least_squares)
     if args.json:
         from ..discrepancy.report import _strip_arrays
 

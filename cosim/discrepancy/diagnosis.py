@@ -168,7 +168,7 @@ def _model_for(rec, model):
 
 def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
-             max_effects: int = 6, verbose: bool = False) -> Diagnosis:
+             max_effects: int = 6, instruments: bool = True, verbose: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -197,6 +197,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     max_effects : int
         Largest number of entries of the forward selection (an all-joints entry names
         one group per joint).
+    instruments : bool
+        Estimate the masses, inertias and viscous frictions by instrumental variables
+        (their columns along the reference motion, free of the rate noise) when the
+        recording has ``qref``; False: least squares on the measured motion, biased low by
+        the noise of the measured accelerations (errors in variables).
 
     Returns
     -------
@@ -233,7 +238,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
             return _contradicted(rec, pipe, warnings, out, t0)
         t1 = time.perf_counter()
         eng = Engine(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
-                     verbose=verbose)
+                     instruments=instruments, verbose=verbose)
         t2 = time.perf_counter()
         sel = eng.run()
         t3 = time.perf_counter()

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .regressors import _NONNEGATIVE, LINEARISED, reference_size
+from .regressors import _NONNEGATIVE, LINEARISED, fit, reference_size
 
 if TYPE_CHECKING:
     from .selection import Selection
@@ -22,18 +22,21 @@ if TYPE_CHECKING:
 class Inference:
     """Jacobians, refinement, intervals, look-alikes, detectability (mixed into :class:`Engine`)."""
 
-    def jacobian(self, selected, theta, mask=None):
+    def jacobian(self, selected, theta, mask=None, instruments=False):
         """Weighted Jacobian (N, p) of the residual with respect to the selected native
         parameters at theta: the precomputed columns for linear parameters, central
-        differences through the core for the others."""
-        names, cols = [], []
+        differences through the core for the others.  Returns (J, names), with
+        ``instruments`` (J, names, Z): Z is J with the instrument in place of each column
+        that has one (None when none has)."""
+        names, cols, zcols = [], [], []
         for a in selected:
             g = a.group
+            o = self.options[g.label][0] if g.label in self.options else None
             if g.key in LINEARISED or (g.key == "payload" and len(g.params) == 1):
-                o = self.options[g.label][0]
                 for j, p in enumerate(g.params):
                     names.append(p)
                     cols.append(self.vec_cols(o.cols[:, :, j:j + 1], mask=mask)[:, 0])
+                    zcols.append(None if o.instr is None else self.vec_cols(o.instr[:, :, j:j + 1], mask=mask)[:, 0])
                 continue
             for p in g.params:
                 if g.key == "payload" and p != g.params[0] and theta.get(g.params[0], 0.0) <= 1e-9:
@@ -58,10 +61,21 @@ class Inference:
                     col = np.zeros_like(self.R0)
                 names.append(p)
                 cols.append(self.vec(col, mask=mask))
+                # The instrument of a non-linear parameter (the payload's mass and offset) is
+                # its option's column along the reference at the nominal model: an instrument
+                # need not be the derivative at theta, only free of the noise and correlated
+                # with it (the estimate does not depend on its scale).
+                zcols.append(None if o is None or o.instr is None
+                             else self.vec_cols(o.instr[:, :, g.params.index(p):g.params.index(p) + 1], mask=mask)[:, 0])
         if not cols:
             n = int((self.train if mask is None else mask).sum()) * self.C
-            return np.zeros((n, 0)), []
-        return np.column_stack(cols), names
+            return (np.zeros((n, 0)), [], None) if instruments else (np.zeros((n, 0)), [])
+        J = np.column_stack(cols)
+        if not instruments:
+            return J, names
+        if all(z is None for z in zcols):
+            return J, names, None
+        return J, names, np.column_stack([c if z is None else z for c, z in zip(cols, zcols)])
 
     def _fd_step(self, g, p, v):
         if p.endswith(".delay"):
@@ -106,16 +120,30 @@ class Inference:
 
     def _gauss_newton(self, selected, theta, iterations):
         """Gauss-Newton on the exact residual over the native parameters of ``selected``
-        (the others held), with step halving."""
+        (the others held), with step halving.  With instruments the step solves the
+        instrumental equations and the objective is the residual's part in the span of the
+        instruments (zero at the instrumental estimate), not the chi-square."""
         if not selected:
             return theta
-        chi2 = self._chi2(theta)
-        for _ in range(iterations):
-            J, names = self.jacobian(selected, theta)
-            y = self.vec(self.R(theta))
+        y = self.vec(self.R(theta))
+        obj = float(y @ y)
+        for it in range(iterations):
+            J, names, Z = self.jacobian(selected, theta, instruments=True)
             if J.shape[1] == 0:
                 break
-            d = -np.linalg.lstsq(J, y, rcond=1e-10)[0]
+            if it == 0:
+                y = self.vec(self.R(theta))
+            if Z is None:
+                def measure(v):
+                    return float(v @ v)
+            else:
+                Qz = np.linalg.qr(Z)[0]
+
+                def measure(v):
+                    p = Qz.T @ v
+                    return float(p @ p)
+            obj = measure(y)
+            d = fit(J, y, Z, rcond=1e-10) if Z is None else fit(J, y, Z)
             improved = False
             for scale in (1.0, 0.5, 0.25):
                 cand = self._clip({**theta, **{n: theta.get(n, self.nominal[n]) + scale * dv
@@ -124,10 +152,10 @@ class Inference:
                 if Rc is None:
                     continue
                 yc = self.vec(Rc)
-                c2 = float(yc @ yc)
-                if c2 < chi2:
-                    improved = chi2 - c2 > 1e-6 * chi2
-                    theta, chi2 = cand, c2
+                c2 = measure(yc)
+                if c2 < obj:
+                    improved = obj - c2 > 1e-6 * max(obj, float(yc @ yc) * 1e-12)
+                    theta, obj, y = cand, c2, yc
                     break
             if not improved:
                 break
@@ -144,10 +172,14 @@ class Inference:
         sel.sigma = np.maximum(np.minimum(sig, self.sig * 10), self.floor())
         # Intervals from the final Jacobian.
         if sel.selected:
-            J, names = self.jacobian(sel.selected, theta)
+            J, names, Z = self.jacobian(sel.selected, theta, instruments=True)
             dof = max(self.n_eff - J.shape[1], 1.0)
             s2 = max(sel.chi2_final / dof, 1.0)
-            cov = np.linalg.pinv(J.T @ J, rcond=1e-10) * s2
+            if Z is None:
+                cov = np.linalg.pinv(J.T @ J, rcond=1e-10) * s2
+            else:  # instrumental variables: (Z'J)^-1 Z'Z (J'Z)^-1
+                A = np.linalg.pinv(Z.T @ J, rcond=1e-12)
+                cov = A @ (Z.T @ Z) @ A.T * s2
             half = 1.96 * np.sqrt(np.maximum(np.diag(cov), 0.0))
             ci = dict(zip(names, half))
             for a in sel.selected:
@@ -173,6 +205,13 @@ class Inference:
             Q = np.linalg.qr(J)[0] if J.shape[1] else np.zeros((len(y), 0))
             y_perp = y - Q @ (Q.T @ y)
             k_rest = sum(self._k(b.group) for b in rest)
+            base, base_chi2 = bic_final, sel.chi2_final
+            if any(self.options[b.group.label][0].instr is not None for b in sel.selected if b.group.label in self.options):
+                # with instruments the final chi-square is not a least-squares one: compare the
+                # alternatives with the group itself fitted the same way as they are
+                own = self._best_option(self.options[a.group.label], Q, y_perp, J, y)
+                if own[0] is not None:
+                    base, base_chi2 = own[0] + (k_rest + own[1].k) * logn, own[0]
             cands = []
             for lab, opts in self.options.items():
                 g = opts[0].group
@@ -186,13 +225,13 @@ class Inference:
                 if best[0] is None:
                     continue
                 bic_alt = best[0] + (k_rest + best[1].k) * logn
-                dbic = bic_alt - bic_final
+                dbic = bic_alt - base
                 if related or dbic < self.lookalike_margin:
                     corr = self._correlation(a.group, g, Q)
                     # The fit apart from the parameter penalty: an alternative with more
                     # parameters that fits exactly as well is the same physics here, not worse.
                     cands.append({"group": g.label, "effect": g.key, "name": g.title, "delta_bic": float(dbic),
-                                  "delta_chi2": float(best[0] - sel.chi2_final),
+                                  "delta_chi2": float(best[0] - base_chi2),
                                   "extra_params": int(best[1].k - self._k(a.group)),
                                   "correlation": corr, "related": related})
             cands.sort(key=lambda c: c["delta_bic"])

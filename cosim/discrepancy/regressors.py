@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._native import ParameterError
+from .._native import JointLimitError, ParameterError, UnreachableError
 from .effects import Group
 
 #: effects whose core parameter acts on its own joint's channels only
@@ -28,6 +28,13 @@ LOCAL = {"coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "s
 #: inverse kinematics at second order, 1e-6)
 LINEARISED = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
               "encoder_offset", "backlash", "compliance", "geometry"}
+#: effects whose columns carry the measured rates and accelerations (errors in variables): with a
+#: reference in the recording they are estimated by instrumental variables, the instrument being the
+#: same column along the reference motion (docs/discrepancy.md, "errors in variables")
+INSTRUMENTED = {"rotor_inertia", "viscous", "platform_mass", "platform_inertia", "payload"}
+#: smallest correlation of an instrument with its column for it to be used (a weaker one would
+#: trade the bias for a variance larger than the bias: least squares instead)
+MIN_RELEVANCE = 0.3
 #: effects of an amplitude (linear) and a velocity scale (a profile grid): (amplitude, velocity)
 VELOCITY_SCALED = {"stribeck", "smooth_coulomb"}
 #: core parameters that cannot be negative
@@ -36,6 +43,21 @@ _NONNEGATIVE = (".coulomb", ".coulomb_v", ".viscous", ".stribeck", ".stribeck_v"
 #: effects whose residual is linear in the core parameter
 LINEAR = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
           "encoder_offset", "backlash", "compliance"}
+
+
+def fit(X, t, Z=None, rcond=None):
+    """Coefficients c making ``t + X c`` smallest: least squares, or with instruments ``Z``
+    (same shape as X) the instrumental-variables estimate, ``Z' (t + X c) = 0``.  With
+    ``rcond`` the singular values of X below rcond times the largest are dropped (of Z' X
+    below its square, the same directions)."""
+    if Z is None:
+        if rcond is not None:
+            return -(np.linalg.pinv(X, rcond=rcond) @ t)
+        return -np.linalg.lstsq(X, t, rcond=None)[0]
+    A = Z.T @ X
+    if rcond is not None:
+        return -(np.linalg.pinv(A, rcond=rcond**2) @ (Z.T @ t))
+    return -np.linalg.lstsq(A, Z.T @ t, rcond=None)[0]
 
 
 @dataclass
@@ -115,6 +137,7 @@ class Option:
     hyper: dict
     k: int
     expand: list | None = None   # the per-joint groups of an all-joints option
+    instr: np.ndarray | None = None  # instruments of the columns (m, C, k), or None: least squares
 
     def native(self, coef, nominal):
         g, e = self.group, self.group.key
@@ -195,13 +218,34 @@ class Regressors:
         return 0.05 * abs(val) if val != 0 else 1e-3
 
     def _one_sided(self, g, p, R0):
-        """(R(p + h) - R0) / h, stepping down instead when the core refuses p + h (a
-        principal moment of inertia beyond the sum of the other two...)."""
+        """((R(p + h) - R0) / h, h), stepping down instead (h < 0) when the core refuses
+        p + h (a principal moment of inertia beyond the sum of the other two...)."""
         h = self._step(g, p)
         try:
-            return (self.R({p: self.nominal[p] + h}) - R0) / h
+            return (self.R({p: self.nominal[p] + h}) - R0) / h, h
         except ParameterError:
-            return (self.R({p: self.nominal[p] - h}) - R0) / -h
+            return (self.R({p: self.nominal[p] - h}) - R0) / -h, -h
+
+    def _reference_change(self, key, params):
+        """Change of the effort residual along the reference motion when ``params`` are
+        set (m, nd): the instrument of an effect in INSTRUMENTED; None for the others
+        and without a reference."""
+        if key not in INSTRUMENTED or not self.use_instruments:
+            return None
+        # the residual is effort minus inverse dynamics
+        return self.pipe.reference_effort() - self.pipe.reference_effort(params)
+
+    def _relevant(self, cols, instr):
+        """``instr`` if every instrument column is correlated with its regressor column
+        by at least MIN_RELEVANCE (on the fitted samples), else None (least squares)."""
+        if instr is None:
+            return None
+        X, Z = self.vec_cols(cols), self.vec_cols(instr)
+        for j in range(X.shape[1]):
+            nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
+            if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
+                return None
+        return instr
 
     def _delay_change(self, name, value, theta, Rbase):
         """Change of the residual when the delay ``name`` goes from its value in theta
@@ -217,10 +261,12 @@ class Regressors:
         return out
 
     def _try_R(self, theta):
-        """R(theta), or None when theta is not a valid parameter set of the core."""
+        """R(theta), or None when theta is not a valid parameter set of the core, or one
+        the recording cannot be evaluated with (sensor errors that put a joint reading
+        outside its stroke: the forward kinematics refuses it)."""
         try:
             return self.R(theta)
-        except ParameterError:
+        except (ParameterError, JointLimitError, UnreachableError):
             return None
 
     # ------------------------------------------------------------- candidates
@@ -234,7 +280,9 @@ class Regressors:
         for key, gs in by_key.items():
             if key in LINEAR and key in LOCAL:
                 steps = {g.params[0]: self._step(g, g.params[0]) for g in gs}
-                D = self.R({p: self.nominal[p] + h for p, h in steps.items()}) - R0
+                moved = {p: self.nominal[p] + h for p, h in steps.items()}
+                D = self.R(moved) - R0
+                Dz = self._reference_change(key, moved)
                 for g in gs:
                     col = np.zeros((m, self.C, 1))
                     h = steps[g.params[0]]
@@ -244,13 +292,21 @@ class Regressors:
                         # A sensor error also moves the pose the dynamics is evaluated at:
                         # that part reaches every effort channel, so it is taken per joint.
                         col[:, :self.nd, 0] = self.pipe.pose_term({g.params[0]: self.nominal[g.params[0]] + h}) / h
-                    self.options[g.label] = [Option(g, col, None, {}, 1)]
+                    instr = None
+                    if Dz is not None:
+                        instr = col.copy()
+                        instr[:, g.joint, 0] = Dz[:, g.joint] / h
+                    self.options[g.label] = [Option(g, col, None, {}, 1, instr=self._relevant(col, instr))]
             elif key in LINEAR or (key == "payload" and len(gs[0].params) == 1):
                 for g in gs:
                     cols = np.zeros((m, self.C, len(g.params)))
+                    instr = cols.copy() if key in INSTRUMENTED and self.use_instruments else None
                     for j, p in enumerate(g.params):
-                        cols[:, :, j] = self._one_sided(g, p, R0)
-                    self.options[g.label] = [Option(g, cols, None, {}, len(g.params))]
+                        cols[:, :, j], h = self._one_sided(g, p, R0)
+                        if instr is not None:
+                            instr[:, :, j] = cols[:, :, j]
+                            instr[:, :self.nd, j] = self._reference_change(key, {p: self.nominal[p] + h})[:, :self.nd] / h
+                    self.options[g.label] = [Option(g, cols, None, {}, len(g.params), instr=self._relevant(cols, instr))]
             elif key == "payload":
                 g = gs[0]
                 pm = g.params[0]
@@ -259,11 +315,20 @@ class Regressors:
                 Rm = self.R({pm: self.nominal[pm] + mref})
                 cols[:, :, 0] = (Rm - R0) / mref
                 hc = 0.01
-                for j, p in enumerate(g.params[1:]):
-                    Rp = self.R({pm: self.nominal[pm] + mref, p: self.nominal[p] + hc})
-                    Rn = self.R({pm: self.nominal[pm] + mref, p: self.nominal[p] - hc})
+                moves = [({p: self.nominal[p] + hc}, {p: self.nominal[p] - hc}) for p in g.params[1:]]
+                for j, (up, down) in enumerate(moves):
+                    Rp = self.R({pm: self.nominal[pm] + mref, **up})
+                    Rn = self.R({pm: self.nominal[pm] + mref, **down})
                     cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
-                self.options[g.label] = [Option(g, cols, None, {}, 4)]
+                instr = None
+                if self.use_instruments:
+                    instr = cols.copy()
+                    instr[:, :self.nd, 0] = self._reference_change(key, {pm: self.nominal[pm] + mref}) / mref
+                    for j, (up, down) in enumerate(moves):
+                        instr[:, :self.nd, j + 1] = (self._reference_change(key, {pm: self.nominal[pm] + mref, **up})
+                                                     - self._reference_change(key, {pm: self.nominal[pm] + mref,
+                                                                                    **down})) / (2 * hc * mref)
+                self.options[g.label] = [Option(g, cols, None, {}, 4, instr=self._relevant(cols, instr))]
             elif key == "geometry":
                 for g in gs:
                     cols = np.zeros((m, self.C, len(g.params)))

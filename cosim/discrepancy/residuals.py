@@ -227,6 +227,7 @@ class Pipeline:
         delay estimates (the recorded command carries the controller's reaction to the
         rate noise, and so do the motion terms, as its derivative: a delay signature
         built from either correlates with the residual's noise)."""
+        self.ref_motion = None
         if self.rec.qref is None:
             return None
         qref = np.asarray(self.rec.qref, float)
@@ -238,7 +239,29 @@ class Pipeline:
         qdd = savgol_filter(qref, 7, 3, deriv=2, delta=self.dt, axis=0, mode="interp")
         xd = cc.pose_velocity(model, x, qd)
         xdd = cc.pose_acceleration(model, x, xd, qdd)
+        self.ref_motion = (x, xd, xdd)
         return self.S(model.inverse_dynamics(x, xd, xdd))
+
+    @property
+    def has_reference(self) -> bool:
+        """The recording has a reference the core could follow (``qref``)."""
+        return self.ref_motion is not None
+
+    def reference_effort(self, params: dict | None = None) -> np.ndarray:
+        """Smoothed inverse dynamics of the model with ``params`` along the reference
+        motion, at the sample positions, (m, nd) [N or N m].  Its change with a mass or
+        an inertia is the instrument of that parameter: the same regressor as the one of
+        the recorded motion, without the noise of the measured rates and accelerations
+        (docs/discrepancy.md, "errors in variables")."""
+        if self.ref_motion is None:
+            raise DiagnosisError(f"{self.where}: the recording has no reference (qref columns)")
+        params = {k: float(v) for k, v in (params or {}).items() if self.nominal.get(k) != float(v)}
+        key = ("ref", tuple(sorted(params.items())))
+
+        def ev():
+            m = self.model_for(params)
+            return self.S(m.inverse_dynamics(*self.ref_motion))[self.idx]
+        return self._cached(key, ev)
 
     def delay_signature(self, name: str, d: float, positions=None):
         """Change of the effort residual for a delay ``d`` [s] of ``name``

@@ -15,7 +15,10 @@ Method (docs/discrepancy.md gives the reasoning):
    parameter moved on every joint gives the columns of all joints.  Non-linear
    hyper-parameters are profiled on a grid: the Stribeck velocity (linear amplitude
    per grid value), the delays and the saturation level (the exact residual change per
-   grid value, no free amplitude).
+   grid value, no free amplitude).  The columns built from the measured motion (masses,
+   inertias, viscous friction) get instruments, the same columns along the reference
+   motion, and are estimated by instrumental variables (:func:`.regressors.fit`): the
+   noise of the measured accelerations would bias least squares low.
 2. Weights.  Each channel is divided by its noise level and the square root of its
    variance inflation ``phi = 1 + 2 sum rho_L`` (autocorrelation of the residual of
    the fit with every linear candidate), so that the chi-square counts effectively
@@ -42,7 +45,7 @@ from .effects import Group
 from .inference import Inference
 from .noise import NoiseModel, _inflation  # noqa: F401  (re-exported)
 from .regressors import (LINEAR, LINEARISED, LOCAL, TYPICAL_RATE, VELOCITY_SCALED, _NONNEGATIVE, Option,  # noqa: F401
-                         Regressors, Scales, _joint_mass, reference_size)
+                         Regressors, Scales, _joint_mass, fit, reference_size)
 from .residuals import DiagnosisError
 
 
@@ -80,7 +83,8 @@ class Engine(Regressors, NoiseModel, Inference):
     """Holds the candidate columns of one recording and runs the selection."""
 
     def __init__(self, pipe, groups, *, train_fraction: float = 0.7, threshold: float = 10.0,
-                 lookalike_margin: float = 10.0, max_groups: int = 8, verbose: bool = False):
+                 lookalike_margin: float = 10.0, max_groups: int = 8, instruments: bool = True,
+                 verbose: bool = False):
         self.pipe, self.groups = pipe, groups
         self.train, self.test = pipe.split(train_fraction)
         if self.train.sum() < 20:
@@ -88,6 +92,7 @@ class Engine(Regressors, NoiseModel, Inference):
                                  f"decimated samples; at least 20 are needed")
         self.threshold, self.lookalike_margin, self.max_groups = threshold, lookalike_margin, max_groups
         self.verbose = verbose
+        self.use_instruments = instruments and pipe.has_reference
         self.model = pipe.model
         self.nominal = pipe.nominal
         self.nd = pipe.nd
@@ -132,6 +137,10 @@ class Engine(Regressors, NoiseModel, Inference):
         logn = math.log(self.n_eff)
         selected, theta, steps = [], {}, []
         self.refused = {}
+        # A group backward elimination took out does not come back in this selection: with
+        # instruments the entry's gain and the removal's cost are two different fits, and
+        # a group between them would go in and out until the entries run out.
+        removed = set()
         y = self.vec(self.R0)
         chi2_nom = chi2 = float(y @ y)
         if self.verbose:
@@ -140,15 +149,18 @@ class Engine(Regressors, NoiseModel, Inference):
         while len(steps) < self.max_groups:  # entries (an all-joints entry adds several groups)
             # Delays already in the model are held (their instrumental estimate is
             # refreshed by refine); least squares would pull them to the noise-biased value.
-            J, names = self.jacobian([a for a in selected if not (a.group.key.endswith("_delay")
-                                                                  and a.group.label in self.instruments)], theta)
+            J, names, Z = self.jacobian(self._fitted_jointly(selected), theta, instruments=True)
             y = self.vec(self.R(theta))
-            chi2 = float(y @ y)
             Q = np.linalg.qr(J)[0] if J.shape[1] else np.zeros((len(y), 0))
             y_perp = y - Q @ (Q.T @ y)
+            # The candidates are fitted with the current parameters projected out by least
+            # squares; with instruments the current chi-square is above that projection's,
+            # so the baseline is the projection's, or every candidate would be credited
+            # with the difference.
+            chi2 = float(y_perp @ y_perp) if Z is not None else float(y @ y)
             best = None
             last_best = {}
-            taken = {a.group.label for a in selected}
+            taken = {a.group.label for a in selected} | removed
             # A group that shares a parameter with a selected one (a fading and a step
             # Coulomb friction of one joint) would fight over it: the first one in stays.
             held = {p for a in selected for p in a.group.params}
@@ -165,7 +177,7 @@ class Engine(Regressors, NoiseModel, Inference):
             if best is None or best[0] > -self.threshold:
                 break
             dbic, opt, c2 = best
-            coef_all = self._coef(opt, J, y)
+            coef_all = self._coef(opt, J, y, Z)
             new = self._apply(theta, names, coef_all, opt)
             if self._try_R(new) is None:
                 # The fit is not a valid parameter set of the core: refuse the group.
@@ -182,7 +194,9 @@ class Engine(Regressors, NoiseModel, Inference):
                 print(f"  + {opt.group.label}: dBIC {dbic:.1f} -> {theta}")
             steps.append({"group": opt.group.label, "delta_bic": float(dbic),
                           "chi2": float(self._chi2(theta))})
+            before = {a.group.label for a in selected}
             selected, theta = self._prune(selected, theta, logn)
+            removed |= before - {a.group.label for a in selected}
             # Statistically supported but physically negligible (a tenth of a 'small'
             # effect, e.g. a 5 us delay): model misfit leaking into a candidate, not physics.
             for a in list(selected):
@@ -210,6 +224,11 @@ class Engine(Regressors, NoiseModel, Inference):
                     theta = self.refine(selected, theta)
         return selected, theta, steps, last_best, chi2_nom
 
+    def _fitted_jointly(self, selected):
+        """The selected groups a linearised joint fit may move: all but the delays estimated
+        by their instrumental root (held, refreshed by refine)."""
+        return [a for a in selected if not (a.group.key.endswith("_delay") and a.group.label in self.instruments)]
+
     def _magnitude(self, g, theta):
         """Size of a group's fitted change, in the unit of its reference size."""
         p = g.params
@@ -233,9 +252,12 @@ class Engine(Regressors, NoiseModel, Inference):
             if len(opts) < 2:
                 continue
             cols = np.concatenate([o.cols for o in opts], axis=2)
+            # a joint whose instrument is too weak keeps its own column (least squares there)
+            instr = None if all(o.instr is None for o in opts) else np.concatenate(
+                [o.cols if o.instr is None else o.instr for o in opts], axis=2)
             groups = [o.group for o in opts]
             pseudo = Group(groups[0].effect, None, tuple(g.params[0] for g in groups))
-            out[f"{key}[all]"] = [Option(pseudo, cols, None, {}, len(opts), expand=groups)]
+            out[f"{key}[all]"] = [Option(pseudo, cols, None, {}, len(opts), expand=groups, instr=instr)]
         # A dead zone on every drive: the same width (as a fraction of each joint's typical
         # effort) enters on all at once, then refine sets each width; one joint at a time, a
         # payload's moments would take the common part first.  A drive's dead zone acts on
@@ -292,9 +314,11 @@ class Engine(Regressors, NoiseModel, Inference):
         if Rt is None:
             return float("inf"), theta
         y = self.vec(Rt)
-        Jr, names = self.jacobian(rest, th)
+        # as in the selection: delays estimated by instruments are held (least squares
+        # would pull them to the noise-biased value and credit the removal with that fit)
+        Jr, names, Zr = self.jacobian(self._fitted_jointly(rest), th, instruments=True)
         if Jr.shape[1]:
-            d = -np.linalg.lstsq(Jr, y, rcond=None)[0]
+            d = fit(Jr, y, Zr)
             y = y + Jr @ d
             th2 = self._clip({**th, **{n: th.get(n, self.nominal[n]) + dv for n, dv in zip(names, d)}})
             th = th2 if self._try_R(th2) is not None else th
@@ -351,7 +375,10 @@ class Engine(Regressors, NoiseModel, Inference):
         joints whose coefficient is positive (active set).
 
         The residual after a change is ``y + offset + X c`` (+ ``J d`` for the current
-        parameters, projected out through Q)."""
+        parameters, projected out through Q: least squares for them, also where they have
+        instruments, so that every option is measured against the same baseline, the
+        chi-square of ``y_perp``).  An option with instruments gets its coefficients by
+        instrumental variables, the current parameters partialled out of both."""
         t = y_perp
         if o.offset is not None:
             off = self.vec(o.offset)
@@ -360,9 +387,14 @@ class Engine(Regressors, NoiseModel, Inference):
             return float(t @ t), np.zeros(0), o
         X = self.vec_cols(o.cols)
         Xp = X - Q @ (Q.T @ X)
+        Zp = None
+        if o.instr is not None:
+            # instrumental variables, the current parameters partialled out of both
+            Z = self.vec_cols(o.instr)
+            Zp = Z - Q @ (Q.T @ Z)
         keep = np.arange(X.shape[1])
         while True:
-            coef = -np.linalg.lstsq(Xp[:, keep], t, rcond=None)[0]
+            coef = fit(Xp[:, keep], t, None if Zp is None else Zp[:, keep])
             if o.expand is None or o.group.effect.sign != ">=0" or np.all(coef >= 0):
                 break
             keep = keep[coef >= 0]
@@ -371,24 +403,32 @@ class Engine(Regressors, NoiseModel, Inference):
         if o.expand is not None and len(keep) < X.shape[1]:
             if len(keep) < 2:
                 return None, None, o
-            o = Option(o.group, o.cols[:, :, keep], None, o.hyper, len(keep), [o.expand[i] for i in keep])
+            o = Option(o.group, o.cols[:, :, keep], None, o.hyper, len(keep), [o.expand[i] for i in keep],
+                       None if o.instr is None else o.instr[:, :, keep])
         if not o.sign_ok(coef):
             return None, None, o
         r = t + Xp[:, keep] @ coef
         return float(r @ r), coef, o
 
-    def _coef(self, o, J, y):
-        """Joint fit: changes of the current parameters, then the option's coefficients."""
+    def _coef(self, o, J, y, Z=None):
+        """Joint fit: changes of the current parameters, then the option's coefficients
+        (instrumental variables where the current parameters ``Z`` or the option have
+        instruments, least squares otherwise)."""
         t = y.copy()
         if o.offset is not None:
             t += self.vec(o.offset)
         X = J if o.cols is None else np.hstack([J, self.vec_cols(o.cols)])
         if X.shape[1] == 0:
             return np.zeros(0)
+        W = None
+        if Z is not None or o.instr is not None:
+            W = J if Z is None else Z
+            if o.cols is not None:
+                W = np.hstack([W, self.vec_cols(o.cols if o.instr is None else o.instr)])
         rank = o.hyper.get("rank")
         if rank is not None and o.cols is not None and rank < o.cols.shape[2]:
-            return -(np.linalg.pinv(X, rcond=1e-6) @ t)
-        return -np.linalg.lstsq(X, t, rcond=None)[0]
+            return fit(X, t, W, rcond=1e-6)
+        return fit(X, t, W)
 
     def _apply(self, theta, names, coef_all, opt):
         theta = dict(theta)
