@@ -108,7 +108,14 @@ def print_diagnosis(d, file=None):
     if d.replay and d.replay.get("runs"):
         for name, run in d.replay["runs"].items():
             if "rms_tau" in run:
-                p(f"  replay, {name} plant: effort RMS difference " + " ".join(f"{v:.3g}" for v in run["rms_tau"]))
+                p(f"  replay, {name} plant: RMS difference, efforts " + " ".join(f"{v:.3g}" for v in run["rms_tau"])
+                  + "; readings " + " ".join(f"{v:.3g}" for v in run["rms_q"]))
+        tb = d.replay.get("two_body") or {}
+        if tb.get("params"):
+            p("  two bodies fitted on " + f"{tb['window'][0]:.2f}-{tb['window'][1]:.2f} s: "
+              + ", ".join(f"{k} = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body"))
+        elif tb.get("skipped"):
+            p(f"  no two-body replay: {tb['skipped']}")
     p(f"\n(diagnosed in {d.timings.get('total', 0):.2f} s)")
 
 

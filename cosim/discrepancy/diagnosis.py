@@ -557,8 +557,11 @@ def _conclusion(effects, not_excited, eng, sel) -> str:
 
 
 def _replay(rec, eng, sel):
-    """Closed-loop replay of the held-out part: the core plant (nominal, then fitted)
-    driven by the recorded controller and reference, against the recorded motion."""
+    """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
+    with a fitted gap or compliance, the fitted plant with those drives as two bodies,
+    :mod:`.drive_bodies`) driven by the recorded controller and reference, against the
+    recorded motion."""
+    from .drive_bodies import WINDOW, drive_joints, fit_two_body
     from .plant import closed_loop, controller_from, reference_from_recording
 
     if rec.qref is None:
@@ -573,18 +576,33 @@ def _replay(rec, eng, sel):
         ref = reference_from_recording(rec, mdl)
     except Exception as e:  # noqa: BLE001 - reported, not fatal
         return {"skipped": f"the reference could not be mapped to poses: {e}"}
+    ctrl, why = controller_from(rec.controller, mdl)
+    if ctrl is None:
+        return {"skipped": why}
+
+    def run(plant, ref, start):
+        ctrl, _ = controller_from(rec.controller, mdl)
+        return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
+                           rtol=1e-8, atol=1e-10)
+
     out = {"start": float(rec.time[k0]), "runs": {}}
-    for name, theta in (("nominal", {}), ("fitted", sel.theta)):
-        ctrl, why = controller_from(rec.controller, mdl)
-        if ctrl is None:
-            return {"skipped": why}
-        plant = mdl.copy()
-        if theta:
-            plant.set_params(theta)
-        x0 = pipe.x_f[k0]
-        xd0 = pipe.xd_f[k0]
+    plants = {"nominal": mdl.copy(), "fitted": mdl.copy()}
+    if sel.theta:
+        plants["fitted"].set_params(sel.theta)
+    joints = drive_joints(sel.theta, mdl)
+    if joints:
+        n_fit = min(int(round(WINDOW / pipe.dt)), k0 - int(pipe.idx[0]))
+        extra, rows = fit_two_body(rec, pipe, plants["fitted"], joints, run, ref, k0 - n_fit, n_fit)
+        if extra is None:
+            out["two_body"] = {"skipped": rows}
+        else:
+            plants["fitted, two bodies"] = plants["fitted"].copy()
+            plants["fitted, two bodies"].set_params(extra)
+            out["two_body"] = {"params": extra, "window": [float(rec.time[k0 - n_fit]), float(rec.time[k0])],
+                               "grid": rows}
+    for name, plant in plants.items():
         try:
-            res = closed_loop(plant, ctrl, ref, x0=x0, xd0=xd0, start=k0, rtol=1e-8, atol=1e-10)
+            res = run(plant, ref, k0)
         except Exception as e:  # noqa: BLE001 - a failing replay is reported
             out["runs"][name] = {"error": str(e)}
             continue

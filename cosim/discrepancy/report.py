@@ -139,16 +139,27 @@ def markdown(d, files: dict) -> str:
         if rp.get("skipped"):
             L += [f"Replay not run: {rp['skipped']}.", ""]
         else:
+            nd = len(_first_run(rp))
             L += [f"Closed-loop replay of the held-out part from t = {rp['start']:.2f} s (core plant, recorded "
-                  f"controller and reference): RMS of the effort difference to the recording", "",
-                  "| plant | " + " | ".join(f"tau{i + 1}" for i in range(len(_first_run(rp)))) + " |",
-                  "| --- |" + " --- |" * len(_first_run(rp))]
+                  f"controller and reference): RMS of the difference to the recording, efforts and readings", "",
+                  "| plant | " + " | ".join(f"tau{i + 1}" for i in range(nd)) + " | "
+                  + " | ".join(f"q{i + 1}" for i in range(nd)) + " |",
+                  "| --- |" + " --- |" * (2 * nd)]
             for name, run in rp["runs"].items():
                 if "error" in run:
                     L.append(f"| {name} | failed: {run['error']} |")
                 else:
-                    L.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in run["rms_tau"]) + " |")
+                    L.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in run["rms_tau"] + run["rms_q"]) + " |")
             L.append("")
+            tb = rp.get("two_body") or {}
+            if tb.get("params"):
+                L += ["The fitted gap or compliance replayed as two bodies (drive body with the rotor inertia, "
+                      "carriage, dead-band spring; docs/discrepancy.md), its damping and faces fitted by replays of "
+                      f"{tb['window'][0]:.2f}-{tb['window'][1]:.2f} s: "
+                      + ", ".join(f"`{k}` = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body") + ".",
+                      ""]
+            elif tb.get("skipped"):
+                L += [f"No two-body replay: {tb['skipped']}.", ""]
             if "replay" in files:
                 L += ["![Replay](replay.png)", ""]
     L += ["## Method", "",
@@ -321,18 +332,30 @@ def _fig_replay(d, eng, path):
         return None
     nd = eng.pipe.nd
     show = [eng.pipe.channels.index(c) for c in d.heldout["affected"] if eng.pipe.channels.index(c) < nd][:3] or [0]
-    fig, axes = plt.subplots(len(show), 1, figsize=(11, 2.4 * len(show)), squeeze=False)
+    panels = [("tau", j) for j in show]
+    # with two bodies: the readings of the first drive joint too (where the gap shows)
+    drive = [int(k[k.index("[") + 1:k.index("]")]) - 1 for k in (d.replay.get("two_body") or {}).get("params", {})
+             if k.endswith(".transmission_damping")]
+    if drive:
+        panels.append(("q", drive[0]))
+    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 2.4 * len(panels)), squeeze=False)
     any_run = next(iter(runs.values()))
     k0 = int(np.searchsorted(rec.time, any_run["time"][0]))
-    for r, j in enumerate(show):
+    for r, (what, j) in enumerate(panels):
         ax = axes[r, 0]
         n = len(any_run["time"])
-        ax.plot(rec.time[k0:k0 + n], rec.tau[k0:k0 + n, j], color="k", lw=0.8, label="recorded")
-        for (name, run), col in zip(runs.items(), ("0.6", "C0")):
-            ax.plot(run["time"], run["tau"][:, j], color=col, lw=0.8, label=f"replay, {name} plant")
-        ax.set_ylabel(f"tau{j + 1}", fontsize=8)
+        recorded = getattr(rec, what)[k0:k0 + n, j]
+        if what == "tau":
+            ax.plot(rec.time[k0:k0 + n], recorded, color="k", lw=0.8, label="recorded")
+        for (name, run), col in zip(runs.items(), ("0.6", "C0", "C3")):
+            m = min(n, len(run["time"]))
+            # readings: the replay less the recording (a gap is micrometres on a stroke of centimetres)
+            y = run[what][:m, j] - (recorded[:m] if what == "q" else 0.0)
+            ax.plot(run["time"][:m], y, color=col, lw=0.8, label=f"replay, {name} plant")
+        ax.set_ylabel(f"{what}{j + 1}" + (" replay - recorded" if what == "q" else ""), fontsize=8)
     axes[0, 0].legend(fontsize=7)
-    axes[0, 0].set_title("closed-loop replay of the held-out part: commanded effort", fontsize=9)
+    axes[0, 0].set_title("closed-loop replay of the held-out part: commanded effort"
+                         + (" and the drive's readings" if drive else ""), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
