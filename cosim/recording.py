@@ -37,6 +37,8 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -58,21 +60,40 @@ def _facts(robot):
         return None
 
 
-def _described(side, name, file):
+def _described(side, name, file, text=None):
     """The facts of a robot the core does not know by name, from the description file the
-    sidecar names (the core then knows it by name for the rest of the process)."""
+    sidecar names (relative to the sidecar, or absolute in recordings written before the
+    path was made relative), else from the description the sidecar carries.  The core then
+    knows the robot by name for the rest of the process."""
     from .core import Model, PkmError
 
-    if not Path(file).exists():
+    src = None
+    if isinstance(file, str):
+        p = Path(file)
+        p = p if p.is_absolute() else side.parent / p
+        if p.exists():
+            src = p
+    if src is None and isinstance(text, str):
+        # the sidecar's own copy, written where the core can read it for the whole process
+        global _CARRIED
+        if _CARRIED is None:
+            _CARRIED = Path(tempfile.mkdtemp(prefix="pkm-robots-"))
+        src = _CARRIED / (Path(file).name if isinstance(file, str) else f"{name}.toml")
+        src.write_text(text)
+    if src is None:
         raise RecordingError(side, f"robot {name!r} is not one the core knows and its description file {file} "
                                    f"is gone (known: {_known()}; or set PKM_ROBOT_PATH, docs/robots.md)")
     try:
-        m = Model(file)
+        m = Model(str(src))
     except PkmError as e:
         raise RecordingError(side, f"robot {name!r}: its description file {file} does not load: {e}") from None
     if m.robot != name:
         raise RecordingError(side, f"the description file {file} is of robot {m.robot!r}, the recording of {name!r}")
     return _facts(name)
+
+
+#: folder of the descriptions carried by sidecars (made on first use, kept for the process)
+_CARRIED = None
 
 
 def _known():
@@ -205,11 +226,17 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
             "controller": rec.controller, "notes": rec.notes}
     facts = _facts(rec.robot)
-    if facts is not None and facts.file:
-        # a robot compiled from a description file: where it came from, so that a process
-        # that does not know the name (a file given by path) can still read the recording
-        meta["robot_file"] = str(Path(facts.file).resolve())
     side = sidecar_path(path)
+    if facts is not None and facts.file:
+        # A robot compiled from a description file: where it came from (relative to the
+        # sidecar, so that a folder holding both can move) and the description itself, so
+        # that a process that does not know the name can read the recording anywhere.
+        src = Path(facts.file).resolve()
+        meta["robot_file"] = os.path.relpath(src, side.parent.resolve())
+        try:
+            meta["robot_description"] = src.read_text()
+        except OSError:
+            pass
     side.write_text(json.dumps(meta, indent=2, default=jsonable))
     return path, side
 
@@ -253,8 +280,9 @@ def read_recording(path, robot: str | None = None) -> Recording:
     if robot is not None and rname != robot:
         raise RecordingError(side, f"recording is of robot {rname!r}, expected {robot!r}")
     facts = _facts(rname) if isinstance(rname, str) else None
-    if facts is None and isinstance(rname, str) and isinstance(meta.get("robot_file"), str):
-        facts = _described(side, rname, meta["robot_file"])
+    if facts is None and isinstance(rname, str) and (isinstance(meta.get("robot_file"), str)
+                                                     or isinstance(meta.get("robot_description"), str)):
+        facts = _described(side, rname, meta.get("robot_file"), meta.get("robot_description"))
     if facts is None:
         raise RecordingError(side, f"unknown robot {rname!r} (known: {_known()})")
     nd, pose_cols = facts.ndof, list(facts.tracker_names)

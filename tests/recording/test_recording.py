@@ -104,3 +104,36 @@ def test_writer_refuses_nan_and_bad_shapes(tmp_path):
     rec.q = rec.q[:, :5]
     with pytest.raises(RecordingError, match="q has shape"):
         write_recording(tmp_path / "w.csv", rec)
+
+
+def test_a_recording_of_a_described_robot_carries_its_description(tmp_path):
+    # a robot no process knows by name: its description file next to the recording, then gone
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from cosim.core import Model
+
+    src = (Path(__file__).resolve().parents[2] / "robots" / "linear_delta.toml").read_text()
+    desc = tmp_path / "robots" / "my_delta.toml"
+    desc.parent.mkdir()
+    desc.write_text(src.replace('name = "linear_delta"', 'name = "my_delta"'))
+    m = Model(str(desc))
+    assert m.robot == "my_delta"
+    csv_path, side = write_recording(tmp_path / "runs" / "a.csv", _rec(robot="my_delta", nd=3, pose=False))
+    meta = json.loads(side.read_text())
+    assert meta["robot_file"] == "../robots/my_delta.toml"  # relative: the folder can move
+    moved = tmp_path / "elsewhere"
+    shutil.copytree(tmp_path / "runs", moved)
+    desc.unlink()  # and the description is gone: the sidecar's copy serves
+    code = ("import sys; from cosim.recording import read_recording; r = read_recording(sys.argv[1]); "
+            "from cosim.core import Model; print(r.robot, r.q.shape[1], Model(r.robot).ndof)")
+    out = subprocess.run([sys.executable, "-c", code, str(moved / "a.csv")], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["my_delta", "3", "3"]
+    # a sidecar without either: one line saying what is missing
+    meta.pop("robot_description")
+    (moved / "a.json").write_text(json.dumps(meta))
+    out = subprocess.run([sys.executable, "-c", code, str(moved / "a.csv")], capture_output=True, text=True)
+    assert out.returncode != 0 and "description file ../robots/my_delta.toml is gone" in out.stderr
