@@ -131,4 +131,15 @@ def diagnosis_page(d, path, model=None) -> Path:
     f.update_layout(barmode="group", yaxis_type="log", height=380,
                     title=f"held-out residual RMS per channel (gain {d.heldout['gain']:.1f}x)")
     sections.append(("before / after on the held-out part", f))
+    runs = {k: v for k, v in ((d.replay or {}).get("runs") or {}).items() if "rms_tau" in v}
+    if runs:
+        # the closed-loop replay: per plant, the RMS difference to the recording of every
+        # effort and reading channel (a two-body replay of a fitted gap shows on the readings)
+        nd = len(next(iter(runs.values()))["rms_tau"])
+        for what, key in (("efforts", "rms_tau"), ("readings", "rms_q")):
+            names = [f"{'tau' if key == 'rms_tau' else 'q'}{i + 1}" for i in range(nd)]
+            f = go.Figure([go.Bar(x=names, y=run[key], name=f"{name} plant") for name, run in runs.items()])
+            f.update_layout(barmode="group", yaxis_type="log", height=360,
+                            title=f"closed-loop replay of the held-out part: RMS difference to the recorded {what}")
+            sections.append((f"replay: {what}", f))
     return write_html(path, f"diagnosis of {Path(d.recording).name}", sections)

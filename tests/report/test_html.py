@@ -82,5 +82,9 @@ def test_run_calibration_and_diagnosis_pages(recording, tmp_path):
     p2 = diagnosis_page(d, tmp_path / "diag.html")
     text = p2.read_text()
     assert "held-out residual RMS" in text and "scatter3d" in text and d.conclusion in text
+    assert "replay: readings" not in text  # no replay run, no replay section
+    d = diagnose(recording, figures=False, replay=True)
+    text = diagnosis_page(d, tmp_path / "diag2.html").read_text()
+    assert "replay: readings" in text and "fitted plant" in text
     with pytest.raises(ReportError, match="section 'bad'"):
         write_html(tmp_path / "x.html", "t", [("bad", 3)])
