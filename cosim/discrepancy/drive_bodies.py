@@ -70,7 +70,8 @@ def fit_two_body(rec, pipe, plant, joints, run, ref, k_fit: int, n_fit: int):
     missing = [p for p, _, _, _ in joints if plant.param(f"{p}.rotor_inertia") <= 0]
     if missing:
         return None, (f"a two-body replay needs the drive's inertia: {', '.join(missing)} "
-                      f"have no rotor_inertia (declare it in the sidecar's parameters)")
+                      f"{'has' if len(missing) == 1 else 'have'} no rotor_inertia (declare \"{missing[0]}.rotor_inertia\" "
+                      f"in the sidecar's parameters)")
     ref = _window(ref, k_fit + n_fit)
     idx = [i for _, i, _, _ in joints]
     effort = np.sqrt(np.mean(pipe.tau_s[pipe.idx][:, idx] ** 2, axis=0))
