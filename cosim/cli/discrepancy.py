@@ -113,7 +113,8 @@ def print_diagnosis(d, file=None):
         tb = d.replay.get("two_body") or {}
         if tb.get("params"):
             p("  two bodies fitted on " + f"{tb['window'][0]:.2f}-{tb['window'][1]:.2f} s: "
-              + ", ".join(f"{k} = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body"))
+              + ", ".join(f"{k} = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body")
+              + f" (differences to the recording there: {tb['score']:.2f}x the reading model's)")
         elif tb.get("skipped"):
             p(f"  no two-body replay: {tb['skipped']}")
     p(f"\n(diagnosed in {d.timings.get('total', 0):.2f} s)")

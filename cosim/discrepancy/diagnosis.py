@@ -598,8 +598,9 @@ def _replay(rec, eng, sel):
         else:
             plants["fitted, two bodies"] = plants["fitted"].copy()
             plants["fitted, two bodies"].set_params(extra)
+            # score: the two bodies' differences on the window over the reading model's (< 1: closer)
             out["two_body"] = {"params": extra, "window": [float(rec.time[k0 - n_fit]), float(rec.time[k0])],
-                               "grid": rows}
+                               "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
     for name, plant in plants.items():
         try:
             res = run(plant, ref, k0)

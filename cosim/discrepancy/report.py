@@ -156,8 +156,9 @@ def markdown(d, files: dict) -> str:
                 L += ["The fitted gap or compliance replayed as two bodies (drive body with the rotor inertia, "
                       "carriage, dead-band spring; docs/discrepancy.md), its damping and faces fitted by replays of "
                       f"{tb['window'][0]:.2f}-{tb['window'][1]:.2f} s: "
-                      + ", ".join(f"`{k}` = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body") + ".",
-                      ""]
+                      + ", ".join(f"`{k}` = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body")
+                      + f"; on that window their differences to the recording are {tb['score']:.2f} times the reading "
+                      f"model's (a window without a gap crossing favours the reading model).", ""]
             elif tb.get("skipped"):
                 L += [f"No two-body replay: {tb['skipped']}.", ""]
             if "replay" in files:
