@@ -270,6 +270,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     if replay:
         t5 = time.perf_counter()
         d.replay = _replay(rec, eng, sel)
+        d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
         timings["replay"] = time.perf_counter() - t5
     timings["diagnosis"] = time.perf_counter() - t0
     d.timings = timings
@@ -554,6 +555,21 @@ def _conclusion(effects, not_excited, eng, sel) -> str:
     if not excited:
         return "cannot diagnose: the recording excites none of the effects of the library (see 'not excited')"
     return "no missing physics found"
+
+
+def _two_body_sentence(replay, unit) -> str:
+    """What the two-body replay of a fitted gap or compliance showed on its joints' readings,
+    for the conclusion ("" without one)."""
+    runs = (replay or {}).get("runs", {})
+    two, reading = runs.get("fitted, two bodies", {}), runs.get("fitted", {})
+    if "rms_q" not in two or "rms_q" not in reading:
+        return ""
+    joints = [int(k[k.index("[") + 1:k.index("]")]) - 1 for k in replay["two_body"]["params"]
+              if k.endswith(".transmission_damping")]
+    closer = all(two["rms_q"][i] < reading["rms_q"][i] for i in joints)
+    parts = ", ".join(f"q{i + 1} {two['rms_q'][i]:.3g} {unit} against {reading['rms_q'][i]:.3g} {unit}" for i in joints)
+    return (f"; replayed as two bodies (drive and carriage) the held-out readings come "
+            f"{'closer to' if closer else 'no closer to'} the recording than with the reading model ({parts})")
 
 
 def _replay(rec, eng, sel):
