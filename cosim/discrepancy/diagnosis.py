@@ -577,7 +577,7 @@ def _replay(rec, eng, sel):
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`) driven by the recorded controller and reference, against the
     recorded motion."""
-    from .drive_bodies import WINDOW, drive_joints, fit_two_body
+    from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
     if rec.qref is None:
@@ -607,15 +607,15 @@ def _replay(rec, eng, sel):
         plants["fitted"].set_params(sel.theta)
     joints = drive_joints(sel.theta, mdl)
     if joints:
-        n_fit = min(int(round(WINDOW / pipe.dt)), k0 - int(pipe.idx[0]))
-        extra, rows = fit_two_body(rec, pipe, plants["fitted"], joints, run, ref, k0 - n_fit, n_fit)
+        k_fit, n_fit = fitting_window(pipe, joints, int(pipe.idx[0]), k0)
+        extra, rows = fit_two_body(rec, pipe, plants["fitted"], joints, run, ref, k_fit, n_fit)
         if extra is None:
             out["two_body"] = {"skipped": rows}
         else:
             plants["fitted, two bodies"] = plants["fitted"].copy()
             plants["fitted, two bodies"].set_params(extra)
             # score: the two bodies' differences on the window over the reading model's (< 1: closer)
-            out["two_body"] = {"params": extra, "window": [float(rec.time[k0 - n_fit]), float(rec.time[k0])],
+            out["two_body"] = {"params": extra, "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
                                "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
     for name, plant in plants.items():
         try:

@@ -56,6 +56,24 @@ def two_body_params(plant, joints, effort_rms, zeta: float, face: float) -> dict
     return out
 
 
+def fitting_window(pipe, joints, start: int, end: int) -> tuple[int, int]:
+    """(first sample, length) of the WINDOW-long stretch of samples ``start .. end`` (the
+    fitted part) where the drive joints' smoothed efforts change sign most often (a gap shows
+    only when it is crossed), or, without a change of sign, vary most (a compliance shows in
+    the changes of its load)."""
+    n = min(int(round(WINDOW / pipe.dt)), end - start)
+    tau = pipe.tau_s[start:end][:, [i for _, i, _, _ in joints]]
+    flips = np.concatenate([np.zeros((1, tau.shape[1])), np.abs(np.diff(np.sign(tau), axis=0)) > 0]).sum(axis=1)
+    step = max(1, n // 10)
+    firsts = np.arange(0, len(tau) - n + 1, step)
+    counts = np.array([flips[a:a + n].sum() for a in firsts])
+    if counts.max() == 0:
+        counts = np.array([float(np.sum(np.var(tau[a:a + n], axis=0))) for a in firsts])
+    # the latest of the best (closest to the held-out part)
+    best = firsts[np.flatnonzero(counts == counts.max())[-1]]
+    return start + int(best), n
+
+
 def _window(ref, end):
     return ReferenceTable(ref.time[:end], ref.q[:end], ref.qd[:end], ref.qdd[:end], ref.x[:end])
 

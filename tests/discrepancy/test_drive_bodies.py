@@ -29,3 +29,22 @@ def test_a_gap_without_a_drive_inertia_is_not_replayed_as_two_bodies(tmp_path):
     assert "fitted, two bodies" not in d.replay["runs"]
     assert "needs the drive's inertia" in d.replay["two_body"]["skipped"]
     assert "rail[6]" in d.replay["two_body"]["skipped"]
+
+
+def test_the_fitting_window_is_where_the_gap_is_crossed():
+    from types import SimpleNamespace
+
+    from cosim.discrepancy.drive_bodies import WINDOW, fitting_window
+
+    dt, n = 1e-3, 6000
+    t = np.arange(n) * dt
+    tau = np.full((n, 6), 0.5)
+    tau[:, 5] = np.where((t > 2.0) & (t < 3.2), np.sin(2 * np.pi * 5 * t), 0.4)  # crossings in 2.0-3.2 s only
+    pipe = SimpleNamespace(dt=dt, tau_s=tau)
+    k, m = fitting_window(pipe, [("rail[6]", 5, 4e-5, 0.0)], 100, 5000)
+    assert m == int(round(WINDOW / dt))
+    assert 1.9 <= k * dt and (k + m) * dt <= 3.35
+    # no sign change anywhere: where the effort varies most
+    tau[:, 5] = 0.5 + np.where((t > 4.0) & (t < 4.8), 0.2 * np.sin(2 * np.pi * 3 * t), 0.0)
+    k, m = fitting_window(pipe, [("rail[6]", 5, 0.0, 2e-5)], 100, 5000)
+    assert 3.7 <= k * dt <= 4.1
