@@ -11,7 +11,8 @@ the library of effects (:mod:`.effects`), regressors (:mod:`.regressors`), the n
 (:mod:`.noise`), forward selection (:mod:`.selection`), inference: intervals, ties,
 detectability (:mod:`.inference`), localisation (:mod:`.localisation`), structure left
 unexplained (:mod:`.structure`), the diagnosis that puts them together (:mod:`.diagnosis`),
-the replay (:mod:`.plant`) and the report (:mod:`.report`).  Blind cases and the benchmark:
+the replay (:mod:`.plant`; a fitted gap or compliance as two bodies: :mod:`.drive_bodies`) and
+the report (:mod:`.report`).  Blind cases and the benchmark:
 :mod:`.blind`.  See docs/discrepancy.md.
 """
 from .diagnosis import (TIE_MARGIN, Diagnosis, DiagnosisError, convention_contradictions,  # noqa: F401
