@@ -102,7 +102,10 @@ def fit_two_body(rec, pipe, plant, joints, run, ref, k_fit: int, n_fit: int):
         return (np.sqrt(np.mean((res.q - rec.q[s]) ** 2, axis=0))[idx],
                 np.sqrt(np.mean((res.tau - rec.tau[s]) ** 2, axis=0))[idx])
 
-    q0, t0 = errors(plant)
+    try:
+        q0, t0 = errors(plant)
+    except Exception as e:  # noqa: BLE001 - reported by the diagnosis, not fatal
+        return None, f"the reading model's replay of the fitting window failed: {e}"
     faces = FACE_DEFLECTIONS if any(comp <= 0 for _, _, _, comp in joints) else (None,)
     rows, best = [], None
     for zeta, face in itertools.product(DAMPING_RATIOS, faces):
