@@ -139,11 +139,14 @@ def markdown(d, files: dict) -> str:
         if rp.get("skipped"):
             L += [f"Replay not run: {rp['skipped']}.", ""]
         else:
+            from ..core import robot_facts
+
             nd = len(_first_run(rp))
+            facts = robot_facts(d.robot)
             L += [f"Closed-loop replay of the held-out part from t = {rp['start']:.2f} s (core plant, recorded "
                   f"controller and reference): RMS of the difference to the recording, efforts and readings", "",
-                  "| plant | " + " | ".join(f"tau{i + 1}" for i in range(nd)) + " | "
-                  + " | ".join(f"q{i + 1}" for i in range(nd)) + " |",
+                  "| plant | " + " | ".join(f"tau{i + 1} [{facts.effort_unit}]" for i in range(nd)) + " | "
+                  + " | ".join(f"q{i + 1} [{facts.joint_unit}]" for i in range(nd)) + " |",
                   "| --- |" + " --- |" * (2 * nd)]
             for name, run in rp["runs"].items():
                 if "error" in run:
