@@ -282,7 +282,22 @@ static int ensure(fmu_plant* p, unsigned bit, const char* what) {
 
 int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
   int i = v->index, s = PKM_OK;
+  /* Outputs computed on demand: the quantity they need (ensure) and where it lands. */
+  unsigned need = 0;
+  const double* derived = NULL;
   switch (v->channel) {
+    case FMU_CH_ACCEL: need = V_ACC, derived = p->xdd; break;
+    case FMU_CH_Q: need = V_KIN, derived = p->q; break;
+    case FMU_CH_QD: need = V_KIN, derived = p->qd; break;
+    case FMU_CH_Q_DRIVE: need = V_DRIVE, derived = p->qdrv; break;
+    case FMU_CH_QD_DRIVE: need = V_DRIVE, derived = p->qddrv; break;
+    case FMU_CH_SING: need = V_SING, derived = p->sing; break;
+    case FMU_CH_ENERGY: need = V_ENERGY, derived = p->energy; break;
+    default: break;
+  }
+  if (derived) {
+    if (!(s = ensure(p, need, v->name))) *value = derived[i];
+  } else switch (v->channel) {
     case FMU_CH_PARAM: *value = p->par[i]; break;
     case FMU_CH_TAU: *value = p->tau[i]; break;
     case FMU_CH_POSE: *value = p->x[i]; break;
@@ -294,27 +309,6 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
     case FMU_CH_SOLVER_MAX_STEP: *value = p->opt.max_step; break;
     case FMU_CH_SOLVER_SING_MIN: *value = p->opt.sing_min; break;
     case FMU_CH_INPUT_GAIN: *value = p->input_gain; break;
-    case FMU_CH_ACCEL:
-      if (!(s = ensure(p, V_ACC, v->name))) *value = p->xdd[i];
-      break;
-    case FMU_CH_Q:
-      if (!(s = ensure(p, V_KIN, v->name))) *value = p->q[i];
-      break;
-    case FMU_CH_QD:
-      if (!(s = ensure(p, V_KIN, v->name))) *value = p->qd[i];
-      break;
-    case FMU_CH_Q_DRIVE:
-      if (!(s = ensure(p, V_DRIVE, v->name))) *value = p->qdrv[i];
-      break;
-    case FMU_CH_QD_DRIVE:
-      if (!(s = ensure(p, V_DRIVE, v->name))) *value = p->qddrv[i];
-      break;
-    case FMU_CH_SING:
-      if (!(s = ensure(p, V_SING, v->name))) *value = p->sing[i];
-      break;
-    case FMU_CH_ENERGY:
-      if (!(s = ensure(p, V_ENERGY, v->name))) *value = p->energy[i];
-      break;
     default: return fail(p, PKM_ERR_ARGUMENT, "variable %s is not a Real", v->name);
   }
   /* The last line of defence: no value leaves the FMU as an infinity or a NaN with OK. */
