@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/guard.hpp"
+#include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
 namespace drive {
@@ -169,10 +170,7 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
   if (!dp.any_friction && !dp.any_rotor) return;
   const int n = d->ndof;
   Vec qd(n), qdd(n), f(n);
-  double J[36];
-  m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
-  Eigen::Map<const Mat> Jm(J, n, n);
-  qd = Jm * Eigen::Map<const Vec>(xd, n);
+  joint_velocity(*m->robot, rm, *d->rd, x, xd, qd.data());
   if (dp.any_friction) {
     drive::friction(dp, qd.data(), f.data());
     for (int i = 0; i < n; ++i) tau[i] += f[i];
@@ -230,9 +228,8 @@ void net_effort(const pkm_model* m, const drive::Params& dp, pkm_data* d, const 
   const int n = d->ndof;
   for (int i = 0; i < n; ++i) net[i] = tau[i];
   if (!dp.any_friction) return;
-  double J[36], qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
-  m->robot->jacobians(*m->compiled, *d->rd, x, nullptr, nullptr, J);
-  Eigen::Map<Vec>(qd, n) = Eigen::Map<const Mat>(J, n, n) * Eigen::Map<const Vec>(xd, n);
+  double qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
+  joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
   drive::friction(dp, qd, f);
   for (int i = 0; i < n; ++i) net[i] -= f[i];
 }
@@ -356,14 +353,7 @@ void sensor_readings(const pkm_model* m, pkm_data* d, const double* x, const dou
   const drive::Params& dp = *m->drive;
   const int n = d->ndof;
   measure_joints(m, d, x, xd, tau, q_meas);
-  if (qd_meas) {
-    double J[36];
-    m->robot->jacobians(*m->compiled, *d->rd, x, nullptr, nullptr, J);
-    for (int i = 0; i < n; ++i) {
-      qd_meas[i] = 0;
-      for (int j = 0; j < n; ++j) qd_meas[i] += J[i * n + j] * xd[j];
-    }
-  }
+  if (qd_meas) joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd_meas);
   for (int i = 0; i < n; ++i) {
     if (!dp.two_body_joint(i)) continue;
     if (theta) q_meas[i] = theta[i] + dp.encoder_offset[i];

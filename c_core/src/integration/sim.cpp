@@ -33,6 +33,7 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include "common/guard.hpp"
+#include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
 
@@ -330,13 +331,8 @@ void Sim::dynamics(const double* y, const double* u, double* f) {
 }
 
 void Sim::joints_of(const double* y, double* q, double* qd) {
-  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
-  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
-  const int n = nd_;
-  double J[36];
   robot_->ik(*rm_, *rd_, y, q);
-  robot_->jacobians(*rm_, *rd_, y, nullptr, nullptr, J);
-  Eigen::Map<Vec>(qd, n) = Eigen::Map<const Mat>(J, n, n) * Eigen::Map<const Vec>(y + n, n);
+  joint_velocity(*robot_, *rm_, *rd_, y, y + nd_, qd);
 }
 
 void Sim::acceleration(const double* tau, double* xdd) {

@@ -73,6 +73,18 @@ void Robot::joint_acceleration(const RobotModel& rm, RobotData& rd, const double
   Eigen::Map<Vec>(qdd, n) = J * Eigen::Map<const Vec>(xdd, n) + Jd * Eigen::Map<const Vec>(xd, n);
 }
 
+void joint_velocity(const Robot& r, const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                    double* qd) {
+  const int n = r.ndof();
+  double J[36];
+  r.jacobians(rm, rd, x, nullptr, nullptr, J);
+  for (int i = 0; i < n; ++i) {
+    double s = 0;
+    for (int j = 0; j < n; ++j) s += J[i * n + j] * xd[j];
+    qd[i] = s;
+  }
+}
+
 // Solves J y = b with a singularity check that says so instead of returning garbage.
 static void solve_J(const Mat& J, const Vec& b, double* y, const char* what) {
   Eigen::FullPivLU<Mat> lu(J);

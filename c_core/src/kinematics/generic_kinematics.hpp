@@ -43,6 +43,10 @@ inline void lu_singularity_guard(const MatA& A, double* measure_bound, double* d
   *measure_bound = std::isfinite(bound) ? bound : 0.0;
 }
 
+// qd = J xd: the joint rates of a pose rate (pkm_joint_velocity, the drive layer's friction,
+// the sensors, the two-body integrator).
+void joint_velocity(const Robot& r, const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
+                    double* qd);
 // xd = J^-1 qd and xdd = J^-1 (qdd - Jdot xd); Error(PKM_ERR_SINGULAR) at a singular J.
 void pose_velocity(const Robot& r, const RobotModel& rm, RobotData& rd, const double* x, const double* qd,
                    double* xd);

@@ -100,13 +100,7 @@ int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x, const d
     check_finite(x, n, "pose x");
     check_finite(xd, n, "pose velocity xd");
     check_out(qd, "qd");
-    double J[36];
-    d->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
-    for (int i = 0; i < n; ++i) {
-      double s = 0;
-      for (int j = 0; j < n; ++j) s += J[i * n + j] * xd[j];
-      qd[i] = s;
-    }
+    joint_velocity(*d->robot, rm, *d->rd, x, xd, qd);
   });
 }
 
