@@ -564,8 +564,7 @@ def _two_body_sentence(replay, unit) -> str:
     two, reading = runs.get("fitted, two bodies", {}), runs.get("fitted", {})
     if "rms_q" not in two or "rms_q" not in reading:
         return ""
-    joints = [int(k[k.index("[") + 1:k.index("]")]) - 1 for k in replay["two_body"]["params"]
-              if k.endswith(".transmission_damping")]
+    joints = replay["two_body"]["joints"]
     closer = all(two["rms_q"][i] < reading["rms_q"][i] for i in joints)
     parts = ", ".join(f"q{i + 1} {two['rms_q'][i]:.3g} {unit} against {reading['rms_q'][i]:.3g} {unit}" for i in joints)
     return (f"; replayed as two bodies (drive and carriage) the held-out readings come "
@@ -597,7 +596,7 @@ def _replay(rec, eng, sel):
         return {"skipped": why}
 
     def run(plant, ref, start):
-        ctrl, _ = controller_from(rec.controller, mdl)
+        ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
                            rtol=1e-8, atol=1e-10)
 
@@ -615,7 +614,8 @@ def _replay(rec, eng, sel):
             plants["fitted, two bodies"] = plants["fitted"].copy()
             plants["fitted, two bodies"].set_params(extra)
             # score: the two bodies' differences on the window over the reading model's (< 1: closer)
-            out["two_body"] = {"params": extra, "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
+            out["two_body"] = {"params": extra, "joints": [i for _, i, _, _ in joints],
+                               "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
                                "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
     for name, plant in plants.items():
         try:

@@ -126,13 +126,10 @@ class Inference:
         if not selected:
             return theta
         y = self.vec(self.R(theta))
-        obj = float(y @ y)
-        for it in range(iterations):
+        for _ in range(iterations):
             J, names, Z = self.jacobian(selected, theta, instruments=True)
             if J.shape[1] == 0:
                 break
-            if it == 0:
-                y = self.vec(self.R(theta))
             if Z is None:
                 def measure(v):
                     return float(v @ v)

@@ -183,13 +183,11 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     if hasattr(controller, "reset"):
         controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
 
-    from ..master import CoreDrive
+    from ..master import CoreDrive, PlantOutputs
 
     line = CoreDrive(plant)
     two_body = plant.two_body_joints() > 0  # drive bodies: the encoders read them (pkm_sim_drive_state)
     out = {k: np.zeros((n, nd)) for k in ("q", "qd", "tau", "pose", "x", "xd", "q_true")}
-    meas = np.zeros((n, nd))  # true sensor readings (before delay and noise)
-    qd_true = np.zeros((n, nd))
     cmds = []  # (time, command)
 
     def command_at(s):
@@ -207,12 +205,11 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     for k in range(n):
         _, x, xd = sim.state
         tau_now = applied_at(t[k])
-        meas[k] = cc.measure_joints(plant, x[None], xd[None], tau_now[None])[0]
-        qd_true[k] = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
-        qd_read = qd_true[k]
-        if two_body:
-            meas[k], qd_read = plant.sensor_readings(x, xd, tau_now, sim.drive_state)
-        qr, qdr = line.delayed(float(t[k]), meas[k], qd_read)  # sensor.delay, as in the core's loop
+        qd_true = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
+        # the sensors' rule, one for every loop (CoreDrive.read: the drive bodies where there are)
+        y = PlantOutputs(None, qd_true, x, xd, sim.drive_state if two_body else None)
+        q_meas, qd_read = line.read(y, tau_now)
+        qr, qdr = line.delayed(float(t[k]), q_meas, qd_read)  # sensor.delay, as in the core's loop
         if np.any(sig["q"]):
             qr = qr + rng.normal(size=nd) * sig["q"]
         if np.any(sig["qd"]):

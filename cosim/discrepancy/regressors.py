@@ -305,7 +305,7 @@ class Regressors:
                         cols[:, :, j], h = self._one_sided(g, p, R0)
                         if instr is not None:
                             instr[:, :, j] = cols[:, :, j]
-                            instr[:, :self.nd, j] = self._reference_change(key, {p: self.nominal[p] + h})[:, :self.nd] / h
+                            instr[:, :self.nd, j] = self._reference_change(key, {p: self.nominal[p] + h}) / h
                     self.options[g.label] = [Option(g, cols, None, {}, len(g.params), instr=self._relevant(cols, instr))]
             elif key == "payload":
                 g = gs[0]

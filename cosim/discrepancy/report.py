@@ -161,7 +161,7 @@ def markdown(d, files: dict) -> str:
                       f"{tb['window'][0]:.2f}-{tb['window'][1]:.2f} s: "
                       + ", ".join(f"`{k}` = {v:.4g}" for k, v in tb["params"].items() if k != "drive.two_body")
                       + f"; on that window their differences to the recording are {tb['score']:.2f} times the reading "
-                      f"model's (a window without a gap crossing favours the reading model).", ""]
+                      f"model's (the window is where the drive joints' efforts change sign most often).", ""]
             elif tb.get("skipped"):
                 L += [f"No two-body replay: {tb['skipped']}.", ""]
             if "replay" in files:
@@ -338,8 +338,7 @@ def _fig_replay(d, eng, path):
     show = [eng.pipe.channels.index(c) for c in d.heldout["affected"] if eng.pipe.channels.index(c) < nd][:3] or [0]
     panels = [("tau", j) for j in show]
     # with two bodies: the readings of the first drive joint too (where the gap shows)
-    drive = [int(k[k.index("[") + 1:k.index("]")]) - 1 for k in (d.replay.get("two_body") or {}).get("params", {})
-             if k.endswith(".transmission_damping")]
+    drive = (d.replay.get("two_body") or {}).get("joints", [])
     if drive:
         panels.append(("q", drive[0]))
     fig, axes = plt.subplots(len(panels), 1, figsize=(11, 2.4 * len(panels)), squeeze=False)
