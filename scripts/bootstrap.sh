@@ -35,7 +35,11 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
 fi
 
 echo "[bootstrap] building (CMake, Release)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+launcher=()
+if command -v ccache >/dev/null 2>&1; then  # rebuilds and parallel checkouts share compiles
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
 if ! cmake --build build -j"$(nproc)" > build/build.log 2>&1; then
   grep -E -B2 -A8 "error" build/build.log | head -80
   echo "[bootstrap] build failed: full log in build/build.log" >&2
