@@ -263,7 +263,7 @@ def main(argv=None) -> int:
           f"{'closure [m]':>11s}")
     for label, wall, err, clo in table:
         print(f"{label:50s} {wall:9.4f} {a.seconds / wall:12.0f} {mj1_wall / wall:13.2f}x {err:12.2e} {clo:11.2e}")
-    print(f"targets (issue 11): compiled >= 8x MuJoCo and >= 1000 sim s/wall s; stepwise >= 2x MuJoCo; "
+    print(f"targets (docs/performance.md): compiled >= 8x MuJoCo and >= 1000 sim s/wall s; stepwise >= 2x MuJoCo; "
           f"fmpy doStep share < 25 %")
     print(f"fmpy Python loop over PKM_6PUS.fmu ({a.fmu_seconds:g} s, medians of {a.repeats}): ERK 5(4) (default) "
           f"{a.fmu_seconds / fmu_wall:.0f} sim s/wall s, {100 * share:.0f} % of the wall time inside doStep; "

@@ -1,4 +1,4 @@
-// core_bench: timings of the reference core for the 6-PUS against SPEC 7's targets,
+// core_bench: timings of the reference core for the 6-PUS against the performance targets,
 // single thread, through the public C API (what every user pays).
 //
 //   core_bench [--json] [--quick]
@@ -50,7 +50,7 @@ bool pass(const Row& r) {
 
 [[noreturn]] void die(const std::string& what) { bench::die("core_bench", what); }
 
-// Poses around home within the workspace SPEC 3.1 asks for (x, y +-20 mm, z 70..90 mm,
+// Poses around home within the supported workspace (x, y +-20 mm, z 70..90 mm,
 // rotations +-3 deg), all reachable in the default layout.
 void random_poses(const double* home, size_t n, std::mt19937_64& rng, std::vector<double>& x) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -288,7 +288,7 @@ int main(int argc, char** argv) {
     }
     std::printf("]\n");
   } else {
-    std::printf("6-PUS reference core, single thread (SPEC 7 targets)\n");
+    std::printf("6-PUS reference core, single thread (performance targets)\n");
     std::printf("%-44s %12s  %-13s %10s  %-4s  %s\n", "quantity", "value", "unit", "target", "", "note");
     for (const Row& r : rows)
       std::printf("%-44s %12s  %-13s %10s  %-4s  %s\n", r.label.c_str(), fmt(r.value).c_str(), r.unit.c_str(),

@@ -5,7 +5,7 @@
 //
 // Rows: inverse kinematics, inverse dynamics, forward dynamics and the Jacobian, ns per
 // call through the public C API over 2000 poses and rates around home; the ratio
-// described / hand-written and the target (within 2x for IK, ID and FD; the
+// described / hand-written and this program's bound (within 2x for IK, ID and FD; the
 // Jacobian row is for information).  Exit 1 if a target or the agreement fails.  Both models must have
 // the same parameters: the program checks that the outputs agree to 1e-10 first.
 #include <algorithm>
@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
   struct Op {
     const char* name;
     int width;
-    bool targeted;  // the target (within 2x) covers IK, inverse and forward dynamics
+    bool targeted;  // this program's bound (within 2x) covers IK, inverse and forward dynamics
     int (*call)(Robot&, size_t, const std::vector<double>&, const std::vector<double>&, const std::vector<double>&,
                 const std::vector<double>&, double*);
   };

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark of the discrepancy engine (SPEC 7): a 10 s, 1 kHz recording diagnosed in < 10 s.
+"""Benchmark of the discrepancy engine (docs/performance.md): a 10 s, 1 kHz recording diagnosed in < 10 s.
 
 Single core (BLAS limited to one thread).  For each robot: one 10 s closed-loop
 recording at 1 kHz of a plant hiding two effects, written as a pkm-recording/1 file;

@@ -12,7 +12,7 @@ stepped rows close a joint-space PD loop around a 2 mm, 2 Hz sine reference per 
   FMU ME, simulate   fmpy.simulate_fmu (Model Exchange, fmpy's CVode, rtol 1e-8), from rest
                      (no controller: the plant drifts off its unstable rest and stops at a
                      limit, so these rows report the simulated time they reached)
-SPEC 7 target: the plant simulation >= 1000x real time inside the FMU.  Uses
+Target: the plant simulation >= 1000x real time inside the FMU.  Uses
 $PKM_BUILD_DIR (default build/) for libpkm.so and fmu/PKM_6PUS.fmu.
 """
 from __future__ import annotations
@@ -147,7 +147,7 @@ def main(argv=None):
         steps = simulated / a.step
         print(f"{name:44s} {wall:9.3f} {simulated / wall:15.1f} {wall / steps * 1e6:10.1f}")
     print(f"final pose, FMU (FMU2Slave) vs core: max |dx| = {dx:.1e}")
-    print("SPEC 7 target: >= 1000 simulated s per wall s inside the FMU")
+    print("Target: >= 1000 simulated s per wall s inside the FMU")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Joint-space controllers (seed 001 sec. 8.8) and their design/analysis with python-control.
+"""Joint-space controllers (Zavala-Yoe et al. 2015 sec. 8.8) and their design/analysis with python-control.
 
 All controllers are sampled at the co-simulation communication step ``dt``: at each
 sample ``t_k`` they read the joint positions ``q`` [m or rad] and velocities ``qd``
@@ -6,9 +6,9 @@ and return the actuator efforts ``tau`` [N or N m] that the plant holds constant
 (zero-order hold) until ``t_k + dt``.
 
 * :func:`pd`: ``tau = Kp (qref - q) + Kd (qdref - qd)``.  Under gravity it settles with
-  the error ``e_ss = Kp^-1 g(x)`` (:func:`predicted_steady_state_error`, SPEC 4), ``g``
+  the error ``e_ss = Kp^-1 g(x)`` (:func:`predicted_steady_state_error`), ``g``
   the joint-space gravity load from the core.
-* :func:`pd_gravity`: the same plus ``g(x)`` fed forward (seed 001 step 6 of algorithm 3
+* :func:`pd_gravity`: the same plus ``g(x)`` fed forward (Zavala-Yoe et al. 2015 step 6 of algorithm 3
   with ``J^T [0 0 mg 0 0 0]``); ``x`` is the pose the core's forward kinematics gives for
   the measured ``q`` (or the reference pose).  No steady-state error.
 * :func:`pid`: PID with a filtered derivative, anti-windup and output limits (the core's
@@ -269,7 +269,7 @@ def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m") -> JointCont
 
 
 def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> JointController:
-    """PD plus gravity compensation (seed 001 sec. 8.8).
+    """PD plus gravity compensation (Zavala-Yoe et al. 2015 sec. 8.8).
 
     ``tau = Kp (qref - q) + Kd (qdref - qd) + g(x)``, ``g`` = ``model.gravity_load``.
 
@@ -549,7 +549,7 @@ def analyse_pd(*, mass: float, kp: float, kd: float, dt: float | None = 1e-3) ->
 
 
 def predicted_steady_state_error(model, x, kp) -> np.ndarray:
-    """``e_ss = Kp^-1 g(x)`` [m or rad]: where a PD loop settles under gravity (SPEC 4).
+    """``e_ss = Kp^-1 g(x)`` [m or rad]: where a PD loop settles under gravity.
 
     At rest ``qd = 0`` and the efforts balance the gravity load ``g(x)`` from the core,
     so ``Kp (qref - q) = g``.

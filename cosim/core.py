@@ -663,7 +663,7 @@ class Model:
     def calib_rows(self, x, frame: str = "world"):
         """6-PUS calibration regression rows, shape (..., 6, 10): dq_i / d eta_i per leg.
 
-        eta_i = [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (seed 000 eq. 4.1).  ``frame="world"``
+        eta_i = [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (Tiberi 2020 eq. 4.1).  ``frame="world"``
         differentiates with respect to the world position of the platform point (the seed's
         tables), ``"platform"`` with respect to ``leg[i].px/py/pz``.  Stroke limits are not
         applied (the rows are geometry); an unreachable or singular pose raises.
@@ -918,8 +918,8 @@ class Simulator:
 
     @property
     def stats(self) -> dict:
-        """CVODE counters summed over all advances since creation: steps, rhs_evals
-        (including those of the difference-quotient Jacobian), jac_evals,
+        """Integrator counters summed over all advances since creation: steps, rhs_evals
+        (with BDF including those of the difference-quotient Jacobian), jac_evals,
         error_test_fails, nonlin_conv_fails."""
         st = pkm_sim_stats()
         self._check(lib.pkm_sim_get_stats(self._s, C.byref(st)))

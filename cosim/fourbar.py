@@ -1,4 +1,4 @@
-"""Four-bar linkage of seed 002: output X of the coupler mid point and its link-length Jacobian.
+"""Four-bar linkage of Vitali 2020: output X of the coupler mid point and its link-length Jacobian.
 
 The core's ``pkm_fourbar_output`` through :meth:`cosim.core.Model.fourbar_output` (the core computes everything).  Lengths are the
 model parameters ``link[1].l`` .. ``link[4].l`` [m]; the crank angle theta [rad] is the
@@ -11,7 +11,7 @@ Example
 >>> from cosim.fourbar import output
 >>> m = Model("fourbar")
 >>> X, A = output(m, np.radians([30, 35]))      # X [m], A = dX/dl [m/m], shape (2, 4)
->>> round(X[0] * 1e3, 4)                        # seed 002: 815.2891 mm
+>>> round(X[0] * 1e3, 4)                        # Vitali 2020: 815.2891 mm
 815.2891
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Performance indices every robot has, computed by the core: per pose and on grids.
 
-The Quattro has 22 indices of its own (seed 003, ``pkm_quattro_indices``, :mod:`cosim.quattro`);
+The Quattro has 22 indices of its own (Virzi 2010, ``pkm_quattro_indices``, :mod:`cosim.quattro`);
 nothing like them is defined for other robots.  What any robot the core knows (hand-written
 or compiled from a description file) offers, and what this module maps:
 

@@ -1,4 +1,4 @@
-"""Recordings in the ``pkm-recording/1`` format (SPEC 5): read, write, validate.
+"""Recordings in the ``pkm-recording/1`` format: read, write, validate.
 
 A recording is a CSV file with a header row and a JSON sidecar of the same name:
 

@@ -1,4 +1,4 @@
-"""Time simulation of a robot model with the core's CVODE integrator (``pkm_sim``).
+"""Time simulation of a robot model with the core's integrator (``pkm_sim``: explicit Runge-Kutta 5(4) by default, CVODE BDF / Adams on request).
 
 The state is the task-space pose and its rate, ``(x, xd)``; the input is the actuator
 effort ``tau``, held constant between updates (zero-order hold).  The equations of

@@ -268,7 +268,7 @@ def letter_m_corners(center=(0.0, 0.0), width: float = 0.03, height: float = 0.0
 def letter_m(center=(0.0, 0.0), z: float = 0.075, width: float = 0.03, height: float = 0.03,
              segment_time: float = 0.4, hold_time: float = 0.1, middle_depth: float = 0.5,
              orientation=(0.0, 0.0, 0.0), t0: float = 0.0, coordinates=None) -> Trajectory:
-    """The laser-cut letter "M" (seed 001 sec. 8.1, 8.9) traced at constant height.
+    """The laser-cut letter "M" (Zavala-Yoe et al. 2015 sec. 8.1, 8.9) traced at constant height.
 
     Four straight strokes through :func:`letter_m_corners`, each a rest-to-rest
     minimum-jerk move of ``segment_time`` [s] (a cutting head stops at the corners so

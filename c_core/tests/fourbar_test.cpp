@@ -1,4 +1,4 @@
-// The four-bar of seed 002 through the C API: the seed's tables, dX/dl against central
+// The four-bar of Vitali 2020 through the C API: the seed's tables, dX/dl against central
 // finite differences, and errors that name the crank angle.
 #include <gtest/gtest.h>
 
@@ -26,12 +26,12 @@ struct Fourbar : pkm_test::ModelFixture<> {
   }
 };
 
-// Seed 002 ch. 1.1 and appendix, typed from the thesis.  theta = 30..60 deg step 5.
+// Vitali 2020 ch. 1.1 and appendix, typed from the thesis.  theta = 30..60 deg step 5.
 const double kXp[7] = {815.2891, 803.5676, 783.9942, 757.9735, 726.5904, 690.7086, 651.0450};
 const double kXpr[7] = {815.6833, 803.9667, 784.3931, 758.3677, 726.9759, 691.0819, 651.4034};
 // phi in radians to 4 decimals (appendix "phi" rows; 30 deg from 37.9585 deg of ch. 1.1).
 const double kPhiRad[7] = {0.6625, 0.5877, 0.5257, 0.4737, 0.4296, 0.3919, 0.3594};
-// Seed 002 ch. 4 matrix A (columns dX/dl1..dX/dl4, mm/mm).
+// Vitali 2020 ch. 4 matrix A (columns dX/dl1..dX/dl4, mm/mm).
 const double kA[7][4] = {{1.2343, 0.8090, -0.5164, -0.1379}, {1.1503, 0.7409, -0.4270, -0.1166},
                          {1.0599, 0.6870, -0.3574, -0.0943}, {0.9670, 0.6445, -0.3031, -0.0735},
                          {0.8731, 0.6107, -0.2603, -0.0552}, {0.7787, 0.5836, -0.2264, -0.0393},

@@ -1,4 +1,4 @@
-// Quattro (seed 003 ch. 5) dynamics through the C API, checked against independent facts:
+// Quattro (Virzi 2010 ch. 5) dynamics through the C API, checked against independent facts:
 // the gravity load is the gradient of the potential energy, the velocity terms are those
 // of Lagrange's equations for the mass matrix (finite differences of M), forward dynamics
 // inverts inverse dynamics, and a free motion conserves T + V.
@@ -56,7 +56,7 @@ TEST_P(QuattroDyn, GravityLoadIsTheGradientOfThePotential) {
 }
 
 TEST_P(QuattroDyn, HoldingTorqueLiftsTheArms) {
-  // Seed 003 writes the gravity terms with the sign of the load (+g m_b lg cos q_r);
+  // Virzi 2010 writes the gravity terms with the sign of the load (+g m_b lg cos q_r);
   // the effort that holds the robot is the opposite: upwards, i.e. negative q.
   double g[4];
   const double x[4] = {0, 0, -0.95, 0};

@@ -1,4 +1,4 @@
-// Quattro index maps (seed 003 ch. 3-5) through the C API: each column against its
+// Quattro index maps (Virzi 2010 ch. 3-5) through the C API: each column against its
 // definition evaluated here from the core's J and M, the GIMRE against the kinetic energy
 // of the links computed from finite differences of the joint points, and the batch
 // conventions (NaN row + status + first failure) for poses outside the workspace.

@@ -1,4 +1,4 @@
-// Quattro (seed 003) kinematics through the C API: the closure equations of the seed
+// Quattro (Virzi 2010) kinematics through the C API: the closure equations of the seed
 // (eqs. 2.6-2.9, typed here independently of the core), Jx / Jq / J and dJ/dt against
 // central finite differences, IK/FK round trip, the root choice, and errors naming the arm.
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // 6-PUS kinematics through the C API: parameter table and whole-set checks, IK/FK
 // round trips, error statuses and messages, Jacobians / Jdot / calibration rows /
-// joint acceleration against central finite differences, the seed 000 leg-1 tables
+// joint acceleration against central finite differences, the Tiberi 2020 leg-1 tables
 // (typed from the thesis) and the absence of an architecture singularity.
 #include <gtest/gtest.h>
 
@@ -32,7 +32,7 @@ struct SixPus : pkm_test::ModelFixture<> {
     EXPECT_EQ(pkm_model_home(m, x.data()), PKM_OK);
     return x;
   }
-  // A pose of SPEC 3.1's workspace box: x, y within +-50 mm, z 20..100 mm, rotations +-5 deg.
+  // A pose of the reference workspace box: x, y within +-50 mm, z 20..100 mm, rotations +-5 deg.
   Vec6 random_workspace_pose() {
     Vec6 x;
     x << uni(-0.05, 0.05), uni(-0.05, 0.05), uni(0.02, 0.10), rad(uni(-5, 5)), rad(uni(-5, 5)), rad(uni(-5, 5));
@@ -85,7 +85,7 @@ TEST_F(SixPus, ParameterTableNamesUnitsAndReferenceGeometry) {
   EXPECT_STREQ(pkm_param_unit(m, index_of("gravity.z")), "m/s2");
   EXPECT_STREQ(pkm_param_unit(m, index_of("rail[6].sx")), "1");
   EXPECT_GT(std::string(pkm_param_description(m, index_of("leg[3].branch"))).size(), 10u);
-  // SPEC 3.1 / Table 4.1 values.
+  // Table 4.1 values.
   EXPECT_EQ(param("rail[1].S0x"), -0.085);
   EXPECT_EQ(param("rail[1].S0y"), 0.020);
   EXPECT_EQ(param("rail[1].S0z"), 0.0);
@@ -165,7 +165,7 @@ TEST_F(SixPus, ParameterRangesAndSetChecksNameTheParameter) {
 }
 
 TEST_F(SixPus, RailsProportionalToPlatformPointsAreRejectedAsArchitectureSingular) {
-  // SPEC 3.1's warning: rail y offsets equal to the platform-point y (and the home stroke
+  // the singular-layout warning (docs/6pus.md): rail y offsets equal to the platform-point y (and the home stroke
   // kept by moving S0x) make all leg lines meet one line: J has rank 5 at home.
   for (int i = 1; i <= 6; ++i) {
     const std::string l = "[" + std::to_string(i) + "]";
@@ -224,7 +224,7 @@ TEST_F(SixPus, FkFromHomeForPosesNearIt) {
 }
 
 TEST_F(SixPus, FastIkAgreesWithTheGeneralLegComputation) {
-  // pkm_ik has its own branch-free path (SPEC 7 speed); the leg points, Jacobians and
+  // pkm_ik has its own branch-free path (speed target); the leg points, Jacobians and
   // dynamics use the general one.  They agree to rounding, on both sides of the 0.8 rad
   // switch between the series and the library sine in the fast path.
   wide_strokes();
@@ -464,7 +464,7 @@ TEST_F(SixPus, CalibrationRowsMatchFiniteDifferences) {
       for (int c = 3; c < 10; ++c) {
         const std::string name = std::string(c == 6 ? "leg" : "rail") + l + cols[c];
         Vec6 col = dparam(name, c >= 7 ? 1e-7 : 1e-6);
-        // A leg parameter moves that leg only (seed 000 eq. 4.7).
+        // A leg parameter moves that leg only (Tiberi 2020 eq. 4.7).
         for (int j = 0; j < 6; ++j)
           if (j != i) EXPECT_EQ(col[j], 0.0) << name;
         fdW(i, c) = fdP(i, c) = col[i];
@@ -478,9 +478,9 @@ TEST_F(SixPus, CalibrationRowsMatchFiniteDifferences) {
   }
 }
 
-// ----------------------------------------------------------- seed 000 Tables 4.2-4.21
+// ----------------------------------------------------------- Tiberi 2020 Tables 4.2-4.21
 
-// Leg 1 regression rows [dq/dX dY dZ dS0x dS0y dS0z dL dsx dsy dsz], typed from seed 000
+// Leg 1 regression rows [dq/dX dY dZ dS0x dS0y dS0z dL dsx dsy dsz], typed from Tiberi 2020
 // Tables 4.3, 4.5, ..., 4.21; poses from Tables 4.2, 4.4, ..., 4.20 (angles in degrees).
 const double kSeedPose[10][6] = {
     // theta_x, theta_y, theta_z [deg], x, y, z [m]
@@ -505,7 +505,7 @@ constexpr double k4dec = 5e-5 + 1e-9;
 
 struct SeedTables : SixPus {
   // The tables concern leg 1 only.  Poses 3 and 8 are out of reach of legs 5 and 6 of
-  // the completed layout (SPEC 3.1 leaves legs 2-6 to us): lengthen those legs so the
+  // the completed layout (the sources fix leg 1 only): lengthen those legs so the
   // poses are valid for the whole robot; leg 1 keeps Table 4.1's parameters.
   void SetUp() override {
     SixPus::SetUp();
@@ -516,7 +516,7 @@ struct SeedTables : SixPus {
     ASSERT_EQ(param("rail[1].S0x"), -0.085);
   }
   // Leg 1 row at a pose given by the seed's angles, read with the core's convention
-  // R = Rx Ry Rz (pkm.h, SPEC 3.1, seed 000 eq. 2.5).
+  // R = Rx Ry Rz (pkm.h, docs/6pus.md, Tiberi 2020 eq. 2.5).
   Eigen::Matrix<double, 10, 1> row_contract(int k) {
     Vec6 x;
     x << kSeedPose[k][3], kSeedPose[k][4], kSeedPose[k][5], rad(kSeedPose[k][0]), rad(kSeedPose[k][1]),
@@ -561,12 +561,12 @@ TEST_F(SeedTables, RowsWithTheContractConventionRxRyRz) {
         EXPECT_NEAR(r[c], s[c], 2e-2) << "row " << k + 1 << " col " << c + 1;
     }
   }
-  // SPEC 4 expected rows 1, 4, 5 to reproduce to 4 decimals; with R = Rx Ry Rz row 4
+  // Expected rows 1, 4, 5 to reproduce to 4 decimals; with R = Rx Ry Rz row 4
   // (and rows 2, 3) do not: the seed's numbers were computed with the other order of
   // rotations (next test).  This assertion fails if that finding is wrong.
   for (int k : {1, 2, 3}) EXPECT_GT((row_contract(k) - seed(k)).cwiseAbs().maxCoeff(), 1e-4) << "row " << k + 1;
   // Row 9 (5 deg about every axis) is where the order matters most: off by more than
-  // 2e-2 with R = Rx Ry Rz (SPEC 4 lists it as an erratum), exact with R = Rz Ry Rx.
+  // 2e-2 with R = Rx Ry Rz (an erratum of the table), exact with R = Rz Ry Rx.
   EXPECT_GT((row_contract(8) - seed(8)).cwiseAbs().maxCoeff(), 2e-2);
 }
 
@@ -598,7 +598,7 @@ TEST_F(SeedTables, RowsReproduceToFourDecimalsWithRzRyRxAndTheErrataAreWhatTheyS
 // ---------------------------------------------------------- architecture singularity
 
 TEST_F(SixPus, NoArchitectureSingularityOverTheCentralWorkspace) {
-  // SPEC 3.1: worst condition number of J (rotation columns divided by the platform
+  // Reference geometry: worst condition number of J (rotation columns divided by the platform
   // radius) over x, y in +-25 mm, z in [65, 85] mm, rotations +-5 deg: "about 5".
   double worst = 0, best = 1e300, worst_lines = 0;
   for (int t = 0; t < 20000; ++t) {
@@ -643,7 +643,7 @@ TEST_F(SixPus, NoArchitectureSingularityOverTheCentralWorkspace) {
   EXPECT_LT(worst, 9.0);
   EXPECT_GT(worst, 3.0);
   // The Plucker coordinates of the six (unit) leg lines are what a direct singularity
-  // makes dependent; their condition number is SPEC 3.1's "about 5" (measured 5.39).
+  // makes dependent; their condition number is the "about 5" of the chosen layout (measured 5.39).
   EXPECT_LT(worst_lines, 6.0);
 }
 

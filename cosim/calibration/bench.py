@@ -1,4 +1,4 @@
-"""Calibration benchmark (SPEC 7: 60 parameters, 1000 poses, < 0.5 s) and the pose-selection study.
+"""Calibration benchmark (target: 60 parameters, 1000 poses, < 0.5 s) and the pose-selection study.
 
 Both are commands, not tests: ``cosim calibrate --bench`` and ``cosim calibrate --design``.
 """
@@ -69,7 +69,7 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
         rms = float(np.sqrt(np.mean(P.residual(res.x) ** 2)))
         rows.append(("baseline: scipy lm, finite-difference J", dt, res.nfev, res.nfev, rms, res.x))
     L = [f"6-PUS calibration benchmark: {P.nmeas // 6} poses, 60-parameter error model = {len(P.names)} calibrated "
-         f"coordinates (|s| = 1), {P.nmeas} equations; target (SPEC 7) < 0.5 s",
+         f"coordinates (|s| = 1), {P.nmeas} equations; target (docs/performance.md) < 0.5 s",
          f"  setup (problem from the recording's poses and joints): {setup * 1e3:.1f} ms",
          f"  {'method':<42} {'time [ms]':>10} {'iter':>5} {'f-evals':>8} {'RMS [um]':>9} {'max |p - p_GN|/SE':>18} "
          f"{'max |p - p_true|/SE':>20}"]
@@ -102,7 +102,7 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
 
 
 def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 5, seed: int = 5) -> str:
-    """Pose selection vs hand-picked and random poses (6-PUS, seed 000's ten poses).
+    """Pose selection vs hand-picked and random poses (6-PUS, Tiberi 2020's ten poses).
 
     Scores (O1, log det, cond: see :mod:`cosim.calibration.design`) of: the seed's ten
     poses (leg 1 only, where the core can compute its rows; the whole robot cannot reach
@@ -124,11 +124,11 @@ def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 
     L = [f"Pose selection, 6-PUS, {n} poses (scores on the column-scaled regression rows; larger O1 and smaller "
          f"cond are better)"]
     cmp = sixpus_seed_comparison(n, ncand, seed)
-    L.append(f"  leg 1 in seed 000's own problem (world frame; identifiable X, Y, Z, L, sx, sy, sz): seed's ten poses "
+    L.append(f"  leg 1 in Tiberi 2020's own problem (world frame; identifiable X, Y, Z, L, sx, sy, sz): seed's ten poses "
              f"(Table 4.22): O1 {cmp['seed']['O1']:.3g}, cond {cmp['seed']['cond']:.3g};  {n} D-optimal poses: "
              f"O1 {cmp['dopt']['O1']:.3g}, cond {cmp['dopt']['cond']:.3g}")
     q_all, st_all = nom.ik(SEED000_POSES, errors="status")
-    L.append(f"  whole robot: {int(np.sum(st_all == 0))} of seed 000's 10 poses are inside this robot's strokes and "
+    L.append(f"  whole robot: {int(np.sum(st_all == 0))} of Tiberi 2020's 10 poses are inside this robot's strokes and "
              f"reach: {int(np.sum(st_all == 0))} equations per leg for 9 parameters, not enough to calibrate")
     h = [np.linalg.norm(A[:, b].reshape(-1, A.shape[-1]), axis=0) ** -1 for b in range(A.shape[1])]
     scores = {}

@@ -39,7 +39,7 @@ __all__ = [
     "read_truth",
 ]
 
-#: Seed 000 Tables 4.2-4.20: the ten measurement poses (x, y, z [m], rx, ry, rz [deg]).
+#: Tiberi 2020 Tables 4.2-4.20: the ten measurement poses (x, y, z [m], rx, ry, rz [deg]).
 SEED000_POSES_DEG = np.array([
     [0.000, 0.000, 0.085, 0, 0, 0],
     [0.000, 0.000, 0.085, 1, 1, 1],
@@ -85,7 +85,7 @@ def sixpus_real_params(nominal: Model, max_length: float = 0.5e-3, max_angle_deg
 def sixpus_candidate_poses(model: Model, n: int, rng=None, xy: float = 0.05, z=(0.02, 0.10),
                            rot_deg: float = 5.0, stroke_margin: float = 5e-3, min_direct: float = 0.02,
                            min_inverse: float = 0.15) -> np.ndarray:
-    """Up to n random poses in the seed 000 workspace that ``model`` reaches comfortably.
+    """Up to n random poses in the Tiberi 2020 workspace that ``model`` reaches comfortably.
 
     Poses are uniform in x, y in +-``xy``, z in ``z``, each rotation in +-``rot_deg``;
     kept if every stroke is at least ``stroke_margin`` inside its range (a real robot that
@@ -319,10 +319,10 @@ def _main(argv=None):
     poses = sixpus_candidate_poses(nominal, 120, rng=7)
     rec = sixpus_campaign(real, poses, tracker_noise=10e-6, rng=11)
     print(*write_campaign(out / "calibration_6pus_campaign.csv", rec, real))
-    # four-bar: the seed 002 linkage, theta = 30..60 deg, noise-free
+    # four-bar: the Vitali 2020 linkage, theta = 30..60 deg, noise-free
     real4 = {"link[1].l": 0.60030, "link[2].l": 0.75050, "link[3].l": 0.79055, "link[4].l": 0.90070}
     rec4 = fourbar_campaign(real4, np.radians(np.arange(30, 61, 5)),
-                            notes="seed 002: four-bar with true errors (0.30, 0.50, 0.55, 0.70) mm, "
+                            notes="Vitali 2020: four-bar with true errors (0.30, 0.50, 0.55, 0.70) mm, "
                                   "crank angle q1 = theta, X of the coupler mid point measured (noise-free)")
     print(*write_campaign(out / "calibration_fourbar_seed002.csv", rec4, real4))
 

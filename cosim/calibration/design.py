@@ -4,7 +4,7 @@ The regression matrix of a set of poses decides how well the parameters can be
 identified; this module scores a set and chooses one from candidates.
 
 Scores (:func:`observability`), per independent block (6-PUS leg) on the column-scaled
-matrix (seed 000 eq. 3.13), worst block reported:
+matrix (Tiberi 2020 eq. 3.13), worst block reported:
 
 * ``O1 = (mu_1 mu_2 ... mu_n)^(1/n) / sqrt(m)``: the observability index of Borm and Menq
   (the geometric mean of the singular values, per measurement): larger is better;
@@ -59,7 +59,7 @@ def observability(A, idx=None, scale=None) -> dict:
     Returns ``{"O1", "logdet", "cond"}`` (worst block for O1 and cond, sum for logdet) and
     the per-block values under ``"blocks"``.  O1 and logdet use the column scales
     ``scale[b]`` if given (a common scale makes sets comparable), cond always the set's
-    own column scaling (seed 000 eq. 3.13, as in the identifiability report).
+    own column scaling (Tiberi 2020 eq. 3.13, as in the identifiability report).
     """
     A = np.asarray(A)
     sel = A if idx is None else A[np.asarray(idx)]
@@ -160,9 +160,9 @@ def select_poses(A, n: int, start=None, exchange: bool = True, max_passes: int =
 
 
 def sixpus_seed_comparison(n: int = 10, ncand: int = 1000, seed: int = 5) -> dict:
-    """Seed 000's ten hand-picked poses against n D-optimal poses, on the seed's own problem.
+    """Tiberi 2020's ten hand-picked poses against n D-optimal poses, on the seed's own problem.
 
-    Seed 000 calibrates leg 1 with the platform point in the world frame; there the rail
+    Tiberi 2020 calibrates leg 1 with the platform point in the world frame; there the rail
     origin is not identifiable and the identifiable columns are X, Y, Z, L, sx, sy, sz.
     Its ten poses give Table 4.22 (typed in :mod:`cosim.calibration.seed`; the seed's leg 1
     is this robot's leg 1).  Here the same seven columns come from the core's rows

@@ -5,12 +5,12 @@ calibration problem of its robot on the nominal model named by the sidecar, anal
 which parameters the data can identify, estimates them with one of the solvers, and
 verifies the accuracy gain on held-out poses.
 
-* 6-PUS (seed 000): each row is a held pose: joint readings ``q1..q6`` and the pose
+* 6-PUS (Tiberi 2020): each row is a held pose: joint readings ``q1..q6`` and the pose
   ``x, y, z, rx, ry, rz`` measured by an external tracker.  Error model: 10 parameters
   per leg (platform point in the platform frame, rail origin, leg length, rail
   direction), 60 in all; 54 calibrated coordinates because each rail direction keeps
   |s| = 1 (see :mod:`cosim.calibration.problems`).
-* Four-bar (seed 002): ``q1`` = crank angle theta, pose column ``X`` = measured output.
+* Four-bar (Vitali 2020): ``q1`` = crank angle theta, pose column ``X`` = measured output.
 
 Example
 -------
@@ -63,7 +63,7 @@ __all__ = [
     "MODELS",
 ]
 
-#: which parameters are estimated: the structural model (seed 000 3.1.1), the prediction
+#: which parameters are estimated: the structural model (Tiberi 2020 3.1.1), the prediction
 #: model (3.1.2: all parameters, truncated SVD) or all parameters ("full", refuses a
 #: rank-deficient set)
 MODELS = ("structural", "prediction", "full")
@@ -308,7 +308,7 @@ class CalibrationResult:
                  + (f", {self.holdout_accuracy.n} poses held out" if self.holdout_accuracy else ", no pose held out"))
         if self.error_model is not None:
             L.append("")
-            L.append("Seed 000 error model (60 parameters, |s| not kept): per leg")
+            L.append("Tiberi 2020 error model (60 parameters, |s| not kept): per leg")
             for b in self.error_model.blocks:
                 dropped = ", ".join(c.parameter.split(".")[-1] for c in b.combinations)
                 L.append(f"  [{b.label}] rank {b.rank}/10, cond {b.cond_scaled:.3g} -> {b.cond_after:.3g} after "
@@ -397,7 +397,7 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     holdout : float
         Fraction of the poses kept out of the calibration to verify it.
     cond_max : float
-        Condition-number limit (seed 000: 100).
+        Condition-number limit (Tiberi 2020: 100).
     seed : int
         Seed of the held-out split.
     nominal : Model, optional

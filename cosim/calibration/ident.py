@@ -1,14 +1,14 @@
-"""Identifiability of calibration parameters (seed 000 ch. 3.1).
+"""Identifiability of calibration parameters (Tiberi 2020 ch. 3.1).
 
 Given a regression matrix J (rows: measurements, columns: parameter errors; Delta y = J
-Delta eta, seed 000 eq. 3.4) this module answers which parameters can be identified from
+Delta eta, Tiberi 2020 eq. 3.4) this module answers which parameters can be identified from
 those measurements, which only in combination with others (and which combination), and
 how well conditioned the problem is:
 
 * column scaling ``J H``, ``h_j = 1 / ||j_j||`` (1 for a zero column), eq. 3.13-3.14, so
   that singular values of parameters with different units can be compared;
 * QR of the scaled matrix in the error-model order (a near-zero ``R_jj`` means column j
-  is a combination of the columns before it, the check of seed 000 ch. 4.2) and with column
+  is a combination of the columns before it, the check of Tiberi 2020 ch. 4.2) and with column
   pivoting (numerical rank and a well-conditioned subset);
 * SVD: singular values, condition number ``k = mu_1 / mu_r`` (eq. 3.10) and the null
   space (the parameter combinations the measurements cannot see);
@@ -51,7 +51,7 @@ NEAR_RANK_RTOL = 1e-3
 
 
 def column_scale(J: np.ndarray) -> np.ndarray:
-    """Seed 000 eq. 3.13: ``h_j = 1/||j_j||``, or 1 for a zero column."""
+    """Tiberi 2020 eq. 3.13: ``h_j = 1/||j_j||``, or 1 for a zero column."""
     n = np.linalg.norm(J, axis=0)
     return np.where(n > 0, 1.0 / np.where(n > 0, n, 1.0), 1.0)
 
@@ -76,7 +76,7 @@ def _dominant(v: np.ndarray) -> int:
 
 @dataclass
 class Elimination:
-    """One step of the condition-number loop (seed 000 3.1.1)."""
+    """One step of the condition-number loop (Tiberi 2020 3.1.1)."""
 
     dropped: str
     cond_before: float
@@ -264,7 +264,7 @@ def _block(J, names, units, label, cond_max, rank_rtol) -> BlockReport:
     # V must span all n columns (null space included); U is not needed at all
     _, s, Vt = np.linalg.svd(Js, full_matrices=m < n) if m and n else (None, np.zeros(0), np.eye(n))
     rank = int(np.sum(s > rank_rtol * s[0])) if s.size else 0
-    # QR in the error-model order (seed 000 ch. 4.2) and with pivoting
+    # QR in the error-model order (Tiberi 2020 ch. 4.2) and with pivoting
     R = sla.qr(Js, mode="r")[0] if m and n else np.zeros((0, n))
     d = np.abs(np.diag(R)) if R.size else np.zeros(0)
     qr_diag = np.concatenate([d, np.zeros(n - d.size)]) / (d[0] if d.size and d[0] > 0 else 1.0)
@@ -339,9 +339,9 @@ def identifiability(J, names, units=None, cond_max: float = 100.0, blocks=None,
         Parameter names (columns).
     units : list of str, optional
     cond_max : float
-        Condition-number limit of the structural model (seed 000: 100).
+        Condition-number limit of the structural model (Tiberi 2020: 100).
     blocks : list of (label, row_indices, column_indices), optional
-        Independent blocks (J is block diagonal, e.g. the six 6-PUS legs, seed 000
+        Independent blocks (J is block diagonal, e.g. the six 6-PUS legs, Tiberi 2020
         eq. 4.7); each is analysed on its own.  Default: one block.
     rank_rtol : float
         Singular values below ``rank_rtol * mu_1`` count as zero (not identifiable).

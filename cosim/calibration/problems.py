@@ -5,9 +5,9 @@ predicted measurements ``predict(p)`` and their Jacobian ``jacobian(p)``; the re
 ``y - predict(p)``.  All physics comes from the core (:class:`cosim.core.Model`); a problem
 only chooses which parameters move and stacks the core's outputs.
 
-* :class:`FourbarProblem` (seed 002): y = X of the coupler mid point at crank angles
+* :class:`FourbarProblem` (Vitali 2020): y = X of the coupler mid point at crank angles
   theta; p = the four link lengths; columns from ``pkm_fourbar_output``.
-* :class:`SixpusProblem` (seed 000 ch. 4): y = the slider strokes q_i read at held poses
+* :class:`SixpusProblem` (Tiberi 2020 ch. 4): y = the slider strokes q_i read at held poses
   whose pose was measured by a tracker; predict(p) = the inverse kinematics of the model
   with parameters p at the measured pose; columns from ``pkm_6pus_calib_rows`` with the
   platform points in the platform frame (constant over poses), so dq = q_measured -
@@ -18,7 +18,7 @@ only chooses which parameters move and stacks the core's outputs.
   columns by central differences of that inverse kinematics.
 * :class:`LinearProblem`: a fixed J and dy (e.g. a table typed from a seed).
 
-The 6-PUS rail direction.  The error model of seed 000 (eq. 4.1) has 10 parameters per
+The 6-PUS rail direction.  The error model of Tiberi 2020 (eq. 4.1) has 10 parameters per
 leg, 3 of them the rail direction s, and its columns are the derivatives without keeping
 |s| = 1.  The radial one, ds along s, has column dq/ds . s = -q: a stroke scale error, which
 a unit rail direction cannot represent (the core requires |s| = 1).  So the calibrated
@@ -62,13 +62,13 @@ class CalibrationWarning(UserWarning):
 
 
 def sixpus_leg_names(i: int) -> list[str]:
-    """The 10 error-model parameters of leg i (1-based), in seed 000 eq. 4.1 order
+    """The 10 error-model parameters of leg i (1-based), in Tiberi 2020 eq. 4.1 order
     [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz], as core parameter names."""
     return [f"leg[{i}].px", f"leg[{i}].py", f"leg[{i}].pz", f"rail[{i}].S0x", f"rail[{i}].S0y",
             f"rail[{i}].S0z", f"leg[{i}].L", f"rail[{i}].sx", f"rail[{i}].sy", f"rail[{i}].sz"]
 
 
-#: the 60-parameter error model of seed 000 (eq. 4.2), leg by leg
+#: the 60-parameter error model of Tiberi 2020 (eq. 4.2), leg by leg
 SIXPUS_ERROR_MODEL = [n for i in range(1, 7) for n in sixpus_leg_names(i)]
 
 
@@ -184,7 +184,7 @@ def _check_finite(a, what, columns):
 
 
 class FourbarProblem(Problem):
-    """Four-bar (seed 002): outputs X [m] measured at crank angles theta [rad].
+    """Four-bar (Vitali 2020): outputs X [m] measured at crank angles theta [rad].
 
     Parameters
     ----------
@@ -240,7 +240,7 @@ class _Dep:
 
 
 class SixpusProblem(Problem):
-    """6-PUS (seed 000 ch. 4): slider strokes q read at held poses measured by a tracker.
+    """6-PUS (Tiberi 2020 ch. 4): slider strokes q read at held poses measured by a tracker.
 
     Parameters
     ----------
@@ -316,7 +316,7 @@ class SixpusProblem(Problem):
         if pose.shape[0] < need:
             raise CalibrationDataError(
                 f"too few poses: {pose.shape[0]} usable pose(s) give {pose.shape[0]} equations per leg, but each leg "
-                f"has 9 calibrated parameters (10 in seed 000's error model minus the unit rail direction); "
+                f"has 9 calibrated parameters (10 in Tiberi 2020's error model minus the unit rail direction); "
                 f"measure at least {need} distinct poses")
         self.pose, self.q = pose, q
         self.pose_labels = labels

@@ -1,11 +1,11 @@
 """The seeds' calibration examples, reproduced and explained.
 
-* :func:`fourbar_seed_study` (seed 002, SPEC 3.3): the four-bar's pseudo-inverse
+* :func:`fourbar_seed_study` (Vitali 2020): the four-bar's pseudo-inverse
   identification at full precision and with the thesis' 4-decimal numbers, which
   explains why the thesis finds (0.2990, 0.5021, 0.5544, 0.6876) mm instead of the true
   (0.30, 0.50, 0.55, 0.70) mm: its output differences are differences of outputs rounded
   to 1e-4 mm, an error of up to 1e-4 mm that cond(A) ~ 1.3e3 amplifies.
-* :func:`sixpus_seed_leg1` (seed 000 ch. 4.2): the leg-1 regression matrix of Table 4.22
+* :func:`sixpus_seed_leg1` (Tiberi 2020 ch. 4.2): the leg-1 regression matrix of Table 4.22
   and its identifiability analysis.
 
 The seed's numbers below are typed from the theses (the tests type their own copy).
@@ -20,7 +20,7 @@ from .solvers import solve
 
 __all__ = ["SEED002", "SEED000_TABLE_4_22", "fourbar_seed_study", "sixpus_seed_leg1"]
 
-#: seed 002 ch. 1.1 and ch. 4, lengths in mm
+#: Vitali 2020 ch. 1.1 and ch. 4, lengths in mm
 SEED002 = {
     "theta_deg": np.arange(30.0, 61.0, 5.0),
     "lengths": np.array([600.0, 750.0, 790.0, 900.0]),
@@ -35,7 +35,7 @@ SEED002 = {
     "dl_thesis": np.array([0.2990, 0.5021, 0.5544, 0.6876]),
 }
 
-#: seed 000 Table 4.22: leg-1 regression rows at the ten poses of Tables 4.2-4.20 (world
+#: Tiberi 2020 Table 4.22: leg-1 regression rows at the ten poses of Tables 4.2-4.20 (world
 #: frame), columns [X, Y, Z, Sx, Sy, Sz, L, sx, sy, sz]
 SEED000_TABLE_4_22 = np.array([
     [1, 0.1019, 1.0824, -1, -0.1019, -1.0824, -1.4771, -0.0550, -0.0056, -0.0595],
@@ -57,7 +57,7 @@ def _pinv_solve(A, b):
 
 
 def fourbar_seed_study() -> dict:
-    """Seed 002's four-bar identification, exact and with the thesis' rounding.
+    """Vitali 2020's four-bar identification, exact and with the thesis' rounding.
 
     Returns a dict (lengths in mm) with:
 
@@ -103,7 +103,7 @@ def fourbar_seed_study() -> dict:
         return f"  {label:<44} " + " ".join(f"{x:8.4f}" for x in v) + f"   max error {np.abs(v - tru).max():.1e} mm"
 
     out["text"] = "\n".join([
-        "Four-bar, seed 002: identified length errors dl1..dl4 [mm] (true 0.30 0.50 0.55 0.70)",
+        "Four-bar, Vitali 2020: identified length errors dl1..dl4 [mm] (true 0.30 0.50 0.55 0.70)",
         f"  cond(A) = {out['cond_A']:.4g} (columns scaled: {out['cond_A_scaled']:.4g})",
         row("one pinv step, full precision", out["dl_one_step"]),
         row("Gauss-Newton (pinv iterated), full precision", out["dl_iterated"]),
@@ -120,6 +120,6 @@ def fourbar_seed_study() -> dict:
 
 
 def sixpus_seed_leg1(cond_max: float = 100.0):
-    """Identifiability of seed 000's leg-1 Table 4.22 (its QR check, and more)."""
+    """Identifiability of Tiberi 2020's leg-1 Table 4.22 (its QR check, and more)."""
     return identifiability(SEED000_TABLE_4_22, SEED000_LEG_NAMES,
                            ["m", "m", "m", "m", "m", "m", "m", "1", "1", "1"], cond_max=cond_max)

@@ -1,4 +1,4 @@
-"""Calibration solvers with one interface (seed 002 ch. 2-3, seed 000 eq. 3.6).
+"""Calibration solvers with one interface (Vitali 2020 ch. 2-3, Tiberi 2020 eq. 3.6).
 
 ``solve(problem, method, free=..., ...)`` minimises ``L = ||w (y - predict(p))||^2`` over
 the free parameters (w: the problem's row weights, 1 if it has none) and returns a :class:`Solution` with standard errors, so that the methods
@@ -6,26 +6,26 @@ can be compared on the same problem:
 
 ``"pinv"``
     one pseudo-inverse step from the nominal parameters, ``dp = J^+ (y - f(p0))``
-    (seed 002 eq. 2.2, seed 000 eq. 3.6);
+    (Vitali 2020 eq. 2.2, Tiberi 2020 eq. 3.6);
 ``"pinv-iter"``
     the same step repeated from the new parameters with the Jacobian re-evaluated
-    (seed 000 after eq. 3.6), full steps;
+    (Tiberi 2020 after eq. 3.6), full steps;
 ``"gauss-newton"``
-    the Gauss-Newton step ``J^T J p = J^T e`` (seed 002 eq. 3.9) with a step length alpha
-    halved until L decreases (seed 002 eq. 3.2-3.3);
+    the Gauss-Newton step ``J^T J p = J^T e`` (Vitali 2020 eq. 3.9) with a step length alpha
+    halved until L decreases (Vitali 2020 eq. 3.2-3.3);
 ``"lm"``
-    Levenberg-Marquardt (seed 002 eq. 3.10) by ``scipy.optimize.least_squares``
+    Levenberg-Marquardt (Vitali 2020 eq. 3.10) by ``scipy.optimize.least_squares``
     (MINPACK) with the analytic Jacobian;
 ``"golden"``
-    derivative-free direct search (seed 002 ch. 3.1): a golden-section line search on
+    derivative-free direct search (Vitali 2020 ch. 3.1): a golden-section line search on
     one coordinate at a time within ``p_j +- width_j``, sweeping the coordinates until no
     coordinate moves.  ``basis="svd"`` searches along the principal axes of the scaled
     Jacobian at the start instead of along the parameters, which decouples a quadratic
     cost (for an ill-conditioned problem the plain coordinate search crawls).
 
-Linear steps are solved by SVD of the column-scaled Jacobian (seed 000 eq. 3.13), with
+Linear steps are solved by SVD of the column-scaled Jacobian (Tiberi 2020 eq. 3.13), with
 singular values below ``rcond * mu_1`` discarded: ``rcond = 1/cond_max`` is the prediction
-model of seed 000 3.1.2; the default keeps everything numerically non-zero.
+model of Tiberi 2020 3.1.2; the default keeps everything numerically non-zero.
 
 Standard errors at the solution, per independent block if the problem has blocks: by
 default the heteroscedasticity-consistent sandwich estimate (HC2), because the noise of
@@ -48,7 +48,7 @@ __all__ = ["METHODS", "Solution", "solve"]
 
 METHODS = ("pinv", "pinv-iter", "gauss-newton", "lm", "golden")
 
-_GOLD = (np.sqrt(5.0) - 1.0) / 2.0  # 0.618..., seed 002: d2 = 2/(1 + sqrt 5) d1
+_GOLD = (np.sqrt(5.0) - 1.0) / 2.0  # 0.618..., Vitali 2020: d2 = 2/(1 + sqrt 5) d1
 
 
 @dataclass
@@ -166,7 +166,7 @@ def _covariance(J, r, rcond, fblocks, se="hc2"):
 
 
 def _golden_1d(f, a, b, tol, fa_cache=None):
-    """Golden-section minimum of f on [a, b] to width tol (seed 002 ch. 3.1)."""
+    """Golden-section minimum of f on [a, b] to width tol (Vitali 2020 ch. 3.1)."""
     d = _GOLD * (b - a)
     xa, xb = b - d, a + d  # seed: delta_A = max - d2, delta_B = min + d2
     fa, fb = f(xa), f(xb)
@@ -262,7 +262,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
             dp, rank = _step(J, r, rcond, fblocks)
             alpha = 1.0
             if method == "gauss-newton":
-                # seed 002 eq. 3.3: accept only a step that lowers L
+                # Vitali 2020 eq. 3.3: accept only a step that lowers L
                 for _ in range(30):
                     Lt, rt = cost_at(_with(p, fi, dp * alpha))
                     if Lt < L:

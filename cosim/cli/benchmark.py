@@ -1,9 +1,9 @@
-"""``cosim bench core``: the reference core's timings against SPEC 7, with baselines.
+"""``cosim bench core``: the reference core's timings against the performance targets, with baselines.
 
 One table, single core, three columns per quantity:
 
 * **core (C++)**: ``build/bin/core_bench`` (bench/core_bench.cpp) calling the C API
-  directly; this is the figure compared with SPEC 7's target (PASS / MISS);
+  directly; this is the figure compared with The target (PASS / MISS);
 * **Python binding**: the same operation through :mod:`cosim.core` /
   :mod:`cosim.simulate` (one batched call, or the Python controller loop);
 * **baseline**: the path a user would take without the batched core: a Python loop
@@ -45,7 +45,7 @@ def _configure(p):
     p.add_argument("--json", action="store_true", help="print the rows as JSON instead of a table")
 
 
-@command("bench", "benchmarks against SPEC 7's targets, with baselines in the same run (cosim bench core)")
+@command("bench", "benchmarks against the performance targets, with baselines in the same run (cosim bench core)")
 def cmd_bench(args):
     return TARGETS[args.target][0](args)
 
@@ -197,7 +197,7 @@ def core_table(cpp: dict, py: dict) -> str:
     """The combined table (text)."""
     head = (f"{'quantity':<50} {'unit':<13} {'core C++':>10} {'Python':>10} {'baseline':>10}  "
             f"{'target':>10}  {'':4}")
-    lines = ["6-PUS reference core, single thread: SPEC 7 targets (PASS/MISS on the C++ figure)", head,
+    lines = ["6-PUS reference core, single thread: performance targets (PASS/MISS on the C++ figure)", head,
              "-" * len(head)]
     notes = []
     for key, r in cpp.items():

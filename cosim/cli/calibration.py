@@ -14,11 +14,11 @@ def _configure(p):
                    choices=["pinv", "pinv-iter", "gauss-newton", "lm", "golden"],
                    help="estimation method (default gauss-newton)")
     p.add_argument("--model", default="structural", choices=["structural", "prediction", "full"],
-                   help="which parameters to estimate: structural (the cond < limit subset, seed 000 3.1.1), "
+                   help="which parameters to estimate: structural (the cond < limit subset, Tiberi 2020 3.1.1), "
                         "prediction (all, truncated SVD, 3.1.2), full (all; refuses a rank-deficient set)")
     p.add_argument("--basis", default="svd", choices=["svd", "parameters"],
                    help="golden search directions: principal axes of the scaled Jacobian (default) or the parameters "
-                        "one at a time as in seed 002 (slow on ill-conditioned problems)")
+                        "one at a time as in Vitali 2020 (slow on ill-conditioned problems)")
     p.add_argument("--holdout", type=float, default=0.25, metavar="FRACTION",
                    help="fraction of the poses kept out to verify the calibration (default 0.25)")
     p.add_argument("--params", metavar="NAMES",
@@ -31,12 +31,12 @@ def _configure(p):
     p.add_argument("--html", action="store_true", help="with --out: also an interactive, self-contained HTML report")
     p.add_argument("--bench", action="store_true",
                    help="benchmark: 60-parameter 6-PUS calibration on --poses poses against a finite-difference "
-                        "baseline (SPEC 7)")
+                        "baseline (docs/performance.md)")
     p.add_argument("--poses", type=int, default=1000, help="poses of the benchmark (default 1000)")
     p.add_argument("--design", action="store_true",
-                   help="pose selection study: D-optimal poses vs seed 000's ten and random ones")
+                   help="pose selection study: D-optimal poses vs Tiberi 2020's ten and random ones")
     p.add_argument("--seed-examples", action="store_true",
-                   help="seed 002's four-bar (rounding and cond(A)) and seed 000's leg-1 table, reproduced")
+                   help="Vitali 2020's four-bar (rounding and cond(A)) and Tiberi 2020's leg-1 table, reproduced")
 
 
 @command("calibrate", "kinematic calibration from a recording: identifiability, estimates +- SE, accuracy gain")
@@ -56,7 +56,7 @@ def cmd_calibrate(args):
 
         print(fourbar_seed_study()["text"])
         print()
-        print("Seed 000, Table 4.22 (leg 1, world frame, ten poses):")
+        print("Tiberi 2020, Table 4.22 (leg 1, world frame, ten poses):")
         print(sixpus_seed_leg1().text())
         return 0
     if not args.recording:

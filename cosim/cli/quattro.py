@@ -1,5 +1,5 @@
 """``cosim quattro ...``: index maps and figures, the map benchmark, the stated maxima of
-seed 003, and the Adept Cycle times predicted against the measured tables."""
+Virzi 2010, and the Adept Cycle times predicted against the measured tables."""
 from __future__ import annotations
 
 import json
@@ -8,7 +8,7 @@ import numpy as np
 
 from .main import command
 
-# Results stated by seed 003 (SPEC 3.2) on the robot axis x = y = 0, as (index, what, z [m]).
+# Results stated by Virzi 2010 on the robot axis x = y = 0, as (index, what, z [m]).
 STATED = [
     ("mu_T", "max", -1.170, "best translational manipulability (Fig. 3.2)"),
     ("mu_xy", "=1", -0.920, "horizontal isotropy point P_xy, mu_xy = 1 (Fig. 3.3)"),
@@ -47,7 +47,7 @@ def _configure(p):
     b = sub.add_parser("bench", help="time of the full map against the 1 s target and a numpy baseline")
     b.add_argument("--set", dest="param_set", default="appendix_a")
     b.add_argument("--json", action="store_true")
-    s = sub.add_parser("maxima", help="the index features stated by seed 003, as found with each parameter set")
+    s = sub.add_parser("maxima", help="the index features stated by Virzi 2010, as found with each parameter set")
     s.add_argument("--json", action="store_true")
     c = sub.add_parser("cycle", help="predicted Adept Cycle times vs Tables 6.1-6.5, figure + correlation")
     c.add_argument("--out", required=True, help="output directory for the figure and the CSV")
@@ -59,7 +59,7 @@ def _configure(p):
                         "tables and predict the others (comma-separated, default 6.1,6.5; 'none' to skip)")
 
 
-@command("quattro", "Adept Quattro (seed 003): index maps, benchmark, stated maxima, cycle times vs measurements")
+@command("quattro", "Adept Quattro (Virzi 2010): index maps, benchmark, stated maxima, cycle times vs measurements")
 def cmd_quattro(args):
     if args.action == "map":
         from .. import quattro

@@ -1,4 +1,4 @@
-"""The library of missing-physics effects the engine knows (SPEC 6).
+"""The library of missing-physics effects the engine knows.
 
 Each :class:`Effect` is a named physical term with its core parameter(s), unit, the
 residual family it shows in, how its regressor is built, the sign it may take, the

@@ -1,4 +1,4 @@
-"""Adept Quattro s650H (seed 003): :mod:`.maps` (performance-index maps, figures, the
+"""Adept Quattro s650H (Virzi 2010): :mod:`.maps` (performance-index maps, figures, the
 Adept frame; re-exported here) and :mod:`.cycle_time` (the cycle-time model against the
 measured tables).  docs/quattro.md.
 """

@@ -1,5 +1,5 @@
 """Pick-and-place cycle times of the Adept Quattro predicted by the core's dynamics,
-compared with the measured Adept Cycle tables of seed 003 (Tables 6.1-6.5).
+compared with the measured Adept Cycle tables of Virzi 2010 (Tables 6.1-6.5).
 
 The cycle (seed ch. 3.3, Fig. 3.1): from the pick/place height z, lift ``lift`` vertically,
 travel ``travel`` along the Adept platform x axis at z + lift, set down, and come back the
@@ -47,7 +47,7 @@ LAYOUTS = {
     "start_x75": lambda L: (0.075, 0.075 + L),
 }
 
-# A copy of shared/data/adept_quattro_cycle_times.csv (Tables 6.1-6.5 of seed 003) ships with the
+# A copy of shared/data/adept_quattro_cycle_times.csv (Tables 6.1-6.5 of Virzi 2010) ships with the
 # project so the comparison does not depend on the checkout layout.
 DATA = Path(__file__).resolve().parents[2] / "data" / "adept_quattro_cycle_times.csv"
 

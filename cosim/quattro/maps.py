@@ -1,4 +1,4 @@
-"""Adept Quattro s650H (seed 003): performance-index maps and figures.
+"""Adept Quattro s650H (Virzi 2010): performance-index maps and figures.
 
 Every number comes from the C++ core: :func:`index_map` is one batched call of
 ``pkm_quattro_indices`` over the whole grid.  Units are SI (m, rad, kg, N, N m, s);
@@ -110,7 +110,7 @@ def indices(m: Model, poses) -> tuple[np.ndarray, np.ndarray]:
 
 def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None = None,
               params: dict | None = None, model: Model | None = None) -> IndexMap:
-    """Every performance index of seed 003 on the grid x * y * z, in one core call.
+    """Every performance index of Virzi 2010 on the grid x * y * z, in one core call.
 
     Parameters
     ----------

@@ -170,7 +170,7 @@ class ScenarioKind(Kind):
 CALIBRATION_DEFAULTS = {
     "robot": "6pus",            # any robot: the 6-PUS and the four-bar have their own campaigns, the others the generic one
     "seed": 1,                  # the real robot, its poses and the noise
-    "n_poses": 60,              # measured poses (6-PUS: random in the seed 000 workspace; four-bar: crank angles)
+    "n_poses": 60,              # measured poses (6-PUS: random in the Tiberi 2020 workspace; four-bar: crank angles)
     "tracker_noise": 10e-6,     # m, standard deviation of the measured position (four-bar: of X)
     "angle_noise": -1.0,        # rad; < 0: tracker_noise over the platform radius
     "encoder_noise": 0.0,       # m

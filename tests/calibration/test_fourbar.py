@@ -1,4 +1,4 @@
-"""Four-bar calibration (seed 002, SPEC 3.3): the seed's tables, recovery of the true
+"""Four-bar calibration (Vitali 2020): the seed's tables, recovery of the true
 errors, cond(A), and why the thesis' 4-decimal answer differs."""
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ from cosim.calibration.solvers import _golden_1d, solve
 from cosim.core import Model
 from cosim.fourbar import LENGTHS, output
 
-# Typed from seed 002 (ch. 1.1, ch. 4 and the appendix); lengths in mm.
+# Typed from Vitali 2020 (ch. 1.1, ch. 4 and the appendix); lengths in mm.
 THETA = np.radians(np.arange(30, 61, 5))
 XP = [815.2891, 803.5676, 783.9942, 757.9735, 726.5904, 690.7086, 651.0450]
 A_SEED = np.array([[1.2343, 0.8090, -0.5164, -0.1379], [1.1503, 0.7409, -0.4270, -0.1166],
@@ -46,7 +46,7 @@ def test_recovers_true_errors_noise_free(problem, method):
 
 
 def test_one_pseudo_inverse_step_has_only_linearisation_error(problem):
-    # SPEC 3.3: at full precision the pseudo-inverse recovers the true errors to ~1e-4 mm
+    # at full precision the pseudo-inverse recovers the true errors to ~1e-4 mm
     err = np.abs(solve(problem, "pinv").dp * 1e3 - TRUE_DL).max()
     assert 1e-6 < err < 3e-4
 
@@ -59,14 +59,14 @@ def test_golden_search_along_principal_axes_recovers_true_errors(problem):
 
 def test_golden_coordinate_search_lowers_cost_but_crawls_on_ill_conditioned_problem(problem):
     s = solve(problem, "golden", max_sweeps=5)
-    assert s.cost[0] * 1e6 == pytest.approx(1.0456, abs=2e-4)  # seed 002 ch. 4: L1 = 1.0456 mm^2
-    assert all(b <= a for a, b in zip(s.cost, s.cost[1:])), "L must never increase (seed 002 eq. 3.3)"
+    assert s.cost[0] * 1e6 == pytest.approx(1.0456, abs=2e-4)  # Vitali 2020 ch. 4: L1 = 1.0456 mm^2
+    assert all(b <= a for a, b in zip(s.cost, s.cost[1:])), "L must never increase (Vitali 2020 eq. 3.3)"
     assert s.cost[-1] < 0.1 * s.cost[0]
     assert not s.converged and "not converged" in s.message
 
 
 def test_golden_section_trial_points_follow_seed():
-    # seed 002 ch. 4: interval [0.25, 0.35] mm, d2 = 0.0618, first points 0.2882 and 0.3118
+    # Vitali 2020 ch. 4: interval [0.25, 0.35] mm, d2 = 0.0618, first points 0.2882 and 0.3118
     seen = []
     _golden_1d(lambda t: seen.append(t) or (t - 0.3) ** 2, 0.25, 0.35, 1e-6)
     assert seen[0] == pytest.approx(0.2882, abs=1e-4)
@@ -137,7 +137,7 @@ def test_nan_output_is_an_error_naming_the_row():
 
 
 def test_seed_direct_search_evaluated_the_prediction_not_the_residual():
-    # Seed 002 ch. 4 / appendix, first golden step on dl1 in [0.25, 0.35]: its dXp,A and
+    # Vitali 2020 ch. 4 / appendix, first golden step on dl1 in [0.25, 0.35]: its dXp,A and
     # dXp,B (typed below) are A (delta, 0, 0, 0) at delta_1A = 0.2882 and delta_1B =
     # 0.3118 (the 35 deg entry of dXp,A, 0.3115, should read 0.3315), and L is their
     # squared norm: the predicted change, not the residual dX - A delta.  That cost is

@@ -1,4 +1,4 @@
-"""Identifiability analysis (seed 000 ch. 3.1 and 4.2)."""
+"""Identifiability analysis (Tiberi 2020 ch. 3.1 and 4.2)."""
 import warnings
 
 import numpy as np
@@ -9,7 +9,7 @@ from cosim.calibration.problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, Cal
                                         calib_rows)
 from cosim.core import Model
 
-# Seed 000 Table 4.22, typed from the thesis: leg 1 at the ten poses of Tables 4.2-4.20,
+# Tiberi 2020 Table 4.22, typed from the thesis: leg 1 at the ten poses of Tables 4.2-4.20,
 # columns [X, Y, Z, Sx, Sy, Sz, L, sx, sy, sz].
 TABLE_4_22 = np.array([
     [1, 0.1019, 1.0824, -1, -0.1019, -1.0824, -1.4771, -0.0550, -0.0056, -0.0595],
@@ -24,7 +24,7 @@ TABLE_4_22 = np.array([
     [1, -0.3401, 0.6347, -1, 0.3401, -0.6347, -1.2323, -0.0893, -0.0304, -0.0567],
 ])
 NAMES = ["X", "Y", "Z", "Sx", "Sy", "Sz", "L", "sx", "sy", "sz"]
-# Seed 000 Tables 4.2-4.20: the poses (x, y, z [m], rx, ry, rz [deg]).
+# Tiberi 2020 Tables 4.2-4.20: the poses (x, y, z [m], rx, ry, rz [deg]).
 POSES_DEG = np.array([[0, 0, 0.085, 0, 0, 0], [0, 0, 0.085, 1, 1, 1], [0.05, 0.05, 0.09, 1, 4, -3],
                       [0.02, 0, 0.075, -1, 1, 2], [0.015, 0.02, 0.04, 0, 4, 0], [-0.01, 0.07, 0.018, 5, 4, 1],
                       [-0.04, 0.01, 0.065, -4, 3, -5], [-0.023, -0.019, 0.1, 0, 2, -3],
@@ -35,7 +35,7 @@ def test_seed_table_rail_origin_not_identifiable_with_platform_point():
     rep = identifiability(TABLE_4_22, NAMES)
     b = rep.blocks[0]
     assert b.rank == 7
-    # QR in the error-model order: R_44, R_55, R_66 ~ 1e-16 (seed 000 ch. 4.2)
+    # QR in the error-model order: R_44, R_55, R_66 ~ 1e-16 (Tiberi 2020 ch. 4.2)
     assert np.all(b.qr_diag[3:6] < 1e-12) and np.all(b.qr_diag[[0, 1, 2, 6, 7, 8, 9]] > 1e-4)
     assert sorted(b.not_identifiable) == ["Sx", "Sy", "Sz"]
     # found from the null space, with the combination: moving P and S0 together is invisible
@@ -160,6 +160,6 @@ def test_sixpus_block_structure_one_leg_per_block():
     J = P.jacobian(P.p0)
     for b, (_, rows, cols) in enumerate(P.blocks):
         other = np.setdiff1d(np.arange(J.shape[1]), cols)
-        assert np.all(J[np.ix_(rows, other)] == 0)  # seed 000 eq. 4.7
+        assert np.all(J[np.ix_(rows, other)] == 0)  # Tiberi 2020 eq. 4.7
     rep = identifiability(J, P.names, P.units, blocks=P.blocks)
     assert [b.label for b in rep.blocks] == [f"leg {i}" for i in range(1, 7)]

@@ -1,4 +1,4 @@
-"""6-PUS calibration, whole robot (seed 000 ch. 4): derivatives, recovery of the
+"""6-PUS calibration, whole robot (Tiberi 2020 ch. 4): derivatives, recovery of the
 identifiable combinations within 3 standard errors, accuracy gain on held-out poses,
 bad data.  A "real" robot is a core model with random geometric errors (fixed seeds)."""
 import warnings

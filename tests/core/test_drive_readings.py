@@ -1,6 +1,6 @@
 """The sensor model of the drive layer (``pkm_measure_joints``): the encoder is on the drive
 side of the transmission, so a gap and an elasticity read the effort the transmission carries:
-the applied effort less the drive's own friction and rotor-inertia force (issue 12: MuJoCo's
+the applied effort less the drive's own friction and rotor-inertia force (MuJoCo's
 two-body rails showed the difference), and the gap's side follows that effort, not the velocity."""
 import numpy as np
 import pytest

@@ -65,7 +65,7 @@ def test_power_balance_and_gravity_load_from_the_energy(m):
 
 
 def test_a_leg_perpendicular_to_its_rail_hands_its_load_to_the_rail():
-    # Seed 001 sec. 5: a model with leg-axis forces only loses its hold on the platform
+    # Zavala-Yoe et al. 2015 sec. 5: a model with leg-axis forces only loses its hold on the platform
     # as a leg turns perpendicular to its rail (s.w -> 0) and the platform "falls".  With
     # the rail reactions in the model, that actuator's holding effort goes to zero with
     # s.w (the rail carries the load), the others stay finite, and the platform stays put.

@@ -1,4 +1,4 @@
-"""A new robot touches the core and nothing in Python (issue 13).
+"""A new robot touches the core and nothing in Python.
 
 ``libpkm_toy.so`` is the core plus one robot written only in the core's test tree
 (``c_core/tests/robots/slider_crank.cpp``: a vertical slider-crank, one joint).  With
@@ -100,8 +100,8 @@ seed = 2
 
 def test_excitation_scenario_draws_its_figure(tmp_path):
     # An excitation reference on a robot the package never heard of: the trajectory comes
-    # from the core's reach, and the figure shows every pose coordinate (it used to stop
-    # with a KeyError on the reference type).
+    # from the core's reach, and the figure shows every pose coordinate (no KeyError on
+    # the reference type).
     (tmp_path / "exc.toml").write_text(EXCITATION)
     out = cosim("run", "exc.toml", "--out", "o", cwd=tmp_path)
     png = tmp_path / "o" / "toy_excitation.png"

@@ -1,4 +1,4 @@
-"""A recording in another joint convention than the model's (issue 12: a rail coordinate
+"""A recording in another joint convention than the model's (a rail coordinate
 running the other way on three legs loaded without a word and was diagnosed wrong).
 
 Undeclared, the diagnosis names the legs whose effort runs against the model's and names

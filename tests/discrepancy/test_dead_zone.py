@@ -23,8 +23,8 @@ def test_a_hidden_dead_zone_is_named_with_its_width(tmp_path):
 
 def test_a_dead_zone_on_every_drive_is_named_with_each_width(tmp_path):
     # the generator's draw for this seed hides a dead zone on all six rails (3-4 % of the
-    # typical effort, each its own width); one rail at a time, a small off-centre payload
-    # used to take their common part first and the widths came out 54 % off
+    # typical effort, each its own width); taken one rail at a time, a small off-centre payload
+    # would take their common part first and the widths would come out 54 % off
     spec = blind.CaseSpec("dz_all", "6pus", ["dead_zone"], seed=1162275821)
     rec, key = blind.make_case(spec, tmp_path / "cases", tmp_path / "keys")
     d = diagnose(rec, figures=False, replay=False)

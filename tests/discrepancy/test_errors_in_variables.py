@@ -1,4 +1,4 @@
-"""Errors in variables: masses, inertias and viscous friction by instrumental variables (issue 12).
+"""Errors in variables: masses, inertias and viscous friction by instrumental variables.
 
 Their regressor columns are built from the measured rates and accelerations, whose noise
 least squares reads as a smaller coefficient (attenuation).  The engine estimates them with

@@ -1,4 +1,4 @@
-"""Friction that fades at low speed (issue 12: MuJoCo's soft friction is 35 % of nominal at
+"""Friction that fades at low speed (MuJoCo's soft friction is 35 % of nominal at
 0.1-1 mm/s): the drive's Coulomb friction with a velocity scale, F tanh(qd / v_c), as a named
 effect.  A blind case hiding one is named so with its amplitude and its velocity scale; a step
 Coulomb friction on the same trajectory stays a Coulomb friction (the extra parameter is not

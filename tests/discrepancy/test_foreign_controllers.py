@@ -1,7 +1,6 @@
 """Recordings made under a PID (integral, filtered derivative, output limits) or a
 discrete LTI controller from python-control: the sidecar describes them, the engine
-rebuilds them and replays the held-out part in closed loop (issue 12: the replay was
-skipped for every recording with such a controller)."""
+rebuilds them and replays the held-out part in closed loop."""
 import control
 import numpy as np
 import pytest

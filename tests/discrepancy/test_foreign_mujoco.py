@@ -1,4 +1,4 @@
-"""The engine on recordings from MuJoCo, a simulator the project did not write (issue 12).
+"""The engine on recordings from MuJoCo, a simulator the project did not write.
 
 A few cases of bench/foreign/mujoco_blind.py (which runs the full set: every effect type,
 clean cases, PD + gravity or PID): the robot simulated by MuJoCo with an effect hidden in

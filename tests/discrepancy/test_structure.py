@@ -1,4 +1,4 @@
-"""Structure left unexplained (issue 12): with the hidden effect's type taken out of the
+"""Structure left unexplained: with the hidden effect's type taken out of the
 library, the residual of the fitted model keeps structure keyed on the motion, and the
 diagnosis says so (channel, what it is keyed on, the library effects of that kind),
 never "no missing physics" or "within noise"; with the full library, and on clean

@@ -1,4 +1,4 @@
-"""Ties, not rulings (issue 12): a centred payload is the same physics as a heavier
+"""Ties, not rulings: a centred payload is the same physics as a heavier
 platform on any recording; the alternative with more parameters fits exactly as well and
 must be reported as a tie, not "ruled out" by its parameter penalty."""
 from disc_helpers import run

@@ -21,7 +21,7 @@ def test_measured_tables_are_loaded():
 
 
 def test_table_6_1_minimum_height_within_50_mm(cmp61):
-    # Acceptance (issue 6): the predicted minimum within 50 mm of the measured one.
+    # Acceptance: the predicted minimum within 50 mm of the measured one.
     assert abs(cmp61.z_min_pred - cmp61.z_min_meas) <= 0.050, cmp61.summary()
 
 
@@ -30,7 +30,7 @@ def test_table_6_1_rank_correlation_at_least_0_7(cmp61):
 
 
 def test_table_6_1_absolute_level_gap_is_reported_not_hidden(cmp61):
-    # SPEC 3.2: the controller's profile and settling set the level; the model is a
+    # the controller's profile and settling set the level; the model is a
     # torque-limited optimum, so it must be well below the measurement.
     assert 2.0 < cmp61.level_ratio < 3.5, cmp61.summary()
     assert 0.3 < cmp61.predicted_t10.mean() / 10 < 0.5
@@ -81,7 +81,7 @@ def test_waypoints_follow_the_layout():
         ct.cycle_waypoints(m, -1.0, "standard", "diagonal")
 
 
-# ------------------------------------------------ fitted cycle model (issue 16)
+# ------------------------------------------------ fitted cycle model 
 
 @pytest.fixture(scope="module")
 def fit_61_65():

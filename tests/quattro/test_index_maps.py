@@ -1,4 +1,4 @@
-"""Quattro index maps (seed 003 ch. 3-5): the stated results, each with the parameter set
+"""Quattro index maps (Virzi 2010 ch. 3-5): the stated results, each with the parameter set
 that reproduces it, and the map API.  Features are read on the robot axis x = y = 0 (the
 seed's x-z sections are symmetric about it) on a 1 mm z grid unless stated otherwise."""
 import numpy as np
@@ -7,7 +7,7 @@ import pytest
 from cosim import quattro
 from cosim.cli.quattro import axis_feature
 
-TOL = 0.030  # m, the acceptance tolerance of issue 6
+TOL = 0.030  # m, the acceptance tolerance
 # The default set's tool offset is 75 mm; the seed's maps use offset 0 (ch. 3.3), so the
 # default set is evaluated with platform.offset = 0 to compare with the figures.
 SEED_MAPS = {"platform.offset": 0.0}

@@ -39,7 +39,7 @@ def test_campaign_export_reloads_with_held_poses(campaign):
         assert np.std(scatter[:, :3]) == pytest.approx(1e-5, rel=0.15)
         # joint readings and the measured pose are simultaneous and at rest
         assert np.max(np.abs(res["qd_true"][settled])) < 1e-3
-    # the reference pose of hold 3 is the campaign's third pose (seed 000 measurement 4)
+    # the reference pose of hold 3 is the campaign's third pose (Tiberi 2020 measurement 4)
     np.testing.assert_allclose(res["xref"][lab == 3][0], [0.02, 0, 0.075, *np.radians([-1, 1, 2])], atol=1e-15)
     # the robot's geometric errors are concealed from the recording, declared in the metrics
     assert rec.parameters == {}

@@ -1,4 +1,4 @@
-"""Computed torque on the laser-cut "M" (seed 001 sec. 8.1, 8.9): nominal plant vs 20 % heavier platform."""
+"""Computed torque on the laser-cut "M" (Zavala-Yoe et al. 2015 sec. 8.1, 8.9): nominal plant vs 20 % heavier platform."""
 from pathlib import Path
 
 import numpy as np

@@ -5,7 +5,7 @@
  * physics through this header only.  Conventions:
  *
  *  1. Units are SI throughout: m, rad, kg, N, N m, s.  Angles of the 6-PUS pose are
- *     fixed-axis rotations, R = Rx(rx) Ry(ry) Rz(rz) (seed 000 eq. 2.5).
+ *     fixed-axis rotations, R = Rx(rx) Ry(ry) Rz(rz) (Tiberi 2020 eq. 2.5).
  *  2. Two handles.  pkm_model is constant while computations run: robot kind,
  *     named parameters, derived geometry.  pkm_data is mutable: work buffers, the
  *     last error, counters.  Every computation is a free function taking
@@ -180,7 +180,7 @@ PKM_API int pkm_fk_batch(const pkm_model* m, pkm_data* d, size_t n, const double
                          const double* x_guess, const pkm_fk_options* opt, double* x,
                          int* status);
 
-/* Jacobians at pose x (seed 001 eq. 5-6): Jx[nd,nd] xd = Jq[nd,nd] qd, and
+/* Jacobians at pose x (Zavala-Yoe et al. 2015 eq. 5-6): Jx[nd,nd] xd = Jq[nd,nd] qd, and
  * J[nd,nd] = Jq^-1 Jx, so qd = J xd.  Any output may be NULL. */
 PKM_API int pkm_jacobians(const pkm_model* m, pkm_data* d, const double* x, double* Jx,
                           double* Jq, double* J);
@@ -470,12 +470,12 @@ PKM_API int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference* r
                             const double* q_noise, const double* qd_noise, int measure,
                             pkm_loop_record* out, size_t* n_done);
 
-/* ====================================================== 6-PUS specific (seed 000) */
+/* ====================================================== 6-PUS specific (Tiberi 2020) */
 
 enum { PKM_FRAME_WORLD = 0, PKM_FRAME_PLATFORM = 1 };
 
 /* Calibration regression rows rows[6,10]: dq_i / d eta_i for each leg i, eta_i =
- * [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (seed 000 eq. 4.1).  frame selects the
+ * [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (Tiberi 2020 eq. 4.1).  frame selects the
  * coordinates of the platform point: PKM_FRAME_WORLD differentiates with respect to
  * the world position of P_i at this pose (the seed's tables), PKM_FRAME_PLATFORM with
  * respect to its platform-frame coordinates leg[i].px/py/pz (what calibration needs:
@@ -487,14 +487,14 @@ PKM_API int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x
 PKM_API int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x, double* P,
                                 double* S);
 
-/* ==================================================== four-bar specific (seed 002) */
+/* ==================================================== four-bar specific (Vitali 2020) */
 
 /* Output of the four-bar at crank angle theta [rad]: X [m] of the mid point of
  * link 2, and dX/dl[4] with respect to the link lengths l1..l4 (may be NULL). */
 PKM_API int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta, double* X,
                                double* dX_dl);
 
-/* ================================================ Quattro specific (seed 003) */
+/* ================================================ Quattro specific (Virzi 2010) */
 
 /* Quattro conventions: pose x = (x, y, z, theta), the tool point in the seed's model
  * frame (arm 1 along +x, arm 2 along +y, z up) with the Adept origin `base.h` above the

@@ -1,8 +1,8 @@
-// The planar four-bar linkage of seed 002 (a calibration benchmark, one degree of freedom).
+// The planar four-bar linkage of Vitali 2020 (a calibration benchmark, one degree of freedom).
 //
 // Frame: origin at the fixed pivot A, x along the fixed link AD (D = (l4, 0)).  The crank
 // AB (l1) is driven at angle theta; the coupler BC (l2) makes angle phi with x; the rocker
-// DC (l3) closes the loop:  l1 e(theta) + l2 e(phi) = l4 e(0) + l3 e(psi)  (seed 002 ch. 1.1).
+// DC (l3) closes the loop:  l1 e(theta) + l2 e(phi) = l4 e(0) + l3 e(psi)  (Vitali 2020 ch. 1.1).
 // Output: X = l1 cos(theta) + l2/2 cos(phi), the x coordinate of the mid point of the
 // coupler.  Pose x[1] = theta and joint q[1] = theta (the crank is the actuator).
 //
@@ -85,7 +85,7 @@ Config assemble(const double* l, double theta) {
 
 struct Fourbar final : Robot {
   const char* name() const override { return "fourbar"; }
-  const char* title() const override { return "four-bar linkage (seed 002), hand-written"; }
+  const char* title() const override { return "four-bar linkage (Vitali 2020), hand-written"; }
   int ndof() const override { return 1; }
   const char* pose_name(int) const override { return "theta"; }  // the crank angle (pose = joint)
   const char* pose_unit(int) const override { return "rad"; }
@@ -97,7 +97,7 @@ struct Fourbar final : Robot {
   std::vector<ParamSpec> param_specs(const std::string& set) const override {
     if (set != "default")
       throw Error(PKM_ERR_ARGUMENT, "robot 'fourbar' has no parameter set '" + set + "' (known: default)");
-    // Seed 002 ch. 1.1 nominal lengths.
+    // Vitali 2020 ch. 1.1 nominal lengths.
     return {
         {"link[1].l", "m", "crank AB length l1 (driven at angle theta about A)", 0.600, 1e-6, 1e3},
         {"link[2].l", "m", "coupler BC length l2 (output point at its mid point)", 0.750, 1e-6, 1e3},

@@ -1,4 +1,4 @@
-// Adept Quattro s650H (4-RUU), seed 003: parameters, inverse kinematics (ch. 1.4.1),
+// Adept Quattro s650H (4-RUU), Virzi 2010: parameters, inverse kinematics (ch. 1.4.1),
 // Jacobians and their time derivative (ch. 2.3, 2.5), the simplified Newton-Euler model of
 // ch. 5 written in task space, and the GIMRE of ch. 4.  Conventions in quattro.hpp.
 #include "robots/quattro.hpp"
@@ -213,7 +213,7 @@ struct ParamTable {
 class Quattro final : public Robot {
  public:
   const char* name() const override { return "quattro"; }
-  const char* title() const override { return "Adept Quattro s650H 4-RUU (seed 003), hand-written"; }
+  const char* title() const override { return "Adept Quattro s650H 4-RUU (Virzi 2010), hand-written"; }
   int ndof() const override { return N; }
   std::vector<std::string> param_sets() const override { return {"default", "appendix_a"}; }
   const char* pose_name(int i) const override {

@@ -1,4 +1,4 @@
-// Adept Quattro s650H (4-RUU), seed 003: the constant model and the per-pose kinematics
+// Adept Quattro s650H (4-RUU), Virzi 2010: the constant model and the per-pose kinematics
 // shared by the robot (quattro.cpp) and the batched index maps (quattro_indices.cpp).
 //
 // Frames and coordinates (docs/quattro.md has the figures):

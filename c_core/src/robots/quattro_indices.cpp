@@ -1,4 +1,4 @@
-// C API specific to the Quattro: the kinematic and dynamic performance indices of seed 003
+// C API specific to the Quattro: the kinematic and dynamic performance indices of Virzi 2010
 // ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points.
 #include <cstring>
 

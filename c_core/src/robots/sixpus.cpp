@@ -12,17 +12,17 @@ namespace sixpus {
 
 namespace {
 
-// Reference geometry (SPEC 3.1, seed 000 ch. 2 and Table 4.1).
+// Reference geometry (docs/6pus.md, Tiberi 2020 ch. 2 and Table 4.1).
 constexpr double kL = 0.116;            // leg length [m]
 constexpr double kRadius = 0.056;       // platform-point circle [m]
 constexpr double kHomeZ = 0.085;        // home height [m]
 constexpr double kHomeStroke = 0.055;   // home stroke of legs 2..6 [m]
 constexpr double kQmax = 0.17;          // stroke range [0, kQmax] (docs/6pus.md)
-// Platform-point angles of legs 1..6 (seed 000 eqs. 2.8-2.13 with R2 mirrored for
-// legs 4-6, SPEC 3.1).
+// Platform-point angles of legs 1..6 (Tiberi 2020 eqs. 2.8-2.13 with R2 mirrored for
+// legs 4-6).
 constexpr double kAngleDeg[NLEG] = {30, 270, 150, -30, 90, 210};
 // Rail y offsets: not proportional to the platform-point y (that would make every leg
-// line meet one common line, a rank-5 Jacobian everywhere; SPEC 3.1).
+// line meet one common line, a rank-5 Jacobian everywhere).
 constexpr double kRailY[NLEG] = {0.020, -0.014, 0.057, -0.040, 0.027, -0.063};
 // Legs 1, 3, 4 have their slider on the -x side of their platform point (s.w > 0),
 // legs 2, 5, 6 on the +x side.
@@ -71,7 +71,7 @@ std::vector<ParamSpec> SixPus::param_specs(const std::string& set) const {
     v.push_back({idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + ", platform frame", py, -10, 10});
     v.push_back({idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + ", platform frame", 0.0, -10, 10});
     v.push_back({idx("leg", i, "branch"), "1",
-                 "IK root of " + leg + ": +1 slider on the -s side of its platform point (s.w > 0, seed 000 eq. 2.17a), "
+                 "IK root of " + leg + ": +1 slider on the -s side of its platform point (s.w > 0, Tiberi 2020 eq. 2.17a), "
                  "-1 on the +s side (eq. 2.17b)",
                  kBranch[i], -1, 1});
     v.push_back({idx("leg", i, "m"), "kg", "mass of " + leg + " (uniform slender rod)", 0.025, 0, 1e6});
@@ -134,7 +134,7 @@ std::unique_ptr<RobotModel> SixPus::compile(const std::vector<ParamSpec>& specs,
     m->disc_tol[i] = 1e-12 * m->L[i] * m->L[i];
     if (m->branch[i] != 1.0 && m->branch[i] != -1.0)
       bad(idx("leg", i, "branch") + " = " + num(m->branch[i]) +
-          " must be +1 or -1 (which inverse-kinematics root, seed 000 eq. 2.17a/b)");
+          " must be +1 or -1 (which inverse-kinematics root, Tiberi 2020 eq. 2.17a/b)");
     const double sn = std::sqrt(m->ss[i]);
     if (std::abs(sn - 1.0) > 1e-6)
       bad("rail " + std::to_string(i + 1) + " direction (" + idx("rail", i, "sx") + ", " + idx("rail", i, "sy") +
@@ -254,7 +254,7 @@ int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x, int fr
     for (int i = 0; i < NLEG; ++i) {
       const Leg& l = legs[i];
       double* r = rows + 10 * i;
-      // Implicit derivatives of |P - S0 - q s|^2 = L^2 (seed 000 eq. 4.9).
+      // Implicit derivatives of |P - S0 - q s|^2 = L^2 (Tiberi 2020 eq. 4.9).
       V3 dP = l.w / l.c;
       if (frame == PKM_FRAME_PLATFORM) dP = f.R.transpose() * dP;  // dq/dp_local = dq/dP R
       for (int k = 0; k < 3; ++k) {

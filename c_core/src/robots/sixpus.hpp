@@ -1,4 +1,4 @@
-// 6-PUS robot (seeds 000 and 001): private interface shared by sixpus.cpp (parameters,
+// 6-PUS robot (Tiberi 2020 and Zavala-Yoe et al. 2015): private interface shared by sixpus.cpp (parameters,
 // compile, registration, 6-PUS specific C functions), sixpus_kinematics.cpp and
 // sixpus_dynamics.cpp.  See docs/6pus.md for the equations and conventions.
 //
@@ -93,7 +93,7 @@ inline M3 Edot_of(const Frame& f, const double* ad) {
 // How strictly inverse kinematics treats a leg.
 enum class Strokes { check, ignore };
 
-// Closed-form inverse kinematics of every leg (seed 000 eq. 2.17a/b).  Throws
+// Closed-form inverse kinematics of every leg (Tiberi 2020 eq. 2.17a/b).  Throws
 // PKM_ERR_UNREACHABLE / PKM_ERR_SINGULAR naming the leg and the pose, and with
 // Strokes::check PKM_ERR_JOINT_LIMIT naming the leg and the stroke.
 void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes strokes);
@@ -136,7 +136,7 @@ const Model& model_of(const RobotModel& rm);
 class SixPus final : public Robot {
  public:
   const char* name() const override { return "6pus"; }
-  const char* title() const override { return "6-PUS laser-cutting platform (seeds 000, 001), hand-written"; }
+  const char* title() const override { return "6-PUS laser-cutting platform (Tiberi 2020, 001), hand-written"; }
   int ndof() const override { return 6; }
   std::vector<ParamSpec> param_specs(const std::string& set) const override;
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
@@ -156,7 +156,7 @@ class SixPus final : public Robot {
   std::string joint_limit_param(int i, bool upper) const override {
     return "rail[" + std::to_string(i + 1) + (upper ? "].qmax" : "].qmin");
   }
-  // A geometric error is a leg-length error, leg by leg (seed 000: the rod lengths are
+  // A geometric error is a leg-length error, leg by leg (Tiberi 2020: the rod lengths are
   // the parameters a rebuild most often gets wrong).
   const char* geometry_param(int i) const override {
     static const char* n[] = {"leg[1].L", "leg[2].L", "leg[3].L", "leg[4].L", "leg[5].L", "leg[6].L"};

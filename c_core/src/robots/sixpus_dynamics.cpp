@@ -7,7 +7,7 @@
 // their virtual power tau.qd = tau . (Jq^-1 Jxw nu) balances Q.  Rail friction and
 // rotor inertia are added around these functions by the drive layer (dynamics/drive.hpp).
 // Reactions of the rails, of the U and S joints are workless and drop out: they are in
-// the model implicitly (seed 001 sec. 5 explains why dropping them fails).
+// the model implicitly (Zavala-Yoe et al. 2015 sec. 5 explains why dropping them fails).
 //
 // A uniform slender rod between S and P with linear velocity field has kinetic energy
 // m/6 (|vS|^2 + vS.vP + |vP|^2): it acts as m/3 at each end plus a cross term m/6, i.e.

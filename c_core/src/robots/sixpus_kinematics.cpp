@@ -1,4 +1,4 @@
-// 6-PUS kinematics: closed-form inverse kinematics, Jacobians (seed 001 eq. 5-6) and
+// 6-PUS kinematics: closed-form inverse kinematics, Jacobians (Zavala-Yoe et al. 2015 eq. 5-6) and
 // their time derivative, singularity measures, Newton forward kinematics and the joint
 // acceleration.  Equations in docs/6pus.md.
 #include <sstream>
@@ -89,7 +89,7 @@ void legs_at(const Model& m, const double* x, const Frame& f, Leg* legs, Strokes
   if (strokes == Strokes::check && bad) legs_at_checked(m, x, f, legs, strokes);
 }
 
-// The batched hot path (SPEC 7: <= 100 ns per pose): branch-free loops over the legs
+// The batched hot path (target: <= 100 ns per pose): branch-free loops over the legs
 // on plain arrays, which the compiler vectorises; any failure is handed to legs_at for
 // its message.
 void SixPus::ik(const RobotModel& rm, RobotData&, const double* x, double* q) const {
