@@ -178,9 +178,9 @@ def test_step_response_matches_an_independent_integrator(model):
     assert res.q[-1, 0] - res.q[0, 0] > 1e-3
 
 
-def test_core_bench_reports_every_spec7_row():
+def test_core_bench_reports_every_target_row():
     """`cosim bench core` is a command, not a test; this only checks that its C++ part runs
-    and reports each SPEC 7 quantity with a finite value and a verdict."""
+    and reports each performance-target quantity with a finite value and a verdict."""
     from cosim.cli.benchmark import _run_cpp, core_table
 
     rows = _run_cpp(quick=True)
@@ -190,5 +190,6 @@ def test_core_bench_reports_every_spec7_row():
         assert r["pass"] == (r["value"] >= r["target"] if r["higher_is_better"] else r["value"] <= r["target"])
     assert "0 failed" in rows["fk_us"]["note"]
     table = core_table(rows, {"ik_ns": {"python": 1.0, "baseline": 2.0, "baseline_what": "loop"}})
-    assert "PASS" in table or "MISS" in table
-    assert all(r["label"] in table for r in rows.values())
+    for r in rows.values():  # each row's line carries the verdict its own figures give
+        line = next(ln for ln in table.splitlines() if r["label"] in ln)
+        assert ("PASS" if r["pass"] else "MISS") in line, line
