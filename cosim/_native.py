@@ -16,44 +16,17 @@ c_double_p = C.POINTER(C.c_double)
 c_int_p = C.POINTER(C.c_int)
 
 
-class PkmError(RuntimeError):
-    """An error reported by the core; ``status`` is the C status name."""
-
-    def __init__(self, message: str, status: str = "PKM_ERR_INTERNAL"):
-        super().__init__(message)
-        self.status = status
-
-
-class ArgumentError(PkmError, ValueError):
-    """Bad argument: wrong shape, NaN or Inf in an input."""
-
-
-class ParameterError(PkmError, ValueError):
-    """A parameter value is invalid."""
-
-
-class UnreachableError(PkmError):
-    """A pose outside the workspace of a leg or arm."""
-
-
-class SingularError(PkmError):
-    """A singular configuration."""
-
-
-class ConvergenceError(PkmError):
-    """An iterative solver (forward kinematics) did not converge."""
-
-
-class JointLimitError(PkmError):
-    """A stroke or joint range was exceeded."""
-
-
-class IntegrationError(PkmError):
-    """CVODE failed."""
-
-
-class UnsupportedError(PkmError, NotImplementedError):
-    """The robot does not provide the function."""
+from .errors import (  # noqa: F401  (re-exported: the status table maps onto them)
+    ArgumentError,
+    ConvergenceError,
+    IntegrationError,
+    JointLimitError,
+    ParameterError,
+    PkmError,
+    SingularError,
+    UnreachableError,
+    UnsupportedError,
+)
 
 
 STATUS = {
@@ -169,6 +142,9 @@ _SIGNATURES = {
     "pkm_model_joint_unit": (CH, [P]),
     "pkm_model_effort_unit": (CH, [P]),
     "pkm_model_joint_noun": (CH, [P]),
+    "pkm_model_has": (I, [P, CH]),
+    "pkm_model_feature_count": (I, [P]),
+    "pkm_model_feature": (CH, [P, I]),
     "pkm_model_joint_prefix": (CH, [P]),
     "pkm_model_joint_limits": (I, [P, I, c_int_p, c_int_p]),
     "pkm_model_geometry_param": (CH, [P, I]),

@@ -24,9 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._native import (
-    ArgumentError,
-    ParameterError,
-    PkmError,
     c_int_p,
     fast,
     lib,
@@ -40,6 +37,7 @@ from ._native import (
     ptr,
     raise_for,
 )
+from .errors import ArgumentError, ParameterError, PkmError, UnsupportedError
 
 __all__ = ["Model", "ParamInfo", "RobotFacts", "robots", "robot_facts", "PkmError", "ParameterError",
            "ArgumentError"]
@@ -116,6 +114,12 @@ class RobotFacts:
     title, file : str
         One line saying what the robot is, and the description file it was compiled from
         (``""`` for the robots written in C++; docs/robots.md).
+    features : tuple of str
+        The robot-specific function families it provides beyond the common set
+        (``pkm_model_has``): ``"6pus_calib_rows"`` (the 60-parameter calibration rows),
+        ``"6pus_leg_points"``, ``"fourbar_output"``, ``"quattro_indices"``,
+        ``"quattro_gimre"``, ``"quattro_points"``.  Capabilities are asked of the model
+        (:meth:`Model.has`), never inferred from its name.
     """
 
     name: str
@@ -132,6 +136,7 @@ class RobotFacts:
     geometry_params: tuple = ()
     title: str = ""
     file: str = ""
+    features: tuple = ()
 
     @property
     def angular_joints(self) -> bool:
@@ -228,7 +233,23 @@ class Model:
             tracker_units=tuple(lib.pkm_model_tracker_unit(m, i).decode() for i in range(lib.pkm_model_tracker_count(m))),
             joint_unit=lib.pkm_model_joint_unit(m).decode(), effort_unit=lib.pkm_model_effort_unit(m).decode(),
             joint_noun=lib.pkm_model_joint_noun(m).decode(), joint_prefix=lib.pkm_model_joint_prefix(m).decode(),
-            geometry_params=tuple(self._geometry_declared()))
+            geometry_params=tuple(self._geometry_declared()),
+            features=tuple(lib.pkm_model_feature(m, i).decode() for i in range(lib.pkm_model_feature_count(m))))
+
+    def has(self, feature: str) -> bool:
+        """True if the robot provides the robot-specific function family ``feature``
+        (:attr:`RobotFacts.features`, ``pkm_model_has``).
+
+        >>> Model("6pus").has("6pus_calib_rows"), Model("quattro").has("6pus_calib_rows")
+        (True, False)
+        """
+        return bool(lib.pkm_model_has(self._m, feature.encode()))
+
+    def _require(self, feature: str, what: str) -> None:
+        if not self.has(feature):
+            have = ", ".join(self.facts.features) or "none"
+            raise UnsupportedError(f"{what} needs a robot that provides {feature!r}; {self.robot!r} does not "
+                                   f"(its robot-specific functions: {have})", "PKM_ERR_UNSUPPORTED")
 
     def _geometry_declared(self) -> list[str]:
         names, i = [], 0
@@ -655,11 +676,7 @@ class Model:
         e = self._loop("pkm_energy", [x, xd], ["x", "xd"], (2,), out_parts=2)
         return e[..., 0], e[..., 1]
 
-    # ------------------------------------------------------------- 6-PUS specific
-    def _require_6pus(self, what: str) -> None:
-        if self.robot != "6pus":
-            raise ArgumentError(f"{what} is a 6-PUS function; this model is {self.robot!r}", "PKM_ERR_ARGUMENT")
-
+    # ------------------------------------------------- robot-specific functions (:meth:`has`)
     def calib_rows(self, x, frame: str = "world"):
         """6-PUS calibration regression rows, shape (..., 6, 10): dq_i / d eta_i per leg.
 
@@ -668,7 +685,7 @@ class Model:
         tables), ``"platform"`` with respect to ``leg[i].px/py/pz``.  Stroke limits are not
         applied (the rows are geometry); an unreachable or singular pose raises.
         """
-        self._require_6pus("calib_rows")
+        self._require("6pus_calib_rows", "calib_rows")
         frames = {"world": 0, "platform": 1}
         if frame not in frames:
             raise ArgumentError(f"frame must be 'world' or 'platform', got {frame!r}", "PKM_ERR_ARGUMENT")
@@ -677,16 +694,14 @@ class Model:
 
     def leg_points(self, x):
         """6-PUS world positions ``(P, S)`` of the platform points and sliders, each (..., 6, 3) [m]."""
-        self._require_6pus("leg_points")
+        self._require("6pus_leg_points", "leg_points")
         ps = self._loop("pkm_6pus_leg_points", [x], ["x"], (2, 6, 3), out_parts=2)
         return ps[..., 0, :, :], ps[..., 1, :, :]
 
-    # ------------------------------------------------------------- four-bar specific
     def fourbar_output(self, theta, jacobian: bool = True):
         """Four-bar coupler mid-point X [m] at crank angle(s) theta [rad], and dX/d(l1..l4)
         [m/m] of shape ``theta.shape + (4,)`` if ``jacobian`` (``pkm_fourbar_output``)."""
-        if self.robot != "fourbar":
-            raise ArgumentError(f"fourbar_output needs a 'fourbar' model, got {self.robot!r}", "PKM_ERR_ARGUMENT")
+        self._require("fourbar_output", "fourbar_output")
         th = np.asarray(theta, dtype=float)
         flat = th.reshape(-1)
         X = np.empty(flat.shape)
@@ -699,15 +714,10 @@ class Model:
         X = X.reshape(th.shape)
         return X if not jacobian else (X, J.reshape(th.shape + (4,)))
 
-    # ------------------------------------------------------------- Quattro specific
-    def _require_quattro(self, what: str) -> None:
-        if self.robot != "quattro":
-            raise ArgumentError(f"{what} is a Quattro function; this model is {self.robot!r}", "PKM_ERR_ARGUMENT")
-
     def quattro_indices(self, poses) -> tuple[np.ndarray, np.ndarray]:
         """Performance indices of poses (..., 4) -> (values (..., n_index), status (...)), one
         core call (``pkm_quattro_indices``); names and units in :func:`quattro_index_names`."""
-        self._require_quattro("quattro_indices")
+        self._require("quattro_indices", "quattro_indices")
         x = np.ascontiguousarray(poses, dtype=np.float64)
         if x.shape[-1:] != (4,):
             raise ArgumentError(f"poses must have 4 coordinates (x, y, z, theta) in the last axis, got {x.shape}",
@@ -723,7 +733,7 @@ class Model:
     def quattro_gimre(self, x) -> np.ndarray:
         """Quattro generalized inertia matrix reduced to the end effector, (4, 4) at pose x
         [kg, kg m, kg m^2] (``pkm_quattro_gimre``)."""
-        self._require_quattro("quattro_gimre")
+        self._require("quattro_gimre", "quattro_gimre")
         xv = np.ascontiguousarray(x, dtype=np.float64)
         N = np.empty((4, 4))
         self._check(lib.pkm_quattro_gimre(self._m, self._d, ptr(xv), ptr(N)))
@@ -732,7 +742,7 @@ class Model:
     def quattro_points(self, x) -> dict:
         """Quattro world points A, B, C (4, 3) [m] of the four arms at pose x (motor axis,
         elbow, platform joint) (``pkm_quattro_points``)."""
-        self._require_quattro("quattro_points")
+        self._require("quattro_points", "quattro_points")
         xv = np.ascontiguousarray(x, dtype=np.float64)
         A, B, Cp = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
         self._check(lib.pkm_quattro_points(self._m, self._d, ptr(xv), ptr(A), ptr(B), ptr(Cp)))

@@ -202,7 +202,7 @@ def _check_pose_units(spec, fail):
     """A reference pose whose lengths or angles are far outside any robot's range is
     almost always a unit slip: say which (mm for m, degrees for rad) instead of letting
     the inverse kinematics report an unreachable pose."""
-    from ._native import PkmError
+    from .errors import PkmError
     from .core import robot_facts
 
     try:  # a robot name, or a description file (its own errors name their line)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._native import ArgumentError, PkmError
+from .errors import ArgumentError, PkmError
 # The integrator's handle lives in the binding (cosim.core owns every foreign call).
 from .core import METHOD_CODES, Simulator, default_options
 
@@ -124,7 +124,7 @@ def simulate(model, x0, xd0=None, t_end: float = 1.0, dt: float = 1e-3, tau=None
 
     Raises
     ------
-    cosim._native.PkmError
+    cosim.errors.PkmError
         The core's error (``JointLimitError``, ``SingularError``, ``IntegrationError``,
         ``UnreachableError``, ``ArgumentError``) when the integration cannot reach
         t_end; its message names the leg and the time, and its ``result`` attribute

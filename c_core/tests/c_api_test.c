@@ -35,6 +35,15 @@ int main(void) {
   CHECK(pkm_model_ndof(m) == 1, "ndof %d", pkm_model_ndof(m));
   CHECK(strcmp(pkm_model_robot(m), "fourbar") == 0, "robot %s", pkm_model_robot(m));
 
+  /* Robot-specific functions are asked of the model, not inferred from its name. */
+  CHECK(pkm_model_has(m, "fourbar_output") == 1, "fourbar_output not declared");
+  CHECK(pkm_model_has(m, "6pus_calib_rows") == 0, "a 6-PUS feature declared by the four-bar");
+  CHECK(pkm_model_has(m, NULL) == 0 && pkm_model_has(NULL, "fourbar_output") == 0, "NULL accepted");
+  CHECK(pkm_model_feature_count(m) == 1 && strcmp(pkm_model_feature(m, 0), "fourbar_output") == 0,
+        "features: %d, %s", pkm_model_feature_count(m), pkm_model_feature(m, 0));
+  CHECK(strcmp(pkm_model_feature(m, 1), "") == 0 && strcmp(pkm_model_feature(m, -1), "") == 0,
+        "past the end: %s", pkm_model_feature(m, 1));
+
   /* Named parameters with units; unknown names give -1. */
   int i1 = pkm_param_index(m, "link[1].l");
   CHECK(i1 >= 0, "link[1].l not found");

@@ -161,13 +161,15 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
             raise CalibrationDataError(f"{meas.source}: the sidecar's parameters do not make a valid {meas.robot} "
                                        f"model: {e}") from None
     labels = [meas.labels[k] for k in idx]
-    if params and meas.robot in ("6pus", "fourbar"):
+    # A robot with its own error model (the core says which) is calibrated by it.
+    own_model = nominal.has("6pus_calib_rows") or nominal.has("fourbar_output")
+    if params and own_model:
         raise CalibrationDataError(f"{meas.source}: the {meas.robot} calibration has its own error model; choosing "
                                    f"the parameters (params) is for the other robots")
-    if meas.robot == "6pus":
+    if nominal.has("6pus_calib_rows"):
         return SixpusProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, unreachable=unreachable,
                              min_poses=min_poses, weighting=weighting)
-    if meas.robot == "fourbar":
+    if nominal.has("fourbar_output"):
         return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
                               min_poses=4 if min_poses is None else min_poses)
     if meas.pose is None or meas.pose.shape[1] != nominal.ndof:
@@ -339,7 +341,7 @@ class CalibrationResult:
         for label, a in (("calibration poses", self.calibration_accuracy), ("held-out poses", self.holdout_accuracy)):
             if a is None:
                 continue
-            if self.robot == "6pus":
+            if isinstance(self.problem, SixpusProblem):
                 L.append(f"Accuracy on {label} ({a.n}): position RMS {a.position[0] * 1e6:.4g} um -> "
                          f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
                          f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "

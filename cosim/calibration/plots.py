@@ -27,9 +27,9 @@ def plot_result(res, outdir) -> list:
     # 1. accuracy per pose, nominal vs calibrated
     acc = res.holdout_accuracy or res.calibration_accuracy
     which = "held-out" if res.holdout_accuracy else "calibration"
-    from .problems import JointProblem
+    from .problems import JointProblem, SixpusProblem
 
-    if res.robot == "6pus" or (isinstance(res.problem, JointProblem) and "m" in res.problem.nominal.facts.pose_units):
+    if isinstance(res.problem, SixpusProblem) or (isinstance(res.problem, JointProblem) and "m" in res.problem.nominal.facts.pose_units):
         what = "position error |p_FK(q) - p_measured|"
     elif isinstance(res.problem, JointProblem):
         what = "joint error |q - q_IK(pose)|"

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._native import ArgumentError, PkmError
+from ..errors import ArgumentError, PkmError
 
 __all__ = [
     "CalibrationDataError",

@@ -158,7 +158,7 @@ def main(argv=None) -> int:
         import os
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
-    from .._native import PkmError
+    from ..errors import PkmError
     from ..master import MasterError
 
     try:

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._native import PkmError
+from ..errors import PkmError
 from ..core import Model, quattro_index_names, quattro_index_units
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model",

@@ -33,7 +33,7 @@ def _segments(model, x):
     """Line segments (list of (3, 2) arrays [m]) and labelled point sets of the robot at pose x:
     each leg's chain as the core gives it (``Model.chain_points``: base joint, moving joint,
     platform joint), whatever the robot."""
-    from .._native import UnsupportedError
+    from ..errors import UnsupportedError
 
     try:
         c = model.chain_points(x)

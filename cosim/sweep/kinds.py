@@ -206,14 +206,14 @@ class CalibrationKind(Kind):
         p = {**CALIBRATION_DEFAULTS, **base, **params}
         seed, n = int(p["seed"]), int(p["n_poses"])
         nominal = Model(p["robot"])
-        if p["robot"] == "6pus":
+        if nominal.has("6pus_calib_rows"):  # the 60-parameter error model and its pose sampler
             real = cd.sixpus_real_params(nominal, max_length=p["max_length"], max_angle_deg=p["max_angle_deg"],
                                          rng=[seed, 1])
             poses = cd.sixpus_candidate_poses(nominal, n, rng=[seed, 2])
             rec = cd.sixpus_campaign(real, poses, tracker_noise=p["tracker_noise"],
                                      angle_noise=None if p["angle_noise"] < 0 else p["angle_noise"],
                                      encoder_noise=p["encoder_noise"], rng=[seed, 3])
-        elif p["robot"] == "fourbar":
+        elif nominal.has("fourbar_output"):  # the four-bar's link lengths, crank-angle campaign
             g = np.random.default_rng([seed, 1])
             real = {k: nominal.param(k) + g.uniform(-p["max_length"], p["max_length"])
                     for k in nominal.param_names() if re.fullmatch(r"link\[\d\]\.l", k)}
@@ -238,7 +238,7 @@ class CalibrationKind(Kind):
                 continue
             out.update({f"{label}.poses": a.n, f"{label}.position_rms_nominal": a.position[0],
                         f"{label}.position_rms_calibrated": a.position[1], f"{label}.gain": a.gain})
-            if p["robot"] != "fourbar" and {"m", "rad"} <= set(nominal.facts.pose_units):
+            if not nominal.has("fourbar_output") and {"m", "rad"} <= set(nominal.facts.pose_units):
                 out.update({f"{label}.orientation_rms_nominal": a.orientation[0],
                             f"{label}.orientation_rms_calibrated": a.orientation[1]})
         out.update(self._truth(p, nominal, real, res, seed))
@@ -255,7 +255,7 @@ class CalibrationKind(Kind):
         real = nominal.copy()
         real.set_params(real_params)
         cal = res.calibrated_model()
-        if p["robot"] == "fourbar":
+        if nominal.has("fourbar_output"):
             from ..fourbar import output
 
             th = np.radians(np.linspace(p["theta_min_deg"], p["theta_max_deg"], nv))
@@ -263,7 +263,7 @@ class CalibrationKind(Kind):
             e0 = output(nominal, th, jacobian=False) - x
             e1 = output(cal, th, jacobian=False) - x
         else:
-            X = (cd.sixpus_candidate_poses(nominal, nv, rng=[seed, 4]) if p["robot"] == "6pus"
+            X = (cd.sixpus_candidate_poses(nominal, nv, rng=[seed, 4]) if nominal.has("6pus_calib_rows")
                  else cd.candidate_poses(nominal, nv, rng=[seed, 4], fraction=p["pose_fraction"]))
             q, st = real.ik(X, errors="status")
             X, q = X[st == 0], q[st == 0]

@@ -4,7 +4,7 @@ mass matrix at a good pose)."""
 import numpy as np
 import pytest
 
-from cosim._native import ArgumentError
+from cosim.errors import ArgumentError
 from cosim.core import Model
 from cosim.simulate import Simulator
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cosim.core import Model, robots
-from cosim._native import ArgumentError
+from cosim.errors import ArgumentError
 
 REPO = Path(__file__).resolve().parents[2]
 LISTED = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
@@ -267,7 +267,7 @@ def test_unknown_robot_names_the_descriptions_and_paths():
 def test_mangled_descriptions_never_crash(tmp_path):
     """600 random edits of a good description (bytes dropped, duplicated, swapped, numbers
     replaced by huge, tiny, negative or non-numbers): each loads or gives one PkmError line."""
-    from cosim._native import PkmError
+    from cosim.errors import PkmError
 
     rng = np.random.default_rng(11)
     base = GOOD + '\n[defaults]\n"rail[2].coulomb" = 1.5\n'
@@ -336,7 +336,7 @@ def test_chain_points_draw_the_legs_the_kinematics_solve(name):
 def test_the_hand_written_robots_give_the_chain_points_of_their_described_twins():
     """The hand-written 6-PUS's and Quattro's chain points equal those of their described
     twins (an independent implementation: the description compiler); the four-bar has none."""
-    from cosim._native import UnsupportedError
+    from cosim.errors import UnsupportedError
 
     m = Model("6pus")
     x = m.home() + np.array([0.004, -0.003, 0.002, 0.02, -0.01, 0.03])
@@ -348,3 +348,19 @@ def test_the_hand_written_robots_give_the_chain_points_of_their_described_twins(
     np.testing.assert_allclose(cq, Model("quattro_described").chain_points(xq), rtol=0, atol=1e-15)
     with pytest.raises(UnsupportedError, match="chain points"):
         Model("fourbar").chain_points(Model("fourbar").home())
+
+
+def test_robot_specific_functions_are_declared_by_the_core_not_by_the_name():
+    """Capabilities come from the core (pkm_model_has): the hand-written 6-PUS has the
+    60-parameter calibration rows, its described twin (same robot, other code) does not, and
+    asking a model for a function it lacks names the function and what the robot has."""
+    from cosim.errors import UnsupportedError
+
+    assert Model("6pus").facts.features == ("6pus_calib_rows", "6pus_leg_points")
+    assert Model("quattro").has("quattro_indices") and not Model("quattro_described").has("quattro_indices")
+    assert Model("fourbar").has("fourbar_output") and not Model("hexapod_ups").facts.features
+    m = Model("6pus_described")
+    with pytest.raises(UnsupportedError, match="'6pus_calib_rows'.*'6pus_described' does not.*none"):
+        m.calib_rows(m.home())
+    with pytest.raises(UnsupportedError, match="'quattro_indices'.*6pus_calib_rows, 6pus_leg_points"):
+        Model("6pus").quattro_indices(np.zeros((1, 4)))

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from cosim._native import ArgumentError, JointLimitError, SingularError
+from cosim.errors import ArgumentError, JointLimitError, SingularError
 from cosim.core import Model
 from cosim.simulate import SimResult, Simulator, default_options, simulate
 

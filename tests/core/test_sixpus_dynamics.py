@@ -4,7 +4,7 @@ rail reaction forces that keep a platform with vertical-ish legs from "falling".
 import numpy as np
 import pytest
 
-from cosim._native import UnreachableError
+from cosim.errors import UnreachableError
 from cosim.core import Model
 
 DEG = np.pi / 180

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from cosim._native import ArgumentError, JointLimitError, ParameterError, SingularError, UnreachableError
+from cosim.errors import ArgumentError, JointLimitError, ParameterError, SingularError, UnreachableError
 from cosim.core import Model
 
 DEG = np.pi / 180

@@ -14,7 +14,7 @@ from cosim import controllers as ctl
 from cosim.core import Model, Simulator
 from cosim.master import CoreDrive, CorePlant, make_reference, run
 from cosim import trajectories as tr
-from cosim._native import ParameterError
+from cosim.errors import ParameterError
 
 GAP, C1, C2, JD = 1e-4, 1e-5, 1e-6, 0.05  # gap [m], compliances [m/N], drive body [kg]
 

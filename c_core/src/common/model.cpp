@@ -1,5 +1,6 @@
 // C API: models, data and named parameters.
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -167,6 +168,20 @@ const char* pkm_model_geometry_param(const pkm_model* m, int i) {
 }
 const char* pkm_model_joint_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "rad" : "m") : ""; }
 const char* pkm_model_effort_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "N m" : "N") : ""; }
+int pkm_model_feature_count(const pkm_model* m) {
+  return m ? static_cast<int>(m->robot->features().size()) : 0;
+}
+const char* pkm_model_feature(const pkm_model* m, int i) {
+  if (!m || i < 0) return "";
+  const auto f = m->robot->features();
+  return i < static_cast<int>(f.size()) ? f[static_cast<size_t>(i)] : "";
+}
+int pkm_model_has(const pkm_model* m, const char* feature) {
+  if (!m || !feature) return 0;
+  for (const char* f : m->robot->features())
+    if (std::strcmp(f, feature) == 0) return 1;
+  return 0;
+}
 const char* pkm_model_joint_noun(const pkm_model* m) { return m ? m->robot->joint_noun() : ""; }
 const char* pkm_model_joint_prefix(const pkm_model* m) { return m ? m->robot->joint_prefix() : ""; }
 

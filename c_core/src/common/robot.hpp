@@ -99,6 +99,9 @@ class Robot {
   virtual const char* geometry_param(int) const { return nullptr; }
   // How limit and singularity messages name the chain of joint i ("leg 3", "joint 2").
   virtual const char* limb_noun() const { return joint_noun(); }
+  // The robot-specific C function families this robot provides beyond the common set
+  // (pkm_model_has): "6pus_calib_rows" stands for pkm_6pus_calib_rows, and so on.
+  virtual std::vector<const char*> features() const { return {}; }
 
   // --- kinematics (x[nd] pose, q[nd] joints; matrices row-major [nd,nd])
   virtual void ik(const RobotModel&, RobotData&, const double* x, double* q) const;

@@ -87,6 +87,7 @@ struct Fourbar final : Robot {
   const char* name() const override { return "fourbar"; }
   const char* title() const override { return "four-bar linkage (Vitali 2020), hand-written"; }
   int ndof() const override { return 1; }
+  std::vector<const char*> features() const override { return {"fourbar_output"}; }
   const char* pose_name(int) const override { return "theta"; }  // the crank angle (pose = joint)
   const char* pose_unit(int) const override { return "rad"; }
   // A tracker measures the output point (pkm_fourbar_output), not the crank angle.

@@ -216,6 +216,9 @@ class Quattro final : public Robot {
   const char* title() const override { return "Adept Quattro s650H 4-RUU (Virzi 2010), hand-written"; }
   int ndof() const override { return N; }
   std::vector<std::string> param_sets() const override { return {"default", "appendix_a"}; }
+  std::vector<const char*> features() const override {
+    return {"quattro_indices", "quattro_gimre", "quattro_points"};
+  }
   const char* pose_name(int i) const override {
     static const char* n[] = {"x", "y", "z", "theta"};
     return n[i];

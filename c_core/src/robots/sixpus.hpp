@@ -136,7 +136,7 @@ const Model& model_of(const RobotModel& rm);
 class SixPus final : public Robot {
  public:
   const char* name() const override { return "6pus"; }
-  const char* title() const override { return "6-PUS laser-cutting platform (Tiberi 2020, 001), hand-written"; }
+  const char* title() const override { return "6-PUS laser-cutting platform (Tiberi 2020; Zavala-Yoe et al. 2015), hand-written"; }
   int ndof() const override { return 6; }
   std::vector<ParamSpec> param_specs(const std::string& set) const override;
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
@@ -146,6 +146,7 @@ class SixPus final : public Robot {
   // (dynamics/drive.hpp): its parameters are "rail[i].coulomb", "rail[i].viscous", ...
   const char* joint_prefix() const override { return "rail"; }
   const char* joint_noun() const override { return "slider"; }
+  std::vector<const char*> features() const override { return {"6pus_calib_rows", "6pus_leg_points"}; }
   bool joints_angular() const override { return false; }
   const char* limb_noun() const override { return "leg"; }
   const char* pose_name(int i) const override {
