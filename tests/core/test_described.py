@@ -325,6 +325,87 @@ def test_mangled_descriptions_never_crash(tmp_path):
     assert loaded + refused == 600 and refused > 300
 
 
+# Line by line: every value of a few descriptions (rails, arms, a P and an R axis, [defaults]
+# and [sets.*]) replaced by a hostile one.  Each case loads (and then nothing it computes at
+# home is NaN) or is refused naming the edited line; a value that is fine alone but breaks
+# the robot as a whole (the home pose out of reach, a massless axis) is reported at the home
+# line, naming the parameter set.
+HOSTILE = ["NaN", "nan", "NAN", "-Infinity", "inf", "+Inf", "1e400", "-1e400", "1e300", "-1e300", "-1", "0", "1e-320",
+           "-1.0000000001", '"x"', "[1, 2", "true", "[]", "1e6", "-0.0"]
+CORPUS_BASES = {
+    "tiny_delta": GOOD + '\n[defaults]\n"rail[2].coulomb" = 1.5\n"payload.m" = 0.01\n\n[sets.heavy]\n'
+                         '"payload.m" = 0.4\n"rail[1].viscous" = 2.0\n',
+    "emps": (REPO / "robots" / "emps.toml").read_text(),
+    "pendulum": (REPO / "robots" / "pendulum.toml").read_text(),
+    "planar_3rrr": (REPO / "robots" / "planar_3rrr.toml").read_text(),
+}
+
+
+def corpus_cases():
+    import re
+
+    value = re.compile(r'^(\s*"?[A-Za-z_][\w\[\].]*"?\s*=\s*)([^#\n]*?)(\s*(#.*)?)$')
+    for base, text in CORPUS_BASES.items():
+        # a copy named differently: the bundled descriptions' names are taken by their files
+        text = re.sub(r'^name = "[^"]*"', f'name = "mangled_{base}"', text, count=1, flags=re.M)
+        lines = text.split("\n")
+        for i, line in enumerate(lines):
+            m = value.match(line)
+            if not m or not re.search(r"\d", m.group(2)):
+                continue
+            for junk in HOSTILE:
+                v = m.group(2)
+                # arrays: the first element replaced; numbers: the whole value
+                new = ("[" + junk + v[v.index(",") :]) if v.startswith("[") and "," in v and junk[0] != "[" else junk
+                out = lines[:i] + [m.group(1) + new + m.group(3)] + lines[i + 1 :]
+                yield base, i + 1, "\n".join(out)
+
+
+def test_mangled_values_are_refused_at_their_line_or_load_finite(tmp_path):
+    import re
+    import time
+
+    from cosim._native import PkmError
+
+    cases = list(corpus_cases())
+    assert len(cases) >= 300
+    loaded = refused = 0
+    for k, (base, line, text) in enumerate(cases):
+        f = write(tmp_path, text, name=f"v{k}.toml")
+        home_line = next(i + 1 for i, l in enumerate(text.split("\n")) if l.startswith("home"))
+        t0 = time.perf_counter()
+        try:
+            m = Model(f)
+            x = m.home()
+            xd = np.full(m.ndof, 0.01)
+            out = [m.ik(x), m.inverse_dynamics(x, xd, xd), m.forward_dynamics(x, xd, np.zeros(m.ndof)),
+                   np.array(m.energy(x, xd)), m.mass_matrix(x), np.array(list(m.params().values()))]
+            assert all(np.all(np.isfinite(o)) for o in out), (base, line, text.split("\n")[line - 1])
+            loaded += 1
+        except PkmError as e:
+            msg = str(e)
+            at = int(re.match(re.escape(f) + r":(\d+): ", msg).group(1))
+            ok = at == line or (at == home_line and "parameter set" in msg)
+            assert ok, (base, line, text.split("\n")[line - 1], msg)
+            assert "\n" not in msg
+            refused += 1
+        assert time.perf_counter() - t0 < 2.0, (base, line)
+    assert refused > 0.8 * len(cases) and loaded > 0
+
+
+def test_a_huge_description_is_refused_fast(tmp_path):
+    """The reader is linear in its input: 200,000 keys in [defaults], 200,000 tables."""
+    import time
+
+    for extra, words in [("\n[defaults]\n" + "".join(f'"k{i}" = 1\n' for i in range(200000)), "'k0' is not a parameter"),
+                         ("".join(f'\n[sets.s{i}]\n"payload.m" = 0.1\n' for i in range(200000)), "more than 1000")]:
+        f = write(tmp_path, GOOD + extra)
+        t0 = time.perf_counter()
+        with pytest.raises(ArgumentError, match=words):
+            Model(f)
+        assert time.perf_counter() - t0 < 4.0  # 149 s for the keys with a quadratic duplicate check
+
+
 def test_cosim_robots_lists_every_robot_with_its_file():
     import subprocess
     import sys

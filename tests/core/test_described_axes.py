@@ -256,3 +256,45 @@ def test_mobility_count_of_a_single_axis():
     """Grubler-Kutzbach: base and platform, one joint of one freedom: 6 (2 - 1 - 1) + 1 = 1."""
     for name in ("emps", "pendulum"):
         assert Model(name).ndof == 1
+
+
+# ------------------------------------------------------- the EMPS through the toolkit
+
+def test_emps_step_scenario_is_the_second_order_system_and_the_fmu_plant_agrees():
+    """PD on a frictionless 90 kg carriage: overshoot exp(-zeta pi / sqrt(1 - zeta^2)) of the
+    closed-form second-order system (zeta = kd / (2 sqrt(kp m)) = 0.8), no steady-state error
+    (no gravity along the axis); the FMU plant runs it like the core plant."""
+    from cosim.scenario import load_scenario, run_scenario
+
+    sc = load_scenario(REPO / "scenarios" / "described" / "emps_step_pd.toml")
+    kp, kd, mass = sc.spec["controller"]["kp"], sc.spec["controller"]["kd"], 90.0
+    zeta = kd / (2 * np.sqrt(kp * mass))
+    core = run_scenario(sc, export=False, figures=False)
+    x = core.result["x"][:, 0]
+    overshoot = 100 * (x.max() - 0.1) / 0.1
+    assert overshoot == pytest.approx(100 * np.exp(-zeta * np.pi / np.sqrt(1 - zeta ** 2)), abs=0.05)
+    assert abs(x[-1] - 0.1) < 1e-6
+    fmu = run_scenario(sc, plant="fmu", export=False, figures=False)
+    assert fmu.result.plant["kind"] == "fmu"
+    np.testing.assert_allclose(fmu.result["q"], core.result["q"], rtol=0, atol=1e-10)
+
+
+def test_blind_case_and_diagnosis_on_the_emps(tmp_path):
+    """The blind generator sizes its effects for a 1-DOF robot from the core; cosim diagnose
+    finds the hidden viscous friction and its value."""
+    import json
+    import subprocess
+    import sys
+
+    from cosim.discrepancy import blind
+
+    csv, key = blind.make_case(blind.CaseSpec("case", "emps", ["viscous"], seed=3), tmp_path / "cases",
+                               tmp_path / "keys")
+    p = subprocess.run([sys.executable, "-m", "cosim", "diagnose", str(csv), "--no-figures", "--no-replay", "--out",
+                        str(tmp_path / "d"), "--json"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    d = json.loads(p.stdout)
+    hidden = json.loads(Path(key).read_text())["effects"][0]
+    assert {e["key"] for e in d["effects"]} == {"viscous"}, d["effects"]
+    for name, true in hidden["params"].items():
+        assert abs(d["theta"][name] - true) < 0.05 * true, (name, d["theta"][name], true)

@@ -498,15 +498,20 @@ const std::vector<Override>* set_of(const Description& d, const std::string& set
 
 std::vector<ParamSpec> DescribedRobot::param_specs(const std::string& set) const {
   std::vector<ParamSpec> v = d_.params;
-  for (const auto& o : *set_of(d_, set))
-    for (auto& s : v)
-      if (s.name == o.name) s.value = o.value;
+  std::unordered_map<std::string, ParamSpec*> by_name;
+  for (auto& s : v) by_name.emplace(s.name, &s);
+  for (const auto& o : param_overrides(set))
+    if (auto it = by_name.find(o.first); it != by_name.end()) it->second->value = o.second;
   return v;
 }
 
 std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(const std::string& set) const {
+  // The defaults, then the set's own values (later ones win).
+  const std::vector<Override>& own = *set_of(d_, set);
   std::vector<std::pair<std::string, double>> out;
-  for (const auto& o : *set_of(d_, set)) out.emplace_back(o.name, o.value);
+  if (&own != &d_.sets.front().second)
+    for (const auto& o : d_.sets.front().second) out.emplace_back(o.name, o.value);
+  for (const auto& o : own) out.emplace_back(o.name, o.value);
   return out;
 }
 

@@ -56,6 +56,7 @@ const LegType* find_leg_type(const std::string& name);
 std::string leg_type_names();
 
 constexpr int kMaxLegs = 6;
+constexpr size_t kMaxSets = 1000;  // [sets.NAME] tables of one description
 
 // Mass elements of a leg over its body points (local indices; point 1 is always P).
 struct PointMass {
@@ -119,7 +120,9 @@ struct Description {
   bool articulated = false;             // [platform] kind = "articulated"
   int redundant = 0;                    // robot.redundant_constraints
   std::vector<ParamSpec> params;        // defaults from the file
-  std::vector<std::pair<std::string, std::vector<Override>>> sets;  // "default" first
+  // "default" first ([defaults]), then each [sets.NAME] with its own values only (applied
+  // after the defaults: DescribedRobot::param_overrides)
+  std::vector<std::pair<std::string, std::vector<Override>>> sets;
   std::vector<double> home;
   int home_line = 0;
   int name_line = 0;

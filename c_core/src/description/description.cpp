@@ -118,9 +118,12 @@ Description read_description(const std::string& text, const std::string& file) {
 
   // [gravity], [platform], [payload]
   double g[3] = {0, 0, -9.81};
+  int g_line = rt.line;  // where a refused value is reported: its own line ([robot] when not written)
   if (auto gt = doc.named("gravity"); !gt.empty()) {
     rd.only(*gt[0], {"vector"}, "[gravity]");
-    auto gv = rd.numbers(rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]"), "gravity.vector", 3);
+    const toml::Value& gval = rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]");
+    g_line = gval.line;
+    auto gv = rd.numbers(gval, "gravity.vector", 3);
     std::copy(gv.begin(), gv.end(), g);
   }
   const auto pts = doc.named("platform");
@@ -147,10 +150,11 @@ Description read_description(const std::string& text, const std::string& file) {
     if (v < 0) rd.fail(pt.find("inertia")->line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
   double pay_m = 0;
   std::vector<double> pay_c = {0, 0, 0};
+  int pay_m_line = pt.line, pay_c_line = pt.line;
   if (auto yt = doc.named("payload"); !yt.empty()) {
     rd.only(*yt[0], {"mass", "position"}, "[payload]");
-    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass");
-    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3);
+    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass"), pay_m_line = v->line;
+    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3), pay_c_line = v->line;
     if (pay_m < 0) rd.fail(yt[0]->find("mass")->line, "payload.mass = " + num(pay_m) + " kg must be >= 0");
   }
 
@@ -367,13 +371,13 @@ Description read_description(const std::string& text, const std::string& file) {
     add("platform.cy", "m", "platform centre from the pose point across the axis", c[1], -1e3, 1e3, pt.find("centre")->line);
     add("platform.cz", "m", "platform centre from the pose point, vertical", c[2], -1e3, 1e3, pt.find("centre")->line);
   }
-  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pt.line);
-  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pt.line);
-  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pt.line);
-  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pt.line);
-  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, pt.line);
-  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, pt.line);
-  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, pt.line);
+  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pay_m_line);
+  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pay_c_line);
+  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pay_c_line);
+  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pay_c_line);
+  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, g_line);
+  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, g_line);
+  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, g_line);
 
   // [defaults] and [sets.NAME]: values by parameter name (checked against the table and
   // the drive layer's names once the robot exists, in load_described).
@@ -382,13 +386,17 @@ Description read_description(const std::string& text, const std::string& file) {
     for (const auto& kv : t.keys) out.push_back({kv.first, rd.number(kv.second, t.name + "." + kv.first), kv.second.line});
     return out;
   };
+  // Each set keeps its own values (a set starts from the defaults when it is used), so the
+  // work stays linear in the file however many keys and sets it has.
   d.sets.emplace_back("default", std::vector<Override>{});
   if (auto dt = doc.named("defaults"); !dt.empty()) d.sets[0].second = overrides(*dt[0]);
   for (const toml::Table& t : doc.tables)
     if (t.name.rfind("sets.", 0) == 0) {
-      auto o = d.sets[0].second;  // a set starts from the defaults
-      for (auto& kv : overrides(t)) o.push_back(kv);
-      d.sets.emplace_back(t.name.substr(5), o);
+      // Every set is compiled and checked when the robot loads: a bound on their number keeps
+      // that bounded (a real robot has a handful).
+      if (d.sets.size() > kMaxSets)
+        rd.fail(t.line, "[" + t.name + "]: more than " + std::to_string(kMaxSets) + " parameter sets");
+      d.sets.emplace_back(t.name.substr(5), overrides(t));
     }
   return d;
 }

@@ -50,8 +50,9 @@ struct Parser {
   size_t i = 0;
   int line = 1;
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw Error(PKM_ERR_ARGUMENT, file + ":" + std::to_string(line) + ": " + what);
+  [[noreturn]] void fail(const std::string& what) const { fail_at(line, what); }
+  [[noreturn]] void fail_at(int at, const std::string& what) const {
+    throw Error(PKM_ERR_ARGUMENT, file + ":" + std::to_string(at) + ": " + what);
   }
   bool end() const { return i >= s.size(); }
   char peek() const { return end() ? '\0' : s[i]; }
@@ -125,8 +126,13 @@ struct Parser {
       v.kind = Value::Array;
       ++i;
       space();
+      // An array may span lines; one that is never closed is reported where it opens.
+      auto broken = [&](const std::string& what) {
+        if (line == v.line) fail(what);
+        fail_at(v.line, "array not closed (line " + std::to_string(line) + ": " + what + ")");
+      };
       while (peek() != ']') {
-        if (end()) fail("array not closed");
+        if (end()) broken("the file ends");
         Value item = value();
         if (item.kind == Value::Array) fail("nested arrays are not part of a robot description");
         v.items.push_back(std::move(item));
@@ -135,7 +141,7 @@ struct Parser {
           ++i;
           space();
         } else if (peek() != ']') {
-          fail("expected ',' or ']' in an array, found " + shown(peek()));
+          broken("expected ',' or ']' in an array, found " + shown(peek()));
         }
       }
       ++i;
