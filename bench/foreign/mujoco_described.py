@@ -22,7 +22,10 @@ The MuJoCo model (MJCF, SI units, no geoms, no contacts):
     R = Rx(rx) Ry(ry) Rz(rz) as in the description; the undeclared coordinates are not joints,
     so they are held at 0), its mass and principal inertias at the frame origin, a payload
     point body;
-  * every leg its own chain from the world, the actuated joint's ``ref`` being its home value
+  * a single axis (P, R): no legs; the platform body itself on one slide joint along the rail
+    (through S0 - p at q = 0) or one hinge about the axis (through A), named by the declared
+    coordinate: its qpos is q, the platform's coordinate;
+  * every other leg its own chain from the world, the actuated joint's ``ref`` being its home value
     (so qpos of that joint *is* the description's q):
       - rail (PUS, PSS, P(SS)2, PRR): a slide joint along the rail carrying the slider (point
         mass at S), then the rod: a ball joint at S, a uniform slender rod of mass m between S
@@ -79,9 +82,12 @@ sys.path.insert(0, str(REPO))
 
 COORDS = ("x", "y", "z", "rx", "ry", "rz")
 RAIL, ARM, STRUT = "rail", "arm", "strut"
+SLIDE_AXIS, HINGE_AXIS = "slide axis", "hinge axis"   # single axes: the joint carries the platform
 LEG_JOINT = {"PUS": RAIL, "PSS": RAIL, "P(SS)2": RAIL, "PRR": RAIL,
              "RUS": ARM, "RSS": ARM, "R(SS)2": ARM, "RRR": ARM,
-             "UPS": STRUT, "SPS": STRUT}
+             "UPS": STRUT, "SPS": STRUT, "P": SLIDE_AXIS, "R": HINGE_AXIS}
+AXES = (SLIDE_AXIS, HINGE_AXIS)
+DRIVE_PREFIXES = ("rail", "arm", "strut", "axis")
 AXIAL = 1e-4        # a slender rod's inertia about its own axis, as a fraction of m L^2/12
 TINY = 1e-12        # floor of masses and inertias MuJoCo must see as positive
 COUNTER = 1.0       # inertia of an articulated platform's counter-turning attachment bodies [kg m2]: they do
@@ -200,6 +206,16 @@ def read(path: Path) -> Robot:
                 P[f"leg[{i}].f{ax}"] = v
             lumped[i] = t.get("rod_model", "uniform") == "lumped"
             lo, hi = t["stroke"]
+            if joint == SLIDE_AXIS:
+                for key, pre in (("rail_origin", "S0"), ("rail_direction", "s")):
+                    for ax, v in zip("xyz", _rz(t[key], a)):
+                        P[f"rail[{i}].{pre}{ax}"] = v
+                P[f"rail[{i}].qmin"], P[f"rail[{i}].qmax"] = lo, hi
+            elif joint == HINGE_AXIS:
+                for key, pre in (("axis_point", "A"), ("axis", "k")):
+                    for ax, v in zip("xyz", _rz(t[key], a)):
+                        P[f"axis[{i}].{pre}{ax}"] = v
+                P[f"axis[{i}].qmin"], P[f"axis[{i}].qmax"] = lo, hi
             if joint in (RAIL, ARM):
                 P[f"leg[{i}].L"] = t["rod_length"]
                 P[f"leg[{i}].m"] = t["rod_mass"]
@@ -221,7 +237,7 @@ def read(path: Path) -> Robot:
                 P[f"arm[{i}].I"] = t["arm_inertia"]
                 P[f"arm[{i}].com_angle"] = t.get("arm_com_angle", 0.0)
                 P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"] = lo, hi
-            else:
+            elif joint == STRUT:
                 for ax, v in zip("xyz", _rz(t["base_point"], a)):
                     P[f"leg[{i}].b{ax}"] = v
                 P[f"strut[{i}].qmin"], P[f"strut[{i}].qmax"] = lo, hi
@@ -252,6 +268,11 @@ def read(path: Path) -> Robot:
             leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"rail[{i}].qmin"], P[f"rail[{i}].qmax"]),
                       L=P[f"leg[{i}].L"], m_rod=P[f"leg[{i}].m"], branch=P[f"leg[{i}].branch"],
                       base=v3(f"rail[{i}].S0"), dir=v3(f"rail[{i}].s"), m_body=P[f"slider[{i}].m"])
+        elif joint in AXES:
+            pre = "rail" if joint == SLIDE_AXIS else "axis"
+            leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"{pre}[{i}].qmin"], P[f"{pre}[{i}].qmax"]),
+                      base=v3(f"{pre}[{i}].{'S0' if joint == SLIDE_AXIS else 'A'}"),
+                      dir=v3(f"{pre}[{i}].{'s' if joint == SLIDE_AXIS else 'k'}"))
         elif joint == ARM:
             leg = Leg(typ, joint, v3(f"leg[{i}].p"), (P[f"arm[{i}].qmin"], P[f"arm[{i}].qmax"]),
                       L=P[f"leg[{i}].L"], m_rod=P[f"leg[{i}].m"], branch=P[f"leg[{i}].branch"],
@@ -325,8 +346,20 @@ def platform_points(rob: Robot, x: np.ndarray) -> np.ndarray:
     return X[:, None, :3] + np.einsum("nij,lj->nli", R, p) + f[None]
 
 
+def single_axis(rob: Robot) -> bool:
+    """One P or R leg: the joint carries the platform, its coordinate is the joint's."""
+    return rob.legs[0].joint in AXES
+
+
+def actuated_joint(rob: Robot, i: int) -> str:
+    """The MuJoCo name of leg i's actuated joint (a single axis: the platform's own joint)."""
+    return COORDS[rob.coords[0]] if single_axis(rob) else f"q{i}"
+
+
 def ik(rob: Robot, x) -> np.ndarray:
     """(N, n) joints of poses x (N, n)."""
+    if single_axis(rob):  # the format defines the coordinate as the joint's
+        return np.atleast_2d(np.asarray(x, float)).copy()
     P = platform_points(rob, np.atleast_2d(x))
     return np.column_stack([leg_ik(l, P[:, i]) for i, l in enumerate(rob.legs)])
 
@@ -358,9 +391,9 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
         raise SystemExit(f"{rob.name}: home is unreachable by this script's IK (legs {bad})")
     P0 = platform_points(rob, rob.home[None])[0]
     armature = {j: rob.drive.get(f"{pre}[{j + 1}].rotor_inertia", 0.0) for j in range(rob.n)
-                for pre in ("rail", "arm", "strut") if f"{pre}[{j + 1}].rotor_inertia" in rob.drive}
+                for pre in DRIVE_PREFIXES if f"{pre}[{j + 1}].rotor_inertia" in rob.drive}
     damping = {j: rob.drive.get(f"{pre}[{j + 1}].viscous", 0.0) for j in range(rob.n)
-               for pre in ("rail", "arm", "strut") if f"{pre}[{j + 1}].viscous" in rob.drive}
+               for pre in DRIVE_PREFIXES if f"{pre}[{j + 1}].viscous" in rob.drive}
 
     def extra(j):
         s = ""
@@ -370,6 +403,8 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
             s += f' damping="{damping[j]:.17g}"'
         return s
 
+    if single_axis(rob):
+        return _single_axis(rob, extra(0), timestep, integrator), q0
     legs = []
     for i, (l, q, P) in enumerate(zip(rob.legs, q0, P0)):
         if l.joint == RAIL:
@@ -454,6 +489,43 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
     return xml, q0
 
 
+def _single_axis(rob: Robot, extra: str, timestep: float, integrator: str) -> str:
+    """A single axis: the platform body on one slide joint along the rail, laid out at q = 0
+    with its platform point at the rail origin, or on one hinge about the axis through the axis
+    point, the platform point on it; qpos is q.  The sites end0 and p0 (the closure the other
+    robots check) are the platform point itself."""
+    l = rob.legs[0]
+    c = rob.coords[0]
+    Ip = np.maximum(rob.I_platform, TINY)
+    if l.joint == SLIDE_AXIS:  # the carriage does not turn: inertias play no part, made valid for MuJoCo
+        Ip[:] = Ip.max()
+        pos, com, jtype = l.base - l.p, np.zeros(3), "slide"
+    else:  # the body frame at the axis point, turning about it; the platform origin at -p from it
+        pos, com, jtype = l.base, -l.p, "hinge"
+    payload = ""
+    if rob.m_payload > 0:
+        payload = (f'\n      <body name="payload" pos="{_v(com + rob.c_payload)}"><inertial pos="0 0 0" '
+                   f'mass="{rob.m_payload:.17g}" diaginertia="{TINY} {TINY} {TINY}"/></body>')
+    site = _v(com + l.p)
+    return f"""<mujoco model="{rob.name}">
+  <compiler angle="radian" inertiafromgeom="false" balanceinertia="false"/>
+  <option timestep="{timestep:.17g}" integrator="{integrator}" gravity="{_v(rob.gravity)}">
+    <flag contact="disable"/>
+  </option>
+  <worldbody>
+    <body name="platform" pos="{_v(pos)}">
+      <joint name="{COORDS[c]}" type="{jtype}" axis="{_v(l.dir)}" pos="0 0 0"{extra}/>
+      <inertial pos="{_v(com)}" mass="{max(rob.m_platform, TINY):.17g}" diaginertia="{_v(Ip)}"/>{payload}
+      <site name="p0" pos="{site}"/>
+      <site name="end0" pos="{site}"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="m0" joint="{COORDS[c]}" gear="1"/>
+  </actuator>
+</mujoco>"""
+
+
 def _articulated_platform(rob: Robot, Ip, payload: str, solref: float, solimp: str) -> tuple[str, str]:
     """An articulated platform as MuJoCo bodies: a translating frame at the pose point (slides
     x, y, z), in it the articulation body turned by the hinge rz (from rz0) carrying the end
@@ -509,6 +581,8 @@ def excitation(rob: Robot, t: np.ndarray, seed: int, scale: float = 1.0) -> np.n
 def leg_span(rob: Robot) -> float:
     """Mean distance from a leg's first joint at home (the slider, the arm's axis point, the
     strut's base) to its platform point [m]: the robot's size."""
+    if single_axis(rob):  # no rod: the stroke's span for a rail (the excitation's size)
+        return float(rob.legs[0].stroke[1] - rob.legs[0].stroke[0])
     q0 = ik(rob, rob.home[None])[0]
     P0 = platform_points(rob, rob.home[None])[0]
     d = []
@@ -660,8 +734,8 @@ def run(robot: str, seconds: float = 4.0, seed: int = 1, timestep: float = 1e-4,
     data = mujoco.MjData(model)
     pq = [model.joint(COORDS[c]).qposadr[0] for c in rob.coords]
     pv = [model.joint(COORDS[c]).dofadr[0] for c in rob.coords]
-    aq = [model.joint(f"q{i}").qposadr[0] for i in range(rob.n)]
-    av = [model.joint(f"q{i}").dofadr[0] for i in range(rob.n)]
+    aq = [model.joint(actuated_joint(rob, i)).qposadr[0] for i in range(rob.n)]
+    av = [model.joint(actuated_joint(rob, i)).dofadr[0] for i in range(rob.n)]
     ends = [model.site(f"end{i}").id for i in range(rob.n)]
     plats = [model.site(f"p{i}").id for i in range(rob.n)]
     data.qpos[pq] = rob.home

@@ -164,7 +164,9 @@ def test_energy_drift_over_ten_seconds(name):
     m.set_params({"gravity.x": 0.0, "gravity.y": 0.0, "gravity.z": 0.0})
     rng = np.random.default_rng(2)
     ang = np.array([u == "rad" for u in m.facts.pose_units])
-    xd = rng.normal(size=m.ndof) * np.where(ang, 2e-3, 4e-4)  # slow enough to stay inside the strokes
+    scale = np.where(ang, 2e-3, 4e-4)  # slow enough to stay inside the strokes
+    xd = rng.normal(size=m.ndof) * scale
+    xd *= max(1.0, 1.0 / np.abs(xd / scale).max())  # one coordinate at least at its scale (a 1-DOF draw may be tiny)
     # 1 ms steps at most: 10,000 steps, as many as a 1 kHz co-simulation takes
     sim = Simulator(m, method="erk", rtol=1e-12, atol=1e-15, max_step=1e-3)
     sim.reset(0.0, m.home(), xd)
@@ -242,6 +244,24 @@ BAD = [
      3, ["Grubler-Kutzbach", "is 4", "+ 1 redundant", "3 coordinates"]),
     ("non-unit rail", lambda s: s.replace("rail_direction = [0.0, 0.0, 1.0]", "rail_direction = [0.0, 0.0, 2.0]"),
      14, ["rail_direction", "unit"]),
+    # every non-finite spelling refused at its own line, here inside a multi-line array
+    *[(f"{word} in an array", lambda s, w=word: s.replace("rail_origin = [0.15, 0.0, 0.0]",
+                                                           f"rail_origin = [0.15,\n  0.0,\n  {w}]"), 15,
+       [f"'{word}'", "not a finite number"]) for word in ("NaN", "NAN", "nan", "Inf", "-Infinity", "+inf", "INFINITY")],
+    ("a range in [defaults]", lambda s: s + '\n[defaults]\n"platform.m" = 1e300\n', 23,
+     ["platform.m = 1e+300 kg", "outside [0, 1000000]"]),
+    ("a range in a set", lambda s: s + '\n[sets.heavy]\n"payload.m" = 0.1\n"rail[1].rotor_inertia" = -1\n', 24,
+     ["rail[1].rotor_inertia = -1 kg", "outside"]),
+    ("an unknown name's hint is a command that exists", lambda s: s + '\n[defaults]\n"rail[9].coulomb" = 1\n', 23,
+     ["cosim params ", "lists them"]),
+    ("an empty set name", lambda s: s + '\n[sets.]\n"payload.m" = 0.1\n', 22, ["set's name", "not empty"]),
+    ("a set named default", lambda s: s + '\n[sets.default]\n"payload.m" = 0.1\n', 22, ["'default'"]),
+    ("branch a hair off -1", lambda s: s.replace("branch = -1", "branch = -1.0000000001"), 19,
+     ["branch = -1.0000000001"]),
+    ("a C++ robot's name", lambda s: s.replace('name = "tiny_delta"', 'name = "6pus"'), 2,
+     ["robot.name '6pus'", "written in C++"]),
+    ("a bundled description's name", lambda s: s.replace('name = "tiny_delta"', 'name = "hexapod_ups"'), 2,
+     ["robot.name 'hexapod_ups'", "taken by the bundled", "hexapod_ups.toml"]),
 ]
 
 
@@ -255,6 +275,12 @@ def test_bad_description_gives_one_clear_error(tmp_path, what, edit, line, words
     for w in words:
         assert w in msg, (w, msg)
     assert "\n" not in msg
+    assert "--robot" not in msg  # cosim params takes the file itself
+
+
+def test_a_copy_of_a_bundled_description_keeps_its_name(tmp_path):
+    f = write(tmp_path, (REPO / "robots" / "hexapod_ups.toml").read_text(), name="copy.toml")
+    assert Model(f).robot == "hexapod_ups"
 
 
 def test_unknown_robot_names_the_descriptions_and_paths():
@@ -299,6 +325,87 @@ def test_mangled_descriptions_never_crash(tmp_path):
     assert loaded + refused == 600 and refused > 300
 
 
+# Line by line: every value of a few descriptions (rails, arms, a P and an R axis, [defaults]
+# and [sets.*]) replaced by a hostile one.  Each case loads (and then nothing it computes at
+# home is NaN) or is refused naming the edited line; a value that is fine alone but breaks
+# the robot as a whole (the home pose out of reach, a massless axis) is reported at the home
+# line, naming the parameter set.
+HOSTILE = ["NaN", "nan", "NAN", "-Infinity", "inf", "+Inf", "1e400", "-1e400", "1e300", "-1e300", "-1", "0", "1e-320",
+           "-1.0000000001", '"x"', "[1, 2", "true", "[]", "1e6", "-0.0"]
+CORPUS_BASES = {
+    "tiny_delta": GOOD + '\n[defaults]\n"rail[2].coulomb" = 1.5\n"payload.m" = 0.01\n\n[sets.heavy]\n'
+                         '"payload.m" = 0.4\n"rail[1].viscous" = 2.0\n',
+    "emps": (REPO / "robots" / "emps.toml").read_text(),
+    "pendulum": (REPO / "robots" / "pendulum.toml").read_text(),
+    "planar_3rrr": (REPO / "robots" / "planar_3rrr.toml").read_text(),
+}
+
+
+def corpus_cases():
+    import re
+
+    value = re.compile(r'^(\s*"?[A-Za-z_][\w\[\].]*"?\s*=\s*)([^#\n]*?)(\s*(#.*)?)$')
+    for base, text in CORPUS_BASES.items():
+        # a copy named differently: the bundled descriptions' names are taken by their files
+        text = re.sub(r'^name = "[^"]*"', f'name = "mangled_{base}"', text, count=1, flags=re.M)
+        lines = text.split("\n")
+        for i, line in enumerate(lines):
+            m = value.match(line)
+            if not m or not re.search(r"\d", m.group(2)):
+                continue
+            for junk in HOSTILE:
+                v = m.group(2)
+                # arrays: the first element replaced; numbers: the whole value
+                new = ("[" + junk + v[v.index(",") :]) if v.startswith("[") and "," in v and junk[0] != "[" else junk
+                out = lines[:i] + [m.group(1) + new + m.group(3)] + lines[i + 1 :]
+                yield base, i + 1, "\n".join(out)
+
+
+def test_mangled_values_are_refused_at_their_line_or_load_finite(tmp_path):
+    import re
+    import time
+
+    from cosim._native import PkmError
+
+    cases = list(corpus_cases())
+    assert len(cases) >= 300
+    loaded = refused = 0
+    for k, (base, line, text) in enumerate(cases):
+        f = write(tmp_path, text, name=f"v{k}.toml")
+        home_line = next(i + 1 for i, l in enumerate(text.split("\n")) if l.startswith("home"))
+        t0 = time.perf_counter()
+        try:
+            m = Model(f)
+            x = m.home()
+            xd = np.full(m.ndof, 0.01)
+            out = [m.ik(x), m.inverse_dynamics(x, xd, xd), m.forward_dynamics(x, xd, np.zeros(m.ndof)),
+                   np.array(m.energy(x, xd)), m.mass_matrix(x), np.array(list(m.params().values()))]
+            assert all(np.all(np.isfinite(o)) for o in out), (base, line, text.split("\n")[line - 1])
+            loaded += 1
+        except PkmError as e:
+            msg = str(e)
+            at = int(re.match(re.escape(f) + r":(\d+): ", msg).group(1))
+            ok = at == line or (at == home_line and "parameter set" in msg)
+            assert ok, (base, line, text.split("\n")[line - 1], msg)
+            assert "\n" not in msg
+            refused += 1
+        assert time.perf_counter() - t0 < 2.0, (base, line)
+    assert refused > 0.8 * len(cases) and loaded > 0
+
+
+def test_a_huge_description_is_refused_fast(tmp_path):
+    """The reader is linear in its input: 200,000 keys in [defaults], 200,000 tables."""
+    import time
+
+    for extra, words in [("\n[defaults]\n" + "".join(f'"k{i}" = 1\n' for i in range(200000)), "'k0' is not a parameter"),
+                         ("".join(f'\n[sets.s{i}]\n"payload.m" = 0.1\n' for i in range(200000)), "more than 1000")]:
+        f = write(tmp_path, GOOD + extra)
+        t0 = time.perf_counter()
+        with pytest.raises(ArgumentError, match=words):
+            Model(f)
+        assert time.perf_counter() - t0 < 4.0  # 149 s for the keys with a quadratic duplicate check
+
+
 def test_cosim_robots_lists_every_robot_with_its_file():
     import subprocess
     import sys
@@ -322,7 +429,10 @@ def test_chain_points_draw_the_legs_the_kinematics_solve(name):
         assert c.shape == (m.ndof, 3, 3)
         q = m.ik(x)
         for i in range(m.ndof):
-            if m.facts.joint_prefix == "strut":
+            if f"leg[{i + 1}].L" not in p and m.facts.joint_prefix == "rail":  # a single P axis
+                S0, s = (np.array([p[f"rail[{i + 1}].{k}{a}"] for a in "xyz"]) for k in ("S0", "s"))
+                assert np.allclose(c[i, 1], S0 + q[i] * s, atol=1e-15) and np.allclose(c[i, 0], S0, atol=1e-15)
+            elif m.facts.joint_prefix == "strut":
                 assert np.linalg.norm(c[i, 2] - c[i, 0]) == pytest.approx(q[i], abs=1e-12)
                 assert np.allclose(c[i, 0], [p[f"leg[{i + 1}].b{k}"] for k in "xyz"], atol=1e-15)
             else:

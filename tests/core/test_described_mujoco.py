@@ -31,11 +31,57 @@ import mujoco_described as md  # noqa: E402
 BOUND = 0.05  # % of the effort RMS, and of its inertial part (see the docstring)
 SECONDS = 1.5
 
-# Leg types and features the listed robots do not exercise: PSS on inclined rails, planar PRR
+# Leg types and features the listed robots do not exercise: single axes (an inclined P rail
+# with a payload, rotor inertia and viscous friction; an R turntable on a tilted axis, off-axis
+# masses under tilted gravity), PSS on inclined rails, planar PRR
 # with in-plane gravity, RUS + RSS in one robot with a payload and tilted gravity, SPS with
 # rotor inertia and viscous friction of the drive layer ([defaults]), horizontal P(SS)2 with a
 # payload and a platform without inertias.
 EXTRA = {
+    "inclined_p": """
+[robot]
+name = "inclined_p"
+coordinates = ["y"]
+home = [0.05]
+[platform]
+mass = 4.0
+inertia = [0.01, 0.02, 0.03]
+[payload]
+mass = 1.5
+position = [0.1, -0.05, 0.2]
+[[leg]]
+type = "P"
+platform_point = [0.02, 0.0, -0.03]
+rail_origin = [0.3, 0.1, 0.2]
+rail_direction = [0.0, 0.6, 0.8]
+stroke = [-0.3, 0.4]
+[defaults]
+"rail[1].rotor_inertia" = 2.0
+"rail[1].viscous" = 30.0
+""",
+    "tilted_r": """
+[robot]
+name = "tilted_r"
+coordinates = ["rx"]
+home = [0.4]
+[gravity]
+vector = [0.8, -0.5, -9.7]
+[platform]
+mass = 2.0
+inertia = [0.02, 0.03, 0.04]
+[payload]
+mass = 0.6
+position = [0.12, 0.05, -0.04]
+[[leg]]
+type = "R"
+platform_point = [0.03, -0.02, 0.1]
+axis_point = [0.1, 0.2, 0.5]
+axis = [0.48, 0.6, 0.64]
+stroke = [-3.0, 3.0]
+[defaults]
+"axis[1].rotor_inertia" = 0.05
+"axis[1].viscous" = 0.4
+""",
     "rot_hexapod": """
 [robot]
 name = "rot_hexapod"

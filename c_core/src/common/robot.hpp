@@ -159,6 +159,8 @@ int robot_count();
 const Robot* robot_at(int i);  // nullptr if out of range (or a bad description)
 const char* robot_name_at(int i);  // "" if out of range
 std::string known_robots();
+// A robot written in C++ goes by this name (a description may not take it).
+bool is_builtin_robot(const std::string& name);
 
 [[noreturn]] void unsupported(const Robot& r, const char* what);
 

@@ -9,7 +9,9 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "description/axis_robot.hpp"
 #include "description/jet.hpp"
+#include "description/schema.hpp"
 #include "kinematics/generic_kinematics.hpp"
 #include "dynamics/drive.hpp"
 
@@ -496,37 +498,29 @@ const std::vector<Override>* set_of(const Description& d, const std::string& set
 
 std::vector<ParamSpec> DescribedRobot::param_specs(const std::string& set) const {
   std::vector<ParamSpec> v = d_.params;
-  for (const auto& o : *set_of(d_, set))
-    for (auto& s : v)
-      if (s.name == o.name) s.value = o.value;
+  std::unordered_map<std::string, ParamSpec*> by_name;
+  for (auto& s : v) by_name.emplace(s.name, &s);
+  for (const auto& o : param_overrides(set))
+    if (auto it = by_name.find(o.first); it != by_name.end()) it->second->value = o.second;
   return v;
 }
 
 std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(const std::string& set) const {
+  // The defaults, then the set's own values (later ones win).
+  const std::vector<Override>& own = *set_of(d_, set);
   std::vector<std::pair<std::string, double>> out;
-  for (const auto& o : *set_of(d_, set)) out.emplace_back(o.name, o.value);
+  if (&own != &d_.sets.front().second)
+    for (const auto& o : d_.sets.front().second) out.emplace_back(o.name, o.value);
+  for (const auto& o : own) out.emplace_back(o.name, o.value);
   return out;
 }
 
 std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>& specs,
                                                     const std::vector<double>& values) const {
-  std::unordered_map<std::string, double> val;
-  for (size_t k = 0; k < specs.size() && k < values.size(); ++k) val[specs[k].name] = values[k];
-  auto get = [&](const std::string& name) {
-    auto it = val.find(name);
-    if (it == val.end()) throw Error(PKM_ERR_PARAMETER, d_.name + " parameter " + name + " is missing from the set");
-    if (!std::isfinite(it->second))
-      throw Error(PKM_ERR_PARAMETER, d_.name + " parameter " + name + " is not finite (" + g6(it->second) + ")");
-    return it->second;
-  };
-  auto name = [](const char* group, int i, const char* field) {
-    return std::string(group) + "[" + std::to_string(i + 1) + "]." + field;
-  };
-  auto vec = [&](const char* group, int i, const char* f0) {
-    return V3(get(name(group, i, (std::string(f0) + "x").c_str())), get(name(group, i, (std::string(f0) + "y").c_str())),
-              get(name(group, i, (std::string(f0) + "z").c_str())));
-  };
-  auto bad = [&](const std::string& msg) { throw Error(PKM_ERR_PARAMETER, d_.name + ": " + msg); };
+  const ParamValues get(d_.name, specs, values);
+  auto name = idx;
+  auto vec = [&](const char* group, int i, const char* f0) { return get.vec(group, i, f0); };
+  auto bad = [&](const std::string& msg) { get.bad(msg); };
   auto m = std::make_unique<Model>();
   m->n = ndof();
   for (int j = 0; j < m->n; ++j) m->coord[j] = d_.coords[j];
@@ -918,19 +912,28 @@ const Robot* make(const std::string& path, const std::string& text) {
   auto it = c.find(key);
   if (it != c.end()) return it->second.get();
   static int serial = 0;
-  auto r = std::make_unique<DescribedRobot>(read_description(text, path), ++serial);
+  Description desc = read_description(text, path);
+  std::unique_ptr<DescribedRobot> r;
+  if (desc.joint == Joint::axis) r = std::make_unique<AxisRobot>(std::move(desc), ++serial);
+  else r = std::make_unique<DescribedRobot>(std::move(desc), ++serial);
   const Description& d = r->description();
-  // Every named value must be a parameter of the robot or of its drive layer.
-  auto drive_specs = drive::specs(*r);
+  // Every named value must be a parameter of the robot or of its drive layer, inside the
+  // parameter's range (as anywhere a value is set: params=, set_params, the FMUs).
+  const auto drive_specs = drive::specs(*r);
+  std::unordered_map<std::string, const ParamSpec*> by_name;
+  for (const auto& p : d.params) by_name.emplace(p.name, &p);
+  for (const auto& p : drive_specs) by_name.emplace(p.name, &p);
   for (const auto& s : d.sets)
     for (const auto& o : s.second) {
-      bool found = false;
-      for (const auto& p : d.params) found |= p.name == o.name;
-      for (const auto& p : drive_specs) found |= p.name == o.name;
-      if (!found)
-        throw Error(PKM_ERR_ARGUMENT, path + ":" + std::to_string(o.line) + ": '" + o.name +
-                                          "' is not a parameter of " + d.name + " (cosim params --robot " + path +
-                                          " lists them)");
+      const auto it = by_name.find(o.name);
+      const std::string where = path + ":" + std::to_string(o.line) + ": ";
+      if (it == by_name.end())
+        throw Error(PKM_ERR_ARGUMENT, where + "'" + o.name + "' is not a parameter of " + d.name + " (cosim params " +
+                                          path + " lists them)");
+      const ParamSpec& p = *it->second;
+      if (!(o.value >= p.lo && o.value <= p.hi))
+        throw Error(PKM_ERR_ARGUMENT, where + o.name + " = " + num(o.value) + " " + p.unit + " is outside [" +
+                                          num(p.lo) + ", " + num(p.hi) + "] (" + p.description + ")");
     }
   // The default set must compile: home reachable, no singularity there.
   for (const auto& s : d.sets) {
@@ -957,6 +960,23 @@ const Robot* make(const std::string& path, const std::string& text) {
   return out;
 }
 
+// A file loaded by path answers to its robot.name from then on: a name that already means
+// another robot (one written in C++, or a bundled description of the project's robots/)
+// would stand for two robots (and sweep workers or FMUs re-created by name get the other).
+void refuse_taken_name(const Description& d, const std::string& text) {
+  const std::string where = d.file + ":" + std::to_string(d.name_line) + ": robot.name '" + d.name + "' ";
+  if (is_builtin_robot(d.name))
+    throw Error(PKM_ERR_ARGUMENT, where + "is the name of a robot written in C++: give the description another name");
+#ifdef PKM_ROBOTS_DIR
+  bool ok = false;
+  const std::string bundled = std::string(PKM_ROBOTS_DIR) + "/" + d.name + ".toml";
+  const std::string bundled_text = read_file(bundled, ok);
+  if (ok && bundled_text != text)
+    throw Error(PKM_ERR_ARGUMENT, where + "is taken by the bundled " + bundled + ", a different description: give "
+                                  "this one another name");
+#endif
+}
+
 }  // namespace
 
 const Robot* load_described(const std::string& name) {
@@ -964,7 +984,9 @@ const Robot* load_described(const std::string& name) {
   if (is_path(name)) {
     const std::string text = read_file(name, ok);
     if (!ok) throw Error(PKM_ERR_ARGUMENT, "cannot read robot description " + name);
-    return make(name, text);
+    const Robot* r = make(name, text);
+    refuse_taken_name(static_cast<const DescribedRobot&>(*r).description(), text);
+    return r;
   }
   for (const auto& dir : search_dirs()) {
     const std::string path = dir + "/" + name + ".toml";

@@ -36,7 +36,10 @@
 namespace pkm {
 namespace described {
 
-enum class Joint { rail, arm, strut };
+// rail, arm and strut legs join the base to a platform point; an axis (the kinds of
+// joint_kind.hpp) carries the platform itself.
+enum class Joint { rail, arm, strut, axis };
+class AxisKind;
 
 // A leg architecture: which actuated joint, and what the Grubler-Kutzbach count sees
 // (bodies, joints, their freedoms, idle freedoms such as a rod's spin between two
@@ -47,11 +50,13 @@ struct LegType {
   int bodies, joints, freedoms, idle;
   bool planar;  // a planar chain (only with planar robots)
   const char* what;
+  const AxisKind* axis = nullptr;  // Joint::axis: its kind
 };
 const LegType* find_leg_type(const std::string& name);
 std::string leg_type_names();
 
 constexpr int kMaxLegs = 6;
+constexpr size_t kMaxSets = 1000;  // [sets.NAME] tables of one description
 
 // Mass elements of a leg over its body points (local indices; point 1 is always P).
 struct PointMass {
@@ -115,9 +120,12 @@ struct Description {
   bool articulated = false;             // [platform] kind = "articulated"
   int redundant = 0;                    // robot.redundant_constraints
   std::vector<ParamSpec> params;        // defaults from the file
-  std::vector<std::pair<std::string, std::vector<Override>>> sets;  // "default" first
+  // "default" first ([defaults]), then each [sets.NAME] with its own values only (applied
+  // after the defaults: DescribedRobot::param_overrides)
+  std::vector<std::pair<std::string, std::vector<Override>>> sets;
   std::vector<double> home;
   int home_line = 0;
+  int name_line = 0;
   Joint joint = Joint::rail;
   bool planar = false;
   int mobility = 0;  // Grubler-Kutzbach count
@@ -126,12 +134,12 @@ struct Description {
 // Reads and checks a description; throws Error(PKM_ERR_ARGUMENT, "file:line: field: what").
 Description read_description(const std::string& text, const std::string& file);
 
-class DescribedRobot final : public Robot {
+class DescribedRobot : public Robot {
  public:
   DescribedRobot(Description d, int serial) : d_(std::move(d)), serial_(serial) {
     // A geometric error is a rod-length error, leg by leg (a strut has no rod: its length
     // is the joint, so the toolkit takes every length parameter instead).
-    if (d_.joint != Joint::strut)
+    if (d_.joint == Joint::rail || d_.joint == Joint::arm)
       for (int k = 0; k < ndof(); ++k) geometry_names_.push_back("leg[" + std::to_string(k + 1) + "].L");
   }
   const Description& description() const { return d_; }

@@ -5,6 +5,8 @@
 #include <sstream>
 
 #include "description/described_robot.hpp"
+#include "description/joint_kind.hpp"
+#include "description/schema.hpp"
 #include "dynamics/drive.hpp"
 
 namespace pkm {
@@ -24,68 +26,12 @@ const LegType kLegTypes[] = {
     {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints"},
     {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint"},
     {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint"},
+    // Single axes: the joint carries the platform (no body of its own, one joint, one freedom).
+    {prismatic_axis().type(), Joint::axis, 0, 1, 1, 0, false, prismatic_axis().what(), &prismatic_axis()},
+    {revolute_axis().type(), Joint::axis, 0, 1, 1, 0, false, revolute_axis().what(), &revolute_axis()},
 };
 
 const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
-
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
-
-std::string idx(const char* group, int i, const char* field) {
-  return std::string(group) + "[" + std::to_string(i + 1) + "]." + field;
-}
-
-struct Reader {
-  const toml::Document& doc;
-  [[noreturn]] void fail(int line, const std::string& what) const {
-    throw Error(PKM_ERR_ARGUMENT, doc.file + ":" + std::to_string(line) + ": " + what);
-  }
-  // The keys a table may have; anything else is refused naming the known ones (typos).
-  void only(const toml::Table& t, const std::vector<std::string>& known, const std::string& where) const {
-    for (const auto& kv : t.keys)
-      if (std::find(known.begin(), known.end(), kv.first) == known.end()) {
-        std::string list;
-        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-        fail(kv.second.line, where + ": unknown field '" + kv.first + "' (known: " + list + ")");
-      }
-  }
-  const toml::Value& need(const toml::Table& t, const std::string& key, const std::string& where,
-                          const std::string& what) const {
-    const toml::Value* v = t.find(key);
-    if (!v) fail(t.line, where + ": field '" + key + "' is missing (" + what + ")");
-    return *v;
-  }
-  std::string text(const toml::Table& t, const std::string& key, const std::string& where, const std::string& what,
-                   bool required = true) const {
-    const toml::Value* v = t.find(key);
-    if (!v) {
-      if (required) need(t, key, where, what);
-      return "";
-    }
-    if (v->kind != toml::Value::String) fail(v->line, where + "." + key + " must be a string (" + what + ")");
-    return v->str;
-  }
-  double number(const toml::Value& v, const std::string& field) const {
-    if (v.kind != toml::Value::Number) fail(v.line, field + " must be a number, got " + v.kind_name());
-    return v.num;
-  }
-  std::vector<double> numbers(const toml::Value& v, const std::string& field, size_t n) const {
-    if (v.kind != toml::Value::Array || v.items.size() != n)
-      fail(v.line, field + " must be an array of " + std::to_string(n) + " numbers");
-    std::vector<double> out;
-    for (const auto& it : v.items) out.push_back(number(it, field));
-    return out;
-  }
-};
-
-// Rotation about the world z axis by angle a applied to (x, y, z).
-std::vector<double> rot_z(const std::vector<double>& v, double a) {
-  return {std::cos(a) * v[0] - std::sin(a) * v[1], std::sin(a) * v[0] + std::cos(a) * v[1], v[2]};
-}
 
 }  // namespace
 
@@ -121,6 +67,12 @@ Description read_description(const std::string& text, const std::string& file) {
                           "] (known: [robot], [gravity], [platform], [payload], [[leg]], [defaults], [sets.NAME])");
     if (t.name == "leg" && !t.array) rd.fail(t.line, "legs are declared as [[leg]] (one per leg), not [leg]");
     if (t.name != "leg" && t.array) rd.fail(t.line, "[[" + t.name + "]] must be written [" + t.name + "]");
+    if (t.name.rfind("sets.", 0) == 0) {
+      const std::string set = t.name.substr(5);
+      if (set.empty() || set.find_first_of(" \t") != std::string::npos || set == "default")
+        rd.fail(t.line, "[" + t.name + "]: a set's name is one word, not empty and not 'default' (the file's own "
+                        "values and [defaults] are the default set)");
+    }
   }
 
   // [robot]
@@ -131,6 +83,7 @@ Description read_description(const std::string& text, const std::string& file) {
   d.name = rd.text(rt, "name", "robot", "the robot's name, what --robot takes");
   if (d.name.empty() || d.name.find_first_of(" /\\\t") != std::string::npos)
     rd.fail(rt.find("name")->line, "robot.name '" + d.name + "' must be one word without spaces or slashes");
+  d.name_line = rt.find("name")->line;
   d.title = rd.text(rt, "title", "robot", "", false);
   d.source = rd.text(rt, "source", "robot", "", false);
   const toml::Value& cv = rd.need(rt, "coordinates", "robot", "the platform's degrees of freedom, e.g. [\"x\", \"y\", \"z\"]");
@@ -165,9 +118,12 @@ Description read_description(const std::string& text, const std::string& file) {
 
   // [gravity], [platform], [payload]
   double g[3] = {0, 0, -9.81};
+  int g_line = rt.line;  // where a refused value is reported: its own line ([robot] when not written)
   if (auto gt = doc.named("gravity"); !gt.empty()) {
     rd.only(*gt[0], {"vector"}, "[gravity]");
-    auto gv = rd.numbers(rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]"), "gravity.vector", 3);
+    const toml::Value& gval = rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]");
+    g_line = gval.line;
+    auto gv = rd.numbers(gval, "gravity.vector", 3);
     std::copy(gv.begin(), gv.end(), g);
   }
   const auto pts = doc.named("platform");
@@ -194,10 +150,11 @@ Description read_description(const std::string& text, const std::string& file) {
     if (v < 0) rd.fail(pt.find("inertia")->line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
   double pay_m = 0;
   std::vector<double> pay_c = {0, 0, 0};
+  int pay_m_line = pt.line, pay_c_line = pt.line;
   if (auto yt = doc.named("payload"); !yt.empty()) {
     rd.only(*yt[0], {"mass", "position"}, "[payload]");
-    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass");
-    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3);
+    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass"), pay_m_line = v->line;
+    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3), pay_c_line = v->line;
     if (pay_m < 0) rd.fail(yt[0]->find("mass")->line, "payload.mass = " + num(pay_m) + " kg must be >= 0");
   }
 
@@ -227,6 +184,21 @@ Description read_description(const std::string& text, const std::string& file) {
     for (int k = 0; k < copies; ++k) legs.push_back({t, lt, 2 * pi * k / copies, k});
   }
   if (legs.empty()) rd.fail(rt.line, "no [[leg]] is declared");
+  // A single axis carries the platform: it is the robot's only leg, and its coordinate is
+  // the joint's (a length along a rail, an angle about an axis).
+  for (const auto& l : legs)
+    if (l.type->axis && legs.size() > 1)
+      rd.fail(l.t->find("copies") ? l.t->find("copies")->line : l.t->line,
+              std::string("a single-axis leg (") + l.type->name + ") carries the platform itself: it must be the only "
+              "leg (one [[leg]], copies = 1) of a robot with one coordinate");
+  if (legs.size() == 1 && legs[0].type->axis && n == 1) {
+    const bool angle = d.coords[0] >= 3, angular = legs[0].type->axis->angular();
+    if (angle != angular)
+      rd.fail(cv.line, std::string("robot.coordinates: a leg of type ") + legs[0].type->name + " moves the platform " +
+                           (angular ? "by an angle: its coordinate is one of rx, ry, rz"
+                                    : "along its rail: its coordinate is one of x, y, z") +
+                           ", not '" + kCoordNames[d.coords[0]] + "'");
+  }
   if ((int)legs.size() != n)
     rd.fail(legs.back().t->line, std::to_string(legs.size()) + " legs for " + std::to_string(n) +
                                      " coordinates: the toolkit needs one actuated leg per degree of freedom");
@@ -266,11 +238,7 @@ Description read_description(const std::string& text, const std::string& file) {
   // Parameter table, leg by leg (names as the hand-written 6-PUS names its own).
   auto& P = d.params;
   auto add = [&](const std::string& name, const char* unit, const std::string& desc, double v, double lo, double hi,
-                 int line) {
-    if (v < lo || v > hi)
-      rd.fail(line, name + " = " + num(v) + " " + unit + " is outside [" + num(lo) + ", " + num(hi) + "] (" + desc + ")");
-    P.push_back({name, unit, desc, v, lo, hi});
-  };
+                 int line) { rd.add(P, name, unit, desc, v, lo, hi, line); };
   for (int i = 0; i < n; ++i) {
     const LegIn& l = legs[i];
     const toml::Table& t = *l.t;
@@ -278,30 +246,32 @@ Description read_description(const std::string& text, const std::string& file) {
     const Joint j = l.type->joint;
     std::vector<std::string> known = {"type", "copies", "platform_point", "stroke"};
     if (d.articulated) known.push_back("platform_offset");
-    if (j != Joint::strut) for (auto k : {"rod_length", "rod_mass", "rod_model", "branch"}) known.push_back(k);
+    if (j == Joint::rail || j == Joint::arm) for (auto k : {"rod_length", "rod_mass", "rod_model", "branch"}) known.push_back(k);
     if (j == Joint::rail) for (auto k : {"rail_origin", "rail_direction", "slider_mass"}) known.push_back(k);
     if (j == Joint::arm) for (auto k : {"axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_com_angle", "arm_inertia"}) known.push_back(k);
     if (j == Joint::strut) for (auto k : {"base_point", "cylinder_mass", "cylinder_length", "piston_mass", "piston_length"}) known.push_back(k);
+    if (j == Joint::axis) for (const auto& k : l.type->axis->fields()) known.push_back(k);
     rd.only(t, known, where);
-    auto vec = [&](const char* key, const char* what) {
-      const toml::Value& v = rd.need(t, key, where, what);
-      return rot_z(rd.numbers(v, std::string("leg.") + key, 3), l.angle);
-    };
+    const LegSchema schema{rd, t, i, l.angle, where, P};
+    auto vec = [&](const char* key, const char* what) { return schema.vec(key, what); };
     auto scalar = [&](const char* key, const char* what, double lo, double hi, const char* unit) {
-      const toml::Value& v = rd.need(t, key, where, what);
-      const double x = rd.number(v, std::string("leg.") + key);
-      if (x < lo || x > hi)
-        rd.fail(v.line, where + ": " + key + " = " + num(x) + " " + unit + " must be " +
-                            (lo > 0 ? "> 0" : hi < 1e300 ? "in [" + num(lo) + ", " + num(hi) + "]" : ">= " + num(lo)) +
-                            " (" + what + ")");
-      return x;
+      return schema.scalar(key, what, lo, hi, unit);
     };
-    auto line_of = [&](const char* key) { return t.find(key) ? t.find(key)->line : t.line; };
+    auto line_of = [&](const char* key) { return schema.line_of(key); };
     const auto p = vec("platform_point", "the leg's attachment point in the platform frame [m]");
     const auto stroke = rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]"), "leg.stroke", 2);
     if (!(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
     const std::string leg = "leg " + std::to_string(i + 1);
-    if (j == Joint::rail || j == Joint::arm) {
+    if (j == Joint::axis) {
+      const char* c[3] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k)
+        add(idx("leg", i, (std::string("p") + c[k]).c_str()), "m",
+            std::string(c[k]) + " of the platform point on the " + (l.type->axis->angular() ? "axis" : "rail") + " of " +
+                leg + ", platform frame",
+            p[k], -1e3, 1e3, line_of("platform_point"));
+      l.type->axis->read(schema, stroke);
+      d.lumped_rods.push_back(false);
+    } else if (j == Joint::rail || j == Joint::arm) {
       const double L = scalar("rod_length", "rod length between its two joints [m]", 1e-9, 1e300, "m");
       add(idx("leg", i, "L"), "m", "length of " + leg + " (rod between its two joints)", L, 1e-9, 1e3, line_of("rod_length"));
       const std::string frame = d.articulated ? ", axis frame (turns with the articulation)" : ", platform frame";
@@ -333,9 +303,7 @@ Description read_description(const std::string& text, const std::string& file) {
     }
     if (j == Joint::rail) {
       const auto S0 = vec("rail_origin", "slider position at q = 0 [m]");
-      const auto s = vec("rail_direction", "unit rail direction, q grows along it");
-      const double sn = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-      if (std::abs(sn - 1) > 1e-6) rd.fail(line_of("rail_direction"), where + ": rail_direction has length " + num(sn) + ", must be a unit vector");
+      const auto s = schema.unit_vec("rail_direction", "unit rail direction, q grows along it");
       const char* c[3] = {"x", "y", "z"};
       for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("S0") + c[k]).c_str()), "m", std::string(c[k]) + " of the slider of " + leg + " at stroke q = 0", S0[k], -1e3, 1e3, line_of("rail_origin"));
       for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("s") + c[k]).c_str()), "1", std::string(c[k]) + " of the rail direction of " + leg + " (unit vector)", s[k], -2, 2, line_of("rail_direction"));
@@ -345,12 +313,8 @@ Description read_description(const std::string& text, const std::string& file) {
           scalar("slider_mass", "slider carriage mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("slider_mass"));
     } else if (j == Joint::arm) {
       const auto A = vec("axis_point", "a point of the motor axis [m]");
-      const auto k_ = vec("axis", "unit motor axis; q turns the arm about it by the right-hand rule");
-      const auto u = vec("arm_direction", "unit arm direction at q = 0, perpendicular to the axis");
-      const double kn = std::sqrt(k_[0] * k_[0] + k_[1] * k_[1] + k_[2] * k_[2]);
-      const double un = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-      if (std::abs(kn - 1) > 1e-6) rd.fail(line_of("axis"), where + ": axis has length " + num(kn) + ", must be a unit vector");
-      if (std::abs(un - 1) > 1e-6) rd.fail(line_of("arm_direction"), where + ": arm_direction has length " + num(un) + ", must be a unit vector");
+      const auto k_ = schema.unit_vec("axis", "unit motor axis; q turns the arm about it by the right-hand rule");
+      const auto u = schema.unit_vec("arm_direction", "unit arm direction at q = 0, perpendicular to the axis");
       if (std::abs(k_[0] * u[0] + k_[1] * u[1] + k_[2] * u[2]) > 1e-6) rd.fail(line_of("arm_direction"), where + ": arm_direction must be perpendicular to the axis");
       const char* c[3] = {"x", "y", "z"};
       for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("A") + c[k]).c_str()), "m", std::string(c[k]) + " of the motor axis point of " + leg, A[k], -1e3, 1e3, line_of("axis_point"));
@@ -369,7 +333,7 @@ Description read_description(const std::string& text, const std::string& file) {
           phi, -4, 4, line_of("arm_com_angle"));
       add(idx("arm", i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, line_of("stroke"));
       add(idx("arm", i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, line_of("stroke"));
-    } else {
+    } else if (j == Joint::strut) {
       d.lumped_rods.push_back(false);
       const auto B = vec("base_point", "the strut's base joint [m]");
       const char* c[3] = {"x", "y", "z"};
@@ -407,13 +371,13 @@ Description read_description(const std::string& text, const std::string& file) {
     add("platform.cy", "m", "platform centre from the pose point across the axis", c[1], -1e3, 1e3, pt.find("centre")->line);
     add("platform.cz", "m", "platform centre from the pose point, vertical", c[2], -1e3, 1e3, pt.find("centre")->line);
   }
-  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pt.line);
-  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pt.line);
-  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pt.line);
-  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pt.line);
-  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, pt.line);
-  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, pt.line);
-  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, pt.line);
+  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pay_m_line);
+  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pay_c_line);
+  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pay_c_line);
+  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pay_c_line);
+  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, g_line);
+  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, g_line);
+  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, g_line);
 
   // [defaults] and [sets.NAME]: values by parameter name (checked against the table and
   // the drive layer's names once the robot exists, in load_described).
@@ -422,13 +386,17 @@ Description read_description(const std::string& text, const std::string& file) {
     for (const auto& kv : t.keys) out.push_back({kv.first, rd.number(kv.second, t.name + "." + kv.first), kv.second.line});
     return out;
   };
+  // Each set keeps its own values (a set starts from the defaults when it is used), so the
+  // work stays linear in the file however many keys and sets it has.
   d.sets.emplace_back("default", std::vector<Override>{});
   if (auto dt = doc.named("defaults"); !dt.empty()) d.sets[0].second = overrides(*dt[0]);
   for (const toml::Table& t : doc.tables)
     if (t.name.rfind("sets.", 0) == 0) {
-      auto o = d.sets[0].second;  // a set starts from the defaults
-      for (auto& kv : overrides(t)) o.push_back(kv);
-      d.sets.emplace_back(t.name.substr(5), o);
+      // Every set is compiled and checked when the robot loads: a bound on their number keeps
+      // that bounded (a real robot has a handful).
+      if (d.sets.size() > kMaxSets)
+        rd.fail(t.line, "[" + t.name + "]: more than " + std::to_string(kMaxSets) + " parameter sets");
+      d.sets.emplace_back(t.name.substr(5), overrides(t));
     }
   return d;
 }

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <unordered_map>
 
 #include "common/robot.hpp"
 
@@ -49,8 +50,9 @@ struct Parser {
   size_t i = 0;
   int line = 1;
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw Error(PKM_ERR_ARGUMENT, file + ":" + std::to_string(line) + ": " + what);
+  [[noreturn]] void fail(const std::string& what) const { fail_at(line, what); }
+  [[noreturn]] void fail_at(int at, const std::string& what) const {
+    throw Error(PKM_ERR_ARGUMENT, file + ":" + std::to_string(at) + ": " + what);
   }
   bool end() const { return i >= s.size(); }
   char peek() const { return end() ? '\0' : s[i]; }
@@ -124,8 +126,13 @@ struct Parser {
       v.kind = Value::Array;
       ++i;
       space();
+      // An array may span lines; one that is never closed is reported where it opens.
+      auto broken = [&](const std::string& what) {
+        if (line == v.line) fail(what);
+        fail_at(v.line, "array not closed (line " + std::to_string(line) + ": " + what + ")");
+      };
       while (peek() != ']') {
-        if (end()) fail("array not closed");
+        if (end()) broken("the file ends");
         Value item = value();
         if (item.kind == Value::Array) fail("nested arrays are not part of a robot description");
         v.items.push_back(std::move(item));
@@ -134,7 +141,7 @@ struct Parser {
           ++i;
           space();
         } else if (peek() != ']') {
-          fail("expected ',' or ']' in an array, found " + shown(peek()));
+          broken("expected ',' or ']' in an array, found " + shown(peek()));
         }
       }
       ++i;
@@ -154,8 +161,12 @@ struct Parser {
       std::string digits;
       for (char ch : tok)
         if (ch != '_') digits += ch;
-      if (digits == "inf" || digits == "+inf" || digits == "-inf" || digits == "nan" || digits == "+nan" ||
-          digits == "-nan")
+      // Every spelling strtod reads as non-finite (inf, Infinity, NAN, nan(1), ...), refused
+      // here at its own line rather than as a NaN later.
+      std::string word;
+      for (char ch : digits)
+        if (ch != '+' && ch != '-') word += (char)std::tolower((unsigned char)ch);
+      if (word == "inf" || word == "infinity" || word == "nan" || word.rfind("nan(", 0) == 0)
         fail("'" + tok + "' is not a finite number");
       errno = 0;
       char* endp = nullptr;
@@ -164,6 +175,7 @@ struct Parser {
         fail("'" + tok + "' is not a number (strings are written in double quotes)");
       if (errno == ERANGE && (x == 0 || std::abs(x) > 1))
         fail("'" + tok + "' is out of the range of a double");
+      if (!std::isfinite(x)) fail("'" + tok + "' is not a finite number");
       v.kind = Value::Number;
       v.num = x;
       i = j;
@@ -186,6 +198,9 @@ struct Parser {
     Document doc;
     doc.file = file;
     doc.tables.push_back(Table{});
+    // Names seen so far (hashed: a file of many keys or tables reads in linear time).
+    std::unordered_map<std::string, std::pair<int, bool>> tables;  // name -> line of the first, declared [[ ]]
+    std::unordered_map<std::string, int> keys;                     // the current table's keys -> line
     for (;;) {
       space();
       if (end()) break;
@@ -200,9 +215,10 @@ struct Parser {
         if (peek() != ']' || (array && (i + 1 >= s.size() || s[i + 1] != ']')))
           fail(std::string("table header not closed with ") + (array ? "']]'" : "']'"));
         i += array ? 2 : 1;
-        for (const Table& o : doc.tables)
-          if (o.name == t.name && (!array || !o.array))
-            fail("[" + t.name + "] is declared twice (first on line " + std::to_string(o.line) + ")");
+        const auto seen = tables.emplace(t.name, std::make_pair(t.line, array));
+        if (!seen.second && (!array || !seen.first->second.second))
+          fail("[" + t.name + "] is declared twice (first on line " + std::to_string(seen.first->second.first) + ")");
+        keys.clear();
         doc.tables.push_back(std::move(t));
         end_of_line();
         continue;
@@ -214,9 +230,10 @@ struct Parser {
       ++i;
       Value v = value();
       Table& cur = doc.tables.back();
-      if (const Value* old = cur.find(k))
+      const auto old = keys.emplace(k, kline);
+      if (!old.second)
         fail("key '" + k + "' is given twice in " + (cur.name.empty() ? "the top level" : "[" + cur.name + "]") +
-             " (first on line " + std::to_string(old->line) + ")");
+             " (first on line " + std::to_string(old.first->second) + ")");
       v.line = kline;
       cur.keys.emplace_back(std::move(k), std::move(v));
       end_of_line();

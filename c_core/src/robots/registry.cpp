@@ -59,6 +59,12 @@ const char* robot_name_at(int i) {
   return "";
 }
 
+bool is_builtin_robot(const std::string& name) {
+  for (const Robot* r : all_robots())
+    if (r && name == r->name()) return true;
+  return false;
+}
+
 std::string known_robots() {
   std::string s;
   for (int i = 0; i < robot_count(); ++i) s += (s.empty() ? "" : ", ") + std::string(robot_name_at(i));

@@ -1,0 +1,73 @@
+// Actuated-joint kinds as traits: one file per kind (description/kind_*.cpp) holds what a
+// description of that kind means: the [[leg]] fields it takes and their checks (its
+// schema), the parameters they become, and its geometry, derivatives, mass and force
+// terms.  The rest of the reader and the robot's algorithms are written once over this
+// interface.
+//
+// The kinds here are single-axis joints: the actuated joint carries the platform
+// itself (a carriage on a rail, a turntable or pendulum on a shaft), so the robot has
+// one coordinate and it is the joint coordinate q.  The platform frame moves rigidly with
+// q; the bodies are the platform (mass at its frame origin, principal inertias about its
+// axes) and the payload point.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "description/schema.hpp"
+
+namespace pkm {
+namespace described {
+
+// An axis's constant data, from the parameters.
+struct AxisModel {
+  Eigen::Vector3d base;  // P: S0, the rail point the platform point sits on at q = 0; R: A, a point of the axis [m]
+  Eigen::Vector3d dir;   // P: s, unit rail direction; R: k, unit axis (q by the right-hand rule) [1]
+  Eigen::Vector3d p;     // the platform point on the rail / on the axis, platform frame [m]
+  double qmin = 0, qmax = 0;
+};
+
+// What the axis carries, in the platform frame.
+struct AxisBodies {
+  double m_platform = 0;            // at the platform frame origin [kg]
+  Eigen::Vector3d I_platform;       // principal inertias about the platform axes [kg m2]
+  double m_payload = 0;             // [kg]
+  Eigen::Vector3d c_payload;        // [m]
+  Eigen::Vector3d g;                // gravity, world frame [m/s2]
+};
+
+class AxisKind {
+ public:
+  virtual ~AxisKind() = default;
+  virtual const char* type() const = 0;    // the leg type in a description ("P")
+  virtual const char* what() const = 0;    // one line for the list of leg types
+  virtual const char* prefix() const = 0;  // joint parameters' group, drive layer's too ("rail" -> rail[1].coulomb)
+  virtual const char* noun() const = 0;    // messages: "carriage 1"
+  virtual bool angular() const = 0;        // q in rad (efforts N m) or m (N)
+
+  // Schema: the [[leg]] fields beyond type, copies, platform_point and stroke, and how
+  // they (and the stroke) become parameters, each checked at its line.
+  virtual std::vector<std::string> fields() const = 0;
+  virtual void read(const LegSchema& s, const std::vector<double>& stroke) const = 0;
+  // The parameters into the model, with the checks across parameters.
+  virtual void compile(const ParamValues& v, AxisModel& a) const = 0;
+
+  // Geometry: the platform frame at q (world point of platform point c: o + R c) and the
+  // joint's moving point (the carriage's rail point, a point of the shaft) for drawings.
+  virtual void place(const AxisModel& a, double q, Eigen::Vector3d& o, Eigen::Matrix3d& R) const = 0;
+  virtual Eigen::Vector3d joint_point(const AxisModel& a, double q) const = 0;
+  // Mass and force terms of the equation of motion  tau = M qdd + c qd^2 - G(q):
+  // M the inertia along the axis (constant for both kinds here), c qd^2 the velocity
+  // terms (zero: a body moving rigidly along or about a fixed axis), G the generalised
+  // gravity force G = -dV/dq.
+  virtual double inertia(const AxisModel& a, const AxisBodies& b) const = 0;
+  virtual double gravity(const AxisModel& a, const AxisBodies& b, double q) const = 0;
+};
+
+// The single-axis kinds (description/kind_prismatic_axis.cpp, kind_revolute_axis.cpp).
+const AxisKind& prismatic_axis();
+const AxisKind& revolute_axis();
+
+}  // namespace described
+}  // namespace pkm
