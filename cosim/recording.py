@@ -4,7 +4,9 @@ A recording is a CSV file with a header row and a JSON sidecar of the same name:
 
 * ``time`` [s], strictly increasing, first column;
 * per joint ``i = 1..nd``: ``q<i>`` [m or rad], ``qd<i>`` [m/s or rad/s], ``tau<i>``
-  [N or N m, actuator effort applied], optional ``qref<i>``;
+  [N or N m, actuator effort applied], optional ``qref<i>`` and ``f_ext<i>`` [N or N m, a
+  measured external effort on joint i, positive along +q_i: a known input, not missing
+  physics; the sidecar's ``units.f_ext`` must state its unit];
 * optional pose columns: ``x, y, z`` [m] and ``rx, ry, rz`` [rad] (6-PUS),
   ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output);
 * any further columns are kept in ``Recording.extra``.
@@ -14,8 +16,11 @@ Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar"
 ``"joint_convention": {"sign": [...], "offset": [...]}`` for a recording made in other
 joint coordinates than the model's: per joint, ``recorded = sign * model + offset``
 (``sign`` +1 or -1; ``offset`` in m or rad, default 0).  The reader converts ``q``,
-``qd``, ``qref`` and ``tau`` to the model's convention (``Recording.joint_convention``
+``qd``, ``qref``, ``tau`` and ``f_ext`` to the model's convention (``Recording.joint_convention``
 keeps what was declared; written recordings are in the model's convention).
+
+Further sidecar fields (``units``, ``derived``, ``sensors``, ``source``: written by
+``cosim import``, docs/recording.md) are kept in ``Recording.sidecar`` and written back.
 
 Scenarios export this; calibration and the discrepancy engine read it.  A bad file gets
 one :class:`RecordingError` naming the file, the row (line number in the file) and the
@@ -121,7 +126,9 @@ class Recording:
 
     Arrays have one row per sample: ``time`` (n,) [s]; ``q``, ``qd``, ``tau``, ``qref``
     (n, nd); ``pose`` (n, npose) in the robot's tracker columns (the core's
-    ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar).
+    ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar);
+    ``f_ext`` (n, nd) [N or N m], the measured external effort on each joint (positive
+    along +q_i), None when the recording has none.
     """
 
     robot: str
@@ -139,6 +146,10 @@ class Recording:
     #: the joint convention the file declared (``sign``, ``offset`` per joint); the arrays
     #: are already in the model's convention.  Empty: the model's own.
     joint_convention: dict = field(default_factory=dict)
+    #: measured external effort per joint (n, nd) [N or N m], None when not recorded
+    f_ext: np.ndarray | None = None
+    #: further sidecar fields, kept verbatim (``units``, ``derived``, ``sensors``, ``source``)
+    sidecar: dict = field(default_factory=dict)
 
     @property
     def ndof(self) -> int:
@@ -160,6 +171,7 @@ class Recording:
             None if self.pose is None else self.pose[s],
             {k: v[s] for k, v in self.extra.items()},
             dict(self.parameters), dict(self.controller), self.notes, self.path, dict(self.joint_convention),
+            f_ext=None if self.f_ext is None else self.f_ext[s], sidecar=dict(self.sidecar),
         )
 
     def column_names(self) -> list[str]:
@@ -167,6 +179,7 @@ class Recording:
         cols = ["time"]
         for i in range(1, nd + 1):
             cols += [f"q{i}", f"qd{i}", f"tau{i}"] + ([f"qref{i}"] if self.qref is not None else [])
+            cols += [f"f_ext{i}"] if self.f_ext is not None else []
         if self.pose is not None:
             cols += self.pose_columns
         cols += list(self.extra)
@@ -179,6 +192,8 @@ class Recording:
             parts += [self.q[:, i:i + 1], self.qd[:, i:i + 1], self.tau[:, i:i + 1]]
             if self.qref is not None:
                 parts.append(self.qref[:, i:i + 1])
+            if self.f_ext is not None:
+                parts.append(self.f_ext[:, i:i + 1])
         if self.pose is not None:
             parts.append(self.pose)
         parts += [np.asarray(v, float)[:, None] for v in self.extra.values()]
@@ -193,7 +208,7 @@ def _validate(rec: Recording, path) -> None:
     if _facts(rec.robot) is None:
         raise RecordingError(path, f"unknown robot {rec.robot!r} (known: {_known()})")
     n, nd = len(rec.time), rec.ndof
-    for name in ("q", "qd", "tau", "qref"):
+    for name in ("q", "qd", "tau", "qref", "f_ext"):
         a = getattr(rec, name)
         if a is None:
             continue
@@ -214,18 +229,65 @@ def _validate(rec: Recording, path) -> None:
                              column=rec.column_names()[c])
 
 
-def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[Path, Path]:
-    """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths."""
+#: sidecar fields the format defines itself (``Recording.sidecar`` cannot override them)
+_RESERVED = ("format", "robot", "parameters", "controller", "notes", "joint_convention", "robot_file",
+             "robot_description")
+
+
+def _si_units(facts, rec: Recording) -> dict:
+    """The sidecar's ``units`` of a written recording: the robot's SI units, per kind of column."""
+    ju, eu = facts.joint_unit, facts.effort_unit
+    units = {"time": "s", "q": ju, "qd": f"{ju}/s", "tau": eu}
+    if rec.qref is not None:
+        units["qref"] = ju
+    if rec.f_ext is not None:
+        units["f_ext"] = eu
+    return units
+
+
+def write_recording(path, rec: Recording, float_format: str = "%.17g", progress: bool | None = False,
+                    chunk_rows: int = 50_000) -> tuple[Path, Path]:
+    """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file (``.csv`` is added when missing).
+    rec : Recording
+        What to write (validated first: shapes, time strictly increasing, every value finite).
+    float_format : str
+        printf format of every value (the default round-trips a double exactly).
+    progress : bool or None
+        A progress bar over the rows (None: on a terminal only).
+    chunk_rows : int
+        Rows formatted per write.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(3) * 1e-3, q=np.zeros((3, 1)),
+    ...                 qd=np.zeros((3, 1)), tau=np.zeros((3, 1)))
+    >>> write_recording("/tmp/three.csv", rec)[1].name
+    'three.json'
+    """
+    from tqdm import tqdm
+
     path = Path(path)
     if path.suffix != ".csv":
         path = path.with_suffix(".csv")
     _validate(rec, path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(path, rec.table(), delimiter=",", header=",".join(rec.column_names()), comments="",
-               fmt=float_format)
-    meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
-            "controller": rec.controller, "notes": rec.notes}
+    table, n = rec.table(), len(rec.time)
+    with open(path, "w") as f, tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+                                    disable=None if progress is None else not progress) as bar:
+        f.write(",".join(rec.column_names()) + "\n")
+        for k in range(0, n, chunk_rows):
+            np.savetxt(f, table[k:k + chunk_rows], delimiter=",", fmt=float_format)
+            bar.update(min(chunk_rows, n - k))
     facts = _facts(rec.robot)
+    meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
+            "controller": rec.controller, "notes": rec.notes, "units": _si_units(facts, rec)}
+    meta.update({k: v for k, v in rec.sidecar.items() if k not in _RESERVED and k != "units"})
     side = sidecar_path(path)
     if facts is not None and facts.file:
         # A robot compiled from a description file: where it came from (relative to the
@@ -306,7 +368,7 @@ def _check_units(side, units, robot):
 
     f = robot_facts(robot)
     want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
-            "tau": f.effort_unit}
+            "tau": f.effort_unit, "f_ext": f.effort_unit}
     for key, unit in units.items():
         if key in want and unit != want[key]:
             raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
@@ -384,15 +446,23 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
     def stack(prefix):
         return np.column_stack([col[f"{prefix}{i}"] for i in range(1, nd + 1)])
 
-    has_qref = [f"qref{i}" in col for i in range(1, nd + 1)]
-    if any(has_qref) and not all(has_qref):
-        missing = f"qref{has_qref.index(False) + 1}"
-        raise RecordingError(path, "qref columns must be given for all joints or none", row=1, column=missing)
+    def all_or_none(prefix, what):
+        has = [f"{prefix}{i}" in col for i in range(1, nd + 1)]
+        if any(has) and not all(has):
+            raise RecordingError(path, f"{what} columns must be given for all joints or none", row=1,
+                                 column=f"{prefix}{has.index(False) + 1}")
+        return all(has)
+
+    has_qref = all_or_none("qref", "qref")
+    has_fext = all_or_none("f_ext", "f_ext (external effort)")
+    if has_fext and not (isinstance(meta.get("units"), dict) and "f_ext" in meta["units"]):
+        raise RecordingError(side, f"the recording has f_ext columns but the sidecar does not state their unit: add "
+                                   f'"units": {{"f_ext": "{_facts(rname).effort_unit}"}} (the joints\' effort unit)')
     has_pose = [c in col for c in pose_cols]
     if any(has_pose) and not all(has_pose):
         missing = pose_cols[has_pose.index(False)]
         raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
-    known = set(required) | {"time"} | {f"qref{i}" for i in range(1, nd + 1)} | set(pose_cols)
+    known = set(required) | {"time"} | {f"{k}{i}" for k in ("qref", "f_ext") for i in range(1, nd + 1)} | set(pose_cols)
     if all(has_pose):
         _check_pose_scale(path, rname, pose_cols, col)
     sign, offset, conv = _joint_convention(side, meta.get("joint_convention"), nd)
@@ -402,7 +472,7 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
         q=sign * (stack("q") - offset),
         qd=sign * stack("qd"),
         tau=sign * stack("tau"),
-        qref=sign * (stack("qref") - offset) if all(has_qref) else None,
+        qref=sign * (stack("qref") - offset) if has_qref else None,
         pose=np.column_stack([col[c] for c in pose_cols]) if all(has_pose) else None,
         extra={h: col[h] for h in header if h not in known},
         parameters=meta.get("parameters") or {},
@@ -410,6 +480,8 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
         notes=meta.get("notes", ""),
         path=path,
         joint_convention=conv,
+        f_ext=sign * stack("f_ext") if has_fext else None,
+        sidecar={k: v for k, v in meta.items() if k not in _RESERVED},
     )
 
 
