@@ -245,8 +245,8 @@ def _si_units(facts, rec: Recording) -> dict:
     return units
 
 
-def write_recording(path, rec: Recording, float_format: str = "%.17g", progress: bool | None = False,
-                    chunk_rows: int = 50_000) -> tuple[Path, Path]:
+def write_recording(path, rec: Recording, float_format: str | None = None, progress: bool | None = False,
+                    chunk_rows: int = 100_000) -> tuple[Path, Path]:
     """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths.
 
     Parameters
@@ -255,8 +255,9 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g", progress:
         The CSV file (``.csv`` is added when missing).
     rec : Recording
         What to write (validated first: shapes, time strictly increasing, every value finite).
-    float_format : str
-        printf format of every value (the default round-trips a double exactly).
+    float_format : str, optional
+        printf format of every value; default the shortest text that reads back as the
+        same double (Arrow's C++ writer: about ten times faster than formatting in Python).
     progress : bool or None
         A progress bar over the rows (None: on a terminal only).
     chunk_rows : int
@@ -278,11 +279,11 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g", progress:
     _validate(rec, path)
     path.parent.mkdir(parents=True, exist_ok=True)
     table, n = rec.table(), len(rec.time)
-    with open(path, "w") as f, tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
-                                    disable=None if progress is None else not progress) as bar:
-        f.write(",".join(rec.column_names()) + "\n")
+    with open(path, "wb") as f, tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+                                     disable=None if progress is None else not progress) as bar:
+        f.write((",".join(rec.column_names()) + "\n").encode())
         for k in range(0, n, chunk_rows):
-            np.savetxt(f, table[k:k + chunk_rows], delimiter=",", fmt=float_format)
+            _write_rows(f, table[k:k + chunk_rows], float_format)
             bar.update(min(chunk_rows, n - k))
     facts = _facts(rec.robot)
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
@@ -301,6 +302,17 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g", progress:
             pass
     side.write_text(json.dumps(meta, indent=2, default=jsonable))
     return path, side
+
+
+def _write_rows(f, block: np.ndarray, float_format: str | None) -> None:
+    if float_format is not None:
+        np.savetxt(f, block, delimiter=",", fmt=float_format)
+        return
+    import pyarrow as pa
+    import pyarrow.csv as pcsv
+
+    cols = {str(j): block[:, j] for j in range(block.shape[1])}
+    pcsv.write_csv(pa.table(cols), f, pcsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
 def read_recording(path, robot: str | None = None) -> Recording:
