@@ -225,7 +225,7 @@ def _validate(rec: Recording, path) -> None:
     nonfinite = np.argwhere(~np.isfinite(tab))
     if nonfinite.size:
         r, c = nonfinite[0]
-        raise RecordingError(path, f"value {tab[r, c]!r} is not a finite number", row=r + 2,
+        raise RecordingError(path, f"value {float(tab[r, c])!r} is not a finite number", row=r + 2,
                              column=rec.column_names()[c])
 
 
@@ -247,17 +247,19 @@ def _si_units(facts, rec: Recording) -> dict:
 
 def write_recording(path, rec: Recording, float_format: str | None = None, progress: bool | None = False,
                     chunk_rows: int = 100_000) -> tuple[Path, Path]:
-    """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths.
+    """Write ``rec`` as a table (CSV, Parquet or HDF5) plus its JSON sidecar; returns both paths.
 
     Parameters
     ----------
     path : str or Path
-        The CSV file (``.csv`` is added when missing).
+        The table: ``.csv``, ``.parquet`` or ``.h5`` (``cosim.recording_io``; ``.csv`` is
+        added to any other name); the sidecar is the same name with ``.json``.
     rec : Recording
         What to write (validated first: shapes, time strictly increasing, every value finite).
     float_format : str, optional
-        printf format of every value; default the shortest text that reads back as the
-        same double (Arrow's C++ writer: about ten times faster than formatting in Python).
+        CSV only: printf format of every value; default the shortest text that reads back
+        as the same double (Arrow's C++ writer: about ten times faster than formatting in
+        Python).
     progress : bool or None
         A progress bar over the rows (None: on a terminal only).
     chunk_rows : int
@@ -273,18 +275,24 @@ def write_recording(path, rec: Recording, float_format: str | None = None, progr
     """
     from tqdm import tqdm
 
+    from .recording_io import SUFFIXES, write_table
+
     path = Path(path)
-    if path.suffix != ".csv":
+    if path.suffix.lower() not in SUFFIXES:
         path = path.with_suffix(".csv")
     _validate(rec, path)
     path.parent.mkdir(parents=True, exist_ok=True)
     table, n = rec.table(), len(rec.time)
-    with open(path, "wb") as f, tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
-                                     disable=None if progress is None else not progress) as bar:
-        f.write((",".join(rec.column_names()) + "\n").encode())
-        for k in range(0, n, chunk_rows):
-            _write_rows(f, table[k:k + chunk_rows], float_format)
-            bar.update(min(chunk_rows, n - k))
+    with tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+              disable=None if progress is None else not progress) as bar:
+        if float_format is None or SUFFIXES[path.suffix.lower()] != "csv":
+            write_table(path, rec.column_names(), table, chunk_rows=chunk_rows, bar=bar)
+        else:
+            with open(path, "w") as f:
+                f.write(",".join(rec.column_names()) + "\n")
+                for k in range(0, n, chunk_rows):
+                    np.savetxt(f, table[k:k + chunk_rows], delimiter=",", fmt=float_format)
+                    bar.update(min(chunk_rows, n - k))
     facts = _facts(rec.robot)
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
             "controller": rec.controller, "notes": rec.notes, "units": _si_units(facts, rec)}
@@ -304,24 +312,13 @@ def write_recording(path, rec: Recording, float_format: str | None = None, progr
     return path, side
 
 
-def _write_rows(f, block: np.ndarray, float_format: str | None) -> None:
-    if float_format is not None:
-        np.savetxt(f, block, delimiter=",", fmt=float_format)
-        return
-    import pyarrow as pa
-    import pyarrow.csv as pcsv
-
-    cols = {str(j): block[:, j] for j in range(block.shape[1])}
-    pcsv.write_csv(pa.table(cols), f, pcsv.WriteOptions(include_header=False, quoting_style="none"))
-
-
 def read_recording(path, robot: str | None = None) -> Recording:
-    """Read and validate a ``pkm-recording/1`` CSV (and its sidecar).
+    """Read and validate a ``pkm-recording/1`` table (CSV, Parquet or HDF5) and its sidecar.
 
     Parameters
     ----------
     path : str or Path
-        The CSV file (``.csv`` may be omitted).
+        The table (``.csv``, ``.parquet``, ``.h5``; the extension may be omitted).
     robot : str, optional
         Expected robot; also used if the sidecar is missing.
 
@@ -330,13 +327,79 @@ def read_recording(path, robot: str | None = None) -> Recording:
     RecordingError
         Naming the file, row and column of the first problem: a missing sidecar or
         column, an unknown robot, a cell that is not a finite number, time not strictly
-        increasing, too few rows.
+        increasing, too few rows.  Rows are file lines in a CSV, 1-based data rows in
+        Parquet and HDF5.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(3) * 1e-3, q=np.zeros((3, 1)),
+    ...                 qd=np.zeros((3, 1)), tau=np.ones((3, 1)))
+    >>> read_recording(write_recording("/tmp/three.parquet", rec)[0]).tau[:, 0]
+    array([1., 1., 1.])
     """
+    path, side, meta, rname, nd, pose_cols = _open(path, robot)
+    header, data = _read_table(path)
+    layout = _layout(path, side, meta, rname, nd, pose_cols, header)
+    if len(data) < 2:
+        raise RecordingError(path, f"has {len(data)} data row(s); at least 2 are needed", row=len(data) + 2)
+    return _block(layout, data, 0)
+
+
+def iter_recording(path, robot: str | None = None, chunk_rows: int = 100_000):
+    """The recording as consecutive :class:`Recording` blocks of at most ``chunk_rows``
+    rows: memory is one block whatever the length of the file (one hour at 1 kHz is 3.6e6
+    rows).  Validated as :func:`read_recording` does (time increasing across blocks too).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(10) * 1e-3, q=np.zeros((10, 1)),
+    ...                 qd=np.zeros((10, 1)), tau=np.zeros((10, 1)))
+    >>> csv_path, _ = write_recording("/tmp/ten.csv", rec)
+    >>> [len(b) for b in iter_recording(csv_path, chunk_rows=4)]
+    [4, 4, 2]
+    """
+    from .recording_io import TableUnreadable, iter_blocks, table_format
+
+    path, side, meta, rname, nd, pose_cols = _open(path, robot)
+    fmt = table_format(path)
+    header = _csv_header(path) if fmt == "csv" else _table_header(path, fmt)
+    layout = _layout(path, side, meta, rname, nd, pose_cols, header)
+    row0, last = 0, None
+    try:
+        for data in iter_blocks(path, header, chunk_rows, fmt):
+            if not np.isfinite(data).all():
+                raise TableUnreadable("a value is not finite")
+            if last is not None and len(data) and data[0, 0] <= last:
+                raise TableUnreadable("time goes back between blocks")
+            yield _block(layout, data, row0)
+            row0 += len(data)
+            last = data[-1, 0] if len(data) else last
+    except TableUnreadable as e:
+        # the whole-file readers say where (a cell and its line, time going back); memory
+        # is the file's only on this error path
+        _block(layout, _read_table(path)[1], 0)
+        raise RecordingError(path, str(e)) from None
+    if row0 < 2:
+        raise RecordingError(path, f"has {row0} data row(s); at least 2 are needed", row=row0 + 2)
+
+
+def _open(path, robot):
+    """The table's path, its sidecar's path and content, the robot's name, joints and pose
+    columns (the sidecar checked)."""
+    from .recording_io import SUFFIXES
+
     path = Path(path)
-    if not path.exists() and path.with_suffix(".csv").exists():
-        path = path.with_suffix(".csv")
+    if not path.exists():
+        for suffix in SUFFIXES:
+            if path.with_suffix(suffix).exists():
+                path = path.with_suffix(suffix)
+                break
     if not path.exists():
         raise RecordingError(path, "file not found")
+    if path.is_dir():
+        raise RecordingError(path, "is a directory, not a recording")
     side = sidecar_path(path)
     meta = {}
     if side.exists():
@@ -359,14 +422,47 @@ def read_recording(path, robot: str | None = None) -> Recording:
         facts = _described(side, rname, meta.get("robot_file"), meta.get("robot_description"))
     if facts is None:
         raise RecordingError(side, f"unknown robot {rname!r} (known: {_known()})")
-    nd, pose_cols = facts.ndof, list(facts.tracker_names)
     _check_units(side, meta.get("units"), rname)
+    return path, side, meta, rname, facts.ndof, list(facts.tracker_names)
+
+
+def _table_header(path, fmt):
+    from .recording_io import TableUnreadable, read_header
+
     try:
+        return read_header(path, fmt)
+    except TableUnreadable as e:
+        raise RecordingError(path, str(e)) from None
+
+
+def _read_table(path):
+    """(header, data (n, ncol)) of a table: Arrow's readers; for a CSV they refuse (a word,
+    a short row, a non-finite value), the careful reader that names the line and column."""
+    from .recording_io import TableUnreadable, read_table, table_format
+
+    fmt = table_format(path)
+    if fmt == "csv":
+        header = _csv_header(path)
+        if len(set(header)) == len(header):
+            try:
+                data = read_table(path, header, "csv")
+                if np.isfinite(data).all():
+                    return header, data
+            except TableUnreadable:
+                pass
         rows, header = _read_rows(path)
-    except UnicodeDecodeError as e:
-        raise RecordingError(path, f"is not a text CSV file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
-                                   f"UTF-8): not a pkm-recording/1 file") from None
-    return _finish(path, side, meta, rname, nd, pose_cols, header, rows)
+        return header, np.asarray(rows, dtype=float).reshape(len(rows), len(header))
+    header = _table_header(path, fmt)
+    try:
+        data = read_table(path, header, fmt)
+    except TableUnreadable as e:
+        raise RecordingError(path, str(e)) from None
+    bad = np.argwhere(~np.isfinite(data))
+    if bad.size:
+        r, c = bad[0]
+        raise RecordingError(path, f"value {float(data[r, c])!r} is not a finite number", row=int(r) + 1,
+                             column=header[c])
+    return header, data
 
 
 def _check_units(side, units, robot):
@@ -405,13 +501,25 @@ def _check_pose_scale(path, robot, pose_cols, col):
                                        f"is in rad)", column=c)
 
 
+def _csv_header(path):
+    """The header row of a CSV table (stripped names)."""
+    try:
+        with open(path, newline="") as f:
+            line = next(csv.reader(f), None)
+    except UnicodeDecodeError as e:
+        raise RecordingError(path, f"is not a text CSV file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
+                                   f"UTF-8): not a pkm-recording/1 file") from None
+    if line is None:
+        raise RecordingError(path, "file is empty (no header row)", row=1)
+    return [h.strip() for h in line]
+
+
 def _read_rows(path):
-    with open(path, newline="") as f:
+    """Every row of a CSV table as floats, cell by cell: slow, but says where a cell is wrong."""
+    header = _csv_header(path)
+    with open(path, newline="", errors="replace") as f:
         reader = csv.reader(f)
-        try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise RecordingError(path, "file is empty (no header row)", row=1) from None
+        next(reader)
         rows = []
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not c.strip() for c in row):
@@ -432,7 +540,30 @@ def _read_rows(path):
     return rows, header
 
 
-def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
+@dataclass
+class _Layout:
+    """What the header and sidecar say of a table's columns (checked once, used per block)."""
+
+    path: Path
+    side: Path
+    meta: dict
+    robot: str
+    nd: int
+    pose_cols: list
+    header: list
+    has_qref: bool
+    has_fext: bool
+    has_pose: bool
+    known: set
+    sign: np.ndarray
+    offset: np.ndarray
+    convention: dict
+    first_row: int      # how the first data row is numbered in messages (a CSV's line 2)
+
+
+def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
+    from .recording_io import table_format
+
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise RecordingError(path, "column appears twice in the header", row=1, column=dup)
@@ -444,22 +575,9 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
         if col not in header:
             raise RecordingError(path, f"required column is missing for robot {rname} ({nd} joints)", row=1,
                                  column=col)
-    if len(rows) < 2:
-        raise RecordingError(path, f"has {len(rows)} data row(s); at least 2 are needed", row=len(rows) + 2)
-    data = np.asarray(rows, dtype=float)
-    col = {h: data[:, j] for j, h in enumerate(header)}
-    t = col["time"]
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise RecordingError(path, f"time is not strictly increasing ({t[k - 1]:.17g} then {t[k]:.17g})", row=k + 2,
-                             column="time")
-
-    def stack(prefix):
-        return np.column_stack([col[f"{prefix}{i}"] for i in range(1, nd + 1)])
 
     def all_or_none(prefix, what):
-        has = [f"{prefix}{i}" in col for i in range(1, nd + 1)]
+        has = [f"{prefix}{i}" in header for i in range(1, nd + 1)]
         if any(has) and not all(has):
             raise RecordingError(path, f"{what} columns must be given for all joints or none", row=1,
                                  column=f"{prefix}{has.index(False) + 1}")
@@ -470,29 +588,48 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
     if has_fext and not (isinstance(meta.get("units"), dict) and "f_ext" in meta["units"]):
         raise RecordingError(side, f"the recording has f_ext columns but the sidecar does not state their unit: add "
                                    f'"units": {{"f_ext": "{_facts(rname).effort_unit}"}} (the joints\' effort unit)')
-    has_pose = [c in col for c in pose_cols]
+    has_pose = [c in header for c in pose_cols]
     if any(has_pose) and not all(has_pose):
         missing = pose_cols[has_pose.index(False)]
         raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
     known = set(required) | {"time"} | {f"{k}{i}" for k in ("qref", "f_ext") for i in range(1, nd + 1)} | set(pose_cols)
-    if all(has_pose):
-        _check_pose_scale(path, rname, pose_cols, col)
     sign, offset, conv = _joint_convention(side, meta.get("joint_convention"), nd)
+    return _Layout(path, side, meta, rname, nd, pose_cols, header, has_qref, has_fext, all(has_pose), known, sign,
+                   offset, conv, 2 if table_format(path) == "csv" else 1)
+
+
+def _block(lay: _Layout, data: np.ndarray, row0: int) -> Recording:
+    """The rows ``data`` (n, ncol) of a table, the first being data row ``row0`` (0-based),
+    as a checked :class:`Recording` in the model's joint convention."""
+    col = {h: data[:, j] for j, h in enumerate(lay.header)}
+    t = col["time"]
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise RecordingError(lay.path, f"time is not strictly increasing ({t[k - 1]:.17g} then {t[k]:.17g})",
+                             row=row0 + k + lay.first_row, column="time")
+
+    def stack(prefix):
+        return np.column_stack([col[f"{prefix}{i}"] for i in range(1, lay.nd + 1)])
+
+    if lay.has_pose:
+        _check_pose_scale(lay.path, lay.robot, lay.pose_cols, col)
+    sign, offset, meta = lay.sign, lay.offset, lay.meta
     return Recording(
-        robot=rname,
+        robot=lay.robot,
         time=t,
         q=sign * (stack("q") - offset),
         qd=sign * stack("qd"),
         tau=sign * stack("tau"),
-        qref=sign * (stack("qref") - offset) if has_qref else None,
-        pose=np.column_stack([col[c] for c in pose_cols]) if all(has_pose) else None,
-        extra={h: col[h] for h in header if h not in known},
+        qref=sign * (stack("qref") - offset) if lay.has_qref else None,
+        pose=np.column_stack([col[c] for c in lay.pose_cols]) if lay.has_pose else None,
+        extra={h: col[h] for h in lay.header if h not in lay.known},
         parameters=meta.get("parameters") or {},
         controller=meta.get("controller") or {},
         notes=meta.get("notes", ""),
-        path=path,
-        joint_convention=conv,
-        f_ext=sign * stack("f_ext") if has_fext else None,
+        path=lay.path,
+        joint_convention=lay.convention,
+        f_ext=sign * stack("f_ext") if lay.has_fext else None,
         sidecar={k: v for k, v in meta.items() if k not in _RESERVED},
     )
 

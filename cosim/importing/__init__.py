@@ -12,7 +12,7 @@ docstring)::
 
     from cosim.importing import import_recording
     res = import_recording("data/emps/DATA_EMPS.mat", "data/emps/emps_map.toml", "out/emps")
-    res.csv, res.sidecar      # out/emps/DATA_EMPS.csv and .json
+    res.table, res.sidecar      # out/emps/DATA_EMPS.csv and .json
 """
 from .convert import Imported, derive, import_recording, to_recording
 from .errors import ImportFailure

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..recording import Recording, write_recording
+from ..recording_io import EXTENSION
 from . import units as U
 from .errors import ImportFailure
 from .mapfile import DERIVATIONS, JOINT_COLUMN, ImportMap, check_columns, read_map, si_unit
@@ -17,11 +18,11 @@ from .sources import Source, open_source
 
 @dataclass
 class Imported:
-    """What :func:`import_recording` made: the recording, the files written, the source
-    and how long it took [s]."""
+    """What :func:`import_recording` made: the recording, the files written (the table:
+    CSV, Parquet or HDF5, and its sidecar), the source and how long it took [s]."""
 
     recording: Recording
-    csv: Path
+    table: Path
     sidecar: Path
     source: Source
     seconds: float
@@ -328,9 +329,9 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
 
 
 def import_recording(source, map_path, out, *, name: str | None = None, robot: str | None = None,
-                     progress: bool | None = None) -> Imported:
+                     file_format: str = "csv", progress: bool | None = None) -> Imported:
     """Import a source file through a map and write the pkm-recording ``out/<name>.csv``
-    with its sidecar ``out/<name>.json``.
+    (or ``.parquet``, ``.h5``) with its sidecar ``out/<name>.json``.
 
     Parameters
     ----------
@@ -340,6 +341,8 @@ def import_recording(source, map_path, out, *, name: str | None = None, robot: s
         Folder of the recording (made if missing).
     name : str, optional
         File name without extension; default the source's.
+    file_format : str
+        The recording's table: ``"csv"``, ``"parquet"`` or ``"hdf5"`` (docs/recording.md).
 
     Raises
     ------
@@ -349,7 +352,7 @@ def import_recording(source, map_path, out, *, name: str | None = None, robot: s
     Example
     -------
     >>> res = import_recording("/tmp/rig.mat", "/tmp/rig.toml", "/tmp/imported")  # files of to_recording's example
-    >>> res.csv.name, len(res.recording)
+    >>> res.table.name, len(res.recording)
     ('rig.csv', 5)
     """
     t0 = _time.perf_counter()
@@ -357,10 +360,12 @@ def import_recording(source, map_path, out, *, name: str | None = None, robot: s
     if out.exists() and not out.is_dir():
         raise ImportFailure(out, "exists and is not a directory (--out names the folder of the recording)")
     rec, src = _convert(source, map_path, robot, progress)
-    target = out / f"{name or Path(source).stem}.csv"
+    if file_format not in EXTENSION:
+        raise ImportFailure(out, f"unknown recording format {file_format!r} (one of: {', '.join(EXTENSION)})")
+    target = out / f"{name or Path(source).stem}{EXTENSION[file_format]}"
     try:
-        csv_path, side = write_recording(target, rec, progress=progress)
+        table, side = write_recording(target, rec, progress=progress)
     except OSError as e:
         raise ImportFailure(target, f"cannot be written: {e.strerror or e}") from None
-    rec.path = csv_path
-    return Imported(rec, csv_path, side, src, _time.perf_counter() - t0)
+    rec.path = table
+    return Imported(rec, table, side, src, _time.perf_counter() - t0)

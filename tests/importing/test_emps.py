@@ -29,7 +29,7 @@ def _stand_in_map(tmp_path):
 def test_emps_columns_are_the_mat_values(tmp_path):
     mat = scipy.io.loadmat(MAT)
     res = import_recording(MAT, _stand_in_map(tmp_path), tmp_path / "out", progress=False)
-    rec = read_recording(res.csv)
+    rec = read_recording(res.table)
     t, qm, qg = mat["t"].ravel(), mat["qm"].ravel(), mat["qg"].ravel()
     assert len(rec) == 24841
     np.testing.assert_array_equal(rec.time, t)

@@ -21,7 +21,7 @@ from import_helpers import MAP
 def test_mat_v5_values_units_scale_and_sidecar(rig, tmp_path):
     src, mp, v = rig
     res = import_recording(src, mp, tmp_path / "out", progress=False)
-    back = read_recording(res.csv)
+    back = read_recording(res.table)
     t = v["zeit"].ravel() * 1e-3   # ms -> s
     np.testing.assert_array_equal(back.time, t)
     np.testing.assert_allclose(back.q[:, 0], v["ang"].ravel() * np.pi / 180, rtol=0, atol=1e-15)
@@ -61,7 +61,7 @@ def test_optional_external_force_used_when_present(rig, tmp_path):
     push = np.where(np.arange(200) % 50 < 25, 5.0, 0.0)
     scipy.io.savemat(src, {**v, "push": push[:, None]})
     res = import_recording(src, mp, tmp_path / "out", progress=False)
-    back = read_recording(res.csv)
+    back = read_recording(res.table)
     np.testing.assert_array_equal(back.f_ext[:, 0], push)
     assert json.loads(res.sidecar.read_text())["units"]["f_ext"] == "N m"
 
@@ -273,3 +273,11 @@ def test_command_writes_and_says_what(rig, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "run1.csv (200 rows" in out and "derived: qd1" in out and "optional columns not in the file: f_ext1" in out
     assert len(read_recording(tmp_path / "o" / "run1.csv")) == 200
+
+
+@pytest.mark.parametrize("fmt, suffix", [("parquet", ".parquet"), ("hdf5", ".h5")])
+def test_command_writes_a_parquet_or_hdf5_table(rig, tmp_path, fmt, suffix):
+    src, mp, v = rig
+    assert main(["import", str(src), "--map", str(mp), "--out", str(tmp_path / "o"), "--format", fmt]) == 0
+    back = read_recording(tmp_path / "o" / f"rig{suffix}")
+    np.testing.assert_array_equal(back.tau[:, 0], v["cmd"].ravel() * 2.5)

@@ -1,0 +1,156 @@
+"""The column table of a pkm-recording on disk: CSV, Parquet or HDF5, read whole or in
+blocks of rows (bounded memory for recordings of any length).  The JSON sidecar is the same
+for all three (``cosim.recording``); the file's extension says which table it is:
+
+* ``.csv``: header row + one line per sample (read by Arrow's C++ reader);
+* ``.parquet``: one float64 column per recording column (Arrow);
+* ``.h5`` / ``.hdf5``: one 1-D float64 dataset per recording column at the file's root,
+  chunked so that a block of rows is read without the rest; the root attribute ``columns``
+  lists them in order.
+
+Example
+-------
+>>> import numpy as np
+>>> write_table("/tmp/tab.parquet", ["time", "q1"], np.array([[0.0, 1.0], [0.1, 2.0]]))
+>>> read_header("/tmp/tab.parquet"), read_table("/tmp/tab.parquet", ["time", "q1"])[1, 1]
+(['time', 'q1'], 2.0)
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+#: extension -> table format
+SUFFIXES = {".csv": "csv", ".parquet": "parquet", ".h5": "hdf5", ".hdf5": "hdf5"}
+#: table format -> the extension written
+EXTENSION = {"csv": ".csv", "parquet": ".parquet", "hdf5": ".h5"}
+
+
+def table_format(path) -> str:
+    """``"csv"``, ``"parquet"`` or ``"hdf5"`` from the extension (anything else: CSV)."""
+    return SUFFIXES.get(Path(path).suffix.lower(), "csv")
+
+
+class TableUnreadable(ValueError):
+    """The fast reader refused the table: the caller's careful reader says where and why."""
+
+
+def write_table(path, header, table: np.ndarray, fmt: str | None = None, chunk_rows: int = 100_000,
+                bar=None) -> None:
+    """Write a table (n, ncol) with its column names; ``fmt`` from the extension by default.
+    CSV numbers are the shortest text that reads back as the same double."""
+    import pyarrow as pa
+
+    fmt = fmt or table_format(path)
+    n = len(table)
+    if fmt == "hdf5":
+        import h5py
+
+        with h5py.File(path, "w") as f:
+            f.attrs["columns"] = list(header)
+            for j, name in enumerate(header):
+                f.create_dataset(name, data=np.ascontiguousarray(table[:, j]), chunks=(min(max(n, 1), 65536),))
+            if bar is not None:
+                bar.update(n)
+        return
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        schema = pa.schema([(h, pa.float64()) for h in header])
+        with pq.ParquetWriter(path, schema) as w:
+            for k in range(0, n, chunk_rows):
+                block = table[k:k + chunk_rows]
+                w.write_table(pa.table({h: block[:, j] for j, h in enumerate(header)}, schema=schema))
+                if bar is not None:
+                    bar.update(len(block))
+        return
+    import pyarrow.csv as pcsv
+
+    opts = pcsv.WriteOptions(include_header=False, quoting_style="none")
+    with open(path, "wb") as f:
+        f.write((",".join(header) + "\n").encode())
+        for k in range(0, n, chunk_rows):
+            block = table[k:k + chunk_rows]
+            pcsv.write_csv(pa.table({str(j): block[:, j] for j in range(block.shape[1])}), f, opts)
+            if bar is not None:
+                bar.update(len(block))
+
+
+def read_header(path, fmt: str | None = None) -> list:
+    """The column names of a Parquet or HDF5 table (a CSV's header is read by
+    ``cosim.recording``, which reports its problems by line)."""
+    fmt = fmt or table_format(path)
+    try:
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            return list(pq.ParquetFile(path).schema_arrow.names)
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            cols = f.attrs.get("columns")
+            if cols is None:
+                raise TableUnreadable("has no 'columns' attribute listing the recording's columns")
+            return [c.decode() if isinstance(c, bytes) else str(c) for c in cols]
+    except TableUnreadable:
+        raise
+    except Exception as e:  # Arrow, h5py and OSError have their own exception types for a foreign file
+        raise TableUnreadable(f"is not a {fmt} recording table: {str(e).splitlines()[0] if str(e) else e!r}") from None
+
+
+def iter_blocks(path, header, chunk_rows: int = 100_000, fmt: str | None = None):
+    """Blocks of rows (float64 arrays (k, ncol), columns in ``header`` order), at most
+    ``chunk_rows`` rows each; memory is one block, whatever the length of the file.
+
+    Raises
+    ------
+    TableUnreadable
+        A cell the fast reader does not take (CSV), a missing or non-numeric column.
+    """
+    import pyarrow as pa
+
+    fmt = fmt or table_format(path)
+    if fmt == "hdf5":
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            for h in header:
+                if h not in f or f[h].ndim != 1 or f[h].dtype.kind not in "fiu":
+                    raise TableUnreadable(f"column {h!r} is not a 1-D dataset of numbers")
+            n = len(f[header[0]])
+            if any(len(f[h]) != n for h in header):
+                raise TableUnreadable("its column datasets do not all have the same length")
+            for k in range(0, n, chunk_rows):
+                yield np.column_stack([f[h][k:k + chunk_rows] for h in header]).astype(float, copy=False)
+        return
+    try:
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            batches = pq.ParquetFile(path).iter_batches(batch_size=chunk_rows, columns=list(header))
+        else:
+            import pyarrow.csv as pcsv
+
+            reader = pcsv.open_csv(
+                path, read_options=pcsv.ReadOptions(column_names=list(header), skip_rows=1, block_size=1 << 22),
+                convert_options=pcsv.ConvertOptions(column_types={h: pa.float64() for h in header}))
+            batches = _rebatch(reader, chunk_rows)
+        for b in batches:
+            yield np.column_stack([b.column(j).to_numpy(zero_copy_only=False) for j in range(b.num_columns)]
+                                  ).astype(float, copy=False).reshape(b.num_rows, len(header))
+    except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError, KeyError) as e:
+        raise TableUnreadable(str(e).splitlines()[0] if str(e) else repr(e)) from None
+
+
+def _rebatch(reader, rows: int):
+    """Record batches of at most ``rows`` rows from a stream of batches of any size."""
+    for b in reader:
+        for k in range(0, b.num_rows, rows):
+            yield b.slice(k, rows)
+
+
+def read_table(path, header, fmt: str | None = None) -> np.ndarray:
+    """The whole table (n, ncol) (see :func:`iter_blocks`)."""
+    blocks = list(iter_blocks(path, header, 1 << 20, fmt))
+    return np.vstack(blocks) if blocks else np.empty((0, len(header)))
