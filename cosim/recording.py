@@ -293,6 +293,56 @@ def write_recording(path, rec: Recording, float_format: str | None = None, progr
                 for k in range(0, n, chunk_rows):
                     np.savetxt(f, table[k:k + chunk_rows], delimiter=",", fmt=float_format)
                     bar.update(min(chunk_rows, n - k))
+    return path, _write_sidecar(path, rec)
+
+
+def write_recording_blocks(path, blocks, progress: bool | None = False) -> tuple[Path, Path]:
+    """Write consecutive :class:`Recording` blocks (one robot, the first block's sidecar
+    fields, time increasing across blocks) as one recording; memory is one block, so a
+    recording of any length can be written.  Returns the table's and the sidecar's paths.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> parts = [Recording(robot="fourbar", time=(np.arange(3) + 3 * k) * 1e-3, q=np.zeros((3, 1)),
+    ...                    qd=np.zeros((3, 1)), tau=np.zeros((3, 1))) for k in range(4)]
+    >>> len(read_recording(write_recording_blocks("/tmp/parts.h5", parts)[0]))
+    12
+    """
+    from tqdm import tqdm
+
+    from .recording_io import SUFFIXES, TableWriter
+
+    path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        path = path.with_suffix(".csv")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    first, writer, rows = None, None, 0
+    with tqdm(unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+              disable=None if progress is None else not progress) as bar:
+        try:
+            for b in blocks:
+                _validate(b, path)
+                if first is None:
+                    first, writer = b, TableWriter(path, b.column_names())
+                elif b.column_names() != writer.header:
+                    raise RecordingError(path, f"block at row {rows + 2} has columns {b.column_names()}, the first "
+                                               f"block {writer.header}")
+                elif b.time[0] <= last:
+                    raise RecordingError(path, f"time goes back between blocks ({last!r} then {b.time[0]!r})",
+                                         row=rows + 2, column="time")
+                writer.write(b.table())
+                rows, last = rows + len(b), b.time[-1]
+                bar.update(len(b))
+        finally:
+            if writer is not None:
+                writer.close()
+    if first is None:
+        raise RecordingError(path, "no blocks to write")
+    return path, _write_sidecar(path, first)
+
+
+def _write_sidecar(path: Path, rec: Recording) -> Path:
     facts = _facts(rec.robot)
     meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
             "controller": rec.controller, "notes": rec.notes, "units": _si_units(facts, rec)}
@@ -309,7 +359,7 @@ def write_recording(path, rec: Recording, float_format: str | None = None, progr
         except OSError:
             pass
     side.write_text(json.dumps(meta, indent=2, default=jsonable))
-    return path, side
+    return side
 
 
 def read_recording(path, robot: str | None = None) -> Recording:

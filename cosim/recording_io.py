@@ -12,8 +12,8 @@ Example
 -------
 >>> import numpy as np
 >>> write_table("/tmp/tab.parquet", ["time", "q1"], np.array([[0.0, 1.0], [0.1, 2.0]]))
->>> read_header("/tmp/tab.parquet"), read_table("/tmp/tab.parquet", ["time", "q1"])[1, 1]
-(['time', 'q1'], 2.0)
+>>> read_header("/tmp/tab.parquet"), read_table("/tmp/tab.parquet", ["time", "q1"])[:, 1].tolist()
+(['time', 'q1'], [1.0, 2.0])
 """
 from __future__ import annotations
 
@@ -36,45 +36,74 @@ class TableUnreadable(ValueError):
     """The fast reader refused the table: the caller's careful reader says where and why."""
 
 
+class TableWriter:
+    """A table written block by block (memory: one block):
+
+    >>> with TableWriter("/tmp/blocks.h5", ["time", "q1"]) as w:
+    ...     w.write(np.array([[0.0, 1.0]])); w.write(np.array([[0.1, 2.0]]))
+    >>> read_table("/tmp/blocks.h5", ["time", "q1"])[:, 1]
+    array([1., 2.])
+    """
+
+    def __init__(self, path, header, fmt: str | None = None, chunk_rows: int = 65536):
+        self.path, self.header, self.fmt = Path(path), list(header), fmt or table_format(path)
+        self.rows = 0
+        if self.fmt == "hdf5":
+            import h5py
+
+            self._f = h5py.File(self.path, "w")
+            self._f.attrs["columns"] = self.header
+            for h in self.header:
+                self._f.create_dataset(h, shape=(0,), maxshape=(None,), dtype="f8", chunks=(chunk_rows,))
+        elif self.fmt == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            self._schema = pa.schema([(h, pa.float64()) for h in self.header])
+            self._f = pq.ParquetWriter(self.path, self._schema)
+        else:
+            self._f = open(self.path, "wb")
+            self._f.write((",".join(self.header) + "\n").encode())
+
+    def write(self, block: np.ndarray) -> None:
+        """Append rows (k, ncol), columns in header order."""
+        import pyarrow as pa
+
+        k = len(block)
+        if self.fmt == "hdf5":
+            for j, h in enumerate(self.header):
+                d = self._f[h]
+                d.resize((self.rows + k,))
+                d[self.rows:] = block[:, j]
+        elif self.fmt == "parquet":
+            self._f.write_table(pa.table({h: block[:, j] for j, h in enumerate(self.header)}, schema=self._schema))
+        else:
+            import pyarrow.csv as pcsv
+
+            pcsv.write_csv(pa.table({str(j): block[:, j] for j in range(block.shape[1])}), self._f,
+                           pcsv.WriteOptions(include_header=False, quoting_style="none"))
+        self.rows += k
+
+    def close(self) -> None:
+        self._f.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
 def write_table(path, header, table: np.ndarray, fmt: str | None = None, chunk_rows: int = 100_000,
                 bar=None) -> None:
     """Write a table (n, ncol) with its column names; ``fmt`` from the extension by default.
     CSV numbers are the shortest text that reads back as the same double."""
-    import pyarrow as pa
-
-    fmt = fmt or table_format(path)
-    n = len(table)
-    if fmt == "hdf5":
-        import h5py
-
-        with h5py.File(path, "w") as f:
-            f.attrs["columns"] = list(header)
-            for j, name in enumerate(header):
-                f.create_dataset(name, data=np.ascontiguousarray(table[:, j]), chunks=(min(max(n, 1), 65536),))
+    with TableWriter(path, header, fmt) as w:
+        for k in range(0, len(table), chunk_rows):
+            w.write(table[k:k + chunk_rows])
             if bar is not None:
-                bar.update(n)
-        return
-    if fmt == "parquet":
-        import pyarrow.parquet as pq
-
-        schema = pa.schema([(h, pa.float64()) for h in header])
-        with pq.ParquetWriter(path, schema) as w:
-            for k in range(0, n, chunk_rows):
-                block = table[k:k + chunk_rows]
-                w.write_table(pa.table({h: block[:, j] for j, h in enumerate(header)}, schema=schema))
-                if bar is not None:
-                    bar.update(len(block))
-        return
-    import pyarrow.csv as pcsv
-
-    opts = pcsv.WriteOptions(include_header=False, quoting_style="none")
-    with open(path, "wb") as f:
-        f.write((",".join(header) + "\n").encode())
-        for k in range(0, n, chunk_rows):
-            block = table[k:k + chunk_rows]
-            pcsv.write_csv(pa.table({str(j): block[:, j] for j in range(block.shape[1])}), f, opts)
-            if bar is not None:
-                bar.update(len(block))
+                bar.update(min(chunk_rows, len(table) - k))
 
 
 def read_header(path, fmt: str | None = None) -> list:

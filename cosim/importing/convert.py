@@ -168,7 +168,7 @@ def to_recording(source, map_path, *, robot: str | None = None, progress: bool |
     ...     'q1 = { variable = "a", unit = "deg" }\\nqd1 = { derive = "central_difference" }\\n'
     ...     'tau1 = { variable = "u", scale = { variable = "g" } }\\n')
     >>> rec = to_recording("/tmp/rig.mat", "/tmp/rig.toml")
-    >>> rec.tau[-1, 0] == 2 * t[-1]
+    >>> bool(rec.tau[-1, 0] == 2 * t[-1])
     True
     """
     return _convert(source, map_path, robot, progress)[0]
@@ -351,9 +351,15 @@ def import_recording(source, map_path, out, *, name: str | None = None, robot: s
 
     Example
     -------
-    >>> res = import_recording("/tmp/rig.mat", "/tmp/rig.toml", "/tmp/imported")  # files of to_recording's example
+    >>> import numpy as np, scipy.io
+    >>> from pathlib import Path
+    >>> t = np.arange(5) * 1e-3
+    >>> scipy.io.savemat("/tmp/rig2.mat", {"t": t[:, None], "a": t[:, None], "u": t[:, None]})
+    >>> _ = Path("/tmp/rig2.toml").write_text('robot = "fourbar"\\n[columns]\\ntime = "t"\\nq1 = "a"\\n'
+    ...                                       'qd1 = { derive = "central_difference" }\\ntau1 = "u"\\n')
+    >>> res = import_recording("/tmp/rig2.mat", "/tmp/rig2.toml", "/tmp/imported", file_format="parquet")
     >>> res.table.name, len(res.recording)
-    ('rig.csv', 5)
+    ('rig2.parquet', 5)
     """
     t0 = _time.perf_counter()
     out = Path(out)

@@ -96,3 +96,16 @@ def test_reading_in_blocks_keeps_memory_to_a_block(tmp_path):
     tracemalloc.stop()
     assert rows == n
     assert peak < whole / 8, (peak, whole)
+
+
+def test_written_in_blocks_is_the_recording(tmp_path):
+    from cosim.recording import write_recording_blocks
+
+    rec = _rec(250)
+    path, side = write_recording_blocks(tmp_path / "wb.parquet", (rec.slice(k, k + 60) for k in range(0, 250, 60)))
+    back = read_recording(path)
+    np.testing.assert_array_equal(back.q, rec.q)
+    np.testing.assert_array_equal(back.f_ext, rec.f_ext)
+    assert json.loads(side.read_text())["units"]["f_ext"] == "N m"     # the Quattro's arms turn
+    with pytest.raises(RecordingError, match=r"row 62, column 'time': time goes back between blocks"):
+        write_recording_blocks(tmp_path / "bad.csv", [rec.slice(0, 60), rec.slice(10, 70)])
