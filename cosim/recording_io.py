@@ -3,7 +3,8 @@ blocks of rows (bounded memory for recordings of any length).  The JSON sidecar 
 for all three (``cosim.recording``); the file's extension says which table it is:
 
 * ``.csv``: header row + one line per sample (read by Arrow's C++ reader);
-* ``.parquet``: one float64 column per recording column (Arrow);
+* ``.parquet``: one float64 column per recording column (Arrow), one row group per block
+  written (a block read holds one row group);
 * ``.h5`` / ``.hdf5``: one 1-D float64 dataset per recording column at the file's root,
   chunked so that a block of rows is read without the rest; the root attribute ``columns``
   lists them in order.
@@ -157,7 +158,10 @@ def iter_blocks(path, header, chunk_rows: int = 100_000, fmt: str | None = None)
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
-            batches = pq.ParquetFile(path).iter_batches(batch_size=chunk_rows, columns=list(header))
+            # one row group at a time (iter_batches reads ahead and holds far more than a batch)
+            f = pq.ParquetFile(path)
+            batches = (b for i in range(f.num_row_groups)
+                       for b in f.read_row_group(i, columns=list(header)).to_batches(max_chunksize=chunk_rows))
         else:
             import pyarrow.csv as pcsv
 
@@ -181,5 +185,22 @@ def _rebatch(reader, rows: int):
 
 def read_table(path, header, fmt: str | None = None) -> np.ndarray:
     """The whole table (n, ncol) (see :func:`iter_blocks`)."""
-    blocks = list(iter_blocks(path, header, 1 << 20, fmt))
-    return np.vstack(blocks) if blocks else np.empty((0, len(header)))
+    fmt = fmt or table_format(path)
+    n = None
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        n = pq.ParquetFile(path).metadata.num_rows
+    elif fmt == "hdf5":
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            n = len(f[header[0]]) if header and header[0] in f else None
+    if n is None:
+        blocks = list(iter_blocks(path, header, 1 << 20, fmt))
+        return np.vstack(blocks) if blocks else np.empty((0, len(header)))
+    out, k = np.empty((n, len(header))), 0
+    for b in iter_blocks(path, header, 1 << 20, fmt):
+        out[k:k + len(b)] = b
+        k += len(b)
+    return out[:k]

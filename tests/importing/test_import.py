@@ -128,6 +128,15 @@ def _resave(src, v, **changes):
     scipy.io.savemat(src, {**v, **changes})
 
 
+def _text_source(tmp_path, mp, file, text, time, q, tau):
+    """A text source and a minimal map of it: time (a TOML value), q1 and tau1 (column names)."""
+    s = tmp_path / file
+    s.write_text(text)
+    mp.write_text(f'robot = "fourbar"\n[columns]\ntime = {time}\nq1 = "{q}"\n'
+                  f'qd1 = {{ derive = "central_difference" }}\ntau1 = "{tau}"\n')
+    return s
+
+
 def _case(name, rig, tmp_path):
     """Make the files of one malformed case; returns (source, map, words the message must hold)."""
     src, mp, v = rig
@@ -166,22 +175,16 @@ def _case(name, rig, tmp_path):
                          "gain": 2.5, "k_p": 1.0}, char={"ang": "hello"})
         return s73, mp, ["text73.mat", "'ang'", "is a char"]
     if name == "TSV with a word in a number column":
-        s = tmp_path / "bad.tsv"
-        s.write_text("zeit\tang\tcmd\tref\n" + "".join(f"{k}\t{k}\t1\t0\n" for k in range(3)) + "3\tabc\t1\t0\n")
-        mp.write_text('robot = "fourbar"\n[columns]\ntime = { variable = "zeit", unit = "ms" }\nq1 = "ang"\n'
-                      'qd1 = { derive = "central_difference" }\ntau1 = "cmd"\n')
+        s = _text_source(tmp_path, mp, "bad.tsv", "zeit\tang\tcmd\tref\n" + "".join(
+            f"{k}\t{k}\t1\t0\n" for k in range(3)) + "3\tabc\t1\t0\n", '{ variable = "zeit", unit = "ms" }', "ang", "cmd")
         return s, mp, ["bad.tsv", "'ang'", "line 5", "'abc' is not a number"]
     if name == "CSV with an empty cell":
-        s = tmp_path / "gap.csv"
-        s.write_text("Time (s),Pos [rad],Effort\n0,0,1\n0.001,,1\n0.002,0,1\n")
-        mp.write_text('robot = "fourbar"\n[columns]\ntime = "Time (s)"\nq1 = "Pos [rad]"\n'
-                      'qd1 = { derive = "central_difference" }\ntau1 = "Effort"\n')
+        s = _text_source(tmp_path, mp, "gap.csv", "Time (s),Pos [rad],Effort\n0,0,1\n0.001,,1\n0.002,0,1\n",
+                         '"Time (s)"', "Pos [rad]", "Effort")
         return s, mp, ["gap.csv", "'Pos [rad]'", "non-finite", "lines 3"]
     if name == "CSV column misspelt":
-        s = tmp_path / "names.csv"
-        s.write_text("Time (s),Pos [rad],Effort\n0,0,1\n0.001,0,1\n")
-        mp.write_text('robot = "fourbar"\n[columns]\ntime = "Time (s)"\nq1 = "Pos (rad)"\n'
-                      'qd1 = { derive = "central_difference" }\ntau1 = "Effort"\n')
+        s = _text_source(tmp_path, mp, "names.csv", "Time (s),Pos [rad],Effort\n0,0,1\n0.001,0,1\n", '"Time (s)"',
+                         "Pos (rad)", "Effort")
         return s, mp, ["names.csv", "'Pos (rad)'", "did you mean 'Pos [rad]'"]
     if name == "not a MATLAB file":
         s = tmp_path / "notes.mat"
