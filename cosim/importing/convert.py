@@ -255,8 +255,9 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         k = int(back[0]) + 1
-        raise ImportFailure(src.path, f"time is not strictly increasing at {src.row_label([k])}: {t[k - 1]:.17g} then "
-                                      f"{t[k]:.17g} s ({back.size} place(s) in all)", variable=tvar, column="time")
+        more = f" ({back.size} places in all)" if back.size > 1 else ""
+        raise ImportFailure(src.path, f"time is not strictly increasing at {src.row_label([k])}: {float(t[k - 1])!r} "
+                                      f"then {float(t[k])!r} s{more}", variable=tvar, column="time")
     derived = {}
     for name, c in present.items():
         if c.derive:

@@ -284,6 +284,12 @@ def check_columns(m: ImportMap, facts) -> None:
         if m.columns[name].optional:
             _fail(m.path, f"columns.{name}.optional", f"{name} is required by the recording format, it cannot be "
                                                       f"optional")
+    for name, s in m.sensors.items():
+        if "unit" in s:
+            try:
+                U.factor(s["unit"], si_unit(name, facts))
+            except ValueError as e:
+                _fail(m.path, f"sensors.{name}.unit", str(e))
     for name, c in m.columns.items():
         if c.derive and c.source not in m.columns:
             _fail(m.path, f"columns.{name}.derive", f"{name} is derived from {c.source}, which the map does not give")

@@ -53,9 +53,10 @@ class Source:
         (as MATLAB counts) otherwise."""
         idx = [int(i) for i in indices[:5]]
         more = f" and {len(indices) - 5} more" if len(indices) > 5 else ""
+        one = len(indices) == 1
         if self.format in ("csv", "tsv"):
-            return "lines " + ", ".join(str(i + self.header_line + 1) for i in idx) + more
-        return "indices " + ", ".join(str(i + 1) for i in idx) + more + " (1-based)"
+            return ("line " if one else "lines ") + ", ".join(str(i + self.header_line + 1) for i in idx) + more
+        return ("index " if one else "indices ") + ", ".join(str(i + 1) for i in idx) + more + " (1-based)"
 
     def load(self, names, progress: bool | None = None) -> dict:
         """The variables ``names`` as float arrays (2-D, MATLAB orientation).

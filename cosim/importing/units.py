@@ -73,8 +73,12 @@ def factor(unit: str, si_unit: str) -> float:
     u = canonical(unit)
     same = ", ".join(k for k, (kind, _) in UNITS.items() if kind == want)
     if u not in UNITS:
-        raise ValueError(f"unknown unit {unit!r} (a {want} is in one of: {same})")
+        raise ValueError(f"unknown unit {unit!r} ({_a(want)} is in one of: {same})")
     kind, f = UNITS[u]
     if kind != want:
-        raise ValueError(f"unit {unit!r} is a {kind}, the column is a {want} in {si_unit} (one of: {same})")
+        raise ValueError(f"unit {unit!r} is {_a(kind)}, the column is {_a(want)} in {si_unit} (one of: {same})")
     return f / UNITS[si_unit][1]
+
+
+def _a(kind: str) -> str:
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"

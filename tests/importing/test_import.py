@@ -151,7 +151,7 @@ def _case(name, rig, tmp_path):
         z = v["zeit"].copy()
         z[50] = z[49]
         _resave(src, v, zeit=z)
-        return src, mp, ["rig.mat", "'zeit'", "not strictly increasing", "indices 51 (1-based)"]
+        return src, mp, ["rig.mat", "'zeit'", "not strictly increasing", "index 51 (1-based)"]
     if name == "NaN rows":
         a = v["ang"].copy()
         a[10], a[12] = np.nan, np.inf
@@ -181,7 +181,7 @@ def _case(name, rig, tmp_path):
     if name == "CSV with an empty cell":
         s = _text_source(tmp_path, mp, "gap.csv", "Time (s),Pos [rad],Effort\n0,0,1\n0.001,,1\n0.002,0,1\n",
                          '"Time (s)"', "Pos [rad]", "Effort")
-        return s, mp, ["gap.csv", "'Pos [rad]'", "non-finite", "lines 3"]
+        return s, mp, ["gap.csv", "'Pos [rad]'", "non-finite", "line 3"]
     if name == "CSV column misspelt":
         s = _text_source(tmp_path, mp, "names.csv", "Time (s),Pos [rad],Effort\n0,0,1\n0.001,0,1\n", '"Time (s)"',
                          "Pos (rad)", "Effort")
@@ -227,6 +227,9 @@ def _case(name, rig, tmp_path):
     if name == "derived column with a unit":
         _set(mp, 'qd1 = { derive = "central_difference" }', 'qd1 = { derive = "central_difference", unit = "deg/s" }')
         return src, mp, ["rig_map.toml", "columns.qd1.unit", "derived column"]
+    if name == "sensor unit of the wrong kind":
+        _set(mp, "q1 = { resolution = 0.01, noise_std = 0.02 }", 'q1 = { resolution = 0.01, unit = "um" }')
+        return src, mp, ["rig_map.toml", "sensors.q1.unit", "'um' is a length"]
     raise KeyError(name)
 
 
@@ -235,7 +238,7 @@ CASES = ["missing variable", "wrong length", "non-monotonic time", "NaN rows", "
          "CSV with an empty cell", "CSV column misspelt", "not a MATLAB file", "empty file", "binary file as CSV",
          "unknown map field", "unknown column field", "not a column of the robot", "required column missing",
          "matrix without a column", "controller variable missing", "unknown derivation", "unknown robot",
-         "source not found", "derived column with a unit"]
+         "source not found", "derived column with a unit", "sensor unit of the wrong kind"]
 
 
 @pytest.mark.parametrize("name", CASES)
@@ -284,3 +287,25 @@ def test_command_writes_a_parquet_or_hdf5_table(rig, tmp_path, fmt, suffix):
     assert main(["import", str(src), "--map", str(mp), "--out", str(tmp_path / "o"), "--format", fmt]) == 0
     back = read_recording(tmp_path / "o" / f"rig{suffix}")
     np.testing.assert_array_equal(back.tau[:, 0], v["cmd"].ravel() * 2.5)
+
+
+def test_robot_as_a_description_path_relative_to_the_map(tmp_path):
+    repo = Path(__file__).resolve().parents[2]
+    (tmp_path / "desc").mkdir()
+    (tmp_path / "maps").mkdir()
+    (tmp_path / "desc" / "my_rails.toml").write_text(
+        (repo / "robots" / "linear_delta.toml").read_text().replace('name = "linear_delta"', 'name = "my_rails"'))
+    t = np.arange(20) * 1e-3
+    rows = "".join(f"{a!r},{0.1 + a},{0.1 + 2 * a},{0.1 + 3 * a},1,2,3\n" for a in t.tolist())
+    (tmp_path / "rails.csv").write_text("t,a,b,c,fa,fb,fc\n" + rows)
+    mp = tmp_path / "maps" / "rails.toml"
+    mp.write_text('robot = "../desc/my_rails.toml"\n[columns]\ntime = "t"\n' + "".join(
+        f'q{i} = {{ variable = "{v}", unit = "mm" }}\nqd{i} = {{ derive = "central_difference" }}\ntau{i} = "f{v}"\n'
+        for i, v in ((1, "a"), (2, "b"), (3, "c"))))
+    res = import_recording(tmp_path / "rails.csv", mp, tmp_path / "out", progress=False)
+    back = read_recording(res.table)
+    assert back.robot == "my_rails"
+    np.testing.assert_allclose(back.q[:, 2], (0.1 + 3 * t) * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(back.qd[:, 1], 2e-3, rtol=1e-9)
+    side = json.loads(res.sidecar.read_text())
+    assert (res.sidecar.parent / side["robot_file"]).resolve() == (tmp_path / "desc" / "my_rails.toml").resolve()
