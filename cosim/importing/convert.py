@@ -178,7 +178,7 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     m = read_map(map_path)
     facts = _model(m, robot, {}).facts
     check_columns(m, facts)
-    src = open_source(source, m.source.get("format"), m.source.get("delimiter"))
+    src = open_source(source, m.source.get("format"), m.source.get("delimiter"), m.source.get("encoding"))
     scal = _Resolver(src)
     for k, v in m.parameters.items():
         if isinstance(v, dict):

@@ -146,8 +146,10 @@ def read_map(path) -> ImportMap:
             _fail(path, "source.format", f"must be one of {', '.join(FORMATS)}, got {v!r}")
         elif k == "delimiter" and (not isinstance(v, str) or len(v) != 1):
             _fail(path, "source.delimiter", f"must be one character, got {v!r}")
-        elif k not in ("format", "delimiter"):
-            _fail(path, f"source.{k}", "unknown field (source has: format, delimiter)")
+        elif k == "encoding" and (not isinstance(v, str) or not v):
+            _fail(path, "source.encoding", f"must be a text encoding's name (e.g. \"latin-1\"), got {v!r}")
+        elif k not in ("format", "delimiter", "encoding"):
+            _fail(path, f"source.{k}", "unknown field (source has: format, delimiter, encoding)")
     cols = doc.get("columns")
     if not isinstance(cols, dict) or not cols:
         _fail(path, "columns", "the map needs a [columns] table (recording column = source variable)")

@@ -47,6 +47,8 @@ class Source:
     what: dict = field(default_factory=dict)
     delimiter: str = ","
     header_line: int = 1
+    data_offset: int = 0
+    encoding: str = "utf-8"
 
     def row_label(self, indices) -> str:
         """How a message names rows of a variable: file lines for text, 1-based indices
@@ -78,7 +80,7 @@ class Source:
         return _load_text(self, names, progress)
 
 
-def open_source(path, fmt: str | None = None, delimiter: str | None = None) -> Source:
+def open_source(path, fmt: str | None = None, delimiter: str | None = None, encoding: str | None = None) -> Source:
     """Open a source file and list its variables (nothing is loaded yet).
 
     Parameters
@@ -119,7 +121,7 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None) -> S
         return _open_mat(p)
     if fmt == "hdf5":
         return _open_hdf5(p, matlab=False)
-    return _open_text(p, "\t" if fmt == "tsv" and delimiter is None else delimiter, fmt)
+    return _open_text(p, "\t" if fmt == "tsv" and delimiter is None else delimiter, fmt, encoding or "utf-8")
 
 
 def _sniff(p: Path) -> str:
@@ -215,18 +217,31 @@ def _load_hdf5(src: Source, names) -> dict:
     return out
 
 
-def _open_text(p: Path, delimiter: str | None, fmt: str) -> Source:
-    try:
-        with p.open(newline="", encoding="utf-8-sig") as f:
-            lineno, line = 0, ""
-            for lineno, line in enumerate(f, start=1):
-                if line.strip() and not line.lstrip().startswith("#"):
-                    break
-            else:
-                raise ImportFailure(p, "has no header line (only blank or comment lines)")
-    except UnicodeDecodeError as e:
-        raise ImportFailure(p, f"is not a text file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not UTF-8); "
-                               f"a MATLAB file needs the .mat extension or [source] format = \"matlab\"") from None
+def _open_text(p: Path, delimiter: str | None, fmt: str, encoding: str = "utf-8") -> Source:
+    """The header of a text file: its first line that is neither blank nor a ``#`` comment;
+    the data start at the byte after it (``Source.data_offset``)."""
+    offset, lineno, line = 0, 0, ""
+    with p.open("rb") as f:
+        for lineno, raw in enumerate(f, start=1):
+            start = 3 if lineno == 1 and raw.startswith(b"\xef\xbb\xbf") else 0   # a UTF-8 byte-order mark
+            try:
+                line = raw[start:].decode(encoding)
+            except UnicodeDecodeError as e:
+                raise ImportFailure(p, f"is not a text file in {encoding} (byte 0x{raw[start + e.start]:02x} at byte "
+                                       f"{offset + start + e.start}); a MATLAB file needs the .mat extension or [source] "
+                                       f"format = \"matlab\"; a text file in another encoding [source] encoding = "
+                                       f"\"latin-1\" (for example)") from None
+            except LookupError:
+                raise ImportFailure(p, f"unknown text encoding {encoding!r} ([source] encoding)") from None
+            control = next((c for c in line if ord(c) < 32 and c not in "\t\r\n"), None)
+            if control is not None:
+                raise ImportFailure(p, f"is not a text file (control byte 0x{ord(control):02x} on line {lineno}); a "
+                                       f"MATLAB file needs the .mat extension or [source] format = \"matlab\"")
+            offset += len(raw)
+            if line.strip() and not line.lstrip().startswith("#"):
+                break
+        else:
+            raise ImportFailure(p, "has no header line (only blank or comment lines)")
     if delimiter is None:
         delimiter = max([",", ";", "\t"], key=line.count)
     header = [h.strip() for h in next(csv.reader([line], delimiter=delimiter))]
@@ -236,7 +251,8 @@ def _open_text(p: Path, delimiter: str | None, fmt: str) -> Source:
         raise ImportFailure(p, f"line {lineno} is not a header of column names ({why}; delimiter {delimiter!r})")
     dup = [h for h in header if header.count(h) > 1]
     what = {h: "column named twice in the header (ambiguous)" for h in dup}
-    return Source(p, fmt, {h: (None, 1) for h in header}, what, delimiter=delimiter, header_line=lineno)
+    return Source(p, fmt, {h: (None, 1) for h in header}, what, delimiter=delimiter, header_line=lineno,
+                  data_offset=offset, encoding=encoding)
 
 
 class _Counted:
@@ -270,11 +286,11 @@ def _load_text(src: Source, names, progress) -> dict:
         with src.path.open("rb") as raw, tqdm(total=size, unit="B", unit_scale=True, desc=f"reading {src.path.name}",
                                               delay=1.0, leave=False,
                                               disable=None if progress is None else not progress) as bar:
-            start = raw.read(3)
-            raw.seek(3 if start == b"\xef\xbb\xbf" else 0)  # a UTF-8 byte-order mark
+            raw.seek(src.data_offset)
+            bar.update(src.data_offset)
             table = pcsv.read_csv(
                 _Counted(raw, bar),
-                read_options=pcsv.ReadOptions(column_names=header, skip_rows=src.header_line, block_size=1 << 22),
+                read_options=pcsv.ReadOptions(column_names=header, block_size=1 << 22, encoding=src.encoding),
                 parse_options=pcsv.ParseOptions(delimiter=src.delimiter),
                 convert_options=pcsv.ConvertOptions(include_columns=names,
                                                     column_types={n: pa.float64() for n in names}))
@@ -287,9 +303,9 @@ def _load_text_slowly(src: Source, names) -> dict:
     header = list(src.shapes)
     cols = [header.index(n) for n in names]
     parts = []
-    with src.path.open(newline="", encoding="utf-8-sig") as f:
-        for _ in range(src.header_line):
-            f.readline()
+    with src.path.open("rb") as raw:
+        raw.seek(src.data_offset)
+        f = io.TextIOWrapper(raw, encoding=src.encoding, errors="replace", newline="")
         first = src.header_line + 1
         while True:
             lines = f.readlines(1 << 22)  # about 4 MB of lines at a time

@@ -309,3 +309,21 @@ def test_robot_as_a_description_path_relative_to_the_map(tmp_path):
     np.testing.assert_allclose(back.qd[:, 1], 2e-3, rtol=1e-9)
     side = json.loads(res.sidecar.read_text())
     assert (res.sidecar.parent / side["robot_file"]).resolve() == (tmp_path / "desc" / "my_rails.toml").resolve()
+
+
+def test_text_with_comment_lines_before_the_header_and_latin1(tmp_path):
+    """Lines before the header are skipped exactly (no data row lost), a latin-1 header read."""
+    body = "".join(f"{k * 0.001!r};{k * 1.5!r};{k * 2.0!r}\n" for k in range(10))
+    (tmp_path / "rig.csv").write_bytes(("# logged by the rig\n\n# v2\nZeit;Winkel [°];Moment\n" + body)
+                                      .encode("latin-1"))
+    mp = tmp_path / "m.toml"
+    mp.write_text('robot = "fourbar"\n[source]\nencoding = "latin-1"\n[columns]\ntime = "Zeit"\n'
+                  'q1 = { variable = "Winkel [°]", unit = "deg" }\nqd1 = { derive = "central_difference" }\n'
+                  'tau1 = "Moment"\n')
+    rec = to_recording(tmp_path / "rig.csv", mp, progress=False)
+    assert len(rec) == 10
+    np.testing.assert_array_equal(rec.tau[:, 0], np.arange(10) * 2.0)
+    np.testing.assert_allclose(rec.q[:, 0], np.arange(10) * 1.5 * np.pi / 180, rtol=1e-15)
+    mp.write_text(mp.read_text().replace('encoding = "latin-1"\n', ""))
+    with pytest.raises(ImportFailure, match=r"rig.csv: is not a text file in utf-8 \(byte 0xb0 at byte 39\)"):
+        to_recording(tmp_path / "rig.csv", mp, progress=False)
