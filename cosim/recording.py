@@ -4,7 +4,9 @@ A recording is a CSV file with a header row and a JSON sidecar of the same name:
 
 * ``time`` [s], strictly increasing, first column;
 * per joint ``i = 1..nd``: ``q<i>`` [m or rad], ``qd<i>`` [m/s or rad/s], ``tau<i>``
-  [N or N m, actuator effort applied], optional ``qref<i>``;
+  [N or N m, actuator effort applied], optional ``qref<i>`` and ``f_ext<i>`` [N or N m, a
+  measured external effort on joint i, positive along +q_i: a known input, not missing
+  physics; the sidecar's ``units.f_ext`` must state its unit];
 * optional pose columns: ``x, y, z`` [m] and ``rx, ry, rz`` [rad] (6-PUS),
   ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output);
 * any further columns are kept in ``Recording.extra``.
@@ -14,8 +16,11 @@ Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar"
 ``"joint_convention": {"sign": [...], "offset": [...]}`` for a recording made in other
 joint coordinates than the model's: per joint, ``recorded = sign * model + offset``
 (``sign`` +1 or -1; ``offset`` in m or rad, default 0).  The reader converts ``q``,
-``qd``, ``qref`` and ``tau`` to the model's convention (``Recording.joint_convention``
+``qd``, ``qref``, ``tau`` and ``f_ext`` to the model's convention (``Recording.joint_convention``
 keeps what was declared; written recordings are in the model's convention).
+
+Further sidecar fields (``units``, ``derived``, ``sensors``, ``source``: written by
+``cosim import``, docs/recording.md) are kept in ``Recording.sidecar`` and written back.
 
 Scenarios export this; calibration and the discrepancy engine read it.  A bad file gets
 one :class:`RecordingError` naming the file, the row (line number in the file) and the
@@ -121,7 +126,9 @@ class Recording:
 
     Arrays have one row per sample: ``time`` (n,) [s]; ``q``, ``qd``, ``tau``, ``qref``
     (n, nd); ``pose`` (n, npose) in the robot's tracker columns (the core's
-    ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar).
+    ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar);
+    ``f_ext`` (n, nd) [N or N m], the measured external effort on each joint (positive
+    along +q_i), None when the recording has none.
     """
 
     robot: str
@@ -139,6 +146,10 @@ class Recording:
     #: the joint convention the file declared (``sign``, ``offset`` per joint); the arrays
     #: are already in the model's convention.  Empty: the model's own.
     joint_convention: dict = field(default_factory=dict)
+    #: measured external effort per joint (n, nd) [N or N m], None when not recorded
+    f_ext: np.ndarray | None = None
+    #: further sidecar fields, kept verbatim (``units``, ``derived``, ``sensors``, ``source``)
+    sidecar: dict = field(default_factory=dict)
 
     @property
     def ndof(self) -> int:
@@ -160,6 +171,7 @@ class Recording:
             None if self.pose is None else self.pose[s],
             {k: v[s] for k, v in self.extra.items()},
             dict(self.parameters), dict(self.controller), self.notes, self.path, dict(self.joint_convention),
+            f_ext=None if self.f_ext is None else self.f_ext[s], sidecar=dict(self.sidecar),
         )
 
     def column_names(self) -> list[str]:
@@ -167,6 +179,7 @@ class Recording:
         cols = ["time"]
         for i in range(1, nd + 1):
             cols += [f"q{i}", f"qd{i}", f"tau{i}"] + ([f"qref{i}"] if self.qref is not None else [])
+            cols += [f"f_ext{i}"] if self.f_ext is not None else []
         if self.pose is not None:
             cols += self.pose_columns
         cols += list(self.extra)
@@ -179,6 +192,8 @@ class Recording:
             parts += [self.q[:, i:i + 1], self.qd[:, i:i + 1], self.tau[:, i:i + 1]]
             if self.qref is not None:
                 parts.append(self.qref[:, i:i + 1])
+            if self.f_ext is not None:
+                parts.append(self.f_ext[:, i:i + 1])
         if self.pose is not None:
             parts.append(self.pose)
         parts += [np.asarray(v, float)[:, None] for v in self.extra.values()]
@@ -193,7 +208,7 @@ def _validate(rec: Recording, path) -> None:
     if _facts(rec.robot) is None:
         raise RecordingError(path, f"unknown robot {rec.robot!r} (known: {_known()})")
     n, nd = len(rec.time), rec.ndof
-    for name in ("q", "qd", "tau", "qref"):
+    for name in ("q", "qd", "tau", "qref", "f_ext"):
         a = getattr(rec, name)
         if a is None:
             continue
@@ -210,22 +225,128 @@ def _validate(rec: Recording, path) -> None:
     nonfinite = np.argwhere(~np.isfinite(tab))
     if nonfinite.size:
         r, c = nonfinite[0]
-        raise RecordingError(path, f"value {tab[r, c]!r} is not a finite number", row=r + 2,
+        raise RecordingError(path, f"value {float(tab[r, c])!r} is not a finite number", row=r + 2,
                              column=rec.column_names()[c])
 
 
-def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[Path, Path]:
-    """Write ``rec`` as ``<path>.csv`` plus its JSON sidecar; returns both paths."""
+#: sidecar fields the format defines itself (``Recording.sidecar`` cannot override them)
+_RESERVED = ("format", "robot", "parameters", "controller", "notes", "joint_convention", "robot_file",
+             "robot_description")
+
+
+def _si_units(facts, rec: Recording) -> dict:
+    """The sidecar's ``units`` of a written recording: the robot's SI units, per kind of column."""
+    ju, eu = facts.joint_unit, facts.effort_unit
+    units = {"time": "s", "q": ju, "qd": f"{ju}/s", "tau": eu}
+    if rec.qref is not None:
+        units["qref"] = ju
+    if rec.f_ext is not None:
+        units["f_ext"] = eu
+    return units
+
+
+def write_recording(path, rec: Recording, float_format: str | None = None, progress: bool | None = False,
+                    chunk_rows: int = 100_000) -> tuple[Path, Path]:
+    """Write ``rec`` as a table (CSV, Parquet or HDF5) plus its JSON sidecar; returns both paths.
+
+    Parameters
+    ----------
+    path : str or Path
+        The table: ``.csv``, ``.parquet`` or ``.h5`` (``cosim.recording_io``; ``.csv`` is
+        added to any other name); the sidecar is the same name with ``.json``.
+    rec : Recording
+        What to write (validated first: shapes, time strictly increasing, every value finite).
+    float_format : str, optional
+        CSV only: printf format of every value; default the shortest text that reads back
+        as the same double (Arrow's C++ writer: about ten times faster than formatting in
+        Python).
+    progress : bool or None
+        A progress bar over the rows (None: on a terminal only).
+    chunk_rows : int
+        Rows formatted per write.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(3) * 1e-3, q=np.zeros((3, 1)),
+    ...                 qd=np.zeros((3, 1)), tau=np.zeros((3, 1)))
+    >>> write_recording("/tmp/three.csv", rec)[1].name
+    'three.json'
+    """
+    from tqdm import tqdm
+
+    from .recording_io import SUFFIXES, write_table
+
     path = Path(path)
-    if path.suffix != ".csv":
+    if path.suffix.lower() not in SUFFIXES:
         path = path.with_suffix(".csv")
     _validate(rec, path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(path, rec.table(), delimiter=",", header=",".join(rec.column_names()), comments="",
-               fmt=float_format)
-    meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
-            "controller": rec.controller, "notes": rec.notes}
+    table, n = rec.table(), len(rec.time)
+    with tqdm(total=n, unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+              disable=None if progress is None else not progress) as bar:
+        if float_format is None or SUFFIXES[path.suffix.lower()] != "csv":
+            write_table(path, rec.column_names(), table, chunk_rows=chunk_rows, bar=bar)
+        else:
+            with open(path, "w") as f:
+                f.write(",".join(rec.column_names()) + "\n")
+                for k in range(0, n, chunk_rows):
+                    np.savetxt(f, table[k:k + chunk_rows], delimiter=",", fmt=float_format)
+                    bar.update(min(chunk_rows, n - k))
+    return path, _write_sidecar(path, rec)
+
+
+def write_recording_blocks(path, blocks, progress: bool | None = False) -> tuple[Path, Path]:
+    """Write consecutive :class:`Recording` blocks (one robot, the first block's sidecar
+    fields, time increasing across blocks) as one recording; memory is one block, so a
+    recording of any length can be written.  Returns the table's and the sidecar's paths.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> parts = [Recording(robot="fourbar", time=(np.arange(3) + 3 * k) * 1e-3, q=np.zeros((3, 1)),
+    ...                    qd=np.zeros((3, 1)), tau=np.zeros((3, 1))) for k in range(4)]
+    >>> len(read_recording(write_recording_blocks("/tmp/parts.h5", parts)[0]))
+    12
+    """
+    from tqdm import tqdm
+
+    from .recording_io import SUFFIXES, TableWriter
+
+    path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        path = path.with_suffix(".csv")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    first, writer, rows = None, None, 0
+    with tqdm(unit="row", desc=f"writing {path.name}", delay=1.0, leave=False,
+              disable=None if progress is None else not progress) as bar:
+        try:
+            for b in blocks:
+                _validate(b, path)
+                if first is None:
+                    first, writer = b, TableWriter(path, b.column_names())
+                elif b.column_names() != writer.header:
+                    raise RecordingError(path, f"block at row {rows + 2} has columns {b.column_names()}, the first "
+                                               f"block {writer.header}")
+                elif b.time[0] <= last:
+                    raise RecordingError(path, f"time goes back between blocks ({last!r} then {b.time[0]!r})",
+                                         row=rows + 2, column="time")
+                writer.write(b.table())
+                rows, last = rows + len(b), b.time[-1]
+                bar.update(len(b))
+        finally:
+            if writer is not None:
+                writer.close()
+    if first is None:
+        raise RecordingError(path, "no blocks to write")
+    return path, _write_sidecar(path, first)
+
+
+def _write_sidecar(path: Path, rec: Recording) -> Path:
     facts = _facts(rec.robot)
+    meta = {"format": FORMAT, "robot": rec.robot, "parameters": rec.parameters,
+            "controller": rec.controller, "notes": rec.notes, "units": _si_units(facts, rec)}
+    meta.update({k: v for k, v in rec.sidecar.items() if k not in _RESERVED and k != "units"})
     side = sidecar_path(path)
     if facts is not None and facts.file:
         # A robot compiled from a description file: where it came from (relative to the
@@ -238,16 +359,16 @@ def write_recording(path, rec: Recording, float_format: str = "%.17g") -> tuple[
         except OSError:
             pass
     side.write_text(json.dumps(meta, indent=2, default=jsonable))
-    return path, side
+    return side
 
 
 def read_recording(path, robot: str | None = None) -> Recording:
-    """Read and validate a ``pkm-recording/1`` CSV (and its sidecar).
+    """Read and validate a ``pkm-recording/1`` table (CSV, Parquet or HDF5) and its sidecar.
 
     Parameters
     ----------
     path : str or Path
-        The CSV file (``.csv`` may be omitted).
+        The table (``.csv``, ``.parquet``, ``.h5``; the extension may be omitted).
     robot : str, optional
         Expected robot; also used if the sidecar is missing.
 
@@ -256,13 +377,79 @@ def read_recording(path, robot: str | None = None) -> Recording:
     RecordingError
         Naming the file, row and column of the first problem: a missing sidecar or
         column, an unknown robot, a cell that is not a finite number, time not strictly
-        increasing, too few rows.
+        increasing, too few rows.  Rows are file lines in a CSV, 1-based data rows in
+        Parquet and HDF5.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(3) * 1e-3, q=np.zeros((3, 1)),
+    ...                 qd=np.zeros((3, 1)), tau=np.ones((3, 1)))
+    >>> read_recording(write_recording("/tmp/three.parquet", rec)[0]).tau[:, 0]
+    array([1., 1., 1.])
     """
+    path, side, meta, rname, nd, pose_cols = _open(path, robot)
+    header, data = _read_table(path)
+    layout = _layout(path, side, meta, rname, nd, pose_cols, header)
+    if len(data) < 2:
+        raise RecordingError(path, f"has {len(data)} data row(s); at least 2 are needed", row=len(data) + 2)
+    return _block(layout, data, 0)
+
+
+def iter_recording(path, robot: str | None = None, chunk_rows: int = 100_000):
+    """The recording as consecutive :class:`Recording` blocks of at most ``chunk_rows``
+    rows: memory is one block whatever the length of the file (one hour at 1 kHz is 3.6e6
+    rows).  Validated as :func:`read_recording` does (time increasing across blocks too).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rec = Recording(robot="fourbar", time=np.arange(10) * 1e-3, q=np.zeros((10, 1)),
+    ...                 qd=np.zeros((10, 1)), tau=np.zeros((10, 1)))
+    >>> csv_path, _ = write_recording("/tmp/ten.csv", rec)
+    >>> [len(b) for b in iter_recording(csv_path, chunk_rows=4)]
+    [4, 4, 2]
+    """
+    from .recording_io import TableUnreadable, iter_blocks, table_format
+
+    path, side, meta, rname, nd, pose_cols = _open(path, robot)
+    fmt = table_format(path)
+    header = _csv_header(path) if fmt == "csv" else _table_header(path, fmt)
+    layout = _layout(path, side, meta, rname, nd, pose_cols, header)
+    row0, last = 0, None
+    try:
+        for data in iter_blocks(path, header, chunk_rows, fmt):
+            if not np.isfinite(data).all():
+                raise TableUnreadable("a value is not finite")
+            if last is not None and len(data) and data[0, 0] <= last:
+                raise TableUnreadable("time goes back between blocks")
+            yield _block(layout, data, row0)
+            row0 += len(data)
+            last = data[-1, 0] if len(data) else last
+    except TableUnreadable as e:
+        # the whole-file readers say where (a cell and its line, time going back); memory
+        # is the file's only on this error path
+        _block(layout, _read_table(path)[1], 0)
+        raise RecordingError(path, str(e)) from None
+    if row0 < 2:
+        raise RecordingError(path, f"has {row0} data row(s); at least 2 are needed", row=row0 + 2)
+
+
+def _open(path, robot):
+    """The table's path, its sidecar's path and content, the robot's name, joints and pose
+    columns (the sidecar checked)."""
+    from .recording_io import SUFFIXES
+
     path = Path(path)
-    if not path.exists() and path.with_suffix(".csv").exists():
-        path = path.with_suffix(".csv")
+    if not path.exists():
+        for suffix in SUFFIXES:
+            if path.with_suffix(suffix).exists():
+                path = path.with_suffix(suffix)
+                break
     if not path.exists():
         raise RecordingError(path, "file not found")
+    if path.is_dir():
+        raise RecordingError(path, "is a directory, not a recording")
     side = sidecar_path(path)
     meta = {}
     if side.exists():
@@ -285,14 +472,47 @@ def read_recording(path, robot: str | None = None) -> Recording:
         facts = _described(side, rname, meta.get("robot_file"), meta.get("robot_description"))
     if facts is None:
         raise RecordingError(side, f"unknown robot {rname!r} (known: {_known()})")
-    nd, pose_cols = facts.ndof, list(facts.tracker_names)
     _check_units(side, meta.get("units"), rname)
+    return path, side, meta, rname, facts.ndof, list(facts.tracker_names)
+
+
+def _table_header(path, fmt):
+    from .recording_io import TableUnreadable, read_header
+
     try:
+        return read_header(path, fmt)
+    except TableUnreadable as e:
+        raise RecordingError(path, str(e)) from None
+
+
+def _read_table(path):
+    """(header, data (n, ncol)) of a table: Arrow's readers; for a CSV they refuse (a word,
+    a short row, a non-finite value), the careful reader that names the line and column."""
+    from .recording_io import TableUnreadable, read_table, table_format
+
+    fmt = table_format(path)
+    if fmt == "csv":
+        header = _csv_header(path)
+        if len(set(header)) == len(header):
+            try:
+                data = read_table(path, header, "csv")
+                if np.isfinite(data).all():
+                    return header, data
+            except TableUnreadable:
+                pass
         rows, header = _read_rows(path)
-    except UnicodeDecodeError as e:
-        raise RecordingError(path, f"is not a text CSV file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
-                                   f"UTF-8): not a pkm-recording/1 file") from None
-    return _finish(path, side, meta, rname, nd, pose_cols, header, rows)
+        return header, np.asarray(rows, dtype=float).reshape(len(rows), len(header))
+    header = _table_header(path, fmt)
+    try:
+        data = read_table(path, header, fmt)
+    except TableUnreadable as e:
+        raise RecordingError(path, str(e)) from None
+    bad = np.argwhere(~np.isfinite(data))
+    if bad.size:
+        r, c = bad[0]
+        raise RecordingError(path, f"value {float(data[r, c])!r} is not a finite number", row=int(r) + 1,
+                             column=header[c])
+    return header, data
 
 
 def _check_units(side, units, robot):
@@ -306,7 +526,7 @@ def _check_units(side, units, robot):
 
     f = robot_facts(robot)
     want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
-            "tau": f.effort_unit}
+            "tau": f.effort_unit, "f_ext": f.effort_unit}
     for key, unit in units.items():
         if key in want and unit != want[key]:
             raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
@@ -331,13 +551,25 @@ def _check_pose_scale(path, robot, pose_cols, col):
                                        f"is in rad)", column=c)
 
 
+def _csv_header(path):
+    """The header row of a CSV table (stripped names)."""
+    try:
+        with open(path, newline="") as f:
+            line = next(csv.reader(f), None)
+    except UnicodeDecodeError as e:
+        raise RecordingError(path, f"is not a text CSV file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
+                                   f"UTF-8): not a pkm-recording/1 file") from None
+    if line is None:
+        raise RecordingError(path, "file is empty (no header row)", row=1)
+    return [h.strip() for h in line]
+
+
 def _read_rows(path):
-    with open(path, newline="") as f:
+    """Every row of a CSV table as floats, cell by cell: slow, but says where a cell is wrong."""
+    header = _csv_header(path)
+    with open(path, newline="", errors="replace") as f:
         reader = csv.reader(f)
-        try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise RecordingError(path, "file is empty (no header row)", row=1) from None
+        next(reader)
         rows = []
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not c.strip() for c in row):
@@ -358,7 +590,30 @@ def _read_rows(path):
     return rows, header
 
 
-def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
+@dataclass
+class _Layout:
+    """What the header and sidecar say of a table's columns (checked once, used per block)."""
+
+    path: Path
+    side: Path
+    meta: dict
+    robot: str
+    nd: int
+    pose_cols: list
+    header: list
+    has_qref: bool
+    has_fext: bool
+    has_pose: bool
+    known: set
+    sign: np.ndarray
+    offset: np.ndarray
+    convention: dict
+    first_row: int      # how the first data row is numbered in messages (a CSV's line 2)
+
+
+def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
+    from .recording_io import table_format
+
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise RecordingError(path, "column appears twice in the header", row=1, column=dup)
@@ -370,46 +625,62 @@ def _finish(path, side, meta, rname, nd, pose_cols, header, rows):
         if col not in header:
             raise RecordingError(path, f"required column is missing for robot {rname} ({nd} joints)", row=1,
                                  column=col)
-    if len(rows) < 2:
-        raise RecordingError(path, f"has {len(rows)} data row(s); at least 2 are needed", row=len(rows) + 2)
-    data = np.asarray(rows, dtype=float)
-    col = {h: data[:, j] for j, h in enumerate(header)}
+
+    def all_or_none(prefix, what):
+        has = [f"{prefix}{i}" in header for i in range(1, nd + 1)]
+        if any(has) and not all(has):
+            raise RecordingError(path, f"{what} columns must be given for all joints or none", row=1,
+                                 column=f"{prefix}{has.index(False) + 1}")
+        return all(has)
+
+    has_qref = all_or_none("qref", "qref")
+    has_fext = all_or_none("f_ext", "f_ext (external effort)")
+    if has_fext and not (isinstance(meta.get("units"), dict) and "f_ext" in meta["units"]):
+        raise RecordingError(side, f"the recording has f_ext columns but the sidecar does not state their unit: add "
+                                   f'"units": {{"f_ext": "{_facts(rname).effort_unit}"}} (the joints\' effort unit)')
+    has_pose = [c in header for c in pose_cols]
+    if any(has_pose) and not all(has_pose):
+        missing = pose_cols[has_pose.index(False)]
+        raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
+    known = set(required) | {"time"} | {f"{k}{i}" for k in ("qref", "f_ext") for i in range(1, nd + 1)} | set(pose_cols)
+    sign, offset, conv = _joint_convention(side, meta.get("joint_convention"), nd)
+    return _Layout(path, side, meta, rname, nd, pose_cols, header, has_qref, has_fext, all(has_pose), known, sign,
+                   offset, conv, 2 if table_format(path) == "csv" else 1)
+
+
+def _block(lay: _Layout, data: np.ndarray, row0: int) -> Recording:
+    """The rows ``data`` (n, ncol) of a table, the first being data row ``row0`` (0-based),
+    as a checked :class:`Recording` in the model's joint convention."""
+    col = {h: data[:, j] for j, h in enumerate(lay.header)}
     t = col["time"]
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         k = int(bad[0]) + 1
-        raise RecordingError(path, f"time is not strictly increasing ({t[k - 1]:.17g} then {t[k]:.17g})", row=k + 2,
-                             column="time")
+        raise RecordingError(lay.path, f"time is not strictly increasing ({t[k - 1]:.17g} then {t[k]:.17g})",
+                             row=row0 + k + lay.first_row, column="time")
 
     def stack(prefix):
-        return np.column_stack([col[f"{prefix}{i}"] for i in range(1, nd + 1)])
+        return np.column_stack([col[f"{prefix}{i}"] for i in range(1, lay.nd + 1)])
 
-    has_qref = [f"qref{i}" in col for i in range(1, nd + 1)]
-    if any(has_qref) and not all(has_qref):
-        missing = f"qref{has_qref.index(False) + 1}"
-        raise RecordingError(path, "qref columns must be given for all joints or none", row=1, column=missing)
-    has_pose = [c in col for c in pose_cols]
-    if any(has_pose) and not all(has_pose):
-        missing = pose_cols[has_pose.index(False)]
-        raise RecordingError(path, "pose columns must be given all or none", row=1, column=missing)
-    known = set(required) | {"time"} | {f"qref{i}" for i in range(1, nd + 1)} | set(pose_cols)
-    if all(has_pose):
-        _check_pose_scale(path, rname, pose_cols, col)
-    sign, offset, conv = _joint_convention(side, meta.get("joint_convention"), nd)
+    if lay.has_pose:
+        _check_pose_scale(lay.path, lay.robot, lay.pose_cols, col)
+    sign, offset, meta = lay.sign, lay.offset, lay.meta
     return Recording(
-        robot=rname,
+        robot=lay.robot,
         time=t,
         q=sign * (stack("q") - offset),
         qd=sign * stack("qd"),
         tau=sign * stack("tau"),
-        qref=sign * (stack("qref") - offset) if all(has_qref) else None,
-        pose=np.column_stack([col[c] for c in pose_cols]) if all(has_pose) else None,
-        extra={h: col[h] for h in header if h not in known},
+        qref=sign * (stack("qref") - offset) if lay.has_qref else None,
+        pose=np.column_stack([col[c] for c in lay.pose_cols]) if lay.has_pose else None,
+        extra={h: col[h] for h in lay.header if h not in lay.known},
         parameters=meta.get("parameters") or {},
         controller=meta.get("controller") or {},
         notes=meta.get("notes", ""),
-        path=path,
-        joint_convention=conv,
+        path=lay.path,
+        joint_convention=lay.convention,
+        f_ext=sign * stack("f_ext") if lay.has_fext else None,
+        sidecar={k: v for k, v in meta.items() if k not in _RESERVED},
     )
 
 

@@ -1,0 +1,59 @@
+"""The shipped EMPS recording imported with its shipped map: every column has the values of
+the .mat (read here independently with scipy), the controller holds the file's gains."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+from cosim.importing import import_recording, read_map
+from cosim.recording import read_recording
+
+REPO = Path(__file__).resolve().parents[2]
+MAT = REPO / "data" / "emps" / "DATA_EMPS.mat"
+MAP = REPO / "data" / "emps" / "emps_map.toml"
+
+
+def _stand_in_map(tmp_path):
+    """The shipped map with robot = the four-bar (one joint, as the EMPS), its units relabelled
+    to the four-bar's (rad for m, N m for N: both factor 1, so the numbers are the same)."""
+    text = MAP.read_text()
+    text = text.replace('robot = "emps"', 'robot = "fourbar"').replace('unit = "m"', 'unit = "rad"')
+    text = text.replace('unit = "N"', 'unit = "N m"')
+    p = tmp_path / "emps_map.toml"
+    p.write_text(text)
+    return p
+
+
+def test_emps_columns_are_the_mat_values(tmp_path):
+    mat = scipy.io.loadmat(MAT)
+    res = import_recording(MAT, _stand_in_map(tmp_path), tmp_path / "out", progress=False)
+    rec = read_recording(res.table)
+    t, qm, qg = mat["t"].ravel(), mat["qm"].ravel(), mat["qg"].ravel()
+    assert len(rec) == 24841
+    np.testing.assert_array_equal(rec.time, t)
+    np.testing.assert_array_equal(rec.q[:, 0], qm)
+    np.testing.assert_array_equal(rec.qref[:, 0], qg)
+    np.testing.assert_array_equal(rec.tau[:, 0], mat["vir"].ravel() * mat["gtau"].item())
+    for k in (1, 5000, 24839):
+        assert rec.qd[k, 0] == pytest.approx((qm[k + 1] - qm[k - 1]) / (t[k + 1] - t[k - 1]), rel=1e-12)
+        assert rec.extra["qdref1"][k] == pytest.approx((qg[k + 1] - qg[k - 1]) / (t[k + 1] - t[k - 1]), rel=1e-12)
+    assert rec.f_ext is None  # this file has no force pulses
+    c = rec.controller
+    assert c["kp"] == mat["kp"].item() == 160.18 and c["kv"] == mat["kv"].item() == 243.45
+    assert c["output_gain"] == mat["gtau"].item()
+    assert (c["kind"], c["period"], c["law"], c["velocity"], c["delay_samples"]) == \
+        ("discrete", 0.001, "cascade_pp", "backward_difference", 1)
+    assert c["position_filter"] == {"b": [0.5, 0.5], "a": [1.0]} and c["saturation"] == [-10.0, 10.0]
+    side = json.loads(res.sidecar.read_text())
+    assert side["derived"]["qd1"] == {"from": "q1", "method": "central_difference",
+                                      "formula": side["derived"]["qd1"]["formula"]}
+
+
+def test_emps_map_is_the_documented_one():
+    m = read_map(MAP)
+    assert m.robot == "emps"
+    assert m.columns["tau1"].variable == "vir" and m.columns["tau1"].scale == "gtau"
+    assert m.columns["qd1"].derive == "central_difference" and m.columns["qdref1"].derive == "central_difference"
+    assert m.columns["f_ext1"].optional
