@@ -200,6 +200,7 @@ _SIGNATURES = {
     "pkm_sim_advance": (I, [P, C.c_double]),
     "pkm_sim_get_state": (I, [P, D, D, D]),
     "pkm_sim_drive_state": (I, [P, D, D]),
+    "pkm_sim_applied_effort": (I, [P, D]),
     "pkm_sim_get_stats": (I, [P, C.POINTER(pkm_sim_stats)]),
     "pkm_sim_error": (CH, [P]),
     "pkm_ctrl_create": (P, [P, C.POINTER(pkm_ctrl_spec), C.c_char_p, S]),

@@ -1,34 +1,69 @@
-"""The compiled closed loop: plant, sampled controller and reference table in one C call.
+"""The closed loop: one definition of the sampled sequence plant - sensors - controller.
 
-:func:`cosim.master.run` steps a plant and a Python controller sample by sample.  When
-the plant is the core (:class:`~cosim.master.CorePlant`) and the controller is one the
-core implements (``pkm_ctrl``: PD, PD + gravity, computed torque, PID, discrete LTI),
-the same loop runs inside the core (``pkm_closed_loop``) with no Python call per
-sample; ``run`` takes that path by itself and says so (``RunResult.loop``).  The
-sequence of operations is the master's, so both paths give the same samples (to the
-last bits of the controller's arithmetic).
+:class:`ClosedLoop` runs a plant and a controller over a reference table.  At each
+sample ``t_k`` (``k = 0 .. n-1``):
+
+1. the sensors read the plant: its joints through the drive's reading model
+   (:class:`cosim.master.CoreDrive`: encoder offset, backlash, compliance under the
+   effort acting on the mechanism, a drive body's encoder) when a drive is given, then
+   the readings' delay (``sensor.delay``), then the white noise on ``q`` and ``qd``;
+2. the controller gives the command ``tau_cmd`` from the readings and reference row k;
+3. the row is recorded: readings, true joints and pose, command, applied effort (the
+   drive's saturation), the command as logged (plus ``tau`` noise) and the tracker's
+   pose (plus ``pose`` noise);
+4. the plant holds the command (saturation and ``actuator.delay`` are the plant's: the
+   core keeps the delay line) and advances to ``t_k + h`` (not after the last sample).
+
+The noise is drawn once, before the run, in one block of shape (n, g nd) with the groups
+``q, qd, tau, pose`` in that order (only those with a non-zero standard deviation), so
+that both back ends see the same numbers.
+
+Two back ends run the sequence:
+
+* **compiled**: the core's ``pkm_closed_loop`` on a :class:`~cosim.master.CorePlant`
+  with a controller the core implements (``pkm_ctrl``: PD, PD + gravity, computed
+  torque, PID, LTI, the discrete rig controller), in pieces of about 50 ms of wall time
+  (the loop goes on exactly across pieces);
+* **stepwise**: any :class:`~cosim.master.Plant` (the core plant or an FMU) and any
+  Python callable, one sample at a time.
+
+By default the compiled back end runs whenever it can; :attr:`LoopRecord.note` says why
+it did not.  :func:`cosim.master.run` (scenarios, sweeps) and the discrepancy replay and
+blind generator (:func:`cosim.discrepancy.plant.closed_loop`) are this loop.
 
 Example
 -------
 >>> from cosim.core import Model
 >>> from cosim import controllers as ctl, trajectories as tr
->>> from cosim.master import CorePlant, make_reference, run
+>>> from cosim.master import CoreDrive, CorePlant, make_reference
+>>> from cosim.closed_loop import ClosedLoop
 >>> m = Model("6pus")
->>> ref = make_reference(m, tr.step(m.home(), m.home() + [0, 0, 0.01, 0, 0, 0]), duration=2.0)
->>> res = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), ref)
->>> res.loop
-'compiled'
+>>> ref = make_reference(m, tr.step(m.home(), m.home() + [0, 0, 0.01, 0, 0, 0]), duration=0.5)
+>>> rec = ClosedLoop(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), drive=CoreDrive(m),
+...                  noise={"q": 1e-6}, seed=1).run(ref)
+>>> rec.loop, rec.q.shape
+('compiled', (501, 6))
 """
 from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
 
 import numpy as np
 
 from ._native import STATUS, raise_for
 # The controller's handle and the loop's C call live in the binding (cosim.core owns every
-# foreign call); this module chains the calls and reports.
+# foreign call); this module chains the calls and records.
 from .core import KINDS, LOOP_FIELDS, CompiledController, closed_loop_call
 
-__all__ = ["CompiledController", "compile_controller", "run_compiled", "KINDS"]
+__all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
+           "NOISE_CHANNELS"]
+
+#: the noise channels, in the order of their draws
+NOISE_CHANNELS = ("q", "qd", "tau", "pose")
+
+#: wall time of one piece of the compiled loop [s]: how long a stop request may wait
+PIECE_SECONDS = 0.05
 
 
 def compile_controller(controller, *, model, dt: float):
@@ -43,71 +78,309 @@ def compile_controller(controller, *, model, dt: float):
         return None, str(e)
 
 
-def run_compiled(sim, ctrl: CompiledController, *, time, dt: float, qref, qdref, qddref=None, xref=None,
-                 q_noise=None, qd_noise=None, measure: bool = False, chunk: int | None = None,
-                 on_chunk=None) -> tuple[dict, int, int, str]:
-    """Run ``pkm_closed_loop`` over the samples ``time`` from the simulator's current state.
+@dataclass
+class LoopRecord:
+    """What a closed-loop run recorded, one row per sample, the first ``n`` rows filled.
+
+    ``q``, ``qd``: the readings the controller saw (noise included); ``q_true``,
+    ``qd_true``, ``x``, ``xd``: the plant's joints and pose; ``tau_cmd``: the command;
+    ``tau``: the effort applied (the drive's saturation; the command without a drive);
+    ``tau_logged``: the command plus the ``tau`` noise; ``pose``: the tracker's pose
+    (``x`` plus the ``pose`` noise).  Arrays (n_samples, nd) [joint and pose units,
+    N or N m]; ``time`` (n_samples,) [s].
+    """
+
+    time: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    q_true: np.ndarray
+    qd_true: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    tau_cmd: np.ndarray
+    tau: np.ndarray
+    tau_logged: np.ndarray
+    pose: np.ndarray
+    n: int = 0
+    #: which back end ran: "compiled" or "python"
+    loop: str = "python"
+    #: why the stepwise back end ran ("" for the compiled one)
+    note: str = ""
+    saturated: int = 0
+    wall: float = 0.0
+    #: the run ended early because ``should_stop`` said so
+    stopped: bool = False
+
+    def head(self) -> "LoopRecord":
+        """The filled rows only."""
+        k = self.n
+        cut = {f: getattr(self, f)[:k] for f in ("time", "q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd",
+                                                  "tau", "tau_logged", "pose")}
+        return LoopRecord(**cut, n=k, loop=self.loop, note=self.note, saturated=self.saturated, wall=self.wall,
+                          stopped=self.stopped)
+
+
+class LoopInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a run: ``partial`` holds what was recorded before it."""
+
+    def __init__(self, partial):
+        super().__init__("closed loop interrupted")
+        self.partial = partial
+
+
+class ClosedLoop:
+    """A plant, its sensors, a controller and the recorder, sampled at the reference's step.
 
     Parameters
     ----------
-    sim : cosim.simulate.Simulator
-        The plant, at its start state.
-    ctrl : CompiledController
-        Reset before the call (``ctrl.reset(x0)``).
-    time : array_like, shape (n,)
-        Sample times [s]; the plant advances from ``time[k]`` to ``time[k] + dt``.
-    qref, qdref, qddref, xref : array_like, shape (n, nd)
-        Reference rows (``qddref``, ``xref`` optional).
-    q_noise, qd_noise : array_like, shape (n, nd), optional
-        Noise added to the joint readings the controller sees.
-    measure : bool
-        Read the joints through the plant's sensor model (``pkm_measure_joints``).
-    chunk : int, optional
-        Samples per C call (the loop goes on exactly across calls); ``on_chunk(k)`` is
-        called after each with the samples done, e.g. for a progress bar.
+    plant : cosim.master.Plant
+        :class:`~cosim.master.CorePlant` or :class:`~cosim.master.FMUPlant` (or any object
+        with that interface).
+    controller : callable
+        ``controller(t, q, qd, ref) -> tau`` (:mod:`cosim.controllers`), or a controller
+        the core implements (then the compiled back end can run it).
+    drive : cosim.master.CoreDrive, optional
+        The plant's drive and sensor model: readings through its reading model and delay,
+        ``tau`` the effort it applies.  Without it the readings are the plant's joints
+        and ``tau`` the command.
+    noise : dict, optional
+        Standard deviations of white noise, scalars or per joint/coordinate: ``q`` [m or
+        rad] and ``qd`` [per s] on the readings the controller sees, ``tau`` [N or N m] on
+        the logged command (not the applied one), ``pose`` [m, rad] on the tracker.
+    seed : int, optional
+        Seed of the noise generator.
+    compiled : bool, optional
+        None (default): the compiled back end whenever it can; True: raise
+        ``ValueError`` if it cannot; False: the stepwise back end.
 
-    Returns
+    Example
     -------
-    (rows, n_done, status, message)
-        ``rows`` maps ``q, qd, q_true, qd_true, x, xd, tau_cmd, tau`` to (n, nd) arrays
-        of which the first ``n_done`` rows are filled; ``status`` is 0 or the core's
-        status of the failure, ``message`` its text (naming the time).
+    See the module's docstring.
     """
-    t = np.ascontiguousarray(time, dtype=float)
-    n, nd = t.size, ctrl.ndof
-    arrs = {k: (None if v is None else np.ascontiguousarray(v, dtype=float).reshape(n, nd))
-            for k, v in (("q", qref), ("qd", qdref), ("qdd", qddref), ("x", xref), ("qn", q_noise),
-                         ("qdn", qd_noise))}
-    rows = {f: np.full((n, nd), np.nan) for f in LOOP_FIELDS}
-    step = n if not chunk else max(1, int(chunk))
-    k0 = 0
-    while k0 < n:
-        k1 = min(n, k0 + step)
-        # A chunk ends one sample into the next (the plant advances after each sample but
-        # the last of a call): each call's last sample is the next call's first, redone.
-        before = None if k0 == 0 else rows["tau"][k0 - 1]
-        st, done, message = closed_loop_call(sim, ctrl, t=t, dt=dt, ref=arrs, rows=rows, k0=k0, k1=k1,
-                                             tau_before=before, q_noise=arrs["qn"], qd_noise=arrs["qdn"],
-                                             measure=measure)
-        if st != 0:
-            return rows, k0 + done, st, message
-        if k1 == n:
-            return rows, n, 0, ""
-        # The last sample of this call was recorded but not advanced: advance it with the
-        # command it produced, then the next call starts at its successor.
-        sim.set_input(rows["tau_cmd"][k1 - 1])
+
+    def __init__(self, plant, controller, *, drive=None, noise: dict | None = None, seed: int | None = 0,
+                 compiled: bool | None = None):
+        self.plant = plant
+        self.controller = controller
+        self.drive = drive
+        nd = plant.ndof
+        self.ndof = nd
+        self.noise = {}
+        for k in NOISE_CHANNELS:
+            s = np.broadcast_to(np.asarray((noise or {}).get(k, 0.0), float), (nd,))
+            if np.any(~np.isfinite(s)) or np.any(s < 0):
+                raise ValueError(f"noise {k!r} must be standard deviations >= 0, got {s.tolist()}")
+            self.noise[k] = s
+        unknown = set(noise or {}) - set(NOISE_CHANNELS)
+        if unknown:
+            raise ValueError(f"noise: unknown channel(s) {sorted(unknown)} (channels: {', '.join(NOISE_CHANNELS)})")
+        self.seed = seed
+        self.compiled = compiled
+
+    # ---------------------------------------------------------------- helpers
+    def _draws(self, n):
+        """The noise of every sample, drawn once: {channel: (n, nd)}."""
+        nd = self.ndof
+        groups = [k for k in NOISE_CHANNELS if np.any(self.noise[k])]
+        rng = np.random.default_rng(self.seed)
+        z = rng.normal(0.0, 1.0, (n, len(groups) * nd)) if groups else np.zeros((n, 0))
+        return {k: z[:, i * nd:(i + 1) * nd] * self.noise[k] for i, k in enumerate(groups)}
+
+    def _compiled_controller(self, h):
+        """``(CompiledController, "")`` when the compiled back end can run, else ``(None, reason)``."""
+        from .master import CoreDrive, CorePlant
+
+        if self.compiled is False:
+            return None, "compiled=False"
+        plant, drive = self.plant, self.drive
+        if not isinstance(plant, CorePlant):
+            return None, f"the plant ({type(plant).__name__}) is not the core plant, the only one that runs compiled"
+        if drive is not None and not (isinstance(drive, CoreDrive) and drive.model.params() == plant.model.params()):
+            return None, "the drive's model is not the plant's"
+        return compile_controller(self.controller, model=plant.model, dt=h)
+
+    # -------------------------------------------------------------------- run
+    def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None) -> LoopRecord:
+        """Run over the reference samples ``start:``.
+
+        Parameters
+        ----------
+        reference : cosim.master.ReferenceTable
+            ``time`` (its spacing is the sample period), ``q``, ``qd`` and optionally
+            ``qdd`` and the pose ``x``.
+        start : int
+            First reference sample of the run.
+        x0, xd0 : array_like, shape (nd,), optional
+            Initial true pose [m, rad] and rate (default: the reference pose of sample
+            ``start``, or the forward kinematics of its joints, at rest).
+        progress : callable, optional
+            ``progress(k)`` with the samples done, after each piece (compiled) or sample.
+        should_stop : callable, optional
+            ``should_stop() -> bool``, asked between pieces (compiled: about every 50 ms)
+            or samples (stepwise); True ends the run there with the rows so far
+            (``LoopRecord.stopped``).
+
+        Returns
+        -------
+        LoopRecord
+
+        Raises
+        ------
+        Exception
+            The plant's or the controller's error (the core's classes for the core's
+            failures), with ``partial`` (the :class:`LoopRecord` of the rows before the
+            failing sample) and ``loop_time`` (that sample's time [s]) attached.
+        LoopInterrupted
+            On ctrl-C, with ``partial``.
+        """
+        t = np.ascontiguousarray(reference.time[start:], dtype=float)
+        n, nd = len(t), self.ndof
+        if n < 2:
+            raise ValueError("the reference needs at least two samples")
+        h = float(t[1] - t[0])
+        if reference.q.shape[1] != nd:
+            raise ValueError(f"the reference has {reference.q.shape[1]} joints, the plant {nd}")
+        if x0 is None:
+            x0 = reference.x[start] if getattr(reference, "x", None) is not None \
+                else self.plant.model.fk(reference.q[start])
+        x0 = np.asarray(x0, float)
+        rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")}
+        draws = self._draws(n)
+        rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
+                         rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan))
+        cc, rec.note = self._compiled_controller(h)
+        if self.compiled and cc is None:
+            raise ValueError(f"the loop cannot run compiled: {rec.note}")
+        rec.loop = "compiled" if cc is not None else "python"
+        ref = {k: (None if getattr(reference, k, None) is None
+                   else np.ascontiguousarray(getattr(reference, k)[start:start + n], dtype=float))
+               for k in ("q", "qd", "qdd", "x")}
+        wall0 = _time.perf_counter()
+        failure = None
         try:
-            sim.advance(float(t[k1 - 1]) + float(dt))
-        except Exception as e:  # noqa: BLE001 - reported as the loop's failure at this sample
-            status = getattr(e, "status", "PKM_ERR_INTERNAL")
-            code = next((c for c, (name, _) in STATUS.items() if name == status), -9)
-            return rows, k1 - 1, code, (f"closed loop stopped at sample {k1 - 1} (t = {t[k1 - 1]:.6g} s): {e}")
-        k0 = k1
-        if on_chunk is not None:
-            on_chunk(k0)
-    return rows, n, 0, ""
+            if cc is not None:
+                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop)
+            else:
+                failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop)
+        except KeyboardInterrupt:
+            self._finish(rec, draws, wall0, cc)
+            raise LoopInterrupted(rec.head()) from None
+        self._finish(rec, draws, wall0, cc)
+        if failure is not None:
+            exc, k = failure
+            exc.partial = rec.head()
+            exc.loop_time = float(t[min(k, n - 1)])
+            raise exc
+        return rec.head() if rec.n < n else rec
+
+    def _finish(self, rec, draws, wall0, cc):
+        k = rec.n
+        rec.wall = _time.perf_counter() - wall0
+        rec.tau_logged[:k] = rec.tau_cmd[:k] + (draws["tau"][:k] if "tau" in draws else 0.0)
+        rec.pose[:k] = rec.x[:k] + (draws["pose"][:k] if "pose" in draws else 0.0)
+        rec.saturated = cc.saturated if cc is not None else getattr(self.controller, "saturated", 0)
+
+    # ------------------------------------------------------------ back ends
+    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop):
+        """``pkm_closed_loop`` in pieces of about :data:`PIECE_SECONDS`; returns None or
+        ``(exception, sample)``."""
+        n = len(t)
+        plant = self.plant
+        try:
+            plant.initialize(float(t[0]), x0, xd0)
+            cc.reset(plant.outputs().x)
+        except Exception as e:  # noqa: BLE001 - reported as the loop's failure at sample 0
+            return e, 0
+        sim = plant.sim
+        qn, qdn = draws.get("q"), draws.get("qd")
+        qn = None if qn is None else np.ascontiguousarray(qn)
+        qdn = None if qdn is None else np.ascontiguousarray(qdn)
+        k0, piece = 0, 64
+        while k0 < n:
+            k1 = min(n, k0 + piece)
+            # A piece ends on a recorded sample the plant has not advanced from: the next
+            # piece starts at its successor after the advance below.
+            before = None if k0 == 0 else rows["tau"][k0 - 1]
+            w = _time.perf_counter()
+            st, done, message = closed_loop_call(sim, cc, t=t, dt=h, ref=ref, rows=rows, k0=k0, k1=k1,
+                                                 tau_before=before, q_noise=qn, qd_noise=qdn,
+                                                 measure=self.drive is not None)
+            rec.n = k0 + done
+            if st != 0:
+                return _core_error(st, message), rec.n
+            if k1 == n:
+                break
+            sim.set_input(rows["tau_cmd"][k1 - 1])
+            try:
+                sim.advance(float(t[k1 - 1]) + h)
+            except Exception as e:  # noqa: BLE001 - the loop's failure at this sample
+                rec.n = k1 - 1
+                e.args = (f"closed loop stopped at sample {k1 - 1} (t = {t[k1 - 1]:.6g} s): {e}",)
+                return e, k1 - 1
+            k0 = k1
+            spent = _time.perf_counter() - w
+            piece = int(min(max(16, piece * PIECE_SECONDS / max(spent, 1e-6)), 4 * piece, 100000))
+            if progress is not None:
+                progress(k0)
+            if should_stop is not None and should_stop():
+                rec.stopped = True
+                # the last sample of the piece was recorded and advanced from: keep it
+                break
+        return None
+
+    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop):
+        """One sample at a time through the Plant interface; returns None or
+        ``(exception, sample)``."""
+        n = len(t)
+        plant, drive, ctrl = self.plant, self.drive, self.controller
+        k = 0
+        try:
+            plant.initialize(float(t[0]), x0, xd0)
+            y = plant.outputs()
+            if hasattr(ctrl, "reset"):
+                ctrl.reset(float(t[0]), y.q, y.x)
+            if drive is not None:
+                drive.reset_delay()
+            acting_of = getattr(plant, "applied_effort", None)  # the core keeps the actuator delay line
+            acting = np.zeros(self.ndof)
+            for k in range(n):
+                if drive is not None:
+                    if acting_of is not None:
+                        acting = acting_of()
+                    q_read, qd_read = drive.read(y, acting)
+                    q_read, qd_read = drive.delayed(float(t[k]), q_read, qd_read)
+                else:
+                    q_read, qd_read = y.q, y.qd
+                qm = q_read + draws["q"][k] if "q" in draws else q_read
+                qdm = qd_read + draws["qd"][k] if "qd" in draws else qd_read
+                tau = np.asarray(ctrl(float(t[k]), qm, qdm, reference.at(start + k)), float)
+                applied = drive.applied(tau) if drive is not None else tau
+                rows["q"][k], rows["qd"][k], rows["q_true"][k], rows["qd_true"][k] = qm, qdm, y.q, y.qd
+                rows["x"][k], rows["xd"][k] = y.x, y.xd
+                rows["tau_cmd"][k], rows["tau"][k] = tau, applied
+                rec.n = k + 1
+                if k == n - 1:
+                    break
+                acting = applied
+                plant.set_input(tau)
+                plant.do_step(float(t[k]), h)
+                y = plant.outputs()
+                if progress is not None:
+                    progress(k + 1)
+                if should_stop is not None and should_stop():
+                    rec.stopped = True
+                    break
+        except Exception as e:  # noqa: BLE001 - reported with the rows so far
+            rec.n = min(rec.n, k)
+            return e, k
+        return None
 
 
-def raise_status(status: int, message: str) -> None:
-    """Raise the core's exception class for a loop failure."""
-    raise_for(status, message)
+def _core_error(status: int, message: str) -> Exception:
+    """The core's exception for a loop failure (its class from the status)."""
+    try:
+        raise_for(status, message)
+    except Exception as e:  # noqa: BLE001 - built to be returned
+        return e
+    name = STATUS.get(status, ("PKM_ERR_UNKNOWN", None))[0]
+    return RuntimeError(f"{name}: {message}")

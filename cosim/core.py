@@ -927,6 +927,15 @@ class Simulator:
         return th, thd
 
     @property
+    def applied_effort(self) -> np.ndarray:
+        """Effort acting on the mechanism now [N or N m] (``pkm_sim_applied_effort``): the
+        held input after saturation, or with ``actuator.delay`` the command issued that much
+        earlier (zero before the first)."""
+        tau = np.empty(self.ndof)
+        self._check(lib.pkm_sim_applied_effort(self._s, ptr(tau)))
+        return tau
+
+    @property
     def stats(self) -> dict:
         """Integrator counters summed over all advances since creation: steps, rhs_evals
         (with BDF including those of the difference-quotient Jacobian), jac_evals,

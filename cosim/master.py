@@ -27,7 +27,6 @@ Example
 from __future__ import annotations
 
 import shutil
-import time as _time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -134,10 +133,17 @@ class CorePlant(Plant):
     def initialize(self, t0, x0, xd0=None):
         x0 = np.asarray(x0, float)
         xd0 = np.zeros(self.ndof) if xd0 is None else np.asarray(xd0, float)
+        self.sim.set_input(np.zeros(self.ndof))  # a run starts with nothing commanded
         self.sim.reset(t0, x0, xd0)
 
     def set_input(self, tau):
         self.sim.set_input(np.asarray(tau, float))
+
+    def applied_effort(self):
+        """Effort acting on the mechanism now [N or N m]: the held command after the drive's
+        saturation, or with ``actuator.delay`` the one issued that much earlier (the core's
+        delay line, ``pkm_sim_applied_effort``)."""
+        return self.sim.applied_effort
 
     def do_step(self, t, h):
         self.sim.advance(t + h)
@@ -552,21 +558,11 @@ def _units(robot, nd):
             "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 
-def _compiled_path(plant, controller, drive, h):
-    """``(CompiledController, "")`` when the loop can run in the core, else ``(None, reason)``."""
-    from .closed_loop import compile_controller
-
-    if not isinstance(plant, CorePlant):
-        return None, f"the plant ({type(plant).__name__}) is not the core plant, the only one that runs compiled"
-    if drive is not None and not (isinstance(drive, CoreDrive) and drive.model.params() == plant.model.params()):
-        return None, "the drive's model is not the plant's"
-    return compile_controller(controller, model=plant.model, dt=h)
-
-
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
         pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
-        compiled: bool | None = None) -> RunResult:
-    """Step ``plant`` and ``controller`` together over the reference's time grid.
+        compiled: bool | None = None, should_stop=None) -> RunResult:
+    """Step ``plant`` and ``controller`` together over the reference's time grid
+    (:class:`cosim.closed_loop.ClosedLoop`).
 
     Parameters
     ----------
@@ -591,18 +587,20 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     drive : CoreDrive, optional
         The plant's drive and sensor model: the recorded ``tau`` is the effort it
         applies (saturation) and the joint readings go through its encoder model
-        (offset, backlash, compliance) before the noise.  Without it the readings are
-        the plant's joints and ``tau`` the command.
+        (offset, backlash, compliance) and delay before the noise.  Without it the
+        readings are the plant's joints and ``tau`` the command.
     progress : bool, optional
         Show a tqdm progress bar; by default it appears on a terminal when the run
         lasts more than two seconds of wall time.
     compiled : bool, optional
-        Run the whole loop inside the core (:mod:`cosim.closed_loop`: one C call, no
-        Python per sample).  By default it does whenever it can: a
-        :class:`CorePlant` and a controller the core implements (PD, PD + gravity,
-        computed torque, PID, LTI); otherwise the Python loop runs and
-        ``RunResult.loop_note`` says why.  ``True`` raises if it cannot, ``False``
-        forces the Python loop.
+        Run the whole loop inside the core (one C call per piece of about 50 ms, no
+        Python per sample).  By default it does whenever it can: a :class:`CorePlant`
+        and a controller the core implements (PD, PD + gravity, computed torque, PID,
+        LTI, discrete); otherwise the stepwise loop runs and ``RunResult.loop_note``
+        says why.  ``True`` raises if it cannot, ``False`` forces the stepwise loop.
+    should_stop : callable, optional
+        ``should_stop() -> bool``, asked between pieces or samples; True ends the run
+        there with the rows so far.
 
     Returns
     -------
@@ -614,8 +612,12 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     MasterError
         When the plant or the controller fails; says at which time, and carries the
         samples taken so far in ``partial``.
+    cosim.closed_loop.LoopInterrupted
+        On ctrl-C, with the samples taken so far (a :class:`RunResult`) in ``partial``.
     """
     from tqdm import tqdm
+
+    from .closed_loop import ClosedLoop, LoopInterrupted
 
     t = reference.time
     n = len(t)
@@ -626,13 +628,13 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     if reference.q.shape[1] != nd:
         raise MasterError(f"reference has {reference.q.shape[1]} joints, the plant {nd}")
     x0 = reference.x[0] if x0 is None else np.asarray(x0, float)
-    rng = np.random.default_rng(seed)
-    sig_q = np.broadcast_to(np.asarray(q_noise, float), (nd,))
-    sig_qd = np.broadcast_to(np.asarray(qd_noise, float), (nd,))
-    sig_x = np.broadcast_to(np.asarray(pose_noise, float), (nd,))
-    for name, s in (("q_noise", sig_q), ("qd_noise", sig_qd), ("pose_noise", sig_x)):
-        if np.any(~np.isfinite(s)) or np.any(s < 0):
-            raise MasterError(f"{name} must be standard deviations >= 0, got {s.tolist()}")
+    try:
+        loop = ClosedLoop(plant, controller, drive=drive, seed=seed, compiled=compiled,
+                          noise={"q": q_noise, "qd": qd_noise, "pose": pose_noise})
+    except ValueError as e:
+        raise MasterError(str(e).replace("noise 'pose'", "pose_noise").replace("noise 'q'", "q_noise")
+                          .replace("noise 'qd'", "qd_noise")) from e
+    sig = loop.noise
 
     data = np.zeros(n, dtype=_dtype(nd))
     data["time"] = t
@@ -642,105 +644,30 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     data["label"] = reference.label
     units = _units(plant.robot, nd)
     ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
-    noise = {"q": sig_q.tolist(), "qd": sig_qd.tolist(), "pose": sig_x.tolist(), "seed": seed}
+    noise = {"q": sig["q"].tolist(), "qd": sig["qd"].tolist(), "pose": sig["pose"].tolist(), "seed": seed}
 
-    def result(rows, wall, loop="python", note="", saturated=None):
-        sat = getattr(controller, "saturated", 0) if saturated is None else saturated
-        return RunResult(data[:rows], units, plant.robot, plant.describe(), ctrl_desc, h, wall, reference.name,
-                         noise, sat, loop, note)
+    def result(rec):
+        k = rec.n
+        for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau"):
+            data[f][:k] = getattr(rec, f)[:k]
+        data["x_meas"][:k] = rec.pose[:k]
+        return RunResult(data[:k], units, plant.robot, plant.describe(), ctrl_desc, h, rec.wall, reference.name,
+                         noise, rec.saturated, rec.loop, rec.note)
 
-    cc, note = (None, "compiled=False") if compiled is False else _compiled_path(plant, controller, drive, h)
-    if compiled and cc is None:
-        raise MasterError(f"the loop cannot run compiled: {note}")
-    if cc is not None:
-        return _run_compiled(plant, cc, reference, data, result, x0, xd0, rng, sig_q, sig_qd, sig_x, drive, progress)
-
-    start = _time.perf_counter()
-    k = 0
     # default: a bar only on a terminal and only once the run has taken two seconds
     bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
                desc=f"{plant.kind} {reference.name}".strip())
     try:
-        plant.initialize(float(t[0]), x0, xd0)
-        y = plant.outputs()
-        if hasattr(controller, "reset"):
-            controller.reset(float(t[0]), y.q, y.x)
-        tau_applied = np.zeros(nd)   # effort acting just before the sample (compliance)
-        if drive is not None:
-            drive.reset_delay()
-        for k in range(n):
-            q_read, qd_read = drive.read(y, tau_applied) if drive is not None else (y.q, y.qd)
-            if drive is not None:
-                q_read, qd_read = drive.delayed(float(t[k]), q_read, qd_read)
-            qm = q_read + rng.normal(0.0, 1.0, nd) * sig_q if np.any(sig_q) else q_read
-            qdm = qd_read + rng.normal(0.0, 1.0, nd) * sig_qd if np.any(sig_qd) else qd_read
-            xm = y.x + rng.normal(0.0, 1.0, nd) * sig_x if np.any(sig_x) else y.x
-            tau = np.asarray(controller(float(t[k]), qm, qdm, reference.at(k)), float)
-            tau_applied = drive.applied(tau) if drive is not None else tau
-            row = data[k]
-            row["q"], row["qd"], row["q_true"], row["qd_true"] = qm, qdm, y.q, y.qd
-            row["x"], row["x_meas"], row["xd"] = y.x, xm, y.xd
-            row["tau"], row["tau_cmd"] = tau_applied, tau
-            if k == n - 1:
-                break
-            plant.set_input(tau)
-            plant.do_step(float(t[k]), h)
-            y = plant.outputs()
-            bar.update(1)
+        rec = loop.run(reference, x0=x0, xd0=xd0, progress=lambda k: bar.update(k - bar.n), should_stop=should_stop)
+    except LoopInterrupted as e:
+        raise LoopInterrupted(result(e.partial)) from None
     except Exception as e:
+        if hasattr(e, "partial"):
+            raise MasterError(f"{plant.kind} run stopped at t = {e.loop_time:.6g} s: {e}", result(e.partial)) from e
+        if isinstance(e, ValueError):
+            raise MasterError(str(e)) from e
+        raise
+    finally:
         bar.close()
-        raise MasterError(f"{plant.kind} run stopped at t = {t[k]:.6g} s: {e}", result(k, _time.perf_counter() - start)) \
-            from e
-    bar.close()
-    return result(n, _time.perf_counter() - start, "python", note)
+    return result(rec)
 
-
-def _run_compiled(plant, cc, reference, data, result, x0, xd0, rng, sig_q, sig_qd, sig_x, drive, progress):
-    """The loop of :func:`run` inside the core (``pkm_closed_loop``), same sequence and noise."""
-    from tqdm import tqdm
-
-    from .closed_loop import run_compiled
-
-    t = reference.time
-    n, nd = len(t), plant.ndof
-    h = float(t[1] - t[0])
-    # The Python loop draws, at every sample, the q, qd and pose noise in this order.
-    groups = [s for s in (sig_q, sig_qd, sig_x) if np.any(s)]
-    z = rng.normal(0.0, 1.0, (n, len(groups) * nd)) if groups else np.zeros((n, 0))
-    cols, noise = 0, {}
-    for name, s in (("q", sig_q), ("qd", sig_qd), ("x", sig_x)):
-        if np.any(s):
-            noise[name] = z[:, cols:cols + nd] * s
-            cols += nd
-    start = _time.perf_counter()
-    bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
-               desc=f"{plant.kind} {reference.name} (compiled)".strip())
-    try:
-        plant.initialize(float(t[0]), x0, xd0)
-        y = plant.outputs()
-        cc.reset(y.x)
-        if hasattr(plant, "sim"):
-            sim = plant.sim
-        qdd = getattr(reference, "qdd", None)
-        rows, done, status, message = run_compiled(
-            sim, cc, time=t, dt=h, qref=reference.q, qdref=reference.qd, qddref=qdd, xref=reference.x,
-            q_noise=noise.get("q"), qd_noise=noise.get("qd"), measure=drive is not None, chunk=2000,
-            on_chunk=lambda k: bar.update(k - bar.n))
-    except Exception as e:
-        bar.close()
-        raise MasterError(f"{plant.kind} run stopped at t = {t[0]:.6g} s: {e}", result(0, _time.perf_counter() - start,
-                                                                                     "compiled")) from e
-    bar.close()
-    wall = _time.perf_counter() - start
-    for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau"):
-        data[f][:done] = rows[f][:done]
-    data["x_meas"][:done] = data["x"][:done] + (noise["x"][:done] if "x" in noise else 0.0)
-    res = result(done, wall, "compiled", "", cc.saturated)
-    if status != 0:
-        from ._native import STATUS, PkmError
-
-        name, cls = STATUS.get(status, ("PKM_ERR_UNKNOWN", PkmError))
-        cause = (cls or PkmError)(message, name)
-        k = min(done, n - 1)
-        raise MasterError(f"{plant.kind} run stopped at t = {t[k]:.6g} s: {message}", res) from cause
-    return res

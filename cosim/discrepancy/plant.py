@@ -1,16 +1,13 @@
 """Closed-loop runs of a core plant with its drive and sensor models: the blind-case
 generator's plant and the engine's replay.
 
-The core's integrator (``pkm_sim``) integrates the mechanics with friction and rotor
-inertia and applies the actuator dead zone, saturation (``<j>[i].effort_max``) and delay
-(``actuator.delay``) to the held command.  The sensors are applied by the core's
-``pkm_measure_joints`` (encoder offset, backlash, compliance) and the readings' delay line
-(``sensor.delay``: the core's closed loop, or :meth:`cosim.master.CoreDrive.delayed` with
-the same rule when this loop runs in Python).  The loop runs inside the core
-(``pkm_closed_loop``) when the controller is one the core implements; the Python loop
-here serves Python controllers and a compliance under an actuator delay (the reading
-deflects under the delayed effort, which the compiled loop does not model).  No physics
-is computed in Python.
+The loop is :class:`cosim.closed_loop.ClosedLoop` on the core plant with the plant's
+drive and sensor model: the core's integrator (``pkm_sim``) integrates the mechanics with
+friction and rotor inertia and applies the actuator dead zone, saturation
+(``<j>[i].effort_max``) and delay (``actuator.delay``, its delay line) to the held
+command; the sensors are the core's reading model and the readings' delay.  It runs
+inside the core (``pkm_closed_loop``) when the controller is one the core implements.
+No physics is computed in Python.
 """
 from __future__ import annotations
 
@@ -20,8 +17,6 @@ import numpy as np
 from scipy.signal import savgol_filter
 
 from ..master import ReferenceTable
-from ..simulate import Simulator
-from . import _corecalls as cc
 
 def controller_from(desc: dict, model):
     """Rebuild the recorded controller from its sidecar description.
@@ -106,42 +101,10 @@ class LoopResult:
     q_true: np.ndarray
 
 
-def _compiled(plant, sim, controller, ref, start, t, x0, xd0, sig, rng, delay):
-    """:func:`closed_loop` through the core's compiled loop (same draws of the noise), or
-    None when the controller or the sensor model needs the Python loop."""
-    from ..closed_loop import compile_controller, run_compiled
-    from .effects import joint_prefix
-
-    nd = plant.ndof
-    if delay > 0 and any(plant.param(f"{joint_prefix(plant)}[{i + 1}].compliance") != 0 for i in range(nd)):
-        return None  # compliance reads the delayed effort: the Python loop models that
-    n, dt = len(t), float(t[1] - t[0])
-    cc_, _ = compile_controller(controller, model=plant, dt=dt)
-    if cc_ is None:
-        return None
-    groups = [k for k in ("q", "qd", "tau", "pose") if np.any(sig[k])]
-    z = rng.normal(size=(n, len(groups) * nd)) if groups else np.zeros((n, 0))
-    draw = {k: z[:, i * nd:(i + 1) * nd] * sig[k] for i, k in enumerate(groups)}
-    sim.reset(float(t[0]), x0, xd0)
-    cc_.reset(x0)
-    sl = slice(start, start + n)
-    qdd = getattr(ref, "qdd", None)
-    rows, done, status, message = run_compiled(
-        sim, cc_, time=t, dt=dt, qref=ref.q[sl], qdref=ref.qd[sl], qddref=None if qdd is None else qdd[sl],
-        xref=None if getattr(ref, "x", None) is None else ref.x[sl], q_noise=draw.get("q"), qd_noise=draw.get("qd"),
-        measure=True)
-    if status != 0:
-        from ..closed_loop import raise_status
-
-        raise_status(status, message)
-    tau = rows["tau_cmd"] + draw.get("tau", 0.0)
-    pose = rows["x"] + draw.get("pose", 0.0)
-    return LoopResult(t, rows["q"], rows["qd"], tau, pose, rows["x"], rows["xd"], rows["q_true"])
-
-
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
                 start: int = 0, rtol: float = 1e-9, atol: float = 1e-11) -> LoopResult:
-    """Run ``controller`` on the core plant ``plant`` over the reference samples.
+    """Run ``controller`` on the core plant ``plant`` over the reference samples
+    (:class:`cosim.closed_loop.ClosedLoop` with the plant's drive and sensor model).
 
     Parameters
     ----------
@@ -160,71 +123,21 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         Noise seed.
     start : int
         First reference sample of the run.
+    rtol, atol : float
+        Tolerances of the plant's integrator.
 
     Returns
     -------
     LoopResult
+
+    Raises
+    ------
+    cosim.core's errors (``PkmError`` subclasses) when the plant stops (a limit, a
+    singularity), the controller's errors otherwise.
     """
-    t = np.asarray(ref.time, float)[start:]
-    n, nd = len(t), plant.ndof
-    dt = float(t[1] - t[0])
-    noise = noise or {}
-    rng = np.random.default_rng(seed)
-    sig = {k: np.broadcast_to(np.asarray(noise.get(k, 0.0), float), (nd,)) for k in ("q", "qd", "tau", "pose")}
-    delay = plant.param("actuator.delay")
-    sim = Simulator(plant, rtol=rtol, atol=atol)
-    if x0 is None:
-        x0 = ref.x[start] if getattr(ref, "x", None) is not None else plant.fk(ref.q[start])
-    # The whole loop inside the core when the controller is one it implements.
-    fast = _compiled(plant, sim, controller, ref, start, t, np.asarray(x0, float), xd0, sig, rng, delay)
-    if fast is not None:
-        return fast
-    sim.reset(float(t[0]), np.asarray(x0, float), xd0)
-    if hasattr(controller, "reset"):
-        controller.reset(float(t[0]), ref.q[start], np.asarray(x0, float))
+    from ..closed_loop import ClosedLoop
+    from ..master import CoreDrive, CorePlant
 
-    from ..master import CoreDrive, PlantOutputs
-
-    line = CoreDrive(plant)
-    two_body = plant.two_body_joints() > 0  # drive bodies: the encoders read them (pkm_sim_drive_state)
-    out = {k: np.zeros((n, nd)) for k in ("q", "qd", "tau", "pose", "x", "xd", "q_true")}
-    cmds = []  # (time, command)
-
-    def command_at(s):
-        if not cmds or s < cmds[0][0] - 1e-12:
-            return np.zeros(nd)
-        k = len(cmds) - 1
-        while k > 0 and cmds[k][0] > s + 1e-12:
-            k -= 1
-        return cmds[k][1]
-
-    def applied_at(s):
-        c = command_at(s - delay)[None, :]
-        return cc.actuator_effort(plant, c)[0]
-
-    for k in range(n):
-        _, x, xd = sim.state
-        tau_now = applied_at(t[k])
-        qd_true = cc.per_sample(plant, "pkm_joint_velocity", x[None], xd[None])[0]
-        # the sensors' rule, one for every loop (CoreDrive.read: the drive bodies where there are)
-        y = PlantOutputs(None, qd_true, x, xd, sim.drive_state if two_body else None)
-        q_meas, qd_read = line.read(y, tau_now)
-        qr, qdr = line.delayed(float(t[k]), q_meas, qd_read)  # sensor.delay, as in the core's loop
-        if np.any(sig["q"]):
-            qr = qr + rng.normal(size=nd) * sig["q"]
-        if np.any(sig["qd"]):
-            qdr = qdr + rng.normal(size=nd) * sig["qd"]
-        cmd = np.asarray(controller(float(t[k]), qr, qdr, ref.at(start + k)), float)
-        cmds.append((float(t[k]), cmd))
-        if len(cmds) > 4 + int(delay / dt) * 2:
-            cmds.pop(0)
-        out["q"][k], out["qd"][k] = qr, qdr
-        out["tau"][k] = cmd + (rng.normal(size=nd) * sig["tau"] if np.any(sig["tau"]) else 0.0)
-        out["pose"][k] = x + (rng.normal(size=nd) * sig["pose"] if np.any(sig["pose"]) else 0.0)
-        out["x"][k], out["xd"][k] = x, xd
-        out["q_true"][k] = plant.ik(x)
-        if k == n - 1:
-            break
-        sim.set_input(cmd)
-        sim.advance(float(t[k + 1]))
-    return LoopResult(t, out["q"], out["qd"], out["tau"], out["pose"], out["x"], out["xd"], out["q_true"])
+    rec = ClosedLoop(CorePlant(plant, rtol=rtol, atol=atol), controller, drive=CoreDrive(plant), noise=noise,
+                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0)
+    return LoopResult(rec.time, rec.q, rec.qd, rec.tau_logged, rec.pose, rec.x, rec.xd, rec.q_true)

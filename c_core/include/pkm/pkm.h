@@ -354,6 +354,11 @@ PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd
  * joint that is two bodies (drive.two_body = 1 with a backlash or a compliance), the joint's
  * own otherwise.  Either pointer may be NULL. */
 PKM_API int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d);
+/* Effort tau[nd] acting on the mechanism at the sim's current time from the commands held
+ * so far [N or N m]: the held input (saturated), or with actuator.delay > 0 the one issued
+ * delay earlier (zero before the first).  The effort the sensor model's compliance reads
+ * under at a sample (pkm_closed_loop, the stepwise loop of cosim.closed_loop). */
+PKM_API int pkm_sim_applied_effort(const pkm_sim* s, double* tau);
 /* Pose acceleration xdd[nd] at the sim's current state under the command tau[nd] (its dead
  * zone and saturation applied, no delay): the forward dynamics, with a two-body joint's
  * carriage driven by what its transmission carries. */
@@ -443,10 +448,12 @@ PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
 
 /* ============================================================== closed loop */
 /* A whole sampled closed loop in one call (the way MuJoCo's rollout runs many steps):
- * plant s, controller c and a reference table, in the order of cosim.master.run.  At
+ * plant s, controller c and a reference table (the compiled back end of
+ * cosim.closed_loop.ClosedLoop, whose stepwise back end runs the same sequence).  At
  * each sample k = 0..n-1 (time t_k):
  *   1. readings: q_k = the plant's joints, or with measure = 1 the sensor model
- *      (pkm_measure_joints at the effort applied before the sample), and qd_k = the
+ *      (pkm_sensor_readings at the effort acting at the sample: the last command's, or
+ *      with actuator.delay the sim's delayed one, pkm_sim_applied_effort), and qd_k = the
  *      plant's joint rates; with sensor.delay = d > 0, both are those of t_k - d,
  *      interpolated linearly between the samples around it (the first sample's before
  *      it; the sim keeps the line across calls, pkm_sim_reset drops what follows t0);

@@ -1,7 +1,7 @@
-// pkm_closed_loop: plant + sampled controller + reference table in one call, the same
-// sequence as the Python master (cosim.master.run), so that a 1 kHz loop pays no
-// per-sample cost outside C (no Python call, no FMI call) and the two paths can be
-// compared sample by sample.
+// pkm_closed_loop: plant + sampled controller + reference table in one call, the
+// compiled back end of cosim.closed_loop.ClosedLoop (whose stepwise back end runs the
+// same sequence sample by sample), so that a 1 kHz loop pays no per-sample cost outside
+// C (no Python call, no FMI call).
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -58,7 +58,14 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
         const bool two = sim.two_body();
         double th[6], thd[6];
         if (two) sim.drive_state(th, thd);
-        st = pkm_sensor_readings(m, d, x, xd, prev_applied, two ? th : nullptr, two ? thd : nullptr, qm,
+        // The compliance deflects under the effort acting now: with an actuator delay the
+        // sim's delay line has it, else it is the last command's.
+        double acting[6];
+        if (sim.actuator_delayed())
+          sim.applied_effort(acting);
+        else
+          for (int i = 0; i < nd; ++i) acting[i] = prev_applied[i];
+        st = pkm_sensor_readings(m, d, x, xd, acting, two ? th : nullptr, two ? thd : nullptr, qm,
                                  two ? qdm : nullptr);
         if (st != PKM_OK) throw Error(st, std::string("sensor model: ") + pkm_data_error(d));
       }

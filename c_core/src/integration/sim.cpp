@@ -550,6 +550,16 @@ void Sim::command_at(double t, double* tau) const {
   for (int i = 0; i < nd_; ++i) tau[i] = history_[k].tau[i];
 }
 
+void Sim::applied_effort(double* tau) const {
+  if (!(delay_ > 0)) {
+    for (int i = 0; i < nd_; ++i) tau[i] = tau_[i];
+    return;
+  }
+  // A command whose delayed start falls on t (a delay of whole periods) acts from t on:
+  // the sample time and the history's start times are sums of periods, equal to rounding.
+  command_at(t_ - delay_ + 1e-12, tau);
+}
+
 void Sim::get_state(double* t, double* x, double* xd) const {
   if (t) *t = t_;
   for (int i = 0; i < nd_; ++i) {

@@ -72,6 +72,11 @@ class Sim {
   const pkm_model* model() const { return model_; }
   pkm_data* data() const { return data_; }
   const double* held_input() const { return tau_.data(); }
+  // The effort acting on the mechanism at the sim's time from the commands issued before
+  // it: the held input, or with an actuator delay the command issued at t - delay (zero
+  // before the first).  What the sensor model's compliance deflects under at a sample.
+  void applied_effort(double* tau) const;
+  bool actuator_delayed() const { return delay_ > 0; }
 
   // The closed loop's delay line of joint readings (drive parameter sensor.delay > 0): the
   // reading and rate of past samples; reset() drops those at or after its t0 (a rollback),

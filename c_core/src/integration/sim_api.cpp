@@ -66,6 +66,12 @@ int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d) {
   return guard_into(s->sim.error, [&] { s->sim.drive_state(theta, theta_d); });
 }
 
+int pkm_sim_applied_effort(const pkm_sim* s, double* tau) {
+  if (!s || !tau) return PKM_ERR_ARGUMENT;
+  s->sim.applied_effort(tau);
+  return PKM_OK;
+}
+
 int pkm_sim_acceleration(pkm_sim* s, const double* tau, double* xdd) {
   if (!s) return PKM_ERR_ARGUMENT;
   return guard_into(s->sim.error, [&] {
