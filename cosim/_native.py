@@ -96,6 +96,21 @@ class pkm_ctrl_spec(C.Structure):
         ("B", c_double_p),
         ("C", c_double_p),
         ("D", c_double_p),
+        ("law", C.c_int),
+        ("kv", c_double_p),
+        ("pos_nb", C.c_int),
+        ("pos_na", C.c_int),
+        ("pos_b", c_double_p),
+        ("pos_a", c_double_p),
+        ("vel_nb", C.c_int),
+        ("vel_na", C.c_int),
+        ("vel_b", c_double_p),
+        ("vel_a", c_double_p),
+        ("velocity_source", C.c_int),
+        ("u_min", c_double_p),
+        ("u_max", c_double_p),
+        ("output_gain", c_double_p),
+        ("delay_samples", C.c_int),
     ]
 
 

@@ -947,7 +947,9 @@ class Simulator:
 
 # --------------------------------------------------------- compiled controllers
 #: controller kinds the core implements (pkm.h pkm_ctrl_kind)
-KINDS = {"pd": 0, "pd_gravity": 1, "computed_torque": 2, "pid": 3, "lti": 4}
+KINDS = {"pd": 0, "pd_gravity": 1, "computed_torque": 2, "pid": 3, "lti": 4, "discrete": 5}
+#: laws of the discrete controller (pkm.h PKM_LAW_*)
+DISCRETE_LAWS = {"cascade_pp": 0, "pid": 1}
 
 
 def _mat(a, shape):
@@ -1006,6 +1008,28 @@ class CompiledController:
         spec.saturation = ptr(sat)
         spec.gravity_at_reference = int(getattr(controller, "gravity", "measured") == "reference")
         spec.gravity_feedforward = int(bool(getattr(controller, "gravity_feedforward", False)))
+        if kind == "discrete":
+            spec.law = DISCRETE_LAWS[controller.law]
+            spec.kv = arr("kv", (nd, nd))
+            for side in ("pos", "vel"):
+                filt = controller.position_filter if side == "pos" else controller.velocity_filter
+                if filt is not None:
+                    b = np.ascontiguousarray(filt["b"], dtype=float)
+                    a = np.ascontiguousarray(filt["a"], dtype=float)
+                    keep[side] = (b, a)
+                    setattr(spec, f"{side}_nb", b.size)
+                    setattr(spec, f"{side}_na", a.size)
+                    setattr(spec, f"{side}_b", ptr(b))
+                    setattr(spec, f"{side}_a", ptr(a))
+            spec.velocity_source = int(controller.velocity == "measured")
+            if controller.limits is not None:
+                lo, hi = (np.ascontiguousarray(v, dtype=float) for v in controller.limits)
+                keep["limits"] = (lo, hi)
+                spec.u_min, spec.u_max = ptr(lo), ptr(hi)
+            g = np.ascontiguousarray(controller.output_gain, dtype=float)
+            keep["output_gain"] = g
+            spec.output_gain = ptr(g)
+            spec.delay_samples = int(controller.delay_samples)
         if kind == "lti":
             A = np.asarray(controller.A, float)
             spec.nx = A.shape[0]
@@ -1040,6 +1064,20 @@ class CompiledController:
     def saturated(self) -> int:
         """Samples at which the saturation clipped an effort since the last reset."""
         return int(lib.pkm_ctrl_saturated(self._c))
+
+    def state(self) -> np.ndarray:
+        """Everything that determines the future outputs, as a 1-D array (``pkm_ctrl_state_save``)."""
+        buf = np.empty(int(lib.pkm_ctrl_state_size(self._c)))
+        self._check(lib.pkm_ctrl_state_save(self._c, ptr(buf)))
+        return buf
+
+    def load_state(self, state) -> None:
+        """Restore a state of :meth:`state`; one of another controller raises ``ArgumentError``."""
+        buf = np.ascontiguousarray(state, dtype=float).ravel()
+        if buf.size != int(lib.pkm_ctrl_state_size(self._c)):
+            raise ArgumentError(f"controller state: {buf.size} values, this controller has "
+                                f"{int(lib.pkm_ctrl_state_size(self._c))}", "PKM_ERR_ARGUMENT")
+        self._check(lib.pkm_ctrl_state_load(self._c, ptr(buf)))
 
     def _check(self, status):
         if status != 0:

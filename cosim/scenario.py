@@ -159,9 +159,21 @@ def _check(spec, path):
             if not isinstance(v, (int, float)) or isinstance(v, bool):
                 fail(f"{sec}.{k}", f"must be a number, got {v!r}")
     c = spec["controller"]
-    if c.get("type") not in ("pd", "pd_gravity", "computed_torque", "pid"):
-        fail("controller.type", f"must be 'pd', 'pd_gravity', 'computed_torque' or 'pid', got {c.get('type')!r}")
-    if c["type"] == "pid":
+    if c.get("kind") == "discrete" or c.get("type") == "discrete":
+        from .controllers import ControllerError, discrete
+
+        try:
+            discrete(c, ndof=1 if not isinstance(c.get("kp"), list) else len(c["kp"]))
+        except ControllerError as e:
+            field, _, why = str(e).partition(": ")
+            fail(field, why)
+        c.setdefault("type", "discrete")
+    elif c.get("type") not in ("pd", "pd_gravity", "computed_torque", "pid"):
+        fail("controller.type", f"must be 'pd', 'pd_gravity', 'computed_torque', 'pid' or 'discrete' (kind = "
+             f"\"discrete\"), got {c.get('type')!r}")
+    if c["type"] == "discrete":
+        pass
+    elif c["type"] == "pid":
         if "ki" not in c:
             fail("controller.ki", "missing: a PID needs its integral gain [N/(m s) or N m/(rad s)]")
         for k in ("deriv_filter",):
@@ -172,7 +184,9 @@ def _check(spec, path):
              f"(this one is {c['type']!r})")
     has_gains = "kp" in c or "kd" in c
     has_design = "bandwidth_hz" in c
-    if has_gains == has_design or (has_gains and not ("kp" in c and "kd" in c)):
+    if c["type"] == "discrete":
+        pass
+    elif has_gains == has_design or (has_gains and not ("kp" in c and "kd" in c)):
         fail("controller", "give either kp and kd, or bandwidth_hz (and optionally damping)")
     r = spec["reference"]
     if r.get("type") not in ("step", "letter_m", "poses", "excitation"):
@@ -187,7 +201,7 @@ def _check(spec, path):
         fail("reference.poses", "missing (a list of poses)")
     for key in ("kp", "kd", "bandwidth_hz", "damping", "saturation"):
         v = c.get(key)
-        if v is not None and not _numbers(v):
+        if c["type"] != "discrete" and v is not None and not _numbers(v):
             fail(f"controller.{key}", f"must be a number or a list of numbers, got {v!r}")
     _check_pose_units(spec, fail)
     return spec
@@ -325,6 +339,8 @@ def build_controller(sc: Scenario, model, x0):
     c = sc.spec["controller"]
     kind = c["type"]
     design = None
+    if kind == "discrete":
+        return ctl.discrete({k: v for k, v in c.items() if k != "type"}, ndof=model.ndof, model=model), None
     if "bandwidth_hz" in c:
         mass = 1.0 if kind == "computed_torque" else float(np.max(np.diag(ctl.joint_mass(model, x0))))
         design = ctl.design_pd(mass=mass, bandwidth_hz=float(c["bandwidth_hz"]), damping=float(c.get("damping", 1.0)),

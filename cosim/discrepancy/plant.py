@@ -24,14 +24,20 @@ def controller_from(desc: dict, model):
     ``desc`` is what ``describe()`` of a controller writes:
     ``{"type": "pd" | "pd_gravity" | "computed_torque", "kp", "kd", ...}``,
     ``{"type": "pid", "kp", "ki", "kd", "dt", "deriv_filter", "saturation",
-    "gravity_feedforward"}`` (:func:`cosim.controllers.pid`) or ``{"type": "lti", "dt",
+    "gravity_feedforward"}`` (:func:`cosim.controllers.pid`), ``{"type": "lti", "dt",
     "A", "B", "C", "D", "saturation", "gravity_feedforward"}`` (a discrete LTI controller
-    on the joint error, :func:`cosim.ssp.lti_controller`).  ``model`` is the model the
+    on the joint error, :func:`cosim.ssp.lti_controller`) or a rig's controller as data,
+    ``{"kind": "discrete", "period", "law", ...}`` (:func:`cosim.controllers.discrete`).  ``model`` is the model the
     controller believes in (the nominal one).  Returns None (and the reason) when it
     cannot be rebuilt.
     """
     from .. import controllers as ctl
 
+    if desc and (desc.get("kind") == "discrete" or desc.get("type") == "discrete"):
+        try:
+            return ctl.discrete(desc, ndof=model.ndof, model=model), ""
+        except ctl.ControllerError as e:
+            return None, f"the sidecar's discrete controller: {e}"
     if not desc or "type" not in desc:
         return None, "the sidecar has no controller description"
     kind = desc["type"]

@@ -398,14 +398,34 @@ PKM_API const char* pkm_sim_error(const pkm_sim* s);
  *  PKM_CTRL_LTI               any discrete LTI controller on the error (e.g. a python-control design
  *                             after c2d at dt): xc_{k+1} = A xc_k + B e_k, tau = C xc_k + D e_k
  *                             (+ g(x) if gravity_feedforward)
+ *  PKM_CTRL_DISCRETE          a rig's sampled controller described as data (docs/scenarios.md,
+ *                             "discrete"), per joint on the readings q, qd:
+ *                               qf = position filter (b, a) of q        (pos_b/pos_a; none: qf = q)
+ *                               v  = (qf_k - qf_{k-1}) / dt (velocity_source 0), or qd (1),
+ *                                    then the velocity filter (vel_b/vel_a; none: as is)
+ *                               law PKM_LAW_CASCADE_PP: u = Kv (Kp (qref - qf) - v)
+ *                               law PKM_LAW_PID:        u = Kp (qref - qf) + Ki i + Kd (qdref - v),
+ *                                                       i_k = i_{k-1} + dt (qref - qf) (anti-windup
+ *                                                       as PKM_CTRL_PID on [u_min, u_max])
+ *                               u clipped to [u_min, u_max] (controller units, e.g. V), then
+ *                               tau = output_gain u (effort units) applied delay_samples later
+ *                               (zero before).
+ *                             A filter is y_k = (sum_i b_i x_{k-i} - sum_{i>=1} a_i y_{k-i}) / a_0,
+ *                             starting at rest at the first sample (past inputs = the first one).
  * Every kind then clips tau at +-saturation[i] (if given). */
 typedef enum pkm_ctrl_kind {
   PKM_CTRL_PD = 0,
   PKM_CTRL_PD_GRAVITY = 1,
   PKM_CTRL_COMPUTED_TORQUE = 2,
   PKM_CTRL_PID = 3,
-  PKM_CTRL_LTI = 4
+  PKM_CTRL_LTI = 4,
+  PKM_CTRL_DISCRETE = 5
 } pkm_ctrl_kind;
+
+/* Laws of PKM_CTRL_DISCRETE. */
+enum { PKM_LAW_CASCADE_PP = 0, PKM_LAW_PID = 1 };
+/* Longest filter (coefficients of b or a) and longest computation delay [samples]. */
+enum { PKM_CTRL_MAX_TAPS = 16, PKM_CTRL_MAX_DELAY = 64 };
 
 typedef struct pkm_ctrl_spec {
   int kind;                 /* pkm_ctrl_kind                                              */
@@ -419,6 +439,18 @@ typedef struct pkm_ctrl_spec {
   int gravity_feedforward;  /* PID, LTI: 1 = add g(x) at the measured pose                */
   int nx;                   /* LTI: controller states (>= 0, <= 64)                       */
   const double *A, *B, *C, *D; /* LTI: A[nx,nx], B[nx,nd], C[nd,nx], D[nd,nd]            */
+  /* DISCRETE (kp [nd,nd] as above in controller units per joint unit, or 1/s in a cascade;
+   * ki, kd for the PID law, may be NULL):                                                 */
+  int law;                  /* PKM_LAW_CASCADE_PP or PKM_LAW_PID                          */
+  const double* kv;         /* [nd,nd] cascade velocity gain (controller units per m/s)   */
+  int pos_nb, pos_na;       /* position filter: coefficients in pos_b, pos_a (0, 0: none) */
+  const double *pos_b, *pos_a;
+  int vel_nb, vel_na;       /* velocity filter (0, 0: none)                               */
+  const double *vel_b, *vel_a;
+  int velocity_source;      /* 0: backward difference of qf, 1: the reading qd            */
+  const double *u_min, *u_max; /* [nd] output limits in controller units, or NULL (none) */
+  const double* output_gain;   /* [nd] effort per controller unit, or NULL (1)            */
+  int delay_samples;        /* computation delay [samples] (0 .. PKM_CTRL_MAX_DELAY)      */
 } pkm_ctrl_spec;
 
 typedef struct pkm_ctrl pkm_ctrl;
@@ -441,7 +473,9 @@ PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double
 PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
 PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
 /* Everything that determines the controller's future outputs (states, last error, pose
- * guess), as doubles, for FMU get/set state. */
+ * guess), as doubles, for FMU get/set state.  A DISCRETE controller's state ends with its
+ * own block, led by its layout (joints, filter lengths, delay), which pkm_ctrl_state_load
+ * checks against the controller before taking anything. */
 PKM_API size_t pkm_ctrl_state_size(const pkm_ctrl* c);
 PKM_API int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf);
 PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);

@@ -26,6 +26,7 @@ const char* kind_name(int kind) {
     case PKM_CTRL_COMPUTED_TORQUE: return "computed_torque";
     case PKM_CTRL_PID: return "pid";
     case PKM_CTRL_LTI: return "lti";
+    case PKM_CTRL_DISCRETE: return "discrete";
     default: return "?";
   }
 }
@@ -54,6 +55,85 @@ void check_gain(const MatX& g, const char* field) {
                                         " is negative (" + num(g(i, i)) + "): the loop would be unstable");
 }
 
+// A discrete filter y_k = (sum_i b_i x_{k-i} - sum_{i>=1} a_i y_{k-i}) / a_0, one per
+// joint, its past inputs and outputs kept newest first.
+struct Filter {
+  std::vector<double> b, a;  // empty: the identity
+  int nd = 0;
+  std::vector<double> xin, yout;  // [nd * (nb - 1)], [nd * (na - 1)]
+
+  static Filter make(const double* b, int nb, const double* a, int na, int nd, const char* name) {
+    Filter f;
+    f.nd = nd;
+    if (nb == 0 && na == 0) return f;
+    PKM_REQUIRE(nb >= 1 && nb <= PKM_CTRL_MAX_TAPS && b != nullptr, PKM_ERR_ARGUMENT,
+                std::string("controller spec: ") + name + ".b needs 1 to " + std::to_string(PKM_CTRL_MAX_TAPS) +
+                    " coefficients, got " + std::to_string(nb));
+    PKM_REQUIRE(na >= 1 && na <= PKM_CTRL_MAX_TAPS && a != nullptr, PKM_ERR_ARGUMENT,
+                std::string("controller spec: ") + name + ".a needs 1 to " + std::to_string(PKM_CTRL_MAX_TAPS) +
+                    " coefficients, got " + std::to_string(na));
+    for (int i = 0; i < nb; ++i)
+      PKM_REQUIRE(std::isfinite(b[i]), PKM_ERR_ARGUMENT,
+                  std::string("controller spec: ") + name + ".b[" + std::to_string(i) + "] is not finite");
+    for (int i = 0; i < na; ++i)
+      PKM_REQUIRE(std::isfinite(a[i]), PKM_ERR_ARGUMENT,
+                  std::string("controller spec: ") + name + ".a[" + std::to_string(i) + "] is not finite");
+    PKM_REQUIRE(a[0] != 0, PKM_ERR_ARGUMENT, std::string("controller spec: ") + name + ".a[0] must not be 0");
+    f.b.assign(b, b + nb);
+    f.a.assign(a, a + na);
+    f.xin.assign((size_t)nd * (nb - 1), 0.0);
+    f.yout.assign((size_t)nd * (na - 1), 0.0);
+    return f;
+  }
+  bool identity() const { return b.empty(); }
+  int nx() const { return identity() ? 0 : (int)b.size() - 1; }
+  int ny() const { return identity() ? 0 : (int)a.size() - 1; }
+  // At rest with input x on joint i: past inputs x, past outputs the DC gain times x.
+  // Returns the output at rest.
+  double rest(int i, double x) {
+    if (identity()) return x;
+    double sb = 0, sa = 0;
+    for (double v : b) sb += v;
+    for (double v : a) sa += v;
+    const double y = sa != 0 ? x * sb / sa : 0.0;
+    for (int k = 0; k < nx(); ++k) xin[(size_t)i * nx() + k] = x;
+    for (int k = 0; k < ny(); ++k) yout[(size_t)i * ny() + k] = y;
+    return y;
+  }
+  double step(int i, double x) {
+    if (identity()) return x;
+    double* xi = xin.data() + (size_t)i * nx();
+    double* yi = yout.data() + (size_t)i * ny();
+    double y = b[0] * x;
+    for (int k = 0; k < nx(); ++k) y += b[k + 1] * xi[k];
+    for (int k = 0; k < ny(); ++k) y -= a[k + 1] * yi[k];
+    y /= a[0];
+    for (int k = nx() - 1; k > 0; --k) xi[k] = xi[k - 1];
+    if (nx() > 0) xi[0] = x;
+    for (int k = ny() - 1; k > 0; --k) yi[k] = yi[k - 1];
+    if (ny() > 0) yi[0] = y;
+    return y;
+  }
+};
+
+// A state block's values, appended in order and read back in the same order.
+struct Writer {
+  double* b;
+  size_t k = 0;
+  void put(double v) { b[k++] = v; }
+  void put(const std::vector<double>& v) {
+    for (double x : v) b[k++] = x;
+  }
+};
+struct Reader {
+  const double* b;
+  size_t k = 0;
+  double get() { return b[k++]; }
+  void get(std::vector<double>& v) {
+    for (double& x : v) x = b[k++];
+  }
+};
+
 }  // namespace
 
 struct pkm_ctrl {
@@ -67,6 +147,17 @@ struct pkm_ctrl {
   double tf = 0;
   bool gravity_ref = false, gravity_ff = false;
   int nx = 0;
+  // DISCRETE
+  int law = PKM_LAW_CASCADE_PP;
+  MatX kv;
+  Filter pos, vel;
+  bool measured_rate = false;
+  VecX u_min, u_max, gain;  // u_min/u_max empty: no limits
+  int delay = 0;
+  // DISCRETE state: previous filtered position, the outputs waiting out the delay (oldest
+  // first), whether the filters have been started at rest.
+  std::vector<double> qf_prev, queue;
+  bool started = false;
 
   // state
   VecX integral, deriv, e_prev, xc, x_guess;
@@ -104,6 +195,57 @@ struct pkm_ctrl {
     const int s = pkm_gravity_load(model, data, x, g.data());
     if (s != PKM_OK) fail_core(s, t, "gravity load");
     for (int i = 0; i < nd; ++i) tau[i] += g[i];
+  }
+
+  void discrete(const double* q, const double* qd, const double* qref, const double* qdref, VecX& tau) {
+    if (!started) {
+      for (int i = 0; i < nd; ++i) {
+        qf_prev[i] = pos.rest(i, q[i]);
+        vel.rest(i, measured_rate ? qd[i] : 0.0);
+      }
+      started = true;
+    }
+    VecX e(nd), v(nd);
+    for (int i = 0; i < nd; ++i) {
+      const double qf = pos.step(i, q[i]);
+      const double raw = measured_rate ? qd[i] : (qf - qf_prev[i]) / dt;
+      qf_prev[i] = qf;
+      v[i] = vel.step(i, raw);
+      e[i] = qref[i] - qf;
+    }
+    VecX u(nd);
+    VecX trial_integral;
+    if (law == PKM_LAW_CASCADE_PP) {
+      u = kv * (kp * e - v);
+    } else {
+      trial_integral = integral + dt * e;
+      VecX ed = -v;
+      for (int i = 0; i < nd; ++i) ed[i] += qdref[i];
+      u = kp * e + ki * trial_integral + kd * ed;
+      VecX next = trial_integral;
+      if (u_min.size())
+        for (int i = 0; i < nd; ++i)
+          if ((u[i] > u_max[i] && e[i] > 0) || (u[i] < u_min[i] && e[i] < 0)) next[i] = integral[i];
+      if (next != trial_integral) u = kp * e + ki * next + kd * ed;
+      integral = next;
+    }
+    bool clipped = false;
+    for (int i = 0; i < nd; ++i) {
+      if (u_min.size()) {
+        const double c = std::clamp(u[i], u_min[i], u_max[i]);
+        clipped = clipped || c != u[i];
+        u[i] = c;
+      }
+      u[i] *= gain[i];
+    }
+    if (clipped) ++saturated;
+    if (delay == 0) {
+      tau = u;
+      return;
+    }
+    for (int i = 0; i < nd; ++i) tau[i] = queue[i];
+    queue.erase(queue.begin(), queue.begin() + nd);
+    for (int i = 0; i < nd; ++i) queue.push_back(u[i]);
   }
 
   void update(double t, const double* q, const double* qd, const double* qref, const double* qdref,
@@ -197,6 +339,9 @@ struct pkm_ctrl {
         }
         break;
       }
+      case PKM_CTRL_DISCRETE:
+        discrete(q, qd, qref, qdref, u);
+        break;
       default:
         throw Error(PKM_ERR_INTERNAL, "unknown controller kind");
     }
@@ -225,6 +370,13 @@ struct pkm_ctrl {
     have_prev = false;
     have_guess = false;
     saturated = 0;
+    qf_prev.assign(nd, 0.0);
+    queue.assign((size_t)nd * delay, 0.0);
+    std::fill(pos.xin.begin(), pos.xin.end(), 0.0);
+    std::fill(pos.yout.begin(), pos.yout.end(), 0.0);
+    std::fill(vel.xin.begin(), vel.xin.end(), 0.0);
+    std::fill(vel.yout.begin(), vel.yout.end(), 0.0);
+    started = false;
     if (x0) {
       check_finite(x0, nd, "reset: pose x0");
       for (int i = 0; i < nd; ++i) x_guess[i] = x0[i];
@@ -233,8 +385,20 @@ struct pkm_ctrl {
   }
 
   // Layout: integral[nd], deriv[nd], e_prev[nd], x_guess[nd], xc[nx], have_prev,
-  // have_guess, saturated.
-  size_t state_size() const { return 4 * (size_t)nd + nx + 3; }
+  // have_guess, saturated; for DISCRETE then its block: the layout (kDiscreteTag, nd,
+  // position filter's past inputs and outputs per joint, the velocity filter's, delay),
+  // started, qf_prev[nd], the filters' histories, the delay queue[delay nd].
+  static constexpr double kDiscreteTag = 5001.0;
+  std::vector<double> discrete_layout() const {
+    return {kDiscreteTag, (double)nd, (double)pos.nx(), (double)pos.ny(), (double)vel.nx(), (double)vel.ny(),
+            (double)delay};
+  }
+  size_t discrete_size() const {
+    if (kind != PKM_CTRL_DISCRETE) return 0;
+    return discrete_layout().size() + 1 + qf_prev.size() + pos.xin.size() + pos.yout.size() + vel.xin.size() +
+           vel.yout.size() + queue.size();
+  }
+  size_t state_size() const { return 4 * (size_t)nd + nx + 3 + discrete_size(); }
   void save(double* b) const {
     size_t k = 0;
     for (const VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
@@ -242,17 +406,37 @@ struct pkm_ctrl {
     b[k++] = have_prev ? 1.0 : 0.0;
     b[k++] = have_guess ? 1.0 : 0.0;
     b[k++] = (double)saturated;
+    if (kind != PKM_CTRL_DISCRETE) return;
+    Writer w{b + k};
+    w.put(discrete_layout());
+    w.put(started ? 1.0 : 0.0);
+    for (const std::vector<double>* v : {&qf_prev, &pos.xin, &pos.yout, &vel.xin, &vel.yout, &queue}) w.put(*v);
   }
   void load(const double* b) {
     const size_t n = state_size();
-    for (size_t k = 0; k < n; ++k)
-      PKM_REQUIRE(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "controller state: entry " + std::to_string(k) + " is not finite");
-    size_t k = 0;
+    size_t k = 4 * (size_t)nd + nx + 3;
+    if (kind == PKM_CTRL_DISCRETE) {
+      // The layout first: a state of another controller is refused before any value is read.
+      const std::vector<double> want = discrete_layout();
+      const char* what[] = {"tag", "joints", "position filter inputs", "position filter outputs",
+                            "velocity filter inputs", "velocity filter outputs", "delay samples"};
+      for (size_t i = 0; i < want.size(); ++i)
+        PKM_REQUIRE(b[k + i] == want[i], PKM_ERR_ARGUMENT,
+                    std::string("controller state: the discrete block's ") + what[i] + " is " + num(b[k + i]) +
+                        ", this controller's " + num(want[i]) + ": a state of another controller");
+    }
+    for (size_t j = 0; j < n; ++j)
+      PKM_REQUIRE(std::isfinite(b[j]), PKM_ERR_ARGUMENT, "controller state: entry " + std::to_string(j) + " is not finite");
+    k = 0;
     for (VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
       for (int i = 0; i < v->size(); ++i) (*v)[i] = b[k++];
     have_prev = b[k++] != 0.0;
     have_guess = b[k++] != 0.0;
     saturated = (long)b[k++];
+    if (kind != PKM_CTRL_DISCRETE) return;
+    Reader r{b + k + discrete_layout().size()};
+    started = r.get() != 0.0;
+    for (std::vector<double>* v : {&qf_prev, &pos.xin, &pos.yout, &vel.xin, &vel.yout, &queue}) r.get(*v);
   }
 };
 
@@ -266,9 +450,10 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
     PKM_REQUIRE(m->compiled != nullptr, PKM_ERR_PARAMETER,
             "controller: the model's parameters were changed and not validated: call pkm_model_validate first");
     const pkm_ctrl_spec& s = *spec;
-    PKM_REQUIRE(s.kind >= PKM_CTRL_PD && s.kind <= PKM_CTRL_LTI, PKM_ERR_ARGUMENT,
+    PKM_REQUIRE(s.kind >= PKM_CTRL_PD && s.kind <= PKM_CTRL_DISCRETE, PKM_ERR_ARGUMENT,
             "controller spec: kind = " + std::to_string(s.kind) +
-                " is not one of PKM_CTRL_PD (0), _PD_GRAVITY (1), _COMPUTED_TORQUE (2), _PID (3), _LTI (4)");
+                " is not one of PKM_CTRL_PD (0), _PD_GRAVITY (1), _COMPUTED_TORQUE (2), _PID (3), _LTI (4), "
+                "_DISCRETE (5)");
     PKM_REQUIRE(std::isfinite(s.dt) && s.dt > 0, PKM_ERR_ARGUMENT,
             "controller spec: dt = " + num(s.dt) + " s must be finite and > 0");
     auto c = std::make_unique<pkm_ctrl>();
@@ -276,9 +461,9 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
     c->nd = nd;
     c->kind = s.kind;
     c->dt = s.dt;
-    const bool lti = s.kind == PKM_CTRL_LTI;
+    const bool lti = s.kind == PKM_CTRL_LTI, disc = s.kind == PKM_CTRL_DISCRETE;
     c->kp = copy_matrix(s.kp, nd, nd, "kp", !lti);
-    c->kd = copy_matrix(s.kd, nd, nd, "kd", !lti);
+    c->kd = copy_matrix(s.kd, nd, nd, "kd", !lti && !disc);
     c->ki = copy_matrix(s.ki, nd, nd, "ki", false);
     if (!lti) {
       check_gain(c->kp, "kp");
@@ -307,6 +492,43 @@ pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec, char* e
       c->B = copy_matrix(s.B, s.nx, nd, "B", s.nx > 0);
       c->C = copy_matrix(s.C, nd, s.nx, "C", s.nx > 0);
       c->D = copy_matrix(s.D, nd, nd, "D", false);
+    }
+    if (disc) {
+      PKM_REQUIRE(s.law == PKM_LAW_CASCADE_PP || s.law == PKM_LAW_PID, PKM_ERR_ARGUMENT,
+                  "controller spec: law = " + std::to_string(s.law) +
+                      " is not PKM_LAW_CASCADE_PP (0) or PKM_LAW_PID (1)");
+      c->law = s.law;
+      c->kv = copy_matrix(s.kv, nd, nd, "kv", s.law == PKM_LAW_CASCADE_PP);
+      check_gain(c->kv, "kv");
+      c->pos = Filter::make(s.pos_b, s.pos_nb, s.pos_a, s.pos_na, nd, "position_filter");
+      c->vel = Filter::make(s.vel_b, s.vel_nb, s.vel_a, s.vel_na, nd, "velocity_filter");
+      PKM_REQUIRE(s.velocity_source == 0 || s.velocity_source == 1, PKM_ERR_ARGUMENT,
+                  "controller spec: velocity_source = " + std::to_string(s.velocity_source) +
+                      " is not 0 (backward difference) or 1 (the reading qd)");
+      c->measured_rate = s.velocity_source == 1;
+      PKM_REQUIRE((s.u_min == nullptr) == (s.u_max == nullptr), PKM_ERR_ARGUMENT,
+                  "controller spec: u_min and u_max go together");
+      if (s.u_min) {
+        c->u_min = Eigen::Map<const VecX>(s.u_min, nd);
+        c->u_max = Eigen::Map<const VecX>(s.u_max, nd);
+        for (int i = 0; i < nd; ++i)
+          PKM_REQUIRE(std::isfinite(c->u_min[i]) && std::isfinite(c->u_max[i]) && c->u_min[i] < c->u_max[i],
+                      PKM_ERR_ARGUMENT,
+                      "controller spec: the output limits of joint " + std::to_string(i + 1) + " [" +
+                          num(c->u_min[i]) + ", " + num(c->u_max[i]) + "] must be finite with min < max");
+      }
+      c->gain = VecX::Ones(nd);
+      if (s.output_gain)
+        for (int i = 0; i < nd; ++i) {
+          PKM_REQUIRE(std::isfinite(s.output_gain[i]) && s.output_gain[i] != 0, PKM_ERR_ARGUMENT,
+                      "controller spec: output_gain of joint " + std::to_string(i + 1) + " must be finite and "
+                      "non-zero, got " + num(s.output_gain[i]));
+          c->gain[i] = s.output_gain[i];
+        }
+      PKM_REQUIRE(s.delay_samples >= 0 && s.delay_samples <= PKM_CTRL_MAX_DELAY, PKM_ERR_ARGUMENT,
+                  "controller spec: delay_samples = " + std::to_string(s.delay_samples) + " must be in [0, " +
+                      std::to_string(PKM_CTRL_MAX_DELAY) + "]");
+      c->delay = s.delay_samples;
     }
     c->model = pkm_model_copy(m);
     PKM_REQUIRE(c->model != nullptr, PKM_ERR_INTERNAL, "controller: out of memory copying the model");
