@@ -116,7 +116,8 @@ class pkm_ctrl_spec(C.Structure):
 
 class pkm_loop_reference(C.Structure):
     _fields_ = [("n", C.c_size_t), ("t0", C.c_double), ("dt", C.c_double), ("t", c_double_p), ("q", c_double_p),
-                ("qd", c_double_p), ("qdd", c_double_p), ("x", c_double_p), ("tau_before", c_double_p)]
+                ("qd", c_double_p), ("qdd", c_double_p), ("x", c_double_p), ("tau_before", c_double_p),
+                ("f_ext", c_double_p)]
 
 
 class pkm_loop_record(C.Structure):
@@ -216,6 +217,7 @@ _SIGNATURES = {
     "pkm_sim_get_state": (I, [P, D, D, D]),
     "pkm_sim_drive_state": (I, [P, D, D]),
     "pkm_sim_applied_effort": (I, [P, D]),
+    "pkm_sim_set_external": (I, [P, D]),
     "pkm_sim_get_stats": (I, [P, C.POINTER(pkm_sim_stats)]),
     "pkm_sim_error": (CH, [P]),
     "pkm_ctrl_create": (P, [P, C.POINTER(pkm_ctrl_spec), C.c_char_p, S]),

@@ -12,7 +12,9 @@ sample ``t_k`` (``k = 0 .. n-1``):
    drive's saturation), the command as logged (plus ``tau`` noise) and the tracker's
    pose (plus ``pose`` noise);
 4. the plant holds the command (saturation and ``actuator.delay`` are the plant's: the
-   core keeps the delay line) and advances to ``t_k + h`` (not after the last sample).
+   core keeps the delay line) and, if given, the known external effort of the sample
+   (``f_ext``, added to the actuator effort), and advances to ``t_k + h`` (not after
+   the last sample).
 
 The noise is drawn once, before the run, in one block of shape (n, g nd) with the groups
 ``q, qd, tau, pose`` in that order (only those with a non-zero standard deviation), so
@@ -200,7 +202,8 @@ class ClosedLoop:
         return compile_controller(self.controller, model=plant.model, dt=h)
 
     # -------------------------------------------------------------------- run
-    def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None) -> LoopRecord:
+    def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
+            f_ext=None) -> LoopRecord:
         """Run over the reference samples ``start:``.
 
         Parameters
@@ -219,6 +222,11 @@ class ClosedLoop:
             ``should_stop() -> bool``, asked between pieces (compiled: about every 50 ms)
             or samples (stepwise); True ends the run there with the rows so far
             (``LoopRecord.stopped``).
+        f_ext : array_like, shape (len(reference.time), nd), optional
+            A known external effort per joint at every reference sample [N or N m],
+            positive along +q (e.g. a recording's measured force, ``Recording.f_ext``):
+            the plant adds it to the actuator effort over the step after each sample,
+            like the command (no saturation, no delay).
 
         Returns
         -------
@@ -246,6 +254,18 @@ class ClosedLoop:
         x0 = np.asarray(x0, float)
         rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")}
         draws = self._draws(n)
+        if f_ext is not None:
+            f_ext = np.asarray(f_ext, float)
+            if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
+                raise ValueError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
+                                 f"got {f_ext.shape}")
+            f_ext = np.ascontiguousarray(f_ext[start:start + n])
+            bad = np.argwhere(~np.isfinite(f_ext))
+            if bad.size:
+                raise ValueError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
+                                 f"{f_ext[tuple(bad[0])]}")
+            if not hasattr(self.plant, "set_external"):
+                raise ValueError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
         rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
                          rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan))
         cc, rec.note = self._compiled_controller(h)
@@ -259,9 +279,10 @@ class ClosedLoop:
         failure = None
         try:
             if cc is not None:
-                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop)
+                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext)
             else:
-                failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop)
+                failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop,
+                                         f_ext)
         except KeyboardInterrupt:
             self._finish(rec, draws, wall0, cc)
             raise LoopInterrupted(rec.head()) from None
@@ -281,7 +302,7 @@ class ClosedLoop:
         rec.saturated = cc.saturated if cc is not None else getattr(self.controller, "saturated", 0)
 
     # ------------------------------------------------------------ back ends
-    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop):
+    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext):
         """``pkm_closed_loop`` in pieces of about :data:`PIECE_SECONDS`; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -304,13 +325,15 @@ class ClosedLoop:
             w = _time.perf_counter()
             st, done, message = closed_loop_call(sim, cc, t=t, dt=h, ref=ref, rows=rows, k0=k0, k1=k1,
                                                  tau_before=before, q_noise=qn, qd_noise=qdn,
-                                                 measure=self.drive is not None)
+                                                 measure=self.drive is not None, f_ext=f_ext)
             rec.n = k0 + done
             if st != 0:
                 return _core_error(st, message), rec.n
             if k1 == n:
                 break
             sim.set_input(rows["tau_cmd"][k1 - 1])
+            if f_ext is not None:
+                sim.set_external(f_ext[k1 - 1])
             try:
                 sim.advance(float(t[k1 - 1]) + h)
             except Exception as e:  # noqa: BLE001 - the loop's failure at this sample
@@ -328,7 +351,7 @@ class ClosedLoop:
                 break
         return None
 
-    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop):
+    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext):
         """One sample at a time through the Plant interface; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -362,6 +385,8 @@ class ClosedLoop:
                 if k == n - 1:
                     break
                 acting = applied
+                if f_ext is not None:
+                    plant.set_external(f_ext[k])
                 plant.set_input(tau)
                 plant.do_step(float(t[k]), h)
                 y = plant.outputs()

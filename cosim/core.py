@@ -889,6 +889,12 @@ class Simulator:
         tau = self._vec(tau, "tau")
         self._check(lib.pkm_sim_set_input(self._s, ptr(tau)))
 
+    def set_external(self, f) -> None:
+        """Hold a known external effort f [N or N m] per joint, positive along +q, from now on
+        (``pkm_sim_set_external``): added to the actuator effort, not saturated, not delayed."""
+        f = self._vec(f, "f")
+        self._check(lib.pkm_sim_set_external(self._s, ptr(f)))
+
     def advance(self, t_end: float) -> None:
         """Integrate to t_end [s] with the held input.
 
@@ -1090,7 +1096,7 @@ LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")
 
 def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, ref: dict, rows: dict,
                      k0: int, k1: int, tau_before=None, q_noise=None, qd_noise=None,
-                     measure: bool = False) -> tuple[int, int, str]:
+                     measure: bool = False, f_ext=None) -> tuple[int, int, str]:
     """One ``pkm_closed_loop`` call over samples ``k0:k1`` (see
     :func:`cosim.closed_loop.run_compiled`, which chains calls).
 
@@ -1105,7 +1111,7 @@ def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, 
 
     before = None if tau_before is None else np.ascontiguousarray(tau_before, dtype=float)
     spec = pkm_loop_reference(m, float(t[k0]), float(dt), at(t), at(ref["q"]), at(ref["qd"]), at(ref.get("qdd")),
-                              at(ref.get("x")), ptr(before))
+                              at(ref.get("x")), ptr(before), at(f_ext))
     rec = pkm_loop_record(*[at(rows[f]) for f in LOOP_FIELDS])
     done = C.c_size_t(0)
     st = lib.pkm_closed_loop(sim._s, ctrl._c, C.byref(spec), at(q_noise), at(qd_noise), int(bool(measure)),

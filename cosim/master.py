@@ -134,10 +134,16 @@ class CorePlant(Plant):
         x0 = np.asarray(x0, float)
         xd0 = np.zeros(self.ndof) if xd0 is None else np.asarray(xd0, float)
         self.sim.set_input(np.zeros(self.ndof))  # a run starts with nothing commanded
+        self.sim.set_external(np.zeros(self.ndof))  # and no external effort
         self.sim.reset(t0, x0, xd0)
 
     def set_input(self, tau):
         self.sim.set_input(np.asarray(tau, float))
+
+    def set_external(self, f):
+        """Hold a known external effort per joint [N or N m], positive along +q (added to the
+        actuator effort)."""
+        self.sim.set_external(np.asarray(f, float))
 
     def applied_effort(self):
         """Effort acting on the mechanism now [N or N m]: the held command after the drive's
@@ -560,7 +566,7 @@ def _units(robot, nd):
 
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
         pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
-        compiled: bool | None = None, should_stop=None) -> RunResult:
+        compiled: bool | None = None, should_stop=None, f_ext=None) -> RunResult:
     """Step ``plant`` and ``controller`` together over the reference's time grid
     (:class:`cosim.closed_loop.ClosedLoop`).
 
@@ -601,6 +607,9 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     should_stop : callable, optional
         ``should_stop() -> bool``, asked between pieces or samples; True ends the run
         there with the rows so far.
+    f_ext : array_like, shape (n, nd), optional
+        Known external effort per joint and reference sample [N or N m], positive along
+        +q, added to the actuator effort over the step after each sample.
 
     Returns
     -------
@@ -658,7 +667,8 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
                desc=f"{plant.kind} {reference.name}".strip())
     try:
-        rec = loop.run(reference, x0=x0, xd0=xd0, progress=lambda k: bar.update(k - bar.n), should_stop=should_stop)
+        rec = loop.run(reference, x0=x0, xd0=xd0, progress=lambda k: bar.update(k - bar.n), should_stop=should_stop,
+                       f_ext=f_ext)
     except LoopInterrupted as e:
         raise LoopInterrupted(result(e.partial)) from None
     except Exception as e:

@@ -598,7 +598,7 @@ def _replay(rec, eng, sel):
     def run(plant, ref, start):
         ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
-                           rtol=1e-8, atol=1e-10)
+                           rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None))  # a known input, replayed
 
     out = {"start": float(rec.time[k0]), "runs": {}}
     plants = {"nominal": mdl.copy(), "fitted": mdl.copy()}

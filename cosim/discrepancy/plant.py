@@ -108,7 +108,7 @@ class LoopResult:
 
 
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
-                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11) -> LoopResult:
+                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None) -> LoopResult:
     """Run ``controller`` on the core plant ``plant`` over the reference samples
     (:class:`cosim.closed_loop.ClosedLoop` with the plant's drive and sensor model).
 
@@ -131,6 +131,10 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         First reference sample of the run.
     rtol, atol : float
         Tolerances of the plant's integrator.
+    f_ext : array_like, shape (len(ref.time), nd), optional
+        Known external effort per joint at every reference sample [N or N m], positive
+        along +q (a recording's ``f_ext`` columns): an input of the plant, added to the
+        actuator effort.
 
     Returns
     -------
@@ -145,5 +149,5 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     from ..master import CoreDrive, CorePlant
 
     rec = ClosedLoop(CorePlant(plant, rtol=rtol, atol=atol), controller, drive=CoreDrive(plant), noise=noise,
-                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0)
+                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext)
     return LoopResult(rec.time, rec.q, rec.qd, rec.tau_logged, rec.pose, rec.x, rec.xd, rec.q_true)

@@ -8,11 +8,13 @@ What the recorded columns mean (``pkm-recording/1``, docs/discrepancy.md):
 * ``tau<i>``: the effort the controller *commanded*, held over the following sample
   (zero-order hold).  What reaches the mechanism may differ: the actuator clips it
   (``<j>[i].effort_max``) and delays it (``actuator.delay``);
-* pose columns, if present: an external tracker measuring the true pose.
+* pose columns, if present: an external tracker measuring the true pose;
+* ``f_ext<i>``, if present (``Recording.f_ext``): a measured external effort per joint,
+  positive along +q, a known input added to what the actuator applies.
 
 Effort residual, for a model with parameters theta (sample time t)::
 
-    r_eff(t) = S[sat(tau)](t - d_a - d_s) - S[ID(x, xd, xdd)](t)
+    r_eff(t) = S[sat(tau)](t - d_a - d_s) + S[f_ext](t) - S[ID(x, xd, xdd)](t)
 
 ``S`` is a zero-phase Savitzky-Golay smoother (``window``, ``polyorder``); ``x =
 FK(q)``, ``xd = pose_velocity(x, qd)`` and ``xdd = pose_acceleration(x, xd, qdd)`` at
@@ -182,6 +184,17 @@ class Pipeline:
         if zoh:
             tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
         self.tau_c = tau
+        # A measured external effort per joint (f_ext columns) is a known input: the mechanism
+        # feels the actuator's effort plus it, so it joins the effort side of the residual,
+        # sampled and smoothed like the effort (never left for the engine to explain).
+        f_ext = getattr(rec, "f_ext", None)
+        if f_ext is not None:
+            f_ext = np.asarray(f_ext, float)
+            if f_ext.shape != (n, nd):
+                raise DiagnosisError(f"{where}: f_ext has shape {f_ext.shape}, the recording ({n}, {nd})")
+            if zoh:
+                f_ext = np.vstack([f_ext[:1], 0.5 * (f_ext[1:] + f_ext[:-1])])
+        self.f_ext = f_ext
         self.q = np.asarray(rec.q, float)
         self.qd = np.asarray(rec.qd, float)
         self.pose = None if rec.pose is None else np.asarray(rec.pose, float)
@@ -190,6 +203,7 @@ class Pipeline:
         self.qd_s = self.S(self.qd)
         self.qdd_s = self.S(self.qd, deriv=1)
         self.tau_s = self.S(self.tau_c)
+        self.f_ext_s = None if self.f_ext is None else self.S(self.f_ext)
         # Central difference: (qd[k+1] - qd[k-1]) / 2 dt is the mean acceleration over the
         # two steps around sample k, exactly what the zero-order-hold efforts held over
         # those two steps produce (their mean is tau_c[k]): no bias for any motion.
@@ -367,6 +381,8 @@ class Pipeline:
         # closed loop) and differ only in the readings against the tracker.
         p_m = pos
         eff = _at(A[1], pos - d_a - d_s) - B[pos]
+        if self.f_ext_s is not None:
+            eff = eff + self.f_ext_s[pos]  # recorded with the motion it drives
         if geo or sens:
             eff -= self._pose_term(m, np.clip(np.round(p_m).astype(int), 0, self.n - 1), bool(sens))
         kin = None

@@ -359,6 +359,11 @@ PKM_API int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d);
  * delay earlier (zero before the first).  The effort the sensor model's compliance reads
  * under at a sample (pkm_closed_loop, the stepwise loop of cosim.closed_loop). */
 PKM_API int pkm_sim_applied_effort(const pkm_sim* s, double* tau);
+/* A known external effort f[nd] per joint [N or N m], positive along +q (e.g. a measured
+ * force on a carriage), held from now on and added to the effort reaching the mechanism,
+ * with no saturation and no delay (zero at creation).  An input like tau: the caller sets
+ * it before each advance; it is not part of the saved state. */
+PKM_API int pkm_sim_set_external(pkm_sim* s, const double* f);
 /* Pose acceleration xdd[nd] at the sim's current state under the command tau[nd] (its dead
  * zone and saturation applied, no delay): the forward dynamics, with a two-body joint's
  * carriage driven by what its transmission carries. */
@@ -494,7 +499,8 @@ PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
  *      then plus q_noise[k] and qd_noise[k] (noise arrays may be NULL);
  *   2. tau_k = pkm_ctrl_update(c, t_k, q_k, qd_k, reference row k);
  *   3. the row is recorded; the plant then holds tau_k (pkm_sim_set_input: saturation,
- *      actuator delay) and advances to t_k + dt (not after the last sample).
+ *      actuator delay) and the known external effort f_ext[k] if given, and advances to
+ *      t_k + dt (not after the last sample).
  * The plant starts from its current state, at time t0.  On a failure (controller, limit,
  * singularity, integration) the loop stops, *n_done says how many rows were recorded
  * (the rows before the failure), and the status is returned with the message, naming
@@ -508,6 +514,9 @@ typedef struct pkm_loop_reference {
   const double *qdd, *x;    /* [n,nd] joint acceleration and pose reference, may be NULL */
   const double* tau_before; /* [nd] effort applied before sample 0 (for the sensor model's
                                compliance), NULL for none: lets a loop go on in pieces  */
+  const double* f_ext;      /* [n,nd] known external effort per joint, held over the step
+                               after each sample like the command (pkm_sim_set_external),
+                               or NULL (the sim's own setting stays)                     */
 } pkm_loop_reference;
 
 typedef struct pkm_loop_record {

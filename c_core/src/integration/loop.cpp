@@ -94,6 +94,13 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
       if (n_done) *n_done = k + 1;
       for (int i = 0; i < nd; ++i) prev_applied[i] = applied[i];
       if (k + 1 == ref->n) break;
+      if (ref->f_ext) {
+        for (int i = 0; i < nd; ++i)
+          PKM_REQUIRE(std::isfinite(ref->f_ext[k * nd + i]), PKM_ERR_ARGUMENT,
+                      "closed loop: f_ext of joint " + std::to_string(i + 1) + " at sample " + std::to_string(k) +
+                          " is not finite");
+        sim.set_external(ref->f_ext + k * nd);
+      }
       sim.set_input(tau);
       sim.advance(t_k + ref->dt);
       sim.get_state(&t, x, xd);

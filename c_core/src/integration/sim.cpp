@@ -121,6 +121,7 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     PKM_REQUIRE(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
     tau_.assign(nd_, 0.0);
     applied_.assign(nd_, 0.0);
+    external_.assign(nd_, 0.0);
     fsal_f_.assign(n2, 0.0);
     fsal_B_.assign((size_t)nd_ * nd_, 0.0);
     reuse_input_ = explicit_method() && two_.empty();  // a two-body joint's effort depends on the state
@@ -550,6 +551,11 @@ void Sim::command_at(double t, double* tau) const {
   for (int i = 0; i < nd_; ++i) tau[i] = history_[k].tau[i];
 }
 
+void Sim::set_external(const double* f) {
+  check_finite(f, nd_, "external effort");
+  for (int i = 0; i < nd_; ++i) external_[i] = f[i];
+}
+
 void Sim::applied_effort(double* tau) const {
   if (!(delay_ > 0)) {
     for (int i = 0; i < nd_; ++i) tau[i] = tau_[i];
@@ -659,6 +665,7 @@ void Sim::advance(double t_end) {
 
   if (!(delay_ > 0)) {
     applied_ = tau_;
+    add_external();
     segment(t_end);
     return;
   }
@@ -678,6 +685,7 @@ void Sim::advance(double t_end) {
       if (sw > t_ && sw < b) b = sw;
     }
     command_at(0.5 * (t_ + b) - delay_, applied_.data());
+    add_external();
     segment(b);
   }
   // Forget commands no rollback within kHistory seconds can need.

@@ -76,6 +76,9 @@ class Sim {
   // it: the held input, or with an actuator delay the command issued at t - delay (zero
   // before the first).  What the sensor model's compliance deflects under at a sample.
   void applied_effort(double* tau) const;
+  // A known external effort per joint [N or N m] (a measured force on the carriage), held
+  // from now on and added to the actuator effort, with no saturation and no delay.
+  void set_external(const double* f);
   bool actuator_delayed() const { return delay_ > 0; }
 
   // The closed loop's delay line of joint readings (drive parameter sensor.delay > 0): the
@@ -158,6 +161,10 @@ class Sim {
   std::vector<double> y_;    // state [x, xd] (2 nd), then [theta, theta_d] of the drive bodies (2 nd) if any
   std::vector<double> tau_;      // held command (after saturation), nd
   std::vector<double> applied_;  // effort reaching the mechanism in the current segment, nd
+  std::vector<double> external_;  // known external effort held (set_external), nd
+  void add_external() {
+    for (int i = 0; i < nd_; ++i) applied_[i] += external_[i];
+  }
 
   // Actuator delay line (drive parameter actuator.delay > 0): the command held over each
   // past advance, from its start time s_k; the mechanism feels the command issued at

@@ -66,6 +66,13 @@ int pkm_sim_drive_state(pkm_sim* s, double* theta, double* theta_d) {
   return guard_into(s->sim.error, [&] { s->sim.drive_state(theta, theta_d); });
 }
 
+int pkm_sim_set_external(pkm_sim* s, const double* f) {
+  return sim_guard(s, [&] {
+    PKM_REQUIRE(f != nullptr, PKM_ERR_ARGUMENT, "external effort: f is NULL");
+    s->sim.set_external(f);
+  });
+}
+
 int pkm_sim_applied_effort(const pkm_sim* s, double* tau) {
   if (!s || !tau) return PKM_ERR_ARGUMENT;
   s->sim.applied_effort(tau);
