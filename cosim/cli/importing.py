@@ -25,8 +25,8 @@ def cmd_import(args):
     rec = res.recording
     n, span = len(rec), float(rec.time[-1] - rec.time[0])
     derived = ", ".join(rec.sidecar.get("derived", {})) or "none"
-    print(f"wrote {res.table} ({n} rows, {span:.6g} s, robot {rec.robot}, from {res.source.format}; derived: {derived}) "
-          f"and {res.sidecar.name} in {res.seconds:.2f} s")
+    print(f"wrote {res.table} ({n} rows, {span:.6g} s, robot {rec.robot}, from {res.source.format}; "
+          f"derived: {derived}) and {res.sidecar.name} in {res.seconds:.2f} s")
     absent = rec.sidecar["source"].get("absent_optional")
     if absent:
         print(f"optional columns not in the file: {', '.join(absent)}")

@@ -271,8 +271,9 @@ def check_columns(m: ImportMap, facts) -> None:
         si = si_unit(name, facts)
         if si is None:
             known = ["time"] + [f"{p}1..{p}{nd}" for p in ("q", "qd", "tau", "qref", "qdref", "f_ext")]
+            known += list(facts.tracker_names)
             _fail(m.path, f"columns.{name}", f"not a recording column of robot {facts.name} ({nd} joint"
-                                             f"{'s' if nd > 1 else ''}; columns: {', '.join(known + list(facts.tracker_names))})")
+                                             f"{'s' if nd > 1 else ''}; columns: {', '.join(known)})")
         if c.unit is not None:
             try:
                 U.factor(c.unit, si)

@@ -227,9 +227,10 @@ def _open_text(p: Path, delimiter: str | None, fmt: str, encoding: str = "utf-8"
             try:
                 line = raw[start:].decode(encoding)
             except UnicodeDecodeError as e:
+                at = offset + start + e.start
                 raise ImportFailure(p, f"is not a text file in {encoding} (byte 0x{raw[start + e.start]:02x} at byte "
-                                       f"{offset + start + e.start}); a MATLAB file needs the .mat extension or [source] "
-                                       f"format = \"matlab\"; a text file in another encoding [source] encoding = "
+                                       f"{at}); a MATLAB file needs the .mat extension or [source] format = "
+                                       f"\"matlab\"; a text file in another encoding [source] encoding = "
                                        f"\"latin-1\" (for example)") from None
             except LookupError:
                 raise ImportFailure(p, f"unknown text encoding {encoding!r} ([source] encoding)") from None

@@ -1,6 +1,9 @@
 """The shipped EMPS recording imported with its shipped map: every column has the values of
-the .mat (read here independently with scipy), the controller holds the file's gains."""
+the .mat (read here independently with scipy), the controller holds the file's gains, and
+cosim diagnose takes the result."""
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,23 +18,12 @@ MAT = REPO / "data" / "emps" / "DATA_EMPS.mat"
 MAP = REPO / "data" / "emps" / "emps_map.toml"
 
 
-def _stand_in_map(tmp_path):
-    """The shipped map with robot = the four-bar (one joint, as the EMPS), its units relabelled
-    to the four-bar's (rad for m, N m for N: both factor 1, so the numbers are the same)."""
-    text = MAP.read_text()
-    text = text.replace('robot = "emps"', 'robot = "fourbar"').replace('unit = "m"', 'unit = "rad"')
-    text = text.replace('unit = "N"', 'unit = "N m"')
-    p = tmp_path / "emps_map.toml"
-    p.write_text(text)
-    return p
-
-
 def test_emps_columns_are_the_mat_values(tmp_path):
     mat = scipy.io.loadmat(MAT)
-    res = import_recording(MAT, _stand_in_map(tmp_path), tmp_path / "out", progress=False)
+    res = import_recording(MAT, MAP, tmp_path / "out", progress=False)
     rec = read_recording(res.table)
     t, qm, qg = mat["t"].ravel(), mat["qm"].ravel(), mat["qg"].ravel()
-    assert len(rec) == 24841
+    assert len(rec) == 24841 and rec.robot == "emps"
     np.testing.assert_array_equal(rec.time, t)
     np.testing.assert_array_equal(rec.q[:, 0], qm)
     np.testing.assert_array_equal(rec.qref[:, 0], qg)
@@ -49,6 +41,8 @@ def test_emps_columns_are_the_mat_values(tmp_path):
     side = json.loads(res.sidecar.read_text())
     assert side["derived"]["qd1"] == {"from": "q1", "method": "central_difference",
                                       "formula": side["derived"]["qd1"]["formula"]}
+    assert side["units"] == {"time": "s", "q": "m", "qd": "m/s", "tau": "N", "qref": "m"}
+    assert side["sensors"] == {"q1": {"resolution": 5e-8, "unit": "m"}}
 
 
 def test_emps_map_is_the_documented_one():
@@ -57,3 +51,16 @@ def test_emps_map_is_the_documented_one():
     assert m.columns["tau1"].variable == "vir" and m.columns["tau1"].scale == "gtau"
     assert m.columns["qd1"].derive == "central_difference" and m.columns["qdref1"].derive == "central_difference"
     assert m.columns["f_ext1"].optional
+
+
+def test_cosim_diagnose_takes_the_imported_recording(tmp_path):
+    out = tmp_path / "emps"
+    p = subprocess.run([sys.executable, "-m", "cosim", "import", str(MAT), "--map", str(MAP), "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "24841 rows" in p.stdout and "robot emps" in p.stdout
+    p = subprocess.run([sys.executable, "-m", "cosim", "diagnose", str(out / "DATA_EMPS.csv"), "--no-figures",
+                        "--out", str(tmp_path / "diagnosis")], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "DATA_EMPS.csv (emps)" in p.stdout and "tau1" in p.stdout
+    assert (tmp_path / "diagnosis" / "report.md").exists()

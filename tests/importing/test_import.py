@@ -111,7 +111,8 @@ def test_csv_with_odd_names_and_tsv(tmp_path):
 def test_time_from_a_period_and_a_matrix_column(rig, tmp_path):
     src, mp, v = rig
     mp.write_text(MAP.replace('time = { variable = "zeit", unit = "ms" }', 'time = { period = 2, unit = "ms" }')
-                  .replace('q1 = { variable = "ang", unit = "deg" }', 'q1 = { variable = "Q", column = 2, unit = "deg" }'))
+                  .replace('q1 = { variable = "ang", unit = "deg" }',
+                           'q1 = { variable = "Q", column = 2, unit = "deg" }'))
     rec = to_recording(src, mp, progress=False)
     np.testing.assert_allclose(rec.time, np.arange(200) * 0.002, rtol=0, atol=1e-15)
     np.testing.assert_allclose(rec.q[:, 0], 2 * v["ang"].ravel() * np.pi / 180, rtol=0, atol=1e-15)
@@ -128,6 +129,39 @@ def _resave(src, v, **changes):
     scipy.io.savemat(src, {**v, **changes})
 
 
+#: cases that are one edit of the rig's map: (text replaced, replacement, words the message must hold)
+MAP_EDITS = {
+    "missing variable": ('"ang"', '"angle"',
+        ["rig.mat", "'angle'", "q1", "not in the file", "did you mean 'ang'"]),
+    "unknown unit": ('unit = "deg" }\nqd1', 'unit = "furlong" }\nqd1',
+        ["rig_map.toml", "columns.q1.unit", "unknown unit 'furlong'"]),
+    "unit of the wrong kind": ('unit = "deg" }\nqd1', 'unit = "mm" }\nqd1',
+        ["rig_map.toml", "columns.q1.unit", "'mm' is a length", "angle"]),
+    "scale variable not scalar": ('scale = { variable = "gain" }', 'scale = { variable = "ang" }',
+        ["rig.mat", "'ang'", "not a scalar", "columns.tau1.scale"]),
+    "unknown column field": ('q1 = { variable = "ang", unit = "deg" }', 'q1 = { variable = "ang", gain = 2 }',
+        ["rig_map.toml", "columns.q1.gain", "unknown field"]),
+    "not a column of the robot": ("qref1 =", "qref2 =",
+        ["rig_map.toml", "columns.qref2", "not a recording column of robot fourbar"]),
+    "required column missing": ('tau1 = { variable = "cmd", scale = { variable = "gain" }, unit = "N m" }\n', "",
+        ["rig_map.toml", "tau1 is missing"]),
+    "matrix without a column": ('q1 = { variable = "ang"', 'q1 = { variable = "Q"',
+        ["rig.mat", "'Q'", "matrix of shape 200 x 2", "column = 1..2"]),
+    "controller variable missing": ('kp = { variable = "k_p" }', 'kp = { variable = "kq" }',
+        ["rig.mat", "'kq'", "controller.kp", "not in the file"]),
+    "unknown derivation": ('"central_difference"', '"spline"',
+        ["rig_map.toml", "columns.qd1.derive", "unknown derivation 'spline'"]),
+    "unknown robot": ('robot = "fourbar"', 'robot = "fivebar"',
+        ["rig_map.toml", "field robot", "'fivebar'"]),
+    "derived column with a unit": ('qd1 = { derive = "central_difference" }',
+                                   'qd1 = { derive = "central_difference", unit = "deg/s" }',
+        ["rig_map.toml", "columns.qd1.unit", "derived column"]),
+    "sensor unit of the wrong kind": ("q1 = { resolution = 0.01, noise_std = 0.02 }",
+                                      'q1 = { resolution = 0.01, unit = "um" }',
+        ["rig_map.toml", "sensors.q1.unit", "'um' is a length"]),
+}
+
+
 def _text_source(tmp_path, mp, file, text, time, q, tau):
     """A text source and a minimal map of it: time (a TOML value), q1 and tau1 (column names)."""
     s = tmp_path / file
@@ -141,9 +175,10 @@ def _case(name, rig, tmp_path):
     """Make the files of one malformed case; returns (source, map, words the message must hold)."""
     src, mp, v = rig
     n = len(v["zeit"])
-    if name == "missing variable":
-        _set(mp, '"ang"', '"angle"')
-        return src, mp, ["rig.mat", "'angle'", "q1", "not in the file", "did you mean 'ang'"]
+    if name in MAP_EDITS:
+        old, new, words = MAP_EDITS[name]
+        _set(mp, old, new)
+        return src, mp, words
     if name == "wrong length":
         _resave(src, v, ref=v["ref"][:-1])
         return src, mp, ["rig.mat", "'ref'", "qref1", f"{n - 1} values", f"has {n}"]
@@ -160,15 +195,6 @@ def _case(name, rig, tmp_path):
     if name == "bad map TOML":
         mp.write_text('robot = "fourbar"\n[columns\ntime = "zeit"\n')
         return src, mp, ["rig_map.toml", "not valid TOML", "line 2"]
-    if name == "unknown unit":
-        _set(mp, 'unit = "deg" }\nqd1', 'unit = "furlong" }\nqd1')
-        return src, mp, ["rig_map.toml", "columns.q1.unit", "unknown unit 'furlong'"]
-    if name == "unit of the wrong kind":
-        _set(mp, 'unit = "deg" }\nqd1', 'unit = "mm" }\nqd1')
-        return src, mp, ["rig_map.toml", "columns.q1.unit", "'mm' is a length", "angle"]
-    if name == "scale variable not scalar":
-        _set(mp, 'scale = { variable = "gain" }', 'scale = { variable = "ang" }')
-        return src, mp, ["rig.mat", "'ang'", "not a scalar", "columns.tau1.scale"]
     if name == "v7.3 char variable":
         s73 = tmp_path / "text73.mat"
         _write_v73(s73, {"zeit": v["zeit"].ravel(), "cmd": v["cmd"].ravel(), "ref": v["ref"].ravel(),
@@ -176,7 +202,8 @@ def _case(name, rig, tmp_path):
         return s73, mp, ["text73.mat", "'ang'", "is a char"]
     if name == "TSV with a word in a number column":
         s = _text_source(tmp_path, mp, "bad.tsv", "zeit\tang\tcmd\tref\n" + "".join(
-            f"{k}\t{k}\t1\t0\n" for k in range(3)) + "3\tabc\t1\t0\n", '{ variable = "zeit", unit = "ms" }', "ang", "cmd")
+            f"{k}\t{k}\t1\t0\n" for k in range(3)) + "3\tabc\t1\t0\n", '{ variable = "zeit", unit = "ms" }',
+                         "ang", "cmd")
         return s, mp, ["bad.tsv", "'ang'", "line 5", "'abc' is not a number"]
     if name == "CSV with an empty cell":
         s = _text_source(tmp_path, mp, "gap.csv", "Time (s),Pos [rad],Effort\n0,0,1\n0.001,,1\n0.002,0,1\n",
@@ -201,44 +228,15 @@ def _case(name, rig, tmp_path):
     if name == "unknown map field":
         mp.write_text(MAP.replace("[sensors]", "[sensor]"))
         return src, mp, ["rig_map.toml", "field sensor", "unknown field"]
-    if name == "unknown column field":
-        _set(mp, 'q1 = { variable = "ang", unit = "deg" }', 'q1 = { variable = "ang", gain = 2 }')
-        return src, mp, ["rig_map.toml", "columns.q1.gain", "unknown field"]
-    if name == "not a column of the robot":
-        _set(mp, "qref1 =", "qref2 =")
-        return src, mp, ["rig_map.toml", "columns.qref2", "not a recording column of robot fourbar"]
-    if name == "required column missing":
-        _set(mp, 'tau1 = { variable = "cmd", scale = { variable = "gain" }, unit = "N m" }\n', "")
-        return src, mp, ["rig_map.toml", "tau1 is missing"]
-    if name == "matrix without a column":
-        _set(mp, 'q1 = { variable = "ang"', 'q1 = { variable = "Q"')
-        return src, mp, ["rig.mat", "'Q'", "matrix of shape 200 x 2", "column = 1..2"]
-    if name == "controller variable missing":
-        _set(mp, 'kp = { variable = "k_p" }', 'kp = { variable = "kq" }')
-        return src, mp, ["rig.mat", "'kq'", "controller.kp", "not in the file"]
-    if name == "unknown derivation":
-        _set(mp, '"central_difference"', '"spline"')
-        return src, mp, ["rig_map.toml", "columns.qd1.derive", "unknown derivation 'spline'"]
-    if name == "unknown robot":
-        _set(mp, 'robot = "fourbar"', 'robot = "fivebar"')
-        return src, mp, ["rig_map.toml", "field robot", "'fivebar'"]
     if name == "source not found":
         return tmp_path / "nope.mat", mp, ["nope.mat", "file not found"]
-    if name == "derived column with a unit":
-        _set(mp, 'qd1 = { derive = "central_difference" }', 'qd1 = { derive = "central_difference", unit = "deg/s" }')
-        return src, mp, ["rig_map.toml", "columns.qd1.unit", "derived column"]
-    if name == "sensor unit of the wrong kind":
-        _set(mp, "q1 = { resolution = 0.01, noise_std = 0.02 }", 'q1 = { resolution = 0.01, unit = "um" }')
-        return src, mp, ["rig_map.toml", "sensors.q1.unit", "'um' is a length"]
     raise KeyError(name)
 
 
-CASES = ["missing variable", "wrong length", "non-monotonic time", "NaN rows", "bad map TOML", "unknown unit",
-         "unit of the wrong kind", "scale variable not scalar", "v7.3 char variable", "TSV with a word in a number column",
-         "CSV with an empty cell", "CSV column misspelt", "not a MATLAB file", "empty file", "binary file as CSV",
-         "unknown map field", "unknown column field", "not a column of the robot", "required column missing",
-         "matrix without a column", "controller variable missing", "unknown derivation", "unknown robot",
-         "source not found", "derived column with a unit", "sensor unit of the wrong kind"]
+CASES = list(MAP_EDITS) + [
+    "wrong length", "non-monotonic time", "NaN rows", "bad map TOML", "v7.3 char variable",
+    "TSV with a word in a number column", "CSV with an empty cell", "CSV column misspelt", "not a MATLAB file",
+    "empty file", "binary file as CSV", "unknown map field", "source not found"]
 
 
 @pytest.mark.parametrize("name", CASES)
