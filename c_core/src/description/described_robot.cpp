@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "description/jet.hpp"
+#include "description/joint_kind.hpp"
 #include "description/schema.hpp"
 #include "kinematics/generic_kinematics.hpp"
 #include "dynamics/drive.hpp"
@@ -513,7 +514,6 @@ std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(cons
 std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>& specs,
                                                     const std::vector<double>& values) const {
   const ParamValues get(d_.name, specs, values);
-  auto name = idx;
   auto vec = [&](const char* group, int i, const char* f0) { return get.vec(group, i, f0); };
   auto bad = [&](const std::string& msg) { get.bad(msg); };
   auto m = std::make_unique<Model>();
@@ -525,59 +525,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int i = 0; i < m->n; ++i) {
     LegModel l;
     l.type = d_.legs[i];
-    const Joint j = l.type->joint;
-    if (j == Joint::strut) {
-      l.base = vec("leg", i, "b");
-      l.p = vec("leg", i, "p");
-      l.qmin = get(name("strut", i, "qmin")), l.qmax = get(name("strut", i, "qmax"));
-      l.m_cyl = get(name("cylinder", i, "m")), l.l_cyl = get(name("cylinder", i, "l"));
-      l.m_pis = get(name("piston", i, "m")), l.l_pis = get(name("piston", i, "l"));
-      l.npt = 4, l.nrod = 2;
-      l.rod[0] = {0, 2, l.m_cyl};
-      l.rod[1] = {3, 1, l.m_pis};
-    } else {
-      l.L = get(name("leg", i, "L"));
-      l.p = V3(get(name("leg", i, "px")), get(name("leg", i, "py")), get(name("leg", i, "pz")));
-      l.branch = get(name("leg", i, "branch"));
-      l.m_rod = get(name("leg", i, "m"));
-      if (!(l.L > 0)) bad(name("leg", i, "L") + " = " + num(l.L) + " m must be > 0");
-      if (l.branch != 1.0 && l.branch != -1.0) bad(name("leg", i, "branch") + " = " + num(l.branch) + " must be +1 or -1");
-      l.disc_tol = 1e-12 * l.L * l.L;
-      if (d_.lumped_rods[i]) l.rod_self = 0.5, l.rod_cross = 0.0;
-      if (j == Joint::rail) {
-        l.base = vec("rail", i, "S0");
-        l.dir = vec("rail", i, "s");
-        l.ss = l.dir.squaredNorm();
-        l.inv_ss = 1.0 / l.ss;
-        if (std::abs(std::sqrt(l.ss) - 1) > 1e-6) bad("rail " + std::to_string(i + 1) + " direction is not a unit vector");
-        l.qmin = get(name("rail", i, "qmin")), l.qmax = get(name("rail", i, "qmax"));
-        l.m_body = get(name("slider", i, "m"));
-        l.npt = 2, l.nmass = 1, l.nrod = 1;
-        l.mass[0] = {0, l.m_body};
-        l.rod[0] = {0, 1, l.m_rod};
-      } else {
-        l.base = vec("arm", i, "A");
-        l.dir = vec("arm", i, "k");
-        l.u = vec("arm", i, "u");
-        if (std::abs(l.dir.norm() - 1) > 1e-6 || std::abs(l.u.norm() - 1) > 1e-6 || std::abs(l.dir.dot(l.u)) > 1e-6)
-          bad("arm " + std::to_string(i + 1) + ": axis and arm direction must be perpendicular unit vectors");
-        // Used as exact unit vectors (a file's rounded directions, within 1e-6 of unit and
-        // perpendicular, would otherwise make the arm r |u| long and the closure inexact).
-        l.dir.normalize();
-        l.u = (l.u - l.u.dot(l.dir) * l.dir).normalized();
-        l.w = l.dir.cross(l.u);
-        l.r = get(name("arm", i, "r"));
-        l.m_body = get(name("arm", i, "mass"));
-        l.rc = get(name("arm", i, "rc"));
-        l.I_arm = get(name("arm", i, "I"));
-        const double phi = get(name("arm", i, "com_angle"));
-        l.com_c = std::cos(phi), l.com_s = std::sin(phi);
-        l.qmin = get(name("arm", i, "qmin")), l.qmax = get(name("arm", i, "qmax"));
-        l.npt = 3, l.nmass = 1, l.nrod = 1;
-        l.mass[0] = {2, l.m_body};
-        l.rod[0] = {0, 1, l.m_rod};
-      }
-    }
+    l.type->leg->compile(get, i, d_.lumped_rods[i], l);
     if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
     if (d_.articulated) l.f = vec("leg", i, "f");
     rsum += l.p.norm();
