@@ -14,7 +14,7 @@ README = (REPO / "README.md").read_text()
 
 # shell commands of the README that take seconds (each is run as written, with the venv's cosim)
 CHEAP = [".venv/bin/cosim run scenarios/6pus_step_pd.toml", ".venv/bin/cosim params 6pus",
-         ".venv/bin/cosim params quattro --set appendix_a",
+         ".venv/bin/cosim params quattro --set appendix_a", ".venv/bin/cosim params emps --set reference",
          ".venv/bin/cosim export-ssp scenarios/6pus_step_pdg.toml --out out/6pus_step_pdg.ssp",
          ".venv/bin/cosim view results/6pus_step_pd/6pus_step_pd.csv",
          ".venv/bin/cosim import data/emps/DATA_EMPS.mat --map data/emps/emps_map.toml --out out/emps"]

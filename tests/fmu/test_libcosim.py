@@ -64,7 +64,8 @@ def test_libcosim_runs_the_described_fmus_like_fmpy(robot, tmp_path):
 
     m = Model(robot)
     tau0 = m.gravity_load(m.home())
-    scale = 0.02 * max(1.0, float(np.abs(tau0).max()))
+    # an effort that moves it: 2 % of its gravity load, or of its mass (a horizontal axis has no load)
+    scale = 0.02 * max(1.0, float(np.abs(tau0).max()), float(np.diag(m.mass_matrix(m.home())).max()))
     outputs = list(m.facts.pose_names) + [f"q[{i}]" for i in range(1, m.ndof + 1)]
     _, lc, ref = _libcosim_and_fmpy(fmu.fmu_path(robot), tau0, 100, outputs, scale, tmp_path)
     assert np.max(np.abs(ref[-1] - ref[0])) > 1e-6  # the robot moved

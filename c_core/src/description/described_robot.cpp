@@ -2,15 +2,11 @@
 #include "description/described_robot.hpp"
 
 #include <algorithm>
-#include <cstdlib>
-#include <fstream>
-#include <map>
-#include <mutex>
 #include <sstream>
 #include <unordered_map>
 
-#include "description/axis_robot.hpp"
 #include "description/jet.hpp"
+#include "description/joint_kind.hpp"
 #include "description/schema.hpp"
 #include "kinematics/generic_kinematics.hpp"
 #include "dynamics/drive.hpp"
@@ -518,7 +514,6 @@ std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(cons
 std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>& specs,
                                                     const std::vector<double>& values) const {
   const ParamValues get(d_.name, specs, values);
-  auto name = idx;
   auto vec = [&](const char* group, int i, const char* f0) { return get.vec(group, i, f0); };
   auto bad = [&](const std::string& msg) { get.bad(msg); };
   auto m = std::make_unique<Model>();
@@ -530,59 +525,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int i = 0; i < m->n; ++i) {
     LegModel l;
     l.type = d_.legs[i];
-    const Joint j = l.type->joint;
-    if (j == Joint::strut) {
-      l.base = vec("leg", i, "b");
-      l.p = vec("leg", i, "p");
-      l.qmin = get(name("strut", i, "qmin")), l.qmax = get(name("strut", i, "qmax"));
-      l.m_cyl = get(name("cylinder", i, "m")), l.l_cyl = get(name("cylinder", i, "l"));
-      l.m_pis = get(name("piston", i, "m")), l.l_pis = get(name("piston", i, "l"));
-      l.npt = 4, l.nrod = 2;
-      l.rod[0] = {0, 2, l.m_cyl};
-      l.rod[1] = {3, 1, l.m_pis};
-    } else {
-      l.L = get(name("leg", i, "L"));
-      l.p = V3(get(name("leg", i, "px")), get(name("leg", i, "py")), get(name("leg", i, "pz")));
-      l.branch = get(name("leg", i, "branch"));
-      l.m_rod = get(name("leg", i, "m"));
-      if (!(l.L > 0)) bad(name("leg", i, "L") + " = " + g6(l.L) + " m must be > 0");
-      if (l.branch != 1.0 && l.branch != -1.0) bad(name("leg", i, "branch") + " = " + g6(l.branch) + " must be +1 or -1");
-      l.disc_tol = 1e-12 * l.L * l.L;
-      if (d_.lumped_rods[i]) l.rod_self = 0.5, l.rod_cross = 0.0;
-      if (j == Joint::rail) {
-        l.base = vec("rail", i, "S0");
-        l.dir = vec("rail", i, "s");
-        l.ss = l.dir.squaredNorm();
-        l.inv_ss = 1.0 / l.ss;
-        if (std::abs(std::sqrt(l.ss) - 1) > 1e-6) bad("rail " + std::to_string(i + 1) + " direction is not a unit vector");
-        l.qmin = get(name("rail", i, "qmin")), l.qmax = get(name("rail", i, "qmax"));
-        l.m_body = get(name("slider", i, "m"));
-        l.npt = 2, l.nmass = 1, l.nrod = 1;
-        l.mass[0] = {0, l.m_body};
-        l.rod[0] = {0, 1, l.m_rod};
-      } else {
-        l.base = vec("arm", i, "A");
-        l.dir = vec("arm", i, "k");
-        l.u = vec("arm", i, "u");
-        if (std::abs(l.dir.norm() - 1) > 1e-6 || std::abs(l.u.norm() - 1) > 1e-6 || std::abs(l.dir.dot(l.u)) > 1e-6)
-          bad("arm " + std::to_string(i + 1) + ": axis and arm direction must be perpendicular unit vectors");
-        // Used as exact unit vectors (a file's rounded directions, within 1e-6 of unit and
-        // perpendicular, would otherwise make the arm r |u| long and the closure inexact).
-        l.dir.normalize();
-        l.u = (l.u - l.u.dot(l.dir) * l.dir).normalized();
-        l.w = l.dir.cross(l.u);
-        l.r = get(name("arm", i, "r"));
-        l.m_body = get(name("arm", i, "mass"));
-        l.rc = get(name("arm", i, "rc"));
-        l.I_arm = get(name("arm", i, "I"));
-        const double phi = get(name("arm", i, "com_angle"));
-        l.com_c = std::cos(phi), l.com_s = std::sin(phi);
-        l.qmin = get(name("arm", i, "qmin")), l.qmax = get(name("arm", i, "qmax"));
-        l.npt = 3, l.nmass = 1, l.nrod = 1;
-        l.mass[0] = {2, l.m_body};
-        l.rod[0] = {0, 1, l.m_rod};
-      }
-    }
+    l.type->leg->compile(get, i, d_.lumped_rods[i], l);
     if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
     if (d_.articulated) l.f = vec("leg", i, "f");
     rsum += l.p.norm();
@@ -859,169 +802,6 @@ void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, c
     for (int k = 0; k < l.nrod; ++k) V += 0.5 * l.rod[k].m * (height(lg.pos[l.rod[k].a]) + height(lg.pos[l.rod[k].b]));
   }
   *potential = V;
-}
-
-// ------------------------------------------------------------------ loading
-
-namespace {
-
-std::string read_file(const std::string& path, bool& ok) {
-  std::ifstream f(path, std::ios::binary);
-  ok = bool(f);
-  if (!ok) return "";
-  std::ostringstream os;
-  os << f.rdbuf();
-  return os.str();
-}
-
-std::vector<std::string> search_dirs() {
-  std::vector<std::string> dirs;
-  if (const char* env = std::getenv("PKM_ROBOT_PATH")) {
-    std::string s(env), cur;
-    for (char c : s + ":") {
-      if (c == ':') {
-        if (!cur.empty()) dirs.push_back(cur);
-        cur.clear();
-      } else {
-        cur += c;
-      }
-    }
-  }
-#ifdef PKM_ROBOTS_DIR
-  dirs.push_back(PKM_ROBOTS_DIR);
-#endif
-  return dirs;
-}
-
-bool is_path(const std::string& s) {
-  return s.find('/') != std::string::npos ||
-         (s.size() > 5 && s.compare(s.size() - 5, 5, ".toml") == 0);
-}
-
-// Robots made so far, by file text (a changed file gives a new robot; old models keep theirs).
-std::mutex g_mu;
-std::map<std::string, std::unique_ptr<DescribedRobot>>& cache() {
-  static std::map<std::string, std::unique_ptr<DescribedRobot>> c;
-  return c;
-}
-
-const Robot* make(const std::string& path, const std::string& text) {
-  std::lock_guard<std::mutex> lock(g_mu);
-  auto& c = cache();
-  const std::string key = path + '\n' + text;
-  auto it = c.find(key);
-  if (it != c.end()) return it->second.get();
-  static int serial = 0;
-  Description desc = read_description(text, path);
-  std::unique_ptr<DescribedRobot> r;
-  if (desc.joint == Joint::axis) r = std::make_unique<AxisRobot>(std::move(desc), ++serial);
-  else r = std::make_unique<DescribedRobot>(std::move(desc), ++serial);
-  const Description& d = r->description();
-  // Every named value must be a parameter of the robot or of its drive layer, inside the
-  // parameter's range (as anywhere a value is set: params=, set_params, the FMUs).
-  const auto drive_specs = drive::specs(*r);
-  std::unordered_map<std::string, const ParamSpec*> by_name;
-  for (const auto& p : d.params) by_name.emplace(p.name, &p);
-  for (const auto& p : drive_specs) by_name.emplace(p.name, &p);
-  for (const auto& s : d.sets)
-    for (const auto& o : s.second) {
-      const auto it = by_name.find(o.name);
-      const std::string where = path + ":" + std::to_string(o.line) + ": ";
-      if (it == by_name.end())
-        throw Error(PKM_ERR_ARGUMENT, where + "'" + o.name + "' is not a parameter of " + d.name + " (cosim params " +
-                                          path + " lists them)");
-      const ParamSpec& p = *it->second;
-      if (!(o.value >= p.lo && o.value <= p.hi))
-        throw Error(PKM_ERR_ARGUMENT, where + o.name + " = " + num(o.value) + " " + p.unit + " is outside [" +
-                                          num(p.lo) + ", " + num(p.hi) + "] (" + p.description + ")");
-    }
-  // The default set must compile: home reachable, no singularity there.
-  for (const auto& s : d.sets) {
-    auto specs = r->param_specs(s.first);
-    std::vector<double> vals;
-    for (const auto& p : specs) vals.push_back(p.value);
-    try {
-      r->compile(specs, vals);
-    } catch (const Error& e) {
-      // Name the home line and, for a leg's failure, the [[leg]] table it came from.
-      std::string msg = e.what(), where;
-      const auto k = msg.find("leg ");
-      if (k != std::string::npos) {
-        const int leg = std::atoi(msg.c_str() + k + 4);
-        if (leg >= 1 && leg <= (int)d.leg_lines.size())
-          where = " (leg " + std::to_string(leg) + " is the [[leg]] on line " + std::to_string(d.leg_lines[leg - 1]) + ")";
-      }
-      throw Error(PKM_ERR_ARGUMENT, path + ":" + std::to_string(d.home_line) + ": parameter set '" + s.first + "': " +
-                                        msg + where);
-    }
-  }
-  const Robot* out = r.get();
-  c.emplace(key, std::move(r));
-  return out;
-}
-
-// A file loaded by path answers to its robot.name from then on: a name that already means
-// another robot (one written in C++, or a bundled description of the project's robots/)
-// would stand for two robots (and sweep workers or FMUs re-created by name get the other).
-void refuse_taken_name(const Description& d, const std::string& text) {
-  const std::string where = d.file + ":" + std::to_string(d.name_line) + ": robot.name '" + d.name + "' ";
-  if (is_builtin_robot(d.name))
-    throw Error(PKM_ERR_ARGUMENT, where + "is the name of a robot written in C++: give the description another name");
-#ifdef PKM_ROBOTS_DIR
-  bool ok = false;
-  const std::string bundled = std::string(PKM_ROBOTS_DIR) + "/" + d.name + ".toml";
-  const std::string bundled_text = read_file(bundled, ok);
-  if (ok && bundled_text != text)
-    throw Error(PKM_ERR_ARGUMENT, where + "is taken by the bundled " + bundled + ", a different description: give "
-                                  "this one another name");
-#endif
-}
-
-}  // namespace
-
-const Robot* load_described(const std::string& name) {
-  bool ok = false;
-  if (is_path(name)) {
-    const std::string text = read_file(name, ok);
-    if (!ok) throw Error(PKM_ERR_ARGUMENT, "cannot read robot description " + name);
-    const Robot* r = make(name, text);
-    refuse_taken_name(static_cast<const DescribedRobot&>(*r).description(), text);
-    return r;
-  }
-  for (const auto& dir : search_dirs()) {
-    const std::string path = dir + "/" + name + ".toml";
-    const std::string text = read_file(path, ok);
-    if (ok) return make(path, text);
-  }
-  // A robot loaded from a path earlier answers to its name too (the newest of that name).
-  std::lock_guard<std::mutex> lock(g_mu);
-  const DescribedRobot* found = nullptr;
-  for (const auto& kv : cache())
-    if (kv.second->description().name == name && (!found || kv.second->serial() > found->serial()))
-      found = kv.second.get();
-  return found;
-}
-
-const Robot* register_description(const std::string& text, const std::string& file) { return make(file, text); }
-
-std::vector<std::string> bundled_descriptions() {
-  std::vector<std::string> out;
-  for (const auto& dir : search_dirs()) {
-    // A short listing without <filesystem>'s exceptions: try the index file robots.list.
-    bool ok = false;
-    const std::string list = read_file(dir + "/robots.list", ok);
-    if (!ok) continue;
-    std::istringstream is(list);
-    std::string line;
-    while (std::getline(is, line)) {
-      const auto h = line.find('#');
-      if (h != std::string::npos) line = line.substr(0, h);
-      line.erase(0, line.find_first_not_of(" \t\r"));
-      line.erase(line.find_last_not_of(" \t\r") + 1);
-      if (!line.empty() && std::find(out.begin(), out.end(), line) == out.end()) out.push_back(line);
-    }
-  }
-  return out;
 }
 
 }  // namespace described

@@ -40,6 +40,7 @@ namespace described {
 // joint_kind.hpp) carries the platform itself.
 enum class Joint { rail, arm, strut, axis };
 class AxisKind;
+class LegKind;
 
 // A leg architecture: which actuated joint, and what the Grubler-Kutzbach count sees
 // (bodies, joints, their freedoms, idle freedoms such as a rod's spin between two
@@ -50,6 +51,7 @@ struct LegType {
   int bodies, joints, freedoms, idle;
   bool planar;  // a planar chain (only with planar robots)
   const char* what;
+  const LegKind* leg = nullptr;    // rail, arm, strut: its kind
   const AxisKind* axis = nullptr;  // Joint::axis: its kind
 };
 const LegType* find_leg_type(const std::string& name);

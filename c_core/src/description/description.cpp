@@ -16,19 +16,19 @@ namespace {
 
 // bodies, joints, freedoms, idle: what the Grubler-Kutzbach count sees of one leg.
 const LegType kLegTypes[] = {
-    {"PUS", Joint::rail, 2, 3, 6, 0, false, "slider on a rail at the base, universal joint, rod, spherical joint"},
-    {"PSS", Joint::rail, 2, 3, 7, 1, false, "slider on a rail, rod between two spherical joints"},
-    {"P(SS)2", Joint::rail, 3, 5, 13, 2, false, "slider on a rail, parallelogram of two rods (linear Delta)"},
-    {"PRR", Joint::rail, 2, 3, 3, 0, true, "planar: slider on a rail, rod between two revolute joints"},
-    {"RUS", Joint::arm, 2, 3, 6, 0, false, "revolute arm at the base, universal joint, rod, spherical joint"},
-    {"RSS", Joint::arm, 2, 3, 7, 1, false, "revolute arm, rod between two spherical joints"},
-    {"R(SS)2", Joint::arm, 3, 5, 13, 2, false, "revolute arm, parallelogram of two rods (Delta)"},
-    {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints"},
-    {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint"},
-    {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint"},
+    {"PUS", Joint::rail, 2, 3, 6, 0, false, "slider on a rail at the base, universal joint, rod, spherical joint", &rail_leg()},
+    {"PSS", Joint::rail, 2, 3, 7, 1, false, "slider on a rail, rod between two spherical joints", &rail_leg()},
+    {"P(SS)2", Joint::rail, 3, 5, 13, 2, false, "slider on a rail, parallelogram of two rods (linear Delta)", &rail_leg()},
+    {"PRR", Joint::rail, 2, 3, 3, 0, true, "planar: slider on a rail, rod between two revolute joints", &rail_leg()},
+    {"RUS", Joint::arm, 2, 3, 6, 0, false, "revolute arm at the base, universal joint, rod, spherical joint", &arm_leg()},
+    {"RSS", Joint::arm, 2, 3, 7, 1, false, "revolute arm, rod between two spherical joints", &arm_leg()},
+    {"R(SS)2", Joint::arm, 3, 5, 13, 2, false, "revolute arm, parallelogram of two rods (Delta)", &arm_leg()},
+    {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints", &arm_leg()},
+    {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint", &strut_leg()},
+    {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint", &strut_leg()},
     // Single axes: the joint carries the platform (no body of its own, one joint, one freedom).
-    {prismatic_axis().type(), Joint::axis, 0, 1, 1, 0, false, prismatic_axis().what(), &prismatic_axis()},
-    {revolute_axis().type(), Joint::axis, 0, 1, 1, 0, false, revolute_axis().what(), &revolute_axis()},
+    {prismatic_axis().type(), Joint::axis, 0, 1, 1, 0, false, prismatic_axis().what(), nullptr, &prismatic_axis()},
+    {revolute_axis().type(), Joint::axis, 0, 1, 1, 0, false, revolute_axis().what(), nullptr, &revolute_axis()},
 };
 
 const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
@@ -246,17 +246,10 @@ Description read_description(const std::string& text, const std::string& file) {
     const Joint j = l.type->joint;
     std::vector<std::string> known = {"type", "copies", "platform_point", "stroke"};
     if (d.articulated) known.push_back("platform_offset");
-    if (j == Joint::rail || j == Joint::arm) for (auto k : {"rod_length", "rod_mass", "rod_model", "branch"}) known.push_back(k);
-    if (j == Joint::rail) for (auto k : {"rail_origin", "rail_direction", "slider_mass"}) known.push_back(k);
-    if (j == Joint::arm) for (auto k : {"axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_com_angle", "arm_inertia"}) known.push_back(k);
-    if (j == Joint::strut) for (auto k : {"base_point", "cylinder_mass", "cylinder_length", "piston_mass", "piston_length"}) known.push_back(k);
-    if (j == Joint::axis) for (const auto& k : l.type->axis->fields()) known.push_back(k);
+    for (const auto& k : j == Joint::axis ? l.type->axis->fields() : l.type->leg->fields()) known.push_back(k);
     rd.only(t, known, where);
     const LegSchema schema{rd, t, i, l.angle, where, P};
     auto vec = [&](const char* key, const char* what) { return schema.vec(key, what); };
-    auto scalar = [&](const char* key, const char* what, double lo, double hi, const char* unit) {
-      return schema.scalar(key, what, lo, hi, unit);
-    };
     auto line_of = [&](const char* key) { return schema.line_of(key); };
     const auto p = vec("platform_point", "the leg's attachment point in the platform frame [m]");
     const auto stroke = rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]"), "leg.stroke", 2);
@@ -271,81 +264,8 @@ Description read_description(const std::string& text, const std::string& file) {
             p[k], -1e3, 1e3, line_of("platform_point"));
       l.type->axis->read(schema, stroke);
       d.lumped_rods.push_back(false);
-    } else if (j == Joint::rail || j == Joint::arm) {
-      const double L = scalar("rod_length", "rod length between its two joints [m]", 1e-9, 1e300, "m");
-      add(idx("leg", i, "L"), "m", "length of " + leg + " (rod between its two joints)", L, 1e-9, 1e3, line_of("rod_length"));
-      const std::string frame = d.articulated ? ", axis frame (turns with the articulation)" : ", platform frame";
-      add(idx("leg", i, "px"), "m", "x of the platform attachment point of " + leg + frame, p[0], -1e3, 1e3, line_of("platform_point"));
-      add(idx("leg", i, "py"), "m", "y of the platform attachment point of " + leg + frame, p[1], -1e3, 1e3, line_of("platform_point"));
-      add(idx("leg", i, "pz"), "m", "z of the platform attachment point of " + leg + frame, p[2], -1e3, 1e3, line_of("platform_point"));
-      if (d.articulated) {
-        std::vector<double> f0 = {0, 0, 0};
-        if (t.find("platform_offset")) f0 = rd.numbers(*t.find("platform_offset"), "leg.platform_offset", 3);
-        const char* c[3] = {"x", "y", "z"};
-        for (int k = 0; k < 3; ++k)
-          add(idx("leg", i, (std::string("f") + c[k]).c_str()), "m", std::string(c[k]) + " of the fixed (non-turning) offset of the platform attachment point of " + leg, f0[k], -1e3, 1e3, line_of("platform_offset"));
-      }
-      std::string rod_model = "uniform";
-      if (t.find("rod_model")) {
-        rod_model = rd.text(t, "rod_model", where, "uniform or lumped");
-        if (rod_model != "uniform" && rod_model != "lumped")
-          rd.fail(line_of("rod_model"), where + ": rod_model '" + rod_model + "' is not known (known: uniform, lumped)");
-      }
-      d.lumped_rods.push_back(rod_model == "lumped");
-      double br = 1;
-      if (t.find("branch")) {
-        br = rd.number(*t.find("branch"), "leg.branch");
-        if (br != 1 && br != -1) rd.fail(line_of("branch"), where + ": branch = " + num(br) + " must be +1 or -1 (which inverse-kinematics root)");
-      }
-      add(idx("leg", i, "branch"), "1", "inverse-kinematics root of " + leg + " (+1 or -1, docs/robots.md)", br, -1, 1, line_of("branch"));
-      add(idx("leg", i, "m"), "kg", "mass of the rod(s) of " + leg + " (uniform slender rods)",
-          scalar("rod_mass", "mass of the rod, or of both rods of a parallelogram [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("rod_mass"));
-    }
-    if (j == Joint::rail) {
-      const auto S0 = vec("rail_origin", "slider position at q = 0 [m]");
-      const auto s = schema.unit_vec("rail_direction", "unit rail direction, q grows along it");
-      const char* c[3] = {"x", "y", "z"};
-      for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("S0") + c[k]).c_str()), "m", std::string(c[k]) + " of the slider of " + leg + " at stroke q = 0", S0[k], -1e3, 1e3, line_of("rail_origin"));
-      for (int k = 0; k < 3; ++k) add(idx("rail", i, (std::string("s") + c[k]).c_str()), "1", std::string(c[k]) + " of the rail direction of " + leg + " (unit vector)", s[k], -2, 2, line_of("rail_direction"));
-      add(idx("rail", i, "qmin"), "m", "lower stroke limit of " + leg, stroke[0], -1e3, 1e3, line_of("stroke"));
-      add(idx("rail", i, "qmax"), "m", "upper stroke limit of " + leg, stroke[1], -1e3, 1e3, line_of("stroke"));
-      add(idx("slider", i, "m"), "kg", "mass of the slider carriage of " + leg,
-          scalar("slider_mass", "slider carriage mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("slider_mass"));
-    } else if (j == Joint::arm) {
-      const auto A = vec("axis_point", "a point of the motor axis [m]");
-      const auto k_ = schema.unit_vec("axis", "unit motor axis; q turns the arm about it by the right-hand rule");
-      const auto u = schema.unit_vec("arm_direction", "unit arm direction at q = 0, perpendicular to the axis");
-      if (std::abs(k_[0] * u[0] + k_[1] * u[1] + k_[2] * u[2]) > 1e-6) rd.fail(line_of("arm_direction"), where + ": arm_direction must be perpendicular to the axis");
-      const char* c[3] = {"x", "y", "z"};
-      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("A") + c[k]).c_str()), "m", std::string(c[k]) + " of the motor axis point of " + leg, A[k], -1e3, 1e3, line_of("axis_point"));
-      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("k") + c[k]).c_str()), "1", std::string(c[k]) + " of the motor axis of " + leg + " (unit vector)", k_[k], -2, 2, line_of("axis"));
-      for (int k = 0; k < 3; ++k) add(idx("arm", i, (std::string("u") + c[k]).c_str()), "1", std::string(c[k]) + " of the arm direction of " + leg + " at q = 0 (unit, perpendicular to the axis)", u[k], -2, 2, line_of("arm_direction"));
-      add(idx("arm", i, "r"), "m", "arm length of " + leg + " (motor axis to elbow joint)",
-          scalar("arm_length", "motor axis to elbow [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("arm_length"));
-      add(idx("arm", i, "mass"), "kg", "arm mass of " + leg, scalar("arm_mass", "arm mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("arm_mass"));
-      add(idx("arm", i, "rc"), "m", "distance from the motor axis to the arm's centre of mass along the arm, " + leg,
-          scalar("arm_com", "axis to the arm's centre of mass [m]", -1e3, 1e3, "m"), -1e3, 1e3, line_of("arm_com"));
-      add(idx("arm", i, "I"), "kg m2", "arm inertia about its centre of mass, about an axis parallel to the motor axis, " + leg,
-          scalar("arm_inertia", "arm inertia about its centre of mass [kg m2]", 0, 1e6, "kg m2"), 0, 1e6, line_of("arm_inertia"));
-      double phi = 0;
-      if (t.find("arm_com_angle")) phi = rd.number(*t.find("arm_com_angle"), "leg.arm_com_angle");
-      add(idx("arm", i, "com_angle"), "rad", "angle of the arm's centre of mass from the line axis-to-elbow, positive as q, " + leg,
-          phi, -4, 4, line_of("arm_com_angle"));
-      add(idx("arm", i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, line_of("stroke"));
-      add(idx("arm", i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, line_of("stroke"));
-    } else if (j == Joint::strut) {
-      d.lumped_rods.push_back(false);
-      const auto B = vec("base_point", "the strut's base joint [m]");
-      const char* c[3] = {"x", "y", "z"};
-      for (int k = 0; k < 3; ++k) add(idx("leg", i, (std::string("b") + c[k]).c_str()), "m", std::string(c[k]) + " of the base joint of " + leg, B[k], -1e3, 1e3, line_of("base_point"));
-      for (int k = 0; k < 3; ++k) add(idx("leg", i, (std::string("p") + c[k]).c_str()), "m", std::string(c[k]) + " of the platform attachment point of " + leg + ", platform frame", p[k], -1e3, 1e3, line_of("platform_point"));
-      if (!(stroke[0] > 0)) rd.fail(line_of("stroke"), where + ": a strut's stroke is its length between the joints; min = " + num(stroke[0]) + " m must be > 0");
-      add(idx("strut", i, "qmin"), "m", "shortest length of the strut of " + leg, stroke[0], 1e-9, 1e3, line_of("stroke"));
-      add(idx("strut", i, "qmax"), "m", "longest length of the strut of " + leg, stroke[1], 1e-9, 1e3, line_of("stroke"));
-      add(idx("cylinder", i, "m"), "kg", "cylinder mass of " + leg + " (uniform tube from the base joint)", scalar("cylinder_mass", "cylinder mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("cylinder_mass"));
-      add(idx("cylinder", i, "l"), "m", "cylinder length of " + leg, scalar("cylinder_length", "cylinder length [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("cylinder_length"));
-      add(idx("piston", i, "m"), "kg", "piston mass of " + leg + " (uniform rod ending at the platform joint)", scalar("piston_mass", "piston mass [kg]", 0, 1e6, "kg"), 0, 1e6, line_of("piston_mass"));
-      add(idx("piston", i, "l"), "m", "piston length of " + leg, scalar("piston_length", "piston length [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, line_of("piston_length"));
+    } else {
+      d.lumped_rods.push_back(l.type->leg->read(schema, p, stroke, d.articulated));
     }
     d.legs.push_back(l.type);
     d.leg_lines.push_back(t.line);

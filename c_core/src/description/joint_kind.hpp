@@ -65,6 +65,28 @@ class AxisKind {
   virtual double gravity(const AxisModel& a, const AxisBodies& b, double q) const = 0;
 };
 
+// A leg from the base to a platform point, with one actuated joint of the kind (rail, arm,
+// strut): its [[leg]] fields and their parameters (the schema) and its compiled form; the
+// kinds' geometry and dynamics are still in described_robot.cpp.
+struct LegModel;
+class LegKind {
+ public:
+  virtual ~LegKind() = default;
+  // The fields beyond type, copies, platform_point, stroke (and platform_offset).
+  virtual std::vector<std::string> fields() const = 0;
+  // Fields to parameters (p the platform point, turned with the copy); true: the rod's mass
+  // is lumped at its joints.
+  virtual bool read(const LegSchema& s, const std::vector<double>& p, const std::vector<double>& stroke,
+                    bool articulated) const = 0;
+  virtual void compile(const ParamValues& v, int i, bool lumped, LegModel& l) const = 0;
+};
+const LegKind& rail_leg();   // kind_rail.cpp
+const LegKind& arm_leg();    // kind_arm.cpp
+const LegKind& strut_leg();  // kind_strut.cpp
+// The rod a rail or an arm ends in (kind_rod.cpp): leg[i].L px py pz (fx fy fz) branch m.
+bool read_rod(const LegSchema& s, const std::vector<double>& p, bool articulated);
+void compile_rod(const ParamValues& v, int i, bool lumped, LegModel& l);
+
 // The single-axis kinds (description/kind_prismatic_axis.cpp, kind_revolute_axis.cpp).
 const AxisKind& prismatic_axis();
 const AxisKind& revolute_axis();

@@ -1,0 +1,86 @@
+// Joint kind `arm` (RUS, RSS, R(SS)2, RRR): a revolute arm at the base, elbow
+// B = A + r (cos q u + sin q (k x u)), its mass at its centre of mass plus an inertia, then the
+// rod to the platform point (kind_rod.cpp).  Its schema and compiled form; the geometry and
+// dynamics are in described_robot.cpp.
+#include <cmath>
+
+#include "description/described_robot.hpp"
+#include "description/joint_kind.hpp"
+
+namespace pkm {
+namespace described {
+
+namespace {
+
+class ArmLeg final : public LegKind {
+ public:
+  std::vector<std::string> fields() const override { return {"rod_length", "rod_mass", "rod_model", "branch", "axis_point", "axis", "arm_direction", "arm_length", "arm_mass", "arm_com", "arm_com_angle", "arm_inertia"}; }
+
+  bool read(const LegSchema& s, const std::vector<double>& p, const std::vector<double>& stroke,
+            bool articulated) const override {
+    const bool lumped = read_rod(s, p, articulated);
+    const Reader& rd = s.rd;
+    const toml::Table& t = s.t;
+    const int i = s.i;
+    const std::string leg = "leg " + std::to_string(i + 1);
+
+    const auto A = s.vec("axis_point", "a point of the motor axis [m]");
+    const auto k_ = s.unit_vec("axis", "unit motor axis; q turns the arm about it by the right-hand rule");
+    const auto u = s.unit_vec("arm_direction", "unit arm direction at q = 0, perpendicular to the axis");
+    if (std::abs(k_[0] * u[0] + k_[1] * u[1] + k_[2] * u[2]) > 1e-6) rd.fail(s.line_of("arm_direction"), s.where + ": arm_direction must be perpendicular to the axis");
+    const char* c[3] = {"x", "y", "z"};
+    for (int k = 0; k < 3; ++k) s.add(idx("arm", i, (std::string("A") + c[k]).c_str()), "m", std::string(c[k]) + " of the motor axis point of " + leg, A[k], -1e3, 1e3, s.line_of("axis_point"));
+    for (int k = 0; k < 3; ++k) s.add(idx("arm", i, (std::string("k") + c[k]).c_str()), "1", std::string(c[k]) + " of the motor axis of " + leg + " (unit vector)", k_[k], -2, 2, s.line_of("axis"));
+    for (int k = 0; k < 3; ++k) s.add(idx("arm", i, (std::string("u") + c[k]).c_str()), "1", std::string(c[k]) + " of the arm direction of " + leg + " at q = 0 (unit, perpendicular to the axis)", u[k], -2, 2, s.line_of("arm_direction"));
+    s.add(idx("arm", i, "r"), "m", "arm length of " + leg + " (motor axis to elbow joint)",
+        s.scalar("arm_length", "motor axis to elbow [m]", 1e-9, 1e300, "m"), 1e-9, 1e3, s.line_of("arm_length"));
+    s.add(idx("arm", i, "mass"), "kg", "arm mass of " + leg, s.scalar("arm_mass", "arm mass [kg]", 0, 1e6, "kg"), 0, 1e6, s.line_of("arm_mass"));
+    s.add(idx("arm", i, "rc"), "m", "distance from the motor axis to the arm's centre of mass along the arm, " + leg,
+        s.scalar("arm_com", "axis to the arm's centre of mass [m]", -1e3, 1e3, "m"), -1e3, 1e3, s.line_of("arm_com"));
+    s.add(idx("arm", i, "I"), "kg m2", "arm inertia about its centre of mass, about an axis parallel to the motor axis, " + leg,
+        s.scalar("arm_inertia", "arm inertia about its centre of mass [kg m2]", 0, 1e6, "kg m2"), 0, 1e6, s.line_of("arm_inertia"));
+    double phi = 0;
+    if (t.find("arm_com_angle")) phi = rd.number(*t.find("arm_com_angle"), "leg.arm_com_angle");
+    s.add(idx("arm", i, "com_angle"), "rad", "angle of the arm's centre of mass from the line axis-to-elbow, positive as q, " + leg,
+        phi, -4, 4, s.line_of("arm_com_angle"));
+    s.add(idx("arm", i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, s.line_of("stroke"));
+    s.add(idx("arm", i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, s.line_of("stroke"));
+    return lumped;
+  }
+
+  void compile(const ParamValues& v, int i, bool lumped, LegModel& l) const override {
+    compile_rod(v, i, lumped, l);
+    const auto name = idx;
+
+    l.base = v.vec("arm", i, "A");
+    l.dir = v.vec("arm", i, "k");
+    l.u = v.vec("arm", i, "u");
+    if (std::abs(l.dir.norm() - 1) > 1e-6 || std::abs(l.u.norm() - 1) > 1e-6 || std::abs(l.dir.dot(l.u)) > 1e-6)
+      v.bad("arm " + std::to_string(i + 1) + ": axis and arm direction must be perpendicular unit vectors");
+    // Used as exact unit vectors (a file's rounded directions, within 1e-6 of unit and
+    // perpendicular, would otherwise make the arm r |u| long and the closure inexact).
+    l.dir.normalize();
+    l.u = (l.u - l.u.dot(l.dir) * l.dir).normalized();
+    l.w = l.dir.cross(l.u);
+    l.r = v(name("arm", i, "r"));
+    l.m_body = v(name("arm", i, "mass"));
+    l.rc = v(name("arm", i, "rc"));
+    l.I_arm = v(name("arm", i, "I"));
+    const double phi = v(name("arm", i, "com_angle"));
+    l.com_c = std::cos(phi), l.com_s = std::sin(phi);
+    l.qmin = v(name("arm", i, "qmin")), l.qmax = v(name("arm", i, "qmax"));
+    l.npt = 3, l.nmass = 1, l.nrod = 1;
+    l.mass[0] = {2, l.m_body};
+    l.rod[0] = {0, 1, l.m_rod};
+  }
+};
+
+}  // namespace
+
+const LegKind& arm_leg() {
+  static const ArmLeg k;
+  return k;
+}
+
+}  // namespace described
+}  // namespace pkm
