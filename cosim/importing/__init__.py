@@ -7,12 +7,12 @@ variable names, made into pkm-recordings through a map file (docs/importing.md).
 * :mod:`.units`: units and their factors to SI;
 * :mod:`.convert`: source + map -> :class:`~cosim.recording.Recording`, written.
 
-Example (the EMPS drive shipped in ``data/emps/``; runnable examples in each function's
-docstring)::
+Example (a rig's MATLAB file and its map; ``data/`` has a real one, docs/importing.md; runnable
+examples in each function's docstring)::
 
     from cosim.importing import import_recording
-    res = import_recording("data/emps/DATA_EMPS.mat", "data/emps/emps_map.toml", "out/emps")
-    res.table, res.sidecar      # out/emps/DATA_EMPS.csv and .json
+    res = import_recording("rig.mat", "rig_map.toml", "out/rig")
+    res.table, res.sidecar      # out/rig/rig.csv and out/rig/rig.json
 """
 from .convert import Imported, derive, import_recording, to_recording
 from .errors import ImportFailure
