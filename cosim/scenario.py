@@ -446,8 +446,8 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
         res = run(p, ctrl, ref, x0=x0, q_noise=noise.get("q", 0.0), qd_noise=noise.get("qd", 0.0),
                   pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], drive=CoreDrive(true),
                   progress=progress)
-    except RunInterrupted as e:
-        e.files = export_partial(sc, e, d) if export else {}
+    except RunInterrupted as e:  # the caller may keep the samples: export_partial(e.scenario, e, e.out_dir)
+        e.scenario, e.out_dir = sc, d
         raise
     finally:
         p.close()
@@ -483,9 +483,10 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
 
 
 def export_partial(sc: Scenario, stop: RunInterrupted, d: Path) -> dict:
-    """The recording of an interrupted run, up to the interruption, in ``d``; the metrics
-    and figure of an earlier complete run there are removed (they would not match it).
-    Nothing is written when fewer than two samples were taken."""
+    """The recording of an interrupted run (:func:`run_scenario` raised ``stop``, a
+    KeyboardInterrupt carrying the samples taken), up to the interruption, in ``d``; the
+    metrics and figure of an earlier complete run there are removed (they would not match
+    it).  Nothing is written when fewer than two samples were taken."""
     from .recording import write_recording
 
     for old in (d / f"{sc.name}_metrics.json", d / f"{sc.name}.png"):

@@ -146,6 +146,14 @@ class _Parser(argparse.ArgumentParser):
 def main(argv=None) -> int:
     """``cosim ...``: the exit code (0; 2 for a mistake, said in one line; 130 when
     interrupted by ctrl-C; 1 for an error of the toolkit itself, also one line)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # while starting (imports) or saying the outcome
+        print("cosim: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv) -> int:
     _load_plugins()
     parser = _Parser(prog="cosim", description=__doc__)
     parser.add_argument("--quiet", dest="global_quiet", action="store_true",
@@ -179,7 +187,7 @@ def main(argv=None) -> int:
         print(f"cosim {args.command}: {e}", file=sys.stderr)
         return 130
     except KeyboardInterrupt:
-        print(f"cosim {args.command}: interrupted (nothing written)", file=sys.stderr)
+        print(f"cosim {args.command}: interrupted", file=sys.stderr)
         return 130
     except (PkmError, ValueError, FileNotFoundError, MasterError, FMUError, SweepError) as e:
         return fail(os_error_text(e) if isinstance(e, OSError) and e.filename else _one_line(e))

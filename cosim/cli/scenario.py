@@ -1,6 +1,7 @@
 """``cosim run scenarios/<name>.toml``: run a co-simulation scenario, print its metrics."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from ..core import robot_facts
@@ -105,16 +106,21 @@ def cmd_run(args):
 
     from ..jsonable import jsonable
     from ..master import RunInterrupted
-    from ..scenario import run_scenario
+    from ..scenario import export_partial, run_scenario
     from .main import Interrupted
 
     try:
         out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
                            figures=False if args.no_figures else None)
     except RunInterrupted as e:
-        rec = getattr(e, "files", {}).get("recording")
-        raise Interrupted(f"interrupted at t = {e.time:.4g} s, partial results in {rec} (the recording up to then)"
-                          if rec else f"interrupted at t = {e.time:.4g} s, nothing written (no sample taken)") from None
+        if len(e.partial) < 2:
+            raise Interrupted(f"interrupted at t = {e.time:.4g} s, nothing written (no step taken)") from None
+        # said at once (a long recording takes a while to write), then written
+        sc, d = e.scenario, e.out_dir
+        print(f"cosim run: interrupted at t = {e.time:.4g} s, partial results in {d / sc.name}.csv (the recording "
+              f"up to then, {len(e.partial)} samples)", file=sys.stderr, flush=True)
+        export_partial(sc, e, d)
+        return 130
     if args.html:
         from ..report.pages import run_page
 
