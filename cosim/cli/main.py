@@ -23,8 +23,10 @@ def robot_arg(value: str) -> str:
     description file (checked when the command makes the model, with the file's line)."""
     from ..core import robots
 
-    if value in robots() or value.endswith(".toml") or "/" in value:
+    if value in robots():
         return value
+    if value.endswith(".toml") or "/" in value:
+        return input_file(value)
     raise argparse.ArgumentTypeError(
         f"unknown robot {value!r} (known: {', '.join(robots())}; or a path to a description file, docs/robots.md)")
 
@@ -270,6 +272,24 @@ def input_file(value: str) -> str:
                 f.read(1)
         except OSError as e:
             raise _arg_error(f"cannot read {value}: {os_error_reason(e)}") from None
+    return value
+
+
+def toml_file(value: str) -> str:
+    """argparse type of a TOML input (scenario, sweep spec): :func:`input_file`, then text
+    that TOML reads; what the file means is the command's to check."""
+    import tomllib
+
+    input_file(value)
+    p = Path(value)
+    if p.is_file():
+        try:
+            tomllib.loads(p.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as e:
+            raise _arg_error(f"{value} is not a text file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
+                             f"UTF-8): give a TOML file") from None
+        except tomllib.TOMLDecodeError as e:
+            raise _arg_error(f"{value}: not valid TOML: {e}") from None
     return value
 
 

@@ -5,11 +5,11 @@ import sys
 from pathlib import Path
 
 from ..core import robot_facts
-from .main import command, input_file, output_dir, output_file, recording_file
+from .main import command, output_dir, output_file, recording_file, toml_file
 
 
 def _configure(p):
-    p.add_argument("scenario", type=input_file, help="scenario TOML file (see scenarios/ and docs/scenarios.md)")
+    p.add_argument("scenario", type=toml_file, help="scenario TOML file (see scenarios/ and docs/scenarios.md)")
     p.add_argument("--plant", choices=["core", "fmu"], default=None,
                    help="plant to step: the CS FMU through fmpy or the core directly (default: the file's)")
     p.add_argument("--duration", type=float, default=None, help="override the duration [s]")
@@ -147,7 +147,7 @@ def cmd_export_ssp(args):
 
 
 def _export_configure(p):
-    p.add_argument("scenario", type=input_file, help="scenario file (TOML) with a step reference")
+    p.add_argument("scenario", type=toml_file, help="scenario file (TOML) with a step reference")
     p.add_argument("--out", type=output_file, required=True, help="the .ssp archive to write")
 
 

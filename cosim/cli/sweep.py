@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import sys
 
-from .main import Interrupted, command, input_file, output_dir
+from .main import Interrupted, command, output_dir, toml_file
 
 
 def _configure(p):
-    p.add_argument("spec", nargs="?", type=input_file, help="sweep spec TOML (see scenarios/sweeps/ and docs/sweep.md)")
+    p.add_argument("spec", nargs="?", type=toml_file, help="sweep spec TOML (see scenarios/sweeps/ and docs/sweep.md)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of an existing Dask scheduler (tcp://host:8786); default: a LocalCluster")
     p.add_argument("--workers", type=int, default=None,
