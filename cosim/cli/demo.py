@@ -40,7 +40,8 @@ def cmd_demo(args):
     from .scenario import print_summary
 
     out_dir = Path(args.out)
-    print("== Part 1: co-simulation scenarios (controller in Python, plant integrated by CVODE)\n")
+    print("== Part 1: co-simulation scenarios (joint PD controllers closed around the 6-PUS plant; each summary says "
+          "which loop ran and the plant's integrator)\n")
     for name in DEMO_SCENARIOS:
         out = run_scenario(REPO / "scenarios" / name, plant=args.plant, out_dir=out_dir)
         print_summary(out)

@@ -20,6 +20,11 @@ def _configure(p):
                    help="also write <name>_report.html: interactive, self-contained (3D robot in motion, errors, efforts)")
 
 
+#: the integrators of the core plant (cosim.simulate), as the run summary names them
+INTEGRATORS = {"erk": "explicit Runge-Kutta 5(4)", "erk23": "explicit Runge-Kutta 3(2)", "bdf": "CVODE BDF",
+               "adams": "CVODE Adams"}
+
+
 def _small(unit: str):
     """(scale, unit) to print a small quantity of ``unit``: metres in mm, radians in mrad."""
     return {"m": (1e3, "mm"), "rad": (1e3, "mrad")}.get(unit, (1.0, unit))
@@ -37,6 +42,9 @@ def print_summary(out, file=None) -> None:
           f"{c['type']} (kp {_g(c['kp'])} {c['kp_unit']}, kd {_g(c['kd'])} {c['kd_unit']})", file=f)
     loop = ("compiled loop in the core" if res.loop == "compiled"
             else f"Python loop: {res.loop_note}" if res.loop_note else "Python loop")
+    method = INTEGRATORS.get(m["plant"].get("method"))
+    if method:
+        loop += f", plant integrated by {method}"
     print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall"
           f" ({loop})", file=f)
     facts = robot_facts(m["robot"])
