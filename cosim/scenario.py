@@ -37,7 +37,8 @@ import numpy as np
 from . import controllers as ctl
 from . import trajectories as tr
 from .jsonable import jsonable
-from .master import CoreDrive, CorePlant, FMUPlant, MasterError, RunInterrupted, make_reference, run
+from .closed_loop import LoopInterrupted
+from .master import CoreDrive, CorePlant, FMUPlant, MasterError, make_reference, run
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -446,7 +447,7 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
         res = run(p, ctrl, ref, x0=x0, q_noise=noise.get("q", 0.0), qd_noise=noise.get("qd", 0.0),
                   pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], drive=CoreDrive(true),
                   progress=progress)
-    except RunInterrupted as e:  # the caller may keep the samples: export_partial(e.scenario, e, e.out_dir)
+    except LoopInterrupted as e:  # the caller may keep the samples: export_partial(e.scenario, e, e.out_dir)
         e.scenario, e.out_dir = sc, d
         raise
     finally:
@@ -482,7 +483,7 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
     return {"recording": csv_path, "sidecar": side, "metrics": mpath}
 
 
-def export_partial(sc: Scenario, stop: RunInterrupted, d: Path) -> dict:
+def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
     """The recording of an interrupted run (:func:`run_scenario` raised ``stop``, a
     KeyboardInterrupt carrying the samples taken), up to the interruption, in ``d``; the
     metrics and figure of an earlier complete run there are removed (they would not match
@@ -494,8 +495,8 @@ def export_partial(sc: Scenario, stop: RunInterrupted, d: Path) -> dict:
     if len(stop.partial) < 2:
         return {}
     d.mkdir(parents=True, exist_ok=True)
-    notes = (f"scenario {sc.name}: interrupted at t = {stop.time:.6g} s of {sc.spec['duration']:g} s (ctrl-C); "
-             f"plant {sc.spec['plant']}; step {sc.spec['step']} s")
+    notes = (f"scenario {sc.name}: interrupted at t = {stop.partial.time[-1]:.6g} s of {sc.spec['duration']:g} s "
+             f"(ctrl-C); plant {sc.spec['plant']}; step {sc.spec['step']} s")
     csv_path, side = write_recording(d / f"{sc.name}.csv",
                                      stop.partial.to_recording(parameters=sc.spec["parameters"], notes=notes))
     return {"recording": csv_path, "sidecar": side}

@@ -113,20 +113,21 @@ def cmd_run(args):
     import json
 
     from ..jsonable import jsonable
-    from ..master import RunInterrupted
+    from ..closed_loop import LoopInterrupted
     from ..scenario import export_partial, run_scenario
     from .main import Interrupted
 
     try:
         out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
                            figures=False if args.no_figures else None)
-    except RunInterrupted as e:
-        if len(e.partial) < 2:
-            raise Interrupted(f"interrupted at t = {e.time:.4g} s, nothing written (no step taken)") from None
+    except LoopInterrupted as e:
+        part = e.partial
+        if len(part) < 2:
+            raise Interrupted("interrupted before the first step, nothing written") from None
         # said at once (a long recording takes a while to write), then written
         sc, d = e.scenario, e.out_dir
-        print(f"cosim run: interrupted at t = {e.time:.4g} s, partial results in {d / sc.name}.csv (the recording "
-              f"up to then, {len(e.partial)} samples)", file=sys.stderr, flush=True)
+        print(f"cosim run: interrupted at t = {part.time[-1]:.4g} s, partial results in {d / sc.name}.csv (the "
+              f"recording up to then, {len(part)} samples)", file=sys.stderr, flush=True)
         export_partial(sc, e, d)
         return 130
     if args.html:

@@ -17,7 +17,8 @@ import pytest
 from cosim import controllers as ctl
 from cosim import trajectories as tr
 from cosim.core import Model
-from cosim.master import CorePlant, RunInterrupted, make_reference, run
+from cosim.closed_loop import LoopInterrupted
+from cosim.master import CorePlant, make_reference, run
 from cosim.recording import read_recording
 
 REPO = Path(__file__).resolve().parents[2]
@@ -46,7 +47,7 @@ def test_the_compiled_loop_stops_within_0_2_s_of_the_signal_and_keeps_its_sample
             os.kill(os.getpid(), signal.SIGINT)
 
     threading.Thread(target=interrupt, daemon=True).start()
-    with pytest.raises(RunInterrupted) as e:
+    with pytest.raises(LoopInterrupted) as e:
         try:
             run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30), ref)
         finally:
@@ -56,7 +57,6 @@ def test_the_compiled_loop_stops_within_0_2_s_of_the_signal_and_keeps_its_sample
     assert part.loop == "compiled"
     assert 2 < len(part) < len(ref.time), len(part)  # stopped inside the loop
     assert latency < 0.2, f"{latency:.3f} s from the signal to the exception"
-    assert e.value.time == pytest.approx(part.time[-1])
     assert np.all(np.isfinite(part["q"])) and np.all(np.isfinite(part["tau"]))
     # the samples kept are the ones an uninterrupted run gives
     short = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30),
