@@ -26,8 +26,12 @@ if [ ${#missing[@]} -gt 0 ]; then
   say "    apt-get update"
   $SUDO apt-get update -qq
   # one line per package as apt unpacks it: "Unpacking chromium (...)"
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y "${missing[@]}" 2>&1 \
+  set +e
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y "${missing[@]}" 2>&1 | tee /tmp/pkm-cosim-apt.log \
     | awk '/^Unpacking /{n++; printf "[bootstrap]     unpacked %d: %s\n", n, $2; fflush()}'
+  rc=${PIPESTATUS[0]}
+  set -e
+  if [ "$rc" -ne 0 ]; then tail -20 /tmp/pkm-cosim-apt.log; say "apt-get failed: full log in /tmp/pkm-cosim-apt.log" >&2; exit 1; fi
   took
 fi
 
@@ -40,10 +44,13 @@ if [ ! -x .venv/bin/python ] || [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$wa
   [ -x .venv/bin/python ] || "$PY" -m venv .venv
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null
   # one line per package pip fetches, counted, then the install
+  set +e
   .venv/bin/python -m pip install --progress-bar off -r requirements.txt 2>&1 | tee .venv/pip.log \
     | awk '/^Collecting /{n++; printf "[bootstrap]     %d: %s\n", n, $2; fflush()}
            /^Installing collected packages/{printf "[bootstrap]     installing %d packages\n", n; fflush()}'
-  [ "${PIPESTATUS[0]}" -eq 0 ] || { say "pip failed: full log in .venv/pip.log" >&2; exit 1; }
+  rc=${PIPESTATUS[0]}
+  set -e
+  [ "$rc" -eq 0 ] || { tail -20 .venv/pip.log; say "pip failed: full log in .venv/pip.log" >&2; exit 1; }
   .venv/bin/python -m pip install -q --no-deps -e . >>.venv/pip.log 2>&1 \
     || { say "pip failed: full log in .venv/pip.log" >&2; exit 1; }
   echo "$want" > "$stamp"
