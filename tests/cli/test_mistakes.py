@@ -19,6 +19,7 @@ from cosim.cli.main import COMMANDS, main
 
 REPO = Path(__file__).resolve().parents[2]
 SCEN = REPO / "scenarios"
+EMPS = REPO / "data" / "emps"
 ROOT = os.geteuid() == 0
 
 STEP = 'robot = "6pus"\nduration = 0.5\n[controller]\ntype = "pd"\nkp = 300\nkd = 30\n[reference]\ntype = "step"\n'
@@ -89,7 +90,11 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "indices --robot": ["indices", "--robot", "{}", "--axis", "x=-0.01:0.01:3"],
           "blind-case --robot": ["blind-case", "--robot", "{}"],
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
-          "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"]}
+          "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
+          "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
+          "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
+          "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
+                             "{tmp}/imp", "--robot", "{}"]}
 # commands writing into a folder given by --out (or --keys); {} is the folder
 OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
             "diagnose": ["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--out", "{}"],
@@ -99,7 +104,8 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
             "indices": ["indices", "--robot", "6pus", "--axis", "x=-0.01:0.01:3", "--out", "{}"],
             "blind-case": ["blind-case", "--out", "{}"], "blind-case --keys": ["blind-case", "--keys", "{}"],
             "discrepancy-demo": ["discrepancy-demo", "--out", "{}"], "demo": ["demo", "--out", "{}"],
-            "blind-benchmark": ["blind-benchmark", "--out", "{}"]}
+            "blind-benchmark": ["blind-benchmark", "--out", "{}"],
+            "import": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", "{}"]}
 # commands writing one file given by --out
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
@@ -226,6 +232,11 @@ def _cases(tmp):
         (["export-ssp", str(SCEN / "6pus_step_pdg.toml")], "the following arguments are required: --out"),
         (["view", str(tmp / "missing.csv")], "file not found"),
         (["bench", "nope"], "invalid choice: 'nope'"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--out", str(tmp / "imp")], "the following arguments are required: --map"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", str(tmp / "imp"),
+          "--format", "xlsx"], "invalid choice: 'xlsx'"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _scenario(tmp, "map_syntax.toml", "[robot\n"), "--out",
+          str(tmp / "imp")], "map_syntax.toml: not valid TOML"),
         (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--solver", "bogus"], "invalid choice: 'bogus'"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--window", "-1"], "window = -1.0 must be"),
