@@ -342,14 +342,16 @@ def recording_file(value: str) -> str:
     except Exception:  # noqa: BLE001 - anything else wrong is the reader's to say, naming row and column
         return value
     joints = sorted({int(m.group(2)) for c in header if (m := re.fullmatch(r"(q|qd|tau|qref)(\d+)", c))})
-    poses = {n for r in robots() for n in robot_facts(r).tracker_names} | {"theta", "rx", "ry", "rz"}
+    n = joints[-1] if joints else 0
+    # more joints than the robot has, or fewer but every one complete (not a column left out)
+    complete = all(f"{c}{i}" in header for i in range(1, n + 1) for c in ("q", "qd", "tau"))
+    poses = {p for r in robots() for p in robot_facts(r).tracker_names} | {"theta", "rx", "ry", "rz"}
     alien = [c for c in header if c in poses and c not in facts.tracker_names]
-    if (joints and joints[-1] != facts.ndof) or alien:
-        n = joints[-1] if joints else 0
+    if n > facts.ndof or (0 < n < facts.ndof and complete) or (alien and complete):
         same = [r for r in robots() if robot_facts(r).ndof == n and r != robot]
         what = (f"joint columns q1..q{n} ({n} joints)" if joints and n != facts.ndof
                 else f"pose columns {', '.join(alien)}")
         raise _arg_error(f"{csv}: the sidecar {side.name} names robot {robot!r} ({facts.ndof} {facts.joint_noun}s, "
                          f"pose {' '.join(facts.tracker_names)}) but the file has {what}: does the sidecar name the "
-                         f"right robot?" + (f" (robots with {n} joints: {', '.join(same)})" if same else ""))
+                         f"right robot?" + (f" (robots with {n} joint{'s' * (n != 1)}: {', '.join(same)})" if same else ""))
     return value
