@@ -564,6 +564,18 @@ def _units(robot, nd):
             "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 
+def _stopped(plant, t, h, why) -> str:
+    """The message of a run that stopped in the communication step from ``t`` [s]: the
+    step's two ends (the cause names the time inside it), and a word on a step that is long
+    for a sampled controller."""
+    import re
+
+    why = re.sub(r"^closed loop stopped at sample \d+ \(t = [^)]*\): ", "", str(why))
+    hint = (f" (the controller holds each command for step = {h:g} s: a sampled controller needs a step well "
+            f"inside the loop's time constants, e.g. 0.001 s)" if h >= 0.1 else "")
+    return f"{plant.kind} run stopped in the step from t = {t:.6g} s to {t + h:.6g} s: {why}{hint}"
+
+
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
         pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
         compiled: bool | None = None, should_stop=None, f_ext=None) -> RunResult:
@@ -673,7 +685,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         raise LoopInterrupted(result(e.partial)) from None
     except Exception as e:
         if hasattr(e, "partial"):
-            raise MasterError(f"{plant.kind} run stopped at t = {e.loop_time:.6g} s: {e}", result(e.partial)) from e
+            raise MasterError(_stopped(plant, e.loop_time, h, e), result(e.partial)) from e
         if isinstance(e, ValueError):
             raise MasterError(str(e)) from e
         raise

@@ -37,6 +37,7 @@ import numpy as np
 from . import controllers as ctl
 from . import trajectories as tr
 from .jsonable import jsonable
+from .closed_loop import LoopInterrupted
 from .master import CoreDrive, CorePlant, FMUPlant, MasterError, make_reference, run
 
 REPO = Path(__file__).resolve().parent.parent
@@ -438,22 +439,25 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     ctrl, design = build_controller(sc, nominal, x0)
     noise = sc.spec["noise"]
     p = build_plant(sc, true, truth)
+    out_cfg = sc.spec["output"]
+    d = Path(out_dir or out_cfg.get("dir") or f"results/{sc.name}")
+    if not d.is_absolute() and out_dir is None and out_cfg.get("dir"):
+        d = Path.cwd() / d
     try:
         res = run(p, ctrl, ref, x0=x0, q_noise=noise.get("q", 0.0), qd_noise=noise.get("qd", 0.0),
                   pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], drive=CoreDrive(true),
                   progress=progress)
+    except LoopInterrupted as e:  # the caller may keep the samples: export_partial(e.scenario, e, e.out_dir)
+        e.scenario, e.out_dir = sc, d
+        raise
     finally:
         p.close()
     metrics = compute_metrics(sc, res, nominal, traj, ctrl, design)
     metrics["plant_parameters"] = {**sc.spec["parameters"], **truth}
     out = ScenarioResult(sc, res, metrics)
-    out_cfg = sc.spec["output"]
     if figures is None:
         figures = bool(out_cfg.get("figures", True))
     if export or figures:
-        d = Path(out_dir or out_cfg.get("dir") or f"results/{sc.name}")
-        if not d.is_absolute() and out_dir is None and out_cfg.get("dir"):
-            d = Path.cwd() / d
         d.mkdir(parents=True, exist_ok=True)
         if export:
             out.files.update(export_run(out, d))
@@ -477,6 +481,25 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
     mpath = d / f"{sc.name}_metrics.json"
     mpath.write_text(json.dumps(out.metrics, indent=2, default=jsonable))
     return {"recording": csv_path, "sidecar": side, "metrics": mpath}
+
+
+def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
+    """The recording of an interrupted run (:func:`run_scenario` raised ``stop``, a
+    KeyboardInterrupt carrying the samples taken), up to the interruption, in ``d``; the
+    metrics and figure of an earlier complete run there are removed (they would not match
+    it).  Nothing is written when fewer than two samples were taken."""
+    from .recording import write_recording
+
+    for old in (d / f"{sc.name}_metrics.json", d / f"{sc.name}.png"):
+        old.unlink(missing_ok=True)
+    if len(stop.partial) < 2:
+        return {}
+    d.mkdir(parents=True, exist_ok=True)
+    notes = (f"scenario {sc.name}: interrupted at t = {stop.partial.time[-1]:.6g} s of {sc.spec['duration']:g} s "
+             f"(ctrl-C); plant {sc.spec['plant']}; step {sc.spec['step']} s")
+    csv_path, side = write_recording(d / f"{sc.name}.csv",
+                                     stop.partial.to_recording(parameters=sc.spec["parameters"], notes=notes))
+    return {"recording": csv_path, "sidecar": side}
 
 
 # ------------------------------------------------------------------- metrics

@@ -5,11 +5,11 @@ import sys
 import warnings
 from pathlib import Path
 
-from .main import command
+from .main import command, output_dir, recording_file
 
 
 def _configure(p):
-    p.add_argument("recording", nargs="?", help="pkm-recording/1 calibration campaign (CSV with its JSON sidecar)")
+    p.add_argument("recording", nargs="?", type=recording_file, help="pkm-recording/1 calibration campaign (CSV with its JSON sidecar)")
     p.add_argument("--solver", default="gauss-newton",
                    choices=["pinv", "pinv-iter", "gauss-newton", "lm", "golden"],
                    help="estimation method (default gauss-newton)")
@@ -27,7 +27,7 @@ def _configure(p):
                         "parameter that moves a joint)")
     p.add_argument("--cond-max", type=float, default=100.0, help="condition-number limit (default 100)")
     p.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
-    p.add_argument("--out", metavar="DIR", help="write figures, the report and the calibrated parameters here")
+    p.add_argument("--out", metavar="DIR", type=output_dir, help="write figures, the report and the calibrated parameters here")
     p.add_argument("--html", action="store_true", help="with --out: also an interactive, self-contained HTML report")
     p.add_argument("--bench", action="store_true",
                    help="benchmark: 60-parameter 6-PUS calibration on --poses poses against a finite-difference "

@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from .main import command, robot_arg
+from .main import Interrupted, command, input_file, output_dir, recording_file, robot_arg
 
 
 def _effect_types():
@@ -23,12 +23,45 @@ def _effect_types():
     return TYPES
 
 
+def model_arg(value: str) -> str:
+    """argparse type of ``diagnose --model``: a named parameter set, or a JSON parameter
+    file (``cosim params R --json``, or ``{name: value}``) checked here, so that a missing
+    file or a value that is not a number is said naming the file and the parameter."""
+    import argparse
+    import math
+
+    p = Path(value)
+    if not (p.exists() or value.endswith(".json") or "/" in value):
+        return value  # a set name: the core lists the sets when it has no such one
+    if not p.exists():
+        raise argparse.ArgumentTypeError(f"{value}: no such parameter file (give a JSON file written by "
+                                         f"`cosim params ROBOT --json`, or a parameter set's name)")
+    input_file(value)
+    try:
+        spec = json.loads(p.read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        where = f" (line {e.lineno}, column {e.colno})" if isinstance(e, json.JSONDecodeError) else ""
+        raise argparse.ArgumentTypeError(f"{value}: not a JSON parameter file{where}") from None
+    params = spec.get("parameters", spec) if isinstance(spec, dict) else None
+    if not isinstance(params, dict):
+        raise argparse.ArgumentTypeError(f"{value}: expected a JSON object of parameters {{name: value}}")
+    prefix = "parameters." if "parameters" in spec else ""
+    for k, v in params.items():
+        if k in ("robot", "param_set") and not prefix:
+            continue
+        x = v.get("value") if isinstance(v, dict) else v
+        field = f"{prefix}{k}" + (".value" if isinstance(v, dict) else "")
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+            raise argparse.ArgumentTypeError(f"{value}: {field} = {json.dumps(x)} is not a finite number")
+    return value
+
+
 def _diag_configure(p):
-    p.add_argument("recording", help="pkm-recording/1 CSV (its JSON sidecar beside it)")
-    p.add_argument("--model", default=None,
+    p.add_argument("recording", type=recording_file, help="pkm-recording/1 CSV (its JSON sidecar beside it)")
+    p.add_argument("--model", type=model_arg, default=None,
                    help="model to test: a named parameter set or a JSON parameter file (cosim params R --json); "
                         "default: the robot's default set with the sidecar's overrides")
-    p.add_argument("--out", default=None, help="report directory (default: results/diagnosis/<recording name>)")
+    p.add_argument("--out", type=output_dir, default=None, help="report directory (default: results/diagnosis/<recording name>)")
     p.add_argument("--threshold", type=float, default=10.0, help="BIC decrease an effect must bring (default 10)")
     p.add_argument("--window", type=float, default=0.05, help="smoothing window [s] (default 0.05)")
     p.add_argument("--effects", default=None, help="comma-separated effect keys to test (default: the library)")
@@ -49,10 +82,15 @@ def cmd_diagnose(args):
     from .main import working
 
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
-    with working(f"diagnosing {Path(args.recording).name}"):
-        d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
-                     effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
-                     figures=not args.no_figures, instruments=not args.least_squares)
+    t0 = time.perf_counter()
+    try:
+        with working(f"diagnosing {Path(args.recording).name}"):
+            d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
+                         effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
+                         figures=not args.no_figures, instruments=not args.least_squares)
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "
+                          f"({out}/report.md and diagnosis.json are written at the end)") from None
     if args.json:
         from ..discrepancy.report import _strip_arrays
 
@@ -76,7 +114,7 @@ def print_diagnosis(d, file=None):
     file = file or sys.stdout
     p = lambda *a: print(*a, file=file)  # noqa: E731
     p(f"{d.recording} ({d.robot}): {d.conclusion}")
-    if d.localisation["summary"]:
+    if d.localisation.get("summary"):
         p("\nwhere:")
         for s in d.localisation["summary"]:
             p(f"  {s}")
@@ -99,6 +137,9 @@ def print_diagnosis(d, file=None):
             for x in items:
                 p(f"  {x}")
     h = d.heldout
+    if not h:  # not diagnosed (the conclusion says why): no fit to compare
+        p(f"\n(stopped after {d.timings.get('total', 0):.2f} s)")
+        return
     p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower "
       f"({h['gain_windows']:.1f}x in the windows out of band) on {', '.join(h['affected']) or '-'}")
     for name in h["affected"]:
@@ -126,7 +167,7 @@ def _bench_configure(p):
     p.add_argument("--seed", type=int, default=1, help="seed of the case plan (default 1)")
     p.add_argument("--robot", type=_robot_or_both, default="6pus",
                    help="robot (any the core knows), or 'both': every robot scenarios/blind/config.toml lists")
-    p.add_argument("--out", default="results/blind", help="output directory (default results/blind)")
+    p.add_argument("--out", type=output_dir, default="results/blind", help="output directory (default results/blind)")
     p.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
     p.add_argument("--report", action="store_true", help="write a diagnosis report per case")
     p.add_argument("--threshold", type=float, default=10.0)
@@ -193,8 +234,8 @@ def _case_configure(p):
     p.add_argument("--effect", action="append", default=[], help=f"effect type to hide (repeatable; none: clean): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--name", default=None, help="case name (default: from the effects and seed)")
-    p.add_argument("--out", default="results/blind/cases", help="recording directory")
-    p.add_argument("--keys", default="results/blind/keys", help="answer-key directory (kept apart)")
+    p.add_argument("--out", type=output_dir, default="results/blind/cases", help="recording directory")
+    p.add_argument("--keys", type=output_dir, default="results/blind/keys", help="answer-key directory (kept apart)")
 
 
 @command("blind-case", "write one blind case: a recording with hidden effects and its answer key apart")
@@ -211,7 +252,7 @@ cmd_blind_case.configure = _case_configure
 
 
 def _demo_configure(p):
-    p.add_argument("--out", default="results/discrepancy_demo", help="output directory")
+    p.add_argument("--out", type=output_dir, default="results/discrepancy_demo", help="output directory")
     p.add_argument("--robot", type=robot_arg, default="6pus", help="robot (any the core knows)")
     p.add_argument("--effect", default="coulomb", help=f"effect to hide (default coulomb): {', '.join(_effect_types())}")
     p.add_argument("--seed", type=int, default=3)

@@ -2,16 +2,16 @@
 pkm-recording through a map file (docs/importing.md)."""
 from __future__ import annotations
 
-from .main import command
+from .main import command, input_file, output_dir, robot_arg, toml_file
 
 
 def _configure(p):
-    p.add_argument("source", help="the rig's file: MATLAB .mat (v5 or v7.3), HDF5 .h5, CSV or TSV")
-    p.add_argument("--map", required=True, metavar="MAP.toml",
+    p.add_argument("source", type=input_file, help="the rig's file: MATLAB .mat (v5 or v7.3), HDF5 .h5, CSV or TSV")
+    p.add_argument("--map", type=toml_file, required=True, metavar="MAP.toml",
                    help="which variable feeds which recording column, with units (docs/importing.md)")
-    p.add_argument("--out", required=True, metavar="DIR", help="folder of the pkm-recording (made if missing)")
+    p.add_argument("--out", type=output_dir, required=True, metavar="DIR", help="folder of the pkm-recording (made if missing)")
     p.add_argument("--name", help="file name of the recording without extension (default: the source's)")
-    p.add_argument("--robot", help="robot name or description file, instead of the map's robot")
+    p.add_argument("--robot", type=robot_arg, help="robot name or description file, instead of the map's robot")
     p.add_argument("--format", dest="file_format", default="csv", choices=["csv", "parquet", "hdf5"],
                    help="the recording's table (default csv; parquet and hdf5 are read in blocks, for long recordings)")
 

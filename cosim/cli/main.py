@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 COMMANDS = {}
 
@@ -22,8 +23,10 @@ def robot_arg(value: str) -> str:
     description file (checked when the command makes the model, with the file's line)."""
     from ..core import robots
 
-    if value in robots() or value.endswith(".toml") or "/" in value:
+    if value in robots():
         return value
+    if value.endswith(".toml") or "/" in value:
+        return input_file(value)
     raise argparse.ArgumentTypeError(
         f"unknown robot {value!r} (known: {', '.join(robots())}; or a path to a description file, docs/robots.md)")
 
@@ -143,6 +146,16 @@ class _Parser(argparse.ArgumentParser):
 
 
 def main(argv=None) -> int:
+    """``cosim ...``: the exit code (0; 2 for a mistake, said in one line; 130 when
+    interrupted by ctrl-C; 1 for an error of the toolkit itself, also one line)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # while starting (imports) or saying the outcome
+        print("cosim: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv) -> int:
     _load_plugins()
     parser = _Parser(prog="cosim", description=__doc__)
     parser.add_argument("--quiet", dest="global_quiet", action="store_true",
@@ -153,22 +166,192 @@ def main(argv=None) -> int:
         if hasattr(fn, "configure"):
             fn.configure(p)
         p.set_defaults(_fn=fn)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # --help, or a mistake argparse has said in one line
+        return e.code if isinstance(e.code, int) else 2
     if args.global_quiet:
         import os
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
     from ..errors import PkmError
+    from ..fmu import FMUError
     from ..master import MasterError
+    from ..sweep.runner import SweepError
+
+    def fail(message, code=2):
+        print(f"cosim {args.command}: error: {message}", file=sys.stderr)
+        return code
 
     try:
         return int(args._fn(args) or 0)
-    except (PkmError, ValueError, FileNotFoundError, MasterError) as e:
-        print(f"cosim {args.command}: error: {e}", file=sys.stderr)
-        return 2
+    except Interrupted as e:
+        print(f"cosim {args.command}: {e}", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print(f"cosim {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except (PkmError, ValueError, FileNotFoundError, MasterError, FMUError, SweepError) as e:
+        return fail(os_error_text(e) if isinstance(e, OSError) and e.filename else _one_line(e))
     except BrokenPipeError:
         # The reader went away (`cosim params 6pus | head`): stop quietly, as Unix tools do.
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as e:
+        return fail(os_error_text(e))
+    except MemoryError:
+        return fail("out of memory: ask for less (a smaller grid, a shorter run or recording)")
+    except Exception as e:  # noqa: BLE001 - a fault of the toolkit, not of the input: still one line
+        import os
+
+        if os.environ.get("COSIM_TRACEBACK"):
+            raise
+        return fail(f"internal error ({type(e).__name__}: {_one_line(e)}); COSIM_TRACEBACK=1 shows where, "
+                    f"please report it", 1)
+
+
+def _one_line(e) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+class Interrupted(Exception):
+    """ctrl-C during a command that keeps what it did: the message says when it stopped
+    and where the partial results are (``interrupted at t = 1.234 s, partial results in
+    results/x``); the exit code is 130."""
+
+
+def os_error_text(e: OSError) -> str:
+    """One line for a file-system error: the path and what is wrong with it."""
+    text = os_error_reason(e)
+    name = e.filename if e.filename is not None else ""
+    return f"{name}: {text}" if name else text
+
+
+def os_error_reason(e: OSError) -> str:
+    """What is wrong in a file-system error, in words (without the path)."""
+    import errno
+
+    what = {errno.EISDIR: "is a directory, not a file", errno.ENOTDIR: "a part of this path is a file, not a folder",
+            errno.EEXIST: "already exists", errno.EACCES: "permission denied",
+            errno.EPERM: "operation not permitted (a read-only place?)", errno.EROFS: "read-only file system",
+            errno.ENOSPC: "no space left on the device", errno.ENOENT: "no such file or folder"}
+    return what.get(e.errno, e.strerror or type(e).__name__)
+
+
+def _probe_writable(d: Path) -> None:
+    """Raise the OSError of writing a file into the folder ``d`` (made if missing)."""
+    import tempfile
+
+    d.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryFile(dir=d):
+        pass
+
+
+def _where(e: OSError, value: str) -> str:
+    """The reason of ``e``, with its path when it is not ``value`` itself."""
+    same = e.filename is None or Path(e.filename) == Path(value)
+    return os_error_reason(e) if same else os_error_text(e)
+
+
+def _arg_error(message):
+    return argparse.ArgumentTypeError(message)
+
+
+def input_file(value: str) -> str:
+    """argparse type of an input file: refused at once (one line) when it is a folder or
+    cannot be read; a missing file is left to the command, whose message says what it
+    looked for."""
+    p = Path(value)
+    if p.is_dir():
+        raise _arg_error(f"{value} is a folder; give a file")
+    if p.exists():
+        try:
+            with open(p, "rb") as f:
+                f.read(1)
+        except OSError as e:
+            raise _arg_error(f"cannot read {value}: {os_error_reason(e)}") from None
+    return value
+
+
+def toml_file(value: str) -> str:
+    """argparse type of a TOML input (scenario, sweep spec): :func:`input_file`, then text
+    that TOML reads; what the file means is the command's to check."""
+    import tomllib
+
+    input_file(value)
+    p = Path(value)
+    if p.is_file():
+        try:
+            tomllib.loads(p.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as e:
+            raise _arg_error(f"{value} is not a text file (byte 0x{e.object[e.start]:02x} at byte {e.start} is not "
+                             f"UTF-8): give a TOML file") from None
+        except tomllib.TOMLDecodeError as e:
+            raise _arg_error(f"{value}: not valid TOML: {e}") from None
+    return value
+
+
+def output_dir(value: str) -> str:
+    """argparse type of an ``--out`` folder: made now, and refused (one line) when the path
+    is an existing file or the folder cannot be written, before any work is done."""
+    p = Path(value)
+    if p.exists() and not p.is_dir():
+        raise _arg_error(f"{value} is an existing file; --out takes a folder")
+    try:
+        _probe_writable(p)
+    except OSError as e:
+        raise _arg_error(f"cannot write in {value}: {_where(e, value)}") from None
+    return value
+
+
+def output_file(value: str) -> str:
+    """argparse type of an ``--out`` file: refused (one line) when the path is a folder or
+    its folder cannot be written, before any work is done."""
+    p = Path(value)
+    if p.is_dir():
+        raise _arg_error(f"{value} is a folder; --out takes the file to write")
+    try:
+        _probe_writable(p.parent)
+    except OSError as e:
+        raise _arg_error(f"cannot write {value}: {_where(e, value)}") from None
+    return value
+
+
+def recording_file(value: str) -> str:
+    """argparse type of a recording (CSV + JSON sidecar): :func:`input_file`, then the
+    CSV's joint and pose columns against the robot its sidecar names, so that a sidecar
+    naming the wrong robot is said as such (not as a pose or forward-kinematics error
+    further on, nor with joint columns silently left out)."""
+    import json
+    import re
+
+    from ..core import robot_facts, robots
+
+    input_file(value)
+    csv = Path(value)
+    if not csv.exists() and csv.with_suffix(".csv").exists():
+        csv = csv.with_suffix(".csv")
+    side = csv.with_suffix(".json")
+    try:
+        robot = json.loads(side.read_text()).get("robot")
+        facts = robot_facts(robot)
+        with open(csv, encoding="utf-8") as f:
+            header = [c.strip() for c in f.readline().split(",")]
+    except Exception:  # noqa: BLE001 - anything else wrong is the reader's to say, naming row and column
+        return value
+    joints = sorted({int(m.group(2)) for c in header if (m := re.fullmatch(r"(q|qd|tau|qref)(\d+)", c))})
+    n = joints[-1] if joints else 0
+    # more joints than the robot has, or fewer but every one complete (not a column left out)
+    complete = all(f"{c}{i}" in header for i in range(1, n + 1) for c in ("q", "qd", "tau"))
+    poses = {p for r in robots() for p in robot_facts(r).tracker_names} | {"theta", "rx", "ry", "rz"}
+    alien = [c for c in header if c in poses and c not in facts.tracker_names]
+    if n > facts.ndof or (0 < n < facts.ndof and complete) or (alien and complete):
+        same = [r for r in robots() if robot_facts(r).ndof == n and r != robot]
+        what = (f"joint columns q1..q{n} ({n} joints)" if joints and n != facts.ndof
+                else f"pose columns {', '.join(alien)}")
+        raise _arg_error(f"{csv}: the sidecar {side.name} names robot {robot!r} ({facts.ndof} {facts.joint_noun}s, "
+                         f"pose {' '.join(facts.tracker_names)}) but the file has {what}: does the sidecar name the "
+                         f"right robot?" + (f" (robots with {n} joint{'s' * (n != 1)}: {', '.join(same)})" if same else ""))
+    return value

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from .main import command
+from .main import command, output_dir
 
 # Results stated by Virzi 2010 on the robot axis x = y = 0, as (index, what, z [m]).
 STATED = [
@@ -37,7 +37,7 @@ def axis_feature(param_set: str | None, index: str, what: str, params: dict | No
 def _configure(p):
     sub = p.add_subparsers(dest="action", required=True)
     m = sub.add_parser("map", help="every index on the 21 x 21 x 51 grid, one figure per index")
-    m.add_argument("--out", required=True, help="output directory for the figures")
+    m.add_argument("--out", type=output_dir, required=True, help="output directory for the figures")
     m.add_argument("--set", dest="param_set", default="appendix_a", help="parameter set (default appendix_a)")
     from ..quattro import index_names
 
@@ -50,7 +50,7 @@ def _configure(p):
     s = sub.add_parser("maxima", help="the index features stated by Virzi 2010, as found with each parameter set")
     s.add_argument("--json", action="store_true")
     c = sub.add_parser("cycle", help="predicted Adept Cycle times vs Tables 6.1-6.5, figure + correlation")
-    c.add_argument("--out", required=True, help="output directory for the figure and the CSV")
+    c.add_argument("--out", type=output_dir, required=True, help="output directory for the figure and the CSV")
     c.add_argument("--set", dest="param_set", default="appendix_a")
     c.add_argument("--n", type=int, default=200, help="grid intervals per segment")
     c.add_argument("--qd-max", type=float, default=None, help="arm speed limit [rad/s] (default none)")

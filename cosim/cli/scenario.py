@@ -1,22 +1,28 @@
 """``cosim run scenarios/<name>.toml``: run a co-simulation scenario, print its metrics."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from ..core import robot_facts
-from .main import command
+from .main import command, output_dir, output_file, recording_file, toml_file
 
 
 def _configure(p):
-    p.add_argument("scenario", help="scenario TOML file (see scenarios/ and docs/scenarios.md)")
+    p.add_argument("scenario", type=toml_file, help="scenario TOML file (see scenarios/ and docs/scenarios.md)")
     p.add_argument("--plant", choices=["core", "fmu"], default=None,
                    help="plant to step: the CS FMU through fmpy or the core directly (default: the file's)")
     p.add_argument("--duration", type=float, default=None, help="override the duration [s]")
-    p.add_argument("--out", default=None, help="output directory (default: the file's [output] dir or results/<name>)")
+    p.add_argument("--out", type=output_dir, default=None, help="output directory (default: the file's [output] dir or results/<name>)")
     p.add_argument("--no-figures", action="store_true", help="do not write the figure")
     p.add_argument("--json", action="store_true", help="print the metrics as JSON")
     p.add_argument("--html", action="store_true",
                    help="also write <name>_report.html: interactive, self-contained (3D robot in motion, errors, efforts)")
+
+
+#: the integrators of the core plant (cosim.simulate), as the run summary names them
+INTEGRATORS = {"erk": "explicit Runge-Kutta 5(4)", "erk23": "explicit Runge-Kutta 3(2)", "bdf": "CVODE BDF",
+               "adams": "CVODE Adams"}
 
 
 def _small(unit: str):
@@ -36,6 +42,9 @@ def print_summary(out, file=None) -> None:
           f"{c['type']} (kp {_g(c['kp'])} {c['kp_unit']}, kd {_g(c['kd'])} {c['kd_unit']})", file=f)
     loop = ("compiled loop in the core" if res.loop == "compiled"
             else f"Python loop: {res.loop_note}" if res.loop_note else "Python loop")
+    method = INTEGRATORS.get(m["plant"].get("method"))
+    if method:
+        loop += f", plant integrated by {method}"
     print(f"  {len(res)} samples at {res.step * 1e3:g} ms, {m['duration']:g} s simulated in {m['wall_time']:.2f} s wall"
           f" ({loop})", file=f)
     facts = robot_facts(m["robot"])
@@ -104,10 +113,23 @@ def cmd_run(args):
     import json
 
     from ..jsonable import jsonable
-    from ..scenario import run_scenario
+    from ..closed_loop import LoopInterrupted
+    from ..scenario import export_partial, run_scenario
+    from .main import Interrupted
 
-    out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
-                       figures=False if args.no_figures else None)
+    try:
+        out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
+                           figures=False if args.no_figures else None)
+    except LoopInterrupted as e:
+        part = e.partial
+        if len(part) < 2:
+            raise Interrupted("interrupted before the first step, nothing written") from None
+        # said at once (a long recording takes a while to write), then written
+        sc, d = e.scenario, e.out_dir
+        print(f"cosim run: interrupted at t = {part.time[-1]:.4g} s, partial results in {d / sc.name}.csv (the "
+              f"recording up to then, {len(part)} samples)", file=sys.stderr, flush=True)
+        export_partial(sc, e, d)
+        return 130
     if args.html:
         from ..report.pages import run_page
 
@@ -134,8 +156,8 @@ def cmd_export_ssp(args):
 
 
 def _export_configure(p):
-    p.add_argument("scenario", help="scenario file (TOML) with a step reference")
-    p.add_argument("--out", required=True, help="the .ssp archive to write")
+    p.add_argument("scenario", type=toml_file, help="scenario file (TOML) with a step reference")
+    p.add_argument("--out", type=output_file, required=True, help="the .ssp archive to write")
 
 
 cmd_export_ssp.configure = _export_configure
@@ -151,8 +173,8 @@ def cmd_view(args):
 
 
 def _view_configure(p):
-    p.add_argument("recording", help="pkm-recording/1 CSV (its JSON sidecar beside it)")
-    p.add_argument("--out", default=None, help="the page to write (default: <recording>_view.html beside it)")
+    p.add_argument("recording", type=recording_file, help="pkm-recording/1 CSV (its JSON sidecar beside it)")
+    p.add_argument("--out", type=output_file, default=None, help="the page to write (default: <recording>_view.html beside it)")
 
 
 cmd_view.configure = _view_configure
@@ -180,7 +202,7 @@ def _indices_configure(p):
                    help="a swept pose coordinate, e.g. x=-0.2:0.2:21 [m, rad] (repeatable)")
     p.add_argument("--at", type=_axis, action="append", default=[], metavar="NAME=VALUE",
                    help="a coordinate held at a value (default: home's)")
-    p.add_argument("--out", metavar="DIR", help="write indices.npz (the grids) and indices.json (the summary) here")
+    p.add_argument("--out", type=output_dir, metavar="DIR", help="write indices.npz (the grids) and indices.json (the summary) here")
 
 
 @command("indices", "performance indices any robot has (singularity measures, speed transmission, inertia, "
@@ -204,8 +226,16 @@ def cmd_indices(args):
             return 2
         axes[name] = np.linspace(parts[0], parts[1], int(parts[2]))
     fixed = {name: parts[0] for name, parts in args.at}
+    model = Model(args.robot)
+    need, have = grid_memory(model, [len(v) for v in axes.values()]), available_memory()
+    if need > 0.5 * have:
+        n = int(np.prod([len(v) for v in axes.values()], dtype=float))
+        print(f"cosim indices: error: --axis: a grid of {n:,} poses ({' x '.join(str(len(v)) for v in axes.values())}) "
+              f"needs about {_bytes(need)} of memory, this machine has {_bytes(have)} free: use fewer points per "
+              f"axis (e.g. 101 each)", file=sys.stderr)
+        return 2
     try:
-        mp = index_map(Model(args.robot), fixed=fixed, **axes)
+        mp = index_map(model, fixed=fixed, **axes)
     except ValueError as e:
         print(f"cosim indices: error: {e}", file=sys.stderr)
         return 2
@@ -222,3 +252,36 @@ def cmd_indices(args):
 
 
 cmd_indices.configure = _indices_configure
+
+
+def grid_memory(model, sizes) -> float:
+    """Bytes :func:`cosim.indices.index_map` holds for a grid of ``sizes`` points per axis:
+    per pose, the axes' meshes, the pose, its joints and statuses, and every index (8 bytes
+    each)."""
+    import numpy as np
+
+    from ..indices import index_units
+
+    n = float(np.prod(sizes, dtype=float))
+    return 8.0 * n * (len(sizes) + 3 * model.ndof + len(index_units(model)) + 2)
+
+
+def available_memory() -> float:
+    """Bytes of memory available now (Linux ``MemAvailable``; the physical memory elsewhere)."""
+    import os
+
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+def _bytes(b: float) -> str:
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b / 1e3:.3g} kB"

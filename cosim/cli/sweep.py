@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import sys
 
-from .main import command
+from .main import Interrupted, command, output_dir, toml_file
 
 
 def _configure(p):
-    p.add_argument("spec", nargs="?", help="sweep spec TOML (see scenarios/sweeps/ and docs/sweep.md)")
+    p.add_argument("spec", nargs="?", type=toml_file, help="sweep spec TOML (see scenarios/sweeps/ and docs/sweep.md)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of an existing Dask scheduler (tcp://host:8786); default: a LocalCluster")
     p.add_argument("--workers", type=int, default=None,
                    help="LocalCluster worker processes (default: one per core); 0: a plain loop in this process")
-    p.add_argument("--out", default=None, help="sweep directory (default results/sweeps/<name>)")
+    p.add_argument("--out", type=output_dir, default=None, help="sweep directory (default results/sweeps/<name>)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--resume", action="store_true", help="skip the cases already in <out>/results.jsonl")
     g.add_argument("--overwrite", action="store_true", help="discard the results already in <out>")
@@ -30,7 +30,9 @@ def _configure(p):
                    help="--bench: kind of case (default both)")
 
 
-@command("sweep", "run a sweep (scenario / calibration / blind / quattro_tile cases) on Dask; results table")
+@command("sweep", "run a sweep (scenario / calibration / blind / quattro_tile cases) on Dask; results table "
+                  "(exit status 0: all done; 3: a case failed, with --strict; 4: cases left pending; 130: "
+                  "interrupted by ctrl-C, what finished is kept)")
 def cmd_sweep(args):
     import json
 
@@ -58,6 +60,14 @@ def cmd_sweep(args):
         return 2
     print(res.text())
     sys.stdout.flush()
+    if res.interrupted:
+        raise Interrupted(f"interrupted after {len(res.rows)} of {len(res.rows) + res.pending} cases, partial results "
+                          f"in {res.files['results']} and {res.files['table']}; {res.pending} pending: run it again "
+                          f"with --resume")
+    if res.pending and args.max_cases is None:
+        print(f"cosim sweep: {res.pending} case(s) pending (cancelled by the cluster): run it again with --resume",
+              file=sys.stderr)
+        return 4
     return 3 if args.strict and res.failed else 0
 
 

@@ -132,7 +132,7 @@ def write_html(path, title: str, sections: list) -> Path:
 
     parts = [f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{_html.escape(title)}</title>",
              "<style>body{font-family:sans-serif;margin:1.5em;max-width:1200px} pre{background:#f4f4f4;"
-             "padding:0.6em;overflow-x:auto} h2{margin-top:1.6em}</style>",
+             "padding:0.6em;overflow-x:auto;white-space:pre-wrap;overflow-wrap:anywhere} h2{margin-top:1.6em}</style>",
              f"<script type='text/javascript'>{get_plotlyjs()}</script></head><body>",
              f"<h1>{_html.escape(title)}</h1>"]
     for heading, item in sections:

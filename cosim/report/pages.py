@@ -23,6 +23,36 @@ def _series(time, Y, names, unit, title, windows=None):
     return fig
 
 
+def _by_unit(rows, title, ytitle, kind="bar", log=False, height=300):
+    """One figure with a panel per unit: ``rows`` is a list of ``(series, label, unit,
+    value[, error])``; every panel's axis says its unit (``ytitle`` with ``{unit}``), so
+    that quantities of different units never share an axis."""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    units = list(dict.fromkeys(r[2] for r in rows))
+    fig = make_subplots(rows=len(units), cols=1, vertical_spacing=0.25 / max(1, len(units)),
+                        subplot_titles=[f"[{u}]" for u in units])
+    series = list(dict.fromkeys(r[0] for r in rows))
+    colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"]
+    for i, u in enumerate(units, start=1):
+        for j, name in enumerate(series):
+            mine = [r for r in rows if r[2] == u and r[0] == name]
+            if not mine:
+                continue
+            style = dict(name=name, legendgroup=name, showlegend=i == 1, marker_color=colours[j % len(colours)])
+            if kind == "bar":
+                fig.add_trace(go.Bar(x=[r[1] for r in mine], y=[r[3] for r in mine], **style), row=i, col=1)
+            else:
+                fig.add_trace(go.Scatter(x=[r[1] for r in mine], y=[r[3] for r in mine], mode="markers",
+                                         error_y=dict(type="data", array=[r[4] for r in mine]), **style),
+                              row=i, col=1)
+        fig.update_yaxes(title_text=ytitle.format(unit=u), type="log" if log else None, row=i, col=1)
+    fig.update_layout(title=title, barmode="group", height=120 + height * len(units),
+                      margin=dict(l=80, r=20, t=70, b=40))
+    return fig
+
+
 def run_page(out, path) -> Path:
     """A scenario run (:class:`cosim.scenario.ScenarioResult`): the robot in motion, the joints
     against their reference, the efforts, the metrics."""
@@ -89,7 +119,6 @@ def diagnosis_page(d, path, model=None) -> Path:
     """A diagnosis (:class:`cosim.discrepancy.Diagnosis`): the recording in 3D, the efforts
     with the windows where the model is wrong, the effects with their 95 % intervals, the
     held-out fit before and after, the conclusion."""
-    import plotly.graph_objects as go
 
     from ..core import Model
     from ..recording import read_recording
@@ -116,30 +145,27 @@ def diagnosis_page(d, path, model=None) -> Path:
             fig = _series(rec.time, rec.tau[:, [min(c, rec.tau.shape[1] - 1)]], [name], unit, name, wins)
         sections.append((f"{name}", fig))
     if d.effects:
-        labels, vals, errs = [], [], []
-        for e in d.effects:
-            for k, v in e["params"].items():
-                labels.append(f"{k} [{v['unit']}]")
-                vals.append(v["value"] - (v.get("nominal") or 0.0))
-                errs.append(v["ci95"])
-        f = go.Figure(go.Scatter(x=labels, y=vals, mode="markers", error_y=dict(type="data", array=errs)))
-        f.update_layout(title="fitted effects: change from the nominal value, 95 % intervals", height=400)
-        sections.append(("effects", f))
-    ch = list(d.heldout["channels"])
-    f = go.Figure([go.Bar(x=ch, y=[d.heldout["channels"][c]["rms_before"] for c in ch], name="nominal model"),
-                   go.Bar(x=ch, y=[d.heldout["channels"][c]["rms_after"] for c in ch], name="fitted model")])
-    f.update_layout(barmode="group", yaxis_type="log", height=380,
-                    title=f"held-out residual RMS per channel (gain {d.heldout['gain']:.1f}x)")
-    sections.append(("before / after on the held-out part", f))
+        # one panel per unit: a friction in N and a mass in kg have no common axis
+        rows = [("fitted change", k, v["unit"], v["value"] - (v.get("nominal") or 0.0), v["ci95"])
+                for e in d.effects for k, v in e["params"].items()]
+        sections.append(("effects", _by_unit(rows, "fitted effects: change from the nominal value, 95 % intervals",
+                                             "change [{unit}]", kind="markers")))
+    hc = d.heldout["channels"]
+    rows = [(label, c, hc[c]["unit"], hc[c][key]) for label, key in (("nominal model", "rms_before"),
+                                                                      ("fitted model", "rms_after")) for c in hc]
+    sections.append(("before / after on the held-out part",
+                     _by_unit(rows, f"held-out residual RMS per channel (gain {d.heldout['gain']:.1f}x)",
+                              "residual RMS [{unit}]", log=True)))
     runs = {k: v for k, v in ((d.replay or {}).get("runs") or {}).items() if "rms_tau" in v}
     if runs:
         # the closed-loop replay: per plant, the RMS difference to the recording of every
         # effort and reading channel (a two-body replay of a fitted gap shows on the readings)
         nd = len(next(iter(runs.values()))["rms_tau"])
-        for what, key in (("efforts", "rms_tau"), ("readings", "rms_q")):
-            names = [f"{'tau' if key == 'rms_tau' else 'q'}{i + 1}" for i in range(nd)]
-            f = go.Figure([go.Bar(x=names, y=run[key], name=f"{name} plant") for name, run in runs.items()])
-            f.update_layout(barmode="group", yaxis_type="log", height=360,
-                            title=f"closed-loop replay of the held-out part: RMS difference to the recorded {what}")
-            sections.append((f"replay: {what}", f))
+        for what, key, sym, unit in (("efforts", "rms_tau", "tau", model.facts.effort_unit),
+                                     ("readings", "rms_q", "q", model.facts.joint_unit)):
+            rows = [(f"{name} plant", f"{sym}{i + 1}", unit, run[key][i]) for name, run in runs.items()
+                    for i in range(nd)]
+            sections.append((f"replay: {what}", _by_unit(
+                rows, f"closed-loop replay of the held-out part: RMS difference to the recorded {what}",
+                "RMS difference [{unit}]", log=True)))
     return write_html(path, f"diagnosis of {Path(d.recording).name}", sections)

@@ -748,6 +748,8 @@ def default_workers() -> int:
 
 def _start_client(scheduler, workers):
     import logging
+    import signal
+    import threading
 
     from distributed import Client, LocalCluster
 
@@ -762,8 +764,18 @@ def _start_client(scheduler, workers):
     n = int(workers or default_workers())
     # one thread per process: the core and the FMUs hold the GIL in ctypes calls and an
     # FMU instance must stay in the thread that made it
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.ERROR)
+    # ctrl-C in a terminal reaches the whole process group: the worker processes are
+    # started with SIGINT ignored (inherited, and Python then installs no handler), so only
+    # this process stops, keeps what finished and closes the cluster, with no worker
+    # printing a KeyboardInterrupt traceback
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, previous)
     return Client(cluster), cluster, f"LocalCluster ({n} worker processes, 1 thread each)"
 
 

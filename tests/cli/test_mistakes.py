@@ -1,13 +1,29 @@
-"""User mistakes on the command line: each ends with exit code 2 and an error that names
-what is wrong and where (file, field, parameter, choices), never a traceback."""
+"""User mistakes on the command line: each ends with exit code 2 and one line that names what
+is wrong and where (file, field, column, parameter, choices), never a traceback.
+
+The corpus runs in this process through the CLI's ``main`` (fast); a few cases run as the
+installed ``cosim`` command, to see the exit code and stderr a shell sees."""
+import contextlib
+import csv
+import io
+import json
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from cosim.cli.main import COMMANDS, main
+
 REPO = Path(__file__).resolve().parents[2]
 SCEN = REPO / "scenarios"
+EMPS = REPO / "data" / "emps"
+ROOT = os.geteuid() == 0
+
+STEP = 'robot = "6pus"\nduration = 0.5\n[controller]\ntype = "pd"\nkp = 300\nkd = 30\n[reference]\ntype = "step"\n'
+HOLD = "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n"
 
 
 def _scenario(tmp, name, body):
@@ -16,25 +32,22 @@ def _scenario(tmp, name, body):
     return str(p)
 
 
-STEP = 'robot = "6pus"\nduration = 0.5\n[controller]\ntype = "pd"\nkp = 300\nkd = 30\n[reference]\ntype = "step"\n'
-
-
 def _recording_variants(tmp):
     """Copies of a valid recording with one thing wrong each: binary content, a bad
-    parameter or a unit field in the sidecar, positions in mm."""
-    import csv
-    import json
-    import shutil
-
+    parameter or a unit field in the sidecar, positions in mm, a sidecar naming another
+    robot than the columns'."""
     src = SCEN / "calibration_6pus_campaign"
     out = {}
-    for name in ("binary", "badpar", "units", "mm"):
+    for name in ("binary", "badpar", "units", "mm", "quattro", "linear_delta", "nosidecar"):
         shutil.copy(src.with_suffix(".csv"), tmp / f"{name}.csv")
         shutil.copy(src.with_suffix(".json"), tmp / f"{name}.json")
         out[name] = str(tmp / f"{name}.csv")
     (tmp / "binary.csv").write_bytes(b"\x82\x00\xff\x01\n\x02\n")
+    (tmp / "nosidecar.json").unlink()
     for name, change in (("badpar", lambda m: m.setdefault("parameters", {}).update({"leg[9].L": 0.1})),
-                         ("units", lambda m: m.update({"units": {"q": "mm"}}))):
+                         ("units", lambda m: m.update({"units": {"q": "mm"}})),
+                         ("quattro", lambda m: m.update({"robot": "quattro", "parameters": {}})),
+                         ("linear_delta", lambda m: m.update({"robot": "linear_delta", "parameters": {}}))):
         meta = json.loads((tmp / f"{name}.json").read_text())
         change(meta)
         (tmp / f"{name}.json").write_text(json.dumps(meta))
@@ -46,12 +59,132 @@ def _recording_variants(tmp):
     return out
 
 
+def _places(tmp):
+    """Real file-system situations: a folder, a file that cannot be read, a folder that
+    cannot be written, a path under a file.  As root (who reads and writes through file
+    modes) the unreadable file is /proc/self/mem (reading it fails with EIO) and the
+    read-only folder is under /sys (EPERM); otherwise modes 000 and 555."""
+    folder = tmp / "a_folder"
+    folder.mkdir()
+    afile = tmp / "a_file.txt"
+    afile.write_text("not a folder\n")
+    if ROOT:
+        unreadable, readonly = Path("/proc/self/mem"), Path("/sys/kernel/cosim_out")
+    else:
+        unreadable = tmp / "secret.toml"
+        unreadable.write_text("x = 1\n")
+        unreadable.chmod(0)
+        ro = tmp / "readonly"
+        ro.mkdir()
+        ro.chmod(0o555)
+        readonly = ro / "out"
+    return {"folder": str(folder), "file": str(afile), "unreadable": str(unreadable), "readonly": str(readonly),
+            "under_file": str(afile / "sub")}
+
+
+# commands reading a file, with the rest of a valid command line; {} is the file
+INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tmp}/x.ssp"],
+          "view": ["view", "{}"], "diagnose": ["diagnose", "{}"], "calibrate": ["calibrate", "{}"],
+          "sweep": ["sweep", "{}"], "params": ["params", "{}"], "diagnose --model":
+          ["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", "{}"],
+          "indices --robot": ["indices", "--robot", "{}", "--axis", "x=-0.01:0.01:3"],
+          "blind-case --robot": ["blind-case", "--robot", "{}"],
+          "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
+          "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
+          "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
+          "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
+          "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
+                             "{tmp}/imp", "--robot", "{}"]}
+# commands writing into a folder given by --out (or --keys); {} is the folder
+OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
+            "diagnose": ["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--out", "{}"],
+            "sweep": ["sweep", str(SCEN / "sweeps" / "pd_gains.toml"), "--out", "{}"],
+            "calibrate": ["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--out", "{}"],
+            "quattro map": ["quattro", "map", "--out", "{}"], "quattro cycle": ["quattro", "cycle", "--out", "{}"],
+            "indices": ["indices", "--robot", "6pus", "--axis", "x=-0.01:0.01:3", "--out", "{}"],
+            "blind-case": ["blind-case", "--out", "{}"], "blind-case --keys": ["blind-case", "--keys", "{}"],
+            "discrepancy-demo": ["discrepancy-demo", "--out", "{}"], "demo": ["demo", "--out", "{}"],
+            "blind-benchmark": ["blind-benchmark", "--out", "{}"],
+            "import": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", "{}"]}
+# commands writing one file given by --out
+OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
+             "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
+
+
+def _fill(argv, value, tmp, rec=""):
+    return [a.replace("{}", value).replace("{tmp}", str(tmp)).replace("{rec}", rec) for a in argv]
+
+
+def _file_system_cases(tmp):
+    pl = _places(tmp)
+    garbage = tmp / "garbage.bin"
+    garbage.write_bytes(b"\x82\x00\xff not text\n")
+    empty = tmp / "empty.toml"
+    empty.write_text("")
+    rec = str(SCEN / "calibration_6pus_campaign.csv")
+    cases = []
+    for name, argv in INPUTS.items():
+        cases.append((_fill(argv, pl["folder"], tmp), f"{pl['folder']} is a folder; give a file"))
+        cases.append((_fill(argv, pl["unreadable"], tmp), f"cannot read {pl['unreadable']}"))
+    for name, argv in OUT_DIRS.items():
+        cases.append((_fill(argv, pl["file"], tmp), f"{pl['file']} is an existing file; --out takes a folder"))
+        cases.append((_fill(argv, pl["readonly"], tmp), f"cannot write in {pl['readonly']}"))
+        cases.append((_fill(argv, pl["under_file"], tmp), "a part of this path is a file, not a folder"))
+    for name, argv in OUT_FILES.items():
+        cases.append((_fill(argv, pl["folder"], tmp, rec), f"{pl['folder']} is a folder; --out takes the file to write"))
+        cases.append((_fill(argv, pl["readonly"] + "/x.out", tmp, rec), f"cannot write {pl['readonly']}/x.out"))
+        cases.append((_fill(argv, pl["under_file"] + "/x.out", tmp, rec), "a part of this path is a file"))
+    cases += [
+        (["run", str(garbage)], "garbage.bin is not a text file (byte 0x82 at byte 0"), (["run", str(empty)], "empty.toml"),
+        (["sweep", str(garbage)], "garbage.bin is not a text file"), (["sweep", str(empty)], "empty.toml"),
+        (["export-ssp", str(garbage), "--out", str(tmp / "x.ssp")], "garbage.bin is not a text file"),
+        (["view", str(garbage)], "garbage.bin"), (["params", str(garbage) + ".toml"], "garbage.bin.toml"),
+    ]
+    return cases
+
+
 def _cases(tmp):
     garbage = tmp / "garbage.csv"
     garbage.write_bytes(b"\x82\x00\xff not a recording\n")
     bad = _recording_variants(tmp)
-    return [
+    heavy = tmp / "heavy.json"
+    heavy.write_text(json.dumps({"platform.m": "heavy"}))
+    heavy2 = tmp / "heavy2.json"
+    heavy2.write_text(json.dumps({"robot": "6pus", "parameters": {"platform.m": {"value": None, "unit": "kg"}}}))
+    notjson = tmp / "notjson.json"
+    notjson.write_text("{ platform.m = 1 }")
+    one_s = _scenario(tmp, "step1s.toml", (SCEN / "6pus_step_pd.toml").read_text().replace("step = 0.001", "step = 1.0"))
+    return _file_system_cases(tmp) + [
+        # the messages of the issue: each says what and where
         (["diagnose", bad["binary"]], "is not a text CSV file (byte 0x82"),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy)],
+         'heavy.json: platform.m = "heavy" is not a finite number'),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy2)],
+         "heavy2.json: parameters.platform.m.value = null is not a finite number"),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(notjson)],
+         "notjson.json: not a JSON parameter file (line 1, column 3)"),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(tmp / "nope.json")],
+         "nope.json: no such parameter file"),
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", "appendix_a"],
+         "no parameter set 'appendix_a'"),
+        (["diagnose", str(SCEN)], f"{SCEN} is a folder; give a file"),
+        (["diagnose", bad["quattro"]], "names robot 'quattro' (4 joints, pose x y z theta) but the file has joint "
+                                       "columns q1..q6 (6 joints): does the sidecar name the right robot?"),
+        (["diagnose", bad["linear_delta"]], "names robot 'linear_delta' (3 sliders, pose x y z) but the file has joint "
+                                            "columns q1..q6"),
+        (["calibrate", bad["quattro"]], "does the sidecar name the right robot?"),
+        (["view", bad["linear_delta"]], "does the sidecar name the right robot?"),
+        (["diagnose", bad["nosidecar"]], "JSON sidecar nosidecar.json is missing"),
+        (["run", one_s, "--out", str(tmp / "one_s")],
+         "stopped in the step from t = 0 s to 1 s: leg 6 reached its stroke limit"),
+        (["indices", "--robot", "6pus", "--axis", "x=-0.1:0.1:100000", "--axis", "y=-0.1:0.1:100000"],
+         "a grid of 10,000,000,000 poses (100000 x 100000) needs about"),
+        (["indices", "--robot", "6pus", "--axis", "x=-0.1:0.1:100000", "--axis", "y=-0.1:0.1:100000"],
+         "use fewer points per axis"),
+        (["indices", "--robot", "6pus", "--axis", "q=-0.1:0.1:3"], "6pus has no pose coordinate 'q'"),
+        (["indices", "--robot", "6pus", "--axis", "x=-0.1:0.1"], "give NAME=START:STOP:N"),
+        (["indices", "--robot", "6pus"], "give at least one --axis"),
+        # kept from the first corpus
         (["calibrate", bad["binary"]], "is not a text CSV file"),
         (["diagnose", bad["badpar"], "--no-replay", "--no-figures"], "badpar.json: parameters: 6pus has no parameter"),
         (["diagnose", bad["units"], "--no-replay", "--no-figures"], "units.q = 'mm'"),
@@ -61,8 +194,7 @@ def _cases(tmp):
         (["params", "6pus", "--set", "nope"], "no parameter set 'nope' (known: default)"),
         (["params", "quattro", "--set", "appendix_b"], "known: default, appendix_a"),
         (["run", str(tmp / "missing.toml")], "scenario file not found"),
-        (["run", _scenario(tmp, "kp.toml", STEP.replace("kp = 300", 'kp = "300"')
-                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
+        (["run", _scenario(tmp, "kp.toml", STEP.replace("kp = 300", 'kp = "300"') + HOLD)],
          "controller.kp: must be a number"),
         (["run", _scenario(tmp, "mm.toml", STEP + "from = [0, 0, 85, 0, 0, 0]\nto = [0, 0, 90, 0, 0, 0]\n")],
          "was it given in mm?"),
@@ -70,16 +202,17 @@ def _cases(tmp):
          "was it given in degrees?"),
         (["run", _scenario(tmp, "far.toml", STEP + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.5, 0, 0, 0]\n")],
          "leg 1 cannot reach the pose"),
-        (["run", _scenario(tmp, "ctl.toml", STEP.replace('type = "pd"', 'type = "pid2"')
-                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
+        (["run", _scenario(tmp, "ctl.toml", STEP.replace('type = "pd"', 'type = "pid2"') + HOLD)],
          "controller.type: must be"),
-        (["run", _scenario(tmp, "nodur.toml", STEP.replace("duration = 0.5\n", "")
-                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")], "duration: missing"),
+        (["run", _scenario(tmp, "nodur.toml", STEP.replace("duration = 0.5\n", "") + HOLD)], "duration: missing"),
         (["run", _scenario(tmp, "noto.toml", STEP + "from = [0, 0, 0.085, 0, 0, 0]\n")], "reference.to: missing"),
-        (["run", _scenario(tmp, "bot.toml", STEP.replace('"6pus"', '"hexapod"')
-                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")], "unknown robot 'hexapod'"),
+        (["run", _scenario(tmp, "bot.toml", STEP.replace('"6pus"', '"hexapod"') + HOLD)], "unknown robot 'hexapod'"),
+        (["run", _scenario(tmp, "syntax.toml", STEP + HOLD + "kd = = 3\n")], "syntax.toml: not valid TOML: Invalid value (at line 11"),
         (["run", str(SCEN / "6pus_step_pd.toml"), "--plant", "banana"], "invalid choice: 'banana'"),
         (["run", str(SCEN / "6pus_step_pd.toml"), "--duration", "-1"], "must be a positive number of seconds"),
+        (["run", str(SCEN / "6pus_step_pd.toml"), "--duration", "abc"], "invalid float value: 'abc'"),
+        (["run", str(SCEN / "6pus_step_pd.toml"), "--bogus"], "unrecognized arguments: --bogus"),
+        (["run"], "the following arguments are required: scenario"),
         (["diagnose", str(garbage)], "garbage.csv"),
         (["diagnose", str(tmp / "missing.csv")], "file not found"),
         (["calibrate", str(tmp / "missing.csv")], "file not found"),
@@ -87,38 +220,105 @@ def _cases(tmp):
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--holdout", "2"], "holdout fraction"),
         (["quattro", "map", "--index", "alpha_x", "--out", str(tmp / "q")], "invalid choice: 'alpha_x'"),
         (["quattro", "cycle", "--out", str(tmp / "q"), "--set", "nope"], "unknown parameter set 'nope'"),
+        (["quattro"], "the following arguments are required: action"),
         (["discrepancy-demo", "--effect", "friction"], "it can hide: coulomb"),
         (["blind-case", "--robot", "quattro", "--effect", "nope", "--seed", "1"], "it can hide: coulomb"),
+        (["blind-case", "--robot", "hexapod"], "unknown robot 'hexapod'"),
+        (["blind-benchmark", "--robot", "hexapod"], "unknown robot 'hexapod'"),
         (["sweep", str(tmp / "missing.toml")], "sweep spec not found"),
+        (["sweep"], "give a sweep spec"),
         (["export-ssp", str(SCEN / "6pus_letter_m_ct.toml"), "--out", str(tmp / "x.ssp")], "set-point"),
         (["export-ssp", str(tmp / "missing.toml"), "--out", str(tmp / "x.ssp")], "scenario file not found"),
+        (["export-ssp", str(SCEN / "6pus_step_pdg.toml")], "the following arguments are required: --out"),
+        (["view", str(tmp / "missing.csv")], "file not found"),
         (["bench", "nope"], "invalid choice: 'nope'"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--out", str(tmp / "imp")], "the following arguments are required: --map"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", str(tmp / "imp"),
+          "--format", "xlsx"], "invalid choice: 'xlsx'"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _scenario(tmp, "map_syntax.toml", "[robot\n"), "--out",
+          str(tmp / "imp")], "map_syntax.toml: not valid TOML"),
         (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--solver", "bogus"], "invalid choice: 'bogus'"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--window", "-1"], "window = -1.0 must be"),
         (["sweep", str(SCEN / "sweeps" / "pd_gains.toml"), "--scheduler", "tcp://127.0.0.1:9", "--out",
           str(tmp / "sw")], "no Dask scheduler answers at tcp://127.0.0.1:9"),
         (["run", _scenario(tmp, "unit.toml", STEP.replace('type = "step"\n', 'type = "step"\nangle_unit = "grad"\n')
-                           + "from = [0, 0, 0.085, 0, 0, 0]\nto = [0, 0, 0.09, 0, 0, 0]\n")],
-         "reference.angle_unit: must be 'rad' or 'deg'"),
+                           + HOLD)], "reference.angle_unit: must be 'rad' or 'deg'"),
     ]
 
 
-def test_every_mistake_is_one_error_with_exit_code_2(tmp_path):
-    bad = []
-    for argv, expect in _cases(tmp_path):
-        p = subprocess.run([sys.executable, "-m", "cosim", *argv], cwd=REPO, capture_output=True, text=True,
-                           timeout=120)
-        err = p.stderr.strip()
-        last = err.splitlines()[-1] if err else ""
-        if p.returncode != 2 or "Traceback" in err or expect not in last or len(err.splitlines()) != 1:
-            bad.append(f"cosim {' '.join(argv)}: exit {p.returncode}, stderr: {err[-400:]!r}")
-    assert not bad, "\n".join(bad)
+def _call(argv):
+    """(exit code, stderr) of ``cosim ARGV`` run by the CLI's main in this process; an
+    exception that escapes main is what a user would see as a traceback."""
+    err, out = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+        try:
+            code = main(argv)
+        except BaseException as e:  # noqa: BLE001 - reported as the traceback it would be
+            code = f"traceback: {type(e).__name__}: {e}"
+    return code, err.getvalue()
 
 
-@pytest.mark.parametrize("n", [37])
-def test_the_corpus_is_large(tmp_path, n):
-    assert len(_cases(tmp_path)) >= n
+def _wrong(argv, code, err, expect):
+    lines = err.strip().splitlines()
+    if code != 2 or "Traceback" in err or len(lines) != 1 or expect not in lines[0]:
+        return f"cosim {' '.join(argv)}: exit {code}, stderr: {err[-600:]!r} (expected {expect!r})"
+    return None
+
+
+def test_every_mistake_is_one_line_with_exit_code_2(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # default outputs (results/...) land here
+    cases = _cases(tmp_path)
+    assert len(cases) >= 100
+    bad = [w for argv, expect in cases if (w := _wrong(argv, *_call(argv), expect))]
+    assert not bad, f"{len(bad)} of {len(cases)}:\n" + "\n".join(bad)
+
+
+def test_the_corpus_covers_every_command_and_every_file_system_mistake(tmp_path):
+    cases = _cases(tmp_path)
+    commands = {argv[0] for argv, _ in cases}
+    untested = set(COMMANDS) - commands - {"robots"}  # `cosim robots` takes no file and no value
+    assert not untested, f"commands with no mistake in the corpus: {sorted(untested)}"
+    # every command with an input file, an output folder or an output file has each kind
+    # of file-system mistake (checked against the commands' own options)
+    import argparse
+    import importlib
+
+    cli = importlib.import_module("cosim.cli.main")
+    parser = argparse.ArgumentParser()
+    sub = parser.add_subparsers()
+
+    def actions(p):
+        for a in p._actions:
+            yield a
+            for q in (a.choices or {}).values() if isinstance(a, argparse._SubParsersAction) else ():
+                yield from actions(q)
+
+    inputs = {v[0] for v in INPUTS.values()}
+    for name, (fn, _) in COMMANDS.items():
+        p = sub.add_parser(name)
+        if hasattr(fn, "configure"):
+            fn.configure(p)
+        for a in actions(p):
+            kind = {cli.output_dir: "dir", cli.output_file: "file"}.get(a.type)
+            if kind:
+                table = OUT_DIRS if kind == "dir" else OUT_FILES
+                assert any(v[0] == name and a.option_strings[0] in v for v in table.values()), (name, a.dest)
+            if a.type in (cli.input_file, cli.recording_file, cli.toml_file, cli.robot_arg):
+                assert name in inputs, (name, a.dest)
+
+
+@pytest.mark.parametrize("argv,expect", [
+    (["run", "scenarios"], "scenarios is a folder; give a file"),
+    (["indices", "--robot", "6pus", "--axis", "x=-0.1:0.1:100000", "--axis", "y=-0.1:0.1:100000"],
+     "needs about 2.48 TB of memory"),
+    (["run", "scenarios/6pus_step_pd.toml", "--out", "README.md"], "README.md is an existing file"),
+])
+def test_the_installed_command_gives_one_line_and_exit_code_2(argv, expect):
+    cosim = Path(sys.executable).parent / "cosim"
+    p = subprocess.run([str(cosim), *argv], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and expect in p.stderr, (p.returncode, p.stderr)
+    assert p.stdout == ""
 
 
 def test_a_reader_that_stops_early_gets_no_traceback():

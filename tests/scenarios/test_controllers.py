@@ -123,7 +123,7 @@ def test_bad_gains_and_measurements_are_named():
 
 def test_master_failure_names_time_and_keeps_samples(toy, failing_toy_plant):
     ref = make_reference(toy, tr.step([0, 0], [0.01, 0]), step=1e-3, duration=0.2)
-    with pytest.raises(MasterError, match=r"stopped at t = 0.05 s: toy plant: leg 2") as e:
+    with pytest.raises(MasterError, match=r"stopped in the step from t = 0.05 s to 0.051 s: toy plant: leg 2") as e:
         run(failing_toy_plant, ctl.pd(ndof=2, kp=10.0, kd=1.0), ref, x0=[0, 0])
     assert len(e.value.partial) == 50
     with pytest.raises(MasterError, match="not a whole number of steps"):

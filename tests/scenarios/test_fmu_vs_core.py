@@ -32,7 +32,7 @@ def test_a_stroke_limit_stops_both_plants_with_leg_and_time(tmp_path):
     sc = load_scenario(SCEN / "6pus_step_pd.toml").with_overrides(duration=0.3)
     sc.spec["plant_parameters"] = {"rail[2].qmin": 0.05}
     for plant in ("core", "fmu"):
-        with pytest.raises(MasterError, match=r"(?s)run stopped at t = 0\.\d+ s.*leg 2.*stroke") as e:
+        with pytest.raises(MasterError, match=r"(?s)run stopped in the step from t = 0\.\d+ s to 0\.\d+ s.*leg 2.*stroke") as e:
             run_scenario(sc, plant=plant, export=False, figures=False)
         part = e.value.partial
         assert 10 < len(part) < 300 and np.all(part["q_true"][:, 1] >= 0.05 - 1e-9)
