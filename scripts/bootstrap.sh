@@ -19,6 +19,27 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
+# The FMUs' other platforms (fmu/platform, docs/fmu.md "Platforms"): the cross compilers for
+# x86_64-windows (MinGW-w64, posix threads) and aarch64-linux, and what runs their binaries in
+# the tests: Wine and QEMU user mode.  Without recommends: the compilers and emulators only.
+cross_pkgs=(g++-mingw-w64-x86-64-posix g++-aarch64-linux-gnu wine wine64 qemu-user)
+missing=()
+for p in "${cross_pkgs[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[bootstrap] installing the FMUs' cross compilers and emulators: ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+# Wine's prefix is made once per user (about half a minute), not inside the first test.
+if command -v wine >/dev/null 2>&1 && [ ! -f "${WINEPREFIX:-$HOME/.wine}/system.reg" ]; then
+  echo "[bootstrap] creating the Wine prefix ${WINEPREFIX:-$HOME/.wine}"
+  WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" wineboot -i >/dev/null 2>&1 || true
+  wineserver -w 2>/dev/null || true
+fi
+
 PY="${PYTHON:-python3}"
 if [ ! -x .venv/bin/python ]; then
   echo "[bootstrap] creating .venv"
