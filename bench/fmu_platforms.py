@@ -35,7 +35,7 @@ def binary_sizes(path):
     with zipfile.ZipFile(path) as z:
         for i in z.infolist():
             parts = i.filename.split("/")
-            if len(parts) == 3 and parts[0] == "binaries":
+            if len(parts) == 3 and parts[0] == "binaries" and parts[2]:
                 out[parts[1]] = i.compress_size
     return out
 

@@ -166,7 +166,8 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     for src in made:
         with zipfile.ZipFile(src) as z:
             names = z.namelist()
-            have = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") == 2}
+            have = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") == 2
+                    and not n.endswith("/")}
             missing = [p for p in platforms if p not in have]
             if missing:
                 raise FileNotFoundError(f"{src} has no {missing[0]} binary: its cross compiler was not installed "

@@ -428,7 +428,7 @@ std::string guid_of(const std::string& text) {
   return b;
 }
 
-// The <SourceFiles> list of a source-code FMU (FMI 2.0 section 2.2.8; one per interface),
+// The <SourceFiles> list of a source-code FMU (FMI 2.0: inside <ModelExchange> and <CoSimulation>),
 // or nothing for a binary FMU.  Not part of the GUID: a source FMU and the binary FMU of
 // the same table are the same model.
 std::string source_files(const std::vector<std::string>& files) {
