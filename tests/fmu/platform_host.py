@@ -66,9 +66,11 @@ class Unpacked:
         ext = ".dll" if platform == "win64" else ".so"
         return self.folder / "binaries" / platform / (self.ident + ext)
 
-    def load_line(self, name: str, platform: str) -> str:
-        return (f"fmu {name} {_native_path(platform, self.library(platform))} {self.guid} "
-                f"{_uri(platform, self.folder / 'resources')}")
+    def load_line(self, name: str, platform: str, model_exchange: bool = False) -> str:
+        kind = "me" if model_exchange else "fmu"
+        nx = f" {len(self.md.derivatives)}" if model_exchange else ""
+        return (f"{kind} {name} {_native_path(platform, self.library(platform))} {self.guid} "
+                f"{_uri(platform, self.folder / 'resources')}{nx}")
 
     def set_lines(self, name: str, values: dict) -> list[str]:
         return [f"{'int' if k in self.integer else 'real'} {name} {self.vr[k]} "
@@ -119,6 +121,27 @@ def loop_script(plant: Unpacked, ctrl: Unpacked, robot: str, platform: str, step
         f"step {steps} {H!r}", show,
         "restore plant", "restore ctrl",
         f"step {steps} {H!r}", show,
+        f"real plant {plant.vr['tau[1]']} nan",
+        "",
+    ])
+
+
+def me_script(plant: Unpacked, robot: str, platform: str, steps: int = 100, h: float = 1e-4) -> str:
+    """The plant as Model Exchange under efforts 2 % above its gravity load at home, stepped
+    by the host's explicit Euler: steps, state save / restore, then a NaN effort."""
+    m = Model(robot)
+    tau = 1.02 * m.gravity_load(m.home())
+    pose = list(m.facts.pose_names) + [p + "d" for p in m.facts.pose_names]
+    show = f"print plant {plant.vrs(pose)}"
+    return "\n".join([
+        plant.load_line("plant", platform, model_exchange=True),
+        *plant.set_lines("plant", {f"tau[{i + 1}]": v for i, v in enumerate(tau)}),
+        "init plant",
+        f"step {steps} {h!r}", show,
+        "save plant",
+        f"step {steps} {h!r}", show,
+        "restore plant",
+        f"step {steps} {h!r}", show,
         f"real plant {plant.vr['tau[1]']} nan",
         "",
     ])

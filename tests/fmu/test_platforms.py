@@ -1,5 +1,6 @@
 """The FMU binaries of the other platforms, run for real: x86_64-windows under Wine and
-aarch64-linux under QEMU, through the tests' own FMI 2.0 host cross-compiled for each
+aarch64-linux under QEMU, Co-Simulation and Model Exchange, through the tests' own FMI 2.0
+host cross-compiled for each
 (tests/fmu/host/fmi2_host.c), against the linux64 binary through the same host; and the
 linux64 host against fmpy's importer, so the host itself is checked by another one.
 
@@ -10,7 +11,8 @@ import numpy as np
 import pytest
 from fmpy.fmi2 import FMU2Slave
 
-from platform_host import H, PLATFORMS, fmu_pair, largest_difference, loop_script, loop_setup, run, solver_script
+from platform_host import (H, PLATFORMS, fmu_pair, largest_difference, loop_script, loop_setup, me_script, run,
+                           solver_script)
 
 ROBOTS = ["6pus", "hexapod_ups"]
 CROSS = [p for p in PLATFORMS if p != "linux64"]
@@ -25,6 +27,7 @@ def runs(tmp_path_factory):
         plant, ctrl = fmu_pair(robot, folder)
         for p in PLATFORMS:
             out[robot, p] = run(p, loop_script(plant, ctrl, robot, p), folder)
+            out[robot, p, "me"] = run(p, me_script(plant, robot, p), folder)
         out[robot, "fmus"] = (plant, ctrl)
     return out
 
@@ -90,6 +93,20 @@ def test_platform_binary_reproduces_linux(runs, robot, platform):
     assert "status setReal Error" in got["lines"]
     assert any(ln.startswith("log plant Error logStatusError: fmi2SetReal") and "tau[1] = nan" in ln
                for ln in got["lines"]), got["lines"]
+
+
+@pytest.mark.parametrize("platform", CROSS)
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_platform_model_exchange_reproduces_linux(runs, robot, platform):
+    """The plant as Model Exchange (derivatives, states, events, FMU state) stepped by the
+    host's explicit Euler: the same pose and rates as linux64 to 1e-12, the same messages."""
+    ref, got = runs[robot, "linux64", "me"], runs[robot, platform, "me"]
+    assert len(got["values"]) == 3
+    assert largest_difference(ref, got) <= 1e-12
+    assert got["lines"] == ref["lines"]
+    np.testing.assert_array_equal(got["values"][2], got["values"][1])
+    assert np.max(np.abs(got["values"][1][1:] - got["values"][0][1:])) > 1e-6  # it moved
+    assert "status setReal Error" in got["lines"]
 
 
 @pytest.mark.parametrize("platform", CROSS)

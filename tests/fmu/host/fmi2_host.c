@@ -8,12 +8,17 @@
  *
  * SCRIPT has one command a line (whitespace-separated; '#' starts a comment):
  *   fmu NAME LIBRARY GUID RESOURCE_URI   load the binary and instantiate it (Co-Simulation)
+ *   me NAME LIBRARY GUID RESOURCE_URI NX the same as Model Exchange with NX continuous states:
+ *                                        its steps are explicit Euler steps of this host
  *   real NAME VR VALUE                   fmi2SetReal of one variable (VALUE may be nan, inf)
  *   int NAME VR VALUE                    fmi2SetInteger of one variable
  *   init NAME                            fmi2SetupExperiment(t = 0), Enter/ExitInitializationMode
+ *                                        (Model Exchange: then the event iteration, continuous-time mode)
  *   connect FROM VR... -> TO VR...       copied from FROM's outputs to TO's inputs before each step
  *   step N H                             N communication steps of H seconds: the connections,
  *                                        then fmi2DoStep of every FMU in the order they were loaded
+ *                                        (Model Exchange: x += H dx/dt, fmi2SetTime, fmi2SetContinuousStates,
+ *                                        fmi2CompletedIntegratorStep)
  *   print NAME VR...                     fmi2GetReal of the variables
  *   save NAME                            fmi2GetFMUstate, serialised into a byte block and freed
  *   restore NAME                         the block deserialised and set back (fmi2SetFMUstate)
@@ -42,10 +47,12 @@
 #define MAX_FMUS 4
 #define MAX_LINKS 64
 #define MAX_VRS 64
+#define MAX_STATES 64
 
 typedef struct {
   char name[64];
   fmi2Component c;
+  int nx; /* Model Exchange: continuous states; 0 for Co-Simulation */
   double t, saved_t;
   char* saved;
   size_t saved_size;
@@ -64,6 +71,13 @@ typedef struct {
   fmi2SerializedFMUstateSizeTYPE* state_size;
   fmi2SerializeFMUstateTYPE* serialize;
   fmi2DeSerializeFMUstateTYPE* deserialize;
+  fmi2SetTimeTYPE* set_time;
+  fmi2GetContinuousStatesTYPE* get_states;
+  fmi2SetContinuousStatesTYPE* set_states;
+  fmi2GetDerivativesTYPE* get_derivatives;
+  fmi2CompletedIntegratorStepTYPE* completed_step;
+  fmi2NewDiscreteStatesTYPE* new_discrete_states;
+  fmi2EnterContinuousTimeModeTYPE* enter_continuous;
 } fmu;
 
 typedef struct {
@@ -123,9 +137,12 @@ static double number(const char* s) {
 static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
 
 static void load(char** w, int nw, int line) {
-  if (nw != 5 || nfmus == MAX_FMUS) die(line, "fmu NAME LIBRARY GUID RESOURCE_URI");
+  int me = strcmp(w[0], "me") == 0;
+  if (nw != 5 + me || nfmus == MAX_FMUS) die(line, "fmu NAME LIBRARY GUID RESOURCE_URI, me ... NX");
   fmu* f = &fmus[nfmus];
   memset(f, 0, sizeof *f);
+  f->nx = me ? atoi(w[5]) : 0;
+  if (me && (f->nx < 1 || f->nx > MAX_STATES)) die(line, "NX out of range");
   snprintf(f->name, sizeof f->name, "%s", w[1]);
   void* lib = LOAD(w[2]);
   if (!lib) die(line, "cannot load the library");
@@ -144,7 +161,17 @@ static void load(char** w, int nw, int line) {
   f->state_size = (fmi2SerializedFMUstateSizeTYPE*)need(lib, "fmi2SerializedFMUstateSize", line);
   f->serialize = (fmi2SerializeFMUstateTYPE*)need(lib, "fmi2SerializeFMUstate", line);
   f->deserialize = (fmi2DeSerializeFMUstateTYPE*)need(lib, "fmi2DeSerializeFMUstate", line);
-  f->c = f->instantiate(w[1], fmi2CoSimulation, w[3], w[4], &callbacks, fmi2False, fmi2False);
+  if (me) {
+    f->set_time = (fmi2SetTimeTYPE*)need(lib, "fmi2SetTime", line);
+    f->get_states = (fmi2GetContinuousStatesTYPE*)need(lib, "fmi2GetContinuousStates", line);
+    f->set_states = (fmi2SetContinuousStatesTYPE*)need(lib, "fmi2SetContinuousStates", line);
+    f->get_derivatives = (fmi2GetDerivativesTYPE*)need(lib, "fmi2GetDerivatives", line);
+    f->completed_step = (fmi2CompletedIntegratorStepTYPE*)need(lib, "fmi2CompletedIntegratorStep", line);
+    f->new_discrete_states = (fmi2NewDiscreteStatesTYPE*)need(lib, "fmi2NewDiscreteStates", line);
+    f->enter_continuous = (fmi2EnterContinuousTimeModeTYPE*)need(lib, "fmi2EnterContinuousTimeMode", line);
+  }
+  f->c = f->instantiate(w[1], me ? fmi2ModelExchange : fmi2CoSimulation, w[3], w[4], &callbacks, fmi2False,
+                        fmi2False);
   if (!f->c) {
     printf("status instantiate NULL\n");
     return;
@@ -158,6 +185,22 @@ static int parse_vrs(char** w, int nw, fmi2ValueReference* vr, int line) {
   return nw;
 }
 
+/* One explicit Euler step of a Model Exchange FMU: the same arithmetic on every platform,
+ * so the comparison is of the FMU's derivatives, events and state handling. */
+static fmi2Status euler_step(fmu* f, double h) {
+  double x[MAX_STATES], dx[MAX_STATES];
+  fmi2Boolean enter_event = fmi2False, terminate = fmi2False;
+  fmi2Status s = f->get_states(f->c, x, f->nx);
+  if (s == fmi2OK) s = f->get_derivatives(f->c, dx, f->nx);
+  if (s != fmi2OK) return s;
+  for (int k = 0; k < f->nx; ++k) x[k] += h * dx[k];
+  s = f->set_time(f->c, f->t + h);
+  if (s == fmi2OK) s = f->set_states(f->c, x, f->nx);
+  if (s == fmi2OK) s = f->completed_step(f->c, fmi2True, &enter_event, &terminate);
+  if (s == fmi2OK && (enter_event || terminate)) printf("event %s %.17g\n", f->name, f->t + h);
+  return s;
+}
+
 static void step(int n, double h) {
   for (int k = 0; k < n; ++k) {
     for (int l = 0; l < nlinks; ++l) {
@@ -167,7 +210,7 @@ static void step(int n, double h) {
       report("set", fmus[c->to].set_real(fmus[c->to].c, c->to_vr, c->n, v));
     }
     for (int i = 0; i < nfmus; ++i) {
-      fmi2Status s = fmus[i].do_step(fmus[i].c, fmus[i].t, h, fmi2True);
+      fmi2Status s = fmus[i].nx ? euler_step(&fmus[i], h) : fmus[i].do_step(fmus[i].c, fmus[i].t, h, fmi2True);
       report("doStep", s);
       if (s != fmi2OK) return;
       fmus[i].t += h;
@@ -197,7 +240,7 @@ int main(int argc, char** argv) {
     for (char* tok = strtok(buf, " \t\r\n"); tok && nw < (int)(sizeof w / sizeof *w); tok = strtok(NULL, " \t\r\n"))
       w[nw++] = tok;
     if (nw == 0) continue;
-    if (strcmp(w[0], "fmu") == 0) {
+    if (strcmp(w[0], "fmu") == 0 || strcmp(w[0], "me") == 0) {
       load(w, nw, line);
     } else if (strcmp(w[0], "real") == 0 && nw == 4) {
       fmu* f = find(w[1], line);
@@ -214,6 +257,14 @@ int main(int argc, char** argv) {
       report("setupExperiment", f->setup(f->c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
       report("enterInitializationMode", f->enter_init(f->c));
       report("exitInitializationMode", f->exit_init(f->c));
+      if (f->nx) {
+        fmi2EventInfo ev;
+        memset(&ev, 0, sizeof ev);
+        ev.newDiscreteStatesNeeded = fmi2True;
+        for (int k = 0; k < 100 && ev.newDiscreteStatesNeeded; ++k)
+          report("newDiscreteStates", f->new_discrete_states(f->c, &ev));
+        report("enterContinuousTimeMode", f->enter_continuous(f->c));
+      }
     } else if (strcmp(w[0], "connect") == 0) {
       int arrow = 0;
       while (arrow < nw && strcmp(w[arrow], "->") != 0) ++arrow;
