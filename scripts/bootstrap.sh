@@ -6,33 +6,27 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 
-# chromium: the headless browser that tests the interactive HTML reports (tests/report)
-apt_pkgs=(libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv chromium)
-missing=()
-for p in "${apt_pkgs[@]}"; do
-  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "[bootstrap] installing Debian packages: ${missing[*]}"
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+# install_missing WHAT APT_OPTION PACKAGE...: the Debian packages not installed yet.
+install_missing() {
+  local what="$1" option="$2"; shift 2
+  local missing=() p
+  for p in "$@"; do
+    dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+  done
+  [ ${#missing[@]} -gt 0 ] || return 0
+  echo "[bootstrap] installing $what: ${missing[*]}"
+  local SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq $option "${missing[@]}" >/dev/null
+}
 
+# chromium: the headless browser that tests the interactive HTML reports (tests/report)
+install_missing "Debian packages" "" libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv chromium
 # The FMUs' other platforms (fmu/platform, docs/fmu.md "Platforms"): the cross compilers for
 # x86_64-windows (MinGW-w64, posix threads) and aarch64-linux, and what runs their binaries in
 # the tests: Wine and QEMU user mode.  Without recommends: the compilers and emulators only.
-cross_pkgs=(g++-mingw-w64-x86-64-posix g++-aarch64-linux-gnu wine wine64 qemu-user)
-missing=()
-for p in "${cross_pkgs[@]}"; do
-  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "[bootstrap] installing the FMUs' cross compilers and emulators: ${missing[*]}"
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+install_missing "the FMUs' cross compilers and emulators" --no-install-recommends \
+  g++-mingw-w64-x86-64-posix g++-aarch64-linux-gnu wine wine64 qemu-user
 # Wine's prefix is made once per user (about half a minute), not inside the first test.
 if command -v wine >/dev/null 2>&1 && [ ! -f "${WINEPREFIX:-$HOME/.wine}/system.reg" ]; then
   echo "[bootstrap] creating the Wine prefix ${WINEPREFIX:-$HOME/.wine}"
