@@ -404,7 +404,8 @@ def build_plant(sc: Scenario, true_model, truth: dict):
     params = {"solver.method": METHOD_CODES[method], **sc.spec["parameters"], **truth}
     # the FMU outputs the joints of its current time; the master delays the readings (CoreDrive)
     params.pop("sensor.delay", None)
-    return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"))
+    return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"),
+                    robot=None if sc.spec["fmu"].get("path") else sc.spec["robot"])
 
 
 # ------------------------------------------------------------------- running
