@@ -98,7 +98,7 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -
     Example
     -------
     >>> from cosim import fmu
-    >>> fmu.build("robots/hexapod_ups.toml")     # build/fmu/PKM_HEXAPOD_UPS.fmu
+    >>> fmu.build("my_stewart.toml")             # build/fmu/PKM_MY_STEWART.fmu
     """
     ident = fmu_id(robot)
     b = Path(build or build_dir())
