@@ -126,7 +126,7 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     Parameters
     ----------
     robot : str
-        A robot the toolkit lists (``"6pus"``, ``"hexapod_ups"``) or a description file.
+        A robot the toolkit lists (``"6pus"``, ``"quattro"``) or a description file.
     out : str or Path
         Folder to write to (created): ``<ID>.fmu`` (plant) and ``<ID>_CTRL.fmu`` (controller),
         each with the binaries of ``platforms``; with ``source``, ``<ID>_sources.fmu`` and
