@@ -82,3 +82,13 @@ def test_scenario_of_a_description_file_runs_with_the_fmu_plant(my_stewart, tmp_
         runs[plant] = json.loads(r.stdout)
     assert runs["fmu"]["plant"]["kind"] == "fmu"
     assert "PKM_MY_STEWART.fmu" in json.dumps(runs["fmu"]["plant"])
+
+
+def test_files_of_a_description_file_are_named_by_its_stem(tmp_path):
+    """``my_delta_viscous_3.csv``, not ``my_delta.toml_viscous_3.csv``."""
+    desc = tmp_path / "my_delta.toml"
+    shutil.copyfile(REPO / "robots" / "linear_delta.toml", desc)
+    r = cosim("blind-case", "--robot", str(desc), "--effect", "viscous", "--seed", "3", "--out", str(tmp_path / "cases"),
+              "--keys", str(tmp_path / "keys"))
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (tmp_path / "cases").iterdir() if p.suffix == ".csv") == ["my_delta_viscous_3.csv"]
