@@ -25,16 +25,25 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FMU_IDS", "fmu_id", "fmu_path", "build", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
+__all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
 
 REPO = Path(__file__).resolve().parent.parent
 
 
+def _is_file(robot: str) -> bool:
+    return robot.endswith(".toml") or "/" in robot or os.sep in robot
+
+
 def fmu_id(robot: str) -> str:
     """Model identifier (and .fmu file name) of a robot's plant FMU: ``PKM_<ROBOT>``, the
-    name fmu_gen gives a model folder's FMU (a robot without a folder has none).  An
-    identifier given as such (``"PKM_6PUS"``) is returned unchanged."""
-    return robot if robot.startswith("PKM_") else f"PKM_{robot.upper()}"
+    name fmu_gen gives a model folder's FMU (a robot without a folder has none); for a
+    description file, its name without ``.toml`` (``my_stewart.toml`` -> ``PKM_MY_STEWART``).
+    An identifier given as such (``"PKM_6PUS"``) is returned unchanged."""
+    if robot.startswith("PKM_"):
+        return robot
+    if _is_file(robot):
+        robot = Path(robot).name.removesuffix(".toml")
+    return "PKM_" + "".join(c if c.isalnum() else "_" for c in robot.upper())
 
 
 class _FmuIds(dict):
@@ -64,23 +73,121 @@ def build_dir() -> Path:
 
 
 def fmu_path(robot: str = "6pus", build: str | Path | None = None) -> Path:
-    """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu``; raises if it is not built."""
+    """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu``; raises if it is not built.
+    A description file's FMU is built on demand by :func:`build` (``cosim fmu PATH.toml``)."""
     ident = fmu_id(robot)
     p = Path(build or build_dir()) / "fmu" / f"{ident}.fmu"
     if not p.exists():
-        raise FileNotFoundError(f"{p} is not built: run ./scripts/bootstrap.sh (or cmake --build "
-                                f"{p.parent.parent} --target {ident}_fmu)")
+        how = (f"cosim fmu {robot} --out DIR (or cosim.fmu.build({robot!r}))" if _is_file(robot) else
+               f"./scripts/bootstrap.sh (or cmake --build {p.parent.parent} --target {ident}_fmu)")
+        raise FileNotFoundError(f"{p} is not built: run {how}")
     return p
 
 
+PLATFORMS = ("linux64", "win64", "aarch64-linux")
+
+
 def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -> Path:
-    """Build (or bring up to date) one FMU with CMake and return its path."""
+    """Build (or bring up to date) a robot's FMUs (plant, controller, source-code) with CMake
+    and return the plant's path.
+
+    A description file anywhere (``"my_stewart.toml"``) is given to the build as
+    ``PKM_FMU_DESCRIPTIONS`` (nothing in the checkout changes): its FMUs compile only their
+    FMU layer, the core of every platform being compiled already.
+
+    Example
+    -------
+    >>> from cosim import fmu
+    >>> fmu.build("my_stewart.toml")             # build/fmu/PKM_MY_STEWART.fmu
+    """
     ident = fmu_id(robot)
     b = Path(build or build_dir())
-    if not (b / "CMakeCache.txt").exists():
-        subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release"], check=True)
-    subprocess.run(["cmake", "--build", str(b), "--target", f"{ident}_fmu", "-j", str(jobs)], check=True)
+    configure = ["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release"]
+    if _is_file(robot):
+        desc = Path(robot).resolve()
+        if not desc.is_file():
+            raise FileNotFoundError(f"{robot}: no such description file")
+        configure.append(f"-DPKM_FMU_DESCRIPTIONS={desc}")
+    if _is_file(robot) or not (b / "CMakeCache.txt").exists():
+        subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
+    targets = [f"{ident}_fmu", f"{ident}_CTRL_fmu", f"{ident}_source_fmu", f"{ident}_CTRL_source_fmu"]
+    subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *targets], check=True,
+                   stdout=subprocess.DEVNULL)
     return fmu_path(robot, b)
+
+
+_build_fmus = build  # for package(), whose ``build`` argument is the folder
+
+
+def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool = False, fmi: int = 2,
+            build: str | Path | None = None) -> list[Path]:
+    """Write a robot's FMUs for the platforms a user asks for into ``out``.
+
+    Parameters
+    ----------
+    robot : str
+        A robot the toolkit lists (``"6pus"``, ``"quattro"``) or a description file.
+    out : str or Path
+        Folder to write to (created): ``<ID>.fmu`` (plant) and ``<ID>_CTRL.fmu`` (controller),
+        each with the binaries of ``platforms``; with ``source``, ``<ID>_sources.fmu`` and
+        ``<ID>_CTRL_sources.fmu`` too (source-code FMUs, docs/fmu.md).
+    platforms : sequence of str
+        Any of ``PLATFORMS``: ``linux64``, ``win64``, ``aarch64-linux``.
+    source : bool
+        Also the source-code FMUs.
+    fmi : int
+        FMI version; 2 (FMI 3.0 FMUs are not made by this build).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Example
+    -------
+    >>> from cosim import fmu
+    >>> fmu.package("6pus", out="out/fmus", platforms=["linux64", "win64"], source=True)
+    """
+    import zipfile
+
+    if fmi != 2:
+        raise ValueError(f"FMI {fmi}: this build makes FMI 2.0 FMUs only")
+    bad = [p for p in platforms if p not in PLATFORMS]
+    if bad:
+        raise ValueError(f"unknown platform {bad[0]!r}: use {', '.join(PLATFORMS)}")
+    b = Path(build or build_dir())
+    ident = fmu_id(robot)
+    made = [b / "fmu" / f"{i}.fmu" for i in (ident, ident + "_CTRL")]
+    if _is_file(robot) or not all(p.exists() for p in made):
+        _build_fmus(robot, b)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for src in made:
+        with zipfile.ZipFile(src) as z:
+            names = z.namelist()
+            have = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") == 2
+                    and not n.endswith("/")}
+            missing = [p for p in platforms if p not in have]
+            if missing:
+                raise FileNotFoundError(f"{src} has no {missing[0]} binary: its cross compiler was not installed "
+                                        f"when the build ran (scripts/bootstrap.sh installs them)")
+            dst = out / src.name
+            with zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as w:
+                for n in names:
+                    parts = n.split("/")
+                    if parts[0] == "binaries" and len(parts) > 1 and parts[1] not in platforms:
+                        continue
+                    w.writestr(z.getinfo(n), z.read(n))
+        written.append(dst)
+        if source:
+            s = b / "fmu" / "source" / src.name
+            if not s.exists():
+                raise FileNotFoundError(f"{s} is not built (cmake --build {b} --target {src.stem}_source_fmu)")
+            dst = out / f"{src.stem}_sources.fmu"
+            shutil.copyfile(s, dst)
+            written.append(dst)
+    return written
 
 
 def validate(path: str | Path) -> list[str]:
@@ -125,7 +232,7 @@ def simulate(path, fmi_type: str = "CoSimulation", stop_time: float = 1.0, step:
     path : str or Path
         The ``.fmu`` (see :func:`fmu_path`).
     fmi_type : {"CoSimulation", "ModelExchange"}
-        CS integrates with CVODE inside the FMU; ME with fmpy's own CVode.
+        CS integrates inside the FMU (the core's integrator, ``solver.method``: RK 5(4) by default); ME with fmpy's own CVode.
     stop_time, step : float
         End time and communication (output) step [s].
     tau : array_like, optional

@@ -247,6 +247,11 @@ class FMUPlant(Plant):
         Overrides of the names of a channel (``"tau"``, ``"q"``, ``"qd"``, ``"x"``,
         ``"xd"``, ``"x0"``, ``"xd0"``): a format string of the 1-based index ``{i}`` or
         a list of nd names.
+    instance_name : str
+        The FMU instance's name.
+    robot : str, optional
+        The robot the FMU models (a name or a description file), for its pose names; by
+        default the listed robot whose FMU identifier (``PKM_<ROBOT>``) the FMU has.
     """
 
     kind = "fmu"
@@ -256,7 +261,8 @@ class FMUPlant(Plant):
     # "<c>d", the initial pose "<c>0" and the initial rate "<c>d0" (fmu/<robot>/variables.txt).
 
     def __init__(self, fmu, parameters: dict | None = None, rtol: float | None = 1e-10,
-                 atol: float | None = 1e-12, names: dict | None = None, instance_name: str = "plant"):
+                 atol: float | None = 1e-12, names: dict | None = None, instance_name: str = "plant",
+                 robot: str | None = None):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
@@ -268,7 +274,7 @@ class FMUPlant(Plant):
         self.ndof = sum(1 for v in self.md.modelVariables if v.causality == "input")
         if self.ndof == 0:
             raise MasterError(f"{self.path}: the FMU has no inputs (expected the actuator efforts)")
-        self.robot = self._robot()
+        self.robot = robot or self._robot()  # a description file's FMU is named after the file, not a listed robot
         facts = _facts(self.robot)
         pose = list(facts.pose_names) if facts else [f"x{i}" for i in range(1, self.ndof + 1)]
         self.names = {**self.NAMES, "x": pose, "xd": [c + "d" for c in pose], "x0": [c + "0" for c in pose],

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import copy
 import json
+import subprocess
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -376,11 +377,16 @@ def fmu_path(sc: Scenario) -> Path:
 
 def built_fmu(robot: str) -> Path:
     """The Co-Simulation FMU of ``robot`` from the CMake build (``cosim.fmu`` knows where)."""
-    from .fmu import fmu_path as fmu_file
+    from .fmu import build, fmu_path as fmu_file
 
     try:
-        return Path(fmu_file(robot))
-    except FileNotFoundError as e:
+        try:
+            return Path(fmu_file(robot))
+        except FileNotFoundError:
+            if not (robot.endswith(".toml") or "/" in robot):
+                raise
+            return Path(build(robot))  # a description file's FMU: made by the build, on demand
+    except (FileNotFoundError, subprocess.CalledProcessError) as e:
         raise ScenarioError(f"the FMU of robot {robot} is not built ({e}): build the project "
                             f"(./scripts/bootstrap.sh) or give [fmu] path in the scenario") from None
 
@@ -399,7 +405,8 @@ def build_plant(sc: Scenario, true_model, truth: dict):
     params = {"solver.method": METHOD_CODES[method], **sc.spec["parameters"], **truth}
     # the FMU outputs the joints of its current time; the master delays the readings (CoreDrive)
     params.pop("sensor.delay", None)
-    return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"))
+    return FMUPlant(fmu_path(sc), parameters=params, rtol=rtol, atol=atol, names=sc.spec["fmu"].get("names"),
+                    robot=None if sc.spec["fmu"].get("path") else sc.spec["robot"])
 
 
 # ------------------------------------------------------------------- running

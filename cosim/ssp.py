@@ -33,7 +33,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .closed_loop import KINDS
-from .fmu import fmu_path
+from .fmu import fmu_id, fmu_path
 
 __all__ = ["controller_parameters", "lti_controller", "export_ssp", "LTIController"]
 
@@ -203,7 +203,7 @@ def export_ssp(path, *, model, controller, qref, dt: float = 1e-3, stop_time: fl
         raise ValueError("qref and qdref must be finite")
     if not (np.isfinite(dt) and dt > 0 and np.isfinite(stop_time) and stop_time > dt):
         raise ValueError(f"dt = {dt} s and stop_time = {stop_time} s: need 0 < dt < stop_time")
-    plant_fmu, ctrl_fmu = fmu_path(model.robot), fmu_path(f"PKM_{model.robot.upper()}_CTRL")
+    plant_fmu, ctrl_fmu = fmu_path(model.robot), fmu_path(fmu_id(model.robot) + "_CTRL")
     facts = model.facts
     x0 = model.home() if x0 is None else np.asarray(x0, float)
     plant_vals = {name: value for name, value in model.params().items()}

@@ -14,25 +14,48 @@ say() { echo "[bootstrap] $*"; }
 step() { t_step=$SECONDS; say "$1/4 $2"; }
 took() { local s=$((SECONDS - t_step)); say "    done in $((s / 60)) min $((s % 60)) s"; }
 
-# chromium: the headless browser that tests the interactive HTML reports (tests/report)
+# chromium: the headless browser that tests the interactive HTML reports (tests/report).
+# The FMUs' other platforms (fmu/platform, docs/fmu.md "Platforms"): the cross compilers for
+# x86_64-windows (MinGW-w64, posix threads) and aarch64-linux, and what runs their binaries in
+# the tests: Wine and QEMU user mode (installed without recommends: compilers and emulators only).
 apt_pkgs=(libeigen3-dev libsundials-dev libgtest-dev cmake g++ python3-venv chromium)
+cross_pkgs=(g++-mingw-w64-x86-64-posix g++-aarch64-linux-gnu wine wine64 qemu-user)
 missing=()
+missing_cross=()
 for p in "${apt_pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
 done
-step 1 "Debian packages: ${#apt_pkgs[@]} needed, ${#missing[@]} to install${missing:+ (${missing[*]})}"
-if [ ${#missing[@]} -gt 0 ]; then
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  say "    apt-get update"
-  $SUDO apt-get update -qq
-  # one line per package as apt unpacks it: "Unpacking chromium (...)"
+for p in "${cross_pkgs[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing_cross+=("$p")
+done
+nall=$((${#apt_pkgs[@]} + ${#cross_pkgs[@]}))
+nmiss=$((${#missing[@]} + ${#missing_cross[@]}))
+all_missing=("${missing[@]}" "${missing_cross[@]}")
+step 1 "Debian packages: $nall needed, $nmiss to install${all_missing:+ (${all_missing[*]})}"
+# apt_install OPTION PACKAGE...: one line per package as apt unpacks it ("Unpacking chromium (...)")
+apt_install() {
+  local option="$1"; shift
+  local SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   set +e
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y "${missing[@]}" 2>&1 | tee /tmp/pkm-cosim-apt.log \
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y $option "$@" 2>&1 | tee -a /tmp/pkm-cosim-apt.log \
     | awk '/^Unpacking /{n++; printf "[bootstrap]     unpacked %d: %s\n", n, $2; fflush()}'
-  rc=${PIPESTATUS[0]}
+  local rc=${PIPESTATUS[0]}
   set -e
   if [ "$rc" -ne 0 ]; then tail -20 /tmp/pkm-cosim-apt.log; say "apt-get failed: full log in /tmp/pkm-cosim-apt.log" >&2; exit 1; fi
+}
+if [ "$nmiss" -gt 0 ]; then
+  say "    apt-get update"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  [ ${#missing[@]} -eq 0 ] || apt_install "" "${missing[@]}"
+  [ ${#missing_cross[@]} -eq 0 ] || apt_install --no-install-recommends "${missing_cross[@]}"
   took
+fi
+# Wine's prefix is made once per user (about half a minute), not inside the first test.
+if command -v wine >/dev/null 2>&1 && [ ! -f "${WINEPREFIX:-$HOME/.wine}/system.reg" ]; then
+  say "    creating the Wine prefix ${WINEPREFIX:-$HOME/.wine}"
+  WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" wineboot -i >/dev/null 2>&1 || true
+  wineserver -w 2>/dev/null || true
 fi
 
 PY="${PYTHON:-python3}"
@@ -59,7 +82,7 @@ else
   step 2 "Python environment .venv: up to date"
 fi
 
-step 3 "building the core, its tests and the FMUs (CMake, Release, $(nproc) jobs; build/build.log)"
+step 3 "building the core, its tests and the FMUs for every platform (CMake, Release, $(nproc) jobs; build/build.log)"
 launcher=()
 if command -v ccache >/dev/null 2>&1; then  # rebuilds and parallel checkouts share compiles
   launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)

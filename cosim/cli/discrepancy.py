@@ -242,7 +242,8 @@ def _case_configure(p):
 def cmd_blind_case(args):
     from ..discrepancy import blind
 
-    name = args.name or f"{args.robot}_{'+'.join(args.effect) or 'clean'}_{args.seed}"
+    robot = Path(args.robot).name.removesuffix(".toml")  # a description file names its cases by its stem
+    name = args.name or f"{robot}_{'+'.join(args.effect) or 'clean'}_{args.seed}"
     csv, key = blind.make_case(blind.CaseSpec(name, args.robot, list(args.effect), args.seed), args.out, args.keys)
     print(f"recording: {csv}\nanswer key: {key}")
     return 0

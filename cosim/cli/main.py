@@ -94,7 +94,8 @@ def _load_plugins():
     # Capability modules register their own sub-commands on import.
     import importlib
 
-    for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark", "importing"):
+    for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark", "importing",
+                "fmu"):
         importlib.import_module(f"cosim.cli.{mod}")
 
 

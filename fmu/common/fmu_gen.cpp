@@ -3,7 +3,7 @@
 // core's own parameter table (names, units, descriptions, defaults come from pkm.h, they
 // are not declared twice).  Run by CMake at build time; see docs/fmu.md.
 //
-//   fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>
+//   fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h> [<source md.xml> <source file>...]
 //
 // Exit status 0 on success; otherwise a message naming the file and line on stderr.
 #include <algorithm>
@@ -428,7 +428,18 @@ std::string guid_of(const std::string& text) {
   return b;
 }
 
-std::string model_description(const Table& t, int nd, const std::string& guid) {
+// The <SourceFiles> list of a source-code FMU (FMI 2.0: inside <ModelExchange> and <CoSimulation>),
+// or nothing for a binary FMU.  Not part of the GUID: a source FMU and the binary FMU of
+// the same table are the same model.
+std::string source_files(const std::vector<std::string>& files) {
+  if (files.empty()) return "/>\n";
+  std::string o = ">\n    <SourceFiles>\n";
+  for (const auto& f : files) o += "      <File name=\"" + xml(f) + "\"/>\n";
+  return o + "    </SourceFiles>\n";
+}
+
+std::string model_description(const Table& t, int nd, const std::string& guid,
+                              const std::vector<std::string>& sources = {}) {
   const std::string id = t.head.at("identifier");
   std::ostringstream o;
   std::string desc = t.head.count("description") ? t.head.at("description") : id;
@@ -442,12 +453,14 @@ std::string model_description(const Table& t, int nd, const std::string& guid) {
       " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\""
       " canNotUseMemoryManagementFunctions=\"true\" canBeInstantiatedOnlyOncePerProcess=\"false\""
       " needsExecutionTool=\"false\"";
+  const std::string files = source_files(sources);
   if (!t.controller())
     o << "  <ModelExchange modelIdentifier=\"" << xml(id) << "\"" << common
-      << " completedIntegratorStepNotNeeded=\"false\"/>\n";
+      << " completedIntegratorStepNotNeeded=\"false\"" << files << (sources.empty() ? "" : "  </ModelExchange>\n");
   o << "  <CoSimulation modelIdentifier=\"" << xml(id) << "\"" << common
     << " canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
-       " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\"/>\n";
+       " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
+    << files << (sources.empty() ? "" : "  </CoSimulation>\n");
 
   std::set<std::string> units;
   for (const auto& v : t.vars)
@@ -583,8 +596,9 @@ void write_if_changed(const std::string& path, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::cerr << "usage: fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>\n";
+  if (argc < 4 || argc == 5) {
+    std::cerr << "usage: fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>"
+                 " [<source modelDescription.xml> <source file>...]\n";
     return 2;
   }
   pkm_model* model = nullptr;
@@ -595,6 +609,8 @@ int main(int argc, char** argv) {
     std::string guid = guid_of(model_description(t, nd, "{}"));
     write_if_changed(argv[2], model_description(t, nd, guid));
     write_if_changed(argv[3], vars_header(t, nd, np, guid, argv[1]));
+    if (argc > 5)  // the source-code FMU's description: the same model, its sources listed
+      write_if_changed(argv[4], model_description(t, nd, guid, std::vector<std::string>(argv + 5, argv + argc)));
   } catch (const std::exception& e) {
     std::cerr << "fmu_gen: " << e.what() << "\n";
     pkm_model_destroy(model);

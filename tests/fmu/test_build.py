@@ -46,3 +46,41 @@ def test_only_fmi2_symbols_are_exported(fmu_file, tmp_path):
     out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in out.splitlines() if line.strip()}
     assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))
+
+
+def _platform_binary(fmu_file, tmp_path, platform, ext):
+    name = f"binaries/{platform}/PKM_6PUS.{ext}"
+    with zipfile.ZipFile(fmu_file) as z:
+        assert name in z.namelist(), z.namelist()
+        z.extract(name, tmp_path)
+    return tmp_path / name
+
+
+# What a Windows installation always has: the DLL carries libstdc++, libgcc and winpthread.
+WINDOWS_SYSTEM_DLLS = {"kernel32.dll", "msvcrt.dll", "user32.dll", "advapi32.dll", "ws2_32.dll"}
+
+
+def test_windows_binary_is_static_and_exports_only_fmi2(fmu_file, tmp_path):
+    dll = _platform_binary(fmu_file, tmp_path, "win64", "dll")
+    dump = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True, text=True,
+                          check=True).stdout
+    assert "file format pei-x86-64" in subprocess.run(["x86_64-w64-mingw32-objdump", "-f", str(dll)],
+                                                      capture_output=True, text=True, check=True).stdout
+    imported = {n.lower() for n in re.findall(r"DLL Name: (\S+)", dump)}
+    assert imported and imported <= WINDOWS_SYSTEM_DLLS, imported
+    table = dump.split("[Ordinal/Name Pointer] Table")[1].split("\n\n")[0]
+    exported = set(re.findall(r"\]\s+(\w+)", table))
+    assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))
+
+
+def test_arm_binary_needs_only_the_c_runtime_and_exports_only_fmi2(fmu_file, tmp_path):
+    so = _platform_binary(fmu_file, tmp_path, "aarch64-linux", "so")
+    head = subprocess.run(["readelf", "-h", str(so)], capture_output=True, text=True, check=True).stdout
+    assert "AArch64" in head
+    dyn = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
+    needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dyn))
+    assert needed and needed <= {"libc.so.6", "libm.so.6", "ld-linux-aarch64.so.1"}, needed
+    syms = subprocess.run(["readelf", "--dyn-syms", "-W", str(so)], capture_output=True, text=True, check=True).stdout
+    exported = {ln.split()[-1] for ln in syms.splitlines()
+                if " GLOBAL " in ln and " DEFAULT " in ln and " UND " not in ln}
+    assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))

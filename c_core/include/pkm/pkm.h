@@ -38,10 +38,12 @@
 extern "C" {
 #endif
 
+#if !defined(PKM_API) /* an FMU binary defines it empty: the core inside stays private */
 #if defined(_WIN32)
 #define PKM_API __declspec(dllexport)
 #else
 #define PKM_API __attribute__((visibility("default")))
+#endif
 #endif
 
 /* ===================================================================== status */

@@ -77,6 +77,11 @@ static void check_options(const pkm_sim_options& o) {
   auto bad = [](const std::string& what) { throw Error(PKM_ERR_ARGUMENT, "pkm_sim options: " + what); };
   if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK && o.method != PKM_ERK23)
     bad("method = " + std::to_string(o.method) + " is none of PKM_BDF (0), PKM_ADAMS (1), PKM_ERK (2), PKM_ERK23 (3)");
+#ifdef PKM_NO_CVODE  // the FMU binaries of platforms without a SUNDIALS library (fmu/platform)
+  if (o.method == PKM_BDF || o.method == PKM_ADAMS)
+    bad("method = " + std::to_string(o.method) + (o.method == PKM_BDF ? " (BDF)" : " (Adams)") +
+        " needs SUNDIALS CVODE, which this binary (" PKM_NO_CVODE ") does not carry: use PKM_ERK (2) or PKM_ERK23 (3)");
+#endif
   if (!(std::isfinite(o.rtol) && o.rtol > 0 && o.rtol < 1))
     bad("rtol = " + num(o.rtol) + " must be in (0, 1)");
   if (!(std::isfinite(o.atol) && o.atol > 0)) bad("atol = " + num(o.atol) + " must be finite and > 0");

@@ -1,0 +1,94 @@
+"""``cosim fmu``: a robot's FMUs for the platforms asked for, for a listed robot or a
+description file anywhere (its FMUs made in the build directory, the checkout untouched), and
+a scenario whose robot is a file run with ``--plant fmu``."""
+import json
+import shutil
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from cosim import fmu
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def cosim(*args):
+    return subprocess.run([sys.executable, "-m", "cosim", *args], capture_output=True, text=True, cwd=REPO)
+
+
+def platforms_in(path):
+    return {n.split("/")[1] for n in zipfile.ZipFile(path).namelist()
+            if n.startswith("binaries/") and n.count("/") == 2 and not n.endswith("/")}
+
+
+def test_listed_robot_with_the_platforms_asked_for(tmp_path):
+    r = cosim("fmu", "6pus", "--platforms", "linux64,win64", "--source", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["PKM_6PUS.fmu", "PKM_6PUS_CTRL.fmu", "PKM_6PUS_CTRL_sources.fmu", "PKM_6PUS_sources.fmu"]
+    assert platforms_in(tmp_path / "PKM_6PUS.fmu") == {"linux64", "win64"}
+    assert platforms_in(tmp_path / "PKM_6PUS_CTRL.fmu") == {"linux64", "win64"}
+    assert fmu.validate(tmp_path / "PKM_6PUS.fmu") == []
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--fmi", "3"], "FMI 3: this build makes FMI 2.0 FMUs only"),
+    (["--platforms", "darwin64"], "unknown platform 'darwin64'"),
+])
+def test_what_cannot_be_made_is_one_line_and_exit_2(tmp_path, args, says):
+    r = cosim("fmu", "6pus", *args, "--out", str(tmp_path))
+    assert r.returncode == 2 and says in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+@pytest.fixture(scope="module")
+def my_stewart(tmp_path_factory):
+    """A description file outside the repository (the bundled hexapod under another name);
+    the build's PKM_FMU_DESCRIPTIONS is emptied again afterwards."""
+    d = tmp_path_factory.mktemp("mine") / "my_stewart.toml"
+    shutil.copyfile(REPO / "robots" / "hexapod_ups.toml", d)
+    yield d
+    subprocess.run(["cmake", "-S", str(REPO), "-B", str(fmu.build_dir()), "-DPKM_FMU_DESCRIPTIONS="],
+                   check=True, stdout=subprocess.DEVNULL)
+
+
+def test_description_file_anywhere(my_stewart, tmp_path):
+    before = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
+    r = cosim("fmu", str(my_stewart), "--platforms", "linux64,win64,aarch64-linux", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    plant = tmp_path / "PKM_MY_STEWART.fmu"
+    assert platforms_in(plant) == {"linux64", "win64", "aarch64-linux"}
+    assert fmu.validate(plant) == []
+    assert "resources/my_stewart.toml" in zipfile.ZipFile(plant).namelist()
+    assert (tmp_path / "PKM_MY_STEWART_CTRL.fmu").exists()
+    after = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
+    assert after == before  # nothing in the checkout changed
+
+
+def test_scenario_of_a_description_file_runs_with_the_fmu_plant(my_stewart, tmp_path):
+    spec = tomllib.loads((REPO / "scenarios" / "described" / "hexapod_ups_step_pd.toml").read_text())
+    text = (REPO / "scenarios" / "described" / "hexapod_ups_step_pd.toml").read_text()
+    text = text.replace(f'robot = "{spec["robot"]}"', f'robot = "{my_stewart}"')
+    sc = tmp_path / "mine.toml"
+    sc.write_text(text)
+    runs = {}
+    for plant in ("fmu", "core"):
+        r = cosim("run", str(sc), "--plant", plant, "--duration", "0.1", "--no-figures", "--json",
+                  "--out", str(tmp_path / plant))
+        assert r.returncode == 0, r.stderr
+        runs[plant] = json.loads(r.stdout)
+    assert runs["fmu"]["plant"]["kind"] == "fmu"
+    assert "PKM_MY_STEWART.fmu" in json.dumps(runs["fmu"]["plant"])
+
+
+def test_files_of_a_description_file_are_named_by_its_stem(tmp_path):
+    """``my_delta_viscous_3.csv``, not ``my_delta.toml_viscous_3.csv``."""
+    desc = tmp_path / "my_delta.toml"
+    shutil.copyfile(REPO / "robots" / "linear_delta.toml", desc)
+    r = cosim("blind-case", "--robot", str(desc), "--effect", "viscous", "--seed", "3", "--out", str(tmp_path / "cases"),
+              "--keys", str(tmp_path / "keys"))
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (tmp_path / "cases").iterdir() if p.suffix == ".csv") == ["my_delta_viscous_3.csv"]
