@@ -24,7 +24,7 @@ Two back ends run the sequence:
 
 * **compiled**: the core's ``pkm_closed_loop`` on a :class:`~cosim.master.CorePlant`
   with a controller the core implements (``pkm_ctrl``: PD, PD + gravity, computed
-  torque, PID, LTI, the discrete rig controller), in pieces of about 50 ms of wall time
+  torque, PID, LTI, the discrete rig controller), in pieces of about 20 ms of wall time
   (the loop goes on exactly across pieces);
 * **stepwise**: any :class:`~cosim.master.Plant` (the core plant or an FMU) and any
   Python callable, one sample at a time.
@@ -65,7 +65,7 @@ __all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", 
 NOISE_CHANNELS = ("q", "qd", "tau", "pose")
 
 #: wall time of one piece of the compiled loop [s]: how long a stop request may wait
-PIECE_SECONDS = 0.05
+PIECE_SECONDS = 0.02
 
 
 def compile_controller(controller, *, model, dt: float):
@@ -219,7 +219,7 @@ class ClosedLoop:
         progress : callable, optional
             ``progress(k)`` with the samples done, after each piece (compiled) or sample.
         should_stop : callable, optional
-            ``should_stop() -> bool``, asked between pieces (compiled: about every 50 ms)
+            ``should_stop() -> bool``, asked between pieces (compiled: about every 20 ms)
             or samples (stepwise); True ends the run there with the rows so far
             (``LoopRecord.stopped``).
         f_ext : array_like, shape (len(reference.time), nd), optional
@@ -342,7 +342,7 @@ class ClosedLoop:
                 return e, k1 - 1
             k0 = k1
             spent = _time.perf_counter() - w
-            piece = int(min(max(16, piece * PIECE_SECONDS / max(spent, 1e-6)), 4 * piece, 100000))
+            piece = int(min(max(16, piece * PIECE_SECONDS / max(spent, 1e-6)), 2 * piece, 100000))
             if progress is not None:
                 progress(k0)
             if should_stop is not None and should_stop():

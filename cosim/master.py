@@ -617,7 +617,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         Show a tqdm progress bar; by default it appears on a terminal when the run
         lasts more than two seconds of wall time.
     compiled : bool, optional
-        Run the whole loop inside the core (one C call per piece of about 50 ms, no
+        Run the whole loop inside the core (one C call per piece of about 20 ms, no
         Python per sample).  By default it does whenever it can: a :class:`CorePlant`
         and a controller the core implements (PD, PD + gravity, computed torque, PID,
         LTI, discrete); otherwise the stepwise loop runs and ``RunResult.loop_note``

@@ -144,3 +144,4 @@ def test_a_failure_stops_both_back_ends_at_the_same_sample_with_the_same_rows():
     np.testing.assert_allclose(fast.partial["x"], slow.partial["x"], rtol=0, atol=1e-14)
     assert str(fast).split(":")[0] == str(slow).split(":")[0]
     assert "singularity" in str(fast) and "singularity" in str(slow)
+
