@@ -2,7 +2,7 @@
 "Platforms, source-code FMUs and which file to give to which tool")."""
 from __future__ import annotations
 
-from .main import command, robot_arg
+from .main import command, output_dir, robot_arg
 
 
 def _configure(p):
@@ -13,7 +13,7 @@ def _configure(p):
                    help=f"comma-separated binaries to include: {', '.join(PLATFORMS)} (default linux64)")
     p.add_argument("--fmi", type=int, choices=[2, 3], default=2, help="FMI version (this build makes 2.0)")
     p.add_argument("--source", action="store_true", help="also the source-code FMUs (<ID>_sources.fmu)")
-    p.add_argument("--out", required=True, help="folder to write the .fmu files to")
+    p.add_argument("--out", type=output_dir, required=True, help="folder to write the .fmu files to")
 
 
 @command("fmu", "write a robot's plant and controller FMUs with the platforms' binaries asked for (and source FMUs)")

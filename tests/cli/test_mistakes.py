@@ -91,6 +91,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-case --robot": ["blind-case", "--robot", "{}"],
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
+          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
           "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
@@ -105,7 +106,8 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
             "blind-case": ["blind-case", "--out", "{}"], "blind-case --keys": ["blind-case", "--keys", "{}"],
             "discrepancy-demo": ["discrepancy-demo", "--out", "{}"], "demo": ["demo", "--out", "{}"],
             "blind-benchmark": ["blind-benchmark", "--out", "{}"],
-            "import": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", "{}"]}
+            "import": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", "{}"],
+            "fmu": ["fmu", "6pus", "--out", "{}"]}
 # commands writing one file given by --out
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
@@ -232,6 +234,8 @@ def _cases(tmp):
         (["export-ssp", str(SCEN / "6pus_step_pdg.toml")], "the following arguments are required: --out"),
         (["view", str(tmp / "missing.csv")], "file not found"),
         (["bench", "nope"], "invalid choice: 'nope'"),
+        (["fmu", "6pus", "--fmi", "4", "--out", str(tmp / "fmus")], "invalid choice: 4"),
+        (["fmu", "hexapod", "--out", str(tmp / "fmus")], "unknown robot 'hexapod'"),
         (["import", str(EMPS / "DATA_EMPS.mat"), "--out", str(tmp / "imp")], "the following arguments are required: --map"),
         (["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out", str(tmp / "imp"),
           "--format", "xlsx"], "invalid choice: 'xlsx'"),
