@@ -89,12 +89,17 @@ if command -v ccache >/dev/null 2>&1; then  # rebuilds and parallel checkouts sh
 fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
 # The Makefile generator prints "[ 42%] ..." before each action: one line per 10 %, and
-# one per FMU packed.
+# one per FMU packed; the other platforms' builds count from 0 % again, each a part.
 set +e
 cmake --build build -j"$(nproc)" 2>&1 | tee build/build.log | awk '
   match($0, /^\[ *[0-9]+%\]/) {
     p = substr($0, 2, RLENGTH - 3) + 0
-    if (p >= next_p) { printf "[bootstrap]     build %3d %%\n", p; next_p = p - p % 10 + 10; fflush() }
+    if (p + 30 < last) { part++; next_p = 0 }
+    last = p
+    if (p >= next_p) {
+      printf "[bootstrap]     build %3d %%%s\n", p, part ? " (part " part + 1 ": another platform)" : ""
+      next_p = p - p % 10 + 10; fflush()
+    }
   }
   /zipping .*\.fmu/ { n++; f = $NF; sub(/.*\//, "", f); printf "[bootstrap]     FMU %d packed: %s\n", n, f; fflush() }'
 rc=${PIPESTATUS[0]}
