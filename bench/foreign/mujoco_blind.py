@@ -69,6 +69,9 @@ EFFECTS = {
     # two bodies: the drive (encoder, motor) and the carriage, joined by a dead-band spring / a spring
     "backlash": ("backlash", "rail[{j}].backlash"),
     "compliance": ("compliance", "rail[{j}].compliance"),
+    # a constant force on the rail (MuJoCo's qfrc_applied): the drive supplies that much less,
+    # rail[j].offset = -force in the core's convention (effort = ID + friction + offset)
+    "offset": ("offset", "rail[{j}].offset"),
 }
 
 #: library effects that are also a right name of a MuJoCo effect: its friction loss is a soft
@@ -196,6 +199,9 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         elif eff == "dead_zone":
             dead, dead_joint = val, jnt
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
+        elif eff == "offset":
+            data.qfrc_applied[drails[jnt]] += val
+            truth[EFFECTS[eff][1].format(j=jnt + 1)] = -val
     n = len(ref.time)
     rows = {k: np.empty((n, 6)) for k in ("q", "qd", "tau", "pose")}
     issued = []  # (time, command) for the delay line
@@ -263,7 +269,7 @@ PAIRS = [("coulomb", "payload"), ("viscous", "gravity_tilt"), ("dead_zone", "rot
 def _draw(effect, cfg, rng):
     lo, hi = cfg[EFFECTS[effect][0]]
     v = rng.uniform(lo, hi)
-    if effect in ("platform_mass", "encoder_offset"):
+    if effect in ("platform_mass", "encoder_offset", "offset"):
         v *= rng.choice([-1, 1])
     return float(v)
 

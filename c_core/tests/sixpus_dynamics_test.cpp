@@ -232,6 +232,30 @@ TEST_F(Dyn, FrictionAddsAgainstTheMotion) {
   EXPECT_LT(rel(tau1 - tau0, 3.0 * qd), 1e-12);
 }
 
+TEST_F(Dyn, AConstantOffsetIsAnEffortTheDriveSuppliesWhateverTheMotion) {
+  // rail[i].offset: the drive supplies inverse dynamics + friction + offset; holding still
+  // needs it too, and the forward dynamics spends it before the mechanism sees the rest.
+  Vec6 x = pose(), xd = vel(), xdd = acc(), g0, g1, off;
+  off << 0.5, -0.25, 0.0, 1.5, -2.0, 0.125;
+  Vec6 tau0 = ID(x, xd, xdd), zero0 = ID(x, Vec6::Zero(), Vec6::Zero());
+  ASSERT_EQ(pkm_gravity_load(m, d, x.data(), g0.data()), PKM_OK);
+  Vec6 fd0 = FD(x, xd, tau0 - off);
+  for (int i = 1; i <= 6; ++i) set("rail[" + std::to_string(i) + "].offset", off[i - 1]);
+  validate();
+  EXPECT_LT((ID(x, xd, xdd) - tau0 - off).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((ID(x, Vec6::Zero(), Vec6::Zero()) - zero0 - off).cwiseAbs().maxCoeff(), 1e-12);
+  ASSERT_EQ(pkm_gravity_load(m, d, x.data(), g1.data()), PKM_OK);
+  EXPECT_LT((g1 - g0 - off).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(FD(x, Vec6::Zero(), g1).cwiseAbs().maxCoeff(), 1e-9 * 9.81);
+  // the command tau0 with the offset moves it as tau0 - offset without
+  EXPECT_LT(rel(FD(x, xd, tau0), fd0), 1e-12);
+  EXPECT_LT(rel(FD(x, xd, tau0 + off), xdd), 1e-9);
+  // the friction call reports it (the part of the effort not reaching the mechanism)
+  Vec6 f, qd = Vec6::Zero();
+  ASSERT_EQ(pkm_joint_friction(m, d, qd.data(), f.data()), PKM_OK);
+  EXPECT_EQ(f, off);
+}
+
 TEST_F(Dyn, PayloadWeighsWhereItIs) {
   // A payload at rest adds exactly its weight to the generalised gravity force, with
   // the moment of its offset: J^T (g_with - g_without) = (0, 0, m g, dPE/dangles).

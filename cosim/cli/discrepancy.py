@@ -64,6 +64,9 @@ def _diag_configure(p):
     p.add_argument("--out", type=output_dir, default=None, help="report directory (default: results/diagnosis/<recording name>)")
     p.add_argument("--threshold", type=float, default=10.0, help="BIC decrease an effect must bring (default 10)")
     p.add_argument("--window", type=float, default=0.05, help="smoothing window [s] (default 0.05)")
+    p.add_argument("--train-fraction", type=float, default=0.7,
+                   help="share of the recording, from its start, the effects are fitted on; the rest is held out for "
+                        "the before/after comparison and the replay (default 0.7)")
     p.add_argument("--effects", default=None, help="comma-separated effect keys to test (default: the library)")
     p.add_argument("--no-replay", action="store_true", help="skip the closed-loop replay of the held-out part")
     p.add_argument("--no-figures", action="store_true", help="write the report without figures")
@@ -86,7 +89,7 @@ def cmd_diagnose(args):
     try:
         with working(f"diagnosing {Path(args.recording).name}"):
             d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
-                         effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
+                         train_fraction=args.train_fraction, effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "

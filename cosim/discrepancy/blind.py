@@ -35,7 +35,7 @@ CONFIG = REPO / "scenarios" / "blind" / "config.toml"
 #: effect types the generator can hide, per robot (those with magnitudes in the config)
 TYPES = ["coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "payload", "platform_mass", "platform_inertia",
          "gravity_tilt", "actuator_delay", "sensor_delay", "saturation", "dead_zone", "encoder_offset", "backlash",
-         "compliance", "geometry"]
+         "compliance", "geometry", "offset"]
 
 
 def load_config(path=None) -> dict:
@@ -63,7 +63,8 @@ def derived_sizes(model) -> tuple[dict, dict]:
     Along 4 s of the robot's exciting motion (:func:`cosim.discrepancy.excitation.excitation`),
     per joint: RMS effort E (inverse dynamics), RMS rate V, joint travel Q (standard deviation)
     and the joint-space mass at home m.  The sizes are the 6-PUS configuration's, relative:
-    friction 2-6 % of E, rotor inertia 10-25 % of m, dead zone 3-8 % of E, offsets and gaps
+    friction 2-6 % of E, rotor inertia 10-25 % of m, dead zone 3-8 % of E, a constant effort
+    offset 3-10 % of E (sign random), encoder offsets and gaps
     0.2-1 % of Q, an elasticity deflecting 0.2-1 % of Q under E; noise 1e-4 Q on the readings,
     4e-3 V on the rates, 7e-3 E on the efforts, 5e-4 of the motion's amplitude on the tracker.
     Only effects whose parameters the robot has are listed.
@@ -85,7 +86,8 @@ def derived_sizes(model) -> tuple[dict, dict]:
          "smooth_coulomb": [0.03 * E, 0.07 * E], "smooth_coulomb_v": [0.05 * V, 0.15 * V],
          "rotor_inertia": [0.1 * m, 0.25 * m], "actuator_delay": [0.002, 0.006], "sensor_delay": [0.002, 0.006],
          "saturation": [0.8, 0.92], "encoder_offset": [0.002 * Q, 0.01 * Q], "backlash": [0.002 * Q, 0.01 * Q],
-         "compliance": [0.002 * Q / E, 0.01 * Q / E], "dead_zone": [0.03 * E, 0.08 * E]}
+         "compliance": [0.002 * Q / E, 0.01 * Q / E], "dead_zone": [0.03 * E, 0.08 * E],
+         "offset": [0.03 * E, 0.1 * E]}
     if "platform.m" in names:
         e["platform_mass"] = [0.06, 0.15]
     if "payload.m" in names and "platform.m" in names:
@@ -172,9 +174,9 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         js = joints()
         p = {f"{pre}[{j}].{kind}": nominal[f"{pre}[{j}].{kind}"] + _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
-    if kind == "encoder_offset":
+    if kind in ("encoder_offset", "offset"):
         js = joints()
-        p = {f"{pre}[{j}].encoder_offset": nominal[f"{pre}[{j}].encoder_offset"]
+        p = {f"{pre}[{j}].{kind}": nominal[f"{pre}[{j}].{kind}"]
              + float(rng.choice([-1, 1])) * _uniform(rng, eff[kind]) for j in js}
         return Hidden(kind, p, js, {k: nominal[k] for k in p})
     if kind in ("stribeck", "smooth_coulomb"):

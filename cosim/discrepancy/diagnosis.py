@@ -346,6 +346,11 @@ def joint_contradictions(pipe, mdl) -> list:
     return out
 
 
+#: how many times more residual the model plus a constant effort offset must leave than a
+#: scale (a gear ratio, a unit, a sign) before the check blames the recording's convention
+SURE = 3.0
+
+
 def effort_contradictions(pipe, mdl) -> list:
     """Joints whose recorded effort runs against the model's, one sentence each.
 
@@ -354,11 +359,15 @@ def effort_contradictions(pipe, mdl) -> list:
     (gravity load of the wrong sign, a reversed rail coordinate) or, where they agree in
     shape (cosine above 0.9), a scale outside 0.5-2 (a gear ratio, a unit) is no missing
     physics the library can name: it is a convention the recording does not share with
-    the model.
+    the model.  A constant effort offset (a cable carrier, an unbalanced mass, a force
+    on the joint) also changes the cosine and the scale of a one-signed effort, and it is
+    physics: the convention is blamed only if it is sure, that is if a scale (with a
+    constant) explains the recorded effort and the model plus a constant offset leaves
+    at least ``SURE`` times more residual; the sentence gives both residuals.
     """
     tau_m = pipe.S(mdl.inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f))[pipe.idx]
     tau_r = pipe.tau_s[pipe.idx]
-    noun = mdl.facts.joint_noun
+    noun, unit = mdl.facts.joint_noun, mdl.facts.effort_unit
     out = []
     for i in range(tau_r.shape[1]):
         a, b = tau_r[:, i], tau_m[:, i]
@@ -367,13 +376,24 @@ def effort_contradictions(pipe, mdl) -> list:
             continue
         cos, scale = float(a @ b) / (na * nb), float(a @ b) / (nb * nb)
         col = f"tau{i + 1}"
-        if cos < -0.5:
-            out.append(f"{noun} {i + 1}: the recorded effort runs against the model's (cosine {cos:.2f}, best scale "
-                       f"{scale:.2f}): was it recorded in another joint convention or with the opposite sign of "
-                       f"{col}? {_DECLARE}")
-        elif cos > 0.9 and not 0.5 < scale < 2.0:
-            out.append(f"{noun} {i + 1}: the recorded effort is the model's times {scale:.2f} (cosine {cos:.2f}): a gear "
-                       f"ratio or a unit in {col}? Convert the column to the joint's effort")
+        against = cos < -0.5
+        if not (against or (cos > 0.9 and not 0.5 < scale < 2.0)):
+            continue
+        # The two explanations: the model times a scale plus a constant, the model plus a
+        # constant offset (physics the library names).
+        (s, c), *_ = np.linalg.lstsq(np.column_stack([b, np.ones_like(b)]), a, rcond=None)
+        r_scale = float(np.sqrt(np.mean((a - s * b - c) ** 2)))
+        r_offset = float(np.std(a - b))
+        if (0.5 < s < 2.0) or r_offset < SURE * r_scale:
+            continue
+        sure = (f"the model times {s:.3g} plus {c:.3g} {unit} leaves {r_scale:.3g} {unit} RMS, the model plus a "
+                f"constant offset {r_offset:.3g} {unit}, {r_offset / max(r_scale, 1e-300):.0f} times more")
+        if against:
+            out.append(f"{noun} {i + 1}: the recorded effort runs against the model's (cosine {cos:.2f}; {sure}): "
+                       f"was it recorded in another joint convention or with the opposite sign of {col}? {_DECLARE}")
+        else:
+            out.append(f"{noun} {i + 1}: the recorded effort is the model's times {s:.3g} (cosine {cos:.2f}; "
+                       f"{sure}): a gear ratio or a unit in {col}? Convert the column to the joint's effort")
     return out
 
 

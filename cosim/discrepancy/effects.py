@@ -150,6 +150,13 @@ LIBRARY = [
            ("coulomb", "payload", "saturation"),
            "core/FMU parameter {j}[i].dead_zone (the drive delivers nothing within +-u0 and u - u0 sgn(u) beyond)",
            "u0 sgn(tau_cmd) where |tau_cmd| > u0, tau_cmd within the band"),
+    Effect("offset", "constant effort offset", "effort", "joint", ("{j}[{i}].offset",), "linear", "any",
+           "motion of the joint (a constant effort shows against any motion; told from a payload or a tilt by "
+           "accelerations and poses, from a dead zone by commands of both signs)",
+           ("payload", "gravity_tilt", "dead_zone", "platform_mass"),
+           "core/FMU parameter {j}[i].offset (the drive supplies inverse dynamics + friction + offset: a cable "
+           "carrier, an unbalanced mass on a vertical axis, a bias of the effort measurement)",
+           "a constant on the effort of joint i"),
     Effect("encoder_offset", "encoder offset", "kinematic", "joint", ("{j}[{i}].encoder_offset",), "linear", "any",
            "tracker pose columns",
            ("geometry",),
@@ -206,6 +213,15 @@ SEPARATING_MOTION = {
                                              "weighing the platform",
     frozenset(("payload", "platform_inertia")): "translational accelerations (a payload adds mass, an inertia "
                                                 "error does not)",
+    frozenset(("offset", "payload")): "accelerations of the platform and poses spread over the workspace (a "
+                                      "payload scales with the motion and the pose, an offset does not)",
+    frozenset(("offset", "gravity_tilt")): "poses spread over the workspace (a tilt's load changes with the pose, "
+                                           "an offset does not; on a single straight axis they are the same physics)",
+    frozenset(("offset", "platform_mass")): "vertical accelerations (a mass error scales with them, an offset does "
+                                            "not)",
+    frozenset(("offset", "dead_zone")): "commands of both signs on the joint (a dead zone takes u0 off either "
+                                        "side, an offset shifts both the same way; under a one-signed command they "
+                                        "are the same constant)",
     frozenset(("payload", "gravity_tilt")): "vertical accelerations (a payload has inertia, a tilt does not)",
     frozenset(("platform_mass", "gravity_tilt")): "vertical accelerations and horizontal poses spread widely",
     frozenset(("actuator_delay", "sensor_delay")): "a tracker (pose columns): a sensor lag shows as q_rec - "

@@ -22,12 +22,12 @@ from .effects import Group
 
 #: effects whose core parameter acts on its own joint's channels only
 LOCAL = {"coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "saturation", "dead_zone", "encoder_offset", "backlash",
-         "compliance"}
+         "compliance", "offset"}
 #: effects whose Jacobian is taken as the regressor columns at the nominal model: the
 #: residual is linear in them, or nearly (geometry: errors of 1e-3 of a length change the
 #: inverse kinematics at second order, 1e-6)
 LINEARISED = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
-              "encoder_offset", "backlash", "compliance", "geometry"}
+              "encoder_offset", "backlash", "compliance", "geometry", "offset"}
 #: effects whose columns carry the measured rates and accelerations (errors in variables): with a
 #: reference in the recording they are estimated by instrumental variables, the instrument being the
 #: same column along the reference motion (docs/discrepancy.md, "errors in variables")
@@ -42,7 +42,7 @@ _NONNEGATIVE = (".coulomb", ".coulomb_v", ".viscous", ".stribeck", ".stribeck_v"
                 ".effort_max", "payload.m", ".delay")
 #: effects whose residual is linear in the core parameter
 LINEAR = {"coulomb", "viscous", "rotor_inertia", "platform_mass", "platform_inertia", "gravity_tilt",
-          "encoder_offset", "backlash", "compliance"}
+          "encoder_offset", "backlash", "compliance", "offset"}
 
 
 def fit(X, t, Z=None, rcond=None):
@@ -99,7 +99,7 @@ def reference_size(group: Group, sc: Scales, model) -> float:
     motion: a recording that hardly moves must come out as not exciting."""
     k, i = group.key, group.joint
     qref = 1e-3 if sc.angular else 5e-5  # 1 mrad / 50 um on a joint reading
-    if k in ("coulomb", "stribeck", "smooth_coulomb"):
+    if k in ("coulomb", "stribeck", "smooth_coulomb", "offset"):
         return 0.02 * sc.effort[i]
     if k == "viscous":
         return 0.02 * sc.effort[i] / TYPICAL_RATE[model.joint_unit]
@@ -199,7 +199,7 @@ class Regressors:
     def _step(self, group, name):
         sc, k, i = self.sc, group.key, group.joint
         val = self.nominal[name]
-        if k in ("coulomb", "stribeck", "smooth_coulomb"):
+        if k in ("coulomb", "stribeck", "smooth_coulomb", "offset"):
             return 0.05 * sc.effort[i]
         if k == "viscous":
             return 0.05 * sc.effort[i] / sc.rate[i]

@@ -83,6 +83,19 @@ def test_parameters_reach_the_plant(fmu_file, model, hold, core_run):
         assert x[-1][2] < model.home()[2] - 1e-3
 
 
+def test_an_effort_offset_reaches_the_fmu_as_a_force_the_drive_works_against(fmu_file, model, hold, core_run):
+    # rail[2].offset = 0.2 N (a parameter of the core's table, so of the FMU): the same plant as
+    # the nominal one driven by the effort less 0.2 N on rail 2
+    off = np.array([0.0, 0.2, 0.0, 0.0, 0.0, 0.0])
+    t, x, _ = core_run(model, np.tile(hold - off, (100, 1)))
+    with fmu.FMUInstance(fmu_file, params={"rail[2].offset": 0.2}) as f:
+        for _ in range(100):
+            f.step(H, tau=hold)
+        assert np.max(np.abs(f.vector("x") - x[-1])) < 1e-10
+    t0, x0, _ = core_run(model, np.tile(hold, (100, 1)))
+    assert np.max(np.abs(x0[-1] - x[-1])) > 1e-4
+
+
 def test_importer_tolerance_replaces_solver_rtol(fmu_file, model, hold, core_run):
     _, x_loose, _ = core_run(model, np.tile(hold, (100, 1)), rtol=1e-4)
     with fmu.FMUInstance(fmu_file, tolerance=1e-4) as f:

@@ -56,3 +56,16 @@ def test_a_sensor_lag_is_applied_the_same_with_the_fmu_and_the_core_plant(tmp_pa
     # the readings at 0.1 s are the joints of 0.097 s
     np.testing.assert_allclose(core["q"][k], core["q_true"][k - 3], rtol=0, atol=1e-12)
     assert np.max(np.abs(core["q"][k] - core["q_true"][k])) > 1e-5
+
+
+@pytest.mark.parametrize("plant", ["core", "fmu"])
+def test_a_constant_effort_offset_is_held_by_the_pd_as_a_steady_error(tmp_path, plant):
+    # rail[3].offset = 0.3 N: the drive must supply 0.3 N more than the mechanism needs. The PD +
+    # gravity controller compensates the nominal gravity only, so at rest its proportional term
+    # carries the offset: kp (qref - q) = 0.3 N on rail 3, a 1 mm error, nothing on the others.
+    sc = load_scenario(SCEN / "6pus_step_pdg.toml").with_overrides(duration=1.5)
+    sc.spec["plant_parameters"] = {"rail[3].offset": 0.3}
+    res = run_scenario(sc, plant=plant, out_dir=tmp_path, figures=False).result
+    err = np.mean(res["qref"][-100:] - res["q"][-100:], axis=0)
+    assert err[2] == pytest.approx(0.3 / 300.0, rel=0.02), err
+    assert np.max(np.abs(np.delete(err, 2))) < 0.02 * 0.3 / 300.0, err

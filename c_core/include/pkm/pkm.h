@@ -246,7 +246,8 @@ PKM_API int pkm_forward_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n
  * singularities): the kinetic energy is 0.5 xd' M xd. */
 PKM_API int pkm_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M);
 /* Joint-space gravity load g[nd]: the actuator efforts that hold the robot still at x
- * (what PD + gravity compensation feeds forward). */
+ * (what PD + gravity compensation feeds forward), the drive's constant offsets
+ * "<j>[i].offset" included. */
 PKM_API int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, double* g);
 /* Kinetic and potential (gravity) energy [J]. */
 PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
@@ -256,7 +257,7 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
 /* Every robot has a drive layer between its mechanics and its controller, with
  * per-joint parameters "<j>[i].coulomb", ".viscous", ".stribeck", ".stribeck_v",
  * ".rotor_inertia", ".effort_max", ".dead_zone", ".encoder_offset", ".backlash", ".compliance",
- * ".transmission_damping" (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
+ * ".transmission_damping", ".offset" (<j> = "rail" for the 6-PUS, "joint" otherwise) and "drive.v_eps",
  * "drive.f_eps", "drive.two_body", "actuator.delay", "sensor.delay".  All default to "absent".
  * Backlash and compliance are reading models (below) unless drive.two_body = 1: then a
  * joint with either is a drive body (rotor_inertia, the friction, the command) and the
@@ -268,7 +269,11 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * tanh(qd / drive.v_eps), so the dynamics stay Lipschitz. */
 
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
- * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd. */
+ * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd
+ * + offset.  The offset "<j>[i].offset" [N | N m] is a constant effort whatever the motion
+ * (a cable carrier, an unbalanced mass on a vertical axis, a bias of the effort measurement),
+ * with this sign: the effort the drive supplies is inverse dynamics + friction + offset, so a
+ * constant force F pushing the joint the positive way is offset = -F. */
 PKM_API int pkm_joint_friction(const pkm_model* m, pkm_data* d, const double* qd, double* f);
 /* Effort reaching the mechanism for a commanded effort u: the drive's dead zone u0
  * (dead_zone > 0: |u| <= u0 gives 0, a larger command delivers u - u0 sgn(u)), then

@@ -15,7 +15,7 @@ namespace drive {
 namespace {
 // Per-joint parameter names, in the order of the loop in specs() and compile().
 const char* kKeys[] = {"coulomb",    "viscous",    "stribeck",  "stribeck_v", "rotor_inertia",       "effort_max",
-                       "encoder_offset", "backlash", "compliance", "dead_zone", "coulomb_v", "transmission_damping"};
+                       "encoder_offset", "backlash", "compliance", "dead_zone", "coulomb_v", "transmission_damping", "offset"};
 constexpr int kNKeys = sizeof(kKeys) / sizeof(kKeys[0]);
 
 double* field(Params& p, int k) {
@@ -31,7 +31,8 @@ double* field(Params& p, int k) {
     case 8: return p.compliance;
     case 9: return p.dead_zone;
     case 10: return p.coulomb_v;
-    default: return p.transmission_damping;
+    case 11: return p.transmission_damping;
+    default: return p.offset;
   }
 }
 
@@ -75,6 +76,11 @@ std::vector<ParamSpec> specs(const Robot& r) {
                    0.0, 0.0, 1e3});
     out.push_back({joint_name(r, i, "transmission_damping"), F + " s/" + Q,
                    "damping of the two-body transmission in contact (drive.two_body = 1), " + who, 0.0, 0.0, 1e9});
+    out.push_back({joint_name(r, i, "offset"), F,
+                   "constant effort offset: the drive supplies inverse dynamics + friction + offset (a force "
+                   "pulling the joint the negative way, a cable carrier, an unbalanced mass, a measured bias), " +
+                       who,
+                   0.0, -1e6, 1e6});
   }
   out.push_back({"drive.v_eps", V, "velocity scale of the smooth sign used by friction", ang ? 1e-3 : 1e-4, 1e-9, 1.0});
   out.push_back({"drive.f_eps", F,
@@ -121,7 +127,7 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
                                          "faces) where a backlash is set");
   }
   for (int i = 0; i < p->nd; ++i) {
-    p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0;
+    p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0 || p->offset[i] != 0;
     p->any_rotor |= p->rotor[i] != 0;
   }
   return p;
@@ -135,7 +141,7 @@ void friction(const Params& p, const double* qd, double* f) {
     const double r = v / p.stribeck_v[i];
     const double vc = p.coulomb_v[i] > 0 ? p.coulomb_v[i] : p.v_eps;
     f[i] = p.coulomb[i] * smooth_sign(v, vc) + p.stribeck[i] * std::exp(-r * r) * smooth_sign(v, p.v_eps) +
-           p.viscous[i] * v;
+           p.viscous[i] * v + p.offset[i];
   }
 }
 
@@ -143,8 +149,8 @@ std::shared_ptr<const Params> carriage_side(const Params& p) {
   auto c = std::make_shared<Params>(p);
   c->any_friction = c->any_rotor = false;
   for (int i = 0; i < p.nd; ++i) {
-    if (p.two_body_joint(i)) c->coulomb[i] = c->viscous[i] = c->stribeck[i] = c->rotor[i] = 0.0;
-    c->any_friction |= c->coulomb[i] != 0 || c->viscous[i] != 0 || c->stribeck[i] != 0;
+    if (p.two_body_joint(i)) c->coulomb[i] = c->viscous[i] = c->stribeck[i] = c->rotor[i] = c->offset[i] = 0.0;
+    c->any_friction |= c->coulomb[i] != 0 || c->viscous[i] != 0 || c->stribeck[i] != 0 || c->offset[i] != 0;
     c->any_rotor |= c->rotor[i] != 0;
   }
   return c;

@@ -44,6 +44,7 @@ struct Params {
   double dead_zone[kMaxJoints] = {};    // drive dead band: |u| <= u0 gives 0, else u - u0 sgn(u) [N | N m]
   double coulomb_v[kMaxJoints] = {};    // velocity scale of this joint's Coulomb sign; 0: v_eps [m/s | rad/s]
   double transmission_damping[kMaxJoints] = {};  // two-body transmission damping in contact [N s/m | N m s/rad]
+  double offset[kMaxJoints] = {};       // constant effort the drive supplies besides ID and friction [N | N m]
   double v_eps = 1e-4;                  // velocity scale of the friction's smooth sign [m/s | rad/s]
   double f_eps = 0.01;                  // effort scale of the backlash side's smooth sign [N | N m]
   double actuator_delay = 0;            // [s]
@@ -55,10 +56,14 @@ struct Params {
 };
 
 // Friction of joint i at velocity v:
-//   coulomb tanh(v / vc) + stribeck exp(-(v / stribeck_v)^2) tanh(v / v_eps) + viscous v,
+//   coulomb tanh(v / vc) + stribeck exp(-(v / stribeck_v)^2) tanh(v / v_eps) + viscous v + offset,
 // vc = coulomb_v if set, else v_eps.  v_eps is a numerical regularisation (far below any
 // speed of interest); a coulomb_v of millimetres per second is physics: friction that fades
-// at low speed, as in drives with lubricated contacts or soft-friction simulators.
+// at low speed, as in drives with lubricated contacts or soft-friction simulators.  The
+// offset is a constant effort whatever the velocity (a force the drive works against: a
+// cable carrier, an unbalanced mass on a vertical axis, a bias of the effort measurement):
+// it is carried with the friction so every path that spends friction spends it too (the
+// inverse and forward dynamics, the carried effort of the sensor model, a two-body drive).
 // Parameter specs appended to every robot's table: "<prefix>[i].coulomb" ..., with the
 // prefix and units of the robot's actuated joints.
 std::vector<ParamSpec> specs(const Robot& r);

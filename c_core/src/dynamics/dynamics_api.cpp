@@ -68,6 +68,8 @@ int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, double* g
     check_out(g, "g");
     double zero[6] = {0, 0, 0, 0, 0, 0};
     d->robot->inverse_dynamics(rm, *d->rd, x, zero, zero, g);
+    // a constant effort offset is a load like gravity: holding still needs it too
+    for (int i = 0; i < d->ndof; ++i) g[i] += m->drive->offset[i];
   });
 }
 
