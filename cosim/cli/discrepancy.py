@@ -69,6 +69,9 @@ def _diag_configure(p):
                         "the before/after comparison and the replay (default 0.7)")
     p.add_argument("--effects", default=None, help="comma-separated effect keys to test (default: the library)")
     p.add_argument("--no-replay", action="store_true", help="skip the closed-loop replay of the held-out part")
+    p.add_argument("--compare", action="append", default=[], metavar="SET",
+                   help="also replay the robot's named parameter set SET (e.g. a published model) on the held-out "
+                        "part, beside the nominal and the fitted plant (repeatable)")
     p.add_argument("--no-figures", action="store_true", help="write the report without figures")
     p.add_argument("--least-squares", action="store_true",
                    help="fit masses, inertias and viscous friction by least squares on the measured motion instead "
@@ -89,7 +92,8 @@ def cmd_diagnose(args):
     try:
         with working(f"diagnosing {Path(args.recording).name}"):
             d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
-                         train_fraction=args.train_fraction, effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
+                         train_fraction=args.train_fraction, compare=args.compare,
+                         effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "
@@ -153,6 +157,7 @@ def print_diagnosis(d, file=None):
         for name, run in d.replay["runs"].items():
             if "rms_tau" in run:
                 p(f"  replay, {name} plant: RMS difference, efforts " + " ".join(f"{v:.3g}" for v in run["rms_tau"])
+                  + " (relative " + " ".join(f"{100 * v:.2f} %" for v in run.get("rel_tau", [])) + ")"
                   + "; readings " + " ".join(f"{v:.3g}" for v in run["rms_q"]))
         tb = d.replay.get("two_body") or {}
         if tb.get("params"):

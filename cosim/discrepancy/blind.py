@@ -381,7 +381,10 @@ def _param_error(h: dict, values: dict) -> float:
         true, est = true[:1], est[:1]
     if h["type"] in ("saturation", "dead_zone"):
         true = np.array([h["params"][n] for n in names])
-        est = np.array([values.get(n, 0.0) for n in names])
+        # a dead zone under a command of one sign is a constant offset of its width (the same
+        # physics, which the engine declares a tie): its size then stands for the width
+        est = np.array([values[n] if n in values else abs(values.get(n.replace(".dead_zone", ".offset"), 0.0))
+                        if h["type"] == "dead_zone" else 0.0 for n in names])
     if h["type"] == "gravity_tilt":
         keep = [i for i, n in enumerate(names) if n != "gravity.z"]
         true, est = true[keep], est[keep]

@@ -168,7 +168,7 @@ def _model_for(rec, model):
 
 def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
-             max_effects: int = 6, instruments: bool = True, verbose: bool = False) -> Diagnosis:
+             max_effects: int = 6, instruments: bool = True, compare=None, verbose: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -197,6 +197,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     max_effects : int
         Largest number of entries of the forward selection (an all-joints entry names
         one group per joint).
+    compare : iterable of str or dict, optional
+        More plants for the replay, each replayed like the nominal and the fitted one: named
+        parameter sets of the robot (``["reference"]``, a published model) or
+        ``{name: {core parameter: value}}`` (overrides of the nominal model).
     instruments : bool
         Estimate the masses, inertias and viscous frictions by instrumental variables
         (their columns along the reference motion, free of the rate noise) when the
@@ -269,7 +273,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left)
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(rec, eng, sel)
+        d.replay = _replay(rec, eng, sel, _compared(rec, mdl, compare))
         d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
         timings["replay"] = time.perf_counter() - t5
     timings["diagnosis"] = time.perf_counter() - t0
@@ -544,6 +548,10 @@ def _drop_unseen_gaps(groups, pipe):
 def _not_excited(eng, sel) -> list:
     """Effects whose smallest detectable size exceeds their reference size."""
     chosen = {a.group.label for a in sel.selected}
+    # a look-alike that fits as well as a named effect is the same physics on this recording
+    # (said with that effect), not an effect the recording cannot reveal
+    chosen |= {c["group"] for a in sel.selected for c in a.lookalikes
+               if c["delta_bic"] < TIE_MARGIN or c.get("delta_chi2", float("inf")) < TIE_MARGIN}
     by_effect = {}
     for lab, (size, ref) in sel.detectability.items():
         g = eng.options[lab][0].group
@@ -591,11 +599,31 @@ def _two_body_sentence(replay, unit) -> str:
             f"{'closer to' if closer else 'no closer to'} the recording than with the reading model ({parts})")
 
 
-def _replay(rec, eng, sel):
+def _compared(rec, mdl, compare) -> dict:
+    """The plants ``compare`` names for the replay: {name: Model}."""
+    from ..core import Model
+
+    if not compare:
+        return {}
+    out = {}
+    for name, spec in (compare.items() if isinstance(compare, dict) else ((c, None) for c in compare)):
+        try:
+            if spec is None:
+                out[name] = Model(rec.robot, name)
+            else:
+                out[name] = mdl.copy()
+                out[name].set_params(spec)
+        except PkmError as e:
+            raise DiagnosisError(f"compare: {name}: {e}") from None
+    return out
+
+
+def _replay(rec, eng, sel, compared=None):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
-    :mod:`.drive_bodies`) driven by the recorded controller and reference, against the
-    recorded motion."""
+    :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
+    reference, against the recorded motion.  Per run the RMS differences and the relative
+    error of the efforts, norm of the difference over the norm of the recorded effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
@@ -637,6 +665,7 @@ def _replay(rec, eng, sel):
             out["two_body"] = {"params": extra, "joints": [i for _, i, _, _ in joints],
                                "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
                                "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
+    plants.update(compared or {})
     for name, plant in plants.items():
         try:
             res = run(plant, ref, k0)
@@ -648,5 +677,7 @@ def _replay(rec, eng, sel):
         dt_ = res.tau - rec.tau[s]
         out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq**2, axis=0)).tolist(),
                              "rms_tau": np.sqrt(np.mean(dt_**2, axis=0)).tolist(),
+                             "rel_tau": (np.linalg.norm(dt_, axis=0)
+                                         / np.maximum(np.linalg.norm(rec.tau[s], axis=0), 1e-300)).tolist(),
                              "time": res.time, "q": res.q, "tau": res.tau}
     return out

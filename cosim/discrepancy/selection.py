@@ -176,7 +176,10 @@ class Engine(Regressors, NoiseModel, Inference):
                     continue
                 gbest = (c2 - chi2 + o2.k * logn, o2, c2)
                 last_best[lab] = gbest[0]
-                if best is None or gbest[0] < best[0]:
+                # Two candidates that are the same physics here (a dead zone under a command
+                # of one sign and an offset of that sign) fit equally to rounding: the first
+                # in the library's order stays, not the one rounding favours.
+                if best is None or gbest[0] < best[0] - 1e-9 * abs(chi2):
                     best = gbest
             if best is None or best[0] > -self.threshold:
                 break
@@ -333,12 +336,47 @@ class Engine(Regressors, NoiseModel, Inference):
         g = opts[0].group
         if g.key in ("actuator_delay", "sensor_delay") and g.label in self.instruments:
             return self._try_delay(opts, Q, y_perp)
+        if g.key == "dead_zone":
+            return self._try_width(opts, Q, y_perp)
         best = (None, None)
         for o in opts:
             c2, _, o2 = self._try(o, Q, y_perp, J, y)
             if c2 is not None and (best[0] is None or c2 < best[0]):
                 best = (c2, o2)
         return best
+
+    def _try_width(self, opts, Q, y_perp):
+        """A dead zone's width between its profile grid's values: the residual change is
+        interpolated linearly between neighbouring widths (from no dead zone to the
+        smallest, then grid value to grid value) and the chi-square minimised on each
+        segment.  Where the joint's command keeps one sign the change is exactly linear in
+        the width (a constant u0 on the command's side), so the dead zone then fits exactly
+        as well as a constant effort offset of that sign, its look-alike, instead of losing
+        to it by the grid's spacing."""
+        g = opts[0].group
+        ts = [y_perp] + [y_perp + (self.vec(o.offset) - Q @ (Q.T @ self.vec(o.offset))) for o in opts]
+        best, where = None, None
+        for i in range(len(opts)):
+            d = ts[i + 1] - ts[i]
+            dd = float(d @ d)
+            a = min(max(-float(ts[i] @ d) / dd, 0.0), 1.0) if dd > 0 else 1.0
+            if i == 0 and a == 0.0:
+                continue  # no dead zone at all is not an option
+            r = ts[i] + a * d
+            c2 = float(r @ r)
+            if best is None or c2 < best:
+                best, where = c2, (i, a)
+        if best is None:
+            return None, None
+        i, a = where
+        hi = opts[i]
+        lo_off = np.zeros_like(hi.offset) if i == 0 else opts[i - 1].offset
+        lo_par = {k: self.nominal[k] for k in hi.hyper["params"]} if i == 0 else opts[i - 1].hyper["params"]
+        lo_f = 0.0 if i == 0 else opts[i - 1].hyper["fraction"]
+        params = {k: (1 - a) * lo_par[k] + a * v for k, v in hi.hyper["params"].items()}
+        off = (1 - a) * lo_off + a * hi.offset
+        return best, Option(g, None, off, {"params": params, "fraction": (1 - a) * lo_f + a * hi.hyper["fraction"]},
+                            hi.k, expand=hi.expand)
 
     def _try_delay(self, opts, Q, y_perp):
         """A delay by instrumental variables: the delay d where the instrument (the
