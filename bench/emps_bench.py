@@ -86,7 +86,7 @@ def main(argv=None) -> int:
 
     t0 = time.perf_counter()
     imp = import_recording(a.source, a.map, a.out, progress=False)
-    rec_path = Path(getattr(imp, "csv", None) or getattr(imp, "path", None) or imp[0])
+    rec_path = imp.table
     t1 = time.perf_counter()
     d = diagnose(rec_path, out=a.out / "diagnosis", train_fraction=0.6, compare=["reference"])
     t2 = time.perf_counter()

@@ -553,12 +553,18 @@ def _not_excited(eng, sel) -> list:
     chosen |= {c["group"] for a in sel.selected for c in a.lookalikes
                if c["delta_bic"] < TIE_MARGIN or c.get("delta_chi2", float("inf")) < TIE_MARGIN}
     by_effect = {}
+    same = {}
     for lab, (size, ref) in sel.detectability.items():
         g = eng.options[lab][0].group
         if lab in chosen or not np.isfinite(ref) or ref <= 0 or not (size > ref):
             continue
+        if lab in getattr(eng, "collinear", ()):
+            same.setdefault(g.key, []).append(g)
+            continue
         by_effect.setdefault(g.key, []).append((g, size, ref))
-    out = []
+    out = [f"{BY_KEY[key].name}{_where(gs)}: its signature on this recording is a combination of the effects "
+           f"already fitted ({', '.join(a.group.title for a in sel.selected)}), so it cannot be told from them; it "
+           f"needs {BY_KEY[key].requires}" for key, gs in same.items()]
     units = _units(eng.model)
     for key, items in by_effect.items():
         e = BY_KEY[key]
@@ -568,6 +574,11 @@ def _not_excited(eng, sel) -> list:
         out.append(f"{e.name}{' (' + where + ')' if where else ''}: this recording cannot reveal it below "
                    f"{worst[1]:.3g} {unit} (a small one is {worst[2]:.3g} {unit}); it needs {e.requires}")
     return out
+
+
+def _where(groups) -> str:
+    joints = ", ".join(f"joint {g.joint + 1}" for g in groups if g.joint is not None)
+    return f" ({joints})" if joints else ""
 
 
 def _conclusion(effects, not_excited, eng, sel) -> str:

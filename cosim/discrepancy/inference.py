@@ -262,14 +262,20 @@ class Inference:
         J, _ = self.jacobian(sel.selected, sel.theta)
         Q = np.linalg.qr(J)[0] if J.shape[1] else None
         out = {}
+        #: groups whose signature lies in the span of the selected ones (a payload's mass on a
+        #: single axis whose moving mass is fitted): not unexcited, indistinguishable from them
+        self.collinear = set()
         for lab, opts in self.options.items():
             o = opts[len(opts) // 2]
             g = o.group
             need = math.sqrt(self.threshold + o.k * logn)
             if o.cols is not None:
                 X = self.vec_cols(o.cols)
+                n0 = float(np.linalg.norm(X[:, 0]))
                 if Q is not None:
                     X = X - Q @ (Q.T @ X)
+                    if n0 > 0 and float(np.linalg.norm(X[:, 0])) < 1e-6 * n0:
+                        self.collinear.add(lab)
                 s = np.linalg.svd(X, compute_uv=False)
                 s_min = s[min(o.hyper.get("rank", len(s)), len(s)) - 1] if len(s) else 0.0
                 # the amplitude column (first) for scalar summaries

@@ -65,6 +65,11 @@ def _traces(model, x):
     for name, P in pts.items():
         traces.append(go.Scatter3d(x=P[:, 0] * 1e3, y=P[:, 1] * 1e3, z=P[:, 2] * 1e3, mode="markers", name=name,
                                    marker=dict(size=3, color="#333")))
+    if model.ndof == 1:
+        # a single axis has no platform polygon: its carriage (the platform point) is drawn as a block
+        c = segs["platform"][0][0] * 1e3
+        traces.append(go.Scatter3d(x=[c[0]], y=[c[1]], z=[c[2]], mode="markers", name="carriage",
+                                   marker=dict(size=14, symbol="square", color=_COLORS["platform"])))
     return traces
 
 
@@ -91,10 +96,16 @@ def mechanism_figure(model, time, poses, *, max_frames: int = 120, title: str = 
     allp = np.concatenate([np.concatenate([np.vstack(v) for v in _segments(model, poses[k])[0].values()])
                            for k in keep[:: max(1, len(keep) // 10)]])
     lo, hi = allp.min(axis=0) * 1e3, allp.max(axis=0) * 1e3
+    # a flat or straight robot (a planar one, a single axis) gets a depth of a quarter of its
+    # size on its thin axes, so the view stays a box and the mechanism is seen, not a sliver
+    mid, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 0.125 * (hi - lo).max())
+    lo, hi = mid - half, mid + half
     pad = 0.05 * (hi - lo).max()
     scene = dict(xaxis=dict(title="x [mm]", range=[lo[0] - pad, hi[0] + pad]),
                  yaxis=dict(title="y [mm]", range=[lo[1] - pad, hi[1] + pad]),
-                 zaxis=dict(title="z [mm]", range=[lo[2] - pad, hi[2] + pad]), aspectmode="data")
+                 zaxis=dict(title="z [mm]", range=[lo[2] - pad, hi[2] + pad]), aspectmode="manual",
+                 # the box's proportions are the ranges' ("data" would take the traces', flat for a flat robot)
+                 aspectratio=dict(zip("xyz", ((hi - lo + 2 * pad) / (hi - lo + 2 * pad).max()).tolist())))
     fig = go.Figure(data=_traces(model, poses[keep[0]]), frames=frames)
     fig.update_layout(
         title=title or f"{model.robot}: the recorded motion", scene=scene, height=640,
