@@ -38,6 +38,7 @@ NOT_RUN = {
                                                                      "pd_gains lines, which run (tests/sweep)",
     ".venv/bin/cosim quattro map": "a minute of figures (tests/quattro/test_quattro_cli.py draws the map)",
     ".venv/bin/cosim quattro cycle": "minutes of cycle fits (tests/quattro/test_cycle_time.py)",
+    "xdg-open": "opens a browser on the page the line before wrote (tests/report draws such pages headless)",
 }
 
 
