@@ -40,6 +40,7 @@ STATUS = {
     -7: ("PKM_ERR_INTEGRATION", IntegrationError),
     -8: ("PKM_ERR_UNSUPPORTED", UnsupportedError),
     -9: ("PKM_ERR_INTERNAL", PkmError),
+    -10: ("PKM_ERR_STEP_BUDGET", IntegrationError),
 }
 
 
@@ -214,6 +215,7 @@ _SIGNATURES = {
     "pkm_sim_reset": (I, [P, C.c_double, D, D]),
     "pkm_sim_set_input": (I, [P, D]),
     "pkm_sim_advance": (I, [P, C.c_double]),
+    "pkm_sim_set_time_limit": (I, [P, C.c_double]),
     "pkm_sim_get_state": (I, [P, D, D, D]),
     "pkm_sim_drive_state": (I, [P, D, D]),
     "pkm_sim_applied_effort": (I, [P, D]),
@@ -228,7 +230,7 @@ _SIGNATURES = {
     "pkm_ctrl_error": (CH, [P]),
     "pkm_ctrl_state_size": (S, [P]),
     "pkm_ctrl_state_save": (I, [P, D]),
-    "pkm_ctrl_state_load": (I, [P, D]),
+    "pkm_ctrl_state_load": (I, [P, D, S]),
     "pkm_closed_loop": (I, [P, P, C.POINTER(pkm_loop_reference), D, D, I, C.POINTER(pkm_loop_record),
                             C.POINTER(C.c_size_t)]),
     "pkm_sim_state_size": (S, [P]),

@@ -176,7 +176,7 @@ TEST(Controller, SavedStateReplaysTheSameOutputs) {
   ASSERT_EQ(pkm_ctrl_state_save(c.c, st.data()), PKM_OK);
   ASSERT_EQ(pkm_ctrl_update(c.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
   CtrlPtr fresh{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
-  ASSERT_EQ(pkm_ctrl_state_load(fresh.c, st.data()), PKM_OK);
+  ASSERT_EQ(pkm_ctrl_state_load(fresh.c, st.data(), st.size()), PKM_OK);
   ASSERT_EQ(pkm_ctrl_update(fresh.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, again), PKM_OK);
   for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
 }

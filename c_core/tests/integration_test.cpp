@@ -106,6 +106,8 @@ TEST(SimCreate, RejectsBadOptionsNamingTheOption) {
       {"atol", [](pkm_sim_options& o) { o.atol = INFINITY; }},
       {"max_step", [](pkm_sim_options& o) { o.max_step = -1; }},
       {"max_steps", [](pkm_sim_options& o) { o.max_steps = 0; }},
+      {"max_steps", [](pkm_sim_options& o) { o.max_steps = PKM_SIM_MAX_STEPS_LIMIT + 1; }},
+      {"max_steps", [](pkm_sim_options& o) { o.max_steps = 2147483647; }},
       {"sing_min", [](pkm_sim_options& o) { o.sing_min = 1.5; }},
       {"sing_min", [](pkm_sim_options& o) { o.sing_min = -1e-3; }},
   };
@@ -368,7 +370,33 @@ TEST(Sim, DamagedSavedStatesAreRefused) {
   bad = saved;
   bad[1] = 4;  // a state of a robot with 4 joints
   EXPECT_EQ(pkm_sim_state_load(s.get(), bad.data(), bad.size()), PKM_ERR_ARGUMENT);
+  // The next step size (after t, x, xd, tau): a denormal one could never be taken.
+  const size_t h_at = 3 + 2 * N + N;
+  ASSERT_GT(saved[h_at], 0.0);
+  bad = saved;
+  bad[h_at] = 5e-324;
+  EXPECT_EQ(pkm_sim_state_load(s.get(), bad.data(), bad.size()), PKM_ERR_ARGUMENT);
+  EXPECT_NE(std::string(pkm_sim_error(s.get())).find("next step size"), std::string::npos) << pkm_sim_error(s.get());
+  bad[h_at] = -1.0;
+  EXPECT_EQ(pkm_sim_state_load(s.get(), bad.data(), bad.size()), PKM_ERR_ARGUMENT);
   EXPECT_TRUE(same_bits(before, state_of(s.get())));
+}
+
+// The delay line of a saved state is checked: commands in order, none after the state's time.
+TEST(Sim, SavedDelayLineOutOfOrderIsRefused) {
+  ModelPtr m = make_model({{"actuator.delay", 0.003}});
+  SimPtr s = make_sim(m.get(), defaults());
+  for (int k = 1; k <= 5; ++k) ASSERT_EQ(pkm_sim_advance(s.get(), k * 1e-3), PKM_OK) << pkm_sim_error(s.get());
+  std::vector<double> saved(pkm_sim_state_size(s.get()));
+  ASSERT_EQ(pkm_sim_state_save(s.get(), saved.data()), PKM_OK);
+  const size_t nh_at = 4 + 2 * N + N;
+  ASSERT_GE(saved[nh_at], 2.0);
+  ASSERT_EQ(pkm_sim_state_load(s.get(), saved.data(), saved.size()), PKM_OK) << pkm_sim_error(s.get());
+  std::vector<double> bad = saved;
+  bad[nh_at + 1] = saved[2] + 1.0;  // the first command issued a second after the state's time
+  EXPECT_EQ(pkm_sim_state_load(s.get(), bad.data(), bad.size()), PKM_ERR_ARGUMENT);
+  EXPECT_NE(std::string(pkm_sim_error(s.get())).find("delay-line command 0"), std::string::npos)
+      << pkm_sim_error(s.get());
 }
 
 TEST(Sim, ExplicitMethodOutOfStepsNamesTheTimeAndKeepsTheState) {
@@ -377,9 +405,11 @@ TEST(Sim, ExplicitMethodOutOfStepsNamesTheTimeAndKeepsTheState) {
   o.max_steps = 5;
   o.max_step = 1e-4;
   SimPtr s = make_sim(m.get(), o);
-  ASSERT_EQ(pkm_sim_advance(s.get(), 0.05), PKM_ERR_INTEGRATION);
+  ASSERT_EQ(pkm_sim_advance(s.get(), 0.05), PKM_ERR_STEP_BUDGET);
   const std::string msg = pkm_sim_error(s.get());
+  EXPECT_NE(msg.find("step budget exceeded at t = "), std::string::npos) << msg;
   EXPECT_NE(msg.find("max_steps = 5"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("use solver.method = BDF"), std::string::npos) << msg;
   const State st = state_of(s.get());
   EXPECT_NEAR(time_in(msg), st.t, 1e-9) << msg;
   EXPECT_NEAR(st.t, 5e-4, 1e-12);
@@ -703,7 +733,7 @@ TEST(Sim, BdfAndAdamsAgree) {
   EXPECT_GT(moved, 1e-4);
 }
 
-TEST(Sim, CvodeFailureNamesTheFlagAndTheTime) {
+TEST(Sim, CvodeOutOfStepsIsTheStepBudgetAndNamesTheTime) {
   ModelPtr m = make_model();
   pkm_sim_options o = defaults();
   o.method = PKM_BDF;
@@ -712,9 +742,10 @@ TEST(Sim, CvodeFailureNamesTheFlagAndTheTime) {
   double x[N], xd[N] = {0.01, -0.02, 0.005, 0.05, -0.03, 0.08};
   home_of(m.get(), x);
   ASSERT_EQ(pkm_sim_reset(s.get(), 0.0, x, xd), PKM_OK);
-  ASSERT_EQ(pkm_sim_advance(s.get(), 0.05), PKM_ERR_INTEGRATION);
+  ASSERT_EQ(pkm_sim_advance(s.get(), 0.05), PKM_ERR_STEP_BUDGET);
   const std::string msg = pkm_sim_error(s.get());
-  EXPECT_NE(msg.find("CV_TOO_MUCH_WORK"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("step budget exceeded at t = "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("max_steps = 5"), std::string::npos) << msg;
   const State st = state_of(s.get());
   EXPECT_NEAR(time_in(msg), st.t, 1e-9) << msg;
   EXPECT_GT(st.t, 0.0);

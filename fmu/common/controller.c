@@ -332,10 +332,31 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   if (nc) pkm_ctrl_state_save(p->c, v + 1);
 }
 
+/* Everything is checked before it is used: the length, every value finite, flags, the
+ * kind and the LTI state count whole and in range (nx sizes the copies plant_start makes);
+ * the gains then go through pkm_ctrl_create and the law's state through
+ * pkm_ctrl_state_load, which checks it against the law's own layout. */
 int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   const size_t fixed = fixed_size(p);
-  if (n < fixed || b[fixed - 1] < 0 || (size_t)b[fixed - 1] != n - fixed)
-    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values", n);
+  if (n < fixed)
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
+  for (size_t k = 0; k < n; ++k)
+    if (!isfinite(b[k])) return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: value %zu is not finite (%g)", k, b[k]);
+  if (!fmu_whole(b[fixed - 1], 0, (double)(n - fixed)) || (size_t)b[fixed - 1] != n - fixed)
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs %zu + %g", n, fixed,
+                b[fixed - 1]);
+  const char* bad = NULL;
+  if (!fmu_whole(b[1], 0, 1) || !fmu_whole(b[2], 0, 1))
+    bad = "started or dirty flag (0 or 1)";
+  else if (!fmu_whole(b[3], -2147483647.0, 2147483647.0) || !fmu_whole(b[4], -2147483647.0, 2147483647.0) ||
+           !fmu_whole(b[5], -2147483647.0, 2147483647.0))
+    bad = "controller.kind or gravity flag (an Integer)";
+  else if (!fmu_whole(b[6], 0, p->nx_max))
+    bad = "LTI state count lti.nx (this FMU has room for 0..lti_states)";
+  if (bad) return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: invalid %s (lti.nx = %g, room %d)", bad, b[6],
+                       p->nx_max);
+  if (n > fixed && b[1] == 0)
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: a controller state without a started controller");
   p->t = b[0];
   const int started = b[1] != 0, dirty = b[2] != 0;
   p->kind = (int)b[3], p->gravity_ref = (int)b[4], p->gravity_ff = (int)b[5], p->nx = (int)b[6];
@@ -353,8 +374,10 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   int s = plant_start(p, t);
   if (s) return s;
   memcpy(p->tau, tau, sizeof(double) * (size_t)p->nd);
-  if (n > fixed && pkm_ctrl_state_load(p->c, b + fixed) != PKM_OK)
+  if (pkm_ctrl_state_load(p->c, b + fixed, n - fixed) != PKM_OK) {
+    p->started = 0;
     return fail(p, PKM_ERR_ARGUMENT, "FMU state: %s", pkm_ctrl_error(p->c));
+  }
   p->dirty = dirty;
   return PKM_OK;
 }

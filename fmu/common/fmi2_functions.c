@@ -11,6 +11,7 @@
  */
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -96,6 +97,16 @@ static fmi2Status error(instance* c, const char* fn, const char* fmt, ...) {
   logmsg(c, fmi2Error, LOG_ERROR, "%s: %s", fn, msg);
   c->state = S_ERROR;
   return fmi2Error;
+}
+
+/* The last line of defence of the array getters: no value leaves as an infinity or a NaN
+ * with OK (fmi2GetReal has its own, per variable, in the plant). */
+static fmi2Status finite_or_error(instance* c, const char* fn, const char* what, const fmi2Real* v, size_t n) {
+  for (size_t i = 0; i < n; ++i)
+    if (!isfinite(v[i]))
+      return error(c, fn, "%s %zu is not finite (%g) at t = %.9g s: a state or an input is too large", what, i, v[i],
+                   plant_time(c->plant));
+  return fmi2OK;
 }
 
 static const char* state_name(int s) {
@@ -402,8 +413,12 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 /* ---------------------------------------------------------------- FMU state */
 
 /* An FMU state is one flat block, so serialising it is a copy.  The header ties it to
- * this model (GUID) and layout; the plant writes the rest. */
+ * this model (GUID), layout (version) and interface; the plant writes the rest.  A
+ * checksum over the whole block (its own field read as zero) catches a block damaged in
+ * storage or transit; every value is checked again when the state is restored (a block
+ * edited on purpose and sealed again must not crash or poison the instance either). */
 #define STATE_MAGIC "PKMFMU2S"
+#define STATE_VERSION 2u
 typedef struct fmu_state {
   char magic[8];
   char guid[48];
@@ -412,22 +427,73 @@ typedef struct fmu_state {
   uint64_t nplant;    /* doubles in plant[]                     */
   double start_time, stop_time, last_successful_time;
   int32_t stop_defined, terminated;
+  uint32_t version;   /* STATE_VERSION                          */
+  uint32_t reserved;  /* 0                                      */
+  uint64_t checksum;  /* FNV-1a 64 of the block, this field as 0 */
   double plant[];
 } fmu_state;
 
 static size_t state_bytes(size_t nplant) { return sizeof(fmu_state) + nplant * sizeof(double); }
 
-static int state_ok(instance* c, const char* fn, const fmu_state* s, size_t size_known) {
+/* FNV-1a (64 bit) of the n bytes of a state block, its checksum field read as zero. */
+static uint64_t state_checksum(const unsigned char* bytes, size_t n) {
+  const size_t skip = offsetof(fmu_state, checksum);
+  uint64_t h = 14695981039346656037ull;
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned char b = (i >= skip && i < skip + sizeof(uint64_t)) ? 0 : bytes[i];
+    h = (h ^ b) * 1099511628211ull;
+  }
+  return h;
+}
+
+/* The state-machine states a state of this interface can be taken in. */
+static int mode_ok(fmi2Type type, int32_t mode) {
+  const int common = S_INSTANTIATED | S_INIT | S_TERMINATED | S_ERROR;
+  const int allowed = common | (type == fmi2CoSimulation ? S_STEP_COMPLETE | S_STEP_FAILED : S_EVENT | S_CONT);
+  return mode > 0 && (mode & (mode - 1)) == 0 && (mode & allowed) != 0;
+}
+
+/* The header s of a state block (block: its bytes, size of them; size 0: the size the
+ * header declares, for a block this FMU made in memory): magic, GUID, interface, layout version, the plant's
+ * length against this model's, the checksum, and every header value in its range. */
+static int state_ok(instance* c, const char* fn, const fmu_state* s, const void* block, size_t size) {
   size_t n = plant_snapshot_min_size(c->plant);
   if (!s || memcmp(s->magic, STATE_MAGIC, 8) != 0) {
     logmsg(c, fmi2Error, LOG_ERROR, "%s: not an FMU state of %s", fn, FMU_MODEL.identifier);
     return 0;
   }
-  if (strncmp(s->guid, FMU_MODEL.guid, sizeof s->guid) != 0 || s->nplant < n || s->nplant > n + (1u << 24) ||
-      s->type != (int32_t)c->type || (size_known && size_known != state_bytes(s->nplant))) {
+  if (memchr(s->guid, 0, sizeof s->guid) == NULL || strcmp(s->guid, FMU_MODEL.guid) != 0 ||
+      s->type != (int32_t)c->type || s->version != STATE_VERSION || s->reserved != 0) {
     logmsg(c, fmi2Error, LOG_ERROR,
-           "%s: FMU state of another model or interface (GUID %.40s, %llu values, type %d; this instance: %s, %zu, %d)",
-           fn, s->guid, (unsigned long long)s->nplant, (int)s->type, FMU_MODEL.guid, n, (int)c->type);
+           "%s: FMU state of another model, interface or layout (GUID %.40s, type %d, layout %u; this instance: %s, "
+           "%d, %u)",
+           fn, s->guid, (int)s->type, (unsigned)s->version, FMU_MODEL.guid, (int)c->type, STATE_VERSION);
+    return 0;
+  }
+  if (s->nplant < n || s->nplant > n + (1u << 24) || (size && size != state_bytes(s->nplant))) {
+    logmsg(c, fmi2Error, LOG_ERROR, "%s: FMU state of %zu bytes declares %llu plant values (this model: %zu + the "
+           "integrator's): it is truncated or damaged", fn, size ? size : state_bytes(s->nplant),
+           (unsigned long long)s->nplant, n);
+    return 0;
+  }
+  const uint64_t sum = state_checksum((const unsigned char*)block, state_bytes(s->nplant));
+  if (sum != s->checksum) {
+    logmsg(c, fmi2Error, LOG_ERROR, "%s: FMU state checksum %016llx does not match its content (%016llx): the block "
+           "was damaged or edited", fn, (unsigned long long)s->checksum, (unsigned long long)sum);
+    return 0;
+  }
+  const char* bad = NULL;
+  if (!mode_ok(c->type, s->mode))
+    bad = "state-machine state";
+  else if (!isfinite(s->start_time) || !isfinite(s->stop_time) || !isfinite(s->last_successful_time))
+    bad = "start, stop or last successful time (not finite)";
+  else if ((s->stop_defined != 0 && s->stop_defined != 1) || (s->terminated != 0 && s->terminated != 1))
+    bad = "stop-defined or terminated flag";
+  else if (s->stop_defined && !(s->stop_time >= s->start_time))
+    bad = "stop time (before the start time)";
+  if (bad) {
+    logmsg(c, fmi2Error, LOG_ERROR, "%s: FMU state has an invalid %s (mode %d, start %g s, stop %g s, last successful "
+           "%g s)", fn, bad, (int)s->mode, s->start_time, s->stop_time, s->last_successful_time);
     return 0;
   }
   return 1;
@@ -455,26 +521,63 @@ fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate* FMUstate) {
   s->last_successful_time = c->last_successful_time;
   s->stop_defined = c->stop_defined;
   s->terminated = c->terminated;
+  s->version = STATE_VERSION;
+  s->reserved = 0;
   plant_snapshot_save(c->plant, s->plant);
+  s->checksum = state_checksum((const unsigned char*)s, state_bytes(n));
   *FMUstate = s;
   return fmi2OK;
+}
+
+/* Is the restored instance one the state machine can go on from?  Past initialization
+ * the plant must be started (its model validated, its state checked); a Co-Simulation
+ * step's last successful time is the plant's time. */
+static const char* restored_inconsistency(const instance* c) {
+  const int running = c->state & (S_EVENT | S_CONT | S_STEP_COMPLETE | S_STEP_FAILED);
+  if (running && plant_dirty(c->plant))
+    return "its state-machine state is past initialization but the model was not started";
+  if ((c->state & (S_STEP_COMPLETE | S_STEP_FAILED)) && c->last_successful_time != plant_time(c->plant))
+    return "its last successful time differs from the model's time";
+  return NULL;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate) {
   instance* c = (instance*)comp;
   if (bad_call(c, "fmi2SetFMUstate", S_ANY)) return fmi2Error;
   const fmu_state* s = (const fmu_state*)FMUstate;
-  if (!state_ok(c, "fmi2SetFMUstate", s, 0)) return fmi2Error;
-  if (plant_snapshot_load(c->plant, s->plant, s->nplant))
-    return error(c, "fmi2SetFMUstate", "%s", plant_error(c->plant));
-  c->start_time = s->start_time;
-  c->stop_time = s->stop_time;
-  c->last_successful_time = s->last_successful_time;
-  c->stop_defined = s->stop_defined;
-  c->terminated = s->terminated;
-  /* A state taken in an error state cannot be saved (S_ERROR is excluded when taken
-   * by a well-behaved importer); restoring one brings back where it was. */
-  c->state = s->mode;
+  if (!state_ok(c, "fmi2SetFMUstate", s, s, 0)) return fmi2Error;
+  /* A refused state leaves the instance as it was: keep what it has now to put back. */
+  instance before = *c;
+  const size_t nkeep = plant_snapshot_size(c->plant);
+  double* keep = (double*)malloc(nkeep * sizeof(double));
+  if (!keep) return error(c, "fmi2SetFMUstate", "out of memory");
+  plant_snapshot_save(c->plant, keep);
+  const char* why = NULL;
+  char msg[2600];
+  if (plant_snapshot_load(c->plant, s->plant, s->nplant)) {
+    snprintf(msg, sizeof msg, "%s", plant_error(c->plant));
+    why = msg;
+  } else {
+    c->start_time = s->start_time;
+    c->stop_time = s->stop_time;
+    c->last_successful_time = s->last_successful_time;
+    c->stop_defined = s->stop_defined;
+    c->terminated = s->terminated;
+    c->state = s->mode;
+    if ((why = restored_inconsistency(c)) != NULL) {
+      snprintf(msg, sizeof msg, "FMU state refused: %s", why);
+      why = msg;
+    }
+  }
+  if (why) {
+    const int restored = plant_snapshot_load(c->plant, keep, nkeep) == 0;
+    free(keep);
+    *c = before;
+    if (!restored) return error(c, "fmi2SetFMUstate", "%s (and the previous state could not be put back)", why);
+    logmsg(c, fmi2Error, LOG_ERROR, "fmi2SetFMUstate: %s; the instance keeps its previous state", why);
+    return fmi2Error;
+  }
+  free(keep);
   return fmi2OK;
 }
 
@@ -492,7 +595,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate,
   instance* c = (instance*)comp;
   if (bad_call(c, "fmi2SerializedFMUstateSize", S_ANY)) return fmi2Error;
   const fmu_state* s = (const fmu_state*)FMUstate;
-  if (!size || !state_ok(c, "fmi2SerializedFMUstateSize", s, 0)) return fmi2Error;
+  if (!size || !state_ok(c, "fmi2SerializedFMUstateSize", s, s, 0)) return fmi2Error;
   *size = state_bytes(s->nplant);
   return fmi2OK;
 }
@@ -501,7 +604,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FMUstate, fmi2
   instance* c = (instance*)comp;
   if (bad_call(c, "fmi2SerializeFMUstate", S_ANY)) return fmi2Error;
   const fmu_state* s = (const fmu_state*)FMUstate;
-  if (!bytes || !state_ok(c, "fmi2SerializeFMUstate", s, 0)) return fmi2Error;
+  if (!bytes || !state_ok(c, "fmi2SerializeFMUstate", s, s, 0)) return fmi2Error;
   if (size < state_bytes(s->nplant)) {
     logmsg(c, fmi2Error, LOG_ERROR, "fmi2SerializeFMUstate: buffer of %zu bytes, %zu needed", size,
            state_bytes(s->nplant));
@@ -520,7 +623,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], s
   }
   fmu_state head;
   memcpy(&head, bytes, sizeof head); /* bytes need not be aligned */
-  if (!state_ok(c, "fmi2DeSerializeFMUstate", &head, size)) return fmi2Error;
+  if (!state_ok(c, "fmi2DeSerializeFMUstate", &head, bytes, size)) return fmi2Error;
   /* A state of ours handed back for overwriting is reused (same model: same size). */
   fmu_state* s = (fmu_state*)*FMUstate;
   if (!s || memcmp(s->magic, STATE_MAGIC, 8) != 0 || s->nplant != head.nplant) {
@@ -619,13 +722,14 @@ fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_
 
 #define S_ME_VALUES (S_INIT | S_EVENT | S_CONT | S_TERMINATED | S_ERROR)
 
+
 fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t nx) {
   instance* c = (instance*)comp;
   if (bad_call(c, "fmi2GetDerivatives", S_ME_VALUES)) return fmi2Error;
   if (!derivatives) return error(c, "fmi2GetDerivatives", "derivatives is NULL");
   if (c->state == S_INIT && ensure_started(c, "fmi2GetDerivatives") != fmi2OK) return fmi2Error;
   int s = plant_get_derivatives(c->plant, derivatives, nx);
-  if (s == PKM_OK) return fmi2OK;
+  if (s == PKM_OK) return finite_or_error(c, "fmi2GetDerivatives", "derivative", derivatives, nx);
   if (s == PKM_ERR_ARGUMENT || s == PKM_ERR_PARAMETER || s == PKM_ERR_INTERNAL)
     return error(c, "fmi2GetDerivatives", "%s", plant_error(c->plant));
   /* A singular pose: the solver may retry with a smaller step, or stop. */
@@ -639,7 +743,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real eventIndicators[]
   if (!eventIndicators && ni > 0) return error(c, "fmi2GetEventIndicators", "eventIndicators is NULL");
   if (c->state == S_INIT && ensure_started(c, "fmi2GetEventIndicators") != fmi2OK) return fmi2Error;
   int s = plant_get_indicators(c->plant, eventIndicators, ni);
-  if (s == PKM_OK) return fmi2OK;
+  if (s == PKM_OK) return finite_or_error(c, "fmi2GetEventIndicators", "event indicator", eventIndicators, ni);
   if (s == PKM_ERR_ARGUMENT || s == PKM_ERR_PARAMETER || s == PKM_ERR_INTERNAL)
     return error(c, "fmi2GetEventIndicators", "%s", plant_error(c->plant));
   logmsg(c, fmi2Discard, LOG_DISCARD, "fmi2GetEventIndicators: %s", plant_error(c->plant));
@@ -654,7 +758,7 @@ fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx) 
   if (plant_get_states(c->plant, x, nx))
     return error(c, "fmi2GetContinuousStates", "%zu states asked for, the model has %d", nx,
                  plant_nstates(c->plant));
-  return fmi2OK;
+  return finite_or_error(c, "fmi2GetContinuousStates", "continuous state", x, nx);
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x_nominal[], size_t nx) {
@@ -704,8 +808,9 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     c->last_successful_time = t_end;
     return fmi2OK;
   }
-  if (s == PKM_ERR_SINGULAR || s == PKM_ERR_JOINT_LIMIT || s == PKM_ERR_UNREACHABLE) {
-    /* The plant stopped at the event: the state there is consistent and readable. */
+  if (s == PKM_ERR_SINGULAR || s == PKM_ERR_JOINT_LIMIT || s == PKM_ERR_UNREACHABLE || s == PKM_ERR_STEP_BUDGET) {
+    /* The plant stopped at the event (or where its step budget ran out): the state there
+     * is consistent and readable. */
     c->last_successful_time = plant_time(c->plant);
     c->terminated = 1;
     c->state = S_STEP_FAILED;
@@ -743,7 +848,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Rea
     return fmi2Error;
   }
   *value = c->last_successful_time;
-  return fmi2OK;
+  return finite_or_error(c, "fmi2GetRealStatus", "last successful time", value, 1);
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer* value) {

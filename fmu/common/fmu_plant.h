@@ -16,6 +16,7 @@
 #ifndef PKM_FMU_PLANT_H
 #define PKM_FMU_PLANT_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "pkm/pkm.h"
@@ -168,6 +169,11 @@ size_t plant_snapshot_size(const fmu_plant* p);
 size_t plant_snapshot_min_size(const fmu_plant* p);
 void plant_snapshot_save(const fmu_plant* p, double* buf);
 int plant_snapshot_load(fmu_plant* p, const double* buf, size_t n);
+
+/* 1 if v, a value read back from an FMU state, is a whole number in [lo, hi]: a flag, a
+ * count or an enumeration that may be converted to an integer (a conversion of a value
+ * out of its type's range is undefined behaviour in C). */
+static inline int fmu_whole(double v, double lo, double hi) { return v >= lo && v <= hi && v == floor(v); }
 
 #ifdef __cplusplus
 }

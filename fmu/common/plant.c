@@ -14,6 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Wall-clock limit of one fmi2DoStep [s] (docs/fmu.md, Bounded work). */
+#define FMU_STEP_TIME_LIMIT 1.0
+
 enum { V_KIN = 1, V_ACC = 2, V_SING = 4, V_ENERGY = 8, V_DRIVE = 16 };
 
 struct fmu_plant {
@@ -378,7 +381,12 @@ static int apply(fmu_plant* p) {
   if (!(o.rtol > 0) || !(o.atol > 0))
     return fail(p, PKM_ERR_PARAMETER, "%s = %g and %s = %g must both be > 0", var_name(p, FMU_CH_SOLVER_RTOL, 0),
                 o.rtol, var_name(p, FMU_CH_SOLVER_ATOL, 0), o.atol);
-  if (!(o.max_step >= 0) || o.max_steps <= 0 || !(o.sing_min >= 0))
+  if (o.max_steps <= 0 || o.max_steps > PKM_SIM_MAX_STEPS_LIMIT)
+    return fail(p, PKM_ERR_PARAMETER,
+                "%s = %ld must be in [1, %ld]: it is the work budget of one fmi2DoStep, which must return in bounded "
+                "time (docs/fmu.md, Bounded work)",
+                var_name(p, FMU_CH_SOLVER_MAX_STEPS, 0), o.max_steps, PKM_SIM_MAX_STEPS_LIMIT);
+  if (!(o.max_step >= 0) || !(o.sing_min >= 0))
     return fail(p, PKM_ERR_PARAMETER, "%s = %g (>= 0), %s = %ld (> 0), %s = %g (>= 0): out of range",
                 var_name(p, FMU_CH_SOLVER_MAX_STEP, 0), o.max_step, var_name(p, FMU_CH_SOLVER_MAX_STEPS, 0),
                 o.max_steps, var_name(p, FMU_CH_SOLVER_SING_MIN, 0), o.sing_min);
@@ -386,6 +394,8 @@ static int apply(fmu_plant* p) {
     pkm_sim_destroy(p->sim);
     p->sim = pkm_sim_create(p->m, &o, cerr, sizeof cerr);
     if (!p->sim) return fail(p, PKM_ERR_INTEGRATION, "cannot create the integrator: %s", cerr);
+    /* A host cannot interrupt fmi2DoStep: past this wall time it is Discarded. */
+    pkm_sim_set_time_limit(p->sim, FMU_STEP_TIME_LIMIT);
   }
   p->opt_applied = o;
   return PKM_OK;
@@ -446,17 +456,26 @@ void plant_set_time(fmu_plant* p, double t) {
   p->t = t;
 }
 
+/* A state (x, xd) the robot can be in: finite, with an energy that does not overflow. */
+static int check_states(fmu_plant* p, const double* x, const double* xd, const char* what) {
+  for (int i = 0; i < 2 * p->nd; ++i) {
+    const double v = i < p->nd ? x[i] : xd[i - p->nd];
+    if (!isfinite(v))
+      return fail(p, PKM_ERR_ARGUMENT, "%s %d (%s) = %g at t = %.9g s is not finite", what, i,
+                  i < p->nd ? var_name(p, FMU_CH_POSE, i) : var_name(p, FMU_CH_TWIST, i - p->nd), v, p->t);
+  }
+  double kinetic = 0, potential = 0;
+  if (pkm_energy(p->m, p->d, x, xd, &kinetic, &potential) == PKM_ERR_ARGUMENT)
+    return fail(p, PKM_ERR_ARGUMENT, "%ss at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
+  return PKM_OK;
+}
+
 int plant_set_states(fmu_plant* p, const double* s, size_t n) {
   if (n != (size_t)(2 * p->nd))
     return fail(p, PKM_ERR_ARGUMENT, "%zu continuous states given, the model has %d", n, 2 * p->nd);
-  for (int i = 0; i < 2 * p->nd; ++i)
-    if (!isfinite(s[i]))
-      return fail(p, PKM_ERR_ARGUMENT, "continuous state %d (%s) = %g at t = %.9g s is not finite", i,
-                  i < p->nd ? var_name(p, FMU_CH_POSE, i) : var_name(p, FMU_CH_TWIST, i - p->nd), s[i], p->t);
   /* A state the robot cannot be in (an energy that overflows) is refused, as a start is. */
-  double kinetic = 0, potential = 0;
-  if (pkm_energy(p->m, p->d, s, s + p->nd, &kinetic, &potential) == PKM_ERR_ARGUMENT)
-    return fail(p, PKM_ERR_ARGUMENT, "continuous states at t = %.9g s: %s", p->t, pkm_data_error(p->d));
+  int st = check_states(p, s, s + p->nd, "continuous state");
+  if (st) return st;
   memcpy(p->x, s, sizeof(double) * p->nd);
   memcpy(p->xd, s + p->nd, sizeof(double) * p->nd);
   p->valid = 0;
@@ -569,12 +588,56 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   if (nsim) pkm_sim_state_save(p->sim, v + 1);
 }
 
+/* The name of value k of a snapshot, for messages. */
+static void snapshot_field(const fmu_plant* p, size_t k, char* out, size_t len) {
+  static const char* const head[SNAP_HEAD] = {"t", "started", "dirty", "model_ok", "tolerance", "solver.method",
+                                              "solver.rtol", "solver.atol", "solver.maxStep", "solver.maxSteps",
+                                              "solver.singMin", "input.gain"};
+  static const char* const vec[5] = {"x", "xd", "tau", "x0", "xd0"};
+  const size_t nd = (size_t)p->nd, fixed = snapshot_fixed(p);
+  if (k < SNAP_HEAD)
+    snprintf(out, len, "%s", head[k]);
+  else if (k < SNAP_HEAD + 5 * nd)
+    snprintf(out, len, "%s[%zu]", vec[(k - SNAP_HEAD) / nd], (k - SNAP_HEAD) % nd + 1);
+  else if (k + 1 < fixed)
+    snprintf(out, len, "parameter %s", pkm_param_name(p->m, (int)(k - SNAP_HEAD - 5 * nd)));
+  else if (k + 1 == fixed)
+    snprintf(out, len, "integrator state length");
+  else
+    snprintf(out, len, "integrator state value %zu", k - fixed);
+}
+
+/* Everything a snapshot says is checked before any of it is used: its length, every value
+ * finite, flags, counts and enumerations whole and in range.  Values that were checked
+ * when they were set (the input gain) are checked again; parameters and solver settings
+ * in force go through the core again (apply), and the integrator's state through
+ * pkm_sim_state_load, which checks the state as a reset does. */
 int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   const size_t fixed = snapshot_fixed(p);
-  if (n < fixed || b[fixed - 1] < 0 || (size_t)b[fixed - 1] != n - fixed)
+  if (n < fixed)
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
+  char field[96];
+  for (size_t k = 0; k < n; ++k)
+    if (!isfinite(b[k])) {
+      snapshot_field(p, k, field, sizeof field);
+      return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: value %zu (%s) = %g is not finite", k, field, b[k]);
+    }
+  if (!fmu_whole(b[fixed - 1], 0, (double)(n - fixed)) || (size_t)b[fixed - 1] != n - fixed)
     return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs %zu + %g", n, fixed,
-                n >= fixed ? b[fixed - 1] : 0.0);
+                b[fixed - 1]);
+  const char* bad = NULL;
+  if (!fmu_whole(b[1], 0, 1) || !fmu_whole(b[2], 0, 1) || !fmu_whole(b[3], 0, 1))
+    bad = "started, dirty or model_ok flag (0 or 1)";
+  else if (!(b[4] == 0 || (b[4] > 0 && b[4] < 1)))
+    bad = "importer tolerance (0 for none, or in (0, 1))";
+  else if (!fmu_whole(b[5], -2147483647.0, 2147483647.0) || !fmu_whole(b[9], -2147483647.0, 2147483647.0))
+    bad = "solver.method or solver.maxSteps (an Integer)";
+  else if (!(b[11] > 0 && b[11] < 1e6))
+    bad = "input.gain (a positive gain below 1e6)";
+  if (bad) return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: invalid %s", bad);
   const size_t nsim = n - fixed;
+  if (nsim && !(p->cs && b[1] != 0))
+    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: an integrator state without a started Co-Simulation");
   const double* simstate = b + fixed;
   int started = b[1] != 0, dirty = b[2] != 0;
   p->tol_override = b[4];
@@ -598,12 +661,20 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
    * back into the core (a no-op when unchanged) and restore the integrator's state. */
   int s = apply(p);
   if (s) return s;
+  if ((s = check_states(p, p->x, p->xd, "FMU state: continuous state"))) return s;
   if (p->cs) {
     if (nsim)
       s = pkm_sim_state_load(p->sim, simstate, nsim);
     else
       s = pkm_sim_reset(p->sim, p->t, p->x, p->xd);
     if (s) return fail(p, s, "restoring the integrator at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
+    /* The integrator's time and state are the plant's: one state, not two. */
+    double t = 0, x[16], xd[16];
+    pkm_sim_get_state(p->sim, &t, x, xd);
+    if (t != p->t || memcmp(x, p->x, sizeof(double) * p->nd) != 0 || memcmp(xd, p->xd, sizeof(double) * p->nd) != 0)
+      return fail(p, PKM_ERR_ARGUMENT,
+                  "FMU state is damaged: the integrator's time %.17g s or state differs from the model's (t = %.17g s)",
+                  t, p->t);
   }
   p->started = 1;
   p->dirty = dirty;

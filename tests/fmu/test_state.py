@@ -116,7 +116,7 @@ def test_foreign_state_is_refused(fmu_file):
         blob = me.serialize(s)
         with pytest.raises(fmu.FMUError):
             cs.deserialize(blob)
-        assert "another model or interface" in cs.log[-1]
+        assert "another model, interface or layout" in cs.log[-1]
         with pytest.raises(fmu.FMUError):
             cs.deserialize(b"\x00" * len(blob))
         assert "not an FMU state" in cs.log[-1]

@@ -58,7 +58,8 @@ typedef enum pkm_status {
   PKM_ERR_JOINT_LIMIT = -6,   /* stroke / joint range exceeded (which joint, value)   */
   PKM_ERR_INTEGRATION = -7,   /* CVODE failure (flag, time)                           */
   PKM_ERR_UNSUPPORTED = -8,   /* the robot does not provide this function             */
-  PKM_ERR_INTERNAL = -9       /* a bug: please report the message                    */
+  PKM_ERR_INTERNAL = -9,      /* a bug: please report the message                    */
+  PKM_ERR_STEP_BUDGET = -10   /* one call used its work budget (steps, time reached)  */
 } pkm_status;
 
 /* Short constant name of a status ("PKM_ERR_SINGULAR"...). */
@@ -324,9 +325,15 @@ typedef struct pkm_sim_options {
   double rtol;       /* relative tolerance (default 1e-8)                         */
   double atol;       /* absolute tolerance (default 1e-10)                        */
   double max_step;   /* largest internal step, s (0 = unlimited)                  */
-  long max_steps;    /* internal steps per advance (default 100000)               */
+  long max_steps;    /* internal steps per advance (default 100000, at most
+                        PKM_SIM_MAX_STEPS_LIMIT): the work budget of one advance     */
   double sing_min;   /* stop when measures[1] of pkm_singularity drops below (1e-4) */
 } pkm_sim_options;
+
+/* The largest max_steps: one advance must return in bounded time (a host cannot tell a
+ * slow call from a hang).  An explicit step of a 6-dof robot costs ~5-20 us, a BDF step
+ * more: 1e6 steps are seconds, the most a 1 ms communication step should ever take. */
+#define PKM_SIM_MAX_STEPS_LIMIT 1000000L
 
 typedef struct pkm_sim_stats {
   long steps, rhs_evals, jac_evals, error_test_fails, nonlin_conv_fails;
@@ -354,8 +361,15 @@ PKM_API int pkm_sim_reset(pkm_sim* s, double t0, const double* x, const double* 
 PKM_API int pkm_sim_set_input(pkm_sim* s, const double* tau);
 /* Integrates to t_end.  On a stroke/joint limit, a singularity or a CVODE failure,
  * stops at the event time with the state there and returns the status; the message
- * names the leg and the time. */
+ * names the leg and the time.  At most max_steps internal steps (explicit attempts and
+ * CVODE steps): then PKM_ERR_STEP_BUDGET at the last accepted state.  The explicit methods
+ * hand a stiff stretch to CVODE BDF by themselves (docs/integration.md, Bounded work). */
 PKM_API int pkm_sim_advance(pkm_sim* s, double t_end);
+/* A wall-clock limit on each pkm_sim_advance [s] (0, the default: none).  Past it the
+ * advance stops at its last accepted state with PKM_ERR_STEP_BUDGET, as when max_steps
+ * runs out.  The only result of a sim that depends on the machine: for hosts that must get
+ * an answer in bounded time (the FMUs set 1 s per fmi2DoStep; docs/integration.md). */
+PKM_API int pkm_sim_set_time_limit(pkm_sim* s, double seconds);
 PKM_API int pkm_sim_get_state(const pkm_sim* s, double* t, double* x, double* xd);
 /* Drive-side position and rate per joint [m or rad, m/s or rad/s]: the drive body's for a
  * joint that is two bodies (drive.two_body = 1 with a backlash or a compliance), the joint's
@@ -485,12 +499,15 @@ PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double
 PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
 PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
 /* Everything that determines the controller's future outputs (states, last error, pose
- * guess), as doubles, for FMU get/set state.  A DISCRETE controller's state ends with its
- * own block, led by its layout (joints, filter lengths, delay), which pkm_ctrl_state_load
- * checks against the controller before taking anything. */
+ * guess), as pkm_ctrl_state_size doubles, for FMU get/set state.  The block starts with
+ * its layout (version, kind, joints, LTI states); a DISCRETE controller's state ends with
+ * its own block, led by its layout (joints, filter lengths, delay).  pkm_ctrl_state_load
+ * checks both against the controller before taking anything and refuses, naming what, a
+ * block of another length or layout, a non-finite value, a flag that is not 0 or 1 or a
+ * count that is not whole, and then leaves the controller unchanged. */
 PKM_API size_t pkm_ctrl_state_size(const pkm_ctrl* c);
 PKM_API int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf);
-PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf);
+PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf, size_t n);
 
 /* ============================================================== closed loop */
 /* A whole sampled closed loop in one call (the way MuJoCo's rollout runs many steps):

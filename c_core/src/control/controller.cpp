@@ -430,6 +430,13 @@ struct pkm_ctrl {
     k = 0;
     for (VecX* v : {&integral, &deriv, &e_prev, &x_guess, &xc})
       for (int i = 0; i < v->size(); ++i) (*v)[i] = b[k++];
+    // The flags and the counter must be what save() writes: 0 or 1, and a whole count
+    // (a conversion of a double out of long's range is undefined behaviour).
+    for (size_t f = k; f < k + 2; ++f)
+      PKM_REQUIRE(b[f] == 0.0 || b[f] == 1.0, PKM_ERR_ARGUMENT,
+                  "controller state: entry " + std::to_string(f) + " is a flag (0 or 1), got " + num(b[f]));
+    PKM_REQUIRE(b[k + 2] >= 0 && b[k + 2] <= 9e15 && b[k + 2] == std::floor(b[k + 2]), PKM_ERR_ARGUMENT,
+                "controller state: the saturation count " + num(b[k + 2]) + " is not a count");
     have_prev = b[k++] != 0.0;
     have_guess = b[k++] != 0.0;
     saturated = (long)b[k++];
@@ -559,18 +566,47 @@ long pkm_ctrl_saturated(const pkm_ctrl* c) { return c ? c->saturated : 0; }
 
 const char* pkm_ctrl_error(const pkm_ctrl* c) { return c ? c->error.c_str() : "controller is NULL"; }
 
-size_t pkm_ctrl_state_size(const pkm_ctrl* c) { return c ? c->state_size() : 0; }
+// The saved state starts with a header naming the layout (version, kind, joints, LTI
+// states), so that a state is loaded only into a controller of the same law and sizes.
+static constexpr size_t kStateHead = 4;
+static constexpr double kStateVersion = 1.0;
+
+size_t pkm_ctrl_state_size(const pkm_ctrl* c) { return c ? kStateHead + c->state_size() : 0; }
 
 int pkm_ctrl_state_save(const pkm_ctrl* c, double* buf) {
   if (!c || !buf) return PKM_ERR_ARGUMENT;
-  c->save(buf);
+  buf[0] = kStateVersion;
+  buf[1] = c->kind;
+  buf[2] = c->nd;
+  buf[3] = c->nx;
+  c->save(buf + kStateHead);
   return PKM_OK;
 }
 
-int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf) {
-  if (!c || !buf) return PKM_ERR_ARGUMENT;
+int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf, size_t n) {
+  if (!c) return PKM_ERR_ARGUMENT;
   c->error.clear();
-  return guard_into(c->error, [&] { c->load(buf); });
+  return guard_into(c->error, [&] {
+    PKM_REQUIRE(buf != nullptr, PKM_ERR_ARGUMENT, "controller state: buffer is NULL");
+    const size_t need = kStateHead + c->state_size();
+    PKM_REQUIRE(n == need, PKM_ERR_ARGUMENT,
+                "controller state: " + std::to_string(n) + " values, this controller's layout has " +
+                    std::to_string(need));
+    PKM_REQUIRE(buf[0] == kStateVersion && buf[1] == c->kind && buf[2] == c->nd && buf[3] == c->nx, PKM_ERR_ARGUMENT,
+                "controller state of another law or size (layout " + num(buf[0]) + ", kind " + num(buf[1]) + ", " +
+                    num(buf[2]) + " joints, " + num(buf[3]) + " LTI states; this controller: layout " +
+                    num(kStateVersion) + ", kind " + std::to_string(c->kind) + " (" + kind_name(c->kind) + "), " +
+                    std::to_string(c->nd) + ", " + std::to_string(c->nx) + ")");
+    // A refused state leaves the controller unchanged: load into a copy of the state first.
+    std::vector<double> keep(c->state_size());
+    c->save(keep.data());
+    try {
+      c->load(buf + kStateHead);
+    } catch (...) {
+      c->load(keep.data());
+      throw;
+    }
+  });
 }
 
 }  // extern "C"

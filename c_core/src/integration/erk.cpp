@@ -43,6 +43,8 @@ struct Tableau {
   double b[7];
   double e[7];
   double expo;  // step-size exponent: -1 / (order of the embedded estimate + 1)
+  double stiff_bound;  // ~0.9 x where the stability region ends on the negative real axis
+  bool last_two_at_end;  // the last two stages are both at the step's end (c = 1)
 };
 
 // Dormand and Prince's 5(4) pair (J. Comput. Appl. Math. 6, 1980).
@@ -57,7 +59,9 @@ constexpr Tableau kDP54{7,
                          {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}},
                         {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84, 0},
                         {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40},
-                        -1.0 / 5};
+                        -1.0 / 5,
+                        3.25,
+                        true};
 
 // Bogacki and Shampine's 3(2) pair (Appl. Math. Lett. 2, 1989): three new stages a step.
 constexpr Tableau kBS32{4,
@@ -65,11 +69,17 @@ constexpr Tableau kBS32{4,
                         {{0}, {1.0 / 2}, {0, 3.0 / 4}, {2.0 / 9, 1.0 / 3, 4.0 / 9}},
                         {2.0 / 9, 1.0 / 3, 4.0 / 9, 0},
                         {2.0 / 9 - 7.0 / 24, 1.0 / 3 - 1.0 / 4, 4.0 / 9 - 1.0 / 3, -1.0 / 8},
-                        -1.0 / 3};
+                        -1.0 / 3,
+                        2.25,
+                        false};
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
-constexpr int kMaxN = 24;  // 4 x 6: pose, rates, and the drive bodies of two-body joints
+constexpr int kMaxN = 24;
+// Stiffness detection: this many steps at the stability edge in one segment (Hairer's
+// DOPRI5 uses 15), forgotten after kCalmSteps steps in a row away from it (6 there).
+constexpr int kStiffHits = 15, kCalmSteps = 6;
+constexpr long kStiffCheckFrom = 15;  // BS3 pays a call a step for the check after this many  // 4 x 6: pose, rates, and the drive bodies of two-body joints
 
 // Cubic Hermite interpolant of a step at theta in [0, 1].
 void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
@@ -239,12 +249,12 @@ void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, cons
   throw Error(is_limit ? PKM_ERR_JOINT_LIMIT : PKM_ERR_SINGULAR, msg);
 }
 
-void Sim::erk_segment(double t_end) {
+bool Sim::erk_segment(double t_end) {
   // An interval below ~1e-15 s (relative to max(1 s, t)) moves only the clock: the state
   // would change by less than its own rounding (a denormal step is a zero step).
   if (t_end - t_ < 4 * DBL_EPSILON * std::max({1.0, std::fabs(t_), std::fabs(t_end)})) {
     t_ = t_end;
-    return;
+    return true;
   }
   const int n2 = ny_;
   cb_status_ = 0;
@@ -280,12 +290,10 @@ void Sim::erk_segment(double t_end) {
   double h = h_next_ > 0 ? h_next_ : erk_initial_step(t_end, f0);
   if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
   long steps = 0;
+  int stiff_hits = 0, calm = 0;  // stiffness detection (see kStiffHits)
   while (t_ < t_end) {
-    if (steps >= opt_.max_steps)
-      throw Error(PKM_ERR_INTEGRATION,
-                  "explicit Runge-Kutta: max_steps = " + std::to_string(opt_.max_steps) + " steps reached at t = " +
-                      num(t_) + " s before t = " + num(t_end) +
-                      " s (a stiff motion, e.g. joint friction with a small drive.v_eps: use solver method BDF)");
+    if (budget_ <= 0 || past_deadline()) budget_exceeded(t_end, budget_ > 0);
+    --budget_;
     const double rest = t_end - t_;
     const bool last = h >= rest * (1 - 1e-12);
     const double hh = last ? rest : h;
@@ -380,6 +388,44 @@ void Sim::erk_segment(double t_end) {
     }
     det0 = det1;
     bound0 = bound1;
+    // Stiffness (Hairer and Wanner, Solving ODEs II, IV.2): h times a local Lipschitz
+    // estimate |f(ya) - f(yb)| / |ya - yb| near the edge of the method's stability region
+    // means the step size is held by stability, not accuracy.  DP5's last two stages are
+    // both at the step's end, so their difference is the error, which at the edge is the
+    // stiff mode's (no extra call).  BS3 has no such pair (stages at another time differ
+    // by the smooth motion too): from its 16th step in a segment it compares the solution
+    // with the embedded one, at one extra call a step.  kStiffHits such steps in one
+    // segment (forgotten after kCalmSteps in a row without) hand the rest to BDF.
+    if (t_ < t_end && (tb.last_two_at_end || steps > kStiffCheckFrom)) {
+      const double* fa = k[tb.s - 1];
+      const double* fb = k[tb.s - 2];
+      const double* yb = ys;
+      double yh[kMaxN], fh[kMaxN];
+      bool have = true;
+      if (!tb.last_two_at_end) {
+        for (int i = 0; i < n2; ++i) {
+          double e = 0;
+          for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
+          yh[i] = y1[i] - hh * e;
+        }
+        have = erk_rhs(t_, yh, fh, applied_.data());
+        ++stats_.rhs_evals;
+        fb = fh;
+        yb = yh;
+      }
+      double num2 = 0, den2 = 0;
+      for (int i = 0; have && i < n2; ++i) {
+        const double df = fa[i] - fb[i], dy = y1[i] - yb[i];
+        num2 += df * df;
+        den2 += dy * dy;
+      }
+      if (have && den2 > 0 && hh * std::sqrt(num2 / den2) > tb.stiff_bound) {
+        calm = 0;
+        if (++stiff_hits >= kStiffHits) return false;
+      } else if (++calm >= kCalmSteps) {
+        stiff_hits = 0;
+      }
+    }
   }
   h_next_ = h;
   if (steps > 0 && B1_fresh) {
@@ -393,6 +439,7 @@ void Sim::erk_segment(double t_end) {
     bound_cached_ = bound0;
     guard_cached_ = true;
   }
+  return true;
 }
 
 // ------------------------------------------------------------------------ state
@@ -444,8 +491,19 @@ void Sim::state_load(const double* b, size_t n) {
   const size_t nh = (size_t)nh_value;
   PKM_REQUIRE(n == 5 + ny + nd + nh * (1 + nd), PKM_ERR_ARGUMENT,
           "state: " + std::to_string(n) + " values do not match the history length it declares");
-  PKM_REQUIRE(b[3 + ny + nd] >= 0, PKM_ERR_ARGUMENT, "state: negative step size");
   const double t = b[2];
+  // The next step size: 0 (choose one) or a step the explicit method can take from t.
+  const double h = b[3 + ny + nd];
+  PKM_REQUIRE(h == 0 || h > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t)), PKM_ERR_ARGUMENT,
+              "state: the next step size " + num(h) + " s is neither 0 nor a step that can be taken at t = " + num(t) +
+                  " s");
+  // The delay line: commands in the order they were issued, none after t.
+  for (size_t j = 0; j < nh; ++j) {
+    const double s = b[5 + ny + nd + j * (1 + nd)];
+    PKM_REQUIRE(s <= t && (j == 0 || s >= b[5 + ny + nd + (j - 1) * (1 + nd)]), PKM_ERR_ARGUMENT,
+                "state: delay-line command " + std::to_string(j) + " issued at t = " + num(s) +
+                    " s is out of order or after the state's time " + num(t) + " s");
+  }
   std::vector<double> x(b + 3, b + 3 + nd_), xd(b + 3 + nd_, b + 3 + 2 * nd_);
   reset(t, x.data(), xd.data());  // checks the state as any reset does; clears h_next_
   for (size_t i = 2 * nd; i < ny; ++i) y_[i] = b[3 + i];  // the drive bodies as saved

@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
@@ -69,6 +70,9 @@ constexpr double kHistory = 1.0;
 // The singularity root is evaluated at every step only within kSingGuard x sing_min.
 constexpr double kSingGuard = 100.0;
 
+// With a time limit, the clock is read every this many steps or right-hand sides.
+constexpr long kClockEvery = 32;
+
 }  // namespace
 
 // ----------------------------------------------------------------- construction
@@ -87,7 +91,9 @@ static void check_options(const pkm_sim_options& o) {
   if (!(std::isfinite(o.atol) && o.atol > 0)) bad("atol = " + num(o.atol) + " must be finite and > 0");
   if (!(std::isfinite(o.max_step) && o.max_step >= 0))
     bad("max_step = " + num(o.max_step) + " s must be finite and >= 0 (0 = unlimited)");
-  if (o.max_steps <= 0) bad("max_steps = " + std::to_string(o.max_steps) + " must be > 0");
+  if (o.max_steps <= 0 || o.max_steps > PKM_SIM_MAX_STEPS_LIMIT)
+    bad("max_steps = " + std::to_string(o.max_steps) + " must be in [1, " + std::to_string(PKM_SIM_MAX_STEPS_LIMIT) +
+        "]: it bounds the work of one advance (a call must return; docs/integration.md, Bounded work)");
   if (!(std::isfinite(o.sing_min) && o.sing_min >= 0 && o.sing_min < 1))
     bad("sing_min = " + num(o.sing_min) + " must be in [0, 1) (0 = no singularity stop)");
 }
@@ -155,49 +161,58 @@ Sim::Sim(const pkm_model* m, const pkm_sim_options& opt) {
     g_.assign(nroots_, 0.0);
     g_cached_.assign(nroots_ + 1, 0.0);
 
-    if (opt_.method == PKM_ERK || opt_.method == PKM_ERK23) return;  // explicit methods need no CVODE objects
-    if (SUNContext_Create(nullptr, &ctx_) != 0 || !ctx_)
-      throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
-    nv_ = N_VNew_Serial(n2, ctx_);
-    nv_back_ = N_VNew_Serial(n2, ctx_);
-    PKM_REQUIRE(nv_ != nullptr && nv_back_ != nullptr, PKM_ERR_INTERNAL,
-            "CVODE set-up: N_VNew_Serial failed (out of memory)");
-    double* v = N_VGetArrayPointer(nv_);
-    for (int i = 0; i < n2; ++i) v[i] = y_[i];
-
-    cvode_ = CVodeCreate(opt_.method == PKM_BDF ? CV_BDF : CV_ADAMS, ctx_);
-    PKM_REQUIRE(cvode_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: CVodeCreate failed (out of memory)");
-    check_cvode(CVodeSetErrHandlerFn(cvode_, err_cb, this), "CVodeSetErrHandlerFn");
-    check_cvode(CVodeInit(cvode_, rhs_cb, 0.0, nv_), "CVodeInit");
-    check_cvode(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
-    check_cvode(CVodeSStolerances(cvode_, opt_.rtol, opt_.atol), "CVodeSStolerances");
-    if (opt_.method == PKM_BDF) {
-      // Newton iteration with a dense direct solver; no Jacobian function is given, so
-      // CVODE builds it by difference quotients of the RHS (2 nd extra RHS calls).
-      A_ = SUNDenseMatrix(n2, n2, ctx_);
-      PKM_REQUIRE(A_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNDenseMatrix failed");
-      ls_ = SUNLinSol_Dense(nv_, A_, ctx_);
-      PKM_REQUIRE(ls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNLinSol_Dense failed");
-      check_cvode(CVodeSetLinearSolver(cvode_, ls_, A_), "CVodeSetLinearSolver");
-    } else {
-      // Adams for non-stiff motion: fixed-point (functional) iteration needs no Jacobian.
-      nls_ = SUNNonlinSol_FixedPoint(nv_, 0, ctx_);
-      PKM_REQUIRE(nls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNNonlinSol_FixedPoint failed");
-      check_cvode(CVodeSetNonlinearSolver(cvode_, nls_), "CVodeSetNonlinearSolver");
-    }
-    check_cvode(CVodeSetMaxStep(cvode_, opt_.max_step), "CVodeSetMaxStep");
-    check_cvode(CVodeSetMaxNumSteps(cvode_, opt_.max_steps), "CVodeSetMaxNumSteps");
-    if (nroots_ > 0) {
-      check_cvode(CVodeRootInit(cvode_, nroots_, root_cb), "CVodeRootInit");
-      // Only a margin going from positive to negative is a stop; moving back inside is not.
-      std::vector<int> dir(nroots_, -1);
-      if (sing_root_) dir[nroots_ - 1] = 0;  // det J may change sign either way
-      check_cvode(CVodeSetRootDirection(cvode_, dir.data()), "CVodeSetRootDirection");
-      check_cvode(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
-    }
+    // The explicit methods need no CVODE objects until a stiff stretch hands a segment to
+    // BDF (erk_segment); the CVODE methods create theirs now.
+    if (!explicit_method()) cvode_create(opt_.method);
   } catch (...) {
     release();
     throw;
+  }
+}
+
+// CVODE's objects for the linear multistep method lmm (PKM_BDF or PKM_ADAMS), with the
+// stop conditions as root functions.
+void Sim::cvode_create(int lmm) {
+  const int n2 = ny_;
+  cvode_lmm_ = lmm;
+  if (SUNContext_Create(nullptr, &ctx_) != 0 || !ctx_)
+    throw Error(PKM_ERR_INTEGRATION, "CVODE set-up: SUNContext_Create failed");
+  nv_ = N_VNew_Serial(n2, ctx_);
+  nv_back_ = N_VNew_Serial(n2, ctx_);
+  PKM_REQUIRE(nv_ != nullptr && nv_back_ != nullptr, PKM_ERR_INTERNAL,
+          "CVODE set-up: N_VNew_Serial failed (out of memory)");
+  double* v = N_VGetArrayPointer(nv_);
+  for (int i = 0; i < n2; ++i) v[i] = y_[i];
+
+  cvode_ = CVodeCreate(lmm == PKM_BDF ? CV_BDF : CV_ADAMS, ctx_);
+  PKM_REQUIRE(cvode_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: CVodeCreate failed (out of memory)");
+  check_cvode(CVodeSetErrHandlerFn(cvode_, err_cb, this), "CVodeSetErrHandlerFn");
+  check_cvode(CVodeInit(cvode_, rhs_cb, 0.0, nv_), "CVodeInit");
+  check_cvode(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
+  check_cvode(CVodeSStolerances(cvode_, opt_.rtol, opt_.atol), "CVodeSStolerances");
+  if (lmm == PKM_BDF) {
+    // Newton iteration with a dense direct solver; no Jacobian function is given, so
+    // CVODE builds it by difference quotients of the RHS (2 nd extra RHS calls).
+    A_ = SUNDenseMatrix(n2, n2, ctx_);
+    PKM_REQUIRE(A_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNDenseMatrix failed");
+    ls_ = SUNLinSol_Dense(nv_, A_, ctx_);
+    PKM_REQUIRE(ls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNLinSol_Dense failed");
+    check_cvode(CVodeSetLinearSolver(cvode_, ls_, A_), "CVodeSetLinearSolver");
+  } else {
+    // Adams for non-stiff motion: fixed-point (functional) iteration needs no Jacobian.
+    nls_ = SUNNonlinSol_FixedPoint(nv_, 0, ctx_);
+    PKM_REQUIRE(nls_ != nullptr, PKM_ERR_INTERNAL, "CVODE set-up: SUNNonlinSol_FixedPoint failed");
+    check_cvode(CVodeSetNonlinearSolver(cvode_, nls_), "CVodeSetNonlinearSolver");
+  }
+  check_cvode(CVodeSetMaxStep(cvode_, opt_.max_step), "CVodeSetMaxStep");
+  check_cvode(CVodeSetMaxNumSteps(cvode_, opt_.max_steps), "CVodeSetMaxNumSteps");
+  if (nroots_ > 0) {
+    check_cvode(CVodeRootInit(cvode_, nroots_, root_cb), "CVodeRootInit");
+    // Only a margin going from positive to negative is a stop; moving back inside is not.
+    std::vector<int> dir(nroots_, -1);
+    if (sing_root_) dir[nroots_ - 1] = 0;  // det J may change sign either way
+    check_cvode(CVodeSetRootDirection(cvode_, dir.data()), "CVodeSetRootDirection");
+    check_cvode(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
   }
 }
 
@@ -272,6 +287,12 @@ int Sim::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
   const double* Y = N_VGetArrayPointer(y);
   double* F = N_VGetArrayPointer(ydot);
   const int n = s.nd_;
+  if (s.past_deadline()) {  // CVODE cannot be interrupted otherwise: an unrecoverable failure
+    s.cb_status_ = PKM_ERR_STEP_BUDGET;
+    s.cb_time_ = t;
+    s.cb_msg_ = s.budget_message(s.budget_end_, true);
+    return -1;
+  }
   for (int i = 0; i < s.ny_; ++i) {
     if (!std::isfinite(Y[i])) {
       s.cb_status_ = PKM_ERR_INTEGRATION;
@@ -648,6 +669,12 @@ void Sim::advance(double t_end) {
   PKM_REQUIRE(t_end >= t_, PKM_ERR_ARGUMENT,
           "advance: t_end = " + num(t_end, 17) + " s is before the current time t = " + num(t_, 17) + " s");
   if (t_end == t_) return;
+  budget_ = opt_.max_steps;
+  budget_t0_ = t_;
+  budget_end_ = t_end;
+  if (time_limit_ > 0)
+    deadline_ = std::chrono::steady_clock::now() +
+                std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(time_limit_));
 
   // A state on or beyond a stop boundary cannot be advanced: CVODE only sees sign
   // changes, so it would miss a crossing that already happened.  (The explicit method
@@ -711,8 +738,13 @@ void Sim::advance(double t_end) {
 // measure below sing_min without J changing sign, back above the guard within a segment.
 void Sim::segment(double t_end) {
   if (explicit_method()) {
-    erk_segment(t_end);
-    return;
+    if (erk_segment(t_end)) return;
+    // A stiff stretch: the explicit method stopped at its last accepted step; BDF takes
+    // the rest of the segment, and the next advance starts explicit again.
+    if (!cvode_) cvode_create(PKM_BDF);
+    h_next_ = 0.0;
+    guard_cached_ = false;
+    fsal_valid_ = false;
   }
   if (!sing_root_) {
     integrate(t_end);
@@ -758,6 +790,38 @@ void Sim::segment(double t_end) {
   integrate(t_end);
 }
 
+std::string Sim::budget_message(double t_end, bool clock) const {
+  std::ostringstream os;
+  os.precision(10);
+  os << "step budget exceeded at t = " << t_ << " s: ";
+  if (clock)
+    os << "in its time limit of " << time_limit_ << " s (wall clock) the advance from t = " << budget_t0_
+       << " s went only ";
+  else
+    os << "max_steps = " << opt_.max_steps << " internal steps took the advance from t = " << budget_t0_ << " s only ";
+  os << (t_ - budget_t0_) << " s of the " << (t_end - budget_t0_) << " s to t = " << t_end << " s; ";
+  if (explicit_method())
+    os << "the dynamics are stiff here, use solver.method = BDF (PKM_BDF), or an input this large is not physical";
+  else
+    os << "the motion is too fast to resolve at rtol = " << opt_.rtol << ": a smaller input or communication step, "
+       << "or a looser tolerance";
+  return os.str();
+}
+
+void Sim::budget_exceeded(double t_end, bool clock) const { throw Error(PKM_ERR_STEP_BUDGET, budget_message(t_end, clock)); }
+
+void Sim::set_time_limit(double seconds) {
+  PKM_REQUIRE(std::isfinite(seconds) && seconds >= 0, PKM_ERR_ARGUMENT,
+              "time limit = " + num(seconds) + " s must be finite and >= 0 (0 = none)");
+  time_limit_ = seconds;
+}
+
+bool Sim::past_deadline() {
+  // The clock is read every kClockEvery calls (~50 ns a read, a step costs microseconds).
+  if (!(time_limit_ > 0) || ++clock_calls_ % kClockEvery != 0) return false;
+  return std::chrono::steady_clock::now() > deadline_;
+}
+
 double Sim::measure_at(const double* y) {
   double meas[2];
   robot_->singularity(*rm_, *rd_, y, meas);
@@ -780,6 +844,8 @@ void Sim::integrate(double t_end) {
   cv_msg_.clear();
   check_cvode(CVodeReInit(cvode_, t_, nv_), "CVodeReInit");
   check_cvode(CVodeSetStopTime(cvode_, t_end), "CVodeSetStopTime");
+  if (budget_ <= 0) budget_exceeded(t_end, false);
+  check_cvode(CVodeSetMaxNumSteps(cvode_, budget_), "CVodeSetMaxNumSteps");
 
   double tret = t_;
   const int flag = CVode(cvode_, t_end, nv_, &tret, CV_NORMAL);
@@ -789,7 +855,7 @@ void Sim::integrate(double t_end) {
   CVodeGetNumRhsEvals(cvode_, &nfe);
   CVodeGetNumErrTestFails(cvode_, &netf);
   CVodeGetNumNonlinSolvConvFails(cvode_, &nncf);
-  if (opt_.method == PKM_BDF) {
+  if (cvode_lmm_ == PKM_BDF) {
     CVodeGetNumLinRhsEvals(cvode_, &nfeLS);
     CVodeGetNumJacEvals(cvode_, &nje);
   }
@@ -798,6 +864,7 @@ void Sim::integrate(double t_end) {
   stats_.jac_evals += nje;
   stats_.error_test_fails += netf;
   stats_.nonlin_conv_fails += nncf;
+  budget_ -= nst;
 
   v = N_VGetArrayPointer(nv_);
   bool finite = true;
@@ -849,7 +916,9 @@ void Sim::integrate(double t_end) {
     for (int i = 0; i < n2; ++i) y_[i] = v[i];
     t_ = tret;
   }
+  if (flag == CV_TOO_MUCH_WORK) budget_exceeded(t_end, false);
   const std::string name = flag_name(flag);
+  if (cb_status_ == PKM_ERR_STEP_BUDGET) budget_exceeded(t_end, true);  // the message with the time reached
   if (cb_status_ != 0 && callback_flag(flag)) {
     throw Error(cb_status_, cb_msg_ + " at t = " + num(cb_time_) + " s (CVODE stopped with " + name +
                                 "; state kept at t = " + num(t_) + " s)");

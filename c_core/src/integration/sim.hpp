@@ -8,6 +8,7 @@
 // the robot's singularity measure, both found at construction.
 #pragma once
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,10 @@ class Sim {
   // Pose acceleration at the current state under the command tau (dead zone, saturation).
   void acceleration(const double* tau, double* xdd);
   const pkm_sim_stats& stats() const { return stats_; }
+  // A wall-clock limit per advance [s] (0: none): past it the advance stops as if its step
+  // budget ran out.  The one result of a sim that depends on the machine, for hosts that
+  // must get an answer in bounded time (the FMUs).
+  void set_time_limit(double seconds);
   int ndof() const { return nd_; }
   bool explicit_method() const { return opt_.method == PKM_ERK || opt_.method == PKM_ERK23; }
   // Everything that determines the future of the sim (pkm_sim_state_*): t, state, held
@@ -114,8 +119,20 @@ class Sim {
   void segment(double b);
   void integrate(double b);
   // The explicit Runge-Kutta path (integration/erk.cpp): one segment [t_, b] with a
-  // constant applied effort, steps carried across advances through h_next_.
-  void erk_segment(double b);
+  // constant applied effort, steps carried across advances through h_next_.  false: the
+  // motion turned stiff (the step size is held by stability, not accuracy), the state is
+  // at the last accepted step before b and BDF takes the rest.
+  bool erk_segment(double b);
+  // CVODE's objects for PKM_BDF or PKM_ADAMS (at construction, or when a stiff stretch
+  // hands an explicit segment to BDF).
+  void cvode_create(int lmm);
+  // Throws PKM_ERR_STEP_BUDGET: the advance to t_end used its max_steps internal steps
+  // (clock false) or ran into its time limit (clock true).
+  [[noreturn]] void budget_exceeded(double t_end, bool clock) const;
+  std::string budget_message(double t_end, bool clock) const;
+  // With a time limit: true once the current advance is past its deadline (reads the
+  // clock every few calls).
+  bool past_deadline();
   // The state's rates f(y) under the applied effort u: (xd, FD) and, for the two-body
   // joints, (theta_d, theta_dd) with the transmission's effort driving the carriage.
   void dynamics(const double* y, const double* u, double* f);
@@ -185,6 +202,14 @@ class Sim {
   std::string cv_msg_;  // last message of CVODE's error handler
 
   pkm_sim_stats stats_{};
+  // Bounded work: internal steps left in the current advance (max_steps at its start; ERK
+  // attempts and CVODE steps both count), and where the advance started.
+  long budget_ = 0;
+  double budget_t0_ = 0.0, budget_end_ = 0.0;
+  double time_limit_ = 0.0;  // wall-clock seconds per advance, 0: none (set_time_limit)
+  std::chrono::steady_clock::time_point deadline_{};
+  long clock_calls_ = 0;
+  int cvode_lmm_ = PKM_BDF;   // the method the CVODE objects were made for
   double h_next_ = 0.0;  // explicit method: step size proposed for the next step (0: choose one)
   // Explicit method: stop-condition values and det J at the state it ended on (valid
   // until the state changes otherwise), so the next advance need not recompute them.

@@ -47,6 +47,10 @@ int pkm_sim_reset(pkm_sim* s, double t0, const double* x, const double* xd) {
   return sim_guard(s, [&] { s->sim.reset(t0, x, xd); });
 }
 
+int pkm_sim_set_time_limit(pkm_sim* s, double seconds) {
+  return sim_guard(s, [&] { s->sim.set_time_limit(seconds); });
+}
+
 int pkm_sim_set_input(pkm_sim* s, const double* tau) {
   return sim_guard(s, [&] { s->sim.set_input(tau); });
 }
