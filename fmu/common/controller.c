@@ -332,11 +332,11 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   if (nc) pkm_ctrl_state_save(p->c, v + 1);
 }
 
-/* Everything is checked before it is used: the length, every value finite, flags, the
- * kind and the LTI state count whole and in range (nx sizes the copies plant_start makes);
- * the gains then go through pkm_ctrl_create and the law's state through
- * pkm_ctrl_state_load, which checks it against the law's own layout. */
-int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+/* Everything is checked before it is used (nothing is changed here): the length, every
+ * value finite, flags, the kind and the LTI state count whole and in range (nx sizes the
+ * copies plant_start makes); the gains then go through pkm_ctrl_create and the law's state
+ * through pkm_ctrl_state_load, which checks it against the law's own layout. */
+int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
   const size_t fixed = fixed_size(p);
   if (n < fixed)
     return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
@@ -353,10 +353,16 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
     bad = "controller.kind or gravity flag (an Integer)";
   else if (!fmu_whole(b[6], 0, p->nx_max))
     bad = "LTI state count lti.nx (this FMU has room for 0..lti_states)";
+  else if (n > fixed && b[1] == 0)
+    bad = "controller state (there is one only for a started controller)";
   if (bad) return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: invalid %s (lti.nx = %g, room %d)", bad, b[6],
                        p->nx_max);
-  if (n > fixed && b[1] == 0)
-    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: a controller state without a started controller");
+  return PKM_OK;
+}
+
+/* Loads a snapshot that passed plant_snapshot_check. */
+int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+  const size_t fixed = fixed_size(p);
   p->t = b[0];
   const int started = b[1] != 0, dirty = b[2] != 0;
   p->kind = (int)b[3], p->gravity_ref = (int)b[4], p->gravity_ff = (int)b[5], p->nx = (int)b[6];
@@ -367,6 +373,7 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   v += na;
   memcpy(p->sat, v, (size_t)p->nd * sizeof(double));
   p->started = 0;
+  p->dirty = dirty;
   if (!started) return PKM_OK;
   double tau[64];
   memcpy(tau, p->tau, sizeof(double) * (size_t)p->nd);

@@ -546,7 +546,13 @@ fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate) {
   if (bad_call(c, "fmi2SetFMUstate", S_ANY)) return fmi2Error;
   const fmu_state* s = (const fmu_state*)FMUstate;
   if (!state_ok(c, "fmi2SetFMUstate", s, s, 0)) return fmi2Error;
-  /* A refused state leaves the instance as it was: keep what it has now to put back. */
+  if (plant_snapshot_check(c->plant, s->plant, s->nplant)) {
+    logmsg(c, fmi2Error, LOG_ERROR, "fmi2SetFMUstate: %s; the instance keeps its previous state",
+           plant_error(c->plant));
+    return fmi2Error;
+  }
+  /* What the core refuses while loading leaves the instance as it was too: keep what it
+   * has now to put back. */
   instance before = *c;
   const size_t nkeep = plant_snapshot_size(c->plant);
   double* keep = (double*)malloc(nkeep * sizeof(double));

@@ -164,10 +164,15 @@ int plant_check_limits(fmu_plant* p, double tol);
 /* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate),
  * the integrator's own state included.  Its size (in doubles) varies with that state
  * (the actuator-delay history): plant_snapshot_size now, never below
- * plant_snapshot_min_size; plant_snapshot_load checks the n values it is given. */
+ * plant_snapshot_min_size. */
 size_t plant_snapshot_size(const fmu_plant* p);
 size_t plant_snapshot_min_size(const fmu_plant* p);
 void plant_snapshot_save(const fmu_plant* p, double* buf);
+/* plant_snapshot_check validates the n values (length, every value finite, flags, counts
+ * and enumerations in range) and changes nothing; plant_snapshot_load loads a checked
+ * snapshot, putting parameters and the integrator's or law's state through the core, and
+ * may leave the plant changed when the core refuses them (the caller restores). */
+int plant_snapshot_check(fmu_plant* p, const double* buf, size_t n);
 int plant_snapshot_load(fmu_plant* p, const double* buf, size_t n);
 
 /* 1 if v, a value read back from an FMU state, is a whole number in [lo, hi]: a flag, a

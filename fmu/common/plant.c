@@ -549,7 +549,7 @@ int plant_check_limits(fmu_plant* p, double tol) {
 
 /* ------------------------------------------------------------------ snapshot */
 
-/* Layout (doubles): t, started, dirty, model_ok, tol_override, 6 solver settings, input gain,
+/* Layout (doubles): t, started, dirty, reserved (1), tol_override, 6 solver settings, input gain,
  * x, xd, tau, x0, xd0 (nd each), par (np), then the length n_sim of the integrator's
  * own state and that state (pkm_sim_state_save: held input, the explicit method's next
  * step size, the actuator-delay history), so a restored state advances exactly as the
@@ -569,7 +569,7 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
   b[0] = p->t;
   b[1] = p->started;
   b[2] = p->dirty;
-  b[3] = p->model_ok;
+  b[3] = 1.0; /* reserved: whether the core model validated is history, not state */
   b[4] = p->tol_override;
   b[5] = p->opt.method;
   b[6] = p->opt.rtol;
@@ -590,7 +590,7 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
 
 /* The name of value k of a snapshot, for messages. */
 static void snapshot_field(const fmu_plant* p, size_t k, char* out, size_t len) {
-  static const char* const head[SNAP_HEAD] = {"t", "started", "dirty", "model_ok", "tolerance", "solver.method",
+  static const char* const head[SNAP_HEAD] = {"t", "started", "dirty", "reserved", "tolerance", "solver.method",
                                               "solver.rtol", "solver.atol", "solver.maxStep", "solver.maxSteps",
                                               "solver.singMin", "input.gain"};
   static const char* const vec[5] = {"x", "xd", "tau", "x0", "xd0"};
@@ -607,12 +607,12 @@ static void snapshot_field(const fmu_plant* p, size_t k, char* out, size_t len) 
     snprintf(out, len, "integrator state value %zu", k - fixed);
 }
 
-/* Everything a snapshot says is checked before any of it is used: its length, every value
- * finite, flags, counts and enumerations whole and in range.  Values that were checked
- * when they were set (the input gain) are checked again; parameters and solver settings
- * in force go through the core again (apply), and the integrator's state through
- * pkm_sim_state_load, which checks the state as a reset does. */
-int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+/* Everything a snapshot says, checked before any of it is used (nothing is changed): its
+ * length, every value finite, flags, counts and enumerations whole and in range.  Values
+ * that were checked when they were set (the input gain) are checked again; the parameters
+ * and solver settings in force go through the core again when loaded (apply), and the
+ * integrator's state through pkm_sim_state_load, which checks the state as a reset does. */
+int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
   const size_t fixed = snapshot_fixed(p);
   if (n < fixed)
     return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
@@ -627,17 +627,23 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
                 b[fixed - 1]);
   const char* bad = NULL;
   if (!fmu_whole(b[1], 0, 1) || !fmu_whole(b[2], 0, 1) || !fmu_whole(b[3], 0, 1))
-    bad = "started, dirty or model_ok flag (0 or 1)";
+    bad = "started, dirty or reserved flag (0 or 1)";
   else if (!(b[4] == 0 || (b[4] > 0 && b[4] < 1)))
     bad = "importer tolerance (0 for none, or in (0, 1))";
   else if (!fmu_whole(b[5], -2147483647.0, 2147483647.0) || !fmu_whole(b[9], -2147483647.0, 2147483647.0))
     bad = "solver.method or solver.maxSteps (an Integer)";
   else if (!(b[11] > 0 && b[11] < 1e6))
     bad = "input.gain (a positive gain below 1e6)";
+  else if (n > fixed && !(p->cs && b[1] != 0))
+    bad = "integrator state (there is one only for a started Co-Simulation)";
   if (bad) return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: invalid %s", bad);
+  return PKM_OK;
+}
+
+/* Loads a snapshot that passed plant_snapshot_check. */
+int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+  const size_t fixed = snapshot_fixed(p);
   const size_t nsim = n - fixed;
-  if (nsim && !(p->cs && b[1] != 0))
-    return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: an integrator state without a started Co-Simulation");
   const double* simstate = b + fixed;
   int started = b[1] != 0, dirty = b[2] != 0;
   p->tol_override = b[4];

@@ -9,19 +9,23 @@
  * 1e300 and the smallest denormal.  Each corrupted block is given
  *   - as it is (the checksum no longer matches: it must be refused), and
  *   - sealed again (the checksum recomputed, as an importer editing states on purpose would),
- * to the instance it came from and to a fresh instance (fmi2Reset), through fmi2DeSerializeFMUstate
- * and fmi2SetFMUstate.  When a corrupted state is accepted, the instance is used: every Real
- * variable is read, and a Co-Simulation instance reads its last successful time and takes a 1 ms
- * step, a Model Exchange one reads its states, derivatives and event indicators.  Then the good
- * state is set again, which must succeed.
+ * to the instance it came from and to a fresh instance (just reset), through
+ * fmi2DeSerializeFMUstate and fmi2SetFMUstate.  When a corrupted state is accepted, the instance
+ * is used: every Real variable is read, and a Co-Simulation instance reads its last successful
+ * time and takes a 1 ms step, a Model Exchange one reads its states, derivatives and event
+ * indicators; then the good state is set again (the fresh instance is reset), which must
+ * succeed.  When it is refused, the instance must have kept its state: its serialized state
+ * must equal, byte for byte, the one it had.
  *
  * What must never happen: a crash (the process dies: the test sees the exit code, and a signal
  * handler prints the case), a value that is not finite returned with fmi2OK, a call refused
- * without a message through the FMI logger, or an instance that cannot be put back to a good
- * state.  Prints one summary line (JSON); exit status 1 if any of that happened.
+ * without a message through the FMI logger, an instance changed by a refused state, or one
+ * that cannot be put back to a good state.  Prints one summary line (JSON); exit status 1 if
+ * any of that happened.
  *
  * The checksum is found, not assumed: the driver looks for the header word whose value is the
- * FNV-1a 64 hash of the block with that word read as zero, and seals with the same rule.
+ * FNV-1a 64 hash of the block with that word read as zero, and seals with the same rule (an FMU
+ * without one gets the corrupted blocks only as they are; the summary says "checksum": false).
  */
 #include <dlfcn.h>
 #include <math.h>
@@ -62,7 +66,8 @@ typedef struct api {
 } api;
 
 static struct {
-  long cases, accepted, refused, ok_nonfinite, silent_refusals, unrecoverable, calls;
+  long cases, accepted, refused, ok_nonfinite, silent_refusals, unrecoverable, changed_by_refusal, calls;
+  int checksum;
 } stats;
 static char current_case[256];
 static int errors_logged; /* Error/Discard messages through the logger since the last reset */
@@ -95,15 +100,15 @@ static uint64_t fnv(const unsigned char* b, size_t n, size_t skip) {
   return h;
 }
 
-/* Offset of the checksum word in a good block, or exit. */
+/* Offset of the checksum word in a good block, or (size_t)-1 when there is none (an FMU
+ * without one: the corrupted blocks are then given as they are only). */
 static size_t find_checksum(const unsigned char* b, size_t n) {
   for (size_t off = 0; off + 8 <= n && off < 256; off += 8) {
     uint64_t stored;
     memcpy(&stored, b + off, 8);
     if (stored == fnv(b, n, off)) return off;
   }
-  fprintf(stderr, "state_fuzz: no checksum word found in a good state of %zu bytes\n", n);
-  exit(2);
+  return (size_t)-1;
 }
 
 /* A call's status: counts a refusal, and a refusal without a logged message. */
@@ -140,18 +145,27 @@ static fmi2Component instantiate(fmu* u, const char* name) {
   return c;
 }
 
+/* Every Real variable: in one call, or one by one when that call is refused (a refusal of
+ * one variable stops the call there). */
+static void read_all(fmu* u, fmi2Component c, double* v, const char* where) {
+  if (checked(u->f.get_real(c, u->vrs, u->nvr, v)) == fmi2OK) {
+    for (size_t i = 0; i < u->nvr; ++i) nonfinite(where, v[i]);
+    return;
+  }
+  for (size_t i = 0; i < u->nvr; ++i)
+    if (checked(u->f.get_real(c, &u->vrs[i], 1, &v[i])) == fmi2OK) nonfinite(where, v[i]);
+}
+
 /* Uses an instance that accepted a state: reads everything, advances once. */
 static void exercise(fmu* u, fmi2Component c) {
   double* v = (double*)malloc(sizeof(double) * (u->nvr + u->nx + u->nz + 1));
-  for (size_t i = 0; i < u->nvr; ++i)
-    if (checked(u->f.get_real(c, &u->vrs[i], 1, &v[i])) == fmi2OK) nonfinite("fmi2GetReal", v[i]);
+  read_all(u, c, v, "fmi2GetReal");
   if (u->type == fmi2CoSimulation) {
     double t = 0;
     if (checked(u->f.get_real_status(c, fmi2LastSuccessfulTime, &t)) == fmi2OK) {
       nonfinite("fmi2GetRealStatus(fmi2LastSuccessfulTime)", t);
       if (isfinite(t) && checked(u->f.do_step(c, t, 1e-3, fmi2True)) == fmi2OK)
-        for (size_t i = 0; i < u->nvr; ++i)
-          if (checked(u->f.get_real(c, &u->vrs[i], 1, &v[i])) == fmi2OK) nonfinite("fmi2GetReal after fmi2DoStep", v[i]);
+        read_all(u, c, v, "fmi2GetReal after fmi2DoStep");
     }
   } else {
     if (u->nx && checked(u->f.get_states(c, v, u->nx)) == fmi2OK)
@@ -164,10 +178,25 @@ static void exercise(fmu* u, fmi2Component c) {
   free(v);
 }
 
-/* Gives bytes[size] to instance c; uses it if accepted; puts the good state back. */
-static void one_case(fmu* u, fmi2Component c, const unsigned char* bytes, size_t size, fmi2FMUstate good, int fresh) {
+/* The serialized state of instance c now (malloc'ed, *size bytes), or NULL. */
+static unsigned char* snapshot(fmu* u, fmi2Component c, size_t* size) {
+  fmi2FMUstate s = NULL;
+  if (u->f.get_state(c, &s) != fmi2OK || u->f.ser_size(c, s, size) != fmi2OK) return NULL;
+  unsigned char* b = (unsigned char*)malloc(*size);
+  if (b && u->f.serialize(c, s, (fmi2Byte*)b, *size) != fmi2OK) {
+    free(b);
+    b = NULL;
+  }
+  u->f.free_state(c, &s);
+  return b;
+}
+
+/* Gives bytes[size] to instance c, whose state is now expect[expect_size].  Accepted: it
+ * is used, then c is put back (good state, or fmi2Reset for the fresh instance).  Refused:
+ * c must still have the state it had. */
+static void one_case(fmu* u, fmi2Component c, const unsigned char* bytes, size_t size, fmi2FMUstate good,
+                     const unsigned char* expect, size_t expect_size) {
   ++stats.cases;
-  if (fresh) checked(u->f.reset(c));
   fmi2FMUstate s = NULL;
   int accepted = 0;
   if (checked(u->f.deserialize(c, (const fmi2Byte*)bytes, size, &s)) == fmi2OK) {
@@ -177,16 +206,27 @@ static void one_case(fmu* u, fmi2Component c, const unsigned char* bytes, size_t
     }
     checked(u->f.free_state(c, &s));
   }
-  if (accepted)
+  if (accepted) {
     ++stats.accepted;
-  else
-    ++stats.refused;
-  if (checked(u->f.set_state(c, good)) != fmi2OK) {
-    if (stats.unrecoverable < 5) fprintf(stderr, "state_fuzz: the good state was refused after case %s\n", current_case);
-    ++stats.unrecoverable;
-    u->f.reset(c);
-    u->f.set_state(c, good);
+    if (checked(good ? u->f.set_state(c, good) : u->f.reset(c)) != fmi2OK) {
+      if (stats.unrecoverable < 5) fprintf(stderr, "state_fuzz: the instance was not put back after case %s\n", current_case);
+      ++stats.unrecoverable;
+      u->f.reset(c);
+      if (good) u->f.set_state(c, good);
+    }
+    return;
   }
+  ++stats.refused;
+  size_t now_size = 0;
+  unsigned char* now = snapshot(u, c, &now_size);
+  if (!now || now_size != expect_size || memcmp(now, expect, now_size) != 0) {
+    if (stats.changed_by_refusal < 5)
+      fprintf(stderr, "state_fuzz: a refused state changed the instance in case %s\n", current_case);
+    ++stats.changed_by_refusal;
+    u->f.reset(c);
+    if (good) u->f.set_state(c, good);
+  }
+  free(now);
 }
 
 /* Brings an instance past initialization and a little further. */
@@ -225,21 +265,25 @@ static void fuzz_state(fmu* u, fmi2Component same, fmi2Component fresh, const ch
   unsigned char* bad = (unsigned char*)malloc(size);
   u->f.serialize(same, good, (fmi2Byte*)bytes, size);
   const size_t sum = find_checksum(bytes, size);
-  /* the good state must go back into a fresh instance too */
-  fmi2FMUstate good_fresh = NULL;
+  stats.checksum = sum != (size_t)-1;
+  /* the fresh instance: just reset, and the good state must go into it too */
+  size_t fresh_size = 0;
   u->f.reset(fresh);
-  if (u->f.deserialize(fresh, (const fmi2Byte*)bytes, size, &good_fresh) != fmi2OK ||
-      u->f.set_state(fresh, good_fresh) != fmi2OK) {
+  unsigned char* fresh_bytes = snapshot(u, fresh, &fresh_size);
+  fmi2FMUstate probe = NULL;
+  if (!fresh_bytes || u->f.deserialize(fresh, (const fmi2Byte*)bytes, size, &probe) != fmi2OK ||
+      u->f.set_state(fresh, probe) != fmi2OK || u->f.reset(fresh) != fmi2OK) {
     fprintf(stderr, "state_fuzz: %s: the good %s state is refused by a fresh instance\n", u->id, base);
     exit(1);
   }
+  u->f.free_state(fresh, &probe);
   double values[NVALUES] = {NAN, INFINITY, -INFINITY, 0.0, -1.0, 1e4, 1e9, 1e300, 4.9406564584124654e-324};
   for (size_t w = 0; w + 8 <= size; w += 8) {
     for (int k = 0; k < NVALUES; ++k) {
       memcpy(bad, bytes, size);
       memcpy(bad + w, &values[k], 8);
       for (int seal = 0; seal < 2; ++seal) {
-        if (seal) {
+        if (seal && stats.checksum) {
           const uint64_t h = fnv(bad, size, sum);
           if (w != sum) memcpy(bad + sum, &h, 8);
         }
@@ -248,17 +292,17 @@ static void fuzz_state(fmu* u, fmi2Component same, fmi2Component fresh, const ch
                    u->type == fmi2CoSimulation ? "CS" : "ME", base, w / 8, VALUE_NAMES[k],
                    seal ? "sealed again" : "as corrupted", f ? "fresh" : "same");
           if (f)
-            one_case(u, fresh, bad, size, good_fresh, 1);
+            one_case(u, fresh, bad, size, NULL, fresh_bytes, fresh_size);
           else
-            one_case(u, same, bad, size, good, 0);
+            one_case(u, same, bad, size, good, bytes, size);
         }
       }
     }
   }
   u->f.free_state(same, &good);
-  u->f.free_state(fresh, &good_fresh);
   free(bytes);
   free(bad);
+  free(fresh_bytes);
 }
 
 int main(int argc, char** argv) {
@@ -325,8 +369,9 @@ int main(int argc, char** argv) {
   u.f.free_instance(same);
   u.f.free_instance(fresh);
   printf("{\"fmu\": \"%s\", \"type\": \"%s\", \"cases\": %ld, \"accepted\": %ld, \"refused\": %ld, \"calls\": %ld, "
-         "\"ok_nonfinite\": %ld, \"silent_refusals\": %ld, \"unrecoverable\": %ld}\n",
+         "\"ok_nonfinite\": %ld, \"silent_refusals\": %ld, \"unrecoverable\": %ld, \"changed_by_refusal\": %ld, "
+         "\"checksum\": %s}\n",
          u.id, argv[4], stats.cases, stats.accepted, stats.refused, stats.calls, stats.ok_nonfinite,
-         stats.silent_refusals, stats.unrecoverable);
-  return stats.ok_nonfinite || stats.silent_refusals || stats.unrecoverable ? 1 : 0;
+         stats.silent_refusals, stats.unrecoverable, stats.changed_by_refusal, stats.checksum ? "true" : "false");
+  return stats.ok_nonfinite || stats.silent_refusals || stats.unrecoverable || stats.changed_by_refusal ? 1 : 0;
 }
