@@ -181,6 +181,49 @@ TEST(Controller, SavedStateReplaysTheSameOutputs) {
   for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
 }
 
+// A saved state is checked against the law's own layout before anything is loaded, and a
+// refused one leaves the controller as it was.
+TEST(Controller, DamagedSavedStatesAreRefused) {
+  auto m = make_model("6pus");
+  auto kp = diag(6, 100), kd = diag(6, 4), ki = diag(6, 500);
+  auto s = spec_of(PKM_CTRL_PID, kp, kd);
+  s.ki = ki.data();
+  char err[512] = "";
+  CtrlPtr c{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
+  ASSERT_NE(c.c, nullptr) << err;
+  auto d = make_data(m.get());
+  double x[6], q[6], zero[6] = {0}, qr[6], tau[6], again[6];
+  pkm_model_home(m.get(), x);
+  ASSERT_EQ(pkm_ik(m.get(), d.get(), x, q), PKM_OK);
+  for (int i = 0; i < 6; ++i) qr[i] = q[i] + 0.001;
+  for (int k = 0; k < 3; ++k) ASSERT_EQ(pkm_ctrl_update(c.c, k * 1e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
+  std::vector<double> good(pkm_ctrl_state_size(c.c));
+  ASSERT_EQ(pkm_ctrl_state_save(c.c, good.data()), PKM_OK);
+  const auto refused = [&](std::vector<double> bad, size_t n, const char* words) {
+    EXPECT_EQ(pkm_ctrl_state_load(c.c, bad.data(), n), PKM_ERR_ARGUMENT);
+    EXPECT_NE(std::string(pkm_ctrl_error(c.c)).find(words), std::string::npos) << pkm_ctrl_error(c.c);
+  };
+  refused(good, good.size() - 1, "this controller's layout has");
+  std::vector<double> bad = good;
+  bad[1] = PKM_CTRL_PD;  // a state of another law with the same sizes
+  refused(bad, bad.size(), "another law or size");
+  bad = good;
+  bad[4] = NAN;
+  refused(bad, bad.size(), "not finite");
+  bad = good;
+  bad[bad.size() - 3] = 2.0;  // have_prev is a flag
+  refused(bad, bad.size(), "flag");
+  bad = good;
+  bad[bad.size() - 1] = 1e300;  // the saturation count
+  refused(bad, bad.size(), "not a count");
+  // Nothing of the refused states was kept: the next sample is the one the good state gives.
+  ASSERT_EQ(pkm_ctrl_update(c.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
+  CtrlPtr fresh{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
+  ASSERT_EQ(pkm_ctrl_state_load(fresh.c, good.data(), good.size()), PKM_OK) << pkm_ctrl_error(fresh.c);
+  ASSERT_EQ(pkm_ctrl_update(fresh.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, again), PKM_OK);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
+}
+
 TEST(Controller, BadSpecsAndReadingsAreNamed) {
   auto m = make_model("6pus");
   auto kp = diag(6, 300), kd = diag(6, 30);
