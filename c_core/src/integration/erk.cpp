@@ -79,7 +79,12 @@ constexpr int kMaxN = 24;
 // Stiffness detection: this many steps at the stability edge in one segment (Hairer's
 // DOPRI5 uses 15), forgotten after kCalmSteps steps in a row away from it (6 there).
 constexpr int kStiffHits = 15, kCalmSteps = 6;
-constexpr long kStiffCheckFrom = 15;  // BS3 pays a call a step for the check after this many  // 4 x 6: pose, rates, and the drive bodies of two-body joints
+constexpr long kStiffCheckFrom = 15;  // BS3 pays a call a step for the check after this many
+#ifdef PKM_NO_CVODE
+constexpr bool kCanHandOver = false;  // no BDF in this binary: the explicit method goes on, its budget bounds it
+#else
+constexpr bool kCanHandOver = true;
+#endif  // 4 x 6: pose, rates, and the drive bodies of two-body joints
 
 // Cubic Hermite interpolant of a step at theta in [0, 1].
 void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
@@ -421,7 +426,7 @@ bool Sim::erk_segment(double t_end) {
       }
       if (have && den2 > 0 && hh * std::sqrt(num2 / den2) > tb.stiff_bound) {
         calm = 0;
-        if (++stiff_hits >= kStiffHits) return false;
+        if (++stiff_hits >= kStiffHits && kCanHandOver) return false;
       } else if (++calm >= kCalmSteps) {
         stiff_hits = 0;
       }
