@@ -24,7 +24,8 @@ typedef int (*CVRootFn)(double t, N_Vector y, double* gout, void* user_data);
 typedef void (*CVErrHandlerFn)(int code, const char* module, const char* function, char* msg, void* user_data);
 
 enum {
-  CV_SUCCESS = 0, CV_TSTOP_RETURN = 1, CV_ROOT_RETURN = 2, CV_CONV_FAILURE = -4, CV_LSETUP_FAIL = -6,
+  CV_SUCCESS = 0, CV_TSTOP_RETURN = 1, CV_ROOT_RETURN = 2, CV_TOO_MUCH_WORK = -1, CV_CONV_FAILURE = -4,
+  CV_LSETUP_FAIL = -6,
   CV_RHSFUNC_FAIL = -8, CV_FIRST_RHSFUNC_ERR = -9, CV_REPTD_RHSFUNC_ERR = -10, CV_UNREC_RHSFUNC_ERR = -11,
   CV_RTFUNC_FAIL = -12, CV_NLS_FAIL = -13, CV_ADAMS = 1, CV_BDF = 2, CV_NORMAL = 1
 };
