@@ -269,7 +269,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     r_after = eng.R(theta) if theta else eng.R0
-    left = unexplained(pipe, r_after, floor=eng.floor())
+    left = unexplained(pipe, r_after, floor=eng.accuracy())
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
@@ -493,6 +493,15 @@ def _effects(eng, sel) -> list:
                 st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f})")
             looks.append(Alternative(**c, statement=st))
+        for tie in getattr(eng, "discovery_ties", []):
+            if tie["group"] == g.label:
+                eq = "; ".join(tie["terms"])
+                d2 = tie["heldout_chi2_discovered"] - tie["heldout_chi2_library"]
+                looks.insert(0, Alternative(
+                    "discovered", "discovered", f"a force no library effect names ({eq})", 0.0, d2,
+                    tie["extra_params"], float("nan"), False,
+                    f"a force no library effect names ({eq}) fits the held-out part as well (chi-square "
+                    f"{d2:+.1f}): {g.effect.name} is not named with confidence on this recording"))
         out.append(FoundEffect(g.key, g.effect.name, g.label, g.title, None if g.joint is None else g.joint + 1,
                                g.effect.family, params, a.delta_bic, a.importance,
                                g.effect.plant.replace("{j}", _prefix(eng.model)), looks, _derived(g, a.values, eng)))
@@ -568,13 +577,21 @@ def _discover(eng, sel, threshold):
     Returns (terms, withdrawn groups, parameters: library kept + discovered)."""
     from .discovery import discover, judge_library
 
-    theta, withdrawn, search = judge_library(eng, sel, threshold)
+    theta, withdrawn, ties, search = judge_library(eng, sel, threshold)
+    eng.discovery_ties = ties
     found, _ = discover(eng, theta, threshold, search=search)
     for t in found:
         t.instead_of = [f"{w['title']}: fits the held-out part worse (chi-square {w['heldout_chi2_library']:.1f} "
                         f"against {w['heldout_chi2_discovered']:.1f} with the discovered term)"
                         for w in withdrawn if t.channel in w["replaced_by"]]
         theta.update(t.params())
+    pipe = eng.pipe
+    R_all = eng.R(theta) if found else None
+    for t in found:
+        c = t.joint - 1
+        without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
+        key = (pipe.q_s if t.key_variable == "position" else pipe.qd_s)[pipe.idx, c]
+        t.curve = {"key": key, "before": without, "after": R_all[:, c]}
     return found, withdrawn, theta
 
 

@@ -71,6 +71,8 @@ MECHANISMS = {
 
 #: a term is kept when the bootstrap selects it in at least this share of the resamples
 STABILITY = 0.6
+#: forward steps of the stepwise selection (a term may leave again in the backward pass)
+MAX_STEPS = 8
 #: bootstrap resamples, and the block length in decimated samples
 N_BOOT, BLOCK = 30, 25
 
@@ -111,6 +113,9 @@ class DiscoveredTerm:
     delta_chi2_heldout: float
     key_variable: str
     instead_of: list = field(default_factory=list)
+    #: for the report's figure, on the decimated samples: ``key`` (the joint's position or
+    #: rate), ``before`` / ``after`` (the channel's residual without / with the term)
+    curve: dict = field(default_factory=dict, repr=False)
 
     def __getitem__(self, k):
         return getattr(self, k)
@@ -314,7 +319,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
     logn = math.log(max(n_eff, 2.0))
     chosen = []
     chi2 = _ls_chi2(search, c, y, chosen, rows)
-    for _ in range(4):
+    for _ in range(MAX_STEPS):
         best = None
         for cand in search.candidates():
             if cand in chosen or any(cand[0] == t for t, _ in chosen):
@@ -369,7 +374,7 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
         pick = _blocks(rows, rng)
         # forward selection on the resample (same rules)
         chosen, chi2 = [], _resampled(search, c, y, [], pick)[0]
-        for _ in range(4):
+        for _ in range(MAX_STEPS):
             best = None
             for cand in search.candidates():
                 if cand in chosen or any(cand[0] == t for t, _ in chosen):
@@ -400,7 +405,7 @@ def discover_channel(search, c, y, threshold, seed=0):
     # The yardstick is the residual's own high-frequency noise (as the structure test's):
     # the engine's noise model is inflated by the very force searched for.
     phi = samples_per_independent(eng.pipe)
-    sigma = own_noise(eng.pipe, y[train], eng.floor()[c])
+    sigma = own_noise(eng.pipe, y[train], eng.accuracy()[c])
     search.w[c] = 1.0 / (sigma * math.sqrt(phi))
     n_eff = float((eng.use[train, c] > 0).sum()) / phi
     lee = 2.0 * math.log(search.n_tried())
@@ -456,15 +461,12 @@ def _term(search, c, terms, coef, half, stab, before, after, d_held) -> Discover
         kind = t.split("_")[0]
         if kind not in kinds:
             kinds.append(kind)
-    mech = "; ".join(f"{TERMS[_first(k)][3]}: {MECHANISMS[k]}" for k in kinds)
+    mech = "; ".join(" and ".join(TERMS[n][3] for n in names if n.split("_")[0] == k) + f": {MECHANISMS[k]}"
+                     for k in kinds)
     key = _key_variable(names)
     noun = search.eng.model.facts.joint_noun
     return DiscoveredTerm(c + 1, search.pipe.channels[c], names, f"{noun} {c + 1}: {eq}", coefs, shape,
                           mech, {t: stab[(t, o)] for t, o in terms}, before, after, d_held, key)
-
-
-def _first(kind):
-    return next(t for t in TERMS if t.split("_")[0] == kind)
 
 
 def _key_variable(names):
@@ -576,11 +578,15 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
     when those fit the held-out part better (held-out chi-square lower by more than
     ``margin``), the group is withdrawn and the discovered terms take its place.
 
-    Returns ``(theta, withdrawn, terms, search)``: the parameters (library kept plus discovered),
-    the withdrawn groups with their held-out figures, the discovered terms."""
+    A group the discovered terms fit the held-out part as well as (within ``threshold``) is
+    kept but tied with them (not named with confidence), unless the terms restate it
+    (:func:`restates`).
+
+    Returns ``(theta, withdrawn, ties, search)``: the library's parameters less the withdrawn
+    groups', the withdrawn groups and the tied ones with their held-out figures, the search."""
     theta = dict(sel.theta)
     search = Search(eng, theta)
-    withdrawn = []
+    withdrawn, ties = [], []
     for a in sorted(sel.selected, key=lambda a: a.importance):
         g = a.group
         if g.effect.family not in ("effort", "both"):
@@ -601,13 +607,30 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
         R_disc = _with_terms(R_minus, search, terms)
         lib = heldout_chi2(search, R_with, chans)
         disc = heldout_chi2(search, R_disc, chans)
-        if disc < lib - margin:
-            theta = th_minus
-            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
-                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                              "heldout_chi2_library": lib, "heldout_chi2_discovered": disc,
-                              "replaced_by": [t.channel for t in terms]})
-            for t in terms:
-                t.instead_of.append(f"{g.title}: fits the held-out part worse (chi-square {lib:.1f} against "
-                                    f"{disc:.1f} with the discovered term)")
-    return theta, withdrawn, search
+        if disc >= lib - margin:
+            if disc <= lib + threshold and not any(restates(t, g.key) for t in terms):
+                # not told apart on the held-out part: the library effect is named, not with confidence
+                ties.append({"group": g.label, "terms": [t.equation for t in terms], "heldout_chi2_library": lib,
+                             "heldout_chi2_discovered": disc, "extra_params": sum(len(t.coefficients) for t in terms)
+                             - len(g.params)})
+            continue
+        theta = th_minus
+        withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                          "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                          "heldout_chi2_library": lib, "heldout_chi2_discovered": disc,
+                          "replaced_by": [t.channel for t in terms]})
+    return theta, withdrawn, ties, search
+
+
+#: library effects a pair of direction-split terms restates when its two coefficients agree
+RESTATED = {"coulomb": ("coulomb_pos", "coulomb_neg"), "viscous": ("viscous_pos", "viscous_neg")}
+
+
+def restates(term: DiscoveredTerm, key: str) -> bool:
+    """The discovered term is the library effect ``key`` itself: Coulomb (viscous) friction
+    split by direction with the two levels equal within their intervals."""
+    pair = RESTATED.get(key)
+    if not pair or sorted(term.terms) != sorted(pair):
+        return False
+    a, b = list(term.coefficients.values())
+    return abs(a.value - b.value) <= math.hypot(a.ci95, b.ci95)
