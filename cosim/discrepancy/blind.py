@@ -291,6 +291,46 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
     return Hidden(kind, {k: float(v) for k, v in p.items()}, [i + 1 for i in js], {k: nominal[k] for k in p})
 
 
+#: the discovered terms each force of UNLISTED must be found with
+UNLISTED_TERMS = {"constant_force": {"constant"}, "ripple": {"ripple"}, "spring": {"spring"}, "drag": {"drag"},
+                  "direction_coulomb": set(), "one_way_damper": {"viscous_pos"}, "hardening_spring": {"cubic"}}
+
+
+def unlisted_errors(kind: str, term, truth: dict) -> list:
+    """Relative errors of a discovered term's coefficients against a hidden force of
+    :data:`UNLISTED` (``truth``: the key's effect entry); for a spring its stiffness and its
+    rest position (its distance to the truth over the joint's position spread, the key's
+    ``spread``, merged into ``truth``)."""
+    p, t = truth["params"], term.params()
+    j = term.joint
+    pre = next(iter(p)).split("[")[0] + f"[{j}]."
+    got = lambda k: t.get(pre + "force_" + k, 0.0)  # noqa: E731
+    want = lambda k: p.get(pre + "force_" + k, 0.0)  # noqa: E731
+    rel = lambda a, b: abs(a / b - 1) if b else float("inf")  # noqa: E731
+    if kind == "ripple":
+        return [rel(math.hypot(got("sin"), got("cos")), math.hypot(want("sin"), want("cos"))),
+                rel(got("period"), want("period"))]
+    if kind == "spring":
+        k = got("k1")
+        q0 = got("qc") - got("c") / k if k else float("inf")
+        return [rel(k, want("k1")), abs(q0 - want("qc")) / truth["spread"][j - 1]]
+    if kind == "direction_coulomb":
+        side = "cpos" if want("cpos") > want("cneg") else "cneg"
+        return [rel(got(side), want(side))]
+    key = {"constant_force": "c", "drag": "v2", "one_way_damper": "vpos", "hardening_spring": "k3"}[kind]
+    return [rel(got(key), want(key))]
+
+
+def unlisted_structure_ok(kind: str, term, truth: dict) -> bool:
+    """The term has the structure of the hidden force: its terms (for a Coulomb friction that
+    differs by direction, the larger side's)."""
+    need = set(UNLISTED_TERMS[kind])
+    if kind == "direction_coulomb":
+        hi = max(truth["params"], key=lambda n: truth["params"][n])
+        need = {"coulomb_pos" if hi.endswith("cpos") else "coulomb_neg"}
+    return need <= set(term.terms)
+
+
 def _controller(kind, model, cfg, dt):
     from .. import controllers as ctl
 
@@ -371,6 +411,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
                     notes=f"blind case {spec.case}: closed-loop recording of a plant that may hide effects the "
                           f"model lacks (the answer key is elsewhere)")
     info = {"controller": kind, "noise": noise, "tau_peak": tau_peak[0].tolist(), "trajectory": traj.name,
+            "spread": ref.q[k0:].std(axis=0).tolist(),
             "failed_attempts": failures}
     return rec, hidden, info
 

@@ -405,29 +405,45 @@ def discover_channel(search, c, y, threshold, seed=0):
     # The yardstick is the residual's own high-frequency noise (as the structure test's):
     # the engine's noise model is inflated by the very force searched for.
     phi = samples_per_independent(eng.pipe)
-    sigma = own_noise(eng.pipe, y[train], eng.accuracy()[c])
-    search.w[c] = 1.0 / (sigma * math.sqrt(phi))
     n_eff = float((eng.use[train, c] > 0).sum()) / phi
     lee = 2.0 * math.log(search.n_tried())
     thr = threshold + lee
-    terms = stepwise(search, c, y, train, thr, phi, n_eff)
-    if not terms:
+    r, terms = y, []
+    search.w[c] = 0.0
+    for _ in range(3):
+        # the force searched for also shows in the differences one window apart when it varies
+        # fast (a spring on a quick arm): the noise is measured again on the residual of the
+        # terms found, and the search repeated with it
+        sigma = own_noise(eng.pipe, r[train], eng.accuracy()[c])
+        if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
+            break
+        search.w[c] = 1.0 / (sigma * math.sqrt(phi))
+        terms = stepwise(search, c, y, train, thr, phi, n_eff)
+        if not terms:
+            break
+        f0 = fit_terms(search, c, y, terms, np.ones_like(train))
+        r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
+
+    def heldout(terms):
+        # the channel's held-out chi-square without and with the terms, coefficients held
+        f = fit_terms(search, c, y, terms, train)
+        Xt, _, wt = _design(search, c, terms, test)
+        tt = y[test] * wt
+        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
+
+    # the cheap held-out check first, then the bootstrap's stability
+    if not terms or not heldout(terms)[1] > threshold:
         return None
     stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
-    terms = [t for t in terms if stab[t] >= STABILITY]
-    if not terms:
+    kept = [t for t in terms if stab[t] >= STABILITY]
+    if not kept:
         return None
-    f = fit_terms(search, c, y, terms, train)
-    # held out: the channel's chi-square without and with the term, coefficients held
-    Xt, _, wt = _design(search, c, terms, test)
-    tt = y[test] * wt
-    before = float(tt @ tt)
-    after = float(np.sum((tt + Xt @ f.coef) ** 2))
-    d_held = before - after
+    if kept != terms:
+        terms = kept
+        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
+    f, d_held = heldout(terms)
     if not d_held > threshold:
         return None
-    if len(spread) != len(f.coef):
-        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
     s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
     sd = np.maximum(np.sqrt(np.maximum(np.diag(f.cov), 0.0) * s2), spread)
     use_t = eng.use[test, c] > 0
