@@ -575,15 +575,13 @@ def _discover(eng, sel, threshold):
     """The discovery step (:mod:`.discovery`): library effects put on trial against
     discovered terms, then the terms found on every effort channel of what is left.
     Returns (terms, withdrawn groups, parameters: library kept + discovered)."""
-    from .discovery import discover, judge_library
+    from .discovery import judge_library
 
-    theta, withdrawn, ties, search = judge_library(eng, sel, threshold)
+    theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     eng.discovery_ties = ties
-    found, _ = discover(eng, theta, threshold, search=search)
+    found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
     for t in found:
-        t.instead_of = [f"{w['title']}: fits the held-out part worse (chi-square {w['heldout_chi2_library']:.1f} "
-                        f"against {w['heldout_chi2_discovered']:.1f} with the discovered term)"
-                        for w in withdrawn if t.channel in w["replaced_by"]]
+        t.instead_of = [_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]]
         theta.update(t.params())
     pipe = eng.pipe
     R_all = eng.R(theta) if found else None
@@ -593,6 +591,13 @@ def _discover(eng, sel, threshold):
         key = (pipe.q_s if t.key_variable == "position" else pipe.qd_s)[pipe.idx, c]
         t.curve = {"key": key, "before": without, "after": R_all[:, c]}
     return found, withdrawn, theta
+
+
+def _withdrawn_sentence(w) -> str:
+    a, b = w["heldout_chi2_library"], w["heldout_chi2_discovered"]
+    how = "worse" if a > b + TIE_MARGIN else "no better"
+    return (f"{w['title']}: fits the held-out part {how} (chi-square {a:.1f} with it, {b:.1f} with the discovered "
+            f"term in its place)")
 
 
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:

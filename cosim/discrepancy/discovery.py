@@ -303,28 +303,21 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     return _Fit(list(terms), coef, chi2, cov)
 
 
-def _ls_chi2(search, c, y, terms, rows):
-    """The least-squares chi-square (the comparison baseline, as in the library's selection)."""
-    return fit_terms(search, c, y, terms, rows, instruments=False).chi2
-
-
-def _k(terms):
-    return sum(len(TERMS[t][0]) for t, _ in terms)
-
-
 def stepwise(search, c, y, rows, threshold, phi, n_eff):
     """Forward selection (then backward elimination) of terms for channel c by BIC in
-    effective samples: a term enters when it lowers chi2/phi + k log N_eff by more than
-    ``threshold``.  Returns the terms."""
+    effective samples: a term enters when it lowers chi2 + k log N_eff by more than
+    ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
+    boolean mask or an index array (a bootstrap resample).  Returns the terms."""
     logn = math.log(max(n_eff, 2.0))
+    chi2_of = lambda terms: _ls_fit(search, c, y, terms, rows)[0]  # noqa: E731
     chosen = []
-    chi2 = _ls_chi2(search, c, y, chosen, rows)
+    chi2 = chi2_of(chosen)
     for _ in range(MAX_STEPS):
         best = None
         for cand in search.candidates():
-            if cand in chosen or any(cand[0] == t for t, _ in chosen):
+            if any(cand[0] == t for t, _ in chosen):
                 continue
-            c2 = _ls_chi2(search, c, y, chosen + [cand], rows)
+            c2 = chi2_of(chosen + [cand])
             gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
             if best is None or gain > best[0]:
                 best = (gain, cand, c2)
@@ -335,7 +328,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
         # backward: a term the newer ones made redundant leaves
         for t in list(chosen[:-1]):
             rest = [u for u in chosen if u != t]
-            c2 = _ls_chi2(search, c, y, rest, rows)
+            c2 = chi2_of(rest)
             if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
                 chosen, chi2 = rest, c2
     return chosen
@@ -350,14 +343,14 @@ def _blocks(rows, rng):
     return where[(starts[:, None] + np.arange(BLOCK)[None, :]).ravel() % n]
 
 
-def _resampled(search, c, y, terms, pick):
-    """The least-squares chi-square of terms on resampled rows (index array)."""
-    eng = search.eng
-    w = search.w[c] * eng.use[pick, c]
-    t = y[pick] * w
+def _ls_fit(search, c, y, terms, rows):
+    """(chi-square, coefficients) of the least-squares fit of ``terms`` to channel c on
+    ``rows`` (mask or index array): the comparison baseline, as in the library's selection."""
+    w = search.w[c] * search.eng.use[rows, c]
+    t = y[rows] * w
     if not terms:
-        return float(t @ t), None
-    X = np.concatenate([search.cols[u][pick, c, :] for u in terms], axis=1) * w[:, None]
+        return float(t @ t), np.zeros(0)
+    X = np.concatenate([search.cols[u][rows, c, :] for u in terms], axis=1) * w[:, None]
     coef = fit(X, t)
     e = t + X @ coef
     return float(e @ e), coef
@@ -367,29 +360,14 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
     """Share of block-bootstrap resamples whose stepwise selection picks each of ``terms``,
     and the spread (standard deviation) of the coefficients of ``terms`` over them."""
     rng = np.random.default_rng(seed + 7 * c)
-    logn = math.log(max(n_eff, 2.0))
     hits = {t: 0 for t in terms}
     coefs = []
     for _ in range(N_BOOT):
         pick = _blocks(rows, rng)
-        # forward selection on the resample (same rules)
-        chosen, chi2 = [], _resampled(search, c, y, [], pick)[0]
-        for _ in range(MAX_STEPS):
-            best = None
-            for cand in search.candidates():
-                if cand in chosen or any(cand[0] == t for t, _ in chosen):
-                    continue
-                c2 = _resampled(search, c, y, chosen + [cand], pick)[0]
-                gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
-                if best is None or gain > best[0]:
-                    best = (gain, cand, c2)
-            if best is None or best[0] <= threshold:
-                break
-            chosen.append(best[1])
-            chi2 = best[2]
+        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff)
         for t in terms:
             hits[t] += any(u[0] == t[0] for u in chosen)
-        coefs.append(_resampled(search, c, y, terms, pick)[1])
+        coefs.append(_ls_fit(search, c, y, terms, pick)[1])
     spread = np.std(np.array(coefs), axis=0) if terms else np.zeros(0)
     return {t: hits[t] / N_BOOT for t in terms}, spread
 
@@ -536,19 +514,6 @@ def equation(names, coefs, shape, search, c) -> str:
     return "F = " + " + ".join(parts)
 
 
-def discover(eng, theta: dict, threshold: float, channels=None, search=None):
-    """Discovered terms on the effort channels (all by default) for the residual of the
-    model ``theta``.  Returns ``(terms, search)``."""
-    search = search or Search(eng, theta, channels)
-    R = eng.R(theta)
-    out = []
-    for c in (channels if channels is not None else range(eng.nd)):
-        t = discover_channel(search, c, R[:, c], threshold)
-        if t is not None:
-            out.append(t)
-    return out, search
-
-
 def heldout_chi2(search, R, channels):
     """Weighted chi-square of the held-out samples of ``channels`` (in effective samples)."""
     eng = search.eng
@@ -586,56 +551,68 @@ def _option(search, t, name):
     return 0
 
 
+def _n_coef(terms):
+    return sum(len(t.coefficients) for t in terms)
+
+
 def judge_library(eng, sel, threshold: float, margin: float = 2.0):
     """The no-confident-wrong-name rule.
 
-    Every effort-family group of the library's selection is put on trial: with its
-    parameters back at nominal, the channels it acts on are searched for discovered terms;
-    when those fit the held-out part better (held-out chi-square lower by more than
-    ``margin``), the group is withdrawn and the discovered terms take its place.
+    Every effort-family group G of the library's selection is put on trial on the channels it
+    acts on, discovery allowed on both sides: (A) the library model with G and the terms
+    discovered on top of it, against (B) the model without G and the terms discovered in its
+    place, compared on the held-out part (chi-square, in effective samples).
 
-    A group the discovered terms fit the held-out part as well as (within ``threshold``) is
-    kept but tied with them (not named with confidence), unless the terms restate it
-    (:func:`restates`).
+    * B better by more than ``margin``, or B as good (within ``margin``) with no more
+      coefficients than A: G is withdrawn (it explains nothing the discovered terms do not),
+      and listed as a look-alike that fits worse;
+    * B within ``threshold`` of A otherwise: G is kept but tied with the discovered terms (not
+      named with confidence), unless they restate it (:func:`restates`: the same physics);
+    * else G is kept: it beats the best discovered term.
 
-    Returns ``(theta, withdrawn, ties, search)``: the library's parameters less the withdrawn
-    groups', the withdrawn groups and the tied ones with their held-out figures, the search."""
+    Returns ``(theta, withdrawn, ties, search, base)``: the library's parameters less the
+    withdrawn groups', the withdrawn and the tied groups with their held-out figures, the search,
+    and the terms discovered per channel on the final library model."""
     theta = dict(sel.theta)
     search = Search(eng, theta)
     withdrawn, ties = [], []
+
+    def discover_all(R, chans):
+        return {c: discover_channel(search, c, R[:, c], threshold) for c in chans}
+
+    R_lib = eng.R(theta)
+    base = discover_all(R_lib, range(eng.nd))
     for a in sorted(sel.selected, key=lambda a: a.importance):
         g = a.group
         if g.effect.family not in ("effort", "both"):
             continue
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
-        R_with, R_minus = eng.R(theta), eng.R(th_minus)
+        R_minus = eng.R(th_minus)
         chans = [c for c in range(eng.nd)
-                 if np.any(np.abs(R_with[:, c] - R_minus[:, c]) > 0.5 * eng.sig[c])]
+                 if np.any(np.abs(R_lib[:, c] - R_minus[:, c]) > 0.5 * eng.sig[c])]
         if not chans:
             continue
-        terms = []
-        for c in chans:
-            t = discover_channel(search, c, R_minus[:, c], threshold)
-            if t is not None:
-                terms.append(t)
-        if not terms:
+        in_place = [t for t in discover_all(R_minus, chans).values() if t is not None]
+        if not in_place:
             continue
-        R_disc = _with_terms(R_minus, search, terms)
-        lib = heldout_chi2(search, R_with, chans)
-        disc = heldout_chi2(search, R_disc, chans)
-        if disc >= lib - margin:
-            if disc <= lib + threshold and not any(restates(t, g.key) for t in terms):
-                # not told apart on the held-out part: the library effect is named, not with confidence
-                ties.append({"group": g.label, "terms": [t.equation for t in terms], "heldout_chi2_library": lib,
-                             "heldout_chi2_discovered": disc, "extra_params": sum(len(t.coefficients) for t in terms)
-                             - len(g.params)})
-            continue
-        theta = th_minus
-        withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
-                          "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                          "heldout_chi2_library": lib, "heldout_chi2_discovered": disc,
-                          "replaced_by": [t.channel for t in terms]})
-    return theta, withdrawn, ties, search
+        on_top = [base[c] for c in chans if base.get(c) is not None]
+        A = heldout_chi2(search, _with_terms(R_lib, search, on_top), chans)
+        B = heldout_chi2(search, _with_terms(R_minus, search, in_place), chans)
+        k_A, k_B = len(g.params) + _n_coef(on_top), _n_coef(in_place)
+        restated = any(restates(t, g.key) for t in in_place)
+        if B < A - margin or (B <= A + margin and k_B <= k_A and not restated):
+            theta = th_minus
+            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                              "heldout_chi2_library": A, "heldout_chi2_discovered": B,
+                              "replaced_by": [t.channel for t in in_place]})
+            R_lib = R_minus
+            base.update(discover_all(R_lib, chans))
+        elif B <= A + threshold and not restated:
+            # not told apart on the held-out part: the library effect is named, not with confidence
+            ties.append({"group": g.label, "terms": [t.equation for t in in_place], "heldout_chi2_library": A,
+                         "heldout_chi2_discovered": B, "extra_params": k_B - k_A})
+    return theta, withdrawn, ties, search, base
 
 
 #: library effects a pair of direction-split terms restates when its two coefficients agree

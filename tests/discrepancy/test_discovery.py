@@ -83,3 +83,29 @@ def test_a_noise_free_recording_of_the_nominal_plant_reads_clean(tmp_path):
     assert d.unexplained == [] and d.discovered == []
     for bad in ("in 0 window", "times the quietest", "x lower", "on -"):
         assert bad not in text.getvalue(), text.getvalue()
+
+
+@pytest.mark.parametrize("hidden, seed, terms", [
+    ("viscous", 502, {"viscous_pos", "viscous_neg"}),   # the library's viscous friction, split by direction
+    ("coulomb", 507, {"coulomb_pos", "coulomb_neg"}),
+])
+def test_a_library_type_held_out_is_discovered_as_its_equation(tmp_path, short_cfg, hidden, seed, terms):
+    from cosim.core import Model
+    from cosim.discrepancy.effects import groups_for
+
+    rec, key = blind.make_case(blind.CaseSpec(f"h{seed}", "6pus", [hidden], seed=seed), tmp_path / "c",
+                               tmp_path / "k", cfg=short_cfg)
+    lib = sorted({g.effect.key for g in groups_for(Model("6pus"), True)[0]})
+    drop = {hidden} | set(blind.HOLD_OUT_WITH.get(hidden, ()))
+    d = diagnose(rec, figures=False, replay=False, effects=[e for e in lib if e not in drop])
+    truth = json.loads(Path(key).read_text())["effects"][0]
+    found = {t.joint: t for t in d.discovered}
+    for name, value in truth["params"].items():
+        j = int(name.split("[")[1].split("]")[0])
+        t = found.get(j)
+        assert t is not None and terms <= set(t.terms), (d.conclusion, truth)
+        for k in ("pos", "neg"):
+            got = t.coefficients[name.replace(f".{hidden}", f".force_{hidden[0]}{k}")].value
+            assert abs(got / value - 1) < 0.15, (t.equation, truth)
+    for e in d.effects:
+        assert d.ties(e["key"]), (e["title"], d.conclusion)
