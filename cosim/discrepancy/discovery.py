@@ -580,8 +580,13 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
     def discover_all(R, chans):
         return {c: discover_channel(search, c, R[:, c], threshold) for c in chans}
 
+    from .structure import own_noise
+
     R_lib = eng.R(theta)
     base = discover_all(R_lib, range(eng.nd))
+    # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
+    # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
+    noise = np.array([own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
     for a in sorted(sel.selected, key=lambda a: a.importance):
         g = a.group
         if g.effect.family not in ("effort", "both"):
@@ -589,7 +594,7 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
         chans = [c for c in range(eng.nd)
-                 if np.any(np.abs(R_lib[:, c] - R_minus[:, c]) > 0.5 * eng.sig[c])]
+                 if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
         if not chans:
             continue
         in_place = [t for t in discover_all(R_minus, chans).values() if t is not None]
