@@ -291,9 +291,10 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
     return Hidden(kind, {k: float(v) for k, v in p.items()}, [i + 1 for i in js], {k: nominal[k] for k in p})
 
 
-#: the discovered terms each force of UNLISTED must be found with
-UNLISTED_TERMS = {"constant_force": {"constant"}, "ripple": {"ripple"}, "spring": {"spring"}, "drag": {"drag"},
-                  "direction_coulomb": set(), "one_way_damper": {"viscous_pos"}, "hardening_spring": {"cubic"}}
+#: the coefficients (core keys) each force of UNLISTED must be found with
+UNLISTED_TERMS = {"constant_force": {"force_c"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
+                  "drag": {"force_v2"}, "direction_coulomb": set(), "one_way_damper": {"force_vpos"},
+                  "hardening_spring": {"force_k3"}}
 
 
 def unlisted_errors(kind: str, term, truth: dict) -> list:
@@ -322,13 +323,13 @@ def unlisted_errors(kind: str, term, truth: dict) -> list:
 
 
 def unlisted_structure_ok(kind: str, term, truth: dict) -> bool:
-    """The term has the structure of the hidden force: its terms (for a Coulomb friction that
-    differs by direction, the larger side's)."""
+    """The term has the structure of the hidden force: its coefficients (for a Coulomb
+    friction that differs by direction, the larger side's)."""
     need = set(UNLISTED_TERMS[kind])
     if kind == "direction_coulomb":
         hi = max(truth["params"], key=lambda n: truth["params"][n])
-        need = {"coulomb_pos" if hi.endswith("cpos") else "coulomb_neg"}
-    return need <= set(term.terms)
+        need = {hi.rsplit(".", 1)[1]}
+    return need <= {p.rsplit(".", 1)[1] for p in term.coefficients}
 
 
 def _controller(kind, model, cfg, dt):

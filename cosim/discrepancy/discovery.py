@@ -47,11 +47,16 @@ TERMS = {
     "viscous_neg": (("force_vneg",), ("V",), (), "viscous friction moving in the negative direction"),
     "coulomb_pos": (("force_cpos",), ("1",), (), "Coulomb friction moving in the positive direction"),
     "coulomb_neg": (("force_cneg",), ("1",), (), "Coulomb friction moving in the negative direction"),
+    # both directions in one step: a greedy search of single terms would take a look-alike of
+    # a friction acting both ways (quadratic drag for half of a viscous one) before either half
+    "viscous_both": (("force_vpos", "force_vneg"), ("V", "V"), (), "viscous friction with a level for each direction"),
+    "coulomb_both": (("force_cpos", "force_cneg"), ("1", "1"), (),
+                     "Coulomb friction with a level for each direction"),
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
 }
 #: terms whose columns carry the rate noise: estimated with instruments
-RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg")
+RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both")
 
 #: physical mechanisms that produce each kind of term (for the report's sentence)
 MECHANISMS = {
@@ -185,8 +190,8 @@ class Search:
         nd = self.nd
         use_iv = eng.use_instruments
         ref0 = self.pipe.reference_effort() if use_iv else None
-        options = {t: (len(self.steps) if t == "step" else 1) for t in TERMS}
-        if not np.all(self.period > 0):
+        options = {t: (len(self.steps) if t == "step" else 1) for t in TERMS if not t.endswith("_both")}
+        if not np.any(self.period > 0):
             options.pop("ripple")
         for term, n_opt in options.items():
             keys, scales, _, _ = TERMS[term]
@@ -207,6 +212,11 @@ class Search:
                 self.cols[(term, o)] = cols
                 if zs is not None:
                     self.instr[(term, o)] = zs
+        for kind in ("viscous", "coulomb"):  # the two directions together: the single terms' columns
+            parts = [(f"{kind}_pos", 0), (f"{kind}_neg", 0)]
+            self.cols[(f"{kind}_both", 0)] = np.concatenate([self.cols[p] for p in parts], axis=2)
+            if all(p in self.instr for p in parts):
+                self.instr[(f"{kind}_both", 0)] = np.concatenate([self.instr[p] for p in parts], axis=2)
 
     def candidates(self):
         return list(self.cols)
@@ -314,8 +324,9 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
     chi2 = chi2_of(chosen)
     for _ in range(MAX_STEPS):
         best = None
+        held = {k for t, _ in chosen for k in TERMS[t][0]}
         for cand in search.candidates():
-            if any(cand[0] == t for t, _ in chosen):
+            if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
                 continue
             c2 = chi2_of(chosen + [cand])
             gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
@@ -366,7 +377,7 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
         pick = _blocks(rows, rng)
         chosen = stepwise(search, c, y, pick, threshold, phi, n_eff)
         for t in terms:
-            hits[t] += any(u[0] == t[0] for u in chosen)
+            hits[t] += any(set(TERMS[u[0]][0]) & set(TERMS[t[0]][0]) for u in chosen)
         coefs.append(_ls_fit(search, c, y, terms, pick)[1])
     spread = np.std(np.array(coefs), axis=0) if terms else np.zeros(0)
     return {t: hits[t] / N_BOOT for t in terms}, spread
@@ -628,7 +639,7 @@ def restates(term: DiscoveredTerm, key: str) -> bool:
     """The discovered term is the library effect ``key`` itself: Coulomb (viscous) friction
     split by direction with the two levels equal within their intervals."""
     pair = RESTATED.get(key)
-    if not pair or sorted(term.terms) != sorted(pair):
+    if not pair or sorted(term.terms) not in (sorted(pair), [f"{key}_both"]):
         return False
     a, b = list(term.coefficients.values())
     return abs(a.value - b.value) <= math.hypot(a.ci95, b.ci95)

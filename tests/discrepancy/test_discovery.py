@@ -85,11 +85,11 @@ def test_a_noise_free_recording_of_the_nominal_plant_reads_clean(tmp_path):
         assert bad not in text.getvalue(), text.getvalue()
 
 
-@pytest.mark.parametrize("hidden, seed, terms", [
-    ("viscous", 502, {"viscous_pos", "viscous_neg"}),   # the library's viscous friction, split by direction
-    ("coulomb", 507, {"coulomb_pos", "coulomb_neg"}),
+@pytest.mark.parametrize("hidden, seed", [
+    ("viscous", 502),   # the library's viscous friction: a level for each direction, the two equal
+    ("coulomb", 507),
 ])
-def test_a_library_type_held_out_is_discovered_as_its_equation(tmp_path, short_cfg, hidden, seed, terms):
+def test_a_library_type_held_out_is_discovered_as_its_equation(tmp_path, short_cfg, hidden, seed):
     from cosim.core import Model
     from cosim.discrepancy.effects import groups_for
 
@@ -103,9 +103,9 @@ def test_a_library_type_held_out_is_discovered_as_its_equation(tmp_path, short_c
     for name, value in truth["params"].items():
         j = int(name.split("[")[1].split("]")[0])
         t = found.get(j)
-        assert t is not None and terms <= set(t.terms), (d.conclusion, truth)
+        assert t is not None, (d.conclusion, truth)
         for k in ("pos", "neg"):
-            got = t.coefficients[name.replace(f".{hidden}", f".force_{hidden[0]}{k}")].value
-            assert abs(got / value - 1) < 0.15, (t.equation, truth)
+            coef = t.coefficients.get(name.replace(f".{hidden}", f".force_{hidden[0]}{k}"))
+            assert coef is not None and abs(coef.value / value - 1) < 0.15, (t.equation, truth)
     for e in d.effects:
         assert d.ties(e["key"]), (e["title"], d.conclusion)
