@@ -424,7 +424,10 @@ def discover_channel(search, c, y, threshold, seed=0):
     if not terms or not heldout(terms)[1] > threshold:
         return None
     stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
-    kept = [t for t in terms if stab[t] >= STABILITY]
+    # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
+    # constant and a step at the end of the stroke) split the resamples' votes between them.
+    full = heldout(terms)[1]
+    kept = [t for t in terms if stab[t] >= STABILITY or full - heldout([u for u in terms if u != t])[1] > threshold]
     if not kept:
         return None
     if kept != terms:
