@@ -68,8 +68,14 @@ def _run(job):
     ok = ok and all(blind.unlisted_structure_ok(kind, found[j], truth) for j in need) and set(found) <= set(joints)
     errs = [e for j in need if j in found for e in blind.unlisted_errors(kind, found[j], truth)]
     gains = [found[j].heldout_before / max(found[j].heldout_after, 1e-300) for j in need if j in found]
+    # interval coverage: each hidden coefficient the discovered terms carry, inside its 95 % interval?
+    cover = []
+    for t in d.discovered:
+        for name, c in t.coefficients.items():
+            if name in truth["params"] and not name.endswith((".force_c",)):
+                cover.append(bool(abs(c.value - truth["params"][name]) <= c.ci95))
     row.update(right=bool(ok), error=max(errs) if errs else float("inf"), gain=min(gains) if gains else 0.0,
-               tied=[e["key"] for e in d.effects if d.ties(e["key"])])
+               tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=cover)
     return row
 
 
@@ -136,6 +142,9 @@ def main(argv=None):
                       f"term: {sum(bool(x['discovered']) for x in cl)} | | | | "
                       f"{np.median([x['time'] for x in cl]):.1f} |")
         eff = [x for x in ok_rows if x["kind"] != "clean"]
+        cov = [c for x in eff for c in x.get("covered", [])]
+        if cov:
+            print(f"\n95 % intervals of the discovered coefficients containing the truth: {sum(cov)}/{len(cov)}")
         if eff:
             print(f"\nall: right {sum(x['right'] for x in eff)}/{len(eff)}, coefficients within 15 % "
                   f"{sum(x['error'] < 0.15 for x in eff)}/{len(eff)}, held-out >= 3x "
