@@ -156,8 +156,10 @@ def print_diagnosis(d, file=None):
     if not d.theta:
         p(f"\nheld-out {h['start']:.2f}-{h['end']:.2f} s: nothing fitted, the nominal model stands")
     elif h["affected"] and math.isfinite(h["gain"]):
-        p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower "
-          f"({h['gain_windows']:.1f}x in the windows out of band) on {', '.join(h['affected'])}")
+        windows = (f" ({h['gain_windows']:.1f}x in the windows out of band)" if math.isfinite(h["gain_windows"])
+                   else "")
+        p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower"
+          f"{windows} on {', '.join(h['affected'])}")
     else:
         p(f"\nheld-out {h['start']:.2f}-{h['end']:.2f} s: the fitted model changes no channel beyond its noise there")
     for name in h["affected"]:

@@ -55,6 +55,8 @@ TERMS = {
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
 }
+#: coefficients of dissipative terms (friction, drag): never negative
+DISSIPATIVE = ("force_v2", "force_vpos", "force_vneg", "force_cpos", "force_cneg")
 #: terms whose columns carry the rate noise: estimated with instruments
 RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both")
 
@@ -319,7 +321,17 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
     ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
     boolean mask or an index array (a bootstrap resample).  Returns the terms."""
     logn = math.log(max(n_eff, 2.0))
-    chi2_of = lambda terms: _ls_fit(search, c, y, terms, rows)[0]  # noqa: E731
+
+    def chi2_of(terms):
+        c2, coef = _ls_fit(search, c, y, terms, rows)
+        keys = [k for t, _ in terms for k in TERMS[t][0]]
+        # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
+        # opposite signs is a constant force while moving), refused as the library refuses
+        # a negative friction
+        if any(k in DISSIPATIVE and v < 0 for k, v in zip(keys, coef)):
+            return math.inf
+        return c2
+
     chosen = []
     chi2 = chi2_of(chosen)
     for _ in range(MAX_STEPS):

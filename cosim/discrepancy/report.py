@@ -148,9 +148,10 @@ def markdown(d, files: dict) -> str:
     L += ["## How much better: held-out fit", ""]
     h = d.heldout
     if d.theta and h["affected"] and np.isfinite(h["gain"]):
+        windows = (f", **{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band"
+                   if np.isfinite(h["gain_windows"]) else "")
         L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. Gain (noise-normalised RMS, affected "
-              f"channels {', '.join(h['affected'])}): **{h['gain']:.1f}x** over all samples, "
-              f"**{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band.", ""]
+              f"channels {', '.join(h['affected'])}): **{h['gain']:.1f}x** over all samples{windows}.", ""]
     else:
         L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. "
               + ("Nothing fitted: the nominal model stands." if not d.theta else
