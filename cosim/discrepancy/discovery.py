@@ -428,6 +428,8 @@ def discover_channel(search, c, y, threshold, seed=0):
     def heldout(terms):
         # the channel's held-out chi-square without and with the terms, coefficients held
         f = fit_terms(search, c, y, terms, train)
+        if not terms:
+            return f, 0.0
         Xt, _, wt = _design(search, c, terms, test)
         tt = y[test] * wt
         return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
