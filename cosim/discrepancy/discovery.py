@@ -591,7 +591,7 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
     discovered on top of it, against (B) the model without G and the terms discovered in its
     place, compared on the held-out part (chi-square, in effective samples).
 
-    * B better by more than ``margin``, or B as good (within ``margin``) with no more
+    * B better by more than ``margin``, or B as good (within ``margin``) with fewer
       coefficients than A: G is withdrawn (it explains nothing the discovered terms do not),
       and listed as a look-alike that fits worse;
     * B within ``threshold`` of A otherwise: G is kept but tied with the discovered terms (not
@@ -633,7 +633,7 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
         B = heldout_chi2(search, _with_terms(R_minus, search, in_place), chans)
         k_A, k_B = len(g.params) + _n_coef(on_top), _n_coef(in_place)
         restated = any(restates(t, g.key) for t in in_place)
-        if B < A - margin or (B <= A + margin and k_B <= k_A and not restated):
+        if B < A - margin or (B <= A + margin and k_B < k_A and not restated):
             theta = th_minus
             withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
                               "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
