@@ -7,7 +7,8 @@ then, each timed (best of --repeat):
 
 * baseline: read the file and form the nominal effort residual once (forward
   kinematics, pose rates and accelerations, inverse dynamics of every sample);
-* diagnose: the full diagnosis without replay or report (what the 10 s target is about);
+* diagnose: the full diagnosis without replay or report (what the 10 s target is about),
+  the discovery step included (its share printed, and the diagnosis without it);
 * + replay: with the closed-loop replay of the held-out part (two core simulations);
 * + report: with the Markdown report and its five figures.
 
@@ -109,18 +110,21 @@ def main(argv=None):
             n = len(read_recording(csv).time)
             base, _ = best(lambda: Pipeline(read_recording(csv), Model(robot)).evaluate({}), args.repeat)
             t_d, d = best(lambda: diagnose(csv, replay=False), args.repeat)
+            t_nd, _ = best(lambda: diagnose(csv, replay=False, discovery=False), args.repeat)
             t_r, _ = best(lambda: diagnose(csv, replay=True), args.repeat)
             t_o, _ = best(lambda: diagnose(csv, replay=True, out=Path(tmp) / "rep"), 1)
-            rows.append((robot, n, t_gen, base, t_d, t_r, t_o, ", ".join(d.named()) or "none"))
+            rows.append((robot, n, t_gen, base, t_d, t_r, t_o, ", ".join(d.named()) or "none", t_nd,
+                         d.timings.get("discovery", float("nan"))))
             if args.per_row:
                 per_row[robot] = _batched_vs_per_row(lambda: diagnose(csv, replay=False), args.repeat)
     print(f"{'robot':<8} {'samples':>7} {'generate':>9} {'baseline':>9} {'diagnose':>9} {'+replay':>9} "
-          f"{'+report':>9}  target  named")
+          f"{'+report':>9}  target  {'no discovery':>12} {'discovery':>9}  named")
     ok = True
-    for robot, n, g, b, dd, r, o, named in rows:
+    for robot, n, g, b, dd, r, o, named, nd, disc in rows:
         flag = "met" if dd < TARGET else "MISSED"
         ok &= dd < TARGET
-        print(f"{robot:<8} {n:>7} {g:>8.2f}s {b:>8.2f}s {dd:>8.2f}s {r:>8.2f}s {o:>8.2f}s  {flag:<6}  {named}")
+        print(f"{robot:<8} {n:>7} {g:>8.2f}s {b:>8.2f}s {dd:>8.2f}s {r:>8.2f}s {o:>8.2f}s  {flag:<6}  {nd:>11.2f}s "
+              f"{disc:>8.2f}s  {named}")
     print(f"(single core, best of {args.repeat}; target: diagnose < {TARGET:g} s for a 10 s, 1 kHz recording)")
     for robot, (loop, batch) in per_row.items():
         print(f"{robot}: diagnose with per-row core calls median {statistics.median(loop):.2f} s "

@@ -8,6 +8,8 @@
 """
 from __future__ import annotations
 
+import math
+
 import json
 import sys
 import time
@@ -18,9 +20,9 @@ from .main import Interrupted, command, input_file, output_dir, recording_file, 
 
 def _effect_types():
     """The effect types the blind generator can hide (for --help)."""
-    from ..discrepancy.blind import TYPES
+    from ..discrepancy.blind import TYPES, UNLISTED
 
-    return TYPES
+    return TYPES + list(UNLISTED)
 
 
 def model_arg(value: str) -> str:
@@ -76,6 +78,8 @@ def _diag_configure(p):
     p.add_argument("--least-squares", action="store_true",
                    help="fit masses, inertias and viscous friction by least squares on the measured motion instead "
                         "of instrumental variables from the reference (biased low by rate noise; for comparison)")
+    p.add_argument("--no-discovery", action="store_true",
+                   help="skip the search for forces no library effect names (the discovery step)")
     p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     p.add_argument("--html", action="store_true",
                    help="also write report.html: interactive, self-contained (3D robot, residual windows, effects)")
@@ -94,7 +98,8 @@ def cmd_diagnose(args):
             d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
                          train_fraction=args.train_fraction, compare=args.compare,
                          effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
-                         figures=not args.no_figures, instruments=not args.least_squares)
+                         figures=not args.no_figures, instruments=not args.least_squares,
+                         discovery=not args.no_discovery)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "
                           f"({out}/report.md and diagnosis.json are written at the end)") from None
@@ -125,6 +130,14 @@ def print_diagnosis(d, file=None):
         p("\nwhere:")
         for s in d.localisation["summary"]:
             p(f"  {s}")
+    if d.discovered:
+        p("\nmissing physics no library effect names (discovery step; the core's joint force <j>[i].force_*):")
+        for t in d.discovered:
+            p(f"  {t.equation}")
+            p(f"    such a term comes from: {t.mechanisms}")
+            p(f"    held-out {t.channel}: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g}")
+            for x in t.instead_of:
+                p(f"    look-alike of the library that fits worse: {x}")
     if d.effects:
         p("\nwhy (most important first; importance = chi-square increase when the term is removed):")
         seen_bic = set()
@@ -147,8 +160,15 @@ def print_diagnosis(d, file=None):
     if not h:  # not diagnosed (the conclusion says why): no fit to compare
         p(f"\n(stopped after {d.timings.get('total', 0):.2f} s)")
         return
-    p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower "
-      f"({h['gain_windows']:.1f}x in the windows out of band) on {', '.join(h['affected']) or '-'}")
+    if not d.theta:
+        p(f"\nheld-out {h['start']:.2f}-{h['end']:.2f} s: nothing fitted, the nominal model stands")
+    elif h["affected"] and math.isfinite(h["gain"]):
+        windows = (f" ({h['gain_windows']:.1f}x in the windows out of band)" if math.isfinite(h["gain_windows"])
+                   else "")
+        p(f"\nhow much better (held-out {h['start']:.2f}-{h['end']:.2f} s): residual RMS {h['gain']:.1f}x lower"
+          f"{windows} on {', '.join(h['affected'])}")
+    else:
+        p(f"\nheld-out {h['start']:.2f}-{h['end']:.2f} s: the fitted model changes no channel beyond its noise there")
     for name in h["affected"]:
         c = h["channels"][name]
         p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} "

@@ -243,6 +243,97 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
     raise ValueError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
 
 
+#: forces in no effect of the library, for the discovery step's proof: kind -> what it is.
+#: Sizes relative to the joint's RMS feed-forward effort E, position spread T and RMS rate V
+#: along the case's reference; each is a combination of the core's generic joint force.
+UNLISTED = {
+    "constant_force": "a constant force on one joint (a cable carrier pulling one way)",
+    "ripple": "a force periodic in the position on every joint (cogging, screw ripple)",
+    "spring": "a spring towards the home position on one joint",
+    "drag": "quadratic drag qd |qd| on one joint",
+    "direction_coulomb": "Coulomb friction that differs by direction on one joint",
+    "one_way_damper": "a damper acting only when the joint moves in its positive direction",
+    "hardening_spring": "a cubic (hardening) spring about the home position on one joint",
+}
+
+
+def sample_unlisted(kind, model, rng, motion) -> Hidden:
+    """Draw one force of :data:`UNLISTED` for ``model``; ``motion`` holds per joint ``E`` (RMS
+    feed-forward effort), ``T`` (position spread), ``V`` (RMS rate), ``span`` (stroke used)
+    and ``home`` (joint position at the home pose) of the case's reference."""
+    pre = joint_prefix(model)
+    nd = model.ndof
+    E, T, V, span, home = (np.asarray(motion[k], float) for k in ("E", "T", "V", "span", "home"))
+    j = int(rng.integers(0, nd))
+    size = float(rng.uniform(0.1, 0.2))
+    name = lambda i, k: f"{pre}[{i + 1}].force_{k}"  # noqa: E731
+    if kind == "constant_force":
+        p, js = {name(j, "c"): float(rng.choice([-1, 1])) * size * E[j]}, [j]
+    elif kind == "ripple":
+        p, js = {}, list(range(nd))
+        for i in js:
+            ph = rng.uniform(0, 2 * math.pi)
+            p.update({name(i, "period"): float(span[i] / rng.uniform(4, 8)),
+                      name(i, "sin"): size * E[i] * math.cos(ph), name(i, "cos"): size * E[i] * math.sin(ph)})
+    elif kind == "spring":
+        p, js = {name(j, "qc"): float(home[j]), name(j, "k1"): 1.5 * size * E[j] / T[j]}, [j]
+    elif kind == "drag":
+        p, js = {name(j, "v2"): 1.5 * size * E[j] / V[j] ** 2}, [j]
+    elif kind == "direction_coulomb":
+        hi, lo = size * E[j], float(rng.uniform(0.0, 0.3)) * size * E[j]
+        p, js = ({name(j, "cpos"): hi, name(j, "cneg"): lo} if rng.uniform() < 0.5 else
+                 {name(j, "cpos"): lo, name(j, "cneg"): hi}), [j]
+    elif kind == "one_way_damper":
+        p, js = {name(j, "vpos"): 2.0 * size * E[j] / V[j]}, [j]
+    elif kind == "hardening_spring":
+        p, js = {name(j, "qc"): float(home[j]), name(j, "k3"): size * E[j] / T[j] ** 3}, [j]
+    else:
+        raise ValueError(f"the generator cannot hide force {kind!r} (it can hide: {', '.join(UNLISTED)})")
+    nominal = model.params()
+    return Hidden(kind, {k: float(v) for k, v in p.items()}, [i + 1 for i in js], {k: nominal[k] for k in p})
+
+
+#: the coefficients (core keys) each force of UNLISTED must be found with
+UNLISTED_TERMS = {"constant_force": {"force_c"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
+                  "drag": {"force_v2"}, "direction_coulomb": set(), "one_way_damper": {"force_vpos"},
+                  "hardening_spring": {"force_k3"}}
+
+
+def unlisted_errors(kind: str, term, truth: dict) -> list:
+    """Relative errors of a discovered term's coefficients against a hidden force of
+    :data:`UNLISTED` (``truth``: the key's effect entry); for a spring its stiffness and its
+    rest position (its distance to the truth over the joint's position spread, the key's
+    ``spread``, merged into ``truth``)."""
+    p, t = truth["params"], term.params()
+    j = term.joint
+    pre = next(iter(p)).split("[")[0] + f"[{j}]."
+    got = lambda k: t.get(pre + "force_" + k, 0.0)  # noqa: E731
+    want = lambda k: p.get(pre + "force_" + k, 0.0)  # noqa: E731
+    rel = lambda a, b: abs(a / b - 1) if b else float("inf")  # noqa: E731
+    if kind == "ripple":
+        return [rel(math.hypot(got("sin"), got("cos")), math.hypot(want("sin"), want("cos"))),
+                rel(got("period"), want("period"))]
+    if kind == "spring":
+        k = got("k1")
+        q0 = got("qc") - got("c") / k if k else float("inf")
+        return [rel(k, want("k1")), abs(q0 - want("qc")) / truth["spread"][j - 1]]
+    if kind == "direction_coulomb":
+        side = "cpos" if want("cpos") > want("cneg") else "cneg"
+        return [rel(got(side), want(side))]
+    key = {"constant_force": "c", "drag": "v2", "one_way_damper": "vpos", "hardening_spring": "k3"}[kind]
+    return [rel(got(key), want(key))]
+
+
+def unlisted_structure_ok(kind: str, term, truth: dict) -> bool:
+    """The term has the structure of the hidden force: its coefficients (for a Coulomb
+    friction that differs by direction, the larger side's)."""
+    need = set(UNLISTED_TERMS[kind])
+    if kind == "direction_coulomb":
+        hi = max(truth["params"], key=lambda n: truth["params"][n])
+        need = {hi.rsplit(".", 1)[1]}
+    return need <= {p.rsplit(".", 1)[1] for p in term.coefficients}
+
+
 def _controller(kind, model, cfg, dt):
     from .. import controllers as ctl
 
@@ -291,8 +382,13 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
         neg = np.mean(signed < 0, axis=0)
         tau_peak = (np.minimum(tau_ff[:cut].max(axis=0), tau_ff[cut:].max(axis=0)),
                     np.abs(nominal.gravity_load(ref.x[k0::50])).max(axis=0), np.minimum(neg, 1 - neg))
+        qd_ref = np.gradient(ref.q[k0:], dt, axis=0)
+        motion = {"E": np.sqrt(np.mean(signed**2, axis=0)), "T": ref.q[k0:].std(axis=0),
+                  "V": np.sqrt(np.mean(qd_ref**2, axis=0)), "span": np.ptp(ref.q[k0:], axis=0),
+                  "home": nominal.ik(nominal.home())}
         try:
-            hidden = [sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]
+            hidden = [sample_unlisted(k, nominal, rng, motion) if k in UNLISTED else
+                      sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]
         except _Redraw as e:
             failures.append(f"attempt {attempt + 1}: {e}")
             continue
@@ -318,6 +414,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
                     notes=f"blind case {spec.case}: closed-loop recording of a plant that may hide effects the "
                           f"model lacks (the answer key is elsewhere)")
     info = {"controller": kind, "noise": noise, "tau_peak": tau_peak[0].tolist(), "trajectory": traj.name,
+            "spread": ref.q[k0:].std(axis=0).tolist(),
             "failed_attempts": failures}
     return rec, hidden, info
 

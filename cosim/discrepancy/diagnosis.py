@@ -94,6 +94,12 @@ class Diagnosis:
     #: residual channels that keep structure after the fit (cosim.discrepancy.structure):
     #: channel, what it is keyed on, the closest library effects, its rms against the noise
     unexplained: list = field(default_factory=list)
+    #: forces no library effect names, found by the discovery step (cosim.discrepancy.discovery):
+    #: one :class:`~cosim.discrepancy.discovery.DiscoveredTerm` per joint, with its equation
+    discovered: list = field(default_factory=list)
+    #: library effects withdrawn because a discovered term fits the held-out part better
+    #: (look-alikes that fit worse): group, effect, params, held-out chi-squares
+    withdrawn: list = field(default_factory=list)
     #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
     #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
     residual: dict = field(default_factory=dict, repr=False)
@@ -122,7 +128,7 @@ class Diagnosis:
         return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
-                                               "warnings", "unexplained")}
+                                               "warnings", "unexplained", "discovered", "withdrawn")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -168,7 +174,8 @@ def _model_for(rec, model):
 
 def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
-             max_effects: int = 6, instruments: bool = True, compare=None, verbose: bool = False) -> Diagnosis:
+             max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
+             verbose: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -206,6 +213,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         (their columns along the reference motion, free of the rate noise) when the
         recording has ``qref``; False: least squares on the measured motion, biased low by
         the noise of the measured accelerations (errors in variables).
+    discovery : bool
+        After the library, search each effort channel for a joint force no library effect
+        names (:mod:`.discovery`), and withdraw a library effect a discovered term fits
+        the held-out part better than.
 
     Returns
     -------
@@ -246,22 +257,28 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t2 = time.perf_counter()
         sel = eng.run()
         t3 = time.perf_counter()
-        held = heldout_fit(eng, sel)
+        found, withdrawn, theta = [], [], dict(sel.theta)
+        if discovery:
+            found, withdrawn, theta = _discover(eng, sel, threshold)
+        t3b = time.perf_counter()
+        held = heldout_fit(eng, sel, theta)
         loc = localise(eng, sel)
         t4 = time.perf_counter()
-    timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, heldout_localisation=t4 - t3)
+    timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, discovery=t3b - t3,
+                   heldout_localisation=t4 - t3b)
     from .structure import sentence, unexplained
 
-    effects_out = _effects(eng, sel)
+    gone = {w["group"] for w in withdrawn}
+    effects_out = [e for e in _effects(eng, sel) if e["group"] not in gone]
     not_excited = _not_excited(eng, sel) + one_signed
-    conclusion = _conclusion(effects_out, not_excited, eng, sel)
-    r_after = eng.R(sel.theta) if sel.theta else eng.R0
-    left = unexplained(pipe, r_after, floor=eng.floor())
+    conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
+    r_after = eng.R(theta) if theta else eng.R0
+    left = unexplained(pipe, r_after, floor=eng.accuracy())
     if left:
-        conclusion = (conclusion + "; " + sentence(left) if effects_out else
+        conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
 
-    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(sel.theta),
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(theta),
                   held, loc, not_excited,
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
                   {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
@@ -270,10 +287,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window},
-                  residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left)
+                  residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left,
+                  discovered=found, withdrawn=withdrawn)
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(rec, eng, sel, _compared(rec, mdl, compare))
+        d.replay = _replay(rec, eng, sel, _compared(rec, mdl, compare), theta)
         d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
         timings["replay"] = time.perf_counter() - t5
     timings["diagnosis"] = time.perf_counter() - t0
@@ -409,15 +427,16 @@ def _check_motion(pipe):
                              f"record a motion with accelerations, constant-velocity phases and reversals")
 
 
-def heldout_fit(eng, sel) -> dict:
+def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
     """Residuals on the held-out samples before (nominal) and after (fitted) modelling.
 
     RMS over the samples each channel uses (a joint's rest phases, where its friction
     and backlash depend on a rate below the reading noise, are left out, as in the
     fit); ``rms_all_*`` over every held-out sample."""
     test = eng.test
+    theta = sel.theta if theta is None else theta
     Rb = eng.R({})[test]
-    Ra = eng.R(sel.theta)[test] if sel.theta else Rb
+    Ra = eng.R(theta)[test] if theta else Rb
     use = eng.use[test] > 0
     pipe = eng.pipe
     chans = pipe.channels
@@ -449,12 +468,13 @@ def heldout_fit(eng, sel) -> dict:
                "rms_all_before": float(rb_all[i]), "rms_all_after": float(ra_all[i]),
                "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
     tt = pipe.t[pipe.idx[test]]
-    if sel.selected and not affected:
+    fitted = bool(theta)
+    if fitted and not affected:
         # The fitted effects change nothing on the held-out part beyond the noise (a
         # saturation never reached there): no gain can be measured.
         gain = gain_w = float("nan")
-    return {"channels": per, "gain": gain if sel.selected else 1.0,
-            "gain_windows": gain_w if sel.selected else 1.0,
+    return {"channels": per, "gain": gain if fitted else 1.0,
+            "gain_windows": gain_w if fitted else 1.0,
             "window_fraction": float(band[:, pick].mean()) if pick else 0.0,
             "affected": [chans[i] for i in affected],
             "samples": int(test.sum()), "start": float(tt[0]) if test.any() else None,
@@ -497,6 +517,15 @@ def _effects(eng, sel) -> list:
                 st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f})")
             looks.append(Alternative(**c, statement=st))
+        for tie in getattr(eng, "discovery_ties", []):
+            if tie["group"] == g.label:
+                eq = "; ".join(tie["terms"])
+                d2 = tie["heldout_chi2_discovered"] - tie["heldout_chi2_library"]
+                looks.insert(0, Alternative(
+                    "discovered", "discovered", f"a force no library effect names ({eq})", 0.0, d2,
+                    tie["extra_params"], float("nan"), False,
+                    f"a force no library effect names ({eq}) fits the held-out part as well (chi-square "
+                    f"{d2:+.1f}): {g.effect.name} is not named with confidence on this recording"))
         out.append(FoundEffect(g.key, g.effect.name, g.label, g.title, None if g.joint is None else g.joint + 1,
                                g.effect.family, params, a.delta_bic, a.importance,
                                g.effect.plant.replace("{j}", _prefix(eng.model)), looks, _derived(g, a.values, eng)))
@@ -581,7 +610,45 @@ def _where(groups) -> str:
     return f" ({joints})" if joints else ""
 
 
-def _conclusion(effects, not_excited, eng, sel) -> str:
+def _discover(eng, sel, threshold):
+    """The discovery step (:mod:`.discovery`): library effects put on trial against
+    discovered terms, then the terms found on every effort channel of what is left.
+    Returns (terms, withdrawn groups, parameters: library kept + discovered)."""
+    from .discovery import judge_library
+
+    theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
+    eng.discovery_ties = ties
+    found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
+    for t in found:
+        t.instead_of = [_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]]
+        theta.update(t.params())
+    pipe = eng.pipe
+    R_all = eng.R(theta) if found else None
+    for t in found:
+        c = t.joint - 1
+        without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
+        key = (pipe.q_s if t.key_variable == "position" else pipe.qd_s)[pipe.idx, c]
+        t.curve = {"key": key, "before": without, "after": R_all[:, c]}
+    return found, withdrawn, theta
+
+
+def _withdrawn_sentence(w) -> str:
+    a, b = w["heldout_chi2_library"], w["heldout_chi2_discovered"]
+    how = "worse" if a > b + TIE_MARGIN else "no better"
+    return (f"{w['title']}: fits the held-out part {how} (chi-square {a:.1f} with it, {b:.1f} with the discovered "
+            f"term in its place)")
+
+
+def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
+    if found:
+        parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})" for t in found]
+        head = "missing physics no library effect names: " + "; ".join(parts)
+        if withdrawn:
+            head += ("; look-alike(s) of the library that fit the held-out part worse: "
+                     + ", ".join(w["title"] for w in withdrawn))
+        if effects:
+            head += "; and from the library: " + _conclusion(effects, not_excited, eng, sel)[len("missing physics: "):]
+        return head
     if effects:
         parts = []
         for e in effects:
@@ -629,7 +696,7 @@ def _compared(rec, mdl, compare) -> dict:
     return out
 
 
-def _replay(rec, eng, sel, compared=None):
+def _replay(rec, eng, sel, compared=None, theta=None):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
@@ -660,10 +727,11 @@ def _replay(rec, eng, sel, compared=None):
                            rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None))  # a known input, replayed
 
     out = {"start": float(rec.time[k0]), "runs": {}}
+    theta = sel.theta if theta is None else theta
     plants = {"nominal": mdl.copy(), "fitted": mdl.copy()}
-    if sel.theta:
-        plants["fitted"].set_params(sel.theta)
-    joints = drive_joints(sel.theta, mdl)
+    if theta:
+        plants["fitted"].set_params(theta)
+    joints = drive_joints(theta, mdl)
     if joints:
         k_fit, n_fit = fitting_window(pipe, joints, int(pipe.idx[0]), k0)
         extra, rows = fit_two_body(rec, pipe, plants["fitted"], joints, run, ref, k_fit, n_fit)

@@ -62,7 +62,7 @@ def localise(eng, sel, k: float = 3.0) -> dict:
     t = pipe.t[pos]
     R0 = eng.R0
     Rf = eng.R(sel.theta) if sel.theta else R0
-    sig = sel.sigma
+    sig = np.maximum(sel.sigma, eng.accuracy())  # round-off of a noiseless recording is no band
     qd, qdd, x = pipe.qd_s[pos], pipe.qdd_s[pos], pipe.x_s[pos]
     ph = phases(qd, qdd)
     nd = pipe.nd
@@ -99,8 +99,9 @@ def localise(eng, sel, k: float = 3.0) -> dict:
             else:
                 where = f"most at {top[0][0]} (x{top[0][1]:.1f} over chance)" + (
                     f" and {top[1][0]} (x{top[1][1]:.1f})" if top[1][1] > 1.3 else "")
-            summary.append(f"{name}: out of its noise band {out.mean() * 100:.0f} % of the time in {len(wins)} "
-                           f"window(s), {where}; {after.mean() * 100:.0f} % after the fit")
+            spans = f" in {len(wins)} window(s)" if wins else " in scattered samples (no window)"
+            summary.append(f"{name}: out of its noise band {out.mean() * 100:.0f} % of the time{spans}, {where}; "
+                           f"{after.mean() * 100:.0f} % after the fit")
     ws = _workspace(pipe, x, R0, sig, flagged_any)
     if ws.get("summary"):
         summary.append(ws["summary"])
@@ -122,7 +123,9 @@ def _workspace(pipe, x, R0, sig, flagged):
         b = np.clip(np.searchsorted(edges, x[:, c], side="right") - 1, 0, 3)
         means = [float(z[b == i].mean()) if np.any(b == i) else 0.0 for i in range(4)]
         out["bins"][name] = {"edges": edges.tolist(), "mean_sigma": means}
-        contrast = max(means) / max(min(means), 1e-12)
+        # a quarter whose mean is below half the noise level is as quiet as noise: the
+        # contrast is counted against that, not against a near-zero mean
+        contrast = max(means) / max(min(means), 0.5)
         if best is None or contrast > best[0]:
             i = int(np.argmax(means))
             best = (contrast, name, edges[i], edges[i + 1], means[i])

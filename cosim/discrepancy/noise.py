@@ -52,6 +52,17 @@ class NoiseModel:
         eff = 1e-4 * self.sc.effort
         return np.concatenate([eff, np.full(self.C - self.nd, 1e-8)])
 
+    def accuracy(self):
+        """The smallest residual structure that counts as physics, per channel: 1e-3 of the
+        largest smoothed effort of the channel, at least :meth:`floor`.  A noiseless
+        recording of the nominal plant still has a residual of 1e-4 of that peak (the
+        smoother and the central difference of the rates err at the jerk peaks: 7.9e-5 N
+        on the 70 mm step of scenarios/6pus_step_pd.toml, whose interior efforts peak at
+        0.7 N), and no force of 0.1 % of the peak effort matters to a model.  The structure
+        test and the discovery step use it; the selection keeps :meth:`floor`."""
+        peak = np.max(np.abs(self.pipe.tau_s[self.pipe.idx]), axis=0)
+        return np.maximum(self.floor(), np.concatenate([1e-3 * peak, np.full(self.C - self.nd, 1e-8)]))
+
     # ---------------------------------------------------------------- select
 
     def _weights(self, sig, phi):

@@ -37,6 +37,8 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
         files["heldout"] = _fig_heldout(d, eng, sel, out / "heldout.png")
         if d.replay and d.replay.get("runs"):
             files["replay"] = _fig_replay(d, eng, out / "replay.png")
+        for t in d.discovered:
+            files[f"discovered{t.joint}"] = _fig_discovered(t, eng, out / f"discovered{t.joint}.png")
     files["json"] = str(out / "diagnosis.json")
     md = out / "report.md"
     files["report"] = str(md)
@@ -48,6 +50,7 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
 
 def _strip_arrays(d) -> str:
     dd = d.to_dict()
+    dd["discovered"] = [{k: v for k, v in vars(t).items() if k != "curve"} for t in d.discovered]
     if dd.get("replay") and dd["replay"].get("runs"):
         dd["replay"] = {**dd["replay"], "runs": {k: {kk: vv for kk, vv in v.items() if kk not in ("time", "q", "tau")}
                                                  for k, v in dd["replay"]["runs"].items()}}
@@ -122,11 +125,38 @@ def markdown(d, files: dict) -> str:
     if d.refused:
         L += ["Refused although the residual pointed at them:", ""] + [f"- {x}" for x in d.refused] + [""]
 
+    if d.discovered or d.withdrawn:
+        L += ["## Missing physics no library effect names (discovery)", "",
+              "Searched on every effort channel after the library: a constant, a spring and its quadratic and cubic "
+              "terms, quadratic drag, viscous and Coulomb friction by direction, a ripple in position (period from the "
+              "residual's spectrum over position), a smooth step; stepwise BIC with the look-elsewhere cost of the "
+              "search, kept when stable over block-bootstrap resamples and better on the held-out part.  The term is "
+              "the core's joint force (`<j>[i].force_*`), so the fitted plant below carries it.", ""]
+        for t in d.discovered:
+            L += [f"- **{t.equation}**", f"  - what makes such a term: {t.mechanisms}",
+                  f"  - held-out residual of `{t.channel}`: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g} "
+                  f"(chi-square {t.delta_chi2_heldout:.0f} lower); kept in "
+                  + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items()) + " of the bootstrap resamples"]
+            L += [f"  - look-alike of the library that fits worse: {x}" for x in t.instead_of]
+            if f"discovered{t.joint}" in files:
+                L += ["", f"![{t.channel} against its key variable](discovered{t.joint}.png)", ""]
+        L.append("")
+        if d.theta:
+            L += ["Plant parameters with the discovered terms (core / FMU names):", "", "```json",
+                  json.dumps(d.theta, indent=2), "```", ""]
+
     L += ["## How much better: held-out fit", ""]
     h = d.heldout
-    L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. Gain (noise-normalised RMS, affected "
-          f"channels {', '.join(h['affected']) or '-'}): **{h['gain']:.1f}x** over all samples, "
-          f"**{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band.", "",
+    if d.theta and h["affected"] and np.isfinite(h["gain"]):
+        windows = (f", **{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band"
+                   if np.isfinite(h["gain_windows"]) else "")
+        L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. Gain (noise-normalised RMS, affected "
+              f"channels {', '.join(h['affected'])}): **{h['gain']:.1f}x** over all samples{windows}.", ""]
+    else:
+        L += [f"Held-out samples: t = {h['start']:.2f}-{h['end']:.2f} s. "
+              + ("Nothing fitted: the nominal model stands." if not d.theta else
+                 "The fitted model changes no channel beyond its noise there."), ""]
+    L += [
           "| channel | RMS before | RMS after | NRMSE before | NRMSE after | noise |", "| --- | --- | --- | --- | --- | --- |"]
     for name, c in h["channels"].items():
         L.append(f"| {name} | {c['rms_before']:.3g} | {c['rms_after']:.3g} | {c['nrmse_before'] * 100:.2f} % | "
@@ -191,6 +221,35 @@ def _fmt(v):
 
 
 # -------------------------------------------------------------------- figures
+
+def _fig_discovered(t, eng, path):
+    """A discovered term: the channel's residual without it against its key variable, the
+    fitted force, and the residual with it (before / after)."""
+    import matplotlib.pyplot as plt
+
+    facts = eng.model.facts
+    cv = t.curve
+    key, before, after = (np.asarray(cv[k]) for k in ("key", "before", "after"))
+    order = np.argsort(key)
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    xl = f"{'q' if t.key_variable == 'position' else 'qd'}{t.joint} " \
+         f"[{facts.joint_unit}{'' if t.key_variable == 'position' else '/s'}]"
+    ax[0].plot(key, before, ".", ms=2, color="#7f7f7f", label="residual without the term")
+    ax[0].plot(key[order], (before - after)[order], "-", color="#d62728", lw=1.5, label="fitted term")
+    ax[0].set_title("before", fontsize=9)
+    ax[1].plot(key, after, ".", ms=2, color="#1f77b4", label="residual with the term")
+    ax[1].set_title("after", fontsize=9)
+    for a in ax:
+        a.set_xlabel(xl)
+        a.legend(fontsize=7)
+        a.grid(alpha=0.3)
+    ax[0].set_ylabel(f"{t.channel} [{facts.effort_unit}]")
+    fig.suptitle(t.equation, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
 
 def _fig_residuals(d, eng, sel, path):
     import matplotlib.pyplot as plt

@@ -63,6 +63,23 @@ def _standardised(X):
     return (X - X.mean(axis=0))[:, s > 0] / s[s > 0]
 
 
+def own_noise(pipe, r, floor=0.0) -> float:
+    """The residual r's own high-frequency noise level: the median absolute difference of
+    samples one smoothing window apart (robust, blind to anything slower), at least
+    ``floor``.  Unlike the engine's noise model it is not inflated by a force the model
+    lacks."""
+    lag = int(math.ceil(pipe.window / pipe.step)) + 1
+    r = np.asarray(r, float) - float(np.mean(r))
+    d = r[lag:] - r[:-lag]
+    sigma = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0) if len(d) else 0.0
+    return max(sigma, float(floor))
+
+
+def samples_per_independent(pipe) -> float:
+    """Decimated samples per independent one: the smoother correlates a window's worth."""
+    return max(1.0, pipe.window / pipe.step)
+
+
 def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
     """Channels whose residual ``R`` (decimated samples x channels) keeps structure.
 
@@ -78,7 +95,7 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
     R = np.asarray(R, float)
     n = R.shape[0]
     lag = int(math.ceil(pipe.window / pipe.step)) + 1
-    phi = max(1.0, pipe.window / pipe.step)  # correlated decimated samples per independent one
+    phi = samples_per_independent(pipe)
     n_eff = n / phi
     if n < 8 * lag or n_eff < 10:
         return []
@@ -86,10 +103,7 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
     for c, name in enumerate(pipe.channels):
         mean = float(R[:, c].mean())
         r = R[:, c] - mean
-        d = r[lag:] - r[:-lag]
-        sigma = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
-        if floor is not None:
-            sigma = max(sigma, float(floor[c]))
+        sigma = own_noise(pipe, r, 0.0 if floor is None else floor[c])
         if not sigma > 0:
             continue
         def scored(sig_name, F):

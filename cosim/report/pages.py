@@ -150,6 +150,21 @@ def diagnosis_page(d, path, model=None) -> Path:
                 for e in d.effects for k, v in e["params"].items()]
         sections.append(("effects", _by_unit(rows, "fitted effects: change from the nominal value, 95 % intervals",
                                              "change [{unit}]", kind="markers")))
+    for t in getattr(d, "discovered", []):
+        cv = t.curve
+        if not cv:
+            continue
+        key, before, after = (np.asarray(cv[k]) for k in ("key", "before", "after"))
+        order = np.argsort(key)
+        f = go.Figure([go.Scattergl(x=key, y=before, mode="markers", marker=dict(size=3, color="#7f7f7f"),
+                                    name="residual without the term (before)"),
+                       go.Scattergl(x=key, y=after, mode="markers", marker=dict(size=3, color="#1f77b4"),
+                                    name="residual with the term (after)"),
+                       go.Scatter(x=key[order], y=(before - after)[order], mode="lines", line=dict(color="#d62728"),
+                                  name="fitted term")])
+        f.update_layout(title=t.equation, height=380, xaxis_title=f"{t.key_variable} of joint {t.joint}",
+                        yaxis_title=t.channel)
+        sections.append((f"discovered: {t.channel}", f))
     hc = d.heldout["channels"]
     rows = [(label, c, hc[c]["unit"], hc[c][key]) for label, key in (("nominal model", "rms_before"),
                                                                       ("fitted model", "rms_after")) for c in hc]

@@ -92,6 +92,7 @@ std::vector<ParamSpec> specs(const Robot& r) {
                  0.0, 0.0, 1.0});
   out.push_back({"actuator.delay", "s", "time delay between commanded and applied actuator effort", 0.0, 0.0, 1.0});
   out.push_back({"sensor.delay", "s", "time delay of the joint readings", 0.0, 0.0, 1.0});
+  for (auto& s : joint_force::specs(r)) out.push_back(std::move(s));
   return out;
 }
 
@@ -130,6 +131,7 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
     p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0 || p->offset[i] != 0;
     p->any_rotor |= p->rotor[i] != 0;
   }
+  p->force = joint_force::compile(r, sp, values);
   return p;
 }
 
@@ -168,11 +170,26 @@ double transmitted_effort(const Params& p, int i, double delta, double delta_dot
 using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 6, 6>;
 using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
+namespace {
+// out += sign * the generic joint force (joint_force.hpp) at the pose x, xd; nothing when none is set.
+void add_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
+                     double sign, double* out) {
+  if (!dp.force.any) return;
+  const int n = d->ndof;
+  double q[6], qd[6], F[6];
+  m->robot->ik(*m->compiled, *d->rd, x, q);
+  joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
+  joint_force::force(dp.force, n, dp.v_eps, q, qd, F);
+  for (int i = 0; i < n; ++i) out[i] += sign * F[i];
+}
+}  // namespace
+
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
                             double* tau) {
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
   m->robot->inverse_dynamics(rm, *d->rd, x, xd, xdd, tau);
+  add_joint_force(m, dp, d, x, xd, 1.0, tau);
   if (!dp.any_friction && !dp.any_rotor) return;
   const int n = d->ndof;
   Vec qd(n), qdd(n), f(n);
@@ -233,6 +250,7 @@ void net_effort(const pkm_model* m, const drive::Params& dp, pkm_data* d, const 
                 const double* tau, double* net) {
   const int n = d->ndof;
   for (int i = 0; i < n; ++i) net[i] = tau[i];
+  add_joint_force(m, dp, d, x, xd, -1.0, net);
   if (!dp.any_friction) return;
   double qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
   joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
@@ -273,7 +291,7 @@ namespace {
 void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
                          const double* tau, double* xdd) {
   const RobotModel& rm = *m->compiled;
-  if (!dp.any_friction && !dp.any_rotor) {
+  if (!dp.any_friction && !dp.any_rotor && !dp.force.any) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
     return;
   }
@@ -378,6 +396,7 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   // its own friction and rotor inertia (computed only when a gap or an elasticity reads it).
   double carried[6];
   for (int i = 0; i < n; ++i) carried[i] = tau[i];
+  if (flexible) add_joint_force(m, dp, d, x, xd, -1.0, carried);
   if (flexible && (dp.any_friction || dp.any_rotor)) {
     double J[36], qd[6], f[6], xdd[6], qdd[6];
     m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "common/handles.hpp"
+#include "dynamics/joint_force.hpp"
 
 namespace pkm {
 namespace drive {
@@ -51,6 +52,7 @@ struct Params {
   double sensor_delay = 0;              // [s]
   bool two_body = false;                // drive.two_body: gaps and compliances as two bodies (above)
   bool any_friction = false, any_rotor = false;
+  joint_force::Coefficients force;      // the generic per-joint force (joint_force.hpp); force.any: one is set
   // Joint i is two bodies: drive.two_body and a gap or a compliance on it.
   bool two_body_joint(int i) const { return two_body && (backlash[i] > 0 || compliance[i] > 0); }
 };

@@ -1,0 +1,158 @@
+"""The discovery step on forces no library names, clean recordings and library types held out.
+
+Blind cases of the engine's generator (``cosim.discrepancy.blind``): each hides one force of
+``blind.UNLISTED`` (a combination of the core's generic joint force, drawn relative to the
+joint's effort, travel and speed along the case's reference), or nothing (clean), or, with
+``--hold-out``, one library type diagnosed without that type in the library.  Each recording is
+diagnosed knowing only its path; the answer key is read afterwards.
+
+Printed: per case the outcome, then per kind: the force found on the right joints with the
+right structure, the largest coefficient error, the held-out RMS ratio of the joint's channel,
+library effects named with confidence (not tied with a discovered term), diagnosis time.
+
+    .venv/bin/python bench/discovery_bench.py --robots 6pus,delta_clavel --seeds 2 --clean 10 --jobs 2
+    .venv/bin/python bench/discovery_bench.py --hold-out --robots 6pus --seeds 1
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+
+
+def _run(job):
+    from cosim.discrepancy import blind, diagnose
+    from cosim.discrepancy.effects import groups_for
+    from cosim.core import Model
+
+    robot, kind, seed, out, hold_out = job
+    hidden = [] if kind == "clean" else [kind]
+    spec = blind.CaseSpec(f"{robot}_{kind}_{seed}", robot, hidden, seed)
+    try:
+        csv, kp = blind.make_case(spec, Path(out) / "cases", Path(out) / "keys")
+    except Exception as e:  # noqa: BLE001 - a case the generator cannot make is reported
+        return {"robot": robot, "kind": kind, "seed": seed, "failed": f"generator: {e}"}
+    effects = None
+    if hold_out:
+        lib = sorted({g.effect.key for g in groups_for(Model(robot), True)[0]})
+        drop = {kind} | set(blind.HOLD_OUT_WITH.get(kind, ()))
+        effects = [e for e in lib if e not in drop]
+    t0 = time.perf_counter()
+    d = diagnose(csv, figures=False, replay=False, effects=effects)
+    dt = time.perf_counter() - t0
+    key = json.loads(Path(kp).read_text())
+    row = {"robot": robot, "kind": kind, "seed": seed, "time": dt, "conclusion": d.conclusion,
+           "discovered": [t.equation for t in d.discovered], "named": d.named(),
+           "confident": [e["key"] for e in d.effects if not d.ties(e["key"])],
+           "unexplained": [u["channel"] for u in d.unexplained]}
+    if kind == "clean":
+        row["clean"] = not d.effects and not d.discovered and not d.unexplained
+        return row
+    truth = dict(key["effects"][0], spread=key["spread"])
+    joints = truth["joints"]
+    found = {t.joint: t for t in d.discovered}
+    if hold_out:
+        on_joints = [found[j] for j in joints if j in found] if joints else list(found.values())
+        changes = {p: v - truth["nominal"][p] for p, v in truth["params"].items()}
+        row["outcome"] = ("discovered" if on_joints else "structure" if d.unexplained else
+                          "same physics" if blind.same_physics_stand_in(kind, changes, d) else
+                          "nothing" if not d.effects else "library only")
+        row["terms"] = [t.equation for t in on_joints]
+        return row
+    need = joints if kind != "ripple" else [j for j in joints if j in found]
+    ok = (kind != "ripple" or len(need) >= len(joints) - 1) and all(j in found for j in need)
+    ok = ok and all(blind.unlisted_structure_ok(kind, found[j], truth) for j in need) and set(found) <= set(joints)
+    errs = [e for j in need if j in found for e in blind.unlisted_errors(kind, found[j], truth)]
+    gains = [found[j].heldout_before / max(found[j].heldout_after, 1e-300) for j in need if j in found]
+    # interval coverage: each hidden coefficient the discovered terms carry, inside its 95 % interval?
+    cover = []
+    for t in d.discovered:
+        for name, c in t.coefficients.items():
+            if name in truth["params"] and not name.endswith((".force_c",)):
+                cover.append(bool(abs(c.value - truth["params"][name]) <= c.ci95))
+    row.update(right=bool(ok), error=max(errs) if errs else float("inf"), gain=min(gains) if gains else 0.0,
+               tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=cover)
+    return row
+
+
+def main(argv=None):
+    from cosim.discrepancy import blind
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--robots", default="6pus,delta_clavel")
+    ap.add_argument("--kinds", default=",".join(blind.UNLISTED))
+    ap.add_argument("--seeds", type=int, default=2, help="cases per kind and robot")
+    ap.add_argument("--seed0", type=int, default=100)
+    ap.add_argument("--clean", type=int, default=10, help="clean cases per robot")
+    ap.add_argument("--hold-out", action="store_true", help="library types, each held out of the library")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--out", default="results/discovery_bench")
+    a = ap.parse_args(argv)
+    robots = a.robots.split(",")
+    jobs = []
+    for r in robots:
+        kinds = blind.types_for(r, blind.with_robot(blind.load_config(), __import__("cosim.core").core.Model(r))) \
+            if a.hold_out else a.kinds.split(",")
+        for k in kinds:
+            for s in range(a.seeds):
+                jobs.append((r, k, a.seed0 + 17 * s + 3, a.out, a.hold_out))
+        if not a.hold_out:
+            jobs += [(r, "clean", a.seed0 + 1000 + s, a.out, False) for s in range(a.clean)]
+    with Pool(a.jobs) as pool:
+        rows = []
+        for row in pool.imap_unordered(_run, jobs):
+            rows.append(row)
+            print(json.dumps({k: v for k, v in row.items() if k != "conclusion"}), flush=True)
+    Path(a.out).mkdir(parents=True, exist_ok=True)
+    (Path(a.out) / ("holdout.json" if a.hold_out else "rows.json")).write_text(json.dumps(rows, indent=1))
+    print()
+    ok_rows = [r for r in rows if "failed" not in r]
+    failed = [r for r in rows if "failed" in r]
+    if a.hold_out:
+        print("| robot | held-out type | cases | discovered on its joints | structure | same physics | "
+              "library only | confident library names |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        for r in robots:
+            for k in sorted({x["kind"] for x in ok_rows if x["robot"] == r}):
+                g = [x for x in ok_rows if x["robot"] == r and x["kind"] == k]
+                c = lambda o: sum(x["outcome"] == o for x in g)  # noqa: E731
+                print(f"| {r} | {k} | {len(g)} | {c('discovered')} | {c('structure')} | {c('same physics')} | "
+                      f"{c('library only')} | {sum(bool(x['confident']) and x['outcome'] == 'library only' for x in g)} |")
+    else:
+        print("| robot | force | cases | right joints and structure | largest coefficient error (median) | "
+              "held-out RMS ratio (min) | library named with confidence | median time [s] |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        for r in robots:
+            for k in a.kinds.split(","):
+                g = [x for x in ok_rows if x["robot"] == r and x["kind"] == k]
+                if not g:
+                    continue
+                errs = [x["error"] for x in g]
+                print(f"| {r} | {k} | {len(g)} | {sum(x['right'] for x in g)} | "
+                      f"{max(errs) * 100:.1f} % ({np.median(errs) * 100:.1f} %) | "
+                      f"{min(x['gain'] for x in g):.1f} | {sum(bool(x['confident']) for x in g)} | "
+                      f"{np.median([x['time'] for x in g]):.1f} |")
+            cl = [x for x in ok_rows if x["robot"] == r and x["kind"] == "clean"]
+            if cl:
+                print(f"| {r} | clean | {len(cl)} | called clean: {sum(x['clean'] for x in cl)}, with a discovered "
+                      f"term: {sum(bool(x['discovered']) for x in cl)} | | | | "
+                      f"{np.median([x['time'] for x in cl]):.1f} |")
+        eff = [x for x in ok_rows if x["kind"] != "clean"]
+        cov = [c for x in eff for c in x.get("covered", [])]
+        if cov:
+            print(f"\n95 % intervals of the discovered coefficients containing the truth: {sum(cov)}/{len(cov)}")
+        if eff:
+            print(f"\nall: right {sum(x['right'] for x in eff)}/{len(eff)}, coefficients within 15 % "
+                  f"{sum(x['error'] < 0.15 for x in eff)}/{len(eff)}, held-out >= 3x "
+                  f"{sum(x['gain'] >= 3 for x in eff)}/{len(eff)}, library named with confidence "
+                  f"{sum(bool(x['confident']) for x in eff)}")
+    for r in failed:
+        print(f"not generated: {r['robot']} {r['kind']} seed {r['seed']}: {r['failed']}")
+
+
+if __name__ == "__main__":
+    main()

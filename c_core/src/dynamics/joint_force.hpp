@@ -1,0 +1,44 @@
+// A generic per-joint force of the drive layer: the term the discrepancy engine's discovery
+// step fits when no effect of its library explains a residual (cosim/discrepancy/discovery.py).
+// Per actuated joint i, with z = q - force_qc and s = tanh(qd / drive.v_eps):
+//
+//   F = force_c + force_k1 z + force_k2 z^2 + force_k3 z^3           (constant, springs)
+//     + force_v2 qd |qd|                                              (quadratic drag)
+//     + force_vpos max(qd, 0) + force_vneg min(qd, 0)                 (viscous by direction)
+//     + force_cpos max(s, 0) + force_cneg min(s, 0)                   (Coulomb by direction)
+//     + force_sin sin(2 pi q / P) + force_cos cos(2 pi q / P)         (ripple; P = force_period > 0)
+//     + force_step tanh((q - force_step_q) / force_step_w)            (a smooth step; force_step_w > 0)
+//
+// F is an effort the drive spends on the joint, like friction: it adds to the inverse
+// dynamics and is subtracted from the applied effort in the forward dynamics.  Every
+// coefficient defaults to 0 (no force).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common/handles.hpp"
+
+namespace pkm {
+namespace joint_force {
+
+constexpr int kMaxJoints = 6;
+// Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
+constexpr int kNKeys = 16;
+extern const char* const kKeys[kNKeys];
+
+struct Coefficients {
+  // [key][joint], in the order of kKeys
+  double v[kNKeys][kMaxJoints] = {};
+  bool any = false;
+};
+
+// Parameter specs of the robot's joints (units of its joints and efforts).
+std::vector<ParamSpec> specs(const Robot& r);
+// Reads the coefficients (by name) from a model's parameter table.
+Coefficients compile(const Robot& r, const std::vector<ParamSpec>& specs, const std::vector<double>& values);
+// F[nd] at joint positions q[nd] and rates qd[nd]; v_eps the drive's velocity scale.
+void force(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* F);
+
+}  // namespace joint_force
+}  // namespace pkm

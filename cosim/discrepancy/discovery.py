@@ -1,0 +1,662 @@
+"""Discovery: the joint force no effect of the library names, as an equation.
+
+After the library's selection, every effort channel is searched for a per-joint force built
+from a function library of the joint's position and rate (the core's generic joint force,
+``<j>[i].force_*``, ``pkm.h``): a constant, a spring and its quadratic and cubic terms about
+the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
+direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
+spectrum over position, and a smooth step in position.  Each candidate column is a finite
+difference of the residual pipeline over its core parameter (the core evaluates the force;
+nothing here restates it), the columns of the rate terms get instruments (the same column
+along the reference motion, free of the rate noise), as the library's masses and viscous
+frictions do.
+
+Selection per channel is stepwise (forward with BIC, then backward), with the threshold of the
+library plus the look-elsewhere cost of the search: ``2 ln M`` for M candidate terms tried
+over all channels (a Bonferroni bound: the chance that the best of M noise-only terms passes
+is at most M times that of one).  A selected set is kept only if its terms come back in most
+block-bootstrap resamples of the fitted part (stability) and it lowers the chi-square of the
+held-out part by more than the threshold.  Intervals are the larger of the instrumental
+sandwich and the block-bootstrap spread (the residual is autocorrelated and the model may be
+wrong: the bootstrap covers both).
+
+A library effect acting on the same channels is then put on trial (:func:`judge_library`): it
+is named only if it fits the held-out part at least as well as the best discovered term in
+its place; otherwise the discovered term is named and the library effect listed as a
+look-alike that fits worse.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .effects import joint_prefix
+from .regressors import MIN_RELEVANCE, fit
+
+#: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
+#: "V", "V2"), shape parameters it needs, what it is in words
+TERMS = {
+    "constant": (("force_c",), ("1",), (), "a constant force"),
+    "spring": (("force_k1",), ("T",), ("force_qc",), "a force proportional to the position (a spring)"),
+    "quadratic": (("force_k2",), ("T2",), ("force_qc",), "a force quadratic in the position"),
+    "cubic": (("force_k3",), ("T3",), ("force_qc",), "a force cubic in the position (a hardening spring)"),
+    "drag": (("force_v2",), ("V2",), (), "quadratic drag, qd |qd|"),
+    "viscous_pos": (("force_vpos",), ("V",), (), "viscous friction moving in the positive direction"),
+    "viscous_neg": (("force_vneg",), ("V",), (), "viscous friction moving in the negative direction"),
+    "coulomb_pos": (("force_cpos",), ("1",), (), "Coulomb friction moving in the positive direction"),
+    "coulomb_neg": (("force_cneg",), ("1",), (), "Coulomb friction moving in the negative direction"),
+    # both directions in one step: a greedy search of single terms would take a look-alike of
+    # a friction acting both ways (quadratic drag for half of a viscous one) before either half
+    "viscous_both": (("force_vpos", "force_vneg"), ("V", "V"), (), "viscous friction with a level for each direction"),
+    "coulomb_both": (("force_cpos", "force_cneg"), ("1", "1"), (),
+                     "Coulomb friction with a level for each direction"),
+    "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
+    "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
+}
+#: coefficients of dissipative terms (friction, drag): never negative
+DISSIPATIVE = ("force_v2", "force_vpos", "force_vneg", "force_cpos", "force_cneg")
+#: terms whose columns carry the rate noise: estimated with instruments
+RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both")
+
+#: physical mechanisms that produce each kind of term (for the report's sentence)
+MECHANISMS = {
+    "constant": "a cable carrier or hose pulling one way, a counterweight or spring preloaded far from its rest, "
+                "an offset in the drive's current or torque measurement",
+    "spring": "a return spring, a cable carrier or hose bending with the stroke, a bellows or way cover, a gas spring",
+    "quadratic": "a cable carrier whose bend changes with the stroke, a spring of changing rate, a stop approached",
+    "cubic": "a hardening spring: a cable carrier or bellows stretched towards its ends, an elastic stop",
+    "drag": "aerodynamic or fluid drag (a part moving through air, oil or coolant), turbulent flow in a seal or damper",
+    "viscous": "a damper or seal that damps one direction more than the other (a check valve, asymmetric lubrication)",
+    "coulomb": "friction that differs by direction: asymmetric wear of a guide, screw or nut, a preload on one flank, "
+               "a seal lip that drags one way",
+    "ripple": "cogging of a motor (magnet pitch), ripple of a ball screw or gear (lead, tooth mesh), a bearing race "
+              "or rack with a periodic defect",
+    "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
+}
+
+#: a term is kept when the bootstrap selects it in at least this share of the resamples
+STABILITY = 0.6
+#: forward steps of the stepwise selection (a term may leave again in the backward pass)
+MAX_STEPS = 8
+#: bootstrap resamples, and the block length in decimated samples
+N_BOOT, BLOCK = 30, 25
+
+
+@dataclass
+class Coefficient:
+    """One fitted coefficient of a discovered term: core ``param``, ``value`` and ``ci95``
+    (half width of the 95 % interval) in ``unit``."""
+
+    param: str
+    value: float
+    ci95: float
+    unit: str
+
+
+@dataclass
+class DiscoveredTerm:
+    """The force found on one joint's effort channel.
+
+    ``joint`` (1-based), ``channel``, ``terms`` (keys of :data:`TERMS`), ``equation`` (with
+    units and intervals), ``coefficients`` ({core parameter: :class:`Coefficient`}),
+    ``shape`` (core shape parameters: the polynomial's centre, the ripple's period, the step's
+    position and width), ``mechanisms`` (a sentence), ``stability`` (share of bootstrap
+    resamples that select each term), ``heldout_before`` / ``heldout_after`` (RMS of the
+    channel's held-out residual without and with the term, in its unit), ``delta_chi2_heldout``,
+    ``instead_of`` (library effects it replaced: look-alikes that fit worse)."""
+
+    joint: int
+    channel: str
+    terms: list
+    equation: str
+    coefficients: dict
+    shape: dict
+    mechanisms: str
+    stability: dict
+    heldout_before: float
+    heldout_after: float
+    delta_chi2_heldout: float
+    key_variable: str
+    instead_of: list = field(default_factory=list)
+    #: for the report's figure, on the decimated samples: ``key`` (the joint's position or
+    #: rate), ``before`` / ``after`` (the channel's residual without / with the term)
+    curve: dict = field(default_factory=dict, repr=False)
+
+    def __getitem__(self, k):
+        return getattr(self, k)
+
+    def params(self) -> dict:
+        """Core parameters that put the term into the plant (shape and coefficients)."""
+        return {**self.shape, **{p: c.value for p, c in self.coefficients.items()}}
+
+
+class Search:
+    """The candidate columns of the function library on one engine's recording.
+
+    Columns are taken once, at the library's fitted parameters ``theta``: the force is
+    additive in the inverse dynamics, so a column does not depend on what else is fitted."""
+
+    def __init__(self, eng, theta: dict, channels=None):
+        self.eng, self.pipe = eng, eng.pipe
+        self.theta = dict(theta)
+        self.nd = eng.nd
+        self.channels = list(range(self.nd)) if channels is None else list(channels)
+        self.pre = joint_prefix(eng.model)
+        pipe, idx, train = self.pipe, self.pipe.idx, eng.train
+        q = pipe.q_s[idx]
+        self.q_centre = q[train].mean(axis=0)
+        self.travel = np.maximum(q[train].std(axis=0), 1e-12)
+        self.rate = np.maximum(np.sqrt(np.mean(pipe.qd_s[idx][train] ** 2, axis=0)), 1e-12)
+        self.effort = eng.sc.effort
+        self.period = np.array([_period(q[train, j], self._base_residual()[train, j], self.travel[j])
+                                for j in range(self.nd)])
+        self.steps = _step_grid(q[train], self.travel)
+        self.cols, self.instr = {}, {}
+        self.w = np.zeros(self.nd)  # per channel: 1 / (own noise sqrt(samples per independent one))
+        self._columns()
+
+    def name(self, j: int, key: str) -> str:
+        return f"{self.pre}[{j + 1}].{key}"
+
+    def _base_residual(self):
+        if not hasattr(self, "_Rb"):
+            self._Rb = self.eng.R(self.theta)
+        return self._Rb
+
+    def shape(self, term: str, j: int, option: int = 0) -> dict:
+        keys = TERMS[term][2]
+        out = {}
+        for k in keys:
+            if k == "force_qc":
+                out[self.name(j, k)] = float(self.q_centre[j])
+            elif k == "force_period":
+                out[self.name(j, k)] = float(self.period[j])
+            elif k == "force_step_q":
+                out[self.name(j, k)] = float(self.steps[option][0][j])
+            elif k == "force_step_w":
+                out[self.name(j, k)] = float(self.steps[option][1][j])
+        return out
+
+    def _delta(self, scale: str, j: int) -> float:
+        # a coefficient whose force is 5 % of the joint's RMS effort at the typical position or rate
+        s = {"1": 1.0, "T": self.travel[j], "T2": self.travel[j] ** 2, "T3": self.travel[j] ** 3,
+             "V": self.rate[j], "V2": self.rate[j] ** 2}[scale]
+        return 0.05 * float(self.effort[j]) / s
+
+    def _columns(self):
+        """One pipeline evaluation per coefficient key (every joint at once: the drive layer's
+        parameters act on their own joint only), per step position."""
+        eng, Rb = self.eng, self._base_residual()
+        nd = self.nd
+        use_iv = eng.use_instruments
+        ref0 = self.pipe.reference_effort() if use_iv else None
+        options = {t: (len(self.steps) if t == "step" else 1) for t in TERMS if not t.endswith("_both")}
+        if not np.any(self.period > 0):
+            options.pop("ripple")
+        for term, n_opt in options.items():
+            keys, scales, _, _ = TERMS[term]
+            for o in range(n_opt):
+                shape = {}
+                for j in range(nd):
+                    shape.update(self.shape(term, j, o))
+                cols = np.zeros((Rb.shape[0], nd, len(keys)))
+                zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
+                for a, (k, s) in enumerate(zip(keys, scales)):
+                    deltas = [self._delta(s, j) for j in range(nd)]
+                    p = dict(self.theta, **shape, **{self.name(j, k): deltas[j] for j in range(nd)})
+                    R = eng.R(p)
+                    cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
+                    if zs is not None:
+                        ref = self.pipe.reference_effort({**shape, **{self.name(j, k): deltas[j] for j in range(nd)}})
+                        zs[:, :, a] = (ref0 - ref) / np.array(deltas)
+                self.cols[(term, o)] = cols
+                if zs is not None:
+                    self.instr[(term, o)] = zs
+        for kind in ("viscous", "coulomb"):  # the two directions together: the single terms' columns
+            parts = [(f"{kind}_pos", 0), (f"{kind}_neg", 0)]
+            self.cols[(f"{kind}_both", 0)] = np.concatenate([self.cols[p] for p in parts], axis=2)
+            if all(p in self.instr for p in parts):
+                self.instr[(f"{kind}_both", 0)] = np.concatenate([self.instr[p] for p in parts], axis=2)
+
+    def candidates(self):
+        return list(self.cols)
+
+    def n_tried(self) -> int:
+        """Candidate terms tried over all channels (the look-elsewhere count)."""
+        return max(1, len(self.cols) * len(self.channels))
+
+
+def _period(q, r, travel):
+    """The period in position of the strongest ripple of residual r over position q (a
+    Lomb-Scargle periodogram over wavelengths from 4 sample spacings of the binned
+    position to half the stroke), or 0 when none stands out."""
+    from scipy.signal import lombscargle
+
+    lo, hi = float(q.min()), float(q.max())
+    span = hi - lo
+    if not span > 0 or len(q) < 50:
+        return 0.0
+    # bin the residual over position: a mean per bin removes the time structure
+    nb = min(400, len(q) // 3)
+    edges = np.linspace(lo, hi, nb + 1)
+    which = np.clip(np.digitize(q, edges) - 1, 0, nb - 1)
+    cnt = np.bincount(which, minlength=nb)
+    ok = cnt > 0
+    ys = np.bincount(which, weights=r, minlength=nb)[ok] / cnt[ok]
+    xs = 0.5 * (edges[:-1] + edges[1:])[ok]
+    if len(xs) < 20:
+        return 0.0
+    ys = ys - np.polyval(np.polyfit(xs - xs.mean(), ys, 3), xs - xs.mean())  # the slow part is a polynomial
+    wl = np.geomspace(4 * span / nb, span / 2, 400)
+    power = lombscargle(xs, ys, 2 * np.pi / wl, normalize=True)
+    k = int(np.argmax(power))
+    if not power[k] > 0.2:
+        return 0.0
+    # a finer grid around the peak: a period 1 % off drifts the phase by a third of a
+    # radian over ten periods
+    fine = np.linspace(0.97 * wl[k], 1.03 * wl[k], 241)
+    return float(fine[int(np.argmax(lombscargle(xs, ys, 2 * np.pi / fine, normalize=True)))])
+
+
+def _step_grid(q, travel):
+    """Positions (the 20-80 % quantiles of each joint's stroke, 7 points) and a width (a
+    tenth of the joint's travel) of the smooth steps tried."""
+    qs = np.quantile(q, np.linspace(0.2, 0.8, 7), axis=0)
+    return [(qs[i], 0.1 * travel) for i in range(len(qs))]
+
+
+# ------------------------------------------------------------------------- fitting
+
+@dataclass
+class _Fit:
+    terms: list          # [(term, option)]
+    coef: np.ndarray     # in units of the columns' deltas (= the core parameter values)
+    chi2: float
+    cov: np.ndarray
+
+
+def _design(search, c, terms, rows):
+    eng = search.eng
+    w = search.w[c] * eng.use[rows, c]
+    X = np.concatenate([search.cols[t][rows, c, :] for t in terms], axis=1) * w[:, None] if terms else None
+    Zs = []
+    for t in terms:
+        z = search.instr.get(t)
+        Zs.append(search.cols[t][rows, c, :] if z is None else z[rows, c, :])
+    Z = np.concatenate(Zs, axis=1) * w[:, None] if terms else None
+    return X, Z, w
+
+
+def _relevant_z(X, Z):
+    for j in range(X.shape[1]):
+        nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
+        if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
+            Z[:, j] = X[:, j]  # a column the reference does not image: least squares for it
+    return Z
+
+
+def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
+    """Fit ``terms`` to channel c's residual y on ``rows`` (boolean mask of samples)."""
+    X, Z, w = _design(search, c, terms, rows)
+    t = y[rows] * w
+    if not terms:
+        return _Fit([], np.zeros(0), float(t @ t), np.zeros((0, 0)))
+    Zr = _relevant_z(X, Z) if instruments else None
+    coef = fit(X, t, Zr)
+    e = t + X @ coef
+    chi2 = float(e @ e)
+    if Zr is None:
+        cov = np.linalg.pinv(X.T @ X)
+    else:
+        A = np.linalg.pinv(Zr.T @ X)
+        cov = A @ (Zr.T @ Zr) @ A.T
+    return _Fit(list(terms), coef, chi2, cov)
+
+
+def stepwise(search, c, y, rows, threshold, phi, n_eff):
+    """Forward selection (then backward elimination) of terms for channel c by BIC in
+    effective samples: a term enters when it lowers chi2 + k log N_eff by more than
+    ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
+    boolean mask or an index array (a bootstrap resample).  Returns the terms."""
+    logn = math.log(max(n_eff, 2.0))
+
+    def chi2_of(terms):
+        c2, coef = _ls_fit(search, c, y, terms, rows)
+        keys = [k for t, _ in terms for k in TERMS[t][0]]
+        # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
+        # opposite signs is a constant force while moving), refused as the library refuses
+        # a negative friction
+        if any(k in DISSIPATIVE and v < 0 for k, v in zip(keys, coef)):
+            return math.inf
+        return c2
+
+    chosen = []
+    chi2 = chi2_of(chosen)
+    for _ in range(MAX_STEPS):
+        best = None
+        held = {k for t, _ in chosen for k in TERMS[t][0]}
+        for cand in search.candidates():
+            if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
+                continue
+            c2 = chi2_of(chosen + [cand])
+            gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
+            if best is None or gain > best[0]:
+                best = (gain, cand, c2)
+        if best is None or best[0] <= threshold:
+            break
+        chosen.append(best[1])
+        chi2 = best[2]
+        # backward: a term the newer ones made redundant leaves
+        for t in list(chosen[:-1]):
+            rest = [u for u in chosen if u != t]
+            c2 = chi2_of(rest)
+            if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
+                chosen, chi2 = rest, c2
+    return chosen
+
+
+def _blocks(rows, rng):
+    """A moving-block bootstrap resample of the True rows (indices, with repetition)."""
+    where = np.flatnonzero(rows)
+    n = len(where)
+    nb = max(1, n // BLOCK)
+    starts = rng.integers(0, max(1, n - BLOCK), nb)
+    return where[(starts[:, None] + np.arange(BLOCK)[None, :]).ravel() % n]
+
+
+def _ls_fit(search, c, y, terms, rows):
+    """(chi-square, coefficients) of the least-squares fit of ``terms`` to channel c on
+    ``rows`` (mask or index array): the comparison baseline, as in the library's selection."""
+    w = search.w[c] * search.eng.use[rows, c]
+    t = y[rows] * w
+    if not terms:
+        return float(t @ t), np.zeros(0)
+    X = np.concatenate([search.cols[u][rows, c, :] for u in terms], axis=1) * w[:, None]
+    coef = fit(X, t)
+    e = t + X @ coef
+    return float(e @ e), coef
+
+
+def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
+    """Share of block-bootstrap resamples whose stepwise selection picks each of ``terms``,
+    and the spread (standard deviation) of the coefficients of ``terms`` over them."""
+    rng = np.random.default_rng(seed + 7 * c)
+    hits = {t: 0 for t in terms}
+    coefs = []
+    for _ in range(N_BOOT):
+        pick = _blocks(rows, rng)
+        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff)
+        for t in terms:
+            hits[t] += any(set(TERMS[u[0]][0]) & set(TERMS[t[0]][0]) for u in chosen)
+        coefs.append(_ls_fit(search, c, y, terms, pick)[1])
+    spread = np.std(np.array(coefs), axis=0) if terms else np.zeros(0)
+    return {t: hits[t] / N_BOOT for t in terms}, spread
+
+
+# ------------------------------------------------------------------------- the step
+
+def discover_channel(search, c, y, threshold, seed=0):
+    """The discovered term on effort channel c (joint c) for the residual y (samples,), or None."""
+    from .structure import own_noise, samples_per_independent
+
+    eng = search.eng
+    train, test = eng.train, eng.test
+    # The yardstick is the residual's own high-frequency noise (as the structure test's):
+    # the engine's noise model is inflated by the very force searched for.
+    phi = samples_per_independent(eng.pipe)
+    n_eff = float((eng.use[train, c] > 0).sum()) / phi
+    lee = 2.0 * math.log(search.n_tried())
+    thr = threshold + lee
+    r, terms = y, []
+    search.w[c] = 0.0
+    for _ in range(3):
+        # the force searched for also shows in the differences one window apart when it varies
+        # fast (a spring on a quick arm): the noise is measured again on the residual of the
+        # terms found, and the search repeated with it
+        sigma = own_noise(eng.pipe, r[train], eng.accuracy()[c])
+        if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
+            break
+        search.w[c] = 1.0 / (sigma * math.sqrt(phi))
+        terms = stepwise(search, c, y, train, thr, phi, n_eff)
+        if not terms:
+            break
+        f0 = fit_terms(search, c, y, terms, np.ones_like(train))
+        r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
+
+    def heldout(terms):
+        # the channel's held-out chi-square without and with the terms, coefficients held
+        f = fit_terms(search, c, y, terms, train)
+        if not terms:
+            return f, 0.0
+        Xt, _, wt = _design(search, c, terms, test)
+        tt = y[test] * wt
+        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
+
+    # the cheap held-out check first, then the bootstrap's stability
+    if not terms or not heldout(terms)[1] > threshold:
+        return None
+    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
+    # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
+    # constant and a step at the end of the stroke) split the resamples' votes between them.
+    full = heldout(terms)[1]
+    kept = [t for t in terms if stab[t] >= STABILITY or full - heldout([u for u in terms if u != t])[1] > threshold]
+    if not kept:
+        return None
+    if kept != terms:
+        terms = kept
+        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
+    f, d_held = heldout(terms)
+    if not d_held > threshold:
+        return None
+    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
+    sd = np.maximum(np.sqrt(np.maximum(np.diag(f.cov), 0.0) * s2), spread)
+    use_t = eng.use[test, c] > 0
+    rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
+    yt = y[test]
+    Xraw = np.concatenate([search.cols[t][test, c, :] for t in terms], axis=1)
+    return _term(search, c, terms, f.coef, 1.96 * sd, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held)
+
+
+def _units(search):
+    facts = search.eng.model.facts
+    return facts.effort_unit, facts.joint_unit
+
+
+def _term(search, c, terms, coef, half, stab, before, after, d_held) -> DiscoveredTerm:
+    F, Q = _units(search)
+    units = {p.name: p.unit for p in search.eng.model.param_info()}
+    coefs, shape = {}, {}
+    i = 0
+    for t, o in terms:
+        shape.update(search.shape(t, c, o))
+        for k in TERMS[t][0]:
+            p = search.name(c, k)
+            coefs[p] = Coefficient(p, float(coef[i]), float(half[i]), units.get(p, ""))
+            i += 1
+    names = [t for t, _ in terms]
+    eq = equation(names, coefs, shape, search, c)
+    kinds = []
+    # a constant beside a spring is the spring's rest position, no force of its own
+    for t in [n for n in names if not (n == "constant" and "spring" in names)]:
+        kind = t.split("_")[0]
+        if kind not in kinds:
+            kinds.append(kind)
+    mech = "; ".join(" and ".join(TERMS[n][3] for n in names if n.split("_")[0] == k) + f": {MECHANISMS[k]}"
+                     for k in kinds)
+    key = _key_variable(names)
+    noun = search.eng.model.facts.joint_noun
+    return DiscoveredTerm(c + 1, search.pipe.channels[c], names, f"{noun} {c + 1}: {eq}", coefs, shape,
+                          mech, {t: stab[(t, o)] for t, o in terms}, before, after, d_held, key)
+
+
+def _key_variable(names):
+    pos = {"spring", "quadratic", "cubic", "ripple", "step"}
+    if any(n in pos for n in names):
+        return "position"
+    if names and all(n == "constant" for n in names):
+        return "position"
+    return "velocity"
+
+
+def _pm(v, ci, unit, digits=3):
+    u = f" {unit}" if unit else ""
+    return f"({v:.{digits}g} +- {ci:.2g}){u}"
+
+
+def equation(names, coefs, shape, search, c) -> str:
+    """F = ... with units and intervals; a spring with a constant as k (q - q0)."""
+    F, Q = _units(search)
+    get = lambda k: coefs.get(search.name(c, k))  # noqa: E731
+    parts = []
+    qc = shape.get(search.name(c, "force_qc"))
+    k1, c0 = get("force_k1"), get("force_c")
+    if k1 is not None and c0 is not None and k1.value != 0:
+        q0 = qc - c0.value / k1.value
+        # delta method, the two taken as independent (an upper bound when they are correlated)
+        dq0 = math.hypot(c0.ci95 / abs(k1.value), abs(c0.value) * k1.ci95 / k1.value ** 2)
+        parts.append(f"{_pm(k1.value, k1.ci95, k1.unit)} (q - ({q0:.5g} +- {dq0:.2g}) {Q})")
+    else:
+        if c0 is not None:
+            parts.append(_pm(c0.value, c0.ci95, c0.unit))
+        if k1 is not None:
+            parts.append(f"{_pm(k1.value, k1.ci95, k1.unit)} (q - {qc:.5g} {Q})")
+    for key, fmt in (("force_k2", "(q - {qc:.5g} {Q})^2"), ("force_k3", "(q - {qc:.5g} {Q})^3"),
+                     ("force_v2", "qd |qd|"), ("force_vpos", "max(qd, 0)"), ("force_vneg", "min(qd, 0)"),
+                     ("force_cpos", "[qd > 0]"), ("force_cneg", "(-[qd < 0])")):
+        e = get(key)
+        if e is not None:
+            parts.append(f"{_pm(e.value, e.ci95, e.unit)} " + fmt.format(qc=qc or 0.0, Q=Q))
+    s, co = get("force_sin"), get("force_cos")
+    if s is not None:
+        P = shape[search.name(c, "force_period")]
+        amp = math.hypot(s.value, co.value)
+        damp = math.hypot(s.ci95, co.ci95)
+        phase = math.atan2(co.value, s.value)
+        parts.append(f"({amp:.3g} +- {damp:.2g}) {F} sin(2 pi q / {P:.4g} {Q} + {phase:.2f})")
+    st = get("force_step")
+    if st is not None:
+        parts.append(f"{_pm(st.value, st.ci95, st.unit)} tanh((q - {shape[search.name(c, 'force_step_q')]:.5g} {Q}) / "
+                     f"{shape[search.name(c, 'force_step_w')]:.3g} {Q})")
+    return "F = " + " + ".join(parts)
+
+
+def heldout_chi2(search, R, channels):
+    """Weighted chi-square of the held-out samples of ``channels`` (in effective samples)."""
+    eng = search.eng
+    test = eng.test
+    total = 0.0
+    for c in channels:
+        r = R[test, c] * search.w[c] * eng.use[test, c]
+        total += float(r @ r)
+    return total
+
+
+def _with_terms(R, search, terms, rows=slice(None)):
+    """R with the discovered terms' forces added (their columns times their coefficients)."""
+    R = R.copy()
+    for t in terms:
+        c = t.joint - 1
+        i = 0
+        for name in t.terms:
+            opt = _option(search, t, name)
+            cols = search.cols[(name, opt)]
+            for a in range(cols.shape[2]):
+                p = list(t.coefficients.values())[i]
+                R[:, c] += cols[:, c, a] * p.value
+                i += 1
+    return R
+
+
+def _option(search, t, name):
+    if name != "step":
+        return 0
+    q = t.shape[search.name(t.joint - 1, "force_step_q")]
+    for o, (qs, _) in enumerate(search.steps):
+        if qs[t.joint - 1] == q:
+            return o
+    return 0
+
+
+def _n_coef(terms):
+    return sum(len(t.coefficients) for t in terms)
+
+
+def judge_library(eng, sel, threshold: float, margin: float = 2.0):
+    """The no-confident-wrong-name rule.
+
+    Every effort-family group G of the library's selection is put on trial on the channels it
+    acts on, discovery allowed on both sides: (A) the library model with G and the terms
+    discovered on top of it, against (B) the model without G and the terms discovered in its
+    place, compared on the held-out part (chi-square, in effective samples).
+
+    * B better by more than ``margin``, or B as good (within ``margin``) with fewer
+      coefficients than A: G is withdrawn (it explains nothing the discovered terms do not),
+      and listed as a look-alike that fits worse;
+    * B within ``threshold`` of A otherwise: G is kept but tied with the discovered terms (not
+      named with confidence), unless they restate it (:func:`restates`: the same physics);
+    * else G is kept: it beats the best discovered term.
+
+    Returns ``(theta, withdrawn, ties, search, base)``: the library's parameters less the
+    withdrawn groups', the withdrawn and the tied groups with their held-out figures, the search,
+    and the terms discovered per channel on the final library model."""
+    theta = dict(sel.theta)
+    search = Search(eng, theta)
+    withdrawn, ties = [], []
+
+    def discover_all(R, chans):
+        return {c: discover_channel(search, c, R[:, c], threshold) for c in chans}
+
+    from .structure import own_noise
+
+    R_lib = eng.R(theta)
+    base = discover_all(R_lib, range(eng.nd))
+    # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
+    # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
+    noise = np.array([own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
+    for a in sorted(sel.selected, key=lambda a: a.importance):
+        g = a.group
+        if g.effect.family not in ("effort", "both"):
+            continue
+        th_minus = {k: v for k, v in theta.items() if k not in g.params}
+        R_minus = eng.R(th_minus)
+        chans = [c for c in range(eng.nd)
+                 if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
+        if not chans:
+            continue
+        in_place = [t for t in discover_all(R_minus, chans).values() if t is not None]
+        if not in_place:
+            continue
+        on_top = [base[c] for c in chans if base.get(c) is not None]
+        A = heldout_chi2(search, _with_terms(R_lib, search, on_top), chans)
+        B = heldout_chi2(search, _with_terms(R_minus, search, in_place), chans)
+        k_A, k_B = len(g.params) + _n_coef(on_top), _n_coef(in_place)
+        restated = any(restates(t, g.key) for t in in_place)
+        if B < A - margin or (B <= A + margin and k_B < k_A and not restated):
+            theta = th_minus
+            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                              "heldout_chi2_library": A, "heldout_chi2_discovered": B,
+                              "replaced_by": [t.channel for t in in_place]})
+            R_lib = R_minus
+            base.update(discover_all(R_lib, chans))
+        elif B <= A + threshold and not restated:
+            # not told apart on the held-out part: the library effect is named, not with confidence
+            ties.append({"group": g.label, "terms": [t.equation for t in in_place], "heldout_chi2_library": A,
+                         "heldout_chi2_discovered": B, "extra_params": k_B - k_A})
+    return theta, withdrawn, ties, search, base
+
+
+#: library effects a pair of direction-split terms restates when its two coefficients agree
+RESTATED = {"coulomb": ("coulomb_pos", "coulomb_neg"), "viscous": ("viscous_pos", "viscous_neg")}
+
+
+def restates(term: DiscoveredTerm, key: str) -> bool:
+    """The discovered term is the library effect ``key`` itself: Coulomb (viscous) friction
+    split by direction with the two levels equal within their intervals."""
+    pair = RESTATED.get(key)
+    if not pair or sorted(term.terms) not in (sorted(pair), [f"{key}_both"]):
+        return False
+    a, b = list(term.coefficients.values())
+    return abs(a.value - b.value) <= math.hypot(a.ci95, b.ci95)
