@@ -54,7 +54,7 @@ def bench_spec(kind: str, cases: int = 100):
 def _warm(kind, base, params):
     # one real case in each worker before timing, as the serial loop gets one: the first
     # case of a process pays the imports and first calls (about 2 s for a scenario run)
-    from .runner import run_case
+    from .case import run_case
 
     return run_case(kind, base, params, "warm-up")["status"]
 
@@ -88,7 +88,8 @@ def run(kind: str, cases: int = 100, workers: int = 2, progress: bool = False, r
     """
     from threadpoolctl import threadpool_limits
 
-    from .runner import _prepare, _start_client
+    from .cluster import _start_client
+    from .runner import _prepare
 
     spec = bench_spec(kind, cases)
     t_serial, t_par, overhead = [], [], []

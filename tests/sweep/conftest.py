@@ -15,7 +15,7 @@ def fmu_cache(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def cluster(fmu_cache):
-    from cosim.sweep.runner import _start_client
+    from cosim.sweep.cluster import _start_client
 
     client, cluster, desc = _start_client(None, 2)
     assert len(client.nthreads()) == 2 and set(client.nthreads().values()) == {1}

@@ -9,7 +9,7 @@ import pytest
 
 from cosim.sweep import SweepError, SweepSpecError, case_id, flatten, load_spec, materialise_fmu, read_records, \
     spec_from_dict
-from cosim.sweep.runner import _open_results
+from cosim.sweep.store import _open_results
 from cosim.sweep.kinds import apply_scenario_override
 
 REPO = Path(__file__).resolve().parents[2]
@@ -172,7 +172,7 @@ def test_results_file_survives_a_line_cut_short(tmp_path):
 
 
 def test_fmu_cache_writes_checks_and_repairs(tmp_path, monkeypatch):
-    import cosim.sweep.runner as sw
+    import cosim.sweep.shipping as sw
 
     monkeypatch.setenv("PKM_SWEEP_FMU_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(sw, "_FMU_CACHE", {})
