@@ -126,7 +126,7 @@ def cmd_run(args):
             raise Interrupted("interrupted before the first step, nothing written") from None
         # said at once (a long recording takes a while to write), then written
         sc, d = e.scenario, e.out_dir
-        print(f"cosim run: interrupted at t = {part.time[-1]:.4g} s, partial results in {d / sc.name}.csv (the "
+        print(f"cosim run: interrupted at t = {part.time[-1]:.6g} s, partial results in {d / sc.name}.csv (the "
               f"recording up to then, {len(part)} samples)", file=sys.stderr, flush=True)
         export_partial(sc, e, d)
         return 130
