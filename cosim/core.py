@@ -1083,7 +1083,7 @@ class CompiledController:
         if buf.size != int(lib.pkm_ctrl_state_size(self._c)):
             raise ArgumentError(f"controller state: {buf.size} values, this controller has "
                                 f"{int(lib.pkm_ctrl_state_size(self._c))}", "PKM_ERR_ARGUMENT")
-        self._check(lib.pkm_ctrl_state_load(self._c, ptr(buf)))
+        self._check(lib.pkm_ctrl_state_load(self._c, ptr(buf), buf.size))
 
     def _check(self, status):
         if status != 0:

@@ -120,6 +120,8 @@ def diagnosis_page(d, path, model=None) -> Path:
     with the windows where the model is wrong, the effects with their 95 % intervals, the
     held-out fit before and after, the conclusion."""
 
+    import plotly.graph_objects as go
+
     from ..core import Model
     from ..recording import read_recording
 

@@ -22,7 +22,10 @@ PUBLISHED = {"M": 95.1089, "rail[1].viscous": 203.5034, "rail[1].coulomb": 20.39
 def emps(tmp_path_factory):
     out = tmp_path_factory.mktemp("emps")
     res = import_recording(DATA / "DATA_EMPS.mat", DATA / "emps_map.toml", out, progress=False)
-    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False)
+    # The published model's own form: the library's symmetric friction and offset.  With the
+    # discovery step (the default) the engine prefers friction that differs by direction on this
+    # rig (docs/emps.md, "With the discovery step").
+    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False, discovery=False)
 
 
 def _param(d, name):

@@ -139,7 +139,7 @@ def test_the_state_saves_and_loads_and_refuses_another_controllers_state():
     for k in range(120):
         step(k)
     state = c.state()
-    assert state[4 * 1 + 3] == 5001.0  # the discrete block's layout leads it
+    assert state[4 + 4 * 1 + 3] == 5001.0  # after the 4-value state header, the discrete block's layout leads it
     c.reset(None)
     c.load_state(state)
     np.testing.assert_array_equal([step(k) for k in range(120, 200)], whole[120:, 0])
@@ -150,7 +150,7 @@ def test_the_state_saves_and_loads_and_refuses_another_controllers_state():
     assert other.state().size == state.size
     with pytest.raises(ArgumentError, match="velocity filter inputs is 0, this controller's 1"):
         other.load_state(state)
-    with pytest.raises(ArgumentError, match="20 values, this controller has 19"):
+    with pytest.raises(ArgumentError, match="24 values, this controller has 23"):
         CompiledController(discrete({**desc, "delay_samples": 1}, ndof=1), model=m, dt=T).load_state(state)
 
 
