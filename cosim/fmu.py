@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "FMUInstance", "FMUError"]
+__all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "restore_fmpy_logger",
+           "FMUInstance", "FMUError"]
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -261,9 +262,44 @@ def simulate(path, fmi_type: str = "CoSimulation", stop_time: float = 1.0, step:
         start.update(zip(names["x0"], np.asarray(x0, float).tolist()))
     if xd0 is not None:
         start.update(zip(names["xd0"], np.asarray(xd0, float).tolist()))
-    kw = {"logger": logger} if logger is not None else {}
-    return simulate_fmu(str(path), fmi_type=fmi_type, stop_time=stop_time, output_interval=step,
-                        start_values=start, relative_tolerance=rtol, output=outputs or names["x"], **kw)
+    if logger is None:
+        return simulate_fmu(str(path), fmi_type=fmi_type, stop_time=stop_time, output_interval=step,
+                            start_values=start, relative_tolerance=rtol, output=outputs or names["x"])
+    try:
+        return simulate_fmu(str(path), fmi_type=fmi_type, stop_time=stop_time, output_interval=step,
+                            start_values=start, relative_tolerance=rtol, output=outputs or names["x"],
+                            logger=logger)
+    finally:
+        restore_fmpy_logger()
+
+
+# fmpy formats an FMU's printf-style log messages in a native proxy that forwards to ONE
+# process-wide Python callback; ``simulate_fmu(logger=...)`` points that proxy at a ctypes
+# callback freed when the call returns, so every later FMU instantiated with fmpy's default
+# callbacks would log through freed memory (a crash, or messages silently lost).  The
+# callback kept here lives as long as the process.
+_FMPY_DEFAULT_LOGGER = None
+
+
+def restore_fmpy_logger() -> None:
+    """Point fmpy's native log proxy back at fmpy's own printing logger.
+
+    Call after ``fmpy.simulate_fmu(..., logger=f)`` returns (:func:`simulate` does):
+    fmpy leaves its process-wide proxy pointing at ``f``'s ctypes wrapper, which is freed
+    with the call, and the next FMU instantiated with fmpy's default callbacks would log
+    through it.
+    """
+    global _FMPY_DEFAULT_LOGGER
+    from ctypes import byref
+
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+
+    if _FMPY_DEFAULT_LOGGER is None:
+        _FMPY_DEFAULT_LOGGER = fmi2CallbackLoggerTYPE(printLogMessage)
+    cb = fmi2CallbackFunctions()
+    cb.logger = _FMPY_DEFAULT_LOGGER
+    addLoggerProxy(byref(cb))
 
 
 class FMUInstance:

@@ -351,27 +351,22 @@ class FMUPlant(Plant):
     def _callbacks(self):
         # The FMU keeps the callbacks it was instantiated with: collect its log lines so an
         # error can say what the FMU said (which leg, which time), not only a status.
-        from ctypes import byref
-
         from fmpy import calloc, free
         from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
         self.log = []
 
+        # The PKM FMUs pre-format their messages (a printf format without arguments, '%'
+        # escaped): fmpy's native formatting proxy is not used, as it forwards to one
+        # process-wide callback that would outlive this instance's.
         def logger(env, instance, status, category, message):
-            self.log.append(message.decode(errors="replace"))
+            self.log.append(message.decode(errors="replace").replace("%%", "%"))
 
         cb = fmi2CallbackFunctions()
         cb.logger = fmi2CallbackLoggerTYPE(logger)
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:  # fmpy's native proxy formats the printf-style arguments of the message
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(cb))
-        except Exception:
-            pass
         self._cb = cb
         return cb
 

@@ -147,9 +147,7 @@ def test_a_two_body_joint_without_its_physics_is_refused(params, words):
 def test_the_fmu_plant_has_the_drive_bodies_too():
     """The Co-Simulation FMU integrates the same two bodies (its q_drive outputs are what the
     encoders read); Model Exchange, whose states are the pose's only, refuses them."""
-    from fmpy import simulate_fmu
-
-    from cosim.fmu import fmu_path
+    from cosim.fmu import fmu_path, simulate
     from cosim.master import FMUPlant
 
     m = two_body_model()
@@ -164,8 +162,8 @@ def test_the_fmu_plant_has_the_drive_bodies_too():
     assert np.abs(np.asarray(fmu["q"])[:, 1] - np.asarray(fmu["q_true"])[:, 1]).max() > GAP / 4
     log = []
     with pytest.raises(Exception):
-        simulate_fmu(str(fmu_path("6pus")), fmi_type="ModelExchange", stop_time=0.01, start_values=params,
-                     logger=lambda *a: log.append(a))
+        simulate(fmu_path("6pus"), fmi_type="ModelExchange", stop_time=0.01, params=params,
+                 logger=lambda *a: log.append(a))
     lines = [a[4].decode() for a in log]
     assert any("Model Exchange has the pose states only" in s for s in lines), lines
 
