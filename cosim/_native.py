@@ -150,6 +150,7 @@ _SIGNATURES = {
     "pkm_robot_param_set_name": (CH, [CH, I]),
     "pkm_robot_title": (CH, [CH]),
     "pkm_chain_points": (I, [P, P, D, D]),
+    "pkm_platform_pose": (I, [P, P, D, D, D]),
     "pkm_robot_file": (CH, [CH]),
     "pkm_model_pose_name": (CH, [P, I]),
     "pkm_model_pose_unit": (CH, [P, I]),

@@ -581,6 +581,24 @@ class Model:
         joint.  Every robot but the four-bar (``UnsupportedError`` there)."""
         return self._loop("pkm_chain_points", [x], ["x"], (self.ndof, 3, 3))
 
+    def platform_pose(self, x):
+        """The platform's full pose (x, y, z, rx, ry, rz) [m, rad] at pose(s) x and the motion
+        map S = d(full pose)/dx, shapes (..., 6) and (..., 6, nd): the components a robot does
+        not declare are held at 0 or, with PRS or RPS legs, dependent (the parasitic motion,
+        solved from the legs' passive revolute joints).  Described robots only.
+
+        Example: ``Model("tripod_3rps").platform_pose([0.45, 0.1, 0.05])[0]``."""
+        xs = self._arr(x, "x")
+        flat = np.ascontiguousarray(xs.reshape(-1, self.ndof))
+        X = np.empty((len(flat), 6))
+        S = np.empty((len(flat), 6, self.ndof))
+        f = fast("pkm_platform_pose")
+        for k in range(len(flat)):
+            st = f(self._m, self._d, flat[k].ctypes.data, X[k].ctypes.data, S[k].ctypes.data)
+            if st:
+                raise_for(st, f"item {k}: {lib.pkm_data_error(self._d).decode()}")
+        return X.reshape(xs.shape[:-1] + (6,)), S.reshape(xs.shape[:-1] + (6, self.ndof))
+
     def joint_velocity(self, x, xd):
         return self._loop("pkm_joint_velocity", [x, xd], ["x", "xd"], (self.ndof,))
 

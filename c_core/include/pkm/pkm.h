@@ -213,6 +213,16 @@ PKM_API int pkm_singularity(const pkm_model* m, pkm_data* d, const double* x,
  * Every robot but the four-bar (PKM_ERR_UNSUPPORTED there). */
 PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, double* pts);
 
+/* The platform's full pose X[6] = (x, y, z, rx, ry, rz) [m, rad] at pose x[nd], and the
+ * motion map S[6,nd] = dX/dx (may be NULL).  The components a robot does not declare as
+ * coordinates are held at 0, or, for a described robot with PRS or RPS legs, dependent:
+ * solved from the legs' passive revolute joints by Newton (PKM_ERR_NO_CONVERGENCE names the
+ * pose if it does not converge to 1e-12 m) -- the parasitic motion of 3-PRS and 3-RPS heads
+ * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
+ * of held ones zero.  Described robots; PKM_ERR_UNSUPPORTED for those written in C++. */
+PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
+                              double* S);
+
 /* Velocity and acceleration kinematics. */
 PKM_API int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, double* qd);

@@ -16,6 +16,9 @@ void Robot::singularity(const RobotModel&, RobotData&, const double*, double*) c
 void Robot::chain_points(const RobotModel&, RobotData&, const double*, double*) const {
   unsupported(*this, "chain points (the robots written in C++ have their own calls)");
 }
+void Robot::platform_pose(const RobotModel&, RobotData&, const double*, double*, double*) const {
+  unsupported(*this, "the platform's full pose (the described robots have it)");
+}
 void Robot::inverse_dynamics(const RobotModel&, RobotData&, const double*, const double*, const double*,
                              double*) const {
   unsupported(*this, "inverse dynamics");

@@ -114,6 +114,10 @@ class Robot {
   // Each leg's base joint, moving proximal joint and platform joint (pts[nd,3,3]) for
   // drawing; default: unsupported.
   virtual void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const;
+  // The platform's full pose X[6] = (x, y, z, rx, ry, rz) at coordinates x, the undeclared
+  // components held (0) or dependent (solved from passive joints), and the motion map
+  // S[6,nd] = dX/dx (may be nullptr); default: unsupported.
+  virtual void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const;
   // What the integrator checks at every step, cheaply: a lower bound of the direct
   // singularity measure (measures[1]; a bound above a threshold proves the measure is
   // above it, so the exact measure is needed only near its threshold) and a value whose

@@ -126,20 +126,25 @@ using M36 = Eigen::Matrix<double, 3, 6>;
 using M6 = Eigen::Matrix<double, 6, 6>;
 using V6 = Eigen::Matrix<double, 6, 1>;
 
+// Dependent coordinates (PRS, RPS legs): at most three, one per constrained leg.
+using MD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+using VD = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
+
 // The platform at a pose: rotation, and the maps of the coordinate rates to its
-// translational and angular velocity (p_dot = Jt xd, omega = Jw xd).
+// translational and angular velocity (p_dot = Jt xd, omega = Jw xd).  With dependent
+// coordinates the full pose's rates are S xd (the motion map) and Jt, Jw include them.
 struct Platform {
   M3 R, E;
   V3 p;
   M36 Jt, Jw;
   double x6[6];
   double sx, cx, sy, cy;  // sines and cosines of rx, ry (E and its rate)
+  M6 S;                   // dependent coordinates: d(full pose)/dx (columns j < n)
+  MD Cdep_inv;            // the inverse of the constraints' Jacobian over the dependent components
 };
 
-// With rates = false only R and p (what inverse kinematics needs).
-void platform_of(const Model& m, const double* x, Platform& pf, bool rates = true) {
-  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
-  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = x[j];
+// R = Rx Ry Rz of the full pose, and the sines and cosines E needs.
+void rotation_of(const Model& m, Platform& pf) {
   double sx, cx, sy, cy, sz, cz;
   sin_cos(pf.x6[3], sx, cx);
   sin_cos(pf.x6[4], sy, cy);
@@ -148,20 +153,130 @@ void platform_of(const Model& m, const double* x, Platform& pf, bool rates = tru
   pf.R << cy * cz, -(cy * sz), sy, sx * sy * cz + cx * sz, cx * cz - sx * sy * sz, -(sx * cy),
       sx * sz - cx * sy * cz, cx * sy * sz + sx * cz, cx * cy;
   pf.p = V3(pf.x6[0], pf.x6[1], pf.x6[2]);
+}
+
+// E (omega = E (rx, ry, rz)_dot) and its rate for the angle rates ax, ay.
+inline M3 angle_map(const Platform& pf) {
+  M3 E;
+  E << 1, 0, pf.sy, 0, pf.cx, -pf.sx * pf.cy, 0, pf.sx, pf.cx * pf.cy;
+  return E;
+}
+inline M3 angle_map_rate(const Platform& pf, double ax, double ay) {
+  const double sx = pf.sx, cx = pf.cx, sy = pf.sy, cy = pf.cy;
+  M3 Ed;
+  Ed << 0, 0, cy * ay, 0, -sx * ax, -cx * cy * ax + sx * sy * ay, 0, cx * ax, -sx * cy * ax - cx * sy * ay;
+  return Ed;
+}
+
+// The constraints of the legs with a passive revolute joint, c_k = a . (P - o), and their
+// Jacobian over the full pose, row k = (a, (R p) x a)' blockdiag(I, E).
+void constraints_of(const Model& m, const Platform& pf, const M3& E, VD& c, Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6>& C) {
+  c.resize(m.ndep);
+  C.resize(m.ndep, 6);
+  int k = 0;
+  for (const LegModel& l : m.legs) {
+    if (!l.constrained) continue;
+    const V3 rP = pf.R * l.p;
+    c[k] = l.plane_n.dot(pf.p + rP - l.plane_o);
+    C.row(k).head<3>() = l.plane_n.transpose();
+    C.row(k).tail<3>() = (rP.cross(l.plane_n)).transpose() * E;
+    ++k;
+  }
+}
+
+// The dependent components of the full pose by Newton from 0 (the parasitic motion is
+// small; Newton converges in a few steps), to 1e-14 m of constraint.
+void solve_dependent(const Model& m, Platform& pf, const double* xval) {
+  VD c;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> C;
+  const double tol = 1e-14 * (1 + m.r_char);
+  double res = 0;
+  for (int it = 0; it < 40; ++it) {
+    rotation_of(m, pf);
+    constraints_of(m, pf, angle_map(pf), c, C);
+    res = c.cwiseAbs().maxCoeff();
+    if (!std::isfinite(res)) break;
+    if (res <= tol) return;
+    MD Cd(m.ndep, m.ndep);
+    for (int k = 0; k < m.ndep; ++k) Cd.col(k) = C.col(m.dep[k]);
+    Eigen::FullPivLU<MD> lu(Cd);
+    if (!lu.isInvertible()) break;
+    const VD dy = lu.solve(-c);
+    for (int k = 0; k < m.ndep; ++k) pf.x6[m.dep[k]] += dy[k];
+  }
+  std::string names;
+  for (int k = 0; k < m.ndep; ++k) names += std::string(k ? ", " : "") + kCoordNames[m.dep[k]];
+  throw Error(PKM_ERR_NO_CONVERGENCE, "the dependent coordinates (" + names + ") did not converge at " +
+                                          pose_text(m, xval) + ": the legs' passive revolute joints leave " + g6(res) +
+                                          " m of constraint (no pose near the home branch holds them, or a singularity)");
+}
+
+// With rates = false only R and p (what inverse kinematics needs).
+void platform_of(const Model& m, const double* x, Platform& pf, bool rates = true) {
+  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
+  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = x[j];
+  if (m.ndep) solve_dependent(m, pf, x);
+  rotation_of(m, pf);
   if (!rates) return;
-  pf.E << 1, 0, sy, 0, cx, -sx * cy, 0, sx, cx * cy;  // omega = E (rx, ry, rz)_dot
+  pf.E = angle_map(pf);
   pf.Jt.setZero();
   pf.Jw.setZero();
-  for (int j = 0; j < m.n; ++j) {
-    if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
-    else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
+  if (!m.ndep) {
+    for (int j = 0; j < m.n; ++j) {
+      if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
+      else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
+    }
+    return;
   }
+  // C S = 0 with S's declared rows unit rows: S_dep = -C_dep^-1 C_ind.
+  VD c;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> C;
+  constraints_of(m, pf, pf.E, c, C);
+  MD Cd(m.ndep, m.ndep);
+  for (int k = 0; k < m.ndep; ++k) Cd.col(k) = C.col(m.dep[k]);
+  Eigen::FullPivLU<MD> lu(Cd);
+  if (!lu.isInvertible())
+    throw Error(PKM_ERR_SINGULAR, "the legs' passive revolute joints do not determine the dependent coordinates at " +
+                                      pose_text(m, x) + " (architecture singularity)");
+  pf.Cdep_inv = lu.inverse();
+  pf.S.setZero();
+  for (int j = 0; j < m.n; ++j) {
+    pf.S(m.coord[j], j) = 1;
+    const VD sj = -pf.Cdep_inv * C.col(m.coord[j]);
+    for (int k = 0; k < m.ndep; ++k) pf.S(m.dep[k], j) = sj[k];
+  }
+  pf.Jt = pf.S.topRows<3>();
+  pf.Jw = pf.E * pf.S.bottomRows<3>();
+}
+
+// The rate of the motion map along the full pose rates r6 (om the angular velocity, Ed the
+// rate of E): C S = 0, so C_dep Sdot_dep = -Cdot S, with row k of Cdot
+// (0, ((om x R p) x a)' E + ((R p) x a)' Ed).  S xdd + Sdot xd is the full pose's acceleration.
+M6 motion_map_rate(const Model& m, const Platform& pf, const V3& om, const M3& Ed) {
+  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> Cdot(m.ndep, 6);
+  int k = 0;
+  for (const LegModel& l : m.legs) {
+    if (!l.constrained) continue;
+    const V3 rP = pf.R * l.p;
+    Cdot.row(k).head<3>().setZero();
+    Cdot.row(k).tail<3>() = ((om.cross(rP)).cross(l.plane_n)).transpose() * pf.E + rP.cross(l.plane_n).transpose() * Ed;
+    ++k;
+  }
+  const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> CS = Cdot * pf.S;
+  const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> Sd_dep = -pf.Cdep_inv * CS;
+  M6 Sd = M6::Zero();
+  for (int q = 0; q < m.ndep; ++q) Sd.row(m.dep[q]) = Sd_dep.row(q);
+  return Sd;
 }
 
 // Column j of T: a unit translation, or a column of E for an angle.  T' v for a twist-space
 // vector v (a wrench, or a row of twist-space coefficients), without the full product.
 inline V6 t_transpose(const Model& m, const Platform& pf, const V6& v) {
   V6 out = V6::Zero();
+  if (m.ndep) {  // T = (Jt; Jw)
+    for (int j = 0; j < m.n; ++j) out[j] = pf.Jt.col(j).dot(v.head<3>()) + pf.Jw.col(j).dot(v.tail<3>());
+    return out;
+  }
   for (int j = 0; j < m.n; ++j) {
     const int c = m.coord[j];
     out[j] = c < 3 ? v[c] : pf.E.col(c - 3).dot(v.tail<3>());
@@ -173,7 +288,8 @@ inline M6 t_congruence(const Model& m, const Platform& pf, const M6& Mt) {
   Eigen::Matrix<double, 6, 6> MtT;  // columns j < n: Mt T e_j
   for (int j = 0; j < m.n; ++j) {
     const int c = m.coord[j];
-    MtT.col(j) = c < 3 ? V6(Mt.col(c)) : V6(Mt.rightCols<3>() * pf.E.col(c - 3));
+    if (m.ndep) MtT.col(j) = Mt.leftCols<3>() * pf.Jt.col(j) + Mt.rightCols<3>() * pf.Jw.col(j);
+    else MtT.col(j) = c < 3 ? V6(Mt.col(c)) : V6(Mt.rightCols<3>() * pf.E.col(c - 3));
   }
   M6 M = M6::Zero();
   for (int j = 0; j < m.n; ++j) M.col(j) = t_transpose(m, pf, MtT.col(j));
@@ -209,6 +325,19 @@ struct PlatformMotion {
   V3 v, om, a, al;
 };
 void platform_motion(const Model& m, const Platform& pf, const double* xd, const double* xdd, PlatformMotion& pm) {
+  if (m.ndep) {
+    // The full pose's rates r6 = S xd and accelerations S xdd + Sdot xd.
+    V6 v = V6::Zero(), a = V6::Zero();
+    for (int j = 0; j < m.n; ++j) v[j] = xd[j], a[j] = xdd ? xdd[j] : 0.0;
+    const V6 r6 = pf.S * v;
+    pm.v = r6.head<3>();
+    pm.om = pf.E * r6.tail<3>();
+    const M3 Ed = angle_map_rate(pf, r6[3], r6[4]);
+    const V6 a6 = pf.S * a + motion_map_rate(m, pf, pm.om, Ed) * v;
+    pm.a = a6.head<3>();
+    pm.al = pf.E * a6.tail<3>() + Ed * r6.tail<3>();
+    return;
+  }
   V6 v = V6::Zero();
   for (int j = 0; j < m.n; ++j) v[j] = xd[j];
   pm.v = pf.Jt * v;
@@ -225,11 +354,7 @@ void platform_motion(const Model& m, const Platform& pf, const double* xd, const
     // alpha = E a_dd + E_dot a_d (E_dot from the angle rates of the coordinates)
     double r6[6] = {0, 0, 0, 0, 0, 0};
     for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
-    const double sx = pf.sx, cx = pf.cx, sy = pf.sy, cy = pf.cy;
-    const double ax = r6[3], ay = r6[4];
-    M3 Ed;
-    Ed << 0, 0, cy * ay, 0, -sx * ax, -cx * cy * ax + sx * sy * ay, 0, cx * ax, -sx * cy * ax - cx * sy * ay;
-    pm.al += Ed * V3(r6[3], r6[4], r6[5]);
+    pm.al += angle_map_rate(pf, r6[3], r6[4]) * V3(r6[3], r6[4], r6[5]);
   }
 }
 
@@ -472,6 +597,51 @@ void forward_n(const Model& m, const MatT& M, const MatT* JT, const VecT& rhs, c
   if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(*JT);
 }
 
+// The legs' passive revolute joints at the home pose with the dependent components at 0
+// (before any solve): each leg's plane must pass near its platform point (an axis along the
+// leg puts the point far off it), and the planes together must fix the dependent components
+// (an axis lying in the leg's plane, or axes that let the platform slide or turn within
+// every plane, leave them free: an architecture singularity).  Both name the legs.
+template <class Bad>
+void check_passive_joints(const Model& m, const Bad& bad) {
+  Platform pf;
+  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
+  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = m.home[j];
+  rotation_of(m, pf);
+  std::vector<int> rows;
+  for (int i = 0; i < m.n; ++i) {
+    const LegModel& l = m.legs[i];
+    if (!l.constrained) continue;
+    rows.push_back(i);
+    const V3 d = pf.p + pf.R * l.p - l.plane_o;
+    const double off = std::abs(l.plane_n.dot(d));
+    if (off > 0.5 * d.norm())
+      bad("leg " + std::to_string(i + 1) + ": its platform point is " + g6(off) + " m off the plane its passive revolute "
+          "joint turns the leg in (through its " + (l.type->joint == Joint::rail ? "rail" : "base joint") +
+          ", normal to revolute_axis) at the home pose, " + g6(d.norm()) + " m from it: the revolute axis must be "
+          "perpendicular to the leg, not along it or through the platform point");
+  }
+  VD c;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> C;
+  constraints_of(m, pf, angle_map(pf), c, C);
+  MD Cd(m.ndep, m.ndep);
+  for (int k = 0; k < m.ndep; ++k) Cd.col(k) = C.col(m.dep[k]) * (m.dep[k] >= 3 ? 1.0 / m.r_char : 1.0);
+  Eigen::JacobiSVD<MD> svd(Cd, Eigen::ComputeFullU);
+  const auto& sv = svd.singularValues();
+  const double inv_cond = sv[0] > 0 ? sv[m.ndep - 1] / sv[0] : 0.0;
+  if (!(inv_cond > 1e-3)) {
+    // The legs whose constraints combine to nothing: the left null vector's entries.
+    std::string legs, names;
+    const VD u = svd.matrixU().col(m.ndep - 1);
+    for (int k = 0; k < m.ndep; ++k)
+      if (std::abs(u[k]) > 0.1) legs += std::string(legs.empty() ? "" : ", ") + "leg " + std::to_string(rows[k] + 1);
+    for (int k = 0; k < m.ndep; ++k) names += std::string(k ? ", " : "") + kCoordNames[m.dep[k]];
+    bad("architecture singularity at the home pose: the passive revolute joints of " + legs + " do not fix the "
+        "dependent coordinates (" + names + "; 1 / cond = " + g6(inv_cond) + " < 1e-3): a revolute axis lies in the "
+        "plane the others leave the platform free in (e.g. axes pointing at the centre instead of tangent to it)");
+  }
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ the Robot
@@ -546,6 +716,9 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
     if (ends > 0) m->r_char = ends;  // the end bars' speed per articulation rate
   }
   for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
+  m->ndep = (int)d_.dependent.size();
+  for (int k = 0; k < m->ndep; ++k) m->dep[k] = d_.dependent[k];
+  if (m->ndep) check_passive_joints(*m, bad);
   // The home pose must be reachable, within the joint limits and away from singularities.
   RobotData rd;
   double q[6], meas[2];
@@ -636,13 +809,20 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
   PlatformMotion pm;
   platform_motion(m, pf, xd, nullptr, pm);
   M36 Jwd = M36::Zero();  // d/dt of Jw: the columns of E_dot
-  if (m.rotates) {
+  M36 Jtd = M36::Zero();  // d/dt of Jt: dependent coordinates only
+  if (m.ndep) {
+    // Jt = S_t, Jw = E S_r: Jtd = Sdot_t, Jwd = Ed S_r + E Sdot_r.
+    V6 v = V6::Zero();
+    for (int j = 0; j < m.n; ++j) v[j] = xd[j];
+    const V6 r6 = pf.S * v;
+    const M3 Ed = angle_map_rate(pf, r6[3], r6[4]);
+    const M6 Sd = motion_map_rate(m, pf, pm.om, Ed);
+    Jtd = Sd.topRows<3>();
+    Jwd = Ed * pf.S.bottomRows<3>() + pf.E * Sd.bottomRows<3>();
+  } else if (m.rotates) {
     double r6[6] = {0, 0, 0, 0, 0, 0};
     for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
-    const double sx = pf.sx, cx = pf.cx, sy = pf.sy, cy = pf.cy;
-    M3 Ed;
-    Ed << 0, 0, cy * r6[4], 0, -sx * r6[3], -cx * cy * r6[3] + sx * sy * r6[4], 0, cx * r6[3],
-        -sx * cy * r6[3] - cx * sy * r6[4];
+    const M3 Ed = angle_map_rate(pf, r6[3], r6[4]);
     for (int j = 0; j < m.n; ++j)
       if (m.coord[j] >= 3) Jwd.col(j) = Ed.col(m.coord[j] - 3);
   }
@@ -658,7 +838,7 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
     Eigen::RowVector3d dq, dqd;
     for (int k = 0; k < 3; ++k) dq[k] = q.d[k].v, dqd[k] = q.d[k].d1;
     const M36 JP = point_jacobian(pf, rP);
-    const M36 JPd = -skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
+    const M36 JPd = Jtd - skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
     const Eigen::Matrix<double, 1, 6> row = dqd * JP + dq * JPd;
     for (int j = 0; j < m.n; ++j) Jdot[m.n * i + j] = row[j];
   }
@@ -683,6 +863,16 @@ void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const doub
   const auto& sv = svd.singularValues();
   measures[0] = t1;
   measures[1] = (sv[0] > 0) ? sv[n - 1] / sv[0] : 0.0;
+}
+
+void DescribedRobot::platform_pose(const RobotModel& rm, RobotData&, const double* x, double* X, double* S) const {
+  const Model& m = model_of(rm);
+  Platform pf;
+  platform_of(m, x, pf, S != nullptr);
+  for (int k = 0; k < 6; ++k) X[k] = pf.x6[k];
+  if (!S) return;
+  for (int r = 0; r < 6; ++r)
+    for (int j = 0; j < m.n; ++j) S[m.n * r + j] = m.ndep ? pf.S(r, j) : (m.coord[j] == r ? 1.0 : 0.0);
 }
 
 void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double* x, double* pts) const {

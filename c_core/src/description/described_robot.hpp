@@ -53,6 +53,7 @@ struct LegType {
   const char* what;
   const LegKind* leg = nullptr;    // rail, arm, strut: its kind
   const AxisKind* axis = nullptr;  // Joint::axis: its kind
+  int constraints = 0;             // passive constraints on the platform (PRS, RPS: its plane, 1)
 };
 const LegType* find_leg_type(const std::string& name);
 std::string leg_type_names();
@@ -84,6 +85,10 @@ struct LegModel {
   double m_cyl = 0, l_cyl = 0, m_pis = 0, l_pis = 0;
   double qmin = 0, qmax = 0;
   double disc_tol = 0;
+  // PRS, RPS: a passive revolute joint holds the platform point in the plane through plane_o
+  // normal to plane_n (the revolute axis): plane_n . (P - plane_o) = 0.
+  bool constrained = false;
+  Eigen::Vector3d plane_n = Eigen::Vector3d::Zero(), plane_o = Eigen::Vector3d::Zero();
   int npt = 0, nmass = 0, nrod = 0;  // body points: rail S, P; arm B, P, C; strut B, P, cylinder end, piston end
   PointMass mass[2];
   Rod rod[2];
@@ -92,6 +97,10 @@ struct LegModel {
 struct Model final : RobotModel {
   int n = 0;
   int coord[6];    // pose index (0..5) of free coordinate j
+  // Dependent pose components (PRS, RPS legs): pose index of each, solved from the legs'
+  // plane constraints (as many as the legs that have one, in leg order).
+  int ndep = 0;
+  int dep[6];
   bool rotates = false;  // some rotation is a coordinate
   bool articulated = false;
   double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
@@ -120,6 +129,8 @@ struct Description {
   std::vector<int> leg_lines;
   std::vector<bool> lumped_rods;        // per leg: rod mass lumped at its joints
   bool articulated = false;             // [platform] kind = "articulated"
+  bool point = false;                   // [platform] kind = "point": the legs meet at one joint
+  std::vector<int> dependent;           // pose indices the legs' passive joints decide (PRS, RPS)
   int redundant = 0;                    // robot.redundant_constraints
   std::vector<ParamSpec> params;        // defaults from the file
   // "default" first ([defaults]), then each [sets.NAME] with its own values only (applied
@@ -174,6 +185,7 @@ class DescribedRobot : public Robot {
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
   void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
+  void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const override;
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
                           const double* xdd, double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,

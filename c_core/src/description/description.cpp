@@ -26,12 +26,35 @@ const LegType kLegTypes[] = {
     {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints", &arm_leg()},
     {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint", &strut_leg()},
     {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint", &strut_leg()},
+    // A passive revolute joint holds the platform point in the leg's plane: one constraint.
+    {"PRS", Joint::rail, 2, 3, 5, 0, false, "slider on a rail, revolute joint, rod, spherical joint (3-PRS heads)",
+     &rail_revolute_leg(), nullptr, 1},
+    {"RPS", Joint::strut, 2, 3, 5, 0, false, "revolute joint at the base, actuated strut, spherical joint (3-RPS tripods)",
+     &revolute_strut_leg(), nullptr, 1},
     // Single axes: the joint carries the platform (no body of its own, one joint, one freedom).
     {prismatic_axis().type(), Joint::axis, 0, 1, 1, 0, false, prismatic_axis().what(), nullptr, &prismatic_axis()},
     {revolute_axis().type(), Joint::axis, 0, 1, 1, 0, false, revolute_axis().what(), nullptr, &revolute_axis()},
 };
 
 const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+
+// Whether every leg ends at the same platform point (the hint for a five-bar written with
+// a platform).
+template <class Legs>
+bool same_platform_point(const Reader& rd, const Legs& legs) {
+  std::vector<double> first;
+  for (const auto& l : legs) {
+    const toml::Value* v = l.t->find("platform_point");
+    if (!v) return false;
+    std::vector<double> p = rd.numbers(*v, "leg.platform_point", 3);
+    const double c = std::cos(l.angle), s = std::sin(l.angle);
+    p = {c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]};
+    if (first.empty()) first = p;
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(p[k] - first[k]) > 1e-9) return false;
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -130,9 +153,15 @@ Description read_description(const std::string& text, const std::string& file) {
   if (pts.empty()) rd.fail(rt.line, "[platform] table is missing (mass, inertia)");
   const toml::Table& pt = *pts[0];
   const std::string kind = rd.text(pt, "kind", "platform", "", false);
-  if (!(kind.empty() || kind == "rigid" || kind == "articulated"))
-    rd.fail(pt.find("kind")->line, "platform.kind '" + kind + "' is not known (known: rigid, articulated)");
+  if (!(kind.empty() || kind == "rigid" || kind == "articulated" || kind == "point"))
+    rd.fail(pt.find("kind")->line, "platform.kind '" + kind + "' is not known (known: rigid, articulated, point)");
   d.articulated = kind == "articulated";
+  d.point = kind == "point";
+  if (d.point)
+    for (int k : d.coords)
+      if (k >= 3)
+        rd.fail(cv.line, std::string("legs that meet at a point (platform.kind = \"point\") move it in x, y, z only; '") +
+                             kCoordNames[k] + "' is an angle");
   if (d.articulated) {
     rd.only(pt, {"kind", "mass", "inertia", "axis_angle", "ends", "centre"}, "[platform] (articulated)");
     if (d.coords != std::vector<int>{0, 1, 2, 5})
@@ -142,12 +171,16 @@ Description read_description(const std::string& text, const std::string& file) {
     rd.only(pt, {"kind", "mass", "inertia"}, "[platform]");
   }
   const double pm = rd.number(rd.need(pt, "mass", "platform", "platform mass [kg]"), "platform.mass");
-  const auto pI = rd.numbers(rd.need(pt, "inertia", "platform",
-                                     "principal inertias [Ixx, Iyy, Izz] about its centre of mass [kg m2]"),
-                             "platform.inertia", 3);
+  // A point (the legs' common joint) has no inertia to give: zero unless written.
+  const auto pI = d.point && !pt.find("inertia")
+                      ? std::vector<double>{0, 0, 0}
+                      : rd.numbers(rd.need(pt, "inertia", "platform",
+                                           "principal inertias [Ixx, Iyy, Izz] about its centre of mass [kg m2]"),
+                                   "platform.inertia", 3);
+  const int inertia_line = pt.find("inertia") ? pt.find("inertia")->line : pt.line;
   if (pm < 0) rd.fail(pt.find("mass")->line, "platform.mass = " + num(pm) + " kg must be >= 0");
   for (double v : pI)
-    if (v < 0) rd.fail(pt.find("inertia")->line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
+    if (v < 0) rd.fail(inertia_line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
   double pay_m = 0;
   std::vector<double> pay_c = {0, 0, 0};
   int pay_m_line = pt.line, pay_c_line = pt.line;
@@ -219,6 +252,10 @@ Description read_description(const std::string& text, const std::string& file) {
   const int lambda = d.planar ? 3 : 6;
   int nb = 2, nj = 0, f = 0;
   if (d.articulated) nb += 1, nj += 1, f += 1;
+  // Legs that meet at a point: no platform body, and the legs' joints at the point are one
+  // joint fewer than the legs (k rods on one pin or ball are k - 1 joints), of the pin's or
+  // ball's freedoms.
+  if (d.point) nb -= 1, nj -= 1, f -= d.planar ? 1 : 3;
   for (const auto& l : legs) {
     nb += l.type->bodies, nj += l.type->joints, f += l.type->freedoms - l.type->idle;
     if (l.type->joint != legs.front().type->joint)
@@ -232,7 +269,27 @@ Description read_description(const std::string& text, const std::string& file) {
        << nb << " bodies - " << nj << " joints - 1) + " << f << " joint freedoms (idle spins removed)";
     if (d.redundant) os << " + " << d.redundant << " redundant constraints";
     os << ", but " << n << " coordinates are declared";
+    if (!d.point && !d.articulated && legs.size() >= 2 && same_platform_point(rd, legs))
+      os << ". Every leg ends at the same platform point: legs whose rods meet at one joint (the five-bar, "
+            "2-RRR) have no platform; write [platform] kind = \"point\" (docs/robots.md, Legs that meet at a point)";
     rd.fail(cv.line, os.str());
+  }
+  // Dependent coordinates: each PRS or RPS leg holds its platform point in a plane, fixing
+  // one pose component; the components not declared are those the legs decide.
+  int nc = 0;
+  for (const auto& l : legs) nc += l.type->constraints;
+  if (nc > 0) {
+    if (d.point || d.articulated || d.planar)
+      rd.fail(legs.front().t->line, "legs with a passive revolute joint (PRS, RPS) hold a rigid spatial platform");
+    if (n + nc != 6) {
+      std::ostringstream os;
+      os << "robot.coordinates: " << nc << " legs with a passive revolute joint (PRS, RPS) fix " << nc
+         << " pose components, so " << 6 - nc << " coordinates are declared (e.g. z, rx, ry for three) and the other "
+         << nc << " follow from the legs; " << n << " are declared";
+      rd.fail(cv.line, os.str());
+    }
+    for (int k = 0; k < 6; ++k)
+      if (std::find(d.coords.begin(), d.coords.end(), k) == d.coords.end()) d.dependent.push_back(k);
   }
 
   // Parameter table, leg by leg (names as the hand-written 6-PUS names its own).
@@ -251,7 +308,11 @@ Description read_description(const std::string& text, const std::string& file) {
     const LegSchema schema{rd, t, i, l.angle, where, P};
     auto vec = [&](const char* key, const char* what) { return schema.vec(key, what); };
     auto line_of = [&](const char* key) { return schema.line_of(key); };
-    const auto p = vec("platform_point", "the leg's attachment point in the platform frame [m]");
+    if (d.point && t.find("platform_point"))
+      rd.fail(line_of("platform_point"), where + ": legs that meet at a point have no platform_point (the point is the "
+                                                 "pose itself)");
+    const auto p = d.point ? std::vector<double>{0, 0, 0}
+                           : vec("platform_point", "the leg's attachment point in the platform frame [m]");
     const auto stroke = rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]"), "leg.stroke", 2);
     if (!(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
     const std::string leg = "leg " + std::to_string(i + 1);
@@ -274,11 +335,11 @@ Description read_description(const std::string& text, const std::string& file) {
   add("platform.m", "kg", art ? "platform mass, half on each end bar (articulated platform)"
                               : "platform mass (its centre of mass is the platform frame origin)", pm, 0, 1e6, pt.find("mass")->line);
   add("platform.Ixx", "kg m2", art ? "inertia turning with the articulation, about the axis-frame x axis (no effect: rz only)"
-                                   : "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, pt.find("inertia")->line);
+                                   : "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, inertia_line);
   add("platform.Iyy", "kg m2", art ? "inertia turning with the articulation, about the axis-frame y axis (no effect: rz only)"
-                                   : "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, pt.find("inertia")->line);
+                                   : "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, inertia_line);
   add("platform.Izz", "kg m2", art ? "inertia about the articulation (a geared tool: ratio^2 x its inertia)"
-                                   : "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, pt.find("inertia")->line);
+                                   : "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, inertia_line);
   if (d.articulated) {
     auto field = [&](const char* key, const char* what) -> const toml::Value& { return rd.need(pt, key, "platform", what); };
     const double ang = rd.number(field("axis_angle", "direction of the end-to-end axis at rz = 0, from x [rad]"), "platform.axis_angle");

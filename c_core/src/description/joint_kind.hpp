@@ -83,6 +83,13 @@ class LegKind {
 const LegKind& rail_leg();   // kind_rail.cpp
 const LegKind& arm_leg();    // kind_arm.cpp
 const LegKind& strut_leg();  // kind_strut.cpp
+// The same with a passive revolute joint that holds the platform point in the leg's plane.
+const LegKind& rail_revolute_leg();    // kind_rail_revolute.cpp (PRS)
+const LegKind& revolute_strut_leg();   // kind_revolute_strut.cpp (RPS)
+// Their revolute axis (kind_passive_revolute.cpp): leg[i].ax ay az; compiled into the leg's
+// plane normal (the kind sets the plane's point).
+std::vector<double> read_revolute_axis(const LegSchema& s, const char* what);
+void compile_revolute_axis(const ParamValues& v, int i, LegModel& l);
 // The rod a rail or an arm ends in (kind_rod.cpp): leg[i].L px py pz (fx fy fz) branch m.
 bool read_rod(const LegSchema& s, const std::vector<double>& p, bool articulated);
 void compile_rod(const ParamValues& v, int i, bool lumped, LegModel& l);

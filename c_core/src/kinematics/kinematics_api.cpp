@@ -93,6 +93,15 @@ int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, double* p
   });
 }
 
+int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X, double* S) {
+  return guard(d, [&] {
+    const RobotModel& rm = prepare(m, d);
+    check_finite(x, d->ndof, "pose x");
+    check_out(X, "X");
+    d->robot->platform_pose(rm, *d->rd, x, X, S);
+  });
+}
+
 int pkm_joint_velocity(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* qd) {
   return guard(d, [&] {
     const RobotModel& rm = prepare(m, d);
