@@ -95,7 +95,7 @@ def _load_plugins():
     import importlib
 
     for mod in ("demo", "scenario", "calibration", "quattro", "discrepancy", "sweep", "benchmark", "importing",
-                "fmu"):
+                "fmu", "parasitic"):
         importlib.import_module(f"cosim.cli.{mod}")
 
 

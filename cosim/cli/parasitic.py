@@ -1,0 +1,81 @@
+"""``cosim parasitic ROBOT``: the parasitic motion of a lower-mobility robot (the pose components
+it does not declare, forced by its legs' passive joints) at poses, its sensitivity to
+geometric parameters, and a map over two coordinates (cosim/parasitic.py)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .main import command, robot_arg
+
+
+def _configure(p):
+    p.add_argument("robot", type=robot_arg, help="robot name or description file (e.g. tripod_3prs)")
+    p.add_argument("--pose", nargs="+", type=float, action="append", default=None, metavar="V",
+                   help="a pose in the robot's coordinates [m, rad] (repeat for more; default: home)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME",
+                   help="also print d(parasitic)/d(NAME), a parameter of `cosim params ROBOT` (repeatable)")
+    p.add_argument("--map", metavar="FILE.png", default=None,
+                   help="draw each parasitic component over a grid of two coordinates (the others at home)")
+    p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
+                   help="the map's two coordinates (default: the last two declared)")
+    p.add_argument("--span", type=float, default=None, help="the map's half-width about home [m or rad]")
+    p.add_argument("--grid", type=int, default=21, help="map points per axis (2-201)")
+
+
+@command("parasitic", "parasitic motion of a lower-mobility robot (3-PRS, 3-RPS): the undeclared pose components "
+                      "at poses, their sensitivity to parameters (--param), a map (--map)")
+def cmd_parasitic(args):
+    from ..core import Model
+    from ..parasitic import (POSE_NAMES, POSE_UNITS, parasitic_components, parasitic_map, parasitic_motion,
+                             parasitic_sensitivity)
+
+    m = Model(args.robot)
+    names = list(m.facts.pose_names)
+    poses = np.array(args.pose if args.pose else [m.home()], float)
+    if poses.ndim != 2 or poses.shape[1] != m.ndof:
+        raise ValueError(f"--pose takes {m.ndof} values ({' '.join(names)}) for {m.robot}")
+    if not 2 <= args.grid <= 201:
+        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
+    for p in args.param:
+        m.param(p)  # an unknown name says so before any work
+    comps = parasitic_components(m)
+    if not comps:
+        print(f"{m.robot} declares all six pose components: no parasitic motion")
+        return 0
+    par = parasitic_motion(m, poses)
+    sens = {p: parasitic_sensitivity(m, poses, p) for p in args.param}
+    head = [f"{n} [{u}]" for n, u in zip(names, m.facts.pose_units)]
+    head += [f"{POSE_NAMES[k]} [{POSE_UNITS[k]}]" for k in comps]
+    for p in args.param:
+        unit = next(i.unit for i in m.param_info() if i.name == p)
+        head += [f"d{POSE_NAMES[k]}/d{p} [{POSE_UNITS[k]}/{unit}]" for k in comps]
+    print("  ".join(f"{h:>16}" for h in head))
+    for k in range(len(poses)):
+        row = list(poses[k]) + list(par[k]) + [v for p in args.param for v in sens[p][k]]
+        print("  ".join(f"{v:>16.6g}" for v in row))
+    if args.map:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        mp = parasitic_map(m, axes=args.axes, span=args.span, grid=args.grid)
+        scale = {"m": (1e3, "mm"), "rad": (1e3, "mrad")}
+        fig, axs = plt.subplots(1, len(mp["names"]), figsize=(4.2 * len(mp["names"]), 3.8), squeeze=False)
+        for c, (name, unit) in enumerate(zip(mp["names"], mp["units"])):
+            s, shown = scale[unit]
+            ax = axs[0, c]
+            im = ax.contourf(mp["u"], mp["v"], s * mp["values"][:, :, c].T, levels=21, cmap="RdBu_r")
+            fig.colorbar(im, ax=ax, label=f"{name} [{shown}]")
+            ax.set_xlabel(f"{mp['axes'][0]} [{m.facts.pose_units[names.index(mp['axes'][0])]}]")
+            ax.set_ylabel(f"{mp['axes'][1]} [{m.facts.pose_units[names.index(mp['axes'][1])]}]")
+            ax.set_title(f"parasitic {name}")
+        fig.suptitle(f"{m.robot}: parasitic motion, other coordinates at home")
+        fig.tight_layout()
+        fig.savefig(args.map, dpi=110)
+        plt.close(fig)
+        print(f"map: {args.map}")
+    return 0
+
+
+cmd_parasitic.configure = _configure

@@ -1,0 +1,130 @@
+"""Parasitic motion of lower-mobility robots: the pose components a robot does not declare.
+
+A 3-PRS head or a 3-RPS tripod is commanded in z, rx, ry; its legs' passive revolute joints
+force small coupled motions of the other components, x, y and rz (the *parasitic* motion,
+docs/robots.md, Dependent coordinates).  The core solves them (``Model.platform_pose``); this
+module tabulates them over poses, maps them over a grid of two coordinates, and gives their
+sensitivity to a geometric parameter (how an error of, say, a revolute axis or a platform
+joint changes the parasitic motion), by central differences of the core's solution.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+POSE_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+POSE_UNITS = ("m", "m", "m", "rad", "rad", "rad")
+
+
+def parasitic_components(model) -> list[int]:
+    """Indices (0..5 in x y z rx ry rz) of the pose components ``model`` does not declare."""
+    declared = set(model.facts.pose_names)
+    return [k for k, n in enumerate(POSE_NAMES) if n not in declared]
+
+
+def parasitic_motion(model, poses) -> np.ndarray:
+    """The undeclared pose components at poses of the declared coordinates.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        A described robot (``Model("tripod_3rps")``).
+    poses : array_like, shape (..., nd)
+        Poses in the robot's coordinates [m, rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6 - nd)
+        The components of ``parasitic_components(model)`` in that order [m, rad]: dependent
+        ones as the legs force them, held ones 0.
+
+    Example
+    -------
+    >>> from cosim.core import Model
+    >>> m = Model("tripod_3rps")
+    >>> parasitic_motion(m, [0.45, 0.1, 0.05])     # x, y [m], rz [rad]    # doctest: +SKIP
+    """
+    X, _ = model.platform_pose(np.asarray(poses, float))
+    return X[..., parasitic_components(model)]
+
+
+def parasitic_sensitivity(model, poses, param: str, *, rel_step: float = 1e-6) -> np.ndarray:
+    """d(parasitic components)/d(param) at poses, by central differences of the core's solve.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+        The robot (left unchanged: the differences use copies).
+    poses : array_like, shape (..., nd)
+        Poses [m, rad].
+    param : str
+        A parameter name (``cosim params ROBOT``), e.g. ``"leg[1].ax"`` or ``"leg[2].px"``.
+    rel_step : float
+        Step relative to max(|value|, 1e-3) in the parameter's unit.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6 - nd)
+        [m or rad per the parameter's unit].
+
+    Example
+    -------
+    >>> parasitic_sensitivity(Model("tripod_3rps"), [0.45, 0.1, 0.05], "leg[1].px")   # doctest: +SKIP
+    """
+    v = model.param(param)
+    h = rel_step * max(abs(v), 1e-3)
+    plus, minus = model.copy(), model.copy()
+    plus.set_params({param: v + h})
+    minus.set_params({param: v - h})
+    return (parasitic_motion(plus, poses) - parasitic_motion(minus, poses)) / (2 * h)
+
+
+def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
+    """The parasitic components over a grid of two declared coordinates, the others at home.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+    axes : tuple of two str, optional
+        The coordinates the grid spans (default: the last two declared, rx ry for a 3-PRS).
+    span : float, optional
+        Half-width of the grid about home in each coordinate's unit (default 0.35 rad for an
+        angle, 0.05 m for a length).
+    grid : int
+        Points per axis.
+
+    Returns
+    -------
+    dict
+        ``axes`` (names), ``u``, ``v`` (grid vectors), ``names``, ``units`` and ``values``
+        (grid x grid x components; NaN where the robot cannot reach).
+
+    Example
+    -------
+    >>> parasitic_map(Model("tripod_3prs"), grid=11)["values"].shape            # doctest: +SKIP
+    (11, 11, 3)
+    """
+    names = list(model.facts.pose_names)
+    axes = tuple(axes or names[-2:])
+    for a in axes:
+        if a not in names:
+            raise ValueError(f"--axes: {a!r} is not a coordinate of {model.robot} ({' '.join(names)})")
+    idx = [names.index(a) for a in axes]
+    home = model.home()
+    half = [span if span is not None else (0.35 if POSE_UNITS[POSE_NAMES.index(a)] == "rad" else 0.05) for a in axes]
+    u = home[idx[0]] + np.linspace(-half[0], half[0], grid)
+    v = home[idx[1]] + np.linspace(-half[1], half[1], grid)
+    comps = parasitic_components(model)
+    values = np.full((grid, grid, len(comps)), np.nan)
+    x = home.copy()
+    from .errors import PkmError
+
+    for i, a in enumerate(u):
+        for j, b in enumerate(v):
+            x[idx[0]], x[idx[1]] = a, b
+            try:
+                model.ik(x)  # inside the joints' limits
+                values[i, j] = parasitic_motion(model, x)
+            except PkmError:
+                pass
+    return {"axes": axes, "u": u, "v": v, "names": [POSE_NAMES[k] for k in comps],
+            "units": [POSE_UNITS[k] for k in comps], "values": values}
