@@ -83,9 +83,10 @@ sys.path.insert(0, str(REPO))
 COORDS = ("x", "y", "z", "rx", "ry", "rz")
 RAIL, ARM, STRUT = "rail", "arm", "strut"
 SLIDE_AXIS, HINGE_AXIS = "slide axis", "hinge axis"   # single axes: the joint carries the platform
-LEG_JOINT = {"PUS": RAIL, "PSS": RAIL, "P(SS)2": RAIL, "PRR": RAIL,
+LEG_JOINT = {"PUS": RAIL, "PSS": RAIL, "P(SS)2": RAIL, "PRR": RAIL, "PRS": RAIL,
              "RUS": ARM, "RSS": ARM, "R(SS)2": ARM, "RRR": ARM,
-             "UPS": STRUT, "SPS": STRUT, "P": SLIDE_AXIS, "R": HINGE_AXIS}
+             "UPS": STRUT, "SPS": STRUT, "RPS": STRUT, "P": SLIDE_AXIS, "R": HINGE_AXIS}
+PASSIVE_REVOLUTE = ("PRS", "RPS")  # a hinge of axis revolute_axis in place of the rod's (strut's) first ball
 AXES = (SLIDE_AXIS, HINGE_AXIS)
 DRIVE_PREFIXES = ("rail", "arm", "strut", "axis")
 AXIAL = 1e-4        # a slender rod's inertia about its own axis, as a fraction of m L^2/12
@@ -122,6 +123,7 @@ class Leg:
     f: np.ndarray = field(default_factory=lambda: np.zeros(3))  # articulated: fixed offset of p [m]
     com_angle: float = 0.0         # arm: its centre of mass's angle from the arm line [rad]
     lumped: bool = False           # rod mass half at each joint instead of uniform
+    rev: np.ndarray = None         # PRS, RPS: the passive revolute axis (the leg's plane normal)
 
 
 @dataclass
@@ -141,6 +143,7 @@ class Robot:
     rz0: float = 0.0               # articulated: axis direction at rz = 0 [rad]
     ends: float = 0.0              # articulated: end bars' distance from the centre [m]
     c_platform: np.ndarray = field(default_factory=lambda: np.zeros(3))  # centre, axis frame [m]
+    dependent: list = field(default_factory=list)  # pose indices the PRS/RPS legs' planes decide
 
     @property
     def n(self) -> int:
@@ -199,9 +202,12 @@ def read(path: Path) -> Robot:
             typ = t["type"]
             types.append(typ)
             joint = LEG_JOINT[typ]
-            for key, pre in (("platform_point", f"leg[{i}].p"),):
-                for ax, v in zip("xyz", _rz(t[key], a)):
+            for key, pre in (("platform_point", f"leg[{i}].p"),):  # legs meeting at a point: none, 0
+                for ax, v in zip("xyz", _rz(t.get(key, [0.0, 0.0, 0.0]), a)):
                     P[pre + ax] = v
+            if typ in PASSIVE_REVOLUTE:
+                for ax, v in zip("xyz", _rz(t["revolute_axis"], a)):
+                    P[f"leg[{i}].a{ax}"] = v
             for ax, v in zip("xyz", t.get("platform_offset", [0.0, 0.0, 0.0])):
                 P[f"leg[{i}].f{ax}"] = v
             lumped[i] = t.get("rod_model", "uniform") == "lumped"
@@ -245,7 +251,7 @@ def read(path: Path) -> Robot:
                 P[f"piston[{i}].m"], P[f"piston[{i}].l"] = t["piston_mass"], t["piston_length"]
     plat = doc["platform"]
     P["platform.m"] = plat["mass"]
-    P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"] = plat["inertia"]
+    P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"] = plat.get("inertia", [0.0, 0.0, 0.0])
     articulated = plat.get("kind", "rigid") == "articulated"
     if articulated:
         P["platform.axis_angle"], P["platform.ends"] = plat["axis_angle"], plat["ends"]
@@ -285,22 +291,54 @@ def read(path: Path) -> Robot:
                       m_pis=P[f"piston[{i}].m"], l_pis=P[f"piston[{i}].l"])
         leg.f = v3(f"leg[{i}].f")
         leg.lumped = lumped[i]
+        if typ in PASSIVE_REVOLUTE:
+            leg.rev = v3(f"leg[{i}].a")
         legs.append(leg)
     art = dict(articulated=True, rz0=P["platform.axis_angle"], ends=P["platform.ends"],
                c_platform=np.array([P["platform.cx"], P["platform.cy"], P["platform.cz"]])) if articulated else {}
+    dependent = [k for k in range(6) if k not in coords] if any(l.rev is not None for l in legs) else []
     return Robot(rob["name"], path, coords, np.array([home_by[COORDS[c]] for c in coords], float),
                  np.array([P["gravity.x"], P["gravity.y"], P["gravity.z"]]), P["platform.m"],
                  np.array([P["platform.Ixx"], P["platform.Iyy"], P["platform.Izz"]]), P["payload.m"],
-                 np.array([P["payload.x"], P["payload.y"], P["payload.z"]]), legs, drive, **art)
+                 np.array([P["payload.x"], P["payload.y"], P["payload.z"]]), legs, drive, **art,
+                 dependent=dependent)
 
 
 # ------------------------------------------------------------------ kinematics (this script's own)
 
 def full_pose(rob: Robot, x: np.ndarray) -> np.ndarray:
-    """(N, 6) poses from (N, n) declared coordinates (the others 0)."""
+    """(N, 6) poses from (N, n) declared coordinates: the others 0, or, with PRS/RPS legs,
+    solved here so that every platform point lies in its leg's plane (a . (P - o) = 0, o the
+    rail origin or base joint) by Newton from 0 with a finite-difference Jacobian."""
     x = np.atleast_2d(x)
     X = np.zeros((len(x), 6))
     X[:, rob.coords] = x
+    if not rob.dependent:
+        return X
+    legs = [l for l in rob.legs if l.rev is not None]
+    a = np.array([l.rev for l in legs])
+    o = np.array([l.base for l in legs])
+    p = np.array([l.p for l in legs])
+    dep = rob.dependent
+
+    def residual(X):
+        P = X[:, None, :3] + np.einsum("nij,lj->nli", rotation(X), p)
+        return np.einsum("lj,nlj->nl", a, P - o[None])
+
+    h = 1e-7
+    for _ in range(30):
+        r = residual(X)
+        if np.max(np.abs(r)) < 1e-15:
+            break
+        J = np.empty((len(X), len(dep), len(dep)))
+        for k, c in enumerate(dep):
+            Xp, Xm = X.copy(), X.copy()
+            Xp[:, c] += h
+            Xm[:, c] -= h
+            J[:, :, k] = (residual(Xp) - residual(Xm)) / (2 * h)
+        X[:, dep] -= np.linalg.solve(J, r[..., None])[..., 0]
+    if np.max(np.abs(residual(X))) > 1e-13:
+        raise SystemExit(f"{rob.name}: this script's solve of the dependent coordinates did not converge")
     return X
 
 
@@ -344,6 +382,12 @@ def platform_points(rob: Robot, x: np.ndarray) -> np.ndarray:
     p = np.array([l.p for l in rob.legs])
     f = np.array([l.f for l in rob.legs])
     return X[:, None, :3] + np.einsum("nij,lj->nli", R, p) + f[None]
+
+
+def platform_joints(rob: Robot) -> list:
+    """The pose components the platform has a MuJoCo joint for: the declared ones, and the
+    dependent ones (the legs' planes hold those)."""
+    return sorted(rob.coords + rob.dependent)
 
 
 def single_axis(rob: Robot) -> bool:
@@ -403,6 +447,12 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
             s += f' damping="{damping[j]:.17g}"'
         return s
 
+    def first_joint(i, l):
+        """The rod's (strut's) joint at the slider (base): a ball, or PRS/RPS the passive hinge."""
+        if l.rev is not None:
+            return f'<joint name="s{i}" type="hinge" axis="{_v(l.rev)}"/>'
+        return f'<joint name="s{i}" type="ball"/>'
+
     if single_axis(rob):
         return _single_axis(rob, extra(0), timestep, integrator), q0
     legs = []
@@ -415,7 +465,7 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
       <joint name="q{i}" type="slide" axis="{_v(l.dir)}" ref="{q:.17g}"{extra(i)}/>
       <inertial pos="0 0 0" mass="{max(l.m_body, TINY):.17g}" diaginertia="{TINY} {TINY} {TINY}"/>
       <body name="rod{i}">
-        <joint name="s{i}" type="ball"/>
+        {first_joint(i, l)}
         <inertial pos="{_v(a / 2)}" {_rod_inertia(l.m_rod, a / np.linalg.norm(a), l.L, l.lumped)}/>
         <site name="end{i}" pos="{_v(a)}"/>
       </body>
@@ -440,7 +490,7 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
             n = (P - l.base) / q
             legs.append(f"""
     <body name="cylinder{i}" pos="{_v(l.base)}">
-      <joint name="s{i}" type="ball"/>
+      {first_joint(i, l)}
       <inertial pos="{_v(n * l.l_cyl / 2)}" {_rod_inertia(l.m_cyl, n, l.l_cyl)}/>
       <body name="piston{i}">
         <joint name="q{i}" type="slide" axis="{_v(n)}" ref="{q:.17g}"{extra(i)}/>
@@ -450,12 +500,12 @@ def mjcf(rob: Robot, timestep: float, integrator: str, solref: float, solimp: st
     </body>""")
     axes = {0: "1 0 0", 1: "0 1 0", 2: "0 0 1"}
     pj = "".join(f'\n      <joint name="{COORDS[c]}" type="{"slide" if c < 3 else "hinge"}" axis="{axes[c % 3]}"/>'
-                 for c in rob.coords)  # slides first (world axes), then rx, ry, rz: R = Rx Ry Rz
+                 for c in platform_joints(rob))  # slides first (world axes), then rx, ry, rz: R = Rx Ry Rz
     # inertias about axes the platform cannot turn about play no part: raised (to the sum of the
     # others) so that MuJoCo's triangle inequality holds whatever the file gives for them
     Ip = np.maximum(rob.I_platform, TINY)
     for a in range(3):
-        if 3 + a not in rob.coords:
+        if 3 + a not in platform_joints(rob):
             Ip[a] = max(Ip[a], Ip.sum() - Ip[a])
     sites = "".join(f'\n      <site name="p{i}" pos="{_v(l.p)}"/>' for i, l in enumerate(rob.legs))
     payload = ""
@@ -633,6 +683,8 @@ class Result:
     home_closure: float
     wall: float
     notes: list
+    dependent_err: float = 0.0       # PRS/RPS: max |core's dependent components - MuJoCo's| along the run
+    dependent_home_err: float = 0.0  # ... and against this script's own solve at home
 
     def figures(self, t0: float = 0.0) -> dict:
         k = self.t >= t0 - 1e-12
@@ -739,6 +791,9 @@ def run(robot: str, seconds: float = 4.0, seed: int = 1, timestep: float = 1e-4,
     ends = [model.site(f"end{i}").id for i in range(rob.n)]
     plats = [model.site(f"p{i}").id for i in range(rob.n)]
     data.qpos[pq] = rob.home
+    dq = [model.joint(COORDS[c]).qposadr[0] for c in rob.dependent]
+    if dq:  # the dependent components at home, from this script's own solve
+        data.qpos[dq] = full_pose(rob, rob.home[None])[0, rob.dependent]
     mujoco.mj_forward(model, data)
     gap = lambda: float(np.max(np.linalg.norm(data.site_xpos[ends] - data.site_xpos[plats], axis=1)))  # noqa: E731
     home_closure = gap()
@@ -760,9 +815,19 @@ def run(robot: str, seconds: float = 4.0, seed: int = 1, timestep: float = 1e-4,
     qref, qdref, scale, nrec, sub = _reference(rob, seconds, seed, timestep)
     if scale < 1:
         notes.append(f"excitation scaled by {scale:.3g} to keep the strokes")
-    rec = _drive(model, data, lambda: data.qpos[aq], av,
-                 lambda: (data.qpos[pq], data.qvel[pv], data.qacc[pv]), gap, qref, qdref, Kp, Kd, nrec, sub, rob.name)
-    return _compare(m, rec, rob.name, rob.kind, seconds, scale, home_q, home_q_core, home_closure, wall, notes)
+    dependent = []  # MuJoCo's dependent components at each record
+
+    def pose_of():
+        dependent.append(data.qpos[dq].copy())
+        return data.qpos[pq], data.qvel[pv], data.qacc[pv]
+
+    rec = _drive(model, data, lambda: data.qpos[aq], av, pose_of, gap, qref, qdref, Kp, Kd, nrec, sub, rob.name)
+    res = _compare(m, rec, rob.name, rob.kind, seconds, scale, home_q, home_q_core, home_closure, wall, notes)
+    if dq:  # the core's dependent components of MuJoCo's declared ones, against MuJoCo's
+        res.dependent_err = float(np.abs(m.platform_pose(rec["x"])[0][:, rob.dependent] - np.array(dependent)).max())
+        res.dependent_home_err = float(np.abs(m.platform_pose(rob.home)[0][rob.dependent]
+                                              - full_pose(rob, rob.home[None])[0, rob.dependent]).max())
+    return res
 
 
 def euler_xyz(R):

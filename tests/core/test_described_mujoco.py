@@ -4,7 +4,10 @@ bench/foreign/mujoco_described.py reads a description itself (tomllib, its own `
 expansion and closed-form inverse kinematics), lays a MuJoCo model out at home from it (each
 leg its own chain, closed at the platform point by a stiff ``connect``), drives the joints
 with a PD along a platform excitation and records the platform's motion and the applied
-efforts; the core's ``inverse_dynamics`` along that motion must give MuJoCo's efforts.
+efforts; the core's ``inverse_dynamics`` along that motion must give MuJoCo's efforts.  For
+PRS and RPS legs the script solves the dependent pose components itself (Newton on the legs'
+plane constraints), MuJoCo has a hinge for the passive revolute joint and a platform joint for
+every pose component; the core's dependent components must match both.
 
 Bound.  Measured (RK4 at 0.1 ms, connect solref 0.5 ms, solimp 0.9999) the residual is
 1e-6 to 1e-3 % of the effort RMS and at most 4e-3 % of its inertial part (effort minus the
@@ -262,6 +265,10 @@ def check(res):
     assert f["pct"] < BOUND, f
     assert f["pct_inertial"] < BOUND, f
     assert f["inertial"] > 0.05 * f["effort"] or f["effort"] == f["inertial"], f  # the motion is exciting
+    # PRS/RPS: the core's dependent components (x, y, rz) against this script's own solve at home,
+    # and along the run against MuJoCo's platform (held by the soft connects: to their closure)
+    assert res.dependent_home_err < 1e-12, res.dependent_home_err
+    assert res.dependent_err < 10 * f["closure"] + 1e-12, (res.dependent_err, f["closure"])
 
 
 @pytest.mark.parametrize("name", md.listed_robots())
