@@ -443,3 +443,26 @@ def test_calibration_of_the_3rps_from_its_campaign(tmp_path):
     # the fitted model predicts held-out poses from the joints far better than the nominal
     assert cal.holdout_accuracy.gain > 10, cal.text()
     assert cal.holdout_accuracy.position[1] < 5e-6
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_second_order_kinematics_and_forward_dynamics(name):
+    """J-dot and the joint accelerations (through Sdot, the dependent components' second
+    order) against central differences of the test's own kinematics along x(t) = x + t xd +
+    t^2/2 xdd; forward dynamics inverts inverse dynamics."""
+    m = Model(name)
+    _, legs = legs_of(name)
+    rng = np.random.default_rng(9)
+    h = 1e-4
+    for x in random_poses(m, 4, 11, *(0.5 * np.array(CASES[name]))):
+        xd = rng.normal(size=3) * [0.05, 0.4, 0.4]
+        xdd = rng.normal(size=3) * [0.5, 3.0, 3.0]
+        path = lambda t: x + t * xd + 0.5 * t * t * xdd  # noqa: E731
+        q = [own_ik(legs, full_pose_scipy(legs, *path(t))) for t in (-h, 0.0, h)]
+        qdd_ref = (q[2] - 2 * q[1] + q[0]) / h ** 2
+        assert np.max(np.abs(m.joint_acceleration(x, xd, xdd) - qdd_ref)) < 1e-5 * max(1.0, np.abs(qdd_ref).max())
+        J = [m.jacobian(x + s * h * xd) for s in (-1, 1)]
+        Jdot_ref = (J[1] - J[0]) / (2 * h)
+        assert np.max(np.abs(m.jacobian_dot(x, xd) - Jdot_ref)) < 1e-6 * max(1.0, np.abs(Jdot_ref).max())
+        tau = m.inverse_dynamics(x, xd, xdd)
+        assert np.max(np.abs(m.forward_dynamics(x, xd, tau) - xdd)) < 1e-9 * max(1.0, np.abs(xdd).max())
