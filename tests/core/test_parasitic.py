@@ -466,3 +466,34 @@ def test_second_order_kinematics_and_forward_dynamics(name):
         assert np.max(np.abs(m.jacobian_dot(x, xd) - Jdot_ref)) < 1e-6 * max(1.0, np.abs(Jdot_ref).max())
         tau = m.inverse_dynamics(x, xd, xdd)
         assert np.max(np.abs(m.forward_dynamics(x, xd, tau) - xdd)) < 1e-9 * max(1.0, np.abs(xdd).max())
+
+
+def test_parasitic_cli_and_sensitivity_against_the_tests_own_solve(tmp_path, capsys):
+    from cosim.cli.main import main
+    from cosim.parasitic import parasitic_motion, parasitic_sensitivity
+
+    m = Model("tripod_3rps")
+    _, legs = legs_of("tripod_3rps")
+    x = np.array([0.46, 0.2, -0.1])
+    # d(x, y, rz)/d leg[1].px: the test's own solve with leg 1's platform point moved
+    h = 1e-7
+    moved = []
+    for s in (1, -1):
+        lg = [dict(l) for l in legs]
+        lg[0]["platform_point"] = lg[0]["platform_point"] + [s * h, 0.0, 0.0]
+        moved.append(full_pose_scipy(lg, *x)[[0, 1, 5]])
+    ref = (moved[0] - moved[1]) / (2 * h)
+    got = parasitic_sensitivity(m, x, "leg[1].px")
+    assert np.max(np.abs(got - ref)) < 1e-6 * np.abs(ref).max(), (got, ref)
+    assert np.abs(ref).max() > 0.01  # a joint-centre error moves the parasitic motion
+    # the command prints the same numbers, and refuses a wrong pose in one line, status 2
+    assert main(["parasitic", "tripod_3rps", "--pose", "0.46", "0.2", "-0.1", "--param", "leg[1].px",
+                 "--map", str(tmp_path / "map.png"), "--grid", "5"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    row = np.array(out[1].split(), float)
+    np.testing.assert_allclose(row[3:6], parasitic_motion(m, x), rtol=1e-5, atol=1e-12)
+    np.testing.assert_allclose(row[6:9], got, rtol=1e-5, atol=1e-12)
+    assert (tmp_path / "map.png").stat().st_size > 1000
+    assert main(["parasitic", "tripod_3rps", "--pose", "0.46", "0.2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--pose takes 3 values (z rx ry)" in err[0]
