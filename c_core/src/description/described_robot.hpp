@@ -14,6 +14,11 @@
 //           rod |P - B| = L (RUS, RSS, R(SS)2 of Delta robots, planar RRR);
 //  * strut: an actuated prismatic strut of length q = |P - B| between a base point and P
 //           (UPS, SPS of Gough-Stewart platforms).
+// PRS and RPS legs add a passive revolute joint that holds their platform point in a plane,
+// a . (P - o) = 0: the pose components not declared are then dependent (the parasitic motion
+// of 3-PRS and 3-RPS heads), solved from those constraints by Newton, and every algorithm runs
+// through the motion map S = d(full pose)/dx and its rate.  With [platform] kind = "point"
+// the legs meet at one joint (the five-bar): no platform body, p = 0.
 // Bodies: the platform (mass, principal inertias; an articulated one as half its mass at
 // each end bar), a payload point, per leg a slider point mass, an arm (mass at its centre
 // of mass, which may lie off the arm line, + inertia about it), rods (uniform slender, or
