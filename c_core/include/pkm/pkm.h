@@ -217,7 +217,7 @@ PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, d
  * motion map S[6,nd] = dX/dx (may be NULL).  The components a robot does not declare as
  * coordinates are held at 0, or, for a described robot with PRS or RPS legs, dependent:
  * solved from the legs' passive revolute joints by Newton (PKM_ERR_NO_CONVERGENCE names the
- * pose if it does not converge to 1e-12 m) -- the parasitic motion of 3-PRS and 3-RPS heads
+ * pose if the constraints are not met to 1e-14 m) -- the parasitic motion of 3-PRS and 3-RPS heads
  * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
  * of held ones zero.  Described robots; PKM_ERR_UNSUPPORTED for those written in C++. */
 PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
