@@ -587,7 +587,7 @@ class Model:
         not declare are held at 0 or, with PRS or RPS legs, dependent (the parasitic motion,
         solved from the legs' passive revolute joints).  Described robots only.
 
-        Example: ``Model("tripod_3rps").platform_pose([0.45, 0.1, 0.05])[0]``."""
+        Example: ``Model("robots/tripod_3rps.toml").platform_pose([0.45, 0.1, 0.05])[0]``."""
         xs = self._arr(x, "x")
         flat = np.ascontiguousarray(xs.reshape(-1, self.ndof))
         X = np.empty((len(flat), 6))

@@ -27,7 +27,7 @@ def parasitic_motion(model, poses) -> np.ndarray:
     Parameters
     ----------
     model : cosim.core.Model
-        A described robot (``Model("tripod_3rps")``).
+        A described robot (``Model("robots/tripod_3rps.toml")``).
     poses : array_like, shape (..., nd)
         Poses in the robot's coordinates [m, rad].
 
@@ -40,7 +40,7 @@ def parasitic_motion(model, poses) -> np.ndarray:
     Example
     -------
     >>> from cosim.core import Model
-    >>> m = Model("tripod_3rps")
+    >>> m = Model("robots/tripod_3rps.toml")
     >>> parasitic_motion(m, [0.45, 0.1, 0.05])     # x, y [m], rz [rad]    # doctest: +SKIP
     """
     X, _ = model.platform_pose(np.asarray(poses, float))
@@ -68,7 +68,7 @@ def parasitic_sensitivity(model, poses, param: str, *, rel_step: float = 1e-6) -
 
     Example
     -------
-    >>> parasitic_sensitivity(Model("tripod_3rps"), [0.45, 0.1, 0.05], "leg[1].px")   # doctest: +SKIP
+    >>> parasitic_sensitivity(Model("robots/tripod_3rps.toml"), [0.45, 0.1, 0.05], "leg[1].px")   # doctest: +SKIP
     """
     v = model.param(param)
     h = rel_step * max(abs(v), 1e-3)
@@ -100,7 +100,7 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
 
     Example
     -------
-    >>> parasitic_map(Model("tripod_3prs"), grid=11)["values"].shape            # doctest: +SKIP
+    >>> parasitic_map(Model("robots/tripod_3prs.toml"), grid=11)["values"].shape            # doctest: +SKIP
     (11, 11, 3)
     """
     names = list(model.facts.pose_names)
