@@ -473,3 +473,15 @@ def test_parasitic_cli_and_sensitivity_against_the_tests_own_solve(tmp_path, cap
     assert main(["parasitic", "tripod_3rps", "--pose", "0.46", "0.2"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--pose takes 3 values (z rx ry)" in err[0]
+
+
+def test_point_platform_refuses_a_platform_point_and_angles(tmp_path):
+    base = (REPO / "robots" / "fivebar.toml").read_text().replace('"fivebar"', '"fivebar_bad"')
+    f = write(tmp_path, "fivebar_bad", base.replace("rod_mass = 0.06", "rod_mass = 0.06\nplatform_point = [0.01, 0.0, 0.0]", 1))
+    with pytest.raises(ArgumentError, match=rf"{f}:{line_of(f, 'platform_point')}: leg 1: legs that meet at a point "
+                                            r"have no platform_point"):
+        Model(f)
+    f = write(tmp_path, "fivebar_bad", base.replace('coordinates = ["x", "y"]', 'coordinates = ["x", "rz"]'))
+    with pytest.raises(ArgumentError, match=rf"{f}:{line_of(f, 'coordinates =')}: legs that meet at a point .* 'rz' "
+                                            r"is an angle"):
+        Model(f)
