@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .main import command, robot_arg
+from .main import command, output_file, robot_arg
 
 
 def _configure(p):
@@ -14,7 +14,7 @@ def _configure(p):
                    help="a pose in the robot's coordinates [m, rad] (repeat for more; default: home)")
     p.add_argument("--param", action="append", default=[], metavar="NAME",
                    help="also print d(parasitic)/d(NAME), a parameter of `cosim params ROBOT` (repeatable)")
-    p.add_argument("--map", metavar="FILE.png", default=None,
+    p.add_argument("--map", metavar="FILE.png", default=None, type=output_file,
                    help="draw each parasitic component over a grid of two coordinates (the others at home)")
     p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
                    help="the map's two coordinates (default: the last two declared)")
@@ -38,6 +38,7 @@ def cmd_parasitic(args):
         raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
     for p in args.param:
         m.param(p)  # an unknown name says so before any work
+    m.ik(poses)  # every pose inside the joints' limits (the message names the leg and the pose)
     comps = parasitic_components(m)
     if not comps:
         print(f"{m.robot} declares all six pose components: no parasitic motion")

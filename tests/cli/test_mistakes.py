@@ -91,6 +91,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-case --robot": ["blind-case", "--robot", "{}"],
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
+          "parasitic": ["parasitic", "{}"],
           "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
@@ -110,6 +111,7 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
             "fmu": ["fmu", "6pus", "--out", "{}"]}
 # commands writing one file given by --out
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
+             "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 
@@ -186,6 +188,10 @@ def _cases(tmp):
         (["indices", "--robot", "6pus", "--axis", "q=-0.1:0.1:3"], "6pus has no pose coordinate 'q'"),
         (["indices", "--robot", "6pus", "--axis", "x=-0.1:0.1"], "give NAME=START:STOP:N"),
         (["indices", "--robot", "6pus"], "give at least one --axis"),
+        (["parasitic", "tripod_3rps", "--pose", "0.45", "0.1"], "--pose takes 3 values (z rx ry) for tripod_3rps"),
+        (["parasitic", "tripod_3rps", "--param", "leg[9].px"], "tripod_3rps has no parameter named 'leg[9].px'"),
+        (["parasitic", "tripod_3rps", "--map", str(tmp / "m.png"), "--grid", "1"], "--grid 1: give 2 to 201 points"),
+        (["parasitic", "tripod_3rps", "--pose", "0.9", "0.0", "0.0"], "leg 1 joint q = "),
         # kept from the first corpus
         (["calibrate", bad["binary"]], "is not a text CSV file"),
         (["diagnose", bad["badpar"], "--no-replay", "--no-figures"], "badpar.json: parameters: 6pus has no parameter"),
