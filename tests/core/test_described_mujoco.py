@@ -39,7 +39,8 @@ SECONDS = 1.5
 # masses under tilted gravity), PSS on inclined rails, planar PRR
 # with in-plane gravity, RUS + RSS in one robot with a payload and tilted gravity, SPS with
 # rotor inertia and viscous friction of the drive layer ([defaults]), horizontal P(SS)2 with a
-# payload and a platform without inertias.
+# payload and a platform without inertias; three RUS legs meeting at one ball joint (the spatial
+# five-bar analogue, platform.kind = "point") under tilted gravity.
 EXTRA = {
     "inclined_p": """
 [robot]
@@ -228,6 +229,31 @@ piston_length = 0.14
 "strut[5].viscous" = 100
 "strut[6].rotor_inertia" = 1.1
 "strut[6].viscous" = 120
+""",
+    "point_3rus": """
+[robot]
+name = "point_3rus"
+coordinates = ["x", "y", "z"]
+home = [0.01, -0.02, -0.25]
+[gravity]
+vector = [0.3, -0.2, -9.81]
+[platform]
+kind = "point"
+mass = 0.2
+[[leg]]
+type = "RUS"
+copies = 3
+axis_point = [0.12, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+arm_direction = [1.0, 0.0, 0.0]
+arm_length = 0.1
+arm_mass = 0.15
+arm_com = 0.04
+arm_inertia = 2e-4
+rod_length = 0.28
+rod_mass = 0.05
+branch = -1
+stroke = [-2.5, 2.5]
 """,
     "lin_delta_h": """
 [robot]
