@@ -122,7 +122,8 @@ def test_computed_torque_tracks_on_the_nominal_plant_not_on_a_heavier_one(robot)
     assert nominal.metrics["held_poses"] == len(sc.spec["reference"]["poses"])
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
+# and the robots with dependent coordinates (PRS, RPS legs) or legs meeting at a point
+@pytest.mark.parametrize("robot", ROBOTS + ["tripod_3prs", "tripod_3rps", "fivebar"])
 def test_the_fmu_plant_runs_the_step_like_the_core_plant(robot):
     from cosim.fmu import fmu_path
 

@@ -485,18 +485,3 @@ def test_point_platform_refuses_a_platform_point_and_angles(tmp_path):
     with pytest.raises(ArgumentError, match=rf"{f}:{line_of(f, 'coordinates =')}: legs that meet at a point .* 'rz' "
                                             r"is an angle"):
         Model(f)
-
-
-@pytest.mark.parametrize("name", ["tripod_3prs", "tripod_3rps", "fivebar"])
-def test_the_fmu_plant_runs_the_pd_step_like_the_core_plant(name):
-    from cosim.fmu import fmu_path
-    from cosim.scenario import load_scenario, run_scenario
-
-    assert fmu_path(name).exists()  # built with the FMUs (one per listed description)
-    sc = load_scenario(SCEN / f"{name}_step_pd.toml")
-    core = run_scenario(sc, export=False, figures=False)
-    fmu = run_scenario(sc, plant="fmu", export=False, figures=False)
-    assert fmu.result.plant["kind"] == "fmu"
-    np.testing.assert_allclose(fmu.result["q"], core.result["q"], rtol=0, atol=1e-10)
-    tau = core.result["tau"]
-    np.testing.assert_allclose(fmu.result["tau"], tau, rtol=0, atol=1e-8 * np.abs(tau).max())
