@@ -185,8 +185,8 @@ def _rows_of(source, chunk_rows):
 
 def _blocks(chunks, block_seconds, max_samples, duration):
     """Blocks of ``block_seconds`` (at most ``max_samples`` rows) from chunks of any size,
-    the first ``duration`` seconds only when given; the first item is the block length in
-    rows."""
+    the first ``duration`` seconds only when given; the first item is (block length in
+    rows, sampling step [s] or None)."""
     buf, rows, block, t_end = [], 0, None, None
     for c in chunks:
         if t_end is None:
@@ -282,20 +282,22 @@ def working_set(source, *, max_samples: int = MAX_SAMPLES, block_seconds: float 
         if total is not None and dt is not None:  # the length is known: strata of their final length at once
             if duration is not None:
                 total = min(total, int(math.ceil(duration / dt)) + 1)
-            per = max(1, math.ceil(math.ceil(total / block_rows) / k_max))
+            per = max(1, math.ceil(max(1, int(total / block_rows + 0.5)) / k_max))  # a short tail is no block
         for b in gen:
             t0 = b.time[0] if t0 is None else t0
             t1 = b.time[-1]
+            start, rows = rows, rows + len(b)
+            bar.update(len(b))
+            if len(b) < block_rows / 2 and (per > 1 or len(strata) >= k_max):
+                continue  # a short tail and no room for it: read, not a block of its own
             score = excitation_score(b)
             if strata and strata[-1][2] < per:
                 s = strata[-1]
                 if score > s[1]:
-                    s[0], s[1], s[3] = b, score, rows
+                    s[0], s[1], s[3] = b, score, start
                 s[2] += 1
             else:
-                strata.append([b, score, 1, rows])
-            rows += len(b)
-            bar.update(len(b))
+                strata.append([b, score, 1, start])
             if len(strata) > k_max:  # twice as long strata: neighbours merged, the better block kept
                 per *= 2
                 strata = [_merge(strata[i:i + 2]) for i in range(0, len(strata), 2)]
