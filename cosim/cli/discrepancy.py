@@ -58,30 +58,21 @@ def model_arg(value: str) -> str:
     return value
 
 
-def _positive_int(value: str) -> int:
-    """argparse type: a whole number > 0 (``--max-samples``)."""
+def _positive(kind):
+    """argparse type: a finite number > 0 of ``kind`` (int: ``--max-samples``, float:
+    ``--block-seconds``)."""
     import argparse
 
-    try:
-        v = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a whole number") from None
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"{value} must be positive")
-    return v
+    def parse(value: str):
+        try:
+            v = kind(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{value!r} is not a {'whole ' if kind is int else ''}number") from None
+        if not (math.isfinite(v) and v > 0):
+            raise argparse.ArgumentTypeError(f"{value} must be a positive number")
+        return v
 
-
-def _positive_float(value: str) -> float:
-    """argparse type: a finite number > 0 (``--block-seconds``)."""
-    import argparse
-
-    try:
-        v = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"{value} must be a positive number")
-    return v
+    return parse
 
 
 def _diag_configure(p):
@@ -106,10 +97,10 @@ def _diag_configure(p):
                         "of instrumental variables from the reference (biased low by rate noise; for comparison)")
     p.add_argument("--no-discovery", action="store_true",
                    help="skip the search for forces no library effect names (the discovery step)")
-    p.add_argument("--max-samples", type=_positive_int, default=None,
+    p.add_argument("--max-samples", type=_positive(int), default=None,
                    help="most rows the diagnosis holds (default 200000); a longer recording is diagnosed on blocks "
                         "spread over all of it, each at the full rate (docs/discrepancy.md, Long recordings)")
-    p.add_argument("--block-seconds", type=_positive_float, default=None,
+    p.add_argument("--block-seconds", type=_positive(float), default=None,
                    help="length of those blocks [s] (default 20)")
     p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     p.add_argument("--html", action="store_true",
