@@ -246,7 +246,8 @@ def main(argv=None) -> int:
     ap.add_argument("--first", type=float, default=10.0, help="minutes of the short diagnosis (default 10)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--robot", default="6pus")
-    ap.add_argument("--max-samples", type=int, default=200_000, help="rows of the working set (default 200000)")
+    ap.add_argument("--max-samples", type=int, default=None,
+                    help="most rows of the working set (default: the diagnosis's, 100000)")
     ap.add_argument("--keep", help="directory to keep (and reuse) the simulated recording in")
     ap.add_argument("--io", action="store_true", help="the formats' write and read table instead")
     ap.add_argument("--chunk", type=int, default=100_000, help="rows per block of --io (default 100000)")
@@ -260,6 +261,10 @@ def main(argv=None) -> int:
     if a.child:
         print(json.dumps(child(a)))
         return 0
+    if a.max_samples is None:
+        from cosim.discrepancy.working_set import MAX_SAMPLES
+
+        a.max_samples = MAX_SAMPLES
     a.rows = int(round(a.minutes * 60 * 1000))
     if a.io:
         a.formats = a.formats or "csv,parquet,hdf5"
