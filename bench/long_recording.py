@@ -11,7 +11,8 @@ plant, its drive and sensors, a PD + gravity controller at 1 kHz, the sensor noi
 ``scenarios/blind/config.toml``) along one exciting trajectory of the whole length
 (:mod:`cosim.discrepancy.excitation`), run in pieces of one minute, each from the true state
 the previous one ended in, and written as it goes (memory one piece).  The plant hides
-Coulomb friction on rail 3 and a payload of 50 g at the platform's centre; the sidecar gives
+Coulomb friction on rail 3 and a payload of 50 g off the platform's centre (a centred one is the
+same physics as a heavier platform, and either may be named); the sidecar gives
 the nominal model only.  Everything is seeded.
 
 Each diagnosis runs in a fresh process pinned to one core, which prints the time to read the
@@ -40,7 +41,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 EXT = {"csv": ".csv", "parquet": ".parquet", "hdf5": ".h5"}
 #: what the plant hides (the recording's sidecar gives the nominal model only)
-HIDDEN = {"rail[3].coulomb": 0.03, "payload.m": 0.05}
+HIDDEN = {"rail[3].coulomb": 0.03, "payload.m": 0.05, "payload.x": 0.015, "payload.y": -0.01, "payload.z": 0.01}
 PIECE_SECONDS = 60.0
 
 

@@ -157,7 +157,7 @@ def concat(blocks, copy: bool = False) -> object:
 
 def _rows_of(source, chunk_rows):
     """(iterator of Recording chunks, rows in total or None)."""
-    from ..recording import Recording, iter_recording
+    from ..recording import Recording
     from ..recording_io import table_format
 
     if isinstance(source, Recording):
@@ -179,8 +179,25 @@ def _rows_of(source, chunk_rows):
                     total = len(f[c0]) if c0 in f else None
         except Exception:  # noqa: BLE001 - only the bar's total; the reader says what is wrong
             total = None
-        return iter_recording(path, chunk_rows=chunk_rows), total
+        return _file_chunks(path, chunk_rows), total
     return iter(source), None
+
+
+def _file_chunks(path, chunk_rows):
+    """The file in chunks (memory one chunk); where Arrow's stream refuses a cell, the
+    careful whole-file reader takes over from there: it says where the file is wrong, or
+    reads what only it reads (as :func:`cosim.recording.read_recording` does)."""
+    from ..recording import RecordingError, iter_recording, read_recording
+
+    done = 0
+    try:
+        for c in iter_recording(path, chunk_rows=chunk_rows):
+            done += len(c)
+            yield c
+    except RecordingError:
+        rec = read_recording(path)
+        for k in range(done, len(rec), chunk_rows):
+            yield rec.slice(k, k + chunk_rows)
 
 
 def _blocks(chunks, block_seconds, max_samples, duration):

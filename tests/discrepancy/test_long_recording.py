@@ -111,3 +111,20 @@ def test_cli_refuses_a_working_set_that_is_not_a_positive_number(tmp_path, capsy
         assert main(["diagnose", str(path), *args]) == 2
         err = capsys.readouterr().err
         assert args[0] in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+
+
+def test_a_csv_cell_only_the_careful_reader_takes_is_read_as_read_recording_reads_it(tmp_path):
+    from cosim.recording import read_recording
+
+    t = np.arange(300) * 1e-3
+    rec = Recording("fourbar", t, np.sin(t)[:, None], np.cos(t)[:, None], np.zeros((300, 1)))
+    path, _ = write_recording(tmp_path / "spaced.csv", rec)
+    lines = path.read_text().splitlines()
+    lines[150] = " " + lines[150].replace(",", ", ")  # blanks around the numbers of one row
+    path.write_text("\n".join(lines) + "\n")
+    whole = read_recording(path)
+    for kw in ({}, {"max_samples": 100, "block_seconds": 0.05, "chunk_rows": 50}):
+        ws = working_set(path, **kw)
+        assert ws.source_rows == 300
+        rows = np.searchsorted(whole.time, ws.recording.time)
+        np.testing.assert_array_equal(ws.recording.q, whole.q[rows])
