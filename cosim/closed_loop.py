@@ -203,7 +203,7 @@ class ClosedLoop:
 
     # -------------------------------------------------------------------- run
     def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
-            f_ext=None) -> LoopRecord:
+            f_ext=None, started=None) -> LoopRecord:
         """Run over the reference samples ``start:``.
 
         Parameters
@@ -227,6 +227,9 @@ class ClosedLoop:
             positive along +q (e.g. a recording's measured force, ``Recording.f_ext``):
             the plant adds it to the actuator effort over the step after each sample,
             like the command (no saturation, no delay).
+        started : callable, optional
+            ``started()``, called once when the set-up is done, right before the first
+            step (the CLI gives ctrl-C back to the loop there).
 
         Returns
         -------
@@ -275,6 +278,8 @@ class ClosedLoop:
         ref = {k: (None if getattr(reference, k, None) is None
                    else np.ascontiguousarray(getattr(reference, k)[start:start + n], dtype=float))
                for k in ("q", "qd", "qdd", "x")}
+        if started is not None:
+            started()
         wall0 = _time.perf_counter()
         failure = None
         try:

@@ -579,7 +579,7 @@ def _stopped(plant, t, h, why) -> str:
 
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
         pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
-        compiled: bool | None = None, should_stop=None, f_ext=None) -> RunResult:
+        compiled: bool | None = None, should_stop=None, f_ext=None, started=None) -> RunResult:
     """Step ``plant`` and ``controller`` together over the reference's time grid
     (:class:`cosim.closed_loop.ClosedLoop`).
 
@@ -623,6 +623,8 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     f_ext : array_like, shape (n, nd), optional
         Known external effort per joint and reference sample [N or N m], positive along
         +q, added to the actuator effort over the step after each sample.
+    started : callable, optional
+        ``started()``, called once right before the first step (the set-up done).
 
     Returns
     -------
@@ -681,7 +683,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
                desc=f"{plant.kind} {reference.name}".strip())
     try:
         rec = loop.run(reference, x0=x0, xd0=xd0, progress=lambda k: bar.update(k - bar.n), should_stop=should_stop,
-                       f_ext=f_ext)
+                       f_ext=f_ext, started=started)
     except LoopInterrupted as e:
         raise LoopInterrupted(result(e.partial)) from None
     except Exception as e:

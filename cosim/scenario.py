@@ -412,7 +412,8 @@ def build_plant(sc: Scenario, true_model, truth: dict):
 # ------------------------------------------------------------------- running
 
 def run_scenario(sc, *, plant: str | None = None, duration: float | None = None, out_dir=None,
-                 figures: bool | None = None, export: bool = True, progress: bool | None = None) -> ScenarioResult:
+                 figures: bool | None = None, export: bool = True, progress: bool | None = None,
+                 started=None) -> ScenarioResult:
     """Run a scenario and write its recording, metrics and figure.
 
     Parameters
@@ -431,6 +432,8 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
         Write the recording and the metrics.
     progress : bool, optional
         Progress bar (default: shown on runs longer than two seconds).
+    started : callable, optional
+        ``started()``, called once when the set-up is done, right before the first step.
     """
     if not isinstance(sc, Scenario):
         sc = load_scenario(sc)
@@ -453,7 +456,7 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
     try:
         res = run(p, ctrl, ref, x0=x0, q_noise=noise.get("q", 0.0), qd_noise=noise.get("qd", 0.0),
                   pose_noise=noise.get("pose", 0.0), seed=sc.spec["seed"], drive=CoreDrive(true),
-                  progress=progress)
+                  progress=progress, started=started)
     except LoopInterrupted as e:  # the caller may keep the samples: export_partial(e.scenario, e, e.out_dir)
         e.scenario, e.out_dir = sc, d
         raise

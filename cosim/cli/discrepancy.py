@@ -58,6 +58,23 @@ def model_arg(value: str) -> str:
     return value
 
 
+def _positive(kind):
+    """argparse type: a finite number > 0 of ``kind`` (int: ``--max-samples``, float:
+    ``--block-seconds``)."""
+    import argparse
+
+    def parse(value: str):
+        try:
+            v = kind(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{value!r} is not a {'whole ' if kind is int else ''}number") from None
+        if not (math.isfinite(v) and v > 0):
+            raise argparse.ArgumentTypeError(f"{value} must be a positive number")
+        return v
+
+    return parse
+
+
 def _diag_configure(p):
     p.add_argument("recording", type=recording_file, help="pkm-recording/1 CSV (its JSON sidecar beside it)")
     p.add_argument("--model", type=model_arg, default=None,
@@ -80,6 +97,11 @@ def _diag_configure(p):
                         "of instrumental variables from the reference (biased low by rate noise; for comparison)")
     p.add_argument("--no-discovery", action="store_true",
                    help="skip the search for forces no library effect names (the discovery step)")
+    p.add_argument("--max-samples", type=_positive(int), default=None,
+                   help="most rows the diagnosis holds (default 200000); a longer recording is diagnosed on blocks "
+                        "spread over all of it, each at the full rate (docs/discrepancy.md, Long recordings)")
+    p.add_argument("--block-seconds", type=_positive(float), default=None,
+                   help="length of those blocks [s] (default 20)")
     p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     p.add_argument("--html", action="store_true",
                    help="also write report.html: interactive, self-contained (3D robot, residual windows, effects)")
@@ -88,14 +110,18 @@ def _diag_configure(p):
 @command("diagnose", "model-discrepancy diagnosis of a recording: where, which missing physics, how much better")
 def cmd_diagnose(args):
     from ..discrepancy import diagnose
+    from ..discrepancy.working_set import BLOCK_SECONDS, MAX_SAMPLES, working_set
 
     from .main import working
 
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
     t0 = time.perf_counter()
     try:
+        # read first (a bar of the rows on a terminal), then the diagnosis of what was kept
+        ws = working_set(args.recording, max_samples=args.max_samples or MAX_SAMPLES,
+                         block_seconds=args.block_seconds or BLOCK_SECONDS, progress=None)
         with working(f"diagnosing {Path(args.recording).name}"):
-            d = diagnose(args.recording, args.model, out=out, window=args.window, threshold=args.threshold,
+            d = diagnose(ws, args.model, out=out, window=args.window, threshold=args.threshold,
                          train_fraction=args.train_fraction, compare=args.compare,
                          effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares,
@@ -126,6 +152,10 @@ def print_diagnosis(d, file=None):
     file = file or sys.stdout
     p = lambda *a: print(*a, file=file)  # noqa: E731
     p(f"{d.recording} ({d.robot}): {d.conclusion}")
+    from ..discrepancy.working_set import sentence
+
+    if sentence(d.settings.get("working_set")):
+        p(f"({sentence(d.settings['working_set'])})")
     if d.localisation.get("summary"):
         p("\nwhere:")
         for s in d.localisation["summary"]:

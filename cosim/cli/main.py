@@ -99,6 +99,78 @@ def _load_plugins():
         importlib.import_module(f"cosim.cli.{mod}")
 
 
+class exits_on_interrupt:
+    """``with exits_on_interrupt("cosim run: interrupted ...") as guard:`` a ctrl-C inside
+    the block ends the process within milliseconds (the message on stderr, exit code 130),
+    even while the main thread is inside one long call into the core or numpy (Python runs
+    its own handler only between two instructions of the main thread, seconds later during
+    the set-up of a long run).  For work that has nothing to keep; ``guard.disarm()`` (or
+    leaving the block) gives ctrl-C back to the main thread, where it raises
+    KeyboardInterrupt as before.
+
+    How: the signal module's wakeup file descriptor receives the signal's number from
+    whichever thread the signal lands in, and a watcher thread blocked on reading it (the
+    interpreter lock released) says the message and exits."""
+
+    def __init__(self, message: str):
+        self.message = message
+        self._thread = None
+        self._lock = None
+
+    def __enter__(self):
+        import signal
+        import socket
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self  # only the main thread may set the wakeup descriptor
+        self._r, self._w = socket.socketpair()
+        self._w.setblocking(False)
+        self._old = signal.set_wakeup_fd(self._w.fileno(), warn_on_full_buffer=False)
+        self._lock, self._armed = threading.Lock(), True
+        self._thread = threading.Thread(target=self._watch, name="exits_on_interrupt", daemon=True)
+        self._thread.start()
+        return self
+
+    def _watch(self):
+        import os
+        import signal
+
+        while True:
+            data = self._r.recv(64)
+            with self._lock:
+                if not self._armed or not data:
+                    return
+                if signal.SIGINT in data:
+                    sys.stderr.write(self.message + "\n")
+                    sys.stderr.flush()
+                    os._exit(130)
+
+    @property
+    def armed(self) -> bool:
+        """A ctrl-C now ends the process."""
+        return self._thread is not None
+
+    def disarm(self):
+        """ctrl-C back to the main thread (KeyboardInterrupt); idempotent."""
+        import signal
+
+        if self._thread is None:
+            return
+        with self._lock:  # the watcher cannot be half-way through its message
+            self._armed = False
+        signal.set_wakeup_fd(self._old)
+        self._w.send(b"\0")
+        self._thread.join(timeout=1.0)
+        self._r.close()
+        self._w.close()
+        self._thread = None
+
+    def __exit__(self, *exc):
+        self.disarm()
+        return False
+
+
 class working:
     """``with working("diagnosing rec.csv"):`` shows, on a terminal and once the work has
     taken two seconds, a line with the elapsed time that keeps ticking until the work is

@@ -115,15 +115,27 @@ def cmd_run(args):
     from ..jsonable import jsonable
     from ..closed_loop import LoopInterrupted
     from ..scenario import export_partial, run_scenario
-    from .main import Interrupted
+    from .main import Interrupted, exits_on_interrupt
 
+    before = "interrupted before the first step, nothing written"
     try:
-        out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
-                           figures=False if args.no_figures else None)
+        # a ctrl-C during the set-up (seconds for a long run, much of it inside single calls
+        # into the core or numpy) ends the command at once: there is nothing to keep yet
+        with exits_on_interrupt(f"cosim run: {before}") as guard:
+            try:
+                out = run_scenario(args.scenario, plant=args.plant, duration=args.duration, out_dir=args.out,
+                                   figures=False if args.no_figures else None, started=guard.disarm)
+            except LoopInterrupted:
+                raise
+            except KeyboardInterrupt:  # the main thread saw it first: the same words
+                if guard.armed:
+                    guard.disarm()
+                    raise Interrupted(before) from None
+                raise
     except LoopInterrupted as e:
         part = e.partial
         if len(part) < 2:
-            raise Interrupted("interrupted before the first step, nothing written") from None
+            raise Interrupted(before) from None
         # said at once (a long recording takes a while to write), then written
         sc, d = e.scenario, e.out_dir
         print(f"cosim run: interrupted at t = {part.time[-1]:.6g} s, partial results in {d / sc.name}.csv (the "

@@ -136,12 +136,21 @@ class Diagnosis:
 
 
 
-def _load(recording):
-    from ..recording import Recording, read_recording
+def _load(recording, max_samples, block_seconds, progress):
+    """The working set of ``recording`` (:mod:`.working_set`): the whole recording when it
+    has at most ``max_samples`` rows, else blocks of it."""
+    from .working_set import WorkingSet, working_set
 
-    if isinstance(recording, Recording):
+    if isinstance(recording, WorkingSet):
         return recording
-    return read_recording(recording)
+    try:
+        return working_set(recording, max_samples=max_samples, block_seconds=block_seconds, progress=progress)
+    except ValueError as e:
+        from ..recording import RecordingError
+
+        if isinstance(e, RecordingError):
+            raise
+        raise DiagnosisError(str(e)) from None
 
 
 def _model_for(rec, model):
@@ -175,13 +184,16 @@ def _model_for(rec, model):
 def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold: float = 10.0,
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
+             max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
              verbose: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
     ----------
-    recording : str, Path or cosim.recording.Recording
-        A ``pkm-recording/1`` CSV (with its sidecar) or a recording object.
+    recording : str, Path, cosim.recording.Recording or WorkingSet
+        A ``pkm-recording/1`` table (CSV, Parquet or HDF5, with its sidecar, read in blocks
+        of rows), a recording object, or a working set already made
+        (:func:`~cosim.discrepancy.working_set.working_set`).
     model : cosim.core.Model, str or Path, optional
         The model to test: a Model, a named parameter set ("default", "appendix_a"),
         or a JSON parameter file (``cosim params <robot> --json``).  Default: the
@@ -217,6 +229,15 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         After the library, search each effort channel for a joint force no library effect
         names (:mod:`.discovery`), and withdraw a library effect a discovered term fits
         the held-out part better than.
+    max_samples : int, optional
+        Most rows the diagnosis holds (default
+        :data:`~cosim.discrepancy.working_set.MAX_SAMPLES`, 200,000): a longer recording is
+        diagnosed on a working set of blocks spread over all of it, each at the full rate
+        (:mod:`.working_set`; memory and time bounded whatever its length).
+    block_seconds : float, optional
+        Length of those blocks [s] (default 20).
+    progress : bool, optional
+        Progress bar of the rows read (None: on a terminal, after 2 s).
 
     Returns
     -------
@@ -239,12 +260,16 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
             raise DiagnosisError(f"{name} = {v!r} must be a positive number")
     if not (0.0 < train_fraction < 1.0):
         raise DiagnosisError(f"train_fraction = {train_fraction!r} must be in (0, 1)")
+    from .working_set import BLOCK_SECONDS, MAX_SAMPLES
+
     t0 = time.perf_counter()
-    rec = _load(recording)
+    ws = _load(recording, MAX_SAMPLES if max_samples is None else max_samples,
+               BLOCK_SECONDS if block_seconds is None else block_seconds, progress)
+    rec = ws.recording
     mdl = _model_for(rec, model)
-    timings = {}
+    timings = {"read": time.perf_counter() - t0}
     with one_blas_thread():
-        pipe = Pipeline(rec, mdl, window=window)
+        pipe = Pipeline(rec, mdl, window=window, segments=None if ws.whole else ws.segments)
         groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
         groups, one_signed = _drop_unseen_gaps(groups, pipe)
         _check_motion(pipe)
@@ -264,7 +289,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         held = heldout_fit(eng, sel, theta)
         loc = localise(eng, sel)
         t4 = time.perf_counter()
-    timings.update(prepare=t1 - t0, regressors=t2 - t1, selection=t3 - t2, discovery=t3b - t3,
+    timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, discovery=t3b - t3,
                    heldout_localisation=t4 - t3b)
     from .structure import sentence, unexplained
 
@@ -286,7 +311,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   steps=sel.steps, refused=[f"{k}: {v}" for k, v in sel.refused.items()],
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
-                            "smoothing_samples": pipe.window},
+                            "smoothing_samples": pipe.window,
+                            "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left,
                   discovered=found, withdrawn=withdrawn)
     if replay:
@@ -713,6 +739,13 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     k0 = int(pipe.idx[test][0]) if test.any() else None
     if k0 is None:
         return {"skipped": "no held-out samples"}
+    # on a working set of blocks the runs stay inside one block: the held-out one from k0,
+    # the two-body fit in the block of the last fitted sample
+    rec = rec.slice(0, pipe.segment_of(k0)[1])
+    fit_from, fit_to = int(pipe.idx[0]), k0
+    if len(pipe.segments) > 1 and (pipe.idx < k0).any():
+        a, b = pipe.segment_of(int(pipe.idx[pipe.idx < k0][-1]))
+        fit_from, fit_to = int(pipe.idx[pipe.idx >= a][0]), min(k0, b)
     try:
         ref = reference_from_recording(rec, mdl)
     except Exception as e:  # noqa: BLE001 - reported, not fatal
@@ -733,7 +766,7 @@ def _replay(rec, eng, sel, compared=None, theta=None):
         plants["fitted"].set_params(theta)
     joints = drive_joints(theta, mdl)
     if joints:
-        k_fit, n_fit = fitting_window(pipe, joints, int(pipe.idx[0]), k0)
+        k_fit, n_fit = fitting_window(pipe, joints, fit_from, fit_to)
         extra, rows = fit_two_body(rec, pipe, plants["fitted"], joints, run, ref, k_fit, n_fit)
         if extra is None:
             out["two_body"] = {"skipped": rows}

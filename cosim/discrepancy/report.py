@@ -67,6 +67,11 @@ def markdown(d, files: dict) -> str:
           f"({s['samples'] * s['dt']:.3g} s); residuals smoothed over {s['smoothing_samples']} samples "
           f"({s['window'] * 1e3:.0f} ms), decimated by {s['decimation']}; the last "
           f"{(1 - s['train_fraction']) * 100:.0f} % of the recording is held out of the fit.", ""]
+    from .working_set import sentence
+
+    if sentence(s.get("working_set")):
+        L += [sentence(s["working_set"])[0].upper() + sentence(s["working_set"])[1:] + " (docs/discrepancy.md, "
+              "Long recordings).", ""]
 
     if getattr(d, "unexplained", None):
         L += ["## Structure left unexplained", "",

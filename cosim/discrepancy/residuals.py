@@ -136,6 +136,12 @@ class Pipeline:
         next): its value at a sample time is the mean of the held values on both sides.
     max_delay : float
         Largest delay the engine considers [s] (sets the margin at the ends).
+    segments : list of (int, int), optional
+        Row ranges ``[start, stop)`` of separate stretches of motion placed one after the
+        other in ``rec`` (the blocks of a long recording's working set,
+        :mod:`.working_set`); each is uniformly sampled at the same step, and residuals are
+        evaluated only where the smoother and the delays stay inside one stretch.  Default:
+        the whole recording is one stretch.
 
     Raises
     ------
@@ -145,7 +151,7 @@ class Pipeline:
     """
 
     def __init__(self, rec, model, *, window: float = 0.05, polyorder: int = 3, step: int | None = None,
-                 zoh: bool = True, max_delay: float = 0.02, geometry=None):
+                 zoh: bool = True, max_delay: float = 0.02, geometry=None, segments=None):
         where = str(rec.path) if rec.path else "recording"
         if rec.robot != model.robot:
             raise DiagnosisError(f"{where}: recording of robot {rec.robot!r}, model of {model.robot!r}")
@@ -154,11 +160,16 @@ class Pipeline:
         n, nd = len(t), model.ndof
         if n < 3:
             raise DiagnosisError(f"{where}: {n} samples; a diagnosis needs a recording of at least a second")
-        dt = (t[-1] - t[0]) / (n - 1)
-        jitter = np.abs(np.diff(t) - dt).max()
-        if jitter > 0.01 * dt:
-            k = int(np.argmax(np.abs(np.diff(t) - dt)))
-            raise DiagnosisError(f"{where}: the sampling is not uniform (rows {k + 2}-{k + 3}: step "
+        self.segments = [(0, n)] if segments is None else [(int(a), int(b)) for a, b in segments]
+        dt = (sum(t[b - 1] - t[a] for a, b in self.segments)
+              / max(sum(b - a - 1 for a, b in self.segments), 1))
+        inside = np.ones(n - 1, bool)
+        inside[[a - 1 for a, _ in self.segments[1:]]] = False  # the jumps between stretches
+        dev = np.where(inside, np.abs(np.diff(t) - dt), 0.0)
+        if dev.max() > 0.01 * dt:
+            k = int(np.argmax(dev))
+            at = (f"rows {k + 2}-{k + 3}" if segments is None else f"t = {t[k]:.6g} s")
+            raise DiagnosisError(f"{where}: the sampling is not uniform ({at}: step "
                                  f"{t[k + 1] - t[k]:.6g} s, mean {dt:.6g} s); resample it to a constant step")
         w = int(round(window / dt)) | 1
         w = max(w, 7)
@@ -167,12 +178,22 @@ class Pipeline:
         self.max_shift = int(math.ceil(max_delay / dt)) + 2
         margin = w // 2 + self.max_shift
         need = 2 * margin + 20 * self.step
-        if n < need:
+        if segments is None and n < need:
             raise DiagnosisError(
                 f"{where}: {n} samples ({t[-1] - t[0]:.3g} s at {1 / dt:.4g} Hz) are too few: the smoothing window "
                 f"is {w} samples and the delays searched reach {max_delay * 1e3:.3g} ms, so at least {need} samples "
                 f"({need * dt:.3g} s) are needed")
-        self.idx = np.arange(margin, n - margin, self.step)
+        if segments is None:
+            self.idx = np.arange(margin, n - margin, self.step)
+        else:
+            # three more samples at the inner ends: the differences of the rates and of the
+            # reference reach that far before the smoother
+            pad = margin + 3
+            self.idx = np.concatenate([np.arange(a + pad, b - pad, self.step) for a, b in self.segments])
+            if len(self.idx) < 20:
+                raise DiagnosisError(f"{where}: its blocks of {min(b - a for a, b in self.segments)} samples are too "
+                                     f"short for a smoothing window of {w} samples and delays up to "
+                                     f"{max_delay * 1e3:.3g} ms")
         self.t = t
         try:
             model.inverse_dynamics(model.home(), np.zeros(nd), np.zeros(nd))
@@ -308,12 +329,14 @@ class Pipeline:
         if guess is None:
             # A chain of solves on a coarse grid, each from the previous pose, gives
             # every sample a guess close to its pose.
-            coarse = np.arange(0, len(q), 20)
+            # Each stretch of motion starts its chain from home, as the first one does.
+            coarse = np.unique(np.concatenate([np.arange(a, b, 20) for a, b in self.segments]))
+            starts = {a for a, _ in self.segments}
             xs = np.empty((len(coarse), model.ndof))
             g = model.home()
             for k, i in enumerate(coarse):
                 try:
-                    g = model.fk(q[i], x_guess=g)
+                    g = model.fk(q[i], x_guess=model.home() if i in starts else g)
                 except PkmError as e:
                     raise DiagnosisError(f"{self.where}: forward kinematics of the recorded joints failed at t = "
                                          f"{t[i]:.6g} s (row {i + 2}): {e}") from None
@@ -329,6 +352,13 @@ class Pipeline:
                 raise DiagnosisError(f"{self.where}: forward kinematics of the recorded joints failed at t = "
                                      f"{t[i]:.6g} s (row {i + 2}): {e}") from None
         return x
+
+    def segment_of(self, row: int) -> tuple[int, int]:
+        """The row range ``[start, stop)`` of the stretch of motion holding ``row``."""
+        for a, b in self.segments:
+            if a <= row < b:
+                return a, b
+        raise IndexError(f"row {row} is outside the recording's {self.n} rows")
 
     def model_for(self, params: dict):
         """The nominal model with ``params`` set: one scratch copy whose parameters are
@@ -365,7 +395,8 @@ class Pipeline:
         pos = self.idx if positions is None else np.asarray(positions)
         d_a = m.param("actuator.delay") / self.dt
         d_s = m.param("sensor.delay") / self.dt
-        if max(d_a, d_s) > self.max_shift - 2:
+        # 1e-9: the largest delay searched, (max_shift - 2) dt, divided by dt may round above max_shift - 2
+        if max(d_a, d_s) > self.max_shift - 2 + 1e-9:
             raise DiagnosisError(f"a delay of {max(d_a, d_s) * self.dt * 1e3:.3g} ms is beyond the "
                                  f"{(self.max_shift - 2) * self.dt * 1e3:.3g} ms the pipeline was built for")
         dyn = tuple(sorted((k, v) for k, v in params.items() if not _is(k, ACTUATOR_KEYS + SENSOR_KEYS)))

@@ -116,6 +116,28 @@ def test_run_interrupted_keeps_its_recording_up_to_then(tmp_path):
     assert "interrupted at t =" in json.loads(csv.with_suffix(".json").read_text())["notes"]
 
 
+def test_run_interrupted_during_its_set_up_stops_at_once_with_the_loops_words(tmp_path):
+    # a 1000 s run at 1 kHz: its set-up (the reference of 1e6 samples, the noise draws, the
+    # row buffers) takes seconds, much of it inside single calls into the core and numpy,
+    # where Python would see the signal only when the call returns
+    sc = tmp_path / "long.toml"
+    sc.write_text((SCEN / "6pus_step_pd.toml").read_text().replace("duration = 2.0", "duration = 1000.0"))
+    out = tmp_path / "out"
+    p = _cosim(["run", str(sc), "--out", str(out), "--no-figures"])
+    assert p.stdout.readline().strip() == "ready"
+    time.sleep(0.5)
+    assert p.poll() is None
+    sent = time.monotonic()
+    os.killpg(p.pid, signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    latency = time.monotonic() - sent
+    assert p.returncode == 130, err
+    # the words of a loop interrupted before its first step, and nothing written
+    assert _one_line(err) == "cosim run: interrupted before the first step, nothing written", err
+    assert latency < 0.5, f"{latency:.2f} s from the signal to the exit"
+    assert not out.exists() or not any(out.iterdir())
+
+
 def test_diagnose_interrupted_says_so_in_one_line(tmp_path):
     from cosim.discrepancy import blind
 
