@@ -449,6 +449,38 @@ std::string source_files(const std::vector<std::string>& files) {
   return o + "    </SourceFiles>\n";
 }
 
+// <UnitDefinitions> of the units used, <LogCategories> and <DefaultExperiment>: the same
+// in the FMI 2.0 and the FMI 3.0 description.
+std::string units_and_log_categories(const std::set<std::string>& units) {
+  std::ostringstream o;
+  if (!units.empty()) {
+    o << "  <UnitDefinitions>\n";
+    for (const auto& u : units) {
+      std::map<std::string, int> e;
+      o << "    <Unit name=\"" << xml(u) << "\"";
+      if (base_unit(u, e)) {
+        o << "><BaseUnit";
+        for (const auto& kv : e)
+          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
+        o << "/></Unit>\n";
+      } else {
+        o << "/>\n";
+      }
+    }
+    o << "  </UnitDefinitions>\n";
+  }
+  o << "  <LogCategories>\n"
+       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
+       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
+       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
+       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
+       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
+       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
+       "  </LogCategories>\n";
+  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  return o.str();
+}
+
 std::string model_description(const Table& t, int nd, const std::string& guid,
                               const std::vector<std::string>& sources = {}) {
   const std::string id = t.head.at("identifier");
@@ -476,31 +508,7 @@ std::string model_description(const Table& t, int nd, const std::string& guid,
   std::set<std::string> units;
   for (const auto& v : t.vars)
     if (!no_unit(v.unit)) units.insert(v.unit);
-  if (!units.empty()) {
-    o << "  <UnitDefinitions>\n";
-    for (const auto& u : units) {
-      std::map<std::string, int> e;
-      o << "    <Unit name=\"" << xml(u) << "\"";
-      if (base_unit(u, e)) {
-        o << "><BaseUnit";
-        for (const auto& kv : e)
-          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
-        o << "/></Unit>\n";
-      } else {
-        o << "/>\n";
-      }
-    }
-    o << "  </UnitDefinitions>\n";
-  }
-  o << "  <LogCategories>\n"
-       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
-       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
-       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
-       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
-       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
-       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
-       "  </LogCategories>\n";
-  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  o << units_and_log_categories(units);
   o << "  <ModelVariables>\n";
   std::map<std::pair<std::string, int>, size_t> pos;  // (channel, index) -> 1-based index
   for (size_t k = 0; k < t.vars.size(); ++k) pos[{t.vars[k].channel, t.vars[k].index}] = k + 1;
@@ -646,31 +654,7 @@ std::string model_description3(const Table& t, const std::vector<Var3>& vars, co
   std::set<std::string> units;
   for (const auto& v : vars)
     if (!no_unit(v.unit)) units.insert(v.unit);
-  if (!units.empty()) {
-    o << "  <UnitDefinitions>\n";
-    for (const auto& u : units) {
-      std::map<std::string, int> e;
-      o << "    <Unit name=\"" << xml(u) << "\"";
-      if (base_unit(u, e)) {
-        o << "><BaseUnit";
-        for (const auto& kv : e)
-          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
-        o << "/></Unit>\n";
-      } else {
-        o << "/>\n";
-      }
-    }
-    o << "  </UnitDefinitions>\n";
-  }
-  o << "  <LogCategories>\n"
-       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
-       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
-       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
-       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
-       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
-       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
-       "  </LogCategories>\n";
-  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  o << units_and_log_categories(units);
   o << "  <ModelVariables>\n";
   std::map<std::string, size_t> vr_of;
   for (size_t k = 0; k < vars.size(); ++k) vr_of[vars[k].name] = k;

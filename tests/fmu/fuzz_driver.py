@@ -30,9 +30,27 @@ def carray(values):
     return (ctypes.c_double * len(values))(*values)
 
 
-class Fmi2:
-    """The calls of a case on an FMI 2.0 instance."""
+class Calls:
+    """The calls of a case, on an FMI 2.0 or 3.0 instance (what differs is in the subclasses)."""
 
+    def do_step(self, t, h):
+        self.f.doStep(t, h)
+
+    def set_states(self, x):
+        self.f.setContinuousStates(carray(x), len(x))
+
+    def derivatives(self, n):
+        dx = carray([0.0] * n)
+        self.get_derivatives(dx, n)
+        return list(dx)
+
+    def indicators(self, n):
+        z = carray([0.0] * n)
+        self.f.getEventIndicators(z, n)
+        return list(z)
+
+
+class Fmi2(Calls):
     def __init__(self, md, unzip, me, name, callbacks):
         from fmpy.fmi2 import FMU2Model, FMU2Slave
 
@@ -40,6 +58,7 @@ class Fmi2:
         ident = (md.modelExchange if me else md.coSimulation).modelIdentifier
         self.f = cls(guid=md.guid, unzipDirectory=unzip, modelIdentifier=ident, instanceName=name)
         self.f.instantiate(callbacks=callbacks, loggingOn=False)
+        self.get_derivatives = getattr(self.f, "getDerivatives", None)
 
     def set(self, refs, values):
         self.f.setReal(refs, values)
@@ -57,31 +76,13 @@ class Fmi2:
         self.f.newDiscreteStates()
         self.f.enterContinuousTimeMode()
 
-    def do_step(self, t, h):
-        self.f.doStep(t, h)
-
-    def set_states(self, x):
-        self.f.setContinuousStates(carray(x), len(x))
-
-    def derivatives(self, n):
-        dx = carray([0.0] * n)
-        self.f.getDerivatives(dx, n)
-        return list(dx)
-
-    def indicators(self, n):
-        z = carray([0.0] * n)
-        self.f.getEventIndicators(z, n)
-        return list(z)
-
     def state_roundtrip(self):
         s = self.f.getFMUstate()
         self.f.setFMUstate(s)
         self.f.freeFMUstate(s)
 
 
-class Fmi3:
-    """The same calls on an FMI 3.0 instance."""
-
+class Fmi3(Calls):
     def __init__(self, md, unzip, me, name, callbacks):
         from fmpy.fmi3 import FMU3Model, FMU3Slave
 
@@ -89,6 +90,7 @@ class Fmi3:
         ident = (md.modelExchange if me else md.coSimulation).modelIdentifier
         self.f = cls(guid=md.guid, unzipDirectory=unzip, modelIdentifier=ident, instanceName=name)
         self.f.instantiate(loggingOn=False, logMessage=callbacks)
+        self.get_derivatives = getattr(self.f, "getContinuousStateDerivatives", None)
 
     def set(self, refs, values):
         self.f.setFloat64(refs, values)
@@ -103,22 +105,6 @@ class Fmi3:
     def to_continuous_time(self):
         self.f.updateDiscreteStates()
         self.f.enterContinuousTimeMode()
-
-    def do_step(self, t, h):
-        self.f.doStep(t, h)
-
-    def set_states(self, x):
-        self.f.setContinuousStates(carray(x), len(x))
-
-    def derivatives(self, n):
-        dx = carray([0.0] * n)
-        self.f.getContinuousStateDerivatives(dx, n)
-        return list(dx)
-
-    def indicators(self, n):
-        z = carray([0.0] * n)
-        self.f.getEventIndicators(z, n)
-        return list(z)
 
     def state_roundtrip(self):
         s = self.f.getFMUState()
