@@ -320,10 +320,15 @@ static int state_ok(fmu_instance* c, const char* fn, const char* magic, const fm
   }
   if (memchr(s->guid, 0, sizeof s->guid) == NULL || strcmp(s->guid, c->token) != 0 ||
       s->type != (int32_t)c->cosimulation || s->version != STATE_VERSION || s->reserved != 0) {
+    /* The block's GUID as printable ASCII: a message is UTF-8 text, whatever the block holds. */
+    char guid[41];
+    size_t k = 0;
+    for (; k < sizeof guid - 1 && s->guid[k]; ++k) guid[k] = (s->guid[k] >= 32 && s->guid[k] < 127) ? s->guid[k] : '?';
+    guid[k] = '\0';
     fmu_log(c, FMU_ERROR, LOG_ERROR,
-            "%s: FMU state of another model, interface or layout (GUID %.40s, type %d, layout %u; this instance: %s, "
+            "%s: FMU state of another model, interface or layout (GUID %s, type %d, layout %u; this instance: %s, "
             "%d, %u)",
-            fn, s->guid, (int)s->type, (unsigned)s->version, c->token, c->cosimulation, STATE_VERSION);
+            fn, guid, (int)s->type, (unsigned)s->version, c->token, c->cosimulation, STATE_VERSION);
     return 0;
   }
   if (s->nplant < n || s->nplant > n + (1u << 24) || (size && size != state_bytes(s->nplant))) {

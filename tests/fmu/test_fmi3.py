@@ -378,3 +378,67 @@ def test_closed_pd_loop_with_the_controller_fmu_equals_fmi2():
     assert np.max(np.abs(q3 - q2)) <= 1e-12
     # the loop works: the error to the reference shrinks from 1 mm
     assert np.max(np.abs(q3[-1] - qref)) < 0.5e-3
+
+
+def _fnv(block: bytes, start: int = 0, h: int = 14695981039346656037) -> int:
+    """FNV-1a 64 of a state block with its checksum field (bytes 112..119) read as zero; from
+    byte ``start`` on with ``h`` the hash of the bytes before it."""
+    for i in range(start, len(block)):
+        h = ((h ^ (0 if 112 <= i < 120 else block[i])) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+@pytest.mark.parametrize("kind", ["CoSimulation", "ModelExchange"])
+def test_corrupted_fmi3_states_are_refused_or_harmless(kind):
+    """Every 8-byte word of a good serialized state (initialized, stepped) replaced by NaN, -Inf,
+    -1 and 1e300, as it is and sealed with its checksum again, into the instance it
+    came from: refused with a logged Error and the instance unchanged byte for byte, or accepted
+    and then every output finite or refused (never a non-finite value with OK), and the good
+    state always set back.  tests/fmu/test_state_fuzz.py does the same, more widely, to FMI 2.0."""
+    hold = hold_input("6pus")
+    f = Instance(fmu.fmu_path("6pus", fmi=3), kind=kind)
+    if kind == "ModelExchange":
+        f.f.updateDiscreteStates()
+        f.f.enterContinuousTimeMode()
+        f.set("tau", hold)
+    else:
+        for _ in range(3):
+            f.step(hold)
+    good = f.f.getFMUState()
+    blob = bytes(f.f.serializeFMUState(good))
+    assert struct.unpack_from("<Q", blob, 112)[0] == _fnv(blob)  # where the checksum is
+    outputs = [v for v, _ in flat(f.md, "output")]
+    n_out = sum(f.size[v.name] for v in outputs)
+    counts = {"cases": 0, "accepted": 0, "refused": 0}
+    prefix = 14695981039346656037  # the hash of the bytes before the word
+    for word in range(len(blob) // 8):
+        for value in (float("nan"), float("-inf"), -1.0, 1e300):
+            bad = bytearray(blob)
+            bad[8 * word:8 * word + 8] = struct.pack("<d", value)
+            for seal in (False, True):
+                if seal:
+                    bad[112:120] = struct.pack("<Q", _fnv(bytes(bad), 8 * word, prefix))
+                counts["cases"] += 1
+                n = len(f.log)
+                try:
+                    s = f.f.deserializeFMUState(bytes(bad))
+                    f.f.setFMUState(s)
+                    f.f.freeFMUState(s)
+                except FMICallException:
+                    counts["refused"] += 1
+                    assert any(st == 3 for st, _ in f.log[n:]), "refused without a message"
+                    now = f.f.getFMUState()
+                    assert bytes(f.f.serializeFMUState(now)) == blob, f"word {word}: changed by a refused state"
+                    f.f.freeFMUState(now)
+                    continue
+                counts["accepted"] += 1
+                try:
+                    vals = f.f.getFloat64([v.valueReference for v in outputs], n_out)
+                    assert np.all(np.isfinite(vals)), f"word {word} = {value}: a non-finite output with OK"
+                except FMICallException:
+                    pass
+                f.f.setFMUState(good)  # must succeed
+        prefix = _fnv(blob[:8 * word + 8], 8 * word, prefix)
+    f.f.freeFMUState(good)
+    f.close()
+    assert counts["cases"] == 8 * (len(blob) // 8) and counts["refused"] > counts["cases"] / 2, counts
