@@ -245,6 +245,23 @@ def fmu_pair(robot: str, folder: Path, fmi: int = 2) -> tuple[Unpacked, Unpacked
     return out[0], out[1]
 
 
+# The FMI 2.0 function named in a message, and its FMI 3.0 counterpart.
+FMI3_NAME = {"fmi2SetReal": "fmi3SetFloat64", "fmi2SetInteger": "fmi3SetInt32", "fmi2GetReal": "fmi3GetFloat64",
+             "fmi2DoStep": "fmi3DoStep", "fmi2ExitInitializationMode": "fmi3ExitInitializationMode",
+             "fmi2GetDerivatives": "fmi3GetContinuousStateDerivatives",
+             "fmi2CompletedIntegratorStep": "fmi3CompletedIntegratorStep"}
+
+
+def as_fmi3(lines: list[str]) -> list[str]:
+    """An FMI 2.0 run's output lines as the FMI 3.0 FMU says them (its function names)."""
+    out = []
+    for ln in lines:
+        for a, b in FMI3_NAME.items():
+            ln = ln.replace(a + ":", b + ":")
+        out.append(ln)
+    return out
+
+
 def largest_difference(a: dict, b: dict) -> float:
     """The largest difference between two runs' printed values (relative where |v| > 1)."""
     assert len(a["values"]) == len(b["values"]), (a, b)

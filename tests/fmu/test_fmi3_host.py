@@ -7,24 +7,9 @@ messages (the FMI 2.0 host on the FMI 2.0 FMUs, linux64, is the reference)."""
 import numpy as np
 import pytest
 
-from platform_host import PLATFORMS, fmu_pair, largest_difference, loop_script, me_script, run
-
-# The FMI 2.0 function named in a message, and its FMI 3.0 counterpart.
-FMI3_NAME = {"fmi2SetReal": "fmi3SetFloat64", "fmi2SetInteger": "fmi3SetInt32", "fmi2GetReal": "fmi3GetFloat64",
-             "fmi2DoStep": "fmi3DoStep", "fmi2ExitInitializationMode": "fmi3ExitInitializationMode",
-             "fmi2GetDerivatives": "fmi3GetContinuousStateDerivatives",
-             "fmi2CompletedIntegratorStep": "fmi3CompletedIntegratorStep"}
+from platform_host import PLATFORMS, as_fmi3, fmu_pair, largest_difference, loop_script, me_script, run
 
 CASES = [("6pus", p) for p in PLATFORMS] + [("hexapod_ups", "linux64")]
-
-
-def as_fmi3(lines):
-    out = []
-    for ln in lines:
-        for a, b in FMI3_NAME.items():
-            ln = ln.replace(a + ":", b + ":")
-        out.append(ln)
-    return out
 
 
 @pytest.fixture(scope="module")
