@@ -1,7 +1,8 @@
 """Every robot's plant and controller FMUs on every platform the build makes binaries for:
 the PD step of tests/fmu/platform_host.py (steps, state save / restore, a refused NaN effort)
 through the tests' FMI 2.0 host, natively (linux64), under Wine (win64) and under QEMU
-(aarch64-linux), each against linux64; and the size of each platform's binary.
+(aarch64-linux), each against linux64; the FMI 3.0 FMUs through the FMI 3.0 host on the three
+platforms against the same FMI 2.0 linux64 run; and the size of each platform's binary.
 
     .venv/bin/python bench/fmu_platforms.py            # all robots with FMUs (a few minutes)
     .venv/bin/python bench/fmu_platforms.py 6pus quattro
@@ -17,7 +18,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests" / "fmu"))
 
-from platform_host import PLATFORMS, fmu_pair, largest_difference, loop_script, run  # noqa: E402
+from platform_host import PLATFORMS, as_fmi3, fmu_pair, largest_difference, loop_script, run  # noqa: E402
 
 from cosim import fmu  # noqa: E402
 
@@ -42,8 +43,9 @@ def binary_sizes(path):
 
 def main(robots):
     print(f"| robot | {' | '.join(p + ' [s]' for p in PLATFORMS)} | largest difference to linux64 | "
-          f"same messages | plant binary in the .fmu, {' / '.join(PLATFORMS)} [kB] |")
-    print("| --- " * (len(PLATFORMS) + 4) + "|")
+          f"same messages | FMI 3.0 on the 3 platforms: largest difference, same messages | "
+          f"plant binary in the .fmu, {' / '.join(PLATFORMS)} [kB] |")
+    print("| --- " * (len(PLATFORMS) + 5) + "|")
     worst = 0.0
     for robot in robots:
         with tempfile.TemporaryDirectory() as d:
@@ -56,10 +58,15 @@ def main(robots):
                 secs[p] = time.perf_counter() - t0
             diff = max(largest_difference(outs["linux64"], outs[p]) for p in PLATFORMS[1:])
             same = all(outs[p]["lines"] == outs["linux64"]["lines"] for p in PLATFORMS[1:])
-            worst = max(worst, diff)
+            plant3, ctrl3 = fmu_pair(robot, folder, fmi=3)
+            outs3 = {p: run(p, loop_script(plant3, ctrl3, robot, p), folder, fmi=3) for p in PLATFORMS}
+            diff3 = max(largest_difference(outs["linux64"], outs3[p]) for p in PLATFORMS)
+            same3 = all(outs3[p]["lines"] == as_fmi3(outs["linux64"]["lines"]) for p in PLATFORMS)
+            worst = max(worst, diff, diff3)
             sizes = binary_sizes(fmu.fmu_path(robot))
             print(f"| {robot} | {' | '.join(f'{secs[p]:.1f}' for p in PLATFORMS)} | {diff:.1e} | "
-                  f"{'yes' if same else 'NO'} | {' / '.join(str(round(sizes.get(p, 0) / 1024)) for p in PLATFORMS)} |")
+                  f"{'yes' if same else 'NO'} | {diff3:.1e}, {'yes' if same3 else 'NO'} | "
+                  f"{' / '.join(str(round(sizes.get(p, 0) / 1024)) for p in PLATFORMS)} |")
     print(f"\nlargest difference over all robots: {worst:.1e} (bound 1e-12)")
     return 0 if worst <= 1e-12 else 1
 

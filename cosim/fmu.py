@@ -73,24 +73,31 @@ def build_dir() -> Path:
     return Path(os.environ.get("PKM_BUILD_DIR", REPO / "build"))
 
 
-def fmu_path(robot: str = "6pus", build: str | Path | None = None) -> Path:
-    """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu``; raises if it is not built.
+def fmu_path(robot: str = "6pus", build: str | Path | None = None, fmi: int = 2) -> Path:
+    """Path of a robot's built FMU, ``<build>/fmu/<ID>.fmu`` (FMI 2.0) or
+    ``<build>/fmu/fmi3/<ID>.fmu`` (``fmi=3``); raises if it is not built.
     A description file's FMU is built on demand by :func:`build` (``cosim fmu PATH.toml``)."""
     ident = fmu_id(robot)
-    p = Path(build or build_dir()) / "fmu" / f"{ident}.fmu"
+    if fmi not in (2, 3):
+        raise ValueError(f"FMI {fmi}: the FMUs are FMI 2.0 or 3.0 (fmi=2 or 3)")
+    folder = Path(build or build_dir()) / "fmu"
+    p = folder / f"{ident}.fmu" if fmi == 2 else folder / "fmi3" / f"{ident}.fmu"
     if not p.exists():
+        target = f"{ident}_fmu" if fmi == 2 else f"{ident}_fmu3"
         how = (f"cosim fmu {robot} --out DIR (or cosim.fmu.build({robot!r}))" if _is_file(robot) else
-               f"./scripts/bootstrap.sh (or cmake --build {p.parent.parent} --target {ident}_fmu)")
+               f"./scripts/bootstrap.sh (or cmake --build {folder.parent} --target {target})")
         raise FileNotFoundError(f"{p} is not built: run {how}")
     return p
 
 
 PLATFORMS = ("linux64", "win64", "aarch64-linux")
+# The binaries/ folder of each platform in an FMI 3.0 FMU (the platform tuples).
+FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
 
 def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -> Path:
-    """Build (or bring up to date) a robot's FMUs (plant, controller, source-code) with CMake
-    and return the plant's path.
+    """Build (or bring up to date) a robot's FMUs (plant, controller, source-code; FMI 2.0 and
+    3.0) with CMake and return the FMI 2.0 plant's path.
 
     A description file anywhere (``"my_stewart.toml"``) is given to the build as
     ``PKM_FMU_DESCRIPTIONS`` (nothing in the checkout changes): its FMUs compile only their
@@ -111,7 +118,8 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -
         configure.append(f"-DPKM_FMU_DESCRIPTIONS={desc}")
     if _is_file(robot) or not (b / "CMakeCache.txt").exists():
         subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
-    targets = [f"{ident}_fmu", f"{ident}_CTRL_fmu", f"{ident}_source_fmu", f"{ident}_CTRL_source_fmu"]
+    targets = [f"{ident}_fmu", f"{ident}_CTRL_fmu", f"{ident}_source_fmu", f"{ident}_CTRL_source_fmu",
+               f"{ident}_fmu3", f"{ident}_CTRL_fmu3"]
     subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *targets], check=True,
                    stdout=subprocess.DEVNULL)
     return fmu_path(robot, b)
@@ -137,7 +145,8 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     source : bool
         Also the source-code FMUs.
     fmi : int
-        FMI version; 2 (FMI 3.0 FMUs are not made by this build).
+        FMI version: 2 or 3 (FMI 3.0: the same binaries under the FMI 3.0 platform tuples,
+        ``x86_64-linux``, ``x86_64-windows``, ``aarch64-linux``; no source-code FMU).
 
     Returns
     -------
@@ -148,17 +157,22 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     -------
     >>> from cosim import fmu
     >>> fmu.package("6pus", out="out/fmus", platforms=["linux64", "win64"], source=True)
+    >>> fmu.package("6pus", out="out/fmi3", platforms=["linux64", "aarch64-linux"], fmi=3)
     """
     import zipfile
 
-    if fmi != 2:
-        raise ValueError(f"FMI {fmi}: this build makes FMI 2.0 FMUs only")
+    if fmi not in (2, 3):
+        raise ValueError(f"FMI {fmi}: this build makes FMI 2.0 and FMI 3.0 FMUs (--fmi 2 or 3)")
+    if fmi == 3 and source:
+        raise ValueError("FMI 3: the source-code FMUs are FMI 2.0 only (drop --source or use --fmi 2)")
     bad = [p for p in platforms if p not in PLATFORMS]
     if bad:
         raise ValueError(f"unknown platform {bad[0]!r}: use {', '.join(PLATFORMS)}")
     b = Path(build or build_dir())
     ident = fmu_id(robot)
-    made = [b / "fmu" / f"{i}.fmu" for i in (ident, ident + "_CTRL")]
+    folder = b / "fmu" if fmi == 2 else b / "fmu" / "fmi3"
+    made = [folder / f"{i}.fmu" for i in (ident, ident + "_CTRL")]
+    platforms = [p if fmi == 2 else FMI3_PLATFORMS[p] for p in platforms]
     if _is_file(robot) or not all(p.exists() for p in made):
         _build_fmus(robot, b)
     out = Path(out)

@@ -11,7 +11,7 @@ def _configure(p):
     p.add_argument("robot", type=robot_arg, help="a listed robot (cosim robots) or a description file")
     p.add_argument("--platforms", default="linux64",
                    help=f"comma-separated binaries to include: {', '.join(PLATFORMS)} (default linux64)")
-    p.add_argument("--fmi", type=int, choices=[2, 3], default=2, help="FMI version (this build makes 2.0)")
+    p.add_argument("--fmi", type=int, choices=[2, 3], default=2, help="FMI version: 2 (default) or 3 (FMI 3.0 FMUs, no source-code FMU)")
     p.add_argument("--source", action="store_true", help="also the source-code FMUs (<ID>_sources.fmu)")
     p.add_argument("--out", type=output_dir, required=True, help="folder to write the .fmu files to")
 

@@ -34,6 +34,11 @@ struct Var {
   bool integer = false;
   bool has_start = false;
   double start = 0;
+  // The table line the row comes from and, for a family, its dimensions ({i} ... each one
+  // a dimension) and its name and description as written: an FMI 3.0 array.
+  int line = 0;
+  std::vector<int> dims;
+  std::string family_name, family_description;
 };
 
 std::string trim(const std::string& s) {
@@ -295,6 +300,12 @@ Table read_table(const std::string& path, pkm_model*& model) {
       v.integer = ci->second.second;
       v.name = name;
       v.description = f[4];
+      v.line = ln;
+      if (family) {
+        for (const auto& q : ph) v.dims.push_back(q.second);
+        v.family_name = name.substr(0, name.find('['));
+        v.family_description = f[4];
+      }
       int rest = k;
       for (size_t a = ph.size(); a-- > 0;) {
         const int pos = rest % ph[a].second;
@@ -438,6 +449,38 @@ std::string source_files(const std::vector<std::string>& files) {
   return o + "    </SourceFiles>\n";
 }
 
+// <UnitDefinitions> of the units used, <LogCategories> and <DefaultExperiment>: the same
+// in the FMI 2.0 and the FMI 3.0 description.
+std::string units_and_log_categories(const std::set<std::string>& units) {
+  std::ostringstream o;
+  if (!units.empty()) {
+    o << "  <UnitDefinitions>\n";
+    for (const auto& u : units) {
+      std::map<std::string, int> e;
+      o << "    <Unit name=\"" << xml(u) << "\"";
+      if (base_unit(u, e)) {
+        o << "><BaseUnit";
+        for (const auto& kv : e)
+          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
+        o << "/></Unit>\n";
+      } else {
+        o << "/>\n";
+      }
+    }
+    o << "  </UnitDefinitions>\n";
+  }
+  o << "  <LogCategories>\n"
+       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
+       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
+       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
+       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
+       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
+       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
+       "  </LogCategories>\n";
+  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  return o.str();
+}
+
 std::string model_description(const Table& t, int nd, const std::string& guid,
                               const std::vector<std::string>& sources = {}) {
   const std::string id = t.head.at("identifier");
@@ -465,31 +508,7 @@ std::string model_description(const Table& t, int nd, const std::string& guid,
   std::set<std::string> units;
   for (const auto& v : t.vars)
     if (!no_unit(v.unit)) units.insert(v.unit);
-  if (!units.empty()) {
-    o << "  <UnitDefinitions>\n";
-    for (const auto& u : units) {
-      std::map<std::string, int> e;
-      o << "    <Unit name=\"" << xml(u) << "\"";
-      if (base_unit(u, e)) {
-        o << "><BaseUnit";
-        for (const auto& kv : e)
-          if (kv.second != 0) o << " " << kv.first << "=\"" << kv.second << "\"";
-        o << "/></Unit>\n";
-      } else {
-        o << "/>\n";
-      }
-    }
-    o << "  </UnitDefinitions>\n";
-  }
-  o << "  <LogCategories>\n"
-       "    <Category name=\"logEvents\" description=\"instantiation, initialization, events\"/>\n"
-       "    <Category name=\"logStatusWarning\" description=\"warnings\"/>\n"
-       "    <Category name=\"logStatusDiscard\" description=\"a step stopped at a singularity or stroke limit\"/>\n"
-       "    <Category name=\"logStatusError\" description=\"errors (bad parameter, bad input, CVODE failure)\"/>\n"
-       "    <Category name=\"logStatusFatal\" description=\"fatal errors\"/>\n"
-       "    <Category name=\"logFmiCalls\" description=\"every FMI call\"/>\n"
-       "  </LogCategories>\n";
-  o << "  <DefaultExperiment startTime=\"0\" stopTime=\"1\" stepSize=\"0.001\"/>\n";
+  o << units_and_log_categories(units);
   o << "  <ModelVariables>\n";
   std::map<std::pair<std::string, int>, size_t> pos;  // (channel, index) -> 1-based index
   for (size_t k = 0; k < t.vars.size(); ++k) pos[{t.vars[k].channel, t.vars[k].index}] = k + 1;
@@ -525,6 +544,177 @@ std::string model_description(const Table& t, int nd, const std::string& guid,
   o << "    <InitialUnknowns>\n";
   for (size_t k : outs) o << "      <Unknown index=\"" << k << "\"/>\n";
   o << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
+  return o.str();
+}
+
+// ------------------------------------------------------------------ FMI 3.0
+
+// One FMI 3.0 variable: consecutive rows of the table taken together (an array over the
+// joints, the pose coordinates, a gain matrix; or one scalar), or time, or the event
+// indicators.  Value references are positions in this list (time is 0).
+struct Var3 {
+  std::string name, causality, description, unit, kind = "FMU3_ROWS";
+  bool integer = false;
+  size_t row = 0, count = 1;  // first row of the FMI 2.0 table (0-based) and the rows
+  std::vector<int> dims;      // empty: a scalar
+};
+
+// The pose channels are arrays over the platform coordinates however the table writes
+// them (one row per coordinate or a {p} family): what each array is.
+const std::map<std::string, std::string>& pose_arrays() {
+  static const std::map<std::string, std::string> m = {
+      {"pose", "platform pose (continuous state)"},
+      {"twist", "rate of the platform pose, der(pose) (continuous state)"},
+      {"accel", "second derivative of the platform pose, der(twist)"},
+      {"pose0", "initial platform pose (default: the home pose)"},
+      {"twist0", "initial rate of the platform pose"}};
+  return m;
+}
+
+std::vector<Var3> fmi3_variables(const Table& t, pkm_model* model, int nd, const std::string& path) {
+  std::vector<Var3> out;
+  Var3 time;
+  time.name = "time";
+  time.causality = "independent";
+  time.description = "simulation time";
+  time.unit = "s";
+  time.kind = "FMU3_TIME";
+  out.push_back(time);
+  for (size_t k = 0; k < t.vars.size();) {
+    const Var& v = t.vars[k];
+    Var3 a;
+    a.causality = v.causality;
+    a.integer = v.integer;
+    a.row = k;
+    size_t end = k + 1;
+    if (pose_arrays().count(v.channel)) {
+      while (end < t.vars.size() && t.vars[end].channel == v.channel) ++end;
+      for (size_t j = k; j < end; ++j)
+        if (t.vars[j].index != (int)(j - k))
+          throw Fail(path + ": the rows of channel " + v.channel + " must give the coordinates in order (FMI 3.0 array)");
+      if ((int)(end - k) != nd) throw Fail(path + ": channel " + v.channel + " needs one row per coordinate, together");
+      a.name = v.channel;
+      a.dims = {nd};
+      a.description = pose_arrays().at(v.channel) + ":";
+      for (int j = 0; j < nd; ++j)
+        a.description += std::string(j ? ", " : " ") + pkm_model_pose_name(model, j) +
+                         (no_unit(t.vars[k + j].unit) ? "" : " [" + t.vars[k + j].unit + "]");
+    } else if (!v.dims.empty()) {
+      while (end < t.vars.size() && t.vars[end].line == v.line) ++end;
+      a.name = v.family_name;
+      a.dims = v.dims;
+      a.description = v.family_description;
+      for (const char* p : {"{i}", "{j}", "{r}", "{c}"}) a.description = replace_all(a.description, p, std::string(1, p[1]));
+      a.description = replace_all(a.description, "{qu}", pkm_model_joint_unit(model));
+      a.description = replace_all(a.description, "{eu}", pkm_model_effort_unit(model));
+    } else {
+      a.name = v.name;
+      a.description = v.description;
+    }
+    a.count = end - k;
+    a.unit = v.unit;
+    for (size_t j = k; j < end; ++j)
+      if (t.vars[j].unit != v.unit) a.unit.clear();  // mixed units (m and rad): said in the description
+    out.push_back(a);
+    k = end;
+  }
+  if (t.nindicators() > 0) {
+    Var3 z;
+    z.name = "eventIndicators";
+    z.causality = "local";
+    z.kind = "FMU3_INDICATORS";
+    z.count = (size_t)t.nindicators();
+    z.dims = {t.nindicators()};
+    z.description = "Model Exchange event indicators, each > 0 inside the usable workspace: "
+                    "singularity.direct - solver.singMin";
+    if (!t.qmin.empty()) z.description += ", then per joint i q[i] - qmin[i], qmax[i] - q[i]";
+    out.push_back(z);
+  }
+  return out;
+}
+
+std::string model_description3(const Table& t, const std::vector<Var3>& vars, const std::string& token) {
+  const std::string id = t.head.at("identifier");
+  std::ostringstream o;
+  std::string desc = t.head.count("description") ? t.head.at("description") : id;
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<!-- Generated by fmu_gen from the model folder's variables.txt and the core's parameter table. -->\n"
+    << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << xml(id) << "\" instantiationToken=\"" << token
+    << "\"\n  description=\"" << xml(desc) << "\"\n  generationTool=\"pkm fmu_gen\" version=\"" << PKM_FMU_VERSION
+    << "\" variableNamingConvention=\"structured\">\n";
+  const char* common =
+      " canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"false\""
+      " canBeInstantiatedOnlyOncePerProcess=\"false\" needsExecutionTool=\"false\"";
+  if (!t.controller())
+    o << "  <ModelExchange modelIdentifier=\"" << xml(id) << "\"" << common
+      << " needsCompletedIntegratorStep=\"true\"/>\n";
+  o << "  <CoSimulation modelIdentifier=\"" << xml(id) << "\"" << common
+    << " canHandleVariableCommunicationStepSize=\"true\" maxOutputDerivativeOrder=\"0\" hasEventMode=\"false\""
+       " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\"/>\n";
+  std::set<std::string> units;
+  for (const auto& v : vars)
+    if (!no_unit(v.unit)) units.insert(v.unit);
+  o << units_and_log_categories(units);
+  o << "  <ModelVariables>\n";
+  std::map<std::string, size_t> vr_of;
+  for (size_t k = 0; k < vars.size(); ++k) vr_of[vars[k].name] = k;
+  for (size_t k = 0; k < vars.size(); ++k) {
+    const Var3& v = vars[k];
+    const char* type = v.integer ? "Int32" : "Float64";
+    std::string variability = v.causality == "parameter" ? "fixed" : (v.integer ? "discrete" : "continuous");
+    o << "    <" << type << " name=\"" << xml(v.name) << "\" valueReference=\"" << k << "\" description=\""
+      << xml(v.description) << "\" causality=\"" << v.causality << "\" variability=\"" << variability << "\"";
+    if (v.causality == "parameter") o << " initial=\"exact\"";
+    if (v.causality == "output") o << " initial=\"calculated\"";
+    if (!v.integer && !no_unit(v.unit)) o << " unit=\"" << xml(v.unit) << "\"";
+    if (v.name == "twist" && vr_of.count("pose")) o << " derivative=\"" << vr_of.at("pose") << "\"";
+    if (v.name == "accel" && vr_of.count("twist")) o << " derivative=\"" << vr_of.at("twist") << "\"";
+    if (v.kind == "FMU3_ROWS" && (v.causality == "parameter" || v.causality == "input")) {
+      o << " start=\"";
+      for (size_t j = 0; j < v.count; ++j) {
+        const Var& r = t.vars[v.row + j];
+        o << (j ? " " : "") << (v.integer ? std::to_string((long long)r.start) : num(r.start));
+      }
+      o << "\"";
+    }
+    if (v.dims.empty()) {
+      o << "/>\n";
+    } else {
+      o << ">\n";
+      for (int d : v.dims) o << "      <Dimension start=\"" << d << "\"/>\n";
+      o << "    </" << type << ">\n";
+    }
+  }
+  o << "  </ModelVariables>\n  <ModelStructure>\n";
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (vars[k].causality == "output") o << "    <Output valueReference=\"" << k << "\"/>\n";
+  // The state vector is (pose, twist): its derivatives are (twist, accel) in that order.
+  if (!t.controller())
+    for (const char* d : {"twist", "accel"})
+      o << "    <ContinuousStateDerivative valueReference=\"" << vr_of.at(d) << "\"/>\n";
+  // Every output is calculated (states from pose0/twist0, derivatives included).
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (vars[k].causality == "output") o << "    <InitialUnknown valueReference=\"" << k << "\"/>\n";
+  for (size_t k = 0; k < vars.size(); ++k)
+    if (vars[k].kind == "FMU3_INDICATORS") o << "    <EventIndicator valueReference=\"" << k << "\"/>\n";
+  o << "  </ModelStructure>\n</fmiModelDescription>\n";
+  return o.str();
+}
+
+std::string vars3_header(const std::vector<Var3>& vars, const std::string& token, const std::string& src) {
+  std::ostringstream o;
+  o << "/* Generated by fmu_gen from " << src << " and the core's parameter table: do not edit.\n"
+    << " * The FMI 3.0 variables of the FMU (its modelDescription.xml comes from the same run),\n"
+    << " * each over rows of FMU_MODEL.vars (fmu_vars.h). */\n"
+    << "#ifndef PKM_FMU_VARS3_H\n#define PKM_FMU_VARS3_H\n\n#include \"fmu_plant.h\"\n\n"
+    << "#define FMU3_TOKEN " << cstr(token) << "\n#define FMU3_NVARS " << vars.size() << "\n\n"
+    << "static const fmu3_var FMU3_VARS[FMU3_NVARS] = {\n";
+  for (size_t k = 0; k < vars.size(); ++k) {
+    const Var3& v = vars[k];
+    o << "    {" << k << "u, " << cstr(v.name) << ", " << (v.integer ? "FMU_INTEGER" : "FMU_REAL") << ", " << v.kind
+      << ", " << v.row << ", " << v.count << "},\n";
+  }
+  o << "};\n\n#endif\n";
   return o.str();
 }
 
@@ -596,9 +786,17 @@ void write_if_changed(const std::string& path, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --fmi3 <modelDescription.xml> <fmu_vars3.h>: the FMI 3.0 description and table too.
+  std::string md3, vars3;
+  if (argc > 3 && std::string(argv[1]) == "--fmi3") {
+    md3 = argv[2];
+    vars3 = argv[3];
+    argv += 3;
+    argc -= 3;
+  }
   if (argc < 4 || argc == 5) {
-    std::cerr << "usage: fmu_gen <variables.txt> <modelDescription.xml> <fmu_vars.h>"
-                 " [<source modelDescription.xml> <source file>...]\n";
+    std::cerr << "usage: fmu_gen [--fmi3 <modelDescription.xml> <fmu_vars3.h>] <variables.txt>"
+                 " <modelDescription.xml> <fmu_vars.h> [<source modelDescription.xml> <source file>...]\n";
     return 2;
   }
   pkm_model* model = nullptr;
@@ -609,6 +807,11 @@ int main(int argc, char** argv) {
     std::string guid = guid_of(model_description(t, nd, "{}"));
     write_if_changed(argv[2], model_description(t, nd, guid));
     write_if_changed(argv[3], vars_header(t, nd, np, guid, argv[1]));
+    // The FMI 3.0 variables always (the binary's FMI 3.0 functions need their table).
+    const std::vector<Var3> v3 = fmi3_variables(t, model, nd, argv[1]);
+    const std::string token = guid_of(model_description3(t, v3, "{}"));
+    if (!md3.empty()) write_if_changed(md3, model_description3(t, v3, token));
+    if (!vars3.empty()) write_if_changed(vars3, vars3_header(v3, token, argv[1]));
     if (argc > 5)  // the source-code FMU's description: the same model, its sources listed
       write_if_changed(argv[4], model_description(t, nd, guid, std::vector<std::string>(argv + 5, argv + argc)));
   } catch (const std::exception& e) {

@@ -91,6 +91,20 @@ typedef struct fmu_var {
   double start;         /* start value (parameters, inputs)                             */
 } fmu_var;
 
+/* An FMI 3.0 variable (fmu_vars3.h): rows of the table above taken together as one
+ * array (joint positions, efforts, the pose, gain matrices) or one scalar, or the two
+ * values FMI 3.0 declares as variables and FMI 2.0 does not (time, event indicators). */
+typedef enum fmu3_kind { FMU3_ROWS = 0, FMU3_TIME = 1, FMU3_INDICATORS = 2 } fmu3_kind;
+
+typedef struct fmu3_var {
+  unsigned vr;          /* FMI 3.0 value reference (its position in the table)          */
+  const char* name;
+  fmu_type type;        /* Float64 or Int32                                             */
+  fmu3_kind kind;
+  int row;              /* FMU3_ROWS: the first row (0-based) of the FMI 2.0 table       */
+  int count;            /* values: rows (row-major over the dimensions), or indicators  */
+} fmu3_var;
+
 /* One FMU: written by each model folder's model.c from its generated header. */
 typedef struct fmu_model_desc {
   const char* identifier; /* modelIdentifier, name of the .so                            */

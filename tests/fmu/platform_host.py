@@ -1,6 +1,7 @@
-"""Running the FMU binaries of every platform through the tests' own FMI 2.0 host
-(tests/fmu/host/fmi2_host.c): natively for linux64, under Wine for win64 and under QEMU for
-aarch64-linux.  Used by tests/fmu/test_platforms.py (two robots) and bench/fmu_platforms.py
+"""Running the FMU binaries of every platform through the tests' own FMI 2.0 and FMI 3.0
+hosts (tests/fmu/host/fmi_host.c, built as fmi2_host and fmi3_host): natively for linux64,
+under Wine for win64 and under QEMU for aarch64-linux.  Used by tests/fmu/test_platforms.py
+(two robots), tests/fmu/test_fmi3_host.py (the FMI 3.0 FMUs) and bench/fmu_platforms.py
 (every FMU).
 
 The scenario is a closed loop of a robot's plant and controller FMUs: a PD step to a pose
@@ -26,9 +27,10 @@ PLATFORMS = ("linux64", "win64", "aarch64-linux")
 AARCH64_SYSROOT = "/usr/aarch64-linux-gnu"
 
 
-def host_command(platform: str) -> list[str]:
-    """The command that runs the host program built for ``platform`` on this machine."""
-    exe = fmu.build_dir() / "fmu" / "hosts" / platform / ("fmi2_host.exe" if platform == "win64" else "fmi2_host")
+def host_command(platform: str, fmi: int = 2) -> list[str]:
+    """The command that runs the FMI ``fmi`` host program built for ``platform`` on this machine."""
+    name = f"fmi{fmi}_host"
+    exe = fmu.build_dir() / "fmu" / "hosts" / platform / (name + ".exe" if platform == "win64" else name)
     if not exe.exists():
         raise FileNotFoundError(f"{exe} is not built (scripts/bootstrap.sh builds every platform's host)")
     if platform == "win64":
@@ -68,7 +70,7 @@ class Unpacked:
 
     def load_line(self, name: str, platform: str, model_exchange: bool = False) -> str:
         kind = "me" if model_exchange else "fmu"
-        nx = f" {len(self.md.derivatives)}" if model_exchange else ""
+        nx = f" {self.md.numberOfContinuousStates}" if model_exchange else ""
         return (f"{kind} {name} {_native_path(platform, self.library(platform))} {self.guid} "
                 f"{_uri(platform, self.folder / 'resources')}{nx}")
 
@@ -78,6 +80,65 @@ class Unpacked:
 
     def vrs(self, names) -> str:
         return " ".join(str(self.vr[n]) for n in names)
+
+
+class Unpacked3(Unpacked):
+    """An FMI 3.0 FMU unzipped into ``folder``, addressed by the names of its FMI 2.0 twin
+    (``fmu2``: the FMI 2.0 ``.fmu`` of the same table): each FMI 2.0 variable is an element
+    of an FMI 3.0 variable, in order (tests/fmu/test_fmi3.py checks that), so the scripts of
+    the FMI 2.0 host serve the FMI 3.0 host with whole arrays (``VR:N``)."""
+
+    fmi = 3
+
+    def __init__(self, path: Path, folder: Path, fmu2: Path):
+        from fmpy import read_model_description
+
+        super().__init__(path, folder)
+        md2 = read_model_description(str(fmu2))
+        self.vars3 = [v for v in self.md.modelVariables if v.causality not in ("independent", "local")]
+        self.size = {v.name: int(np.prod([int(d.start) for d in v.dimensions])) if v.dimensions else 1
+                     for v in self.vars3}
+        self.element = {}  # FMI 2.0 name -> (FMI 3.0 variable, index)
+        self.start = {}    # FMI 3.0 name -> its start values (FMI 2.0's)
+        rows = iter(md2.modelVariables)
+        for v in self.vars3:
+            starts = []
+            for k in range(self.size[v.name]):
+                r = next(rows)
+                self.element[r.name] = (v, k)
+                starts.append(r.start)
+            self.start[v.name] = starts
+        self.integer = {v.name for v in self.vars3 if v.type == "Int32"}
+
+    def library(self, platform: str) -> Path:
+        ext = ".dll" if platform == "win64" else ".so"
+        return self.folder / "binaries" / fmu.FMI3_PLATFORMS[platform] / (self.ident + ext)
+
+    def set_lines(self, name: str, values: dict) -> list[str]:
+        """One line per FMI 3.0 variable touched: all its values, the ones not given at their start."""
+        arrays = {}
+        for k, x in values.items():
+            v, i = self.element[k]
+            arrays.setdefault(v.name, (v, list(self.start[v.name])))[1][i] = x
+        lines = []
+        for n, (v, vals) in arrays.items():
+            txt = [str(int(x)) if n in self.integer else repr(float(x)) for x in vals]
+            lines.append(f"{'int' if n in self.integer else 'real'} {name} {v.valueReference}:{len(vals)} "
+                         + " ".join(txt))
+        return lines
+
+    def vrs(self, names) -> str:
+        """Names that make whole FMI 3.0 variables, in order, as ``VR:N`` words."""
+        words, k = [], 0
+        names = list(names)
+        while k < len(names):
+            v, i = self.element[names[k]]
+            n = self.size[v.name]
+            got = [self.element[m] for m in names[k:k + n]]
+            assert i == 0 and got == [(v, j) for j in range(n)], f"{names[k:k + n]} is not the whole of {v.name}"
+            words.append(f"{v.valueReference}:{n}")
+            k += n
+        return " ".join(words)
 
 
 def loop_setup(robot: str):
@@ -121,7 +182,7 @@ def loop_script(plant: Unpacked, ctrl: Unpacked, robot: str, platform: str, step
         f"step {steps} {H!r}", show,
         "restore plant", "restore ctrl",
         f"step {steps} {H!r}", show,
-        f"real plant {plant.vr['tau[1]']} nan",
+        plant.set_lines("plant", {"tau[1]": float("nan")})[0],
         "",
     ])
 
@@ -142,27 +203,28 @@ def me_script(plant: Unpacked, robot: str, platform: str, steps: int = 100, h: f
         f"step {steps} {h!r}", show,
         "restore plant",
         f"step {steps} {h!r}", show,
-        f"real plant {plant.vr['tau[1]']} nan",
+        plant.set_lines("plant", {"tau[1]": float("nan")})[0],
         "",
     ])
 
 
 def solver_script(plant: Unpacked, platform: str, method: int) -> str:
     """Instantiate and initialise the plant with ``solver.method = method``, one step."""
-    return "\n".join([plant.load_line("plant", platform), f"int plant {plant.vr['solver.method']} {method}",
+    return "\n".join([plant.load_line("plant", platform), *plant.set_lines("plant", {"solver.method": method}),
                       "init plant", f"step 1 {H!r}", ""])
 
 
-def run(platform: str, script: str, folder: Path, timeout: float = 300) -> dict:
-    """Run a host script on ``platform``; the output split into values, statuses and log lines."""
-    path = folder / f"script_{platform}.txt"
+def run(platform: str, script: str, folder: Path, timeout: float = 300, fmi: int = 2) -> dict:
+    """Run a host script on ``platform`` with the FMI ``fmi`` host; the output split into values,
+    statuses and log lines."""
+    path = folder / f"script_{platform}_fmi{fmi}.txt"
     path.write_text(script)
     env = dict(os.environ, WINEDEBUG="-all", WINEDLLOVERRIDES="mscoree,mshtml=")
     env.pop("DISPLAY", None)
-    r = subprocess.run(host_command(platform) + [_native_path(platform, path)], capture_output=True, text=True,
+    r = subprocess.run(host_command(platform, fmi) + [_native_path(platform, path)], capture_output=True, text=True,
                        timeout=timeout, env=env)
     if r.returncode != 0:
-        raise RuntimeError(f"fmi2_host ({platform}) exited {r.returncode}: {r.stderr.strip()[-2000:]}")
+        raise RuntimeError(f"fmi{fmi}_host ({platform}) exited {r.returncode}: {r.stderr.strip()[-2000:]}")
     out = {"values": [], "lines": []}
     for line in r.stdout.splitlines():
         if line.startswith("values "):
@@ -172,11 +234,32 @@ def run(platform: str, script: str, folder: Path, timeout: float = 300) -> dict:
     return out
 
 
-def fmu_pair(robot: str, folder: Path) -> tuple[Unpacked, Unpacked]:
-    """The robot's plant and controller FMUs, unzipped under ``folder``."""
-    plant = Unpacked(fmu.fmu_path(robot), folder / "plant")
-    ctrl = Unpacked(fmu.fmu_path(fmu.fmu_id(robot) + "_CTRL"), folder / "ctrl")
-    return plant, ctrl
+def fmu_pair(robot: str, folder: Path, fmi: int = 2) -> tuple[Unpacked, Unpacked]:
+    """The robot's plant and controller FMUs (FMI ``fmi``), unzipped under ``folder``."""
+    out = []
+    for name, ident in (("plant", robot), ("ctrl", fmu.fmu_id(robot) + "_CTRL")):
+        if fmi == 2:
+            out.append(Unpacked(fmu.fmu_path(ident), folder / name))
+        else:
+            out.append(Unpacked3(fmu.fmu_path(ident, fmi=3), folder / f"{name}3", fmu.fmu_path(ident)))
+    return out[0], out[1]
+
+
+# The FMI 2.0 function named in a message, and its FMI 3.0 counterpart.
+FMI3_NAME = {"fmi2SetReal": "fmi3SetFloat64", "fmi2SetInteger": "fmi3SetInt32", "fmi2GetReal": "fmi3GetFloat64",
+             "fmi2DoStep": "fmi3DoStep", "fmi2ExitInitializationMode": "fmi3ExitInitializationMode",
+             "fmi2GetDerivatives": "fmi3GetContinuousStateDerivatives",
+             "fmi2CompletedIntegratorStep": "fmi3CompletedIntegratorStep"}
+
+
+def as_fmi3(lines: list[str]) -> list[str]:
+    """An FMI 2.0 run's output lines as the FMI 3.0 FMU says them (its function names)."""
+    out = []
+    for ln in lines:
+        for a, b in FMI3_NAME.items():
+            ln = ln.replace(a + ":", b + ":")
+        out.append(ln)
+    return out
 
 
 def largest_difference(a: dict, b: dict) -> float:

@@ -1,7 +1,11 @@
-"""The .fmu archive and its binary: self-contained (no SUNDIALS, no libpkm) and exporting only fmi2*."""
+"""The .fmu archive and its binary: self-contained (no SUNDIALS, no libpkm) and exporting only
+the FMI 2.0 and FMI 3.0 functions (one binary serves the FMI 2.0 and the FMI 3.0 FMU)."""
 import re
 import subprocess
 import zipfile
+from pathlib import Path
+
+import fmpy
 
 FMI2_FUNCTIONS = """fmi2GetTypesPlatform fmi2GetVersion fmi2SetDebugLogging fmi2Instantiate fmi2FreeInstance
 fmi2SetupExperiment fmi2EnterInitializationMode fmi2ExitInitializationMode fmi2Terminate fmi2Reset
@@ -13,6 +17,11 @@ fmi2SetContinuousStates fmi2GetDerivatives fmi2GetEventIndicators fmi2GetContinu
 fmi2GetNominalsOfContinuousStates fmi2SetRealInputDerivatives fmi2GetRealOutputDerivatives fmi2DoStep
 fmi2CancelStep fmi2GetStatus fmi2GetRealStatus fmi2GetIntegerStatus fmi2GetBooleanStatus
 fmi2GetStringStatus""".split()
+
+# Every function of the FMI 3.0 standard: the function types its header declares.
+FMI3_FUNCTIONS = sorted(set(re.findall(r"\b(fmi3\w+)TYPE\b", (Path(fmpy.__file__).parent / "c-code" /
+                                                               "fmi3FunctionTypes.h").read_text())))
+EXPORTED = set(FMI2_FUNCTIONS) | set(FMI3_FUNCTIONS)
 
 
 def _binary(fmu_file, tmp_path):
@@ -41,11 +50,12 @@ def test_binary_needs_neither_sundials_nor_libpkm(fmu_file, tmp_path):
     assert "not found" not in ldd, ldd
 
 
-def test_only_fmi2_symbols_are_exported(fmu_file, tmp_path):
+def test_only_fmi_functions_are_exported(fmu_file, tmp_path):
     so = _binary(fmu_file, tmp_path)
     out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in out.splitlines() if line.strip()}
-    assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))
+    assert exported == EXPORTED, sorted(exported ^ EXPORTED)
+    assert len(FMI3_FUNCTIONS) == 75  # the standard's 3.0 function set
 
 
 def _platform_binary(fmu_file, tmp_path, platform, ext):
@@ -60,7 +70,7 @@ def _platform_binary(fmu_file, tmp_path, platform, ext):
 WINDOWS_SYSTEM_DLLS = {"kernel32.dll", "msvcrt.dll", "user32.dll", "advapi32.dll", "ws2_32.dll"}
 
 
-def test_windows_binary_is_static_and_exports_only_fmi2(fmu_file, tmp_path):
+def test_windows_binary_is_static_and_exports_only_the_fmi_functions(fmu_file, tmp_path):
     dll = _platform_binary(fmu_file, tmp_path, "win64", "dll")
     dump = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True, text=True,
                           check=True).stdout
@@ -70,10 +80,10 @@ def test_windows_binary_is_static_and_exports_only_fmi2(fmu_file, tmp_path):
     assert imported and imported <= WINDOWS_SYSTEM_DLLS, imported
     table = dump.split("[Ordinal/Name Pointer] Table")[1].split("\n\n")[0]
     exported = set(re.findall(r"\]\s+(\w+)", table))
-    assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))
+    assert exported == EXPORTED, sorted(exported ^ EXPORTED)
 
 
-def test_arm_binary_needs_only_the_c_runtime_and_exports_only_fmi2(fmu_file, tmp_path):
+def test_arm_binary_needs_only_the_c_runtime_and_exports_only_the_fmi_functions(fmu_file, tmp_path):
     so = _platform_binary(fmu_file, tmp_path, "aarch64-linux", "so")
     head = subprocess.run(["readelf", "-h", str(so)], capture_output=True, text=True, check=True).stdout
     assert "AArch64" in head
@@ -83,4 +93,4 @@ def test_arm_binary_needs_only_the_c_runtime_and_exports_only_fmi2(fmu_file, tmp
     syms = subprocess.run(["readelf", "--dyn-syms", "-W", str(so)], capture_output=True, text=True, check=True).stdout
     exported = {ln.split()[-1] for ln in syms.splitlines()
                 if " GLOBAL " in ln and " DEFAULT " in ln and " UND " not in ln}
-    assert exported == set(FMI2_FUNCTIONS), sorted(exported ^ set(FMI2_FUNCTIONS))
+    assert exported == EXPORTED, sorted(exported ^ EXPORTED)

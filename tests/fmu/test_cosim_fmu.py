@@ -35,8 +35,18 @@ def test_listed_robot_with_the_platforms_asked_for(tmp_path):
     assert fmu.validate(tmp_path / "PKM_6PUS.fmu") == []
 
 
+def test_fmi3_with_the_platforms_asked_for(tmp_path):
+    r = cosim("fmu", "6pus", "--fmi", "3", "--platforms", "linux64,aarch64-linux", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["PKM_6PUS.fmu", "PKM_6PUS_CTRL.fmu"]
+    for name in ("PKM_6PUS.fmu", "PKM_6PUS_CTRL.fmu"):
+        assert platforms_in(tmp_path / name) == {"x86_64-linux", "aarch64-linux"}
+        assert 'fmiVersion="3.0"' in zipfile.ZipFile(tmp_path / name).read("modelDescription.xml").decode()
+        assert fmu.validate(tmp_path / name) == []
+
+
 @pytest.mark.parametrize("args, says", [
-    (["--fmi", "3"], "FMI 3: this build makes FMI 2.0 FMUs only"),
+    (["--fmi", "3", "--source"], "FMI 3: the source-code FMUs are FMI 2.0 only"),
     (["--platforms", "darwin64"], "unknown platform 'darwin64'"),
 ])
 def test_what_cannot_be_made_is_one_line_and_exit_2(tmp_path, args, says):

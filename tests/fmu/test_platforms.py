@@ -1,7 +1,7 @@
 """The FMU binaries of the other platforms, run for real: x86_64-windows under Wine and
 aarch64-linux under QEMU, Co-Simulation and Model Exchange, through the tests' own FMI 2.0
 host cross-compiled for each
-(tests/fmu/host/fmi2_host.c), against the linux64 binary through the same host; and the
+(tests/fmu/host/fmi_host.c built as fmi2_host), against the linux64 binary through the same host; and the
 linux64 host against fmpy's importer, so the host itself is checked by another one.
 
 Two robots here (the hand-written 6-PUS and the described Gough-Stewart hexapod, plant and

@@ -1,0 +1,634 @@
+/*
+ * fmu_instance.c -- the FMI-version-independent part of every PKM FMU (fmu_instance.h):
+ * written once for the FMI 2.0 and the FMI 3.0 layer.
+ *
+ * Every call checks the instance's state against the state machine, every failure is
+ * logged with the function name and the plant's what/where message, and the status
+ * escalates the state (Error -> error state; a Discarded Co-Simulation step -> step
+ * failed, with the state at the event time).  An instance owns all its memory, the
+ * importer's callbacks are copied at instantiation; nothing here is global and mutable,
+ * so instances run side by side.
+ */
+#include "fmu_instance.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char* const LOG_NAMES[] = {"logEvents", "logStatusWarning", "logStatusDiscard",
+                                        "logStatusError", "logStatusFatal", "logFmiCalls"};
+#define LOG_NCAT 6
+
+static void vlog(const fmu_instance* c, fmu_status st, int cat, const char* fmt, va_list ap) {
+  if (!c || !c->emit) return;
+  /* Errors, discards and warnings are always reported; the rest only when asked for. */
+  if (st == FMU_OK && !(c->log_mask & (unsigned)cat)) return;
+  char msg[4096];
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  int k = 0;
+  while (k < LOG_NCAT - 1 && (1 << k) != cat) ++k;
+  c->emit(c, st, LOG_NAMES[k], msg);
+}
+
+void fmu_log(const fmu_instance* c, fmu_status st, int cat, const char* fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vlog(c, st, cat, fmt, ap);
+  va_end(ap);
+}
+
+fmu_status fmu_error(fmu_instance* c, const char* fn, const char* fmt, ...) {
+  char msg[3000];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s", fn, msg);
+  c->state = S_ERROR;
+  return FMU_ERROR;
+}
+
+/* The last line of defence of the array getters: no value leaves as an infinity or a NaN
+ * with OK (the variable getters have their own, per variable, in the plant). */
+fmu_status fmu_finite_or_error(fmu_instance* c, const char* fn, const char* what, const double* v, size_t n) {
+  for (size_t i = 0; i < n; ++i)
+    if (!isfinite(v[i]))
+      return fmu_error(c, fn, "%s %zu is not finite (%g) at t = %.9g s: a state or an input is too large", what, i,
+                       v[i], plant_time(c->plant));
+  return FMU_OK;
+}
+
+static const char* state_name(int s) {
+  switch (s) {
+    case S_INSTANTIATED: return "instantiated";
+    case S_INIT: return "initialization mode";
+    case S_EVENT: return "event mode";
+    case S_CONT: return "continuous-time mode";
+    case S_STEP_COMPLETE: return "step complete";
+    case S_STEP_FAILED: return "step failed";
+    case S_TERMINATED: return "terminated";
+    case S_ERROR: return "error";
+    case S_FATAL: return "fatal";
+    default: return "unknown";
+  }
+}
+
+/* A call in a wrong state is an error of the importer: logged, but it does not corrupt
+ * the instance. */
+int fmu_bad_call(fmu_instance* c, const char* fn, int allowed) {
+  if (!c) return 1;
+  if (c->state & allowed) {
+    fmu_log(c, FMU_OK, LOG_CALLS, "%s", fn);
+    return 0;
+  }
+  fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: not allowed in state '%s'", fn, state_name(c->state));
+  return 1;
+}
+
+fmu_status fmu_set_debug_logging(fmu_instance* c, const char* fn, int on, size_t n, const char* const cats[]) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  if (n == 0) {
+    c->log_mask = on ? ~0u : 0u;
+    return FMU_OK;
+  }
+  if (!cats) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %zu categories in a NULL array", fn, n);
+    return FMU_ERROR;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    int k = 0;
+    while (k < LOG_NCAT && (!cats[i] || strcmp(cats[i], LOG_NAMES[k]) != 0)) ++k;
+    if (k == LOG_NCAT) {
+      fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: unknown log category '%s'", fn, cats[i] ? cats[i] : "(null)");
+      return FMU_ERROR;
+    }
+    if (on)
+      c->log_mask |= 1u << k;
+    else
+      c->log_mask &= ~(1u << k);
+  }
+  return FMU_OK;
+}
+
+/* In initialization mode the outputs are computed from the pending start values. */
+static fmu_status ensure_started(fmu_instance* c, const char* fn) {
+  if (!plant_dirty(c->plant)) return FMU_OK;
+  if (plant_start(c->plant, c->start_time)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  return FMU_OK;
+}
+
+/* ------------------------------------------------------- life of an instance */
+
+fmu_instance* fmu_instantiate(const char* fn, fmu_instance* head, size_t size, const char* name, const char* token,
+                              const char* token_word, int cosimulation) {
+  head->name = (char*)(name ? name : "?");
+  head->state = 0;
+  if (!name || !*name) {
+    fmu_log(head, FMU_ERROR, LOG_ERROR, "%s: missing instance name", fn);
+    return NULL;
+  }
+  if (!token || strcmp(token, head->token) != 0) {
+    fmu_log(head, FMU_ERROR, LOG_ERROR,
+            "%s: %s %s does not match this binary's %s (modelDescription.xml of another build?)", fn, token_word,
+            token ? token : "(null)", head->token);
+    return NULL;
+  }
+  char err[1024] = "";
+  fmu_plant* p = plant_create(&FMU_MODEL, cosimulation, err, sizeof err);
+  if (!p) {
+    fmu_log(head, FMU_ERROR, LOG_ERROR, "%s: %s", fn, err);
+    return NULL;
+  }
+  fmu_instance* c = (fmu_instance*)calloc(1, size);
+  char* copy = (char*)malloc(strlen(name) + 1);
+  if (!c || !copy) {
+    fmu_log(head, FMU_ERROR, LOG_ERROR, "%s: out of memory", fn);
+    free(c);
+    free(copy);
+    plant_destroy(p);
+    return NULL;
+  }
+  strcpy(copy, name);
+  memcpy(c, head, size);
+  c->name = copy;
+  c->cosimulation = cosimulation;
+  c->plant = p;
+  c->state = S_INSTANTIATED;
+  fmu_log(c, FMU_OK, LOG_EVENTS, "%s: %s %s (%s), token %s", fn, FMU_MODEL.identifier,
+          cosimulation ? "Co-Simulation" : "Model Exchange", FMU_MODEL.robot, token);
+  return c;
+}
+
+void fmu_free(fmu_instance* c) {
+  if (!c) return;
+  plant_destroy(c->plant);
+  free(c->name);
+  free(c);
+}
+
+fmu_status fmu_reset(fmu_instance* c, const char* fn) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  plant_reset(c->plant);
+  c->start_time = c->stop_time = 0;
+  c->stop_defined = 0;
+  c->terminated = 0;
+  c->last_successful_time = 0;
+  c->state = S_INSTANTIATED;
+  return FMU_OK;
+}
+
+fmu_status fmu_setup(fmu_instance* c, const char* fn, int tolerance_defined, double tolerance, double start_time,
+                     int stop_defined, double stop_time) {
+  if (!isfinite(start_time) || (stop_defined && !(stop_time >= start_time)))
+    return fmu_error(c, fn, "start time %g, stop time %g: need finite start <= stop", start_time, stop_time);
+  if (tolerance_defined && !(tolerance > 0 && tolerance < 1))
+    return fmu_error(c, fn, "tolerance %g is no relative tolerance: it must be in (0, 1)", tolerance);
+  c->start_time = start_time;
+  c->stop_time = stop_time;
+  c->stop_defined = stop_defined != 0;
+  /* The importer's tolerance, when given, is the integrator's relative tolerance. */
+  plant_set_tolerance(c->plant, tolerance_defined ? tolerance : 0.0);
+  plant_set_time(c->plant, start_time);
+  return FMU_OK;
+}
+
+fmu_status fmu_exit_initialization(fmu_instance* c, const char* fn) {
+  if (fmu_bad_call(c, fn, S_INIT)) return FMU_ERROR;
+  if (ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
+  c->last_successful_time = c->start_time;
+  c->terminated = 0;
+  c->state = c->cosimulation ? S_STEP_COMPLETE : S_EVENT;
+  fmu_log(c, FMU_OK, LOG_EVENTS, "%s: started at t = %.9g s", fn, c->start_time);
+  return FMU_OK;
+}
+
+fmu_status fmu_terminate(fmu_instance* c, const char* fn) {
+  if (fmu_bad_call(c, fn, S_EVENT | S_CONT | S_STEP_COMPLETE | S_STEP_FAILED)) return FMU_ERROR;
+  c->state = S_TERMINATED;
+  return FMU_OK;
+}
+
+/* ------------------------------------------------------------ variable values */
+
+const fmu_var* fmu_lookup(fmu_instance* c, const char* fn, unsigned vr, fmu_type type, const char* type_name) {
+  if (vr < 1 || vr > (unsigned)FMU_MODEL.nvars) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: unknown value reference %u (1..%d)", fn, vr, FMU_MODEL.nvars);
+    return NULL;
+  }
+  const fmu_var* v = &FMU_MODEL.vars[vr - 1];
+  if (v->type != type) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: value reference %u (%s) is not a%s %s", fn, vr, v->name,
+            strchr("AEIOU", type_name[0]) ? "n" : "", type_name);
+    return NULL;
+  }
+  return v;
+}
+
+/* Parameters are fixed once initialization is over; inputs are set any time a value
+ * can be used. */
+static int settable(fmu_instance* c, const char* fn, const fmu_var* v) {
+  if (v->causality == FMU_PARAMETER && !(c->state & (S_INSTANTIATED | S_INIT))) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: parameter %s is fixed: set it before the end of initialization", fn,
+            v->name);
+    return 0;
+  }
+  if (v->causality == FMU_OUTPUT) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s is an output and cannot be set", fn, v->name);
+    return 0;
+  }
+  return 1;
+}
+
+fmu_status fmu_get_real(fmu_instance* c, const char* fn, const fmu_var* v, double* value) {
+  if (c->state == S_INIT && v->causality == FMU_OUTPUT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
+  if (plant_get_real(c->plant, v, value)) return fmu_error(c, fn, "%s: %s", v->name, plant_error(c->plant));
+  return FMU_OK;
+}
+
+fmu_status fmu_get_integer(fmu_instance* c, const char* fn, const fmu_var* v, int* value) {
+  if (plant_get_integer(c->plant, v, value)) return fmu_error(c, fn, "%s: %s", v->name, plant_error(c->plant));
+  return FMU_OK;
+}
+
+fmu_status fmu_set_real(fmu_instance* c, const char* fn, const fmu_var* v, double value) {
+  if (!settable(c, fn, v)) return FMU_ERROR;
+  if (plant_set_real(c->plant, v, value)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  return FMU_OK;
+}
+
+fmu_status fmu_set_integer(fmu_instance* c, const char* fn, const fmu_var* v, int value) {
+  if (!settable(c, fn, v)) return FMU_ERROR;
+  if (plant_set_integer(c->plant, v, value)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  return FMU_OK;
+}
+
+/* ---------------------------------------------------------------- FMU state */
+
+/* The header ties a state block to this model (GUID or token), layout (version), FMI
+ * layer (magic) and interface; the plant writes the rest.  A checksum over the whole
+ * block (its own field read as zero) catches a block damaged in storage or transit; every
+ * value is checked again when the state is restored (a block edited on purpose and sealed
+ * again must not crash or poison the instance either). */
+#define STATE_VERSION 2u
+typedef struct fmu_state {
+  char magic[8];
+  char guid[48];
+  int32_t type;       /* 0 Model Exchange, 1 Co-Simulation      */
+  int32_t mode;       /* state-machine state                   */
+  uint64_t nplant;    /* doubles in plant[]                     */
+  double start_time, stop_time, last_successful_time;
+  int32_t stop_defined, terminated;
+  uint32_t version;   /* STATE_VERSION                          */
+  uint32_t reserved;  /* 0                                      */
+  uint64_t checksum;  /* FNV-1a 64 of the block, this field as 0 */
+  double plant[];
+} fmu_state;
+
+static size_t state_bytes(size_t nplant) { return sizeof(fmu_state) + nplant * sizeof(double); }
+
+/* FNV-1a (64 bit) of the n bytes of a state block, its checksum field read as zero. */
+static uint64_t state_checksum(const unsigned char* bytes, size_t n) {
+  const size_t skip = offsetof(fmu_state, checksum);
+  uint64_t h = 14695981039346656037ull;
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned char b = (i >= skip && i < skip + sizeof(uint64_t)) ? 0 : bytes[i];
+    h = (h ^ b) * 1099511628211ull;
+  }
+  return h;
+}
+
+/* The state-machine states a state of this interface can be taken in. */
+static int mode_ok(int cosimulation, int32_t mode) {
+  const int common = S_INSTANTIATED | S_INIT | S_TERMINATED | S_ERROR;
+  const int allowed = common | (cosimulation ? S_STEP_COMPLETE | S_STEP_FAILED : S_EVENT | S_CONT);
+  return mode > 0 && (mode & (mode - 1)) == 0 && (mode & allowed) != 0;
+}
+
+/* The header s of a state block (block: its bytes, size of them; size 0: the size the
+ * header declares, for a block this FMU made in memory): magic, GUID, interface, layout
+ * version, the plant's length against this model's, the checksum, and every header value
+ * in its range. */
+static int state_ok(fmu_instance* c, const char* fn, const char* magic, const fmu_state* s, const void* block,
+                    size_t size) {
+  size_t n = plant_snapshot_min_size(c->plant);
+  if (!s || memcmp(s->magic, magic, 8) != 0) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: not an FMU state of %s", fn, FMU_MODEL.identifier);
+    return 0;
+  }
+  if (memchr(s->guid, 0, sizeof s->guid) == NULL || strcmp(s->guid, c->token) != 0 ||
+      s->type != (int32_t)c->cosimulation || s->version != STATE_VERSION || s->reserved != 0) {
+    /* The block's GUID as printable ASCII: a message is UTF-8 text, whatever the block holds. */
+    char guid[41];
+    size_t k = 0;
+    for (; k < sizeof guid - 1 && s->guid[k]; ++k) guid[k] = (s->guid[k] >= 32 && s->guid[k] < 127) ? s->guid[k] : '?';
+    guid[k] = '\0';
+    fmu_log(c, FMU_ERROR, LOG_ERROR,
+            "%s: FMU state of another model, interface or layout (GUID %s, type %d, layout %u; this instance: %s, "
+            "%d, %u)",
+            fn, guid, (int)s->type, (unsigned)s->version, c->token, c->cosimulation, STATE_VERSION);
+    return 0;
+  }
+  if (s->nplant < n || s->nplant > n + (1u << 24) || (size && size != state_bytes(s->nplant))) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR,
+            "%s: FMU state of %zu bytes declares %llu plant values (this model: %zu + the "
+            "integrator's): it is truncated or damaged",
+            fn, size ? size : state_bytes(s->nplant), (unsigned long long)s->nplant, n);
+    return 0;
+  }
+  const uint64_t sum = state_checksum((const unsigned char*)block, state_bytes(s->nplant));
+  if (sum != s->checksum) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR,
+            "%s: FMU state checksum %016llx does not match its content (%016llx): the block "
+            "was damaged or edited",
+            fn, (unsigned long long)s->checksum, (unsigned long long)sum);
+    return 0;
+  }
+  const char* bad = NULL;
+  if (!mode_ok(c->cosimulation, s->mode))
+    bad = "state-machine state";
+  else if (!isfinite(s->start_time) || !isfinite(s->stop_time) || !isfinite(s->last_successful_time))
+    bad = "start, stop or last successful time (not finite)";
+  else if ((s->stop_defined != 0 && s->stop_defined != 1) || (s->terminated != 0 && s->terminated != 1))
+    bad = "stop-defined or terminated flag";
+  else if (s->stop_defined && !(s->stop_time >= s->start_time))
+    bad = "stop time (before the start time)";
+  if (bad) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR,
+            "%s: FMU state has an invalid %s (mode %d, start %g s, stop %g s, last successful "
+            "%g s)",
+            fn, bad, (int)s->mode, s->start_time, s->stop_time, s->last_successful_time);
+    return 0;
+  }
+  return 1;
+}
+
+fmu_status fmu_state_get(fmu_instance* c, const char* fn, const char* magic, void** state) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  if (!state) return fmu_error(c, fn, "FMUstate pointer is NULL");
+  size_t n = plant_snapshot_size(c->plant);
+  fmu_state* s = (fmu_state*)*state;
+  /* A state handed back for overwriting is reused; anything else gets a new block. */
+  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nplant != n) {
+    s = (fmu_state*)calloc(1, state_bytes(n));
+    if (!s) return fmu_error(c, fn, "out of memory");
+  }
+  memcpy(s->magic, magic, 8);
+  memset(s->guid, 0, sizeof s->guid);
+  strncpy(s->guid, c->token, sizeof s->guid - 1);
+  s->type = (int32_t)c->cosimulation;
+  s->mode = c->state;
+  s->nplant = n;
+  s->start_time = c->start_time;
+  s->stop_time = c->stop_time;
+  s->last_successful_time = c->last_successful_time;
+  s->stop_defined = c->stop_defined;
+  s->terminated = c->terminated;
+  s->version = STATE_VERSION;
+  s->reserved = 0;
+  plant_snapshot_save(c->plant, s->plant);
+  s->checksum = state_checksum((const unsigned char*)s, state_bytes(n));
+  *state = s;
+  return FMU_OK;
+}
+
+/* Is the restored instance one the state machine can go on from?  Past initialization
+ * the plant must be started (its model validated, its state checked); a Co-Simulation
+ * step's last successful time is the plant's time. */
+static const char* restored_inconsistency(const fmu_instance* c) {
+  const int running = c->state & (S_EVENT | S_CONT | S_STEP_COMPLETE | S_STEP_FAILED);
+  if (running && plant_dirty(c->plant))
+    return "its state-machine state is past initialization but the model was not started";
+  if ((c->state & (S_STEP_COMPLETE | S_STEP_FAILED)) && c->last_successful_time != plant_time(c->plant))
+    return "its last successful time differs from the model's time";
+  return NULL;
+}
+
+fmu_status fmu_state_set(fmu_instance* c, const char* fn, const char* magic, const void* state) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  const fmu_state* s = (const fmu_state*)state;
+  if (!state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
+  if (plant_snapshot_check(c->plant, s->plant, s->nplant)) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s; the instance keeps its previous state", fn, plant_error(c->plant));
+    return FMU_ERROR;
+  }
+  /* What the core refuses while loading leaves the instance as it was too: keep what it
+   * has now to put back. */
+  fmu_instance before = *c;
+  const size_t nkeep = plant_snapshot_size(c->plant);
+  double* keep = (double*)malloc(nkeep * sizeof(double));
+  if (!keep) return fmu_error(c, fn, "out of memory");
+  plant_snapshot_save(c->plant, keep);
+  const char* why = NULL;
+  char msg[2600];
+  if (plant_snapshot_load(c->plant, s->plant, s->nplant)) {
+    snprintf(msg, sizeof msg, "%s", plant_error(c->plant));
+    why = msg;
+  } else {
+    c->start_time = s->start_time;
+    c->stop_time = s->stop_time;
+    c->last_successful_time = s->last_successful_time;
+    c->stop_defined = s->stop_defined;
+    c->terminated = s->terminated;
+    c->state = s->mode;
+    if ((why = restored_inconsistency(c)) != NULL) {
+      snprintf(msg, sizeof msg, "FMU state refused: %s", why);
+      why = msg;
+    }
+  }
+  if (why) {
+    const int restored = plant_snapshot_load(c->plant, keep, nkeep) == 0;
+    free(keep);
+    *c = before;
+    if (!restored) return fmu_error(c, fn, "%s (and the previous state could not be put back)", why);
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s; the instance keeps its previous state", fn, why);
+    return FMU_ERROR;
+  }
+  free(keep);
+  return FMU_OK;
+}
+
+fmu_status fmu_state_free(fmu_instance* c, const char* fn, void** state) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  if (state) {
+    free(*state);
+    *state = NULL;
+  }
+  return FMU_OK;
+}
+
+fmu_status fmu_state_size(fmu_instance* c, const char* fn, const char* magic, const void* state, size_t* size) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  const fmu_state* s = (const fmu_state*)state;
+  if (!size || !state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
+  *size = state_bytes(s->nplant);
+  return FMU_OK;
+}
+
+fmu_status fmu_state_serialize(fmu_instance* c, const char* fn, const char* magic, const void* state,
+                               unsigned char* bytes, size_t size) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  const fmu_state* s = (const fmu_state*)state;
+  if (!bytes || !state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
+  if (size < state_bytes(s->nplant)) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: buffer of %zu bytes, %zu needed", fn, size, state_bytes(s->nplant));
+    return FMU_ERROR;
+  }
+  memcpy(bytes, s, state_bytes(s->nplant));
+  return FMU_OK;
+}
+
+fmu_status fmu_state_deserialize(fmu_instance* c, const char* fn, const char* magic, const unsigned char* bytes,
+                                 size_t size, void** state) {
+  if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
+  if (!bytes || !state || size < sizeof(fmu_state)) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %zu bytes are too few for an FMU state", fn, size);
+    return FMU_ERROR;
+  }
+  fmu_state head;
+  memcpy(&head, bytes, sizeof head); /* bytes need not be aligned */
+  if (!state_ok(c, fn, magic, &head, bytes, size)) return FMU_ERROR;
+  /* A state of ours handed back for overwriting is reused (same model: same size). */
+  fmu_state* s = (fmu_state*)*state;
+  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nplant != head.nplant) {
+    s = (fmu_state*)malloc(size);
+    if (!s) return fmu_error(c, fn, "out of memory");
+  }
+  memcpy(s, bytes, size);
+  *state = s;
+  return FMU_OK;
+}
+
+/* ----------------------------------------------------------- Model Exchange */
+
+fmu_status fmu_enter_event_mode(fmu_instance* c, const char* fn) {
+  if (fmu_bad_call(c, fn, S_EVENT | S_CONT)) return FMU_ERROR;
+  c->state = S_EVENT;
+  return FMU_OK;
+}
+
+fmu_status fmu_enter_continuous_time_mode(fmu_instance* c, const char* fn) {
+  if (fmu_bad_call(c, fn, S_EVENT)) return FMU_ERROR;
+  c->state = S_CONT;
+  return FMU_OK;
+}
+
+/* Where a state event lands, the indicator is zero up to the importer's root finding. */
+#define LIMIT_TOL 1e-9
+
+/* In Model Exchange the importer owns time: at the edge of the usable workspace the
+ * FMU can only ask it to stop (terminateSimulation), saying why, where and when. */
+static int reached_limit(fmu_instance* c, const char* fn) {
+  if (!plant_check_limits(c->plant, LIMIT_TOL)) return 0;
+  c->terminated = 1;
+  c->last_successful_time = plant_time(c->plant);
+  fmu_log(c, FMU_WARNING, LOG_WARNING, "%s: stopping the simulation: %s", fn, plant_error(c->plant));
+  return 1;
+}
+
+fmu_status fmu_update_discrete_states(fmu_instance* c, const char* fn, int* terminate) {
+  if (fmu_bad_call(c, fn, S_EVENT)) return FMU_ERROR;
+  if (!terminate) return fmu_error(c, fn, "NULL output argument");
+  *terminate = c->terminated || reached_limit(c, fn);
+  return *terminate ? FMU_WARNING : FMU_OK;
+}
+
+fmu_status fmu_completed_integrator_step(fmu_instance* c, const char* fn, int* enter_event_mode, int* terminate) {
+  if (fmu_bad_call(c, fn, S_CONT)) return FMU_ERROR;
+  if (!enter_event_mode || !terminate) return fmu_error(c, fn, "NULL output argument");
+  *enter_event_mode = 0;
+  /* Also catches an importer that steps past a limit without locating the event. */
+  *terminate = reached_limit(c, fn);
+  if (!*terminate) c->last_successful_time = plant_time(c->plant);
+  return *terminate ? FMU_WARNING : FMU_OK;
+}
+
+fmu_status fmu_set_time(fmu_instance* c, const char* fn, double time) {
+  if (fmu_bad_call(c, fn, S_EVENT | S_CONT)) return FMU_ERROR;
+  if (!isfinite(time)) return fmu_error(c, fn, "time %g is not finite", time);
+  plant_set_time(c->plant, time);
+  return FMU_OK;
+}
+
+fmu_status fmu_set_states(fmu_instance* c, const char* fn, const double* x, size_t nx) {
+  if (fmu_bad_call(c, fn, S_CONT)) return FMU_ERROR;
+  if (!x) return fmu_error(c, fn, "x is NULL");
+  if (plant_set_states(c->plant, x, nx)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  return FMU_OK;
+}
+
+/* A plant status of a model evaluation: an error of the model or the arguments moves to
+ * the error state; a singular pose is a Discard (the solver may retry with a smaller step,
+ * or stop). */
+static fmu_status evaluation(fmu_instance* c, const char* fn, int s, const char* what, const double* v, size_t n) {
+  if (s == PKM_OK) return fmu_finite_or_error(c, fn, what, v, n);
+  if (s == PKM_ERR_ARGUMENT || s == PKM_ERR_PARAMETER || s == PKM_ERR_INTERNAL)
+    return fmu_error(c, fn, "%s", plant_error(c->plant));
+  fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s: %s", fn, plant_error(c->plant));
+  return FMU_DISCARD;
+}
+
+fmu_status fmu_get_derivatives(fmu_instance* c, const char* fn, double* dx, size_t nx) {
+  if (fmu_bad_call(c, fn, S_ME_VALUES)) return FMU_ERROR;
+  if (!dx) return fmu_error(c, fn, "derivatives is NULL");
+  if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
+  return evaluation(c, fn, plant_get_derivatives(c->plant, dx, nx), "derivative", dx, nx);
+}
+
+fmu_status fmu_get_indicators(fmu_instance* c, const char* fn, double* z, size_t nz) {
+  /* Also a variable's values in FMI 3.0 (<EventIndicator>), readable between steps. */
+  if (fmu_bad_call(c, fn, S_ME_VALUES | S_STEP_COMPLETE | S_STEP_FAILED)) return FMU_ERROR;
+  if (!z && nz > 0) return fmu_error(c, fn, "eventIndicators is NULL");
+  if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
+  return evaluation(c, fn, plant_get_indicators(c->plant, z, nz), "event indicator", z, nz);
+}
+
+fmu_status fmu_get_states(fmu_instance* c, const char* fn, double* x, size_t nx) {
+  if (fmu_bad_call(c, fn, S_ME_VALUES)) return FMU_ERROR;
+  if (!x) return fmu_error(c, fn, "x is NULL");
+  if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
+  if (plant_get_states(c->plant, x, nx))
+    return fmu_error(c, fn, "%zu states asked for, the model has %d", nx, plant_nstates(c->plant));
+  return fmu_finite_or_error(c, fn, "continuous state", x, nx);
+}
+
+fmu_status fmu_get_nominals(fmu_instance* c, const char* fn, double* nominals, size_t nx) {
+  if (fmu_bad_call(c, fn, S_INSTANTIATED | S_ME_VALUES)) return FMU_ERROR;
+  if (!nominals || nx != (size_t)plant_nstates(c->plant))
+    return fmu_error(c, fn, "%zu nominals asked for, the model has %d states", nx, plant_nstates(c->plant));
+  for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
+  return FMU_OK;
+}
+
+/* -------------------------------------------------------------- Co-Simulation */
+
+fmu_status fmu_do_step(fmu_instance* c, const char* fn, double t, double h) {
+  if (fmu_bad_call(c, fn, S_STEP_COMPLETE)) return FMU_ERROR;
+  double now = plant_time(c->plant);
+  if (!isfinite(t) || !isfinite(h) || h < 0)
+    return fmu_error(c, fn, "communication point %g and step %g: need finite values and step >= 0", t, h);
+  /* The importer keeps its own clock; accept its rounding, not a jump. */
+  if (fabs(t - now) > 1e-9 * (1.0 + fabs(now)))
+    return fmu_error(c, fn, "communication point t = %.17g s differs from the FMU time %.17g s", t, now);
+  double t_end = t + h;
+  if (c->stop_defined && t_end > c->stop_time * (1 + 1e-12) + 1e-12)
+    return fmu_error(c, fn, "step to t = %.17g s goes past the stop time %.17g s", t_end, c->stop_time);
+  if (h == 0) return FMU_OK;
+  int s = plant_step(c->plant, t_end);
+  if (s == PKM_OK) {
+    c->last_successful_time = t_end;
+    return FMU_OK;
+  }
+  if (s == PKM_ERR_SINGULAR || s == PKM_ERR_JOINT_LIMIT || s == PKM_ERR_UNREACHABLE || s == PKM_ERR_STEP_BUDGET) {
+    /* The plant stopped at the event (or where its step budget ran out): the state there
+     * is consistent and readable. */
+    c->last_successful_time = plant_time(c->plant);
+    c->terminated = 1;
+    c->state = S_STEP_FAILED;
+    fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s from t = %.9g s to %.9g s: %s", fn, t, t_end, plant_error(c->plant));
+    return FMU_DISCARD;
+  }
+  return fmu_error(c, fn, "from t = %.9g s to %.9g s: %s", t, t_end, plant_error(c->plant));
+}
