@@ -163,10 +163,13 @@ def controller(kind: str, m: Model):
                    gravity_feedforward=True)
 
 
-def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity"):
+def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
-    ``(type, value, joint)`` to hide several at once."""
+    ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
+    hidden in MuJoCo's physics: ``force(q, qd)`` of the six rails' true positions (the model's
+    coordinates) and rates gives the six forces [N] pushing them along +q, applied at every
+    MuJoCo step (``qfrc_applied``)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
@@ -202,6 +205,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         elif eff == "offset":
             data.qfrc_applied[drails[jnt]] += val
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = -val
+    applied = data.qfrc_applied[drails].copy()  # the constant part (a hidden offset)
     n = len(ref.time)
     rows = {k: np.empty((n, 6)) for k in ("q", "qd", "tau", "pose")}
     issued = []  # (time, command) for the delay line
@@ -231,6 +235,8 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
                 u = cmd[dead_joint]
                 cmd[dead_joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
             data.ctrl[:] = cmd
+            if force is not None:
+                data.qfrc_applied[drails] = applied + force(q0 + data.qpos[rails], data.qvel[drails])
             for adr, dof, eff, val in gaps:
                 data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)
