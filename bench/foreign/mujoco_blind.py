@@ -423,14 +423,18 @@ def main(argv=None) -> int:
         if key and key in est and key in truth:
             nominal = m.params()[key] if key in m.params() else 0.0
             perr = abs(est[key] - truth[key]) / max(abs(truth[key] - nominal), 1e-12)
-        rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1,
+        # the stated 95 % intervals against the truth, every hidden parameter the engine fitted
+        stated = {p: v for e in d.effects for p, v in e["params"].items()}
+        holds = [bool(abs(stated[p]["value"] - v) <= stated[p]["ci95"]) for p, v in truth.items()
+                 if p in stated and np.isfinite(stated[p]["ci95"])]
+        rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1, "holds": holds,
                      "named": first or "none", "ok": bool(ok if effect else first is None), "param_error": perr,
                      "same_physics": bool(same), "stand_in": bool(stand_in),
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
-              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  ({wall:.1f} s)"
+              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  interval holds {sum(holds)}/{len(holds)}  ({wall:.1f} s)"
               f"{'  [one-signed effort: the gap is an offset b/2]' if same else ''}"
               f"{'  [held out: named its same-physics stand-in at the right size]' if stand_in else ''}", flush=True)
     if a.two:
@@ -455,6 +459,9 @@ def main(argv=None) -> int:
     print(f"parameter within 15 %:     {sum(r['param_error'] < 0.15 for r in comparable)}/{len(comparable)} "
           f"comparable")
     print(f"clean cases called clean:  {sum(r['ok'] for r in clean)}/{len(clean)}")
+    holds = [h for r in eff for h in r["holds"]]
+    if holds:
+        print(f"stated 95 % intervals containing the truth: {sum(holds)}/{len(holds)} hidden parameters fitted")
     print(f"structure left unexplained: {sum(bool(r['unexplained']) for r in eff)}/{len(eff)} effect cases, "
           f"{sum(bool(r['unexplained']) for r in clean)}/{len(clean)} clean cases")
     (a.out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
