@@ -48,6 +48,7 @@ def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed,
     want = truth[f"rail[{j}].{coefficient}"]
     assert coefficient in got, (term.equation, truth)
     assert abs(got[coefficient].value / want - 1) < 0.15, (term.equation, truth)
+    assert abs(got[coefficient].value - want) <= got[coefficient].ci95, (term.equation, truth)  # the stated 95 %
     assert term.heldout_before >= 3 * term.heldout_after, term.equation
     # no library effect named with confidence: any one left is tied with the discovered term
     for e in d.effects:
