@@ -276,7 +276,8 @@ class _Fit:
     coef: np.ndarray     # in units of the columns' deltas (= the core parameter values)
     chi2: float
     cov: np.ndarray
-    z95: float = 1.96    # multiplier of the standard errors for 95 % intervals
+    z95: float = 1.96    # multiplier of the HAC standard errors for 95 % intervals
+    cov_classical: np.ndarray | None = None  # (Z'X)^-1 Z'Z (X'Z)^-1, in the weights' units
 
 
 def _design(search, c, terms, rows):
@@ -312,7 +313,9 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     # the residual drifts slowly where the model is not quite right: intervals from the
     # scores' correlation in time (HAC), not from a fixed count of samples per independent one
     cov, z95 = hac_covariance(X, e, Zr)
-    return _Fit(list(terms), coef, chi2, cov, z95)
+    Zc = X if Zr is None else Zr
+    A = np.linalg.pinv(Zc.T @ X)
+    return _Fit(list(terms), coef, chi2, cov, z95, A @ (Zc.T @ Zc) @ A.T)
 
 
 def stepwise(search, c, y, rows, threshold, phi, n_eff):
@@ -481,9 +484,12 @@ def discover_channel(search, c, y, threshold, seed=0):
     f, d_held = heldout(terms)
     if not d_held > threshold:
         return None
-    # the HAC interval, or the bootstrap's spread of the coefficients if wider (it also sees the
-    # selection of the terms)
-    half = np.maximum(f.z95 * np.sqrt(np.maximum(np.diag(f.cov), 0.0)), 1.96 * spread)
+    # the widest of: the HAC interval, the classical one of the residual's own noise in effective
+    # samples (s^2 >= 1: never narrower than that noise allows), and the bootstrap's spread of
+    # the coefficients (which also sees the selection of the terms)
+    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
+    half = np.maximum(np.maximum(f.z95 * np.sqrt(np.maximum(np.diag(f.cov), 0.0)),
+                                 1.96 * np.sqrt(np.maximum(np.diag(f.cov_classical), 0.0) * s2)), 1.96 * spread)
     use_t = eng.use[test, c] > 0
     rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
     yt = y[test]
