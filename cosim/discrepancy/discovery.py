@@ -310,8 +310,8 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     coef = fit(X, t, Zr)
     e = t + X @ coef
     chi2 = float(e @ e)
-    # the residual drifts slowly where the model is not quite right: intervals from the
-    # scores' correlation in time (HAC), not from a fixed count of samples per independent one
+    # two covariances for the intervals: HAC (the scores' correlation in time: the residual
+    # drifts where the model is not quite right) and the classical one (scaled by the caller)
     cov, z95 = hac_covariance(X, e, Zr)
     Zc = X if Zr is None else Zr
     A = np.linalg.pinv(Zc.T @ X)
