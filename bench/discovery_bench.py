@@ -72,8 +72,17 @@ def _run(job):
     cover = []
     for t in d.discovered:
         for name, c in t.coefficients.items():
-            if name in truth["params"] and not name.endswith((".force_c",)):
+            if name in truth["params"] and not name.endswith((".force_c", ".force_sin", ".force_cos")):
                 cover.append(bool(abs(c.value - truth["params"][name]) <= c.ci95))
+        # a ripple by its amplitude, as its equation states it: the split into sin and cos is the
+        # phase at q = 0, which a period known to 0.1 % moves by a radian when q = 0 lies 25
+        # periods from the stroke
+        pre = next(iter(t.coefficients)).rsplit(".", 1)[0]
+        s, co = t.coefficients.get(f"{pre}.force_sin"), t.coefficients.get(f"{pre}.force_cos")
+        if s is not None and co is not None:
+            want = np.hypot(truth["params"].get(f"{pre}.force_sin", 0.0), truth["params"].get(f"{pre}.force_cos", 0.0))
+            if want > 0:
+                cover.append(bool(abs(np.hypot(s.value, co.value) - want) <= np.hypot(s.ci95, co.ci95)))
     row.update(right=bool(ok), error=max(errs) if errs else float("inf"), gain=min(gains) if gains else 0.0,
                tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=cover)
     return row

@@ -32,6 +32,8 @@ NOT_RUN = {
     ".venv/bin/python bench/foreign/mujoco_blind.py": "a benchmark of minutes (tests/discrepancy/test_foreign_mujoco.py)",
     ".venv/bin/python bench/foreign/mujoco_rate_noise.py": "a benchmark of minutes (tests/discrepancy)",
     ".venv/bin/python bench/long_recording.py": "a benchmark of minutes (tests/discrepancy/test_long_recording.py)",
+    ".venv/bin/python bench/discovery_mujoco_bench.py": "a benchmark of minutes "
+                                                        "(tests/discrepancy/test_discovery_mujoco.py)",
     ".venv/bin/cosim sweep scenarios/sweeps/blind_benchmark.toml --scheduler": "needs a scheduler the user started, "
                                                                               "and minutes (tests/sweep/test_dask.py)",
     ".venv/bin/cosim sweep --bench": "a benchmark of minutes (tests/sweep)",

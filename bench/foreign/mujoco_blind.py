@@ -163,10 +163,13 @@ def controller(kind: str, m: Model):
                    gravity_feedforward=True)
 
 
-def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity"):
+def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
-    ``(type, value, joint)`` to hide several at once."""
+    ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
+    hidden in MuJoCo's physics: ``force(q, qd)`` of the six rails' true positions (the model's
+    coordinates) and rates gives the six forces [N] pushing them along +q, applied at every
+    MuJoCo step (``qfrc_applied``)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
@@ -202,6 +205,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         elif eff == "offset":
             data.qfrc_applied[drails[jnt]] += val
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = -val
+    applied = data.qfrc_applied[drails].copy()  # the constant part (a hidden offset)
     n = len(ref.time)
     rows = {k: np.empty((n, 6)) for k in ("q", "qd", "tau", "pose")}
     issued = []  # (time, command) for the delay line
@@ -231,6 +235,8 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
                 u = cmd[dead_joint]
                 cmd[dead_joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
             data.ctrl[:] = cmd
+            if force is not None:
+                data.qfrc_applied[drails] = applied + force(q0 + data.qpos[rails], data.qvel[drails])
             for adr, dof, eff, val in gaps:
                 data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)
@@ -417,14 +423,18 @@ def main(argv=None) -> int:
         if key and key in est and key in truth:
             nominal = m.params()[key] if key in m.params() else 0.0
             perr = abs(est[key] - truth[key]) / max(abs(truth[key] - nominal), 1e-12)
-        rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1,
+        # the stated 95 % intervals against the truth, every hidden parameter the engine fitted
+        stated = {p: v for e in d.effects for p, v in e["params"].items()}
+        holds = [bool(abs(stated[p]["value"] - v) <= stated[p]["ci95"]) for p, v in truth.items()
+                 if p in stated and np.isfinite(stated[p]["ci95"])]
+        rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1, "holds": holds,
                      "named": first or "none", "ok": bool(ok if effect else first is None), "param_error": perr,
                      "same_physics": bool(same), "stand_in": bool(stand_in),
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
-              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  ({wall:.1f} s)"
+              f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  interval holds {sum(holds)}/{len(holds)}  ({wall:.1f} s)"
               f"{'  [one-signed effort: the gap is an offset b/2]' if same else ''}"
               f"{'  [held out: named its same-physics stand-in at the right size]' if stand_in else ''}", flush=True)
     if a.two:
@@ -449,6 +459,9 @@ def main(argv=None) -> int:
     print(f"parameter within 15 %:     {sum(r['param_error'] < 0.15 for r in comparable)}/{len(comparable)} "
           f"comparable")
     print(f"clean cases called clean:  {sum(r['ok'] for r in clean)}/{len(clean)}")
+    holds = [h for r in eff for h in r["holds"]]
+    if holds:
+        print(f"stated 95 % intervals containing the truth: {sum(holds)}/{len(holds)} hidden parameters fitted")
     print(f"structure left unexplained: {sum(bool(r['unexplained']) for r in eff)}/{len(eff)} effect cases, "
           f"{sum(bool(r['unexplained']) for r in clean)}/{len(clean)} clean cases")
     (a.out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))

@@ -491,6 +491,16 @@ def _param_error(h: dict, values: dict) -> float:
     return float(np.linalg.norm(est - true) / nrm) if nrm > 0 else float("nan")
 
 
+def interval_holds(diag, truth: dict) -> list:
+    """For every hidden parameter the diagnosis states a 95 % interval of (a library effect's
+    or a discovered term's coefficient): does the interval contain the truth?"""
+    stated = {p: (v["value"], v["ci95"]) for e in diag.effects for p, v in e["params"].items()}
+    for t in diag.discovered:
+        stated.update({p: (c.value, c.ci95) for p, c in t.coefficients.items()})
+    return [bool(abs(stated[p][0] - v) <= stated[p][1]) for p, v in truth.items()
+            if p in stated and np.isfinite(stated[p][1])]
+
+
 def score(diag, key: dict) -> dict:
     """Compare a diagnosis with the answer key of its case."""
     hidden = [h["type"] for h in key["effects"]]
@@ -514,6 +524,7 @@ def score(diag, key: dict) -> dict:
             out["payload_offset_error_mm"] = float(np.linalg.norm(np.subtract(est, true)) * 1e3)
     out["param_error"] = errs
     out["param_ok"] = all(e <= 0.15 for e in errs.values())
+    out["holds"] = interval_holds(diag, {p: v for h in key["effects"] for p, v in h["params"].items()})
     out["gain"] = diag.heldout.get("gain", float("nan"))
     out["gain_windows"] = diag.heldout.get("gain_windows", float("nan"))
     # nan: the fitted effects do not act on the held-out part (nothing to measure)
@@ -695,9 +706,19 @@ def summarize(rows) -> dict:
         "max_diagnose_s": float(np.nanmax([r["t_diagnose"] for r in rows])) if rows else float("nan"),
         "diagnosis_failed": [r["case"] for r in rows if "diagnosis_failed" in r],
         "per_type": per_type, "confusion": confusion, "not_generated": [r["case"] for r in failed],
+        "intervals_holding": [sum(sum(r.get("holds", [])) for r in eff), sum(len(r.get("holds", [])) for r in eff)],
         "structure_when_held_out": (sum(bool(r["structure"]) for r in held) / len(held)) if held else None,
         "stand_in_when_held_out": (sum(bool(r.get("stand_in")) for r in held) / len(held)) if held else None,
     }
+
+
+def _coverage_line(holding) -> str:
+    k, n = holding
+    if not n:
+        return "95 % intervals holding the truth:  none stated for a hidden parameter"
+    p = k / n
+    return (f"95 % intervals holding the truth:  {k}/{n} hidden parameters ({p * 100:.1f} % +- "
+            f"{100 * math.sqrt(p * (1 - p) / n):.1f} %, binomial standard error)")
 
 
 def format_summary(summary: dict) -> str:
@@ -732,6 +753,7 @@ def format_summary(summary: dict) -> str:
         f"{s['median_gain_windows']:.1f}x); {s['effect_cases'] - s['gain_measurable_cases']} case(s) whose "
         f"effect does not act on the held-out part",
         f"clean cases, no missing physics:   {s['clean_no_missing_physics'] * 100:5.1f} %",
+        _coverage_line(s.get("intervals_holding", [0, 0])),
         f"diagnosis time:                    median {s['median_diagnose_s']:.2f} s, max {s['max_diagnose_s']:.2f} s",
         "",
         "per primary hidden type: cases, named first, parameter within 15 %, median parameter error, median gain "

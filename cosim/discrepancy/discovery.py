@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects import joint_prefix
+from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
 
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
@@ -275,6 +276,8 @@ class _Fit:
     coef: np.ndarray     # in units of the columns' deltas (= the core parameter values)
     chi2: float
     cov: np.ndarray
+    z95: float = 1.96    # multiplier of the HAC standard errors for 95 % intervals
+    cov_classical: np.ndarray | None = None  # (Z'X)^-1 Z'Z (X'Z)^-1, in the weights' units
 
 
 def _design(search, c, terms, rows):
@@ -307,12 +310,12 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     coef = fit(X, t, Zr)
     e = t + X @ coef
     chi2 = float(e @ e)
-    if Zr is None:
-        cov = np.linalg.pinv(X.T @ X)
-    else:
-        A = np.linalg.pinv(Zr.T @ X)
-        cov = A @ (Zr.T @ Zr) @ A.T
-    return _Fit(list(terms), coef, chi2, cov)
+    # two covariances for the intervals: HAC (the scores' correlation in time: the residual
+    # drifts where the model is not quite right) and the classical one (scaled by the caller)
+    cov, z95 = hac_covariance(X, e, Zr)
+    Zc = X if Zr is None else Zr
+    A = np.linalg.pinv(Zc.T @ X)
+    return _Fit(list(terms), coef, chi2, cov, z95, A @ (Zc.T @ Zc) @ A.T)
 
 
 def stepwise(search, c, y, rows, threshold, phi, n_eff):
@@ -321,9 +324,10 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
     ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
     boolean mask or an index array (a bootstrap resample).  Returns the terms."""
     logn = math.log(max(n_eff, 2.0))
+    gram = _Gram(search, c, y, rows)
 
     def chi2_of(terms):
-        c2, coef = _ls_fit(search, c, y, terms, rows)
+        c2, coef = gram.fit(terms)
         keys = [k for t, _ in terms for k in TERMS[t][0]]
         # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
         # opposite signs is a constant force while moving), refused as the library refuses
@@ -355,6 +359,36 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
             if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
                 chosen, chi2 = rest, c2
     return chosen
+
+
+class _Gram:
+    """The least-squares fits of any set of candidate terms on channel c and ``rows``, from the
+    cross products of all candidate columns taken once (a selection fits hundreds of subsets of
+    the same columns: a solve of a few unknowns each instead of a least-squares problem over
+    the samples)."""
+
+    def __init__(self, search, c, y, rows):
+        w = search.w[c] * search.eng.use[rows, c]
+        t = y[rows] * w
+        self.at, n = {}, 0
+        blocks = []
+        for cand in search.candidates():
+            col = search.cols[cand][rows, c, :] * w[:, None]
+            self.at[cand] = np.arange(n, n + col.shape[1])
+            n += col.shape[1]
+            blocks.append(col)
+        X = np.concatenate(blocks, axis=1)
+        self.G, self.b, self.tt = X.T @ X, X.T @ t, float(t @ t)
+
+    def fit(self, terms):
+        """(chi-square, coefficients) of the least-squares fit of ``terms``, as :func:`_ls_fit`."""
+        if not terms:
+            return self.tt, np.zeros(0)
+        i = np.concatenate([self.at[u] for u in terms])
+        G, b = self.G[np.ix_(i, i)], self.b[i]
+        coef = -np.linalg.lstsq(G, b, rcond=None)[0]
+        # |t + X c|^2 = t't + 2 c'X't + c'X'X c
+        return max(self.tt + 2.0 * float(coef @ b) + float(coef @ G @ coef), 0.0), coef
 
 
 def _blocks(rows, rng):
@@ -450,13 +484,17 @@ def discover_channel(search, c, y, threshold, seed=0):
     f, d_held = heldout(terms)
     if not d_held > threshold:
         return None
+    # the widest of: the HAC interval, the classical one of the residual's own noise in effective
+    # samples (s^2 >= 1: never narrower than that noise allows), and the bootstrap's spread of
+    # the coefficients (which also sees the selection of the terms)
     s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
-    sd = np.maximum(np.sqrt(np.maximum(np.diag(f.cov), 0.0) * s2), spread)
+    half = np.maximum(np.maximum(f.z95 * np.sqrt(np.maximum(np.diag(f.cov), 0.0)),
+                                 1.96 * np.sqrt(np.maximum(np.diag(f.cov_classical), 0.0) * s2)), 1.96 * spread)
     use_t = eng.use[test, c] > 0
     rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
     yt = y[test]
     Xraw = np.concatenate([search.cols[t][test, c, :] for t in terms], axis=1)
-    return _term(search, c, terms, f.coef, 1.96 * sd, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held)
+    return _term(search, c, terms, f.coef, half, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held)
 
 
 def _units(search):

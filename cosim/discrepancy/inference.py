@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .intervals import hac_covariance
 from .regressors import _NONNEGATIVE, LINEARISED, fit, reference_size
 
 if TYPE_CHECKING:
@@ -170,14 +171,19 @@ class Inference:
         # Intervals from the final Jacobian.
         if sel.selected:
             J, names, Z = self.jacobian(sel.selected, theta, instruments=True)
+            # The wider of two intervals: the classical one of the noise model in effective
+            # samples (never narrower than the measured noise allows: s^2 >= 1), and the HAC one,
+            # (Z'J)^-1 S (J'Z)^-1 with S the scores' autocovariances summed over the lags of the
+            # residual's correlation in time (Z = J for least squares), which widens where the
+            # residual drifts with the trajectory
             dof = max(self.n_eff - J.shape[1], 1.0)
             s2 = max(sel.chi2_final / dof, 1.0)
-            if Z is None:
-                cov = np.linalg.pinv(J.T @ J, rcond=1e-10) * s2
-            else:  # instrumental variables: (Z'J)^-1 Z'Z (J'Z)^-1
-                A = np.linalg.pinv(Z.T @ J, rcond=1e-12)
-                cov = A @ (Z.T @ Z) @ A.T * s2
-            half = 1.96 * np.sqrt(np.maximum(np.diag(cov), 0.0))
+            Zc = J if Z is None else Z
+            A = np.linalg.pinv(Zc.T @ J, rcond=1e-12)
+            classical = A @ (Zc.T @ Zc) @ A.T * s2
+            cov, z95 = hac_covariance(J, self.vec(self.R(theta)), Z, n_series=self.C)
+            half = np.maximum(z95 * np.sqrt(np.maximum(np.diag(cov), 0.0)),
+                              1.96 * np.sqrt(np.maximum(np.diag(classical), 0.0)))
             ci = dict(zip(names, half))
             for a in sel.selected:
                 a.values = {p: theta.get(p, self.nominal[p]) for p in a.group.params}
