@@ -72,8 +72,6 @@ class CvodeStepper final : public Stepper {
   // stop conditions as root functions.
   CvodeStepper(int lmm, Ivp& ivp);
   ~CvodeStepper() override { release(); }
-  CvodeStepper(const CvodeStepper&) = delete;
-  CvodeStepper& operator=(const CvodeStepper&) = delete;
 
   void restart() override {}  // nothing carried: every segment restarts CVODE
   void start_values(double* g) override { stops_.roots(y_.data(), g); }
@@ -104,14 +102,6 @@ class CvodeStepper final : public Stepper {
   void stop_inside(double t_start);
   void stop_before_singularity(double t_start);
 
-  const pkm_sim_options& opt_;
-  Plant& plant_;
-  StopConditions& stops_;
-  StepBudget& budget_;
-  pkm_sim_stats& stats_;
-  double& t_;
-  std::vector<double>& y_;
-  const std::vector<double>& applied_;
   const int nd_, ny_;
   const int lmm_;
 
@@ -141,14 +131,7 @@ void CvodeStepper::check_cvode(int flag, const char* call) const {
 }
 
 CvodeStepper::CvodeStepper(int lmm, Ivp& ivp)
-    : opt_(ivp.opt),
-      plant_(ivp.plant),
-      stops_(ivp.stops),
-      budget_(ivp.budget),
-      stats_(ivp.stats),
-      t_(ivp.t),
-      y_(ivp.y),
-      applied_(ivp.applied),
+    : Stepper(ivp),
       nd_(ivp.plant.nd()),
       ny_(ivp.plant.ny()),
       lmm_(lmm) {

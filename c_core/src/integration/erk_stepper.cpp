@@ -101,14 +101,7 @@ template <const Tableau& kPair>
 class ErkStepper final : public Stepper {
  public:
   ErkStepper(Ivp& ivp, bool stiff_fallback)
-      : opt_(ivp.opt),
-        plant_(ivp.plant),
-        stops_(ivp.stops),
-        budget_(ivp.budget),
-        stats_(ivp.stats),
-        t_(ivp.t),
-        y_(ivp.y),
-        applied_(ivp.applied),
+      : Stepper(ivp),
         nd_(ivp.plant.nd()),
         ny_(ivp.plant.ny()),
         stiff_fallback_(stiff_fallback) {
@@ -158,14 +151,6 @@ class ErkStepper final : public Stepper {
   [[noreturn]] void stop_in_step(double t0, double h, const double* y0, const double* f0, const double* y1,
                                  const double* f1, double det0);
 
-  const pkm_sim_options& opt_;
-  Plant& plant_;
-  StopConditions& stops_;
-  StepBudget& budget_;
-  pkm_sim_stats& stats_;
-  double& t_;
-  std::vector<double>& y_;
-  const std::vector<double>& applied_;
   const int nd_, ny_;
   const bool stiff_fallback_;  // a stiff stepper takes over a stiff stretch
 

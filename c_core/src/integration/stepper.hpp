@@ -38,7 +38,18 @@ struct Ivp {
 
 class Stepper {
  public:
+  explicit Stepper(Ivp& ivp)
+      : opt_(ivp.opt),
+        plant_(ivp.plant),
+        stops_(ivp.stops),
+        budget_(ivp.budget),
+        stats_(ivp.stats),
+        t_(ivp.t),
+        y_(ivp.y),
+        applied_(ivp.applied) {}
   virtual ~Stepper() = default;
+  Stepper(const Stepper&) = delete;
+  Stepper& operator=(const Stepper&) = delete;
   // The state changed otherwise than by this stepper (a reset, a load, another stepper):
   // forget what was carried from the last segment.
   virtual void restart() = 0;
@@ -58,6 +69,17 @@ class Stepper {
   virtual void load(const double* b) = 0;
   // What the message of an exceeded step budget advises with this stepper.
   virtual std::string budget_advice() const = 0;
+
+ protected:
+  // The parts of the Ivp, by name.
+  const pkm_sim_options& opt_;
+  Plant& plant_;
+  StopConditions& stops_;
+  StepBudget& budget_;
+  pkm_sim_stats& stats_;
+  double& t_;
+  std::vector<double>& y_;
+  const std::vector<double>& applied_;
 };
 
 // The stepper of method (a pkm_lmm).  stiff_fallback: a stiff stepper exists for an
