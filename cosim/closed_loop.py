@@ -56,7 +56,8 @@ import numpy as np
 from ._native import STATUS, raise_for
 # The controller's handle and the loop's C call live in the binding (cosim.core owns every
 # foreign call); this module chains the calls and records.
-from .core import KINDS, LOOP_FIELDS, CompiledController, closed_loop_call
+from .core.controller import KINDS, CompiledController
+from .core.loop import LOOP_FIELDS, closed_loop_call
 
 __all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
            "NOISE_CHANNELS"]

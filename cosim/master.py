@@ -38,7 +38,7 @@ def _facts(robot):
     """The core's facts of a robot, or None for a name the core does not know (an FMU of
     another origin)."""
     from ._native import PkmError
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     try:
         return robot_facts(robot)
@@ -293,7 +293,7 @@ class FMUPlant(Plant):
 
     def _robot(self):
         """The core robot the FMU packs: its model identifier is ``PKM_<ROBOT>`` (fmu_gen)."""
-        from .core import robots
+        from .core.facts import robots
 
         ident = self.md.coSimulation.modelIdentifier
         for r in robots():

@@ -35,7 +35,7 @@ def step_figure(out, path, coords: str = "moved") -> Path:
     res, m = out.result, out.metrics
     t = res["time"]
     fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     facts = robot_facts(res.robot)
     names, units = list(facts.pose_names), list(facts.pose_units)

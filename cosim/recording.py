@@ -57,7 +57,8 @@ FORMAT = "pkm-recording/1"
 def _facts(robot):
     """The core's facts of a robot (joints, tracker columns; cached by the core module), or
     None if it knows none."""
-    from .core import PkmError, robot_facts
+    from .core.model import robot_facts
+    from .errors import PkmError
 
     try:
         return robot_facts(robot)
@@ -70,7 +71,8 @@ def _described(side, name, file, text=None):
     sidecar names (relative to the sidecar, or absolute in recordings written before the
     path was made relative), else from the description the sidecar carries.  The core then
     knows the robot by name for the rest of the process."""
-    from .core import Model, PkmError
+    from .core.model import Model
+    from .errors import PkmError
 
     src = None
     if isinstance(file, str):
@@ -102,7 +104,7 @@ _CARRIED = None
 
 
 def _known():
-    from .core import robots
+    from .core.facts import robots
 
     return ", ".join(robots())
 
@@ -522,7 +524,7 @@ def _check_units(side, units, robot):
         return
     if not isinstance(units, dict):
         raise RecordingError(side, f"units must be an object of column: unit, got {units!r}")
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     f = robot_facts(robot)
     want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
@@ -539,7 +541,7 @@ def _check_units(side, units, robot):
 def _check_pose_scale(path, robot, pose_cols, col):
     """Pose columns far beyond any robot's reach are a unit slip (mm for m, degrees for rad):
     say so, naming the column, instead of letting a later step fail on unreachable poses."""
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     for c, unit in zip(pose_cols, robot_facts(robot).tracker_units):
         big = float(np.max(np.abs(col[c])))

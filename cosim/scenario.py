@@ -219,7 +219,7 @@ def _check_pose_units(spec, fail):
     almost always a unit slip: say which (mm for m, degrees for rad) instead of letting
     the inverse kinematics report an unreachable pose."""
     from .errors import PkmError
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     try:  # a robot name, or a description file (its own errors name their line)
         robot_facts(spec["robot"])
@@ -264,7 +264,7 @@ def _angles(pose, unit, units=None):
 
 def build_models(sc: Scenario):
     """The controller's (nominal) model and the plant's ("true") model."""
-    from .core import Model
+    from .core.model import Model
 
     robot, pset = sc.spec["robot"], sc.spec.get("param_set")
     nominal = Model(robot, pset, sc.spec["parameters"] or None)
@@ -662,7 +662,7 @@ def pose_set_metrics(sc, res) -> dict:
     """Per held pose: rows, final pose error (``position_error``: the norm over the pose
     coordinates in metres, as the core names their units), tracker scatter; over the whole
     run (``motion``): the joint and pose tracking errors and the largest effort."""
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     units = robot_facts(sc.spec["robot"]).pose_units
     lengths = [i for i, u in enumerate(units) if u == "m"]

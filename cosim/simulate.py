@@ -33,7 +33,7 @@ import numpy as np
 
 from .errors import ArgumentError, PkmError
 # The integrator's handle lives in the binding (cosim.core owns every foreign call).
-from .core import METHOD_CODES, Simulator, default_options
+from .core.simulator import METHOD_CODES, Simulator, default_options
 
 __all__ = ["Simulator", "SimResult", "simulate", "default_options", "METHOD_CODES"]
 

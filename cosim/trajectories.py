@@ -415,7 +415,7 @@ def pen_point(robot: str, x, offset=(0.0, 0.0, 0.0)):
         rx, ry, rz (:func:`tool_point`); otherwise the pose's position coordinates (those in
         metres) are the traced point.
     """
-    from .core import robot_facts
+    from .core.model import robot_facts
 
     f = robot_facts(robot)
     x = np.atleast_2d(np.asarray(x, float))

@@ -19,8 +19,6 @@ file(MAKE_DIRECTORY ${src})
 file(COPY ${SOURCE_DIR}/c_core/src/ DESTINATION ${src})
 file(COPY ${SOURCE_DIR}/c_core/include/pkm DESTINATION ${src})
 file(COPY ${EIGEN_DIR}/Eigen DESTINATION ${src})
-# no SUNDIALS in a source build: the core's explicit methods (fmu/platform/no_cvode)
-file(COPY ${SOURCE_DIR}/fmu/platform/no_cvode/ DESTINATION ${src})
 # the FMU layer and the generated table
 foreach(f fmi2Functions.h fmi2FunctionTypes.h fmi2TypesPlatform.h)
   file(COPY ${FMI2_HEADERS_DIR}/${f} DESTINATION ${src})

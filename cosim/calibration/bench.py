@@ -13,7 +13,7 @@ from .data import SEED000_POSES, sixpus_campaign, sixpus_candidate_poses, sixpus
 from .design import observability, pose_rows, select_poses, sixpus_seed_comparison
 from .problems import CalibrationWarning, SixpusProblem
 from .solvers import solve
-from ..core import Model
+from ..core.model import Model
 
 __all__ = ["benchmark", "design_study"]
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .problems import sixpus_leg_names
-from ..core import Model
+from ..core.model import Model
 from ..recording import Recording, write_recording
 
 __all__ = [

@@ -178,7 +178,7 @@ def sixpus_seed_comparison(n: int = 10, ncand: int = 1000, seed: int = 5) -> dic
     from .data import sixpus_candidate_poses
     from .problems import PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem, calib_rows
     from .seed import SEED000_TABLE_4_22
-    from ..core import Model
+    from ..core.model import Model
 
     cols = [0, 1, 2, 6, 7, 8, 9]  # X, Y, Z, L, sx, sy, sz
     nom = Model("6pus")

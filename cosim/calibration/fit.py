@@ -45,7 +45,7 @@ from .problems import (
     SixpusProblem,
 )
 from .solvers import METHODS, Solution, solve
-from ..core import Model
+from ..core.model import Model
 from ..recording import Recording, read_recording
 
 __all__ = [

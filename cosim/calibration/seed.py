@@ -70,7 +70,7 @@ def fourbar_seed_study() -> dict:
     ``bound``: the first-order bound cond(A) ||d(dX)|| / ||dX|| on the relative error from
     a rounding of dX by 1e-4 mm; ``text``: the explanation as a table.
     """
-    from ..core import Model
+    from ..core.model import Model
     from ..fourbar import output
 
     s = SEED002

@@ -115,7 +115,7 @@ def python_rows(quick: bool = False, seed: int = 1) -> dict:
     from scipy.integrate import solve_ivp
     from scipy.optimize import least_squares
 
-    from ..core import Model
+    from ..core.model import Model
     from ..simulate import simulate
 
     m = Model("6pus")

@@ -21,7 +21,7 @@ def command(name, help):
 def robot_arg(value: str) -> str:
     """argparse type of every ``--robot``: a robot the core lists, or a path to a
     description file (checked when the command makes the model, with the file's line)."""
-    from ..core import robots
+    from ..core.facts import robots
 
     if value in robots():
         return value
@@ -32,7 +32,8 @@ def robot_arg(value: str) -> str:
 
 
 def _params_configure(p):
-    from ..core import robot_facts, robots
+    from ..core.facts import robots
+    from ..core.model import robot_facts
 
     names = robots()
     sets = "; ".join(f"{r}: {', '.join(robot_facts(r).param_sets)}" for r in names)
@@ -43,7 +44,7 @@ def _params_configure(p):
 
 @command("params", "print a robot's parameter set with units (table or --json)")
 def cmd_params(args):
-    from ..core import Model
+    from ..core.model import Model
 
     m = Model(args.robot, args.param_set)
     if args.json:
@@ -68,7 +69,8 @@ def _robots_configure(p):
 def cmd_robots(args):
     import json
 
-    from ..core import robot_facts, robots
+    from ..core.facts import robots
+    from ..core.model import robot_facts
 
     rows = []
     for r in robots():
@@ -400,7 +402,8 @@ def recording_file(value: str) -> str:
     import json
     import re
 
-    from ..core import robot_facts, robots
+    from ..core.facts import robots
+    from ..core.model import robot_facts
 
     input_file(value)
     csv = Path(value)

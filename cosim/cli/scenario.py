@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..core import robot_facts
+from ..core.model import robot_facts
 from .main import command, output_dir, output_file, recording_file, toml_file
 
 
@@ -225,7 +225,7 @@ def cmd_indices(args):
 
     import numpy as np
 
-    from ..core import Model
+    from ..core.model import Model
     from ..indices import index_map
 
     if not args.axis:

@@ -349,7 +349,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
 
     ``cfg`` is the generator configuration (default: ``scenarios/blind/config.toml``);
     tests pass a copy with a shorter duration."""
-    from ..core import Model
+    from ..core.model import Model
     from ..master import make_reference
     from ..recording import Recording
     from .excitation import excitation
@@ -441,7 +441,7 @@ def plan(n_effect: int, n_clean: int, seed: int, robots=("6pus",), cfg: dict | N
     """Case specs: ``n_effect`` cases cycling over the effect types of each robot (so
     every type gets its share), a fraction with a second non-look-alike effect, and
     ``n_clean`` clean cases; robots alternate."""
-    from ..core import Model
+    from ..core.model import Model
 
     cfg = cfg or load_config()
     for r in robots:

@@ -154,7 +154,7 @@ def _load(recording, max_samples, block_seconds, progress):
 
 
 def _model_for(rec, model):
-    from ..core import Model
+    from ..core.model import Model
 
     def sidecar_params(m):
         if rec.parameters:
@@ -705,7 +705,7 @@ def _two_body_sentence(replay, unit) -> str:
 
 def _compared(rec, mdl, compare) -> dict:
     """The plants ``compare`` names for the replay: {name: Model}."""
-    from ..core import Model
+    from ..core.model import Model
 
     if not compare:
         return {}

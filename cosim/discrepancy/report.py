@@ -174,7 +174,7 @@ def markdown(d, files: dict) -> str:
         if rp.get("skipped"):
             L += [f"Replay not run: {rp['skipped']}.", ""]
         else:
-            from ..core import robot_facts
+            from ..core.model import robot_facts
 
             nd = len(_first_run(rp))
             facts = robot_facts(d.robot)

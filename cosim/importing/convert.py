@@ -111,7 +111,8 @@ def _substitute(obj, values):
 
 
 def _model(m: ImportMap, robot: str | None, params: dict):
-    from ..core import Model, PkmError
+    from ..core.model import Model
+    from ..errors import PkmError
 
     ref = robot if robot is not None else m.robot_ref()
     try:

@@ -30,8 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Model
-from .maps import adept_to_model
+from ..core.model import Model
+from .maps import adept_to_model, require_indices
+from .maps import model as quattro_model
 
 __all__ = ["CYCLES", "LAYOUTS", "Profile", "topp_segment", "cycle_waypoints", "cycle_time", "load_measured",
            "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison",
@@ -203,7 +204,7 @@ def cycle_time(m: Model | None = None, z: float = -0.95, cycle: str = "standard"
 
     With ``detail=True`` returns ``(time, [Profile, ...])``.
     """
-    m = m if m is not None else Model("quattro", param_set)
+    m = require_indices(m) if m is not None else quattro_model(param_set)
     w = cycle_waypoints(m, z, cycle, layout)
     profs = [topp_segment(m, w[i], w[i + 1], n=n, qd_max=qd_max) for i in range(len(w) - 1)]
     T = sum(p.duration for p in profs)
@@ -293,7 +294,7 @@ def compare(param_set: str = "default", params: dict | None = None, tables=None,
     qd_max : float, optional
         Arm speed limit [rad/s].
     """
-    m = Model("quattro", param_set, params)
+    m = quattro_model(param_set, params)
     meas = measured or load_measured()
     out = Comparison(param_set=param_set, qd_max=qd_max)
     for name in tables or sorted(meas):
@@ -555,7 +556,7 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n
     if missing or not fit_tables:
         raise ValueError(f"fit table {missing[0] if missing else '(none)'!r} is not among the measured tables "
                          f"({', '.join(sorted(meas))})")
-    m = Model("quattro", param_set)
+    m = quattro_model(param_set)
     terms, fit_tables = tuple(terms), tuple(fit_tables)
     cache = {}
 

@@ -21,10 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import PkmError
-from ..core import Model, quattro_index_names, quattro_index_units
+from ..core.facts import quattro_index_names, quattro_index_units
+from ..core.model import Model
+from ..errors import PkmError, UnsupportedError
 
-__all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model",
+__all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model", "require_indices",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]
 
 NINDEX = 22  # PKM_QUATTRO_NINDEX in pkm.h
@@ -46,9 +47,40 @@ def index_units() -> dict[str, str]:
     return quattro_index_units()
 
 
-def model(param_set: str | None = None, params: dict | None = None) -> Model:
-    """A Quattro :class:`~cosim.core.Model` ("default" = seed text values, "appendix_a")."""
-    return Model("quattro", param_set, params)
+def model(param_set: str | None = None, params: dict | None = None, robot: str = "quattro") -> Model:
+    """A :class:`~cosim.core.Model` with the Quattro indices, by default the Quattro's.
+
+    Parameters
+    ----------
+    param_set : str, optional
+        Named parameter set ("default" = seed text values, "appendix_a").
+    params : dict, optional
+        Overrides by name.
+    robot : str
+        Robot name or description file; it must declare the Quattro indices
+        (``Model.has("quattro_indices")``, see :func:`require_indices`).
+
+    Example
+    -------
+    >>> m = model(param_set="appendix_a")
+    >>> m.has("quattro_indices")
+    True
+    """
+    return require_indices(Model(robot, param_set, params))
+
+
+def require_indices(m: Model) -> Model:
+    """``m`` itself if the core declares the Quattro indices for it (``Model.has``), else
+    ``UnsupportedError`` naming the robot: the functions of :mod:`cosim.quattro` ask the
+    model, never its name."""
+    if not m.has("quattro_indices"):
+        raise UnsupportedError(f"robot {m.robot!r} has no Quattro indices (Model.has('quattro_indices') is False): "
+                               "cosim.quattro needs a model that declares them, e.g. Model('quattro')",
+                               "PKM_ERR_UNSUPPORTED")
+    return m
+
+
+_quattro_model = model  # index_map's argument `model` shadows the function
 
 
 @dataclass
@@ -130,7 +162,7 @@ def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None 
         Arrays of shape (nx, ny, nz) per index, NaN where the pose is unreachable, beyond
         the joint range or singular (the reason is in ``status``).
     """
-    m = model if model is not None else Model("quattro", param_set, params)
+    m = require_indices(model) if model is not None else _quattro_model(param_set, params)
     h = m.param("base.h")
     x = np.linspace(-0.5, 0.5, 21) if x is None else np.atleast_1d(np.asarray(x, dtype=float))
     y = np.linspace(-0.5, 0.5, 21) if y is None else np.atleast_1d(np.asarray(y, dtype=float))

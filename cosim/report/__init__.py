@@ -185,7 +185,7 @@ def view(recording, *, out=None, model=None, max_frames: int = 120) -> Path:
         The model to draw with (default: the robot of the recording with its sidecar's
         parameters).
     """
-    from ..core import Model
+    from ..core.model import Model
     from ..recording import read_recording
 
     rec = read_recording(recording)

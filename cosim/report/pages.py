@@ -58,7 +58,7 @@ def run_page(out, path) -> Path:
     against their reference, the efforts, the metrics."""
     import json
 
-    from ..core import Model, robot_facts
+    from ..core.model import Model, robot_facts
 
     res = out.result
     facts = robot_facts(res.robot)
@@ -122,7 +122,7 @@ def diagnosis_page(d, path, model=None) -> Path:
 
     import plotly.graph_objects as go
 
-    from ..core import Model
+    from ..core.model import Model
     from ..recording import read_recording
 
     rec = read_recording(d.recording)

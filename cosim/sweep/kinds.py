@@ -201,7 +201,7 @@ class CalibrationKind(Kind):
     def run(self, base, params, ctx):
         from ..calibration import data as cd
         from ..calibration import calibrate
-        from ..core import Model
+        from ..core.model import Model
 
         p = {**CALIBRATION_DEFAULTS, **base, **params}
         seed, n = int(p["seed"]), int(p["n_poses"])

@@ -117,3 +117,15 @@ def test_wrong_pose_shape_is_an_error():
     m = quattro.model("appendix_a")
     with pytest.raises(ValueError, match="4 coordinates"):
         quattro.indices(m, np.zeros((3, 3)))
+
+
+def test_a_model_without_the_quattro_indices_is_refused_by_capability_not_name():
+    from cosim.core import Model
+    from cosim.errors import UnsupportedError
+
+    # the described Quattro is the same machine but the core declares no index family for it
+    with pytest.raises(UnsupportedError, match="robot 'quattro_described' has no Quattro indices"):
+        quattro.index_map(x=[0.0], y=[0.0], z=[-1.0], model=Model("quattro_described"))
+    with pytest.raises(UnsupportedError, match="robot '6pus' has no Quattro indices"):
+        quattro.model(robot="6pus")
+    assert quattro.model(param_set="appendix_a").has("quattro_indices")

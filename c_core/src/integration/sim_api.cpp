@@ -1,4 +1,4 @@
-// C API: the CVODE simulator (pkm_sim_*).  Exceptions of pkm::Sim become a status
+// C API: the simulator (pkm_sim_*).  Exceptions of pkm::Sim become a status
 // and a message kept in the sim (pkm_sim_error); nothing throws across the boundary.
 #include "common/guard.hpp"
 #include "integration/sim.hpp"

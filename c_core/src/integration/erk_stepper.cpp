@@ -1,12 +1,12 @@
-// The explicit Runge-Kutta path of pkm_sim (method PKM_ERK, the default): Dormand and
-// Prince's embedded 5(4) pair (J. Comput. Appl. Math. 6, 1980), local extrapolation,
+// The explicit Runge-Kutta stepper of pkm_sim (methods PKM_ERK, the default, and PKM_ERK23):
+// Dormand and Prince's embedded 5(4) pair (J. Comput. Appl. Math. 6, 1980), local extrapolation,
 // an error-per-step controller, and stop conditions checked at every accepted step.
 //
 // Why a one-step method (docs/integration.md): under a controller the input changes at
 // every communication point, and CVODE's multistep history restarts there, at order 1
 // with a fresh initial step (12 steps per 1 ms).  A one-step method loses nothing at a
 // restart: its whole state is (t, y) plus the step size it proposes next.  That step
-// size is part of the sim's state (pkm_sim_state_save), so a rollback followed by a
+// size is the stepper's block of the sim's state (pkm_sim_state_save), so a rollback followed by a
 // re-advance repeats the same steps and reproduces the trajectory bit for bit.
 //
 // Under a controller the held input changes at every communication point, which breaks
@@ -27,7 +27,10 @@
 #include <sstream>
 
 #include "common/guard.hpp"
-#include "integration/sim.hpp"
+#include "integration/plant.hpp"
+#include "integration/step_budget.hpp"
+#include "integration/stepper.hpp"
+#include "integration/stop_conditions.hpp"
 
 namespace pkm {
 
@@ -45,6 +48,7 @@ struct Tableau {
   double expo;  // step-size exponent: -1 / (order of the embedded estimate + 1)
   double stiff_bound;  // ~0.9 x where the stability region ends on the negative real axis
   bool last_two_at_end;  // the last two stages are both at the step's end (c = 1)
+  double start_expo;     // exponent of the starting step's estimate: 1 / (order + 1)
 };
 
 // Dormand and Prince's 5(4) pair (J. Comput. Appl. Math. 6, 1980).
@@ -61,7 +65,8 @@ constexpr Tableau kDP54{7,
                         {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40},
                         -1.0 / 5,
                         3.25,
-                        true};
+                        true,
+                        1.0 / 5};
 
 // Bogacki and Shampine's 3(2) pair (Appl. Math. Lett. 2, 1989): three new stages a step.
 constexpr Tableau kBS32{4,
@@ -71,20 +76,15 @@ constexpr Tableau kBS32{4,
                         {2.0 / 9 - 7.0 / 24, 1.0 / 3 - 1.0 / 4, 4.0 / 9 - 1.0 / 3, -1.0 / 8},
                         -1.0 / 3,
                         2.25,
-                        false};
+                        false,
+                        1.0 / 3};
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
-constexpr double kSingGuard = 100.0;  // exact singularity measure only below this x sing_min
-constexpr int kMaxN = 24;
+constexpr int kMaxN = 24;  // 4 x 6: pose, rates, and the drive bodies of two-body joints
 // Stiffness detection: this many steps at the stability edge in one segment (Hairer's
 // DOPRI5 uses 15), forgotten after kCalmSteps steps in a row away from it (6 there).
 constexpr int kStiffHits = 15, kCalmSteps = 6;
 constexpr long kStiffCheckFrom = 15;  // BS3 pays a call a step for the check after this many
-#ifdef PKM_NO_CVODE
-constexpr bool kCanHandOver = false;  // no BDF in this binary: the explicit method goes on, its budget bounds it
-#else
-constexpr bool kCanHandOver = true;
-#endif  // 4 x 6: pose, rates, and the drive bodies of two-body joints
 
 // Cubic Hermite interpolant of a step at theta in [0, 1].
 void hermite(int n, double theta, double h, const double* y0, const double* f0, const double* y1, const double* f1,
@@ -96,7 +96,88 @@ void hermite(int n, double theta, double h, const double* y0, const double* f0, 
 
 }  // namespace
 
-bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, double* B) {
+// The pair is a template argument: its coefficients are constants of the compiled steps.
+template <const Tableau& kPair>
+class ErkStepper final : public Stepper {
+ public:
+  ErkStepper(Ivp& ivp, bool stiff_fallback)
+      : Stepper(ivp),
+        nd_(ivp.plant.nd()),
+        ny_(ivp.plant.ny()),
+        stiff_fallback_(stiff_fallback) {
+    fsal_f_.assign(ny_, 0.0);
+    fsal_B_.assign((size_t)nd_ * nd_, 0.0);
+    g_cached_.assign(stops_.nroots() + 1, 0.0);
+    reuse_input_ = plant_.bodies().empty();  // a two-body joint's effort depends on the state
+  }
+
+  void restart() override {
+    h_next_ = 0.0;  // a new start: the first step is chosen afresh
+    guard_cached_ = false;
+    fsal_valid_ = false;
+  }
+
+  // The stop values at the state the last segment ended on are kept from its last step.
+  void start_values(double* g) override {
+    if (!guard_cached_) {
+      stops_.guard(y_.data(), g_cached_.data(), det_cached_, bound_cached_);
+      guard_cached_ = true;
+    }
+    std::copy(g_cached_.begin(), g_cached_.begin() + stops_.nstop(), g);
+  }
+
+  bool advance(double t_end) override;
+
+  // The block: the step size proposed for the next step (0: choose one).
+  size_t state_size() const override { return 1; }
+  void save(double* b) const override { b[0] = h_next_; }
+  void check(const double* b, double t) const override { check_next_step(b[0], t); }
+  void load(const double* b) override { h_next_ = b[0]; }
+
+  std::string budget_advice() const override {
+    return "the dynamics are stiff here, use solver.method = BDF (PKM_BDF), or an input this large is not physical";
+  }
+
+ private:
+  // f = (xd, FD(y, tau)), tau nullptr: zero effort; with B != nullptr also B = d xdd / d tau
+  // when the robot offers it (else reuse_input_ turns false).  false: a trial state the
+  // robot refuses (outside the workspace, non-finite), recorded in cb_*.
+  bool rhs(double t, const double* y, double* f, const double* tau, double* B = nullptr);
+  // A stage from its split: f = F + (0, B applied), F = f at zero effort.
+  void stage(const double* F, const double* B, double* f) const;
+  double initial_step(double t_end, const double* f0);
+  // First violation of a stop condition inside the accepted step [t0, t0 + h] (Hermite
+  // interpolant of y0, f0, y1, f1): stops there and throws.
+  [[noreturn]] void stop_in_step(double t0, double h, const double* y0, const double* f0, const double* y1,
+                                 const double* f1, double det0);
+
+  const int nd_, ny_;
+  const bool stiff_fallback_;  // a stiff stepper takes over a stiff stretch
+
+  double h_next_ = 0.0;  // step size proposed for the next step (0: choose one)
+  // Stop-condition values and det J at the state the last segment ended on (valid until
+  // the state changes otherwise), so the next advance need not recompute them.
+  bool guard_cached_ = false;
+  double det_cached_ = 1.0, bound_cached_ = 1.0;
+  std::vector<double> g_cached_;
+  // The last stage of a segment split as f(y, 0) (fsal_f_) and B = d xdd / d tau
+  // (fsal_B_).  The accelerations are affine in the effort, so the first stage of the
+  // next segment is fsal_f_ + B applied whatever its input: a 6x6 product instead of a
+  // forward-dynamics call.  The split depends on y alone, so after a reset or a load it
+  // is recomputed to the same bits: a rollback (and a reset to a saved state) repeats
+  // the trajectory bit for bit.
+  bool reuse_input_ = false;  // the robot offers B and no joint is two bodies
+  bool fsal_valid_ = false;   // fsal_f_ and fsal_B_ belong to the current y
+  std::vector<double> fsal_f_, fsal_B_;
+  // Failure recorded by rhs (a trial state refused: a smaller step may avoid it).
+  int cb_status_ = 0;
+  double cb_time_ = 0.0;
+  std::string cb_msg_;
+};
+
+
+template <const Tableau& kPair>
+bool ErkStepper<kPair>::rhs(double t, const double* y, double* f, const double* tau, double* B) {
   const int n = nd_;
   for (int i = 0; i < ny_; ++i)
     if (!std::isfinite(y[i])) {
@@ -109,9 +190,9 @@ bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, doubl
   try {
     static const double zero[6] = {0, 0, 0, 0, 0, 0};
     if (!tau) tau = zero;
-    if (!B || !two_.empty() || !total_forward_dynamics_response(model_, data_, y, y + n, tau, f + n, B)) {
+    if (!B || !plant_.rates_response(y, tau, f, B)) {
       if (B) reuse_input_ = false;  // this robot or drive has no cheap response: call FD each time
-      dynamics(y, tau, f);
+      plant_.rates(y, tau, f);
     }
   } catch (const Error& e) {
     cb_status_ = e.status;
@@ -132,7 +213,8 @@ bool Sim::erk_rhs(double t, const double* y, double* f, const double* tau, doubl
   return true;
 }
 
-void Sim::erk_stage(const double* F, const double* B, double* f) const {
+template <const Tableau& kPair>
+void ErkStepper<kPair>::stage(const double* F, const double* B, double* f) const {
   const int n = nd_;
   for (int i = 0; i < n; ++i) {
     double acc = 0;
@@ -151,7 +233,8 @@ void Sim::erk_stage(const double* F, const double* B, double* f) const {
 
 // Hairer, Norsett and Wanner's starting step (Solving ODEs I, II.4): from the sizes of y,
 // f and an estimate of f's change, capped by the segment and max_step.
-double Sim::erk_initial_step(double t_end, const double* f0) {
+template <const Tableau& kPair>
+double ErkStepper<kPair>::initial_step(double t_end, const double* f0) {
   const int n2 = ny_;
   double d0 = 0, d1 = 0;
   for (int i = 0; i < n2; ++i) {
@@ -166,7 +249,7 @@ double Sim::erk_initial_step(double t_end, const double* f0) {
   double y1[kMaxN] = {}, f1[kMaxN];
   for (int i = 0; i < n2; ++i) y1[i] = y_[i] + h0 * f0[i];
   double h1;
-  if (!erk_rhs(t_ + h0, y1, f1, applied_.data())) {
+  if (!rhs(t_ + h0, y1, f1, applied_.data())) {
     h1 = h0;
   } else {
     double d2 = 0;
@@ -176,7 +259,7 @@ double Sim::erk_initial_step(double t_end, const double* f0) {
     }
     d2 = std::sqrt(d2 / n2) / h0;
     const double dm = std::max(d1, d2);
-    h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, opt_.method == PKM_ERK23 ? 1.0 / 3 : 1.0 / 5);
+    h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, kPair.start_expo);
   }
   ++stats_.rhs_evals;
   double h = std::min(100 * h0, h1);
@@ -184,23 +267,9 @@ double Sim::erk_initial_step(double t_end, const double* f0) {
   return h;
 }
 
-void Sim::erk_guard(const double* y, double* g, double& det, double& bound) {
-  int k = 0;
-  if (!limits_.empty()) {
-    robot_->ik(*rm_, *rd_, y, q_.data());
-    for (const JointLimit& L : limits_) g[k++] = L.upper ? L.value - q_[L.joint] : q_[L.joint] - L.value;
-  }
-  det = 1.0;
-  bound = 1.0;
-  if (sing_root_) {
-    robot_->direct_singularity_guard(*rm_, *rd_, y, &bound, &det);
-    const double guard = std::min(0.5, kSingGuard * opt_.sing_min);
-    g[k++] = bound >= guard ? bound - opt_.sing_min : measure_at(y) - opt_.sing_min;
-  }
-}
-
-void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, const double* y1, const double* f1,
-                   double det0) {
+template <const Tableau& kPair>
+void ErkStepper<kPair>::stop_in_step(double t0, double h, const double* y0, const double* f0, const double* y1,
+                              const double* f1, double det0) {
   const int n2 = ny_;
   double y[kMaxN], g[64];
   // violated(theta): some stop margin <= 0 or det J of the other sign than at the start.
@@ -208,18 +277,18 @@ void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, cons
     hermite(n2, theta, h, y0, f0, y1, f1, y);
     double det = det0, bound = 0;
     try {
-      erk_guard(y, g, det, bound);
+      stops_.guard(y, g, det, bound);
     } catch (const Error&) {
       if (which) *which = -1;
       return true;  // outside the workspace: past the stop
     }
-    for (int k = 0; k < nstop_; ++k)
+    for (int k = 0; k < stops_.nstop(); ++k)
       if (g[k] <= 0) {
         if (which) *which = k;
         return true;
       }
-    if (sing_root_ && (det > 0) != (det0 > 0)) {
-      if (which) *which = nstop_ - 1;
+    if (stops_.singularity() && (det > 0) != (det0 > 0)) {
+      if (which) *which = stops_.nstop() - 1;
       if (crossed) *crossed = true;
       return true;
     }
@@ -243,18 +312,19 @@ void Sim::erk_stop(double t0, double h, const double* y0, const double* f0, cons
   t_ = t0 + lo * h;
   double det = det0, bound = 0;
   try {
-    erk_guard(y_.data(), g, det, bound);
+    stops_.guard(y_.data(), g, det, bound);
   } catch (const Error&) {
-    for (int k = 0; k < nroots_; ++k) g[k] = 0.0;
+    for (int k = 0; k < stops_.nroots(); ++k) g[k] = 0.0;
   }
-  if (which < 0) which = nstop_ > 0 ? nstop_ - 1 : 0;
-  const bool is_limit = which < (int)limits_.size();
-  std::string msg = root_message(which, g, t_, false);
+  if (which < 0) which = stops_.nstop() > 0 ? stops_.nstop() - 1 : 0;
+  const bool is_limit = which < stops_.nlimits();
+  std::string msg = stops_.message(which, g, t_, false);
   if (crossed) msg += " (the motion crosses the singularity at t = " + num(t_hi) + " s)";
   throw Error(is_limit ? PKM_ERR_JOINT_LIMIT : PKM_ERR_SINGULAR, msg);
 }
 
-bool Sim::erk_segment(double t_end) {
+template <const Tableau& kPair>
+bool ErkStepper<kPair>::advance(double t_end) {
   // An interval below ~1e-15 s (relative to max(1 s, t)) moves only the clock: the state
   // would change by less than its own rounding (a denormal step is a zero step).
   if (t_end - t_ < 4 * DBL_EPSILON * std::max({1.0, std::fabs(t_), std::fabs(t_end)})) {
@@ -264,21 +334,21 @@ bool Sim::erk_segment(double t_end) {
   const int n2 = ny_;
   cb_status_ = 0;
   cb_msg_.clear();
-  const Tableau& tb = opt_.method == PKM_ERK23 ? kBS32 : kDP54;
+  const Tableau& tb = kPair;
   double y0[kMaxN], k[7][kMaxN], y1[kMaxN], ys[kMaxN], g[64];
   double* f0 = k[0];
   for (int i = 0; i < n2; ++i) y0[i] = y_[i];
   const int n = nd_;
   if (reuse_input_ && !fsal_valid_) {  // after a reset or a load: the split of the last stage anew
-    if (!erk_rhs(t_, y0, fsal_f_.data(), nullptr, fsal_B_.data()))
+    if (!rhs(t_, y0, fsal_f_.data(), nullptr, fsal_B_.data()))
       throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
     ++stats_.rhs_evals;
     fsal_valid_ = reuse_input_;
   }
   if (reuse_input_) {
-    erk_stage(fsal_f_.data(), fsal_B_.data(), f0);
+    stage(fsal_f_.data(), fsal_B_.data(), f0);
   } else {
-    if (!erk_rhs(t_, y0, f0, applied_.data())) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
+    if (!rhs(t_, y0, f0, applied_.data())) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
     ++stats_.rhs_evals;
   }
   fsal_valid_ = false;  // y_ changes below
@@ -286,19 +356,19 @@ bool Sim::erk_segment(double t_end) {
   double F1[kMaxN], B1[36];
   bool B1_fresh = false;
   if (!guard_cached_) {
-    erk_guard(y0, g_cached_.data(), det_cached_, bound_cached_);
+    stops_.guard(y0, g_cached_.data(), det_cached_, bound_cached_);
     guard_cached_ = true;
   }
   double det0 = det_cached_, bound0 = bound_cached_;
   guard_cached_ = false;  // y_ changes below
 
-  double h = h_next_ > 0 ? h_next_ : erk_initial_step(t_end, f0);
+  double h = h_next_ > 0 ? h_next_ : initial_step(t_end, f0);
   if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
   long steps = 0;
   int stiff_hits = 0, calm = 0;  // stiffness detection (see kStiffHits)
   while (t_ < t_end) {
-    if (budget_ <= 0 || past_deadline()) budget_exceeded(t_end, budget_ > 0);
-    --budget_;
+    if (budget_.left() <= 0 || budget_.past_deadline()) budget_.exceeded(t_, t_end, budget_.left() > 0);
+    budget_.spend(1);
     const double rest = t_end - t_;
     const bool last = h >= rest * (1 - 1e-12);
     const double hh = last ? rest : h;
@@ -319,7 +389,7 @@ bool Sim::erk_segment(double t_end) {
         for (int l = 0; l < j; ++l) acc += tb.a[j][l] * k[l][i];
         ys[i] = y0[i] + hh * acc;
       }
-      ok = erk_rhs(t_ + tb.c[j] * hh, ys, k[j], applied_.data());
+      ok = rhs(t_ + tb.c[j] * hh, ys, k[j], applied_.data());
       ++evals;
     }
     if (ok) {
@@ -332,11 +402,11 @@ bool Sim::erk_segment(double t_end) {
       // that the next segment starts from it whatever its input.
       B1_fresh = last && reuse_input_;
       if (B1_fresh) {
-        ok = erk_rhs(t_ + hh, y1, F1, nullptr, B1);
+        ok = rhs(t_ + hh, y1, F1, nullptr, B1);
         B1_fresh = ok && reuse_input_;
-        if (B1_fresh) erk_stage(F1, B1, k[tb.s - 1]);
+        if (B1_fresh) stage(F1, B1, k[tb.s - 1]);
       }
-      if (!B1_fresh) ok = erk_rhs(t_ + hh, y1, k[tb.s - 1], applied_.data());
+      if (!B1_fresh) ok = rhs(t_ + hh, y1, k[tb.s - 1], applied_.data());
       ++evals;
     }
     stats_.rhs_evals += evals;
@@ -365,15 +435,15 @@ bool Sim::erk_segment(double t_end) {
     double det1 = det0, bound1 = bound0;
     bool stop = false;
     try {
-      erk_guard(y1, g, det1, bound1);
-      for (int k = 0; k < nstop_; ++k) stop = stop || g[k] <= 0;
-      stop = stop || (sing_root_ && (det1 > 0) != (det0 > 0));
+      stops_.guard(y1, g, det1, bound1);
+      for (int k = 0; k < stops_.nstop(); ++k) stop = stop || g[k] <= 0;
+      stop = stop || (stops_.singularity() && (det1 > 0) != (det0 > 0));
     } catch (const Error&) {
       stop = true;  // the new point is outside the workspace: locate where it left
     }
     ++stats_.steps;
     double* f1 = k[tb.s - 1];
-    if (stop) erk_stop(t_, hh, y0, f0, y1, f1, det0);
+    if (stop) stop_in_step(t_, hh, y0, f0, y1, f1, det0);
     t_ = last ? t_end : t_ + hh;
     for (int i = 0; i < n2; ++i) {
       y0[i] = y1[i];
@@ -387,7 +457,7 @@ bool Sim::erk_segment(double t_end) {
     // Approaching a direct singularity, no step may skip over it (det J could change
     // sign twice within one step): while the singularity bound falls, the next step
     // covers at most half the time the bound would take to reach zero at its last rate.
-    if (sing_root_ && bound1 < bound0) {
+    if (stops_.singularity() && bound1 < bound0) {
       const double reach = bound1 / ((bound0 - bound1) / hh);
       h = std::min(h, std::max(0.5 * reach, 1e-9));
     }
@@ -413,7 +483,7 @@ bool Sim::erk_segment(double t_end) {
           for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
           yh[i] = y1[i] - hh * e;
         }
-        have = erk_rhs(t_, yh, fh, applied_.data());
+        have = rhs(t_, yh, fh, applied_.data());
         ++stats_.rhs_evals;
         fb = fh;
         yb = yh;
@@ -426,7 +496,7 @@ bool Sim::erk_segment(double t_end) {
       }
       if (have && den2 > 0 && hh * std::sqrt(num2 / den2) > tb.stiff_bound) {
         calm = 0;
-        if (++stiff_hits >= kStiffHits && kCanHandOver) return false;
+        if (++stiff_hits >= kStiffHits && stiff_fallback_) return false;
       } else if (++calm >= kCalmSteps) {
         stiff_hits = 0;
       }
@@ -439,7 +509,7 @@ bool Sim::erk_segment(double t_end) {
     fsal_valid_ = true;
   }
   if (steps > 0) {
-    std::copy(g, g + nroots_, g_cached_.begin());
+    std::copy(g, g + stops_.nroots(), g_cached_.begin());
     det_cached_ = det0;
     bound_cached_ = bound0;
     guard_cached_ = true;
@@ -447,81 +517,9 @@ bool Sim::erk_segment(double t_end) {
   return true;
 }
 
-// ------------------------------------------------------------------------ state
-
-size_t Sim::state_size() const {
-  // version, nd, t, y[ny] (2 nd; 4 nd with drive bodies), tau[nd], h_next, history count,
-  // history entries (1 + nd each)
-  size_t needed = 0;
-  for (size_t k = 0; k < history_.size(); ++k)
-    if (k + 1 == history_.size() || history_[k + 1].s > t_ - delay_) ++needed;
-  return 5 + (size_t)ny_ + (size_t)nd_ + needed * (1 + (size_t)nd_);
-}
-
-void Sim::state_save(double* b) const {
-  size_t k = 0;
-  b[k++] = two_.empty() ? 1.0 : 2.0;  // layout version: 2 with the drive bodies' states
-  b[k++] = nd_;
-  b[k++] = t_;
-  for (int i = 0; i < ny_; ++i) b[k++] = y_[i];
-  for (int i = 0; i < nd_; ++i) b[k++] = tau_[i];
-  b[k++] = h_next_;
-  // Only the commands that can still act at or after t (the last one issued before
-  // t - delay and every later one).
-  size_t first = history_.size();
-  for (size_t j = 0; j < history_.size(); ++j)
-    if (j + 1 == history_.size() || history_[j + 1].s > t_ - delay_) {
-      first = j;
-      break;
-    }
-  b[k++] = (double)(history_.size() - first);
-  for (size_t j = first; j < history_.size(); ++j) {
-    b[k++] = history_[j].s;
-    for (int i = 0; i < nd_; ++i) b[k++] = history_[j].tau[i];
-  }
-}
-
-void Sim::state_load(const double* b, size_t n) {
-  PKM_REQUIRE(b != nullptr, PKM_ERR_ARGUMENT, "state: buffer is NULL");
-  const double version = two_.empty() ? 1.0 : 2.0;
-  const size_t ny = (size_t)ny_, nd = (size_t)nd_;
-  PKM_REQUIRE(n >= 5 + ny + nd && b[0] == version && b[1] == nd_, PKM_ERR_ARGUMENT,
-          "state: not a pkm_sim state of this robot and drive layer (layout version " + num(version) + ", " +
-              std::to_string(nd_) + " joints)");
-  for (size_t k = 0; k < n; ++k)
-    PKM_REQUIRE(std::isfinite(b[k]), PKM_ERR_ARGUMENT, "state: entry " + std::to_string(k) + " is not finite");
-  const double nh_value = b[4 + ny + nd];
-  PKM_REQUIRE(nh_value >= 0 && nh_value < 1e9 && nh_value == std::floor(nh_value), PKM_ERR_ARGUMENT,
-          "state: a history length of " + num(nh_value) + " entries is not a count");
-  const size_t nh = (size_t)nh_value;
-  PKM_REQUIRE(n == 5 + ny + nd + nh * (1 + nd), PKM_ERR_ARGUMENT,
-          "state: " + std::to_string(n) + " values do not match the history length it declares");
-  const double t = b[2];
-  // The next step size: 0 (choose one) or a step the explicit method can take from t.
-  const double h = b[3 + ny + nd];
-  PKM_REQUIRE(h == 0 || h > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t)), PKM_ERR_ARGUMENT,
-              "state: the next step size " + num(h) + " s is neither 0 nor a step that can be taken at t = " + num(t) +
-                  " s");
-  // The delay line: commands in the order they were issued, none after t.
-  for (size_t j = 0; j < nh; ++j) {
-    const double s = b[5 + ny + nd + j * (1 + nd)];
-    PKM_REQUIRE(s <= t && (j == 0 || s >= b[5 + ny + nd + (j - 1) * (1 + nd)]), PKM_ERR_ARGUMENT,
-                "state: delay-line command " + std::to_string(j) + " issued at t = " + num(s) +
-                    " s is out of order or after the state's time " + num(t) + " s");
-  }
-  std::vector<double> x(b + 3, b + 3 + nd_), xd(b + 3 + nd_, b + 3 + 2 * nd_);
-  reset(t, x.data(), xd.data());  // checks the state as any reset does; clears h_next_
-  for (size_t i = 2 * nd; i < ny; ++i) y_[i] = b[3 + i];  // the drive bodies as saved
-  for (int i = 0; i < nd_; ++i) tau_[i] = b[3 + ny + i];
-  h_next_ = b[3 + ny + nd];
-  history_.clear();
-  size_t k = 5 + ny + nd;
-  for (size_t j = 0; j < nh; ++j) {
-    Command c{};
-    c.s = b[k++];
-    for (int i = 0; i < nd_; ++i) c.tau[i] = b[k++];
-    history_.push_back(c);
-  }
+std::unique_ptr<Stepper> make_erk_stepper(int method, Ivp& ivp, bool stiff_fallback) {
+  if (method == PKM_ERK23) return std::make_unique<ErkStepper<kBS32>>(ivp, stiff_fallback);
+  return std::make_unique<ErkStepper<kDP54>>(ivp, stiff_fallback);
 }
 
 }  // namespace pkm

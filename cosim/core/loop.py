@@ -1,0 +1,41 @@
+"""One call of the core's closed loop (``pkm_closed_loop``: plant, controller and reference
+table in C); :mod:`cosim.closed_loop` chains the calls.
+"""
+from __future__ import annotations
+
+import ctypes as C
+
+import numpy as np
+
+from .._native import lib, pkm_loop_record, pkm_loop_reference, ptr
+from .simulator import Simulator
+from .controller import CompiledController
+
+
+#: the recorded channels of ``pkm_closed_loop`` (pkm_loop_record), in its order
+LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")
+
+
+def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, ref: dict, rows: dict,
+                     k0: int, k1: int, tau_before=None, q_noise=None, qd_noise=None,
+                     measure: bool = False, f_ext=None) -> tuple[int, int, str]:
+    """One ``pkm_closed_loop`` call over samples ``k0:k1`` (see
+    :func:`cosim.closed_loop.run_compiled`, which chains calls).
+
+    ``ref`` maps ``q, qd, qdd, x`` to C-contiguous (n, nd) arrays (``qdd``, ``x`` may be
+    None); ``rows`` maps :data:`LOOP_FIELDS` to (n, nd) arrays that receive the samples.
+    Returns ``(status, samples done in this call, message)``.
+    """
+    m = k1 - k0
+
+    def at(a):
+        return None if a is None else ptr(a[k0:k1])
+
+    before = None if tau_before is None else np.ascontiguousarray(tau_before, dtype=float)
+    spec = pkm_loop_reference(m, float(t[k0]), float(dt), at(t), at(ref["q"]), at(ref["qd"]), at(ref.get("qdd")),
+                              at(ref.get("x")), ptr(before), at(f_ext))
+    rec = pkm_loop_record(*[at(rows[f]) for f in LOOP_FIELDS])
+    done = C.c_size_t(0)
+    st = lib.pkm_closed_loop(sim._s, ctrl._c, C.byref(spec), at(q_noise), at(qd_noise), int(bool(measure)),
+                             C.byref(rec), C.byref(done))
+    return st, int(done.value), (lib.pkm_sim_error(sim._s).decode() if st else "")
