@@ -9,6 +9,7 @@ M qdd = tau - Fv qd - Fc sgn(qd) - OF, so the core's offset (the drive supplies 
 offset) is OF itself."""
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim.discrepancy import diagnose
@@ -67,14 +68,55 @@ def _replay_errors(d):
     return {name: runs[name]["rel_tau"][0] for name in ("nominal", "fitted", "reference")}
 
 
+def _held_out(d):
+    """The recorded effort of the held-out part and each replay's difference to it."""
+    from cosim.recording import read_recording
+
+    rec = read_recording(d.recording)
+    k0 = int(np.argmin(np.abs(rec.time - d.replay["start"])))
+    y = rec.tau[k0:, 0]
+    return y, {name: d.replay["runs"][name]["tau"][:, 0] - y for name in ("nominal", "fitted", "reference")}
+
+
+def test_the_replay_starts_where_the_rig_was(emps):
+    """The held-out replay starts from the recorded state with the rig's controller primed by
+    the recorded readings: no start transient (a controller at rest outputs nothing for its
+    delay sample and sees no velocity: a kick of 350 N on this rig).  Its first 20 ms are no
+    further from the recorded force than the replay on average."""
+    y, err = _held_out(emps)
+    for name in ("fitted", "reference"):
+        e = err[name]
+        assert np.sqrt(np.mean(e[:20] ** 2)) < np.sqrt(np.mean(e ** 2)), (name, e[:20])
+
+
 def test_the_fitted_model_replays_the_held_out_force_far_better_than_the_nominal_one(emps):
     err = _replay_errors(emps)
-    assert err["nominal"] > 3 * err["fitted"], err
+    assert err["nominal"] > 10 * err["fitted"], err
 
 
-@pytest.mark.xfail(strict=True, reason="measured: the fitted model replays the held-out force to 11.11 % against the "
-                                       "published model's 11.09 % in the same loop (docs/emps.md); over the whole "
-                                       "file 6.74 % against 6.77 %")
 def test_the_fitted_model_replays_the_held_out_force_as_well_as_the_published_one(emps):
+    """Fitted (first 60 %) and published (whole file) models in the same loop on the held-out
+    40 %: their relative errors differ by less than twice the standard error of that
+    difference (a moving-block bootstrap over 1 s blocks of the held-out samples, computed
+    here from the replays and the recording)."""
+    y, err = _held_out(emps)
+    rel = lambda e, ix: np.linalg.norm(e[ix]) / np.linalg.norm(y[ix])  # noqa: E731
+    every = np.arange(len(y))
+    diff = rel(err["fitted"], every) - rel(err["reference"], every)
+    rng = np.random.default_rng(0)
+    block = 1000
+    boot = []
+    for _ in range(200):
+        ix = (rng.integers(0, len(y) - block, len(y) // block)[:, None] + np.arange(block)).ravel()
+        boot.append(rel(err["fitted"], ix) - rel(err["reference"], ix))
+    assert abs(diff) < 2 * np.std(boot), (diff, np.std(boot), _replay_errors(emps))
+
+
+@pytest.mark.xfail(strict=True, reason="measured: the fitted model replays the held-out force to 5.867 % against the "
+                                       "published model's 5.855 % (a difference of 0.012 points, standard error "
+                                       "0.055); its viscous friction is 1.5 % below the published one, and the "
+                                       "rig's friction on the held-out part is higher than on the fitted one "
+                                       "(docs/emps.md); over the whole file 5.85 % against 5.88 %")
+def test_the_fitted_model_replays_the_held_out_force_no_worse_than_the_published_one(emps):
     err = _replay_errors(emps)
     assert err["fitted"] <= err["reference"], err

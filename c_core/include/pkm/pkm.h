@@ -506,6 +506,18 @@ PKM_API int pkm_ctrl_reset(pkm_ctrl* c, const double* x0);
 PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd,
                             const double* qref, const double* qdref, const double* qddref,
                             const double* xref, double* tau);
+/* Seeds the controller's history: feeds n past samples (oldest first; rows of t [n], q, qd,
+ * qref, qdref, qddref, xref [n,nd], qddref and xref may be NULL where the kind does not need
+ * them) through pkm_ctrl_update, outputs discarded, the saturation counter unchanged.  A run
+ * that starts in the middle of a recording (the replay of a held-out part) calls it after
+ * pkm_ctrl_reset with the recorded readings and reference of the samples before its start:
+ * filters, backward differences, integrators and the computation-delay line then hold what
+ * the rig's controller held instead of starting at rest (a DISCRETE controller at rest
+ * outputs zero for delay_samples samples and sees no velocity at first).  A failure names
+ * the sample's time like pkm_ctrl_update; the samples before it have been taken. */
+PKM_API int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd,
+                           const double* qref, const double* qdref, const double* qddref,
+                           const double* xref);
 /* Samples at which the saturation clipped an effort since the last reset. */
 PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
 PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
