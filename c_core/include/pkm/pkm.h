@@ -272,13 +272,15 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * A generic joint force (what the discrepancy engine's discovery step fits when no effect
  * of its library explains a residual) is part of the same functions: per joint
  * "<j>[i].force_*", with z = q - force_qc and s = tanh(qd / drive.v_eps),
- *   F = force_c + force_k1 z + force_k2 z^2 + force_k3 z^3 + force_v2 qd|qd|
+ *   F = force_k1 z + force_k2 z^2 + force_k3 z^3 + force_v2 qd|qd|
  *     + force_vpos max(qd,0) + force_vneg min(qd,0) + force_cpos max(s,0) + force_cneg min(s,0)
  *     + force_sin sin(2 pi q / force_period) + force_cos cos(2 pi q / force_period)   (period > 0)
  *     + force_step tanh((q - force_step_q) / force_step_w)                             (width > 0)
  * [N | N m], an effort the drive spends on the joint like friction (added to the inverse
  * dynamics, subtracted from the applied effort in the forward dynamics and in the effort a
- * transmission carries).  All coefficients default to 0. */
+ * transmission carries).  All coefficients default to 0.  Its constant term is the drive's
+ * offset "<j>[i].offset" (pkm_joint_friction): one parameter for a constant effort, whoever
+ * finds it. */
 
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
  * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd
