@@ -23,10 +23,8 @@ PUBLISHED = {"M": 95.1089, "rail[1].viscous": 203.5034, "rail[1].coulomb": 20.39
 def emps(tmp_path_factory):
     out = tmp_path_factory.mktemp("emps")
     res = import_recording(DATA / "DATA_EMPS.mat", DATA / "emps_map.toml", out, progress=False)
-    # The published model's own form: the library's symmetric friction and offset.  With the
-    # discovery step (the default) the engine prefers friction that differs by direction on this
-    # rig (docs/emps.md, "With the discovery step").
-    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False, discovery=False)
+    # the default diagnosis, the discovery step included
+    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False)
 
 
 def _param(d, name):
@@ -94,29 +92,21 @@ def test_the_fitted_model_replays_the_held_out_force_far_better_than_the_nominal
     assert err["nominal"] > 10 * err["fitted"], err
 
 
-def test_the_fitted_model_replays_the_held_out_force_as_well_as_the_published_one(emps):
-    """Fitted (first 60 %) and published (whole file) models in the same loop on the held-out
-    40 %: their relative errors differ by less than twice the standard error of that
-    difference (a moving-block bootstrap over 1 s blocks of the held-out samples, computed
-    here from the replays and the recording)."""
-    y, err = _held_out(emps)
-    rel = lambda e, ix: np.linalg.norm(e[ix]) / np.linalg.norm(y[ix])  # noqa: E731
-    every = np.arange(len(y))
-    diff = rel(err["fitted"], every) - rel(err["reference"], every)
-    rng = np.random.default_rng(0)
-    block = 1000
-    boot = []
-    for _ in range(200):
-        ix = (rng.integers(0, len(y) - block, len(y) // block)[:, None] + np.arange(block)).ravel()
-        boot.append(rel(err["fitted"], ix) - rel(err["reference"], ix))
-    assert abs(diff) < 2 * np.std(boot), (diff, np.std(boot), _replay_errors(emps))
-
-
-@pytest.mark.xfail(strict=True, reason="measured: the fitted model replays the held-out force to 5.867 % against the "
-                                       "published model's 5.855 % (a difference of 0.012 points, standard error "
-                                       "0.055); its viscous friction is 1.5 % below the published one, and the "
-                                       "rig's friction on the held-out part is higher than on the fitted one "
-                                       "(docs/emps.md); over the whole file 5.85 % against 5.88 %")
 def test_the_fitted_model_replays_the_held_out_force_no_worse_than_the_published_one(emps):
+    """The fitted model (first 60 %: the library's effects and the asymmetry of the friction the
+    discovery step adds on top) against the published model (whole file) in the same loop on
+    the held-out 40 %, the nominal one far behind."""
     err = _replay_errors(emps)
-    assert err["fitted"] <= err["reference"], err
+    assert err["fitted"] <= err["reference"] < err["nominal"] / 10, err
+
+
+def test_the_discovered_term_is_the_frictions_asymmetry_on_top_of_the_named_effects(emps):
+    """Discovery adds to the library's named friction (it withdraws none of it on this rig):
+    the direction-split viscous coefficients are increments of opposite signs whose totals stay
+    positive."""
+    assert not emps.withdrawn, emps.withdrawn
+    (term,) = emps.discovered
+    th = emps.plant_parameters()
+    pos, neg = th["rail[1].force_vpos"], th["rail[1].force_vneg"]
+    assert pos * neg < 0, term.equation
+    assert th["rail[1].viscous"] + min(pos, neg) > 0, term.equation
