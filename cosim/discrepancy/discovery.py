@@ -26,8 +26,8 @@ wrong: the bootstrap covers both).
 A library effect acting on the same channels is then put on trial (:func:`judge_library`):
 the discovered terms in its place replace it only when they fit the held-out part
 significantly better (:func:`significant`: the held-out chi-square lower by more than the
-threshold a term pays to enter, look-elsewhere cost included, and by more than twice the
-standard error of that difference over blocks of the held-out part); otherwise the library
+threshold a term pays to enter, look-elsewhere cost included, and by more than Z_ONE_SIDED
+standard errors of that difference over blocks of the held-out part); otherwise the library
 effect is named, because it carries a physics name, and the discovered terms are listed as
 a tie when they fit about as well.
 """
@@ -86,6 +86,8 @@ MECHANISMS = {
     "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
 }
 
+#: standard errors a held-out chi-square gain must exceed to be significant (one-sided 95 %)
+Z_ONE_SIDED = 1.645
 #: a term is kept when the bootstrap selects it in at least this share of the resamples
 STABILITY = 0.6
 #: forward steps of the stepwise selection (a term may leave again in the backward pass)
@@ -413,10 +415,14 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=fr
 
 # ------------------------------------------------------------------------- the step
 
-def discover_channel(search, c, y, threshold, seed=0, theta=None):
+def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
     model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
-    holds on this joint (the library's offset) is not searched: it is fitted already."""
+    holds on this joint (the library's offset) is not searched: it is fitted already.  For the
+    library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
+    the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
+    the coefficient, must not be negative); otherwise each split level is a friction of its
+    own."""
     from .structure import own_noise, samples_per_independent
 
     eng = search.eng
@@ -429,7 +435,7 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None):
     thr = threshold + lee
     held = search.theta if theta is None else theta
     fixed = frozenset(k for t in TERMS.values() for k in t[0] if search.name(c, k) in held)
-    floor = {k: -float(held.get(search.name(c, lib), 0.0)) for k, lib in ADDS_TO.items()}
+    floor = {k: -float(held.get(search.name(c, lib), 0.0)) if lib in asymmetry else 0.0 for k, lib in ADDS_TO.items()}
     r, terms = y, []
     search.w[c] = 0.0
     for _ in range(3):
@@ -588,7 +594,7 @@ def significant(search, R_a, R_b, channels, bar: float) -> tuple:
     residuals are autocorrelated and, on a real recording, carry structure neither model
     explains, which white-noise chi-square statistics would not count).  B is better when
     ``gain`` exceeds both ``bar`` (the threshold a term pays to enter, look-elsewhere cost
-    included) and ``2 se``."""
+    included) and :data:`Z_ONE_SIDED` ``se`` (B better than A at 95 %, one-sided)."""
     d = heldout_samples(search, R_a, channels) - heldout_samples(search, R_b, channels)
     gain = float(d.sum())
     nb = len(d) // BLOCK
@@ -597,7 +603,7 @@ def significant(search, R_a, R_b, channels, bar: float) -> tuple:
         se = float(np.std(sums, ddof=1) * math.sqrt(nb) * len(d) / (nb * BLOCK))
     else:
         se = float("inf")
-    return gain > bar and gain > 2.0 * se, gain, se
+    return gain > bar and gain > Z_ONE_SIDED * se, gain, se
 
 
 def _with_terms(R, search, terms, rows=slice(None)):
@@ -635,13 +641,14 @@ def judge_library(eng, sel, threshold: float):
     place, compared on the held-out part (:func:`significant`; the bar is the threshold a
     term pays to enter the search, ``threshold + 2 ln M`` for M candidate terms tried).
 
-    * B significantly better, or not significantly worse with fewer free coefficients (the
-      rank of the columns: a direction-split pair on top of the library's symmetric friction
-      is one more, its asymmetry): G is withdrawn (the discovered terms explain what it
-      explains, and more or more simply) and listed as a look-alike that fits worse;
+    * B significantly better (:func:`significant`), or B with fewer free coefficients (the
+      rank of the columns) and a held-out gain above the bar: G is withdrawn (the discovered
+      terms explain what it explains, and more or more simply) and listed as a look-alike
+      that fits worse;
     * B not significantly worse: G is named, because it carries a physics name, but tied with
       the discovered terms (not with confidence), unless they restate it (:func:`restates`:
-      the same physics, e.g. Coulomb friction split by direction with equal levels);
+      Coulomb or viscous friction split by direction with both levels positive is the library's
+      friction with an asymmetry);
     * else G is named: it beats the best discovered term.
 
     Terms in G's place that the library names itself (a constant alone: the drive's offset,
@@ -655,9 +662,11 @@ def judge_library(eng, sel, threshold: float):
     search = Search(eng, theta)
     bar = threshold + 2.0 * math.log(search.n_tried())
     withdrawn, ties = [], []
+    confirmed = {}  # channel -> library frictions that the terms in their place restated
 
-    def discover_all(R, chans, th):
-        return {c: discover_channel(search, c, R[:, c], threshold, theta=th) for c in chans}
+    def discover_all(R, chans, th, asymmetry=None):
+        return {c: discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=(asymmetry or {}).get(c, ()))
+                for c in chans}
 
     from .structure import own_noise
 
@@ -687,21 +696,31 @@ def judge_library(eng, sel, threshold: float):
         k_A = len(g.params) - 1 + _rank(search, [R_lib - R_minus], on_top, chans)
         k_B = _rank(search, [], in_place, chans)
         better, gain, se = significant(search, R_A, R_B, chans, bar)
-        simpler = k_B < k_A and -gain <= min(bar, 2.0 * se)  # as good on both yardsticks
         restated = any(restates(t, g.key) for t in in_place)
+        if restated:
+            for c in chans:
+                confirmed.setdefault(c, set()).add(g.key)
         figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se, "bar": bar,
                    "coefficients": [k_A, k_B]}
-        if (better or simpler) and not restated:
+        # fewer free coefficients and a held-out gain above the bar, or a gain beyond its
+        # uncertainty as well
+        if (better or (k_B < k_A and gain > bar)) and not restated:
             theta = th_minus
             withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
                               "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
                               "replaced_by": [t.channel for t in in_place], **figures})
             R_lib = R_minus
             base.update(discover_all(R_lib, chans, theta))
-        elif not restated and -gain <= max(bar, 2.0 * se):
+        elif not restated and -gain <= max(bar, Z_ONE_SIDED * se):
             # not told apart on the held-out part: the library effect is named, not with confidence
             ties.append({"group": g.label, "terms": [t.equation for t in in_place], "extra_params": k_B - k_A,
                          **figures})
+    # On the library model that stays, a direction-split friction may now be the asymmetry of a
+    # library friction that the terms in its place restated (on trial each level had to be a
+    # friction of its own, so that the library effect stood against the discovered terms alone;
+    # a friction kept only as a tie may be a stand-in, whose asymmetry would be no physics)
+    again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
+    base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
     return theta, withdrawn, ties, search, base
 
 
@@ -734,15 +753,24 @@ def library_named(term: DiscoveredTerm) -> bool:
     return list(term.terms) == ["constant"]
 
 
-#: library effects a pair of direction-split terms restates when its two coefficients agree
-RESTATED = {"coulomb": ("coulomb_pos", "coulomb_neg"), "viscous": ("viscous_pos", "viscous_neg")}
+
+
+#: the coefficient keys of the direction-split pair of a library friction
+_PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
 
 
 def restates(term: DiscoveredTerm, key: str) -> bool:
-    """The discovered term is the library effect ``key`` itself: Coulomb (viscous) friction
-    split by direction with the two levels equal within their intervals."""
-    pair = RESTATED.get(key)
-    if not pair or sorted(term.terms) not in (sorted(pair), [f"{key}_both"]):
+    """The discovered term holds the library effect ``key``: Coulomb (viscous) friction split
+    by direction with both levels positive beyond their intervals, i.e. the library's friction
+    (the levels' mean) and an asymmetry (their difference; none when they are equal within
+    their intervals).  A level for one direction only (a one-way damper) is no such friction."""
+    if key not in _PAIR_KEYS:
         return False
-    a, b = list(term.coefficients.values())
-    return abs(a.value - b.value) <= math.hypot(a.ci95, b.ci95)
+    pos = neg = None
+    for name, c in term.coefficients.items():
+        k = name.rsplit(".", 1)[1]
+        if k == _PAIR_KEYS[key][0]:
+            pos = c
+        elif k == _PAIR_KEYS[key][1]:
+            neg = c
+    return pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95
