@@ -63,6 +63,19 @@ def _run(job):
                           "nothing" if not d.effects else "library only")
         row["terms"] = [t.equation for t in on_joints]
         return row
+    if kind == "constant_force":
+        # the drive's offset: the library's offset effect names it, or the discovery step finds
+        # it as a constant; either way the one parameter <j>[i].offset on the right joint
+        name = next(iter(truth["params"]))
+        want, got = truth["params"][name], d.theta.get(name)
+        others = [k for k, v in d.theta.items() if k.endswith(".offset") and k != name and v != 0]
+        ch = d.heldout["channels"].get(f"tau{joints[0]}", {}) if isinstance(d.heldout, dict) else {}
+        err = abs(got / want - 1) if got is not None else float("inf")
+        row.update(right=bool(got is not None and err < 0.15 and not others), error=err,
+                   gain=ch.get("rms_before", 0.0) / max(ch.get("rms_after", 1e-300), 1e-300),
+                   confident=[k for k in row["confident"] if k != "offset"],
+                   tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=[])
+        return row
     need = joints if kind != "ripple" else [j for j in joints if j in found]
     ok = (kind != "ripple" or len(need) >= len(joints) - 1) and all(j in found for j in need)
     ok = ok and all(blind.unlisted_structure_ok(kind, found[j], truth) for j in need) and set(found) <= set(joints)
@@ -72,7 +85,7 @@ def _run(job):
     cover = []
     for t in d.discovered:
         for name, c in t.coefficients.items():
-            if name in truth["params"] and not name.endswith((".force_c", ".force_sin", ".force_cos")):
+            if name in truth["params"] and not name.endswith((".force_sin", ".force_cos")):
                 cover.append(bool(abs(c.value - truth["params"][name]) <= c.ci95))
         # a ripple by its amplitude, as its equation states it: the split into sin and cos is the
         # phase at q = 0, which a period known to 0.1 % moves by a radian when q = 0 lies 25

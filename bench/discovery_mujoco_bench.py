@@ -124,7 +124,7 @@ def draw(kind, rng, mo, home):
 MEASURE = {"constant_force": ("c",), "ripple": ("amplitude", "period"), "spring": ("k1", "q0"), "drag": ("v2",),
            "direction_coulomb": ("larger",), "one_way_damper": ("vpos",), "hardening_spring": ("k3",),
            "detent": ("step",)}
-NEEDS = {"constant_force": {"force_c"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
+NEEDS = {"constant_force": {"offset"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
          "drag": {"force_v2"}, "one_way_damper": {"force_vpos"}, "hardening_spring": {"force_k3"},
          "detent": {"force_step"}}
 
@@ -134,13 +134,14 @@ def _found_values(term, j):
     pre = f"rail[{j}]."
     co = {p[len(pre):]: c for p, c in term.coefficients.items()}
     sh = {p[len(pre):]: v for p, v in term.shape.items()}
-    out = {k[len("force_"):]: (c.value, c.ci95) for k, c in co.items()}
+    # the discovered constant is the joint's offset parameter: measured as "c"
+    out = {("c" if k == "offset" else k[len("force_"):]): (c.value, c.ci95) for k, c in co.items()}
     if "force_sin" in co:
         s, c = co["force_sin"], co["force_cos"]
         out["amplitude"] = (math.hypot(s.value, c.value), math.hypot(s.ci95, c.ci95))
         out["period"] = (sh.get("force_period", float("nan")), None)
     if "force_k1" in co and co["force_k1"].value:
-        c0 = co["force_c"].value if "force_c" in co else 0.0
+        c0 = co["offset"].value if "offset" in co else 0.0
         out["q0"] = (sh["force_qc"] - c0 / co["force_k1"].value, None)
     return out
 

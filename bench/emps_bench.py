@@ -63,7 +63,10 @@ def whole_file_replay(rec_path, plants: dict) -> dict:
             continue
         ref = reference_from_recording(rec, m)
         x0 = m.fk(rec.q[0], x_guess=m.home())
-        res = closed_loop(m, ctrl, ref, x0=x0, xd0=np.zeros(m.ndof), start=0, rtol=1e-8, atol=1e-10)
+        # the recorded state (the carriage moves at the first sample); the controller has no
+        # past to be primed with: its delay sample puts out 0 N there
+        xd0 = m.pose_velocity(x0, rec.qd[0])
+        res = closed_loop(m, ctrl, ref, x0=x0, xd0=xd0, start=0, rtol=1e-8, atol=1e-10)
         s = slice(0, len(res.time))
         out[name] = float(np.linalg.norm(res.tau - rec.tau[s]) / np.linalg.norm(rec.tau[s]))
     return out

@@ -227,6 +227,7 @@ _SIGNATURES = {
     "pkm_ctrl_destroy": (None, [P]),
     "pkm_ctrl_reset": (I, [P, D]),
     "pkm_ctrl_update": (I, [P, C.c_double, D, D, D, D, D, D, D]),
+    "pkm_ctrl_prime": (I, [P, C.c_size_t, D, D, D, D, D, D, D]),
     "pkm_ctrl_saturated": (C.c_long, [P]),
     "pkm_ctrl_error": (CH, [P]),
     "pkm_ctrl_state_size": (S, [P]),

@@ -204,7 +204,7 @@ class ClosedLoop:
 
     # -------------------------------------------------------------------- run
     def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
-            f_ext=None, started=None) -> LoopRecord:
+            f_ext=None, history=None, started=None) -> LoopRecord:
         """Run over the reference samples ``start:``.
 
         Parameters
@@ -228,6 +228,14 @@ class ClosedLoop:
             positive along +q (e.g. a recording's measured force, ``Recording.f_ext``):
             the plant adds it to the actuator effort over the step after each sample,
             like the command (no saturation, no delay).
+        history : tuple of array_like, optional
+            ``(q, qd)``, each (m, nd): the readings of the m samples before ``start``
+            (``m <= start``, oldest first), e.g. a recording's.  After its reset the
+            controller is fed them with the reference rows ``start - m .. start - 1``
+            (outputs discarded; ``CompiledController.prime``, ``pkm_ctrl_prime``), so that
+            its filters, differences, integrators and computation delay start where the
+            controller that saw them was, not at rest.  The plant's own delay lines
+            (``actuator.delay``, ``sensor.delay``) start from the state ``x0``, ``xd0``.
         started : callable, optional
             ``started()``, called once when the set-up is done, right before the first
             step (the CLI gives ctrl-C back to the loop there).
@@ -270,6 +278,7 @@ class ClosedLoop:
                                  f"{f_ext[tuple(bad[0])]}")
             if not hasattr(self.plant, "set_external"):
                 raise ValueError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+        past = self._history(reference, start, history)
         rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
                          rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan))
         cc, rec.note = self._compiled_controller(h)
@@ -285,10 +294,11 @@ class ClosedLoop:
         failure = None
         try:
             if cc is not None:
-                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext)
+                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
+                                         past)
             else:
                 failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop,
-                                         f_ext)
+                                         f_ext, past)
         except KeyboardInterrupt:
             self._finish(rec, draws, wall0, cc)
             raise LoopInterrupted(rec.head()) from None
@@ -305,10 +315,33 @@ class ClosedLoop:
         rec.wall = _time.perf_counter() - wall0
         rec.tau_logged[:k] = rec.tau_cmd[:k] + (draws["tau"][:k] if "tau" in draws else 0.0)
         rec.pose[:k] = rec.x[:k] + (draws["pose"][:k] if "pose" in draws else 0.0)
-        rec.saturated = cc.saturated if cc is not None else getattr(self.controller, "saturated", 0)
+        rec.saturated = cc.saturated if cc is not None else rec.saturated + getattr(self.controller, "saturated", 0)
+
+    def _history(self, reference, start, history):
+        """``history`` checked: ``(rows, t, q, qd, ref)`` of the samples before ``start``, or None."""
+        if history is None:
+            return None
+        try:
+            q, qd = (np.ascontiguousarray(v, dtype=float) for v in history)
+        except (TypeError, ValueError):
+            raise ValueError("history must be (q, qd), the readings before start, each (m, nd)") from None
+        m, nd = (q.shape + (0,))[:2] if q.ndim == 2 else (-1, -1)
+        if q.ndim != 2 or q.shape != qd.shape or nd != self.ndof or not 0 < m <= start:
+            raise ValueError(f"history: q and qd must both have shape (m, {self.ndof}) with 0 < m <= start = {start}, "
+                             f"got {q.shape} and {qd.shape}")
+        for name, v in (("q", q), ("qd", qd)):
+            bad = np.argwhere(~np.isfinite(v))
+            if bad.size:
+                k = start - m + int(bad[0][0])
+                raise ValueError(f"history: {name} of sample {k} (t = {reference.time[k]:.6g} s), joint "
+                                 f"{bad[0][1] + 1} is {v[tuple(bad[0])]}")
+        s = slice(start - m, start)
+        ref = {k: (None if getattr(reference, k, None) is None else np.ascontiguousarray(getattr(reference, k)[s]))
+               for k in ("q", "qd", "qdd", "x")}
+        return range(start - m, start), np.ascontiguousarray(reference.time[s], dtype=float), q, qd, ref
 
     # ------------------------------------------------------------ back ends
-    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext):
+    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past):
         """``pkm_closed_loop`` in pieces of about :data:`PIECE_SECONDS`; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -316,6 +349,8 @@ class ClosedLoop:
         try:
             plant.initialize(float(t[0]), x0, xd0)
             cc.reset(plant.outputs().x)
+            if past is not None:
+                cc.prime(*past[1:])
         except Exception as e:  # noqa: BLE001 - reported as the loop's failure at sample 0
             return e, 0
         sim = plant.sim
@@ -357,7 +392,7 @@ class ClosedLoop:
                 break
         return None
 
-    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext):
+    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past):
         """One sample at a time through the Plant interface; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -368,6 +403,11 @@ class ClosedLoop:
             y = plant.outputs()
             if hasattr(ctrl, "reset"):
                 ctrl.reset(float(t[0]), y.q, y.x)
+            if past is not None:
+                for j, k in enumerate(past[0]):
+                    ctrl(float(past[1][j]), past[2][j], past[3][j], reference.at(k))
+                # the run counts its own saturated samples only
+                rec.saturated = -int(getattr(ctrl, "saturated", 0))
             if drive is not None:
                 drive.reset_delay()
             acting_of = getattr(plant, "applied_effort", None)  # the core keeps the actuator delay line

@@ -127,6 +127,43 @@ class CompiledController:
         self._check(lib.pkm_ctrl_update(self._c, float(t), *[ptr(v) for v in a], ptr(tau)))
         return tau
 
+    def prime(self, t, q, qd, ref: dict) -> None:
+        """Seed the controller's history with past samples (``pkm_ctrl_prime``): their
+        readings and reference go through the controller, outputs discarded, so that a run
+        starting after them starts where a controller that saw them would be.
+
+        Parameters
+        ----------
+        t : array_like, shape (n,)
+            Sample times [s], oldest first.
+        q, qd : array_like, shape (n, nd)
+            Readings [m or rad, per s].
+        ref : dict
+            ``q``, ``qd`` (n, nd) and optionally ``qdd``, ``x`` (None where not needed).
+
+        Example
+        -------
+        >>> cc.reset(x0); cc.prime(rec.time[k0 - 50:k0], rec.q[k0 - 50:k0], rec.qd[k0 - 50:k0],
+        ...                        {"q": rec.qref[k0 - 50:k0], "qd": rec.qdref[k0 - 50:k0]})  # doctest: +SKIP
+        """
+        t = np.ascontiguousarray(t, dtype=float).ravel()
+        n, nd = t.size, self.ndof
+
+        def rows(v, name, required=True):
+            if v is None:
+                if required:
+                    raise ArgumentError(f"controller prime: {name} is required", "PKM_ERR_ARGUMENT")
+                return None
+            a = np.ascontiguousarray(v, dtype=float)
+            if a.shape != (n, nd):
+                raise ArgumentError(f"controller prime: {name} has shape {a.shape}, expected ({n}, {nd})",
+                                    "PKM_ERR_ARGUMENT")
+            return a
+
+        a = [rows(q, "q"), rows(qd, "qd"), rows(ref.get("q"), "ref q"), rows(ref.get("qd"), "ref qd"),
+             rows(ref.get("qdd"), "ref qdd", False), rows(ref.get("x"), "ref x", False)]
+        self._check(lib.pkm_ctrl_prime(self._c, n, ptr(t), *[ptr(v) for v in a]))
+
     @property
     def saturated(self) -> int:
         """Samples at which the saturation clipped an effort since the last reset."""

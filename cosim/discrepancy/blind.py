@@ -267,8 +267,8 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
     j = int(rng.integers(0, nd))
     size = float(rng.uniform(0.1, 0.2))
     name = lambda i, k: f"{pre}[{i + 1}].force_{k}"  # noqa: E731
-    if kind == "constant_force":
-        p, js = {name(j, "c"): float(rng.choice([-1, 1])) * size * E[j]}, [j]
+    if kind == "constant_force":  # the drive's offset: the library's offset effect names it too
+        p, js = {f"{pre}[{j + 1}].offset": float(rng.choice([-1, 1])) * size * E[j]}, [j]
     elif kind == "ripple":
         p, js = {}, list(range(nd))
         for i in js:
@@ -294,7 +294,7 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
 
 
 #: the coefficients (core keys) each force of UNLISTED must be found with
-UNLISTED_TERMS = {"constant_force": {"force_c"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
+UNLISTED_TERMS = {"constant_force": {"offset"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
                   "drag": {"force_v2"}, "direction_coulomb": set(), "one_way_damper": {"force_vpos"},
                   "hardening_spring": {"force_k3"}}
 
@@ -307,8 +307,9 @@ def unlisted_errors(kind: str, term, truth: dict) -> list:
     p, t = truth["params"], term.params()
     j = term.joint
     pre = next(iter(p)).split("[")[0] + f"[{j}]."
-    got = lambda k: t.get(pre + "force_" + k, 0.0)  # noqa: E731
-    want = lambda k: p.get(pre + "force_" + k, 0.0)  # noqa: E731
+    key_of = lambda k: pre + ("offset" if k == "c" else "force_" + k)  # noqa: E731 - the constant: the offset
+    got = lambda k: t.get(key_of(k), 0.0)  # noqa: E731
+    want = lambda k: p.get(key_of(k), 0.0)  # noqa: E731
     rel = lambda a, b: abs(a / b - 1) if b else float("inf")  # noqa: E731
     if kind == "ripple":
         return [rel(math.hypot(got("sin"), got("cos")), math.hypot(want("sin"), want("cos"))),

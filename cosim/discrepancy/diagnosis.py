@@ -660,9 +660,8 @@ def _discover(eng, sel, threshold):
 
 def _withdrawn_sentence(w) -> str:
     a, b = w["heldout_chi2_library"], w["heldout_chi2_discovered"]
-    how = "worse" if a > b + TIE_MARGIN else "no better"
-    return (f"{w['title']}: fits the held-out part {how} (chi-square {a:.1f} with it, {b:.1f} with the discovered "
-            f"term in its place)")
+    return (f"{w['title']}: fits the held-out part worse (chi-square {a:.1f} with it, {b:.1f} with the discovered "
+            f"term in its place: {w['gain']:.1f} +- {w['se']:.1f}, bar {w['bar']:.1f})")
 
 
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
@@ -726,8 +725,13 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
-    reference, against the recorded motion.  Per run the RMS differences and the relative
-    error of the efforts, norm of the difference over the norm of the recorded effort."""
+    reference, against the recorded motion.  Each run starts from the recorded state at the
+    first held-out sample, its controller primed with the recorded readings and reference of
+    every sample before it (filters, differences, integrators and computation delay as the
+    rig's controller had them: started at rest, a rig's controller with a delay outputs
+    nothing at first and sees no velocity, a kick of hundreds of newtons on a real drive).
+    Per run the RMS differences and the relative error of the efforts, norm of the
+    difference over the norm of the recorded effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
@@ -757,7 +761,8 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     def run(plant, ref, start):
         ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
-                           rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None))  # a known input, replayed
+                           rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None),  # a known input, replayed
+                           history=(rec.q[:start], rec.qd[:start]) if start > 0 else None)
 
     out = {"start": float(rec.time[k0]), "runs": {}}
     theta = sel.theta if theta is None else theta

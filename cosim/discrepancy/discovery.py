@@ -2,7 +2,10 @@
 
 After the library's selection, every effort channel is searched for a per-joint force built
 from a function library of the joint's position and rate (the core's generic joint force,
-``<j>[i].force_*``, ``pkm.h``): a constant, a spring and its quadratic and cubic terms about
+``<j>[i].force_*``, ``pkm.h``): a constant (the drive's ``<j>[i].offset``, the library's
+offset effect: one parameter, so the library and the search can never fit the same column
+twice with opposite signs, and a coefficient the library has fitted on a channel is not
+searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
 direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
 spectrum over position, and a smooth step in position.  Each candidate column is a finite
@@ -20,10 +23,13 @@ held-out part by more than the threshold.  Intervals are the larger of the instr
 sandwich and the block-bootstrap spread (the residual is autocorrelated and the model may be
 wrong: the bootstrap covers both).
 
-A library effect acting on the same channels is then put on trial (:func:`judge_library`): it
-is named only if it fits the held-out part at least as well as the best discovered term in
-its place; otherwise the discovered term is named and the library effect listed as a
-look-alike that fits worse.
+A library effect acting on the same channels is then put on trial (:func:`judge_library`):
+the discovered terms in its place replace it only when they fit the held-out part
+significantly better (:func:`significant`: the held-out chi-square lower by more than the
+threshold a term pays to enter, look-elsewhere cost included, and by more than Z_ONE_SIDED
+standard errors of that difference over blocks of the held-out part); otherwise the library
+effect is named, because it carries a physics name, and the discovered terms are listed as
+a tie when they fit about as well.
 """
 from __future__ import annotations
 
@@ -39,7 +45,7 @@ from .regressors import MIN_RELEVANCE, fit
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
 #: "V", "V2"), shape parameters it needs, what it is in words
 TERMS = {
-    "constant": (("force_c",), ("1",), (), "a constant force"),
+    "constant": (("offset",), ("1",), (), "a constant force (the drive's offset)"),
     "spring": (("force_k1",), ("T",), ("force_qc",), "a force proportional to the position (a spring)"),
     "quadratic": (("force_k2",), ("T2",), ("force_qc",), "a force quadratic in the position"),
     "cubic": (("force_k3",), ("T3",), ("force_qc",), "a force cubic in the position (a hardening spring)"),
@@ -56,8 +62,12 @@ TERMS = {
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
 }
-#: coefficients of dissipative terms (friction, drag): never negative
+#: coefficients of dissipative terms (friction, drag): the friction they make never negative
 DISSIPATIVE = ("force_v2", "force_vpos", "force_vneg", "force_cpos", "force_cneg")
+#: the library's symmetric friction a direction-split coefficient adds to on its joint: on top
+#: of it the split term is the friction's asymmetry, and the total (library level plus the
+#: coefficient), not the coefficient, must not be negative
+ADDS_TO = {"force_vpos": "viscous", "force_vneg": "viscous", "force_cpos": "coulomb", "force_cneg": "coulomb"}
 #: terms whose columns carry the rate noise: estimated with instruments
 RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both")
 
@@ -77,6 +87,8 @@ MECHANISMS = {
     "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
 }
 
+#: standard errors a held-out chi-square gain must exceed to be significant (one-sided 95 %)
+Z_ONE_SIDED = 1.645
 #: a term is kept when the bootstrap selects it in at least this share of the resamples
 STABILITY = 0.6
 #: forward steps of the stepwise selection (a term may leave again in the backward pass)
@@ -206,7 +218,9 @@ class Search:
                 zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
                 for a, (k, s) in enumerate(zip(keys, scales)):
                     deltas = [self._delta(s, j) for j in range(nd)]
-                    p = dict(self.theta, **shape, **{self.name(j, k): deltas[j] for j in range(nd)})
+                    # a step from the value the model holds (the library's offset, if fitted)
+                    p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0) + deltas[j]
+                                                     for j in range(nd)})
                     R = eng.R(p)
                     cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
                     if zs is not None:
@@ -318,11 +332,15 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     return _Fit(list(terms), coef, chi2, cov, z95, A @ (Zc.T @ Zc) @ A.T)
 
 
-def stepwise(search, c, y, rows, threshold, phi, n_eff):
+def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None):
     """Forward selection (then backward elimination) of terms for channel c by BIC in
     effective samples: a term enters when it lowers chi2 + k log N_eff by more than
     ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
-    boolean mask or an index array (a bootstrap resample).  Returns the terms."""
+    boolean mask or an index array (a bootstrap resample); ``fixed``: coefficient keys the
+    model already fits on this channel (the library's offset), not searched; ``floor``: the
+    smallest value of each dissipative coefficient (default 0; minus the library's level of the
+    friction it adds to, :data:`ADDS_TO`).  Returns the terms."""
+    floor = floor or {}
     logn = math.log(max(n_eff, 2.0))
     gram = _Gram(search, c, y, rows)
 
@@ -332,7 +350,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
         # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
         # opposite signs is a constant force while moving), refused as the library refuses
         # a negative friction
-        if any(k in DISSIPATIVE and v < 0 for k, v in zip(keys, coef)):
+        if any(k in DISSIPATIVE and v < floor.get(k, 0.0) for k, v in zip(keys, coef)):
             return math.inf
         return c2
 
@@ -340,7 +358,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff):
     chi2 = chi2_of(chosen)
     for _ in range(MAX_STEPS):
         best = None
-        held = {k for t, _ in chosen for k in TERMS[t][0]}
+        held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
         for cand in search.candidates():
             if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
                 continue
@@ -413,7 +431,7 @@ def _ls_fit(search, c, y, terms, rows):
     return float(e @ e), coef
 
 
-def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
+def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=frozenset(), floor=None):
     """Share of block-bootstrap resamples whose stepwise selection picks each of ``terms``,
     and the spread (standard deviation) of the coefficients of ``terms`` over them."""
     rng = np.random.default_rng(seed + 7 * c)
@@ -421,7 +439,7 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
     coefs = []
     for _ in range(N_BOOT):
         pick = _blocks(rows, rng)
-        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff)
+        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff, fixed, floor)
         for t in terms:
             hits[t] += any(set(TERMS[u[0]][0]) & set(TERMS[t[0]][0]) for u in chosen)
         coefs.append(_ls_fit(search, c, y, terms, pick)[1])
@@ -431,8 +449,14 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0):
 
 # ------------------------------------------------------------------------- the step
 
-def discover_channel(search, c, y, threshold, seed=0):
-    """The discovered term on effort channel c (joint c) for the residual y (samples,), or None."""
+def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
+    """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
+    model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
+    holds on this joint (the library's offset) is not searched: it is fitted already.  For the
+    library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
+    the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
+    the coefficient, must not be negative); otherwise each split level is a friction of its
+    own."""
     from .structure import own_noise, samples_per_independent
 
     eng = search.eng
@@ -443,6 +467,9 @@ def discover_channel(search, c, y, threshold, seed=0):
     n_eff = float((eng.use[train, c] > 0).sum()) / phi
     lee = 2.0 * math.log(search.n_tried())
     thr = threshold + lee
+    held = search.theta if theta is None else theta
+    fixed = frozenset(k for t in TERMS.values() for k in t[0] if search.name(c, k) in held)
+    floor = {k: -float(held.get(search.name(c, lib), 0.0)) if lib in asymmetry else 0.0 for k, lib in ADDS_TO.items()}
     r, terms = y, []
     search.w[c] = 0.0
     for _ in range(3):
@@ -453,7 +480,7 @@ def discover_channel(search, c, y, threshold, seed=0):
         if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
             break
         search.w[c] = 1.0 / (sigma * math.sqrt(phi))
-        terms = stepwise(search, c, y, train, thr, phi, n_eff)
+        terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor)
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))
@@ -471,7 +498,7 @@ def discover_channel(search, c, y, threshold, seed=0):
     # the cheap held-out check first, then the bootstrap's stability
     if not terms or not heldout(terms)[1] > threshold:
         return None
-    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
+    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor)
     # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
     # constant and a step at the end of the stroke) split the resamples' votes between them.
     full = heldout(terms)[1]
@@ -480,7 +507,7 @@ def discover_channel(search, c, y, threshold, seed=0):
         return None
     if kept != terms:
         terms = kept
-        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed)
+        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor)
     f, d_held = heldout(terms)
     if not d_held > threshold:
         return None
@@ -549,7 +576,7 @@ def equation(names, coefs, shape, search, c) -> str:
     get = lambda k: coefs.get(search.name(c, k))  # noqa: E731
     parts = []
     qc = shape.get(search.name(c, "force_qc"))
-    k1, c0 = get("force_k1"), get("force_c")
+    k1, c0 = get("force_k1"), get("offset")
     if k1 is not None and c0 is not None and k1.value != 0:
         q0 = qc - c0.value / k1.value
         # delta method, the two taken as independent (an upper bound when they are correlated)
@@ -582,13 +609,39 @@ def equation(names, coefs, shape, search, c) -> str:
 
 def heldout_chi2(search, R, channels):
     """Weighted chi-square of the held-out samples of ``channels`` (in effective samples)."""
+    return float(heldout_samples(search, R, channels).sum())
+
+
+def heldout_samples(search, R, channels):
+    """Each held-out sample's weighted chi-square over ``channels`` (held-out samples,)."""
     eng = search.eng
     test = eng.test
-    total = 0.0
+    total = np.zeros(int(np.count_nonzero(test)))
     for c in channels:
         r = R[test, c] * search.w[c] * eng.use[test, c]
-        total += float(r @ r)
+        total += r * r
     return total
+
+
+def significant(search, R_a, R_b, channels, bar: float) -> tuple:
+    """Does model B fit the held-out part of ``channels`` significantly better than model A?
+
+    ``(better, gain, se)``: the held-out chi-square of A minus B's (``gain``, in effective
+    samples) and its standard error ``se`` (the per-sample differences summed over blocks of
+    :data:`BLOCK` consecutive held-out samples, the blocks taken as independent: the
+    residuals are autocorrelated and, on a real recording, carry structure neither model
+    explains, which white-noise chi-square statistics would not count).  B is better when
+    ``gain`` exceeds both ``bar`` (the threshold a term pays to enter, look-elsewhere cost
+    included) and :data:`Z_ONE_SIDED` ``se`` (B better than A at 95 %, one-sided)."""
+    d = heldout_samples(search, R_a, channels) - heldout_samples(search, R_b, channels)
+    gain = float(d.sum())
+    nb = len(d) // BLOCK
+    if nb >= 2:
+        sums = d[:nb * BLOCK].reshape(nb, BLOCK).sum(axis=1)
+        se = float(np.std(sums, ddof=1) * math.sqrt(nb) * len(d) / (nb * BLOCK))
+    else:
+        se = float("inf")
+    return gain > bar and gain > Z_ONE_SIDED * se, gain, se
 
 
 def _with_terms(R, search, terms, rows=slice(None)):
@@ -617,39 +670,46 @@ def _option(search, t, name):
     return 0
 
 
-def _n_coef(terms):
-    return sum(len(t.coefficients) for t in terms)
-
-
-def judge_library(eng, sel, threshold: float, margin: float = 2.0):
-    """The no-confident-wrong-name rule.
+def judge_library(eng, sel, threshold: float):
+    """The tie rule between the library's named effects and discovered terms.
 
     Every effort-family group G of the library's selection is put on trial on the channels it
     acts on, discovery allowed on both sides: (A) the library model with G and the terms
     discovered on top of it, against (B) the model without G and the terms discovered in its
-    place, compared on the held-out part (chi-square, in effective samples).
+    place, compared on the held-out part (:func:`significant`; the bar is the threshold a
+    term pays to enter the search, ``threshold + 2 ln M`` for M candidate terms tried).
 
-    * B better by more than ``margin``, or B as good (within ``margin``) with fewer
-      coefficients than A: G is withdrawn (it explains nothing the discovered terms do not),
-      and listed as a look-alike that fits worse;
-    * B within ``threshold`` of A otherwise: G is kept but tied with the discovered terms (not
-      named with confidence), unless they restate it (:func:`restates`: the same physics);
-    * else G is kept: it beats the best discovered term.
+    * B significantly better (:func:`significant`), or B with fewer free coefficients (the
+      rank of the columns) and a held-out gain above the bar: G is withdrawn (the discovered
+      terms explain what it explains, and more or more simply) and listed as a look-alike
+      that fits worse;
+    * B not significantly worse: G is named, because it carries a physics name, but tied with
+      the discovered terms (not with confidence), unless they restate it (:func:`restates`:
+      Coulomb or viscous friction split by direction with both levels positive is the library's
+      friction with an asymmetry);
+    * else G is named: it beats the best discovered term.
+
+    Terms in G's place that the library names itself (a constant alone: the drive's offset,
+    the library's offset effect) are no discovered alternative: the library's own selection
+    has weighed G against its look-alikes.
 
     Returns ``(theta, withdrawn, ties, search, base)``: the library's parameters less the
     withdrawn groups', the withdrawn and the tied groups with their held-out figures, the search,
     and the terms discovered per channel on the final library model."""
     theta = dict(sel.theta)
     search = Search(eng, theta)
+    bar = threshold + 2.0 * math.log(search.n_tried())
     withdrawn, ties = [], []
+    confirmed = {}  # channel -> library frictions that the terms in their place restated
 
-    def discover_all(R, chans):
-        return {c: discover_channel(search, c, R[:, c], threshold) for c in chans}
+    def discover_all(R, chans, th, asymmetry=None):
+        return {c: discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=(asymmetry or {}).get(c, ()))
+                for c in chans}
 
     from .structure import own_noise
 
     R_lib = eng.R(theta)
-    base = discover_all(R_lib, range(eng.nd))
+    base = discover_all(R_lib, range(eng.nd), theta)
     # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
     # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
     noise = np.array([own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
@@ -663,38 +723,92 @@ def judge_library(eng, sel, threshold: float, margin: float = 2.0):
                  if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
         if not chans:
             continue
-        in_place = [t for t in discover_all(R_minus, chans).values() if t is not None]
-        if not in_place:
+        in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
+        if not in_place or all(library_named(t) for t in in_place):
             continue
         on_top = [base[c] for c in chans if base.get(c) is not None]
-        A = heldout_chi2(search, _with_terms(R_lib, search, on_top), chans)
-        B = heldout_chi2(search, _with_terms(R_minus, search, in_place), chans)
-        k_A, k_B = len(g.params) + _n_coef(on_top), _n_coef(in_place)
+        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
+        A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
+        # free coefficients: a direction-split pair on top of the library's symmetric friction
+        # adds one (its asymmetry), not two
+        k_A = len(g.params) - 1 + _rank(search, [R_lib - R_minus], on_top, chans)
+        k_B = _rank(search, [], in_place, chans)
+        better, gain, se = significant(search, R_A, R_B, chans, bar)
         restated = any(restates(t, g.key) for t in in_place)
-        if B < A - margin or (B <= A + margin and k_B < k_A and not restated):
+        if restated:
+            for c in chans:
+                confirmed.setdefault(c, set()).add(g.key)
+        figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se, "bar": bar,
+                   "coefficients": [k_A, k_B]}
+        # fewer free coefficients and a held-out gain above the bar, or a gain beyond its
+        # uncertainty as well
+        if (better or (k_B < k_A and gain > bar)) and not restated:
             theta = th_minus
             withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
                               "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                              "heldout_chi2_library": A, "heldout_chi2_discovered": B,
-                              "replaced_by": [t.channel for t in in_place]})
+                              "replaced_by": [t.channel for t in in_place], **figures})
             R_lib = R_minus
-            base.update(discover_all(R_lib, chans))
-        elif B <= A + threshold and not restated:
+            base.update(discover_all(R_lib, chans, theta))
+        elif not restated and -gain <= max(bar, Z_ONE_SIDED * se):
             # not told apart on the held-out part: the library effect is named, not with confidence
-            ties.append({"group": g.label, "terms": [t.equation for t in in_place], "heldout_chi2_library": A,
-                         "heldout_chi2_discovered": B, "extra_params": k_B - k_A})
+            ties.append({"group": g.label, "terms": [t.equation for t in in_place], "extra_params": k_B - k_A,
+                         **figures})
+    # On the library model that stays, a direction-split friction may now be the asymmetry of a
+    # library friction that the terms in its place restated (on trial each level had to be a
+    # friction of its own, so that the library effect stood against the discovered terms alone;
+    # a friction kept only as a tie may be a stand-in, whose asymmetry would be no physics)
+    again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
+    base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
     return theta, withdrawn, ties, search, base
 
 
-#: library effects a pair of direction-split terms restates when its two coefficients agree
-RESTATED = {"coulomb": ("coulomb_pos", "coulomb_neg"), "viscous": ("viscous_pos", "viscous_neg")}
+def _rank(search, extra, terms, chans) -> int:
+    """Number of independent columns among ``extra`` (residual differences, (samples, channels))
+    and the columns of ``terms``, over the samples of ``chans`` stacked."""
+    cols = [np.concatenate([e[:, c] for c in chans]) for e in extra]
+    n = search.eng.test.shape[0]
+    for t in terms:
+        c = t.joint - 1
+        if c not in chans:
+            continue
+        for name in t.terms:
+            block = search.cols[(name, _option(search, t, name))][:, c, :]
+            for a in range(block.shape[1]):
+                v = np.zeros(n * len(chans))
+                k = chans.index(c)
+                v[k * n:(k + 1) * n] = block[:, a]
+                cols.append(v)
+    if not cols:
+        return 0
+    M = np.array(cols).T
+    M = M / np.maximum(np.linalg.norm(M, axis=0), 1e-300)
+    sv = np.linalg.svd(M, compute_uv=False)
+    return int(np.sum(sv > 1e-6 * sv[0]))
+
+
+def library_named(term: DiscoveredTerm) -> bool:
+    """The term is one the effect library names itself: a constant alone (the drive's offset)."""
+    return list(term.terms) == ["constant"]
+
+
+
+
+#: the coefficient keys of the direction-split pair of a library friction
+_PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
 
 
 def restates(term: DiscoveredTerm, key: str) -> bool:
-    """The discovered term is the library effect ``key`` itself: Coulomb (viscous) friction
-    split by direction with the two levels equal within their intervals."""
-    pair = RESTATED.get(key)
-    if not pair or sorted(term.terms) not in (sorted(pair), [f"{key}_both"]):
+    """The discovered term holds the library effect ``key``: Coulomb (viscous) friction split
+    by direction with both levels positive beyond their intervals, i.e. the library's friction
+    (the levels' mean) and an asymmetry (their difference; none when they are equal within
+    their intervals).  A level for one direction only (a one-way damper) is no such friction."""
+    if key not in _PAIR_KEYS:
         return False
-    a, b = list(term.coefficients.values())
-    return abs(a.value - b.value) <= math.hypot(a.ci95, b.ci95)
+    pos = neg = None
+    for name, c in term.coefficients.items():
+        k = name.rsplit(".", 1)[1]
+        if k == _PAIR_KEYS[key][0]:
+            pos = c
+        elif k == _PAIR_KEYS[key][1]:
+            neg = c
+    return pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95

@@ -108,7 +108,7 @@ class LoopResult:
 
 
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
-                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None) -> LoopResult:
+                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None, history=None) -> LoopResult:
     """Run ``controller`` on the core plant ``plant`` over the reference samples
     (:class:`cosim.closed_loop.ClosedLoop` with the plant's drive and sensor model).
 
@@ -135,6 +135,10 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         Known external effort per joint at every reference sample [N or N m], positive
         along +q (a recording's ``f_ext`` columns): an input of the plant, added to the
         actuator effort.
+    history : tuple of array_like, optional
+        ``(q, qd)``, the readings of the samples before ``start`` (each (m, nd), oldest
+        first): the controller sees them first, so that it starts where the recorded
+        controller was (:meth:`cosim.closed_loop.ClosedLoop.run`).
 
     Returns
     -------
@@ -149,5 +153,5 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     from ..master import CoreDrive, CorePlant
 
     rec = ClosedLoop(CorePlant(plant, rtol=rtol, atol=atol), controller, drive=CoreDrive(plant), noise=noise,
-                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext)
+                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext, history=history)
     return LoopResult(rec.time, rec.q, rec.qd, rec.tau_logged, rec.pose, rec.x, rec.xd, rec.q_true)

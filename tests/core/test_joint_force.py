@@ -1,6 +1,6 @@
-"""The drive layer's generic joint force (``<j>[i].force_*``, joint_force.hpp): the term the
-discovery step of the discrepancy engine fits.  Checked against the formula written here
-from the joint positions and rates (inverse kinematics of the pose, and of a pose a small
+"""The drive layer's generic joint force (``<j>[i].force_*``, joint_force.hpp; its constant is
+the drive's ``<j>[i].offset``): the term the discovery step of the discrepancy engine fits.
+Checked against the formula written here from the joint positions and rates (inverse kinematics of the pose, and of a pose a small
 step along the velocity), in the inverse dynamics, the forward dynamics and on a described
 robot with rotary joints."""
 import math
@@ -10,7 +10,7 @@ import pytest
 
 from cosim.core import Model
 
-COEF = {"force_c": 0.3, "force_qc": 0.25, "force_k1": -230.0, "force_k2": 40.0, "force_k3": -900.0,
+COEF = {"offset": 0.3, "force_qc": 0.25, "force_k1": -230.0, "force_k2": 40.0, "force_k3": -900.0,
         "force_v2": 2.5, "force_vpos": 0.7, "force_vneg": 0.2, "force_cpos": 0.05, "force_cneg": 0.11,
         "force_sin": 0.32, "force_cos": -0.1, "force_period": 0.01, "force_step": 0.04, "force_step_q": 0.26,
         "force_step_w": 0.002}
@@ -21,7 +21,7 @@ def _expected(q, qd, v_eps):
     z = q - c["force_qc"]
     s = math.tanh(qd / v_eps)
     a = 2 * math.pi * q / c["force_period"]
-    return (c["force_c"] + c["force_k1"] * z + c["force_k2"] * z**2 + c["force_k3"] * z**3
+    return (c["offset"] + c["force_k1"] * z + c["force_k2"] * z**2 + c["force_k3"] * z**3
             + c["force_v2"] * qd * abs(qd) + c["force_vpos"] * max(qd, 0) + c["force_vneg"] * min(qd, 0)
             + c["force_cpos"] * max(s, 0) + c["force_cneg"] * min(s, 0)
             + c["force_sin"] * math.sin(a) + c["force_cos"] * math.cos(a)

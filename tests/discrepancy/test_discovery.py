@@ -22,9 +22,7 @@ def _case(tmp_path, cfg, kind, seed, robot="6pus"):
     ("spring", 21, "6pus"),
     ("drag", 22, "6pus"),            # viscous friction stands in for it in the library: withdrawn
     ("ripple", 23, "6pus"),          # on every rail, its period from the residual's spectrum over position
-    pytest.param("one_way_damper", 24, "quattro", marks=pytest.mark.xfail(
-        strict=True, reason="the library's offset and the discovered constant are one column: both enter with "
-                            "opposite signs (+0.648 / -0.647 N m) instead of a tie; to be resolved by one parameter")),
+    ("one_way_damper", 24, "quattro"),  # the library's offset and the discovered constant: one parameter
 ])
 def test_a_force_in_no_library_is_found_as_an_equation(tmp_path, short_cfg, kind, seed, robot):
     rec, truth = _case(tmp_path, short_cfg, kind, seed, robot)

@@ -55,6 +55,6 @@ def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed,
         assert d.ties(e["key"]), (e["title"], d.conclusion)
     assert "missing physics no library effect names" in d.conclusion
     if kind == "spring":  # the rest position is home
-        c0 = got["force_c"].value if "force_c" in got else 0.0
+        c0 = got["offset"].value if "offset" in got else 0.0
         q0 = term.shape[f"rail[{j}].force_qc"] - c0 / got["force_k1"].value
         assert math.isclose(q0, m.ik(m.home())[j - 1], abs_tol=1e-3), (q0, term.equation)

@@ -9,6 +9,7 @@ M qdd = tau - Fv qd - Fc sgn(qd) - OF, so the core's offset (the drive supplies 
 offset) is OF itself."""
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim.discrepancy import diagnose
@@ -22,10 +23,8 @@ PUBLISHED = {"M": 95.1089, "rail[1].viscous": 203.5034, "rail[1].coulomb": 20.39
 def emps(tmp_path_factory):
     out = tmp_path_factory.mktemp("emps")
     res = import_recording(DATA / "DATA_EMPS.mat", DATA / "emps_map.toml", out, progress=False)
-    # The published model's own form: the library's symmetric friction and offset.  With the
-    # discovery step (the default) the engine prefers friction that differs by direction on this
-    # rig (docs/emps.md, "With the discovery step").
-    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False, discovery=False)
+    # the default diagnosis, the discovery step included
+    return diagnose(res.table, train_fraction=0.6, compare=["reference"], figures=False)
 
 
 def _param(d, name):
@@ -67,14 +66,47 @@ def _replay_errors(d):
     return {name: runs[name]["rel_tau"][0] for name in ("nominal", "fitted", "reference")}
 
 
+def _held_out(d):
+    """The recorded effort of the held-out part and each replay's difference to it."""
+    from cosim.recording import read_recording
+
+    rec = read_recording(d.recording)
+    k0 = int(np.argmin(np.abs(rec.time - d.replay["start"])))
+    y = rec.tau[k0:, 0]
+    return y, {name: d.replay["runs"][name]["tau"][:, 0] - y for name in ("nominal", "fitted", "reference")}
+
+
+def test_the_replay_starts_where_the_rig_was(emps):
+    """The held-out replay starts from the recorded state with the rig's controller primed by
+    the recorded readings: no start transient (a controller at rest outputs nothing for its
+    delay sample and sees no velocity: a kick of 350 N on this rig).  Its first 20 ms are no
+    further from the recorded force than the replay on average."""
+    y, err = _held_out(emps)
+    for name in ("fitted", "reference"):
+        e = err[name]
+        assert np.sqrt(np.mean(e[:20] ** 2)) < np.sqrt(np.mean(e ** 2)), (name, e[:20])
+
+
 def test_the_fitted_model_replays_the_held_out_force_far_better_than_the_nominal_one(emps):
     err = _replay_errors(emps)
-    assert err["nominal"] > 3 * err["fitted"], err
+    assert err["nominal"] > 10 * err["fitted"], err
 
 
-@pytest.mark.xfail(strict=True, reason="measured: the fitted model replays the held-out force to 11.11 % against the "
-                                       "published model's 11.09 % in the same loop (docs/emps.md); over the whole "
-                                       "file 6.74 % against 6.77 %")
-def test_the_fitted_model_replays_the_held_out_force_as_well_as_the_published_one(emps):
+def test_the_fitted_model_replays_the_held_out_force_no_worse_than_the_published_one(emps):
+    """The fitted model (first 60 %: the library's effects and the asymmetry of the friction the
+    discovery step adds on top) against the published model (whole file) in the same loop on
+    the held-out 40 %, the nominal one far behind."""
     err = _replay_errors(emps)
-    assert err["fitted"] <= err["reference"], err
+    assert err["fitted"] <= err["reference"] < err["nominal"] / 10, err
+
+
+def test_the_discovered_term_is_the_frictions_asymmetry_on_top_of_the_named_effects(emps):
+    """Discovery adds to the library's named friction (it withdraws none of it on this rig):
+    the direction-split viscous coefficients are increments of opposite signs whose totals stay
+    positive."""
+    assert not emps.withdrawn, emps.withdrawn
+    (term,) = emps.discovered
+    th = emps.plant_parameters()
+    pos, neg = th["rail[1].force_vpos"], th["rail[1].force_vneg"]
+    assert pos * neg < 0, term.equation
+    assert th["rail[1].viscous"] + min(pos, neg) > 0, term.equation

@@ -145,3 +145,27 @@ def test_a_failure_stops_both_back_ends_at_the_same_sample_with_the_same_rows():
     assert str(fast).split(":")[0] == str(slow).split(":")[0]
     assert "singularity" in str(fast) and "singularity" in str(slow)
 
+
+
+def test_a_run_after_its_history_starts_where_the_whole_run_was_on_both_back_ends():
+    """history: a PID controller (integral, filtered derivative) fed the readings of the
+    samples before ``start`` continues as in the run that went through them: from the whole
+    run's state at ``start``, its efforts are the whole run's (both back ends); started at
+    rest they are not."""
+    m = Model("6pus")
+    ref = _reference(m, 0.01)
+
+    def pid():
+        return ctl.pid(m, kp=300.0, ki=200.0, kd=30.0, dt=H, deriv_filter=0.002)
+
+    whole = ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m)).run(ref)
+    k0 = 200
+    for compiled in (True, False):
+        part = ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m), compiled=compiled).run(
+            ref, start=k0, x0=whole.x[k0], xd0=whole.xd[k0], history=(whole.q[:k0], whole.qd[:k0]))
+        np.testing.assert_allclose(part.tau[:50], whole.tau[k0:k0 + 50], atol=1e-6 * np.abs(whole.tau).max())
+    cold = ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m)).run(ref, start=k0, x0=whole.x[k0], xd0=whole.xd[k0])
+    assert np.abs(cold.tau[0] - whole.tau[k0]).max() > 1e-3 * np.abs(whole.tau).max()
+    with pytest.raises(ValueError, match="history"):
+        ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m)).run(ref, start=k0, history=(whole.q[:k0 + 1],
+                                                                                        whole.qd[:k0 + 1]))

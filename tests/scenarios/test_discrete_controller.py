@@ -58,6 +58,42 @@ def test_the_published_emps_law_equals_a_direct_numpy_implementation():
     assert c.saturated == np.sum(np.abs(kv * (kp * (qg - qf) - dqf)) > 10)
 
 
+def test_a_controller_primed_with_past_samples_goes_on_as_if_it_had_run_through_them():
+    """pkm_ctrl_prime: the EMPS law primed with the first m samples then updated from sample m
+    gives the numpy law's outputs from m on (filters, difference and delay line as after the
+    whole run), not the outputs of a controller started at rest at m; the saturation count
+    is the run's own."""
+    kp, kv, gtau = 160.18, 243.45, 35.15
+    desc = {"kind": "discrete", "period": T, "law": "cascade_pp", "kp": kp, "kv": kv,
+            "position_filter": {"b": [0.5, 0.5], "a": [1.0]}, "velocity": "backward_difference",
+            "saturation": [-10.0, 10.0], "output_gain": gtau, "delay_samples": 1}
+    qm, qg = _signals()
+    qf = (qm + _prev(qm)) / 2
+    dqf = (qf - _prev(qf)) / T
+    u = np.clip(kv * (kp * (qg - qf) - dqf), -10, 10)
+    expected = gtau * np.concatenate([[0.0], u[:-1]])
+    m = 150
+    model = Model("fourbar")
+    nd = model.ndof
+    c = CompiledController(discrete(desc, ndof=nd), model=model, dt=T)
+    c.reset(None)
+    wide = lambda x: np.repeat(np.asarray(x)[:, None], nd, axis=1)  # noqa: E731
+    c.prime(np.arange(m) * T, wide(qm[:m]), np.zeros((m, nd)), {"q": wide(qg[:m]), "qd": np.zeros((m, nd))})
+    assert c.saturated == 0
+    got = np.array([c(k * T, wide(qm)[k], np.zeros(nd), Reference(wide(qg)[k], np.zeros(nd), np.zeros(nd)))
+                    for k in range(m, len(qm))])
+    np.testing.assert_allclose(got[:, 0], expected[m:], rtol=1e-12, atol=1e-9)
+    at_rest, _ = _outputs(desc, qm[m:], qg[m:])
+    assert abs(at_rest[0, 0] - expected[m]) > 1.0  # what the priming is for: at rest the first output is 0
+    with pytest.raises(ArgumentError, match="prime: q has shape"):
+        c.prime(np.arange(3) * T, np.zeros((2, nd)), np.zeros((3, nd)), {"q": np.zeros((3, nd)),
+                                                                          "qd": np.zeros((3, nd))})
+    bad = wide(qm[:m])
+    bad[7, 0] = np.nan
+    with pytest.raises(ArgumentError, match="not finite|NaN|nan"):
+        c.prime(np.arange(m) * T, bad, np.zeros((m, nd)), {"q": wide(qg[:m]), "qd": np.zeros((m, nd))})
+
+
 def test_the_pid_law_with_iir_filters_equals_scipy_lfilter():
     # per-joint gains on the 6-PUS, a second-order low-pass on the position, a first-order
     # filter on the measured rate, limits per joint, no delay

@@ -282,13 +282,15 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * A generic joint force (what the discrepancy engine's discovery step fits when no effect
  * of its library explains a residual) is part of the same functions: per joint
  * "<j>[i].force_*", with z = q - force_qc and s = tanh(qd / drive.v_eps),
- *   F = force_c + force_k1 z + force_k2 z^2 + force_k3 z^3 + force_v2 qd|qd|
+ *   F = force_k1 z + force_k2 z^2 + force_k3 z^3 + force_v2 qd|qd|
  *     + force_vpos max(qd,0) + force_vneg min(qd,0) + force_cpos max(s,0) + force_cneg min(s,0)
  *     + force_sin sin(2 pi q / force_period) + force_cos cos(2 pi q / force_period)   (period > 0)
  *     + force_step tanh((q - force_step_q) / force_step_w)                             (width > 0)
  * [N | N m], an effort the drive spends on the joint like friction (added to the inverse
  * dynamics, subtracted from the applied effort in the forward dynamics and in the effort a
- * transmission carries).  All coefficients default to 0. */
+ * transmission carries).  All coefficients default to 0.  Its constant term is the drive's
+ * offset "<j>[i].offset" (pkm_joint_friction): one parameter for a constant effort, whoever
+ * finds it. */
 
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
  * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd
@@ -516,6 +518,18 @@ PKM_API int pkm_ctrl_reset(pkm_ctrl* c, const double* x0);
 PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd,
                             const double* qref, const double* qdref, const double* qddref,
                             const double* xref, double* tau);
+/* Seeds the controller's history: feeds n past samples (oldest first; rows of t [n], q, qd,
+ * qref, qdref, qddref, xref [n,nd], qddref and xref may be NULL where the kind does not need
+ * them) through pkm_ctrl_update, outputs discarded, the saturation counter unchanged.  A run
+ * that starts in the middle of a recording (the replay of a held-out part) calls it after
+ * pkm_ctrl_reset with the recorded readings and reference of the samples before its start:
+ * filters, backward differences, integrators and the computation-delay line then hold what
+ * the rig's controller held instead of starting at rest (a DISCRETE controller at rest
+ * outputs zero for delay_samples samples and sees no velocity at first).  A failure names
+ * the sample's time like pkm_ctrl_update; the samples before it have been taken. */
+PKM_API int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd,
+                           const double* qref, const double* qdref, const double* qddref,
+                           const double* xref);
 /* Samples at which the saturation clipped an effort since the last reset. */
 PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
 PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);

@@ -562,6 +562,24 @@ int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd, co
   return guard_into(c->error, [&] { c->update(t, q, qd, qref, qdref, qddref, xref, tau); });
 }
 
+int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd, const double* qref,
+                   const double* qdref, const double* qddref, const double* xref) {
+  if (!c) return PKM_ERR_ARGUMENT;
+  c->error.clear();
+  return guard_into(c->error, [&] {
+    if (n == 0) return;
+    PKM_REQUIRE(t && q && qd && qref && qdref, PKM_ERR_ARGUMENT,
+                "controller prime: t, q, qd, qref and qdref are required (qddref and xref may be NULL)");
+    const size_t nd = (size_t)c->nd;
+    const long saturated = c->saturated;  // the run counts its own samples only
+    std::vector<double> tau(nd);
+    auto row = [&](const double* a, size_t k) { return a ? a + k * nd : nullptr; };
+    for (size_t k = 0; k < n; ++k)
+      c->update(t[k], row(q, k), row(qd, k), row(qref, k), row(qdref, k), row(qddref, k), row(xref, k), tau.data());
+    c->saturated = saturated;
+  });
+}
+
 long pkm_ctrl_saturated(const pkm_ctrl* c) { return c ? c->saturated : 0; }
 
 const char* pkm_ctrl_error(const pkm_ctrl* c) { return c ? c->error.c_str() : "controller is NULL"; }

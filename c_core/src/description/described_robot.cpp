@@ -5,6 +5,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/joint_param.hpp"
 #include "description/jet.hpp"
 #include "description/joint_kind.hpp"
 #include "description/schema.hpp"
@@ -753,7 +754,7 @@ const char* DescribedRobot::joint_noun() const {
 const char* DescribedRobot::pose_name(int i) const { return kCoordNames[d_.coords[i]]; }
 const char* DescribedRobot::pose_unit(int i) const { return d_.coords[i] < 3 ? "m" : "rad"; }
 std::string DescribedRobot::joint_limit_param(int i, bool upper) const {
-  return std::string(joint_prefix()) + "[" + std::to_string(i + 1) + (upper ? "].qmax" : "].qmin");
+  return joint_param(*this, i, upper ? "qmax" : "qmin");
 }
 const char* DescribedRobot::geometry_param(int i) const {
   return i >= 0 && i < (int)geometry_names_.size() ? geometry_names_[i].c_str() : nullptr;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/guard.hpp"
+#include "common/joint_param.hpp"
 #include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
@@ -36,9 +37,6 @@ double* field(Params& p, int k) {
   }
 }
 
-std::string joint_name(const Robot& r, int i, const char* key) {
-  return std::string(r.joint_prefix()) + "[" + std::to_string(i + 1) + "]." + key;
-}
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -48,35 +46,35 @@ std::vector<ParamSpec> specs(const Robot& r) {
   std::vector<ParamSpec> out;
   for (int i = 0; i < r.ndof(); ++i) {
     const std::string who = noun + " " + std::to_string(i + 1);
-    out.push_back({joint_name(r, i, "coulomb"), F, "Coulomb friction of actuated " + who, 0.0, 0.0, 1e6});
-    out.push_back({joint_name(r, i, "viscous"), F + " s/" + Q, "viscous friction coefficient of actuated " + who,
+    out.push_back({joint_param(r, i, "coulomb"), F, "Coulomb friction of actuated " + who, 0.0, 0.0, 1e6});
+    out.push_back({joint_param(r, i, "viscous"), F + " s/" + Q, "viscous friction coefficient of actuated " + who,
                    0.0, 0.0, 1e6});
-    out.push_back({joint_name(r, i, "stribeck"), F,
+    out.push_back({joint_param(r, i, "stribeck"), F,
                    "Stribeck friction: static friction in excess of Coulomb at rest, " + who, 0.0, 0.0, 1e6});
-    out.push_back({joint_name(r, i, "stribeck_v"), V, "Stribeck velocity (decay scale of the Stribeck term), " + who,
+    out.push_back({joint_param(r, i, "stribeck_v"), V, "Stribeck velocity (decay scale of the Stribeck term), " + who,
                    ang ? 0.05 : 0.005, 1e-9, 1e3});
-    out.push_back({joint_name(r, i, "rotor_inertia"), ang ? "kg m2" : "kg",
+    out.push_back({joint_param(r, i, "rotor_inertia"), ang ? "kg m2" : "kg",
                    "reflected actuator (rotor) inertia at the joint, " + who, 0.0, 0.0, 1e6});
-    out.push_back({joint_name(r, i, "effort_max"), F, "actuator saturation |tau| <= effort_max (0: none), " + who,
+    out.push_back({joint_param(r, i, "effort_max"), F, "actuator saturation |tau| <= effort_max (0: none), " + who,
                    0.0, 0.0, 1e9});
-    out.push_back({joint_name(r, i, "encoder_offset"), Q, "encoder offset: measured minus true joint position, " + who,
+    out.push_back({joint_param(r, i, "encoder_offset"), Q, "encoder offset: measured minus true joint position, " + who,
                    0.0, -1.0, 1.0});
-    out.push_back({joint_name(r, i, "backlash"), Q,
+    out.push_back({joint_param(r, i, "backlash"), Q,
                    "backlash: total transmission gap; the encoder reads +-gap/2 by the sign of the transmitted effort, " +
                        who,
                    0.0, 0.0, 0.1});
-    out.push_back({joint_name(r, i, "compliance"), Q + "/" + F,
+    out.push_back({joint_param(r, i, "compliance"), Q + "/" + F,
                    "transmission compliance (1/stiffness): encoder deflection per unit effort, " + who, 0.0, 0.0, 1.0});
-    out.push_back({joint_name(r, i, "dead_zone"), F,
+    out.push_back({joint_param(r, i, "dead_zone"), F,
                    "drive dead zone: commands within +-dead_zone deliver nothing, larger ones lose dead_zone, " + who,
                    0.0, 0.0, 1e6});
-    out.push_back({joint_name(r, i, "coulomb_v"), V,
+    out.push_back({joint_param(r, i, "coulomb_v"), V,
                    "velocity scale of the Coulomb friction, tanh(v / coulomb_v): friction that fades below it "
                    "(0: drive.v_eps, a numerical regularisation), " + who,
                    0.0, 0.0, 1e3});
-    out.push_back({joint_name(r, i, "transmission_damping"), F + " s/" + Q,
+    out.push_back({joint_param(r, i, "transmission_damping"), F + " s/" + Q,
                    "damping of the two-body transmission in contact (drive.two_body = 1), " + who, 0.0, 0.0, 1e9});
-    out.push_back({joint_name(r, i, "offset"), F,
+    out.push_back({joint_param(r, i, "offset"), F,
                    "constant effort offset: the drive supplies inverse dynamics + friction + offset (a force "
                    "pulling the joint the negative way, a cable carrier, an unbalanced mass, a measured bias), " +
                        who,
@@ -106,7 +104,7 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
     throw Error(PKM_ERR_INTERNAL, "drive parameter " + name + " missing from the table");
   };
   for (int i = 0; i < p->nd; ++i)
-    for (int k = 0; k < kNKeys; ++k) field(*p, k)[i] = get(joint_name(r, i, kKeys[k]));
+    for (int k = 0; k < kNKeys; ++k) field(*p, k)[i] = get(joint_param(r, i, kKeys[k]));
   p->v_eps = get("drive.v_eps");
   p->f_eps = get("drive.f_eps");
   p->actuator_delay = get("actuator.delay");
@@ -120,10 +118,10 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
     // A drive body needs an inertia, and a gap's faces a stiffness: else the two-body
     // model has no dynamics of its own.
     if (!(p->rotor[i] > 0))
-      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_name(r, i, "rotor_inertia") +
+      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_param(r, i, "rotor_inertia") +
                                          " must be > 0 (the drive body's inertia) where a backlash or a compliance is set");
     if (!(p->compliance[i] > 0))
-      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_name(r, i, "compliance") +
+      throw Error(PKM_ERR_PARAMETER, "drive.two_body = 1: " + joint_param(r, i, "compliance") +
                                          " must be > 0 (1 / the stiffness of the transmission, or of a gap's contact "
                                          "faces) where a backlash is set");
   }

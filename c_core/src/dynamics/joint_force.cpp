@@ -4,20 +4,17 @@
 #include <cmath>
 
 #include "common/guard.hpp"
+#include "common/joint_param.hpp"
 
 namespace pkm {
 namespace joint_force {
 
-const char* const kKeys[kNKeys] = {"force_c",    "force_qc",   "force_k1",   "force_k2",
-                                   "force_k3",   "force_v2",   "force_vpos", "force_vneg",
-                                   "force_cpos", "force_cneg", "force_sin",  "force_cos",
-                                   "force_period", "force_step", "force_step_q", "force_step_w"};
+const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "force_k3",
+                                   "force_v2",   "force_vpos", "force_vneg",   "force_cpos",
+                                   "force_cneg", "force_sin",  "force_cos",    "force_period",
+                                   "force_step", "force_step_q", "force_step_w"};
 namespace {
-enum { C, QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W };
-
-std::string joint_name(const Robot& r, int i, const char* key) {
-  return std::string(r.joint_prefix()) + "[" + std::to_string(i + 1) + "]." + key;
-}
+enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W };
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -28,9 +25,8 @@ std::vector<ParamSpec> specs(const Robot& r) {
   for (int i = 0; i < r.ndof(); ++i) {
     const std::string who = std::string(", generic joint force of ") + r.joint_noun() + " " + std::to_string(i + 1);
     auto add = [&](int k, const std::string& unit, const std::string& what, double lo) {
-      out.push_back({joint_name(r, i, kKeys[k]), unit, what + who, 0.0, lo, big});
+      out.push_back({joint_param(r, i, kKeys[k]), unit, what + who, 0.0, lo, big});
     };
-    add(C, F, "constant force", -big);
     add(QC, Q, "centre z = q - force_qc of the position polynomial", -big);
     add(K1, F + "/" + Q, "stiffness: force per unit of z", -big);
     add(K2, F + "/" + Q + "2", "force per z^2", -big);
@@ -60,7 +56,7 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std
   };
   for (int i = 0; i < r.ndof(); ++i)
     for (int k = 0; k < kNKeys; ++k) {
-      c.v[k][i] = get(joint_name(r, i, kKeys[k]));
+      c.v[k][i] = get(joint_param(r, i, kKeys[k]));
       // The centre, the period and the step's position and width shape terms; alone they are no force.
       if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W) c.any |= c.v[k][i] != 0;
     }
@@ -72,7 +68,7 @@ void force(const Coefficients& c, int nd, double v_eps, const double* q, const d
   for (int i = 0; i < nd; ++i) {
     const auto& v = c.v;
     const double z = q[i] - v[QC][i], w = qd[i], s = std::tanh(w / v_eps);
-    double f = v[C][i] + z * (v[K1][i] + z * (v[K2][i] + z * v[K3][i])) + v[V2][i] * w * std::fabs(w) +
+    double f = z * (v[K1][i] + z * (v[K2][i] + z * v[K3][i])) + v[V2][i] * w * std::fabs(w) +
                v[VPOS][i] * std::fmax(w, 0.0) + v[VNEG][i] * std::fmin(w, 0.0) + v[CPOS][i] * std::fmax(s, 0.0) +
                v[CNEG][i] * std::fmin(s, 0.0);
     if (v[PERIOD][i] > 0) {

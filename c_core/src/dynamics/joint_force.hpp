@@ -2,7 +2,7 @@
 // step fits when no effect of its library explains a residual (cosim/discrepancy/discovery.py).
 // Per actuated joint i, with z = q - force_qc and s = tanh(qd / drive.v_eps):
 //
-//   F = force_c + force_k1 z + force_k2 z^2 + force_k3 z^3           (constant, springs)
+//   F = force_k1 z + force_k2 z^2 + force_k3 z^3                     (springs)
 //     + force_v2 qd |qd|                                              (quadratic drag)
 //     + force_vpos max(qd, 0) + force_vneg min(qd, 0)                 (viscous by direction)
 //     + force_cpos max(s, 0) + force_cneg min(s, 0)                   (Coulomb by direction)
@@ -11,7 +11,9 @@
 //
 // F is an effort the drive spends on the joint, like friction: it adds to the inverse
 // dynamics and is subtracted from the applied effort in the forward dynamics.  Every
-// coefficient defaults to 0 (no force).
+// coefficient defaults to 0 (no force).  Its constant term is the drive's own
+// "<j>[i].offset" (drive.hpp): one parameter, so that a constant force has one column and
+// one name whether the effect library or the discovery step finds it.
 #pragma once
 
 #include <string>
@@ -24,7 +26,7 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 16;
+constexpr int kNKeys = 15;
 extern const char* const kKeys[kNKeys];
 
 struct Coefficients {
