@@ -50,7 +50,7 @@ def hold_input(robot):
 
 
 # fmpy's validation takes ~2 s an FMU: the suite validates the kinds (a plant in C++, its
-# controller, a described plant with a drive model); bench/fmu_fmi3.py validates every one.
+# controller, a described plant with a drive model); bench/fmu_validate.py validates every one.
 @pytest.mark.parametrize("ident", ["PKM_6PUS", "PKM_6PUS_CTRL", "PKM_HEXAPOD_UPS", "PKM_EMPS"])
 def test_fmpy_validates_the_fmi3_fmus(ident):
     f = fmu.build_dir() / "fmu" / "fmi3" / f"{ident}.fmu"
