@@ -30,6 +30,42 @@ pkm_ctrl_spec spec_of(int kind, const std::vector<double>& kp, const std::vector
   return s;
 }
 
+// A 6-PUS PID controller after three samples of a 1 mm step on every joint: what the
+// saved-state tests save, damage and replay.
+struct PidAfterThreeSamples {
+  ModelPtr m = make_model("6pus");
+  DataPtr d = make_data(m.get());
+  std::vector<double> kp = diag(6, 100), kd = diag(6, 4), ki = diag(6, 500);
+  pkm_ctrl_spec s = spec_of(PKM_CTRL_PID, kp, kd);
+  char err[512] = "";
+  CtrlPtr c;
+  double x[6], q[6], zero[6] = {0}, qr[6];
+
+  PidAfterThreeSamples(double deriv_filter, int gravity_feedforward) {
+    s.ki = ki.data();
+    s.deriv_filter = deriv_filter;
+    s.gravity_feedforward = gravity_feedforward;
+    c.c = pkm_ctrl_create(m.get(), &s, err, sizeof err);
+    EXPECT_NE(c.c, nullptr) << err;
+    pkm_model_home(m.get(), x);
+    EXPECT_EQ(pkm_ik(m.get(), d.get(), x, q), PKM_OK);
+    for (int i = 0; i < 6; ++i) qr[i] = q[i] + 0.001;
+    double tau[6];
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(update(c.c, k * 1e-3, tau), PKM_OK);
+  }
+  int update(pkm_ctrl* ctrl, double t, double* tau) {
+    return pkm_ctrl_update(ctrl, t, q, zero, qr, zero, nullptr, nullptr, tau);
+  }
+  // The fourth sample of a fresh controller loaded with `state` equals `tau`.
+  void expect_fresh_controller_replays(const std::vector<double>& state, const double* tau) {
+    CtrlPtr fresh{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
+    ASSERT_EQ(pkm_ctrl_state_load(fresh.c, state.data(), state.size()), PKM_OK) << pkm_ctrl_error(fresh.c);
+    double again[6];
+    ASSERT_EQ(update(fresh.c, 3e-3, again), PKM_OK);
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
+  }
+};
+
 }  // namespace
 
 TEST(Controller, PdIsKpErrorPlusKdRateError) {
@@ -157,46 +193,21 @@ TEST(Controller, LtiIsTheStateSpaceRecursionOnTheError) {
 }
 
 TEST(Controller, SavedStateReplaysTheSameOutputs) {
-  auto m = make_model("6pus");
-  auto kp = diag(6, 100), kd = diag(6, 4), ki = diag(6, 500);
-  auto s = spec_of(PKM_CTRL_PID, kp, kd);
-  s.ki = ki.data();
-  s.deriv_filter = 0.01;
-  s.gravity_feedforward = 1;
-  char err[512] = "";
-  CtrlPtr c{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
-  ASSERT_NE(c.c, nullptr) << err;
-  auto d = make_data(m.get());
-  double x[6], q[6], zero[6] = {0}, qr[6], tau[6], again[6];
-  pkm_model_home(m.get(), x);
-  ASSERT_EQ(pkm_ik(m.get(), d.get(), x, q), PKM_OK);
-  for (int i = 0; i < 6; ++i) qr[i] = q[i] + 0.001;
-  for (int k = 0; k < 3; ++k) ASSERT_EQ(pkm_ctrl_update(c.c, k * 1e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
-  std::vector<double> st(pkm_ctrl_state_size(c.c));
-  ASSERT_EQ(pkm_ctrl_state_save(c.c, st.data()), PKM_OK);
-  ASSERT_EQ(pkm_ctrl_update(c.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
-  CtrlPtr fresh{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
-  ASSERT_EQ(pkm_ctrl_state_load(fresh.c, st.data(), st.size()), PKM_OK);
-  ASSERT_EQ(pkm_ctrl_update(fresh.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, again), PKM_OK);
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
+  PidAfterThreeSamples p(0.01, 1);
+  ASSERT_NE(p.c.c, nullptr);
+  std::vector<double> st(pkm_ctrl_state_size(p.c.c));
+  ASSERT_EQ(pkm_ctrl_state_save(p.c.c, st.data()), PKM_OK);
+  double tau[6];
+  ASSERT_EQ(p.update(p.c.c, 3e-3, tau), PKM_OK);
+  p.expect_fresh_controller_replays(st, tau);
 }
 
 // A saved state is checked against the law's own layout before anything is loaded, and a
 // refused one leaves the controller as it was.
 TEST(Controller, DamagedSavedStatesAreRefused) {
-  auto m = make_model("6pus");
-  auto kp = diag(6, 100), kd = diag(6, 4), ki = diag(6, 500);
-  auto s = spec_of(PKM_CTRL_PID, kp, kd);
-  s.ki = ki.data();
-  char err[512] = "";
-  CtrlPtr c{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
-  ASSERT_NE(c.c, nullptr) << err;
-  auto d = make_data(m.get());
-  double x[6], q[6], zero[6] = {0}, qr[6], tau[6], again[6];
-  pkm_model_home(m.get(), x);
-  ASSERT_EQ(pkm_ik(m.get(), d.get(), x, q), PKM_OK);
-  for (int i = 0; i < 6; ++i) qr[i] = q[i] + 0.001;
-  for (int k = 0; k < 3; ++k) ASSERT_EQ(pkm_ctrl_update(c.c, k * 1e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
+  PidAfterThreeSamples p(0.0, 0);
+  ASSERT_NE(p.c.c, nullptr);
+  auto& c = p.c;
   std::vector<double> good(pkm_ctrl_state_size(c.c));
   ASSERT_EQ(pkm_ctrl_state_save(c.c, good.data()), PKM_OK);
   const auto refused = [&](std::vector<double> bad, size_t n, const char* words) {
@@ -217,11 +228,9 @@ TEST(Controller, DamagedSavedStatesAreRefused) {
   bad[bad.size() - 1] = 1e300;  // the saturation count
   refused(bad, bad.size(), "not a count");
   // Nothing of the refused states was kept: the next sample is the one the good state gives.
-  ASSERT_EQ(pkm_ctrl_update(c.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, tau), PKM_OK);
-  CtrlPtr fresh{pkm_ctrl_create(m.get(), &s, err, sizeof err)};
-  ASSERT_EQ(pkm_ctrl_state_load(fresh.c, good.data(), good.size()), PKM_OK) << pkm_ctrl_error(fresh.c);
-  ASSERT_EQ(pkm_ctrl_update(fresh.c, 3e-3, q, zero, qr, zero, nullptr, nullptr, again), PKM_OK);
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(tau[i], again[i]);
+  double tau[6];
+  ASSERT_EQ(p.update(c.c, 3e-3, tau), PKM_OK);
+  p.expect_fresh_controller_replays(good, tau);
 }
 
 TEST(Controller, BadSpecsAndReadingsAreNamed) {
