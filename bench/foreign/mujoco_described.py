@@ -830,6 +830,56 @@ def run(robot: str, seconds: float = 4.0, seed: int = 1, timestep: float = 1e-4,
     return res
 
 
+def closure_pose(rob: Robot, x, tol: float = 1e-15, max_iter: int = 30) -> tuple[np.ndarray, float]:
+    """The full platform poses (N, 6) at declared coordinates x (N, n), solved on MuJoCo's
+    kinematics alone: the MJCF of :func:`mjcf` as an open tree (its connects not simulated),
+    the declared platform joints set to x, and every other joint of the tree (the dependent
+    platform joints, each leg's actuated and passive joints) moved by Gauss-Newton until the
+    end site of every leg meets its platform site.  MuJoCo computes the sites' positions
+    (``mj_kinematics``) and their Jacobians (``mj_jacSite``); this function only solves.  Each
+    pose starts from the previous solution (the first from the home layout).  Returns the
+    poses and the largest closure gap met [m]."""
+    import mujoco
+
+    xml, _ = mjcf(rob, 1e-4, "RK4", 5e-4, "0.9999 0.9999 0.001 0.5 2")
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    plat = platform_joints(rob)
+    pq = [model.joint(COORDS[c]).qposadr[0] for c in rob.coords]
+    allq = [model.joint(COORDS[c]).qposadr[0] for c in plat]
+    fixed = set(model.joint(COORDS[c]).dofadr[0] for c in rob.coords)
+    if model.nq != model.nv:
+        raise SystemExit(f"{rob.name}: a ball joint in the tree; closure_pose takes hinge and slide joints only")
+    free = [j for j in range(model.nv) if j not in fixed]
+    ends = [model.site(f"end{i}").id for i in range(rob.n)]
+    plats = [model.site(f"p{i}").id for i in range(rob.n)]
+    data.qpos[:] = model.qpos0
+    data.qpos[[model.joint(COORDS[c]).qposadr[0] for c in rob.dependent]] = \
+        full_pose(rob, rob.home[None])[0, rob.dependent]  # the layout's pose (mjcf laid it out there)
+    data.qpos[pq] = rob.home
+    jp, jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    out, worst = np.zeros((len(np.atleast_2d(x)), 6)), 0.0
+    for k, xk in enumerate(np.atleast_2d(np.asarray(x, float))):
+        data.qpos[pq] = xk
+        for _ in range(max_iter):
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_comPos(model, data)
+            r = (data.site_xpos[ends] - data.site_xpos[plats]).ravel()
+            J = np.zeros((3 * rob.n, model.nv))
+            for i, (e, p) in enumerate(zip(ends, plats)):
+                mujoco.mj_jacSite(model, data, jp, jr, e)
+                J[3 * i:3 * i + 3] = jp
+                mujoco.mj_jacSite(model, data, jp, jr, p)
+                J[3 * i:3 * i + 3] -= jp
+            if np.max(np.abs(r)) <= tol:
+                break
+            dv = np.linalg.lstsq(J[:, free], -r, rcond=None)[0]
+            data.qpos[free] += dv  # hinges and slides: qpos is the dof
+        worst = max(worst, float(np.max(np.abs(r))))
+        out[k, plat] = data.qpos[allq]
+    return out, worst
+
+
 def euler_xyz(R):
     """(rx, ry, rz) with R = Rx(rx) Ry(ry) Rz(rz)."""
     ry = math.asin(max(-1.0, min(1.0, R[0, 2])))
