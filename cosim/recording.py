@@ -8,7 +8,10 @@ A recording is a CSV file with a header row and a JSON sidecar of the same name:
   measured external effort on joint i, positive along +q_i: a known input, not missing
   physics; the sidecar's ``units.f_ext`` must state its unit];
 * optional pose columns: ``x, y, z`` [m] and ``rx, ry, rz`` [rad] (6-PUS),
-  ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output);
+  ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output); a robot that declares only
+  some of the six components (a 3-RPS tripod: ``z, rx, ry``) takes either its own columns or
+  the full pose ``x, y, z, rx, ry, rz`` (a 6-DOF tracker, which also sees the parasitic
+  motion: :func:`full_pose_allowed`);
 * any further columns are kept in ``Recording.extra``.
 
 Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar",
@@ -103,6 +106,20 @@ def _described(side, name, file, text=None):
 _CARRIED = None
 
 
+#: the six components of a platform's pose, in the core's order, with their units
+FULL_POSE = ("x", "y", "z", "rx", "ry", "rz")
+FULL_POSE_UNITS = ("m", "m", "m", "rad", "rad", "rad")
+
+
+def full_pose_allowed(facts) -> bool:
+    """Whether a recording of this robot may carry the full pose ``x y z rx ry rz`` instead of
+    its own tracker columns: a robot whose tracker columns are some, not all, of the six
+    platform components (a 3-PRS or 3-RPS head, a Delta, a five-bar), whose other components
+    the core holds or solves (``Model.platform_pose``).  A 6-DOF tracker measures all six."""
+    names = tuple(facts.tracker_names)
+    return bool(names) and len(names) < 6 and set(names) <= set(FULL_POSE)
+
+
 def _known():
     from .core.facts import robots
 
@@ -159,7 +176,17 @@ class Recording:
 
     @property
     def pose_columns(self) -> list[str]:
-        return list(_facts(self.robot).tracker_names)
+        """The pose columns: the robot's tracker columns, or the full pose ``x y z rx ry rz``
+        when ``pose`` has six columns and the robot allows it (:func:`full_pose_allowed`)."""
+        facts = _facts(self.robot)
+        if self.pose is not None and self.pose.shape[-1] == 6 and full_pose_allowed(facts):
+            return list(FULL_POSE)
+        return list(facts.tracker_names)
+
+    @property
+    def full_pose(self) -> bool:
+        """True when the pose columns are the full pose of a robot that declares fewer."""
+        return self.pose is not None and self.pose_columns == list(FULL_POSE) and self.ndof < 6
 
     def __len__(self) -> int:
         return len(self.time)
@@ -240,6 +267,8 @@ def _si_units(facts, rec: Recording) -> dict:
     """The sidecar's ``units`` of a written recording: the robot's SI units, per kind of column."""
     ju, eu = facts.joint_unit, facts.effort_unit
     units = {"time": "s", "q": ju, "qd": f"{ju}/s", "tau": eu}
+    if rec.pose is not None and rec.full_pose:
+        units["pose"] = list(FULL_POSE_UNITS)
     if rec.qref is not None:
         units["qref"] = ju
     if rec.f_ext is not None:
@@ -534,8 +563,10 @@ def _check_units(side, units, robot):
             raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
                                        f"({key} in {want[key]}); convert the column (e.g. mm -> m) and drop or fix "
                                        f"the field")
-        if key in ("pose", "x") and isinstance(unit, list) and list(unit) != list(f.tracker_units):
-            raise RecordingError(side, f"units.{key} = {unit!r}: the pose columns must be in {list(f.tracker_units)}")
+        full = full_pose_allowed(f) and isinstance(unit, list) and len(unit) == 6
+        want_pose = list(FULL_POSE_UNITS) if full else list(f.tracker_units)
+        if key in ("pose", "x") and isinstance(unit, list) and list(unit) != want_pose:
+            raise RecordingError(side, f"units.{key} = {unit!r}: the pose columns must be in {want_pose}")
 
 
 def _check_pose_scale(path, robot, pose_cols, col):
@@ -543,7 +574,9 @@ def _check_pose_scale(path, robot, pose_cols, col):
     say so, naming the column, instead of letting a later step fail on unreachable poses."""
     from .core.model import robot_facts
 
-    for c, unit in zip(pose_cols, robot_facts(robot).tracker_units):
+    facts = robot_facts(robot)
+    units = FULL_POSE_UNITS if list(pose_cols) == list(FULL_POSE) else facts.tracker_units
+    for c, unit in zip(pose_cols, units):
         big = float(np.max(np.abs(col[c])))
         if unit == "m" and big > 2.0:
             raise RecordingError(path, f"values up to {big:g} m: was the column written in mm? (the format is in m)",
@@ -640,6 +673,16 @@ def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
     if has_fext and not (isinstance(meta.get("units"), dict) and "f_ext" in meta["units"]):
         raise RecordingError(side, f"the recording has f_ext columns but the sidecar does not state their unit: add "
                                    f'"units": {{"f_ext": "{_facts(rname).effort_unit}"}} (the joints\' effort unit)')
+    facts = _facts(rname)
+    if full_pose_allowed(facts):
+        others = [c for c in FULL_POSE if c not in pose_cols]
+        seen = [c in header for c in others]
+        if all(seen):
+            pose_cols = list(FULL_POSE)  # a 6-DOF tracker: the declared components and the others
+        elif any(seen):
+            raise RecordingError(path, f"the full pose ({' '.join(FULL_POSE)}) must be given whole: "
+                                       f"{', '.join(c for c, k in zip(others, seen) if k)} without this column",
+                                 row=1, column=others[seen.index(False)])
     has_pose = [c in header for c in pose_cols]
     if any(has_pose) and not all(has_pose):
         missing = pose_cols[has_pose.index(False)]

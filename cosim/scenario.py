@@ -45,7 +45,7 @@ REPO = Path(__file__).resolve().parent.parent
 
 _TOP_KEYS = {"name", "description", "robot", "param_set", "plant", "duration", "step", "seed", "parameters",
              "plant_parameters", "plant_scale", "plant_offset", "integrator", "controller", "reference", "initial", "noise",
-             "output", "fmu"}
+             "output", "fmu", "tracker"}
 
 
 class ScenarioError(ValueError):
@@ -206,7 +206,33 @@ def _check(spec, path):
         if c["type"] != "discrete" and v is not None and not _numbers(v):
             fail(f"controller.{key}", f"must be a number or a list of numbers, got {v!r}")
     _check_pose_units(spec, fail)
+    _check_tracker(spec, fail)
     return spec
+
+
+def _check_tracker(spec, fail):
+    """``[tracker] pose = "full"``: a 6-DOF tracker that measures x y z rx ry rz (for a robot
+    that declares fewer: the parasitic motion of a 3-PRS or 3-RPS head too), ``noise`` its
+    standard deviation per component [m, m, m, rad, rad, rad] (default 0)."""
+    t = spec.setdefault("tracker", {})
+    if not isinstance(t, dict):
+        fail("tracker", "must be a table")
+    for k in t:
+        if k not in ("pose", "noise"):
+            fail(f"tracker.{k}", "unknown key (known: pose, noise)")
+    if t.get("pose", "declared") not in ("declared", "full"):
+        fail("tracker.pose", f"must be 'declared' (the robot's coordinates) or 'full' (x y z rx ry rz), got "
+                             f"{t['pose']!r}")
+    if t.get("pose") == "full":
+        from .core.model import robot_facts
+        from .recording import full_pose_allowed
+
+        if not full_pose_allowed(robot_facts(spec["robot"])):
+            fail("tracker.pose", f"'full' is for a robot that declares some of x y z rx ry rz; {spec['robot']} "
+                                 f"declares {' '.join(robot_facts(spec['robot']).pose_names)}")
+    nz = t.get("noise", [0.0] * 6)
+    if not (isinstance(nz, list) and len(nz) == 6 and _numbers(nz) and all(v >= 0 for v in nz)):
+        fail("tracker.noise", f"must be 6 non-negative numbers (x y z [m], rx ry rz [rad]), got {nz!r}")
 
 
 def _numbers(v) -> bool:
@@ -487,10 +513,27 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
              f"step {sc.spec['step']} s; pose columns are the external tracker's measurement "
              f"(noise {out.result.noise['pose']}); label = index of the held pose (0 while moving)")
     rec = out.result.to_recording(parameters=sc.spec["parameters"], notes=notes)
+    tracker = sc.spec.get("tracker", {})
+    if tracker.get("pose") == "full":
+        rec.pose = full_pose_measured(sc, out.result["x"])
+        rec.notes = notes.replace("the external tracker's measurement", "a 6-DOF tracker's measurement of x y z rx "
+                                  "ry rz") .replace(f"(noise {out.result.noise['pose']})",
+                                                    f"(noise {tracker.get('noise', [0.0] * 6)})")
     csv_path, side = write_recording(d / f"{sc.name}.csv", rec)
     mpath = d / f"{sc.name}_metrics.json"
     mpath.write_text(json.dumps(out.metrics, indent=2, default=jsonable))
     return {"recording": csv_path, "sidecar": side, "metrics": mpath}
+
+
+def full_pose_measured(sc: Scenario, x) -> np.ndarray:
+    """What a 6-DOF tracker reads of the plant at true poses x (n, nd): the plant's full pose
+    x y z rx ry rz (its undeclared components as the core holds or solves them, the parasitic
+    motion) plus the ``[tracker] noise`` (seeded from the scenario's seed)."""
+    _, true, _ = build_models(sc)
+    X = np.asarray(true.platform_pose(np.asarray(x, float))[0], float).reshape(-1, 6)
+    sd = np.asarray(sc.spec.get("tracker", {}).get("noise", [0.0] * 6), float)
+    rng = np.random.default_rng([int(sc.spec.get("seed") or 0), 6])
+    return X + rng.normal(0.0, 1.0, X.shape) * sd
 
 
 def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
@@ -507,8 +550,10 @@ def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
     d.mkdir(parents=True, exist_ok=True)
     notes = (f"scenario {sc.name}: interrupted at t = {stop.partial.time[-1]:.6g} s of {sc.spec['duration']:g} s "
              f"(ctrl-C); plant {sc.spec['plant']}; step {sc.spec['step']} s")
-    csv_path, side = write_recording(d / f"{sc.name}.csv",
-                                     stop.partial.to_recording(parameters=sc.spec["parameters"], notes=notes))
+    rec = stop.partial.to_recording(parameters=sc.spec["parameters"], notes=notes)
+    if sc.spec.get("tracker", {}).get("pose") == "full":
+        rec.pose = full_pose_measured(sc, stop.partial["x"])
+    csv_path, side = write_recording(d / f"{sc.name}.csv", rec)
     return {"recording": csv_path, "sidecar": side}
 
 

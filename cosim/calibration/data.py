@@ -252,14 +252,18 @@ def candidate_poses(model: Model, n: int, rng=None, fraction: float = 0.5, joint
 
 def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: float = 10e-6,
                    angle_noise: float | None = None, encoder_noise: float = 0.0, rng=None, dwell: float = 1.0,
-                   notes: str = "") -> Recording:
+                   notes: str = "", full_pose: bool = False) -> Recording:
     """A calibration recording of any robot: the real robot (``nominal`` with ``real_params``)
     held at ``poses``, its joints read (its inverse kinematics at the true pose, plus
     ``encoder_noise``) and the pose measured by a tracker (``tracker_noise`` [m] on the
     coordinates in metres, ``angle_noise`` [rad] on those in radians; default
     ``tracker_noise`` / 0.1 m: a tracker seeing points 10 cm apart).  Poses the real robot
     cannot reach are skipped (counted in the notes).  The sidecar names the nominal model
-    (its robot and parameter set overrides), never the real one."""
+    (its robot and parameter set overrides), never the real one.
+
+    ``full_pose``: a 6-DOF tracker measures all of x, y, z [m], rx, ry, rz [rad] (a robot
+    that declares fewer: the real robot's undeclared components as the core holds or solves
+    them, the parasitic motion of a 3-PRS or 3-RPS head, ``Model.platform_pose``)."""
     rng = np.random.default_rng(rng)
     real = nominal.copy()
     real.set_params(real_params)
@@ -271,8 +275,13 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
     n = poses.shape[0]
     if angle_noise is None:
         angle_noise = tracker_noise / 0.1
-    sd = np.array([tracker_noise if u == "m" else angle_noise for u in nominal.facts.pose_units])
-    meas = poses + rng.normal(0.0, 1.0, poses.shape) * sd
+    units = nominal.facts.pose_units
+    seen = poses
+    if full_pose:
+        seen = np.asarray(real.platform_pose(poses)[0], float).reshape(-1, 6)
+        units = ("m", "m", "m", "rad", "rad", "rad")
+    sd = np.array([tracker_noise if u == "m" else angle_noise for u in units])
+    meas = seen + rng.normal(0.0, 1.0, seen.shape) * sd
     qm = q + (rng.normal(0.0, encoder_noise, q.shape) if encoder_noise > 0 else 0.0)
     base = Model(nominal.source, nominal.param_set)
     overrides = {k: v for k, v in nominal.params().items() if v != base.param(k)}
@@ -281,6 +290,7 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
         pose=meas, parameters=overrides,
         notes=(notes or f"{nominal.robot} calibration campaign (synthetic): the robot is held at each pose; q are "
                f"its joint readings, the pose columns what an external tracker measured")
+        + ("; a 6-DOF tracker: the full pose x y z rx ry rz" if full_pose else "")
         + f"; tracker noise {tracker_noise:g} m and {angle_noise:g} rad, encoder noise {encoder_noise:g}"
         + (f"; {skipped} planned pose(s) skipped (out of the real robot's reach)" if skipped else ""),
     )

@@ -40,6 +40,7 @@ from .problems import (
     CalibrationDataError,
     CalibrationWarning,
     FourbarProblem,
+    FullPoseProblem,
     JointProblem,
     Problem,
     SixpusProblem,
@@ -172,6 +173,10 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
     if nominal.has("fourbar_output"):
         return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
                               min_poses=4 if min_poses is None else min_poses)
+    if meas.pose is not None and meas.pose.shape[1] == 6 and nominal.ndof < 6:
+        # a 6-DOF tracker of a robot that declares fewer components: the parasitic motion too
+        return FullPoseProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels,
+                               min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses, params=params)
     if meas.pose is None or meas.pose.shape[1] != nominal.ndof:
         raise CalibrationDataError(f"{meas.source}: calibrating {meas.robot!r} needs tracker columns of its pose "
                                    f"({', '.join(nominal.facts.pose_names)})")
@@ -204,6 +209,9 @@ class Accuracy:
     joint: tuple
     per_pose: np.ndarray  # (n, 2) per-pose position error, nominal and calibrated [m]
     excluded: list = field(default_factory=list)  # poses left out (forward kinematics failed)
+    #: a full-pose calibration: per undeclared component (the parasitic x, y, rz), the RMS of
+    #: measured minus predicted at the measured declared pose, (nominal, calibrated) [m or rad]
+    parasitic: dict = field(default_factory=dict)
 
     @property
     def gain(self) -> float:
@@ -239,6 +247,8 @@ def accuracy(problem: Problem, p_cal) -> Accuracy:
         return Accuracy(int(ok.sum()), (rms(out[0][0]), rms(out[1][0])), (rms(out[0][1]), rms(out[1][1])),
                         (rms(out[0][2]), rms(out[1][2])), np.column_stack([out[0][0], out[1][0]]),
                         [l for l, k in zip(problem.pose_labels, ok) if not k])
+    if isinstance(problem, FullPoseProblem):
+        return _full_pose_accuracy(problem, p_cal)
     if isinstance(problem, JointProblem):
         return _joint_accuracy(problem, p_cal)
     e0, e1 = problem.residual(problem.p0), problem.residual(p_cal)
@@ -275,6 +285,40 @@ def _joint_accuracy(problem, p_cal) -> Accuracy:
     dj = [d[ok] for d in dq]
     return Accuracy(int(ok.sum()), (rms(dp[0]), rms(dp[1])), (rms(da[0]), rms(da[1])), (rms(dj[0]), rms(dj[1])),
                     np.column_stack(dp), [lab for lab, k in zip(problem.pose_labels, ok) if not k])
+
+
+def _full_pose_accuracy(problem, p_cal) -> Accuracy:
+    """Accuracy of a :class:`FullPoseProblem`: the core's forward kinematics of the measured
+    joints, completed by its parasitic components, against the measured full pose (position
+    over x y z, orientation over rx ry rz); the joint residual; and per parasitic component
+    the residual at the measured declared pose (what the legs force against what the tracker
+    saw)."""
+    n, nd = problem.q.shape
+    rms = lambda v: float(np.sqrt(np.mean(v ** 2))) if v.size else 0.0  # noqa: E731
+    ok = np.ones(n, bool)
+    full, pred = [], []
+    for p in (problem.p0, p_cal):
+        problem._set(p)
+        x, st = problem.model.fk(problem.q, x_guess=problem.pose, errors="status")
+        ok &= np.asarray(st) == 0
+        X = np.full((n, 6), np.nan)
+        good = np.asarray(st) == 0
+        if good.any():
+            X[good] = np.asarray(problem.model.platform_pose(np.asarray(x, float)[good])[0]).reshape(-1, 6)
+        full.append(X)
+        pred.append(problem.predict(p).reshape(n, -1))
+    if not ok.any():
+        raise CalibrationDataError("forward kinematics of the measured joints failed at every pose: the models "
+                                   "cannot assemble the recorded joint readings")
+    meas = problem.full[ok]
+    dp = [np.linalg.norm(X[ok, :3] - meas[:, :3], axis=1) for X in full]
+    da = [np.linalg.norm(X[ok, 3:] - meas[:, 3:], axis=1) for X in full]
+    dj = [problem.q[ok] - P[ok, :nd] for P in pred]
+    names = ("x", "y", "z", "rx", "ry", "rz")
+    para = {names[k]: (rms(meas[:, k] - pred[0][ok, nd + j]), rms(meas[:, k] - pred[1][ok, nd + j]))
+            for j, k in enumerate(problem.other)}
+    return Accuracy(int(ok.sum()), (rms(dp[0]), rms(dp[1])), (rms(da[0]), rms(da[1])), (rms(dj[0]), rms(dj[1])),
+                    np.column_stack(dp), [lab for lab, k in zip(problem.pose_labels, ok) if not k], para)
 
 
 @dataclass
@@ -346,6 +390,16 @@ class CalibrationResult:
                          f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
                          f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
                          f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} um")
+            elif isinstance(self.problem, FullPoseProblem):
+                para = "; ".join(f"{c} {v[0] * 1e6:.4g} -> {v[1] * 1e6:.4g} {'um' if c in ('x', 'y', 'z') else 'urad'}"
+                                 for c, v in a.parasitic.items())
+                L.append(f"Accuracy on {label} ({a.n}): position RMS (forward kinematics of the joints and the "
+                         f"parasitic components vs the 6-DOF tracker) {a.position[0] * 1e6:.4g} um -> "
+                         f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
+                         f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
+                         f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} "
+                         f"{'um' if self.problem.nominal.facts.joint_unit == 'm' else 'urad'}")
+                L.append(f"  parasitic motion, measured - predicted at the measured pose (RMS): {para}")
             elif isinstance(self.problem, JointProblem):
                 units = self.problem.nominal.facts.pose_units
                 jo = (f"joint RMS {a.joint[0] * 1e6:.4g} {mu} -> {a.joint[1] * 1e6:.4g} {mu}")

@@ -45,6 +45,7 @@ __all__ = [
     "FourbarProblem",
     "SixpusProblem",
     "JointProblem",
+    "FullPoseProblem",
     "SIXPUS_ERROR_MODEL",
     "sixpus_leg_names",
     "calib_rows",
@@ -546,7 +547,7 @@ class JointProblem(Problem):
         self.y = self.q.ravel()
         self._p = None
         info = {i.name: i for i in model.param_info()}
-        geo = geometry_candidates(model, self.pose)
+        geo = self._candidates(model, self.pose)
         chosen = geo if params is None else _select(model, geo, params)
         if not chosen:
             raise CalibrationDataError(f"robot {self.robot!r}: no length parameter moves a joint at these poses")
@@ -561,9 +562,18 @@ class JointProblem(Problem):
         if self.pose.shape[0] < need:
             raise CalibrationDataError(f"too few poses: {self.pose.shape[0]} for {len(keep)} parameters "
                                        f"({', '.join(self.names)}); at least {need} are needed")
-        self.blocks = _joint_blocks(self.jacobian(self.p0), nd)
-        if self.blocks is not None and sum(len(b[2]) for b in self.blocks) != len(self.names):
-            self.blocks = None  # a parameter that moves no joint here: analyse the whole matrix
+        self.blocks = self._find_blocks()
+
+    def _candidates(self, model, poses):
+        """The parameters calibrated by default (:func:`geometry_candidates`)."""
+        return geometry_candidates(model, poses)
+
+    def _find_blocks(self):
+        """Independent blocks (:func:`_joint_blocks`), or None for the whole matrix."""
+        blocks = _joint_blocks(self.jacobian(self.p0), self.q.shape[1])
+        if blocks is not None and sum(len(b[2]) for b in blocks) != len(self.names):
+            return None  # a parameter that moves no joint here: analyse the whole matrix
+        return blocks
 
     def _ik(self, model):
         return np.asarray(model.ik(self.pose), float).reshape(self.pose.shape)
@@ -583,3 +593,108 @@ class JointProblem(Problem):
             J[:, j] = (self.predict(up) - self.predict(dn)) / (2 * h)
         self._set(p)
         return J
+
+
+#: the six platform pose components and their units (a 6-DOF tracker's columns)
+_FULL = ("x", "y", "z", "rx", "ry", "rz")
+_FULL_UNITS = ("m", "m", "m", "rad", "rad", "rad")
+
+
+class FullPoseProblem(JointProblem):
+    """A robot that declares some pose components (a 3-PRS or 3-RPS head: z, rx, ry) measured
+    by a 6-DOF tracker: the joints and the other components (the parasitic x, y, rz) at held
+    poses.
+
+    The measured declared components are the poses; the measurements are the joint readings
+    and the measured other components.  predict(p) is the core's inverse kinematics at those
+    poses and the core's solution of the other components there (``Model.platform_pose``),
+    with the geometric parameters p; so a geometry error shows twice: in the joints, and in
+    the parasitic motion the legs force.  The parasitic equations couple every leg (no
+    independent blocks).  Angular equations are weighted by ``angle_length`` (an angle error
+    seen by a tracker as the displacement of points that far apart), the others by 1.
+
+    Parameters
+    ----------
+    pose : array_like, shape (n, 6)
+        Measured full poses x, y, z [m], rx, ry, rz [rad].
+    q : array_like, shape (n, nd)
+        Joint readings.
+    model : cosim.core.Model
+        The nominal model (copied): a described robot declaring fewer than six components.
+    row_labels, min_poses, params
+        As :class:`JointProblem`; ``params`` default: every length that moves a joint or a
+        parasitic component at these poses.
+    angle_length : float
+        Length [m] that turns a radian residual into metres for the weights (default 0.1 m).
+
+    Example
+    -------
+    >>> from cosim.core import Model
+    >>> from cosim.calibration import data
+    >>> m = Model("tripod_3rps")
+    >>> X = data.candidate_poses(m, 20, rng=1)
+    >>> rec = data.joint_campaign(m, {"leg[1].bx": m.param("leg[1].bx") + 2e-4}, X, tracker_noise=0.0,
+    ...                           full_pose=True)
+    >>> FullPoseProblem(rec.pose, rec.q, m).names[:3]              # doctest: +SKIP
+    """
+
+    def __init__(self, pose, q, model, row_labels=None, min_poses: int | None = None, params=None,
+                 angle_length: float = 0.1):
+        nd = model.ndof
+        full = _check_finite(np.atleast_2d(pose), "measured full poses", list(_FULL))
+        q = _check_finite(np.atleast_2d(q), "joint readings", [f"q{i + 1}" for i in range(nd)])
+        if full.shape[1] != 6 or full.shape[0] != q.shape[0] or q.shape[1] != nd:
+            raise CalibrationDataError(f"{full.shape[0]} measured poses of {full.shape[1]} components and "
+                                       f"{q.shape[0]} joint readings of {q.shape[1]}: need 6 components "
+                                       f"({' '.join(_FULL)}) and {nd} joints per pose")
+        declared = list(model.facts.pose_names)
+        if not set(declared) < set(_FULL):
+            raise CalibrationDataError(f"robot {model.robot!r} declares {' '.join(declared)}: a full-pose "
+                                       f"calibration is for a robot that declares some of x y z rx ry rz")
+        self.decl = [_FULL.index(n) for n in declared]
+        self.other = [k for k in range(6) if k not in self.decl]
+        self.full = full
+        self._angle_length = float(angle_length)
+        self._params = params
+        super().__init__(full[:, self.decl], q, model, row_labels=row_labels, min_poses=min_poses, params=params)
+        self.y = np.concatenate([self.q, self.full[:, self.other]], axis=1).ravel()
+        self.row_labels = [f"{lab}, {what}" for lab in self.pose_labels
+                           for what in [f"joint {j + 1}" for j in range(nd)] + [_FULL[k] for k in self.other]]
+        w_other = [1.0 if _FULL_UNITS[k] == "m" else self._angle_length for k in self.other]
+        w_joint = [1.0 if model.facts.joint_unit == "m" else self._angle_length] * nd
+        self.weights = np.tile(np.array(w_joint + w_other), self.pose.shape[0])
+        self.measurement_unit = "m"
+
+    def _find_blocks(self):
+        return None  # the parasitic components couple the legs
+
+    def _candidates(self, model, poses):
+        """Every length [m] (outside gravity, payload, drive and sensors) whose change moves a
+        joint or a parasitic component at ``poses``."""
+        base = self._measure(model, poses)
+        trial = model.copy()
+        keep = []
+        for info in model.param_info():
+            if info.unit != "m" or info.name.startswith(_NOT_GEOMETRY):
+                continue
+            h = 1e-6 * max(abs(info.value), 1e-3)
+            try:
+                trial.set_params({info.name: info.value + h})
+                moved = np.max(np.abs(self._measure(trial, poses) - base)) > 1e-9 * h
+            except PkmError:
+                moved = False
+            finally:
+                trial.set_params({info.name: info.value})
+            if moved:
+                keep.append(info.name)
+        return keep
+
+    def _measure(self, model, poses):
+        """(n, nd + 6 - nd): the joints and the other pose components of ``model`` at ``poses``."""
+        q = np.asarray(model.ik(poses), float).reshape(poses.shape[0], -1)
+        X, _ = model.platform_pose(poses)
+        return np.concatenate([q, np.asarray(X).reshape(-1, 6)[:, self.other]], axis=1)
+
+    def predict(self, p):
+        self._set(p)
+        return self._measure(self.model, self.pose).ravel()

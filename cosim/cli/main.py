@@ -404,6 +404,7 @@ def recording_file(value: str) -> str:
 
     from ..core.facts import robots
     from ..core.model import robot_facts
+    from ..recording import FULL_POSE, full_pose_allowed
 
     input_file(value)
     csv = Path(value)
@@ -422,7 +423,8 @@ def recording_file(value: str) -> str:
     # more joints than the robot has, or fewer but every one complete (not a column left out)
     complete = all(f"{c}{i}" in header for i in range(1, n + 1) for c in ("q", "qd", "tau"))
     poses = {p for r in robots() for p in robot_facts(r).tracker_names} | {"theta", "rx", "ry", "rz"}
-    alien = [c for c in header if c in poses and c not in facts.tracker_names]
+    own = set(facts.tracker_names) | (set(FULL_POSE) if full_pose_allowed(facts) else set())  # a 6-DOF tracker
+    alien = [c for c in header if c in poses and c not in own]
     if n > facts.ndof or (0 < n < facts.ndof and complete) or (alien and complete):
         same = [r for r in robots() if robot_facts(r).ndof == n and r != robot]
         what = (f"joint columns q1..q{n} ({n} joints)" if joints and n != facts.ndof
