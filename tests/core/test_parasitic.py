@@ -504,3 +504,20 @@ def test_point_platform_refuses_a_platform_point_and_angles(tmp_path):
     with pytest.raises(ArgumentError, match=rf"{f}:{line_of(f, 'coordinates =')}: legs that meet at a point .* 'rz' "
                                             r"is an angle"):
         Model(f)
+
+
+@pytest.mark.parametrize("robot,effect", [("tripod_3prs", "viscous"), ("tripod_3rps", "coulomb")])
+def test_a_hidden_effect_is_diagnosed_and_named(tmp_path, robot, effect):
+    """A blind case (the plant hides one library effect; its answer key written apart), then
+    the diagnosis: that effect named and nothing else, its coefficients within 2 %."""
+    import json
+
+    from cosim.discrepancy import blind, diagnose
+
+    csv, key = blind.make_case(blind.CaseSpec("case", robot, [effect], seed=4), tmp_path / "cases",
+                               tmp_path / "keys")
+    d = diagnose(csv, replay=False, figures=False)
+    hidden = json.loads(Path(key).read_text())["effects"][0]
+    assert hidden["type"] == effect and d.named() == [effect], d.named()
+    for name, true in hidden["params"].items():
+        assert abs(d.theta[name] - true) < 0.02 * true, (name, d.theta[name], true)
