@@ -81,6 +81,9 @@ def test_full_pose_recording_round_trip_and_a_partial_full_pose_is_refused(tmp_p
     csv_path, side = write_recording(tmp_path / "c.csv", rec)
     back = read_recording(csv_path)
     assert back.pose_columns == list(FULL_POSE) and np.array_equal(back.pose, rec.pose)
+    from cosim.report import _recording_poses
+
+    assert np.array_equal(_recording_poses(back, Model("tripod_3rps")), rec.pose[:, 2:5])  # the 3D view's z rx ry
     header = csv_path.read_text().splitlines()[0].split(",")
     assert [c for c in header if c in FULL_POSE] == list(FULL_POSE)
     # drop the rz column: the full pose without one of its undeclared components is an error

@@ -521,3 +521,33 @@ def test_a_hidden_effect_is_diagnosed_and_named(tmp_path, robot, effect):
     assert hidden["type"] == effect and d.named() == [effect], d.named()
     for name, true in hidden["params"].items():
         assert abs(d.theta[name] - true) < 0.02 * true, (name, d.theta[name], true)
+
+
+@pytest.mark.parametrize("name", ["tripod_3prs", "tripod_3rps", "fivebar"])
+def test_params_and_the_3d_view_of_each_robot(name, capsys):
+    """`cosim params` lists every leg's parameters; the report's 3D view draws one link and one
+    leg per leg, the platform through the legs' platform joints, and those joints where this
+    file's own kinematics puts them (the tripods' with the parasitic x, y, rz; the five-bar's
+    rods meeting at the tool point)."""
+    from cosim.cli import main
+    from cosim.report import mechanism_figure
+
+    m = Model(name)
+    assert main(["params", name]) == 0
+    n = m.ndof
+    assert f"leg[{n}].px" in capsys.readouterr().out
+    x = m.home() + ([0.01, 0.15, -0.1] if n == 3 else [0.02, 0.01])
+    fig = mechanism_figure(m, [0.0, 0.1], np.array([m.home(), x]))
+    shown = {t.name: t for t in fig.frames[1].data}
+    drawn = lambda t: np.array([v for v in t.x if v is not None])  # noqa: E731
+    assert len(drawn(shown["links"])) == 2 * n and len(drawn(shown["legs"])) == 2 * n
+    assert len(shown["base joints"].x) == n and len(drawn(shown["platform"])) == n + 1
+    if name == "fivebar":
+        want = np.tile([x[0], x[1], 0.0], (n, 1))
+    else:
+        _, legs = legs_of(name)
+        X = full_pose_scipy(legs, *x)
+        want = np.array([X[:3] + rot(*X[3:]) @ l["platform_point"] for l in legs])
+        assert np.abs(X[[0, 1, 5]]).max() > 1e-4  # the parasitic motion shows
+    got = np.column_stack([np.array(shown["platform"][c][:n], float) for c in "xyz"]) * 1e-3  # mm -> m
+    assert np.abs(got - want).max() < 1e-12, got - want
