@@ -78,8 +78,16 @@ def parasitic_sensitivity(model, poses, param: str, *, rel_step: float = 1e-6) -
     return (parasitic_motion(plus, poses) - parasitic_motion(minus, poses)) / (2 * h)
 
 
-def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
-    """The parasitic components over a grid of two declared coordinates, the others at home.
+def _half_width(name: str, span=None) -> float:
+    """A map's default half-width about home: 0.35 rad for an angle, 0.05 m for a length."""
+    if span is not None:
+        return float(span)
+    return 0.35 if POSE_UNITS[POSE_NAMES.index(name)] == "rad" else 0.05
+
+
+def parasitic_map(model, *, axes=None, span=None, grid: int = 21, at=None) -> dict:
+    """The parasitic components over a grid of two declared coordinates, the others at home
+    (or at ``at``).
 
     Parameters
     ----------
@@ -91,6 +99,8 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
         angle, 0.05 m for a length).
     grid : int
         Points per axis.
+    at : dict, optional
+        Values of the other declared coordinates, ``{"z": 0.42}`` [m, rad] (default: home).
 
     Returns
     -------
@@ -110,12 +120,17 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
             raise ValueError(f"--axes: {a!r} is not a coordinate of {model.robot} ({' '.join(names)})")
     idx = [names.index(a) for a in axes]
     home = model.home()
-    half = [span if span is not None else (0.35 if POSE_UNITS[POSE_NAMES.index(a)] == "rad" else 0.05) for a in axes]
+    half = [_half_width(a, span) for a in axes]
     u = home[idx[0]] + np.linspace(-half[0], half[0], grid)
     v = home[idx[1]] + np.linspace(-half[1], half[1], grid)
     comps = parasitic_components(model)
     values = np.full((grid, grid, len(comps)), np.nan)
     x = home.copy()
+    for name, val in (at or {}).items():
+        if name not in names or name in axes:
+            raise ValueError(f"at: {name!r} is not a coordinate of {model.robot} outside the map's axes "
+                             f"({' '.join(n for n in names if n not in axes)})")
+        x[names.index(name)] = float(val)
     from .errors import PkmError
 
     for i, a in enumerate(u):
@@ -127,4 +142,72 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21) -> dict:
             except PkmError:
                 pass
     return {"axes": axes, "u": u, "v": v, "names": [POSE_NAMES[k] for k in comps],
-            "units": [POSE_UNITS[k] for k in comps], "values": values}
+            "units": [POSE_UNITS[k] for k in comps], "values": values,
+            "at": {n: float(x[k]) for k, n in enumerate(names) if n not in axes}}
+
+
+def plot_parasitic_map(model, path, *, axes=None, span=None, grid: int = 21, slices: int = 3):
+    """Draw the parasitic motion over the workspace: each parasitic component (columns: x, y
+    [mm], rz [mrad] for a 3-PRS) over a grid of two declared coordinates (rx, ry), one row per
+    value of the remaining one (z at home and ``slices`` values across its span), one colour
+    scale per component so the rows compare.  Points the robot cannot reach are left blank.
+
+    Parameters
+    ----------
+    model : cosim.core.Model
+    path : str or Path
+        The figure (PNG).
+    axes, span, grid
+        As :func:`parasitic_map` (``span`` also the remaining coordinate's half-width).
+    slices : int
+        Rows: values of the declared coordinate outside ``axes`` (1: home only).
+
+    Returns
+    -------
+    dict
+        The maps drawn, one :func:`parasitic_map` per row.
+
+    Example
+    -------
+    >>> plot_parasitic_map(Model("tripod_3prs"), "out/parasitic_3prs.png", grid=31)   # doctest: +SKIP
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(model.facts.pose_names)
+    axes = tuple(axes or names[-2:])
+    rest = [n for n in names if n not in axes]
+    home = model.home()
+    if rest and slices > 1:
+        k = names.index(rest[0])
+        h = _half_width(rest[0], span)
+        levels = [{rest[0]: v} for v in home[k] + np.linspace(-h, h, slices)]
+    else:
+        levels = [{}]
+    maps = [parasitic_map(model, axes=axes, span=span, grid=grid, at=lv) for lv in levels]
+    comps = maps[0]["names"]
+    units = maps[0]["units"]
+    shown = {"m": (1e3, "mm"), "rad": (1e3, "mrad")}
+    pose_units = dict(zip(names, model.facts.pose_units))
+    fig, axs = plt.subplots(len(maps), len(comps), figsize=(4.2 * len(comps), 3.6 * len(maps)), squeeze=False)
+    for c, (name, unit) in enumerate(zip(comps, units)):
+        s, label = shown[unit]
+        allv = np.concatenate([s * mp["values"][:, :, c].ravel() for mp in maps])
+        lim = float(np.nanmax(np.abs(allv))) if np.isfinite(allv).any() else 1.0
+        lim = lim or 1.0
+        for r, mp in enumerate(maps):
+            ax = axs[r, c]
+            im = ax.contourf(mp["u"], mp["v"], s * mp["values"][:, :, c].T, levels=np.linspace(-lim, lim, 21),
+                             cmap="RdBu_r")
+            fig.colorbar(im, ax=ax, label=f"{name} [{label}]")
+            ax.set_xlabel(f"{axes[0]} [{pose_units[axes[0]]}]")
+            ax.set_ylabel(f"{axes[1]} [{pose_units[axes[1]]}]")
+            where = ", ".join(f"{n} = {v:.4g} {pose_units[n]}" for n, v in mp["at"].items())
+            ax.set_title(f"parasitic {name}" + (f" at {where}" if where else ""), fontsize=9)
+    fig.suptitle(f"{model.robot}: parasitic motion over {', '.join(names)}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return maps

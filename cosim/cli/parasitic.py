@@ -20,6 +20,20 @@ def _configure(p):
                    help="the map's two coordinates (default: the last two declared)")
     p.add_argument("--span", type=float, default=None, help="the map's half-width about home [m or rad]")
     p.add_argument("--grid", type=int, default=21, help="map points per axis (2-201)")
+    p.add_argument("--slices", type=int, default=3,
+                   help="map rows: values of the remaining coordinate (e.g. z) across its span (default 3)")
+
+
+def _map_configure(p):
+    p.add_argument("robot", type=robot_arg, help="robot name or description file (e.g. tripod_3prs)")
+    p.add_argument("--out", metavar="FILE.png", default=None, type=output_file,
+                   help="the figure (default parasitic_map_ROBOT.png)")
+    p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
+                   help="the map's two coordinates (default: the last two declared)")
+    p.add_argument("--span", type=float, default=None, help="half-width about home [m or rad]")
+    p.add_argument("--grid", type=int, default=21, help="points per axis (2-201)")
+    p.add_argument("--slices", type=int, default=3,
+                   help="rows: values of the remaining coordinate (e.g. z) across its span (default 3)")
 
 
 @command("parasitic", "parasitic motion of a lower-mobility robot (3-PRS, 3-RPS): the undeclared pose components "
@@ -36,6 +50,8 @@ def cmd_parasitic(args):
         raise ValueError(f"--pose takes {m.ndof} values ({' '.join(names)}) for {m.robot}")
     if not 2 <= args.grid <= 201:
         raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
+    if not 1 <= args.slices <= 9:
+        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
     for p in args.param:
         m.param(p)  # an unknown name says so before any work
     m.ik(poses)  # every pose inside the joints' limits (the message names the leg and the pose)
@@ -55,28 +71,38 @@ def cmd_parasitic(args):
         row = list(poses[k]) + list(par[k]) + [v for p in args.param for v in sens[p][k]]
         print("  ".join(f"{v:>16.6g}" for v in row))
     if args.map:
-        import matplotlib
+        _draw(m, args.map, args)
+    return 0
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
 
-        mp = parasitic_map(m, axes=args.axes, span=args.span, grid=args.grid)
-        scale = {"m": (1e3, "mm"), "rad": (1e3, "mrad")}
-        fig, axs = plt.subplots(1, len(mp["names"]), figsize=(4.2 * len(mp["names"]), 3.8), squeeze=False)
-        for c, (name, unit) in enumerate(zip(mp["names"], mp["units"])):
-            s, shown = scale[unit]
-            ax = axs[0, c]
-            im = ax.contourf(mp["u"], mp["v"], s * mp["values"][:, :, c].T, levels=21, cmap="RdBu_r")
-            fig.colorbar(im, ax=ax, label=f"{name} [{shown}]")
-            ax.set_xlabel(f"{mp['axes'][0]} [{m.facts.pose_units[names.index(mp['axes'][0])]}]")
-            ax.set_ylabel(f"{mp['axes'][1]} [{m.facts.pose_units[names.index(mp['axes'][1])]}]")
-            ax.set_title(f"parasitic {name}")
-        fig.suptitle(f"{m.robot}: parasitic motion, other coordinates at home")
-        fig.tight_layout()
-        fig.savefig(args.map, dpi=110)
-        plt.close(fig)
-        print(f"map: {args.map}")
+def _draw(m, path, args):
+    from ..parasitic import parasitic_components, plot_parasitic_map
+
+    if not parasitic_components(m):
+        raise ValueError(f"{m.robot} declares all six pose components: no parasitic motion to map")
+    maps = plot_parasitic_map(m, path, axes=args.axes, span=args.span, grid=args.grid, slices=args.slices)
+    for c, (name, unit) in enumerate(zip(maps[0]["names"], maps[0]["units"])):
+        vals = np.concatenate([mp["values"][:, :, c].ravel() for mp in maps])
+        print(f"  {name}: {np.nanmin(vals):+.6g} ... {np.nanmax(vals):+.6g} {unit} over the map")
+    print(f"map: {path}")
     return 0
 
 
 cmd_parasitic.configure = _configure
+
+
+@command("map", "parasitic-motion map: x, y, rz of a 3-PRS or 3-RPS over its z, rx, ry workspace (the drawing of "
+                "`cosim parasitic ROBOT --map`)")
+def cmd_map(args):
+    from ..core import Model
+
+    if not 2 <= args.grid <= 201:
+        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
+    if not 1 <= args.slices <= 9:
+        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
+    m = Model(args.robot)
+    _draw(m, args.out or f"parasitic_map_{m.robot}.png", args)
+    return 0
+
+
+cmd_map.configure = _map_configure

@@ -91,7 +91,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-case --robot": ["blind-case", "--robot", "{}"],
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
-          "parasitic": ["parasitic", "{}"],
+          "parasitic": ["parasitic", "{}"], "map": ["map", "{}", "--out", "{tmp}/m.png"],
           "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
@@ -112,6 +112,7 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
 # commands writing one file given by --out
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
+             "map": ["map", "tripod_3rps", "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 
@@ -192,6 +193,8 @@ def _cases(tmp):
         (["parasitic", "tripod_3rps", "--param", "leg[9].px"], "tripod_3rps has no parameter named 'leg[9].px'"),
         (["parasitic", "tripod_3rps", "--map", str(tmp / "m.png"), "--grid", "1"], "--grid 1: give 2 to 201 points"),
         (["parasitic", "tripod_3rps", "--pose", "0.9", "0.0", "0.0"], "leg 1 joint q = "),
+        (["map", "tripod_3rps", "--slices", "0"], "--slices 0: give 1 to 9 rows"),
+        (["map", "tripod_3rps", "--axes", "rx", "x"], "--axes: 'x' is not a coordinate of tripod_3rps"),
         # kept from the first corpus
         (["calibrate", bad["binary"]], "is not a text CSV file"),
         (["diagnose", bad["badpar"], "--no-replay", "--no-figures"], "badpar.json: parameters: 6pus has no parameter"),

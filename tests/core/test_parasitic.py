@@ -551,3 +551,29 @@ def test_params_and_the_3d_view_of_each_robot(name, capsys):
         assert np.abs(X[[0, 1, 5]]).max() > 1e-4  # the parasitic motion shows
     got = np.column_stack([np.array(shown["platform"][c][:n], float) for c in "xyz"]) * 1e-3  # mm -> m
     assert np.abs(got - want).max() < 1e-12, got - want
+
+
+def test_the_map_draws_x_y_rz_over_z_rx_ry_as_the_closed_form_gives_them(tmp_path, capsys):
+    """`cosim map` (and `cosim parasitic --map`, the same drawing): x, y, rz over rx, ry, one
+    row per z; every drawn value is the closed form's at that pose; the printed ranges in SI."""
+    from cosim.cli.main import main
+    from cosim.parasitic import plot_parasitic_map
+
+    m = Model("tripod_3prs")
+    _, legs = legs_of("tripod_3prs")
+    r = np.linalg.norm(legs[0]["platform_point"])
+    maps = plot_parasitic_map(m, tmp_path / "m.png", grid=7, slices=3)
+    zs = [mp["at"]["z"] for mp in maps]
+    assert zs == pytest.approx([-0.35, -0.3, -0.25]) and maps[0]["names"] == ["x", "y", "rz"]
+    assert maps[0]["units"] == ["m", "m", "rad"]
+    for mp in maps:
+        for i, rx in enumerate(mp["u"]):
+            for j, ry in enumerate(mp["v"]):
+                ref = closed_form(r, mp["at"]["z"], rx, ry)[[0, 1, 5]]
+                assert np.abs(mp["values"][i, j] - ref).max() < 1e-12
+    assert np.nanmax(np.abs(maps[0]["values"][:, :, 0])) > 1e-3  # millimetres of x at 0.35 rad
+    assert main(["map", "tripod_3prs", "--out", str(tmp_path / "c.png"), "--grid", "5", "--slices", "2"]) == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "c.png").stat().st_size > 1000 and "rz: " in out and " rad over the map" in out
+    assert main(["map", "tripod_3prs", "--slices", "0"]) == 2
+    assert "--slices 0: give 1 to 9 rows" in capsys.readouterr().err
