@@ -11,7 +11,7 @@ A recording is a CSV file with a header row and a JSON sidecar of the same name:
   ``x, y, z, theta`` (Quattro), ``X`` [m] (four-bar output); a robot that declares only
   some of the six components (a 3-RPS tripod: ``z, rx, ry``) takes either its own columns or
   the full pose ``x, y, z, rx, ry, rz`` (a 6-DOF tracker, which also sees the parasitic
-  motion: :func:`full_pose_allowed`);
+  motion: :func:`full_pose_allowed`; ``Recording.pose_full``, and ``pose`` its declared columns);
 * any further columns are kept in ``Recording.extra``.
 
 Sidecar: ``{"format": "pkm-recording/1", "robot": "6pus" | "quattro" | "fourbar",
@@ -111,6 +111,11 @@ FULL_POSE = ("x", "y", "z", "rx", "ry", "rz")
 FULL_POSE_UNITS = ("m", "m", "m", "rad", "rad", "rad")
 
 
+def _declared(robot) -> list:
+    """Indices in x y z rx ry rz of a robot's tracker columns (:func:`full_pose_allowed`)."""
+    return [FULL_POSE.index(n) for n in _facts(robot).tracker_names]
+
+
 def full_pose_allowed(facts) -> bool:
     """Whether a recording of this robot may carry the full pose ``x y z rx ry rz`` instead of
     its own tracker columns: a robot whose tracker columns are some, not all, of the six
@@ -147,7 +152,8 @@ class Recording:
     (n, nd); ``pose`` (n, npose) in the robot's tracker columns (the core's
     ``RobotFacts.tracker_names``: the pose coordinates; ``X`` for the four-bar);
     ``f_ext`` (n, nd) [N or N m], the measured external effort on each joint (positive
-    along +q_i), None when the recording has none.
+    along +q_i), None when the recording has none; ``pose_full`` (n, 6), the full pose of a
+    6-DOF tracker (:meth:`set_full_pose`), None when not recorded.
     """
 
     robot: str
@@ -169,6 +175,10 @@ class Recording:
     f_ext: np.ndarray | None = None
     #: further sidecar fields, kept verbatim (``units``, ``derived``, ``sensors``, ``source``)
     sidecar: dict = field(default_factory=dict)
+    #: the full pose x y z rx ry rz [m, rad] a 6-DOF tracker measured (n, 6), for a robot that
+    #: declares some of the six (its parasitic components too); ``pose`` is then its declared
+    #: columns.  None when the recording has the robot's own tracker columns only.
+    pose_full: np.ndarray | None = None
 
     @property
     def ndof(self) -> int:
@@ -176,17 +186,15 @@ class Recording:
 
     @property
     def pose_columns(self) -> list[str]:
-        """The pose columns: the robot's tracker columns, or the full pose ``x y z rx ry rz``
-        when ``pose`` has six columns and the robot allows it (:func:`full_pose_allowed`)."""
-        facts = _facts(self.robot)
-        if self.pose is not None and self.pose.shape[-1] == 6 and full_pose_allowed(facts):
-            return list(FULL_POSE)
-        return list(facts.tracker_names)
+        return list(_facts(self.robot).tracker_names)
 
-    @property
-    def full_pose(self) -> bool:
-        """True when the pose columns are the full pose of a robot that declares fewer."""
-        return self.pose is not None and self.pose_columns == list(FULL_POSE) and self.ndof < 6
+    def set_full_pose(self, X) -> None:
+        """Set the full pose a 6-DOF tracker measured, (n, 6) x y z rx ry rz [m, rad], and
+        ``pose`` to its declared columns (a robot that declares some of the six:
+        :func:`full_pose_allowed`)."""
+        X = np.asarray(X, float)
+        self.pose_full = X
+        self.pose = X[:, _declared(self.robot)] if X.ndim == 2 and X.shape[1] == 6 else None
 
     def __len__(self) -> int:
         return len(self.time)
@@ -201,6 +209,7 @@ class Recording:
             {k: v[s] for k, v in self.extra.items()},
             dict(self.parameters), dict(self.controller), self.notes, self.path, dict(self.joint_convention),
             f_ext=None if self.f_ext is None else self.f_ext[s], sidecar=dict(self.sidecar),
+            pose_full=None if self.pose_full is None else self.pose_full[s],
         )
 
     def column_names(self) -> list[str]:
@@ -209,7 +218,9 @@ class Recording:
         for i in range(1, nd + 1):
             cols += [f"q{i}", f"qd{i}", f"tau{i}"] + ([f"qref{i}"] if self.qref is not None else [])
             cols += [f"f_ext{i}"] if self.f_ext is not None else []
-        if self.pose is not None:
+        if self.pose_full is not None:
+            cols += list(FULL_POSE)
+        elif self.pose is not None:
             cols += self.pose_columns
         cols += list(self.extra)
         return cols
@@ -223,7 +234,9 @@ class Recording:
                 parts.append(self.qref[:, i:i + 1])
             if self.f_ext is not None:
                 parts.append(self.f_ext[:, i:i + 1])
-        if self.pose is not None:
+        if self.pose_full is not None:
+            parts.append(self.pose_full)
+        elif self.pose is not None:
             parts.append(self.pose)
         parts += [np.asarray(v, float)[:, None] for v in self.extra.values()]
         return np.hstack(parts)
@@ -245,6 +258,12 @@ def _validate(rec: Recording, path) -> None:
             raise RecordingError(path, f"{name} has shape {a.shape}, expected ({n}, {nd}) for robot {rec.robot}")
     if rec.pose is not None and rec.pose.shape != (n, len(rec.pose_columns)):
         raise RecordingError(path, f"pose has shape {rec.pose.shape}, expected ({n}, {len(rec.pose_columns)})")
+    if rec.pose_full is not None:
+        if not full_pose_allowed(_facts(rec.robot)):
+            raise RecordingError(path, f"a full pose (x y z rx ry rz) is for a robot that declares some of them; "
+                                       f"{rec.robot} declares {' '.join(rec.pose_columns)}")
+        if rec.pose_full.shape != (n, 6):
+            raise RecordingError(path, f"pose_full has shape {rec.pose_full.shape}, expected ({n}, 6)")
     bad = np.flatnonzero(np.diff(rec.time) <= 0)
     if bad.size:
         k = bad[0] + 1
@@ -267,7 +286,7 @@ def _si_units(facts, rec: Recording) -> dict:
     """The sidecar's ``units`` of a written recording: the robot's SI units, per kind of column."""
     ju, eu = facts.joint_unit, facts.effort_unit
     units = {"time": "s", "q": ju, "qd": f"{ju}/s", "tau": eu}
-    if rec.pose is not None and rec.full_pose:
+    if rec.pose_full is not None:
         units["pose"] = list(FULL_POSE_UNITS)
     if rec.qref is not None:
         units["qref"] = ju
@@ -717,7 +736,11 @@ def _block(lay: _Layout, data: np.ndarray, row0: int) -> Recording:
         qd=sign * stack("qd"),
         tau=sign * stack("tau"),
         qref=sign * (stack("qref") - offset) if lay.has_qref else None,
-        pose=np.column_stack([col[c] for c in lay.pose_cols]) if lay.has_pose else None,
+        pose=(np.column_stack([col[c] for c in lay.pose_cols])[:, _declared(lay.robot)]
+              if lay.has_pose and lay.pose_cols == list(FULL_POSE) and lay.nd < 6 else
+              np.column_stack([col[c] for c in lay.pose_cols]) if lay.has_pose else None),
+        pose_full=(np.column_stack([col[c] for c in FULL_POSE])
+                   if lay.has_pose and lay.pose_cols == list(FULL_POSE) and lay.nd < 6 else None),
         extra={h: col[h] for h in lay.header if h not in lay.known},
         parameters=meta.get("parameters") or {},
         controller=meta.get("controller") or {},

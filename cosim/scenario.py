@@ -515,7 +515,7 @@ def export_run(out: ScenarioResult, d: Path) -> dict:
     rec = out.result.to_recording(parameters=sc.spec["parameters"], notes=notes)
     tracker = sc.spec.get("tracker", {})
     if tracker.get("pose") == "full":
-        rec.pose = full_pose_measured(sc, out.result["x"])
+        rec.set_full_pose(full_pose_measured(sc, out.result["x"]))
         rec.notes = notes.replace("the external tracker's measurement", "a 6-DOF tracker's measurement of x y z rx "
                                   "ry rz") .replace(f"(noise {out.result.noise['pose']})",
                                                     f"(noise {tracker.get('noise', [0.0] * 6)})")
@@ -552,7 +552,7 @@ def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
              f"(ctrl-C); plant {sc.spec['plant']}; step {sc.spec['step']} s")
     rec = stop.partial.to_recording(parameters=sc.spec["parameters"], notes=notes)
     if sc.spec.get("tracker", {}).get("pose") == "full":
-        rec.pose = full_pose_measured(sc, stop.partial["x"])
+        rec.set_full_pose(full_pose_measured(sc, stop.partial["x"]))
     csv_path, side = write_recording(d / f"{sc.name}.csv", rec)
     return {"recording": csv_path, "sidecar": side}
 

@@ -285,15 +285,18 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
     qm = q + (rng.normal(0.0, encoder_noise, q.shape) if encoder_noise > 0 else 0.0)
     base = Model(nominal.source, nominal.param_set)
     overrides = {k: v for k, v in nominal.params().items() if v != base.param(k)}
-    return Recording(
+    rec = Recording(
         robot=nominal.robot, time=np.arange(n) * dwell, q=qm, qd=np.zeros_like(q), tau=_tau_hold(real, poses),
-        pose=meas, parameters=overrides,
+        pose=None if full_pose else meas, parameters=overrides,
         notes=(notes or f"{nominal.robot} calibration campaign (synthetic): the robot is held at each pose; q are "
                f"its joint readings, the pose columns what an external tracker measured")
         + ("; a 6-DOF tracker: the full pose x y z rx ry rz" if full_pose else "")
         + f"; tracker noise {tracker_noise:g} m and {angle_noise:g} rad, encoder noise {encoder_noise:g}"
         + (f"; {skipped} planned pose(s) skipped (out of the real robot's reach)" if skipped else ""),
     )
+    if full_pose:
+        rec.set_full_pose(meas)
+    return rec
 
 
 def truth_path(csv_path) -> Path:

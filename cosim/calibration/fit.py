@@ -112,14 +112,16 @@ def measurements(rec, use: str = "auto") -> Measurements:
     lab = rec.extra.get("label")
     if use == "held" and lab is None:
         raise CalibrationDataError(f"{where}: no 'label' column tagging the held poses (use='rows' takes every row)")
+    # a 6-DOF tracker's full pose (the parasitic components too) when the recording has it
+    P = rec.pose if rec.pose_full is None else rec.pose_full
     if use == "rows" or (use == "auto" and lab is None):
-        return Measurements(rec.robot, rec.pose, rec.q, [f"row {k + 2} (t = {rec.time[k]:g} s)" for k in
+        return Measurements(rec.robot, P, rec.q, [f"row {k + 2} (t = {rec.time[k]:g} s)" for k in
                                                          range(len(rec))], rec.parameters, where)
     pose, q, labels = [], [], []
     for k in sorted(set(np.asarray(lab).tolist()) - {0.0}):
         rows = np.flatnonzero(lab == k)
         last = rows[len(rows) // 2:]
-        pose.append(rec.pose[last].mean(axis=0))
+        pose.append(P[last].mean(axis=0))
         q.append(rec.q[last].mean(axis=0))
         labels.append(f"hold {k:g} (rows {last[0] + 2}-{last[-1] + 2}, t = {rec.time[last[0]]:g}-"
                       f"{rec.time[last[-1]]:g} s)")

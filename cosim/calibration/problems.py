@@ -421,7 +421,7 @@ class SixpusProblem(Problem):
 _NOT_GEOMETRY = ("gravity.", "drive.", "actuator.", "sensor.", "payload.")
 
 
-def geometry_candidates(model, poses) -> list:
+def geometry_candidates(model, poses, measure=None) -> list:
     """Every length parameter [m] of ``model`` (outside gravity, payload and the drive and
     sensor layers) whose change moves a joint of the core's inverse kinematics at ``poses``:
     a central difference of the IK per parameter, all poses in one call.
@@ -430,9 +430,12 @@ def geometry_candidates(model, poses) -> list:
     parameters named after the joint (a described robot's ``arm[i].Ax``, ``arm[i].r``,
     ``rail[i].S0x``): the drive parameters under the same prefix (friction, offsets,
     limits) do not move the inverse kinematics, so the difference leaves them out.
+    ``measure(model, poses)``: what must move instead of the joints (an array).
     """
     x = np.atleast_2d(np.asarray(poses, float))
-    base = np.asarray(model.ik(x), float)
+    if measure is None:
+        measure = lambda m, xs: np.asarray(m.ik(xs), float)  # noqa: E731
+    base = measure(model, x)
     trial = model.copy()
     keep = []
     for info in model.param_info():
@@ -441,7 +444,7 @@ def geometry_candidates(model, poses) -> list:
         h = 1e-6 * max(abs(info.value), 1e-3)
         try:
             trial.set_params({info.name: info.value + h})
-            moved = np.max(np.abs(np.asarray(trial.ik(x), float) - base)) > 1e-9 * h
+            moved = np.max(np.abs(measure(trial, x) - base)) > 1e-9 * h
         except PkmError:
             moved = False
         finally:
@@ -671,23 +674,7 @@ class FullPoseProblem(JointProblem):
     def _candidates(self, model, poses):
         """Every length [m] (outside gravity, payload, drive and sensors) whose change moves a
         joint or a parasitic component at ``poses``."""
-        base = self._measure(model, poses)
-        trial = model.copy()
-        keep = []
-        for info in model.param_info():
-            if info.unit != "m" or info.name.startswith(_NOT_GEOMETRY):
-                continue
-            h = 1e-6 * max(abs(info.value), 1e-3)
-            try:
-                trial.set_params({info.name: info.value + h})
-                moved = np.max(np.abs(self._measure(trial, poses) - base)) > 1e-9 * h
-            except PkmError:
-                moved = False
-            finally:
-                trial.set_params({info.name: info.value})
-            if moved:
-                keep.append(info.name)
-        return keep
+        return geometry_candidates(model, poses, measure=self._measure)
 
     def _measure(self, model, poses):
         """(n, nd + 6 - nd): the joints and the other pose components of ``model`` at ``poses``."""

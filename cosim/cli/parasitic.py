@@ -16,6 +16,11 @@ def _configure(p):
                    help="also print d(parasitic)/d(NAME), a parameter of `cosim params ROBOT` (repeatable)")
     p.add_argument("--map", metavar="FILE.png", default=None, type=output_file,
                    help="draw each parasitic component over a grid of two coordinates (the others at home)")
+    _map_options(p)
+
+
+def _map_options(p):
+    """The map's options, shared by `cosim parasitic --map` and `cosim map`."""
     p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
                    help="the map's two coordinates (default: the last two declared)")
     p.add_argument("--span", type=float, default=None, help="the map's half-width about home [m or rad]")
@@ -24,16 +29,18 @@ def _configure(p):
                    help="map rows: values of the remaining coordinate (e.g. z) across its span (default 3)")
 
 
+def _check_map_options(args):
+    if not 2 <= args.grid <= 201:
+        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
+    if not 1 <= args.slices <= 9:
+        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
+
+
 def _map_configure(p):
     p.add_argument("robot", type=robot_arg, help="robot name or description file (e.g. tripod_3prs)")
     p.add_argument("--out", metavar="FILE.png", default=None, type=output_file,
                    help="the figure (default parasitic_map_ROBOT.png)")
-    p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
-                   help="the map's two coordinates (default: the last two declared)")
-    p.add_argument("--span", type=float, default=None, help="half-width about home [m or rad]")
-    p.add_argument("--grid", type=int, default=21, help="points per axis (2-201)")
-    p.add_argument("--slices", type=int, default=3,
-                   help="rows: values of the remaining coordinate (e.g. z) across its span (default 3)")
+    _map_options(p)
 
 
 @command("parasitic", "parasitic motion of a lower-mobility robot (3-PRS, 3-RPS): the undeclared pose components "
@@ -48,10 +55,7 @@ def cmd_parasitic(args):
     poses = np.array(args.pose if args.pose else [m.home()], float)
     if poses.ndim != 2 or poses.shape[1] != m.ndof:
         raise ValueError(f"--pose takes {m.ndof} values ({' '.join(names)}) for {m.robot}")
-    if not 2 <= args.grid <= 201:
-        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
-    if not 1 <= args.slices <= 9:
-        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
+    _check_map_options(args)
     for p in args.param:
         m.param(p)  # an unknown name says so before any work
     m.ik(poses)  # every pose inside the joints' limits (the message names the leg and the pose)
@@ -96,10 +100,7 @@ cmd_parasitic.configure = _configure
 def cmd_map(args):
     from ..core import Model
 
-    if not 2 <= args.grid <= 201:
-        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
-    if not 1 <= args.slices <= 9:
-        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
+    _check_map_options(args)
     m = Model(args.robot)
     _draw(m, args.out or f"parasitic_map_{m.robot}.png", args)
     return 0

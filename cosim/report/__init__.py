@@ -162,12 +162,9 @@ def write_html(path, title: str, sections: list) -> Path:
 
 
 def _recording_poses(rec, model):
-    """Poses of a recording: its tracker columns (of a full pose, the robot's declared
-    components), or the core's forward kinematics of q."""
+    """Poses of a recording: its tracker columns, or the core's forward kinematics of q."""
     if rec.pose is not None and rec.pose.shape[1] == model.ndof:
         return rec.pose
-    if rec.pose is not None and rec.full_pose:
-        return rec.pose[:, [rec.pose_columns.index(n) for n in model.facts.pose_names]]
     x = np.empty((len(rec.time), model.ndof))
     guess = model.home()
     for k, q in enumerate(rec.q):
