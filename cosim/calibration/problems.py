@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, PkmError
+from ..recording import FULL_POSE as _FULL, FULL_POSE_UNITS as _FULL_UNITS  # a 6-DOF tracker's columns
 
 __all__ = [
     "CalibrationDataError",
@@ -598,10 +599,6 @@ class JointProblem(Problem):
         return J
 
 
-#: the six platform pose components and their units (a 6-DOF tracker's columns)
-_FULL = ("x", "y", "z", "rx", "ry", "rz")
-_FULL_UNITS = ("m", "m", "m", "rad", "rad", "rad")
-
 
 class FullPoseProblem(JointProblem):
     """A robot that declares some pose components (a 3-PRS or 3-RPS head: z, rx, ry) measured
@@ -638,7 +635,8 @@ class FullPoseProblem(JointProblem):
     >>> X = data.candidate_poses(m, 20, rng=1)
     >>> rec = data.joint_campaign(m, {"leg[1].bx": m.param("leg[1].bx") + 2e-4}, X, tracker_noise=0.0,
     ...                           full_pose=True)
-    >>> FullPoseProblem(rec.pose, rec.q, m).names[:3]              # doctest: +SKIP
+    >>> FullPoseProblem(rec.pose_full, rec.q, m).names[:3]         # doctest: +SKIP
+    ['leg[1].bx', 'leg[1].by', 'leg[1].bz']
     """
 
     def __init__(self, pose, q, model, row_labels=None, min_poses: int | None = None, params=None,
@@ -658,7 +656,6 @@ class FullPoseProblem(JointProblem):
         self.other = [k for k in range(6) if k not in self.decl]
         self.full = full
         self._angle_length = float(angle_length)
-        self._params = params
         super().__init__(full[:, self.decl], q, model, row_labels=row_labels, min_poses=min_poses, params=params)
         self.y = np.concatenate([self.q, self.full[:, self.other]], axis=1).ravel()
         self.row_labels = [f"{lab}, {what}" for lab in self.pose_labels
@@ -677,7 +674,8 @@ class FullPoseProblem(JointProblem):
         return geometry_candidates(model, poses, measure=self._measure)
 
     def _measure(self, model, poses):
-        """(n, nd + 6 - nd): the joints and the other pose components of ``model`` at ``poses``."""
+        """(n, joints + other components): the joints and the undeclared pose components of
+        ``model`` at ``poses``."""
         q = np.asarray(model.ik(poses), float).reshape(poses.shape[0], -1)
         X, _ = model.platform_pose(poses)
         return np.concatenate([q, np.asarray(X).reshape(-1, 6)[:, self.other]], axis=1)
