@@ -169,7 +169,7 @@ def plot_parasitic_map(model, path, *, axes=None, span=None, grid: int = 21, sli
 
     Example
     -------
-    >>> plot_parasitic_map(Model("tripod_3prs"), "out/parasitic_3prs.png", grid=31)   # doctest: +SKIP
+    >>> plot_parasitic_map(Model("robots/tripod_3prs.toml"), "out/parasitic_3prs.png", grid=31)   # doctest: +SKIP
     """
     import matplotlib
 

@@ -631,7 +631,7 @@ class FullPoseProblem(JointProblem):
     -------
     >>> from cosim.core import Model
     >>> from cosim.calibration import data
-    >>> m = Model("tripod_3rps")
+    >>> m = Model("robots/tripod_3rps.toml")
     >>> X = data.candidate_poses(m, 20, rng=1)
     >>> rec = data.joint_campaign(m, {"leg[1].bx": m.param("leg[1].bx") + 2e-4}, X, tracker_noise=0.0,
     ...                           full_pose=True)
