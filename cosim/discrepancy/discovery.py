@@ -700,6 +700,7 @@ def judge_library(eng, sel, threshold: float):
     search = Search(eng, theta)
     bar = threshold + 2.0 * math.log(search.n_tried())
     withdrawn, ties = [], []
+    acting = []  # (selected group, the channels it acts on), in the order put on trial
     confirmed = {}  # channel -> library frictions that the terms in their place restated
 
     def discover_all(R, chans, th, asymmetry=None):
@@ -723,6 +724,7 @@ def judge_library(eng, sel, threshold: float):
                  if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
         if not chans:
             continue
+        acting.append((a, chans))
         in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
         if not in_place or all(library_named(t) for t in in_place):
             continue
@@ -753,6 +755,43 @@ def judge_library(eng, sel, threshold: float):
             # not told apart on the held-out part: the library effect is named, not with confidence
             ties.append({"group": g.label, "terms": [t.equation for t in in_place], "extra_params": k_B - k_A,
                          **figures})
+    # Two library effects on one channel may be one force the search names: Coulomb friction and
+    # an offset are, while the joint moves, friction that differs by direction.  Alone on trial,
+    # each lost to nothing (with the offset kept, the pair in Coulomb's place restated Coulomb);
+    # they go on trial together against the terms discovered in their joint place.
+    for (a1, ch1), (a2, ch2) in _pairs(acting):
+        g1, g2 = a1.group, a2.group
+        if not all(p in theta for p in (*g1.params, *g2.params)):
+            continue  # one of them was withdrawn already
+        th_minus = {k: v for k, v in theta.items() if k not in g1.params and k not in g2.params}
+        chans = sorted(set(ch1) | set(ch2))
+        R_minus = eng.R(th_minus)
+        in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
+        if not in_place or any(library_named(t) for t in in_place) or any(
+                restates(t, g.key, distinct=True) for t in in_place for g in (g1, g2)):
+            continue
+        on_top = [base[c] for c in chans if base.get(c) is not None]
+        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
+        A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
+        k_A = (len(g1.params) + len(g2.params) - 2
+               + _rank(search, [R_lib - eng.R({k: v for k, v in theta.items() if k not in g.params})
+                                for g in (g1, g2)], on_top, chans))
+        k_B = _rank(search, [], in_place, chans)
+        better, gain, se = significant(search, R_A, R_B, chans, bar)
+        # one force for two effects, with no more free coefficients and a held-out fit not
+        # worse beyond the bar or its uncertainty: the simpler account is the one force (the
+        # two effects are listed as look-alikes that fit as well, not named)
+        if better or (k_B <= k_A and -gain <= max(bar, Z_ONE_SIDED * se)):
+            figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se,
+                       "bar": bar, "coefficients": [k_A, k_B], "together": [g1.title, g2.title],
+                       "as_well": not better}
+            for g in (g1, g2):
+                withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                                  "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                                  "replaced_by": [t.channel for t in in_place], **figures})
+            ties[:] = [t for t in ties if t["group"] not in (g1.label, g2.label)]
+            theta, R_lib = th_minus, R_minus
+            base.update(discover_all(R_lib, chans, theta))
     # On the library model that stays, a direction-split friction may now be the asymmetry of a
     # library friction that the terms in its place restated (on trial each level had to be a
     # friction of its own, so that the library effect stood against the discovered terms alone;
@@ -760,6 +799,11 @@ def judge_library(eng, sel, threshold: float):
     again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
     base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
     return theta, withdrawn, ties, search, base
+
+
+def _pairs(acting):
+    """Pairs of library effects on trial that act on a common channel, in trial order."""
+    return [(x, y) for i, x in enumerate(acting) for y in acting[i + 1:] if set(x[1]) & set(y[1])]
 
 
 def _rank(search, extra, terms, chans) -> int:
@@ -797,11 +841,14 @@ def library_named(term: DiscoveredTerm) -> bool:
 _PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
 
 
-def restates(term: DiscoveredTerm, key: str) -> bool:
+def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
     """The discovered term holds the library effect ``key``: Coulomb (viscous) friction split
     by direction with both levels positive beyond their intervals, i.e. the library's friction
     (the levels' mean) and an asymmetry (their difference; none when they are equal within
-    their intervals).  A level for one direction only (a one-way damper) is no such friction."""
+    their intervals).  A level for one direction only (a one-way damper) is no such friction.
+    ``distinct``: the term restates the effect alone, with nothing besides: the two levels
+    equal within their intervals (then the pair is the library's friction, not friction that
+    differs by direction)."""
     if key not in _PAIR_KEYS:
         return False
     pos = neg = None
@@ -811,4 +858,7 @@ def restates(term: DiscoveredTerm, key: str) -> bool:
             pos = c
         elif k == _PAIR_KEYS[key][1]:
             neg = c
-    return pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95
+    both = pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95
+    if distinct:
+        return both and abs(pos.value - neg.value) <= math.hypot(pos.ci95, neg.ci95)
+    return both

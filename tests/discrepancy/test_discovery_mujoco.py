@@ -25,10 +25,9 @@ from cosim.discrepancy import blind, diagnose  # noqa: E402
 @pytest.mark.parametrize("kind, seed, coefficient", [
     ("spring", 41, "force_k1"),             # a spring towards the home stroke on one rail
     # friction of another level in each direction: while the rail moves it is the library's Coulomb
-    # friction (the mean level) plus a constant offset (half the difference), and both are named
-    pytest.param("direction_coulomb", 42, None, marks=pytest.mark.xfail(
-        strict=True, reason="named as Coulomb friction with confidence plus an offset: each library group is put "
-                            "on trial alone, and with the offset kept the discovered pair restates Coulomb")),
+    # friction (the mean level) plus a constant offset (half the difference); the two go on trial
+    # together against the one discovered force
+    ("direction_coulomb", 42, None),
 ])
 def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed, coefficient):
     m = Model("6pus")
