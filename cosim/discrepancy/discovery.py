@@ -1010,12 +1010,14 @@ def judge_library(eng, sel, threshold: float):
                    "bar": bar, "coefficients": [k_A, k_B]}
         as_well = -gain <= max(bar, Z_ONE_SIDED * se)
         if alone:
-            # the other effect may be a stand-in the discovered terms do without: tied (not
-            # named with confidence) when they fit as well with no more free coefficients
-            (g,) = other
-            if k_B <= k_A and as_well and not any(t["group"] == g.label for t in ties):
-                ties.append({"group": g.label, "terms": [t.equation for t in in_place],
-                             "extra_params": k_B - k_A, **figures})
+            # the other effect may be a stand-in the discovered terms do without: when they fit
+            # as well with no more free coefficients, it is tied (not named with confidence), and
+            # so is the restated one, whose level was fitted with the stand-in's share
+            if k_B <= k_A and as_well:
+                for g in (g1, g2):
+                    if not any(t["group"] == g.label for t in ties):
+                        ties.append({"group": g.label, "terms": [t.equation for t in in_place],
+                                     "extra_params": k_B - k_A, **figures})
             continue
         # one force for two effects whose sum is, while the joint moves, a term of the search
         # (:data:`ONE_FORCE`), with no more free coefficients and a held-out fit not worse
