@@ -8,7 +8,9 @@ twice with opposite signs, and a coefficient the library has fitted on a channel
 searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
 direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
-spectrum over position, and a smooth step in position.  Each candidate column is a finite
+spectrum over position, and a smooth step in position (a selected step's position and width
+and a selected ripple's period are then fitted, with intervals from the fit linearised in
+them; the library's offset on the joint is refitted with the terms).  Each candidate column is a finite
 difference of the residual pipeline over its core parameter (the core evaluates the force;
 nothing here restates it), the columns of the rate terms get instruments (the same column
 along the reference motion, free of the rate noise), as the library's masses and viscous
@@ -29,7 +31,9 @@ significantly better (:func:`significant`: the held-out chi-square lower by more
 threshold a term pays to enter, look-elsewhere cost included, and by more than Z_ONE_SIDED
 standard errors of that difference over blocks of the held-out part); otherwise the library
 effect is named, because it carries a physics name, and the discovered terms are listed as
-a tie when they fit about as well.
+a tie when they fit about as well.  Two effects on a common channel then go on trial together
+(Coulomb friction and an offset are, while the joint moves, friction that differs by
+direction; a friction restated alone in place of two effects makes the other a stand-in).
 """
 from __future__ import annotations
 
@@ -1079,8 +1083,9 @@ def library_named(term: DiscoveredTerm) -> bool:
 
 #: pairs of library effects that are, while the joint moves, one term of the search: Coulomb
 #: friction (or one fading at low speed) and a constant offset are friction that differs by
-#: direction (the levels' mean and half their difference)
-ONE_FORCE = ({"coulomb", "offset"}, {"smooth_coulomb", "offset"})
+#: direction (the levels' mean and half their difference); so is a dead zone in the offset's
+#: place, a constant force where the joint's command keeps one sign
+ONE_FORCE = tuple({f, c} for f in ("coulomb", "smooth_coulomb") for c in ("offset", "dead_zone"))
 
 #: the coefficient keys of the direction-split pair of a library friction
 _PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
