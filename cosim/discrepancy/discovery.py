@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ParameterError
 from .effects import joint_prefix
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
@@ -232,10 +233,20 @@ class Search:
                 zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
                 for a, (k, s) in enumerate(zip(keys, scales)):
                     deltas = [self._delta(s, j) for j in range(nd)]
-                    # a step from the value the model holds (the library's offset, if fitted)
-                    p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0) + deltas[j]
-                                                     for j in range(nd)})
-                    R = eng.R(p)
+                    for attempt in range(4):
+                        # a step from the value the model holds (the library's offset, if fitted)
+                        p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0)
+                                                         + deltas[j] for j in range(nd)})
+                        try:
+                            R = eng.R(p)
+                            break
+                        except ParameterError:
+                            # a joint that hardly moves (a step response): the step of a cubic per
+                            # its tiny spread leaves the core's range; the column is linear in the
+                            # coefficient, and a smaller step gives the same column
+                            if attempt == 3:
+                                raise
+                            deltas = [1e-3 * d for d in deltas]
                     cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
                     if zs is not None:
                         ref = self.pipe.reference_effort({**shape, **{self.name(j, k): deltas[j] for j in range(nd)}})
