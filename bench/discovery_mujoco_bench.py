@@ -123,7 +123,7 @@ def draw(kind, rng, mo, home):
 #: the coefficient each kind is measured by (core key suffix), and the structure it needs
 MEASURE = {"constant_force": ("c",), "ripple": ("amplitude", "period"), "spring": ("k1", "q0"), "drag": ("v2",),
            "direction_coulomb": ("larger",), "one_way_damper": ("vpos",), "hardening_spring": ("k3",),
-           "detent": ("step",)}
+           "detent": ("step", "step_w")}
 NEEDS = {"constant_force": {"offset"}, "ripple": {"force_sin", "force_cos"}, "spring": {"force_k1"},
          "drag": {"force_v2"}, "one_way_damper": {"force_vpos"}, "hardening_spring": {"force_k3"},
          "detent": {"force_step"}}
@@ -134,12 +134,16 @@ def _found_values(term, j):
     pre = f"rail[{j}]."
     co = {p[len(pre):]: c for p, c in term.coefficients.items()}
     sh = {p[len(pre):]: v for p, v in term.shape.items()}
+    sh_ci = {p[len(pre):]: v for p, v in term.shape_ci95.items()}  # the shape the fit moved
     # the discovered constant is the joint's offset parameter: measured as "c"
     out = {("c" if k == "offset" else k[len("force_"):]): (c.value, c.ci95) for k, c in co.items()}
     if "force_sin" in co:
         s, c = co["force_sin"], co["force_cos"]
         out["amplitude"] = (math.hypot(s.value, c.value), math.hypot(s.ci95, c.ci95))
-        out["period"] = (sh.get("force_period", float("nan")), None)
+        out["period"] = (sh.get("force_period", float("nan")), sh_ci.get("force_period"))
+    if "force_step" in co:
+        for k in ("step_q", "step_w"):
+            out[k] = (sh[f"force_{k}"], sh_ci.get(f"force_{k}"))
     if "force_k1" in co and co["force_k1"].value:
         c0 = co["offset"].value if "offset" in co else 0.0
         out["q0"] = (sh["force_qc"] - c0 / co["force_k1"].value, None)
@@ -189,7 +193,7 @@ def score(kind, truth, joints, d, mo):
                 hits.append(bool(abs(v - want[k]) <= ci))
         # every other hidden coefficient the term carries (the smaller Coulomb side)
         for k, (v, ci) in got.items():
-            if k in want and k not in meas and k not in ("qc", "period", "step_q", "step_w") and ci is not None:
+            if k in want and k not in meas and k != "qc" and ci is not None:
                 hits.append(bool(abs(v - want[k]) <= ci))
         before.append(t.heldout_before)
         after.append(t.heldout_after)

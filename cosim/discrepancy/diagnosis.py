@@ -660,6 +660,10 @@ def _discover(eng, sel, threshold):
 
 def _withdrawn_sentence(w) -> str:
     a, b = w["heldout_chi2_library"], w["heldout_chi2_discovered"]
+    if w.get("as_well"):  # put on trial with another effect: two effects where one force suffices
+        return (f"{w['title']}: with {' and '.join(t for t in w['together'] if t != w['title'])}, fits the held-out "
+                f"part as well as the one discovered force in their place (chi-square {a:.1f} with them, {b:.1f} "
+                f"with it: {w['gain']:.1f} +- {w['se']:.1f}, bar {w['bar']:.1f}), with no fewer coefficients")
     return (f"{w['title']}: fits the held-out part worse (chi-square {a:.1f} with it, {b:.1f} with the discovered "
             f"term in its place: {w['gain']:.1f} +- {w['se']:.1f}, bar {w['bar']:.1f})")
 
@@ -669,8 +673,13 @@ def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
         parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})" for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
-            head += ("; look-alike(s) of the library that fit the held-out part worse: "
-                     + ", ".join(w["title"] for w in withdrawn))
+            worse = [w["title"] for w in withdrawn if not w.get("as_well")]
+            same = [w["title"] for w in withdrawn if w.get("as_well")]
+            if worse:
+                head += "; look-alike(s) of the library that fit the held-out part worse: " + ", ".join(worse)
+            if same:
+                head += ("; look-alike(s) of the library that fit the held-out part as well, two effects for one "
+                         "force: " + ", ".join(same))
         if effects:
             head += "; and from the library: " + _conclusion(effects, not_excited, eng, sel)[len("missing physics: "):]
         return head

@@ -8,7 +8,9 @@ twice with opposite signs, and a coefficient the library has fitted on a channel
 searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
 direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
-spectrum over position, and a smooth step in position.  Each candidate column is a finite
+spectrum over position, and a smooth step in position (a selected step's position and width
+and a selected ripple's period are then fitted, with intervals from the fit linearised in
+them; the library's offset on the joint is refitted with the terms).  Each candidate column is a finite
 difference of the residual pipeline over its core parameter (the core evaluates the force;
 nothing here restates it), the columns of the rate terms get instruments (the same column
 along the reference motion, free of the rate noise), as the library's masses and viscous
@@ -29,7 +31,9 @@ significantly better (:func:`significant`: the held-out chi-square lower by more
 threshold a term pays to enter, look-elsewhere cost included, and by more than Z_ONE_SIDED
 standard errors of that difference over blocks of the held-out part); otherwise the library
 effect is named, because it carries a physics name, and the discovered terms are listed as
-a tie when they fit about as well.
+a tie when they fit about as well.  Two effects on a common channel then go on trial together
+(Coulomb friction and an offset are, while the joint moves, friction that differs by
+direction; a friction restated alone in place of two effects makes the other a stand-in).
 """
 from __future__ import annotations
 
@@ -38,6 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ParameterError
 from .effects import joint_prefix
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
@@ -100,12 +105,15 @@ N_BOOT, BLOCK = 30, 25
 @dataclass
 class Coefficient:
     """One fitted coefficient of a discovered term: core ``param``, ``value`` and ``ci95``
-    (half width of the 95 % interval) in ``unit``."""
+    (half width of the 95 % interval) in ``unit``, ``base`` the value the model held."""
 
     param: str
     value: float
     ci95: float
     unit: str
+    #: the value the model held before (the library's offset refitted with the term): the
+    #: term's force is ``value - base`` times the column on top of the model
+    base: float = 0.0
 
 
 @dataclass
@@ -133,6 +141,9 @@ class DiscoveredTerm:
     delta_chi2_heldout: float
     key_variable: str
     instead_of: list = field(default_factory=list)
+    #: 95 % half widths of the shape parameters the fit moves (a step's position and width, a
+    #: ripple's period), {core parameter: half width}
+    shape_ci95: dict = field(default_factory=dict)
     #: for the report's figure, on the decimated samples: ``key`` (the joint's position or
     #: rate), ``before`` / ``after`` (the channel's residual without / with the term)
     curve: dict = field(default_factory=dict, repr=False)
@@ -165,7 +176,11 @@ class Search:
         self.effort = eng.sc.effort
         self.period = np.array([_period(q[train, j], self._base_residual()[train, j], self.travel[j])
                                 for j in range(self.nd)])
+        self.periods = {0: self.period}  # per ripple option: the spectrum's, then periods fitted
         self.steps = _step_grid(q[train], self.travel)
+        #: (term, option) of shapes fitted off the grid: no candidates
+        self.off_grid = set()
+        self.q_range = (q[train].min(axis=0), q[train].max(axis=0))
         self.cols, self.instr = {}, {}
         self.w = np.zeros(self.nd)  # per channel: 1 / (own noise sqrt(samples per independent one))
         self._columns()
@@ -185,7 +200,7 @@ class Search:
             if k == "force_qc":
                 out[self.name(j, k)] = float(self.q_centre[j])
             elif k == "force_period":
-                out[self.name(j, k)] = float(self.period[j])
+                out[self.name(j, k)] = float(self.periods[option][j])
             elif k == "force_step_q":
                 out[self.name(j, k)] = float(self.steps[option][0][j])
             elif k == "force_step_w":
@@ -218,10 +233,20 @@ class Search:
                 zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
                 for a, (k, s) in enumerate(zip(keys, scales)):
                     deltas = [self._delta(s, j) for j in range(nd)]
-                    # a step from the value the model holds (the library's offset, if fitted)
-                    p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0) + deltas[j]
-                                                     for j in range(nd)})
-                    R = eng.R(p)
+                    for attempt in range(4):
+                        # a step from the value the model holds (the library's offset, if fitted)
+                        p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0)
+                                                         + deltas[j] for j in range(nd)})
+                        try:
+                            R = eng.R(p)
+                            break
+                        except ParameterError:
+                            # a joint that hardly moves (a step response): the step of a cubic per
+                            # its tiny spread leaves the core's range; the column is linear in the
+                            # coefficient, and a smaller step gives the same column
+                            if attempt == 3:
+                                raise
+                            deltas = [1e-3 * d for d in deltas]
                     cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
                     if zs is not None:
                         ref = self.pipe.reference_effort({**shape, **{self.name(j, k): deltas[j] for j in range(nd)}})
@@ -236,11 +261,46 @@ class Search:
                 self.instr[(f"{kind}_both", 0)] = np.concatenate([self.instr[p] for p in parts], axis=2)
 
     def candidates(self):
-        return list(self.cols)
+        """The grid's candidate terms (a step fitted off the grid is no candidate)."""
+        return [k for k in self.cols if k not in self.off_grid]
 
     def n_tried(self) -> int:
         """Candidate terms tried over all channels (the look-elsewhere count)."""
-        return max(1, len(self.cols) * len(self.channels))
+        return max(1, len(self.candidates()) * len(self.channels))
+
+    def column(self, c: int, key: str, scale: str, shape: dict) -> np.ndarray:
+        """The column (samples,) of coefficient ``key`` on joint c with the shape parameters
+        ``shape`` ({core name: value}): one pipeline evaluation."""
+        d = self._delta(scale, c)
+        p = dict(self.theta, **shape, **{self.name(c, key): self.theta.get(self.name(c, key), 0.0) + d})
+        return (self.eng.R(p)[:, c] - self._base_residual()[:, c]) / d
+
+    def add_ripple(self, c: int, period: float) -> int:
+        """A ripple on joint c of another period: its option number (no candidate)."""
+        ps = self.periods[0].copy()
+        ps[c] = period
+        o = max(self.periods) + 1
+        self.periods[o] = ps
+        self.off_grid.add(("ripple", o))
+        cols = self.cols[("ripple", 0)].copy()
+        sh = self.shape("ripple", c, o)
+        for a, (k, sc) in enumerate(zip(TERMS["ripple"][0], TERMS["ripple"][1])):
+            cols[:, c, a] = self.column(c, k, sc, sh)
+        self.cols[("ripple", o)] = cols
+        return o
+
+    def add_step(self, c: int, q: float, w: float) -> int:
+        """A step on joint c at position q, width w, off the grid: its option number (the
+        other joints' columns are those of the grid's first option; the option is no candidate)."""
+        qs, ws = (a.copy() for a in self.steps[0])
+        qs[c], ws[c] = q, w
+        self.steps.append((qs, ws))
+        o = len(self.steps) - 1
+        self.off_grid.add(("step", o))
+        cols = self.cols[("step", 0)].copy()
+        cols[:, c, 0] = self.column(c, "force_step", "1", self.shape("step", c, o))
+        self.cols[("step", o)] = cols
+        return o
 
 
 def _period(q, r, travel):
@@ -332,20 +392,34 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
     return _Fit(list(terms), coef, chi2, cov, z95, A @ (Zc.T @ Zc) @ A.T)
 
 
-def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None):
+#: terms that span a constant while the joint moves: the library's offset is not refitted beside them
+SPAN_CONSTANT = ("constant", "coulomb_pos", "coulomb_neg", "coulomb_both")
+
+
+def offset_refit(search, c, held, terms) -> list:
+    """``[("constant", 0)]`` when the library's offset held on joint c (in ``held``) is
+    refitted beside ``terms`` (none of them spans a constant while the joint moves), else []."""
+    if search.name(c, "offset") in held and not any(t in SPAN_CONSTANT for t, _ in terms):
+        return [("constant", 0)]
+    return []
+
+
+def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None, held=None):
     """Forward selection (then backward elimination) of terms for channel c by BIC in
     effective samples: a term enters when it lowers chi2 + k log N_eff by more than
     ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
     boolean mask or an index array (a bootstrap resample); ``fixed``: coefficient keys the
     model already fits on this channel (the library's offset), not searched; ``floor``: the
     smallest value of each dissipative coefficient (default 0; minus the library's level of the
-    friction it adds to, :data:`ADDS_TO`).  Returns the terms."""
+    friction it adds to, :data:`ADDS_TO`); ``held``: the model's parameters, whose offset on
+    this joint is refitted beside the terms (:func:`offset_refit`), so that no term enters as
+    a stand-in for the offset's share of them.  Returns the terms."""
     floor = floor or {}
     logn = math.log(max(n_eff, 2.0))
     gram = _Gram(search, c, y, rows)
 
     def chi2_of(terms):
-        c2, coef = gram.fit(terms)
+        c2, coef = gram.fit(terms + offset_refit(search, c, held or {}, terms))
         keys = [k for t, _ in terms for k in TERMS[t][0]]
         # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
         # opposite signs is a constant force while moving), refused as the library refuses
@@ -431,18 +505,20 @@ def _ls_fit(search, c, y, terms, rows):
     return float(e @ e), coef
 
 
-def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=frozenset(), floor=None):
+def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=frozenset(), floor=None, refit=(),
+              held=None):
     """Share of block-bootstrap resamples whose stepwise selection picks each of ``terms``,
-    and the spread (standard deviation) of the coefficients of ``terms`` over them."""
+    and the spread (standard deviation) of the coefficients of ``terms`` and ``refit`` (terms
+    fitted with them, not selected) over them."""
     rng = np.random.default_rng(seed + 7 * c)
     hits = {t: 0 for t in terms}
     coefs = []
     for _ in range(N_BOOT):
         pick = _blocks(rows, rng)
-        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff, fixed, floor)
+        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff, fixed, floor, held)
         for t in terms:
             hits[t] += any(set(TERMS[u[0]][0]) & set(TERMS[t[0]][0]) for u in chosen)
-        coefs.append(_ls_fit(search, c, y, terms, pick)[1])
+        coefs.append(_ls_fit(search, c, y, list(terms) + list(refit), pick)[1])
     spread = np.std(np.array(coefs), axis=0) if terms else np.zeros(0)
     return {t: hits[t] / N_BOOT for t in terms}, spread
 
@@ -480,7 +556,7 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
         if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
             break
         search.w[c] = 1.0 / (sigma * math.sqrt(phi))
-        terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor)
+        terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))
@@ -498,7 +574,18 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     # the cheap held-out check first, then the bootstrap's stability
     if not terms or not heldout(terms)[1] > threshold:
         return None
-    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor)
+    # The library's offset on this joint is refitted with the terms: fitted before them, it
+    # took the part of their force the recording's mean leaves (a spring's force at the mean
+    # position: its rest position would be missed).  Not beside Coulomb friction split by
+    # direction: while the joint moves the two levels span the constant already.
+    refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
+    fitted = _fit_period(search, c, y, _fit_step(search, c, y, terms, train), train)
+    if fitted != terms:
+        # the terms that stood in for the step's misplaced edge go again (the backward pass
+        # of the selection, on the fitted step)
+        terms = _backward(search, c, y, fitted, train, thr, n_eff)
+    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                             refit=refit(terms), held=held)
     # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
     # constant and a step at the end of the stroke) split the resamples' votes between them.
     full = heldout(terms)[1]
@@ -507,7 +594,17 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
         return None
     if kept != terms:
         terms = kept
-        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor)
+        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                              refit=refit(terms), held=held)
+    extra = refit(terms)
+    if extra:
+        # terms that stood in for the offset's part (a step at the end of the stroke) leave
+        pruned = _backward(search, c, y, terms, train, thr, n_eff, keep=extra)
+        if pruned != terms:
+            terms = pruned
+            _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                                  refit=extra, held=held)
+    terms = terms + extra
     f, d_held = heldout(terms)
     if not d_held > threshold:
         return None
@@ -521,7 +618,130 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
     yt = y[test]
     Xraw = np.concatenate([search.cols[t][test, c, :] for t in terms], axis=1)
-    return _term(search, c, terms, f.coef, half, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held)
+    base = {search.name(c, "offset"): float(held[search.name(c, "offset")])} if extra else {}
+    term = _term(search, c, terms, f.coef, half, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held, base=base,
+                 shape_ci95=_shape_intervals(search, c, y, terms, f.coef, train, s2))
+    return term
+
+
+def _fit_step(search, c, y, terms, rows):
+    """The step of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
+    fitted part's chi-square, every other term refitted with it, from the grid's step; the
+    width kept within 2-100 % of the joint's position spread, the position within its range):
+    ``terms`` with the step's option replaced by the fitted one."""
+    from scipy.optimize import minimize
+
+    k = next((i for i, (t, _) in enumerate(terms) if t == "step"), None)
+    if k is None:
+        return terms
+    qs, ws = search.steps[terms[k][1]]
+    q0, w0 = float(qs[c]), float(ws[c])
+    lo, hi = float(search.q_range[0][c]), float(search.q_range[1][c])
+    T = float(search.travel[c])
+    tried = {}
+
+    def at(x):
+        q, w = q0 + x[0] * w0, w0 * math.exp(x[1])
+        if not (lo <= q <= hi and 0.02 * T <= w <= T):
+            return math.inf, None
+        o = search.add_step(c, q, w)
+        chi2 = _ls_fit(search, c, y, terms[:k] + [("step", o)] + terms[k + 1:], rows)[0]
+        tried[o] = chi2
+        return chi2, o
+
+    r = minimize(lambda x: at(x)[0], np.zeros(2), method="Nelder-Mead",
+                 options={"initial_simplex": [[0, 0], [0.5, 0], [0, 0.5]], "xatol": 0.01, "fatol": 0.1,
+                          "maxfev": 40})
+    best = min(tried, key=tried.get, default=None)
+    start = _ls_fit(search, c, y, terms, rows)[0]
+    if best is None or not tried[best] < start or not np.isfinite(r.fun):
+        return terms
+    return terms[:k] + [("step", best)] + terms[k + 1:]
+
+
+def _fit_period(search, c, y, terms, rows):
+    """The ripple of ``terms`` (if any) with its period fitted (bounded scalar minimisation of
+    the fitted part's chi-square within +-3 % of the spectrum's period, the other terms
+    refitted with it)."""
+    from scipy.optimize import minimize_scalar
+
+    k = next((i for i, (t, _) in enumerate(terms) if t == "ripple"), None)
+    if k is None:
+        return terms
+    P0 = float(search.periods[terms[k][1]][c])
+    if not P0 > 0:
+        return terms
+    tried = {}
+
+    def at(x):
+        o = search.add_ripple(c, P0 * (1.0 + x))
+        tried[o] = _ls_fit(search, c, y, terms[:k] + [("ripple", o)] + terms[k + 1:], rows)[0]
+        return tried[o]
+
+    minimize_scalar(at, bounds=(-0.03, 0.03), method="bounded", options={"xatol": 2e-4, "maxiter": 10})
+    best = min(tried, key=tried.get, default=None)
+    if best is None or not tried[best] < _ls_fit(search, c, y, terms, rows)[0]:
+        return terms
+    return terms[:k] + [("ripple", best)] + terms[k + 1:]
+
+
+def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):
+    """The backward pass of :func:`stepwise` on ``terms`` (least squares, with the terms
+    ``keep`` fitted beside them): a term leaves when the others without it lose no more than
+    ``threshold`` plus its BIC price."""
+    logn = math.log(max(n_eff, 2.0))
+    keep = list(keep)
+    chi2 = _ls_fit(search, c, y, terms + keep, rows)[0]
+    for t in list(terms):
+        rest = [u for u in terms if u != t]
+        if not rest:
+            break
+        c2 = _ls_fit(search, c, y, rest + keep, rows)[0]
+        if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
+            terms, chi2 = rest, c2
+    return terms
+
+
+def _shape_intervals(search, c, y, terms, coef, rows, s2):
+    """95 % half widths of the shape parameters a fit moves (a step's position and width, a
+    ripple's period), from the fit linearised in them: the derivative of the term's force over
+    each shape parameter (central differences of the pipeline's columns) as one more column
+    beside the terms' own; the wider of the classical (s^2 >= 1) and the HAC interval."""
+    out, extra = {}, []
+    i = 0
+    for t, o in terms:
+        n = len(TERMS[t][0])
+        a = coef[i:i + n]
+        i += n
+        shape = search.shape(t, c, o)
+        if t == "step":
+            keys = ("force_step_q", "force_step_w")
+        elif t == "ripple":
+            keys = ("force_period",)
+        else:
+            continue
+        for key in keys:
+            name = search.name(c, key)
+            v = shape[name]
+            h = 1e-3 * (search.travel[c] if key != "force_period" else v)
+            force = []
+            for sgn in (1, -1):
+                sh = dict(shape, **{name: v + sgn * h})
+                force.append(sum(a[b] * search.column(c, k2, sc, sh)
+                                 for b, (k2, sc) in enumerate(zip(TERMS[t][0], TERMS[t][1]))))
+            extra.append((name, (force[0] - force[1]) / (2 * h)))
+    if not extra:
+        return out
+    w = search.w[c] * search.eng.use[rows, c]
+    X = np.concatenate([search.cols[u][rows, c, :] for u in terms] + [d[rows, None] for _, d in extra], axis=1)
+    X = X * w[:, None]
+    e = y[rows] * w + X[:, :len(coef)] @ coef
+    cov_c = np.linalg.pinv(X.T @ X) * s2
+    cov_h, z95 = hac_covariance(X, e)
+    for j, (name, _) in enumerate(extra):
+        jj = len(coef) + j
+        out[name] = float(max(1.96 * math.sqrt(max(cov_c[jj, jj], 0.0)), z95 * math.sqrt(max(cov_h[jj, jj], 0.0))))
+    return out
 
 
 def _units(search):
@@ -529,7 +749,11 @@ def _units(search):
     return facts.effort_unit, facts.joint_unit
 
 
-def _term(search, c, terms, coef, half, stab, before, after, d_held) -> DiscoveredTerm:
+def _term(search, c, terms, coef, half, stab, before, after, d_held, base=None, shape_ci95=None) -> DiscoveredTerm:
+    """The :class:`DiscoveredTerm` of ``terms`` fitted on channel c; ``base``: {core parameter:
+    the value the model held} of coefficients refitted with the terms (their coefficient is
+    the held value plus the fitted step)."""
+    base = base or {}
     F, Q = _units(search)
     units = {p.name: p.unit for p in search.eng.model.param_info()}
     coefs, shape = {}, {}
@@ -538,13 +762,16 @@ def _term(search, c, terms, coef, half, stab, before, after, d_held) -> Discover
         shape.update(search.shape(t, c, o))
         for k in TERMS[t][0]:
             p = search.name(c, k)
-            coefs[p] = Coefficient(p, float(coef[i]), float(half[i]), units.get(p, ""))
+            b = base.get(p, 0.0)
+            coefs[p] = Coefficient(p, b + float(coef[i]), float(half[i]), units.get(p, ""), b)
             i += 1
     names = [t for t, _ in terms]
-    eq = equation(names, coefs, shape, search, c)
+    eq = equation(names, coefs, shape, search, c, shape_ci95 or {})
     kinds = []
-    # a constant beside a spring is the spring's rest position, no force of its own
-    for t in [n for n in names if not (n == "constant" and "spring" in names)]:
+    # a constant beside a spring is the spring's rest position, no force of its own; a
+    # refitted offset is the library's
+    refitted = {search.name(c, "offset")} & set(base)
+    for t in [n for n in names if not (n == "constant" and ("spring" in names or refitted))]:
         kind = t.split("_")[0]
         if kind not in kinds:
             kinds.append(kind)
@@ -553,7 +780,8 @@ def _term(search, c, terms, coef, half, stab, before, after, d_held) -> Discover
     key = _key_variable(names)
     noun = search.eng.model.facts.joint_noun
     return DiscoveredTerm(c + 1, search.pipe.channels[c], names, f"{noun} {c + 1}: {eq}", coefs, shape,
-                          mech, {t: stab[(t, o)] for t, o in terms}, before, after, d_held, key)
+                          mech, {t: stab[(t, o)] for t, o in terms if (t, o) in stab}, before, after, d_held, key,
+                          shape_ci95=dict(shape_ci95 or {}))
 
 
 def _key_variable(names):
@@ -570,9 +798,14 @@ def _pm(v, ci, unit, digits=3):
     return f"({v:.{digits}g} +- {ci:.2g}){u}"
 
 
-def equation(names, coefs, shape, search, c) -> str:
+def equation(names, coefs, shape, search, c, shape_ci95=None) -> str:
     """F = ... with units and intervals; a spring with a constant as k (q - q0)."""
     F, Q = _units(search)
+    shape_ci95 = shape_ci95 or {}
+
+    def sh(key, digits):  # a shape parameter, with its interval when the fit moved it
+        v, ci = shape[search.name(c, key)], shape_ci95.get(search.name(c, key))
+        return f"{v:.{digits}g} {Q}" if ci is None else f"({v:.{digits}g} +- {ci:.2g}) {Q}"
     get = lambda k: coefs.get(search.name(c, k))  # noqa: E731
     parts = []
     qc = shape.get(search.name(c, "force_qc"))
@@ -595,15 +828,13 @@ def equation(names, coefs, shape, search, c) -> str:
             parts.append(f"{_pm(e.value, e.ci95, e.unit)} " + fmt.format(qc=qc or 0.0, Q=Q))
     s, co = get("force_sin"), get("force_cos")
     if s is not None:
-        P = shape[search.name(c, "force_period")]
         amp = math.hypot(s.value, co.value)
         damp = math.hypot(s.ci95, co.ci95)
         phase = math.atan2(co.value, s.value)
-        parts.append(f"({amp:.3g} +- {damp:.2g}) {F} sin(2 pi q / {P:.4g} {Q} + {phase:.2f})")
+        parts.append(f"({amp:.3g} +- {damp:.2g}) {F} sin(2 pi q / {sh('force_period', 4)} + {phase:.2f})")
     st = get("force_step")
     if st is not None:
-        parts.append(f"{_pm(st.value, st.ci95, st.unit)} tanh((q - {shape[search.name(c, 'force_step_q')]:.5g} {Q}) / "
-                     f"{shape[search.name(c, 'force_step_w')]:.3g} {Q})")
+        parts.append(f"{_pm(st.value, st.ci95, st.unit)} tanh((q - {sh('force_step_q', 5)}) / {sh('force_step_w', 3)})")
     return "F = " + " + ".join(parts)
 
 
@@ -655,12 +886,15 @@ def _with_terms(R, search, terms, rows=slice(None)):
             cols = search.cols[(name, opt)]
             for a in range(cols.shape[2]):
                 p = list(t.coefficients.values())[i]
-                R[:, c] += cols[:, c, a] * p.value
+                R[:, c] += cols[:, c, a] * (p.value - p.base)
                 i += 1
     return R
 
 
 def _option(search, t, name):
+    if name == "ripple":
+        P = t.shape[search.name(t.joint - 1, "force_period")]
+        return next((o for o, ps in search.periods.items() if ps[t.joint - 1] == P), 0)
     if name != "step":
         return 0
     q = t.shape[search.name(t.joint - 1, "force_step_q")]
@@ -700,6 +934,7 @@ def judge_library(eng, sel, threshold: float):
     search = Search(eng, theta)
     bar = threshold + 2.0 * math.log(search.n_tried())
     withdrawn, ties = [], []
+    acting = []  # (selected group, the channels it acts on), in the order put on trial
     confirmed = {}  # channel -> library frictions that the terms in their place restated
 
     def discover_all(R, chans, th, asymmetry=None):
@@ -723,6 +958,7 @@ def judge_library(eng, sel, threshold: float):
                  if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
         if not chans:
             continue
+        acting.append((a, chans))
         in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
         if not in_place or all(library_named(t) for t in in_place):
             continue
@@ -753,6 +989,64 @@ def judge_library(eng, sel, threshold: float):
             # not told apart on the held-out part: the library effect is named, not with confidence
             ties.append({"group": g.label, "terms": [t.equation for t in in_place], "extra_params": k_B - k_A,
                          **figures})
+    # Two library effects on one channel may be one force the search names: Coulomb friction and
+    # an offset are, while the joint moves, friction that differs by direction.  Alone on trial,
+    # each lost to nothing (with the offset kept, the pair in Coulomb's place restated Coulomb);
+    # they go on trial together against the terms discovered in their joint place.
+    for (a1, ch1), (a2, ch2) in _pairs(acting):
+        g1, g2 = a1.group, a2.group
+        if not all(p in theta for p in (*g1.params, *g2.params)):
+            continue  # one of them was withdrawn already
+        th_minus = {k: v for k, v in theta.items() if k not in g1.params and k not in g2.params}
+        chans = sorted(set(ch1) | set(ch2))
+        R_minus = eng.R(th_minus)
+        in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
+        if not in_place or any(library_named(t) for t in in_place):
+            continue
+        # both frictions restated (split by direction, every level positive): they are named,
+        # their asymmetry searched on top, as alone on trial
+        if all(any(restates(t, g.key) for t in in_place) for g in (g1, g2)):
+            continue
+        # one of them restated alone (equal levels): the terms in place of both need only it,
+        # and the other one stands on trial against them
+        alone = [g for g in (g1, g2) if any(restates(t, g.key, distinct=True) for t in in_place)]
+        other = [g for g in (g1, g2) if g not in alone]
+        # the library's side as it would stay: with the asymmetry of the frictions the terms
+        # in their place restated (searched on top of them)
+        on_top = [t for t in discover_all(R_lib, chans, theta, asymmetry=confirmed).values() if t is not None]
+        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
+        A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
+        k_A = (len(g1.params) + len(g2.params) - 2
+               + _rank(search, [R_lib - eng.R({k: v for k, v in theta.items() if k not in g.params})
+                                for g in (g1, g2)], on_top, chans))
+        k_B = _rank(search, [], in_place, chans)
+        better, gain, se = significant(search, R_A, R_B, chans, bar)
+        figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se,
+                   "bar": bar, "coefficients": [k_A, k_B]}
+        as_well = -gain <= max(bar, Z_ONE_SIDED * se)
+        if alone:
+            # the other effect may be a stand-in the discovered terms do without: when they fit
+            # as well with no more free coefficients, it is tied (not named with confidence), and
+            # so is the restated one, whose level was fitted with the stand-in's share
+            if k_B <= k_A and as_well:
+                for g in (g1, g2):
+                    if not any(t["group"] == g.label for t in ties):
+                        ties.append({"group": g.label, "terms": [t.equation for t in in_place],
+                                     "extra_params": k_B - k_A, **figures})
+            continue
+        # one force for two effects whose sum is, while the joint moves, a term of the search
+        # (:data:`ONE_FORCE`), with no more free coefficients and a held-out fit not worse
+        # beyond the bar or its uncertainty: the simpler account is the one force (the two
+        # effects are listed as look-alikes that fit as well, not named)
+        if {g1.key, g2.key} in ONE_FORCE and (better or (k_B <= k_A and as_well)):
+            figures.update(together=[g1.title, g2.title], as_well=not better)
+            for g in (g1, g2):
+                withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                                  "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                                  "replaced_by": [t.channel for t in in_place], **figures})
+            ties[:] = [t for t in ties if t["group"] not in (g1.label, g2.label)]
+            theta, R_lib = th_minus, R_minus
+            base.update(discover_all(R_lib, chans, theta))
     # On the library model that stays, a direction-split friction may now be the asymmetry of a
     # library friction that the terms in its place restated (on trial each level had to be a
     # friction of its own, so that the library effect stood against the discovered terms alone;
@@ -760,6 +1054,11 @@ def judge_library(eng, sel, threshold: float):
     again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
     base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
     return theta, withdrawn, ties, search, base
+
+
+def _pairs(acting):
+    """Pairs of library effects on trial that act on a common channel, in trial order."""
+    return [(x, y) for i, x in enumerate(acting) for y in acting[i + 1:] if set(x[1]) & set(y[1])]
 
 
 def _rank(search, extra, terms, chans) -> int:
@@ -793,15 +1092,24 @@ def library_named(term: DiscoveredTerm) -> bool:
 
 
 
+#: pairs of library effects that are, while the joint moves, one term of the search: Coulomb
+#: friction (or one fading at low speed) and a constant offset are friction that differs by
+#: direction (the levels' mean and half their difference); so is a dead zone in the offset's
+#: place, a constant force where the joint's command keeps one sign
+ONE_FORCE = tuple({f, c} for f in ("coulomb", "smooth_coulomb") for c in ("offset", "dead_zone"))
+
 #: the coefficient keys of the direction-split pair of a library friction
 _PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
 
 
-def restates(term: DiscoveredTerm, key: str) -> bool:
+def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
     """The discovered term holds the library effect ``key``: Coulomb (viscous) friction split
     by direction with both levels positive beyond their intervals, i.e. the library's friction
     (the levels' mean) and an asymmetry (their difference; none when they are equal within
-    their intervals).  A level for one direction only (a one-way damper) is no such friction."""
+    their intervals).  A level for one direction only (a one-way damper) is no such friction.
+    ``distinct``: the term restates the effect alone, with nothing besides: the two levels
+    equal within their intervals (then the pair is the library's friction, not friction that
+    differs by direction)."""
     if key not in _PAIR_KEYS:
         return False
     pos = neg = None
@@ -811,4 +1119,7 @@ def restates(term: DiscoveredTerm, key: str) -> bool:
             pos = c
         elif k == _PAIR_KEYS[key][1]:
             neg = c
-    return pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95
+    both = pos is not None and neg is not None and pos.value > pos.ci95 and neg.value > neg.ci95
+    if distinct:
+        return both and abs(pos.value - neg.value) <= math.hypot(pos.ci95, neg.ci95)
+    return both

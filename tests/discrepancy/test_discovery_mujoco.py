@@ -1,6 +1,6 @@
 """The discovery step on recordings MuJoCo made of the 6-PUS with a force no library lists.
 
-Two cases of bench/discovery_mujoco_bench.py (which runs eight kinds of hidden force, two
+Three cases of bench/discovery_mujoco_bench.py (which runs eight kinds of hidden force, two
 seeds each, and clean runs): the force is computed at every MuJoCo step from the rail's true
 position and rate and applied to the rail's joint, so neither the core nor its joint force
 makes it.  The recording is diagnosed blind with the default settings; the truth is compared
@@ -25,10 +25,10 @@ from cosim.discrepancy import blind, diagnose  # noqa: E402
 @pytest.mark.parametrize("kind, seed, coefficient", [
     ("spring", 41, "force_k1"),             # a spring towards the home stroke on one rail
     # friction of another level in each direction: while the rail moves it is the library's Coulomb
-    # friction (the mean level) plus a constant offset (half the difference), and both are named
-    pytest.param("direction_coulomb", 42, None, marks=pytest.mark.xfail(
-        strict=True, reason="named as Coulomb friction with confidence plus an offset: each library group is put "
-                            "on trial alone, and with the offset kept the discovered pair restates Coulomb")),
+    # friction (the mean level) plus a constant offset (half the difference); the two go on trial
+    # together against the one discovered force
+    ("direction_coulomb", 42, None),
+    ("detent", 43, "force_step"),           # a smooth step at a place and width off the search's grid
 ])
 def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed, coefficient):
     m = Model("6pus")
@@ -54,6 +54,11 @@ def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed,
     for e in d.effects:
         assert d.ties(e["key"]), (e["title"], d.conclusion)
     assert "missing physics no library effect names" in d.conclusion
+    if kind == "detent":  # the step's place and width are fitted: the truth inside their stated intervals
+        for k in ("force_step_q", "force_step_w"):
+            name = f"rail[{j}].{k}"
+            assert abs(term.shape[name] - truth[name]) <= term.shape_ci95[name], (k, term.equation, truth)
+        assert abs(term.shape[f"rail[{j}].force_step_w"] / truth[f"rail[{j}].force_step_w"] - 1) < 0.15, term.equation
     if kind == "spring":  # the rest position is home
         c0 = got["offset"].value if "offset" in got else 0.0
         q0 = term.shape[f"rail[{j}].force_qc"] - c0 / got["force_k1"].value
