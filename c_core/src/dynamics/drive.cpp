@@ -184,9 +184,14 @@ void add_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, c
 
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
                             double* tau) {
+  m->robot->inverse_dynamics(*m->compiled, *d->rd, x, xd, xdd, tau);
+  add_drive_inverse_dynamics(m, d, x, xd, xdd, tau);
+}
+
+void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau) {
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
-  m->robot->inverse_dynamics(rm, *d->rd, x, xd, xdd, tau);
   add_joint_force(m, dp, d, x, xd, 1.0, tau);
   if (!dp.any_friction && !dp.any_rotor) return;
   const int n = d->ndof;

@@ -94,6 +94,11 @@ double transmitted_effort(const Params& p, int i, double delta, double delta_dot
 // validated; d prepared.  Throw Error like the robot functions.
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* xdd, double* tau);
+// tau += the drive layer's part of total_inverse_dynamics (generic joint force and offset,
+// friction, rotor inertia), in the order total_inverse_dynamics adds them: the robot's
+// inverse dynamics followed by this is total_inverse_dynamics bit for bit.
+void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* tau, double* xdd);
 // The same with the drive parameters dp instead of the model's (pkm_sim: the carriage side).
