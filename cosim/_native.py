@@ -201,6 +201,7 @@ _SIGNATURES = {
     "pkm_inverse_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
     "pkm_mechanism_inverse_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
     "pkm_add_drive_inverse_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
+    "pkm_add_drive_efforts_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
     "pkm_forward_dynamics": (I, [P, P, D, D, D, D]),
     "pkm_forward_dynamics_batch": (I, [P, P, S, D, D, D, D, c_int_p]),
     "pkm_mass_matrix": (I, [P, P, D, D]),

@@ -518,15 +518,24 @@ class Model:
         (``pkm_add_drive_inverse_dynamics_batch``).  With ``mechanism`` from
         :meth:`mechanism_inverse_dynamics` of a model with the same mechanism parameters, the
         result is :meth:`inverse_dynamics` bit for bit."""
-        arrs = [np.ascontiguousarray(self._arr(a, n).reshape(-1, self.ndof))
-                for a, n in ((x, "x"), (xd, "xd"), (xdd, "xdd"))]
+        return self._add_to(lib.pkm_add_drive_inverse_dynamics_batch, (x, xd, xdd), ("x", "xd", "xdd"), mechanism)
+
+    def add_drive_efforts(self, q, qd, qdd, mechanism):
+        """:meth:`add_drive_inverse_dynamics` from the joint motion at the poses: ``q`` =
+        :meth:`ik` [m or rad], ``qd`` = :meth:`joint_velocity`, ``qdd`` = :meth:`joint_acceleration`
+        (``pkm_add_drive_efforts_batch``), for several drive layers added along one motion: the
+        same result bit for bit."""
+        return self._add_to(lib.pkm_add_drive_efforts_batch, (q, qd, qdd), ("q", "qd", "qdd"), mechanism)
+
+    def _add_to(self, fn, inputs, names, mechanism):
+        arrs = [np.ascontiguousarray(self._arr(a, n).reshape(-1, self.ndof)) for a, n in zip(inputs, names)]
         tau = np.array(self._arr(mechanism, "mechanism"), dtype=np.float64, order="C").reshape(-1, self.ndof)
         if len({len(a) for a in arrs + [tau]}) != 1:
-            raise ArgumentError(f"x, xd, xdd and mechanism must have the same number of rows, got "
+            raise ArgumentError(f"{', '.join(names)} and mechanism must have the same number of rows, got "
                                 f"{[len(a) for a in arrs + [tau]]}", "PKM_ERR_ARGUMENT")
         status = np.zeros(len(tau), dtype=np.intc)
-        self._check(lib.pkm_add_drive_inverse_dynamics_batch(self._m, self._d, len(tau), *[ptr(a) for a in arrs],
-                                                             ptr(tau), status.ctypes.data_as(C.POINTER(C.c_int))))
+        self._check(fn(self._m, self._d, len(tau), *[ptr(a) for a in arrs], ptr(tau),
+                       status.ctypes.data_as(C.POINTER(C.c_int))))
         return tau
 
     def drive_layer_params(self) -> frozenset:

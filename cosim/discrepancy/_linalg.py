@@ -4,7 +4,9 @@
 converting its arguments (about 60 us against 20 us for LAPACK's ``gelsd`` itself, measured
 on the engine's Gram matrices).  :func:`small_lstsq` calls the same LAPACK routine through
 the same numpy kernel, with the same cut-off of small singular values, so its solution is
-numpy's bit for bit (``tests/discrepancy/test_small_lstsq.py``), for float64 arrays only.
+numpy's bit for bit (``tests/discrepancy/test_small_lstsq.py``), for float64 arrays only; where
+LAPACK fails (a NaN in the system) it raises numpy's ``LinAlgError`` too, after numpy's
+floating-point warning.
 """
 from __future__ import annotations
 
@@ -38,11 +40,9 @@ def small_lstsq(a, b):
     array([0.5 , 0.25])
     """
     m, n = a.shape
-    if (_umath_linalg is None or a.dtype != np.float64 or b.dtype != np.float64 or m == 0 or n == 0
-            or not math.isfinite(a.sum() + b.sum())):  # numpy's own path: its checks, its LinAlgError
+    if _umath_linalg is None or a.dtype != np.float64 or b.dtype != np.float64 or m == 0 or n == 0:
         return np.linalg.lstsq(a, b, rcond=None)[0]
-    with np.errstate(all="ignore"):  # a failed SVD gives NaN, refused below
-        x = _umath_linalg.lstsq(a, b[:, None], _EPS * max(m, n), signature="ddd->ddid")[0][:, 0]
-    if not math.isfinite(x.sum()):
+    x = _umath_linalg.lstsq(a, b[:, None], _EPS * max(m, n), signature="ddd->ddid")[0][:, 0]
+    if not math.isfinite(x @ x):  # LAPACK failed (a non-finite input): numpy's path and its LinAlgError
         return np.linalg.lstsq(a, b, rcond=None)[0]
     return x

@@ -322,7 +322,11 @@ class Pipeline:
         (the model's parameters that differ from the nominal ones)."""
         mech = tuple(sorted((k, v) for k, v in params if k not in self._drive_params))
         M = self._cached(("M", motion, mech), lambda: m.mechanism_inverse_dynamics(x, xd, xdd))
-        return m.add_drive_inverse_dynamics(x, xd, xdd, M)
+        if mech:
+            return m.add_drive_inverse_dynamics(x, xd, xdd, M)
+        # the nominal mechanism's joint motion along this motion, for every drive layer tried on it
+        J = self._cached(("J", motion), lambda: (m.ik(x), m.joint_velocity(x, xd), m.joint_acceleration(x, xd, xdd)))
+        return m.add_drive_efforts(*J, M)
 
     def delay_signature(self, name: str, d: float, positions=None):
         """Change of the effort residual for a delay ``d`` [s] of ``name``

@@ -1,5 +1,5 @@
 """The inverse dynamics in its two layers (``pkm_mechanism_inverse_dynamics_batch``,
-``pkm_add_drive_inverse_dynamics_batch``, ``pkm_param_in_drive_layer``): the drive layer added
+``pkm_add_drive_inverse_dynamics_batch``, ``pkm_add_drive_efforts_batch``, ``pkm_param_in_drive_layer``): the drive layer added
 to the mechanism's efforts is the whole inverse dynamics bit for bit, no drive-layer parameter
 moves the mechanism's part, and the drive layer's part of a viscous friction is b qd."""
 import numpy as np
@@ -28,6 +28,8 @@ def test_drive_layer_on_the_mechanism_is_the_inverse_dynamics_bit_for_bit(robot)
     x, xd, xdd = _motion(m)
     mech = m.mechanism_inverse_dynamics(x, xd, xdd)
     assert np.array_equal(m.add_drive_inverse_dynamics(x, xd, xdd, mech), m.inverse_dynamics(x, xd, xdd))
+    joints = m.ik(x), m.joint_velocity(x, xd), m.joint_acceleration(x, xd, xdd)
+    assert np.array_equal(m.add_drive_efforts(*joints, mech), m.inverse_dynamics(x, xd, xdd))
     assert not np.array_equal(mech, m.inverse_dynamics(x, xd, xdd))
 
 
@@ -77,6 +79,8 @@ def test_bad_inputs_of_the_drive_layer_are_named():
     x, xd, xdd = _motion(m, n=10)
     with pytest.raises(ArgumentError, match="same number of rows"):
         m.add_drive_inverse_dynamics(x, xd, xdd, np.zeros((9, 6)))
+    with pytest.raises(PkmError, match=r"item 2: joint velocity qd\[0\] is not finite"):
+        m.add_drive_efforts(m.ik(x), np.where(np.arange(10)[:, None] == 2, np.inf, xd), xdd, np.zeros((10, 6)))
     mech = np.zeros((10, 6))
     mech[4, 1] = np.nan
     with pytest.raises(PkmError, match=r"item 4: mechanism effort tau\[1\] is not finite"):

@@ -260,15 +260,21 @@ PKM_API int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n
  *     (pkm_param_in_drive_layer);
  *   pkm_add_drive_inverse_dynamics_batch: tau[n,nd] += the drive layer's efforts (the joint
  *     force and offset, friction, rotor inertia) at the same (x, xd, xdd), in place.
- * The second applied to the first's output is pkm_inverse_dynamics_batch bit for bit.
+ *   pkm_add_drive_efforts_batch: the same sum from the joint motion at those poses,
+ *     q[n,nd] = pkm_ik (m, rad), qd[n,nd] = pkm_joint_velocity (m/s, rad/s), qdd[n,nd] =
+ *     pkm_joint_acceleration (m/s2, rad/s2), for a caller that adds several drive layers
+ *     along one motion (q is read only with a joint force, qdd only with rotor inertia).
+ * Either adder applied to the first's output is pkm_inverse_dynamics_batch bit for bit.
  * Same shapes, units, status and NaN rows as pkm_inverse_dynamics_batch; a non-finite tau
- * row given to the second is refused for that row. */
+ * row given to an adder is refused for that row. */
 PKM_API int pkm_mechanism_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
                                                  const double* x, const double* xd,
                                                  const double* xdd, double* tau, int* status);
 PKM_API int pkm_add_drive_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
                                                  const double* x, const double* xd,
                                                  const double* xdd, double* tau, int* status);
+PKM_API int pkm_add_drive_efforts_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q,
+                                        const double* qd, const double* qdd, double* tau, int* status);
 /* Forward dynamics: xdd[nd] from (x, xd, tau). */
 PKM_API int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x,
                                  const double* xd, const double* tau, double* xdd);

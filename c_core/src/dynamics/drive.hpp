@@ -99,6 +99,10 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
 // inverse dynamics followed by this is total_inverse_dynamics bit for bit.
 void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                                 const double* xdd, double* tau);
+// The same from the joint motion at that pose: q = ik(x), qd = joint velocity, qdd = joint
+// acceleration (q unused without a joint force, qdd without rotor inertia).
+void add_drive_efforts(const drive::Params& dp, int n, const double* q, const double* qd, const double* qdd,
+                       double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* tau, double* xdd);
 // The same with the drive parameters dp instead of the model's (pkm_sim: the carriage side).
