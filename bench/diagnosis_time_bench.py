@@ -14,7 +14,9 @@ The cases (written once into ``--dir`` and reused; each is 10 s at 1 kHz):
 * ``6pus_clean``: the 6-PUS with nothing hidden (seed 7);
 * ``mujoco_spring``: MuJoCo's 6-PUS with a spring towards home on one rail, a force no library effect
   names (bench/discovery_mujoco_bench.py's generator, seed 1; left out with ``--no-mujoco`` or without
-  the ``mujoco`` package).
+  the ``mujoco`` package);
+* ``mujoco_backlash``: MuJoCo's 6-PUS with a 50 um backlash as two bodies (drive body, carriage, stiff
+  damped faces) on a rail whose effort changes sign (bench/foreign/mujoco_blind.py, seed 4).
 
 Each diagnosis runs in this process pinned to one core (``os.sched_setaffinity``; BLAS and OpenMP on
 one thread through the environment, set before numpy is imported), ``--repeat`` times; the medians of
@@ -66,7 +68,7 @@ OWN = {"6pus_library": ("6pus", ["coulomb", "payload"], 2024),
        "quattro_backlash": ("quattro", ["backlash"], 4),
        "quattro_dead_zone": ("quattro", ["dead_zone"], 3),
        "6pus_clean": ("6pus", [], 7)}
-MUJOCO = {"mujoco_spring": ("spring", 1)}
+MUJOCO = {"mujoco_spring": ("spring", 1), "mujoco_backlash": ("backlash", 4)}
 #: stage -> functions whose (outermost) time is the stage's, as "module:qualified name"; the first
 #: that exists is wrapped (in every module of the package that holds it), so the bench outlives a
 #: function moved between modules
@@ -104,9 +106,13 @@ def make_cases(out: Path, names, mujoco: bool) -> dict:
                 kind, seed = MUJOCO[name]
                 m = Model("6pus")
                 noise = blind.load_config()["noise"]["6pus"]
-                rng = np.random.default_rng(seed)
-                force, _, _ = dmb.draw(kind, rng, dmb.motion(m, seed, DURATION), m.ik(m.home()))
-                rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, force=force)
+                if kind == "backlash":  # a gap of 50 um as two bodies, on a rail whose effort changes sign
+                    rec, _ = mb.simulate(m, "backlash", 5e-5, mb.gap_joint(m, seed, DURATION, 2), seed, DURATION,
+                                         noise)
+                else:
+                    rng = np.random.default_rng(seed)
+                    force, _, _ = dmb.draw(kind, rng, dmb.motion(m, seed, DURATION), m.ik(m.home()))
+                    rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, force=force)
                 csv = mb.write_case(m, rec, csv)
         else:
             continue
