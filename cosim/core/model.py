@@ -503,6 +503,46 @@ class Model:
                 return tau
         return self._batch(lib.pkm_inverse_dynamics_batch, [x, xd, xdd], ["x", "xd", "xdd"], errors)
 
+    def mechanism_inverse_dynamics(self, x, xd, xdd):
+        """The mechanism's part of :meth:`inverse_dynamics` [N or N m], shape (n, nd): links,
+        platform, payload and gravity, without the drive layer (no parameter of
+        :meth:`drive_layer_params` changes it; ``pkm_mechanism_inverse_dynamics_batch``).
+
+        Example: ``m.add_drive_inverse_dynamics(x, xd, xdd, m.mechanism_inverse_dynamics(x, xd, xdd))``
+        equals ``m.inverse_dynamics(x, xd, xdd)`` bit for bit."""
+        return self._batch(lib.pkm_mechanism_inverse_dynamics_batch, [x, xd, xdd], ["x", "xd", "xdd"])
+
+    def add_drive_inverse_dynamics(self, x, xd, xdd, mechanism):
+        """``mechanism`` (n, nd) plus the drive layer's efforts at (x, xd, xdd): joint force and
+        offset, friction, rotor inertia [N or N m]; a new array
+        (``pkm_add_drive_inverse_dynamics_batch``).  With ``mechanism`` from
+        :meth:`mechanism_inverse_dynamics` of a model with the same mechanism parameters, the
+        result is :meth:`inverse_dynamics` bit for bit."""
+        return self._add_to(lib.pkm_add_drive_inverse_dynamics_batch, (x, xd, xdd), ("x", "xd", "xdd"), mechanism)
+
+    def add_drive_efforts(self, q, qd, qdd, mechanism):
+        """:meth:`add_drive_inverse_dynamics` from the joint motion at the poses: ``q`` =
+        :meth:`ik` [m or rad], ``qd`` = :meth:`joint_velocity`, ``qdd`` = :meth:`joint_acceleration`
+        (``pkm_add_drive_efforts_batch``), for several drive layers added along one motion: the
+        same result bit for bit."""
+        return self._add_to(lib.pkm_add_drive_efforts_batch, (q, qd, qdd), ("q", "qd", "qdd"), mechanism)
+
+    def _add_to(self, fn, inputs, names, mechanism):
+        arrs = [np.ascontiguousarray(self._arr(a, n).reshape(-1, self.ndof)) for a, n in zip(inputs, names)]
+        tau = np.array(self._arr(mechanism, "mechanism"), dtype=np.float64, order="C").reshape(-1, self.ndof)
+        if len({len(a) for a in arrs + [tau]}) != 1:
+            raise ArgumentError(f"{', '.join(names)} and mechanism must have the same number of rows, got "
+                                f"{[len(a) for a in arrs + [tau]]}", "PKM_ERR_ARGUMENT")
+        status = np.zeros(len(tau), dtype=np.intc)
+        self._check(fn(self._m, self._d, len(tau), *[ptr(a) for a in arrs], ptr(tau),
+                       status.ctypes.data_as(C.POINTER(C.c_int))))
+        return tau
+
+    def drive_layer_params(self) -> frozenset:
+        """Names of the drive layer's parameters (``pkm_param_in_drive_layer``): friction, rotor
+        inertia, joint force and offset, actuators, sensors; the others are the mechanism's."""
+        return frozenset(n for i, n in enumerate(self.param_names()) if lib.pkm_param_in_drive_layer(self._m, i) == 1)
+
     def forward_dynamics(self, x, xd, tau, errors: str = "raise"):
         """Pose acceleration xdd, shape (..., nd), from (x, xd, tau)."""
         if errors == "raise":

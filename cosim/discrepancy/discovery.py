@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ParameterError
+from ._linalg import small_lstsq
 from .effects import joint_prefix
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
@@ -477,8 +478,8 @@ class _Gram:
         if not terms:
             return self.tt, np.zeros(0)
         i = np.concatenate([self.at[u] for u in terms])
-        G, b = self.G[np.ix_(i, i)], self.b[i]
-        coef = -np.linalg.lstsq(G, b, rcond=None)[0]
+        G, b = self.G[i][:, i], self.b[i]
+        coef = -small_lstsq(G, b)
         # |t + X c|^2 = t't + 2 c'X't + c'X'X c
         return max(self.tt + 2.0 * float(coef @ b) + float(coef @ G @ coef), 0.0), coef
 

@@ -46,7 +46,8 @@ from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import savgol_filter
+from scipy.ndimage import convolve1d
+from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
@@ -76,6 +77,16 @@ class Residual:
     def stack(self) -> np.ndarray:
         """Channels side by side: (m, nd) or (m, 2 nd)."""
         return self.eff if self.kin is None else np.hstack([self.eff, self.kin])
+
+
+#: the evaluation cache of a pipeline: at least this many entries, and more up to CACHE_BYTES
+CACHE_ENTRIES = 64
+CACHE_BYTES = 256 * 2**20
+
+
+def _nbytes(v) -> int:
+    """Bytes of the arrays of a cached value (an array or a tuple of arrays)."""
+    return sum(a.nbytes for a in (v if isinstance(v, tuple) else (v,)) if isinstance(a, np.ndarray))
 
 
 def _at(a, pos):
@@ -220,6 +231,7 @@ class Pipeline:
         self.qd = np.asarray(rec.qd, float)
         self.pose = None if rec.pose is None else np.asarray(rec.pose, float)
         self._smooth_args = dict(window_length=w, polyorder=polyorder, axis=0, mode="interp")
+        self._coeffs = savgol_coeffs(w, polyorder, delta=dt)
         self.q_s = self.S(self.q)
         self.qd_s = self.S(self.qd)
         self.qdd_s = self.S(self.qd, deriv=1)
@@ -255,6 +267,12 @@ class Pipeline:
         self.geometry = frozenset(geometry)
         self._scratch = _Scratch(model, self.nominal)
         self._cache: OrderedDict = OrderedDict()
+        self._cache_bytes = 0
+        # The mechanism's inverse dynamics is kept apart from the drive layer's (friction,
+        # rotor inertia, joint force): most candidates move only the drive layer, and the
+        # mechanism's part, the costly one, is then the nominal one.
+        self._drive_params = model.drive_layer_params()
+        self._compliant = any(k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
 
     def _reference_effort(self, model):
         """Smoothed inverse dynamics of the reference (``qref``) through the nominal
@@ -295,8 +313,20 @@ class Pipeline:
 
         def ev():
             m = self.model_for(params)
-            return self.S(m.inverse_dynamics(*self.ref_motion))[self.idx]
+            return self.S_inner(self._inverse_dynamics(m, "ref", params.items(), *self.ref_motion))[self.idx]
         return self._cached(key, ev)
+
+    def _inverse_dynamics(self, m, motion, params, x, xd, xdd):
+        """``m.inverse_dynamics(x, xd, xdd)`` bit for bit, its mechanism's part cached under
+        ``motion`` (which names x, xd, xdd) and the mechanism's parameters among ``params``
+        (the model's parameters that differ from the nominal ones)."""
+        mech = tuple(sorted((k, v) for k, v in params if k not in self._drive_params))
+        M = self._cached(("M", motion, mech), lambda: m.mechanism_inverse_dynamics(x, xd, xdd))
+        if mech:
+            return m.add_drive_inverse_dynamics(x, xd, xdd, M)
+        # the nominal mechanism's joint motion along this motion, for every drive layer tried on it
+        J = self._cached(("J", motion), lambda: (m.ik(x), m.joint_velocity(x, xd), m.joint_acceleration(x, xd, xdd)))
+        return m.add_drive_efforts(*J, M)
 
     def delay_signature(self, name: str, d: float, positions=None):
         """Change of the effort residual for a delay ``d`` [s] of ``name``
@@ -312,6 +342,17 @@ class Pipeline:
     def S(self, a, deriv: int = 0):
         """Zero-phase Savitzky-Golay smoothing (deriv=1: its time derivative)."""
         return savgol_filter(a, deriv=deriv, delta=self.dt, **self._smooth_args)
+
+    def S_inner(self, a):
+        """:meth:`S` of the rows whose smoothing window lies inside the recording, bit for bit,
+        without the polynomial fits of the rows nearer its ends (half a window at each end;
+        NaN there): an evaluation reads its smoothed signals a margin of at least half a
+        window away from the ends, and those fits cost as much as the smoothing itself."""
+        y = convolve1d(np.asarray(a, float), self._coeffs, axis=0, mode="constant")
+        h = self.window // 2
+        y[:h] = np.nan
+        y[len(y) - h:] = np.nan
+        return y
 
     @property
     def has_pose(self) -> bool:
@@ -369,12 +410,16 @@ class Pipeline:
         return self._scratch.set(params)
 
     def _cached(self, key, fn):
+        """fn(), kept under ``key``; the oldest entries leave when the cache holds more than
+        CACHE_ENTRIES entries and more than CACHE_BYTES (a short recording keeps hundreds of
+        evaluations, a long one's working set at least CACHE_ENTRIES)."""
         v = self._cache.get(key)
         if v is None:
             v = fn()
             self._cache[key] = v
-            if len(self._cache) > 64:
-                self._cache.popitem(last=False)
+            self._cache_bytes += _nbytes(v)
+            while len(self._cache) > CACHE_ENTRIES and self._cache_bytes > CACHE_BYTES:
+                self._cache_bytes -= _nbytes(self._cache.popitem(last=False)[1])
         return v
 
     def split(self, train_fraction: float = 0.7):
@@ -405,7 +450,8 @@ class Pipeline:
         geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
 
         A = self._cached(("A", act), lambda: self._applied(m, act))
-        B = self._cached(("B", dyn), lambda: self.S(m.inverse_dynamics(self.x_f, self.xd_f, self.xdd_f)))
+        B = self._cached(("B", dyn), lambda: self.S_inner(self._inverse_dynamics(m, "recorded", dyn, self.x_f,
+                                                                                  self.xd_f, self.xdd_f)))
         # Readings lagging by d_s show the motion of t - d_s, driven by the command of
         # t - d_s - d_a: the residual is labelled by the recorded motion's sample, so an
         # actuator delay and a sensor lag give the same effort residual (they are the same
@@ -415,11 +461,10 @@ class Pipeline:
         if self.f_ext_s is not None:
             eff = eff + self.f_ext_s[pos]  # recorded with the motion it drives
         if geo or sens:
-            eff -= self._pose_term(m, np.clip(np.round(p_m).astype(int), 0, self.n - 1), bool(sens))
+            eff -= self._pose_term(m, params, np.clip(np.round(p_m).astype(int), 0, self.n - 1), bool(sens))
         kin = None
         if self.has_pose:
-            compliant = any(k.endswith(".compliance") and v != 0 for k, v in sens) or any(
-                k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
+            compliant = any(k.endswith(".compliance") and v != 0 for k, v in sens) or self._compliant
             key = ("K", sens, geo) + ((act, round(d_a, 9)) if compliant else ())
             K = self._cached(key, lambda: self._readings(m, A[0], d_a))
             kin = self.q_s[pos] - _at(K, pos - d_s)
@@ -433,7 +478,7 @@ class Pipeline:
         if not act:
             return self.tau_c, self.tau_s
         raw = cc.actuator_effort(m, self.tau_c, times=self.t)
-        return raw, self.S(raw)
+        return raw, self.S_inner(raw)
 
     def pose_term(self, params: dict, positions=None):
         """Change of the effort residual when the pose is recomputed for a model with
@@ -442,15 +487,18 @@ class Pipeline:
         m = self.model_for(params)
         pos = self.idx if positions is None else np.asarray(positions)
         sens = any(_is(k, SENSOR_KEYS) and k != "sensor.delay" for k in params)
-        return -self._pose_term(m, pos, sens)
+        return -self._pose_term(m, params, pos, sens)
 
-    def _pose_term(self, m, i, sensors: bool):
+    def _pose_term(self, m, params, i, sensors: bool):
         """Change of the inverse dynamics when the pose of the smoothed joints is
         recomputed with the model's geometry and, with ``sensors``, from the joints
-        corrected for the model's sensor errors (decimated samples: a smooth term)."""
+        corrected for the model's sensor errors (decimated samples: a smooth term).
+        ``m`` is the model with ``params`` set."""
         x0 = self.x_s[i]
         q, qd, qdd = self.q_s[i], self.qd_s[i], self.qdd_s[i]
-        xd0 = cc.pose_velocity(self.model, x0, qd)
+        # the nominal pose's rates at these samples are the same for every candidate
+        at = ("smoothed", i.tobytes())
+        xd0, xdd0 = self._cached(("P0",) + at, lambda: self._nominal_rates(x0, qd, qdd))
         if sensors:
             # reading = q + e(q, qd, tau): one fixed-point step from the nominal pose
             # (e is the sensor error, at most a few 1e-4 of the stroke).
@@ -458,14 +506,19 @@ class Pipeline:
             q = q - e
         x = m.fk(q, x_guess=x0)
         xd = cc.pose_velocity(m, x, qd)
-        xdd0 = cc.pose_acceleration(self.model, x0, xd0, qdd)
         xdd = cc.pose_acceleration(m, x, xd, qdd)
-        return m.inverse_dynamics(x, xd, xdd) - m.inverse_dynamics(x0, xd0, xdd0)
+        return m.inverse_dynamics(x, xd, xdd) - self._inverse_dynamics(m, at, params.items(), x0, xd0, xdd0)
+
+    def _nominal_rates(self, x0, qd, qdd):
+        """Pose rate and acceleration of the nominal model at poses x0 for joint rates qd and
+        accelerations qdd."""
+        xd0 = cc.pose_velocity(self.model, x0, qd)
+        return xd0, cc.pose_acceleration(self.model, x0, xd0, qdd)
 
     def _readings(self, m, applied, d_a):
         """Smoothed joint readings the model's sensors give at the tracker poses."""
         tau = applied if d_a == 0 else _at(applied, np.clip(np.arange(self.n) - d_a, 0, self.n - 1))
-        return self.S(cc.measure_joints(m, self.pose, self.xd_p, tau, times=self.t))
+        return self.S_inner(cc.measure_joints(m, self.pose, self.xd_p, tau, times=self.t))
 
     # ------------------------------------------------------------ descriptors
     def motion(self, positions=None):

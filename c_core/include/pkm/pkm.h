@@ -146,6 +146,11 @@ PKM_API const char* pkm_param_name(const pkm_model* m, int i);
 PKM_API const char* pkm_param_unit(const pkm_model* m, int i);
 PKM_API const char* pkm_param_description(const pkm_model* m, int i);
 PKM_API double pkm_param_get(const pkm_model* m, int i);
+/* 1 if parameter i belongs to the drive layer (the joints' friction, rotor inertia, joint
+ * force and offset, the actuators, the sensors, "drive.*", "actuator.*", "sensor.*"), 0 if
+ * to the mechanism (geometry, masses, inertias, payload, gravity, joint limits), -1 if i is
+ * out of range. */
+PKM_API int pkm_param_in_drive_layer(const pkm_model* m, int i);
 /* Sets one parameter after checking its own range (e.g. a length > 0, a mass >= 0).
  * Cross-parameter consistency is checked by pkm_model_validate. */
 PKM_API int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen);
@@ -247,6 +252,29 @@ PKM_API int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* 
 PKM_API int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
                                        const double* x, const double* xd,
                                        const double* xdd, double* tau, int* status);
+/* The two layers of pkm_inverse_dynamics_batch, for callers that change one layer's
+ * parameters many times and keep the other's result (the discrepancy engine's finite
+ * differences over friction, rotor inertia or a joint force):
+ *   pkm_mechanism_inverse_dynamics_batch: tau[n,nd] = the mechanism's efforts alone (links,
+ *     platform, payload, gravity), which no drive-layer parameter changes
+ *     (pkm_param_in_drive_layer);
+ *   pkm_add_drive_inverse_dynamics_batch: tau[n,nd] += the drive layer's efforts (the joint
+ *     force and offset, friction, rotor inertia) at the same (x, xd, xdd), in place.
+ *   pkm_add_drive_efforts_batch: the same sum from the joint motion at those poses,
+ *     q[n,nd] = pkm_ik (m, rad), qd[n,nd] = pkm_joint_velocity (m/s, rad/s), qdd[n,nd] =
+ *     pkm_joint_acceleration (m/s2, rad/s2), for a caller that adds several drive layers
+ *     along one motion (q is read only with a joint force, qdd only with rotor inertia).
+ * Either adder applied to the first's output is pkm_inverse_dynamics_batch bit for bit.
+ * Same shapes, units, status and NaN rows as pkm_inverse_dynamics_batch; a non-finite tau
+ * row given to an adder is refused for that row. */
+PKM_API int pkm_mechanism_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                                 const double* x, const double* xd,
+                                                 const double* xdd, double* tau, int* status);
+PKM_API int pkm_add_drive_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n,
+                                                 const double* x, const double* xd,
+                                                 const double* xdd, double* tau, int* status);
+PKM_API int pkm_add_drive_efforts_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q,
+                                        const double* qd, const double* qdd, double* tau, int* status);
 /* Forward dynamics: xdd[nd] from (x, xd, tau). */
 PKM_API int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x,
                                  const double* xd, const double* tau, double* xdd);

@@ -226,6 +226,12 @@ const char* pkm_param_description(const pkm_model* m, int i) {
 }
 double pkm_param_get(const pkm_model* m, int i) { return valid_index(m, i) ? m->values[i] : std::nan(""); }
 
+int pkm_param_in_drive_layer(const pkm_model* m, int i) {
+  if (!valid_index(m, i)) return -1;
+  // the drive layer's parameters follow the robot's (pkm_model_create appends them)
+  return static_cast<size_t>(i) + pkm::drive::specs(*m->robot).size() >= m->specs.size() ? 1 : 0;
+}
+
 int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t errlen) {
   return pkm::guard_err(err, errlen, [&] {
     PKM_REQUIRE(m != nullptr, PKM_ERR_ARGUMENT, "model is NULL");

@@ -184,22 +184,36 @@ void add_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, c
 
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
                             double* tau) {
+  m->robot->inverse_dynamics(*m->compiled, *d->rd, x, xd, xdd, tau);
+  add_drive_inverse_dynamics(m, d, x, xd, xdd, tau);
+}
+
+void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau) {
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
-  m->robot->inverse_dynamics(rm, *d->rd, x, xd, xdd, tau);
-  add_joint_force(m, dp, d, x, xd, 1.0, tau);
-  if (!dp.any_friction && !dp.any_rotor) return;
   const int n = d->ndof;
-  Vec qd(n), qdd(n), f(n);
-  joint_velocity(*m->robot, rm, *d->rd, x, xd, qd.data());
+  double q[6] = {}, qd[6] = {}, qdd[6] = {};
+  if (dp.force.any) m->robot->ik(rm, *d->rd, x, q);
+  if (dp.force.any || dp.any_friction) joint_velocity(*m->robot, rm, *d->rd, x, xd, qd);
+  if (dp.any_rotor) m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd);
+  add_drive_efforts(dp, n, q, qd, qdd, tau);
+}
+
+void add_drive_efforts(const drive::Params& dp, int n, const double* q, const double* qd, const double* qdd,
+                       double* tau) {
+  if (dp.force.any) {
+    double F[6];
+    joint_force::force(dp.force, n, dp.v_eps, q, qd, F);
+    for (int i = 0; i < n; ++i) tau[i] += F[i];
+  }
   if (dp.any_friction) {
-    drive::friction(dp, qd.data(), f.data());
+    double f[6];
+    drive::friction(dp, qd, f);
     for (int i = 0; i < n; ++i) tau[i] += f[i];
   }
-  if (dp.any_rotor) {
-    m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd.data());
+  if (dp.any_rotor)
     for (int i = 0; i < n; ++i) tau[i] += dp.rotor[i] * qdd[i];
-  }
 }
 
 namespace {

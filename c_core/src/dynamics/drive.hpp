@@ -94,6 +94,15 @@ double transmitted_effort(const Params& p, int i, double delta, double delta_dot
 // validated; d prepared.  Throw Error like the robot functions.
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* xdd, double* tau);
+// tau += the drive layer's part of total_inverse_dynamics (generic joint force and offset,
+// friction, rotor inertia), in the order total_inverse_dynamics adds them: the robot's
+// inverse dynamics followed by this is total_inverse_dynamics bit for bit.
+void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau);
+// The same from the joint motion at that pose: q = ik(x), qd = joint velocity, qdd = joint
+// acceleration (q unused without a joint force, qdd without rotor inertia).
+void add_drive_efforts(const drive::Params& dp, int n, const double* q, const double* qd, const double* qdd,
+                       double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* tau, double* xdd);
 // The same with the drive parameters dp instead of the model's (pkm_sim: the carriage side).

@@ -29,6 +29,43 @@ int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const 
   });
 }
 
+int pkm_mechanism_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
+                                         const double* xd, const double* xdd, double* tau, int* status) {
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
+                        [&](const RobotModel& rm, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    m->robot->inverse_dynamics(rm, *d->rd, xk, xdk, row_at(xdd, k, nd, "pose acceleration xdd"), tau + k * nd);
+  });
+}
+
+int pkm_add_drive_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
+                                         const double* xd, const double* xdd, double* tau, int* status) {
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
+                        [&](const RobotModel&, size_t k) {
+    const double* xk = row_at(x, k, nd, "pose x");
+    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
+    const double* xddk = row_at(xdd, k, nd, "pose acceleration xdd");
+    check_finite(tau + k * nd, nd, "mechanism effort tau");
+    add_drive_inverse_dynamics(m, d, xk, xdk, xddk, tau + k * nd);
+  });
+}
+
+int pkm_add_drive_efforts_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q, const double* qd,
+                                const double* qdd, double* tau, int* status) {
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, tau, {{q, "q"}, {qd, "qd"}, {qdd, "qdd"}, {tau, "tau"}},
+                        [&](const RobotModel&, size_t k) {
+    const double* qk = row_at(q, k, nd, "joint position q");
+    const double* qdk = row_at(qd, k, nd, "joint velocity qd");
+    const double* qddk = row_at(qdd, k, nd, "joint acceleration qdd");
+    check_finite(tau + k * nd, nd, "mechanism effort tau");
+    add_drive_efforts(*m->drive, nd, qk, qdk, qddk, tau + k * nd);
+  });
+}
+
 int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
                          double* xdd) {
   return guard(d, [&] {

@@ -1,0 +1,40 @@
+"""The residual pipeline's caches change no figure: every evaluation, in any order and
+after any other, equals the residual formed directly from the core (the whole inverse
+dynamics of the model with the parameters set, smoothed with scipy's Savitzky-Golay filter)
+bit for bit, whether the parameters move the drive layer, the mechanism or both."""
+import numpy as np
+import pytest
+from scipy.signal import savgol_filter
+
+from cosim.core import Model
+from cosim.discrepancy.residuals import Pipeline, _at
+
+
+def _direct(pipe, params):
+    """The effort residual of section 2 of docs/discrepancy.md, computed from scratch."""
+    m = Model(pipe.model.robot)
+    m.set_params(params)
+    S = lambda a: savgol_filter(a, pipe.window, pipe.polyorder, axis=0, mode="interp", delta=pipe.dt)  # noqa: E731
+    tau_id = S(m.inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f))
+    applied = S(m.actuator_effort(pipe.tau_c)) if any(k.endswith(".effort_max") for k in params) else pipe.tau_s
+    d = (m.param("actuator.delay") + m.param("sensor.delay")) / pipe.dt
+    return _at(applied, pipe.idx - d) - tau_id[pipe.idx]
+
+
+@pytest.mark.parametrize("robot", ["6pus", "quattro"])
+def test_cached_evaluations_equal_the_direct_residual_bit_for_bit(clean_runs, robot):
+    rec = clean_runs[robot]
+    pipe = Pipeline(rec, Model(robot))
+    j = pipe.model.facts.joint_prefix
+    cases = [{}, {f"{j}[1].coulomb": 0.05}, {f"{j}[2].viscous": 0.4, f"{j}[1].coulomb": 0.05},
+             {"payload.m": 0.05}, {"payload.m": 0.05, f"{j}[3].rotor_inertia": 0.02},
+             {f"{j}[2].offset": 0.1, f"{j}[2].force_k1": 2.0}, {f"{j}[1].effort_max": 0.5 * np.abs(pipe.tau_c).max()},
+             {"actuator.delay": 0.002, f"{j}[1].coulomb": 0.05}, {f"{j}[1].coulomb": 0.05}, {}]
+    first = {}
+    for params in cases:  # repeats come from the cache
+        got = pipe.evaluate(params).eff
+        assert np.array_equal(got, _direct(pipe, params)), params
+        key = tuple(sorted(params.items()))
+        if key in first:
+            assert np.array_equal(got, first[key])
+        first[key] = got
