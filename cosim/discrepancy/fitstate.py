@@ -113,6 +113,13 @@ class FitState:
     n_eff: float | None = None
     instruments: MappingProxyType = field(default_factory=_empty)
 
+    def __post_init__(self):
+        # frozen means the arrays too: a step that wrote into R0 or the weights would change
+        # every other step's input behind its back
+        for a in (self.train, self.test, self.use, self.R0, self.W, self.sig, self.phi):
+            if isinstance(a, np.ndarray):
+                a.setflags(write=False)
+
     # ------------------------------------------------------------ the recording
 
     @property
