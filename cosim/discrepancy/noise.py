@@ -103,8 +103,27 @@ def weighted(st, noise: NoiseLevels):
 
 
 def inflation(r, window, step):
-    """Variance inflation 1 + 2 sum_L rho_L of a decimated smoothed residual (sum to the
-    first negative autocorrelation, at most two smoothing windows)."""
+    """Variance inflation ``1 + 2 sum_L rho_L`` of a decimated smoothed residual.
+
+    Parameters
+    ----------
+    r : numpy.ndarray, shape (n,)
+        One channel's residual on the decimated samples it uses.
+    window, step : int
+        The smoothing window and the decimation [samples]: the sum runs to the first
+        negative autocorrelation, over at most two windows' worth of lags.
+
+    Returns
+    -------
+    float
+        At least 1 (1 for white noise or a zero residual).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> inflation(np.array([1.0, -1.0] * 50), window=20, step=10)
+    1.0
+    """
     r = r - r.mean()
     v = float(r @ r)
     if v <= 0:
