@@ -139,6 +139,12 @@ class Option:
     expand: list | None = None   # the per-joint groups of an all-joints option
     instr: np.ndarray | None = None  # instruments of the columns (m, C, k), or None: least squares
 
+    def __post_init__(self):
+        # an option is shared by every step that tries it: its arrays are read-only
+        for a in (self.cols, self.offset, self.instr):
+            if isinstance(a, np.ndarray):
+                a.setflags(write=False)
+
     def native(self, coef, nominal):
         g, e = self.group, self.group.key
         if self.expand is not None and self.cols is not None:

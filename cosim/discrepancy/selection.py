@@ -95,8 +95,9 @@ class Selection:
         Variance inflation per channel.
     steps : tuple of dict
         Log of the forward steps (group, delta BIC, chi-square).
-    candidates : dict
-        Group label -> best delta BIC at the last step (evidence against).
+    last_delta_bic : dict
+        Group label -> delta BIC of its best option at the last forward step (the evidence
+        against the groups left out).
     detectability : dict
         Group label -> (smallest detectable size, reference size), set by the inference.
     threshold : float
@@ -116,7 +117,7 @@ class Selection:
     sigma: np.ndarray
     phi: np.ndarray
     steps: tuple
-    candidates: dict
+    last_delta_bic: dict
     detectability: dict
     threshold: float
     refused: dict = field(default_factory=dict)
