@@ -5,6 +5,8 @@ the discrepancy engine (a refactoring that must not change a reported figure).
     PYTHONPATH=/path/to/other/checkout python bench/diagnosis_compare.py record /tmp/before --cases /tmp/diag_cases
     python bench/diagnosis_compare.py compare /tmp/before /tmp/after
 
+The other checkout may be a bare tree (``git archive <commit> | tar -x -C DIR``): its Python
+package comes first on PYTHONPATH, and ``PKM_LIB=build/lib/libpkm.so`` gives it this build's core.
 ``record`` writes the recordings into ``--cases`` when they are not there yet (so both runs
 diagnose the same files: give both the same folder), then diagnoses each one (BLAS on one
 thread, no figures) into ``<out>/<case>/`` (``diagnosis.json``, ``report.md``); ``compare``
