@@ -7,9 +7,10 @@ physics explains it, with what parameters, and how much better the model gets.
 missing physics: Coulomb friction, joint 3 (rail[3].coulomb = 0.0312 +- 0.0011 N)
 
 The engine in parts a reader can hold: residuals and their noise (:mod:`.residuals`),
-the library of effects (:mod:`.effects`), regressors (:mod:`.regressors`), the noise model
-(:mod:`.noise`), forward selection (:mod:`.selection`), inference: intervals, ties,
-detectability (:mod:`.inference`), localisation (:mod:`.localisation`), structure left
+the library of effects (:mod:`.effects`), the attribution engine (:mod:`.engine`: the fit state
+:mod:`.fitstate`, regressors :mod:`.regressors`, the noise model :mod:`.noise`, the shared fits
+:mod:`.fitting`, forward selection :mod:`.selection`, inference: intervals, ties,
+detectability :mod:`.inference`), localisation (:mod:`.localisation`), structure left
 unexplained (:mod:`.structure`), the diagnosis that puts them together (:mod:`.diagnosis`),
 the replay (:mod:`.plant`; a fitted gap or compliance as two bodies: :mod:`.drive_bodies`) and
 the report (:mod:`.report`).  Blind cases and the benchmark:

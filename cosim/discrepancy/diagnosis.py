@@ -253,7 +253,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     """
     from ._threads import one_blas_thread
     from .localisation import localise
-    from .selection import Engine
+    from .engine import attribute, prepare
 
     for name, v, lo in (("window", window, 0.0), ("threshold", threshold, 0.0)):
         if not (isinstance(v, (int, float)) and np.isfinite(v) and v > lo):
@@ -277,14 +277,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         if warnings:
             return _contradicted(rec, pipe, warnings, out, t0)
         t1 = time.perf_counter()
-        eng = Engine(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
-                     instruments=instruments, verbose=verbose)
+        eng = prepare(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
+                      instruments=instruments, verbose=verbose)
         t2 = time.perf_counter()
-        sel = eng.run()
+        eng, sel = attribute(eng)
         t3 = time.perf_counter()
-        found, withdrawn, theta = [], [], dict(sel.theta)
+        found, withdrawn, theta, ties = [], [], dict(sel.theta), []
         if discovery:
-            found, withdrawn, theta = _discover(eng, sel, threshold)
+            found, withdrawn, theta, ties = _discover(eng, sel, threshold)
         t3b = time.perf_counter()
         held = heldout_fit(eng, sel, theta)
         loc = localise(eng, sel)
@@ -294,7 +294,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     from .structure import sentence, unexplained
 
     gone = {w["group"] for w in withdrawn}
-    effects_out = [e for e in _effects(eng, sel) if e["group"] not in gone]
+    effects_out = [e for e in _effects(eng, sel, ties) if e["group"] not in gone]
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     r_after = eng.R(theta) if theta else eng.R0
@@ -308,7 +308,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
                   {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
                    "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
-                  steps=sel.steps, refused=[f"{k}: {v}" for k, v in sel.refused.items()],
+                  steps=list(sel.steps), refused=[f"{k}: {v}" for k, v in sel.refused.items()],
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window,
@@ -517,7 +517,7 @@ def _units(mdl):
     return {p.name: p.unit for p in mdl.param_info()}
 
 
-def _effects(eng, sel) -> list:
+def _effects(eng, sel, ties=()) -> list:
     units = _units(eng.model)
     out = []
     for a in sel.selected:
@@ -535,7 +535,7 @@ def _effects(eng, sel) -> list:
                       f"{c['correlation']:.2f}): the same physics on this recording; only its "
                       f"{c['extra_params']} extra parameter(s) cost it delta BIC {c['delta_bic']:+.1f}, which is no "
                       f"evidence against it; {separating_motion(g.key, c['effect'])} would separate them")
-            elif c["delta_bic"] < eng.lookalike_margin:
+            elif c["delta_bic"] < eng.settings.lookalike_margin:
                 st = (f"{c['name']} is a weaker alternative (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f}): not told apart with confidence; "
                       f"{separating_motion(g.key, c['effect'])} would separate them")
@@ -543,7 +543,7 @@ def _effects(eng, sel) -> list:
                 st = (f"{c['name']} was ruled out (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f})")
             looks.append(Alternative(**c, statement=st))
-        for tie in getattr(eng, "discovery_ties", []):
+        for tie in ties:
             if tie["group"] == g.label:
                 eq = "; ".join(tie["terms"])
                 d2 = tie["heldout_chi2_discovered"] - tie["heldout_chi2_library"]
@@ -613,7 +613,7 @@ def _not_excited(eng, sel) -> list:
         g = eng.options[lab][0].group
         if lab in chosen or not np.isfinite(ref) or ref <= 0 or not (size > ref):
             continue
-        if lab in getattr(eng, "collinear", ()):
+        if lab in sel.collinear:
             same.setdefault(g.key, []).append(g)
             continue
         by_effect.setdefault(g.key, []).append((g, size, ref))
@@ -639,11 +639,11 @@ def _where(groups) -> str:
 def _discover(eng, sel, threshold):
     """The discovery step (:mod:`.discovery`): library effects put on trial against
     discovered terms, then the terms found on every effort channel of what is left.
-    Returns (terms, withdrawn groups, parameters: library kept + discovered)."""
+    Returns (terms, withdrawn groups, parameters: library kept + discovered, the groups tied
+    with discovered terms)."""
     from .discovery import judge_library
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
-    eng.discovery_ties = ties
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
     for t in found:
         t.instead_of = [_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]]
@@ -655,7 +655,7 @@ def _discover(eng, sel, threshold):
         without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
         key = (pipe.q_s if t.key_variable == "position" else pipe.qd_s)[pipe.idx, c]
         t.curve = {"key": key, "before": without, "after": R_all[:, c]}
-    return found, withdrawn, theta
+    return found, withdrawn, theta, ties
 
 
 def _withdrawn_sentence(w) -> str:

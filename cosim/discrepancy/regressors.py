@@ -1,4 +1,4 @@
-"""Regressors of the attribution (part 1 of the engine, see :mod:`.selection`).
+"""Regressors of the attribution: :func:`candidates` (step 1 of the engine, see :mod:`.engine`).
 
 Every candidate group (an effect on a joint, or a global effect) gets its columns from the
 residual pipeline by finite differences over its core parameters at the nominal model:
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._native import JointLimitError, ParameterError, UnreachableError
+from .._native import ParameterError
 from .effects import Group
 
 #: effects whose core parameter acts on its own joint's channels only
@@ -60,7 +60,7 @@ def fit(X, t, Z=None, rcond=None):
     return -np.linalg.lstsq(A, Z.T @ t, rcond=None)[0]
 
 
-@dataclass
+@dataclass(frozen=True)
 class Scales:
     """Typical magnitudes of the recording, per joint (used for finite-difference steps
     and the reference size of each effect)."""
@@ -126,7 +126,7 @@ def reference_size(group: Group, sc: Scales, model) -> float:
     return 0.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class Option:
     """One way a group can enter: linear columns (m, C, k) and/or a fixed offset (m, C)
     of the residual, with the native parameters a coefficient vector maps to."""
@@ -138,6 +138,12 @@ class Option:
     k: int
     expand: list | None = None   # the per-joint groups of an all-joints option
     instr: np.ndarray | None = None  # instruments of the columns (m, C, k), or None: least squares
+
+    def __post_init__(self):
+        # an option is shared by every step that tries it: its arrays are read-only
+        for a in (self.cols, self.offset, self.instr):
+            if isinstance(a, np.ndarray):
+                a.setflags(write=False)
 
     def native(self, coef, nominal):
         g, e = self.group, self.group.key
@@ -160,245 +166,222 @@ class Option:
         return bool(coef[0] >= 0)
 
 
-class Regressors:
-    """The engine's residual evaluations and candidate columns (mixed into :class:`Engine`)."""
+@dataclass(frozen=True)
+class Candidates:
+    """The result of :func:`candidates`.
 
-    def R(self, theta):
-        return self.pipe.evaluate(theta).stack()
+    Attributes
+    ----------
+    options : dict
+        Group label -> tuple of :class:`Option` (one for a linear group, one per grid value
+        of a profiled one), in the library's order.
+    instrument_cols : dict
+        Delay group label -> the residual change per second of delay (m, C) with the effort
+        channels from the reference effort: the delay's instrument (a recording with a
+        reference only).
+    """
 
-    def vec(self, Rm, mask=None, w=None):
-        """Weighted residual channels of the rows in ``mask``, one channel after the other."""
-        mask = self.train if mask is None else mask
-        W = (self.W if w is None else w * self.use)[mask]
-        return (Rm[mask] * W).T.reshape(-1)
+    options: dict
+    instrument_cols: dict
 
-    def vec_cols(self, cols, mask=None, w=None):
-        mask = self.train if mask is None else mask
-        W = (self.W if w is None else w * self.use)[mask]
-        c = cols[mask] * W[:, :, None]
-        return c.transpose(1, 0, 2).reshape(-1, cols.shape[2])
 
-    def _channels(self, group):
-        i, fam = group.joint, group.effect.family
-        ch = []
-        if fam in ("effort", "both"):
-            ch.append(i)
-        if fam in ("kinematic", "both") and self.C > self.nd:
-            ch.append(self.nd + i)
-        return ch
+def candidates(st) -> Candidates:
+    """The ways every candidate group can enter the model, computed through the core.
 
-    def velocity_grid(self) -> np.ndarray:
-        """The velocity scales tried for a Stribeck or fading friction [m/s or rad/s]: 9
-        points from a few times the rate noise (a smaller scale is not resolvable) to half
-        the median RMS joint speed (a larger one is friction proportional to speed over the
-        recording: viscous friction)."""
-        v = float(np.median(self.sc.rate))
-        vmin = max(0.02 * v, 5.0 * float(np.median(self.pipe.qd_noise)))
-        return np.geomspace(vmin, max(0.5 * v, 2 * vmin), 9)
+    One-sided differences for the parameters the residual is linear in (drive-layer and
+    sensor parameters moved on every joint at once: each acts on its own joint only),
+    central ones for the payload's offset and the geometry, profile grids for the velocity
+    scales, the delays, the saturation level and the dead-zone width; instruments (the same
+    columns along the reference motion) for the effects in ``INSTRUMENTED``.
 
-    def _step(self, group, name):
-        sc, k, i = self.sc, group.key, group.joint
-        val = self.nominal[name]
-        if k in ("coulomb", "stribeck", "smooth_coulomb", "offset"):
-            return 0.05 * sc.effort[i]
-        if k == "viscous":
-            return 0.05 * sc.effort[i] / sc.rate[i]
-        if k == "rotor_inertia":
-            return 0.05 * sc.effort[i] / sc.accel[i]
-        if k in ("encoder_offset", "backlash"):
-            return 1e-3 * sc.travel[i]
-        if k == "compliance":
-            return 1e-3 * sc.travel[i] / sc.effort[i]
-        if name.startswith("gravity."):
-            return 0.1
-        if k == "geometry":
-            return 1e-4 * max(abs(val), 1e-3)
-        if k in ("saturation", "dead_zone"):
-            return 0.01 * sc.effort[i]
-        return 0.05 * abs(val) if val != 0 else 1e-3
+    Parameters
+    ----------
+    st : FitState
+        The recording's state (:func:`.fitstate.fit_state`); its weights are not used
+        (the instruments' relevance is judged on the unweighted samples).
 
-    def _one_sided(self, g, p, R0):
-        """((R(p + h) - R0) / h, h), stepping down instead (h < 0) when the core refuses
-        p + h (a principal moment of inertia beyond the sum of the other two...)."""
-        h = self._step(g, p)
-        try:
-            return (self.R({p: self.nominal[p] + h}) - R0) / h, h
-        except ParameterError:
-            return (self.R({p: self.nominal[p] - h}) - R0) / -h, -h
+    Returns
+    -------
+    Candidates
+        The options per group label and the delays' instrument columns.
 
-    def _reference_change(self, key, params):
-        """Change of the effort residual along the reference motion when ``params`` are
-        set (m, nd): the instrument of an effect in INSTRUMENTED; None for the others
-        and without a reference."""
-        if key not in INSTRUMENTED or not self.use_instruments:
-            return None
-        # the residual is effort minus inverse dynamics
-        return self.pipe.reference_effort() - self.pipe.reference_effort(params)
-
-    def _relevant(self, cols, instr):
-        """``instr`` if every instrument column is correlated with its regressor column
-        by at least MIN_RELEVANCE (on the fitted samples), else None (least squares)."""
-        if instr is None:
-            return None
-        X, Z = self.vec_cols(cols), self.vec_cols(instr)
-        for j in range(X.shape[1]):
-            nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
-            if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
-                return None
-        return instr
-
-    def _delay_change(self, name, value, theta, Rbase):
-        """Change of the residual when the delay ``name`` goes from its value in theta
-        to ``value``: the effort channels from the reference effort (an instrument free
-        of the rate noise, when the recording has qref), the readings exactly."""
-        R = self.R(dict(theta, **{name: value}))
-        out = R - Rbase
-        cur = theta.get(name, self.nominal[name])
-        sig = self.pipe.delay_signature(name, value)
-        if sig is not None:
-            base = self.pipe.delay_signature(name, cur)
-            out[:, :self.nd] = sig - base
-        return out
-
-    def _try_R(self, theta):
-        """R(theta), or None when theta is not a valid parameter set of the core, or one
-        the recording cannot be evaluated with (sensor errors that put a joint reading
-        outside its stroke: the forward kinematics refuses it)."""
-        try:
-            return self.R(theta)
-        except (ParameterError, JointLimitError, UnreachableError):
-            return None
-
-    # ------------------------------------------------------------- candidates
-
-    def _build_options(self):
-        R0 = self.R0
-        m = R0.shape[0]
-        by_key = {}
-        for g in self.groups:
-            by_key.setdefault(g.key, []).append(g)
-        for key, gs in by_key.items():
-            if key in LINEAR and key in LOCAL:
-                steps = {g.params[0]: self._step(g, g.params[0]) for g in gs}
-                moved = {p: self.nominal[p] + h for p, h in steps.items()}
-                D = self.R(moved) - R0
-                Dz = self._reference_change(key, moved)
-                for g in gs:
-                    col = np.zeros((m, self.C, 1))
-                    h = steps[g.params[0]]
-                    for c in self._channels(g):
-                        col[:, c, 0] = D[:, c] / h
-                    if g.effect.family == "kinematic":
-                        # A sensor error also moves the pose the dynamics is evaluated at:
-                        # that part reaches every effort channel, so it is taken per joint.
-                        col[:, :self.nd, 0] = self.pipe.pose_term({g.params[0]: self.nominal[g.params[0]] + h}) / h
-                    instr = None
-                    if Dz is not None:
-                        instr = col.copy()
-                        instr[:, g.joint, 0] = Dz[:, g.joint] / h
-                    self.options[g.label] = [Option(g, col, None, {}, 1, instr=self._relevant(col, instr))]
-            elif key in LINEAR or (key == "payload" and len(gs[0].params) == 1):
-                for g in gs:
-                    cols = np.zeros((m, self.C, len(g.params)))
-                    instr = cols.copy() if key in INSTRUMENTED and self.use_instruments else None
-                    for j, p in enumerate(g.params):
-                        cols[:, :, j], h = self._one_sided(g, p, R0)
-                        if instr is not None:
-                            instr[:, :, j] = cols[:, :, j]
-                            instr[:, :self.nd, j] = self._reference_change(key, {p: self.nominal[p] + h}) / h
-                    self.options[g.label] = [Option(g, cols, None, {}, len(g.params), instr=self._relevant(cols, instr))]
-            elif key == "payload":
-                g = gs[0]
-                pm = g.params[0]
-                mref = max(0.1 * self.nominal.get("platform.m", 0.1), 1e-3)
-                cols = np.zeros((m, self.C, 4))
-                Rm = self.R({pm: self.nominal[pm] + mref})
-                cols[:, :, 0] = (Rm - R0) / mref
-                hc = 0.01
-                moves = [({p: self.nominal[p] + hc}, {p: self.nominal[p] - hc}) for p in g.params[1:]]
-                for j, (up, down) in enumerate(moves):
-                    Rp = self.R({pm: self.nominal[pm] + mref, **up})
-                    Rn = self.R({pm: self.nominal[pm] + mref, **down})
-                    cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
+    Examples
+    --------
+    >>> st = fit_state(pipe, groups)                                   # doctest: +SKIP
+    >>> c = candidates(st)                                             # doctest: +SKIP
+    >>> c.options["coulomb[1]"][0].cols.shape == st.R0.shape + (1,)    # doctest: +SKIP
+    True
+    """
+    options, instrument_cols = {}, {}
+    R0 = st.R0
+    m = R0.shape[0]
+    by_key = {}
+    for g in st.groups:
+        by_key.setdefault(g.key, []).append(g)
+    for key, gs in by_key.items():
+        if key in LINEAR and key in LOCAL:
+            steps = {g.params[0]: st.step(g, g.params[0]) for g in gs}
+            moved = {p: st.nominal[p] + h for p, h in steps.items()}
+            D = st.R(moved) - R0
+            Dz = _reference_change(st, key, moved)
+            for g in gs:
+                col = np.zeros((m, st.C, 1))
+                h = steps[g.params[0]]
+                for c in st.channels(g):
+                    col[:, c, 0] = D[:, c] / h
+                if g.effect.family == "kinematic":
+                    # A sensor error also moves the pose the dynamics is evaluated at:
+                    # that part reaches every effort channel, so it is taken per joint.
+                    col[:, :st.nd, 0] = st.pipe.pose_term({g.params[0]: st.nominal[g.params[0]] + h}) / h
                 instr = None
-                if self.use_instruments:
-                    instr = cols.copy()
-                    instr[:, :self.nd, 0] = self._reference_change(key, {pm: self.nominal[pm] + mref}) / mref
-                    for j, (up, down) in enumerate(moves):
-                        instr[:, :self.nd, j + 1] = (self._reference_change(key, {pm: self.nominal[pm] + mref, **up})
-                                                     - self._reference_change(key, {pm: self.nominal[pm] + mref,
-                                                                                    **down})) / (2 * hc * mref)
-                self.options[g.label] = [Option(g, cols, None, {}, 4, instr=self._relevant(cols, instr))]
-            elif key == "geometry":
+                if Dz is not None:
+                    instr = col.copy()
+                    instr[:, g.joint, 0] = Dz[:, g.joint] / h
+                options[g.label] = [Option(g, col, None, {}, 1, instr=_relevant(st, col, instr))]
+        elif key in LINEAR or (key == "payload" and len(gs[0].params) == 1):
+            for g in gs:
+                cols = np.zeros((m, st.C, len(g.params)))
+                instr = cols.copy() if key in INSTRUMENTED and st.use_instruments else None
+                for j, p in enumerate(g.params):
+                    cols[:, :, j], h = _one_sided(st, g, p, R0)
+                    if instr is not None:
+                        instr[:, :, j] = cols[:, :, j]
+                        instr[:, :st.nd, j] = _reference_change(st, key, {p: st.nominal[p] + h}) / h
+                options[g.label] = [Option(g, cols, None, {}, len(g.params), instr=_relevant(st, cols, instr))]
+        elif key == "payload":
+            g = gs[0]
+            pm = g.params[0]
+            mref = max(0.1 * st.nominal.get("platform.m", 0.1), 1e-3)
+            cols = np.zeros((m, st.C, 4))
+            Rm = st.R({pm: st.nominal[pm] + mref})
+            cols[:, :, 0] = (Rm - R0) / mref
+            hc = 0.01
+            moves = [({p: st.nominal[p] + hc}, {p: st.nominal[p] - hc}) for p in g.params[1:]]
+            for j, (up, down) in enumerate(moves):
+                Rp = st.R({pm: st.nominal[pm] + mref, **up})
+                Rn = st.R({pm: st.nominal[pm] + mref, **down})
+                cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
+            instr = None
+            if st.use_instruments:
+                instr = cols.copy()
+                instr[:, :st.nd, 0] = _reference_change(st, key, {pm: st.nominal[pm] + mref}) / mref
+                for j, (up, down) in enumerate(moves):
+                    instr[:, :st.nd, j + 1] = (_reference_change(st, key, {pm: st.nominal[pm] + mref, **up})
+                                                 - _reference_change(st, key, {pm: st.nominal[pm] + mref,
+                                                                                **down})) / (2 * hc * mref)
+            options[g.label] = [Option(g, cols, None, {}, 4, instr=_relevant(st, cols, instr))]
+        elif key == "geometry":
+            for g in gs:
+                cols = np.zeros((m, st.C, len(g.params)))
+                for j, p in enumerate(g.params):
+                    h = st.step(g, p)
+                    cols[:, :, j] = (st.R({p: st.nominal[p] + h}) - st.R({p: st.nominal[p] - h})) / (2 * h)
+                vw = st.vec_cols(cols, w=np.ones(st.C) / np.maximum(np.std(R0[st.train], axis=0), 1e-15))
+                s = np.linalg.svd(vw, compute_uv=False)
+                rank = int(np.sum(s > 1e-6 * s[0])) if s[0] > 0 else 0
+                if rank == 0:
+                    continue
+                options[g.label] = [Option(g, cols, None, {"rank": rank}, rank)]
+        elif key in VELOCITY_SCALED:
+            grid = st.velocity_grid()
+            opts = {g.label: [] for g in gs}
+            for vs in grid:
+                steps = {g: st.step(g, g.params[0]) for g in gs}
+                par = {}
+                for g, h in steps.items():
+                    par[g.params[0]] = st.nominal[g.params[0]] + h
+                    par[g.params[1]] = vs
+                D = st.R(par) - R0
                 for g in gs:
-                    cols = np.zeros((m, self.C, len(g.params)))
-                    for j, p in enumerate(g.params):
-                        h = self._step(g, p)
-                        cols[:, :, j] = (self.R({p: self.nominal[p] + h}) - self.R({p: self.nominal[p] - h})) / (2 * h)
-                    vw = self.vec_cols(cols, w=np.ones(self.C) / np.maximum(np.std(R0[self.train], axis=0), 1e-15))
-                    s = np.linalg.svd(vw, compute_uv=False)
-                    rank = int(np.sum(s > 1e-6 * s[0])) if s[0] > 0 else 0
-                    if rank == 0:
-                        continue
-                    self.options[g.label] = [Option(g, cols, None, {"rank": rank}, rank)]
-            elif key in VELOCITY_SCALED:
-                grid = self.velocity_grid()
-                opts = {g.label: [] for g in gs}
-                for vs in grid:
-                    steps = {g: self._step(g, g.params[0]) for g in gs}
-                    par = {}
-                    for g, h in steps.items():
-                        par[g.params[0]] = self.nominal[g.params[0]] + h
-                        par[g.params[1]] = vs
-                    D = self.R(par) - R0
-                    for g in gs:
-                        col = np.zeros((m, self.C, 1))
-                        for c in self._channels(g):
-                            col[:, c, 0] = D[:, c] / steps[g]
-                        opts[g.label].append(Option(g, col, None, {"v": float(vs)}, 2))
-                self.options.update(opts)
-            elif key in ("actuator_delay", "sensor_delay"):
-                g = gs[0]
-                p = g.params[0]
-                dmax = (self.pipe.max_shift - 2) * self.pipe.dt
-                grid = np.arange(0.25e-3, dmax + 1e-12, 0.25e-3)
-                opts = []
-                for d in grid:
-                    off = self.R({p: self.nominal[p] + d}) - R0
-                    opts.append(Option(g, None, off, {"params": {p: self.nominal[p] + d}}, 1))
-                self.options[g.label] = opts
-                if self.pipe.tau_ref_s is not None:
-                    h = 0.25e-3
-                    self._instrument_cols[g.label] = self._delay_change(p, self.nominal[p] + h, {}, R0) / h
-            elif key in ("saturation", "dead_zone"):
-                # a profile over the level: the effort limit as a fraction of the largest
-                # command, the dead-zone width as a fraction of the typical effort
-                if key == "saturation":
-                    base = np.abs(self.pipe.tau_c).max(axis=0)
-                    fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
-                else:
-                    base = np.asarray(self.sc.effort)
-                    fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
-                tmax = base
-                opts = {g.label: [] for g in gs}
-                for f in fracs:
-                    par = {g.params[0]: f * tmax[g.joint] for g in gs}
-                    D = self.R(par) - R0
-                    for g in gs:
-                        off = np.zeros((m, self.C))
-                        for c in self._channels(g):
-                            off[:, c] = D[:, c]
-                        if np.any(off[self.train] != 0):
-                            opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]},
-                                                                       "fraction": f}, 1))
-                for lab, o in opts.items():
-                    if o:
-                        self.options[lab] = o
-            if self.verbose:
-                print(f"  columns of {key}: done")
+                    col = np.zeros((m, st.C, 1))
+                    for c in st.channels(g):
+                        col[:, c, 0] = D[:, c] / steps[g]
+                    opts[g.label].append(Option(g, col, None, {"v": float(vs)}, 2))
+            options.update(opts)
+        elif key in ("actuator_delay", "sensor_delay"):
+            g = gs[0]
+            p = g.params[0]
+            dmax = (st.pipe.max_shift - 2) * st.pipe.dt
+            grid = np.arange(0.25e-3, dmax + 1e-12, 0.25e-3)
+            opts = []
+            for d in grid:
+                off = st.R({p: st.nominal[p] + d}) - R0
+                opts.append(Option(g, None, off, {"params": {p: st.nominal[p] + d}}, 1))
+            options[g.label] = opts
+            if st.pipe.tau_ref_s is not None:
+                h = 0.25e-3
+                instrument_cols[g.label] = _delay_change(st, p, st.nominal[p] + h, {}, R0) / h
+        elif key in ("saturation", "dead_zone"):
+            # a profile over the level: the effort limit as a fraction of the largest
+            # command, the dead-zone width as a fraction of the typical effort
+            if key == "saturation":
+                base = np.abs(st.pipe.tau_c).max(axis=0)
+                fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
+            else:
+                base = np.asarray(st.sc.effort)
+                fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
+            tmax = base
+            opts = {g.label: [] for g in gs}
+            for f in fracs:
+                par = {g.params[0]: f * tmax[g.joint] for g in gs}
+                D = st.R(par) - R0
+                for g in gs:
+                    off = np.zeros((m, st.C))
+                    for c in st.channels(g):
+                        off[:, c] = D[:, c]
+                    if np.any(off[st.train] != 0):
+                        opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]},
+                                                                   "fraction": f}, 1))
+            for lab, o in opts.items():
+                if o:
+                    options[lab] = o
+        if st.settings.verbose:
+            print(f"  columns of {key}: done")
+    return Candidates({lab: tuple(o) for lab, o in options.items()}, instrument_cols)
 
-    # ------------------------------------------------------------ noise model
 
-    def _k(self, g):
-        o = self.options.get(g.label)
-        return o[0].k if o else len(g.params)
+def _one_sided(st, g, p, R0):
+    """((R(p + h) - R0) / h, h), stepping down instead (h < 0) when the core refuses
+    p + h (a principal moment of inertia beyond the sum of the other two...)."""
+    h = st.step(g, p)
+    try:
+        return (st.R({p: st.nominal[p] + h}) - R0) / h, h
+    except ParameterError:
+        return (st.R({p: st.nominal[p] - h}) - R0) / -h, -h
+
+
+def _reference_change(st, key, params):
+    """Change of the effort residual along the reference motion when ``params`` are
+    set (m, nd): the instrument of an effect in INSTRUMENTED; None for the others
+    and without a reference."""
+    if key not in INSTRUMENTED or not st.use_instruments:
+        return None
+    # the residual is effort minus inverse dynamics
+    return st.pipe.reference_effort() - st.pipe.reference_effort(params)
+
+
+def _relevant(st, cols, instr):
+    """``instr`` if every instrument column is correlated with its regressor column
+    by at least MIN_RELEVANCE (on the fitted samples), else None (least squares)."""
+    if instr is None:
+        return None
+    X, Z = st.vec_cols(cols), st.vec_cols(instr)
+    for j in range(X.shape[1]):
+        nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
+        if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
+            return None
+    return instr
+
+
+def _delay_change(st, name, value, theta, Rbase):
+    """Change of the residual when the delay ``name`` goes from its value in theta
+    to ``value``: the effort channels from the reference effort (an instrument free
+    of the rate noise, when the recording has qref), the readings exactly."""
+    R = st.R(dict(theta, **{name: value}))
+    out = R - Rbase
+    cur = theta.get(name, st.nominal[name])
+    sig = st.pipe.delay_signature(name, value)
+    if sig is not None:
+        base = st.pipe.delay_signature(name, cur)
+        out[:, :st.nd] = sig - base
+    return out

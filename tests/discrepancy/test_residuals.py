@@ -14,7 +14,8 @@ from cosim.core import Model
 from cosim.discrepancy import DiagnosisError, diagnose
 from cosim.discrepancy.effects import groups_for
 from cosim.discrepancy.residuals import Pipeline
-from cosim.discrepancy.selection import LINEAR, LOCAL, Engine
+from cosim.discrepancy.engine import prepare
+from cosim.discrepancy.regressors import LINEAR, LOCAL
 from cosim.recording import Recording, RecordingError, write_recording
 
 from disc_helpers import COMBINED, rms
@@ -59,7 +60,7 @@ def engine_6pus(clean_runs):
     m = Model("6pus")
     p = Pipeline(rec, m)
     groups, _ = groups_for(m, True)
-    return Engine(p, groups)
+    return prepare(p, groups)
 
 
 def test_linear_regressors_match_central_differences(engine_6pus):
@@ -72,13 +73,13 @@ def test_linear_regressors_match_central_differences(engine_6pus):
         if g.key not in LINEAR:
             continue
         for j, name in enumerate(g.params):
-            h = 0.5 * e._step(g, name)
+            h = 0.5 * e.step(g, name)
             nom = e.nominal[name]
             sgn = 1.0 if g.effect.sign == ">=0" else -1.0  # Izz + 3h would break Ixx + Iyy >= Izz
             central = (e.R({name: nom + 3 * sgn * h}) - e.R({name: nom + sgn * h})) / (2 * sgn * h)
             if g.key in LOCAL:
                 keep = np.zeros(e.C, bool)
-                keep[e._channels(g)] = True
+                keep[e.channels(g)] = True
                 if g.effect.family == "kinematic":
                     keep[: e.nd] = True  # the pose the dynamics is evaluated at moves too
                 central[:, ~keep] = 0.0
