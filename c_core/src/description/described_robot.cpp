@@ -305,6 +305,12 @@ inline V6 twist_row(const V3& f, const V3& rP) {
   return r;
 }
 
+// W += twist_row(f, rP), without the temporary.
+inline void add_load(V6& W, const V3& f, const V3& rP) {
+  W.head<3>() += f;
+  W.tail<3>() += rP.cross(f);
+}
+
 inline M3 skew(const V3& v) {
   M3 S;
   S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
@@ -371,6 +377,7 @@ struct LegGrad {
   V3 w;   // the rod (strut) vector from its proximal joint to P
   V3 t;   // rails and arms: d S / dq (D[0] = t dq)
   V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
+  V6 j;   // the leg's twist row (dq, rP x dq): qd = j . (p_dot, omega)
 };
 
 // points = false: only q and dq/dP (the Jacobian).
@@ -511,8 +518,11 @@ void state_of(const Model& m, const double* x, State& st, bool points = true, bo
   platform_of(m, x, st.pf);
   if (rows) st.J.setZero();
   for (int i = 0; i < m.n; ++i) {
-    leg_grad(m, i, st.pf, x, st.lg[i], Check::none, points);
-    if (rows) st.J.row(i) = t_transpose(m, st.pf, twist_row(st.lg[i].dq.transpose(), st.lg[i].rP)).transpose();
+    LegGrad& lg = st.lg[i];
+    leg_grad(m, i, st.pf, x, lg, Check::none, points);
+    lg.j.head<3>() = lg.dq.transpose();
+    lg.j.tail<3>() = lg.rP.cross(lg.j.head<3>());
+    if (rows) st.J.row(i) = t_transpose(m, st.pf, lg.j).transpose();
   }
 }
 
@@ -526,32 +536,66 @@ inline void add_point_inertia(M6& Mt, const M3& MP, const V3& r) {
   Mt.bottomRightCorner<3, 3>().noalias() -= S * MS;
 }
 
-// Task-space mass matrix M = T' Mt T, Mt the twist-space inertia of every body.
-M6 mass_of(const Model& m, const State& st) {
+// The twist-space inertia Mt of every body (KE = 1/2 nu' Mt nu, nu = (p_dot, omega)).
+// Point masses on the platform (its end bars, the payload, the rods' isotropic part at P)
+// are summed first: mp at r adds (mp I, -mp [r]x; mp [r]x, mp (|r|^2 I - r r')).  A rail's
+// or an arm's remaining inertia at P, c g g' + mx (g t' + t g') (leg_mass), is rank two in
+// twist space: with j = (g, rP x g) and u = (t, rP x t) it is j v' + v j' for
+// v = c/2 j + mx u.
+M6 twist_mass(const Model& m, const State& st) {
   const Platform& pf = st.pf;
-  M6 Mt = M6::Zero();
-  if (!m.articulated) {
-    Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
-  } else {  // half the mass at each end bar
-    for (const V3& e : m.end_bars) add_point_inertia(Mt, 0.5 * m.m_platform * M3::Identity(), pf.R * e);
+  double mr = m.articulated ? 0.0 : m.m_platform;
+  V3 h = V3::Zero();
+  M3 G = M3::Zero();  // sum mp r r'
+  auto point = [&](double mp, const V3& r) {
+    mr += mp;
+    h += mp * r;
+    G.noalias() += (mp * r) * r.transpose();
+  };
+  if (m.articulated)  // half the mass at each end bar
+    for (const V3& e : m.end_bars) point(0.5 * m.m_platform, pf.R * e);
+  if (m.m_payload != 0) point(m.m_payload, pf.R * m.c_payload);
+  M6 Mt = M6::Zero(), A = M6::Zero();
+  for (int i = 0; i < m.n; ++i) {
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    if (l.type->joint == Joint::strut) {
+      add_point_inertia(Mt, leg_mass(l, lg), lg.rP);
+      continue;
+    }
+    const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
+    const double c = l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm;
+    point(ms, lg.rP);
+    V6 v;  // (0.5 c) j + mx (t, rP x t)
+    v.head<3>() = (0.5 * c) * lg.j.head<3>() + mx * lg.t;
+    v.tail<3>() = (0.5 * c) * lg.j.tail<3>() + mx * lg.rP.cross(lg.t);
+    A.noalias() += lg.j * v.transpose();
   }
+  Mt += A + A.transpose();
+  Mt.topLeftCorner<3, 3>().diagonal().array() += mr;
+  const M3 H = skew(h);
+  Mt.topRightCorner<3, 3>() -= H;
+  Mt.bottomLeftCorner<3, 3>() += H;
+  Mt.bottomRightCorner<3, 3>() -= G;
+  Mt.bottomRightCorner<3, 3>().diagonal().array() += G.trace();
   if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
-  if (m.m_payload != 0) add_point_inertia(Mt, m.m_payload * M3::Identity(), pf.R * m.c_payload);
-  for (int i = 0; i < m.n; ++i) add_point_inertia(Mt, leg_mass(m.legs[i], st.lg[i]), st.lg[i].rP);
-  return t_congruence(m, pf, Mt);
+  return Mt;
 }
 
-// Generalised inertia-and-gravity force Q (J^T tau = Q) at (x, xd, xdd).
-V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
+// Task-space mass matrix M = T' Mt T.
+M6 mass_of(const Model& m, const State& st) { return t_congruence(m, st.pf, twist_mass(m, st)); }
+
+// The inertia-and-gravity loads at (x, xd, xdd) as one wrench W = (force, moment) about
+// the platform origin: the generalised force is Q = T' W (J^T tau = Q).
+V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd) {
   const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, xdd, pm);
-  // The loads as one wrench about the platform origin, W = (force, moment); Q = T^T W.
   V6 W;
   W.setZero();
   auto point_load = [&](double mass, const V3& rc) {
     const V3 ac = pm.a + pm.al.cross(rc) + pm.om.cross(pm.om.cross(rc));
-    W += twist_row(mass * (ac - m.g), rc);
+    add_load(W, mass * (ac - m.g), rc);
   };
   if (!m.articulated) W.head<3>() = m.m_platform * (pm.a - m.g);
   else
@@ -567,9 +611,12 @@ V6 generalised_force(const Model& m, const State& st, const double* xd, const do
     const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
     LegMotion lm;
     leg_motion(m, i, st.lg[i], vP, aP, lm);
-    W += twist_row(leg_force(m, m.legs[i], st.lg[i], lm), rP);
+    add_load(W, leg_force(m, m.legs[i], st.lg[i], lm), rP);
   }
-  return t_transpose(m, pf, W);
+  return W;
+}
+V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
+  return t_transpose(m, st.pf, load_wrench(m, st, xd, xdd));
 }
 
 // tau from J^T tau = Q (the n x n blocks).
@@ -587,15 +634,53 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
   else solve_jt_n(m, Mat(J.topLeftCorner(m.n, m.n).transpose()), Vec(Q.head(m.n)), x, tau);
 }
 
-// xdd = M^-1 (J^T tau - h) and B = M^-1 J^T (the n x n blocks).
-template <class MatT, class VecT>
-void forward_n(const Model& m, const MatT& M, const MatT* JT, const VecT& rhs, const double* x, double* xdd, double* B) {
-  Eigen::LLT<MatT> llt(M);
-  if (llt.info() != Eigen::Success)
-    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
-  const VecT a = llt.solve(rhs);
-  for (int i = 0; i < m.n; ++i) xdd[i] = a[i];
-  if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(*JT);
+// Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
+// triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
+// general LLT at these sizes (the forward dynamics run at every integrator stage).
+struct SmallCholesky {
+  int n = 0;
+  double L[6][6], inv[6];  // inv: reciprocals of the diagonal
+  bool factor(const M6& A, int size) {  // false: a pivot is not positive (A not positive definite)
+    n = size;
+    for (int j = 0; j < n; ++j) {
+      double d = A(j, j);
+      for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+      if (!(d > 0)) return false;
+      inv[j] = 1.0 / std::sqrt(d);
+      for (int i = j + 1; i < n; ++i) {
+        double s = A(i, j);
+        for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+        L[i][j] = s * inv[j];
+      }
+    }
+    return true;
+  }
+  V6 solve(const V6& b) const {
+    V6 y, x;
+    for (int i = 0; i < n; ++i) {
+      double s = b[i];
+      for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
+      y[i] = s * inv[i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      double s = y[i];
+      for (int k = i + 1; k < n; ++k) s -= L[k][i] * x[k];
+      x[i] = s * inv[i];
+    }
+    return x;
+  }
+};
+
+// The angle rates a_dot = E^-1 w of a twist-space angular vector w (E is singular at
+// ry = +-90 deg).
+void angle_rates(const Model& m, const Platform& pf, const double* x, const V3& w, double* ad) {
+  if (std::abs(pf.cy) < 1e-9)
+    throw Error(PKM_ERR_SINGULAR, "the Euler angles are singular (ry = +-90 deg) at " + pose_text(m, x) +
+                                      ": angle rates are undefined there");
+  const double az = (-pf.sx * w.y() + pf.cx * w.z()) / pf.cy;
+  ad[2] = az;
+  ad[1] = pf.cx * w.y() + pf.sx * w.z();
+  ad[0] = w.x() - pf.sy * az;
 }
 
 // The legs' passive revolute joints at the home pose with the dependent components at 0
@@ -719,6 +804,8 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
   m->ndep = (int)d_.dependent.size();
   for (int k = 0; k < m->ndep; ++k) m->dep[k] = d_.dependent[k];
+  m->full_pose = m->n == 6 && !m->ndep;
+  for (int j = 0; j < m->n; ++j) m->full_pose &= m->coord[j] == j;
   if (m->ndep) check_passive_joints(*m, bad);
   // The home pose must be reachable, within the joint limits and away from singularities.
   RobotData rd;
@@ -935,8 +1022,15 @@ void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData&, const do
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
   State st;
-  state_of(m, x, st);
-  solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
+  state_of(m, x, st, true, !m.full_pose);
+  if (!m.full_pose) {
+    solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
+    return;
+  }
+  // T square: J^T tau = T' W is Jc tau = W, Jc's columns the legs' twist rows.
+  M6 Jc;
+  for (int i = 0; i < 6; ++i) Jc.col(i) = st.lg[i].j;
+  solve_jt_n(m, Jc, load_wrench(m, st, xd, xdd), x, tau);
 }
 
 void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const {
@@ -948,23 +1042,44 @@ void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData&, const double*
 
 bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&, const double* x, const double* xd,
                                                const double* tau, double* xdd, double* B) const {
-  // M xdd = J^T tau - h with h = Q(x, xd, xdd = 0).
+  // J^T tau = T' Jc tau, Jc's columns the legs' twist rows j_i = (dq_i, rP_i x dq_i), and the
+  // loads W(xdd) = W(0) + Mt (T xdd) (W(0) holds the T_dot xd part): T' Mt T xdd = T' (Jc tau - W(0)).
   const Model& m = model_of(rm);
   const int n = m.n;
   State st;
-  state_of(m, x, st, true, B != nullptr);
-  const V6 h = generalised_force(m, st, xd, nullptr);
-  V6 w = V6::Zero();  // J^T tau = T' sum_i tau_i (dq_i, rP_i x dq_i)
-  for (int i = 0; i < n; ++i) w += tau[i] * twist_row(st.lg[i].dq.transpose(), st.lg[i].rP);
-  const V6 rhs = t_transpose(m, st.pf, w) - h;
-  const M6 M = mass_of(m, st);
-  if (n == 6) {
-    const M6 JT = B ? M6(st.J.transpose()) : M6();
-    forward_n(m, M, B ? &JT : nullptr, rhs, x, xdd, B);
-  } else {
-    const Mat JT = B ? Mat(st.J.topLeftCorner(n, n).transpose()) : Mat();
-    forward_n(m, Mat(M.topLeftCorner(n, n)), B ? &JT : nullptr, Vec(rhs.head(n)), x, xdd, B);
+  state_of(m, x, st, true, false);
+  M6 Jc = M6::Zero();
+  V6 W = -load_wrench(m, st, xd, nullptr);
+  for (int i = 0; i < n; ++i) {
+    Jc.col(i) = st.lg[i].j;
+    W += tau[i] * Jc.col(i);
   }
+  const M6 Mt = twist_mass(m, st);
+  SmallCholesky llt;
+  auto not_definite = [&] {
+    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
+  };
+  if (m.full_pose) {
+    // T = blockdiag(I, E) is square: Mt (p_dd, E a_dd) = Jc tau - W(0).
+    if (!llt.factor(Mt, 6)) not_definite();
+    auto to_pose = [&](const V6& y, double* out, int stride) {
+      double ad[3];
+      angle_rates(m, st.pf, x, y.tail<3>(), ad);
+      for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
+    };
+    to_pose(llt.solve(W), xdd, 1);
+    if (B)
+      for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
+    return true;
+  }
+  if (!llt.factor(t_congruence(m, st.pf, Mt), n)) not_definite();
+  const V6 a = llt.solve(t_transpose(m, st.pf, W));
+  for (int i = 0; i < n; ++i) xdd[i] = a[i];
+  if (B)  // B = M^-1 J^T, column j = M^-1 T' j_j
+    for (int j = 0; j < n; ++j) {
+      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
+      for (int i = 0; i < n; ++i) B[n * i + j] = b[i];
+    }
   return true;
 }
 

@@ -107,6 +107,9 @@ struct Model final : RobotModel {
   int ndep = 0;
   int dep[6];
   bool rotates = false;  // some rotation is a coordinate
+  // The coordinates are the whole pose (x, y, z, rx, ry, rz) in order, none dependent: the
+  // map T of the pose rates to the twist is square, and the dynamics solve in twist space.
+  bool full_pose = false;
   bool articulated = false;
   double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
   std::vector<LegModel> legs;
