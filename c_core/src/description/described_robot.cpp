@@ -76,7 +76,7 @@ __attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, c
   };
   const P3<T> d = P - l.base;
   out[1] = P;
-  if (l.type->joint == Joint::rail) {
+  if (l.joint == Joint::rail) {
     // |d - q s|^2 = L^2 with d = P - S0: ss q^2 - 2 b q + |d|^2 - L^2 = 0.
     const T b = dot(l.dir, d);
     const T disc = b * b - l.ss * (dot(d, d) - l.L * l.L);
@@ -85,7 +85,7 @@ __attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, c
                                                : "the rod is perpendicular to its rail (inverse-kinematic singularity)");
     q = l.inv_ss * (b - l.branch * sqrt(disc));
     out[0] = l.base + along(q, l.dir);
-  } else if (l.type->joint == Joint::arm) {
+  } else if (l.joint == Joint::arm) {
     // alpha cos q + beta sin q = K with d = P - A in the (u, w) frame of the arm.
     const T al = dot(l.u, d), be = dot(l.w, d);
     const T K = (0.5 / l.r) * (dot(d, d) + (l.r * l.r - l.L * l.L));
@@ -389,7 +389,7 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
   leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
   for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
   const V3 w = lg.w = P - V3(pts[0].x, pts[0].y, pts[0].z);
-  if (l.type->joint == Joint::strut) {
+  if (l.joint == Joint::strut) {
     const V3 n = w / lg.q;
     lg.dq = n.transpose();
     if (points) {
@@ -401,9 +401,9 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
     }
   } else {
     // |P - S(q)| = L: w . (dP - t dq) = 0 with t = dS/dq.
-    // D[0] = t dq and the slider's or arm's centre of mass tb dq: leg_mass and leg_force use them.
+    // D[0] = t dq and the slider's or arm's centre of mass tb dq: leg_mass and leg_load use them.
     lg.t = lg.tb = l.dir;
-    if (l.type->joint == Joint::arm) {
+    if (l.joint == Joint::arm) {
       double sq, cq;
       sin_cos(lg.q, sq, cq);
       const V3 e = cq * l.u + sq * l.w, ep = cq * l.w - sq * l.u;
@@ -414,52 +414,12 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
   }
 }
 
-// One leg's joint and point accelerations for its platform point's velocity vP and
-// acceleration aP, in closed form per joint kind (the second derivative of the closure;
-// joint_acceleration gets the same from forward-mode Taylor coefficients, and the tests
-// hold the two together).
-struct LegMotion {
-  double qdd;
-  V3 acc[4];
-};
-void leg_motion(const Model& m, int i, const LegGrad& lg, const V3& vP, const V3& aP, LegMotion& lm) {
-  const LegModel& l = m.legs[i];
-  const V3& w = lg.w;
-  const double qd = lg.dq.dot(vP);
-  lm.acc[1] = aP;
-  if (l.type->joint == Joint::rail) {
-    // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
-    const V3 wd = vP - qd * l.dir;
-    lm.qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
-    lm.acc[0] = lm.qdd * l.dir;
-  } else if (l.type->joint == Joint::arm) {
-    // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
-    double sq, cq;
-    sin_cos(lg.q, sq, cq);
-    const V3 e = cq * l.u + sq * l.w, t = l.r * (cq * l.w - sq * l.u);
-    const V3 wd = vP - qd * t;
-    lm.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
-    lm.acc[0] = lm.qdd * t - (l.r * qd * qd) * e;
-    const V3 ep = t / l.r;
-    lm.acc[2] = lm.qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * ep);
-  } else {
-    // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
-    const double q = lg.q;
-    const V3 n = w / q, nd = (vP - qd * n) / q;
-    lm.qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
-    const V3 ndd = (aP - lm.qdd * n - (2 * qd) * nd) / q;
-    lm.acc[0].setZero();
-    lm.acc[2] = l.l_cyl * ndd;
-    lm.acc[3] = aP - l.l_pis * ndd;
-  }
-}
-
 // The leg's inertia seen at its platform point: KE = 1/2 vP' MP vP.  Rails and arms
 // move their body points along one direction t per unit q (D = k t dq, rank one), which
 // the sums use; struts take the general form.
 M3 leg_mass(const LegModel& l, const LegGrad& lg) {
   M3 MP;
-  if (l.type->joint != Joint::strut) {
+  if (l.joint != Joint::strut) {
     const V3& t = lg.t;
     const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
     const double c = l.m_body * lg.tb.squaredNorm() + ms * t.squaredNorm() + l.I_arm;
@@ -480,30 +440,61 @@ M3 leg_mass(const LegModel& l, const LegGrad& lg) {
   return MP;
 }
 
-// The leg's inertia-and-gravity load seen at its platform point (virtual power).
-V3 leg_force(const Model& m, const LegModel& l, const LegGrad& lg, const LegMotion& lm) {
-  if (l.type->joint != Joint::strut) {
+// The leg's inertia-and-gravity load seen at its platform point (virtual power) for the
+// point's velocity vP and acceleration aP.  The joint acceleration and the body points'
+// accelerations in closed form per joint kind (the second derivative of the closure;
+// joint_acceleration gets qdd from forward-mode Taylor coefficients, and the tests hold the
+// two together).
+V3 leg_load(const Model& m, const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+  const V3& w = lg.w;
+  const double qd = lg.dq.dot(vP);
+  if (l.joint != Joint::strut) {
     // D_body = tb dq, D_S = t dq, D_P = I: the loads at S and the body act through dq.
-    const bool arm = l.type->joint == Joint::arm;
+    double qdd;
+    V3 aS, aB;  // the slider or elbow, the slider or arm centre of mass
+    if (l.joint == Joint::rail) {
+      // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
+      const V3 wd = vP - qd * l.dir;
+      qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+      aS = aB = qdd * l.dir;
+    } else {
+      // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
+      double sq, cq;
+      sin_cos(lg.q, sq, cq);
+      const V3 e = cq * l.u + sq * l.w;
+      const V3& t = lg.t;
+      const V3 wd = vP - qd * t;
+      qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+      aS = qdd * t - (l.r * qd * qd) * e;
+      aB = qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * (t / l.r));
+    }
     const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
-    const V3& aS = lm.acc[0];
-    const V3& aP = lm.acc[1];
-    const V3 Fb = l.m_body * (lm.acc[arm ? 2 : 0] - m.g);
+    const V3 Fb = l.m_body * (aB - m.g);
     const V3 Fs = ms * aS + mx * aP - (mr / 2) * m.g;
     const V3 Fp = mx * aS + ms * aP - (mr / 2) * m.g;
-    const double along = lg.tb.dot(Fb) + lg.t.dot(Fs) + l.I_arm * lm.qdd;
+    const double along = lg.tb.dot(Fb) + lg.t.dot(Fs) + l.I_arm * qdd;
     return Fp + along * lg.dq.transpose();
   }
+  // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
+  const double q = lg.q;
+  const V3 n = w / q, nd = (vP - qd * n) / q;
+  const double qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
+  const V3 ndd = (aP - qdd * n - (2 * qd) * nd) / q;
+  V3 acc[4];
+  acc[0].setZero();
+  acc[1] = aP;
+  acc[2] = l.l_cyl * ndd;
+  acc[3] = aP - l.l_pis * ndd;
   V3 f = V3::Zero();
   for (int k = 0; k < l.nmass; ++k)
-    f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (lm.acc[l.mass[k].a] - m.g));
+    f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (acc[l.mass[k].a] - m.g));
   for (int k = 0; k < l.nrod; ++k) {
     const Rod& r = l.rod[k];
-    const V3 Fa = (r.m / 3) * lm.acc[r.a] + (r.m / 6) * lm.acc[r.b] - (r.m / 2) * m.g;
-    const V3 Fb = (r.m / 6) * lm.acc[r.a] + (r.m / 3) * lm.acc[r.b] - (r.m / 2) * m.g;
+    const V3 Fa = (r.m / 3) * acc[r.a] + (r.m / 6) * acc[r.b] - (r.m / 2) * m.g;
+    const V3 Fb = (r.m / 6) * acc[r.a] + (r.m / 3) * acc[r.b] - (r.m / 2) * m.g;
     f.noalias() += lg.D[r.a].transpose() * Fa + lg.D[r.b].transpose() * Fb;
   }
-  if (l.I_arm != 0) f += (l.I_arm * lm.qdd) * lg.dq.transpose();
+  if (l.I_arm != 0) f += (l.I_arm * qdd) * lg.dq.transpose();
   return f;
 }
 
@@ -559,7 +550,7 @@ M6 twist_mass(const Model& m, const State& st) {
   for (int i = 0; i < m.n; ++i) {
     const LegModel& l = m.legs[i];
     const LegGrad& lg = st.lg[i];
-    if (l.type->joint == Joint::strut) {
+    if (l.joint == Joint::strut) {
       add_point_inertia(Mt, leg_mass(l, lg), lg.rP);
       continue;
     }
@@ -609,9 +600,7 @@ V6 load_wrench(const Model& m, const State& st, const double* xd, const double* 
     const V3& rP = st.lg[i].rP;
     const V3 vP = pm.v + pm.om.cross(rP);
     const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
-    LegMotion lm;
-    leg_motion(m, i, st.lg[i], vP, aP, lm);
-    add_load(W, leg_force(m, m.legs[i], st.lg[i], lm), rP);
+    add_load(W, leg_load(m, m.legs[i], st.lg[i], vP, aP), rP);
   }
   return W;
 }
@@ -703,7 +692,7 @@ void check_passive_joints(const Model& m, const Bad& bad) {
     const double off = std::abs(l.plane_n.dot(d));
     if (off > 0.5 * d.norm())
       bad("leg " + std::to_string(i + 1) + ": its platform point is " + g6(off) + " m off the plane its passive revolute "
-          "joint turns the leg in (through its " + (l.type->joint == Joint::rail ? "rail" : "base joint") +
+          "joint turns the leg in (through its " + (l.joint == Joint::rail ? "rail" : "base joint") +
           ", normal to revolute_axis) at the home pose, " + g6(d.norm()) + " m from it: the revolute axis must be "
           "perpendicular to the leg, not along it or through the platform point");
   }
@@ -781,6 +770,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int i = 0; i < m->n; ++i) {
     LegModel l;
     l.type = d_.legs[i];
+    l.joint = l.type->joint;
     l.type->leg->compile(get, i, d_.lumped_rods[i], l);
     if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
     if (d_.articulated) l.f = vec("leg", i, "f");
@@ -876,8 +866,8 @@ void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x
     const LegGrad& lg = st.lg[i];
     const V3& w = lg.w;
     double jq;
-    if (l.type->joint == Joint::rail) jq = w.dot(l.dir);
-    else if (l.type->joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
+    if (l.joint == Joint::rail) jq = w.dot(l.dir);
+    else if (l.joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
     else jq = lg.q;
     const V6 jx = t_transpose(m, st.pf, twist_row(w, lg.rP));
     for (int j = 0; j < n; ++j) {
@@ -941,8 +931,8 @@ void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const doub
   double t1 = 1.0;
   for (int i = 0; i < n; ++i) {
     const LegModel& l = m.legs[i];
-    if (l.type->joint == Joint::rail) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * std::sqrt(l.ss)));
-    if (l.type->joint == Joint::arm) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * l.r));
+    if (l.joint == Joint::rail) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * std::sqrt(l.ss)));
+    if (l.joint == Joint::arm) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * l.r));
   }
   // Direct: 1 / cond of J with the rotation columns scaled by the platform radius.
   for (int j = 0; j < n; ++j)
@@ -974,7 +964,7 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
     P3<double> p[4];
     double q;
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q, p, Check::none, x);
-    const P3<double> moving = l.type->joint == Joint::strut ? p[2] : p[0];  // a strut: its cylinder's end
+    const P3<double> moving = l.joint == Joint::strut ? p[2] : p[0];  // a strut: its cylinder's end
     const P3<double> rows[3] = {{l.base.x(), l.base.y(), l.base.z()}, moving, p[1]};
     for (int r = 0; r < 3; ++r) {
       pts[9 * i + 3 * r + 0] = rows[r].x;
@@ -1000,7 +990,7 @@ void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, 
 void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const double* x, const double* xd,
                                         const double* xdd, double* qdd) const {
   // Forward-mode Taylor coefficients of the leg closure along P(t) = P + t vP + t^2/2 aP
-  // (independent of leg_motion's closed forms, which the tests compare with this).
+  // (independent of leg_load's closed forms, which the tests compare with this).
   const Model& m = model_of(rm);
   Platform pf;
   platform_of(m, x, pf);

@@ -78,6 +78,7 @@ struct Rod {  // uniform slender rod between points a and b
 
 struct LegModel {
   const LegType* type = nullptr;
+  Joint joint = Joint::rail;  // type->joint, at hand in the legs' loops
   Eigen::Vector3d p;  // platform point in the platform frame [m]
   Eigen::Vector3d f = Eigen::Vector3d::Zero();  // articulated platform: fixed offset of the point [m]
   Eigen::Vector3d base;  // rail: S0; arm: axis point A; strut: base point B [m]
