@@ -371,7 +371,7 @@ void platform_motion(const Model& m, const Platform& pf, const double* xd, const
 struct LegGrad {
   Eigen::RowVector3d dq;  // dq / dP
   M3 D[4];                // d point / dP
-  double pos[4][3];
+  P3<double> pos[4];  // the body points
   double q;
   V3 rP;
   V3 w;   // the rod (strut) vector from its proximal joint to P
@@ -385,10 +385,8 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
               bool points = true) {
   const LegModel& l = m.legs[i];
   const V3 P = attachment(m, pf, i, lg.rP);
-  P3<double> pts[4];
-  leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
-  for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
-  const V3 w = lg.w = P - V3(pts[0].x, pts[0].y, pts[0].z);
+  leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, check, x);
+  const V3 w = lg.w = P - V3(lg.pos[0].x, lg.pos[0].y, lg.pos[0].z);
   if (l.joint == Joint::strut) {
     const V3 n = w / lg.q;
     lg.dq = n.transpose();
@@ -626,17 +624,19 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
 // Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
 // triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
 // general LLT at these sizes (the forward dynamics run at every integrator stage).
+template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
 struct SmallCholesky {
-  int n = 0;
-  double L[6][6], inv[6];  // inv: reciprocals of the diagonal
-  bool factor(const M6& A, int size) {  // false: a pivot is not positive (A not positive definite)
-    n = size;
-    for (int j = 0; j < n; ++j) {
+  int n = N;
+  double L[6][6] = {}, inv[6];  // inv: reciprocals of the diagonal
+  int size() const { return N ? N : n; }
+  bool factor(const M6& A, int size_n = N) {  // false: a pivot is not positive (A not positive definite)
+    n = size_n;
+    for (int j = 0; j < size(); ++j) {
       double d = A(j, j);
       for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
       if (!(d > 0)) return false;
       inv[j] = 1.0 / std::sqrt(d);
-      for (int i = j + 1; i < n; ++i) {
+      for (int i = j + 1; i < size(); ++i) {
         double s = A(i, j);
         for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
         L[i][j] = s * inv[j];
@@ -646,14 +646,14 @@ struct SmallCholesky {
   }
   V6 solve(const V6& b) const {
     V6 y, x;
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < size(); ++i) {
       double s = b[i];
       for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
       y[i] = s * inv[i];
     }
-    for (int i = n - 1; i >= 0; --i) {
+    for (int i = size() - 1; i >= 0; --i) {
       double s = y[i];
-      for (int k = i + 1; k < n; ++k) s -= L[k][i] * x[k];
+      for (int k = i + 1; k < size(); ++k) s -= L[k][i] * x[k];
       x[i] = s * inv[i];
     }
     return x;
@@ -1045,13 +1045,13 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&,
     W += tau[i] * Jc.col(i);
   }
   const M6 Mt = twist_mass(m, st);
-  SmallCholesky llt;
   auto not_definite = [&] {
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
   };
   if (m.full_pose) {
     // T = blockdiag(I, E) is square: Mt (p_dd, E a_dd) = Jc tau - W(0).
-    if (!llt.factor(Mt, 6)) not_definite();
+    SmallCholesky<6> llt;
+    if (!llt.factor(Mt)) not_definite();
     auto to_pose = [&](const V6& y, double* out, int stride) {
       double ad[3];
       angle_rates(m, st.pf, x, y.tail<3>(), ad);
@@ -1062,6 +1062,7 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&,
       for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
     return true;
   }
+  SmallCholesky<0> llt;
   if (!llt.factor(t_congruence(m, st.pf, Mt), n)) not_definite();
   const V6 a = llt.solve(t_transpose(m, st.pf, W));
   for (int i = 0; i < n; ++i) xdd[i] = a[i];
@@ -1086,11 +1087,11 @@ void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, c
   V6 v = V6::Zero();
   for (int j = 0; j < m.n; ++j) v[j] = xd[j];
   *kinetic = 0.5 * v.dot(mass_of(m, st) * v);
-  auto height = [&](const double* p) { return -m.g.dot(V3(p[0], p[1], p[2])); };
+  auto height = [&](const P3<double>& p) { return -m.g.dot(V3(p.x, p.y, p.z)); };
   // The platform's centre of mass: its origin, or an articulated platform's centre (the ends' mean).
   double V = -m.g.dot(st.pf.p + st.pf.R * m.c_platform) * m.m_platform;
   const V3 c = st.pf.p + st.pf.R * m.c_payload;
-  V += m.m_payload * height(c.data());
+  V += m.m_payload * height(P3<double>{c.x(), c.y(), c.z()});
   for (int i = 0; i < m.n; ++i) {
     const LegModel& l = m.legs[i];
     const LegGrad& lg = st.lg[i];
