@@ -496,23 +496,51 @@ V3 leg_load(const Model& m, const LegModel& l, const LegGrad& lg, const V3& vP, 
   return f;
 }
 
-// Everything of a pose the dynamics need, and the motion-dependent part.
+// Everything of a pose the dynamics need.
 struct State {
   Platform pf;
   LegGrad lg[kMaxLegs];
-  M6 J;  // dq/dx (zero beyond n)
+  M6 J;              // dq/dx (zero beyond n), if rows
+  bool rows = false;
 };
+// J's rows from the legs' twist rows.
+void add_rows(const Model& m, State& st) {
+  st.J.setZero();
+  for (int i = 0; i < m.n; ++i) st.J.row(i) = t_transpose(m, st.pf, st.lg[i].j).transpose();
+  st.rows = true;
+}
 // rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
-void state_of(const Model& m, const double* x, State& st, bool points = true, bool rows = true) {
+void state_of(const Model& m, const double* x, State& st, bool rows) {
   platform_of(m, x, st.pf);
-  if (rows) st.J.setZero();
+  st.rows = false;
   for (int i = 0; i < m.n; ++i) {
     LegGrad& lg = st.lg[i];
-    leg_grad(m, i, st.pf, x, lg, Check::none, points);
+    leg_grad(m, i, st.pf, x, lg, Check::none);
     lg.j.head<3>() = lg.dq.transpose();
     lg.j.tail<3>() = lg.rP.cross(lg.j.head<3>());
-    if (rows) st.J.row(i) = t_transpose(m, st.pf, lg.j).transpose();
   }
+  if (rows) add_rows(m, st);
+}
+
+// A pkm_data's part of a described robot: the state of the last pose it saw.  The calls at
+// one pose (the drive layer asks for J, the joint velocities, the dynamics and M in turn)
+// compute it once; a new pose (compared value by value) or a failed call starts afresh.
+struct Data final : RobotData {
+  bool valid = false;
+  double x[6];
+  State st;
+};
+const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows) {
+  Data& d = static_cast<Data&>(rd);  // every pkm_data of a described robot holds one (make_data)
+  if (!(d.valid && std::equal(x, x + m.n, d.x))) {
+    d.valid = false;
+    state_of(m, x, d.st, rows);
+    std::copy(x, x + m.n, d.x);
+    d.valid = true;
+  } else if (rows && !d.st.rows) {
+    add_rows(m, d.st);
+  }
+  return d.st;
 }
 
 // Adds A' MP A for A = [I, -[r]x] (a point at r on the platform, twist space).
@@ -627,7 +655,7 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
 template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
 struct SmallCholesky {
   int n = N;
-  double L[6][6] = {}, inv[6];  // inv: reciprocals of the diagonal
+  double L[6][6] = {}, inv[6] = {};  // inv: reciprocals of the diagonal
   int size() const { return N ? N : n; }
   bool factor(const M6& A, int size_n = N) {  // false: a pivot is not positive (A not positive definite)
     n = size_n;
@@ -798,7 +826,8 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int j = 0; j < m->n; ++j) m->full_pose &= m->coord[j] == j;
   if (m->ndep) check_passive_joints(*m, bad);
   // The home pose must be reachable, within the joint limits and away from singularities.
-  RobotData rd;
+  const std::unique_ptr<RobotData> rdp = make_data(*m);
+  RobotData& rd = *rdp;
   double q[6], meas[2];
   try {
     ik(*m, rd, m->home, q);
@@ -816,6 +845,8 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
         "(1 / cond J = " + g6(meas[1]) + " < 1e-3)");
   return m;
 }
+
+std::unique_ptr<RobotData> DescribedRobot::make_data(const RobotModel&) const { return std::make_unique<Data>(); }
 
 void DescribedRobot::home(const RobotModel& rm, double* x) const {
   const Model& m = model_of(rm);
@@ -849,11 +880,10 @@ void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, doubl
   }
 }
 
-void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x, double* Jx, double* Jq,
+void DescribedRobot::jacobians(const RobotModel& rm, RobotData& rd, const double* x, double* Jx, double* Jq,
                                double* J) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st, false);
+  const State& st = state_at(m, rd, x, true);
   const int n = m.n;
   if (J)
     for (int i = 0; i < n; ++i)
@@ -974,12 +1004,11 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
   }
 }
 
-void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, const double* x,
+void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData& rd, const double* x,
                                               double* measure_bound, double* det_j) const {
   // The J of state_of (no points), scaled as in singularity(), one LU.
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st, false);
+  const State& st = state_at(m, rd, x, true);
   M6 A = st.J;
   for (int j = 0; j < m.n; ++j)
     if (m.coord[j] >= 3) A.col(j) /= m.r_char;
@@ -1008,11 +1037,10 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const 
   }
 }
 
-void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st, true, !m.full_pose);
+  const State& st = state_at(m, rd, x, !m.full_pose);
   if (!m.full_pose) {
     solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
     return;
@@ -1023,21 +1051,19 @@ void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData&, const do
   solve_jt_n(m, Jc, load_wrench(m, st, xd, xdd), x, tau);
 }
 
-void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const {
+void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData& rd, const double* x, double* M) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st);
+  const State& st = state_at(m, rd, x, false);
   Eigen::Map<Mat>(M, m.n, m.n) = mass_of(m, st).topLeftCorner(m.n, m.n);
 }
 
-bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                                const double* tau, double* xdd, double* B) const {
   // J^T tau = T' Jc tau, Jc's columns the legs' twist rows j_i = (dq_i, rP_i x dq_i), and the
   // loads W(xdd) = W(0) + Mt (T xdd) (W(0) holds the T_dot xd part): T' Mt T xdd = T' (Jc tau - W(0)).
   const Model& m = model_of(rm);
   const int n = m.n;
-  State st;
-  state_of(m, x, st, true, false);
+  const State& st = state_at(m, rd, x, false);
   M6 Jc = M6::Zero();
   V6 W = -load_wrench(m, st, xd, nullptr);
   for (int i = 0; i < n; ++i) {
@@ -1079,11 +1105,10 @@ void DescribedRobot::forward_dynamics(const RobotModel& rm, RobotData& rd, const
   forward_dynamics_response(rm, rd, x, xd, tau, xdd, nullptr);
 }
 
-void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, const double* xd, double* kinetic,
+void DescribedRobot::energy(const RobotModel& rm, RobotData& rd, const double* x, const double* xd, double* kinetic,
                             double* potential) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st);
+  const State& st = state_at(m, rd, x, false);
   V6 v = V6::Zero();
   for (int j = 0; j < m.n; ++j) v[j] = xd[j];
   *kinetic = 0.5 * v.dot(mass_of(m, st) * v);

@@ -176,6 +176,7 @@ class DescribedRobot : public Robot {
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
                                       const std::vector<double>& values) const override;
   void home(const RobotModel&, double* x) const override;
+  std::unique_ptr<RobotData> make_data(const RobotModel&) const override;
   const char* joint_prefix() const override;
   const char* joint_noun() const override;
   bool joints_angular() const override { return d_.joint == Joint::arm; }
