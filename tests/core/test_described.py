@@ -126,7 +126,7 @@ def test_closed_form_derivatives_agree_with_forward_mode_and_finite_differences(
         # J (closed form) against central differences of the inverse kinematics
         Jfd = np.column_stack([(m.ik(x + h * e) - m.ik(x - h * e)) / (2 * h) for e in np.eye(m.ndof)])
         assert np.abs(J - Jfd).max() < 1e-6 * max(1.0, np.abs(J).max())
-        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (Jdot forward-mode too)
+        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (J and Jdot in closed form)
         qdd = m.joint_acceleration(x, xd, xdd)
         assert rel(qdd, J @ xdd + m.jacobian_dot(x, xd) @ xd) < 1e-10
         # Jx xd = Jq qd

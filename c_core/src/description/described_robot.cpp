@@ -907,13 +907,14 @@ void DescribedRobot::jacobians(const RobotModel& rm, RobotData& rd, const double
   }
 }
 
-void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                   double* Jdot) const {
-  // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first from the
-  // gradient of q along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.
+  // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first in closed
+  // form per joint kind along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.  (The tests
+  // hold J xdd + Jdot xd against joint_acceleration's forward-mode Taylor coefficients.)
   const Model& m = model_of(rm);
-  Platform pf;
-  platform_of(m, x, pf);
+  const State& st = state_at(m, rd, x, false);
+  const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, nullptr, pm);
   M36 Jwd = M36::Zero();  // d/dt of Jw: the columns of E_dot
@@ -934,20 +935,33 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
     for (int j = 0; j < m.n; ++j)
       if (m.coord[j] >= 3) Jwd.col(j) = Ed.col(m.coord[j] - 3);
   }
-  using GT = Grad<3, TT>;
   for (int i = 0; i < m.n; ++i) {
-    V3 rP;
-    const V3 P = attachment(m, pf, i, rP), vP = pm.v + pm.om.cross(rP);
-    const P3<GT> Pg{GT::variable(TT(P.x(), vP.x(), 0), 0), GT::variable(TT(P.y(), vP.y(), 0), 1),
-                    GT::variable(TT(P.z(), vP.z(), 0), 2)};
-    GT q;
-    P3<GT> pts[4];
-    leg_geometry(m, i, Pg, q, pts, Check::none, x);
-    Eigen::RowVector3d dq, dqd;
-    for (int k = 0; k < 3; ++k) dq[k] = q.d[k].v, dqd[k] = q.d[k].d1;
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    const V3& rP = lg.rP;
+    const V3 vP = pm.v + pm.om.cross(rP);
+    const V3& w = lg.w;
+    const double qd = lg.dq.dot(vP);
+    Eigen::RowVector3d dqd;
+    if (l.joint == Joint::strut) {  // dq/dP = n' = w' / q
+      dqd = ((vP - qd * lg.dq.transpose()) / lg.q).transpose();
+    } else {
+      // dq/dP = w' / (w . t), w = P - S(q), t = dS/dq: wd = vP - qd t, and t's rate is 0 on a
+      // rail, -r qd e(q) on an arm.
+      const V3& t = lg.t;
+      const V3 wd = vP - qd * t;
+      double c_rate = wd.dot(t);
+      if (l.joint == Joint::arm) {
+        double sq, cq;
+        sin_cos(lg.q, sq, cq);
+        c_rate -= l.r * qd * w.dot(cq * l.u + sq * l.w);
+      }
+      const double c = w.dot(t);
+      dqd = (wd / c - (c_rate / (c * c)) * w).transpose();
+    }
     const M36 JP = point_jacobian(pf, rP);
     const M36 JPd = Jtd - skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
-    const Eigen::Matrix<double, 1, 6> row = dqd * JP + dq * JPd;
+    const Eigen::Matrix<double, 1, 6> row = dqd * JP + lg.dq * JPd;
     for (int j = 0; j < m.n; ++j) Jdot[m.n * i + j] = row[j];
   }
 }
