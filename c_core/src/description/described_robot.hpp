@@ -26,9 +26,11 @@
 // total mass: its rods translate), a strut's cylinder and piston as uniform slender tubes.
 //
 // Algorithms.  The positions of all body points are written once as a template of the
-// pose (closed-form inverse kinematics per leg); forward-mode differentiation
-// (description/jet.hpp) gives the Jacobians and the accelerations exactly.  Dynamics by
-// virtual power: J^T tau = sum_b J_b^T (inertia and gravity force of b).
+// pose (closed-form inverse kinematics per leg); the Jacobians, their rate and the loads use
+// the closure's derivatives in closed form per joint kind, and forward-mode differentiation
+// (description/jet.hpp) of the same template gives the joint accelerations exactly (the
+// tests hold the two together).  Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia
+// and gravity force of b), the bodies' inertia assembled in twist space.
 #pragma once
 
 #include <Eigen/Dense>
