@@ -652,6 +652,10 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
 // Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
 // triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
 // general LLT at these sizes (the forward dynamics run at every integrator stage).
+// GCC's -Wmaybe-uninitialized reads L[i][k] (k < j) as possibly unset once the loops are
+// unrolled; every such entry is written at an earlier column j.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
 struct SmallCholesky {
   int n = N;
@@ -687,6 +691,7 @@ struct SmallCholesky {
     return x;
   }
 };
+#pragma GCC diagnostic pop
 
 // The angle rates a_dot = E^-1 w of a twist-space angular vector w (E is singular at
 // ry = +-90 deg).
