@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cosim.core import Model, robots
-from cosim.errors import ArgumentError
+from cosim.errors import ArgumentError, PkmError
 
 REPO = Path(__file__).resolve().parents[2]
 LISTED = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
@@ -126,7 +126,7 @@ def test_closed_form_derivatives_agree_with_forward_mode_and_finite_differences(
         # J (closed form) against central differences of the inverse kinematics
         Jfd = np.column_stack([(m.ik(x + h * e) - m.ik(x - h * e)) / (2 * h) for e in np.eye(m.ndof)])
         assert np.abs(J - Jfd).max() < 1e-6 * max(1.0, np.abs(J).max())
-        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (Jdot forward-mode too)
+        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (J and Jdot in closed form)
         qdd = m.joint_acceleration(x, xd, xdd)
         assert rel(qdd, J @ xdd + m.jacobian_dot(x, xd) @ xd) < 1e-10
         # Jx xd = Jq qd
@@ -474,3 +474,28 @@ def test_robot_specific_functions_are_declared_by_the_core_not_by_the_name():
         m.calib_rows(m.home())
     with pytest.raises(UnsupportedError, match="'quattro_indices'.*6pus_calib_rows, 6pus_leg_points"):
         Model("6pus").quattro_indices(np.zeros((1, 4)))
+
+
+def test_the_state_kept_for_the_last_pose_is_never_stale():
+    """A pkm_data of a described robot keeps the legs' state of the last pose: calls that
+    come back to a pose, follow a pose that failed or a parameter change give what a fresh
+    model gives at that pose, to the bit."""
+    a = Model("quattro_described")
+    X, XD, XDD = samples(a, 3, seed=5)
+    far = a.home() + np.array([5.0, 0, 0, 0])  # no leg reaches it
+
+    def fresh(k, params=None):
+        f = Model("quattro_described", params=params)
+        return f.inverse_dynamics(X[k], XD[k], XDD[k]), f.mass_matrix(X[k]), f.jacobian(X[k])
+    for k in [0, 1, 0, 2, 2, 1]:
+        if k == 2:
+            with pytest.raises(PkmError):
+                a.inverse_dynamics(far, XD[k], XDD[k])
+        for got, want in zip((a.inverse_dynamics(X[k], XD[k], XDD[k]), a.mass_matrix(X[k]), a.jacobian(X[k])),
+                             fresh(k)):
+            assert np.array_equal(got, want)
+    a.set_params({"platform.m": 2 * a.param("platform.m")})
+    for got, want in zip((a.inverse_dynamics(X[1], XD[1], XDD[1]), a.mass_matrix(X[1]), a.jacobian(X[1])),
+                         fresh(1, {"platform.m": a.param("platform.m")})):
+        assert np.array_equal(got, want)
+    assert not np.array_equal(a.mass_matrix(X[1]), fresh(1)[1])

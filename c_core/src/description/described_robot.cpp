@@ -76,7 +76,7 @@ __attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, c
   };
   const P3<T> d = P - l.base;
   out[1] = P;
-  if (l.type->joint == Joint::rail) {
+  if (l.joint == Joint::rail) {
     // |d - q s|^2 = L^2 with d = P - S0: ss q^2 - 2 b q + |d|^2 - L^2 = 0.
     const T b = dot(l.dir, d);
     const T disc = b * b - l.ss * (dot(d, d) - l.L * l.L);
@@ -85,7 +85,7 @@ __attribute__((always_inline)) inline void leg_geometry(const Model& m, int i, c
                                                : "the rod is perpendicular to its rail (inverse-kinematic singularity)");
     q = l.inv_ss * (b - l.branch * sqrt(disc));
     out[0] = l.base + along(q, l.dir);
-  } else if (l.type->joint == Joint::arm) {
+  } else if (l.joint == Joint::arm) {
     // alpha cos q + beta sin q = K with d = P - A in the (u, w) frame of the arm.
     const T al = dot(l.u, d), be = dot(l.w, d);
     const T K = (0.5 / l.r) * (dot(d, d) + (l.r * l.r - l.L * l.L));
@@ -305,6 +305,12 @@ inline V6 twist_row(const V3& f, const V3& rP) {
   return r;
 }
 
+// W += twist_row(f, rP), without the temporary.
+inline void add_load(V6& W, const V3& f, const V3& rP) {
+  W.head<3>() += f;
+  W.tail<3>() += rP.cross(f);
+}
+
 inline M3 skew(const V3& v) {
   M3 S;
   S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
@@ -365,12 +371,13 @@ void platform_motion(const Model& m, const Platform& pf, const double* xd, const
 struct LegGrad {
   Eigen::RowVector3d dq;  // dq / dP
   M3 D[4];                // d point / dP
-  double pos[4][3];
+  P3<double> pos[4];  // the body points
   double q;
   V3 rP;
   V3 w;   // the rod (strut) vector from its proximal joint to P
   V3 t;   // rails and arms: d S / dq (D[0] = t dq)
   V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
+  V6 j;   // the leg's twist row (dq, rP x dq): qd = j . (p_dot, omega)
 };
 
 // points = false: only q and dq/dP (the Jacobian).
@@ -378,11 +385,9 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
               bool points = true) {
   const LegModel& l = m.legs[i];
   const V3 P = attachment(m, pf, i, lg.rP);
-  P3<double> pts[4];
-  leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, pts, check, x);
-  for (int a = 0; a < l.npt; ++a) lg.pos[a][0] = pts[a].x, lg.pos[a][1] = pts[a].y, lg.pos[a][2] = pts[a].z;
-  const V3 w = lg.w = P - V3(pts[0].x, pts[0].y, pts[0].z);
-  if (l.type->joint == Joint::strut) {
+  leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, check, x);
+  const V3 w = lg.w = P - V3(lg.pos[0].x, lg.pos[0].y, lg.pos[0].z);
+  if (l.joint == Joint::strut) {
     const V3 n = w / lg.q;
     lg.dq = n.transpose();
     if (points) {
@@ -394,9 +399,9 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
     }
   } else {
     // |P - S(q)| = L: w . (dP - t dq) = 0 with t = dS/dq.
-    // D[0] = t dq and the slider's or arm's centre of mass tb dq: leg_mass and leg_force use them.
+    // D[0] = t dq and the slider's or arm's centre of mass tb dq: leg_mass and leg_load use them.
     lg.t = lg.tb = l.dir;
-    if (l.type->joint == Joint::arm) {
+    if (l.joint == Joint::arm) {
       double sq, cq;
       sin_cos(lg.q, sq, cq);
       const V3 e = cq * l.u + sq * l.w, ep = cq * l.w - sq * l.u;
@@ -407,52 +412,12 @@ void leg_grad(const Model& m, int i, const Platform& pf, const double* x, LegGra
   }
 }
 
-// One leg's joint and point accelerations for its platform point's velocity vP and
-// acceleration aP, in closed form per joint kind (the second derivative of the closure;
-// joint_acceleration gets the same from forward-mode Taylor coefficients, and the tests
-// hold the two together).
-struct LegMotion {
-  double qdd;
-  V3 acc[4];
-};
-void leg_motion(const Model& m, int i, const LegGrad& lg, const V3& vP, const V3& aP, LegMotion& lm) {
-  const LegModel& l = m.legs[i];
-  const V3& w = lg.w;
-  const double qd = lg.dq.dot(vP);
-  lm.acc[1] = aP;
-  if (l.type->joint == Joint::rail) {
-    // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
-    const V3 wd = vP - qd * l.dir;
-    lm.qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
-    lm.acc[0] = lm.qdd * l.dir;
-  } else if (l.type->joint == Joint::arm) {
-    // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
-    double sq, cq;
-    sin_cos(lg.q, sq, cq);
-    const V3 e = cq * l.u + sq * l.w, t = l.r * (cq * l.w - sq * l.u);
-    const V3 wd = vP - qd * t;
-    lm.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
-    lm.acc[0] = lm.qdd * t - (l.r * qd * qd) * e;
-    const V3 ep = t / l.r;
-    lm.acc[2] = lm.qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * ep);
-  } else {
-    // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
-    const double q = lg.q;
-    const V3 n = w / q, nd = (vP - qd * n) / q;
-    lm.qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
-    const V3 ndd = (aP - lm.qdd * n - (2 * qd) * nd) / q;
-    lm.acc[0].setZero();
-    lm.acc[2] = l.l_cyl * ndd;
-    lm.acc[3] = aP - l.l_pis * ndd;
-  }
-}
-
 // The leg's inertia seen at its platform point: KE = 1/2 vP' MP vP.  Rails and arms
 // move their body points along one direction t per unit q (D = k t dq, rank one), which
 // the sums use; struts take the general form.
 M3 leg_mass(const LegModel& l, const LegGrad& lg) {
   M3 MP;
-  if (l.type->joint != Joint::strut) {
+  if (l.joint != Joint::strut) {
     const V3& t = lg.t;
     const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
     const double c = l.m_body * lg.tb.squaredNorm() + ms * t.squaredNorm() + l.I_arm;
@@ -473,47 +438,109 @@ M3 leg_mass(const LegModel& l, const LegGrad& lg) {
   return MP;
 }
 
-// The leg's inertia-and-gravity load seen at its platform point (virtual power).
-V3 leg_force(const Model& m, const LegModel& l, const LegGrad& lg, const LegMotion& lm) {
-  if (l.type->joint != Joint::strut) {
+// The leg's inertia-and-gravity load seen at its platform point (virtual power) for the
+// point's velocity vP and acceleration aP.  The joint acceleration and the body points'
+// accelerations in closed form per joint kind (the second derivative of the closure;
+// joint_acceleration gets qdd from forward-mode Taylor coefficients, and the tests hold the
+// two together).
+V3 leg_load(const Model& m, const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+  const V3& w = lg.w;
+  const double qd = lg.dq.dot(vP);
+  if (l.joint != Joint::strut) {
     // D_body = tb dq, D_S = t dq, D_P = I: the loads at S and the body act through dq.
-    const bool arm = l.type->joint == Joint::arm;
+    double qdd;
+    V3 aS, aB;  // the slider or elbow, the slider or arm centre of mass
+    if (l.joint == Joint::rail) {
+      // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
+      const V3 wd = vP - qd * l.dir;
+      qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+      aS = aB = qdd * l.dir;
+    } else {
+      // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
+      double sq, cq;
+      sin_cos(lg.q, sq, cq);
+      const V3 e = cq * l.u + sq * l.w;
+      const V3& t = lg.t;
+      const V3 wd = vP - qd * t;
+      qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+      aS = qdd * t - (l.r * qd * qd) * e;
+      aB = qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * (t / l.r));
+    }
     const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
-    const V3& aS = lm.acc[0];
-    const V3& aP = lm.acc[1];
-    const V3 Fb = l.m_body * (lm.acc[arm ? 2 : 0] - m.g);
+    const V3 Fb = l.m_body * (aB - m.g);
     const V3 Fs = ms * aS + mx * aP - (mr / 2) * m.g;
     const V3 Fp = mx * aS + ms * aP - (mr / 2) * m.g;
-    const double along = lg.tb.dot(Fb) + lg.t.dot(Fs) + l.I_arm * lm.qdd;
+    const double along = lg.tb.dot(Fb) + lg.t.dot(Fs) + l.I_arm * qdd;
     return Fp + along * lg.dq.transpose();
   }
+  // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
+  const double q = lg.q;
+  const V3 n = w / q, nd = (vP - qd * n) / q;
+  const double qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
+  const V3 ndd = (aP - qdd * n - (2 * qd) * nd) / q;
+  V3 acc[4];
+  acc[0].setZero();
+  acc[1] = aP;
+  acc[2] = l.l_cyl * ndd;
+  acc[3] = aP - l.l_pis * ndd;
   V3 f = V3::Zero();
   for (int k = 0; k < l.nmass; ++k)
-    f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (lm.acc[l.mass[k].a] - m.g));
+    f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (acc[l.mass[k].a] - m.g));
   for (int k = 0; k < l.nrod; ++k) {
     const Rod& r = l.rod[k];
-    const V3 Fa = (r.m / 3) * lm.acc[r.a] + (r.m / 6) * lm.acc[r.b] - (r.m / 2) * m.g;
-    const V3 Fb = (r.m / 6) * lm.acc[r.a] + (r.m / 3) * lm.acc[r.b] - (r.m / 2) * m.g;
+    const V3 Fa = (r.m / 3) * acc[r.a] + (r.m / 6) * acc[r.b] - (r.m / 2) * m.g;
+    const V3 Fb = (r.m / 6) * acc[r.a] + (r.m / 3) * acc[r.b] - (r.m / 2) * m.g;
     f.noalias() += lg.D[r.a].transpose() * Fa + lg.D[r.b].transpose() * Fb;
   }
-  if (l.I_arm != 0) f += (l.I_arm * lm.qdd) * lg.dq.transpose();
+  if (l.I_arm != 0) f += (l.I_arm * qdd) * lg.dq.transpose();
   return f;
 }
 
-// Everything of a pose the dynamics need, and the motion-dependent part.
+// Everything of a pose the dynamics need.
 struct State {
   Platform pf;
   LegGrad lg[kMaxLegs];
-  M6 J;  // dq/dx (zero beyond n)
+  M6 J;              // dq/dx (zero beyond n), if rows
+  bool rows = false;
 };
+// J's rows from the legs' twist rows.
+void add_rows(const Model& m, State& st) {
+  st.J.setZero();
+  for (int i = 0; i < m.n; ++i) st.J.row(i) = t_transpose(m, st.pf, st.lg[i].j).transpose();
+  st.rows = true;
+}
 // rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
-void state_of(const Model& m, const double* x, State& st, bool points = true, bool rows = true) {
+void state_of(const Model& m, const double* x, State& st, bool rows) {
   platform_of(m, x, st.pf);
-  if (rows) st.J.setZero();
+  st.rows = false;
   for (int i = 0; i < m.n; ++i) {
-    leg_grad(m, i, st.pf, x, st.lg[i], Check::none, points);
-    if (rows) st.J.row(i) = t_transpose(m, st.pf, twist_row(st.lg[i].dq.transpose(), st.lg[i].rP)).transpose();
+    LegGrad& lg = st.lg[i];
+    leg_grad(m, i, st.pf, x, lg, Check::none);
+    lg.j.head<3>() = lg.dq.transpose();
+    lg.j.tail<3>() = lg.rP.cross(lg.j.head<3>());
   }
+  if (rows) add_rows(m, st);
+}
+
+// A pkm_data's part of a described robot: the state of the last pose it saw.  The calls at
+// one pose (the drive layer asks for J, the joint velocities, the dynamics and M in turn)
+// compute it once; a new pose (compared value by value) or a failed call starts afresh.
+struct Data final : RobotData {
+  bool valid = false;
+  double x[6];
+  State st;
+};
+const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows) {
+  Data& d = static_cast<Data&>(rd);  // every pkm_data of a described robot holds one (make_data)
+  if (!(d.valid && std::equal(x, x + m.n, d.x))) {
+    d.valid = false;
+    state_of(m, x, d.st, rows);
+    std::copy(x, x + m.n, d.x);
+    d.valid = true;
+  } else if (rows && !d.st.rows) {
+    add_rows(m, d.st);
+  }
+  return d.st;
 }
 
 // Adds A' MP A for A = [I, -[r]x] (a point at r on the platform, twist space).
@@ -526,32 +553,66 @@ inline void add_point_inertia(M6& Mt, const M3& MP, const V3& r) {
   Mt.bottomRightCorner<3, 3>().noalias() -= S * MS;
 }
 
-// Task-space mass matrix M = T' Mt T, Mt the twist-space inertia of every body.
-M6 mass_of(const Model& m, const State& st) {
+// The twist-space inertia Mt of every body (KE = 1/2 nu' Mt nu, nu = (p_dot, omega)).
+// Point masses on the platform (its end bars, the payload, the rods' isotropic part at P)
+// are summed first: mp at r adds (mp I, -mp [r]x; mp [r]x, mp (|r|^2 I - r r')).  A rail's
+// or an arm's remaining inertia at P, c g g' + mx (g t' + t g') (leg_mass), is rank two in
+// twist space: with j = (g, rP x g) and u = (t, rP x t) it is j v' + v j' for
+// v = c/2 j + mx u.
+M6 twist_mass(const Model& m, const State& st) {
   const Platform& pf = st.pf;
-  M6 Mt = M6::Zero();
-  if (!m.articulated) {
-    Mt.topLeftCorner<3, 3>().diagonal().setConstant(m.m_platform);
-  } else {  // half the mass at each end bar
-    for (const V3& e : m.end_bars) add_point_inertia(Mt, 0.5 * m.m_platform * M3::Identity(), pf.R * e);
+  double mr = m.articulated ? 0.0 : m.m_platform;
+  V3 h = V3::Zero();
+  M3 G = M3::Zero();  // sum mp r r'
+  auto point = [&](double mp, const V3& r) {
+    mr += mp;
+    h += mp * r;
+    G.noalias() += (mp * r) * r.transpose();
+  };
+  if (m.articulated)  // half the mass at each end bar
+    for (const V3& e : m.end_bars) point(0.5 * m.m_platform, pf.R * e);
+  if (m.m_payload != 0) point(m.m_payload, pf.R * m.c_payload);
+  M6 Mt = M6::Zero(), A = M6::Zero();
+  for (int i = 0; i < m.n; ++i) {
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    if (l.joint == Joint::strut) {
+      add_point_inertia(Mt, leg_mass(l, lg), lg.rP);
+      continue;
+    }
+    const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
+    const double c = l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm;
+    point(ms, lg.rP);
+    V6 v;  // (0.5 c) j + mx (t, rP x t)
+    v.head<3>() = (0.5 * c) * lg.j.head<3>() + mx * lg.t;
+    v.tail<3>() = (0.5 * c) * lg.j.tail<3>() + mx * lg.rP.cross(lg.t);
+    A.noalias() += lg.j * v.transpose();
   }
+  Mt += A + A.transpose();
+  Mt.topLeftCorner<3, 3>().diagonal().array() += mr;
+  const M3 H = skew(h);
+  Mt.topRightCorner<3, 3>() -= H;
+  Mt.bottomLeftCorner<3, 3>() += H;
+  Mt.bottomRightCorner<3, 3>() -= G;
+  Mt.bottomRightCorner<3, 3>().diagonal().array() += G.trace();
   if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
-  if (m.m_payload != 0) add_point_inertia(Mt, m.m_payload * M3::Identity(), pf.R * m.c_payload);
-  for (int i = 0; i < m.n; ++i) add_point_inertia(Mt, leg_mass(m.legs[i], st.lg[i]), st.lg[i].rP);
-  return t_congruence(m, pf, Mt);
+  return Mt;
 }
 
-// Generalised inertia-and-gravity force Q (J^T tau = Q) at (x, xd, xdd).
-V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
+// Task-space mass matrix M = T' Mt T.
+M6 mass_of(const Model& m, const State& st) { return t_congruence(m, st.pf, twist_mass(m, st)); }
+
+// The inertia-and-gravity loads at (x, xd, xdd) as one wrench W = (force, moment) about
+// the platform origin: the generalised force is Q = T' W (J^T tau = Q).
+V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd) {
   const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, xdd, pm);
-  // The loads as one wrench about the platform origin, W = (force, moment); Q = T^T W.
   V6 W;
   W.setZero();
   auto point_load = [&](double mass, const V3& rc) {
     const V3 ac = pm.a + pm.al.cross(rc) + pm.om.cross(pm.om.cross(rc));
-    W += twist_row(mass * (ac - m.g), rc);
+    add_load(W, mass * (ac - m.g), rc);
   };
   if (!m.articulated) W.head<3>() = m.m_platform * (pm.a - m.g);
   else
@@ -565,11 +626,12 @@ V6 generalised_force(const Model& m, const State& st, const double* xd, const do
     const V3& rP = st.lg[i].rP;
     const V3 vP = pm.v + pm.om.cross(rP);
     const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
-    LegMotion lm;
-    leg_motion(m, i, st.lg[i], vP, aP, lm);
-    W += twist_row(leg_force(m, m.legs[i], st.lg[i], lm), rP);
+    add_load(W, leg_load(m, m.legs[i], st.lg[i], vP, aP), rP);
   }
-  return t_transpose(m, pf, W);
+  return W;
+}
+V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
+  return t_transpose(m, st.pf, load_wrench(m, st, xd, xdd));
 }
 
 // tau from J^T tau = Q (the n x n blocks).
@@ -587,15 +649,60 @@ void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double*
   else solve_jt_n(m, Mat(J.topLeftCorner(m.n, m.n).transpose()), Vec(Q.head(m.n)), x, tau);
 }
 
-// xdd = M^-1 (J^T tau - h) and B = M^-1 J^T (the n x n blocks).
-template <class MatT, class VecT>
-void forward_n(const Model& m, const MatT& M, const MatT* JT, const VecT& rhs, const double* x, double* xdd, double* B) {
-  Eigen::LLT<MatT> llt(M);
-  if (llt.info() != Eigen::Success)
-    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
-  const VecT a = llt.solve(rhs);
-  for (int i = 0; i < m.n; ++i) xdd[i] = a[i];
-  if (B) Eigen::Map<Mat>(B, m.n, m.n) = llt.solve(*JT);
+// Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
+// triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
+// general LLT at these sizes (the forward dynamics run at every integrator stage).
+// GCC's -Wmaybe-uninitialized reads L[i][k] (k < j) as possibly unset once the loops are
+// unrolled; every such entry is written at an earlier column j.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
+struct SmallCholesky {
+  int n = N;
+  double L[6][6] = {}, inv[6] = {};  // inv: reciprocals of the diagonal
+  int size() const { return N ? N : n; }
+  bool factor(const M6& A, int size_n = N) {  // false: a pivot is not positive (A not positive definite)
+    n = size_n;
+    for (int j = 0; j < size(); ++j) {
+      double d = A(j, j);
+      for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+      if (!(d > 0)) return false;
+      inv[j] = 1.0 / std::sqrt(d);
+      for (int i = j + 1; i < size(); ++i) {
+        double s = A(i, j);
+        for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+        L[i][j] = s * inv[j];
+      }
+    }
+    return true;
+  }
+  V6 solve(const V6& b) const {
+    V6 y, x;
+    for (int i = 0; i < size(); ++i) {
+      double s = b[i];
+      for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
+      y[i] = s * inv[i];
+    }
+    for (int i = size() - 1; i >= 0; --i) {
+      double s = y[i];
+      for (int k = i + 1; k < size(); ++k) s -= L[k][i] * x[k];
+      x[i] = s * inv[i];
+    }
+    return x;
+  }
+};
+#pragma GCC diagnostic pop
+
+// The angle rates a_dot = E^-1 w of a twist-space angular vector w (E is singular at
+// ry = +-90 deg).
+void angle_rates(const Model& m, const Platform& pf, const double* x, const V3& w, double* ad) {
+  if (std::abs(pf.cy) < 1e-9)
+    throw Error(PKM_ERR_SINGULAR, "the Euler angles are singular (ry = +-90 deg) at " + pose_text(m, x) +
+                                      ": angle rates are undefined there");
+  const double az = (-pf.sx * w.y() + pf.cx * w.z()) / pf.cy;
+  ad[2] = az;
+  ad[1] = pf.cx * w.y() + pf.sx * w.z();
+  ad[0] = w.x() - pf.sy * az;
 }
 
 // The legs' passive revolute joints at the home pose with the dependent components at 0
@@ -618,7 +725,7 @@ void check_passive_joints(const Model& m, const Bad& bad) {
     const double off = std::abs(l.plane_n.dot(d));
     if (off > 0.5 * d.norm())
       bad("leg " + std::to_string(i + 1) + ": its platform point is " + g6(off) + " m off the plane its passive revolute "
-          "joint turns the leg in (through its " + (l.type->joint == Joint::rail ? "rail" : "base joint") +
+          "joint turns the leg in (through its " + (l.joint == Joint::rail ? "rail" : "base joint") +
           ", normal to revolute_axis) at the home pose, " + g6(d.norm()) + " m from it: the revolute axis must be "
           "perpendicular to the leg, not along it or through the platform point");
   }
@@ -696,6 +803,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int i = 0; i < m->n; ++i) {
     LegModel l;
     l.type = d_.legs[i];
+    l.joint = l.type->joint;
     l.type->leg->compile(get, i, d_.lumped_rods[i], l);
     if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
     if (d_.articulated) l.f = vec("leg", i, "f");
@@ -719,9 +827,12 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   for (int j = 0; j < m->n; ++j) m->home[j] = d_.home[j];
   m->ndep = (int)d_.dependent.size();
   for (int k = 0; k < m->ndep; ++k) m->dep[k] = d_.dependent[k];
+  m->full_pose = m->n == 6 && !m->ndep;
+  for (int j = 0; j < m->n; ++j) m->full_pose &= m->coord[j] == j;
   if (m->ndep) check_passive_joints(*m, bad);
   // The home pose must be reachable, within the joint limits and away from singularities.
-  RobotData rd;
+  const std::unique_ptr<RobotData> rdp = make_data(*m);
+  RobotData& rd = *rdp;
   double q[6], meas[2];
   try {
     ik(*m, rd, m->home, q);
@@ -739,6 +850,8 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
         "(1 / cond J = " + g6(meas[1]) + " < 1e-3)");
   return m;
 }
+
+std::unique_ptr<RobotData> DescribedRobot::make_data(const RobotModel&) const { return std::make_unique<Data>(); }
 
 void DescribedRobot::home(const RobotModel& rm, double* x) const {
   const Model& m = model_of(rm);
@@ -772,11 +885,10 @@ void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, doubl
   }
 }
 
-void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x, double* Jx, double* Jq,
+void DescribedRobot::jacobians(const RobotModel& rm, RobotData& rd, const double* x, double* Jx, double* Jq,
                                double* J) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st, false);
+  const State& st = state_at(m, rd, x, true);
   const int n = m.n;
   if (J)
     for (int i = 0; i < n; ++i)
@@ -789,8 +901,8 @@ void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x
     const LegGrad& lg = st.lg[i];
     const V3& w = lg.w;
     double jq;
-    if (l.type->joint == Joint::rail) jq = w.dot(l.dir);
-    else if (l.type->joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
+    if (l.joint == Joint::rail) jq = w.dot(l.dir);
+    else if (l.joint == Joint::arm) jq = l.r * w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
     else jq = lg.q;
     const V6 jx = t_transpose(m, st.pf, twist_row(w, lg.rP));
     for (int j = 0; j < n; ++j) {
@@ -800,13 +912,14 @@ void DescribedRobot::jacobians(const RobotModel& rm, RobotData&, const double* x
   }
 }
 
-void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                   double* Jdot) const {
-  // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first from the
-  // gradient of q along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.
+  // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first in closed
+  // form per joint kind along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.  (The tests
+  // hold J xdd + Jdot xd against joint_acceleration's forward-mode Taylor coefficients.)
   const Model& m = model_of(rm);
-  Platform pf;
-  platform_of(m, x, pf);
+  const State& st = state_at(m, rd, x, false);
+  const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, nullptr, pm);
   M36 Jwd = M36::Zero();  // d/dt of Jw: the columns of E_dot
@@ -827,20 +940,33 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData&, const double
     for (int j = 0; j < m.n; ++j)
       if (m.coord[j] >= 3) Jwd.col(j) = Ed.col(m.coord[j] - 3);
   }
-  using GT = Grad<3, TT>;
   for (int i = 0; i < m.n; ++i) {
-    V3 rP;
-    const V3 P = attachment(m, pf, i, rP), vP = pm.v + pm.om.cross(rP);
-    const P3<GT> Pg{GT::variable(TT(P.x(), vP.x(), 0), 0), GT::variable(TT(P.y(), vP.y(), 0), 1),
-                    GT::variable(TT(P.z(), vP.z(), 0), 2)};
-    GT q;
-    P3<GT> pts[4];
-    leg_geometry(m, i, Pg, q, pts, Check::none, x);
-    Eigen::RowVector3d dq, dqd;
-    for (int k = 0; k < 3; ++k) dq[k] = q.d[k].v, dqd[k] = q.d[k].d1;
+    const LegModel& l = m.legs[i];
+    const LegGrad& lg = st.lg[i];
+    const V3& rP = lg.rP;
+    const V3 vP = pm.v + pm.om.cross(rP);
+    const V3& w = lg.w;
+    const double qd = lg.dq.dot(vP);
+    Eigen::RowVector3d dqd;
+    if (l.joint == Joint::strut) {  // dq/dP = n' = w' / q
+      dqd = ((vP - qd * lg.dq.transpose()) / lg.q).transpose();
+    } else {
+      // dq/dP = w' / (w . t), w = P - S(q), t = dS/dq: wd = vP - qd t, and t's rate is 0 on a
+      // rail, -r qd e(q) on an arm.
+      const V3& t = lg.t;
+      const V3 wd = vP - qd * t;
+      double c_rate = wd.dot(t);
+      if (l.joint == Joint::arm) {
+        double sq, cq;
+        sin_cos(lg.q, sq, cq);
+        c_rate -= l.r * qd * w.dot(cq * l.u + sq * l.w);
+      }
+      const double c = w.dot(t);
+      dqd = (wd / c - (c_rate / (c * c)) * w).transpose();
+    }
     const M36 JP = point_jacobian(pf, rP);
     const M36 JPd = Jtd - skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
-    const Eigen::Matrix<double, 1, 6> row = dqd * JP + dq * JPd;
+    const Eigen::Matrix<double, 1, 6> row = dqd * JP + lg.dq * JPd;
     for (int j = 0; j < m.n; ++j) Jdot[m.n * i + j] = row[j];
   }
 }
@@ -854,8 +980,8 @@ void DescribedRobot::singularity(const RobotModel& rm, RobotData& rd, const doub
   double t1 = 1.0;
   for (int i = 0; i < n; ++i) {
     const LegModel& l = m.legs[i];
-    if (l.type->joint == Joint::rail) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * std::sqrt(l.ss)));
-    if (l.type->joint == Joint::arm) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * l.r));
+    if (l.joint == Joint::rail) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * std::sqrt(l.ss)));
+    if (l.joint == Joint::arm) t1 = std::min(t1, std::abs(Jq(i, i)) / (l.L * l.r));
   }
   // Direct: 1 / cond of J with the rotation columns scaled by the platform radius.
   for (int j = 0; j < n; ++j)
@@ -887,7 +1013,7 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
     P3<double> p[4];
     double q;
     leg_geometry(m, i, P3<double>{P.x(), P.y(), P.z()}, q, p, Check::none, x);
-    const P3<double> moving = l.type->joint == Joint::strut ? p[2] : p[0];  // a strut: its cylinder's end
+    const P3<double> moving = l.joint == Joint::strut ? p[2] : p[0];  // a strut: its cylinder's end
     const P3<double> rows[3] = {{l.base.x(), l.base.y(), l.base.z()}, moving, p[1]};
     for (int r = 0; r < 3; ++r) {
       pts[9 * i + 3 * r + 0] = rows[r].x;
@@ -897,12 +1023,11 @@ void DescribedRobot::chain_points(const RobotModel& rm, RobotData&, const double
   }
 }
 
-void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, const double* x,
+void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData& rd, const double* x,
                                               double* measure_bound, double* det_j) const {
   // The J of state_of (no points), scaled as in singularity(), one LU.
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st, false);
+  const State& st = state_at(m, rd, x, true);
   M6 A = st.J;
   for (int j = 0; j < m.n; ++j)
     if (m.coord[j] >= 3) A.col(j) /= m.r_char;
@@ -913,7 +1038,7 @@ void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData&, 
 void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const double* x, const double* xd,
                                         const double* xdd, double* qdd) const {
   // Forward-mode Taylor coefficients of the leg closure along P(t) = P + t vP + t^2/2 aP
-  // (independent of leg_motion's closed forms, which the tests compare with this).
+  // (independent of leg_load's closed forms, which the tests compare with this).
   const Model& m = model_of(rm);
   Platform pf;
   platform_of(m, x, pf);
@@ -931,40 +1056,66 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const 
   }
 }
 
-void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st);
-  solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
+  const State& st = state_at(m, rd, x, !m.full_pose);
+  if (!m.full_pose) {
+    solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
+    return;
+  }
+  // T square: J^T tau = T' W is Jc tau = W, Jc's columns the legs' twist rows.
+  M6 Jc;
+  for (int i = 0; i < 6; ++i) Jc.col(i) = st.lg[i].j;
+  solve_jt_n(m, Jc, load_wrench(m, st, xd, xdd), x, tau);
 }
 
-void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData&, const double* x, double* M) const {
+void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData& rd, const double* x, double* M) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st);
+  const State& st = state_at(m, rd, x, false);
   Eigen::Map<Mat>(M, m.n, m.n) = mass_of(m, st).topLeftCorner(m.n, m.n);
 }
 
-bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                                const double* tau, double* xdd, double* B) const {
-  // M xdd = J^T tau - h with h = Q(x, xd, xdd = 0).
+  // J^T tau = T' Jc tau, Jc's columns the legs' twist rows j_i = (dq_i, rP_i x dq_i), and the
+  // loads W(xdd) = W(0) + Mt (T xdd) (W(0) holds the T_dot xd part): T' Mt T xdd = T' (Jc tau - W(0)).
   const Model& m = model_of(rm);
   const int n = m.n;
-  State st;
-  state_of(m, x, st, true, B != nullptr);
-  const V6 h = generalised_force(m, st, xd, nullptr);
-  V6 w = V6::Zero();  // J^T tau = T' sum_i tau_i (dq_i, rP_i x dq_i)
-  for (int i = 0; i < n; ++i) w += tau[i] * twist_row(st.lg[i].dq.transpose(), st.lg[i].rP);
-  const V6 rhs = t_transpose(m, st.pf, w) - h;
-  const M6 M = mass_of(m, st);
-  if (n == 6) {
-    const M6 JT = B ? M6(st.J.transpose()) : M6();
-    forward_n(m, M, B ? &JT : nullptr, rhs, x, xdd, B);
-  } else {
-    const Mat JT = B ? Mat(st.J.topLeftCorner(n, n).transpose()) : Mat();
-    forward_n(m, Mat(M.topLeftCorner(n, n)), B ? &JT : nullptr, Vec(rhs.head(n)), x, xdd, B);
+  const State& st = state_at(m, rd, x, false);
+  M6 Jc = M6::Zero();
+  V6 W = -load_wrench(m, st, xd, nullptr);
+  for (int i = 0; i < n; ++i) {
+    Jc.col(i) = st.lg[i].j;
+    W += tau[i] * Jc.col(i);
   }
+  const M6 Mt = twist_mass(m, st);
+  auto not_definite = [&] {
+    throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
+  };
+  if (m.full_pose) {
+    // T = blockdiag(I, E) is square: Mt (p_dd, E a_dd) = Jc tau - W(0).
+    SmallCholesky<6> llt;
+    if (!llt.factor(Mt)) not_definite();
+    auto to_pose = [&](const V6& y, double* out, int stride) {
+      double ad[3];
+      angle_rates(m, st.pf, x, y.tail<3>(), ad);
+      for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
+    };
+    to_pose(llt.solve(W), xdd, 1);
+    if (B)
+      for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
+    return true;
+  }
+  SmallCholesky<0> llt;
+  if (!llt.factor(t_congruence(m, st.pf, Mt), n)) not_definite();
+  const V6 a = llt.solve(t_transpose(m, st.pf, W));
+  for (int i = 0; i < n; ++i) xdd[i] = a[i];
+  if (B)  // B = M^-1 J^T, column j = M^-1 T' j_j
+    for (int j = 0; j < n; ++j) {
+      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
+      for (int i = 0; i < n; ++i) B[n * i + j] = b[i];
+    }
   return true;
 }
 
@@ -973,19 +1124,18 @@ void DescribedRobot::forward_dynamics(const RobotModel& rm, RobotData& rd, const
   forward_dynamics_response(rm, rd, x, xd, tau, xdd, nullptr);
 }
 
-void DescribedRobot::energy(const RobotModel& rm, RobotData&, const double* x, const double* xd, double* kinetic,
+void DescribedRobot::energy(const RobotModel& rm, RobotData& rd, const double* x, const double* xd, double* kinetic,
                             double* potential) const {
   const Model& m = model_of(rm);
-  State st;
-  state_of(m, x, st);
+  const State& st = state_at(m, rd, x, false);
   V6 v = V6::Zero();
   for (int j = 0; j < m.n; ++j) v[j] = xd[j];
   *kinetic = 0.5 * v.dot(mass_of(m, st) * v);
-  auto height = [&](const double* p) { return -m.g.dot(V3(p[0], p[1], p[2])); };
+  auto height = [&](const P3<double>& p) { return -m.g.dot(V3(p.x, p.y, p.z)); };
   // The platform's centre of mass: its origin, or an articulated platform's centre (the ends' mean).
   double V = -m.g.dot(st.pf.p + st.pf.R * m.c_platform) * m.m_platform;
   const V3 c = st.pf.p + st.pf.R * m.c_payload;
-  V += m.m_payload * height(c.data());
+  V += m.m_payload * height(P3<double>{c.x(), c.y(), c.z()});
   for (int i = 0; i < m.n; ++i) {
     const LegModel& l = m.legs[i];
     const LegGrad& lg = st.lg[i];

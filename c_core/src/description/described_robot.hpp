@@ -26,9 +26,11 @@
 // total mass: its rods translate), a strut's cylinder and piston as uniform slender tubes.
 //
 // Algorithms.  The positions of all body points are written once as a template of the
-// pose (closed-form inverse kinematics per leg); forward-mode differentiation
-// (description/jet.hpp) gives the Jacobians and the accelerations exactly.  Dynamics by
-// virtual power: J^T tau = sum_b J_b^T (inertia and gravity force of b).
+// pose (closed-form inverse kinematics per leg); the Jacobians, their rate and the loads use
+// the closure's derivatives in closed form per joint kind, and forward-mode differentiation
+// (description/jet.hpp) of the same template gives the joint accelerations exactly (the
+// tests hold the two together).  Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia
+// and gravity force of b), the bodies' inertia assembled in twist space.
 #pragma once
 
 #include <Eigen/Dense>
@@ -78,6 +80,7 @@ struct Rod {  // uniform slender rod between points a and b
 
 struct LegModel {
   const LegType* type = nullptr;
+  Joint joint = Joint::rail;  // type->joint, at hand in the legs' loops
   Eigen::Vector3d p;  // platform point in the platform frame [m]
   Eigen::Vector3d f = Eigen::Vector3d::Zero();  // articulated platform: fixed offset of the point [m]
   Eigen::Vector3d base;  // rail: S0; arm: axis point A; strut: base point B [m]
@@ -107,6 +110,9 @@ struct Model final : RobotModel {
   int ndep = 0;
   int dep[6];
   bool rotates = false;  // some rotation is a coordinate
+  // The coordinates are the whole pose (x, y, z, rx, ry, rz) in order, none dependent: the
+  // map T of the pose rates to the twist is square, and the dynamics solve in twist space.
+  bool full_pose = false;
   bool articulated = false;
   double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
   std::vector<LegModel> legs;
@@ -172,6 +178,7 @@ class DescribedRobot : public Robot {
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
                                       const std::vector<double>& values) const override;
   void home(const RobotModel&, double* x) const override;
+  std::unique_ptr<RobotData> make_data(const RobotModel&) const override;
   const char* joint_prefix() const override;
   const char* joint_noun() const override;
   bool joints_angular() const override { return d_.joint == Joint::arm; }
