@@ -248,7 +248,7 @@ def _run(job):
     if kind == "constant_force":  # the library's offset on the force's rail is the same physics
         confident = [k for k in confident if k != "offset" or
                      not any(f"{pre}[{j}].offset" in d.theta for j in joints)]
-    row = {"robot": robot, "prefix": pre, "case": name, "kind": kind, "seed": seed, "time": wall, "joints": joints,
+    row = {"robot": robot, "prefix": pre, "units": (m.facts.effort_unit, m.facts.joint_unit), "case": name, "kind": kind, "seed": seed, "time": wall, "joints": joints,
            "truth": {k: float(v) for k, v in truth.items()},
            "discovered": [t.equation for t in d.discovered], "library": d.named(), "confident": confident,
            "unexplained": [u["channel"] for u in d.unexplained], "conclusion": d.conclusion}
@@ -261,18 +261,21 @@ def _run(job):
 
 def _truth_text(row):
     t, pre = row["truth"], row.get("prefix", "rail")
+    F, Q = row.get("units", ("N", "m"))  # the joints' effort and position units
+    mQ = "mm" if Q == "m" else "mrad"
     j = row["joints"][0]
     g = lambda k: t.get(f"{pre}[{j}].force_{k}")  # noqa: E731
     k = row["kind"]
     if k == "ripple":
         a = [t[f"{pre}[{i}].force_amplitude"] for i in row["joints"]]
         p = [t[f"{pre}[{i}].force_period"] for i in row["joints"]]
-        return f"all: {min(a):.3g}-{max(a):.3g} N, P {1e3 * min(p):.1f}-{1e3 * max(p):.1f} mm"
-    text = {"constant_force": lambda: f"F={g('c'):.4g} N", "spring": lambda: f"k1={g('k1'):.4g} N/m",
-            "drag": lambda: f"v2={g('v2'):.4g} N s2/m2",
-            "direction_coulomb": lambda: f"cpos={g('cpos'):.3g}, cneg={g('cneg'):.3g} N",
-            "one_way_damper": lambda: f"vpos={g('vpos'):.4g} N s/m", "hardening_spring": lambda: f"k3={g('k3'):.4g} N/m3",
-            "detent": lambda: f"{g('step'):.3g} N at {g('step_q'):.4f} m, w {1e3 * g('step_w'):.1f} mm"}[k]()
+        return f"all: {min(a):.3g}-{max(a):.3g} {F}, P {1e3 * min(p):.1f}-{1e3 * max(p):.1f} {mQ}"
+    text = {"constant_force": lambda: f"F={g('c'):.4g} {F}", "spring": lambda: f"k1={g('k1'):.4g} {F}/{Q}",
+            "drag": lambda: f"v2={g('v2'):.4g} {F} s2/{Q}2",
+            "direction_coulomb": lambda: f"cpos={g('cpos'):.3g}, cneg={g('cneg'):.3g} {F}",
+            "one_way_damper": lambda: f"vpos={g('vpos'):.4g} {F} s/{Q}",
+            "hardening_spring": lambda: f"k3={g('k3'):.4g} {F}/{Q}3",
+            "detent": lambda: f"{g('step'):.3g} {F} at {g('step_q'):.4f} {Q}, w {1e3 * g('step_w'):.1f} {mQ}"}[k]()
     return f"{pre} {j}: {text}"
 
 
@@ -311,7 +314,7 @@ def main(argv=None) -> int:
     print(f"\nMuJoCo {__import__('mujoco').__version__}, {a.robot}, PD + gravity, {len(eff)} cases with a hidden force, "
           f"{len(clean)} clean; {time.perf_counter() - t_start:.0f} s with {a.jobs} job(s)\n")
     print("| case | truth | named | right joints and structure | coefficient error | 95 % intervals hold | "
-          "held-out RMS before -> after [N] (ratio) | library named with confidence | time [s] |")
+          "held-out RMS before -> after (ratio) | library named with confidence | time [s] |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in eff:
         eqs = [e for e in r["discovered"] if any(re.match(rf"\w+ {j}:", e) for j in r["joints"])]
