@@ -1,12 +1,16 @@
-"""The discovery step on MuJoCo recordings of the 6-PUS hiding forces no library lists.
+"""The discovery step on MuJoCo recordings of the 6-PUS, or of a described robot, hiding forces no library lists.
 
-    .venv/bin/python bench/discovery_mujoco_bench.py [--seeds 2] [--clean 4] [--jobs 2] [--kinds spring,drag] [--reuse]
+    .venv/bin/python bench/discovery_mujoco_bench.py [--robot 6pus] [--seeds 2] [--clean 4] [--jobs 2]
+        [--kinds spring,drag] [--reuse]
+    .venv/bin/python bench/discovery_mujoco_bench.py --robot linear_delta --seeds 2 --clean 4
 
-Each case is a run of bench/foreign/mujoco_blind.py's MuJoCo model of the 6-PUS (PD + gravity,
-the engine's exciting trajectory, the generator's sensor noise) with one force law hidden in
-MuJoCo's physics: a force on the rail's joint (``qfrc_applied``) computed here at every MuJoCo
-step from the rail's true position and rate, so neither the core nor its generic joint force
-computes it.  The kinds: the five of the engine's failure list (a constant force on one rail, a
+Each case is a run of bench/foreign/mujoco_blind.py's MuJoCo model of the 6-PUS, or with
+``--robot NAME`` of MuJoCo built from the description robots/NAME.toml by
+bench/foreign/mujoco_described.py and recorded by bench/foreign/mujoco_described_blind.py
+(PD + gravity, the engine's exciting trajectory, the generator's sensor noise), with one force
+law hidden in MuJoCo's physics: a force on the actuated joint (``qfrc_applied``) computed here
+at every MuJoCo step from the joint's true position and rate, so neither the core nor its
+generic joint force computes it.  The kinds: the five of the engine's failure list (a constant force on one rail, a
 force periodic in the stroke on every rail, a spring towards the home stroke, quadratic drag,
 Coulomb friction that differs by direction) and three more (a damper acting one way, a cubic
 hardening spring about home, a detent: a smooth step in position whose place and width are
@@ -29,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 import time
 from multiprocessing import Pool
@@ -71,25 +76,27 @@ def motion(m, seed, duration):
             "q10": np.quantile(q, 0.1, axis=0), "q90": np.quantile(q, 0.9, axis=0)}
 
 
-def draw(kind, rng, mo, home):
-    """(force law f(q, qd) -> six forces along +q [N], truth in the core's joint-force keys
-    (the drive spends F = -f), the rails it acts on (1-based))."""
-    j = int(rng.integers(6))
+def draw(kind, rng, mo, home, pre="rail"):
+    """(force law f(q, qd) -> the n joints' forces along +q [N or N m], truth in the core's
+    joint-force keys ``<pre>[j].force_*`` (the drive spends F = -f), the joints it acts on
+    (1-based))."""
+    n = len(mo["E"])
+    j = int(rng.integers(n))
     size = float(rng.uniform(0.1, 0.2))
     E, T, V = mo["E"], mo["T"], mo["V"]
-    key = lambda i, k: f"rail[{i + 1}].force_{k}"  # noqa: E731
-    one = lambda fj: (lambda q, qd: np.eye(6)[j] * fj(q[j], qd[j]))  # noqa: E731
+    key = lambda i, k: f"{pre}[{i + 1}].force_{k}"  # noqa: E731
+    one = lambda fj: (lambda q, qd: np.eye(n)[j] * fj(q[j], qd[j]))  # noqa: E731
     if kind == "constant_force":
         f0 = float(rng.choice([-1, 1])) * size * E[j]
         return one(lambda q, qd: f0), {key(j, "c"): -f0}, [j + 1]
     if kind == "ripple":
         A = size * E
-        P = mo["span"] / rng.uniform(4, 8, 6)
-        ph = rng.uniform(0, 2 * math.pi, 6)
+        P = mo["span"] / rng.uniform(4, 8, n)
+        ph = rng.uniform(0, 2 * math.pi, n)
         truth = {}
-        for i in range(6):
+        for i in range(n):
             truth.update({key(i, "amplitude"): float(A[i]), key(i, "period"): float(P[i])})
-        return (lambda q, qd: -A * np.sin(2 * np.pi * q / P + ph)), truth, list(range(1, 7))
+        return (lambda q, qd: -A * np.sin(2 * np.pi * q / P + ph)), truth, list(range(1, n + 1))
     if kind == "spring":
         k = 1.5 * size * E[j] / T[j]
         return one(lambda q, qd: -k * (q - home[j])), {key(j, "k1"): k, key(j, "qc"): float(home[j])}, [j + 1]
@@ -129,9 +136,9 @@ NEEDS = {"constant_force": {"offset"}, "ripple": {"force_sin", "force_cos"}, "sp
          "detent": {"force_step"}}
 
 
-def _found_values(term, j):
-    """The discovered term's figures on rail j: {name: (value, 95 % half width or None)}."""
-    pre = f"rail[{j}]."
+def _found_values(term, j, pre="rail"):
+    """The discovered term's figures on joint j: {name: (value, 95 % half width or None)}."""
+    pre = f"{pre}[{j}]."
     co = {p[len(pre):]: c for p, c in term.coefficients.items()}
     sh = {p[len(pre):]: v for p, v in term.shape.items()}
     sh_ci = {p[len(pre):]: v for p, v in term.shape_ci95.items()}  # the shape the fit moved
@@ -150,13 +157,13 @@ def _found_values(term, j):
     return out
 
 
-def score(kind, truth, joints, d, mo):
+def score(kind, truth, joints, d, mo, pre="rail"):
     """Right joints and structure, coefficient errors, interval hits, held-out RMS before/after."""
     found = {t.joint: t for t in d.discovered}
     lib_offset = {}
     if kind == "constant_force":  # the library's constant effort offset is this physics
         for j in joints:
-            v = d.theta.get(f"rail[{j}].offset")
+            v = d.theta.get(f"{pre}[{j}].offset")
             if v is not None and j not in found:
                 lib_offset[j] = v
     need = joints if kind != "ripple" else [j for j in joints if j in found]
@@ -165,13 +172,13 @@ def score(kind, truth, joints, d, mo):
     errs, hits, ratios, before, after = [], [], [], [], []
     for j in need:
         if j in lib_offset:
-            errs.append(abs(lib_offset[j] / truth[f"rail[{j}].force_c"] - 1))
+            errs.append(abs(lib_offset[j] / truth[f"{pre}[{j}].force_c"] - 1))
             continue
         if j not in found:
             continue
         t = found[j]
         names = {p.rsplit(".", 1)[1] for p in t.coefficients}
-        want = {k[len(f"rail[{j}]."):][len("force_"):]: v for k, v in truth.items() if k.startswith(f"rail[{j}].")}
+        want = {k[len(f"{pre}[{j}]."):][len("force_"):]: v for k, v in truth.items() if k.startswith(f"{pre}[{j}].")}
         if kind == "direction_coulomb":
             side = "cpos" if want["cpos"] > want["cneg"] else "cneg"
             ok = ok and f"force_{side}" in names
@@ -179,7 +186,7 @@ def score(kind, truth, joints, d, mo):
         else:
             ok = ok and NEEDS[kind] <= names
             meas = MEASURE[kind]
-        got = _found_values(t, j)
+        got = _found_values(t, j, pre)
         for k in meas:
             if k not in got:
                 errs.append(float("inf"))
@@ -207,63 +214,76 @@ def score(kind, truth, joints, d, mo):
 
 def _run(job):
     import mujoco_blind as mb
+    import mujoco_described_blind as mdb
 
     from cosim.core import Model
     from cosim.discrepancy import blind, diagnose
+    from cosim.discrepancy.effects import joint_prefix
+    from cosim.recording import write_recording
 
-    kind, seed, out, reuse = job
-    m = Model("6pus")
-    noise = blind.load_config()["noise"]["6pus"]
+    robot, kind, seed, out, reuse = job
+    m = Model(robot)
+    pre = joint_prefix(m)
     duration = 9.0
-    name = f"{kind}_{seed}"
+    name = f"{kind}_{seed}" if robot == "6pus" else f"{robot}_{kind}_{seed}"
     force, truth, joints = None, {}, []
     if kind != "clean":
         rng = np.random.default_rng(seed)
-        force, truth, joints = draw(kind, rng, motion(m, seed, duration), m.ik(m.home()))
+        force, truth, joints = draw(kind, rng, motion(m, seed, duration), m.ik(m.home()), pre)
     csv = Path(out) / f"{name}.csv"
     if not (reuse and csv.exists()):  # MuJoCo's run is deterministic: --reuse diagnoses the same file again
         try:
-            rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, force=force)
+            if robot == "6pus":  # the hand-written MuJoCo 6-PUS, recorded in MuJoCo's joint coordinates
+                noise = blind.load_config()["noise"]["6pus"]
+                rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, force=force)
+                csv = mb.write_case(m, rec, csv)
+            else:  # MuJoCo built from the robot's description file
+                csv, _ = write_recording(csv, mdb.simulate(robot, seed, duration, force=force))
         except Exception as e:  # noqa: BLE001 - a drawn case the controller cannot hold is reported
-            return {"case": name, "kind": kind, "failed": str(e)}
-        csv = mb.write_case(m, rec, csv)
+            return {"robot": robot, "case": name, "kind": kind, "failed": str(e)}
     t0 = time.perf_counter()
     d = diagnose(csv, figures=False, replay=False)  # blind, default settings
     wall = time.perf_counter() - t0
     confident = [e["key"] for e in d.effects if not d.ties(e["key"])]
     if kind == "constant_force":  # the library's offset on the force's rail is the same physics
         confident = [k for k in confident if k != "offset" or
-                     not any(f"rail[{j}].offset" in d.theta for j in joints)]
-    row = {"case": name, "kind": kind, "seed": seed, "time": wall, "joints": joints,
+                     not any(f"{pre}[{j}].offset" in d.theta for j in joints)]
+    row = {"robot": robot, "prefix": pre, "units": (m.facts.effort_unit, m.facts.joint_unit), "case": name, "kind": kind, "seed": seed, "time": wall, "joints": joints,
            "truth": {k: float(v) for k, v in truth.items()},
            "discovered": [t.equation for t in d.discovered], "library": d.named(), "confident": confident,
            "unexplained": [u["channel"] for u in d.unexplained], "conclusion": d.conclusion}
     if kind == "clean":
         row["clean"] = not d.effects and not d.discovered and not d.unexplained
         return row
-    row.update(score(kind, truth, joints, d, motion(m, seed, duration)))
+    row.update(score(kind, truth, joints, d, motion(m, seed, duration), pre))
     return row
 
 
 def _truth_text(row):
-    t = row["truth"]
+    t, pre = row["truth"], row.get("prefix", "rail")
+    F, Q = row.get("units", ("N", "m"))  # the joints' effort and position units
+    mQ = "mm" if Q == "m" else "mrad"
     j = row["joints"][0]
-    g = lambda k: t.get(f"rail[{j}].force_{k}")  # noqa: E731
+    g = lambda k: t.get(f"{pre}[{j}].force_{k}")  # noqa: E731
     k = row["kind"]
     if k == "ripple":
-        a = [t[f"rail[{i}].force_amplitude"] for i in row["joints"]]
-        p = [t[f"rail[{i}].force_period"] for i in row["joints"]]
-        return f"all: {min(a):.3g}-{max(a):.3g} N, P {1e3 * min(p):.1f}-{1e3 * max(p):.1f} mm"
-    text = {"constant_force": lambda: f"F={g('c'):.4g} N", "spring": lambda: f"k1={g('k1'):.4g} N/m",
-            "drag": lambda: f"v2={g('v2'):.4g} N s2/m2",
-            "direction_coulomb": lambda: f"cpos={g('cpos'):.3g}, cneg={g('cneg'):.3g} N",
-            "one_way_damper": lambda: f"vpos={g('vpos'):.4g} N s/m", "hardening_spring": lambda: f"k3={g('k3'):.4g} N/m3",
-            "detent": lambda: f"{g('step'):.3g} N at {g('step_q'):.4f} m, w {1e3 * g('step_w'):.1f} mm"}[k]()
-    return f"rail {j}: {text}"
+        a = [t[f"{pre}[{i}].force_amplitude"] for i in row["joints"]]
+        p = [t[f"{pre}[{i}].force_period"] for i in row["joints"]]
+        return f"all: {min(a):.3g}-{max(a):.3g} {F}, P {1e3 * min(p):.1f}-{1e3 * max(p):.1f} {mQ}"
+    text = {"constant_force": lambda: f"F={g('c'):.4g} {F}", "spring": lambda: f"k1={g('k1'):.4g} {F}/{Q}",
+            "drag": lambda: f"v2={g('v2'):.4g} {F} s2/{Q}2",
+            "direction_coulomb": lambda: f"cpos={g('cpos'):.3g}, cneg={g('cneg'):.3g} {F}",
+            "one_way_damper": lambda: f"vpos={g('vpos'):.4g} {F} s/{Q}",
+            "hardening_spring": lambda: f"k3={g('k3'):.4g} {F}/{Q}3",
+            "detent": lambda: f"{g('step'):.3g} {F} at {g('step_q'):.4f} {Q}, w {1e3 * g('step_w'):.1f} {mQ}"}[k]()
+    return f"{pre} {j}: {text}"
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--robot", default="6pus", help="6pus (the hand-written MuJoCo 6-PUS) or a description "
+                    "name (MuJoCo built from robots/NAME.toml by bench/foreign/mujoco_described.py), e.g. "
+                    "linear_delta (default 6pus)")
     ap.add_argument("--kinds", default=",".join(KINDS), help="hidden force kinds (default: all)")
     ap.add_argument("--seeds", type=int, default=2, help="cases per kind (default 2)")
     ap.add_argument("--seed0", type=int, default=300, help="first seed (default 300)")
@@ -278,8 +298,9 @@ def main(argv=None) -> int:
     if bad:
         ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(KINDS)}")
     a.out.mkdir(parents=True, exist_ok=True)
-    jobs = [(k, a.seed0 + 31 * s + i, str(a.out), a.reuse) for i, k in enumerate(kinds) for s in range(a.seeds)]
-    jobs += [("clean", a.seed0 + 900 + s, str(a.out), a.reuse) for s in range(a.clean)]
+    jobs = [(a.robot, k, a.seed0 + 31 * s + i, str(a.out), a.reuse) for i, k in enumerate(kinds)
+            for s in range(a.seeds)]
+    jobs += [(a.robot, "clean", a.seed0 + 900 + s, str(a.out), a.reuse) for s in range(a.clean)]
     t_start = time.perf_counter()
     rows = []
     with Pool(a.jobs) as pool:
@@ -290,13 +311,13 @@ def main(argv=None) -> int:
     ok = [r for r in rows if "failed" not in r]
     eff = sorted([r for r in ok if r["kind"] != "clean"], key=lambda r: (kinds.index(r["kind"]), r["seed"]))
     clean = [r for r in ok if r["kind"] == "clean"]
-    print(f"\nMuJoCo {__import__('mujoco').__version__}, 6-PUS, PD + gravity, {len(eff)} cases with a hidden force, "
+    print(f"\nMuJoCo {__import__('mujoco').__version__}, {a.robot}, PD + gravity, {len(eff)} cases with a hidden force, "
           f"{len(clean)} clean; {time.perf_counter() - t_start:.0f} s with {a.jobs} job(s)\n")
     print("| case | truth | named | right joints and structure | coefficient error | 95 % intervals hold | "
-          "held-out RMS before -> after [N] (ratio) | library named with confidence | time [s] |")
+          "held-out RMS before -> after (ratio) | library named with confidence | time [s] |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in eff:
-        eqs = [e for e in r["discovered"] if any(e.startswith(f"slider {j}:") for j in r["joints"])]
+        eqs = [e for e in r["discovered"] if any(re.match(rf"\w+ {j}:", e) for j in r["joints"])]
         named = "; ".join(eqs[:2]) + (f" (+{len(eqs) - 2} rails)" if len(eqs) > 2 else "")
         others = len(r["discovered"]) - len(eqs)
         named = (named or "no term") + (f"; + {others} term(s) on other rails" if others else "")

@@ -201,8 +201,9 @@ def print_diagnosis(d, file=None):
         p(f"\nheld-out {h['start']:.2f}-{h['end']:.2f} s: the fitted model changes no channel beyond its noise there")
     for name in h["affected"]:
         c = h["channels"][name]
-        p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} "
-          f"(NRMSE {c['nrmse_before'] * 100:.2f} % -> {c['nrmse_after'] * 100:.2f} %, noise {c['noise']:.2g})")
+        nrmse = (f"NRMSE {c['nrmse_na']}" if c.get("nrmse_na") else
+                 f"NRMSE {c['nrmse_before'] * 100:.2f} % -> {c['nrmse_after'] * 100:.2f} %")
+        p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} ({nrmse}, noise {c['noise']:.2g})")
     if d.replay and d.replay.get("runs"):
         for name, run in d.replay["runs"].items():
             if "rms_tau" in run:

@@ -47,7 +47,9 @@ class Diagnosis:
         Every fitted core parameter (the plant overrides that model the effects).
     heldout : dict
         Fit on the held-out part before/after: per channel ``rms_before``,
-        ``rms_after``, ``nrmse_before``, ``nrmse_after``; ``gain`` (noise-normalised RMS
+        ``rms_after``, ``nrmse_before``, ``nrmse_after`` (None, with the reason in
+        ``nrmse_na``, for a joint that did not move or an effort that stayed zero over the
+        held-out part: no scale to divide by); ``gain`` (noise-normalised RMS
         ratio on the affected channels), ``gain_windows`` (the same over the samples
         where the nominal residual is out of its noise band), ``affected`` channels.
     localisation : dict
@@ -489,8 +491,8 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
     den = sum(np.sum((Ra[band[:, i], i] / sig[i]) ** 2) for i in pick)
     gain_w = float(np.sqrt(num / den)) if den > 0 else float("nan")
     rb_all, ra_all = np.sqrt(np.mean(Rb**2, axis=0)), np.sqrt(np.mean(Ra**2, axis=0))
-    per = {c: {"rms_before": float(rb[i]), "rms_after": float(ra[i]), "nrmse_before": float(rb[i] / scale[i]),
-               "nrmse_after": float(ra[i] / scale[i]), "noise": float(sig[i]),
+    per = {c: {"rms_before": float(rb[i]), "rms_after": float(ra[i]),
+               **_nrmse(rb[i], ra[i], scale[i], i < nd), "noise": float(sig[i]),
                "rms_all_before": float(rb_all[i]), "rms_all_after": float(ra_all[i]),
                "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
     tt = pipe.t[pipe.idx[test]]
@@ -505,6 +507,16 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
             "affected": [chans[i] for i in affected],
             "samples": int(test.sum()), "start": float(tt[0]) if test.any() else None,
             "end": float(tt[-1]) if test.any() else None, "nd": nd}
+
+
+def _nrmse(rms_before, rms_after, scale, effort: bool) -> dict:
+    """The held-out RMS over the channel's own scale (RMS effort, or the joint's spread), or,
+    where that scale is zero (a joint that did not move over the held-out part, an effort
+    that stayed zero), ``None`` with the reason in ``nrmse_na``: no ratio, never a NaN."""
+    if scale > 0 and math.isfinite(scale):
+        return {"nrmse_before": float(rms_before / scale), "nrmse_after": float(rms_after / scale), "nrmse_na": None}
+    why = "no effort on the joint" if effort else "joint did not move"
+    return {"nrmse_before": None, "nrmse_after": None, "nrmse_na": f"{why} over the held-out part: n/a"}
 
 
 def _unit(pipe, i):

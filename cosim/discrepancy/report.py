@@ -164,8 +164,11 @@ def markdown(d, files: dict) -> str:
     L += [
           "| channel | RMS before | RMS after | NRMSE before | NRMSE after | noise |", "| --- | --- | --- | --- | --- | --- |"]
     for name, c in h["channels"].items():
-        L.append(f"| {name} | {c['rms_before']:.3g} | {c['rms_after']:.3g} | {c['nrmse_before'] * 100:.2f} % | "
-                 f"{c['nrmse_after'] * 100:.2f} % | {c['noise']:.3g} {c['unit']} |")
+        if c.get("nrmse_na"):
+            nb = na = f"n/a ({c['nrmse_na'].split(' over ')[0]})"
+        else:
+            nb, na = f"{c['nrmse_before'] * 100:.2f} %", f"{c['nrmse_after'] * 100:.2f} %"
+        L.append(f"| {name} | {c['rms_before']:.3g} | {c['rms_after']:.3g} | {nb} | {na} | {c['noise']:.3g} {c['unit']} |")
     L.append("")
     if "heldout" in files:
         L += ["![Held-out overlay](heldout.png)", ""]

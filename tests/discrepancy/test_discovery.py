@@ -124,3 +124,36 @@ def test_a_rail_that_hardly_moves_reads_clean(tmp_path):
                     "--out", str(tmp_path), "--no-figures"], check=True, capture_output=True)
     d = diagnose(tmp_path / "tripod_3prs_step_pd.csv", figures=False, replay=False)
     assert d.conclusion == "no missing physics found", d.conclusion
+
+
+def test_a_joint_that_does_not_move_has_no_nrmse_and_the_report_says_why(tmp_path):
+    """The 3-RPS tripod's step response without noise: strut 3 reads the same length over the
+    held-out part (spread 0), so its NRMSE has nothing to divide by: ``None`` with the reason,
+    never a NaN, and the markdown report and the CLI text say n/a and why."""
+    import io
+    import math
+    import subprocess
+    import sys
+
+    from cosim.cli.discrepancy import print_diagnosis
+    from cosim.discrepancy.report import markdown
+
+    repo = Path(__file__).resolve().parents[2]
+    subprocess.run([sys.executable, "-m", "cosim", "run", str(repo / "scenarios" / "described" / "tripod_3rps_step_pd.toml"),
+                    "--out", str(tmp_path), "--no-figures"], check=True, capture_output=True)
+    d = diagnose(tmp_path / "tripod_3rps_step_pd.csv", figures=False, replay=False)
+    channels = d.heldout["channels"]
+    still = [c for c, v in channels.items() if v["nrmse_na"]]
+    assert still == ["q3"], channels  # strut 3 does not move in this step response
+    assert channels["q3"]["nrmse_before"] is None and channels["q3"]["nrmse_after"] is None
+    assert "joint did not move" in channels["q3"]["nrmse_na"]
+    for c, v in channels.items():  # every other figure a number
+        for k, x in v.items():
+            assert not (isinstance(x, float) and math.isnan(x)), (c, k)
+    md = markdown(d, {}).splitlines()
+    table = md.index("| channel | RMS before | RMS after | NRMSE before | NRMSE after | noise |")
+    row = next(line for line in md[table:] if line.startswith("| q3 |"))
+    assert "n/a (joint did not move)" in row and "nan" not in row.lower(), row
+    text = io.StringIO()
+    print_diagnosis(d, file=text)
+    assert "nan" not in text.getvalue().lower().replace("nanometre", ""), text.getvalue()

@@ -1,7 +1,8 @@
-"""The discovery step on recordings MuJoCo made of the 6-PUS with a force no library lists.
+"""The discovery step on recordings MuJoCo made with a force no library lists: of the 6-PUS, and
+of the linear delta built from its description file.
 
-Three cases of bench/discovery_mujoco_bench.py (which runs eight kinds of hidden force, two
-seeds each, and clean runs): the force is computed at every MuJoCo step from the rail's true
+Four cases of bench/discovery_mujoco_bench.py (which runs eight kinds of hidden force, two
+seeds each, and clean runs, per robot): the force is computed at every MuJoCo step from the rail's true
 position and rate and applied to the rail's joint, so neither the core nor its joint force
 makes it.  The recording is diagnosed blind with the default settings; the truth is compared
 afterwards.  Nothing of the engine was tuned on these cases."""
@@ -63,3 +64,28 @@ def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed,
         c0 = got["offset"].value if "offset" in got else 0.0
         q0 = term.shape[f"rail[{j}].force_qc"] - c0 / got["force_k1"].value
         assert math.isclose(q0, m.ik(m.home())[j - 1], abs_tol=1e-3), (q0, term.equation)
+
+
+def test_a_force_hidden_in_mujoco_built_from_a_description_is_named(tmp_path):
+    """Another family: the linear delta (3-P(SS)2), MuJoCo built from its description file by
+    bench/foreign/mujoco_described.py (bench/foreign/mujoco_described_blind.py records it as
+    the 6-PUS's runs are recorded), a detent (a smooth step of force at a place and width off the
+    search's grid) hidden on one rail: a case of ``bench/discovery_mujoco_bench.py --robot
+    linear_delta``."""
+    import mujoco_described_blind as mdb
+
+    from cosim.recording import write_recording
+
+    kind, seed, duration = "detent", 307, 9.0
+    m = Model("linear_delta")
+    mo = dmb.motion(m, seed, duration)
+    force, truth, joints = dmb.draw(kind, np.random.default_rng(seed), mo, m.ik(m.home()))
+    csv, _ = write_recording(tmp_path / "run.csv", mdb.simulate("linear_delta", seed, duration, force=force))
+    d = diagnose(csv, figures=False, replay=False)
+    s = dmb.score(kind, truth, joints, d, mo)
+    assert s["right"], (d.conclusion, truth)
+    assert s["errors"] and max(s["errors"]) < 0.15, (s, [t.equation for t in d.discovered], truth)
+    assert s["ratio"] >= 3, s
+    assert all(s["hits"]), (s, [t.equation for t in d.discovered], truth)  # the stated 95 % intervals
+    for e in d.effects:
+        assert d.ties(e["key"]), (e["title"], d.conclusion)
