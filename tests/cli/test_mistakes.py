@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from cosim.cli.main import COMMANDS, main
+from cosim.cli.common import COMMANDS
+from cosim.cli.main import main
 
 REPO = Path(__file__).resolve().parents[2]
 SCEN = REPO / "scenarios"
@@ -294,7 +295,7 @@ def test_the_corpus_covers_every_command_and_every_file_system_mistake(tmp_path)
     import argparse
     import importlib
 
-    cli = importlib.import_module("cosim.cli.main")
+    cli = importlib.import_module("cosim.cli.common")
     parser = argparse.ArgumentParser()
     sub = parser.add_subparsers()
 
