@@ -98,9 +98,13 @@ def _main(argv) -> int:
     parser.add_argument("--quiet", dest="global_quiet", action="store_true",
                         help="no progress bars (they show on a terminal only, after 2 s)")
     sub = parser.add_subparsers(dest="command", required=True)
+    # Only the command called gets its options: building another's may ask the core or load
+    # a capability module (its --help lists, e.g., the effects the blind generator can hide).
+    argv = sys.argv[1:] if argv is None else list(argv)
+    called = next((a for a in argv if not a.startswith("-")), None)
     for name, (fn, help) in COMMANDS.items():
         p = sub.add_parser(name, help=help, description=help)
-        if hasattr(fn, "configure"):
+        if name == called and hasattr(fn, "configure"):
             fn.configure(p)
         p.set_defaults(_fn=fn)
     try:
@@ -113,8 +117,8 @@ def _main(argv) -> int:
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
     from ..errors import PkmError
     from ..fmu import FMUError
-    from ..master import MasterError
-    from ..sweep.runner import SweepError
+    from ..plants import MasterError
+    from ..sweep.errors import SweepError
 
     def fail(message, code=2):
         print(f"cosim {args.command}: error: {message}", file=sys.stderr)

@@ -160,7 +160,7 @@ def _cases(tmp):
     notjson.write_text("{ platform.m = 1 }")
     one_s = _scenario(tmp, "step1s.toml", (SCEN / "6pus_step_pd.toml").read_text().replace("step = 0.001", "step = 1.0"))
     return _file_system_cases(tmp) + [
-        # the messages of the issue: each says what and where
+        # messages that each say what is wrong and where
         (["diagnose", bad["binary"]], "is not a text CSV file (byte 0x82"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy)],
          'heavy.json: platform.m = "heavy" is not a finite number'),
