@@ -26,7 +26,7 @@ README = (REPO / "README.md").read_text()
 
 # the commands not run here: what they are, and where the same code runs in the suite
 NOT_RUN = {
-    "./scripts/demo.sh": "the set-up, then `cosim demo` (tests/scenarios/test_scenario_files.py::test_cosim_demo)",
+    "./scripts/demo.sh": "the set-up, then `cosim demo` (tests/scenario/test_scenario_files.py::test_cosim_demo)",
     "./scripts/test.sh": "the set-up, then the whole test suite this test is part of",
     ".venv/bin/cosim blind-benchmark --cases 45": "minutes (tests/discrepancy: the blind benchmark on a few cases)",
     ".venv/bin/cosim blind-benchmark --cases 48": "minutes (tests/discrepancy: the held-out benchmark on a few cases)",
