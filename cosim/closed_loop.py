@@ -4,7 +4,7 @@
 sample ``t_k`` (``k = 0 .. n-1``):
 
 1. the sensors read the plant: its joints through the drive's reading model
-   (:class:`cosim.master.CoreDrive`: encoder offset, backlash, compliance under the
+   (:class:`cosim.plants.CoreDrive`: encoder offset, backlash, compliance under the
    effort acting on the mechanism, a drive body's encoder) when a drive is given, then
    the readings' delay (``sensor.delay``), then the white noise on ``q`` and ``qd``;
 2. the controller gives the command ``tau_cmd`` from the readings and reference row k;
@@ -22,11 +22,11 @@ that both back ends see the same numbers.
 
 Two back ends run the sequence:
 
-* **compiled**: the core's ``pkm_closed_loop`` on a :class:`~cosim.master.CorePlant`
+* **compiled**: the core's ``pkm_closed_loop`` on a :class:`~cosim.plants.CorePlant`
   with a controller the core implements (``pkm_ctrl``: PD, PD + gravity, computed
   torque, PID, LTI, the discrete rig controller), in pieces of about 20 ms of wall time
   (the loop goes on exactly across pieces);
-* **stepwise**: any :class:`~cosim.master.Plant` (the core plant or an FMU) and any
+* **stepwise**: any :class:`~cosim.plants.Plant` (the core plant or an FMU) and any
   Python callable, one sample at a time.
 
 By default the compiled back end runs whenever it can; :attr:`LoopRecord.note` says why
@@ -37,7 +37,8 @@ Example
 -------
 >>> from cosim.core import Model
 >>> from cosim import controllers as ctl, trajectories as tr
->>> from cosim.master import CoreDrive, CorePlant, make_reference
+>>> from cosim.master import make_reference
+>>> from cosim.plants import CoreDrive, CorePlant
 >>> from cosim.closed_loop import ClosedLoop
 >>> m = Model("6pus")
 >>> ref = make_reference(m, tr.step(m.home(), m.home() + [0, 0, 0.01, 0, 0, 0]), duration=0.5)
@@ -58,6 +59,7 @@ from ._native import STATUS, raise_for
 # foreign call); this module chains the calls and records.
 from .core.controller import KINDS, CompiledController
 from .core.loop import LOOP_FIELDS, closed_loop_call
+from .plants import CoreDrive, CorePlant
 
 __all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
            "NOISE_CHANNELS"]
@@ -136,13 +138,13 @@ class ClosedLoop:
 
     Parameters
     ----------
-    plant : cosim.master.Plant
-        :class:`~cosim.master.CorePlant` or :class:`~cosim.master.FMUPlant` (or any object
+    plant : cosim.plants.Plant
+        :class:`~cosim.plants.CorePlant` or :class:`~cosim.plants.FMUPlant` (or any object
         with that interface).
     controller : callable
         ``controller(t, q, qd, ref) -> tau`` (:mod:`cosim.controllers`), or a controller
         the core implements (then the compiled back end can run it).
-    drive : cosim.master.CoreDrive, optional
+    drive : cosim.plants.CoreDrive, optional
         The plant's drive and sensor model: readings through its reading model and delay,
         ``tau`` the effort it applies.  Without it the readings are the plant's joints
         and ``tau`` the command.
@@ -191,8 +193,6 @@ class ClosedLoop:
 
     def _compiled_controller(self, h):
         """``(CompiledController, "")`` when the compiled back end can run, else ``(None, reason)``."""
-        from .master import CoreDrive, CorePlant
-
         if self.compiled is False:
             return None, "compiled=False"
         plant, drive = self.plant, self.drive

@@ -215,7 +215,7 @@ class PID(JointController):
 
     def reset(self, t0, q0, x0=None):
         super().reset(t0, q0, x0)
-        from .closed_loop import CompiledController
+        from .core.controller import CompiledController
 
         if self._cc is None:
             self._cc = CompiledController(self, model=self.model, dt=self.dt)
@@ -644,7 +644,7 @@ class DiscreteController:
         self._cc = None
 
     def reset(self, t0, q0, x0=None):
-        from .closed_loop import CompiledController
+        from .core.controller import CompiledController
 
         if self._cc is None:
             if self.model is None:

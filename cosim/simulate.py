@@ -58,7 +58,7 @@ class SimResult:
         Effort applied from ``t[k]`` on [N or N m] (zero-order hold); the last row
         repeats the effort of the last interval.
     stats : dict
-        CVODE counters of the run (see :attr:`Simulator.stats`).
+        The integrator's counters of the run (see :attr:`Simulator.stats`).
     error : PkmError or None
         The core's error that stopped the run early (then the last row is the state
         where it stopped), else None.

@@ -9,8 +9,9 @@ shipped or written by an earlier README command; the description the README asks
 as ``my_delta.toml`` is saved there first.
 
 A few commands are not run here, each for the reason given in NOT_RUN (minutes of work, or
-the whole test suite); the test fails when one of them leaves the README (the list cannot
-go stale) and when the README gains a command that neither runs nor is listed."""
+the whole test suite), and a benchmark runs with options appended that make it small
+(SMALLER); the test fails when one of them leaves the README (the lists cannot go stale)
+and when the README gains a command that neither runs nor is listed."""
 import os
 import re
 import shutil
@@ -25,7 +26,7 @@ README = (REPO / "README.md").read_text()
 
 # the commands not run here: what they are, and where the same code runs in the suite
 NOT_RUN = {
-    "./scripts/demo.sh": "the set-up, then `cosim demo` (tests/scenarios/test_scenario_files.py::test_cosim_demo)",
+    "./scripts/demo.sh": "the set-up, then `cosim demo` (tests/scenario/test_scenario_files.py::test_cosim_demo)",
     "./scripts/test.sh": "the set-up, then the whole test suite this test is part of",
     ".venv/bin/cosim blind-benchmark --cases 45": "minutes (tests/discrepancy: the blind benchmark on a few cases)",
     ".venv/bin/cosim blind-benchmark --cases 48": "minutes (tests/discrepancy: the held-out benchmark on a few cases)",
@@ -42,6 +43,15 @@ NOT_RUN = {
     ".venv/bin/cosim quattro map": "a minute of figures (tests/quattro/test_quattro_cli.py draws the map)",
     ".venv/bin/cosim quattro cycle": "minutes of cycle fits (tests/quattro/test_cycle_time.py)",
     "xdg-open": "opens a browser on the page the line before wrote (tests/report draws such pages headless)",
+}
+
+# benchmarks run here as the README writes them, with options appended that make them small
+# (argparse keeps an option's last value; an option the script does not take fails the run):
+# the command, its script and its table, in seconds
+SMALLER = {
+    ".venv/bin/python bench/discovery_bench.py": ("--robots 6pus --kinds drag --seeds 1 --clean 1",
+                                                  "48 blind diagnoses, minutes (tests/discrepancy/test_discovery.py "
+                                                  "checks what they measure)"),
 }
 
 
@@ -65,6 +75,16 @@ def _skipped(cmd):
     return next((k for k in NOT_RUN if cmd.startswith(k)), None)
 
 
+def _as_run(cmd):
+    """The command as this test runs it: the README's, with SMALLER's options appended
+    (before its comment)."""
+    k = next((k for k in SMALLER if cmd.startswith(k)), None)
+    if k is None:
+        return cmd
+    line, hash_, comment = cmd.partition(" #")
+    return f"{line.rstrip()} {SMALLER[k][0]}" + (f"  #{comment}" if hash_ else "")
+
+
 @pytest.fixture(scope="module")
 def clone(tmp_path_factory):
     """A fresh clone where every README command has run: (folder, [(command, result)])."""
@@ -86,7 +106,7 @@ def clone(tmp_path_factory):
         if not cmds:
             continue
         # one bash per block, stopping at the first failure; each command echoed first
-        script = "set -e\n" + "\n".join(f"echo '>>> {i}' >&2\n{c}" for i, c in enumerate(cmds))
+        script = "set -e\n" + "\n".join(f"echo '>>> {i}' >&2\n{_as_run(c)}" for i, c in enumerate(cmds))
         p = subprocess.run(["bash", "-c", script], cwd=root, capture_output=True, text=True, env=env, timeout=900)
         done = [int(m) for m in re.findall(r"^>>> (\d+)$", p.stderr, flags=re.M)]
         for i, c in enumerate(cmds):
@@ -108,6 +128,8 @@ def test_the_commands_not_run_are_in_the_readme_and_every_other_command_ran(clon
     every = [c for b in _blocks("bash") for c in _commands(b)]
     for k in NOT_RUN:
         assert any(c.startswith(k) for c in every), f"{k!r} is no longer in the README: update NOT_RUN"
+    for k in SMALLER:
+        assert any(c.startswith(k) for c in every), f"{k!r} is no longer in the README: update SMALLER"
     assert {c for c, _, _ in ran} == {c for c in every if not _skipped(c)}
 
 

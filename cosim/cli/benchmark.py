@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .main import command
+from .common import command
 
 TARGETS: dict = {}
 

@@ -5,7 +5,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .main import command, output_dir, recording_file
+from .common import command, output_dir, recording_file
 
 
 def _configure(p):
@@ -63,7 +63,7 @@ def cmd_calibrate(args):
         print("cosim calibrate: error: give a recording (or --bench, --design, --seed-examples)", file=sys.stderr)
         return 2
     from ..calibration.fit import CalibrationWarning, calibrate
-    from .main import working
+    from .common import working
 
     with warnings.catch_warnings(), working(f"calibrating from {Path(args.recording).name}"):
         warnings.simplefilter("ignore", CalibrationWarning)  # they are part of the report

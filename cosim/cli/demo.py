@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .main import command, output_dir
+from .common import command, output_dir
 
 
 def _effect_types():

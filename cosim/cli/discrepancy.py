@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from .main import Interrupted, command, input_file, output_dir, recording_file, robot_arg
+from .common import Interrupted, command, input_file, output_dir, recording_file, robot_arg
 
 
 def _effect_types():
@@ -112,7 +112,7 @@ def cmd_diagnose(args):
     from ..discrepancy import diagnose
     from ..discrepancy.working_set import BLOCK_SECONDS, MAX_SAMPLES, working_set
 
-    from .main import working
+    from .common import working
 
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
     t0 = time.perf_counter()

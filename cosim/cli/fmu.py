@@ -2,7 +2,7 @@
 "Platforms, source-code FMUs and which file to give to which tool")."""
 from __future__ import annotations
 
-from .main import command, output_dir, robot_arg
+from .common import command, output_dir, robot_arg
 
 
 def _configure(p):

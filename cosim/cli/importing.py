@@ -2,7 +2,7 @@
 pkm-recording through a map file (docs/importing.md)."""
 from __future__ import annotations
 
-from .main import command, input_file, output_dir, robot_arg, toml_file
+from .common import command, input_file, output_dir, robot_arg, toml_file
 
 
 def _configure(p):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .main import command, output_file, robot_arg
+from .common import command, output_file, robot_arg
 
 
 def _configure(p):

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from .main import command, output_dir
+from .common import command, output_dir
 
 # Results stated by Virzi 2010 on the robot axis x = y = 0, as (index, what, z [m]).
 STATED = [
@@ -112,7 +112,7 @@ def cmd_quattro(args):
         from pathlib import Path
 
         from ..quattro import cycle_time as ct
-        from .main import working
+        from .common import working
 
         with working("timing the cycles of Tables 6.1-6.5"):
             cmp = ct.compare(param_set=args.param_set, n=args.n, qd_max=args.qd_max)

@@ -5,7 +5,7 @@ import sys
 from pathlib import Path
 
 from ..core.model import robot_facts
-from .main import command, output_dir, output_file, recording_file, toml_file
+from .common import command, output_dir, output_file, recording_file, toml_file
 
 
 def _configure(p):
@@ -115,7 +115,7 @@ def cmd_run(args):
     from ..jsonable import jsonable
     from ..closed_loop import LoopInterrupted
     from ..scenario import export_partial, run_scenario
-    from .main import Interrupted, exits_on_interrupt
+    from .common import Interrupted, exits_on_interrupt
 
     before = "interrupted before the first step, nothing written"
     try:
@@ -207,7 +207,7 @@ def _axis(value: str):
 
 
 def _indices_configure(p):
-    from .main import robot_arg
+    from .common import robot_arg
 
     p.add_argument("--robot", type=robot_arg, required=True, help="robot (any the core knows, or a description file)")
     p.add_argument("--axis", type=_axis, action="append", default=[], metavar="NAME=START:STOP:N",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from .main import Interrupted, command, output_dir, toml_file
+from .common import Interrupted, command, output_dir, toml_file
 
 
 def _configure(p):

@@ -151,7 +151,7 @@ class Simulator:
         """Integrate to t_end [s] with the held input.
 
         On a stroke limit (``JointLimitError``), a direct singularity (``SingularError``)
-        or a CVODE failure (``IntegrationError``), the state stays where the
+        or an integrator failure (``IntegrationError``), the state stays where the
         integration stopped and the exception's message names the leg and the time.
         """
         self._check(lib.pkm_sim_advance(self._s, float(t_end)))

@@ -1,6 +1,6 @@
 """``python -m cosim.sweep SPEC ...`` is ``cosim sweep SPEC ...``."""
 import sys
 
-from .runner import _main
+from ..cli.main import main
 
-sys.exit(_main())
+sys.exit(main(["sweep", *sys.argv[1:]]))

@@ -35,7 +35,6 @@ Example
 """
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -185,12 +184,3 @@ def _gather(spec: SweepSpec, out: Path, n_cases: int, t_start: float, **counts) 
         res.summary = f"(no summary: {type(e).__name__}: {e})"
     return res
 
-
-def _main(argv=None):  # pragma: no cover - python -m cosim.sweep SPEC ... (same as cosim sweep; cosim/sweep/__main__.py)
-    from ..cli import main
-
-    return main(["sweep", *(sys.argv[1:] if argv is None else argv)])
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(_main())

@@ -1,4 +1,5 @@
-"""cosim.simulate: the Python face of the core's CVODE simulator (pkm_sim).
+"""cosim.simulate: the Python face of the core's simulator (pkm_sim: explicit Runge-Kutta
+5(4) by default, CVODE BDF or Adams on request).
 
 The physics is checked in c_core/tests/integration_test.cpp; here: the binding (shapes,
 inputs, errors as exceptions with the stop state attached), bit-for-bit rollback from
@@ -149,7 +150,7 @@ def test_step_response_matches_an_independent_integrator(model):
     The reference integrates the same equations, the core's forward dynamics, with
     scipy's DOP853 at tight tolerances, the input held over each 1 ms interval and
     computed from scipy's own state: agreement to 1e-6 checks the simulator's state
-    handling, input hold and CVODE accuracy.
+    handling, input hold and integration accuracy (the default RK 5(4)).
     """
     x0 = model.home()
     q_ref = model.ik(x0) + np.array([2e-3, 0, 0, 0, 0, 0])

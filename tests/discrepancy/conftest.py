@@ -1,4 +1,4 @@
-"""Recordings for the discrepancy-engine tests, simulated once per session.
+"""Recordings for the discrepancy-engine tests, simulated once per test run.
 
 Closed-loop runs of the core plants (cosim.discrepancy.plant.closed_loop) with effects
 set in the plant: the engine must find what the plant holds, so the expected values

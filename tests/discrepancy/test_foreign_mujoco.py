@@ -20,18 +20,30 @@ from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
 
 
+def _case(folder, effect, value, joint, replay=False):
+    """(truth, diagnosis) of a 6 s MuJoCo recording of the 6-PUS hiding ``effect``."""
+    m = Model("6pus")
+    rec, truth = mb.simulate(m, effect, value, joint, seed=21, duration=6.0,
+                             noise=blind.load_config()["noise"]["6pus"])
+    csv = mb.write_case(m, rec, folder / "run.csv")  # MuJoCo's joint zero is home: declared in the sidecar
+    return truth, diagnose(csv, figures=False, replay=replay)
+
+
+@pytest.fixture(scope="module")
+def gap_case(tmp_path_factory):
+    """MuJoCo's gap on rail 6 diagnosed once, with its replays (the blind check reads the
+    same selection and values as without them: the replays come after the fit)."""
+    return _case(tmp_path_factory.mktemp("gap"), "backlash", 5e-5, 5, replay=True)
+
+
 @pytest.mark.parametrize("effect, value, joint, key", [
     (None, 0.0, 0, None),
     ("coulomb", 0.03, 2, "rail[3].coulomb"),          # MuJoCo's soft friction (frictionloss)
     ("dead_zone", 0.04, 4, "rail[5].dead_zone"),      # the drive passes nothing within +-0.04 N
-    ("backlash", 5e-5, 5, "rail[6].backlash"),        # two bodies; rail 6's effort changes sign
+    ("backlash", 5e-5, 5, "rail[6].backlash"),        # two bodies; rail 6's effort changes sign (gap_case)
 ])
-def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, effect, value, joint, key):
-    m = Model("6pus")
-    rec, truth = mb.simulate(m, effect, value, joint, seed=21, duration=6.0,
-                             noise=blind.load_config()["noise"]["6pus"])
-    csv = mb.write_case(m, rec, tmp_path / "run.csv")  # MuJoCo's joint zero is home: declared in the sidecar
-    d = diagnose(csv, figures=False, replay=False)
+def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, request, effect, value, joint, key):
+    truth, d = request.getfixturevalue("gap_case") if effect == "backlash" else _case(tmp_path, effect, value, joint)
     if effect is None:
         assert d.named() == [] and d.conclusion == "no missing physics found", d.conclusion
         return
@@ -48,14 +60,11 @@ def test_a_gap_is_put_on_a_rail_whose_effort_changes_sign():
     assert mb.gap_joint(m, 1109, 9.0, 5) == 5  # a rail whose effort changes sign stays
 
 
-def test_a_fitted_gap_is_replayed_as_two_bodies_closer_to_the_recorded_readings(tmp_path):
+def test_a_fitted_gap_is_replayed_as_two_bodies_closer_to_the_recorded_readings(gap_case):
     # MuJoCo's gap: a 0.05 kg drive (declared as the rail's rotor inertia) on faces of 1e6 N/m
     # with damping ratio 0.3; the engine fits the gap by its reading model, then the damping and
     # the faces of two bodies on the last second of the fitted part (cosim.discrepancy.drive_bodies)
-    m = Model("6pus")
-    rec, truth = mb.simulate(m, "backlash", 5e-5, 5, seed=21, duration=6.0,
-                             noise=blind.load_config()["noise"]["6pus"])
-    d = diagnose(mb.write_case(m, rec, tmp_path / "gap.csv"), figures=False, replay=True)
+    _, d = gap_case
     assert d.named()[0] == "backlash", d.conclusion
     tb = d.replay["two_body"]
     assert tb["params"]["drive.two_body"] == 1.0 and tb["params"]["rail[6].transmission_damping"] > 0

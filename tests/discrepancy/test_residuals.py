@@ -1,6 +1,6 @@
 """The residual pipeline against closed-loop runs of the core plant.
 
-The plant is integrated by the core's CVODE simulator with its drive and sensor
+The plant is integrated by the core's simulator with its drive and sensor
 models; the pipeline runs the core's kinematics and inverse dynamics on the recorded
 signals.  Two independent paths through the core: they agree when the pipeline
 models an effect the way the plant holds it.

@@ -1,6 +1,6 @@
 """Shared fixtures of the FMU tests: the built FMU, the core model and a direct core run.
 
-The reference for every trajectory is the core's own CVODE integrator (pkm_sim through
+The reference for every trajectory is the core's own integrator (pkm_sim through
 ctypes), so the FMU is checked against the code it wraps, not against itself.
 """
 import ctypes as C

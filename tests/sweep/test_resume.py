@@ -93,7 +93,7 @@ def test_a_killed_sweep_resumes_from_what_it_wrote(client, tmp_path):
                          f'b = 3\nsleep = 0.3\nlog = "{log}"\n[grid]\na = {list(range(12))}\n')
     out = tmp_path / "out"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(HERE), os.environ.get("PYTHONPATH", "")]))
-    # its own session: the CLI, its LocalCluster's nannies and workers share one process group
+    # a new process group (start_new_session): the CLI, its LocalCluster's nannies and workers
     cosim = Path(sys.executable).parent / "cosim"   # the console script (python -m cosim.cli would not see plugins)
     proc = subprocess.Popen([str(cosim), "sweep", str(spec_file), "--workers", "2",
                              "--out", str(out), "--no-progress"], cwd=REPO, env=env, start_new_session=True,
