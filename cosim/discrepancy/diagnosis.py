@@ -471,6 +471,10 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
     nd = pipe.nd
     scale = np.concatenate([np.sqrt(np.mean(pipe.tau_s[pipe.idx[test]] ** 2, axis=0)),
                             np.std(pipe.q[pipe.idx[test]], axis=0)])[: len(chans)]
+    # A scale at the rounding level of the channel's own values (a joint held still reads
+    # a spread of 1e-16 m) is no scale: the joint did not move, the NRMSE is n/a.
+    size = np.concatenate([np.max(np.abs(pipe.tau_s), axis=0), np.max(np.abs(pipe.q), axis=0)])[: len(chans)]
+    scale = np.where(scale > 1024 * np.finfo(float).eps * size, scale, 0.0)
 
     def rms(a):
         return np.sqrt(np.sum(a**2 * use, axis=0) / np.maximum(use.sum(axis=0), 1))
