@@ -46,17 +46,24 @@ def jacobian(st, selected, theta, mask=None, instruments=False):
         The core parameter of each column.
     Z : numpy.ndarray, shape (n C, p), or None
         With ``instruments`` only: J with the instrument in place of each column that has
-        one (None when none has).
+        one (None when none has): a delay estimated by its instrumental root
+        (:func:`try_delay`) has that instrument, the options with instruments theirs.
     """
     names, cols, zcols = [], [], []
+
+    def add(p, col, z=None):
+        # one place for a column and its instrument: Z must match J column for column
+        names.append(p)
+        cols.append(col)
+        zcols.append(z)
+
     for a in selected:
         g = a.group
         o = st.options[g.label][0] if g.label in st.options else None
         if g.key in LINEARISED or (g.key == "payload" and len(g.params) == 1):
             for j, p in enumerate(g.params):
-                names.append(p)
-                cols.append(st.vec_cols(o.cols[:, :, j:j + 1], mask=mask)[:, 0])
-                zcols.append(None if o.instr is None else st.vec_cols(o.instr[:, :, j:j + 1], mask=mask)[:, 0])
+                add(p, st.vec_cols(o.cols[:, :, j:j + 1], mask=mask)[:, 0],
+                    None if o.instr is None else st.vec_cols(o.instr[:, :, j:j + 1], mask=mask)[:, 0])
             continue
         for p in g.params:
             if g.key == "payload" and p != g.params[0] and theta.get(g.params[0], 0.0) <= 1e-9:
@@ -66,8 +73,10 @@ def jacobian(st, selected, theta, mask=None, instruments=False):
             if p.endswith(".delay"):
                 lo, hi = max(v - h, 0.0), min(v + h, (st.pipe.max_shift - 2) * st.pipe.dt)
                 col = (st.R(dict(theta, **{p: hi})) - st.R(dict(theta, **{p: lo}))) / (hi - lo)
-                names.append(p)
-                cols.append(st.vec(col, mask=mask))
+                # estimated by its instrumental root where it has an instrument (refine):
+                # its interval is that estimate's, with the same instrument
+                add(p, st.vec(col, mask=mask),
+                    st.vec(st.instrument_cols[g.label], mask=mask) if g.label in st.instruments else None)
                 continue
             Rhi = st.try_R(dict(theta, **{p: v + h}))
             Rlo = None if p.endswith(_NONNEGATIVE) and v - h < 0 else st.try_R(dict(theta, **{p: v - h}))
@@ -79,14 +88,13 @@ def jacobian(st, selected, theta, mask=None, instruments=False):
                 col = (st.R(theta) - Rlo) / h
             else:
                 col = np.zeros_like(st.R0)
-            names.append(p)
-            cols.append(st.vec(col, mask=mask))
             # The instrument of a non-linear parameter (the payload's mass and offset) is
             # its option's column along the reference at the nominal model: an instrument
             # need not be the derivative at theta, only free of the noise and correlated
             # with it (the estimate does not depend on its scale).
-            zcols.append(None if o is None or o.instr is None
-                         else st.vec_cols(o.instr[:, :, g.params.index(p):g.params.index(p) + 1], mask=mask)[:, 0])
+            add(p, st.vec(col, mask=mask),
+                None if o is None or o.instr is None
+                else st.vec_cols(o.instr[:, :, g.params.index(p):g.params.index(p) + 1], mask=mask)[:, 0])
     if not cols:
         n = int((st.train if mask is None else mask).sum()) * st.C
         return (np.zeros((n, 0)), [], None) if instruments else (np.zeros((n, 0)), [])
