@@ -2,7 +2,7 @@
 
     .venv/bin/python bench/fmu_bench.py [--seconds 5] [--step 1e-3] [--repeat 3]
 
-Rows (single core, default CVODE settings; the plant is open-loop unstable, so the
+Rows (single core, the core's default integrator; the plant is open-loop unstable, so the
 stepped rows close a joint-space PD loop around a 2 mm, 2 Hz sine reference per slider):
   core, PD loop      pkm_sim driven directly (ctypes): ik + joint velocity + PD + advance
   core, advance      the time spent inside pkm_sim_advance alone: the core's own figure
