@@ -47,12 +47,14 @@ def test_blind_case(diagnosed, case):
     t = s["hidden"][0]
     assert s["param_error"][t] < 0.15, s["param_error"]
     assert s["gain_measurable"] and s["gain_windows"] > 3.0, d.heldout
-    # The reported 95 % interval is honest: the truth is within 3 half-widths.
+    # The reported 95 % interval is honest: the truth is within twice its half-width (3.9
+    # standard errors: an honest interval misses that by chance once in 10,000). Coverage at
+    # the stated 95 % over many recordings: docs/discrepancy.md, "how often they hold the truth".
     e = d.effects[0]
     truth = key["effects"][0]["params"]
     for p, v in e["params"].items():
         if p in truth and not p.endswith(("stribeck_v", "effort_max")) and np.isfinite(v["ci95"]):
-            assert abs(v["value"] - truth[p]) < 3 * v["ci95"] + 0.05 * abs(truth[p]), (p, v, truth[p])
+            assert abs(v["value"] - truth[p]) < 2 * v["ci95"], (p, v, truth[p])
 
 
 def test_localisation_finds_the_joint_and_the_phase(diagnosed):
