@@ -652,9 +652,6 @@ def smooth_excitation(rob: Robot, t: np.ndarray, seed: int) -> tuple:
     """The excitation's sines without the fade-in: platform coordinates (N, n) and their exact
     first and second time derivatives, scaled down (x0.7 a step) until every joint stays 10 %
     of its stroke inside its limits along it.  Returns x, xd, xdd, scale."""
-    lo = np.array([l.stroke[0] for l in rob.legs])
-    hi = np.array([l.stroke[1] for l in rob.legs])
-    margin = 0.1 * (hi - lo)
     scale = 1.0
     for _ in range(30):
         x, xd, xdd = (np.tile(rob.home, (len(t), 1)), np.zeros((len(t), rob.n)), np.zeros((len(t), rob.n)))
@@ -664,8 +661,7 @@ def smooth_excitation(rob: Robot, t: np.ndarray, seed: int) -> tuple:
             x[:, j] += (w * np.sin(arg)).sum(axis=1)
             xd[:, j] = (w * om * np.cos(arg)).sum(axis=1)
             xdd[:, j] = -(w * om ** 2 * np.sin(arg)).sum(axis=1)
-        q = ik(rob, x)
-        if np.all(np.isfinite(q)) and np.all(q >= lo + margin) and np.all(q <= hi - margin):
+        if _inside_strokes(rob, ik(rob, x)):
             return x, xd, xdd, scale
         scale *= 0.7
     raise SystemExit(f"{rob.name}: no excitation around home stays inside the strokes")
@@ -685,17 +681,22 @@ def leg_span(rob: Robot) -> float:
     return float(np.mean(d))
 
 
+def _inside_strokes(rob: Robot, q: np.ndarray) -> bool:
+    """Every joint of q (N, n) reachable and 10 % of its stroke inside its limits."""
+    lo = np.array([l.stroke[0] for l in rob.legs])
+    hi = np.array([l.stroke[1] for l in rob.legs])
+    margin = 0.1 * (hi - lo)
+    return bool(np.all(np.isfinite(q)) and np.all(q >= lo + margin) and np.all(q <= hi - margin))
+
+
 def fitted_excitation(rob: Robot, t, seed):
     """The excitation scaled down until every joint stays 10 % of its stroke inside its limits
     (and every leg reachable) along it."""
     scale = 1.0
-    lo = np.array([l.stroke[0] for l in rob.legs])
-    hi = np.array([l.stroke[1] for l in rob.legs])
-    margin = 0.1 * (hi - lo)
     for _ in range(30):
         x = excitation(rob, t, seed, scale)
         q = ik(rob, x)
-        if np.all(np.isfinite(q)) and np.all(q >= lo + margin) and np.all(q <= hi - margin):
+        if _inside_strokes(rob, q):
             return x, q, scale
         scale *= 0.7
     raise SystemExit(f"{rob.name}: no excitation around home stays inside the strokes")
