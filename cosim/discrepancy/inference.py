@@ -77,6 +77,8 @@ def infer(st, sel: Selection) -> Selection:
         sel = replace(sel, selected=tuple(selected))
         sel = replace(sel, selected=tuple(replace(a, lookalikes=looks)
                                           for a, looks in zip(sel.selected, _lookalikes(st, sel))))
+        sel = replace(sel, selected=tuple(replace(a, lookalikes=looks + a.lookalikes)
+                                          for a, looks in zip(sel.selected, _one_column(st, sel))))
     detectability, collinear = _detectability(st, sel)
     return replace(sel, detectability=detectability, collinear=collinear)
 
@@ -128,6 +130,60 @@ def _lookalikes(st, sel: Selection) -> list:
         cands.sort(key=lambda c: c["delta_bic"])
         out.append([c for c in cands if c["related"] or c["delta_bic"] < st.settings.lookalike_margin][:4])
     return out
+
+
+#: variance inflation above which two selected groups are one column: the textbook level of
+#: harmful collinearity (Kutner et al. 2005 sec. 10.5, docs/references.md), i.e. a squared
+#: partial correlation above 0.9; not chosen on any recording
+VIF_ONE_COLUMN = 10.0
+
+
+def _one_column(st, sel: Selection) -> list:
+    """For each selected group, the other selected groups it is (nearly) one column with.
+
+    Two selected groups whose regressors, over the weighted samples the fit used and with the
+    other selected groups taken out, have a largest canonical correlation rho with
+    ``1 / (1 - rho^2) > VIF_ONE_COLUMN`` are one column on this recording (a dead zone under an
+    effort that keeps one sign is a constant: the drive's offset): their split is set by the
+    few samples where they differ, and whatever else the residual holds there, not by
+    physics.  Each is listed as the other's look-alike with ``collinear`` set, a tie: neither
+    is named with confidence.  The figures are those of taking it out with the other kept
+    (``delta_chi2``, ``delta_bic``)."""
+    out = [[] for _ in sel.selected]
+    if len(sel.selected) < 2:
+        return out
+    J, names = jacobian(st, sel.selected, sel.theta)
+    logn = math.log(st.n_eff)
+    block = [[i for i, p in enumerate(names) if p in a.group.params] for a in sel.selected]
+    for i, a in enumerate(sel.selected):
+        for j, b in enumerate(sel.selected):
+            if j <= i or not block[i] or not block[j]:
+                continue
+            rest = [k for m, blk in enumerate(block) if m not in (i, j) for k in blk]
+            rho = _canonical(J[:, block[i]], J[:, block[j]], J[:, rest])
+            if not rho < math.sqrt(1.0 - 1.0 / VIF_ONE_COLUMN):
+                for (x, y, k) in ((a, b, i), (b, a, j)):
+                    out[k].append({"group": y.group.label, "effect": y.group.key, "name": y.group.title,
+                                   "delta_bic": float(x.importance - st.k(x.group) * logn),
+                                   "delta_chi2": float(x.importance), "extra_params": 0,
+                                   "correlation": float(rho), "related": True, "collinear": True})
+    return out
+
+
+def _canonical(X1, X2, Xr):
+    """Largest canonical correlation between the column spaces of X1 and X2 after removing Xr."""
+    if Xr.shape[1]:
+        Q = np.linalg.qr(Xr)[0]
+        X1, X2 = X1 - Q @ (Q.T @ X1), X2 - Q @ (Q.T @ X2)
+
+    def basis(X):
+        u, s, _ = np.linalg.svd(X, full_matrices=False)
+        return u[:, s > 1e-9 * (s[0] if len(s) and s[0] > 0 else 1.0)]
+
+    U1, U2 = basis(X1), basis(X2)
+    if U1.shape[1] == 0 or U2.shape[1] == 0:
+        return 0.0
+    return float(np.clip(np.linalg.svd(U1.T @ U2, compute_uv=False)[0], 0.0, 1.0))
 
 
 def _correlation(st, g1, g2, Q):
