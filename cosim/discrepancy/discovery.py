@@ -1035,15 +1035,17 @@ def judge_library(eng, sel, threshold: float):
                         ties.append({"group": g.label, "terms": [t.equation for t in in_place],
                                      "extra_params": k_B - k_A, **figures})
             continue
-        # one force for two effects whose sum is, while the joint moves, a term of the search
-        # (:data:`ONE_FORCE`), or for two effects that are one column on this recording (the
-        # inference's ``collinear`` look-alikes: a dead zone under a one-signed effort and an
-        # offset), with no more free coefficients and a held-out fit not worse beyond the bar or
-        # its uncertainty: the simpler account is the one force (the two effects are listed as
+        # the pair is withdrawn by the rule of a single effect's trial (the terms in place of
+        # both significantly better, or fewer free coefficients and a held-out gain above the
+        # bar: a saturation and viscous friction that stand in for quadratic drag), or, for two
+        # effects whose sum is, while the joint moves, a term of the search (:data:`ONE_FORCE`)
+        # or that are one column on this recording (the inference's ``collinear`` look-alikes),
+        # with no more free coefficients and a held-out fit not worse beyond the bar or its
+        # uncertainty: the simpler account is the one force (the two effects are listed as
         # look-alikes that fit as well, not named)
         one = {g1.key, g2.key} in ONE_FORCE or any(c.get("collinear") and c["group"] == g2.label
                                                    for c in a1.lookalikes)
-        if one and (better or (k_B <= k_A and as_well)):
+        if better or (k_B < k_A and gain > bar) or (one and k_B <= k_A and as_well):
             figures.update(together=[g1.title, g2.title], as_well=not better)
             for g in (g1, g2):
                 withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
