@@ -160,7 +160,8 @@ def _one_column(st, sel: Selection) -> list:
             if j <= i or not block[i] or not block[j]:
                 continue
             rest = [k for m, blk in enumerate(block) if m not in (i, j) for k in blk]
-            rho = _canonical(J[:, block[i]], J[:, block[j]], J[:, rest])
+            Q = np.linalg.qr(J[:, rest])[0] if rest else np.zeros((J.shape[0], 0))
+            rho = _canonical(J[:, block[i]], J[:, block[j]], Q)
             if not rho < math.sqrt(1.0 - 1.0 / VIF_ONE_COLUMN):
                 for (x, y, k) in ((a, b, i), (b, a, j)):
                     out[k].append({"group": y.group.label, "effect": y.group.key, "name": y.group.title,
@@ -170,15 +171,13 @@ def _one_column(st, sel: Selection) -> list:
     return out
 
 
-def _canonical(X1, X2, Xr):
-    """Largest canonical correlation between the column spaces of X1 and X2 after removing Xr."""
-    if Xr.shape[1]:
-        Q = np.linalg.qr(Xr)[0]
-        X1, X2 = X1 - Q @ (Q.T @ X1), X2 - Q @ (Q.T @ X2)
-
+def _canonical(X1, X2, Q):
+    """Largest canonical correlation between the column spaces of X1 and X2 after removing the
+    span of the orthonormal columns Q."""
     def basis(X):
+        X = X - Q @ (Q.T @ X)
         u, s, _ = np.linalg.svd(X, full_matrices=False)
-        return u[:, s > 1e-9 * (s[0] if len(s) and s[0] > 0 else 1.0)]
+        return u[:, s > 1e-9 * (s[0] if len(s) else 1.0)]
 
     U1, U2 = basis(X1), basis(X2)
     if U1.shape[1] == 0 or U2.shape[1] == 0:
@@ -189,21 +188,11 @@ def _canonical(X1, X2, Xr):
 def _correlation(st, g1, g2, Q):
     """Largest canonical correlation between the two groups' column spaces (first
     option of each), after removing the other selected groups."""
-    def space(g):
+    def signature(g):
         o = st.options[g.label][0]
-        if o.cols is not None:
-            X = st.vec_cols(o.cols)
-        else:
-            X = st.vec(o.offset)[:, None]
-        X = X - Q @ (Q.T @ X)
-        u, s, _ = np.linalg.svd(X, full_matrices=False)
-        keep = s > 1e-9 * (s[0] if len(s) else 1)
-        return u[:, keep]
+        return st.vec_cols(o.cols) if o.cols is not None else st.vec(o.offset)[:, None]
     try:
-        U1, U2 = space(g1), space(g2)
-        if U1.shape[1] == 0 or U2.shape[1] == 0:
-            return 0.0
-        return float(np.clip(np.linalg.svd(U1.T @ U2, compute_uv=False)[0], 0.0, 1.0))
+        return _canonical(signature(g1), signature(g2), Q)
     except (np.linalg.LinAlgError, KeyError):
         return float("nan")
 
