@@ -16,7 +16,6 @@ import numpy as np
 from .._native import PkmError
 from ..jsonable import jsonable
 from .effects import BY_KEY, LIBRARY, groups_for, separating_motion
-from .inference import VIF_ONE_COLUMN
 from .residuals import DiagnosisError, Pipeline
 from .results import Alternative, FoundEffect, ParamEstimate
 
@@ -548,7 +547,8 @@ def _effects(eng, sel, ties=()) -> list:
         for c in a.lookalikes:
             if c.get("collinear"):
                 st = (f"{c['name']} is the same column on this recording (partial correlation "
-                      f"{c['correlation']:.3f}, variance inflation above {VIF_ONE_COLUMN:g}): the two act as one "
+                      f"{c['correlation']:.3f}, variance inflation {1 / max(1 - c['correlation'] ** 2, 1e-12):.3g}): "
+                      f"the two act as one "
                       f"force here and their split is no physics; neither is named with confidence; "
                       f"{separating_motion(g.key, c['effect'])} would separate them")
             elif c["delta_bic"] < TIE_MARGIN:
