@@ -3,8 +3,9 @@
 From a :class:`.selection.Selection`: the noise of the final fit, confidence intervals
 (95 %, the wider of the chi-square rescaled and the HAC one), the importance of each group
 (chi-square increase when removed), look-alikes (the best alternative group in its place,
-within ``lookalike_margin`` a tie) and the detectability of every candidate (the smallest
-amplitude that would have entered).  The result is a new :class:`.selection.Selection`.
+within ``lookalike_margin`` a tie; two selected groups that are one column on the recording,
+:data:`VIF_ONE_COLUMN`, each other's tied look-alikes) and the detectability of every
+candidate (the smallest amplitude that would have entered).  The result is a new :class:`.selection.Selection`.
 """
 from __future__ import annotations
 
