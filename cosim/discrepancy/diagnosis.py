@@ -25,6 +25,13 @@ __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 TIE_MARGIN = 2.0
 
 
+def tied(alternative) -> bool:
+    """Whether a look-alike (dict) is a tie with the effect it is listed under: its BIC or its
+    fit within :data:`TIE_MARGIN`, or one column with it on the recording (``collinear``)."""
+    return (alternative["delta_bic"] < TIE_MARGIN or alternative.get("delta_chi2", float("inf")) < TIE_MARGIN
+            or bool(alternative.get("collinear", False)))
+
+
 @dataclass
 class Diagnosis:
     """The answer of :func:`diagnose`.
@@ -119,7 +126,7 @@ class Diagnosis:
         for e in self.effects:
             if e["key"] == key:
                 return [a["effect"] for a in e["lookalikes"]
-                        if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
+                        if tied(a)]
         return []
 
     def plant_parameters(self) -> dict:
@@ -542,7 +549,13 @@ def _effects(eng, sel, ties=()) -> list:
                                    units.get(p, "")) for p in g.params}
         looks = []
         for c in a.lookalikes:
-            if c["delta_bic"] < TIE_MARGIN:
+            if c.get("collinear"):
+                st = (f"{c['name']} is the same column on this recording (partial correlation "
+                      f"{c['correlation']:.3f}, variance inflation {1 / max(1 - c['correlation'] ** 2, 1e-12):.3g}): "
+                      f"the two act as one "
+                      f"force here and their split is no physics; neither is named with confidence; "
+                      f"{separating_motion(g.key, c['effect'])} would separate them")
+            elif c["delta_bic"] < TIE_MARGIN:
                 st = (f"{c['name']} explains the data as well (delta BIC {c['delta_bic']:+.1f}, correlation "
                       f"{c['correlation']:.2f}): the two cannot be told apart with this data; "
                       f"{separating_motion(g.key, c['effect'])} would separate them")
@@ -622,7 +635,7 @@ def _not_excited(eng, sel) -> list:
     # a look-alike that fits as well as a named effect is the same physics on this recording
     # (said with that effect), not an effect the recording cannot reveal
     chosen |= {c["group"] for a in sel.selected for c in a.lookalikes
-               if c["delta_bic"] < TIE_MARGIN or c.get("delta_chi2", float("inf")) < TIE_MARGIN}
+               if tied(c)}
     by_effect = {}
     same = {}
     for lab, (size, ref) in sel.detectability.items():
@@ -703,9 +716,8 @@ def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
         parts = []
         for e in effects:
             vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
-            tied = [a["name"] for a in e["lookalikes"]
-                    if a["delta_bic"] < TIE_MARGIN or a.get("delta_chi2", float("inf")) < TIE_MARGIN]
-            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(tied)} fits as well]" if tied else ""))
+            same = [a["name"] for a in e["lookalikes"] if tied(a)]
+            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(same)} fits as well]" if same else ""))
         return "missing physics: " + ", ".join(parts)
     excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
     if not excited:

@@ -1035,11 +1035,17 @@ def judge_library(eng, sel, threshold: float):
                         ties.append({"group": g.label, "terms": [t.equation for t in in_place],
                                      "extra_params": k_B - k_A, **figures})
             continue
-        # one force for two effects whose sum is, while the joint moves, a term of the search
-        # (:data:`ONE_FORCE`), with no more free coefficients and a held-out fit not worse
-        # beyond the bar or its uncertainty: the simpler account is the one force (the two
-        # effects are listed as look-alikes that fit as well, not named)
-        if {g1.key, g2.key} in ONE_FORCE and (better or (k_B <= k_A and as_well)):
+        # the pair is withdrawn by the rule of a single effect's trial (the terms in place of
+        # both significantly better, or fewer free coefficients and a held-out gain above the
+        # bar: a saturation and viscous friction that stand in for quadratic drag), or, for two
+        # effects whose sum is, while the joint moves, a term of the search (:data:`ONE_FORCE`)
+        # or that are one column on this recording (the inference's ``collinear`` look-alikes),
+        # with no more free coefficients and a held-out fit not worse beyond the bar or its
+        # uncertainty: the simpler account is the one force (the two effects are listed as
+        # look-alikes that fit as well, not named)
+        one = {g1.key, g2.key} in ONE_FORCE or any(c.get("collinear") and c["group"] == g2.label
+                                                   for c in a1.lookalikes)
+        if better or (k_B < k_A and gain > bar) or (one and k_B <= k_A and as_well):
             figures.update(together=[g1.title, g2.title], as_well=not better)
             for g in (g1, g2):
                 withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
@@ -1096,8 +1102,11 @@ def library_named(term: DiscoveredTerm) -> bool:
 #: pairs of library effects that are, while the joint moves, one term of the search: Coulomb
 #: friction (or one fading at low speed) and a constant offset are friction that differs by
 #: direction (the levels' mean and half their difference); so is a dead zone in the offset's
-#: place, a constant force where the joint's command keeps one sign
-ONE_FORCE = tuple({f, c} for f in ("coulomb", "smooth_coulomb") for c in ("offset", "dead_zone"))
+#: place, a constant force where the joint's command keeps one sign.  For the same reason a dead
+#: zone and an offset are one force there: a constant outside the zone and whatever the few
+#: samples inside it (the efforts nearest zero) hold; alone on trial each is taken over by the other
+ONE_FORCE = (tuple({f, c} for f in ("coulomb", "smooth_coulomb") for c in ("offset", "dead_zone"))
+             + ({"offset", "dead_zone"},))
 
 #: the coefficient keys of the direction-split pair of a library friction
 _PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}

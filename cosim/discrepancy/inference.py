@@ -3,8 +3,9 @@
 From a :class:`.selection.Selection`: the noise of the final fit, confidence intervals
 (95 %, the wider of the chi-square rescaled and the HAC one), the importance of each group
 (chi-square increase when removed), look-alikes (the best alternative group in its place,
-within ``lookalike_margin`` a tie) and the detectability of every candidate (the smallest
-amplitude that would have entered).  The result is a new :class:`.selection.Selection`.
+within ``lookalike_margin`` a tie; two selected groups that are one column on the recording,
+:data:`VIF_ONE_COLUMN`, each other's tied look-alikes) and the detectability of every
+candidate (the smallest amplitude that would have entered).  The result is a new :class:`.selection.Selection`.
 """
 from __future__ import annotations
 
@@ -77,6 +78,8 @@ def infer(st, sel: Selection) -> Selection:
         sel = replace(sel, selected=tuple(selected))
         sel = replace(sel, selected=tuple(replace(a, lookalikes=looks)
                                           for a, looks in zip(sel.selected, _lookalikes(st, sel))))
+        sel = replace(sel, selected=tuple(replace(a, lookalikes=looks + a.lookalikes)
+                                          for a, looks in zip(sel.selected, _one_column(st, sel))))
     detectability, collinear = _detectability(st, sel)
     return replace(sel, detectability=detectability, collinear=collinear)
 
@@ -130,24 +133,67 @@ def _lookalikes(st, sel: Selection) -> list:
     return out
 
 
+#: variance inflation above which two selected groups are one column: the textbook level of
+#: harmful collinearity (Kutner et al. 2005 sec. 10.5, docs/references.md), i.e. a squared
+#: partial correlation above 0.9; not chosen on any recording
+VIF_ONE_COLUMN = 10.0
+
+
+def _one_column(st, sel: Selection) -> list:
+    """For each selected group, the other selected groups it is (nearly) one column with.
+
+    Two selected groups whose regressors, over the weighted samples the fit used and with the
+    other selected groups taken out, have a largest canonical correlation rho with
+    ``1 / (1 - rho^2) > VIF_ONE_COLUMN`` are one column on this recording (a dead zone under an
+    effort that keeps one sign is a constant: the drive's offset): their split is set by the
+    few samples where they differ, and whatever else the residual holds there, not by
+    physics.  Each is listed as the other's look-alike with ``collinear`` set, a tie: neither
+    is named with confidence.  The figures are those of taking it out with the other kept
+    (``delta_chi2``, ``delta_bic``)."""
+    out = [[] for _ in sel.selected]
+    if len(sel.selected) < 2:
+        return out
+    J, names = jacobian(st, sel.selected, sel.theta)
+    logn = math.log(st.n_eff)
+    block = [[i for i, p in enumerate(names) if p in a.group.params] for a in sel.selected]
+    for i, a in enumerate(sel.selected):
+        for j, b in enumerate(sel.selected):
+            if j <= i or not block[i] or not block[j]:
+                continue
+            rest = [k for m, blk in enumerate(block) if m not in (i, j) for k in blk]
+            Q = np.linalg.qr(J[:, rest])[0] if rest else np.zeros((J.shape[0], 0))
+            rho = _canonical(J[:, block[i]], J[:, block[j]], Q)
+            if not rho < math.sqrt(1.0 - 1.0 / VIF_ONE_COLUMN):
+                for (x, y, k) in ((a, b, i), (b, a, j)):
+                    out[k].append({"group": y.group.label, "effect": y.group.key, "name": y.group.title,
+                                   "delta_bic": float(x.importance - st.k(x.group) * logn),
+                                   "delta_chi2": float(x.importance), "extra_params": 0,
+                                   "correlation": float(rho), "related": True, "collinear": True})
+    return out
+
+
+def _canonical(X1, X2, Q):
+    """Largest canonical correlation between the column spaces of X1 and X2 after removing the
+    span of the orthonormal columns Q."""
+    def basis(X):
+        X = X - Q @ (Q.T @ X)
+        u, s, _ = np.linalg.svd(X, full_matrices=False)
+        return u[:, s > 1e-9 * (s[0] if len(s) else 1.0)]
+
+    U1, U2 = basis(X1), basis(X2)
+    if U1.shape[1] == 0 or U2.shape[1] == 0:
+        return 0.0
+    return float(np.clip(np.linalg.svd(U1.T @ U2, compute_uv=False)[0], 0.0, 1.0))
+
+
 def _correlation(st, g1, g2, Q):
     """Largest canonical correlation between the two groups' column spaces (first
     option of each), after removing the other selected groups."""
-    def space(g):
+    def signature(g):
         o = st.options[g.label][0]
-        if o.cols is not None:
-            X = st.vec_cols(o.cols)
-        else:
-            X = st.vec(o.offset)[:, None]
-        X = X - Q @ (Q.T @ X)
-        u, s, _ = np.linalg.svd(X, full_matrices=False)
-        keep = s > 1e-9 * (s[0] if len(s) else 1)
-        return u[:, keep]
+        return st.vec_cols(o.cols) if o.cols is not None else st.vec(o.offset)[:, None]
     try:
-        U1, U2 = space(g1), space(g2)
-        if U1.shape[1] == 0 or U2.shape[1] == 0:
-            return 0.0
-        return float(np.clip(np.linalg.svd(U1.T @ U2, compute_uv=False)[0], 0.0, 1.0))
+        return _canonical(signature(g1), signature(g2), Q)
     except (np.linalg.LinAlgError, KeyError):
         return float("nan")
 

@@ -52,7 +52,8 @@ class Alternative(Record):
     ``delta_bic`` (its BIC minus the selected model's; < 2 is a tie), ``delta_chi2`` (the fit
     apart from the parameter penalty; < 2 is the same physics on this recording),
     ``extra_params`` (how many more parameters it has), ``correlation`` (of the two
-    signatures), ``related`` (declared look-alikes in the library), ``statement`` (the
+    signatures), ``related`` (declared look-alikes in the library), ``collinear`` (both selected, and one
+    column on this recording: a tie), ``statement`` (the
     sentence of the report, with the motion that would separate them)."""
 
     group: str
@@ -64,6 +65,7 @@ class Alternative(Record):
     correlation: float
     related: bool
     statement: str = ""
+    collinear: bool = False
 
 
 @dataclass
