@@ -169,16 +169,21 @@ using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajo
 using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
 namespace {
-// out += sign * the generic joint force (joint_force.hpp) at the pose x, xd; nothing when none is set.
+// out += sign * the generic joint force (joint_force.hpp) at the joint motion q, qd.
+void add_joint_force_at(const drive::Params& dp, int n, const double* q, const double* qd, double sign, double* out) {
+  double F[6];
+  joint_force::force(dp.force, n, dp.v_eps, q, qd, F);
+  for (int i = 0; i < n; ++i) out[i] += sign * F[i];
+}
+
+// out += sign * the generic joint force at the pose x, xd; nothing when none is set.
 void add_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
                      double sign, double* out) {
   if (!dp.force.any) return;
-  const int n = d->ndof;
-  double q[6], qd[6], F[6];
+  double q[6], qd[6];
   m->robot->ik(*m->compiled, *d->rd, x, q);
   joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
-  joint_force::force(dp.force, n, dp.v_eps, q, qd, F);
-  for (int i = 0; i < n; ++i) out[i] += sign * F[i];
+  add_joint_force_at(dp, d->ndof, q, qd, sign, out);
 }
 }  // namespace
 
@@ -202,11 +207,7 @@ void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x
 
 void add_drive_efforts(const drive::Params& dp, int n, const double* q, const double* qd, const double* qdd,
                        double* tau) {
-  if (dp.force.any) {
-    double F[6];
-    joint_force::force(dp.force, n, dp.v_eps, q, qd, F);
-    for (int i = 0; i < n; ++i) tau[i] += F[i];
-  }
+  if (dp.force.any) add_joint_force_at(dp, n, q, qd, 1.0, tau);
   if (dp.any_friction) {
     double f[6];
     drive::friction(dp, qd, f);
