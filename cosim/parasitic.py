@@ -9,6 +9,8 @@ joint changes the parasitic motion), by central differences of the core's soluti
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 POSE_NAMES = ("x", "y", "z", "rx", "ry", "rz")
@@ -81,6 +83,8 @@ def parasitic_sensitivity(model, poses, param: str, *, rel_step: float = 1e-6) -
 def _half_width(name: str, span=None) -> float:
     """A map's default half-width about home: 0.35 rad for an angle, 0.05 m for a length."""
     if span is not None:
+        if not (math.isfinite(float(span)) and float(span) > 0):
+            raise ValueError(f"span = {span}: give the map's half-width about home as a positive number [m or rad]")
         return float(span)
     return 0.35 if POSE_UNITS[POSE_NAMES.index(name)] == "rad" else 0.05
 

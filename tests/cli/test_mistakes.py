@@ -195,6 +195,7 @@ def _cases(tmp):
         (["parasitic", "tripod_3rps", "--map", str(tmp / "m.png"), "--grid", "1"], "--grid 1: give 2 to 201 points"),
         (["parasitic", "tripod_3rps", "--pose", "0.9", "0.0", "0.0"], "leg 1 joint q = "),
         (["map", "tripod_3rps", "--slices", "0"], "--slices 0: give 1 to 9 rows"),
+        (["map", "tripod_3rps", "--span", "-1"], "span = -1.0: give the map's half-width about home as a positive"),
         (["map", "tripod_3rps", "--axes", "rx", "x"], "--axes: 'x' is not a coordinate of tripod_3rps"),
         # kept from the first corpus
         (["calibrate", bad["binary"]], "is not a text CSV file"),
