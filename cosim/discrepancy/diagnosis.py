@@ -23,6 +23,9 @@ __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 
 #: |delta BIC| below which two explanations are called a tie (equally good)
 TIE_MARGIN = 2.0
+#: group of the look-alike that marks a fit leaving structure on its own joints (a tie: the
+#: effect may stand in for physics the library lacks)
+UNEXPLAINED = "unexplained"
 
 
 def tied(alternative) -> bool:
@@ -303,11 +306,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     from .structure import sentence, unexplained
 
     gone = {w["group"] for w in withdrawn}
-    effects_out = [e for e in _effects(eng, sel, ties) if e["group"] not in gone]
-    not_excited = _not_excited(eng, sel) + one_signed
-    conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     r_after = eng.R(theta) if theta else eng.R0
     left = unexplained(pipe, r_after, floor=eng.accuracy())
+    effects_out = [e for e in _effects(eng, sel, ties, _open_structure(eng, sel, theta, r_after, left, gone))
+                   if e["group"] not in gone]
+    for t in found:
+        t.partial = _partial_sentence(open_on(left, {t.joint - 1}))
+    not_excited = _not_excited(eng, sel) + one_signed
+    conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
@@ -488,10 +494,7 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
 
     rb, ra = rms(Rb), rms(Ra)
     sig = sel.sigma
-    # Channels the fitted effects act on: their contribution exceeds twice the noise on
-    # at least 2 % of the held-out samples (a Stribeck term acts at reversals only).
-    acts = (np.abs(Rb - Ra) > 2.0 * sig) & use
-    affected = [i for i in range(len(chans)) if acts[:, i].mean() >= 0.02]
+    affected = acting_channels(Rb, Ra, sig, use)
     pick = affected or list(range(len(chans)))
     gain = float(np.sqrt(np.sum((rb[pick] / sig[pick]) ** 2) / max(np.sum((ra[pick] / sig[pick]) ** 2), 1e-300)))
     # The same ratio over the held-out samples where the nominal residual leaves its
@@ -520,6 +523,61 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
             "end": float(tt[-1]) if test.any() else None, "nd": nd}
 
 
+#: a fitted model acts on a channel where it moves the residual by more than ACTS_NOISE times
+#: the channel's noise on at least ACTS_SHARE of the samples (a Stribeck term acts at reversals only)
+ACTS_NOISE, ACTS_SHARE = 2.0, 0.02
+
+
+def acting_channels(R_without, R_with, sigma, use) -> list:
+    """Channels (indices) a fitted part of the model acts on: ``R_without`` / ``R_with`` the
+    residuals (samples x channels) without / with it, ``sigma`` the channels' noise, ``use``
+    the samples each channel uses (same shape, bool)."""
+    acts = (np.abs(R_without - R_with) > ACTS_NOISE * sigma) & use
+    return [i for i in range(acts.shape[1]) if acts[:, i].mean() >= ACTS_SHARE]
+
+
+def open_on(left, joints) -> list:
+    """The structure items of ``left`` (:func:`.structure.unexplained`) on the channels of
+    ``joints`` (0-based): its effort and its reading.  In closed loop an error of the reading
+    moves the effort and one of the effort moves the reading, so a fit that leaves either
+    channel of its joint structured has not explained that joint."""
+    return [s for s in left if s["joint"] - 1 in joints]
+
+
+def _open_statement(items) -> str:
+    chans = ", ".join(s["channel"] for s in items)
+    keyed = "; ".join(dict.fromkeys(s["keyed_on"] for s in items))
+    return f"structure remains unexplained on {chans} (keyed on {keyed})"
+
+
+def _partial_sentence(items) -> str:
+    """For a discovered term: "" when its joint keeps no structure, else why it is a partial fit."""
+    if not items:
+        return ""
+    return (_open_statement(items) + " with the term added: a partial fit that may stand in for what is missing, "
+            "not the physics")
+
+
+def _open_structure(eng, sel, theta, r_after, left, gone=()) -> dict:
+    """Per selected group label, the structure ``left`` keeps on the joints the group acts on
+    (:func:`acting_channels`, over every sample each channel uses, with the group's parameters
+    taken out of ``theta``), anywhere for a group that acts on no channel; only groups with some."""
+    if not left:
+        return {}
+    nd, use, out = eng.pipe.nd, eng.use > 0, {}
+    for a in sel.selected:
+        g = a.group
+        if g.label in gone:
+            continue
+        without = eng.try_R({k: v for k, v in theta.items() if k not in g.params})
+        chans = [] if without is None else acting_channels(without, r_after, sel.sigma, use)
+        # a fit that acts on no channel beyond the noise checks out nowhere: the whole recording
+        items = open_on(left, {c % nd for c in chans}) if chans else list(left)
+        if items:
+            out[g.label] = items
+    return out
+
+
 def _nrmse(rms_before, rms_after, scale, effort: bool) -> dict:
     """The held-out RMS over the channel's own scale (RMS effort, or the joint's spread), or,
     where that scale is zero (a joint that did not move over the held-out part, an effort
@@ -540,7 +598,7 @@ def _units(mdl):
     return {p.name: p.unit for p in mdl.param_info()}
 
 
-def _effects(eng, sel, ties=()) -> list:
+def _effects(eng, sel, ties=(), open_structure=None) -> list:
     units = _units(eng.model)
     out = []
     for a in sel.selected:
@@ -581,6 +639,15 @@ def _effects(eng, sel, ties=()) -> list:
                     tie["extra_params"], float("nan"), False,
                     f"a force no library effect names ({eq}) fits the held-out part as well (chi-square "
                     f"{d2:+.1f}): {g.effect.name} is not named with confidence on this recording"))
+        items = (open_structure or {}).get(g.label)
+        if items:
+            # the fit leaves its own joints structured: it may be a stand-in for physics the
+            # library lacks (a look-alike of it), so it is not named with confidence
+            chans = ", ".join(s["channel"] for s in items)
+            looks.insert(0, Alternative(
+                UNEXPLAINED, UNEXPLAINED, f"structure left unexplained on {chans}", 0.0, 0.0, 0, float("nan"),
+                False, f"{_open_statement(items)}: the fit may stand in for what is missing; "
+                       f"{g.effect.name} is not named with confidence"))
         out.append(FoundEffect(g.key, g.effect.name, g.label, g.title, None if g.joint is None else g.joint + 1,
                                g.effect.family, params, a.delta_bic, a.importance,
                                g.effect.plant.replace("{j}", _prefix(eng.model)), looks, _derived(g, a.values, eng)))
@@ -699,7 +766,8 @@ def _withdrawn_sentence(w) -> str:
 
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
     if found:
-        parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})" for t in found]
+        parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})"
+                 + (f" [partial fit: {t.partial}]" if t.partial else "") for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
             worse = [w["title"] for w in withdrawn if not w.get("as_well")]
@@ -716,8 +784,10 @@ def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
         parts = []
         for e in effects:
             vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
-            same = [a["name"] for a in e["lookalikes"] if tied(a)]
-            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(same)} fits as well]" if same else ""))
+            same = [a["name"] for a in e["lookalikes"] if tied(a) and a["group"] != UNEXPLAINED]
+            open_ = [a["name"] for a in e["lookalikes"] if a["group"] == UNEXPLAINED]
+            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(same)} fits as well]" if same else "")
+                         + (f" [not named with confidence: {open_[0]}]" if open_ else ""))
         return "missing physics: " + ", ".join(parts)
     excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
     if not excited:

@@ -143,6 +143,8 @@ def markdown(d, files: dict) -> str:
                   f"(chi-square {t.delta_chi2_heldout:.0f} lower); kept in "
                   + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items()) + " of the bootstrap resamples"]
             L += [f"  - look-alike of the library that fits worse: {x}" for x in t.instead_of]
+            if t.partial:
+                L.append(f"  - not named as the physics: {t.partial}")
             if f"discovered{t.joint}" in files:
                 L += ["", f"![{t.channel} against its key variable](discovered{t.joint}.png)", ""]
         L.append("")
