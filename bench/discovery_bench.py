@@ -144,7 +144,10 @@ def _run(job):
     key = json.loads(Path(kp).read_text())
     row = {"robot": robot, "kind": kind, "seed": seed, "time": dt, "conclusion": d.conclusion,
            "discovered": [t.equation for t in d.discovered], "named": d.named(),
-           "confident": [e["key"] for e in d.effects if not d.ties(e["key"])],
+           "confident": [e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"])],
+           # without the look-alike that marks a fit leaving structure unexplained
+           "confident_before": [e["key"] for e in d.effects
+                                if not any(tied(a) for a in e["lookalikes"] if a["group"] != UNEXPLAINED)],
            "unexplained": [u["channel"] for u in d.unexplained]}
     if kind == "clean":
         row["clean"] = not d.effects and not d.discovered and not d.unexplained
@@ -161,7 +164,6 @@ def _run(job):
         # confident: no tie among its look-alikes; "before" ignores the look-alike that marks a
         # fit leaving its own joints structured (what the report named with confidence without it)
         row.update(
-            confident=[e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"])],
             confident_wrong=[e["title"] for e in wrong if not any(tied(a) for a in e["lookalikes"])]
             + [t.equation for t in stand_ins if not t.partial],
             confident_wrong_before=[e["title"] for e in wrong if not any(
@@ -187,6 +189,8 @@ def _run(job):
         row.update(right=bool(got is not None and err < 0.15 and not others), error=err,
                    gain=ch.get("rms_before", 0.0) / max(ch.get("rms_after", 1e-300), 1e-300),
                    confident=[k for k in row["confident"] if k != "offset"],
+                   confident_before=[k for k in row["confident_before"] if k != "offset"],
+                   partial=[j for j in joints if j in found and found[j].partial],
                    tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=[])
         return row
     need = joints if kind != "ripple" else [j for j in joints if j in found]
@@ -210,7 +214,8 @@ def _run(job):
             if want > 0:
                 cover.append(bool(abs(np.hypot(s.value, co.value) - want) <= np.hypot(s.ci95, co.ci95)))
     row.update(right=bool(ok), error=max(errs) if errs else float("inf"), gain=min(gains) if gains else 0.0,
-               tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=cover)
+               tied=[e["key"] for e in d.effects if d.ties(e["key"])], covered=cover,
+               partial=[j for j in need if j in found and found[j].partial])
     return row
 
 
@@ -290,7 +295,9 @@ def main(argv=None):
             print(f"\nall: right {sum(x['right'] for x in eff)}/{len(eff)}, coefficients within 15 % "
                   f"{sum(x['error'] < 0.15 for x in eff)}/{len(eff)}, held-out >= 3x "
                   f"{sum(x['gain'] >= 3 for x in eff)}/{len(eff)}, library named with confidence "
-                  f"{sum(bool(x['confident']) for x in eff)}")
+                  f"{sum(bool(x['confident']) for x in eff)} (without the structure rule "
+                  f"{sum(bool(x.get('confident_before', x['confident'])) for x in eff)}), right terms flagged "
+                  f"a partial fit {sum(x['right'] and bool(x.get('partial')) for x in eff)}")
     for r in failed:
         print(f"not generated: {r['robot']} {r['kind']} seed {r['seed']}: {r['failed']}")
 

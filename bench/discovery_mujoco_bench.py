@@ -244,13 +244,18 @@ def _run(job):
     t0 = time.perf_counter()
     d = diagnose(csv, figures=False, replay=False)  # blind, default settings
     wall = time.perf_counter() - t0
-    confident = [e["key"] for e in d.effects if not d.ties(e["key"])]
+    from cosim.discrepancy.diagnosis import UNEXPLAINED, tied
+
+    confident = [e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"])]
+    # without the look-alike that marks a fit leaving structure unexplained
+    before = [e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"] if a["group"] != UNEXPLAINED)]
     if kind == "constant_force":  # the library's offset on the force's rail is the same physics
-        confident = [k for k in confident if k != "offset" or
-                     not any(f"{pre}[{j}].offset" in d.theta for j in joints)]
+        confident, before = ([k for k in c if k != "offset" or not any(f"{pre}[{j}].offset" in d.theta
+                                                                      for j in joints)] for c in (confident, before))
     row = {"robot": robot, "prefix": pre, "units": (m.facts.effort_unit, m.facts.joint_unit), "case": name, "kind": kind, "seed": seed, "time": wall, "joints": joints,
            "truth": {k: float(v) for k, v in truth.items()},
            "discovered": [t.equation for t in d.discovered], "library": d.named(), "confident": confident,
+           "confident_before": before, "partial": [t.joint for t in d.discovered if t.partial],
            "unexplained": [u["channel"] for u in d.unexplained], "conclusion": d.conclusion}
     if kind == "clean":
         row["clean"] = not d.effects and not d.discovered and not d.unexplained
@@ -343,7 +348,10 @@ def main(argv=None) -> int:
         print(f"\nright rails and structure: {right}/{n} ({100 * right / n:.0f} %; acceptance >= 80 %)")
         print(f"coefficients within 15 %:  {within}/{n}")
         print(f"held-out RMS >= 3x lower:  {gain}/{n}")
-        print(f"library effect named first with confidence: {conf} (acceptance 0)")
+        print(f"library effect named first with confidence: {conf} (acceptance 0; without the structure rule "
+              f"{sum(bool(r['confident_before']) for r in eff)})")
+        print(f"right rails whose term is flagged a partial fit: "
+              f"{sum(r['right'] and bool(set(r['partial']) & set(r['joints'])) for r in eff)}/{right}")
         if hits:
             p = sum(hits) / len(hits)
             se = math.sqrt(p * (1 - p) / len(hits))

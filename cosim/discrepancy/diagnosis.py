@@ -23,8 +23,8 @@ __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 
 #: |delta BIC| below which two explanations are called a tie (equally good)
 TIE_MARGIN = 2.0
-#: group of the look-alike that marks a fit leaving structure on its own joints (a tie: the
-#: effect may stand in for physics the library lacks)
+#: group of the look-alike that marks a fit leaving structure unexplained (a tie: the effect
+#: may stand in for physics the library lacks, so it is not named with confidence)
 UNEXPLAINED = "unexplained"
 
 
@@ -308,10 +308,12 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     gone = {w["group"] for w in withdrawn}
     r_after = eng.R(theta) if theta else eng.R0
     left = unexplained(pipe, r_after, floor=eng.accuracy())
-    effects_out = [e for e in _effects(eng, sel, ties, _open_structure(eng, sel, theta, r_after, left, gone))
-                   if e["group"] not in gone]
+    # A fit that leaves structure anywhere may stand in for physics the library lacks: in
+    # closed loop a missing force moves every joint's readings and efforts, and a stand-in often
+    # acts on other channels than those it leaves structured (measured: docs/discrepancy.md)
+    effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone]
     for t in found:
-        t.partial = _partial_sentence(open_on(left, {t.joint - 1}))
+        t.partial = _partial_sentence(open_on(left, t.joint))
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if left:
@@ -494,7 +496,10 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
 
     rb, ra = rms(Rb), rms(Ra)
     sig = sel.sigma
-    affected = acting_channels(Rb, Ra, sig, use)
+    # Channels the fitted effects act on: their contribution exceeds twice the noise on
+    # at least 2 % of the held-out samples (a Stribeck term acts at reversals only).
+    acts = (np.abs(Rb - Ra) > 2.0 * sig) & use
+    affected = [i for i in range(len(chans)) if acts[:, i].mean() >= 0.02]
     pick = affected or list(range(len(chans)))
     gain = float(np.sqrt(np.sum((rb[pick] / sig[pick]) ** 2) / max(np.sum((ra[pick] / sig[pick]) ** 2), 1e-300)))
     # The same ratio over the held-out samples where the nominal residual leaves its
@@ -523,25 +528,12 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
             "end": float(tt[-1]) if test.any() else None, "nd": nd}
 
 
-#: a fitted model acts on a channel where it moves the residual by more than ACTS_NOISE times
-#: the channel's noise on at least ACTS_SHARE of the samples (a Stribeck term acts at reversals only)
-ACTS_NOISE, ACTS_SHARE = 2.0, 0.02
-
-
-def acting_channels(R_without, R_with, sigma, use) -> list:
-    """Channels (indices) a fitted part of the model acts on: ``R_without`` / ``R_with`` the
-    residuals (samples x channels) without / with it, ``sigma`` the channels' noise, ``use``
-    the samples each channel uses (same shape, bool)."""
-    acts = (np.abs(R_without - R_with) > ACTS_NOISE * sigma) & use
-    return [i for i in range(acts.shape[1]) if acts[:, i].mean() >= ACTS_SHARE]
-
-
-def open_on(left, joints) -> list:
+def open_on(left, joint: int) -> list:
     """The structure items of ``left`` (:func:`.structure.unexplained`) on the channels of
-    ``joints`` (0-based): its effort and its reading.  In closed loop an error of the reading
-    moves the effort and one of the effort moves the reading, so a fit that leaves either
+    ``joint`` (1-based): its effort and its reading.  In closed loop an error of the reading
+    moves the effort and one of the effort moves the reading, so a term that leaves either
     channel of its joint structured has not explained that joint."""
-    return [s for s in left if s["joint"] - 1 in joints]
+    return [s for s in left if s["joint"] == joint]
 
 
 def _open_statement(items) -> str:
@@ -556,26 +548,6 @@ def _partial_sentence(items) -> str:
         return ""
     return (_open_statement(items) + " with the term added: a partial fit that may stand in for what is missing, "
             "not the physics")
-
-
-def _open_structure(eng, sel, theta, r_after, left, gone=()) -> dict:
-    """Per selected group label, the structure ``left`` keeps on the joints the group acts on
-    (:func:`acting_channels`, over every sample each channel uses, with the group's parameters
-    taken out of ``theta``), anywhere for a group that acts on no channel; only groups with some."""
-    if not left:
-        return {}
-    nd, use, out = eng.pipe.nd, eng.use > 0, {}
-    for a in sel.selected:
-        g = a.group
-        if g.label in gone:
-            continue
-        without = eng.try_R({k: v for k, v in theta.items() if k not in g.params})
-        chans = [] if without is None else acting_channels(without, r_after, sel.sigma, use)
-        # a fit that acts on no channel beyond the noise checks out nowhere: the whole recording
-        items = open_on(left, {c % nd for c in chans}) if chans else list(left)
-        if items:
-            out[g.label] = items
-    return out
 
 
 def _nrmse(rms_before, rms_after, scale, effort: bool) -> dict:
@@ -598,7 +570,11 @@ def _units(mdl):
     return {p.name: p.unit for p in mdl.param_info()}
 
 
-def _effects(eng, sel, ties=(), open_structure=None) -> list:
+def _effects(eng, sel, ties=(), left=()) -> list:
+    """The selected groups as :class:`FoundEffect`, with their look-alikes: the library's,
+    a discovered term tied with it (``ties``), and, when structure is ``left`` unexplained
+    (:func:`.structure.unexplained`), the statement that the fit may stand in for what is
+    missing (a tie: not named with confidence)."""
     units = _units(eng.model)
     out = []
     for a in sel.selected:
@@ -639,14 +615,11 @@ def _effects(eng, sel, ties=(), open_structure=None) -> list:
                     tie["extra_params"], float("nan"), False,
                     f"a force no library effect names ({eq}) fits the held-out part as well (chi-square "
                     f"{d2:+.1f}): {g.effect.name} is not named with confidence on this recording"))
-        items = (open_structure or {}).get(g.label)
-        if items:
-            # the fit leaves its own joints structured: it may be a stand-in for physics the
-            # library lacks (a look-alike of it), so it is not named with confidence
-            chans = ", ".join(s["channel"] for s in items)
+        if left:
+            chans = ", ".join(s["channel"] for s in left)
             looks.insert(0, Alternative(
                 UNEXPLAINED, UNEXPLAINED, f"structure left unexplained on {chans}", 0.0, 0.0, 0, float("nan"),
-                False, f"{_open_statement(items)}: the fit may stand in for what is missing; "
+                False, f"{_open_statement(left)}: the fit may stand in for what is missing; "
                        f"{g.effect.name} is not named with confidence"))
         out.append(FoundEffect(g.key, g.effect.name, g.label, g.title, None if g.joint is None else g.joint + 1,
                                g.effect.family, params, a.delta_bic, a.importance,
@@ -785,10 +758,11 @@ def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
         for e in effects:
             vals = "; ".join(f"{p} = {v['value']:.4g} +- {v['ci95']:.2g} {v['unit']}" for p, v in e["params"].items())
             same = [a["name"] for a in e["lookalikes"] if tied(a) and a["group"] != UNEXPLAINED]
-            open_ = [a["name"] for a in e["lookalikes"] if a["group"] == UNEXPLAINED]
-            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(same)} fits as well]" if same else "")
-                         + (f" [not named with confidence: {open_[0]}]" if open_ else ""))
-        return "missing physics: " + ", ".join(parts)
+            parts.append(f"{e['title']} ({vals})" + (f" [tie: {', '.join(same)} fits as well]" if same else ""))
+        open_ = any(a["group"] == UNEXPLAINED for e in effects for a in e["lookalikes"])
+        return "missing physics: " + ", ".join(parts) + (
+            " [none named with confidence: the fit leaves structure unexplained and may stand in for what is "
+            "missing]" if open_ else "")
     excited = [lab for lab, (size, ref) in sel.detectability.items() if not (np.isfinite(ref) and size > ref)]
     if not excited:
         return "cannot diagnose: the recording excites none of the effects of the library (see 'not excited')"
