@@ -76,6 +76,8 @@ def _same_physics(kind: str, effect, changes: dict, d, csv) -> bool:
     named = d.named()
     if named and effect["key"] == named[0] and blind.same_physics_stand_in(kind, changes, d):
         return True
+    if kind == "smooth_coulomb" and effect["key"] == "coulomb" and effect["joint"] is not None:
+        return _step_friction(changes, d, csv, effect)
     if effect["key"] != "offset" or effect["joint"] is None:
         return False
     value = next(iter(effect["params"].values()))["value"] - next(iter(effect["params"].values()))["nominal"]
@@ -93,6 +95,26 @@ def _same_physics(kind: str, effect, changes: dict, d, csv) -> bool:
     if np.mean(sign * u <= u0) >= GAP_MINORITY:
         return False
     return bool(abs(value - sign * u0) <= EQUAL * u0)
+
+
+def _step_friction(changes: dict, d, csv, effect) -> bool:
+    """Is a friction fading below its velocity scale, c tanh(qd / v), the library's Coulomb
+    friction on this recording: the fitted one differs from it by an RMS below the effort
+    channel's noise over the recording's rates (where the joint rarely moves slower than v)?"""
+    from cosim.core import Model
+    from cosim.recording import read_recording
+
+    j = effect["joint"]
+    name = next((p for p in changes if p.endswith(f"[{j}].coulomb")), None)
+    if name is None:
+        return False
+    m = Model(d.robot)
+    qd = np.asarray(read_recording(csv).qd, float)[:, j - 1]
+    v = changes.get(name + "_v", 0.0) + m.param(name + "_v")
+    eps = m.param("drive.v_eps")
+    truth = (changes[name] + m.param(name)) * np.tanh(qd / (v if v > 0 else eps))
+    fitted = next(iter(effect["params"].values()))["value"] * np.tanh(qd / eps)
+    return bool(np.sqrt(np.mean((truth - fitted) ** 2)) < d.noise["sigma"][f"tau{j}"])
 
 
 def _constant_load(changes: dict, robot: str, csv, j: int, offset: float, sigma: float) -> bool:

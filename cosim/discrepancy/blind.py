@@ -553,10 +553,11 @@ def same_physics_stand_in(kind: str, changes: dict, diag) -> bool:
     physics on this recording, at the size the truth implies?  Then no structure can
     remain and none is owed.  ``changes``: the hidden parameters' true changes from nominal.
 
-    Two exact equivalences: a heavier platform is a payload at the platform's centre (its
+    Three exact equivalences: a heavier platform is a payload at the platform's centre (its
     mass the platform's extra mass within 10 %, its offset under 1 cm); a gap on a joint whose
     effort keeps one sign (all but the engine's ``GAP_MINORITY`` of the samples) is an
-    encoder offset of b/2 (within 10 %)."""
+    encoder offset of b/2 (within 10 %); a payload at the platform's centre is a heavier platform
+    (its extra mass the payload's within 10 %)."""
     from ..recording import read_recording
     from .diagnosis import GAP_MINORITY
 
@@ -566,6 +567,11 @@ def same_physics_stand_in(kind: str, changes: dict, diag) -> bool:
         dm = changes["platform.m"]
         off = math.sqrt(sum(est.get(f"payload.{c}", 0.0) ** 2 for c in "xyz"))
         return abs(est.get("payload.m", 0.0) - dm) < 0.1 * abs(dm) and off < 0.01
+    if kind == "payload" and first == "platform_mass":  # the same, the other way round
+        dm = changes["payload.m"]
+        off = math.sqrt(sum(changes.get(f"payload.{c}", 0.0) ** 2 for c in "xyz"))
+        nominal = diag.effects[0]["params"]["platform.m"]["nominal"]
+        return abs(est.get("platform.m", nominal) - nominal - dm) < 0.1 * abs(dm) and off < 0.01
     if kind == "backlash" and first == "encoder_offset" and len(changes) == 1:
         (name, b), = changes.items()
         joint = int(name.split("[")[1].split("]")[0])
