@@ -190,8 +190,6 @@ def _run(job):
             + [t.equation for t in stand_ins if not t.partial],
             confident_wrong_before=[e["title"] for e in wrong if not any(
                 tied(a) for a in e["lookalikes"] if a["group"] != UNEXPLAINED)] + [t.equation for t in stand_ins],
-            confident_wrong_whole=[e["title"] for e in wrong if not d.unexplained and not any(
-                tied(a) for a in e["lookalikes"])] + [t.equation for t in stand_ins if not d.unexplained],
             same_physics=[e["title"] for e in same], stand_ins=[t.equation for t in stand_ins],
             partial=[t.equation for t in d.discovered if t.partial])
         row["outcome"] = ("discovered" if equivalent and not stand_ins and not any(t.partial for t in equivalent)
@@ -276,9 +274,9 @@ def main(argv=None):
     failed = [r for r in rows if "failed" in r]
     if a.hold_out:
         print("| robot | held-out type | cases | discovered as its equation | structure | same physics | "
-              "library only | confident wrong names (without the rule; whole-recording rule) |")
+              "library only | confident wrong names (without the structure rule) |")
         print("| --- | --- | --- | --- | --- | --- | --- | --- |")
-        n = {"": 0, "_before": 0, "_whole": 0}
+        n = {"": 0, "_before": 0}
         for r in robots:
             for k in sorted({x["kind"] for x in ok_rows if x["robot"] == r}):
                 g = [x for x in ok_rows if x["robot"] == r and x["kind"] == k]
@@ -286,9 +284,9 @@ def main(argv=None):
                 w = {s: sum(len(x[f"confident_wrong{s}"]) for x in g) for s in n}
                 n = {s: n[s] + w[s] for s in n}
                 print(f"| {r} | {k} | {len(g)} | {c('discovered')} | {c('structure')} | {c('same physics')} | "
-                      f"{c('library only')} | {w['']} ({w['_before']}; {w['_whole']}) |")
+                      f"{c('library only')} | {w['']} ({w['_before']}) |")
         print(f"\nconfident wrong names over all {len(ok_rows)} cases: {n['']} (without the rule "
-              f"{n['_before']}; with the whole-recording rule {n['_whole']}); cases with one: "
+              f"{n['_before']}); cases with one: "
               f"{sum(bool(x['confident_wrong']) for x in ok_rows)}")
     else:
         print("| robot | force | cases | right joints and structure | largest coefficient error (median) | "

@@ -312,8 +312,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     # closed loop a missing force moves every joint's readings and efforts, and a stand-in often
     # acts on other channels than those it leaves structured (measured: docs/discrepancy.md)
     effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone]
-    for t in found:
-        t.partial = _partial_sentence(open_on(left, t.joint))
+    for t in found:  # the same for a discovered term: fitted on top of stand-ins, it may share their error
+        t.partial = _partial_sentence(left, t.joint)
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if left:
@@ -528,26 +528,23 @@ def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
             "end": float(tt[-1]) if test.any() else None, "nd": nd}
 
 
-def open_on(left, joint: int) -> list:
-    """The structure items of ``left`` (:func:`.structure.unexplained`) on the channels of
-    ``joint`` (1-based): its effort and its reading.  In closed loop an error of the reading
-    moves the effort and one of the effort moves the reading, so a term that leaves either
-    channel of its joint structured has not explained that joint."""
-    return [s for s in left if s["joint"] == joint]
-
-
 def _open_statement(items) -> str:
     chans = ", ".join(s["channel"] for s in items)
     keyed = "; ".join(dict.fromkeys(s["keyed_on"] for s in items))
     return f"structure remains unexplained on {chans} (keyed on {keyed})"
 
 
-def _partial_sentence(items) -> str:
-    """For a discovered term: "" when its joint keeps no structure, else why it is a partial fit."""
-    if not items:
-        return ""
-    return (_open_statement(items) + " with the term added: a partial fit that may stand in for what is missing, "
-            "not the physics")
+def _partial_sentence(left, joint: int) -> str:
+    """For a discovered term on ``joint`` (1-based): "" when the recording keeps no structure
+    (``left``, :func:`.structure.unexplained`), else why it is not named as the physics."""
+    own = [s for s in left if s["joint"] == joint]  # its effort or its reading
+    if own:
+        return (_open_statement(own) + " with the term added: a partial fit that may stand in for what is "
+                "missing, not the physics")
+    if left:
+        return (_open_statement(left) + ": the fit of the recording is incomplete and the term may take part of "
+                "what is missing, so it is not named as the physics with confidence")
+    return ""
 
 
 def _nrmse(rms_before, rms_after, scale, effort: bool) -> dict:

@@ -47,6 +47,7 @@ def test_a_stand_in_that_leaves_structure_is_not_named_with_confidence(backlash_
         assert "not named with confidence" in look["statement"], look["statement"]
         assert any(c in look["statement"] for c in open_channels), look["statement"]
     assert "none named with confidence" in d.conclusion, d.conclusion
-    for t in d.discovered:  # a discovered term on a joint that keeps structure is a partial fit
+    for t in d.discovered:  # nor is a discovered term named as the physics
+        assert t.partial, t
         if any(u["joint"] == t.joint for u in d.unexplained):
-            assert t.partial and "partial fit" in t.partial, t
+            assert "partial fit" in t.partial, t.partial
