@@ -737,7 +737,7 @@ def _withdrawn_sentence(w) -> str:
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
     if found:
         parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})"
-                 + (f" [partial fit: {t.partial}]" if t.partial else "") for t in found]
+                 + (" [a partial fit, not the physics: structure remains]" if t.partial else "") for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
             worse = [w["title"] for w in withdrawn if not w.get("as_well")]

@@ -164,7 +164,8 @@ def diagnosis_page(d, path, model=None) -> Path:
                                     name="residual with the term (after)"),
                        go.Scatter(x=key[order], y=(before - after)[order], mode="lines", line=dict(color="#d62728"),
                                   name="fitted term")])
-        f.update_layout(title=t.equation, height=380, xaxis_title=f"{t.key_variable} of joint {t.joint}",
+        f.update_layout(title=t.equation + (" (a partial fit, not the physics)" if getattr(t, "partial", "") else ""),
+                        height=380, xaxis_title=f"{t.key_variable} of joint {t.joint}",
                         yaxis_title=t.channel)
         sections.append((f"discovered: {t.channel}", f))
     hc = d.heldout["channels"]
