@@ -128,7 +128,8 @@ class DiscoveredTerm:
     resamples that select each term), ``heldout_before`` / ``heldout_after`` (RMS of the
     channel's held-out residual without and with the term, in its unit), ``delta_chi2_heldout``,
     ``instead_of`` (library effects it replaced: look-alikes that fit worse), ``partial`` (why
-    it is only a partial fit: structure its joint keeps with it, or "")."""
+    it is not named as the physics: structure the recording keeps with it, a partial fit where
+    its own joint keeps it; or "")."""
 
     joint: int
     channel: str
@@ -143,8 +144,8 @@ class DiscoveredTerm:
     delta_chi2_heldout: float
     key_variable: str
     instead_of: list = field(default_factory=list)
-    #: "" when the joint keeps no structure with the term added; else the sentence saying so:
-    #: a partial fit that may stand in for what is missing, not the physics
+    #: "" when the recording keeps no structure with the term added; else the sentence saying so
+    #: (a partial fit that may stand in for what is missing, not the physics)
     partial: str = ""
     #: 95 % half widths of the shape parameters the fit moves (a step's position and width, a
     #: ripple's period), {core parameter: half width}
