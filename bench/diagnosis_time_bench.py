@@ -32,7 +32,11 @@ elapsed (wall) time of the whole:
 * discovery: the search for terms no library effect names, and the tie rule;
 * held-out / localisation: the held-out fit and where the model goes wrong;
 * replay: the closed-loop replay of the held-out part (nominal and fitted plant, two-body fit);
-* total: ``diagnose`` from reading the file to the replay (the 10 s target), CPU time; wall: elapsed.
+* total: ``diagnose`` from reading the file to the replay (the 10 s target), CPU time; wall: elapsed;
+* peak MB: the peak resident memory of a fresh process that runs one diagnosis of the case
+  (Linux's ``VmHWM``; the interpreter, numpy and the core library hold about 110 MB of it before the
+  diagnosis starts).  Measured in a process of its own: in this one the memory the previous runs
+  freed stays with the process and would be counted again.
 
 The machine's load average (1 min) is printed beside every case: on a shared machine a figure is
 only comparable with one taken at a similar load, and medians are kept for that reason.
@@ -212,6 +216,26 @@ def first_difference(a, b, where="") -> str | None:
     return None
 
 
+def _peak_of(csv: str) -> float:
+    """Peak resident memory [MB] of this process after one default diagnosis of csv."""
+    from cosim.discrepancy import diagnose
+
+    diagnose(csv, figures=False)
+    try:  # the high-water mark of this process's memory (ru_maxrss would carry the parent's over)
+        with open("/proc/self/status") as f:
+            return next(int(x.split()[1]) / 1024.0 for x in f if x.startswith("VmHWM:"))
+    except (OSError, StopIteration):
+        return float("nan")
+
+
+def peak_memory(csv: Path) -> float:
+    """Peak resident memory [MB] of a fresh process diagnosing csv once."""
+    import multiprocessing
+
+    with multiprocessing.get_context("spawn").Pool(1) as pool:
+        return pool.apply(_peak_of, (str(csv),))
+
+
 def time_case(csv: Path, repeat: int, clock: StageClock):
     """``repeat`` default diagnoses of csv: per run the load, CPU time per stage and in total,
     and the wall time in total."""
@@ -257,17 +281,18 @@ def main(argv=None) -> int:
     print(f"one core ({core}), BLAS/OpenMP on one thread, median of {args.repeat}; CPU seconds per stage "
           f"(library: the rest of the diagnosis, mostly the candidate columns and the selection); wall: elapsed")
     head = (f"{'case':<18} {'samples':>7} {'load':>5} " + " ".join(f"{c:>9}" for c in COLUMNS)
-            + f" {'wall':>8}  target  named")
+            + f" {'wall':>8} {'peak MB':>8}  target  named")
     print(head)
     ok, bad = True, []
     for name, csv in paths.items():
         rows, d = time_case(csv, args.repeat, clock)
         med = {c: statistics.median(r[c] for r in rows) for c in COLUMNS + ["wall", "load"]}
+        med["peak"] = peak_memory(csv)
         flag = "met" if med["total"] < TARGET else "MISSED"
         ok &= med["total"] < TARGET
         named = ", ".join(d.named() + [t.equation for t in d.discovered]) or "clean"
         print(f"{name:<18} {rows[0]['samples']:>7} {med['load']:>5.2f} " + " ".join(f"{med[c]:>8.2f}s" for c in COLUMNS)
-              + f" {med['wall']:>7.2f}s  {flag:<6}  {named}", flush=True)
+              + f" {med['wall']:>7.2f}s {med['peak']:>8.0f}  {flag:<6}  {named}", flush=True)
         fig = figures(d)
         if args.golden:
             args.golden.mkdir(parents=True, exist_ok=True)

@@ -191,9 +191,14 @@ def select(st) -> tuple:
             gbest = (c2 - chi2 + o2.k * logn, o2, c2)
             last_best[lab] = gbest[0]
             # Two candidates that are the same physics here (a dead zone under a command
-            # of one sign and an offset of that sign) fit equally to rounding: the first
-            # in the library's order stays, not the one rounding favours.
-            if best is None or gbest[0] < best[0] - 1e-9 * abs(chi2):
+            # of one sign that never enters the zone, and an offset of that sign) fit
+            # equally to rounding: rounding does not choose.  The linear one is named (a
+            # constant force is all the recording shows; the dead zone's behaviour near
+            # zero command is nowhere in it), the other stays its tie; between two of a
+            # kind, the first in the library's order.
+            tol = 1e-9 * abs(chi2)
+            if (best is None or gbest[0] < best[0] - tol
+                    or (gbest[0] <= best[0] + tol and _plainer(o2.group, best[1].group))):
                 best = gbest
         if best is None or best[0] > -st.settings.threshold:
             break
@@ -243,6 +248,12 @@ def select(st) -> tuple:
                 theta = refine(st, selected, theta)
     return st, Selection(tuple(selected), theta, chi2_nom, st.chi2(theta), st.n_eff, st.sig, st.phi, tuple(steps),
                          last_best, {}, st.settings.threshold, refused)
+
+
+def _plainer(a, b) -> bool:
+    """Of two groups that fit alike, ``a`` claims less beyond the recording: a linear
+    effect (a column the recording shows) against a profiled non-linear one."""
+    return a.effect.kind == "linear" and b.effect.kind != "linear"
 
 
 def _joint_sets(st, taken):

@@ -9,6 +9,7 @@ is tuned on these cases."""
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
@@ -18,6 +19,7 @@ import mujoco_blind as mb  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
+from cosim.recording import read_recording  # noqa: E402
 
 
 def _case(folder, effect, value, joint, replay=False):
@@ -46,6 +48,16 @@ def test_a_mujoco_recording_is_diagnosed_blind(tmp_path, request, effect, value,
     truth, d = request.getfixturevalue("gap_case") if effect == "backlash" else _case(tmp_path, effect, value, joint)
     if effect is None:
         assert d.named() == [] and d.conclusion == "no missing physics found", d.conclusion
+        return
+    if effect == "dead_zone" and d.named()[0] == "offset":
+        # the rail is commanded one way, never within the band: a dead zone is then a constant,
+        # the offset's column; the offset of its size is named, the dead zone its tie
+        tau = np.asarray(read_recording(d.recording).tau)[:, joint]
+        assert np.all(np.sign(tau) == np.sign(tau[0])) and np.abs(tau).min() > value, d.conclusion
+        assert "dead_zone" in d.ties("offset"), d.conclusion
+        key = key.replace(".dead_zone", ".offset")
+        est = abs(d.plant_parameters()[key])
+        assert abs(est - value) < 0.10 * value, (est, value)
         return
     assert d.named()[0] == effect, d.conclusion
     est = d.plant_parameters()[key]
