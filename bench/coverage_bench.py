@@ -108,12 +108,11 @@ def cases(seeds=(0,), own_robots=("6pus", "quattro")) -> list:
 
 def short_cases() -> list:
     """The cases of tests/discrepancy/test_coverage.py and ``--short``: every type of each
-    generator at seed 0, the own generator's library types on the 6-PUS only (with
-    :data:`SHORT`: 45 cases, 117 estimates)."""
+    generator at seed 0, the own generator's library types on the 6-PUS only: 45 cases."""
     return cases(seeds=(0,), own_robots=("6pus",))
 
 
-def _own_cfg(robot, profile):
+def _own_cfg(profile):
     from cosim.discrepancy import blind
 
     cfg = copy.deepcopy(blind.load_config())
@@ -130,7 +129,7 @@ def _simulate(case: Case, profile: Profile, folder: Path):
 
     if case.source.startswith("own"):
         csv, kp = blind.make_case(blind.CaseSpec(case.name, case.robot, [case.kind], case.seed), folder / "rec",
-                                  folder / "keys", _own_cfg(case.robot, profile))
+                                  folder / "keys", _own_cfg(profile))
         return csv, {p: v for h in json.loads(Path(kp).read_text())["effects"] for p, v in h["params"].items()}
     import discovery_mujoco_bench as dmb
     import mujoco_blind as mb
@@ -175,8 +174,10 @@ def estimates(diag, truth: dict) -> list:
 
 
 def run_case(job) -> dict:
-    """Simulate and diagnose one case: ``{"case", "source", "estimates", "time", "named"}``
-    (or ``"failed"``: a case the generator could not make, reported, not dropped silently)."""
+    """Simulate and diagnose one case ``job = (case, profile, folder)``: ``{"case", "source",
+    "estimates"`` (:func:`estimates`), ``"named", "discovered", "t_simulate", "t_diagnose"}``
+    [s], or ``"failed"`` with no estimates: a case the generator could not make, reported in the
+    table, never dropped silently."""
     case, profile, folder = job
     from cosim.discrepancy import diagnose
 
