@@ -35,6 +35,7 @@ NOT_RUN = {
     ".venv/bin/python bench/long_recording.py": "a benchmark of minutes (tests/discrepancy/test_long_recording.py)",
     ".venv/bin/python bench/discovery_mujoco_bench.py": "a benchmark of minutes "
                                                         "(tests/discrepancy/test_discovery_mujoco.py)",
+    ".venv/bin/python bench/coverage_bench.py": "a benchmark of minutes (tests/discrepancy/test_coverage.py)",
     ".venv/bin/cosim sweep scenarios/sweeps/blind_benchmark.toml --scheduler": "needs a scheduler the user started, "
                                                                               "and minutes (tests/sweep/test_dask.py)",
     ".venv/bin/cosim sweep --bench": "a benchmark of minutes (tests/sweep)",
