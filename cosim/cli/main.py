@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..errors import is_input_error
 from .common import COMMANDS, Interrupted, command, os_error_text, robot_arg
 
 
@@ -124,7 +125,6 @@ def _main(argv, called) -> int:
         import os
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
-    from ..errors import is_input_error
     from ..fmu import FMUError
     from ..plants import MasterError
     from ..sweep.errors import SweepError
@@ -149,10 +149,21 @@ def _main(argv, called) -> int:
     except MemoryError:
         return _mistake(prog, "out of memory: ask for less (a smaller grid, a shorter run or recording)")
     except Exception as e:  # noqa: BLE001 - sorted below: the input's mistake, or a fault of the toolkit
-        # The co-simulation, an FMU and a sweep say what stopped them (time, FMU call, spec)
-        if is_input_error(e) or isinstance(e, (MasterError, FMUError, SweepError)):
+        fault = _fault_in(e, (MasterError, FMUError, SweepError))
+        if fault is None:
             return _mistake(prog, _one_line(e))
-        return _fault(e, prog)
+        return _fault(e, prog, type(fault).__name__)
+
+
+def _fault_in(e: BaseException, wrappers) -> BaseException | None:
+    """The fault of the toolkit in ``e``, or None when ``e`` is the input's mistake: an input
+    error, or one of ``wrappers`` (the co-simulation, an FMU, a sweep: they say what stopped
+    them, at which time, FMU call or spec) that wraps none, an input error or a file error."""
+    if is_input_error(e) or isinstance(e, OSError):
+        return None
+    if isinstance(e, wrappers):
+        return None if e.__cause__ is None else _fault_in(e.__cause__, wrappers)
+    return e
 
 
 def _mistake(prog: str, message: str) -> int:
@@ -160,15 +171,16 @@ def _mistake(prog: str, message: str) -> int:
     return EXIT_INPUT
 
 
-def _fault(e: Exception, prog: str) -> int:
-    """A fault of the toolkit (not of the input), in one line; ``COSIM_TRACEBACK=1`` raises
-    it instead, so that the traceback shows where."""
+def _fault(e: Exception, prog: str, kind: str | None = None) -> int:
+    """A fault of the toolkit (not of the input), in one line: its type (``kind``: the type
+    of the fault a wrapper holds) and message; ``COSIM_TRACEBACK=1`` raises it instead, so
+    that the traceback shows where."""
     import os
 
     if os.environ.get("COSIM_TRACEBACK"):
         raise e
-    print(f"{prog}: internal error: {type(e).__name__}: {_one_line(e)} (please report it with the command that "
-          f"caused it; COSIM_TRACEBACK=1 shows where)", file=sys.stderr)
+    print(f"{prog}: internal error: {kind or type(e).__name__}: {_one_line(e)} (please report it with the command "
+          f"that caused it; COSIM_TRACEBACK=1 shows where)", file=sys.stderr)
     return EXIT_INTERNAL
 
 

@@ -124,3 +124,22 @@ def test_input_errors_are_value_errors_and_the_package_errors_derive_from_input_
     assert is_input_error(RecordingError("x.csv", "column 'q1' is missing"))
     assert is_input_error(UnreachableError("leg 1 cannot reach the pose", "PKM_ERR_UNREACHABLE"))
     assert not is_input_error(ValueError("plain")) and not is_input_error(ZeroDivisionError())
+
+
+@pytest.mark.parametrize("raised,code,start", [
+    (ZeroDivisionError("division by zero"), 70, "cosim run: internal error: ZeroDivisionError: reference "),
+    (PkmError("leg 3 cannot reach the pose", "PKM_ERR_UNREACHABLE"), 2, "cosim run: error: reference "),
+])
+def test_a_fault_the_co_simulation_wraps_is_still_a_fault(monkeypatch, tmp_path, raised, code, start):
+    # The co-simulation says what stopped it (MasterError, "reference ...: cannot map it to
+    # joints: ..."); what it wraps decides whose the problem is.
+    import cosim.trajectories
+
+    def joint_reference(*a, **k):
+        raise raised
+
+    monkeypatch.delenv("COSIM_TRACEBACK", raising=False)
+    monkeypatch.setattr(cosim.trajectories, "joint_reference", joint_reference)
+    rc, err = _call(["run", str(REPO / "scenarios" / "6pus_step_pd.toml"), "--out", str(tmp_path / "run")])
+    lines = err.strip().splitlines()
+    assert rc == code and len(lines) == 1 and lines[0].startswith(start) and str(raised) in lines[0], (rc, err)
