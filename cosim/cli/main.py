@@ -145,7 +145,7 @@ def _main(argv, called) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except OSError as e:  # a file that is missing, cannot be read or written: the path is the user's
-        return _mistake(prog, os_error_text(e) if e.filename else _one_line(e))
+        return _mistake(prog, _one_line(e) if isinstance(e, FileNotFoundError) and not e.filename else os_error_text(e))
     except MemoryError:
         return _mistake(prog, "out of memory: ask for less (a smaller grid, a shorter run or recording)")
     except Exception as e:  # noqa: BLE001 - sorted below: the input's mistake, or a fault of the toolkit
