@@ -16,8 +16,13 @@ With --per-row, the diagnosis is also timed with the core's per-row loop in plac
 batched calls over the samples (actuator effort, sensor readings, pose rates), the two
 alternated, medians of --repeat: the same-run baseline of the batched calls.
 
+With --instruments, the diagnosis is also timed without the instrumental variables of the
+masses, inertias and viscous frictions (``diagnose(..., instruments=False)``: least squares)
+and with them, the two alternated, medians of --repeat in CPU time (``time.process_time``,
+which the machine's other processes change little) and elapsed time.
+
 Usage: PKM_BUILD_DIR=build .venv/bin/python bench/discrepancy_bench.py [--repeat 3] [--robot 6pus quattro]
-       [--per-row]
+       [--per-row] [--instruments]
 """
 from __future__ import annotations
 
@@ -86,12 +91,26 @@ def _batched_vs_per_row(fn, repeat):
     return loop, batch
 
 
+def _with_and_without_instruments(csv, repeat):
+    """(CPU, elapsed) times of the diagnosis with and without instruments, alternated."""
+    out = {True: ([], []), False: ([], [])}
+    for _ in range(repeat):
+        for instruments in (True, False):
+            c, w = time.process_time(), time.perf_counter()
+            diagnose(csv, replay=False, instruments=instruments)
+            out[instruments][0].append(time.process_time() - c)
+            out[instruments][1].append(time.perf_counter() - w)
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--robot", nargs="+", default=["6pus", "quattro"])
     ap.add_argument("--per-row", action="store_true",
                     help="also time the diagnosis with per-row core calls instead of the batched ones (alternated)")
+    ap.add_argument("--instruments", action="store_true",
+                    help="also time the diagnosis with and without the instrumental variables (alternated)")
     args = ap.parse_args(argv)
     try:
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # single core
@@ -100,7 +119,7 @@ def main(argv=None):
     cfg = blind.load_config()
     cfg["general"]["duration"] = 10.0
     cfg["general"]["two_effects"] = 0.0
-    rows, per_row = [], {}
+    rows, per_row, instr = [], {}, {}
     with tempfile.TemporaryDirectory() as tmp, threadpool_limits(1, user_api="blas"):
         for robot in args.robot:
             spec = blind.CaseSpec(f"bench_{robot}", robot, HIDDEN[robot], seed=2024)
@@ -117,6 +136,8 @@ def main(argv=None):
                          d.timings.get("discovery", float("nan"))))
             if args.per_row:
                 per_row[robot] = _batched_vs_per_row(lambda: diagnose(csv, replay=False), args.repeat)
+            if args.instruments:
+                instr[robot] = _with_and_without_instruments(csv, args.repeat)
     print(f"{'robot':<8} {'samples':>7} {'generate':>9} {'baseline':>9} {'diagnose':>9} {'+replay':>9} "
           f"{'+report':>9}  target  {'no discovery':>12} {'discovery':>9}  named")
     ok = True
@@ -130,6 +151,10 @@ def main(argv=None):
         print(f"{robot}: diagnose with per-row core calls median {statistics.median(loop):.2f} s "
               f"({min(loop):.2f}-{max(loop):.2f}), batched median {statistics.median(batch):.2f} s "
               f"({min(batch):.2f}-{max(batch):.2f}); alternated, {args.repeat} each")
+    for robot, t in instr.items():
+        med = {k: (statistics.median(c), statistics.median(w)) for k, (c, w) in t.items()}
+        print(f"{robot}: diagnose with instruments CPU {med[True][0]:.2f} s (elapsed {med[True][1]:.2f} s), without "
+              f"CPU {med[False][0]:.2f} s (elapsed {med[False][1]:.2f} s); alternated, medians of {args.repeat}")
     return 0 if ok else 1
 
 

@@ -60,6 +60,7 @@ from ._native import STATUS, raise_for
 from .core.controller import KINDS, CompiledController
 from .core.loop import LOOP_FIELDS, closed_loop_call
 from .plants import CoreDrive, CorePlant
+from .errors import InputError
 
 __all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
            "NOISE_CHANNELS"]
@@ -174,11 +175,11 @@ class ClosedLoop:
         for k in NOISE_CHANNELS:
             s = np.broadcast_to(np.asarray((noise or {}).get(k, 0.0), float), (nd,))
             if np.any(~np.isfinite(s)) or np.any(s < 0):
-                raise ValueError(f"noise {k!r} must be standard deviations >= 0, got {s.tolist()}")
+                raise InputError(f"noise {k!r} must be standard deviations >= 0, got {s.tolist()}")
             self.noise[k] = s
         unknown = set(noise or {}) - set(NOISE_CHANNELS)
         if unknown:
-            raise ValueError(f"noise: unknown channel(s) {sorted(unknown)} (channels: {', '.join(NOISE_CHANNELS)})")
+            raise InputError(f"noise: unknown channel(s) {sorted(unknown)} (channels: {', '.join(NOISE_CHANNELS)})")
         self.seed = seed
         self.compiled = compiled
 
@@ -256,10 +257,10 @@ class ClosedLoop:
         t = np.ascontiguousarray(reference.time[start:], dtype=float)
         n, nd = len(t), self.ndof
         if n < 2:
-            raise ValueError("the reference needs at least two samples")
+            raise InputError("the reference needs at least two samples")
         h = float(t[1] - t[0])
         if reference.q.shape[1] != nd:
-            raise ValueError(f"the reference has {reference.q.shape[1]} joints, the plant {nd}")
+            raise InputError(f"the reference has {reference.q.shape[1]} joints, the plant {nd}")
         if x0 is None:
             x0 = reference.x[start] if getattr(reference, "x", None) is not None \
                 else self.plant.model.fk(reference.q[start])
@@ -269,15 +270,15 @@ class ClosedLoop:
         if f_ext is not None:
             f_ext = np.asarray(f_ext, float)
             if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
-                raise ValueError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
+                raise InputError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
                                  f"got {f_ext.shape}")
             f_ext = np.ascontiguousarray(f_ext[start:start + n])
             bad = np.argwhere(~np.isfinite(f_ext))
             if bad.size:
-                raise ValueError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
+                raise InputError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
                                  f"{f_ext[tuple(bad[0])]}")
             if not hasattr(self.plant, "set_external"):
-                raise ValueError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+                raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
         past = self._history(reference, start, history)
         rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
                          rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan))
@@ -324,16 +325,16 @@ class ClosedLoop:
         try:
             q, qd = (np.ascontiguousarray(v, dtype=float) for v in history)
         except (TypeError, ValueError):
-            raise ValueError("history must be (q, qd), the readings before start, each (m, nd)") from None
+            raise InputError("history must be (q, qd), the readings before start, each (m, nd)") from None
         m, nd = (q.shape + (0,))[:2] if q.ndim == 2 else (-1, -1)
         if q.ndim != 2 or q.shape != qd.shape or nd != self.ndof or not 0 < m <= start:
-            raise ValueError(f"history: q and qd must both have shape (m, {self.ndof}) with 0 < m <= start = {start}, "
+            raise InputError(f"history: q and qd must both have shape (m, {self.ndof}) with 0 < m <= start = {start}, "
                              f"got {q.shape} and {qd.shape}")
         for name, v in (("q", q), ("qd", qd)):
             bad = np.argwhere(~np.isfinite(v))
             if bad.size:
                 k = start - m + int(bad[0][0])
-                raise ValueError(f"history: {name} of sample {k} (t = {reference.time[k]:.6g} s), joint "
+                raise InputError(f"history: {name} of sample {k} (t = {reference.time[k]:.6g} s), joint "
                                  f"{bad[0][1] + 1} is {v[tuple(bad[0])]}")
         s = slice(start - m, start)
         ref = {k: (None if getattr(reference, k, None) is None else np.ascontiguousarray(getattr(reference, k)[s]))

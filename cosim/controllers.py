@@ -38,8 +38,10 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from .errors import InputError
 
-class ControllerError(ValueError):
+
+class ControllerError(InputError):
     """A controller that cannot be built or cannot act (says which gain/joint/time)."""
 
 

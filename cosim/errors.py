@@ -1,4 +1,12 @@
-"""The exceptions the core's statuses become (``pkm.h``, status section).
+"""The package's exceptions: the mistakes of its caller (:class:`InputError` and its
+subclasses) and the statuses of the core (``pkm.h``, status section).
+
+:class:`InputError` is what every check of the caller's input raises: a file, a row or
+column of it, a parameter, a joint, a time, an option.  Its subclasses across the package
+(:class:`ArgumentError`, :class:`ParameterError` here; ``ScenarioError``,
+``RecordingError``, ``DiagnosisError``...) say which input.  It is a ``ValueError``, so a
+caller that catches ``ValueError`` catches it too; the command line tells it (one line,
+exit code 2) from a fault of the toolkit (any other exception: one line, exit code 70).
 
 Every core call that fails raises one of these, with the core's message (what and where:
 leg, pose, time, parameter) and ``status``, the C status name.  They subclass the built-in
@@ -15,23 +23,35 @@ PKM_ERR_UNREACHABLE
 """
 from __future__ import annotations
 
-__all__ = ["PkmError", "ArgumentError", "ParameterError", "UnreachableError", "SingularError",
+__all__ = ["InputError", "is_input_error", "PkmError", "ArgumentError", "ParameterError", "UnreachableError", "SingularError",
            "ConvergenceError", "JointLimitError", "IntegrationError", "UnsupportedError"]
 
 
+class InputError(ValueError):
+    """A mistake in the caller's input; the message says what is wrong and where (file,
+    row, column, parameter, joint, time).
+
+    >>> from cosim.errors import InputError
+    >>> issubclass(InputError, ValueError)
+    True
+    """
+
+
 class PkmError(RuntimeError):
-    """An error reported by the core; ``status`` is the C status name."""
+    """An error reported by the core; ``status`` is the C status name.  Every status but
+    ``PKM_ERR_INTERNAL`` (a bug of the core) describes the input: a pose, a parameter, a
+    joint's stroke, a time step (:func:`is_input_error`)."""
 
     def __init__(self, message: str, status: str = "PKM_ERR_INTERNAL"):
         super().__init__(message)
         self.status = status
 
 
-class ArgumentError(PkmError, ValueError):
+class ArgumentError(PkmError, InputError):
     """Bad argument: wrong shape, NaN or Inf in an input."""
 
 
-class ParameterError(PkmError, ValueError):
+class ParameterError(PkmError, InputError):
     """A parameter value is invalid."""
 
 
@@ -57,3 +77,34 @@ class IntegrationError(PkmError):
 
 class UnsupportedError(PkmError, NotImplementedError):
     """The robot does not provide the function."""
+
+
+_FAULTS = ("PKM_ERR_INTERNAL", "PKM_ERR_UNKNOWN")  # a bug of the core, or a status this package does not know
+
+
+def is_input_error(error: BaseException) -> bool:
+    """Whether ``error`` is a mistake in the caller's input (an :class:`InputError`, or a
+    core status other than an internal one) rather than a fault of the toolkit.
+
+    Parameters
+    ----------
+    error : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    bool
+        True for the caller's mistakes; False for everything else (a plain ``ValueError``
+        raised by numpy included).
+
+    Examples
+    --------
+    >>> from cosim.errors import ParameterError, PkmError, is_input_error
+    >>> is_input_error(ParameterError("platform.m = -1 kg must be > 0", "PKM_ERR_PARAMETER"))
+    True
+    >>> is_input_error(PkmError("unexpected", "PKM_ERR_INTERNAL")), is_input_error(ValueError("numpy"))
+    (False, False)
+    """
+    if isinstance(error, PkmError):
+        return error.status not in _FAULTS
+    return isinstance(error, InputError)

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import InputError
+
 __all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "restore_fmpy_logger",
            "FMUInstance", "FMUError"]
 
@@ -79,7 +81,7 @@ def fmu_path(robot: str = "6pus", build: str | Path | None = None, fmi: int = 2)
     A description file's FMU is built on demand by :func:`build` (``cosim fmu PATH.toml``)."""
     ident = fmu_id(robot)
     if fmi not in (2, 3):
-        raise ValueError(f"FMI {fmi}: the FMUs are FMI 2.0 or 3.0 (fmi=2 or 3)")
+        raise InputError(f"FMI {fmi}: the FMUs are FMI 2.0 or 3.0 (fmi=2 or 3)")
     folder = Path(build or build_dir()) / "fmu"
     p = folder / f"{ident}.fmu" if fmi == 2 else folder / "fmi3" / f"{ident}.fmu"
     if not p.exists():
@@ -162,12 +164,12 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     import zipfile
 
     if fmi not in (2, 3):
-        raise ValueError(f"FMI {fmi}: this build makes FMI 2.0 and FMI 3.0 FMUs (--fmi 2 or 3)")
+        raise InputError(f"FMI {fmi}: this build makes FMI 2.0 and FMI 3.0 FMUs (--fmi 2 or 3)")
     if fmi == 3 and source:
-        raise ValueError("FMI 3: the source-code FMUs are FMI 2.0 only (drop --source or use --fmi 2)")
+        raise InputError("FMI 3: the source-code FMUs are FMI 2.0 only (drop --source or use --fmi 2)")
     bad = [p for p in platforms if p not in PLATFORMS]
     if bad:
-        raise ValueError(f"unknown platform {bad[0]!r}: use {', '.join(PLATFORMS)}")
+        raise InputError(f"unknown platform {bad[0]!r}: use {', '.join(PLATFORMS)}")
     b = Path(build or build_dir())
     ident = fmu_id(robot)
     folder = b / "fmu" if fmi == 2 else b / "fmu" / "fmi3"

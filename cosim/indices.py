@@ -40,6 +40,8 @@ from dataclasses import dataclass, field
 
 import numpy as np  # noqa: F401 (the example above)
 
+from .errors import InputError
+
 __all__ = ["pose_indices", "index_map", "IndexMap", "index_units", "BETTER", "ORDER"]
 
 #: which way is better for the indices where one is (speed and turn gains: faster is less precise)
@@ -125,9 +127,9 @@ class IndexMap:
         v = self.values[name]
         better = better or BETTER.get(name)
         if better not in ("max", "min"):
-            raise ValueError(f"index {name!r} has no better direction: give better='max' or 'min'")
+            raise InputError(f"index {name!r} has no better direction: give better='max' or 'min'")
         if not np.isfinite(v).any():
-            raise ValueError(f"index {name!r} has no value on this grid (nothing reachable)")
+            raise InputError(f"index {name!r} has no value on this grid (nothing reachable)")
         f = np.nanargmax if better == "max" else np.nanargmin
         return self.pose(np.unravel_index(f(v), v.shape))
 
@@ -164,9 +166,9 @@ def index_map(model, fixed: dict | None = None, **axes) -> IndexMap:
     names = list(model.facts.pose_names)
     unknown = [a for a in list(axes) + list(fixed or {}) if a not in names]
     if unknown:
-        raise ValueError(f"{model.robot} has no pose coordinate {unknown[0]!r} (its coordinates: {' '.join(names)})")
+        raise InputError(f"{model.robot} has no pose coordinate {unknown[0]!r} (its coordinates: {' '.join(names)})")
     if not axes:
-        raise ValueError("give at least one pose coordinate to sweep")
+        raise InputError("give at least one pose coordinate to sweep")
     home = dict(zip(names, model.home()))
     fixed = {n: float((fixed or {}).get(n, home[n])) for n in names if n not in axes}
     ax = {n: np.atleast_1d(np.asarray(v, float)) for n, v in axes.items()}

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from .errors import InputError
+
 POSE_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 POSE_UNITS = ("m", "m", "m", "rad", "rad", "rad")
 
@@ -84,7 +86,7 @@ def _half_width(name: str, span=None) -> float:
     """A map's default half-width about home: 0.35 rad for an angle, 0.05 m for a length."""
     if span is not None:
         if not (math.isfinite(float(span)) and float(span) > 0):
-            raise ValueError(f"span = {span}: give the map's half-width about home as a positive number [m or rad]")
+            raise InputError(f"span = {span}: give the map's half-width about home as a positive number [m or rad]")
         return float(span)
     return 0.35 if POSE_UNITS[POSE_NAMES.index(name)] == "rad" else 0.05
 
@@ -121,7 +123,7 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21, at=None) -> di
     axes = tuple(axes or names[-2:])
     for a in axes:
         if a not in names:
-            raise ValueError(f"--axes: {a!r} is not a coordinate of {model.robot} ({' '.join(names)})")
+            raise InputError(f"--axes: {a!r} is not a coordinate of {model.robot} ({' '.join(names)})")
     idx = [names.index(a) for a in axes]
     home = model.home()
     half = [_half_width(a, span) for a in axes]
@@ -132,7 +134,7 @@ def parasitic_map(model, *, axes=None, span=None, grid: int = 21, at=None) -> di
     x = home.copy()
     for name, val in (at or {}).items():
         if name not in names or name in axes:
-            raise ValueError(f"at: {name!r} is not a coordinate of {model.robot} outside the map's axes "
+            raise InputError(f"at: {name!r} is not a coordinate of {model.robot} outside the map's axes "
                              f"({' '.join(n for n in names if n not in axes)})")
         x[names.index(name)] = float(val)
     from .errors import PkmError

@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from .jsonable import jsonable
+from .errors import InputError
 
 FORMAT = "pkm-recording/1"
 
@@ -131,7 +132,7 @@ def _known():
     return ", ".join(robots())
 
 
-class RecordingError(ValueError):
+class RecordingError(InputError):
     """A malformed recording; the message names the file, row and column."""
 
     def __init__(self, path, message, row=None, column=None):

@@ -40,6 +40,7 @@ from . import trajectories as tr
 from .jsonable import jsonable
 from .closed_loop import LoopInterrupted
 from .master import CoreDrive, CorePlant, FMUPlant, MasterError, make_reference, run
+from .errors import InputError
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -48,7 +49,7 @@ _TOP_KEYS = {"name", "description", "robot", "param_set", "plant", "duration", "
              "output", "fmu", "tracker"}
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """A scenario file that cannot be run; names the file and the key."""
 
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from .closed_loop import KINDS
 from .fmu import fmu_id, fmu_path
+from .errors import InputError
 
 __all__ = ["controller_parameters", "lti_controller", "export_ssp", "LTIController"]
 
@@ -74,7 +75,7 @@ class LTIController:
 
         if getattr(self, "_cc", None) is None:
             if self.model is None:
-                raise ValueError("an LTI controller run from Python needs the model (lti_controller(..., model=m))")
+                raise InputError("an LTI controller run from Python needs the model (lti_controller(..., model=m))")
             self._cc = CompiledController(self, model=self.model, dt=self.dt)
         return self._cc
 
@@ -96,14 +97,14 @@ def lti_controller(sys_d, *, ndof: int, model=None, gravity_feedforward: bool = 
     import control
 
     if not (getattr(sys_d, "dt", None) and sys_d.dt is not True and sys_d.dt > 0):
-        raise ValueError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
+        raise InputError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
     ss = control.ss(sys_d)
     A, B, C, D = (np.asarray(a, float) for a in (ss.A, ss.B, ss.C, ss.D))
     if B.shape[1] == 1 and C.shape[0] == 1 and ndof > 1:
         I = np.eye(ndof)
         A, B, C, D = np.kron(I, A), np.kron(I, B), np.kron(I, C), np.kron(I, D)
     if B.shape[1] != ndof or C.shape[0] != ndof:
-        raise ValueError(f"the design has {B.shape[1]} inputs and {C.shape[0]} outputs; the robot has {ndof} joints")
+        raise InputError(f"the design has {B.shape[1]} inputs and {C.shape[0]} outputs; the robot has {ndof} joints")
     return LTIController(A, B, C, D, dt=float(ss.dt), model=model, gravity_feedforward=gravity_feedforward,
                          saturation=saturation)
 
@@ -117,7 +118,7 @@ def controller_parameters(controller, *, ndof: int, dt: float, lti_states: int) 
     """Start values of the controller FMU's parameters for a controller, by variable name."""
     kind = getattr(controller, "kind", None)
     if kind not in KINDS:
-        raise ValueError(f"controller kind {kind!r} has no FMU (kinds: {', '.join(KINDS)})")
+        raise InputError(f"controller kind {kind!r} has no FMU (kinds: {', '.join(KINDS)})")
     nd = ndof
     p = {"controller.kind": KINDS[kind], "controller.dt": float(dt)}
     for name in ("kp", "kd", "ki"):
@@ -135,7 +136,7 @@ def controller_parameters(controller, *, ndof: int, dt: float, lti_states: int) 
         A, B, C, D = controller.A, controller.B, controller.C, controller.D
         nx = A.shape[0]
         if nx > lti_states:
-            raise ValueError(f"the LTI design has {nx} states; the controller FMU has room for {lti_states}")
+            raise InputError(f"the LTI design has {nx} states; the controller FMU has room for {lti_states}")
         p["lti.nx"] = nx
         p.update({f"lti.A[{r + 1},{c + 1}]": float(A[r, c]) for r in range(nx) for c in range(nx)})
         p.update({f"lti.B[{r + 1},{j + 1}]": float(B[r, j]) for r in range(nx) for j in range(nd)})
@@ -200,9 +201,9 @@ def export_ssp(path, *, model, controller, qref, dt: float = 1e-3, stop_time: fl
     qref = np.broadcast_to(np.asarray(qref, float), (nd,))
     qdref = np.zeros(nd) if qdref is None else np.broadcast_to(np.asarray(qdref, float), (nd,))
     if not (np.all(np.isfinite(qref)) and np.all(np.isfinite(qdref))):
-        raise ValueError("qref and qdref must be finite")
+        raise InputError("qref and qdref must be finite")
     if not (np.isfinite(dt) and dt > 0 and np.isfinite(stop_time) and stop_time > dt):
-        raise ValueError(f"dt = {dt} s and stop_time = {stop_time} s: need 0 < dt < stop_time")
+        raise InputError(f"dt = {dt} s and stop_time = {stop_time} s: need 0 < dt < stop_time")
     plant_fmu, ctrl_fmu = fmu_path(model.robot), fmu_path(fmu_id(model.robot) + "_CTRL")
     facts = model.facts
     x0 = model.home() if x0 is None else np.asarray(x0, float)

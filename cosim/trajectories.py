@@ -26,8 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import InputError
 
-class TrajectoryError(ValueError):
+
+class TrajectoryError(InputError):
     """A trajectory specification that cannot be evaluated (says which item is wrong)."""
 
 
@@ -307,7 +309,7 @@ def letter_m(center=(0.0, 0.0), z: float = 0.075, width: float = 0.03, height: f
         full = ("x", "y", "z", "rx", "ry", "rz")
         other = [c for c in coordinates if c not in full]
         if other or not {"x", "y"} <= set(coordinates):
-            raise ValueError(f"the letter M is traced in x and y by a robot with coordinates among "
+            raise TrajectoryError(f"the letter M is traced in x and y by a robot with coordinates among "
                              f"{' '.join(full)}; this one has {' '.join(coordinates)}")
         poses = poses[:, [full.index(c) for c in coordinates]]
     hold = np.zeros(len(poses))

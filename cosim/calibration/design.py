@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .ident import column_scale
+from ..errors import InputError
 
 __all__ = ["observability", "select_poses", "pose_rows", "common_scale", "sixpus_seed_comparison"]
 
@@ -108,7 +109,7 @@ def select_poses(A, n: int, start=None, exchange: bool = True, max_passes: int =
     A = np.asarray(A, float)
     nc, nb, nr, ncol = A.shape
     if n > nc:
-        raise ValueError(f"cannot choose {n} poses among {nc} candidates")
+        raise InputError(f"cannot choose {n} poses among {nc} candidates")
     h = np.array(common_scale(A))
     As = A * h[None, :, None, :]
     eps = ridge * np.mean(np.einsum("kbrc,kbrc->b", As, As)) / ncol

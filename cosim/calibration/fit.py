@@ -48,6 +48,7 @@ from .problems import (
 from .solvers import METHODS, Solution, solve
 from ..core.model import Model
 from ..recording import Recording, read_recording
+from ..errors import InputError
 
 __all__ = [
     "calibrate",
@@ -108,7 +109,7 @@ def measurements(rec, use: str = "auto") -> Measurements:
             f"{where}: no pose columns ({', '.join(rec.pose_columns)}): a calibration campaign must record the "
             f"measured pose (or output) next to the joint readings")
     if use not in ("auto", "held", "rows"):
-        raise ValueError(f"use must be 'auto', 'held' or 'rows', got {use!r}")
+        raise InputError(f"use must be 'auto', 'held' or 'rows', got {use!r}")
     lab = rec.extra.get("label")
     if use == "held" and lab is None:
         raise CalibrationDataError(f"{where}: no 'label' column tagging the held poses (use='rows' takes every row)")
@@ -189,7 +190,7 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
 def split_holdout(n: int, fraction: float, seed: int = 0):
     """Random split of n rows into (calibration, held-out) index arrays."""
     if not 0.0 <= fraction < 1.0:
-        raise ValueError(f"holdout fraction must be in [0, 1), got {fraction}")
+        raise InputError(f"holdout fraction must be in [0, 1), got {fraction}")
     perm = np.random.default_rng(seed).permutation(n)
     nh = int(round(fraction * n))
     return np.sort(perm[nh:]), np.sort(perm[:nh])
@@ -476,9 +477,9 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
         Too few poses, no pose columns, a rank-deficient set with ``model="full"``...
     """
     if model not in MODELS:
-        raise ValueError(f"unknown model {model!r} (known: {', '.join(MODELS)})")
+        raise InputError(f"unknown model {model!r} (known: {', '.join(MODELS)})")
     if solver not in METHODS:
-        raise ValueError(f"unknown solver {solver!r} (known: {', '.join(METHODS)})")
+        raise InputError(f"unknown solver {solver!r} (known: {', '.join(METHODS)})")
     meas = measurements(recording, use)
     source = meas.source
     cal_idx, hold_idx = split_holdout(len(meas), holdout, seed)

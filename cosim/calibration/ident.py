@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from ..errors import InputError
+
 __all__ = [
     "column_scale",
     "identifiability",
@@ -353,14 +355,14 @@ def identifiability(J, names, units=None, cond_max: float = 100.0, blocks=None,
     """
     J = np.asarray(J, dtype=float)
     if J.ndim != 2:
-        raise ValueError(f"regression matrix must be 2-D, got shape {J.shape}")
+        raise InputError(f"regression matrix must be 2-D, got shape {J.shape}")
     names = list(names)
     if J.shape[1] != len(names):
-        raise ValueError(f"regression matrix has {J.shape[1]} columns but {len(names)} parameter names")
+        raise InputError(f"regression matrix has {J.shape[1]} columns but {len(names)} parameter names")
     bad = np.argwhere(~np.isfinite(J))
     if bad.size:
         r, c = bad[0]
-        raise ValueError(f"regression matrix row {r}, column {names[c]!r} is not finite ({J[r, c]!r})")
+        raise InputError(f"regression matrix row {r}, column {names[c]!r} is not finite ({J[r, c]!r})")
     units = list(units) if units is not None else [""] * len(names)
     if blocks is None:
         blocks = [("all", np.arange(J.shape[0]), np.arange(J.shape[1]))]

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ArgumentError, PkmError
+from ..errors import ArgumentError, InputError, PkmError
 from ..recording import FULL_POSE as _FULL, FULL_POSE_UNITS as _FULL_UNITS  # a 6-DOF tracker's columns
 
 __all__ = [
@@ -55,7 +55,7 @@ __all__ = [
 PKM_FRAME_WORLD, PKM_FRAME_PLATFORM = 0, 1
 
 
-class CalibrationDataError(ValueError):
+class CalibrationDataError(InputError):
     """Calibration data cannot be used: too few poses, unreachable poses, NaN..."""
 
 
@@ -333,7 +333,7 @@ class SixpusProblem(Problem):
             sd = np.sqrt(np.sum(Jx[:, :, :3] ** 2, axis=2) + np.sum(Jx[:, :, 3:] ** 2, axis=2) / r ** 2)
             self.weights = (1.0 / sd).reshape(-1)
         elif weighting != "none":
-            raise ValueError(f"weighting must be 'tracker' or 'none', got {weighting!r}")
+            raise InputError(f"weighting must be 'tracker' or 'none', got {weighting!r}")
         self.weighting = weighting
 
     # --------------------------------------------------------------- parameters

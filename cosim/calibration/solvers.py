@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .ident import column_scale
+from ..errors import InputError
 
 __all__ = ["METHODS", "Solution", "solve"]
 
@@ -217,9 +218,9 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     Solution
     """
     if method not in METHODS:
-        raise ValueError(f"unknown calibration method {method!r} (known: {', '.join(METHODS)})")
+        raise InputError(f"unknown calibration method {method!r} (known: {', '.join(METHODS)})")
     if se not in ("hc2", "ols"):
-        raise ValueError(f"se must be 'hc2' or 'ols', got {se!r}")
+        raise InputError(f"se must be 'hc2' or 'ols', got {se!r}")
     t0 = time.perf_counter()
     n = len(problem.names)
     p0 = np.asarray(problem.p0 if p_start is None else p_start, float).copy()
@@ -228,16 +229,16 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     elif len(free) and isinstance(next(iter(free)), str):
         unknown = [f for f in free if f not in problem.names]
         if unknown:
-            raise ValueError(f"unknown parameter(s) {unknown} (calibrated coordinates: {problem.names})")
+            raise InputError(f"unknown parameter(s) {unknown} (calibrated coordinates: {problem.names})")
         mask = np.array([nm in set(free) for nm in problem.names])
     else:
         mask = np.asarray(free, bool)
     fi = np.flatnonzero(mask)
     if fi.size == 0:
-        raise ValueError("no free parameter to estimate")
+        raise InputError("no free parameter to estimate")
     m = problem.nmeas
     if m < fi.size and method in ("lm",):
-        raise ValueError(f"{m} measurements for {fi.size} free parameters: Levenberg-Marquardt (MINPACK) needs "
+        raise InputError(f"{m} measurements for {fi.size} free parameters: Levenberg-Marquardt (MINPACK) needs "
                          f"at least as many measurements as parameters")
     prior = np.asarray(problem.prior, float)
     fblocks = _free_blocks(problem.blocks, fi, m)
@@ -319,7 +320,7 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
             D = np.eye(fi.size)
             half = w[fi]
         else:
-            raise ValueError(f"basis must be 'parameters' or 'svd', got {basis!r}")
+            raise InputError(f"basis must be 'parameters' or 'svd', got {basis!r}")
         tols = tol * np.array([np.max(np.abs(D[:, k]) * prior[fi]) for k in range(D.shape[1])]) / \
             np.maximum(np.abs(D).max(axis=0), 1e-300)
         for it in range(1, max_sweeps + 1):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..errors import is_input_error
 from .common import COMMANDS, Interrupted, command, os_error_text, robot_arg
 
 
@@ -82,17 +83,28 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+EXIT_INPUT = 2  # a mistake in the input: the command line, a file, a value
+EXIT_INTERRUPTED = 130  # ctrl-C
+EXIT_INTERNAL = 70  # a fault of the toolkit (EX_SOFTWARE of sysexits.h); Python's own 1 is left to a crash
+
+
 def main(argv=None) -> int:
-    """``cosim ...``: the exit code (0; 2 for a mistake, said in one line; 130 when
-    interrupted by ctrl-C; 1 for an error of the toolkit itself, also one line)."""
+    """``cosim ...``: the exit code: 0; 2 for a mistake in the input, said in one line
+    ("error: ..."); 130 when interrupted by ctrl-C; 70 for a fault of the toolkit itself,
+    also one line ("internal error: ..."; ``COSIM_TRACEBACK=1`` raises it instead, with
+    its traceback).  ``cosim sweep`` adds 3 and 4 (docs/sweep.md)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    called = next((a for a in argv if not a.startswith("-")), None)
     try:
-        return _main(argv)
+        return _main(argv, called)
     except KeyboardInterrupt:  # while starting (imports) or saying the outcome
         print("cosim: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
+    except Exception as e:  # noqa: BLE001 - while starting (imports, options): a fault, in one line
+        return _fault(e, f"cosim {called}" if called in COMMANDS else "cosim")
 
 
-def _main(argv) -> int:
+def _main(argv, called) -> int:
     _load_plugins()
     parser = _Parser(prog="cosim", description=__doc__)
     parser.add_argument("--quiet", dest="global_quiet", action="store_true",
@@ -100,8 +112,6 @@ def _main(argv) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     # Only the command called gets its options: building another's may ask the core or load
     # a capability module (its --help lists, e.g., the effects the blind generator can hide).
-    argv = sys.argv[1:] if argv is None else list(argv)
-    called = next((a for a in argv if not a.startswith("-")), None)
     for name, (fn, help) in COMMANDS.items():
         p = sub.add_parser(name, help=help, description=help)
         if name == called and hasattr(fn, "configure"):
@@ -110,47 +120,68 @@ def _main(argv) -> int:
     try:
         args = parser.parse_args(argv)
     except SystemExit as e:  # --help, or a mistake argparse has said in one line
-        return e.code if isinstance(e.code, int) else 2
+        return e.code if isinstance(e.code, int) else EXIT_INPUT
     if args.global_quiet:
         import os
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
-    from ..errors import PkmError
     from ..fmu import FMUError
     from ..plants import MasterError
     from ..sweep.errors import SweepError
 
-    def fail(message, code=2):
-        print(f"cosim {args.command}: error: {message}", file=sys.stderr)
-        return code
-
+    prog = f"cosim {args.command}"
     try:
         return int(args._fn(args) or 0)
     except Interrupted as e:
-        print(f"cosim {args.command}: {e}", file=sys.stderr)
-        return 130
+        print(f"{prog}: {e}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except KeyboardInterrupt:
-        print(f"cosim {args.command}: interrupted", file=sys.stderr)
-        return 130
-    except (PkmError, ValueError, FileNotFoundError, MasterError, FMUError, SweepError) as e:
-        return fail(os_error_text(e) if isinstance(e, OSError) and e.filename else _one_line(e))
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # The reader went away (`cosim params 6pus | head`): stop quietly, as Unix tools do.
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except OSError as e:
-        return fail(os_error_text(e))
+    except OSError as e:  # a file that is missing, cannot be read or written: the path is the user's
+        return _mistake(prog, _one_line(e) if isinstance(e, FileNotFoundError) and not e.filename else os_error_text(e))
     except MemoryError:
-        return fail("out of memory: ask for less (a smaller grid, a shorter run or recording)")
-    except Exception as e:  # noqa: BLE001 - a fault of the toolkit, not of the input: still one line
-        import os
+        return _mistake(prog, "out of memory: ask for less (a smaller grid, a shorter run or recording)")
+    except Exception as e:  # noqa: BLE001 - sorted below: the input's mistake, or a fault of the toolkit
+        fault = _fault_in(e, (MasterError, FMUError, SweepError))
+        if fault is None:
+            return _mistake(prog, _one_line(e))
+        return _fault(e, prog, type(fault).__name__)
 
-        if os.environ.get("COSIM_TRACEBACK"):
-            raise
-        return fail(f"internal error ({type(e).__name__}: {_one_line(e)}); COSIM_TRACEBACK=1 shows where, "
-                    f"please report it", 1)
+
+def _fault_in(e: BaseException, wrappers) -> BaseException | None:
+    """The fault of the toolkit in ``e``, or None when ``e`` is the input's mistake: an input
+    error, or one of ``wrappers`` (the co-simulation, an FMU, a sweep: they say what stopped
+    them, at which time, FMU call or spec) that wraps none, an input error or a file error."""
+    if is_input_error(e) or isinstance(e, OSError):
+        return None
+    if isinstance(e, wrappers):
+        return None if e.__cause__ is None else _fault_in(e.__cause__, wrappers)
+    return e
+
+
+def _mistake(prog: str, message: str) -> int:
+    print(f"{prog}: error: {message}", file=sys.stderr)
+    return EXIT_INPUT
+
+
+def _fault(e: Exception, prog: str, kind: str | None = None) -> int:
+    """A fault of the toolkit (not of the input), in one line: its type (``kind``: the type
+    of the fault a wrapper holds) and message; ``COSIM_TRACEBACK=1`` raises it instead, so
+    that the traceback shows where."""
+    import os
+
+    if os.environ.get("COSIM_TRACEBACK"):
+        raise e
+    print(f"{prog}: internal error: {kind or type(e).__name__}: {_one_line(e)} (please report it with the command "
+          f"that caused it; COSIM_TRACEBACK=1 shows where)", file=sys.stderr)
+    return EXIT_INTERNAL
 
 
 def _one_line(e) -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import command, output_file, robot_arg
+from ..errors import InputError
 
 
 def _configure(p):
@@ -31,9 +32,9 @@ def _map_options(p):
 
 def _check_map_options(args):
     if not 2 <= args.grid <= 201:
-        raise ValueError(f"--grid {args.grid}: give 2 to 201 points per axis")
+        raise InputError(f"--grid {args.grid}: give 2 to 201 points per axis")
     if not 1 <= args.slices <= 9:
-        raise ValueError(f"--slices {args.slices}: give 1 to 9 rows")
+        raise InputError(f"--slices {args.slices}: give 1 to 9 rows")
 
 
 def _map_configure(p):
@@ -54,7 +55,7 @@ def cmd_parasitic(args):
     names = list(m.facts.pose_names)
     poses = np.array(args.pose if args.pose else [m.home()], float)
     if poses.ndim != 2 or poses.shape[1] != m.ndof:
-        raise ValueError(f"--pose takes {m.ndof} values ({' '.join(names)}) for {m.robot}")
+        raise InputError(f"--pose takes {m.ndof} values ({' '.join(names)}) for {m.robot}")
     _check_map_options(args)
     for p in args.param:
         m.param(p)  # an unknown name says so before any work
@@ -83,7 +84,7 @@ def _draw(m, path, args):
     from ..parasitic import parasitic_components, plot_parasitic_map
 
     if not parasitic_components(m):
-        raise ValueError(f"{m.robot} declares all six pose components: no parasitic motion to map")
+        raise InputError(f"{m.robot} declares all six pose components: no parasitic motion to map")
     maps = plot_parasitic_map(m, path, axes=args.axes, span=args.span, grid=args.grid, slices=args.slices)
     for c, (name, unit) in enumerate(zip(maps[0]["names"], maps[0]["units"])):
         vals = np.concatenate([mp["values"][:, :, c].ravel() for mp in maps])

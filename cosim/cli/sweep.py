@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from .common import Interrupted, command, output_dir, toml_file
+from ..errors import InputError
 
 
 def _configure(p):
@@ -43,7 +44,7 @@ def cmd_sweep(args):
 
         return bench_main(["--cases", str(args.cases), "--kind", args.kind])
     if not args.spec:
-        raise ValueError("give a sweep spec (scenarios/sweeps/*.toml) or --bench")
+        raise InputError("give a sweep spec (scenarios/sweeps/*.toml) or --bench")
     spec = load_spec(args.spec)
     if args.list:
         cases = spec.case_list()

@@ -8,7 +8,7 @@ import ctypes as C
 import numpy as np
 
 from .._native import lib, pkm_ctrl_spec, ptr, raise_for
-from ..errors import ArgumentError
+from ..errors import ArgumentError, InputError
 from ._handles import _release
 
 
@@ -44,11 +44,11 @@ class CompiledController:
     def __init__(self, controller, *, model, dt: float):
         kind = getattr(controller, "kind", None)
         if kind not in KINDS:
-            raise ValueError(f"controller kind {kind!r} is not one the core implements ({sorted(KINDS)})")
+            raise InputError(f"controller kind {kind!r} is not one the core implements ({sorted(KINDS)})")
         self.kind = kind
         own_dt = getattr(controller, "dt", None)
         if own_dt is not None and abs(float(own_dt) - float(dt)) > 1e-9 * float(dt):
-            raise ValueError(f"the {kind} controller was designed for a sample period of {own_dt:g} s; the loop "
+            raise InputError(f"the {kind} controller was designed for a sample period of {own_dt:g} s; the loop "
                              f"runs at {dt:g} s")
         self.model = getattr(controller, "model", None) or model
         nd = self.model.ndof
@@ -108,7 +108,7 @@ class CompiledController:
         err = C.create_string_buffer(1024)
         h = lib.pkm_ctrl_create(self.model._m, C.byref(spec), err, len(err))
         if not h:
-            raise ValueError(f"{kind} controller: {err.value.decode()}")
+            raise InputError(f"{kind} controller: {err.value.decode()}")
         self._c = C.c_void_p(h)
 
     def __del__(self):

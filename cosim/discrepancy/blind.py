@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .effects import BY_KEY, geometry_layout, joint_prefix
+from ..errors import InputError
 from .diagnosis import UNEXPLAINED, tied
 
 REPO = Path(__file__).resolve().parents[2]
@@ -241,7 +242,7 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         else:
             name, js = geo[int(rng.integers(len(geo)))], []
         return Hidden(kind, {name: nominal[name] + sign * _uniform(rng, eff[kind])}, js, {name: nominal[name]})
-    raise ValueError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
+    raise InputError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
 
 
 #: forces in no effect of the library, for the discovery step's proof: kind -> what it is.
@@ -289,7 +290,7 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
     elif kind == "hardening_spring":
         p, js = {name(j, "qc"): float(home[j]), name(j, "k3"): size * E[j] / T[j] ** 3}, [j]
     else:
-        raise ValueError(f"the generator cannot hide force {kind!r} (it can hide: {', '.join(UNLISTED)})")
+        raise InputError(f"the generator cannot hide force {kind!r} (it can hide: {', '.join(UNLISTED)})")
     nominal = model.params()
     return Hidden(kind, {k: float(v) for k, v in p.items()}, [i + 1 for i in js], {k: nominal[k] for k in p})
 
@@ -428,7 +429,7 @@ def make_case(spec: CaseSpec, out_dir, key_dir, cfg: dict | None = None):
 
     out_dir, key_dir = Path(out_dir), Path(key_dir)
     if out_dir.resolve() == key_dir.resolve():
-        raise ValueError("the answer keys must go to a directory apart from the recordings")
+        raise InputError("the answer keys must go to a directory apart from the recordings")
     rec, hidden, info = simulate_case(spec, cfg)
     csv, _ = write_recording(out_dir / f"{spec.case}.csv", rec)
     key_dir.mkdir(parents=True, exist_ok=True)

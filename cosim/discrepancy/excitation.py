@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
+
 #: tuned excitation profiles by robot (a data file; robots without one get derived_profile)
 PROFILE_FILE = Path(__file__).resolve().parents[2] / "scenarios" / "blind" / "excitation.toml"
 
@@ -240,7 +242,7 @@ def derived_profile(model) -> dict:
                 ok, bad = (mid, bad) if fine(home + sign * mid * np.eye(len(home))[i]) else (ok, mid)
             best = min(best, ok)
         if not best > 0:
-            raise ValueError(f"{model.robot}: pose coordinate {model.facts.pose_names[i]} cannot move from home "
+            raise InputError(f"{model.robot}: pose coordinate {model.facts.pose_names[i]} cannot move from home "
                              f"without leaving the workspace; no excitation possible")
         reach[i] = best
     return {"centre": 0.15 * reach, "centre_offset": np.zeros(len(home)), "amp": 0.30 * reach,

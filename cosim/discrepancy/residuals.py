@@ -51,9 +51,10 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
+from ..errors import InputError
 
 
-class DiagnosisError(ValueError):
+class DiagnosisError(InputError):
     """A recording (or model) the engine cannot diagnose; the message says what is missing."""
 
 

@@ -47,6 +47,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
+
 #: samples at the full rate a diagnosis holds at most (100 s at 1 kHz: about 1.7 GB peak
 #: and 1-2 minutes on one core for the 6-PUS; bench/long_recording.py measures it)
 MAX_SAMPLES = 100_000
@@ -274,9 +276,9 @@ def working_set(source, *, max_samples: int = MAX_SAMPLES, block_seconds: float 
     from tqdm import tqdm
 
     if not (isinstance(max_samples, (int, np.integer)) and max_samples > 0):
-        raise ValueError(f"max_samples = {max_samples!r} must be a positive whole number of rows")
+        raise InputError(f"max_samples = {max_samples!r} must be a positive whole number of rows")
     if not (isinstance(block_seconds, (int, float)) and np.isfinite(block_seconds) and block_seconds > 0):
-        raise ValueError(f"block_seconds = {block_seconds!r} must be a positive number of seconds")
+        raise InputError(f"block_seconds = {block_seconds!r} must be a positive number of seconds")
     from ..recording import Recording
 
     if isinstance(source, Recording) and len(source) <= max_samples and duration is None:

@@ -1,8 +1,10 @@
 """The one error of an import: what is wrong, in which file, with which variable or field."""
 from __future__ import annotations
 
+from ..errors import InputError
 
-class ImportFailure(ValueError):
+
+class ImportFailure(InputError):
     """A source file or a map that cannot be imported.
 
     The message is one line: the file, then the variable (of the source) or the field (of

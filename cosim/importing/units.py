@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 
+from ..errors import InputError
+
 #: unit -> (kind, factor to the SI unit of that kind)
 UNITS = {
     # length [m]
@@ -73,10 +75,10 @@ def factor(unit: str, si_unit: str) -> float:
     u = canonical(unit)
     same = ", ".join(k for k, (kind, _) in UNITS.items() if kind == want)
     if u not in UNITS:
-        raise ValueError(f"unknown unit {unit!r} ({_a(want)} is in one of: {same})")
+        raise InputError(f"unknown unit {unit!r} ({_a(want)} is in one of: {same})")
     kind, f = UNITS[u]
     if kind != want:
-        raise ValueError(f"unit {unit!r} is {_a(kind)}, the column is {_a(want)} in {si_unit} (one of: {same})")
+        raise InputError(f"unit {unit!r} is {_a(kind)}, the column is {_a(want)} in {si_unit} (one of: {same})")
     return f / UNITS[si_unit][1]
 
 

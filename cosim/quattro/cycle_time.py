@@ -33,6 +33,7 @@ import numpy as np
 from ..core.model import Model
 from .maps import adept_to_model, require_indices
 from .maps import model as quattro_model
+from ..errors import InputError
 
 __all__ = ["CYCLES", "LAYOUTS", "Profile", "topp_segment", "cycle_waypoints", "cycle_time", "load_measured",
            "compare", "Comparison", "TableComparison", "spearman", "simulate_segment", "plot_comparison",
@@ -111,7 +112,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
     xa, xb = np.asarray(xa, float), np.asarray(xb, float)
     L = float(np.linalg.norm(xb[:3] - xa[:3]))
     if not L > 0:
-        raise ValueError("topp_segment: start and end positions coincide")
+        raise InputError("topp_segment: start and end positions coincide")
     u = np.zeros(4)
     u[:3] = (xb[:3] - xa[:3]) / L
     tmax = _limits(m) if tau_max is None else float(tau_max)
@@ -125,7 +126,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
     ds = L / n
     # Bounds of s_dd per joint: lo_j(b) = al_j + be_j b <= s_dd <= up_j(b) = ga_j + de_j b.
     if np.any(np.abs(a) < 1e-12):
-        raise ValueError("topp_segment: an arm does not move along this path (a = 0); not supported")
+        raise InputError("topp_segment: an arm does not move along this path (a = 0); not supported")
     lo_num = np.where(a > 0, -tmax, tmax) - c
     up_num = np.where(a > 0, tmax, -tmax) - c
     al, be = lo_num / a, -b / a
@@ -140,7 +141,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
                 bound = np.where(cf > 0, rhs / cf, np.inf)
             bstat = np.minimum(bstat, bound)
     if np.any(np.abs(c) >= tmax):
-        raise ValueError("topp_segment: gravity alone exceeds the torque limit on this path")
+        raise InputError("topp_segment: gravity alone exceeds the torque limit on this path")
     if qd_max is not None:
         qs = np.abs(m.joint_velocity(X, U))  # dq/ds
         with np.errstate(divide="ignore"):
@@ -172,7 +173,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
     sd = np.sqrt(bb)
     den = sd[:-1] + sd[1:]
     if np.any(den <= 0):
-        raise ValueError("topp_segment: the path speed drops to zero inside the segment (limits too tight)")
+        raise InputError("topp_segment: the path speed drops to zero inside the segment (limits too tight)")
     t = np.concatenate([[0.0], np.cumsum(2 * ds / den)])
     sdd = np.diff(bb) / (2 * ds)
     sdd = np.append(sdd, sdd[-1])
@@ -184,9 +185,9 @@ def cycle_waypoints(m: Model, z: float, cycle: str = "standard", layout: str = "
                     theta: float = 0.0) -> np.ndarray:
     """The 7 poses (6 segments) of one cycle at pick/place height z [m] (Adept frame x, y = 0)."""
     if cycle not in CYCLES:
-        raise ValueError(f"unknown cycle {cycle!r} (known: {', '.join(CYCLES)})")
+        raise InputError(f"unknown cycle {cycle!r} (known: {', '.join(CYCLES)})")
     if layout not in LAYOUTS:
-        raise ValueError(f"unknown layout {layout!r} (known: {', '.join(LAYOUTS)})")
+        raise InputError(f"unknown layout {layout!r} (known: {', '.join(LAYOUTS)})")
     lift, travel, down = CYCLES[cycle]
     xs, xe = LAYOUTS[layout](travel)
     pts = []
@@ -550,11 +551,11 @@ def fit_cycle_model(fit_tables=("6.1", "6.5"), terms=("time_scale", "settle"), n
 
     unknown = [t for t in terms if t not in CYCLE_TERMS]
     if unknown:
-        raise ValueError(f"unknown cycle-model term {unknown[0]!r} (known: {', '.join(CYCLE_TERMS)})")
+        raise InputError(f"unknown cycle-model term {unknown[0]!r} (known: {', '.join(CYCLE_TERMS)})")
     meas = measured or load_measured()
     missing = [t for t in fit_tables if t not in meas]
     if missing or not fit_tables:
-        raise ValueError(f"fit table {missing[0] if missing else '(none)'!r} is not among the measured tables "
+        raise InputError(f"fit table {missing[0] if missing else '(none)'!r} is not among the measured tables "
                          f"({', '.join(sorted(meas))})")
     m = quattro_model(param_set)
     terms, fit_tables = tuple(terms), tuple(fit_tables)

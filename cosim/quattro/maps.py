@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core.facts import quattro_index_names, quattro_index_units
 from ..core.model import Model
-from ..errors import PkmError, UnsupportedError
+from ..errors import InputError, PkmError, UnsupportedError
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model", "require_indices",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]
@@ -122,7 +122,7 @@ class IndexMap:
         """Grid pose (x, y, z) [m] of the best value of index ``name`` (max or min per BETTER)."""
         v = self.values[name]
         if not np.isfinite(v).any():
-            raise ValueError(f"index {name} has no finite value on this grid")
+            raise InputError(f"index {name} has no finite value on this grid")
         better = better or BETTER[name]
         k = np.nanargmax(v) if better == "max" else np.nanargmin(v)
         i, j, l = np.unravel_index(k, v.shape)

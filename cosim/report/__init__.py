@@ -22,10 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = ["mechanism_figure", "write_html", "view", "ReportError"]
 
 
-class ReportError(ValueError):
+class ReportError(InputError):
     """A recording or robot the report cannot draw (says which and why)."""
 
 

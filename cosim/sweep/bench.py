@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .runner import REPO, run_sweep, spec_from_dict
+from ..errors import InputError
 
 _TIMING = ("seconds", "worker", "wall_time", "solve_seconds")
 
@@ -48,7 +49,7 @@ def bench_spec(kind: str, cases: int = 100):
             d = {**d, "grid": {}, "cases": [c.params for c in spec.case_list()[:cases]]}
             spec = spec_from_dict(d)
         return spec
-    raise ValueError(f"unknown benchmark kind {kind!r}")
+    raise InputError(f"unknown benchmark kind {kind!r}")
 
 
 def _warm(kind, base, params):

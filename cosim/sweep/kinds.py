@@ -32,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -349,7 +351,7 @@ class BlindKind(Kind):
             effects = [e for e in effects.split("+") if e and e != "clean"]
         unknown = [e for e in effects if e not in blind.TYPES]
         if unknown:
-            raise ValueError(f"unknown effect type(s) {unknown} (known: {', '.join(blind.TYPES)})")
+            raise InputError(f"unknown effect type(s) {unknown} (known: {', '.join(blind.TYPES)})")
         name = p["case"] or f"{p['robot']}_{'+'.join(effects) or 'clean'}_{p['seed']}"
         spec = blind.CaseSpec(name, p["robot"], list(effects), int(p["seed"]), p["controller"] or None)
         import time
@@ -455,17 +457,17 @@ class QuattroTileKind(Kind):
         m, x, y, z = self._grid(p)
         tiles, k = int(p["tiles"]), int(p["tile"])
         if not 0 <= k < tiles:
-            raise ValueError(f"tile {k} out of range: the map is cut into {tiles} tiles along x")
+            raise InputError(f"tile {k} out of range: the map is cut into {tiles} tiles along x")
         xs = np.array_split(x, tiles)[k]
         if xs.size == 0:
-            raise ValueError(f"tile {k}: more tiles ({tiles}) than x values ({x.size})")
+            raise InputError(f"tile {k}: more tiles ({tiles}) than x values ({x.size})")
         mp = index_map(xs, y, z, theta=float(p["theta"]), model=m)
         out = {"x_from": float(xs[0]), "x_to": float(xs[-1]), "points": int(mp.status.size),
                "reachable": int(np.sum(mp.status == 0)), "core_seconds": mp.seconds}
         names = list(p["indices"]) or list(mp.values)
         unknown = [n for n in names if n not in mp.values]
         if unknown:
-            raise ValueError(f"unknown Quattro index name(s) {unknown} (known: {', '.join(mp.values)})")
+            raise InputError(f"unknown Quattro index name(s) {unknown} (known: {', '.join(mp.values)})")
         for n in names:
             v = mp.values[n]
             if np.isfinite(v).any():
@@ -558,4 +560,4 @@ def get_kind(name: str) -> Kind:
     try:
         return KINDS[name]
     except KeyError:
-        raise ValueError(f"unknown kind of sweep case {name!r} (known: {', '.join(KINDS)})") from None
+        raise InputError(f"unknown kind of sweep case {name!r} (known: {', '.join(KINDS)})") from None

@@ -17,7 +17,6 @@
  * checked by pkm_ctrl_create) when initialization ends.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,14 +38,6 @@ struct fmu_plant {
   int started, dirty;
   char msg[2048];
 };
-
-static int fail(fmu_plant* p, int status, const char* fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(p->msg, sizeof p->msg, fmt, ap);
-  va_end(ap);
-  return status;
-}
 
 const char* plant_error(const fmu_plant* p) { return p ? p->msg : "controller is NULL"; }
 double plant_time(const fmu_plant* p) { return p->t; }

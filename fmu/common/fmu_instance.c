@@ -40,6 +40,14 @@ void fmu_log(const fmu_instance* c, fmu_status st, int cat, const char* fmt, ...
   va_end(ap);
 }
 
+int plant_fail(char* msg, size_t size, int status, const char* fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, size, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
 fmu_status fmu_error(fmu_instance* c, const char* fn, const char* fmt, ...) {
   char msg[3000];
   va_list ap;

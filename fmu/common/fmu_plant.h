@@ -138,6 +138,13 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
 void plant_destroy(fmu_plant* p);
 const char* plant_error(const fmu_plant* p);
 
+/* How a hook fails (convention 2): formats the message (printf-style) into msg, the
+ * buffer of size bytes that plant_error() returns, and gives back status.  Both hook
+ * sets (plant.c, controller.c) keep that buffer as p->msg and call it as
+ * fail(p, status, fmt, ...).  Defined in fmu_instance.c, which every FMU compiles. */
+int plant_fail(char* msg, size_t size, int status, const char* fmt, ...);
+#define fail(p, status, ...) plant_fail((p)->msg, sizeof (p)->msg, (status), __VA_ARGS__)
+
 /* Back to the start values of every variable (fmi2Reset). */
 int plant_reset(fmu_plant* p);
 

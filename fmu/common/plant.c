@@ -9,7 +9,6 @@
 #include "fmu_plant.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,14 +43,6 @@ struct fmu_plant {
 
   char msg[2048];
 };
-
-static int fail(fmu_plant* p, int status, const char* fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(p->msg, sizeof p->msg, fmt, ap);
-  va_end(ap);
-  return status;
-}
 
 const char* plant_error(const fmu_plant* p) { return p ? p->msg : "plant is NULL"; }
 double plant_time(const fmu_plant* p) { return p->t; }

@@ -132,4 +132,33 @@ int prepared_batch(const pkm_model* m, pkm_data* d, size_t n, int* status, doubl
   return run_batch(d, n, status, out, d->ndof, [&](size_t k) { row(*rm, k); });
 }
 
+// One input of rows_batch: n rows of nd values, named ``name`` when NULL and ``what`` when a
+// row is not finite (pkm.h's messages: "x is NULL", "item 2: pose x[0] is not finite (nan)").
+struct BatchRows {
+  const double* data;
+  const char* name;
+  const char* what;
+};
+
+// The batched form of a per-row function of N input rows into one output row (nd values
+// each): prepared_batch with the inputs then the output out (named out_name) refused if
+// NULL, each row's inputs refused unless finite (in the order given), then
+// row(rm, in_row..., out_row).
+template <size_t N, class Row, size_t... I>
+int rows_batch(const pkm_model* m, pkm_data* d, size_t n, int* status, const BatchRows (&in)[N], double* out,
+               const char* out_name, Row&& row, std::index_sequence<I...>) {
+  const int nd = d ? d->ndof : 0;
+  return prepared_batch(m, d, n, status, out, {{in[I].data, in[I].name}..., {out, out_name}},
+                        [&](const RobotModel& rm, size_t k) {
+    const double* r[N] = {row_at(in[I].data, k, nd, in[I].what)...};  // a braced list: checked in order
+    row(rm, r[I]..., out + k * nd);
+  });
+}
+
+template <size_t N, class Row>
+int rows_batch(const pkm_model* m, pkm_data* d, size_t n, int* status, const BatchRows (&in)[N], double* out,
+               const char* out_name, Row&& row) {
+  return rows_batch(m, d, n, status, in, out, out_name, std::forward<Row>(row), std::make_index_sequence<N>{});
+}
+
 }  // namespace pkm

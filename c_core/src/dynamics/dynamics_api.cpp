@@ -4,6 +4,13 @@
 
 using namespace pkm;
 
+namespace {
+// The pose inputs of the batched calls, named as in pkm.h's messages.
+BatchRows pose_rows(const double* x) { return {x, "x", "pose x"}; }
+BatchRows rate_rows(const double* xd) { return {xd, "xd", "pose velocity xd"}; }
+BatchRows acceleration_rows(const double* xdd) { return {xdd, "xdd", "pose acceleration xdd"}; }
+}  // namespace
+
 extern "C" {
 
 int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
@@ -20,50 +27,38 @@ int pkm_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const
 
 int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                                const double* xdd, double* tau, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
-                        [&](const RobotModel&, size_t k) {
-    const double* xk = row_at(x, k, nd, "pose x");
-    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
-    total_inverse_dynamics(m, d, xk, xdk, row_at(xdd, k, nd, "pose acceleration xdd"), tau + k * nd);
-  });
+  return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), acceleration_rows(xdd)}, tau, "tau",
+                    [&](const RobotModel&, auto xk, auto xdk, auto xddk, double* tk) {
+                      total_inverse_dynamics(m, d, xk, xdk, xddk, tk);
+                    });
 }
 
 int pkm_mechanism_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
                                          const double* xd, const double* xdd, double* tau, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
-                        [&](const RobotModel& rm, size_t k) {
-    const double* xk = row_at(x, k, nd, "pose x");
-    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
-    m->robot->inverse_dynamics(rm, *d->rd, xk, xdk, row_at(xdd, k, nd, "pose acceleration xdd"), tau + k * nd);
-  });
+  return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), acceleration_rows(xdd)}, tau, "tau",
+                    [&](const RobotModel& rm, auto xk, auto xdk, auto xddk, double* tk) {
+                      m->robot->inverse_dynamics(rm, *d->rd, xk, xdk, xddk, tk);
+                    });
 }
 
 int pkm_add_drive_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
                                          const double* xd, const double* xdd, double* tau, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, tau, {{x, "x"}, {xd, "xd"}, {xdd, "xdd"}, {tau, "tau"}},
-                        [&](const RobotModel&, size_t k) {
-    const double* xk = row_at(x, k, nd, "pose x");
-    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
-    const double* xddk = row_at(xdd, k, nd, "pose acceleration xdd");
-    check_finite(tau + k * nd, nd, "mechanism effort tau");
-    add_drive_inverse_dynamics(m, d, xk, xdk, xddk, tau + k * nd);
-  });
+  return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), acceleration_rows(xdd)}, tau, "tau",
+                    [&](const RobotModel&, auto xk, auto xdk, auto xddk, double* tk) {
+                      check_finite(tk, d->ndof, "mechanism effort tau");
+                      add_drive_inverse_dynamics(m, d, xk, xdk, xddk, tk);
+                    });
 }
 
 int pkm_add_drive_efforts_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q, const double* qd,
                                 const double* qdd, double* tau, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, tau, {{q, "q"}, {qd, "qd"}, {qdd, "qdd"}, {tau, "tau"}},
-                        [&](const RobotModel&, size_t k) {
-    const double* qk = row_at(q, k, nd, "joint position q");
-    const double* qdk = row_at(qd, k, nd, "joint velocity qd");
-    const double* qddk = row_at(qdd, k, nd, "joint acceleration qdd");
-    check_finite(tau + k * nd, nd, "mechanism effort tau");
-    add_drive_efforts(*m->drive, nd, qk, qdk, qddk, tau + k * nd);
-  });
+  const BatchRows joints[] = {{q, "q", "joint position q"}, {qd, "qd", "joint velocity qd"},
+                              {qdd, "qdd", "joint acceleration qdd"}};
+  return rows_batch(m, d, n, status, joints, tau, "tau",
+                    [&](const RobotModel&, auto qk, auto qdk, auto qddk, double* tk) {
+                      check_finite(tk, d->ndof, "mechanism effort tau");
+                      add_drive_efforts(*m->drive, d->ndof, qk, qdk, qddk, tk);
+                    });
 }
 
 int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* tau,
@@ -80,13 +75,10 @@ int pkm_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const
 
 int pkm_forward_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                                const double* tau, double* xdd, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, xdd, {{x, "x"}, {xd, "xd"}, {tau, "tau"}, {xdd, "xdd"}},
-                        [&](const RobotModel&, size_t k) {
-    const double* xk = row_at(x, k, nd, "pose x");
-    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
-    total_forward_dynamics(m, d, xk, xdk, row_at(tau, k, nd, "actuator effort tau"), xdd + k * nd);
-  });
+  return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), {tau, "tau", "actuator effort tau"}}, xdd, "xdd",
+                    [&](const RobotModel&, auto xk, auto xdk, auto tk, double* xddk) {
+                      total_forward_dynamics(m, d, xk, xdk, tk, xddk);
+                    });
 }
 
 int pkm_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M) {
@@ -175,22 +167,16 @@ int pkm_model_two_body_joints(const pkm_model* m) {
 
 int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n, const double* tau_cmd,
                               double* tau_applied, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, tau_applied, {{tau_cmd, "tau_cmd"}, {tau_applied, "tau_applied"}},
-                        [&](const RobotModel&, size_t k) {
-    actuator_effort(*m->drive, row_at(tau_cmd, k, nd, "commanded effort tau_cmd"), tau_applied + k * nd);
-  });
+  return rows_batch(m, d, n, status, {{tau_cmd, "tau_cmd", "commanded effort tau_cmd"}}, tau_applied, "tau_applied",
+                    [&](const RobotModel&, auto uk, double* tk) { actuator_effort(*m->drive, uk, tk); });
 }
 
 int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x, const double* xd,
                              const double* tau, double* q_meas, int* status) {
-  const int nd = d ? d->ndof : 0;
-  return prepared_batch(m, d, n, status, q_meas, {{x, "x"}, {xd, "xd"}, {tau, "tau"}, {q_meas, "q_meas"}},
-                        [&](const RobotModel&, size_t k) {
-    const double* xk = row_at(x, k, nd, "pose x");
-    const double* xdk = row_at(xd, k, nd, "pose velocity xd");
-    measure_joints(m, d, xk, xdk, row_at(tau, k, nd, "applied effort tau"), q_meas + k * nd);
-  });
+  return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), {tau, "tau", "applied effort tau"}}, q_meas,
+                    "q_meas", [&](const RobotModel&, auto xk, auto xdk, auto tk, double* qk) {
+                      measure_joints(m, d, xk, xdk, tk, qk);
+                    });
 }
 
 }  // extern "C"
