@@ -1,20 +1,21 @@
 """Discovery: the joint force no effect of the library names, as an equation.
 
 After the library's selection, every effort channel is searched for a per-joint force built
-from a function library of the joint's position and rate (the core's generic joint force,
+from a function library of the joint's position, rate and acceleration (the core's generic joint force,
 ``<j>[i].force_*``, ``pkm.h``): a constant (the drive's ``<j>[i].offset``, the library's
 offset effect: one parameter, so the library and the search can never fit the same column
 twice with opposite signs, and a coefficient the library has fitted on a channel is not
 searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
 direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
-spectrum over position, and a smooth step in position (a selected step's position and width
+spectrum over position, a smooth step in position, and an added inertia force_inertia qdd, the
+rotor inertia's physics, not searched where the library fits that (a selected step's position and width
 and a selected ripple's period are then fitted, with intervals from the fit linearised in
 them; the library's offset on the joint is refitted with the terms).  Each candidate column is a finite
 difference of the residual pipeline over its core parameter (the core evaluates the force;
-nothing here restates it), the columns of the rate terms get instruments (the same column
-along the reference motion, free of the rate noise), as the library's masses and viscous
-frictions do.
+nothing here restates it), the columns of the rate terms and the inertia get instruments (the
+same column along the reference motion, free of the rate and acceleration noise), as the
+library's masses and viscous frictions do.
 
 Selection per channel is stepwise (forward with BIC, then backward), with the threshold of the
 library plus the look-elsewhere cost of the search: ``2 ln M`` for M candidate terms tried
