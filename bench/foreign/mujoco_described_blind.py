@@ -8,7 +8,9 @@ nominal core model at 1 kHz, the generator's sensor noise for the robot (configu
 from the core, ``blind.with_robot``), the first 0.5 s (standstill) dropped.  A force law may
 be hidden in MuJoCo's physics: ``force(q, qd)`` of the actuated joints' true positions and
 rates gives the forces pushing them along +q, applied at every MuJoCo step (``qfrc_applied``),
-so neither the core nor its generic joint force computes it.
+so neither the core nor its generic joint force computes it.  So may an inertia on an actuated
+joint: ``armature`` {joint (0-based): kg or kg m2} adds to MuJoCo's armature of that joint (a
+rotor, pulley or a mass riding on the carriage, in MuJoCo's joint-space mass matrix).
 
 MuJoCo's actuated joints carry the description's q itself (their ``ref`` is the home value),
 so the recording is in the core's joint coordinates; the pose columns are the platform's
@@ -28,10 +30,11 @@ DT, SUBSTEPS = 1e-3, 10  # controller / recording period [s], MuJoCo RK4 steps p
 LEAD_IN = 0.5            # standstill dropped from the recording [s], as the engine's own generator
 
 
-def simulate(robot: str, seed: int, duration: float, force=None):
+def simulate(robot: str, seed: int, duration: float, force=None, armature=None):
     """One run of ``robot`` (a description name): a ``Recording`` in the core's coordinates.
 
-    ``force(q, qd) -> (n,)`` [N or N m along +q], if given, is hidden in MuJoCo's physics.
+    ``force(q, qd) -> (n,)`` [N or N m along +q], if given, is hidden in MuJoCo's physics, and
+    so is ``armature`` {actuated joint, 0-based: inertia [kg or kg m2]} added to the joints'.
     Raises RuntimeError if MuJoCo's run diverges or leaves the description's strokes."""
     import mujoco
     import mujoco_described as md
@@ -54,6 +57,8 @@ def simulate(robot: str, seed: int, duration: float, force=None):
     data = mujoco.MjData(model)
     aq = [model.joint(md.actuated_joint(rob, i)).qposadr[0] for i in range(rob.n)]
     av = [model.joint(md.actuated_joint(rob, i)).dofadr[0] for i in range(rob.n)]
+    for j, inertia in (armature or {}).items():
+        model.dof_armature[av[j]] += inertia
     pq = [model.joint(md.COORDS[c]).qposadr[0] for c in rob.coords]
     data.qpos[pq] = rob.home
     mujoco.mj_forward(model, data)

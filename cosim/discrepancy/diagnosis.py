@@ -719,7 +719,7 @@ def _discover(eng, sel, threshold):
     for t in found:
         c = t.joint - 1
         without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
-        key = (pipe.q_s if t.key_variable == "position" else pipe.qd_s)[pipe.idx, c]
+        key = {"position": pipe.q_s, "velocity": pipe.qd_s, "acceleration": pipe.qdd_s}[t.key_variable][pipe.idx, c]
         t.curve = {"key": key, "before": without, "after": R_all[:, c]}
     return found, withdrawn, theta, ties
 

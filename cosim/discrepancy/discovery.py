@@ -1,20 +1,21 @@
 """Discovery: the joint force no effect of the library names, as an equation.
 
 After the library's selection, every effort channel is searched for a per-joint force built
-from a function library of the joint's position and rate (the core's generic joint force,
+from a function library of the joint's position, rate and acceleration (the core's generic joint force,
 ``<j>[i].force_*``, ``pkm.h``): a constant (the drive's ``<j>[i].offset``, the library's
 offset effect: one parameter, so the library and the search can never fit the same column
 twice with opposite signs, and a coefficient the library has fitted on a channel is not
 searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
 direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
-spectrum over position, and a smooth step in position (a selected step's position and width
+spectrum over position, a smooth step in position, and an added inertia force_inertia qdd, the
+rotor inertia's physics, not searched where the library fits that (a selected step's position and width
 and a selected ripple's period are then fitted, with intervals from the fit linearised in
 them; the library's offset on the joint is refitted with the terms).  Each candidate column is a finite
 difference of the residual pipeline over its core parameter (the core evaluates the force;
-nothing here restates it), the columns of the rate terms get instruments (the same column
-along the reference motion, free of the rate noise), as the library's masses and viscous
-frictions do.
+nothing here restates it), the columns of the rate terms and the inertia get instruments (the
+same column along the reference motion, free of the rate and acceleration noise), as the
+library's masses and viscous frictions do.
 
 Selection per channel is stepwise (forward with BIC, then backward), with the threshold of the
 library plus the look-elsewhere cost of the search: ``2 ln M`` for M candidate terms tried
@@ -49,7 +50,7 @@ from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
 
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
-#: "V", "V2"), shape parameters it needs, what it is in words
+#: "V", "V2", "A" (the acceleration)), shape parameters it needs, what it is in words
 TERMS = {
     "constant": (("offset",), ("1",), (), "a constant force (the drive's offset)"),
     "spring": (("force_k1",), ("T",), ("force_qc",), "a force proportional to the position (a spring)"),
@@ -67,15 +68,25 @@ TERMS = {
                      "Coulomb friction with a level for each direction"),
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
+    "inertia": (("force_inertia",), ("A",), (), "a force proportional to the acceleration (an inertia on the joint)"),
 }
 #: coefficients of dissipative terms (friction, drag): the friction they make never negative
 DISSIPATIVE = ("force_v2", "force_vpos", "force_vneg", "force_cpos", "force_cneg")
+#: coefficients with a sign of their physics: friction and drag dissipate, and the joint's
+#: inertia (the rotor's the model holds plus the added one) is no less than zero
+SIGNED = DISSIPATIVE + ("force_inertia",)
+#: the library's parameter whose column on its joint is the coefficient's own (the same physics):
+#: where the model fits it, the coefficient is not searched
+SAME_COLUMN = {"force_inertia": "rotor_inertia"}
 #: the library's symmetric friction a direction-split coefficient adds to on its joint: on top
 #: of it the split term is the friction's asymmetry, and the total (library level plus the
 #: coefficient), not the coefficient, must not be negative
 ADDS_TO = {"force_vpos": "viscous", "force_vneg": "viscous", "force_cpos": "coulomb", "force_cneg": "coulomb"}
-#: terms whose columns carry the rate noise: estimated with instruments
-RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both")
+#: terms whose columns carry the noise of the measured rates or accelerations: estimated with
+#: instruments (an acceleration from the smoother is noisier than a rate: the library's rotor
+#: inertia is instrumented for the same reason)
+RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both",
+              "inertia")
 
 #: physical mechanisms that produce each kind of term (for the report's sentence)
 MECHANISMS = {
@@ -91,6 +102,8 @@ MECHANISMS = {
     "ripple": "cogging of a motor (magnet pitch), ripple of a ball screw or gear (lead, tooth mesh), a bearing race "
               "or rack with a periodic defect",
     "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
+    "inertia": "a mass or inertia the drive moves that the model leaves out: a motor rotor, coupling, pulley, belt or "
+               "screw, a tool, clamp or cable carrier riding on the carriage",
 }
 
 #: standard errors a held-out chi-square gain must exceed to be significant (one-sided 95 %)
@@ -179,6 +192,7 @@ class Search:
         self.q_centre = q[train].mean(axis=0)
         self.travel = np.maximum(q[train].std(axis=0), 1e-12)
         self.rate = np.maximum(np.sqrt(np.mean(pipe.qd_s[idx][train] ** 2, axis=0)), 1e-12)
+        self.accel = np.maximum(np.sqrt(np.mean(pipe.qdd_s[idx][train] ** 2, axis=0)), 1e-12)
         self.effort = eng.sc.effort
         self.period = np.array([_period(q[train, j], self._base_residual()[train, j], self.travel[j])
                                 for j in range(self.nd)])
@@ -214,9 +228,10 @@ class Search:
         return out
 
     def _delta(self, scale: str, j: int) -> float:
-        # a coefficient whose force is 5 % of the joint's RMS effort at the typical position or rate
+        # a coefficient whose force is 5 % of the joint's RMS effort at the typical position, rate
+        # or acceleration
         s = {"1": 1.0, "T": self.travel[j], "T2": self.travel[j] ** 2, "T3": self.travel[j] ** 3,
-             "V": self.rate[j], "V2": self.rate[j] ** 2}[scale]
+             "V": self.rate[j], "V2": self.rate[j] ** 2, "A": self.accel[j]}[scale]
         return 0.05 * float(self.effort[j]) / s
 
     def _columns(self):
@@ -430,7 +445,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
         # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
         # opposite signs is a constant force while moving), refused as the library refuses
         # a negative friction
-        if any(k in DISSIPATIVE and v < floor.get(k, 0.0) for k, v in zip(keys, coef)):
+        if any(k in SIGNED and v < floor.get(k, 0.0) for k, v in zip(keys, coef)):
             return math.inf
         return c2
 
@@ -550,8 +565,12 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     lee = 2.0 * math.log(search.n_tried())
     thr = threshold + lee
     held = search.theta if theta is None else theta
-    fixed = frozenset(k for t in TERMS.values() for k in t[0] if search.name(c, k) in held)
+    fixed = frozenset(k for t in TERMS.values() for k in t[0]
+                      if search.name(c, k) in held or search.name(c, SAME_COLUMN.get(k, k)) in held)
     floor = {k: -float(held.get(search.name(c, lib), 0.0)) if lib in asymmetry else 0.0 for k, lib in ADDS_TO.items()}
+    # an added inertia may lower the rotor's the model holds, never below zero
+    rotor = search.name(c, "rotor_inertia")
+    floor["force_inertia"] = -float(held.get(rotor, eng.model.param(rotor)))
     r, terms = y, []
     search.w[c] = 0.0
     for _ in range(3):
@@ -613,6 +632,11 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     terms = terms + extra
     f, d_held = heldout(terms)
     if not d_held > threshold:
+        return None
+    # the fit with instruments may leave the selection's least squares: a joint inertia below
+    # zero is no body (and no plant of the core)
+    keys = [k for t, _ in terms for k in TERMS[t][0]]
+    if any(k == "force_inertia" and v < floor[k] for k, v in zip(keys, f.coef)):
         return None
     # the widest of: the HAC interval, the classical one of the residual's own noise in effective
     # samples (s^2 >= 1: never narrower than that noise allows), and the bootstrap's spread of
@@ -810,6 +834,8 @@ def _key_variable(names):
     pos = {"spring", "quadratic", "cubic", "ripple", "step"}
     if any(n in pos for n in names):
         return "position"
+    if "inertia" in names:
+        return "acceleration"
     if names and all(n == "constant" for n in names):
         return "position"
     return "velocity"
@@ -844,7 +870,7 @@ def equation(names, coefs, shape, search, c, shape_ci95=None) -> str:
             parts.append(f"{_pm(k1.value, k1.ci95, k1.unit)} (q - {qc:.5g} {Q})")
     for key, fmt in (("force_k2", "(q - {qc:.5g} {Q})^2"), ("force_k3", "(q - {qc:.5g} {Q})^3"),
                      ("force_v2", "qd |qd|"), ("force_vpos", "max(qd, 0)"), ("force_vneg", "min(qd, 0)"),
-                     ("force_cpos", "[qd > 0]"), ("force_cneg", "(-[qd < 0])")):
+                     ("force_cpos", "[qd > 0]"), ("force_cneg", "(-[qd < 0])"), ("force_inertia", "qdd")):
         e = get(key)
         if e is not None:
             parts.append(f"{_pm(e.value, e.ci95, e.unit)} " + fmt.format(qc=qc or 0.0, Q=Q))
@@ -1134,13 +1160,19 @@ _PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos",
 
 
 def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
-    """The discovered term holds the library effect ``key``: Coulomb (viscous) friction split
+    """The discovered term holds the library effect ``key``: an added inertia positive beyond its
+    interval holds the rotor inertia (the same column); Coulomb (viscous) friction split
     by direction with both levels positive beyond their intervals, i.e. the library's friction
     (the levels' mean) and an asymmetry (their difference; none when they are equal within
     their intervals).  A level for one direction only (a one-way damper) is no such friction.
     ``distinct``: the term restates the effect alone, with nothing besides: the two levels
     equal within their intervals (then the pair is the library's friction, not friction that
     differs by direction)."""
+    if key == "rotor_inertia":
+        # an added inertia on the joint is the rotor's physics (one column): a positive one restates it
+        inertia = [c for name, c in term.coefficients.items() if name.endswith(".force_inertia")]
+        return (bool(inertia) and inertia[0].value > inertia[0].ci95
+                and (not distinct or list(term.terms) == ["inertia"]))
     if key not in _PAIR_KEYS:
         return False
     pos = neg = None

@@ -242,8 +242,8 @@ def _fig_discovered(t, eng, path):
     key, before, after = (np.asarray(cv[k]) for k in ("key", "before", "after"))
     order = np.argsort(key)
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
-    xl = f"{'q' if t.key_variable == 'position' else 'qd'}{t.joint} " \
-         f"[{facts.joint_unit}{'' if t.key_variable == 'position' else '/s'}]"
+    sym, per = {"position": ("q", ""), "velocity": ("qd", "/s"), "acceleration": ("qdd", "/s2")}[t.key_variable]
+    xl = f"{sym}{t.joint} [{facts.joint_unit}{per}]"
     ax[0].plot(key, before, ".", ms=2, color="#7f7f7f", label="residual without the term")
     ax[0].plot(key[order], (before - after)[order], "-", color="#d62728", lw=1.5, label="fitted term")
     ax[0].set_title("before", fontsize=9)

@@ -78,3 +78,114 @@ def test_parameters_are_in_the_table_with_units_and_bounds():
     assert info["joint[2].force_v2"].unit == "N m s2/rad2"
     with pytest.raises(Exception, match="force_period"):
         Model("quattro", params={"joint[1].force_period": -0.1})
+
+
+# ----------------------------------------------------------------- the added inertia
+# force_inertia [kg | kg m2]: F = force_inertia qdd, an inertia the drive carries on the joint.
+# References: the pendulum's closed form (robots/pendulum.toml: a 1 kg bob 0.5 m below the
+# shaft, its own inertia 1e-4 kg m2), tau = (m l^2 + I + J) qdd + m g l sin q, and the rotor
+# inertia (an existing parameter of the same physics) on the 6-PUS.
+M_L2, MGL = 1.0 * 0.5**2 + 1e-4, 1.0 * 9.81 * 0.5
+
+
+def test_added_inertia_in_the_pendulum_dynamics_by_hand():
+    J = 0.25
+    m = Model("pendulum", params={"axis[1].force_inertia": J})
+    x, xd, xdd = np.array([0.3]), np.array([0.5]), np.array([1.2])
+    np.testing.assert_allclose(m.inverse_dynamics(x, xd, xdd), (M_L2 + J) * 1.2 + MGL * math.sin(0.3), rtol=1e-12)
+    np.testing.assert_allclose(m.mass_matrix(x), [[M_L2 + J]], rtol=1e-12)
+    ke, _ = m.energy(x, xd)
+    assert float(ke) == pytest.approx(0.5 * (M_L2 + J) * 0.25, rel=1e-12)
+    np.testing.assert_allclose(m.forward_dynamics(x, xd, np.array([2.0])),
+                               (2.0 - MGL * math.sin(0.3)) / (M_L2 + J), rtol=1e-12)
+
+
+def test_added_inertia_slows_the_pendulum_as_its_closed_form_says():
+    # small swings: period 2 pi sqrt((m l^2 + I + J) / (m g l)); with J = m l^2 it grows by sqrt(2)
+    from cosim.core import Simulator
+
+    J = 0.25
+    period = 2 * math.pi * math.sqrt((M_L2 + J) / MGL)
+    sim = Simulator(Model("pendulum", params={"axis[1].force_inertia": J}), rtol=1e-10, atol=1e-12)
+    sim.reset(0.0, [0.01])
+    crossings, prev, t = [], 0.01, 0.0
+    h = 1e-3
+    while len(crossings) < 2:
+        t += h
+        sim.advance(t)
+        q = float(sim.state[1][0])
+        if prev > 0 >= q:  # a downward crossing of the vertical, interpolated
+            crossings.append(t - h * q / (q - prev))
+        prev = q
+    assert crossings[1] - crossings[0] == pytest.approx(period, rel=1e-4)
+    assert period > 1.4 * 2 * math.pi * math.sqrt(M_L2 / MGL)
+
+
+def test_added_inertia_keeps_the_energy_of_a_free_swing():
+    # no friction, no effort: kinetic (with 0.5 J qd^2) + potential energy stays constant;
+    # an energy without the added inertia would not (the swing trades 0.5 J qd^2 too)
+    from cosim.core import Simulator
+
+    m = Model("pendulum", params={"axis[1].force_inertia": 0.4})
+    sim = Simulator(m, rtol=1e-11, atol=1e-12)
+    sim.reset(0.0, [1.0])
+    energies, speeds = [], []
+    for k in range(1, 300):
+        sim.advance(k * 5e-3)
+        _, x, xd = sim.state
+        ke, pe = m.energy(x, xd)
+        energies.append(float(ke + pe))
+        speeds.append(abs(float(xd[0])))
+    assert max(speeds) > 1.0  # it swings through the bottom
+    assert np.ptp(energies) < 1e-7 * energies[0]
+    # the share the added inertia carries at the fastest point is far above that tolerance
+    assert 0.5 * 0.4 * max(speeds) ** 2 > 1e-2 * energies[0]
+
+
+def _sixpus_motion():
+    m = Model("6pus")
+    x, xd = _state(m)
+    return x, xd, np.array([0.3, -0.2, 0.1, 1.0, 0.5, -0.7])
+
+
+def test_added_inertia_is_the_rotor_inertia_physics_on_the_6pus():
+    # the same joint inertia split between the rotor and the added term gives the same plant
+    x, xd, xdd = _sixpus_motion()
+    rotor = {f"rail[{i}].rotor_inertia": 0.02 * i for i in range(1, 7)}
+    split = dict(rotor, **{"rail[2].force_inertia": 0.05, "rail[5].force_inertia": 0.11})
+    lumped = dict(rotor, **{"rail[2].rotor_inertia": 0.04 + 0.05, "rail[5].rotor_inertia": 0.10 + 0.11})
+    a, b = Model("6pus", params=split), Model("6pus", params=lumped)
+    tau = a.inverse_dynamics(x, xd, xdd)
+    np.testing.assert_allclose(tau, b.inverse_dynamics(x, xd, xdd), rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(a.mass_matrix(x), b.mass_matrix(x), rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(a.energy(x, xd), b.energy(x, xd), rtol=1e-13)
+    np.testing.assert_allclose(a.forward_dynamics(x, xd, tau), b.forward_dynamics(x, xd, tau), rtol=1e-9, atol=1e-9)
+    # and it is a force on its joint: force_inertia times the joint acceleration
+    nominal = Model("6pus", params=rotor)
+    qdd = nominal.joint_acceleration(x, xd, xdd)
+    want = np.zeros(6)
+    want[1], want[4] = 0.05 * qdd[1], 0.11 * qdd[4]
+    assert np.min(np.abs(want[[1, 4]])) > 5e-4  # well above the comparison's 1e-12
+    np.testing.assert_allclose(tau - nominal.inverse_dynamics(x, xd, xdd), want, rtol=1e-10, atol=1e-12)
+
+
+def test_added_inertia_round_trip_with_the_other_terms():
+    # forward dynamics of the inverse dynamics' efforts gives the acceleration back, the
+    # generic force's position and rate terms and friction on the same joints
+    x, xd, xdd = _sixpus_motion()
+    p = {f"rail[3].{k}": v for k, v in COEF.items()}
+    p.update({"rail[3].force_inertia": 0.07, "rail[6].force_inertia": 0.2, "rail[6].viscous": 3.0,
+              "rail[1].rotor_inertia": 0.05})
+    m = Model("6pus", params=p)
+    tau = m.inverse_dynamics(x, xd, xdd)
+    np.testing.assert_allclose(m.forward_dynamics(x, xd, tau), xdd, rtol=1e-9, atol=1e-9)
+    # the layered calls agree with the whole (the discrepancy engine's path)
+    mech = m.mechanism_inverse_dynamics(x[None], xd[None], xdd[None])
+    joints = (m.ik(x)[None], m.joint_velocity(x, xd)[None], m.joint_acceleration(x, xd, xdd)[None])
+    np.testing.assert_array_equal(m.add_drive_efforts(*joints, mech)[0], tau)
+
+
+def test_a_negative_joint_inertia_is_refused_naming_both_parameters():
+    Model("pendulum", params={"axis[1].rotor_inertia": 0.1, "axis[1].force_inertia": -0.05})  # a correction
+    with pytest.raises(Exception, match=r"axis\[1\]\.rotor_inertia \+ axis\[1\]\.force_inertia = -0\.05"):
+        Model("pendulum", params={"axis[1].force_inertia": -0.05})

@@ -101,3 +101,21 @@ def test_importer_tolerance_replaces_solver_rtol(fmu_file, model, hold, core_run
         for _ in range(100):
             f.step(H, tau=hold)
         assert np.max(np.abs(f.vector("x") - x_loose[-1])) < 1e-12
+
+
+def test_an_added_inertia_is_an_fmu_parameter_with_the_rotor_inertia_physics(fmu_file, model, hold, core_run):
+    # rail[3].force_inertia = 0.08 kg (declared once, in the core's table): read back as set, and the
+    # plant is the core's with rail[3].rotor_inertia = 0.08 kg (the same joint inertia, another parameter)
+    rotor = model.copy()
+    rotor.set_params({"rail[3].rotor_inertia": 0.08})
+    _, x, _ = core_run(rotor, np.tile(hold, (100, 1)))
+    with fmu.FMUInstance(fmu_file, params={"rail[3].force_inertia": 0.08}) as f:
+        assert [v.name for v in f.md.modelVariables].count("rail[3].force_inertia") == 1
+        assert f.vars["rail[3].force_inertia"].unit == "kg"
+        assert f.vars["rail[3].force_inertia"].causality == "parameter"
+        assert f.get("rail[3].force_inertia") == 0.08
+        for _ in range(100):
+            f.step(H, tau=hold)
+        assert np.max(np.abs(f.vector("x") - x[-1])) < 1e-10
+    _, x0, _ = core_run(model, np.tile(hold, (100, 1)))
+    assert np.max(np.abs(x0[-1] - x[-1])) > 1e-6

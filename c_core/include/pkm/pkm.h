@@ -263,7 +263,8 @@ PKM_API int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n
  *   pkm_add_drive_efforts_batch: the same sum from the joint motion at those poses,
  *     q[n,nd] = pkm_ik (m, rad), qd[n,nd] = pkm_joint_velocity (m/s, rad/s), qdd[n,nd] =
  *     pkm_joint_acceleration (m/s2, rad/s2), for a caller that adds several drive layers
- *     along one motion (q is read only with a joint force, qdd only with rotor inertia).
+ *     along one motion (q is read only with a joint force, qdd only with a rotor or added
+ *     inertia).
  * Either adder applied to the first's output is pkm_inverse_dynamics_batch bit for bit.
  * Same shapes, units, status and NaN rows as pkm_inverse_dynamics_batch; a non-finite tau
  * row given to an adder is refused for that row. */
@@ -314,11 +315,17 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  *     + force_vpos max(qd,0) + force_vneg min(qd,0) + force_cpos max(s,0) + force_cneg min(s,0)
  *     + force_sin sin(2 pi q / force_period) + force_cos cos(2 pi q / force_period)   (period > 0)
  *     + force_step tanh((q - force_step_q) / force_step_w)                             (width > 0)
+ *     + force_inertia qdd
  * [N | N m], an effort the drive spends on the joint like friction (added to the inverse
  * dynamics, subtracted from the applied effort in the forward dynamics and in the effort a
  * transmission carries).  All coefficients default to 0.  Its constant term is the drive's
  * offset "<j>[i].offset" (pkm_joint_friction): one parameter for a constant effort, whoever
- * finds it. */
+ * finds it.  Its acceleration term force_inertia [kg | kg m2] is an inertia the drive carries
+ * on the joint (a coupling, pulley, belt, a mass riding on the carriage): the same physics as
+ * ".rotor_inertia", to which it adds (the joint inertia rotor_inertia + force_inertia, which
+ * must not be negative, is in pkm_mass_matrix, pkm_energy and the implicit forward
+ * dynamics); with drive.two_body = 1 it stays on the carriage while the rotor is the drive
+ * body's. */
 
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
  * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd
@@ -336,8 +343,8 @@ PKM_API int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n,
                                       const double* tau_cmd, double* tau_applied, int* status);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
  * q_meas = q + encoder_offset + backlash/2 sgn(c) + compliance c, with c the effort the
- * transmission carries: tau less the drive side's own friction and rotor inertia (rotor qdd,
- * qdd from the forward dynamics at (x, xd, tau)).  The encoder is on the drive side, the
+ * transmission carries: tau less the drive side's own friction, joint force and joint inertia
+ * ((rotor_inertia + force_inertia) qdd, qdd from the forward dynamics at (x, xd, tau)).  The encoder is on the drive side, the
  * carriage leans on the side of the gap c pushes it to (smooth sign tanh(c / drive.f_eps)),
  * and the transmission deflects by compliance c. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,

@@ -1,4 +1,4 @@
-// The drive layer (see drive.hpp): friction, rotor inertia, saturation and sensor model
+// The drive layer (see drive.hpp): friction, joint force, rotor inertia, saturation and sensor model
 // added to a robot's rigid-body mechanics.
 #include "dynamics/drive.hpp"
 
@@ -125,11 +125,17 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
                                          " must be > 0 (1 / the stiffness of the transmission, or of a gap's contact "
                                          "faces) where a backlash is set");
   }
+  p->force = joint_force::compile(r, sp, values);
   for (int i = 0; i < p->nd; ++i) {
     p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0 || p->offset[i] != 0;
-    p->any_rotor |= p->rotor[i] != 0;
+    p->inertia[i] = p->rotor[i] + p->force.v[joint_force::kInertia][i];
+    // A negative added inertia may correct a rotor's; a joint with a negative inertia is no body.
+    if (!(p->inertia[i] >= 0))
+      throw Error(PKM_ERR_PARAMETER, joint_param(r, i, "rotor_inertia") + " + " +
+                                         joint_param(r, i, joint_force::kKeys[joint_force::kInertia]) + " = " +
+                                         num(p->inertia[i], 6) + " must be >= 0 (the joint inertia the drive adds)");
+    p->any_inertia |= p->inertia[i] != 0;
   }
-  p->force = joint_force::compile(r, sp, values);
   return p;
 }
 
@@ -147,11 +153,14 @@ void friction(const Params& p, const double* qd, double* f) {
 
 std::shared_ptr<const Params> carriage_side(const Params& p) {
   auto c = std::make_shared<Params>(p);
-  c->any_friction = c->any_rotor = false;
+  c->any_friction = c->any_inertia = false;
   for (int i = 0; i < p.nd; ++i) {
-    if (p.two_body_joint(i)) c->coulomb[i] = c->viscous[i] = c->stribeck[i] = c->rotor[i] = c->offset[i] = 0.0;
+    if (p.two_body_joint(i)) {
+      c->coulomb[i] = c->viscous[i] = c->stribeck[i] = c->rotor[i] = c->offset[i] = 0.0;
+      c->inertia[i] = p.force.v[joint_force::kInertia][i];
+    }
     c->any_friction |= c->coulomb[i] != 0 || c->viscous[i] != 0 || c->stribeck[i] != 0 || c->offset[i] != 0;
-    c->any_rotor |= c->rotor[i] != 0;
+    c->any_inertia |= c->inertia[i] != 0;
   }
   return c;
 }
@@ -201,7 +210,7 @@ void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x
   double q[6] = {}, qd[6] = {}, qdd[6] = {};
   if (dp.force.any) m->robot->ik(rm, *d->rd, x, q);
   if (dp.force.any || dp.any_friction) joint_velocity(*m->robot, rm, *d->rd, x, xd, qd);
-  if (dp.any_rotor) m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd);
+  if (dp.any_inertia) m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd);
   add_drive_efforts(dp, n, q, qd, qdd, tau);
 }
 
@@ -213,8 +222,8 @@ void add_drive_efforts(const drive::Params& dp, int n, const double* q, const do
     drive::friction(dp, qd, f);
     for (int i = 0; i < n; ++i) tau[i] += f[i];
   }
-  if (dp.any_rotor)
-    for (int i = 0; i < n; ++i) tau[i] += dp.rotor[i] * qdd[i];
+  if (dp.any_inertia)
+    for (int i = 0; i < n; ++i) tau[i] += dp.inertia[i] * qdd[i];
 }
 
 namespace {
@@ -285,8 +294,8 @@ void total_forward_dynamics(const pkm_model* m, const drive::Params& dp, pkm_dat
 
 bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                                      const double* tau, double* xdd, double* B) {
-  // Rotor inertia changes the mass matrix the robot factorises: no cheap response then.
-  if (m->drive->any_rotor) return false;
+  // A joint inertia (rotor, added) changes the mass matrix the robot factorises: no cheap response then.
+  if (m->drive->any_inertia) return false;
   bool ok = false;
   with_overflow_message(d, xd, tau, [&] {
     double net[6];
@@ -304,20 +313,20 @@ namespace {
 void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
                          const double* tau, double* xdd) {
   const RobotModel& rm = *m->compiled;
-  if (!dp.any_friction && !dp.any_rotor && !dp.force.any) {
+  if (!dp.any_friction && !dp.any_inertia && !dp.force.any) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
     return;
   }
   const int n = d->ndof;
-  // Friction and the velocity part of the rotor inertia force are efforts the actuator
+  // Friction and the velocity part of the joint inertia force are efforts the actuator
   // spends before the mechanism sees any: the mechanism is driven by the net effort.
   Vec net(n);
   net_effort(m, dp, d, x, xd, tau, net.data());
-  if (!dp.any_rotor) {
+  if (!dp.any_inertia) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd);
     return;
   }
-  // Rotor inertia Jr qdd with qdd = J xdd + Jdot xd: the mechanism sees
+  // Joint inertia (rotor and added) Jr qdd with qdd = J xdd + Jdot xd: the mechanism sees
   // net - Jr (J xdd + Jdot xd), so (M + J' Jr J) xdd = M xdd0 with
   // xdd0 = FD_robot(net - Jr Jdot xd).
   double J[36], Jd[36];
@@ -325,7 +334,7 @@ void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* 
   Eigen::Map<const Mat> Jm(J, n, n);
   m->robot->jacobian_dot(rm, *d->rd, x, xd, Jd);
   Vec jdxd = Eigen::Map<const Mat>(Jd, n, n) * Eigen::Map<const Vec>(xd, n);
-  for (int i = 0; i < n; ++i) net[i] -= dp.rotor[i] * jdxd[i];
+  for (int i = 0; i < n; ++i) net[i] -= dp.inertia[i] * jdxd[i];
   Vec xdd0(n);
   m->robot->forward_dynamics(rm, *d->rd, x, xd, net.data(), xdd0.data());
   Mat M(n, n);
@@ -333,7 +342,7 @@ void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* 
   Mat Mt = M;
   for (int i = 0; i < n; ++i)
     for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) Mt(a, b) += Jm(i, a) * dp.rotor[i] * Jm(i, b);
+      for (int b = 0; b < n; ++b) Mt(a, b) += Jm(i, a) * dp.inertia[i] * Jm(i, b);
   Eigen::LLT<Mat> llt(Mt);
   if (llt.info() != Eigen::Success)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at this pose");
@@ -346,13 +355,13 @@ void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double*
   const RobotModel& rm = *m->compiled;
   const drive::Params& dp = *m->drive;
   m->robot->mass_matrix(rm, *d->rd, x, M);
-  if (!dp.any_rotor) return;
+  if (!dp.any_inertia) return;
   const int n = d->ndof;
   double J[36];
   m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
   for (int i = 0; i < n; ++i)
     for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) M[a * n + b] += J[i * n + a] * dp.rotor[i] * J[i * n + b];
+      for (int b = 0; b < n; ++b) M[a * n + b] += J[i * n + a] * dp.inertia[i] * J[i * n + b];
 }
 
 void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double* xd, double* kinetic,
@@ -362,14 +371,14 @@ void total_energy(const pkm_model* m, pkm_data* d, const double* x, const double
   m->robot->energy(rm, *d->rd, x, xd, kinetic, potential);
   const double both[2] = {*kinetic, *potential};
   require_finite_result(both, 2, "the energy", xd, nullptr, d->ndof);
-  if (!dp.any_rotor) return;
+  if (!dp.any_inertia) return;
   const int n = d->ndof;
   double J[36];
   m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
   for (int i = 0; i < n; ++i) {
     double qd = 0;
     for (int j = 0; j < n; ++j) qd += J[i * n + j] * xd[j];
-    *kinetic += 0.5 * dp.rotor[i] * qd * qd;
+    *kinetic += 0.5 * dp.inertia[i] * qd * qd;
   }
   require_finite_result(kinetic, 1, "the kinetic energy", xd, nullptr, n);
 }
@@ -406,11 +415,11 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   bool flexible = false;
   for (int i = 0; i < n; ++i) flexible |= dp.backlash[i] != 0 || dp.compliance[i] != 0;
   // The effort the transmission carries: the applied one less what the drive side spends on
-  // its own friction and rotor inertia (computed only when a gap or an elasticity reads it).
+  // its own friction, joint force and joint inertia (computed only when a gap or an elasticity reads it).
   double carried[6];
   for (int i = 0; i < n; ++i) carried[i] = tau[i];
   if (flexible) add_joint_force(m, dp, d, x, xd, -1.0, carried);
-  if (flexible && (dp.any_friction || dp.any_rotor)) {
+  if (flexible && (dp.any_friction || dp.any_inertia)) {
     double J[36], qd[6], f[6], xdd[6], qdd[6];
     m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);
     for (int i = 0; i < n; ++i) {
@@ -421,10 +430,10 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
       drive::friction(dp, qd, f);
       for (int i = 0; i < n; ++i) carried[i] -= f[i];
     }
-    if (dp.any_rotor) {
+    if (dp.any_inertia) {
       total_forward_dynamics(m, d, x, xd, tau, xdd);
       m->robot->joint_acceleration(rm, *d->rd, x, xd, xdd, qdd);
-      for (int i = 0; i < n; ++i) carried[i] -= dp.rotor[i] * qdd[i];
+      for (int i = 0; i < n; ++i) carried[i] -= dp.inertia[i] * qdd[i];
     }
   }
   m->robot->ik(rm, *d->rd, x, q_meas);

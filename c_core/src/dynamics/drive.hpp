@@ -51,8 +51,13 @@ struct Params {
   double actuator_delay = 0;            // [s]
   double sensor_delay = 0;              // [s]
   bool two_body = false;                // drive.two_body: gaps and compliances as two bodies (above)
-  bool any_friction = false, any_rotor = false;
-  joint_force::Coefficients force;      // the generic per-joint force (joint_force.hpp); force.any: one is set
+  // The joint inertia the drive adds to the mechanism's [kg | kg m2]: the rotor's and the joint
+  // force's force_inertia (an added inertia, joint_force.hpp), one term inertia qdd in the inverse
+  // dynamics, the mass matrix, the energy and the forward dynamics.  On a two-body joint the
+  // rotor is the drive body's (rotor[i]) and the carriage side keeps the force_inertia.
+  double inertia[kMaxJoints] = {};
+  bool any_friction = false, any_inertia = false;
+  joint_force::Coefficients force;      // the generic per-joint force (joint_force.hpp); force.any: a q or qd term is set
   // Joint i is two bodies: drive.two_body and a gap or a compliance on it.
   bool two_body_joint(int i) const { return two_body && (backlash[i] > 0 || compliance[i] > 0); }
 };
@@ -81,7 +86,8 @@ double smooth_sign(double v, double eps);
 // subtracted from the actuator effort).
 void friction(const Params& p, const double* qd, double* f);
 // The carriage side of a two-body drive layer: the same parameters with the friction
-// and rotor inertia of every two-body joint removed (they act on its drive body).
+// and rotor inertia of every two-body joint removed (they act on its drive body; its joint
+// force and added inertia stay on the carriage).
 std::shared_ptr<const Params> carriage_side(const Params& p);
 // Effort a two-body joint's transmission carries at the drive-to-carriage deflection
 // delta = theta - q and its rate: k dz(delta) + c delta_dot in contact, 0 inside the gap
@@ -90,7 +96,7 @@ double transmitted_effort(const Params& p, int i, double delta, double delta_dot
 
 }  // namespace drive
 
-// Total dynamics = robot mechanics + drive (friction, rotor inertia).  m must be
+// Total dynamics = robot mechanics + drive (friction, joint force, rotor and added inertia).  m must be
 // validated; d prepared.  Throw Error like the robot functions.
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                             const double* xdd, double* tau);
@@ -100,7 +106,7 @@ void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
 void add_drive_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                                 const double* xdd, double* tau);
 // The same from the joint motion at that pose: q = ik(x), qd = joint velocity, qdd = joint
-// acceleration (q unused without a joint force, qdd without rotor inertia).
+// acceleration (q unused without a joint force, qdd without a rotor or added inertia).
 void add_drive_efforts(const drive::Params& dp, int n, const double* q, const double* qd, const double* qdd,
                        double* tau);
 void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
@@ -109,7 +115,7 @@ void total_forward_dynamics(const pkm_model* m, pkm_data* d, const double* x, co
 void total_forward_dynamics(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x,
                             const double* xd, const double* tau, double* xdd);
 // The same with B = d xdd / d tau (row-major nd x nd) when the robot offers it cheaply
-// and the drive has no rotor inertia; false otherwise (outputs untouched).
+// and the drive adds no joint inertia; false otherwise (outputs untouched).
 bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
                                      const double* tau, double* xdd, double* B);
 void total_mass_matrix(const pkm_model* m, pkm_data* d, const double* x, double* M);

@@ -12,9 +12,10 @@ namespace joint_force {
 const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "force_k3",
                                    "force_v2",   "force_vpos", "force_vneg",   "force_cpos",
                                    "force_cneg", "force_sin",  "force_cos",    "force_period",
-                                   "force_step", "force_step_q", "force_step_w"};
+                                   "force_step", "force_step_q", "force_step_w", "force_inertia"};
 namespace {
-enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W };
+enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, INERTIA };
+static_assert(INERTIA == kInertia, "kInertia names the last key");
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -42,6 +43,10 @@ std::vector<ParamSpec> specs(const Robot& r) {
     add(STEP, F, "height of the smooth step tanh((q - force_step_q) / force_step_w)", -big);
     add(STEP_Q, Q, "position of the smooth step", -big);
     add(STEP_W, Q, "width of the smooth step (0: no step)", 0.0);
+    add(INERTIA, ang ? "kg m2" : "kg",
+        "added inertia the drive carries on the joint (a coupling, pulley, belt, a mass riding on it): force per "
+        "unit of joint acceleration, added to the rotor inertia",
+        -big);
   }
   (void)V;
   return out;
@@ -58,7 +63,8 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std
     for (int k = 0; k < kNKeys; ++k) {
       c.v[k][i] = get(joint_param(r, i, kKeys[k]));
       // The centre, the period and the step's position and width shape terms; alone they are no force.
-      if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W) c.any |= c.v[k][i] != 0;
+      // The inertia is the drive's joint inertia's (drive::compile), not a term of force().
+      if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W && k != INERTIA) c.any |= c.v[k][i] != 0;
     }
   return c;
 }

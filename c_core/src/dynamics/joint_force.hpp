@@ -8,9 +8,14 @@
 //     + force_cpos max(s, 0) + force_cneg min(s, 0)                   (Coulomb by direction)
 //     + force_sin sin(2 pi q / P) + force_cos cos(2 pi q / P)         (ripple; P = force_period > 0)
 //     + force_step tanh((q - force_step_q) / force_step_w)            (a smooth step; force_step_w > 0)
+//     + force_inertia qdd                                             (an added inertia)
 //
 // F is an effort the drive spends on the joint, like friction: it adds to the inverse
-// dynamics and is subtracted from the applied effort in the forward dynamics.  Every
+// dynamics and is subtracted from the applied effort in the forward dynamics.  Its
+// acceleration term is an inertia the drive carries on the joint (a coupling, a pulley, a
+// belt, a mass riding on the carriage): it is not evaluated here but added to the drive's
+// joint inertia with the rotor inertia (drive.hpp, Params::inertia), so it is part of the
+// mass matrix, the energy and the implicit forward dynamics like the rotor's.  Every
 // coefficient defaults to 0 (no force).  Its constant term is the drive's own
 // "<j>[i].offset" (drive.hpp): one parameter, so that a constant force has one column and
 // one name whether the effect library or the discovery step finds it.
@@ -26,20 +31,23 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 15;
+constexpr int kNKeys = 16;
+// Index of "force_inertia" in kKeys (the acceleration term, not evaluated by force()).
+constexpr int kInertia = 15;
 extern const char* const kKeys[kNKeys];
 
 struct Coefficients {
   // [key][joint], in the order of kKeys
   double v[kNKeys][kMaxJoints] = {};
-  bool any = false;
+  bool any = false;  // a coefficient of a term of q or qd is set (force() is not zero)
 };
 
 // Parameter specs of the robot's joints (units of its joints and efforts).
 std::vector<ParamSpec> specs(const Robot& r);
 // Reads the coefficients (by name) from a model's parameter table.
 Coefficients compile(const Robot& r, const std::vector<ParamSpec>& specs, const std::vector<double>& values);
-// F[nd] at joint positions q[nd] and rates qd[nd]; v_eps the drive's velocity scale.
+// F[nd] at joint positions q[nd] and rates qd[nd], the acceleration term left out (the drive's
+// joint inertia carries it); v_eps the drive's velocity scale.
 void force(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* F);
 
 }  // namespace joint_force
