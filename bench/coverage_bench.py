@@ -154,10 +154,9 @@ def estimates(diag, truth: dict) -> list:
     ``truth`` ({core parameter: value}): a list of ``(parameter, value, half width, truth)``.
     Sine and cosine coefficients of a ripple (in the diagnosis and in ``truth``) count as one
     amplitude ``<joint>.force_amplitude``."""
-    stated = {p: (v["value"], v["ci95"]) for e in diag.effects for p, v in e["params"].items()}
-    for t in diag.discovered:
-        stated.update({p: (c.value, c.ci95) for p, c in t.coefficients.items()})
-        stated.update({p: (t.shape[p], h) for p, h in t.shape_ci95.items()})
+    from cosim.discrepancy.blind import stated_intervals
+
+    stated = stated_intervals(diag, shapes=True)
     truth = dict(truth)
     for src in (stated, truth):
         for p in [p for p in src if p.endswith(".force_sin")]:

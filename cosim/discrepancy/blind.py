@@ -494,12 +494,22 @@ def _param_error(h: dict, values: dict) -> float:
     return float(np.linalg.norm(est - true) / nrm) if nrm > 0 else float("nan")
 
 
-def interval_holds(diag, truth: dict) -> list:
-    """For every hidden parameter the diagnosis states a 95 % interval of (a library effect's
-    or a discovered term's coefficient): does the interval contain the truth?"""
+def stated_intervals(diag, shapes: bool = False) -> dict:
+    """{core parameter: (value, 95 % half width)} of every parameter the diagnosis states: the
+    library effects' and the discovered terms' coefficients, and with ``shapes`` the fitted
+    shape parameters of the discovered terms (a step's position and width, a ripple's period)."""
     stated = {p: (v["value"], v["ci95"]) for e in diag.effects for p, v in e["params"].items()}
     for t in diag.discovered:
         stated.update({p: (c.value, c.ci95) for p, c in t.coefficients.items()})
+        if shapes:
+            stated.update({p: (t.shape[p], h) for p, h in t.shape_ci95.items()})
+    return stated
+
+
+def interval_holds(diag, truth: dict) -> list:
+    """For every hidden parameter the diagnosis states a 95 % interval of (a library effect's
+    or a discovered term's coefficient): does the interval contain the truth?"""
+    stated = stated_intervals(diag)
     return [bool(abs(stated[p][0] - v) <= stated[p][1]) for p, v in truth.items()
             if p in stated and np.isfinite(stated[p][1])]
 
