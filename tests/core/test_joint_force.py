@@ -66,7 +66,8 @@ def test_forward_dynamics_is_driven_by_the_effort_less_the_force():
 
 def test_shape_parameters_alone_are_no_force():
     nominal = Model("6pus")
-    m = Model("6pus", params={"rail[2].force_qc": 0.3, "rail[2].force_period": 0.01, "rail[2].force_step_w": 0.01})
+    m = Model("6pus", params={"rail[2].force_qc": 0.3, "rail[2].force_period": 0.01, "rail[2].force_step_w": 0.01,
+                              "rail[2].force_cv": 0.02})
     x, xd = _state(m)
     xdd = np.zeros(6)
     np.testing.assert_array_equal(m.inverse_dynamics(x, xd, xdd), nominal.inverse_dynamics(x, xd, xdd))
@@ -78,6 +79,38 @@ def test_parameters_are_in_the_table_with_units_and_bounds():
     assert info["joint[2].force_v2"].unit == "N m s2/rad2"
     with pytest.raises(Exception, match="force_period"):
         Model("quattro", params={"joint[1].force_period": -0.1})
+    assert info["joint[2].force_cv"].unit == "rad/s"
+    with pytest.raises(Exception, match="force_cv"):
+        Model("quattro", params={"joint[1].force_cv": -0.1})
+
+
+# ----------------------------------------------------------------- the Coulomb levels' velocity scale
+# force_cv [m/s | rad/s]: the Coulomb levels act through tanh(qd / force_cv), a friction that
+# fades below that speed; 0 keeps the drive's drive.v_eps (a sharp friction).
+
+@pytest.mark.parametrize("qd", [-0.3, -0.02, 0.004, 0.05, 0.8])
+def test_coulomb_levels_fade_below_their_velocity_scale(qd):
+    cv, cpos, cneg = 0.05, 0.7, 0.4
+    nominal = Model("pendulum")
+    m = Model("pendulum", params={"axis[1].force_cpos": cpos, "axis[1].force_cneg": cneg, "axis[1].force_cv": cv})
+    x, xd, xdd = np.array([0.3]), np.array([qd]), np.array([1.2])
+    s = math.tanh(qd / cv)
+    want = cpos * max(s, 0.0) + cneg * min(s, 0.0)
+    np.testing.assert_allclose(m.inverse_dynamics(x, xd, xdd) - nominal.inverse_dynamics(x, xd, xdd), [want],
+                               rtol=1e-12, atol=1e-15)
+    # the drive's own friction that fades (coulomb with its velocity scale coulomb_v) is the same
+    # physics when the two levels are equal: one plant by either parameter set
+    smooth = Model("pendulum", params={"axis[1].coulomb": cpos, "axis[1].coulomb_v": cv})
+    split = Model("pendulum", params={"axis[1].force_cpos": cpos, "axis[1].force_cneg": cpos, "axis[1].force_cv": cv})
+    np.testing.assert_allclose(split.inverse_dynamics(x, xd, xdd), smooth.inverse_dynamics(x, xd, xdd), rtol=1e-13)
+
+
+def test_without_a_velocity_scale_the_levels_are_sharp():
+    m = Model("pendulum", params={"axis[1].force_cpos": 0.7})
+    eps = m.params()["drive.v_eps"]
+    x, xdd = np.array([0.3]), np.array([0.0])
+    d = m.inverse_dynamics(x, np.array([3 * eps]), xdd) - Model("pendulum").inverse_dynamics(x, np.array([3 * eps]), xdd)
+    np.testing.assert_allclose(d, [0.7 * math.tanh(3.0)], rtol=1e-12)
 
 
 # ----------------------------------------------------------------- the added inertia

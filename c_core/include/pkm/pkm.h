@@ -310,7 +310,8 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  *
  * A generic joint force (what the discrepancy engine's discovery step fits when no effect
  * of its library explains a residual) is part of the same functions: per joint
- * "<j>[i].force_*", with z = q - force_qc and s = tanh(qd / drive.v_eps),
+ * "<j>[i].force_*", with z = q - force_qc and s = tanh(qd / v_c), v_c = force_cv if positive (a
+ * friction that fades below that speed [m/s | rad/s]) else drive.v_eps,
  *   F = force_k1 z + force_k2 z^2 + force_k3 z^3 + force_v2 qd|qd|
  *     + force_vpos max(qd,0) + force_vneg min(qd,0) + force_cpos max(s,0) + force_cneg min(s,0)
  *     + force_sin sin(2 pi q / force_period) + force_cos cos(2 pi q / force_period)   (period > 0)

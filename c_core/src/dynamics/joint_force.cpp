@@ -12,9 +12,10 @@ namespace joint_force {
 const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "force_k3",
                                    "force_v2",   "force_vpos", "force_vneg",   "force_cpos",
                                    "force_cneg", "force_sin",  "force_cos",    "force_period",
-                                   "force_step", "force_step_q", "force_step_w", "force_inertia"};
+                                   "force_step", "force_step_q", "force_step_w", "force_cv",
+                                   "force_inertia"};
 namespace {
-enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, INERTIA };
+enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, CV, INERTIA };
 static_assert(INERTIA == kInertia, "kInertia names the last key");
 }  // namespace
 
@@ -43,12 +44,15 @@ std::vector<ParamSpec> specs(const Robot& r) {
     add(STEP, F, "height of the smooth step tanh((q - force_step_q) / force_step_w)", -big);
     add(STEP_Q, Q, "position of the smooth step", -big);
     add(STEP_W, Q, "width of the smooth step (0: no step)", 0.0);
+    add(CV, V,
+        "velocity scale of the Coulomb levels force_cpos / force_cneg, tanh(qd / force_cv): a friction that fades "
+        "below it (0: drive.v_eps)",
+        0.0);
     add(INERTIA, ang ? "kg m2" : "kg",
         "added inertia the drive carries on the joint (a coupling, pulley, belt, a mass riding on it): force per "
         "unit of joint acceleration, added to the rotor inertia",
         -big);
   }
-  (void)V;
   return out;
 }
 
@@ -62,9 +66,10 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std
   for (int i = 0; i < r.ndof(); ++i)
     for (int k = 0; k < kNKeys; ++k) {
       c.v[k][i] = get(joint_param(r, i, kKeys[k]));
-      // The centre, the period and the step's position and width shape terms; alone they are no force.
-      // The inertia is the drive's joint inertia's (drive::compile), not a term of force().
-      if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W && k != INERTIA) c.any |= c.v[k][i] != 0;
+      // The centre, the period, the step's position and width and the Coulomb levels' velocity scale
+      // shape terms; alone they are no force.  The inertia is the drive's joint inertia's
+      // (drive::compile), not a term of force().
+      if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W && k != CV && k != INERTIA) c.any |= c.v[k][i] != 0;
     }
   return c;
 }
@@ -73,7 +78,7 @@ void force(const Coefficients& c, int nd, double v_eps, const double* q, const d
   const double two_pi = 6.283185307179586;
   for (int i = 0; i < nd; ++i) {
     const auto& v = c.v;
-    const double z = q[i] - v[QC][i], w = qd[i], s = std::tanh(w / v_eps);
+    const double z = q[i] - v[QC][i], w = qd[i], s = std::tanh(w / (v[CV][i] > 0 ? v[CV][i] : v_eps));
     double f = z * (v[K1][i] + z * (v[K2][i] + z * v[K3][i])) + v[V2][i] * w * std::fabs(w) +
                v[VPOS][i] * std::fmax(w, 0.0) + v[VNEG][i] * std::fmin(w, 0.0) + v[CPOS][i] * std::fmax(s, 0.0) +
                v[CNEG][i] * std::fmin(s, 0.0);

@@ -1,6 +1,7 @@
 // A generic per-joint force of the drive layer: the term the discrepancy engine's discovery
 // step fits when no effect of its library explains a residual (cosim/discrepancy/discovery.py).
-// Per actuated joint i, with z = q - force_qc and s = tanh(qd / drive.v_eps):
+// Per actuated joint i, with z = q - force_qc and s = tanh(qd / v_c), v_c = force_cv if it is
+// positive (a friction that fades below that speed), else drive.v_eps (a sharp Coulomb friction):
 //
 //   F = force_k1 z + force_k2 z^2 + force_k3 z^3                     (springs)
 //     + force_v2 qd |qd|                                              (quadratic drag)
@@ -31,9 +32,9 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 16;
+constexpr int kNKeys = 17;
 // Index of "force_inertia" in kKeys (the acceleration term, not evaluated by force()).
-constexpr int kInertia = 15;
+constexpr int kInertia = 16;
 extern const char* const kKeys[kNKeys];
 
 struct Coefficients {
@@ -47,7 +48,7 @@ std::vector<ParamSpec> specs(const Robot& r);
 // Reads the coefficients (by name) from a model's parameter table.
 Coefficients compile(const Robot& r, const std::vector<ParamSpec>& specs, const std::vector<double>& values);
 // F[nd] at joint positions q[nd] and rates qd[nd], the acceleration term left out (the drive's
-// joint inertia carries it); v_eps the drive's velocity scale.
+// joint inertia carries it); v_eps the drive's velocity scale (of the Coulomb levels where force_cv is 0).
 void force(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* F);
 
 }  // namespace joint_force
