@@ -32,8 +32,8 @@ import numpy as np
 
 #: a held-out library parameter (its name's last part) -> the discovered coefficients that are
 #: the same equation on its joint, each equal to the library parameter's change (Coulomb
-#: friction: the direction-split pair at one level; viscous friction: the rate pair; the
-#: drive's offset: the constant)
+#: friction: the direction-split pair at one level, through the same velocity scale when it
+#: fades; viscous friction: the rate pair; the drive's offset: the constant)
 EQUIVALENT = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg"), "offset": ("offset",)}
 #: relative tolerance of that equality (the benchmark's coefficient tolerance)
 EQUAL = 0.15
@@ -56,11 +56,22 @@ def _equivalent(term, changes: dict) -> bool:
     equivalent to a hidden parameter of that joint, each within :data:`EQUAL` of its change?"""
     eq = _equivalent_coefficients()
     mine = {p: v for p, v in changes.items() if p.startswith(f"{next(iter(term.coefficients)).split(']')[0]}]")}
+    # a coefficient zero within its interval puts no force into the plant, and a library
+    # parameter refitted with the term (the drive's offset the library named) that the term
+    # leaves where it was, within its interval, is the library's: neither is part of the term's force
+    own = {p: c for p, c in term.coefficients.items()
+           if not (abs(c.value) <= c.ci95 or (c.base != 0 and abs(c.value - c.base) <= c.ci95))}
     for p, dv in mine.items():
         want = eq.get(p.rsplit(".", 1)[1])
-        if want is None or set(c.rsplit(".", 1)[1] for c in term.coefficients) != set(want):
+        if want is None or set(c.rsplit(".", 1)[1] for c in own) != set(want):
             continue
-        if all(abs((c.value - c.base) - dv) <= EQUAL * abs(dv) for c in term.coefficients.values()):
+        # a friction with a velocity scale (coulomb_v: one that fades below it) is the fading
+        # pair at that scale, within the same tolerance; a sharp one is the sharp pair
+        v = mine.get(p + "_v")
+        cv = next((val for k, val in term.shape.items() if k.endswith(".force_cv")), None)
+        if (v is None) != (cv is None) or (v is not None and abs(cv - v) > EQUAL * abs(v)):
+            continue
+        if all(abs((c.value - c.base) - dv) <= EQUAL * abs(dv) for c in own.values()):
             return True
     return False
 

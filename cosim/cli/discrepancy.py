@@ -167,7 +167,9 @@ def print_diagnosis(d, file=None):
             p(f"    such a term comes from: {t.mechanisms}")
             p(f"    held-out {t.channel}: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g}")
             for x in t.instead_of:
-                p(f"    look-alike of the library that fits worse: {x}")
+                p(f"    library effect it replaces: {x}")
+            if t.partial:
+                p(f"    not named as the physics: {t.partial}")
     if d.effects:
         p("\nwhy (most important first; importance = chi-square increase when the term is removed):")
         seen_bic = set()

@@ -313,7 +313,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     # acts on other channels than those it leaves structured (measured: docs/discrepancy.md)
     effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone]
     for t in found:  # the same for a discovered term: fitted on top of stand-ins, it may share their error
-        t.partial = _partial_sentence(left, t.joint)
+        t.partial = _partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t)
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if left:
@@ -547,6 +547,25 @@ def _partial_sentence(left, joint: int) -> str:
     return ""
 
 
+def _partial_reason(partial: str) -> str:
+    """The conclusion's short form of why a discovered term is a partial fit."""
+    return "fitted beside a tied library effect" if partial.startswith("fitted beside") else "structure remains"
+
+
+def _beside_tie_sentence(ties, gone, term) -> str:
+    """For a discovered ``term``: why it is not named as the physics when a library effect kept
+    on its channel is tied with terms discovered in its place (the two fit as well; fitted
+    beside it, the term shares what the effect explains), else "".  An effect whose parameters
+    the term refits itself (the drive's offset beside a spring: the spring's rest position) is
+    part of the term, not beside it."""
+    beside = [t["title"] for t in ties if term.channel in t.get("channels", ()) and t["group"] not in gone
+              and not set(t.get("params", ())) & set(term.coefficients)]
+    if not beside:
+        return ""
+    return (f"fitted beside {', '.join(dict.fromkeys(beside))}, which terms discovered in its place fit as well: "
+            "the two share what they explain, so the term is not named as the physics with confidence")
+
+
 def _nrmse(rms_before, rms_after, scale, effort: bool) -> dict:
     """The held-out RMS over the channel's own scale (RMS effort, or the joint's spread), or,
     where that scale is zero (a joint that did not move over the held-out part, an effort
@@ -711,6 +730,7 @@ def _discover(eng, sel, threshold):
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
+    withdrawn += _offsets_refitted_away(sel, found, {w["group"] for w in withdrawn})
     for t in found:
         t.instead_of = [_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]]
         theta.update(t.params())
@@ -724,7 +744,28 @@ def _discover(eng, sel, threshold):
     return found, withdrawn, theta, ties
 
 
+def _offsets_refitted_away(sel, found, gone) -> list:
+    """The library's offsets that a discovered term refitted to zero on its joint (its value with
+    the term within its 95 % interval of zero): it stood in for the term, and is withdrawn (the
+    plant's parameters hold the refitted value)."""
+    out = []
+    for t in found:
+        for a in sel.selected:
+            g = a.group
+            c = t.coefficients.get(g.params[0]) if g.key == "offset" else None
+            if c is None or g.label in gone or c.base == 0 or abs(c.value) > c.ci95:
+                continue
+            out.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                        "params": {g.params[0]: float(sel.theta.get(g.params[0], float("nan")))},
+                        "replaced_by": [t.channel], "refitted": {"value": c.value, "ci95": c.ci95, "unit": c.unit}})
+    return out
+
+
 def _withdrawn_sentence(w) -> str:
+    if "refitted" in w:
+        r = w["refitted"]
+        return (f"{w['title']}: refitted with the discovered term to {r['value']:.3g} +- {r['ci95']:.2g} {r['unit']}, "
+                f"zero within its interval (it stood in for the term)")
     a, b = w["heldout_chi2_library"], w["heldout_chi2_discovered"]
     if w.get("as_well"):  # put on trial with another effect: two effects where one force suffices
         return (f"{w['title']}: with {' and '.join(t for t in w['together'] if t != w['title'])}, fits the held-out "
@@ -737,13 +778,16 @@ def _withdrawn_sentence(w) -> str:
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
     if found:
         parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})"
-                 + (" [a partial fit, not the physics: structure remains]" if t.partial else "") for t in found]
+                 + (f" [not named as the physics: {_partial_reason(t.partial)}]" if t.partial else "") for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
-            worse = [w["title"] for w in withdrawn if not w.get("as_well")]
+            worse = [w["title"] for w in withdrawn if not w.get("as_well") and "refitted" not in w]
             same = [w["title"] for w in withdrawn if w.get("as_well")]
+            zero = [w["title"] for w in withdrawn if "refitted" in w]
             if worse:
                 head += "; look-alike(s) of the library that fit the held-out part worse: " + ", ".join(worse)
+            if zero:
+                head += "; refitted to zero with the terms (they stood in for them): " + ", ".join(zero)
             if same:
                 head += ("; look-alike(s) of the library that fit the held-out part as well, two effects for one "
                          "force: " + ", ".join(same))

@@ -7,11 +7,13 @@ offset effect: one parameter, so the library and the search can never fit the sa
 twice with opposite signs, and a coefficient the library has fitted on a channel is not
 searched again there), a spring and its quadratic and cubic terms about
 the recording's mean position, quadratic drag qd|qd|, viscous and Coulomb terms split by the
-direction of motion, a ripple sin/cos(2 pi q / P) with the period P found from the residual's
+direction of motion, Coulomb levels that fade below a velocity scale v, tanh(qd / v) (from a grid of
+scales), a ripple sin/cos(2 pi q / P) with the period P found from the residual's
 spectrum over position, a smooth step in position, and an added inertia force_inertia qdd, the
-rotor inertia's physics, not searched where the library fits that (a selected step's position and width
-and a selected ripple's period are then fitted, with intervals from the fit linearised in
-them; the library's offset on the joint is refitted with the terms).  Each candidate column is a finite
+rotor inertia's physics, not searched where the library fits that (a selected step's position and
+width, a selected ripple's period and a fading friction's velocity scale are then fitted, with
+intervals from the fit linearised in them; the library's offset on the joint is refitted with the
+terms).  Each candidate column is a finite
 difference of the residual pipeline over its core parameter (the core evaluates the force;
 nothing here restates it), the columns of the rate terms and the inertia get instruments (the
 same column along the reference motion, free of the rate and acceleration noise), as the
@@ -48,6 +50,7 @@ from ._linalg import small_lstsq
 from .effects import joint_prefix
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
+from .structure import own_noise, samples_per_independent
 
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
 #: "V", "V2", "A" (the acceleration)), shape parameters it needs, what it is in words
@@ -66,6 +69,11 @@ TERMS = {
     "viscous_both": (("force_vpos", "force_vneg"), ("V", "V"), (), "viscous friction with a level for each direction"),
     "coulomb_both": (("force_cpos", "force_cneg"), ("1", "1"), (),
                      "Coulomb friction with a level for each direction"),
+    # the same levels through tanh(qd / force_cv): a friction that builds up over a velocity
+    # scale instead of at the smallest speed (one scale per joint in the core: the sharp and the
+    # fading levels are one pair of coefficients, entered once)
+    "fading": (("force_cpos", "force_cneg"), ("1", "1"), ("force_cv",),
+               "Coulomb friction that fades below a velocity scale, a level for each direction"),
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
     "inertia": (("force_inertia",), ("A",), (), "a force proportional to the acceleration (an inertia on the joint)"),
@@ -86,7 +94,7 @@ ADDS_TO = {"force_vpos": "viscous", "force_vneg": "viscous", "force_cpos": "coul
 #: instruments (an acceleration from the smoother is noisier than a rate: the library's rotor
 #: inertia is instrumented for the same reason)
 RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both",
-              "inertia")
+              "fading", "inertia")
 
 #: physical mechanisms that produce each kind of term (for the report's sentence)
 MECHANISMS = {
@@ -99,6 +107,9 @@ MECHANISMS = {
     "viscous": "a damper or seal that damps one direction more than the other (a check valve, asymmetric lubrication)",
     "coulomb": "friction that differs by direction: asymmetric wear of a guide, screw or nut, a preload on one flank, "
                "a seal lip that drags one way",
+    "fading": "friction that builds up over a speed range instead of at once: a contact that deflects before it "
+              "slides (pre-sliding, bristles of a seal or brush), a lubricated guide or screw, a belt or elastomer "
+              "coupling that creeps, a drive whose friction compensation is smoothed",
     "ripple": "cogging of a motor (magnet pitch), ripple of a ball screw or gear (lead, tooth mesh), a bearing race "
               "or rack with a periodic defect",
     "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
@@ -137,12 +148,13 @@ class DiscoveredTerm:
     ``joint`` (1-based), ``channel``, ``terms`` (keys of :data:`TERMS`), ``equation`` (with
     units and intervals), ``coefficients`` ({core parameter: :class:`Coefficient`}),
     ``shape`` (core shape parameters: the polynomial's centre, the ripple's period, the step's
-    position and width), ``mechanisms`` (a sentence), ``stability`` (share of bootstrap
-    resamples that select each term), ``heldout_before`` / ``heldout_after`` (RMS of the
-    channel's held-out residual without and with the term, in its unit), ``delta_chi2_heldout``,
-    ``instead_of`` (library effects it replaced: look-alikes that fit worse), ``partial`` (why
-    it is not named as the physics: structure the recording keeps with it, a partial fit where
-    its own joint keeps it; or "")."""
+    position and width, the fading friction's velocity scale), ``mechanisms`` (a sentence),
+    ``stability`` (share of bootstrap resamples that select each term), ``heldout_before`` /
+    ``heldout_after`` (RMS of the channel's held-out residual without and with the term, in its
+    unit), ``delta_chi2_heldout``, ``instead_of`` (library effects it replaced: look-alikes that
+    fit worse, offsets it refitted to zero), ``partial`` (why it is not named as the physics:
+    structure the recording keeps with it, a partial fit where its own joint keeps it, a tied
+    library effect beside it; or "")."""
 
     joint: int
     channel: str
@@ -161,7 +173,7 @@ class DiscoveredTerm:
     #: (a partial fit that may stand in for what is missing, not the physics)
     partial: str = ""
     #: 95 % half widths of the shape parameters the fit moves (a step's position and width, a
-    #: ripple's period), {core parameter: half width}
+    #: ripple's period, a fading friction's velocity scale), {core parameter: half width}
     shape_ci95: dict = field(default_factory=dict)
     #: for the report's figure, on the decimated samples: ``key`` (the joint's position or
     #: rate), ``before`` / ``after`` (the channel's residual without / with the term)
@@ -198,6 +210,10 @@ class Search:
                                 for j in range(self.nd)])
         self.periods = {0: self.period}  # per ripple option: the spectrum's, then periods fitted
         self.steps = _step_grid(q[train], self.travel)
+        # the slowest fading the rates resolve: below a few times their noise a sharp friction read
+        # at noisy rates looks the same (the pipeline leaves such samples out of the fit)
+        self.v_floor = 3.0 * np.asarray(pipe.qd_noise, float)
+        self.fades = [np.maximum(f * self.rate, self.v_floor) for f in FADE_GRID]  # per option: the scales
         #: (term, option) of shapes fitted off the grid: no candidates
         self.off_grid = set()
         self.q_range = (q[train].min(axis=0), q[train].max(axis=0))
@@ -225,6 +241,8 @@ class Search:
                 out[self.name(j, k)] = float(self.steps[option][0][j])
             elif k == "force_step_w":
                 out[self.name(j, k)] = float(self.steps[option][1][j])
+            elif k == "force_cv":
+                out[self.name(j, k)] = float(self.fades[option][j])
         return out
 
     def _delta(self, scale: str, j: int) -> float:
@@ -240,8 +258,9 @@ class Search:
         eng, Rb = self.eng, self._base_residual()
         nd = self.nd
         use_iv = eng.use_instruments
-        ref0 = self.pipe.reference_effort() if use_iv else None
-        options = {t: (len(self.steps) if t == "step" else 1) for t in TERMS if not t.endswith("_both")}
+        ref0 = self._ref0 = self.pipe.reference_effort() if use_iv else None
+        options = {t: {"step": len(self.steps), "fading": len(self.fades)}.get(t, 1)
+                   for t in TERMS if not t.endswith("_both")}
         if not np.any(self.period > 0):
             options.pop("ripple")
         for term, n_opt in options.items():
@@ -310,6 +329,27 @@ class Search:
         self.cols[("ripple", o)] = cols
         return o
 
+    def add_fade(self, c: int, v: float) -> int:
+        """Fading Coulomb levels on joint c with velocity scale v, off the grid: their option
+        number (the other joints' columns are those of the grid's first option; no candidate)."""
+        vs = self.fades[0].copy()
+        vs[c] = v
+        self.fades.append(vs)
+        o = len(self.fades) - 1
+        self.off_grid.add(("fading", o))
+        cols = self.cols[("fading", 0)].copy()
+        sh = self.shape("fading", c, o)
+        for a, (k, sc) in enumerate(zip(TERMS["fading"][0], TERMS["fading"][1])):
+            cols[:, c, a] = self.column(c, k, sc, sh)
+        self.cols[("fading", o)] = cols
+        if ("fading", 0) in self.instr:
+            z = self.instr[("fading", 0)].copy()
+            for a, (k, sc) in enumerate(zip(TERMS["fading"][0], TERMS["fading"][1])):
+                d = self._delta(sc, c)
+                z[:, c, a] = (self._ref0 - self.pipe.reference_effort({**sh, self.name(c, k): d}))[:, c] / d
+            self.instr[("fading", o)] = z
+        return o
+
     def add_step(self, c: int, q: float, w: float) -> int:
         """A step on joint c at position q, width w, off the grid: its option number (the
         other joints' columns are those of the grid's first option; the option is no candidate)."""
@@ -354,6 +394,13 @@ def _period(q, r, travel):
     # radian over ten periods
     fine = np.linspace(0.97 * wl[k], 1.03 * wl[k], 241)
     return float(fine[int(np.argmax(lombscargle(xs, ys, 2 * np.pi / fine, normalize=True)))])
+
+
+#: velocity scales of the fading Coulomb levels tried, per RMS joint rate of the recording (a
+#: factor 3 apart, none below three times the rate readings' noise: the fit then moves the
+#: selected one, within FADE_RANGE)
+FADE_GRID = (0.02, 0.06, 0.2)
+FADE_RANGE = (0.005, 1.0)
 
 
 def _step_grid(q, travel):
@@ -414,7 +461,7 @@ def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
 
 
 #: terms that span a constant while the joint moves: the library's offset is not refitted beside them
-SPAN_CONSTANT = ("constant", "coulomb_pos", "coulomb_neg", "coulomb_both")
+SPAN_CONSTANT = ("constant", "coulomb_pos", "coulomb_neg", "coulomb_both", "fading")
 
 
 def offset_refit(search, c, held, terms) -> list:
@@ -554,8 +601,6 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
     the coefficient, must not be negative); otherwise each split level is a friction of its
     own."""
-    from .structure import own_noise, samples_per_independent
-
     eng = search.eng
     train, test = eng.train, eng.test
     # The yardstick is the residual's own high-frequency noise (as the structure test's):
@@ -604,7 +649,8 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     # position: its rest position would be missed).  Not beside Coulomb friction split by
     # direction: while the joint moves the two levels span the constant already.
     refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
-    fitted = _fit_period(search, c, y, _fit_step(search, c, y, terms, train), train)
+    fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
+        search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
     if fitted != terms:
         # the terms that stood in for the step's misplaced edge go again (the backward pass
         # of the selection, on the fitted step)
@@ -690,45 +736,88 @@ def _fit_step(search, c, y, terms, rows):
 
 
 def _fit_period(search, c, y, terms, rows):
-    """The ripple of ``terms`` (if any) with its period fitted: Newton steps on the fitted part's
-    chi-square (the other terms refitted with it) from the parabola through the three best
-    periods tried, starting at the spectrum's period and 0.5 % either side, within +-3 % of it;
-    done when the step is below a tenth of the period's standard error the parabola's curvature
-    gives (a chi-square rise of 1), or after four steps."""
+    """The ripple of ``terms`` (if any) with its period fitted (:func:`_fit_shape`), from the
+    spectrum's period P0 as P0 (1 + x), x from 0.5 % either side, within +-3 %."""
     k = next((i for i, (t, _) in enumerate(terms) if t == "ripple"), None)
     if k is None:
         return terms
     P0 = float(search.periods[terms[k][1]][c])
     if not P0 > 0:
         return terms
+    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_ripple(c, P0 * (1.0 + x)), 0.005,
+                      (-0.03, 0.03))
+
+
+def _fit_fade(search, c, y, terms, rows):
+    """The fading friction of ``terms`` (if any) with its velocity scale fitted (:func:`_fit_shape`),
+    from the grid's v0 as v0 exp(x), x from 0.3 either side, within :data:`FADE_RANGE` of the
+    joint's RMS rate and no slower than three times the rate readings' noise."""
+    k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
+    if k is None:
+        return terms
+    v0 = float(search.fades[terms[k][1]][c])
+    lo, hi = (math.log(max(f * search.rate[c], search.v_floor[c]) / v0) for f in FADE_RANGE)
+    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
+
+
+def _resolved_fade(search, c, y, terms, rows):
+    """``terms`` with a fading friction whose velocity scale the recording does not resolve
+    (its 95 % interval reaches down to :attr:`Search.v_floor`, the slowest scale the rate
+    readings tell from a sharp friction) taken as the sharp pair, the simpler account."""
+    k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
+    if k is None:
+        return terms
+    f = fit_terms(search, c, y, terms, rows)
+    n_eff = float((search.eng.use[rows, c] > 0).sum()) / samples_per_independent(search.eng.pipe)
+    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
+    name = search.name(c, "force_cv")
+    v = search.shape("fading", c, terms[k][1])[name]
+    half = _shape_intervals(search, c, y, terms, f.coef, rows, s2).get(name, math.inf)
+    if v - half > search.v_floor[c]:
+        return terms
+    return terms[:k] + [("coulomb_both", 0)] + terms[k + 1:]
+
+
+def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
+    """Term k of ``terms`` with one shape parameter fitted: Newton steps on the fitted part's
+    chi-square (the other terms refitted with it) from the parabola through the three best
+    values of x tried (``option_at(x)``: the search's option of the term at x; x = 0 is the
+    term's own), starting at 0 and +-h, within ``bounds``; done when the step is below a tenth
+    of x's standard error the parabola's curvature gives (a chi-square rise of 1), or after
+    four steps.  ``terms`` with the term's option replaced by the best one tried."""
+    name = terms[k][0]
     start = _ls_fit(search, c, y, terms, rows)[0]
-    tried = {0.0: (start, None)}  # relative change of the period -> (chi-square, option)
+    tried = {0.0: (start, None)}  # x -> (chi-square, option)
+    lo, hi = bounds
 
     def at(x):
         if x not in tried:
-            o = search.add_ripple(c, P0 * (1.0 + x))
-            tried[x] = (_ls_fit(search, c, y, terms[:k] + [("ripple", o)] + terms[k + 1:], rows)[0], o)
+            o = option_at(x)
+            tried[x] = (_ls_fit(search, c, y, terms[:k] + [(name, o)] + terms[k + 1:], rows)[0], o)
         return tried[x][0]
 
-    h, bound = 0.005, 0.03
-    at(-h), at(h)
+    for x in (-h, h):
+        if lo <= x <= hi:
+            at(x)
     for _ in range(4):
         xs = sorted(tried, key=lambda x: tried[x][0])[:3]
+        if len(xs) < 3:
+            break
         a2, a1, _ = np.polyfit(xs, [tried[x][0] for x in xs], 2)
         best = xs[0]
         if a2 > 0:
-            x = float(np.clip(-a1 / (2 * a2), -bound, bound))
+            x = float(np.clip(-a1 / (2 * a2), lo, hi))
             if abs(x - best) < 0.1 / math.sqrt(a2):
                 break
         else:  # no minimum between them: on towards the lower side
-            x = float(np.clip(best + (2 * h if best >= max(xs) else -2 * h), -bound, bound))
+            x = float(np.clip(best + (2 * h if best >= max(xs) else -2 * h), lo, hi))
         if x in tried:
             break
         at(x)
     best = min(tried, key=lambda x: tried[x][0])
     if tried[best][1] is None or not tried[best][0] < start:
         return terms
-    return terms[:k] + [("ripple", tried[best][1])] + terms[k + 1:]
+    return terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
 
 
 def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):
@@ -750,9 +839,10 @@ def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):
 
 def _shape_intervals(search, c, y, terms, coef, rows, s2):
     """95 % half widths of the shape parameters a fit moves (a step's position and width, a
-    ripple's period), from the fit linearised in them: the derivative of the term's force over
-    each shape parameter (central differences of the pipeline's columns) as one more column
-    beside the terms' own; the wider of the classical (s^2 >= 1) and the HAC interval."""
+    ripple's period, a fading friction's velocity scale), from the fit linearised in them: the
+    derivative of the term's force over each shape parameter (central differences of the
+    pipeline's columns) as one more column beside the terms' own; the wider of the classical
+    (s^2 >= 1) and the HAC interval."""
     out, extra = {}, []
     i = 0
     for t, o in terms:
@@ -764,12 +854,14 @@ def _shape_intervals(search, c, y, terms, coef, rows, s2):
             keys = ("force_step_q", "force_step_w")
         elif t == "ripple":
             keys = ("force_period",)
+        elif t == "fading":
+            keys = ("force_cv",)
         else:
             continue
         for key in keys:
             name = search.name(c, key)
             v = shape[name]
-            h = 1e-3 * (search.travel[c] if key != "force_period" else v)
+            h = 1e-3 * (v if key in ("force_period", "force_cv") else search.travel[c])
             force = []
             for sgn in (1, -1):
                 sh = dict(shape, **{name: v + sgn * h})
@@ -851,9 +943,9 @@ def equation(names, coefs, shape, search, c, shape_ci95=None) -> str:
     F, Q = _units(search)
     shape_ci95 = shape_ci95 or {}
 
-    def sh(key, digits):  # a shape parameter, with its interval when the fit moved it
+    def sh(key, digits, unit=Q):  # a shape parameter, with its interval when the fit moved it
         v, ci = shape[search.name(c, key)], shape_ci95.get(search.name(c, key))
-        return f"{v:.{digits}g} {Q}" if ci is None else f"({v:.{digits}g} +- {ci:.2g}) {Q}"
+        return f"{v:.{digits}g} {unit}" if ci is None else f"({v:.{digits}g} +- {ci:.2g}) {unit}"
     get = lambda k: coefs.get(search.name(c, k))  # noqa: E731
     parts = []
     qc = shape.get(search.name(c, "force_qc"))
@@ -868,9 +960,13 @@ def equation(names, coefs, shape, search, c, shape_ci95=None) -> str:
             parts.append(_pm(c0.value, c0.ci95, c0.unit))
         if k1 is not None:
             parts.append(f"{_pm(k1.value, k1.ci95, k1.unit)} (q - {qc:.5g} {Q})")
+    signs = ("[qd > 0]", "(-[qd < 0])")
+    if "fading" in names:  # the levels through tanh(qd / v)
+        v = sh("force_cv", 3, f"{Q}/s")
+        signs = (f"max(tanh(qd / {v}), 0)", f"min(tanh(qd / {v}), 0)")
     for key, fmt in (("force_k2", "(q - {qc:.5g} {Q})^2"), ("force_k3", "(q - {qc:.5g} {Q})^3"),
                      ("force_v2", "qd |qd|"), ("force_vpos", "max(qd, 0)"), ("force_vneg", "min(qd, 0)"),
-                     ("force_cpos", "[qd > 0]"), ("force_cneg", "(-[qd < 0])"), ("force_inertia", "qdd")):
+                     ("force_cpos", signs[0]), ("force_cneg", signs[1]), ("force_inertia", "qdd")):
         e = get(key)
         if e is not None:
             parts.append(f"{_pm(e.value, e.ci95, e.unit)} " + fmt.format(qc=qc or 0.0, Q=Q))
@@ -943,6 +1039,9 @@ def _option(search, t, name):
     if name == "ripple":
         P = t.shape[search.name(t.joint - 1, "force_period")]
         return next((o for o, ps in search.periods.items() if ps[t.joint - 1] == P), 0)
+    if name == "fading":
+        v = t.shape[search.name(t.joint - 1, "force_cv")]
+        return next((o for o, vs in enumerate(search.fades) if vs[t.joint - 1] == v), 0)
     if name != "step":
         return 0
     q = t.shape[search.name(t.joint - 1, "force_step_q")]
@@ -971,6 +1070,11 @@ def judge_library(eng, sel, threshold: float):
       friction with an asymmetry);
     * else G is named: it beats the best discovered term.
 
+    Two effects acting on a common channel then go on trial together against the terms in
+    their joint place: withdrawn as a single effect would be, or as one force (see the code's
+    comments), and tied when those terms fit as well with no more free coefficients (Coulomb and
+    viscous friction standing in together for a friction that fades at low speed).
+
     Terms in G's place that the library names itself (a constant alone: the drive's offset,
     the library's offset effect) are no discovered alternative: the library's own selection
     has weighed G against its look-alikes.
@@ -988,8 +1092,6 @@ def judge_library(eng, sel, threshold: float):
     def discover_all(R, chans, th, asymmetry=None):
         return {c: discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=(asymmetry or {}).get(c, ()))
                 for c in chans}
-
-    from .structure import own_noise
 
     R_lib = eng.R(theta)
     base = discover_all(R_lib, range(eng.nd), theta)
@@ -1035,8 +1137,7 @@ def judge_library(eng, sel, threshold: float):
             base.update(discover_all(R_lib, chans, theta))
         elif not restated and -gain <= max(bar, Z_ONE_SIDED * se):
             # not told apart on the held-out part: the library effect is named, not with confidence
-            ties.append({"group": g.label, "terms": [t.equation for t in in_place], "extra_params": k_B - k_A,
-                         **figures})
+            _tie(ties, (g,), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
     # Two library effects on one channel may be one force the search names: Coulomb friction and
     # an offset are, while the joint moves, friction that differs by direction.  Alone on trial,
     # each lost to nothing (with the offset kept, the pair in Coulomb's place restated Coulomb);
@@ -1077,10 +1178,7 @@ def judge_library(eng, sel, threshold: float):
             # as well with no more free coefficients, it is tied (not named with confidence), and
             # so is the restated one, whose level was fitted with the stand-in's share
             if k_B <= k_A and as_well:
-                for g in (g1, g2):
-                    if not any(t["group"] == g.label for t in ties):
-                        ties.append({"group": g.label, "terms": [t.equation for t in in_place],
-                                     "extra_params": k_B - k_A, **figures})
+                _tie(ties, (g1, g2), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
             continue
         # the pair is withdrawn by the rule of a single effect's trial (the terms in place of
         # both significantly better, or fewer free coefficients and a held-out gain above the
@@ -1101,6 +1199,11 @@ def judge_library(eng, sel, threshold: float):
             ties[:] = [t for t in ties if t["group"] not in (g1.label, g2.label)]
             theta, R_lib = th_minus, R_minus
             base.update(discover_all(R_lib, chans, theta))
+        elif k_B <= k_A and as_well:
+            # one force in place of both fits as well with no more free coefficients (Coulomb and
+            # viscous friction for a friction that fades at low speed): neither is named with
+            # confidence, the two may stand in for it together
+            _tie(ties, (g1, g2), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
     # On the library model that stays, a direction-split friction may now be the asymmetry of a
     # library friction that the terms in its place restated (on trial each level had to be a
     # friction of its own, so that the library effect stood against the discovered terms alone;
@@ -1108,6 +1211,16 @@ def judge_library(eng, sel, threshold: float):
     again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
     base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
     return theta, withdrawn, ties, search, base
+
+
+def _tie(ties, groups, in_place, extra, figures, channels):
+    """Each of ``groups`` tied with the terms ``in_place`` (once): named, not with confidence; the
+    record says on which ``channels`` and with which parameters (a discovered term fitted
+    beside it there is no physics of its own either, diagnosis._beside_tie_sentence)."""
+    for g in groups:
+        if not any(t["group"] == g.label for t in ties):
+            ties.append({"group": g.label, "title": g.title, "params": list(g.params), "channels": list(channels),
+                         "terms": [t.equation for t in in_place], "extra_params": extra, **figures})
 
 
 def _pairs(acting):
@@ -1155,8 +1268,10 @@ def library_named(term: DiscoveredTerm) -> bool:
 ONE_FORCE = (tuple({f, c} for f in ("coulomb", "smooth_coulomb") for c in ("offset", "dead_zone"))
              + ({"offset", "dead_zone"},))
 
-#: the coefficient keys of the direction-split pair of a library friction
-_PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg")}
+#: the coefficient keys of the direction-split pair of a library friction (a friction that fades
+#: below a velocity scale: the Coulomb pair through tanh(qd / force_cv), the term "fading")
+_PAIR_KEYS = {"coulomb": ("force_cpos", "force_cneg"), "viscous": ("force_vpos", "force_vneg"),
+              "smooth_coulomb": ("force_cpos", "force_cneg")}
 
 
 def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
@@ -1167,7 +1282,9 @@ def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
     their intervals).  A level for one direction only (a one-way damper) is no such friction.
     ``distinct``: the term restates the effect alone, with nothing besides: the two levels
     equal within their intervals (then the pair is the library's friction, not friction that
-    differs by direction)."""
+    differs by direction).  Coulomb levels that fade below a velocity scale (the term "fading")
+    restate the library's friction that fades (``smooth_coulomb``), not its sharp Coulomb friction,
+    and a sharp pair not the fading one."""
     if key == "rotor_inertia":
         # an added inertia on the joint is the rotor's physics (one column): a positive one restates it
         inertia = [c for name, c in term.coefficients.items() if name.endswith(".force_inertia")]
@@ -1175,6 +1292,8 @@ def restates(term: DiscoveredTerm, key: str, distinct: bool = False) -> bool:
                 and (not distinct or list(term.terms) == ["inertia"]))
     if key not in _PAIR_KEYS:
         return False
+    if key in ("coulomb", "smooth_coulomb") and ("fading" in term.terms) != (key == "smooth_coulomb"):
+        return False  # a sharp pair is no friction that fades, nor a fading one a sharp friction
     pos = neg = None
     for name, c in term.coefficients.items():
         k = name.rsplit(".", 1)[1]

@@ -133,8 +133,9 @@ def markdown(d, files: dict) -> str:
     if d.discovered or d.withdrawn:
         L += ["## Missing physics no library effect names (discovery)", "",
               "Searched on every effort channel after the library: a constant, a spring and its quadratic and cubic "
-              "terms, quadratic drag, viscous and Coulomb friction by direction, a ripple in position (period from the "
-              "residual's spectrum over position), a smooth step; stepwise BIC with the look-elsewhere cost of the "
+              "terms, quadratic drag, viscous and Coulomb friction by direction, Coulomb friction that fades below a "
+              "velocity scale, a ripple in position (period from the residual's spectrum over position), a smooth "
+              "step, an added inertia; stepwise BIC with the look-elsewhere cost of the "
               "search, kept when stable over block-bootstrap resamples and better on the held-out part.  The term is "
               "the core's joint force (`<j>[i].force_*`), so the fitted plant below carries it.", ""]
         for t in d.discovered:
@@ -142,7 +143,7 @@ def markdown(d, files: dict) -> str:
                   f"  - held-out residual of `{t.channel}`: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g} "
                   f"(chi-square {t.delta_chi2_heldout:.0f} lower); kept in "
                   + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items()) + " of the bootstrap resamples"]
-            L += [f"  - look-alike of the library that fits worse: {x}" for x in t.instead_of]
+            L += [f"  - library effect it replaces: {x}" for x in t.instead_of]
             if t.partial:
                 L.append(f"  - not named as the physics: {t.partial}")
             if f"discovered{t.joint}" in files:

@@ -227,7 +227,9 @@ def select(st) -> tuple:
             size = _magnitude(st, a.group, theta)
             ref = reference_size(a.group, st.sc, st.model)
             why = None
-            if a.group.key not in ("saturation", "dead_zone") and ref > 0 and size < 0.1 * ref:
+            # (a saturation's parameter is its limit, not the size of what it does; a dead zone's is
+            # the constant it takes off a one-signed command, an offset's size: both are judged)
+            if a.group.key != "saturation" and ref > 0 and size < 0.1 * ref:
                 why = f"fitted size {size:.3g} is below a tenth of a small one ({ref:.3g}): negligible"
             elif a.group.key in VELOCITY_SCALED:
                 # A velocity scale that left the grid upwards is not resolved by this recording:

@@ -1,8 +1,10 @@
 """Structure left unexplained: what the selected model leaves in the residual.
 
 After the selection, each residual channel is tested for a constant offset and for a part
-keyed on the motion of its joint: the sign of the joint velocity, the sign of the
-commanded effort, the joint position, the velocity, the acceleration; when none of those, on the platform pose.  The yardstick is the residual's own
+keyed on the motion of its joint: the sign of the joint velocity, that sign at low speed only
+(a friction that changes below some speed: a Stribeck peak, a friction that fades), the sign of
+the commanded effort, the joint position, the velocity, the acceleration; when none of those, on
+the platform pose.  The yardstick is the residual's own
 high-frequency noise (median absolute difference of samples one smoothing window
 apart), not the engine's noise model: an effect outside the library inflates that one
 and would pass for noise ("within noise").  A family of regressors counts when it
@@ -23,6 +25,8 @@ SIGNATURES = {
     "offset": ("nothing: a constant offset", ["encoder offset (a reading)", "dead zone under a one-signed "
                                                  "command", "gravity tilt", "payload"]),
     "velocity_sign": ("the sign of the joint velocity", ["Coulomb friction", "Stribeck friction"]),
+    "low_speed": ("the sign of the joint velocity at low speed", ["Stribeck friction",
+                                                                  "friction that fades at low speed"]),
     "command_sign": ("the sign of the commanded effort", ["dead zone", "backlash"]),
     "position": ("the joint position", ["geometry", "payload", "gravity tilt", "encoder offset"]),
     "pose": ("the platform pose", ["geometry", "gravity tilt", "payload", "encoder offset"]),
@@ -32,6 +36,10 @@ SIGNATURES = {
 
 #: signatures fitted with their mean (the others are centred: the offset is tested alone)
 SIGNED = ("velocity_sign", "command_sign")
+
+#: velocity scales of the low-speed family, per RMS rate of the joint: the sign less a sign
+#: that builds up over each scale (the discovery step's grid of fading frictions)
+LOW_SPEEDS = (0.02, 0.06, 0.2)
 
 #: chi-square (independent samples) a family must explain beyond k log n to be reported;
 #: set on the clean and effect cases of the engine's own generator (docs/discrepancy.md)
@@ -46,8 +54,15 @@ def _families(pipe, j: int) -> dict:
     v_eps = 3.0 * max(float(pipe.qd_noise[j]), 1e-12)
     t_eps = 0.02 * max(float(np.std(tau)), 1e-12)
     z = (q - q.mean()) / max(float(np.std(q)), 1e-12)
+    sign = np.tanh(qd / v_eps)
+    # scales below twice the rate noise's are no low speed the smoothed rate resolves, and the
+    # samples whose smoothing window is mostly at rest (``pipe.usable``) count for nothing here: a
+    # sharp friction evaluated at noisy rates leaves a fading shape of the noise's scale there
+    scales = sorted({max(f * float(np.sqrt(np.mean(qd ** 2))), 2.0 * v_eps) for f in LOW_SPEEDS})
+    moving = pipe.usable[:, j].astype(float)
     return {
-        "velocity_sign": np.tanh(qd / v_eps)[:, None],
+        "velocity_sign": sign[:, None],
+        "low_speed": np.column_stack([moving * (sign - np.tanh(qd / v)) for v in scales]),
         "command_sign": np.tanh(tau / t_eps)[:, None],
         "position": np.column_stack([z, z * z, z ** 3]),
         # a length error of a leg moves its joint by a pose-dependent amount: linear in the pose

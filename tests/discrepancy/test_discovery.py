@@ -109,6 +109,7 @@ def test_a_library_type_held_out_is_discovered_as_its_equation(tmp_path, short_c
         for k in ("pos", "neg"):
             coef = t.coefficients.get(name.replace(f".{hidden}", f".force_{hidden[0]}{k}"))
             assert coef is not None and abs(coef.value / value - 1) < 0.15, (t.equation, truth)
+        assert "fading" not in t.terms, t.equation  # a sharp friction is not discovered as one that fades
     for e in d.effects:
         assert d.ties(e["key"]), (e["title"], d.conclusion)
 
