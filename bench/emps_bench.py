@@ -37,15 +37,25 @@ PUBLISHED = {"platform.m": 95.1089, "rail[1].viscous": 203.5034, "rail[1].coulom
 def fitted_values(d, nominal: dict) -> dict:
     """The fitted model as the published one's four numbers, each (value, 95 % interval): the
     moving mass (the platform's mass plus the axis's rotor inertia, one physics on a single axis,
-    whichever of the two the diagnosis named), viscous and Coulomb friction, the offset."""
+    whichever of the two the diagnosis named), viscous and Coulomb friction, the offset.  A
+    friction is its part common to both directions, as the published model's: the library's
+    level plus the mean of the direction-split levels a discovered term adds (through its
+    velocity scale, for Coulomb levels that fade)."""
     th = d.plant_parameters()
     est = {p: v for e in d.effects for p, v in e["params"].items()}
     ci = {p: v["ci95"] for p, v in est.items()}
+    split = {n: c for t in d.discovered for n, c in t.coefficients.items()}
     mass = th.get("platform.m", nominal["platform.m"]) + th.get("rail[1].rotor_inertia", nominal.get(
         "rail[1].rotor_inertia", 0.0))
     out = {"platform.m": (mass, float(np.hypot(ci.get("platform.m", 0.0), ci.get("rail[1].rotor_inertia", 0.0))))}
     for p in ("rail[1].viscous", "rail[1].coulomb", "rail[1].offset"):
-        out[p] = (th.get(p, nominal.get(p, 0.0)), ci.get(p, float("nan")))
+        value, half = th.get(p, nominal.get(p, 0.0)), ci.get(p, 0.0 if p not in th else float("nan"))
+        pair = [split.get(f"rail[1].force_{k}") for k in {"rail[1].viscous": ("vpos", "vneg"),
+                                                           "rail[1].coulomb": ("cpos", "cneg")}.get(p, ())]
+        if len(pair) == 2 and None not in pair:
+            value += 0.5 * (pair[0].value + pair[1].value)
+            half = float(np.hypot(half, 0.5 * np.hypot(pair[0].ci95, pair[1].ci95)))
+        out[p] = (value, half if half > 0 else float("nan"))
     return out
 
 
