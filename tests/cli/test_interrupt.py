@@ -23,6 +23,17 @@ from cosim.recording import read_recording
 
 REPO = Path(__file__).resolve().parents[2]
 SCEN = REPO / "scenarios"
+#: first lines of every command started here: ctrl-C as a terminal's foreground process gets it
+#: (a suite started in the background by a shell without job control runs with SIGINT ignored,
+#: and its children inherit that)
+AS_IN_A_TERMINAL = "import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+
+
+@pytest.fixture(autouse=True)
+def _sigint_as_in_a_terminal():
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
 
 
 def test_the_compiled_loop_stops_within_0_2_s_of_the_signal_and_keeps_its_samples(monkeypatch):
@@ -68,7 +79,8 @@ def _cosim(args):
     """`cosim ARGS` in a process that says "ready" once its imports are done (the package's
     and the libraries' the commands load), so that the signal lands in the command's work,
     not in Python's start-up."""
-    code = ("import importlib, sys\nm = importlib.import_module('cosim.cli.main')\nm._load_plugins()\n"
+    code = (AS_IN_A_TERMINAL
+            + "import importlib, sys\nm = importlib.import_module('cosim.cli.main')\nm._load_plugins()\n"
             "import cosim.scenario, cosim.discrepancy, cosim.sweep.runner, cosim.fmu, control, fmpy, distributed\nprint('ready', flush=True)\n"
             f"sys.exit(m.main({list(args)!r}))")
     return subprocess.Popen([sys.executable, "-c", code], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
