@@ -323,46 +323,38 @@ class Search:
         ps[c] = period
         o = max(self.periods) + 1
         self.periods[o] = ps
-        self.off_grid.add(("ripple", o))
-        cols = self.cols[("ripple", 0)].copy()
-        sh = self.shape("ripple", c, o)
-        for a, (k, sc) in enumerate(zip(TERMS["ripple"][0], TERMS["ripple"][1])):
-            cols[:, c, a] = self.column(c, k, sc, sh)
-        self.cols[("ripple", o)] = cols
-        return o
+        return self._off_grid("ripple", c, o)
 
     def add_fade(self, c: int, v: float) -> int:
-        """Fading Coulomb levels on joint c with velocity scale v, off the grid: their option
-        number (the other joints' columns are those of the grid's first option; no candidate)."""
+        """Fading Coulomb levels on joint c with velocity scale v: their option number (no candidate)."""
         vs = self.fades[0].copy()
         vs[c] = v
         self.fades.append(vs)
-        o = len(self.fades) - 1
-        self.off_grid.add(("fading", o))
-        cols = self.cols[("fading", 0)].copy()
-        sh = self.shape("fading", c, o)
-        for a, (k, sc) in enumerate(zip(TERMS["fading"][0], TERMS["fading"][1])):
-            cols[:, c, a] = self.column(c, k, sc, sh)
-        self.cols[("fading", o)] = cols
-        if ("fading", 0) in self.instr:
-            z = self.instr[("fading", 0)].copy()
-            for a, (k, sc) in enumerate(zip(TERMS["fading"][0], TERMS["fading"][1])):
-                d = self._delta(sc, c)
-                z[:, c, a] = (self._ref0 - self.pipe.reference_effort({**sh, self.name(c, k): d}))[:, c] / d
-            self.instr[("fading", o)] = z
-        return o
+        return self._off_grid("fading", c, len(self.fades) - 1)
 
     def add_step(self, c: int, q: float, w: float) -> int:
-        """A step on joint c at position q, width w, off the grid: its option number (the
-        other joints' columns are those of the grid's first option; the option is no candidate)."""
+        """A step on joint c at position q, width w: its option number (no candidate)."""
         qs, ws = (a.copy() for a in self.steps[0])
         qs[c], ws[c] = q, w
         self.steps.append((qs, ws))
-        o = len(self.steps) - 1
-        self.off_grid.add(("step", o))
-        cols = self.cols[("step", 0)].copy()
-        cols[:, c, 0] = self.column(c, "force_step", "1", self.shape("step", c, o))
-        self.cols[("step", o)] = cols
+        return self._off_grid("step", c, len(self.steps) - 1)
+
+    def _off_grid(self, term: str, c: int, o: int) -> int:
+        """Option ``o`` of ``term``, whose shape differs from the grid's first option on joint c
+        only: that option's columns (and instruments, for a rate term) with joint c's taken
+        again at the new shape.  Fitted shapes are no candidates."""
+        self.off_grid.add((term, o))
+        sh = self.shape(term, c, o)
+        cols = self.cols[(term, 0)].copy()
+        z = self.instr[(term, 0)].copy() if (term, 0) in self.instr else None
+        for a, (k, sc) in enumerate(zip(TERMS[term][0], TERMS[term][1])):
+            cols[:, c, a] = self.column(c, k, sc, sh)
+            if z is not None:
+                d = self._delta(sc, c)
+                z[:, c, a] = (self._ref0 - self.pipe.reference_effort({**sh, self.name(c, k): d}))[:, c] / d
+        self.cols[(term, o)] = cols
+        if z is not None:
+            self.instr[(term, o)] = z
         return o
 
 
