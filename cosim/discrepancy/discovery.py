@@ -52,7 +52,7 @@ from ._linalg import small_lstsq
 from .effects import joint_prefix
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
-from .structure import own_noise, samples_per_independent
+from .structure import LOW_SPEEDS, own_noise, samples_per_independent
 
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
 #: "V", "V2", "A" (the acceleration)), shape parameters it needs, what it is in words
@@ -393,7 +393,7 @@ def _period(q, r, travel):
 #: velocity scales of the fading Coulomb levels tried, per RMS joint rate of the recording (a
 #: factor 3 apart, none below three times the rate readings' noise: the fit then moves the
 #: selected one, within FADE_RANGE)
-FADE_GRID = (0.02, 0.06, 0.2)
+FADE_GRID = LOW_SPEEDS  # the structure test's low-speed family: what it keys on, the search tries
 FADE_RANGE = (0.005, 1.0)
 
 

@@ -38,7 +38,8 @@ SIGNATURES = {
 SIGNED = ("velocity_sign", "command_sign")
 
 #: velocity scales of the low-speed family, per RMS rate of the joint: the sign less a sign
-#: that builds up over each scale (the discovery step's grid of fading frictions)
+#: that builds up over each scale (also the discovery step's grid of fading frictions,
+#: discovery.FADE_GRID)
 LOW_SPEEDS = (0.02, 0.06, 0.2)
 
 #: chi-square (independent samples) a family must explain beyond k log n to be reported;
@@ -55,7 +56,7 @@ def _families(pipe, j: int) -> dict:
     t_eps = 0.02 * max(float(np.std(tau)), 1e-12)
     z = (q - q.mean()) / max(float(np.std(q)), 1e-12)
     sign = np.tanh(qd / v_eps)
-    # scales below twice the rate noise's are no low speed the smoothed rate resolves, and the
+    # scales below twice the sign's (six times the rate noise) are no low speed the rates resolve, and the
     # samples whose smoothing window is mostly at rest (``pipe.usable``) count for nothing here: a
     # sharp friction evaluated at noisy rates leaves a fading shape of the noise's scale there
     scales = sorted({max(f * float(np.sqrt(np.mean(qd ** 2))), 2.0 * v_eps) for f in LOW_SPEEDS})
