@@ -118,11 +118,12 @@ class pkm_ctrl_spec(C.Structure):
 class pkm_loop_reference(C.Structure):
     _fields_ = [("n", C.c_size_t), ("t0", C.c_double), ("dt", C.c_double), ("t", c_double_p), ("q", c_double_p),
                 ("qd", c_double_p), ("qdd", c_double_p), ("x", c_double_p), ("tau_before", c_double_p),
-                ("f_ext", c_double_p)]
+                ("f_ext", c_double_p), ("inject_point", C.c_int), ("inject", c_double_p)]
 
 
 class pkm_loop_record(C.Structure):
-    _fields_ = [(name, c_double_p) for name in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")]
+    _fields_ = [(name, c_double_p) for name in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau",
+                                                 "tau_inj")]
 
 
 def library_path() -> Path:
@@ -232,6 +233,8 @@ _SIGNATURES = {
     "pkm_ctrl_reset": (I, [P, D]),
     "pkm_ctrl_update": (I, [P, C.c_double, D, D, D, D, D, D, D]),
     "pkm_ctrl_prime": (I, [P, C.c_size_t, D, D, D, D, D, D, D]),
+    "pkm_ctrl_update_injected": (I, [P, C.c_double, D, D, D, D, D, D, I, D, D, D]),
+    "pkm_ctrl_prime_injected": (I, [P, C.c_size_t, D, D, D, D, D, D, D, I, D]),
     "pkm_ctrl_saturated": (C.c_long, [P]),
     "pkm_ctrl_error": (CH, [P]),
     "pkm_ctrl_state_size": (S, [P]),

@@ -11,6 +11,10 @@ sample ``t_k`` (``k = 0 .. n-1``):
 3. the row is recorded: readings, true joints and pose, command, applied effort (the
    drive's saturation), the command as logged (plus ``tau`` noise) and the tracker's
    pose (plus ``pose`` noise);
+   A signal injected into the loop (``inject``, :mod:`cosim.injection`) is added at
+   its point: to the controller's output before or after its saturation, to the
+   reference, or to the position reading the controller sees (the recorded reading
+   stays the sensor's); ``LoopRecord.tau_inj`` is the part of the command it makes;
 4. the plant holds the command (saturation and ``actuator.delay`` are the plant's: the
    core keeps the delay line) and, if given, the known external effort of the sample
    (``f_ext``, added to the actuator effort), and advances to ``t_k + h`` (not after
@@ -116,6 +120,8 @@ class LoopRecord:
     wall: float = 0.0
     #: the run ended early because ``should_stop`` said so
     stopped: bool = False
+    #: (n_samples, nd): the part of ``tau_cmd`` an injected signal makes (zeros without one)
+    tau_inj: np.ndarray | None = None
 
     def head(self) -> "LoopRecord":
         """The filled rows only."""
@@ -123,7 +129,7 @@ class LoopRecord:
         cut = {f: getattr(self, f)[:k] for f in ("time", "q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd",
                                                   "tau", "tau_logged", "pose")}
         return LoopRecord(**cut, n=k, loop=self.loop, note=self.note, saturated=self.saturated, wall=self.wall,
-                          stopped=self.stopped)
+                          stopped=self.stopped, tau_inj=None if self.tau_inj is None else self.tau_inj[:k])
 
 
 class LoopInterrupted(KeyboardInterrupt):
@@ -205,7 +211,7 @@ class ClosedLoop:
 
     # -------------------------------------------------------------------- run
     def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
-            f_ext=None, history=None, started=None) -> LoopRecord:
+            f_ext=None, history=None, started=None, inject=None) -> LoopRecord:
         """Run over the reference samples ``start:``.
 
         Parameters
@@ -240,6 +246,11 @@ class ClosedLoop:
         started : callable, optional
             ``started()``, called once when the set-up is done, right before the first
             step (the CLI gives ctrl-C back to the loop there).
+        inject : cosim.injection.Injection, optional
+            A signal injected into the loop, a row per reference sample, at its point
+            (the controller's output before or after its saturation [N or N m], the
+            reference or the position reading [m or rad]); its rows before ``start`` go
+            into the ``history``'s priming too.
 
         Returns
         -------
@@ -265,7 +276,8 @@ class ClosedLoop:
             x0 = reference.x[start] if getattr(reference, "x", None) is not None \
                 else self.plant.model.fk(reference.q[start])
         x0 = np.asarray(x0, float)
-        rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")}
+        rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau",
+                                                       "tau_inj")}
         draws = self._draws(n)
         if f_ext is not None:
             f_ext = np.asarray(f_ext, float)
@@ -280,12 +292,16 @@ class ClosedLoop:
             if not hasattr(self.plant, "set_external"):
                 raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
         past = self._history(reference, start, history)
+        inj = None if inject is None else inject.bind(len(reference.time), nd, start, n, reference.time)
         rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
-                         rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan))
+                         rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan),
+                         tau_inj=rows["tau_inj"])
         cc, rec.note = self._compiled_controller(h)
         if self.compiled and cc is None:
             raise ValueError(f"the loop cannot run compiled: {rec.note}")
         rec.loop = "compiled" if cc is not None else "python"
+        if cc is None and inj is not None and inj.refusal(self.controller):
+            raise InputError(inj.refusal(self.controller))
         ref = {k: (None if getattr(reference, k, None) is None
                    else np.ascontiguousarray(getattr(reference, k)[start:start + n], dtype=float))
                for k in ("q", "qd", "qdd", "x")}
@@ -296,10 +312,10 @@ class ClosedLoop:
         try:
             if cc is not None:
                 failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
-                                         past)
+                                         past, inj)
             else:
                 failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop,
-                                         f_ext, past)
+                                         f_ext, past, inj)
         except KeyboardInterrupt:
             self._finish(rec, draws, wall0, cc)
             raise LoopInterrupted(rec.head()) from None
@@ -342,7 +358,7 @@ class ClosedLoop:
         return range(start - m, start), np.ascontiguousarray(reference.time[s], dtype=float), q, qd, ref
 
     # ------------------------------------------------------------ back ends
-    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past):
+    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past, inject):
         """``pkm_closed_loop`` in pieces of about :data:`PIECE_SECONDS`; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -351,7 +367,7 @@ class ClosedLoop:
             plant.initialize(float(t[0]), x0, xd0)
             cc.reset(plant.outputs().x)
             if past is not None:
-                cc.prime(*past[1:])
+                cc.prime(*past[1:], **({} if inject is None else inject.prime_args(past[0])))
         except Exception as e:  # noqa: BLE001 - reported as the loop's failure at sample 0
             return e, 0
         sim = plant.sim
@@ -367,7 +383,8 @@ class ClosedLoop:
             w = _time.perf_counter()
             st, done, message = closed_loop_call(sim, cc, t=t, dt=h, ref=ref, rows=rows, k0=k0, k1=k1,
                                                  tau_before=before, q_noise=qn, qd_noise=qdn,
-                                                 measure=self.drive is not None, f_ext=f_ext)
+                                                 measure=self.drive is not None, f_ext=f_ext,
+                                                 **({} if inject is None else inject.loop_args()))
             rec.n = k0 + done
             if st != 0:
                 return _core_error(st, message), rec.n
@@ -393,7 +410,8 @@ class ClosedLoop:
                 break
         return None
 
-    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past):
+    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past,
+                  inject):
         """One sample at a time through the Plant interface; returns None or
         ``(exception, sample)``."""
         n = len(t)
@@ -406,7 +424,7 @@ class ClosedLoop:
                 ctrl.reset(float(t[0]), y.q, y.x)
             if past is not None:
                 for j, k in enumerate(past[0]):
-                    ctrl(float(past[1][j]), past[2][j], past[3][j], reference.at(k))
+                    _law(ctrl, float(past[1][j]), past[2][j], past[3][j], reference.at(k), inject, k)
                 # the run counts its own saturated samples only
                 rec.saturated = -int(getattr(ctrl, "saturated", 0))
             if drive is not None:
@@ -423,7 +441,7 @@ class ClosedLoop:
                     q_read, qd_read = y.q, y.qd
                 qm = q_read + draws["q"][k] if "q" in draws else q_read
                 qdm = qd_read + draws["qd"][k] if "qd" in draws else qd_read
-                tau = np.asarray(ctrl(float(t[k]), qm, qdm, reference.at(start + k)), float)
+                tau, rows["tau_inj"][k] = _law(ctrl, float(t[k]), qm, qdm, reference.at(start + k), inject, start + k)
                 applied = drive.applied(tau) if drive is not None else tau
                 rows["q"][k], rows["qd"][k], rows["q_true"][k], rows["qd_true"][k] = qm, qdm, y.q, y.qd
                 rows["x"][k], rows["xd"][k] = y.x, y.xd
@@ -446,6 +464,14 @@ class ClosedLoop:
             rec.n = min(rec.n, k)
             return e, k
         return None
+
+
+def _law(ctrl, t, q, qd, row, inject, k):
+    """The controller's command at one sample and the part an injected signal makes of it."""
+    if inject is None:
+        tau = np.asarray(ctrl(t, q, qd, row), float)
+        return tau, np.zeros_like(tau)
+    return inject.stepwise(ctrl, t, q, qd, row, k)
 
 
 def _core_error(status: int, message: str) -> Exception:

@@ -293,6 +293,9 @@ def _si_units(facts, rec: Recording) -> dict:
         units["qref"] = ju
     if rec.f_ext is not None:
         units["f_ext"] = eu
+    if "inject1" in rec.extra:  # an injected signal (cosim.injection): an effort at the command
+        point = (rec.sidecar.get("injection") or {}).get("point")
+        units["inject"] = eu if point in ("command", "command_after_saturation") else ju
     return units
 
 

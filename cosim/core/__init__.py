@@ -27,7 +27,7 @@ array([...])
 >>> m.set_params({"platform.m": 0.42})      # overrides by name, checked by the core
 """
 from ..errors import ArgumentError, ParameterError, PkmError, UnsupportedError
-from .controller import DISCRETE_LAWS, KINDS, CompiledController
+from .controller import DISCRETE_LAWS, INJECT_POINTS, KINDS, CompiledController
 from .facts import ParamInfo, RobotFacts, quattro_index_names, quattro_index_units, robots
 from .loop import LOOP_FIELDS, closed_loop_call
 from .model import Model, robot_facts
@@ -35,5 +35,6 @@ from .simulator import METHOD_CODES, Simulator, default_options
 
 __all__ = ["Model", "ParamInfo", "RobotFacts", "robots", "robot_facts", "quattro_index_names",
            "quattro_index_units", "Simulator", "default_options", "METHOD_CODES", "CompiledController", "KINDS",
-           "DISCRETE_LAWS", "LOOP_FIELDS", "closed_loop_call", "PkmError", "ParameterError", "ArgumentError",
+           "DISCRETE_LAWS", "INJECT_POINTS", "LOOP_FIELDS", "closed_loop_call", "PkmError",
+           "ParameterError", "ArgumentError",
            "UnsupportedError"]

@@ -16,6 +16,8 @@ from ._handles import _release
 KINDS = {"pd": 0, "pd_gravity": 1, "computed_torque": 2, "pid": 3, "lti": 4, "discrete": 5}
 #: laws of the discrete controller (pkm.h PKM_LAW_*)
 DISCRETE_LAWS = {"cascade_pp": 0, "pid": 1}
+#: where a signal is injected into the loop (pkm.h pkm_inject_point; docs/recording.md)
+INJECT_POINTS = {"command": 1, "command_after_saturation": 2, "reference": 3, "measurement": 4}
 
 
 def _mat(a, shape):
@@ -121,13 +123,44 @@ class CompiledController:
 
     def __call__(self, t, q, qd, ref) -> np.ndarray:
         """One sample, as the Python controllers: ``tau`` [N or N m] from readings and reference."""
+        return self.update(t, q, qd, ref)[0]
+
+    def update(self, t, q, qd, ref, *, inject=None, point: str = "command"):
+        """One sample with a signal injected (``pkm_ctrl_update_injected``).
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s].
+        q, qd : array_like, shape (nd,)
+            Readings [m or rad, per s].
+        ref : object
+            The reference row (``q``, ``qd``, ``qdd``, ``x``; the last two may be None).
+        inject : array_like, shape (nd,), optional
+            The injected signal: [N or N m] at a command point, [m or rad] at the
+            reference or the measurement.
+        point : str
+            One of :data:`INJECT_POINTS`.
+
+        Returns
+        -------
+        tau, tau_inj : numpy.ndarray, shape (nd,)
+            The command [N or N m] and the part of it the signal makes.
+
+        Example
+        -------
+        >>> tau, part = cc.update(0.0, q, qd, row, inject=[5.0], point="command")  # doctest: +SKIP
+        """
         a = [np.ascontiguousarray(v, dtype=float) if v is not None else None
              for v in (q, qd, ref.q, ref.qd, ref.qdd, ref.x)]
-        tau = np.empty(self.ndof)
-        self._check(lib.pkm_ctrl_update(self._c, float(t), *[ptr(v) for v in a], ptr(tau)))
-        return tau
+        w = None if inject is None else np.ascontiguousarray(np.broadcast_to(np.asarray(inject, float), (self.ndof,)))
+        tau, part = np.empty(self.ndof), np.empty(self.ndof)
+        self._check(lib.pkm_ctrl_update_injected(self._c, float(t), *[ptr(v) for v in a],
+                                                 INJECT_POINTS[point] if w is not None else 0, ptr(w), ptr(tau),
+                                                 ptr(part)))
+        return tau, part
 
-    def prime(self, t, q, qd, ref: dict) -> None:
+    def prime(self, t, q, qd, ref: dict, *, inject=None, point: str = "command") -> None:
         """Seed the controller's history with past samples (``pkm_ctrl_prime``): their
         readings and reference go through the controller, outputs discarded, so that a run
         starting after them starts where a controller that saw them would be.
@@ -140,6 +173,10 @@ class CompiledController:
             Readings [m or rad, per s].
         ref : dict
             ``q``, ``qd`` (n, nd) and optionally ``qdd``, ``x`` (None where not needed).
+        inject : array_like, shape (n, nd), optional
+            The signal injected at ``point`` in those samples (:meth:`update`).
+        point : str
+            One of :data:`INJECT_POINTS`.
 
         Example
         -------
@@ -162,7 +199,9 @@ class CompiledController:
 
         a = [rows(q, "q"), rows(qd, "qd"), rows(ref.get("q"), "ref q"), rows(ref.get("qd"), "ref qd"),
              rows(ref.get("qdd"), "ref qdd", False), rows(ref.get("x"), "ref x", False)]
-        self._check(lib.pkm_ctrl_prime(self._c, n, ptr(t), *[ptr(v) for v in a]))
+        w = rows(inject, "inject", False)
+        self._check(lib.pkm_ctrl_prime_injected(self._c, n, ptr(t), *[ptr(v) for v in a],
+                                                INJECT_POINTS[point] if w is not None else 0, ptr(w)))
 
     @property
     def saturated(self) -> int:

@@ -13,17 +13,20 @@ from .controller import CompiledController
 
 
 #: the recorded channels of ``pkm_closed_loop`` (pkm_loop_record), in its order
-LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau")
+LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau", "tau_inj")
 
 
 def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, ref: dict, rows: dict,
                      k0: int, k1: int, tau_before=None, q_noise=None, qd_noise=None,
-                     measure: bool = False, f_ext=None) -> tuple[int, int, str]:
+                     measure: bool = False, f_ext=None, inject=None, inject_point: int = 0
+                     ) -> tuple[int, int, str]:
     """One ``pkm_closed_loop`` call over samples ``k0:k1`` (see
     :func:`cosim.closed_loop.run_compiled`, which chains calls).
 
     ``ref`` maps ``q, qd, qdd, x`` to C-contiguous (n, nd) arrays (``qdd``, ``x`` may be
-    None); ``rows`` maps :data:`LOOP_FIELDS` to (n, nd) arrays that receive the samples.
+    None); ``rows`` maps :data:`LOOP_FIELDS` to (n, nd) arrays that receive the samples
+    (a missing one is not recorded).  ``inject`` (n, nd) is a signal injected at
+    ``inject_point`` (``pkm_inject_point``, :data:`cosim.core.controller.INJECT_POINTS`).
     Returns ``(status, samples done in this call, message)``.
     """
     m = k1 - k0
@@ -33,8 +36,9 @@ def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, 
 
     before = None if tau_before is None else np.ascontiguousarray(tau_before, dtype=float)
     spec = pkm_loop_reference(m, float(t[k0]), float(dt), at(t), at(ref["q"]), at(ref["qd"]), at(ref.get("qdd")),
-                              at(ref.get("x")), ptr(before), at(f_ext))
-    rec = pkm_loop_record(*[at(rows[f]) for f in LOOP_FIELDS])
+                              at(ref.get("x")), ptr(before), at(f_ext), int(inject_point if inject is not None else 0),
+                              at(inject))
+    rec = pkm_loop_record(*[at(rows.get(f)) for f in LOOP_FIELDS])
     done = C.c_size_t(0)
     st = lib.pkm_closed_loop(sim._s, ctrl._c, C.byref(spec), at(q_noise), at(qd_noise), int(bool(measure)),
                              C.byref(rec), C.byref(done))

@@ -879,12 +879,15 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     ctrl, why = controller_from(rec.controller, mdl)
     if ctrl is None:
         return {"skipped": why}
+    from ..injection import from_recording
+
+    injected = from_recording(rec)  # a test signal the rig added into its loop, replayed at its point
 
     def run(plant, ref, start):
         ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
                            rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None),  # a known input, replayed
-                           history=(rec.q[:start], rec.qd[:start]) if start > 0 else None)
+                           history=(rec.q[:start], rec.qd[:start]) if start > 0 else None, inject=injected)
 
     out = {"start": float(rec.time[k0]), "runs": {}}
     theta = sel.theta if theta is None else theta

@@ -108,7 +108,8 @@ class LoopResult:
 
 
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
-                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None, history=None) -> LoopResult:
+                start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None, history=None,
+                inject=None) -> LoopResult:
     """Run ``controller`` on the core plant ``plant`` over the reference samples
     (:class:`cosim.closed_loop.ClosedLoop` with the plant's drive and sensor model).
 
@@ -139,6 +140,10 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         ``(q, qd)``, the readings of the samples before ``start`` (each (m, nd), oldest
         first): the controller sees them first, so that it starts where the recorded
         controller was (:meth:`cosim.closed_loop.ClosedLoop.run`).
+    inject : cosim.injection.Injection, optional
+        A signal injected into the loop (a recording's, :func:`cosim.injection.from_recording`):
+        the loop adds it at its point, and ``tau`` is the command as the recording logs
+        it (with the signal's part, or without it when the recorded effort excludes it).
 
     Returns
     -------
@@ -153,5 +158,6 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
     from ..master import CoreDrive, CorePlant
 
     rec = ClosedLoop(CorePlant(plant, rtol=rtol, atol=atol), controller, drive=CoreDrive(plant), noise=noise,
-                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext, history=history)
-    return LoopResult(rec.time, rec.q, rec.qd, rec.tau_logged, rec.pose, rec.x, rec.xd, rec.q_true)
+                     seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext, history=history, inject=inject)
+    tau = rec.tau_logged if inject is None else inject.effort_seen(rec.tau_logged, rec.tau_inj)
+    return LoopResult(rec.time, rec.q, rec.qd, tau, rec.pose, rec.x, rec.xd, rec.q_true)

@@ -10,7 +10,9 @@ What the recorded columns mean (``pkm-recording/1``, docs/discrepancy.md):
   (``<j>[i].effort_max``) and delays it (``actuator.delay``);
 * pose columns, if present: an external tracker measuring the true pose;
 * ``f_ext<i>``, if present (``Recording.f_ext``): a measured external effort per joint,
-  positive along +q, a known input added to what the actuator applies.
+  positive along +q, a known input added to what the actuator applies;
+* ``inject<i>``, if present (:mod:`cosim.injection`): a signal the rig added into its
+  loop; one added to the command and logged without it is added to ``tau``.
 
 Effort residual, for a model with parameters theta (sample time t)::
 
@@ -219,6 +221,13 @@ class Pipeline:
                                  f"effort residual cannot be formed") from None
         self.zoh = zoh
         tau = np.asarray(rec.tau, float)
+        # A test signal added to the command and logged without it (cosim.injection) reached
+        # the drive all the same: the command is the recorded one plus it.
+        from ..injection import from_recording
+
+        injected = from_recording(rec)
+        if injected is not None:
+            tau = injected.applied_from_recorded(tau)
         if zoh:
             tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
         self.tau_c = tau

@@ -566,6 +566,37 @@ PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double
 PKM_API int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd,
                            const double* qref, const double* qdref, const double* qddref,
                            const double* xref);
+/* A signal injected into the loop (an identification test signal, a dither), at one of:
+ *   PKM_INJECT_COMMAND            w [N or N m] added to the controller's output before its
+ *                                 saturation (a DISCRETE controller: w / output_gain added
+ *                                 to u before the clamp to [u_min, u_max]; e.g. a test
+ *                                 voltage added to the command, in effort units);
+ *   PKM_INJECT_COMMAND_AFTER_SAT  the same, after the saturation;
+ *   PKM_INJECT_REFERENCE          w [m or rad] added to qref (not to qdref);
+ *   PKM_INJECT_MEASUREMENT        w [m or rad] added to the position reading q the law sees.
+ * A command signal is part of the output of the sample it is given at: it goes through
+ * the output gain and the computation delay (delay_samples) with it. */
+typedef enum pkm_inject_point {
+  PKM_INJECT_NONE = 0,
+  PKM_INJECT_COMMAND = 1,
+  PKM_INJECT_COMMAND_AFTER_SAT = 2,
+  PKM_INJECT_REFERENCE = 3,
+  PKM_INJECT_MEASUREMENT = 4
+} pkm_inject_point;
+/* pkm_ctrl_update with w[nd] injected at point (w may be NULL with PKM_INJECT_NONE);
+ * tau_inj[nd] (may be NULL) receives the part of tau the signal makes, tau minus what tau
+ * would be without it (saturation and delay included): what a recording of the
+ * controller's output without the signal lacks.  That part is a record, not state: it is
+ * not in pkm_ctrl_state_save (no future output depends on it). */
+PKM_API int pkm_ctrl_update_injected(pkm_ctrl* c, double t, const double* q, const double* qd,
+                                     const double* qref, const double* qdref, const double* qddref,
+                                     const double* xref, int point, const double* w, double* tau,
+                                     double* tau_inj);
+/* pkm_ctrl_prime with the signal w [n,nd] of those samples injected at point. */
+PKM_API int pkm_ctrl_prime_injected(pkm_ctrl* c, size_t n, const double* t, const double* q,
+                                    const double* qd, const double* qref, const double* qdref,
+                                    const double* qddref, const double* xref, int point,
+                                    const double* w);
 /* Samples at which the saturation clipped an effort since the last reset. */
 PKM_API long pkm_ctrl_saturated(const pkm_ctrl* c);
 PKM_API const char* pkm_ctrl_error(const pkm_ctrl* c);
@@ -592,7 +623,9 @@ PKM_API int pkm_ctrl_state_load(pkm_ctrl* c, const double* buf, size_t n);
  *      interpolated linearly between the samples around it (the first sample's before
  *      it; the sim keeps the line across calls, pkm_sim_reset drops what follows t0);
  *      then plus q_noise[k] and qd_noise[k] (noise arrays may be NULL);
- *   2. tau_k = pkm_ctrl_update(c, t_k, q_k, qd_k, reference row k);
+ *   2. tau_k = pkm_ctrl_update(c, t_k, q_k, qd_k, reference row k), with the signal
+ *      inject[k] at inject_point if given (pkm_ctrl_update_injected: q_k is recorded as
+ *      read, the law sees q_k + inject[k] with PKM_INJECT_MEASUREMENT);
  *   3. the row is recorded; the plant then holds tau_k (pkm_sim_set_input: saturation,
  *      actuator delay) and the known external effort f_ext[k] if given, and advances to
  *      t_k + dt (not after the last sample).
@@ -612,12 +645,16 @@ typedef struct pkm_loop_reference {
   const double* f_ext;      /* [n,nd] known external effort per joint, held over the step
                                after each sample like the command (pkm_sim_set_external),
                                or NULL (the sim's own setting stays)                     */
+  int inject_point;         /* pkm_inject_point of inject (PKM_INJECT_NONE: none)         */
+  const double* inject;     /* [n,nd] the injected signal, or NULL                        */
 } pkm_loop_reference;
 
 typedef struct pkm_loop_record {
-  /* [n,nd] each, any may be NULL: readings the controller saw, the plant's true joints,
-   * pose and pose rate at the sample, the command and the effort applied (saturated). */
-  double *q, *qd, *q_true, *qd_true, *x, *xd, *tau_cmd, *tau;
+  /* [n,nd] each, any may be NULL: readings (sensor model, delay and noise; not the
+   * injected signal), the plant's true joints, pose and pose rate at the sample, the
+   * command (with the injected signal) and the effort applied (saturated); tau_inj: the
+   * part of tau_cmd the injected signal makes (pkm_ctrl_update_injected). */
+  double *q, *qd, *q_true, *qd_true, *x, *xd, *tau_cmd, *tau, *tau_inj;
 } pkm_loop_record;
 
 PKM_API int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference* ref,

@@ -159,6 +159,15 @@ struct pkm_ctrl {
   std::vector<double> qf_prev, queue;
   bool started = false;
 
+  // The signal injected at this update (pkm_ctrl_update_injected): its point and values
+  // [nd], set for one update only.  inj_queue holds the injected parts of the outputs
+  // waiting out the delay and inj_part that of the last output: a record (what the
+  // signal added to tau), not state, since no future output depends on it.
+  int inj_point = PKM_INJECT_NONE;
+  const double* inj = nullptr;
+  std::vector<double> inj_queue;
+  VecX inj_part, pre_part;
+
   // state
   VecX integral, deriv, e_prev, xc, x_guess;
   bool have_prev = false, have_guess = false;
@@ -229,23 +238,35 @@ struct pkm_ctrl {
       if (next != trial_integral) u = kp * e + ki * next + kd * ed;
       integral = next;
     }
+    // An injected command signal w [effort] is w / gain in controller units, added to u
+    // before its clamp (PKM_INJECT_COMMAND) or after it (_COMMAND_AFTER_SAT); part: what
+    // it adds to the output.
+    const bool before = inj_point == PKM_INJECT_COMMAND, after = inj_point == PKM_INJECT_COMMAND_AFTER_SAT;
+    VecX part = VecX::Zero(nd);
     bool clipped = false;
     for (int i = 0; i < nd; ++i) {
+      const double w = (before || after) ? inj[i] / gain[i] : 0.0;
+      double c = u[i] + (before ? w : 0.0), c0 = u[i];
       if (u_min.size()) {
-        const double c = std::clamp(u[i], u_min[i], u_max[i]);
-        clipped = clipped || c != u[i];
-        u[i] = c;
+        const double cc = std::clamp(c, u_min[i], u_max[i]);
+        clipped = clipped || cc != c;
+        c = cc;
+        c0 = std::clamp(c0, u_min[i], u_max[i]);
       }
-      u[i] *= gain[i];
+      if (after) c += w;
+      u[i] = c * gain[i];
+      part[i] = (c - c0) * gain[i];
     }
     if (clipped) ++saturated;
     if (delay == 0) {
       tau = u;
+      pre_part = part;
       return;
     }
-    for (int i = 0; i < nd; ++i) tau[i] = queue[i];
+    for (int i = 0; i < nd; ++i) tau[i] = queue[i], pre_part[i] = inj_queue[i];
     queue.erase(queue.begin(), queue.begin() + nd);
-    for (int i = 0; i < nd; ++i) queue.push_back(u[i]);
+    inj_queue.erase(inj_queue.begin(), inj_queue.begin() + nd);
+    for (int i = 0; i < nd; ++i) queue.push_back(u[i]), inj_queue.push_back(part[i]);
   }
 
   void update(double t, const double* q, const double* qd, const double* qref, const double* qdref,
@@ -269,6 +290,15 @@ struct pkm_ctrl {
     check(qddref, "qddref", false);
     check(xref, "xref", false);
     check_out(tau, "tau");
+    // A signal injected at the reference or the reading: the law sees qref + w or q + w.
+    std::vector<double> shifted;
+    if (inj_point == PKM_INJECT_REFERENCE || inj_point == PKM_INJECT_MEASUREMENT) {
+      const double* base = inj_point == PKM_INJECT_REFERENCE ? qref : q;
+      shifted.assign(base, base + nd);
+      for (int i = 0; i < nd; ++i) shifted[i] += inj[i];
+      (inj_point == PKM_INJECT_REFERENCE ? qref : q) = shifted.data();
+    }
+    pre_part.setZero(nd);
     Eigen::Map<const VecX> Q(q, nd), QD(qd, nd), QR(qref, nd), QDR(qdref, nd);
     const VecX e = QR - Q, ed = QDR - QD;
     VecX u(nd);
@@ -345,20 +375,54 @@ struct pkm_ctrl {
       default:
         throw Error(PKM_ERR_INTERNAL, "unknown controller kind");
     }
+    // The injected command (a DISCRETE controller has added it in its own units above):
+    // before the saturation, or after it; inj_part = tau - what tau would be without it.
+    const bool own = kind != PKM_CTRL_DISCRETE;
+    if (own && inj_point == PKM_INJECT_COMMAND)
+      for (int i = 0; i < nd; ++i) u[i] += inj[i], pre_part[i] = inj[i];
     bool clipped = false;
     for (int i = 0; i < nd; ++i) {
-      double v = u[i];
+      double v = u[i], v0 = u[i] - pre_part[i];
       if (sat.size()) {
         const double c = std::clamp(v, -sat[i], sat[i]);
         clipped = clipped || c != v;
         v = c;
+        v0 = std::clamp(v0, -sat[i], sat[i]);
       }
+      if (own && inj_point == PKM_INJECT_COMMAND_AFTER_SAT) v += inj[i];
       if (!std::isfinite(v))
         throw Error(PKM_ERR_ARGUMENT, std::string(kn) + " at t = " + num(t) + " s: the effort of joint " +
                                           std::to_string(i + 1) + " is not finite (" + num(v) + ")");
       tau[i] = v;
+      inj_part[i] = v - v0;
     }
     if (clipped) ++saturated;
+  }
+
+  // update() with a signal injected at point (pkm_inject_point), w [nd] (NULL: none).
+  void update_injected(double t, const double* q, const double* qd, const double* qref, const double* qdref,
+                       const double* qddref, const double* xref, int point, const double* w, double* tau) {
+    PKM_REQUIRE(point >= PKM_INJECT_NONE && point <= PKM_INJECT_MEASUREMENT, PKM_ERR_ARGUMENT,
+                std::string(kind_name(kind)) + ": injection point " + std::to_string(point) +
+                    " is not PKM_INJECT_NONE (0), _COMMAND (1), _COMMAND_AFTER_SAT (2), _REFERENCE (3) or "
+                    "_MEASUREMENT (4)");
+    if (point != PKM_INJECT_NONE) {
+      PKM_REQUIRE(w != nullptr, PKM_ERR_ARGUMENT,
+                  std::string(kind_name(kind)) + " at t = " + num(t) + " s: the injected signal is NULL");
+      for (int i = 0; i < nd; ++i)
+        PKM_REQUIRE(std::isfinite(w[i]), PKM_ERR_ARGUMENT,
+                    std::string(kind_name(kind)) + " at t = " + num(t) + " s: the injected signal of joint " +
+                        std::to_string(i + 1) + " is " + num(w[i]));
+    }
+    inj_point = w ? point : PKM_INJECT_NONE;
+    inj = w;
+    try {
+      update(t, q, qd, qref, qdref, qddref, xref, tau);
+    } catch (...) {
+      inj_point = PKM_INJECT_NONE, inj = nullptr;
+      throw;
+    }
+    inj_point = PKM_INJECT_NONE, inj = nullptr;
   }
 
   void reset(const double* x0) {
@@ -372,6 +436,9 @@ struct pkm_ctrl {
     saturated = 0;
     qf_prev.assign(nd, 0.0);
     queue.assign((size_t)nd * delay, 0.0);
+    inj_queue.assign((size_t)nd * delay, 0.0);
+    inj_part.setZero(nd);
+    pre_part.setZero(nd);
     std::fill(pos.xin.begin(), pos.xin.end(), 0.0);
     std::fill(pos.yout.begin(), pos.yout.end(), 0.0);
     std::fill(vel.xin.begin(), vel.xin.end(), 0.0);
@@ -557,13 +624,29 @@ int pkm_ctrl_reset(pkm_ctrl* c, const double* x0) {
 
 int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd, const double* qref,
                     const double* qdref, const double* qddref, const double* xref, double* tau) {
+  return pkm_ctrl_update_injected(c, t, q, qd, qref, qdref, qddref, xref, PKM_INJECT_NONE, nullptr, tau, nullptr);
+}
+
+int pkm_ctrl_update_injected(pkm_ctrl* c, double t, const double* q, const double* qd, const double* qref,
+                             const double* qdref, const double* qddref, const double* xref, int point,
+                             const double* w, double* tau, double* tau_inj) {
   if (!c) return PKM_ERR_ARGUMENT;
   c->error.clear();
-  return guard_into(c->error, [&] { c->update(t, q, qd, qref, qdref, qddref, xref, tau); });
+  return guard_into(c->error, [&] {
+    c->update_injected(t, q, qd, qref, qdref, qddref, xref, point, w, tau);
+    if (tau_inj)
+      for (int i = 0; i < c->nd; ++i) tau_inj[i] = c->inj_part[i];
+  });
 }
 
 int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd, const double* qref,
                    const double* qdref, const double* qddref, const double* xref) {
+  return pkm_ctrl_prime_injected(c, n, t, q, qd, qref, qdref, qddref, xref, PKM_INJECT_NONE, nullptr);
+}
+
+int pkm_ctrl_prime_injected(pkm_ctrl* c, size_t n, const double* t, const double* q, const double* qd,
+                            const double* qref, const double* qdref, const double* qddref, const double* xref,
+                            int point, const double* w) {
   if (!c) return PKM_ERR_ARGUMENT;
   c->error.clear();
   return guard_into(c->error, [&] {
@@ -575,7 +658,8 @@ int pkm_ctrl_prime(pkm_ctrl* c, size_t n, const double* t, const double* q, cons
     std::vector<double> tau(nd);
     auto row = [&](const double* a, size_t k) { return a ? a + k * nd : nullptr; };
     for (size_t k = 0; k < n; ++k)
-      c->update(t[k], row(q, k), row(qd, k), row(qref, k), row(qdref, k), row(qddref, k), row(xref, k), tau.data());
+      c->update_injected(t[k], row(q, k), row(qd, k), row(qref, k), row(qdref, k), row(qddref, k), row(xref, k),
+                         point, row(w, k), tau.data());
     c->saturated = saturated;
   });
 }

@@ -76,8 +76,10 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
         qr[i] = ref->q[k * nd + i];
         qdr[i] = ref->qd[k * nd + i];
       }
-      st = pkm_ctrl_update(c, t_k, qm, qdm, qr, qdr, ref->qdd ? ref->qdd + k * nd : nullptr,
-                           ref->x ? ref->x + k * nd : nullptr, tau);
+      double tau_inj[6];
+      st = pkm_ctrl_update_injected(c, t_k, qm, qdm, qr, qdr, ref->qdd ? ref->qdd + k * nd : nullptr,
+                                    ref->x ? ref->x + k * nd : nullptr, ref->inject ? ref->inject_point : 0,
+                                    ref->inject ? ref->inject + k * nd : nullptr, tau, tau_inj);
       if (st != PKM_OK) throw Error(st, pkm_ctrl_error(c));
       st = pkm_actuator_effort(m, d, tau, applied);
       if (st != PKM_OK) throw Error(st, std::string("actuator: ") + pkm_data_error(d));
@@ -90,6 +92,7 @@ extern "C" int pkm_closed_loop(pkm_sim* s, pkm_ctrl* c, const pkm_loop_reference
         put(out->xd, k, nd, xd);
         put(out->tau_cmd, k, nd, tau);
         put(out->tau, k, nd, applied);
+        put(out->tau_inj, k, nd, tau_inj);
       }
       if (n_done) *n_done = k + 1;
       for (int i = 0; i < nd; ++i) prev_applied[i] = applied[i];
