@@ -293,6 +293,8 @@ def _si_units(facts, rec: Recording) -> dict:
         units["qref"] = ju
     if rec.f_ext is not None:
         units["f_ext"] = eu
+    if "tau_meas1" in rec.extra:  # a measured effort (a torque sensor, a current times its constant)
+        units["tau_meas"] = eu
     if "inject1" in rec.extra:  # an injected signal (cosim.injection): an effort at the command
         point = (rec.sidecar.get("injection") or {}).get("point")
         units["inject"] = eu if point in ("command", "command_after_saturation") else ju
@@ -580,7 +582,7 @@ def _check_units(side, units, robot):
 
     f = robot_facts(robot)
     want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
-            "tau": f.effort_unit, "f_ext": f.effort_unit}
+            "tau": f.effort_unit, "f_ext": f.effort_unit, "tau_meas": f.effort_unit}
     for key, unit in units.items():
         if key in want and unit != want[key]:
             raise RecordingError(side, f"units.{key} = {unit!r}: a pkm-recording/1 file is in the robot's SI units "
@@ -696,6 +698,9 @@ def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
     if has_fext and not (isinstance(meta.get("units"), dict) and "f_ext" in meta["units"]):
         raise RecordingError(side, f"the recording has f_ext columns but the sidecar does not state their unit: add "
                                    f'"units": {{"f_ext": "{_facts(rname).effort_unit}"}} (the joints\' effort unit)')
+    if "tau_meas1" in header and not (isinstance(meta.get("units"), dict) and "tau_meas" in meta["units"]):
+        raise RecordingError(side, f"the recording has a measured effort (tau_meas columns) but the sidecar does not "
+                                   f'state its unit: add "units": {{"tau_meas": "{_facts(rname).effort_unit}"}}')
     facts = _facts(rname)
     if full_pose_allowed(facts):
         others = [c for c in FULL_POSE if c not in pose_cols]

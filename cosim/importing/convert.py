@@ -12,7 +12,7 @@ from ..recording import Recording, write_recording
 from ..recording_io import EXTENSION
 from . import units as U
 from .errors import ImportFailure
-from .mapfile import DERIVATIONS, JOINT_COLUMN, ImportMap, check_columns, read_map, si_unit
+from .mapfile import DERIVATIONS, EXTRA_PREFIXES, JOINT_COLUMN, ImportMap, check_columns, read_map, si_unit
 from .sources import Source, open_source
 
 
@@ -242,7 +242,7 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     for name, c in present.items():
         if c.derive:
             continue
-        si = si_unit(name, facts)
+        si = si_unit(name, facts, m.injection)
         f = U.factor(c.unit, si) if c.unit is not None else 1.0
         raw = cols[name]
         scale, offset = scal.value(c.scale), scal.value(c.offset)
@@ -287,12 +287,14 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
         miss = pose_names[have_pose.index(False)]
         raise ImportFailure(m.path, f"pose columns must be given all or none ({', '.join(pose_names)}): {miss} is "
                                     f"missing", field=f"columns.{miss}")
-    extra = {name: v for name, v in cols.items() if (mm := JOINT_COLUMN.match(name)) and mm.group(1) == "qdref"}
+    extra = {name: v for name, v in cols.items() if (mm := JOINT_COLUMN.match(name)) and mm.group(1) in EXTRA_PREFIXES}
+    for prefix in ("inject", "tau_meas"):
+        block(prefix)  # all joints or none
     sensors = {}
     for name, s in m.sensors.items():
         if name not in cols:
             continue
-        si = si_unit(name, facts)
+        si = si_unit(name, facts, m.injection)
         unit = s.get("unit", m.columns[name].unit)
         f = U.factor(unit, si) if unit is not None else 1.0
         sensors[name] = {k: scal.value(v["variable"] if isinstance(v, dict) else v) * f
@@ -321,6 +323,8 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
         side["derived"] = derived
     if sensors:
         side["sensors"] = sensors
+    if m.injection and "inject1" in extra:
+        side["injection"] = {k: v for k, v in m.injection.items() if k in ("point", "in_effort")}
     controller = _substitute(m.controller, scal.values)
     params = {k: scal.value(v["variable"] if isinstance(v, dict) else v) for k, v in m.parameters.items()}
     return Recording(

@@ -24,13 +24,17 @@ DERIVATIONS = {
 }
 
 #: the map's top-level fields
-TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters")
+TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters", "injection")
 #: fields of a column
 COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
-JOINT_COLUMN = re.compile(r"^(q|qd|tau|qref|qdref|f_ext)([1-9][0-9]*)$")
+JOINT_COLUMN = re.compile(r"^(q|qd|tau|qref|qdref|f_ext|inject|tau_meas)([1-9][0-9]*)$")
+#: per-joint columns kept in the recording's extra columns (not its own arrays)
+EXTRA_PREFIXES = ("qdref", "inject", "tau_meas")
+#: the injection points at which a signal is an effort (cosim.injection)
+COMMAND_POINTS = ("command", "command_after_saturation")
 #: the position column each derivable velocity column comes from
 DERIVED_FROM = {"qd": "q", "qdref": "qref"}
 
@@ -65,6 +69,8 @@ class ImportMap:
     controller: dict = field(default_factory=dict)
     sensors: dict = field(default_factory=dict)
     parameters: dict = field(default_factory=dict)
+    #: where the signal of the inject<i> columns was added (cosim.injection), {} for none
+    injection: dict = field(default_factory=dict)
 
     def robot_ref(self) -> str:
         """The robot as the core takes it: a listed name, or the description file's path
@@ -180,7 +186,14 @@ def read_map(path) -> ImportMap:
         _fail(path, "parameters", "must be a table of parameter name = value")
     for k, v in params.items():
         _number_or_variable(path, f"parameters.{k!r}", v)
-    return ImportMap(path, robot, columns, notes, dict(src), ctrl, sensors, params)
+    injection = doc.get("injection", {})
+    if injection:
+        from ..injection import declaration_errors
+
+        why = declaration_errors(injection)
+        if why:
+            _fail(path, "injection", why)
+    return ImportMap(path, robot, columns, notes, dict(src), ctrl, sensors, params, dict(injection))
 
 
 def _column(path, name, spec) -> Column:
@@ -243,15 +256,17 @@ def _column(path, name, spec) -> Column:
     return c
 
 
-def si_unit(name: str, facts) -> str | None:
-    """The SI unit of a recording column for a robot (None: not a column of the format)."""
+def si_unit(name: str, facts, injection: dict | None = None) -> str | None:
+    """The SI unit of a recording column for a robot (None: not a column of the format); an
+    ``inject<i>`` column's is the effort's or the joint's by the ``injection`` point."""
     if name == "time":
         return "s"
     m = JOINT_COLUMN.match(name)
     if m and 1 <= int(m.group(2)) <= facts.ndof:
         ju = facts.joint_unit
+        inj = facts.effort_unit if (injection or {}).get("point", "command") in COMMAND_POINTS else ju
         return {"q": ju, "qref": ju, "qd": f"{ju}/s", "qdref": f"{ju}/s", "tau": facts.effort_unit,
-                "f_ext": facts.effort_unit}[m.group(1)]
+                "f_ext": facts.effort_unit, "inject": inj, "tau_meas": facts.effort_unit}[m.group(1)]
     if name in facts.tracker_names:
         return facts.tracker_units[list(facts.tracker_names).index(name)]
     return None
@@ -268,12 +283,21 @@ def check_columns(m: ImportMap, facts) -> None:
     """
     nd = facts.ndof
     for name, c in m.columns.items():
-        si = si_unit(name, facts)
+        si = si_unit(name, facts, m.injection)
         if si is None:
-            known = ["time"] + [f"{p}1..{p}{nd}" for p in ("q", "qd", "tau", "qref", "qdref", "f_ext")]
+            known = ["time"] + [f"{p}1..{p}{nd}" for p in ("q", "qd", "tau", "qref", "qdref", "f_ext", "inject",
+                                                             "tau_meas")]
             known += list(facts.tracker_names)
             _fail(m.path, f"columns.{name}", f"not a recording column of robot {facts.name} ({nd} joint"
                                              f"{'s' if nd > 1 else ''}; columns: {', '.join(known)})")
+        if name.startswith("tau_meas") and c.unit is None:
+            _fail(m.path, f"columns.{name}.unit", f"missing: a measured effort needs its unit ({si} or another "
+                                                  f"{'torque' if si == 'N m' else 'force'} unit; a motor current: "
+                                                  f"scale = its torque constant, unit = {si!r})")
+        if name.startswith("inject") and not m.injection:
+            _fail(m.path, f"columns.{name}", "an injected signal needs [injection] point = \"command\" | "
+                                             "\"command_after_saturation\" | \"reference\" | \"measurement\" and, "
+                                             "at the command, in_effort = true | false (does tau include it?)")
         if c.unit is not None:
             try:
                 U.factor(c.unit, si)

@@ -149,6 +149,36 @@ def _file_system_cases(tmp):
     return cases
 
 
+def _two_channel_rig(tmp):
+    """A rig's MATLAB file with a test signal one sample short and a measured torque, maps
+    that import them (one giving the torque no unit), and a recording whose sidecar does
+    not state the measured effort's unit."""
+    import numpy as np
+    import scipy.io
+
+    t = np.arange(200) * 1e-3
+    scipy.io.savemat(tmp / "rig2.mat", {"t": t, "ang": np.sin(t), "u": np.cos(t), "w": np.zeros(199),
+                                        "trq": np.cos(t)})
+    head = 'robot = "pendulum"\n[columns]\ntime = "t"\nq1 = "ang"\nqd1 = { derive = "central_difference" }\n' \
+           'tau1 = { variable = "u", unit = "N m" }\n'
+    short = _scenario(tmp, "inject_map.toml", head + 'inject1 = { variable = "w", unit = "N m" }\n'
+                      '[injection]\npoint = "command"\nin_effort = true\n')
+    nounit = _scenario(tmp, "meas_map.toml", head + 'tau_meas1 = "trq"\n')
+    rows = "\n".join(f"{k * 1e-3},{np.sin(k * 1e-3)},{np.cos(k * 1e-3)},{np.cos(k * 1e-3)},{np.cos(k * 1e-3)}"
+                      for k in range(200))
+    (tmp / "meas.csv").write_text("time,q1,qd1,tau1,tau_meas1\n" + rows + "\n")
+    (tmp / "meas.json").write_text(json.dumps({"format": "pkm-recording/1", "robot": "pendulum",
+                                               "units": {"time": "s", "q": "rad", "qd": "rad/s", "tau": "N m"}}))
+    return [
+        (["import", str(tmp / "rig2.mat"), "--map", short, "--out", str(tmp / "imp2")],
+         "variable 'w' (column inject1): has 199 values, time (t) has 200"),
+        (["import", str(tmp / "rig2.mat"), "--map", nounit, "--out", str(tmp / "imp2")],
+         "columns.tau_meas1.unit: missing: a measured effort needs its unit"),
+        (["diagnose", str(tmp / "meas.csv")], "has a measured effort (tau_meas columns) but the sidecar does not "
+                                              "state its unit"),
+    ]
+
+
 def _cases(tmp):
     garbage = tmp / "garbage.csv"
     garbage.write_bytes(b"\x82\x00\xff not a recording\n")
@@ -160,7 +190,7 @@ def _cases(tmp):
     notjson = tmp / "notjson.json"
     notjson.write_text("{ platform.m = 1 }")
     one_s = _scenario(tmp, "step1s.toml", (SCEN / "6pus_step_pd.toml").read_text().replace("step = 0.001", "step = 1.0"))
-    return _file_system_cases(tmp) + [
+    return _file_system_cases(tmp) + _two_channel_rig(tmp) + [
         # messages that each say what is wrong and where
         (["diagnose", bad["binary"]], "is not a text CSV file (byte 0x82"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy)],

@@ -31,7 +31,8 @@ def test_emps_columns_are_the_mat_values(tmp_path):
     for k in (1, 5000, 24839):
         assert rec.qd[k, 0] == pytest.approx((qm[k + 1] - qm[k - 1]) / (t[k + 1] - t[k - 1]), rel=1e-12)
         assert rec.extra["qdref1"][k] == pytest.approx((qg[k + 1] - qg[k - 1]) / (t[k + 1] - t[k - 1]), rel=1e-12)
-    assert rec.f_ext is None  # this file has no force pulses
+    assert rec.f_ext is None and "inject1" not in rec.extra  # this file has no test signal (pulses_N)
+    assert "pulses_N" not in mat
     c = rec.controller
     assert c["kp"] == mat["kp"].item() == 160.18 and c["kv"] == mat["kv"].item() == 243.45
     assert c["output_gain"] == mat["gtau"].item()
@@ -51,7 +52,12 @@ def test_emps_map_is_the_documented_one():
     assert m.robot == "emps"
     assert m.columns["tau1"].variable == "vir" and m.columns["tau1"].scale == "gtau"
     assert m.columns["qd1"].derive == "central_difference" and m.columns["qdref1"].derive == "central_difference"
-    assert m.columns["f_ext1"].optional
+    # the test signal pulses_N is a 0/5 V signal added to the command before the drive gain,
+    # included in vir: an injection at the command, not an external force
+    assert "f_ext1" not in m.columns
+    c = m.columns["inject1"]
+    assert (c.variable, c.scale, c.unit, c.optional) == ("pulses_N", "gtau", "N", True)
+    assert m.injection == {"point": "command", "in_effort": True}
 
 
 def test_cosim_diagnose_takes_the_imported_recording(tmp_path):
