@@ -233,6 +233,8 @@ _SIGNATURES = {
     "pkm_ctrl_reset": (I, [P, D]),
     "pkm_ctrl_update": (I, [P, C.c_double, D, D, D, D, D, D, D]),
     "pkm_ctrl_prime": (I, [P, C.c_size_t, D, D, D, D, D, D, D]),
+    "pkm_effort_map": (I, [C.c_size_t, C.c_double, D, C.c_double, C.c_double, C.c_double, C.c_double, C.c_double,
+                           D, C.c_char_p, C.c_size_t]),
     "pkm_ctrl_update_injected": (I, [P, C.c_double, D, D, D, D, D, D, I, D, D, D]),
     "pkm_ctrl_prime_injected": (I, [P, C.c_size_t, D, D, D, D, D, D, D, I, D]),
     "pkm_ctrl_saturated": (C.c_long, [P]),

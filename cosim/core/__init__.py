@@ -12,6 +12,7 @@ One module per concern:
 - :mod:`cosim.core.simulator`: :class:`Simulator` (``pkm_sim``) and its options
 - :mod:`cosim.core.controller`: :class:`CompiledController` (``pkm_ctrl``)
 - :mod:`cosim.core.loop`: one ``pkm_closed_loop`` call
+- :mod:`cosim.core.drive`: a drive's command-to-effort map (``pkm_effort_map``)
 - errors: :mod:`cosim.errors`
 
 The names below are the public API, importable from ``cosim.core``.
@@ -28,6 +29,7 @@ array([...])
 """
 from ..errors import ArgumentError, ParameterError, PkmError, UnsupportedError
 from .controller import DISCRETE_LAWS, INJECT_POINTS, KINDS, CompiledController
+from .drive import effort_map
 from .facts import ParamInfo, RobotFacts, quattro_index_names, quattro_index_units, robots
 from .loop import LOOP_FIELDS, closed_loop_call
 from .model import Model, robot_facts
@@ -35,6 +37,6 @@ from .simulator import METHOD_CODES, Simulator, default_options
 
 __all__ = ["Model", "ParamInfo", "RobotFacts", "robots", "robot_facts", "quattro_index_names",
            "quattro_index_units", "Simulator", "default_options", "METHOD_CODES", "CompiledController", "KINDS",
-           "DISCRETE_LAWS", "INJECT_POINTS", "LOOP_FIELDS", "closed_loop_call", "PkmError",
+           "DISCRETE_LAWS", "INJECT_POINTS", "effort_map", "LOOP_FIELDS", "closed_loop_call", "PkmError",
            "ParameterError", "ArgumentError",
            "UnsupportedError"]

@@ -115,6 +115,9 @@ class Diagnosis:
     #: the residual of every channel on the decimated samples: ``time`` (m,) [s], ``before``
     #: (nominal model) and ``after`` (fitted model), (m, channels), in the channels' units
     residual: dict = field(default_factory=dict, repr=False)
+    #: with a measured effort (tau_meas columns): the channel the physics is fitted on and the
+    #: drive's command-to-effort map per joint (:mod:`.effort_map`); None with one channel
+    effort_map: dict | None = None
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -279,6 +282,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                BLOCK_SECONDS if block_seconds is None else block_seconds, progress)
     rec = ws.recording
     mdl = _model_for(rec, model)
+    from .effort_map import effort_channels
+
+    commanded = rec  # two effort channels: the physics on the measured one, the drive's map fitted
+    rec, effort_map = effort_channels(rec, mdl.facts.effort_unit)
     timings = {"read": time.perf_counter() - t0}
     with one_blas_thread():
         pipe = Pipeline(rec, mdl, window=window, segments=None if ws.whole else ws.segments)
@@ -331,10 +338,12 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                             "smoothing_samples": pipe.window,
                             "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left,
-                  discovered=found, withdrawn=withdrawn)
+                  discovered=found, withdrawn=withdrawn, effort_map=effort_map)
+    if effort_map is not None:
+        d.conclusion += "; " + effort_map["statement"]
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(rec, eng, sel, _compared(rec, mdl, compare), theta)
+        d.replay = _replay(commanded, eng, sel, _compared(rec, mdl, compare), theta)
         d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
         timings["replay"] = time.perf_counter() - t5
     timings["diagnosis"] = time.perf_counter() - t0

@@ -342,6 +342,16 @@ PKM_API int pkm_actuator_effort(const pkm_model* m, pkm_data* d, const double* t
                                 double* tau_applied);
 PKM_API int pkm_actuator_effort_batch(const pkm_model* m, pkm_data* d, size_t n,
                                       const double* tau_cmd, double* tau_applied, int* status);
+/* A drive's command-to-effort map, sampled: what a torque sensor (or a motor current
+ * times its torque constant) reads against the commanded effort u.  The command u[k] is
+ * held over [t_k, t_k + dt); the drive makes e_k = clip(gain u[k], +-limit) + offset
+ * (limit <= 0 or inf: none) and the delivered effort follows e with a first-order lag of
+ * time constant lag [s] (>= 0): y[k] = a y[k-1] + (1 - a) e_k, a = exp(-dt / lag), the
+ * delivered effort at t_k + dt, exact for the held e (lag = 0: y[k] = e_k); y[-1] = y0.
+ * The effort read at t_k is y[k-1].  u, y [n] in the same unit (N or N m); a non-finite
+ * value or a bad parameter returns PKM_ERR_ARGUMENT with the reason in err. */
+PKM_API int pkm_effort_map(size_t n, double dt, const double* u, double gain, double offset, double lag,
+                           double limit, double y0, double* y, char* err, size_t errlen);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
  * q_meas = q + encoder_offset + backlash/2 sgn(c) + compliance c, with c the effort the
  * transmission carries: tau less the drive side's own friction, joint force and joint inertia
