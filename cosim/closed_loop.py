@@ -250,7 +250,10 @@ class ClosedLoop:
             A signal injected into the loop, a row per reference sample, at its point
             (the controller's output before or after its saturation [N or N m], the
             reference or the position reading [m or rad]); its rows before ``start`` go
-            into the ``history``'s priming too.
+            into the ``history``'s priming too.  The stepwise back end gives it to a
+            controller the core implements through a compiled copy of it (the core's
+            ``pkm_ctrl_update_injected``); a Python law with its own saturation cannot
+            take one before that saturation (``InputError``).
 
         Returns
         -------
@@ -422,6 +425,8 @@ class ClosedLoop:
             y = plant.outputs()
             if hasattr(ctrl, "reset"):
                 ctrl.reset(float(t[0]), y.q, y.x)
+            if inject is not None:
+                inject.start(ctrl, getattr(plant, "model", None), h, y.x)
             if past is not None:
                 for j, k in enumerate(past[0]):
                     _law(ctrl, float(past[1][j]), past[2][j], past[3][j], reference.at(k), inject, k)

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .core.controller import INJECT_POINTS, CompiledController
+from .core.controller import INJECT_POINTS, KINDS, CompiledController
 from .errors import InputError
 
 __all__ = ["Injection", "INJECT_POINTS", "COMMAND_POINTS", "from_recording", "declaration_errors"]
@@ -150,6 +150,8 @@ class _Bound:
 
     inj: Injection
     rows: np.ndarray
+    #: the compiled copy of a Python controller the core implements, for the stepwise back end
+    twin: CompiledController | None = None
 
     def loop_args(self) -> dict:
         """Keywords of :func:`cosim.core.loop.closed_loop_call`."""
@@ -161,19 +163,29 @@ class _Bound:
 
     def refusal(self, ctrl) -> str:
         """Why the stepwise back end cannot inject into ``ctrl`` ("" if it can)."""
-        if isinstance(ctrl, CompiledController):
-            return ""  # the core's controller (pkm_ctrl_update_injected)
+        if isinstance(ctrl, CompiledController) or getattr(ctrl, "kind", None) in KINDS:
+            return ""  # the core's controller (pkm_ctrl_update_injected), or its compiled copy
         if self.inj.point == "command" and (getattr(ctrl, "saturation", None) is not None
                                             or getattr(ctrl, "limits", None) is not None):
             return (f"a signal injected before the saturation of a Python controller ({type(ctrl).__name__}) cannot "
                     f"be placed: run the loop compiled (the core plant and a controller the core implements)")
         return ""
 
+    def start(self, ctrl, model, h: float, x0) -> None:
+        """Before a stepwise run (after the controller's reset): a Python controller the core
+        implements gets a compiled copy, reset at the pose ``x0``, which the signal enters
+        (the core's law, ``pkm_ctrl_update_injected``; its own period, else ``h``)."""
+        self.twin = None
+        if not isinstance(ctrl, CompiledController) and getattr(ctrl, "kind", None) in KINDS:
+            self.twin = CompiledController(ctrl, model=model, dt=getattr(ctrl, "dt", None) or h)
+            self.twin.reset(x0)
+
     def stepwise(self, ctrl, t, q, qd, row, k):
         """``(tau, tau_inj)`` of one sample of the stepwise back end, the signal of reference row ``k`` injected."""
         w = self.inj.signal[k]
-        if isinstance(ctrl, CompiledController):
-            return ctrl.update(t, q, qd, row, inject=w, point=self.inj.point)
+        law = self.twin if self.twin is not None else ctrl
+        if isinstance(law, CompiledController):
+            return law.update(t, q, qd, row, inject=w, point=self.inj.point)
         # A Python law: the signal is added where the law's inputs or output are (a law
         # without saturation has the same output before and after it).
         if self.inj.point == "reference":
@@ -204,8 +216,8 @@ def from_recording(rec) -> Injection | None:
                                  f"columns")
         return None
     if not all(have):
-        raise InjectionError(f"{where}: inject columns must be given for all joints or none ({names[have.index(False)]} "
-                             f"is missing)")
+        raise InjectionError(f"{where}: inject columns must be given for all joints or none "
+                             f"({names[have.index(False)]} is missing)")
     if decl is None:
         raise InjectionError(f'{where}: inject columns without the sidecar\'s "injection" '
                              f'({{"point": ..., "in_effort": ...}}): where was the signal added?')

@@ -32,6 +32,7 @@ LAYERS = [
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
      ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.trajectories", "cosim.simulate",
       "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
+      "cosim.injection",
       # exciting trajectories: a leaf (it imports nothing of cosim) that scenarios and calibration use too
       "cosim.discrepancy.excitation"]),
     ("loop", "plants, the one closed loop, scenarios and their SSP export",

@@ -77,10 +77,10 @@ def test_a_signal_added_to_the_command_replays_to_1e_9_with_the_right_declaratio
     truth, law = _truth(m, ref, "command", w)
     assert np.any(np.abs(truth.tau_cmd) >= SAT)  # the signal makes the command clip
     # recorded with the signal in the effort, and without it
-    for in_effort, recorded in ((True, truth.tau_cmd), (False, law)):
+    for (in_effort, recorded), compiled in zip(((True, truth.tau_cmd), (False, law)) * 2, (True, True, False, False)):
         inj = Injection(w, point="command", in_effort=in_effort)
-        rep = _replay(m, ref, inj)
-        assert rep.loop == "compiled"
+        rep = _replay(m, ref, inj, compiled)  # stepwise: the controller's compiled copy takes the signal
+        assert rep.loop == ("compiled" if compiled else "python")
         np.testing.assert_allclose(rep.q, truth.q, rtol=0, atol=1e-9)
         np.testing.assert_allclose(inj.effort_seen(rep.tau_cmd, rep.tau_inj), recorded, rtol=0, atol=1e-9)
         # the wrong declaration of the effort: off by the signal where it acted
@@ -109,7 +109,8 @@ def test_the_other_points_replay_the_hand_made_loop_on_both_back_ends(emps, poin
         np.testing.assert_allclose(rep.q, rep.q_true, rtol=0, atol=0)
 
 
-def test_the_discrete_controller_delays_the_injected_command_with_its_output():
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_discrete_controller_delays_the_injected_command_with_its_output(compiled):
     m = Model("emps")
     t = np.arange(N) * H
     hold = np.full((N, 1), 0.1)
@@ -117,16 +118,23 @@ def test_the_discrete_controller_delays_the_injected_command_with_its_output():
     desc = {"kind": "discrete", "period": H, "law": "cascade_pp", "kp": 160.18, "kv": 243.45,
             "saturation": [-10.0, 10.0], "output_gain": 35.15, "delay_samples": 1}
     w = _signal(0.5 * 35.15)  # half a volt, in N through the drive gain: no clipping
-    rec = ClosedLoop(CorePlant(m), ctl.discrete(desc, ndof=1, model=m)).run(ref, inject=Injection(w))
-    assert rec.loop == "compiled"
+    rec = ClosedLoop(CorePlant(m), ctl.discrete(desc, ndof=1, model=m), compiled=compiled).run(ref, inject=Injection(w))
+    assert rec.loop == ("compiled" if compiled else "python")
     np.testing.assert_allclose(rec.tau_inj[1:], w[:-1], rtol=0, atol=1e-9)
     assert rec.tau_inj[0, 0] == 0.0
 
 
-def test_a_python_controller_saturated_before_the_signal_is_refused_stepwise(emps):
+def test_a_python_law_saturated_before_the_signal_is_refused(emps):
     m, ref = emps
+
+    class Clipped:  # a law the core does not implement, with its own saturation
+        saturation = SAT
+
+        def __call__(self, t, q, qd, row):
+            return np.clip(KP * (row.q - q), -SAT, SAT)
+
     with pytest.raises(InputError, match="before the saturation of a Python controller"):
-        _replay(m, ref, Injection(_signal(1.0), point="command"), compiled=False)
+        ClosedLoop(CorePlant(m), Clipped()).run(ref, inject=Injection(_signal(1.0), point="command"))
 
 
 @pytest.mark.parametrize("signal, words", [(np.zeros((N - 1, 1)), r"shape \(599, 1\), the run \(600, 1\)"),

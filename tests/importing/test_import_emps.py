@@ -71,3 +71,28 @@ def test_cosim_diagnose_takes_the_imported_recording(tmp_path):
     assert p.returncode == 0, p.stderr[-2000:]
     assert "DATA_EMPS.csv (emps)" in p.stdout and "tau1" in p.stdout
     assert (tmp_path / "diagnosis" / "report.md").exists()
+
+
+def test_a_file_with_the_test_signal_gets_it_as_a_command_injection_in_the_effort(tmp_path):
+    """A file like the rig's second recording (DATA_EMPS.mat's variables plus a 0/5 square
+    wave named pulses_N, made here): the map makes it the signal added to the command,
+    pulses_N * gtau [N], included in the recorded effort."""
+    from cosim.injection import from_recording
+
+    mat = {k: v for k, v in scipy.io.loadmat(MAT).items() if not k.startswith("__")}
+    n = 3000
+    for k in ("t", "qm", "qg", "vir"):
+        mat[k] = mat[k][:n]
+    pulses = 5.0 * ((np.arange(n) // 250) % 2 == 1)
+    mat["pulses_N"] = pulses[:, None]
+    scipy.io.savemat(tmp_path / "second.mat", mat)
+    res = import_recording(tmp_path / "second.mat", MAP, tmp_path / "out")
+    rec = read_recording(res.table)
+    inj = from_recording(rec)
+    gtau = mat["gtau"].item()
+    np.testing.assert_allclose(inj.signal[:, 0], pulses * gtau, rtol=1e-15)
+    assert (inj.point, inj.in_effort) == ("command", True)
+    side = json.loads(res.sidecar.read_text())
+    assert side["injection"] == {"point": "command", "in_effort": True} and side["units"]["inject"] == "N"
+    assert rec.f_ext is None  # not a force on the carriage
+    np.testing.assert_array_equal(inj.applied_from_recorded(rec.tau), rec.tau)  # vir includes it
