@@ -85,7 +85,8 @@ def fit_effort_map(time, commanded, measured) -> list:
     Parameters
     ----------
     time : array_like, shape (n,)
-        Sample times [s] (uniform).
+        Sample times [s] (uniform; blocks with gaps between them are taken as one run, the
+        lag carried across each seam).
     commanded, measured : array_like, shape (n, nd)
         The commanded and the measured effort [N or N m].
 
@@ -109,7 +110,7 @@ def fit_effort_map(time, commanded, measured) -> list:
     t = np.asarray(time, float)
     u = np.atleast_2d(np.asarray(commanded, float).T).T
     m = np.atleast_2d(np.asarray(measured, float).T).T
-    dt = float((t[-1] - t[0]) / (len(t) - 1))
+    dt = float(np.median(np.diff(t)))  # the sample period (a working set's blocks have gaps between them)
     out = []
     for j in range(u.shape[1]):
         p, cov, ssr, s2 = _fit(u[:, j], m[:, j], dt, False)
