@@ -56,9 +56,10 @@ _POINTER = 0.1
 
 def _rotary_axis(model, x, chain):
     """A revolute axis drawn so that its turning shows: its shaft (a line along the axis
-    through the axis point) and a pointer from the platform origin, fixed in the platform,
+    through the axis point) and a pointer from the axis point, fixed in the platform,
     perpendicular to the axis (its direction at q = 0 turned by the platform's rotation,
-    from ``Model.platform_pose``)."""
+    from ``Model.platform_pose``), as long as the platform is far from the axis (at least
+    100 mm)."""
     from scipy.spatial.transform import Rotation
 
     k = np.array([model.param(f"axis[1].k{c}") for c in "xyz"])
@@ -69,7 +70,7 @@ def _rotary_axis(model, x, chain):
     u /= np.linalg.norm(u)
     R = Rotation.from_euler("XYZ", X[3:]).as_matrix()  # R = Rx(rx) Ry(ry) Rz(rz), docs/robots.md
     return {"shaft": [np.array([A - 0.5 * size * k, A + 0.5 * size * k])],
-            "pointer": [np.array([o, o + size * (R @ u)])]}
+            "pointer": [np.array([A, A + size * (R @ u)])]}
 
 
 _COLORS = {"shaft": "#555555", "pointer": "#ff7f0e", "links": "#888888", "rails": "#888888", "legs": "#1f77b4", "platform": "#d62728", "arms": "#1f77b4", "forearms": "#2ca02c"}
@@ -94,7 +95,8 @@ def _traces(model, x):
     if model.ndof == 1:
         # a single axis has no platform polygon: its carriage (the platform point) is drawn as a block
         c = segs["platform"][0][0] * 1e3
-        traces.append(go.Scatter3d(x=[c[0]], y=[c[1]], z=[c[2]], mode="markers", name="carriage",
+        name = "platform" if model.joint_unit == "rad" else "carriage"
+        traces.append(go.Scatter3d(x=[c[0]], y=[c[1]], z=[c[2]], mode="markers", name=name,
                                    marker=dict(size=14, symbol="square", color=_COLORS["platform"])))
     return traces
 
