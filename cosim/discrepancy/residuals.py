@@ -132,10 +132,19 @@ class _Scratch:
 
 def _check_joint_limits(model, t, q, where, whole=True):
     """Refuse recorded joint positions outside the model's joint limits (a continuous joint
-    has none), naming the first row (as the file counts it: the header is row 1; on a working
+    has none, but its angle must be unwrapped: no jump of more than pi between samples),
+    naming the first row (as the file counts it: the header is row 1; on a working
     set of blocks, the time alone), the time, the value and what to do."""
     lo, hi = model.joint_limits()
     for j in range(model.ndof):
+        jump = np.flatnonzero(np.abs(np.diff(q[:, j])) > np.pi) if model.joint_unit == "rad" else []
+        if len(jump) and np.isnan(lo[j]) and np.isnan(hi[j]):
+            k = int(jump[0]) + 1
+            at = f"row {k + 2} (t = {t[k]:.6g} s)" if whole else f"t = {t[k]:.6g} s"
+            raise DiagnosisError(f"{where}: {at}: q{j + 1} of the continuous joint {j + 1} jumps by "
+                                 f"{q[k, j] - q[k - 1, j]:.6g} rad in one sample ({len(jump)} jumps in all): a "
+                                 f"wrapped angle; the toolkit's is unwrapped (import it with angle = \"unwrap\", "
+                                 f"docs/importing.md)")
         out = np.flatnonzero((q[:, j] < lo[j]) | (q[:, j] > hi[j]))
         if out.size:
             k = int(out[0])

@@ -52,3 +52,18 @@ def test_a_continuous_joint_takes_the_same_recording(tmp_path):
     m = Model(str(tmp_path / "spin_axis.toml"))
     p = Pipeline(_spin("spin_axis"), m)
     assert p.q[-1, 0] > 10
+
+
+def test_a_continuous_joint_recorded_wrapped_is_refused_with_the_way_out(tmp_path):
+    import pytest
+
+    from cosim.discrepancy.residuals import DiagnosisError
+
+    (tmp_path / "spin_axis.toml").write_text(SPINNER)
+    m = Model(str(tmp_path / "spin_axis.toml"))
+    rec = _spin("spin_axis")
+    rec.q[:, 0] = np.angle(np.exp(1j * rec.q[:, 0]))  # into (-pi, pi]: jumps by -2 pi
+    k = int(np.flatnonzero(np.abs(np.diff(rec.q[:, 0])) > np.pi)[0]) + 1
+    with pytest.raises(DiagnosisError, match=f"row {k + 2} \\(t = {rec.time[k]:.6g} s\\): q1 of the continuous "
+                                             "joint 1 jumps by -6.2"):
+        Pipeline(rec, m)
