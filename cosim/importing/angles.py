@@ -8,6 +8,8 @@
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .errors import ImportFailure
@@ -51,8 +53,6 @@ def angle_column_error(name: str, si: str | None, facts) -> str | None:
     """Why column ``name`` (SI unit ``si``) of robot ``facts`` cannot be wrapped or
     unwrapped, or None if it can: only a joint position or reference (``q<i>``, ``qref<i>``)
     of a revolute joint or an angle of the pose (unit rad) is an angle."""
-    import re
-
     if si == "rad" and (re.match(r"^(q|qref)[1-9][0-9]*$", name) or name in facts.tracker_names):
         return None
     what = ("a time" if name == "time" else
