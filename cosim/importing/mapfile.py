@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import units as U
+from .angles import ANGLE_OPTIONS, angle_column_error
 from .errors import ImportFailure
 from .sources import FORMATS
 
@@ -26,7 +27,8 @@ DERIVATIONS = {
 #: the map's top-level fields
 TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters")
 #: fields of a column
-COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start")
+COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
+                 "angle")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
@@ -51,6 +53,7 @@ class Column:
     source: str | None = None          # the column a derived one comes from
     period: float | None = None        # time only: a sampling period instead of a variable
     start: float = 0.0
+    angle: str | None = None           # "wrap" or "unwrap" (angles.ANGLE_OPTIONS), an angle column only
 
 
 @dataclass
@@ -236,6 +239,10 @@ def _column(path, name, spec) -> Column:
         c.offset = _number_or_variable(path, f"{f}.offset", spec["offset"])
     if "unit" in spec:
         c.unit = _unit(path, f"{f}.unit", spec["unit"])
+    if "angle" in spec:
+        if spec["angle"] not in ANGLE_OPTIONS:
+            _fail(path, f"{f}.angle", f"must be one of {', '.join(map(repr, ANGLE_OPTIONS))}, got {spec['angle']!r}")
+        c.angle = spec["angle"]
     if "optional" in spec:
         if not isinstance(spec["optional"], bool):
             _fail(path, f"{f}.optional", f"must be true or false, got {spec['optional']!r}")
@@ -279,6 +286,8 @@ def check_columns(m: ImportMap, facts) -> None:
                 U.factor(c.unit, si)
             except ValueError as e:
                 _fail(m.path, f"columns.{name}.unit", str(e))
+        if c.angle is not None and (why := angle_column_error(name, si, facts)):
+            _fail(m.path, f"columns.{name}.angle", why)
     for name in ["time"] + [f"{p}{i}" for i in range(1, nd + 1) for p in ("q", "qd", "tau")]:
         if name not in m.columns:
             hint = f' (or derive it: {name} = {{ derive = "central_difference" }})' if name.startswith("qd") else ""

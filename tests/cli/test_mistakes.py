@@ -33,6 +33,14 @@ def _scenario(tmp, name, body):
     return str(p)
 
 
+def _emps_map(tmp, name, column, angle):
+    """The EMPS map with ``angle = ...`` (wrap or unwrap) on one column entry."""
+    text = (EMPS / "emps_map.toml").read_text()
+    entry = {"q1": 'q1 = { variable = "qm", unit = "m"', "time": 'time = { variable = "t", unit = "s"'}[column]
+    assert entry in text
+    return _scenario(tmp, name, text.replace(entry, f'{entry}, angle = "{angle}"'))
+
+
 def _recording_variants(tmp):
     """Copies of a valid recording with one thing wrong each: binary content, a bad
     parameter or a unit field in the sidecar, positions in mm, a sidecar naming another
@@ -252,6 +260,10 @@ def _cases(tmp):
           "--format", "xlsx"], "invalid choice: 'xlsx'"),
         (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _scenario(tmp, "map_syntax.toml", "[robot\n"), "--out",
           str(tmp / "imp")], "map_syntax.toml: not valid TOML"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _emps_map(tmp, "wrap_q.toml", "q1", "wrap"), "--out",
+          str(tmp / "imp")], "q1 is a position in m (a prismatic joint): only an angle column"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _emps_map(tmp, "wrap_t.toml", "time", "unwrap"), "--out",
+          str(tmp / "imp")], "field columns.time.angle: time is a time: only an angle column"),
         (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--solver", "bogus"], "invalid choice: 'bogus'"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--window", "-1"], "window = -1.0 must be"),
