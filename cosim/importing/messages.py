@@ -26,7 +26,6 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ImportFailure
-from .sources import Source
 
 #: pseudo-fields: the log's times of a message [s] (``log_time`` as the recorder received it)
 CLOCKS = ("log_time",)
@@ -130,11 +129,17 @@ class _Fields(dict):
 
 
 @dataclass
-class MessageSource(Source):
-    """A ROS 2 bag or an MCAP file (see the module docstring).
+class MessageSource:
+    """A ROS 2 bag or an MCAP file (see the module docstring); used as a
+    :class:`~cosim.importing.sources.Source` (the same attributes and methods).
 
     Attributes
     ----------
+    path : Path
+    format : str
+        ``"rosbag2"`` or ``"mcap"``.
+    shapes : dict
+        Variable name (``"<topic>:<field>"``) -> shape (messages, 1).
     topics : dict
         Topic name -> its type, message count and the fields of its first message.
     dropped : int
@@ -142,6 +147,10 @@ class MessageSource(Source):
         every topic used).
     """
 
+    path: Path
+    format: str
+    shapes: dict
+    what: dict = field(default_factory=dict)
     topics: dict = field(default_factory=dict)
     dropped: int = 0
     _reader_path: Path | None = None

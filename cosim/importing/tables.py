@@ -8,18 +8,25 @@ table viewer shows them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .errors import ImportFailure
-from .sources import Source
 
 
 @dataclass
-class ParquetSource(Source):
-    """A Parquet file (see the module docstring)."""
+class ParquetSource:
+    """A Parquet file (see the module docstring); used as a
+    :class:`~cosim.importing.sources.Source` (the same attributes and methods): ``format``
+    is ``"parquet"``, ``shapes`` column name -> (rows, 1), (rows, k) or (rows, None) for
+    lists whose length is known when read, ``what`` the columns that are not numbers."""
+
+    path: Path
+    format: str
+    shapes: dict
+    what: dict = field(default_factory=dict)
 
     def row_label(self, indices) -> str:
         idx = [int(i) for i in indices[:5]]
