@@ -208,3 +208,13 @@ def test_parquet_errors(tmp_path, capsys):
     _fails(tmp_path, capsys, tmp_path / "bad.parquet", body + 'q1 = "qq"\n', "variable 'qq'", "did you mean 'q'")
     (tmp_path / "fake.parquet").write_text("t,q\n1,2\n")
     _fails(tmp_path, capsys, tmp_path / "fake.parquet", body + 'q1 = "q"\n', "is not a Parquet file")
+
+
+def test_cli_imports_a_bag_folder(tmp_path, capsys):
+    """`cosim import BAG_FOLDER` (the folder holding metadata.yaml) writes the recording."""
+    bag = _write_bag(tmp_path / "run1", "mcap")
+    (tmp_path / "map.toml").write_text(MAP % "header.stamp")
+    assert main(["import", str(bag), "--map", str(tmp_path / "map.toml"), "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert "from rosbag2" in out and f"({N - 1} rows" in out, out
+    assert (tmp_path / "out" / "run1.csv").is_file() and (tmp_path / "out" / "run1.json").is_file()
