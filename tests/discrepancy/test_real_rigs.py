@@ -8,7 +8,8 @@ this code computed.
   time-invariant system with a 3rd degree polynomial static nonlinearity around it in feedback".
   The description (robots/silverbox.toml) has a mass and nothing else: the diagnosis has to find a
   force linear in the position, one cubic in the position and a damping, and nothing it cannot
-  explain.
+  explain; its cubic coefficient against Noël and Schoukens 2017's, b = 3.98 (identified on other
+  Silverbox records, at 2441 Hz; 3.96 at 12205 Hz), in the same units (input and output in V).
 * Pick-and-place machine (Juloski, Heemels, Ferrari-Trecate 2004, data/pickplace/): a vertical
   axis recorded in open loop whose dynamics the authors identify as hybrid, "unilateral contact
   and saturation phenomena characterize the hybrid dynamics": no smooth single-mode model
@@ -48,7 +49,9 @@ def test_silverbox_the_diagnosis_finds_the_duffing_structure(silverbox):
     (term,) = d.discovered
     # the literature's structure: a linear spring a y and a cubic b y^3 on a mass-damper
     assert {"spring", "cubic"} <= set(term.terms), term.equation
-    assert "not named as the physics" not in d.conclusion, d.conclusion
+    assert term.partial == "", term.partial                # named as the physics, no structure left
+    b = term.coefficients["rail[1].force_k3"]
+    assert 0 < b.ci95 < 0.5 * b.value and abs(b.value - 3.98) <= b.ci95, term.equation
     th = d.plant_parameters()
     # physical (a stable second-order system): positive stiffness, mass and damping
     assert th["rail[1].force_k1"] > 0, term.equation
@@ -62,8 +65,8 @@ def test_pickplace_no_single_smooth_model_and_a_force_switching_with_position(pi
     d = pickplace
     assert not d.warnings, d.warnings
     # hybrid dynamics (contact and saturation): structure is left, nothing named with confidence
-    assert "not named as the physics" in d.conclusion or "structure left" in d.conclusion, d.conclusion
     (term,) = d.discovered
+    assert term.partial, term.equation
     assert "step" in term.terms, term.equation           # a force that switches on over a short stretch of q
     th = d.plant_parameters()
     damping = [th.get("rail[1].viscous", 0.0) + th.get(k, 0.0) for k in ("rail[1].force_vpos", "rail[1].force_vneg")]
