@@ -5,7 +5,9 @@ A variable of such a source is one numeric field of one topic's messages, named
 ``"<topic>:<field>"`` (a map says ``{ topic = "/joint_states", field = "position[0]" }``,
 :func:`variable_name`).  A field is a path into the message: attribute names joined by dots,
 array elements by ``[k]`` (0-based, as ROS counts): ``position[0]``, ``header.stamp``,
-``twist.linear.x``.  A ``builtin_interfaces/Time`` (``header.stamp``) is read in seconds; the
+``twist.linear.x``; ``[label]`` picks the element at the place ``label`` has in the ``name`` list
+of the message holding the array, on every message (``position[elbow]`` of a
+sensor_msgs/JointState, whatever the order of its joints).  A ``builtin_interfaces/Time`` (``header.stamp``) is read in seconds; the
 pseudo-fields :data:`CLOCKS` are the log's own times of each message.
 
 Times (a stamp or a log time) are made relative to the first message of the topic that gives
@@ -31,8 +33,13 @@ from .errors import ImportFailure
 CLOCKS = ("log_time",)
 #: fields read as times (relative to the time topic's first message, in s)
 _TIME_TYPES = ("builtin_interfaces/msg/Time",)
-_STEP = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[([0-9]+)\]")
-_PATH = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*|\[[0-9]+\])*$")
+_STEP = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[([0-9]+)\]|\[([^\[\]0-9][^\[\]]*)\]")
+_PATH = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*|\[[0-9]+\]|\[[^\[\]0-9][^\[\]]*\])*$")
+
+
+class _Name(str):
+    """A step ``[label]``: the element of an array at the place ``label`` has in the ``name``
+    list of the message holding the array (sensor_msgs/JointState's ``position[elbow]``)."""
 _SEP = ":"
 
 
@@ -57,7 +64,8 @@ def _steps(path: str):
     """A field path as steps: attribute names (str) and indices (int); None if malformed."""
     if not _PATH.match(path):
         return None
-    return [m.group(1) if m.group(1) is not None else int(m.group(2)) for m in _STEP.finditer(path)]
+    return [m.group(1) if m.group(1) is not None else int(m.group(2)) if m.group(2) is not None
+            else _Name(m.group(3)) for m in _STEP.finditer(path)]
 
 
 def _is_message(v) -> bool:
@@ -116,7 +124,7 @@ class _Fields(dict):
             return False
         try:
             v = _value(t.first, steps)
-        except (IndexError, AttributeError, TypeError):
+        except (IndexError, AttributeError, TypeError, KeyError):
             return False
         if isinstance(v, (bool, int, float, np.number, np.bool_)) or getattr(v, "__msgtype__", "") in _TIME_TYPES:
             t.fields[path] = v
@@ -180,10 +188,19 @@ class MessageSource:
         if steps is None:
             return ImportFailure(self.path, f"{where}: not a field path (names joined by '.', indices as [k], "
                                             f"e.g. position[0] or header.stamp)")
-        obj = t.first
+        obj = parent = t.first
         for k, s in enumerate(steps):
             done = _format_path(steps[:k])
-            if isinstance(s, int):
+            if isinstance(s, _Name):
+                names = getattr(parent, "name", None) if _is_message(parent) else None
+                if not isinstance(names, (list, tuple, np.ndarray)):
+                    return ImportFailure(self.path, f"{where}: [{s}] picks by name, but the message holding {done} "
+                                                    f"has no name list (give an index, e.g. {done}[0])")
+                if s not in list(names):
+                    return ImportFailure(self.path, f"{where}: {s!r} is not in the first message's name list (it "
+                                                    f"has: {', '.join(map(str, names))})")
+                obj = obj[list(names).index(s)]
+            elif isinstance(s, int):
                 if not isinstance(obj, (list, tuple, np.ndarray)):
                     return ImportFailure(self.path, f"{where}: {done or 'the message'} is not an array")
                 if not 0 <= s < len(obj):
@@ -197,7 +214,7 @@ class MessageSource:
                     hint = f"; did you mean {_format_path(steps[:k] + [close[0]])!r}?" if close else ""
                     return ImportFailure(self.path, f"{where}: {t.msgtype}{' ' + done if done else ''} has no "
                                                     f"field {s!r} (it has: {', '.join(names)}){hint}")
-                obj = getattr(obj, s)
+                parent, obj = obj, getattr(obj, s)
         if isinstance(obj, (list, tuple, np.ndarray)):
             return ImportFailure(self.path, f"{where}: is an array of {len(obj)} value(s); name one element, "
                                             f"e.g. {path}[0]")
@@ -224,7 +241,7 @@ class MessageSource:
 def _format_path(steps) -> str:
     out = ""
     for s in steps:
-        out += f"[{s}]" if isinstance(s, int) else (f".{s}" if out else s)
+        out += f"[{s}]" if isinstance(s, (int, _Name)) else (f".{s}" if out else s)
     return out
 
 
@@ -239,14 +256,25 @@ def _is_time(topic: _Topic, path: str) -> bool:
 
 
 def _value(msg, steps):
+    parent = msg
     for s in steps:
         if isinstance(s, int):
             msg = msg[s]
+        elif isinstance(s, _Name):
+            msg = msg[_place(parent, s)]
         elif _is_message(msg) and not s.startswith("__"):
-            msg = getattr(msg, s)
+            parent, msg = msg, getattr(msg, s)
         else:
             raise AttributeError(s)
     return msg
+
+
+def _place(parent, label: str) -> int:
+    """Where ``label`` is in the ``name`` list of ``parent`` (IndexError when it is not)."""
+    names = getattr(parent, "name", None) if _is_message(parent) else None
+    if not isinstance(names, (list, tuple, np.ndarray)) or label not in list(names):
+        raise IndexError(label)
+    return list(names).index(label)
 
 
 def _read(src: MessageSource, wanted: dict, progress) -> tuple[dict, dict]:
@@ -275,8 +303,8 @@ def _read(src: MessageSource, wanted: dict, progress) -> tuple[dict, dict]:
                         v = _value(msg, steps)
                     except (IndexError, AttributeError):
                         raise ImportFailure(src.path, f"topic {t!r}, field {path!r}: message {k} (1-based) has no "
-                                                      f"such element (its arrays are shorter than the first "
-                                                      f"message's)") from None
+                                                      f"such element (an array shorter than the first message's, "
+                                                      f"or a name missing from its name list)") from None
                     if _is_message(v):
                         v = int(v.sec) * 1_000_000_000 + int(v.nanosec)
                     values[n].append(v)

@@ -218,3 +218,32 @@ def test_cli_imports_a_bag_folder(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "from rosbag2" in out and f"({N - 1} rows" in out, out
     assert (tmp_path / "out" / "run1.csv").is_file() and (tmp_path / "out" / "run1.json").is_file()
+
+
+def test_joint_picked_by_name_whatever_the_order(tmp_path, capsys):
+    """`position[b]`: the element where "b" is in each message's name list; the publisher swaps
+    the order of its two joints on every other message."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    JS, H, T = (ts.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header",
+                                      "builtin_interfaces/msg/Time"))
+    t, q, qd, tau, _ = _signals()
+    with Writer(tmp_path / "swapped", version=9) as w:
+        c = w.add_connection("/joint_states", JS.__msgtype__, typestore=ts)
+        for k in range(N):
+            ns = T0_NS + int(round(t[k] * 1e9))
+            mine = [q[k], qd[k], tau[k]]
+            order = ["a", "b"] if k % 2 == 0 else ["b", "a"]
+            arr = [np.array([9.0, v]) if k % 2 == 0 else np.array([v, 9.0]) for v in mine]
+            m = JS(header=H(stamp=T(sec=ns // 10**9, nanosec=ns % 10**9), frame_id=""), name=order,
+                   position=arr[0], velocity=arr[1], effort=arr[2])
+            w.write(c, ns, ts.serialize_cdr(m, JS.__msgtype__))
+    body = (MAP % "header.stamp").split("qref1")[0].replace("[1]", "[b]")
+    (tmp_path / "map.toml").write_text(body)
+    rec = to_recording(tmp_path / "swapped", tmp_path / "map.toml")
+    np.testing.assert_array_equal(rec.q[:, 0], q)
+    np.testing.assert_array_equal(rec.tau[:, 0], tau)
+    _fails(tmp_path, capsys, tmp_path / "swapped", body.replace("position[b]", "position[c]"), "field 'position[c]'",
+           "'c' is not in the first message's name list (it has: a, b)")
