@@ -55,6 +55,8 @@ def derive(x: np.ndarray, t: np.ndarray, method: str) -> np.ndarray:
 
 
 def _missing(src: Source, var: str, column: str, role: str = "") -> ImportFailure:
+    if hasattr(src, "missing"):  # a message log says topic and field (messages.py)
+        return src.missing(var, column)
     names = list(src.shapes)
     close = difflib.get_close_matches(var, names, n=1)
     have = ", ".join(names[:20]) + (f", ... ({len(names)} in all)" if len(names) > 20 else "")

@@ -28,7 +28,7 @@ DERIVATIONS = {
 TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters")
 #: fields of a column
 COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
-                 "angle")
+                 "angle", "topic", "field")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
@@ -223,6 +223,8 @@ def _column(path, name, spec) -> Column:
         c.start = _number_or_variable(path, f"{f}.start", spec.get("start", 0.0), allow_variable=False)
     elif "start" in spec:
         _fail(path, f"{f}.start", "start goes with period (time = { period = ..., start = ... })")
+    elif "topic" in spec or "field" in spec:
+        c.variable = _topic_field(path, f, spec)
     else:
         v = spec.get("variable")
         if not isinstance(v, str) or not v:
@@ -248,6 +250,24 @@ def _column(path, name, spec) -> Column:
             _fail(path, f"{f}.optional", f"must be true or false, got {spec['optional']!r}")
         c.optional = spec["optional"]
     return c
+
+
+def _topic_field(path, f, spec) -> str:
+    """A message log's field (a ROS 2 bag, an MCAP file): ``topic`` and ``field``, as the
+    source's variable name (messages.py)."""
+    from .messages import variable_name
+
+    if "variable" in spec:
+        _fail(path, f"{f}.variable", "give either variable (a file's variable) or topic and field (a message "
+                                     "log's), not both")
+    for k in ("topic", "field"):
+        v = spec.get(k)
+        if not isinstance(v, str) or not v:
+            other = "field" if k == "topic" else "topic"
+            _fail(path, f"{f}.{k}", f"missing or not a string: a message log's column needs topic and field "
+                                    f"(e.g. topic = \"/joint_states\", field = \"position[0]\"), got {other} only"
+                  if k not in spec else f"must be a non-empty string, got {v!r}")
+    return variable_name(spec["topic"], spec["field"])
 
 
 def si_unit(name: str, facts) -> str | None:
