@@ -178,7 +178,8 @@ class Model:
 
     def joint_limits(self):
         """``(qmin, qmax)`` of the actuated joints [m or rad], arrays of shape (nd,); NaN
-        where the robot has no limit (the current values of the limit parameters)."""
+        where the robot has no limit (a continuous axis, docs/robots.md; the current values
+        of the limit parameters)."""
         lo, hi = np.full(self.ndof, np.nan), np.full(self.ndof, np.nan)
         a, b = C.c_int(), C.c_int()
         for i in range(self.ndof):

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import units as U
+from .angles import ANGLE_OPTIONS, angle_column_error
 from .errors import ImportFailure
 from .sources import FORMATS
 
@@ -26,7 +27,8 @@ DERIVATIONS = {
 #: the map's top-level fields
 TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters", "injection")
 #: fields of a column
-COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start")
+COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
+                 "angle", "topic", "field")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
@@ -55,6 +57,7 @@ class Column:
     source: str | None = None          # the column a derived one comes from
     period: float | None = None        # time only: a sampling period instead of a variable
     start: float = 0.0
+    angle: str | None = None           # "wrap" or "unwrap" (angles.ANGLE_OPTIONS), an angle column only
 
 
 @dataclass
@@ -233,6 +236,8 @@ def _column(path, name, spec) -> Column:
         c.start = _number_or_variable(path, f"{f}.start", spec.get("start", 0.0), allow_variable=False)
     elif "start" in spec:
         _fail(path, f"{f}.start", "start goes with period (time = { period = ..., start = ... })")
+    elif "topic" in spec or "field" in spec:
+        c.variable = _topic_field(path, f, spec)
     else:
         v = spec.get("variable")
         if not isinstance(v, str) or not v:
@@ -249,11 +254,33 @@ def _column(path, name, spec) -> Column:
         c.offset = _number_or_variable(path, f"{f}.offset", spec["offset"])
     if "unit" in spec:
         c.unit = _unit(path, f"{f}.unit", spec["unit"])
+    if "angle" in spec:
+        if spec["angle"] not in ANGLE_OPTIONS:
+            _fail(path, f"{f}.angle", f"must be one of {', '.join(map(repr, ANGLE_OPTIONS))}, got {spec['angle']!r}")
+        c.angle = spec["angle"]
     if "optional" in spec:
         if not isinstance(spec["optional"], bool):
             _fail(path, f"{f}.optional", f"must be true or false, got {spec['optional']!r}")
         c.optional = spec["optional"]
     return c
+
+
+def _topic_field(path, f, spec) -> str:
+    """A message log's field (a ROS 2 bag, an MCAP file): ``topic`` and ``field``, as the
+    source's variable name (messages.py)."""
+    from .messages import variable_name
+
+    if "variable" in spec:
+        _fail(path, f"{f}.variable", "give either variable (a file's variable) or topic and field (a message "
+                                     "log's), not both")
+    for k in ("topic", "field"):
+        v = spec.get(k)
+        if not isinstance(v, str) or not v:
+            other = "field" if k == "topic" else "topic"
+            _fail(path, f"{f}.{k}", f"missing or not a string: a message log's column needs topic and field "
+                                    f"(e.g. topic = \"/joint_states\", field = \"position[0]\"), got {other} only"
+                  if k not in spec else f"must be a non-empty string, got {v!r}")
+    return variable_name(spec["topic"], spec["field"])
 
 
 def si_unit(name: str, facts, injection: dict | None = None) -> str | None:
@@ -303,6 +330,8 @@ def check_columns(m: ImportMap, facts) -> None:
                 U.factor(c.unit, si)
             except ValueError as e:
                 _fail(m.path, f"columns.{name}.unit", str(e))
+        if c.angle is not None and (why := angle_column_error(name, si, facts)):
+            _fail(m.path, f"columns.{name}.angle", why)
     for name in ["time"] + [f"{p}{i}" for i in range(1, nd + 1) for p in ("q", "qd", "tau")]:
         if name not in m.columns:
             hint = f' (or derive it: {name} = {{ derive = "central_difference" }})' if name.startswith("qd") else ""

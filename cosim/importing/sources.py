@@ -1,4 +1,6 @@
-"""Source files of an import: MATLAB (v5 and v7.3/HDF5), plain HDF5, CSV and TSV.
+"""Source files of an import: MATLAB (v5 and v7.3/HDF5), plain HDF5, CSV and TSV here; ROS 2
+bags and MCAP files in :mod:`.messages`, Parquet in :mod:`.tables` (dispatched by
+:func:`open_source`).
 
 :func:`open_source` looks at a file and lists its variables (name -> shape, cheap: nothing
 is loaded); :meth:`Source.load` reads the variables an import needs.  Arrays come back
@@ -18,10 +20,10 @@ import numpy as np
 from .errors import ImportFailure
 
 #: the formats a source may be read as (``[source] format`` in a map)
-FORMATS = ("matlab", "hdf5", "csv", "tsv")
+FORMATS = ("matlab", "hdf5", "csv", "tsv", "rosbag2", "mcap", "parquet")
 
 _EXTENSIONS = {".mat": "matlab", ".h5": "hdf5", ".hdf5": "hdf5", ".csv": "csv", ".tsv": "tsv", ".tab": "tsv",
-               ".txt": "csv"}
+               ".txt": "csv", ".db3": "rosbag2", ".mcap": "mcap", ".parquet": "parquet", ".pq": "parquet"}
 
 
 @dataclass
@@ -86,9 +88,11 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     Parameters
     ----------
     path : str or Path
+        A file, or a ROS 2 bag's folder (the one with ``metadata.yaml``).
     fmt : str, optional
         One of :data:`FORMATS`; default from the extension (``.mat``, ``.h5``/``.hdf5``,
-        ``.csv``/``.txt``, ``.tsv``/``.tab``), else from the content.
+        ``.csv``/``.txt``, ``.tsv``/``.tab``, ``.db3`` (a bag's), ``.mcap``,
+        ``.parquet``/``.pq``), else from the content.
     delimiter : str, optional
         Of a text file; default a tab for TSV, else the one of ``, ; <tab>`` the header
         line has most of.
@@ -108,6 +112,8 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     p = Path(path)
     if not p.exists():
         raise ImportFailure(p, "file not found")
+    if p.is_dir() and (p / "metadata.yaml").is_file() and fmt in (None, "rosbag2"):
+        return _open_other(p, "rosbag2")
     if p.is_dir():
         raise ImportFailure(p, "is a directory, not a source file")
     if not os.access(p, os.R_OK):
@@ -117,11 +123,24 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     if fmt is not None and fmt not in FORMATS:
         raise ImportFailure(p, f"unknown source format {fmt!r} (one of: {', '.join(FORMATS)})")
     fmt = fmt or _EXTENSIONS.get(p.suffix.lower()) or _sniff(p)
+    if fmt in ("rosbag2", "mcap", "parquet"):
+        return _open_other(p, fmt)
     if fmt == "matlab":
         return _open_mat(p)
     if fmt == "hdf5":
         return _open_hdf5(p, matlab=False)
     return _open_text(p, "\t" if fmt == "tsv" and delimiter is None else delimiter, fmt, encoding or "utf-8")
+
+
+def _open_other(p: Path, fmt: str) -> Source:
+    """The readers of the formats kept in their own modules."""
+    if fmt == "parquet":
+        from .tables import open_parquet
+
+        return open_parquet(p)
+    from .messages import open_messages
+
+    return open_messages(p, fmt)
 
 
 def _sniff(p: Path) -> str:
@@ -130,6 +149,12 @@ def _sniff(p: Path) -> str:
         return "matlab"
     if head.startswith(b"\x89HDF"):
         return "hdf5"
+    if head.startswith(b"\x89MCAP"):
+        return "mcap"
+    if head.startswith(b"PAR1"):
+        return "parquet"
+    if head.startswith(b"SQLite format 3\x00"):
+        return "rosbag2"
     return "csv"
 
 

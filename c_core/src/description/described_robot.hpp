@@ -148,6 +148,7 @@ struct Description {
   // after the defaults: DescribedRobot::param_overrides)
   std::vector<std::pair<std::string, std::vector<Override>>> sets;
   std::vector<double> home;
+  bool continuous = false;              // a single R axis declared `continuous = true` (no limits)
   int home_line = 0;
   int name_line = 0;
   Joint joint = Joint::rail;
