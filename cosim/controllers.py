@@ -584,6 +584,76 @@ def step_metrics(t, y, y0: float | None = None, yfinal: float | None = None,
     return out
 
 
+# ------------------------------------------------ a python-control LTI design
+
+class LTIController(_CoreLaw):
+    """A discrete LTI controller on the joint error, ``x+ = A x + B e``, ``tau = C x + D e``
+    (``e = qref - q``), with optional gravity feed-forward: what ``pkm_ctrl`` kind LTI runs.
+
+    Build it with :func:`lti_controller` from a python-control design.
+    """
+
+    kind = "lti"
+
+    def __init__(self, A, B, C, D, *, dt: float, model=None, gravity_feedforward: bool = False, saturation=None):
+        self.A, self.B, self.C, self.D = (np.atleast_2d(np.asarray(a, float)) for a in (A, B, C, D))
+        self.dt, self.model, self.gravity_feedforward, self.saturation = dt, model, gravity_feedforward, saturation
+        self.kp = self.kd = None
+
+    def describe(self) -> dict:
+        """Everything needed to rebuild it (the recording sidecar's ``controller``)."""
+        d = {"type": "lti", "nx": int(self.A.shape[0]), "dt": self.dt,
+             "gravity_feedforward": bool(self.gravity_feedforward),
+             "A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(), "D": self.D.tolist()}
+        if self.saturation is not None:
+            d["saturation"] = np.asarray(self.saturation, float).tolist()
+        return d
+
+
+def lti_controller(sys_d, *, ndof: int, model=None, gravity_feedforward: bool = False,
+                   saturation=None) -> LTIController:
+    """A python-control discrete ``StateSpace`` (inputs: the nd joint errors [m or rad];
+    outputs: the nd efforts [N or N m]) as a controller the core, the compiled loop and
+    the controller FMU run.  A SISO design is applied to every joint (block diagonal).
+
+    Parameters
+    ----------
+    sys_d : control.StateSpace
+        Discrete-time (``sys_d.dt > 0``), e.g. ``control.c2d(pid_tf, dt)`` converted with
+        ``control.ss``.
+    ndof : int
+        Number of joints.
+    model : cosim.core.Model, optional
+        The model the controller believes in (the gravity feed-forward; needed to call it
+        outside a closed loop).
+    gravity_feedforward : bool
+        Add the gravity load at the pose of the measured joints to the output.
+    saturation : float or array_like, shape (nd,), optional
+        Largest effort magnitude per actuator [N or N m].
+
+    Example
+    -------
+    >>> import control
+    >>> from cosim.core import Model
+    >>> from cosim import controllers as ctl
+    >>> m = Model("6pus")
+    >>> pd = control.c2d(control.tf([30.0, 300.0], [1.0]) * control.tf([1.0], [1e-3, 1.0]), 1e-3)
+    >>> c = ctl.lti_controller(control.ss(pd), ndof=6, model=m, gravity_feedforward=True)
+    """
+    if not (getattr(sys_d, "dt", None) and sys_d.dt is not True and sys_d.dt > 0):
+        raise ControllerError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
+    ss = control.ss(sys_d)
+    A, B, C, D = (np.asarray(a, float) for a in (ss.A, ss.B, ss.C, ss.D))
+    if B.shape[1] == 1 and C.shape[0] == 1 and ndof > 1:
+        I = np.eye(ndof)
+        A, B, C, D = np.kron(I, A), np.kron(I, B), np.kron(I, C), np.kron(I, D)
+    if B.shape[1] != ndof or C.shape[0] != ndof:
+        raise ControllerError(f"the design has {B.shape[1]} inputs and {C.shape[0]} outputs; the robot has {ndof} "
+                              f"joints")
+    return LTIController(A, B, C, D, dt=float(ss.dt), model=model, gravity_feedforward=gravity_feedforward,
+                         saturation=saturation)
+
+
 # ------------------------------------------------------------ a rig's controller as data
 
 #: the keys of a discrete controller's description (sidecar / scenario ``[controller]``)

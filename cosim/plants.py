@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import MasterError
+
 
 def _facts(robot):
     """The core's facts of a robot, or None for a name the core does not know (an FMU of
@@ -40,17 +42,6 @@ def _facts(robot):
         return robot_facts(robot)
     except PkmError:
         return None
-
-
-class MasterError(RuntimeError):
-    """A co-simulation that could not go on; says at which time and why.
-
-    ``partial`` holds the :class:`RunResult` of the samples taken before the failure.
-    """
-
-    def __init__(self, message, partial=None):
-        super().__init__(message)
-        self.partial = partial
 
 
 @dataclass
