@@ -126,7 +126,7 @@ def _main(argv, called) -> int:
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
     from ..fmu import FMUError
-    from ..plants import MasterError
+    from ..errors import MasterError
     from ..sweep.errors import SweepError
 
     prog = f"cosim {args.command}"
