@@ -71,8 +71,9 @@ def _rpy(r, p, y):
 
 def _rpy_of(R):
     """URDF's roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    return (math.atan2(R[2, 1], R[2, 2]), math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0])),
-            math.atan2(R[1, 0], R[0, 0]))
+    angles = (math.atan2(R[2, 1], R[2, 2]), math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0])),
+              math.atan2(R[1, 0], R[0, 0]))
+    return tuple(a + 0.0 for a in angles)  # no -0.0 in the text
 
 
 class _Reader:
