@@ -186,7 +186,7 @@ def _merge(a: _Inertial | None, b: _Inertial | None, T):
         d = ci - c
         return Ii + mass * (d @ d * np.eye(3) - np.outer(d, d))
 
-    return _Inertial(m, c, shift(a.m, a.c, a.I) + shift(b.m, c_b, b.I))
+    return _Inertial(m, c, shift(a.m, a.c, a.I) + shift(b.m, c_b, I_b))
 
 
 def _joints(rd, root, links):

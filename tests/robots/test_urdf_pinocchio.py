@@ -96,3 +96,55 @@ def test_rotor_inertia_is_pinocchio_armature():
         M = pin.crba(pm, pd, q[k])
         assert _rel(m.mass_matrix(q[k]), np.triu(M) + np.triu(M, 1).T) < TOL
         assert _rel(m.forward_dynamics(q[k], v[k], tau[k]), pin.aba(pm, pd, q[k], v[k], tau[k])) < TOL
+
+
+MERGED = """<?xml version="1.0"?>
+<robot name="merged_arm">
+  <link name="base"/>
+  <joint name="mount" type="fixed"><parent link="base"/><child link="plate"/>
+    <origin xyz="0.1 -0.2 0.3" rpy="0.3 -0.2 0.5"/></joint>
+  <link name="plate"><inertial><mass value="7"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <joint name="j1" type="continuous"><parent link="plate"/><child link="l1"/>
+    <origin xyz="0 0 0.2" rpy="0 0.1 0"/><axis xyz="0 0.6 0.8"/></joint>
+  <link name="l1"><inertial><origin xyz="0.1 0.02 0.3" rpy="0.4 0.1 -0.3"/><mass value="3"/>
+    <inertia ixx="0.05" ixy="0.004" ixz="-0.003" iyy="0.06" iyz="0.002" izz="0.04"/></inertial></link>
+  <joint name="bracket" type="fixed"><parent link="l1"/><child link="motor"/>
+    <origin xyz="0.05 0.1 0.4" rpy="-0.7 0.2 1.1"/></joint>
+  <link name="motor"><inertial><origin xyz="0.02 -0.01 0.05" rpy="0.2 0.3 0.1"/><mass value="2.2"/>
+    <inertia ixx="0.01" ixy="0.001" ixz="0" iyy="0.012" iyz="-0.001" izz="0.008"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="motor"/><child link="l2"/>
+    <origin xyz="0.3 0 0.1" rpy="1.2 0 -0.4"/><axis xyz="1 0 0"/><limit lower="-2" upper="2.5" effort="100" velocity="3"/></joint>
+  <link name="l2"><inertial><origin xyz="0.2 0.01 0" rpy="0 0 0.2"/><mass value="1.5"/>
+    <inertia ixx="0.004" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.4 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="100" velocity="3"/></joint>
+  <link name="l3"><inertial><origin xyz="0.1 0 0"/><mass value="0.8"/>
+    <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/></inertial></link>
+  <joint name="flange" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0.2 0 0.05" rpy="0 1.5 0"/></joint>
+  <link name="tip"><inertial><mass value="0.3"/><inertia ixx="0.0002" ixy="0" ixz="0" iyy="0.0002" iyz="0" izz="0.0002"/></inertial></link>
+</robot>
+"""
+
+
+def test_fixed_joints_merge_as_pinocchio_merges_them(tmp_path):
+    """Massive links on fixed joints (with turned inertials) merged into the moving links, a
+    continuous joint on a skew axis, a massive tool link: the same dynamics as Pinocchio's."""
+    path = tmp_path / "merged_arm.urdf"
+    path.write_text(MERGED)
+    m = Model(register_urdf(str(path)))
+    pm = pin.buildModelFromUrdf(str(path))
+    pd = pm.createData()
+    assert list(m.facts.pose_names) == ["j1", "j2", "j3"]
+    assert np.isnan(m.joint_limits()[0][0])  # continuous: no limit
+    assert pm.nq == 4  # Pinocchio's continuous joint is (cos q, sin q)
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        q = np.array([rng.uniform(-6, 6), rng.uniform(-2, 2.5), rng.uniform(-2, 2)])
+        qp = np.array([np.cos(q[0]), np.sin(q[0]), q[1], q[2]])
+        v, a, tau = rng.normal(0, 2, 3), rng.normal(0, 4, 3), rng.normal(0, 20, 3)
+        assert _rel(m.inverse_dynamics(q, v, a), pin.rnea(pm, pd, qp, v, a)) < TOL
+        M = pin.crba(pm, pd, qp)
+        assert _rel(m.mass_matrix(q), np.triu(M) + np.triu(M, 1).T) < TOL
+        assert _rel(m.forward_dynamics(q, v, tau), pin.aba(pm, pd, qp, v, tau)) < TOL
+        pin.framesForwardKinematics(pm, pd, qp)
+        assert _rel(m.platform_pose(q)[0][:3], pd.oMf[pm.getFrameId("tip")].translation) < TOL
