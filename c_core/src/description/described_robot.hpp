@@ -157,6 +157,7 @@ struct Description {
 
 // Reads and checks a description; throws Error(PKM_ERR_ARGUMENT, "file:line: field: what").
 Description read_description(const std::string& text, const std::string& file);
+Description read_description(const toml::Document& doc, const std::string& file);  // parsed already
 
 class DescribedRobot : public Robot {
  public:

@@ -70,7 +70,7 @@ const Robot* make(const std::string& path, const std::string& text) {
   static int serial = 0;
   std::vector<ChainJointInfo> chain;
   const toml::Document doc = toml::parse(text, path);
-  Description desc = is_serial_description(doc) ? read_serial_description(doc, path, chain) : read_description(text, path);
+  Description desc = is_serial_description(doc) ? read_serial_description(doc, path, chain) : read_description(doc, path);
   std::unique_ptr<DescribedRobot> r;
   if (desc.joint == Joint::serial) r = std::make_unique<SerialRobot>(std::move(desc), std::move(chain), ++serial);
   else if (desc.joint == Joint::axis) r = std::make_unique<AxisRobot>(std::move(desc), ++serial);
