@@ -18,7 +18,7 @@ KP, KD = 3000.0, 150.0
 @pytest.fixture(scope="module")
 def ur5(tmp_path_factory):
     out = tmp_path_factory.mktemp("ur5") / "ur5.toml"
-    assert main(["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--tip", "tool0", "--out", str(out)]) == 0
+    assert main(["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--tip", "tool0", "--name", "ur5_loop", "--out", str(out)]) == 0
     # the drive layer as for any robot: gearbox-reflected rotor inertias, 0.4 kg m2 a joint
     with open(out, "a") as f:
         f.write("[defaults]\n" + "".join(f'"joint[{i}].rotor_inertia" = 0.4\n' for i in range(1, 7)))

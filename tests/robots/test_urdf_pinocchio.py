@@ -27,7 +27,7 @@ def _rel(a, b):
 
 def _arm(file, tip):
     path = str(REPO / "robots" / "urdf" / file)
-    m = Model(register_urdf(path, tip=tip))
+    m = Model(register_urdf(path, tip=tip, name=Path(file).stem + "_pin"))
     pm = pin.buildModelFromUrdf(path)
     assert pm.nq == m.ndof == 6
     assert [pm.names[i] for i in range(1, pm.njoints)] == list(m.facts.pose_names)
