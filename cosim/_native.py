@@ -152,6 +152,7 @@ _SIGNATURES = {
     "pkm_chain_points": (I, [P, P, D, D]),
     "pkm_platform_pose": (I, [P, P, D, D, D]),
     "pkm_robot_file": (CH, [CH]),
+    "pkm_robot_register_description": (I, [CH, CH, C.c_char_p, S]),
     "pkm_model_pose_name": (CH, [P, I]),
     "pkm_model_pose_unit": (CH, [P, I]),
     "pkm_model_tracker_count": (I, [P]),

@@ -224,7 +224,9 @@ PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, d
  * solved from the legs' passive revolute joints by Newton (PKM_ERR_NO_CONVERGENCE names the
  * pose if the constraints are not met to 1e-14 m) -- the parasitic motion of 3-PRS and 3-RPS heads
  * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
- * of held ones zero.  Described robots; PKM_ERR_UNSUPPORTED for those written in C++. */
+ * of held ones zero.  A serial arm's (docs/robots.md, Serial arms) X is its tool frame and S its
+ * Jacobian in these coordinates (position rows the geometric Jacobian's).  Described robots;
+ * PKM_ERR_UNSUPPORTED for those written in C++. */
 PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
                               double* S);
 
