@@ -2,7 +2,7 @@
 pkm_closed_loop's inject).
 
 Oracles, none of them the injection code: the truth runs are the stepwise loop with a plain
-Python controller that adds the signal itself (``pd`` law + w, clipped by hand where the
+Python controller that adds the signal itself (a PD law written in the test + w, clipped by hand where the
 signal goes before the saturation; the law given q + w or qref + w); the discrete
 controller's injected part is checked against its closed form (w one computation delay
 later while nothing clips).
@@ -40,7 +40,8 @@ def _signal(amplitude):
 
 def _truth(m, ref, point, w):
     """The stepwise loop with a Python controller that adds w itself at ``point``."""
-    raw = ctl.pd(ndof=1, kp=KP, kd=KD)  # the law, unsaturated
+    def raw(t, q, qd, row):  # the PD law, unsaturated, written here
+        return KP * (row.q - q) + KD * (row.qd - qd)
 
     def controller(t, q, qd, row):
         k = int(round(t / H))

@@ -227,7 +227,13 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     cols, n, tvar = {}, None, tc.variable
     for name, c in present.items():
         if c.variable:
-            v = _vector(src, c.variable, data[c.variable], name, c.column)
+            a = data[c.variable]
+            if c.row is not None:  # one signal per row: its row, as a column
+                if c.row > a.shape[0]:
+                    raise ImportFailure(src.path, f"has {a.shape[0]} rows, the map asks for row {c.row}",
+                                        variable=c.variable, column=name)
+                a = a[c.row - 1:c.row, :].T
+            v = _vector(src, c.variable, a, name, c.column)
             if name == "time" or (tc.period is not None and n is None):
                 n = len(v)
             cols[name] = v
@@ -314,6 +320,8 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
         what = c.variable if c.variable else f"{c.start:g} + {c.period:g} * k"
         if c.column:
             what += f"[:, {c.column}]"
+        if c.row:
+            what += f"[{c.row}, :]"
         sc, off = c.scale, c.offset
         if sc != 1.0:
             what += f" * {sc} ({scal.values[sc]:.17g})" if isinstance(sc, str) else f" * {sc:.17g}"

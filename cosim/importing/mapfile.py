@@ -27,7 +27,7 @@ DERIVATIONS = {
 #: the map's top-level fields
 TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters", "injection")
 #: fields of a column
-COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
+COLUMN_FIELDS = ("variable", "column", "row", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
                  "angle", "topic", "field")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
@@ -49,6 +49,7 @@ class Column:
     name: str
     variable: str | None = None
     column: int | None = None          # 1-based column of a matrix variable
+    row: int | None = None             # 1-based row of a matrix variable holding one signal per row
     scale: object = 1.0                # a number, or the name of a scalar variable (str)
     offset: object = 0.0               # idem, in the unit after the scale
     unit: str | None = None            # of the variable (after scale and offset); None: the SI unit
@@ -248,6 +249,14 @@ def _column(path, name, spec) -> Column:
         if isinstance(k, bool) or not isinstance(k, int) or k < 1:
             _fail(path, f"{f}.column", f"must be a column number >= 1 of a matrix variable, got {k!r}")
         c.column = k
+    if "row" in spec:
+        k = spec["row"]
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            _fail(path, f"{f}.row", f"must be a row number >= 1 of a matrix variable, got {k!r}")
+        if c.column is not None:
+            _fail(path, f"{f}.row", "give column or row, not both: a column is one signal of an n x k matrix, a row "
+                                    "one of a k x n matrix")
+        c.row = k
     if "scale" in spec:
         c.scale = _number_or_variable(path, f"{f}.scale", spec["scale"])
     if "offset" in spec:

@@ -172,14 +172,62 @@ def _open_mat(p: Path) -> Source:
     try:
         listing = scipy.io.whosmat(str(p))
     except Exception as e:  # scipy raises ValueError, TypeError, OSError... on a foreign file
-        raise ImportFailure(p, f"is not a MATLAB file (v5, or v7.3 which is HDF5): {_reason(e)}") from None
+        listing = _listing_by_loading(p, e)
     shapes, what = {}, {}
     for name, shape, cls in listing:
         shapes[name] = tuple(shape)
         if cls not in ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
                        "logical"):
             what[name] = cls
+        if cls == "struct" and tuple(shape) == (1, 1):  # its fields, "name/field" as in a v7.3 (HDF5) file
+            for field_name, a in _struct_fields(name, _read_mat5(p, [name])[name]):
+                a = np.asarray(a)
+                shapes[field_name] = tuple(a.shape) if a.ndim == 2 else (a.size, 1) if a.ndim == 1 else a.shape
+                if a.dtype.kind not in "fiub":
+                    what[field_name] = "struct" if a.dtype.names else "char" if a.dtype.kind == "U" else str(a.dtype)
     return Source(p, "matlab-v5", shapes, what)
+
+
+def _listing_by_loading(p: Path, e: Exception) -> list:
+    """whosmat's (name, shape, class) from the loaded file: scipy's whosmat fails on some
+    files it reads (a MATLAB object among the variables, as a saved SerialLink)."""
+    import scipy.io
+
+    try:
+        raw = scipy.io.loadmat(str(p))
+    except Exception:
+        raise ImportFailure(p, f"is not a MATLAB file (v5, or v7.3 which is HDF5): {_reason(e)}") from None
+    out = []
+    for name, a in raw.items():
+        if name.startswith("__") or not isinstance(a, np.ndarray):
+            continue
+        cls = "struct" if a.dtype.names else "char" if a.dtype.kind == "U" else "object" if a.dtype.kind == "O" \
+            else "double" if a.dtype.kind in "fiub" else str(a.dtype)
+        out.append((name, a.shape, cls))
+    return out
+
+
+def _read_mat5(p: Path, names) -> dict:
+    import scipy.io
+
+    try:
+        return scipy.io.loadmat(str(p), variable_names=names)
+    except Exception as e:
+        raise ImportFailure(p, f"cannot be read as MATLAB v5: {_reason(e)}") from None
+
+
+def _struct_fields(name: str, a):
+    """("name/field", value) of a 1 x 1 MATLAB struct, nested 1 x 1 structs walked."""
+    a = np.asarray(a)
+    if not a.dtype.names or a.size != 1:
+        return
+    rec = a.reshape(-1)[0]
+    for f in a.dtype.names:
+        v = np.asarray(rec[f])
+        if v.dtype.names and v.size == 1:
+            yield from _struct_fields(f"{name}/{f}", v)
+        else:
+            yield f"{name}/{f}", v
 
 
 def _reason(e: Exception) -> str:
@@ -188,13 +236,10 @@ def _reason(e: Exception) -> str:
 
 
 def _load_mat5(src: Source, names) -> dict:
-    import scipy.io
-
-    try:
-        raw = scipy.io.loadmat(str(src.path), variable_names=names)
-    except Exception as e:
-        raise ImportFailure(src.path, f"cannot be read as MATLAB v5: {_reason(e)}") from None
-    return {n: _numbers(src, n, raw[n]) for n in names}
+    tops = sorted({n.split("/", 1)[0] for n in names})
+    raw = _read_mat5(src.path, tops)
+    fields = dict(kv for t in tops for kv in _struct_fields(t, raw[t]))  # a struct's fields, "name/field"
+    return {n: _numbers(src, n, fields[n] if n in fields else raw[n]) for n in names}
 
 
 def _numbers(src: Source, name: str, a) -> np.ndarray:

@@ -102,7 +102,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
           "parasitic": ["parasitic", "{}"], "map": ["map", "{}", "--out", "{tmp}/m.png"],
-          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"],
+          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
           "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
@@ -123,6 +123,7 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
              "map": ["map", "tripod_3rps", "--out", "{}"],
+             "urdf": ["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 
@@ -234,6 +235,8 @@ def _cases(tmp):
         (["parasitic", "tripod_3rps", "--map", str(tmp / "m.png"), "--grid", "1"], "--grid 1: give 2 to 201 points"),
         (["parasitic", "tripod_3rps", "--pose", "0.9", "0.0", "0.0"], "leg 1 joint q = "),
         (["map", "tripod_3rps", "--slices", "0"], "--slices 0: give 1 to 9 rows"),
+        (["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--tip", "forearm_link"],
+         'tip link "forearm_link" is not fixed to the last moving link'),
         (["map", "tripod_3rps", "--span", "-1"], "span = -1.0: give the map's half-width about home as a positive"),
         (["map", "tripod_3rps", "--axes", "rx", "x"], "--axes: 'x' is not a coordinate of tripod_3rps"),
         # kept from the first corpus

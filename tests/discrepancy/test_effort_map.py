@@ -83,7 +83,7 @@ def test_a_drive_delivering_55_percent_is_a_gain_and_the_physics_is_fitted_on_th
 
     m = Model("emps")
     n = 6000
-    law = ctl.pd(ndof=1, kp=2e4, kd=1.5e3)
+    law = ctl.pd(ndof=1, kp=2e4, kd=1.5e3, model=m)
     state = {"y": 0.0, "u": []}
 
     def drive(t, q, qd, row):  # the drive between the controller and the carriage

@@ -87,7 +87,10 @@ std::string leg_type_names() {
 }
 
 Description read_description(const std::string& text, const std::string& file) {
-  const toml::Document doc = toml::parse(text, file);
+  return read_description(toml::parse(text, file), file);
+}
+
+Description read_description(const toml::Document& doc, const std::string& file) {
   Reader rd{doc};
   Description d;
   d.file = file;
