@@ -4,20 +4,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "c_check.h"
 #include "pkm/pkm.h"
-
-static int failures = 0, passed = 0;
-#define CHECK(cond, ...)                                     \
-  do {                                                       \
-    if (cond) {                                              \
-      ++passed;                                              \
-    } else {                                                 \
-      ++failures;                                            \
-      printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
-      printf(__VA_ARGS__);                                   \
-      printf("\n");                                          \
-    }                                                        \
-  } while (0)
 
 int main(void) {
   char err[512] = "";
