@@ -61,7 +61,7 @@ def _strip_arrays(d) -> str:
 
 def markdown(d, files: dict) -> str:
     L = [f"# Discrepancy diagnosis: {Path(d.recording).name}", ""]
-    L += [f"**{d.conclusion}**", ""]
+    L += [f"**{d.conclusion}**", ""] + ([f"Details: {d.details}", ""] if d.details else [])
     s = d.settings
     L += [f"Robot `{d.robot}`, {s['samples']} samples at {1 / s['dt']:.4g} Hz "
           f"({s['samples'] * s['dt']:.3g} s); residuals smoothed over {s['smoothing_samples']} samples "
