@@ -55,6 +55,8 @@ def run_campaign(args, out: Path):
         return 0
     print_campaign(res)
     print(f"\nreport of the joint fit: {res.joint.files.get('report')}; campaign: {out / 'campaign.json'}")
+    if args.html:  # the page draws one recording's motion; a campaign has several
+        print("(no report.html for a campaign: the page draws one recording; diagnose a run alone for it)")
     return 0
 
 

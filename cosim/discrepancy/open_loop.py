@@ -148,7 +148,8 @@ def sentence(replay: dict | None) -> str:
     if replay.get("kind") == "open loop":
         unit = replay.get("unit", "")
         runs = "; ".join(f"{name}: rate RMS " + " ".join(f"{v:.3g}" for v in r["rms_qd"])
-                         + f" {unit}/s (" + " ".join(f"{100 * v:.2f} %" for v in r["rel_qd"]) + ")"
+                         + f" {unit}/s (" + " ".join(f"{100 * v:.2f} %" for v in r["rel_qd"])
+                         + " of the recorded rates' RMS)"
                          if "rms_qd" in r else f"{name}: {r.get('error')}" for name, r in replay["runs"].items())
         return f"replay: {replay['method']}; {runs}"
     return (f"replay: closed loop from {replay.get('start', 0):.2f} s (the recorded controller and reference, "

@@ -28,8 +28,10 @@ import math
 
 import numpy as np
 
-#: a mass or an inertia below this share of its nominal value is "at ~0"
-NEAR_ZERO = 1e-3
+#: a mass or an inertia below this share of its nominal value is "at ~0" (no description of a rig
+#: is a hundred times off; a fit that says so is degenerate or the recording is not the rig's),
+#: and so is an actuator limit below this share of the largest recorded effort
+NEAR_ZERO = 1e-2
 #: a force-like parameter larger than this many times the largest recorded effort is no friction
 TOO_LARGE = 100.0
 #: core parameter suffixes of masses and inertias
@@ -134,7 +136,9 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
     if not effects and not found and not left:
         return ""
     better = f" Held-out residual RMS {gain:.3g}x lower." if gain and math.isfinite(gain) and gain > 0 else ""
-    names = [_title(e) for e in effects] + [t.equation for t in found]
+    # a discovered term by its kinds (its equation, long, is in the details)
+    short = {id(t): f"a force on {t.channel} no library effect names ({', '.join(t.terms)})" for t in found}
+    names = [_title(e) for e in effects] + [short[id(t)] for t in found]
     if left:
         where = "; ".join(dict.fromkeys(f"{s['channel']} (keyed on {s['keyed_on']})" for s in left))
         fit = (f" The fit with {', '.join(names)} may stand in for what is missing; none of it is named as the "
@@ -145,7 +149,7 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
         same = [a["name"] for a in e["lookalikes"] if (tied(a) if tied else False) and a["group"] != unexplained_group]
         if same:
             ties.append(f"{_title(e)}, tied with {', '.join(same)}")
-    partial = [t.equation for t in found if t.partial]
+    partial = [short[id(t)] for t in found if t.partial]
     if ties or partial:
         what = "; ".join(ties + [f"{eq} (a partial fit)" for eq in partial])
         sure = [n for e, n in zip(effects, names) if not any(t.startswith(_title(e) + ", tied") for t in ties)]
