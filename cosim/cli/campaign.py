@@ -83,7 +83,8 @@ def print_campaign(res, file=None):
     if res.leave_one_out:
         p("\nleave one run out (fitted on the others, judged on it):")
         for x in res.leave_one_out:
-            p(f"  {x['name']}: held-out residual RMS {x['gain']:.3g}x lower; named: {', '.join(x['named']) or 'nothing'}")
+            named = ", ".join(x["named"]) or "nothing"
+            p(f"  {x['name']}: held-out residual RMS {x['gain']:.3g}x lower; named: {named}")
     if res.replays:
         p("\nreplay of the held-out runs:")
         for r in res.replays:

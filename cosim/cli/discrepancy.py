@@ -222,6 +222,10 @@ def print_diagnosis(d, file=None):
         nrmse = (f"NRMSE {c['nrmse_na']}" if c.get("nrmse_na") else
                  f"NRMSE {c['nrmse_before'] * 100:.2f} % -> {c['nrmse_after'] * 100:.2f} %")
         p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} ({nrmse}, noise {c['noise']:.2g})")
+    if d.replay:  # which replay ran (closed loop, open loop with its method), or why none did
+        from ..discrepancy.open_loop import sentence as replay_sentence
+
+        p(f"  {replay_sentence(d.replay)}")
     if d.replay and d.replay.get("runs"):
         for name, run in d.replay["runs"].items():
             if "rms_tau" in run:
@@ -235,10 +239,6 @@ def print_diagnosis(d, file=None):
               + f" (differences to the recording there: {tb['score']:.2f}x the reading model's)")
         elif tb.get("skipped"):
             p(f"  no two-body replay: {tb['skipped']}")
-    if d.replay and (d.replay.get("skipped") or d.replay.get("kind") == "open loop"):
-        from ..discrepancy.open_loop import sentence as replay_sentence
-
-        p(f"  {replay_sentence(d.replay)}")
     p(f"\n(diagnosed in {d.timings.get('total', 0):.2f} s)")
 
 

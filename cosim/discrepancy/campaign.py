@@ -368,8 +368,11 @@ def agreement(per_run: list, names: list) -> list:
     Example
     -------
     >>> runs = [{"a": {"value": 1.0, "ci95": 0.1, "unit": "N"}}] * 3 + [{"a": {"value": 2.0, "ci95": 0.1, "unit": "N"}}]
-    >>> [(x["run"], x["param"]) for x in agreement(runs, ["r1", "r2", "r3", "r4"])]
-    [('r4', 'a')]
+    >>> dis = agreement(runs, ["r1", "r2", "r3", "r4"])
+    >>> dis[0]["run"], dis[0]["param"]           # the farthest first (the others, through a mean it pulls)
+    ('r4', 'a')
+    >>> odd_runs([r for r in runs], ["r1", "r2", "r3", "r4"])[0]
+    ['r4']
     """
     from scipy.stats import norm
 

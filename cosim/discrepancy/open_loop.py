@@ -153,7 +153,7 @@ def sentence(replay: dict | None) -> str:
                          if "rms_qd" in r else f"{name}: {r.get('error')}" for name, r in replay["runs"].items())
         return f"replay: {replay['method']}; {runs}"
     return (f"replay: closed loop from {replay.get('start', 0):.2f} s (the recorded controller and reference, "
-            f"the recorded state at the start)")
+            f"started from the recorded state)")
 
 
 def heldout_replay(rec, eng, theta: dict, compared: dict | None = None) -> dict:

@@ -68,7 +68,8 @@ def unphysical(theta: dict, nominal: dict, peak_effort, peak_rate, units: dict |
 
     Example
     -------
-    >>> unphysical({"rail[1].effort_max": 3.3e-24}, {"rail[1].effort_max": 0.0}, [80.0], [0.2], {"rail[1].effort_max": "N"})
+    >>> units = {"rail[1].effort_max": "N"}
+    >>> unphysical({"rail[1].effort_max": 3.3e-24}, {"rail[1].effort_max": 0.0}, [80.0], [0.2], units)
     ['rail[1].effort_max = 3.3e-24 N: an actuator limit at ~0 (the recorded effort reaches 80 N on joint 1)']
     """
     units = units or {}
