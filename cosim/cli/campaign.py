@@ -49,7 +49,8 @@ def run_campaign(args, out: Path):
                                 train_fraction=args.train_fraction,
                                 effects=args.effects.split(",") if args.effects else None,
                                 discovery=not args.no_discovery, instruments=not args.least_squares,
-                                replay=not args.no_replay, figures=not args.no_figures)
+                                replay=not args.no_replay, figures=not args.no_figures,
+                                max_samples=args.max_samples)
     if args.json:
         print(res.to_json())
         return 0

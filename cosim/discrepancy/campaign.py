@@ -464,7 +464,7 @@ def _held_out_words(c: Campaign, held_out, train_fraction) -> str:
 def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bool = False, out=None,
                       window: float = 0.05, threshold: float = 10.0, train_fraction: float = 0.7, effects=None,
                       discovery: bool = True, instruments: bool = True, replay: bool = True,
-                      figures: bool = True) -> CampaignDiagnosis:
+                      figures: bool = True, max_samples: int | None = None) -> CampaignDiagnosis:
     """Diagnose the runs of a campaign together (see the module's text).
 
     Parameters
@@ -484,6 +484,9 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
         with ``held_out="within"``, and of each run's own fit).
     replay : bool
         Replay each held-out run (closed loop, or open loop for an open-loop run).
+    max_samples : int, optional
+        Most rows the runs may hold together (default
+        :data:`~cosim.discrepancy.working_set.MAX_SAMPLES`): a campaign holds its runs whole.
 
     Returns
     -------
@@ -499,7 +502,14 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
     >>> [x["run"] for x in res.disagree]                                               # doctest: +SKIP
     ['run3']
     """
+    from .working_set import MAX_SAMPLES
+
     c = campaign if isinstance(campaign, Campaign) else read_campaign(campaign)
+    rows, budget = sum(len(r) for r in c.runs), MAX_SAMPLES if max_samples is None else max_samples
+    if rows > budget:
+        raise CampaignError(f"{c.where}: {len(c.runs)} runs of {rows:,} rows in all, more than the {budget:,} a "
+                            f"diagnosis holds (max_samples, --max-samples): a campaign holds its runs whole, so "
+                            f"give fewer or shorter runs, or a larger budget if the memory allows it")
     kw = {"window": window, "threshold": threshold, "instruments": instruments}
     declared = _declared_values(c, model, train_fraction, kw, effects)
     runs = _corrected(c, declared)

@@ -124,7 +124,7 @@ def test_the_cli_diagnoses_runs_together(tmp_path, capsys):
     for k, x in enumerate(_runs(duration=2.0)[:3]):
         files.append(str(write_recording(tmp_path / f"run{k + 1}.csv", x)[0]))
     code = main(["diagnose", *files, "--effects", "coulomb,viscous,offset", "--no-discovery", "--no-figures",
-                 "--per-run", "rail[1].offset", "--out", str(tmp_path / "out")])
+                 "--per-run", "rail[1].offset", "--leave-one-out", "--out", str(tmp_path / "out")])
     text = capsys.readouterr().out
     assert code == 0, text
     assert text.startswith("campaign of 3 runs (run1, run2, run3)"), text[:300]
@@ -132,5 +132,9 @@ def test_the_cli_diagnoses_runs_together(tmp_path, capsys):
     # run3 is the odd one (viscous friction 200 N s/m): set aside, so the last run that agrees is held out
     assert "runs that disagree beyond their intervals:\n  run3: rail[1].viscous" in text, text
     assert "replay of the held-out runs:\n  run2: closed loop" in text, text
+    # each run that agrees held out in turn: the fit of the other one beats the nominal model on it
+    assert "leave one run out (fitted on the others, judged on it):\n  run1: held-out residual RMS" in text, text
     saved = json.loads((tmp_path / "out" / "campaign.json").read_text())
     assert saved["runs"] == ["run1", "run2", "run3"]
+    assert [x["name"] for x in saved["leave_one_out"]] == ["run1", "run2"]
+    assert all(x["gain"] > 5 for x in saved["leave_one_out"]), saved["leave_one_out"]
