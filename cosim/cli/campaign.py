@@ -80,7 +80,8 @@ def print_campaign(res, file=None):
         p("\nruns that disagree beyond their intervals:")
         for x in res.disagree:
             p(f"  {x['run']}: {x['param']} = {x['value']:.4g} +- {x['ci95']:.2g} {x['unit']}, the other runs "
-              f"{x['others']:.4g} +- {x['others_ci95']:.2g} ({x['sigmas']:.1f} times the combined interval)")
+              f"{x['others']:.4g} +- {x['others_ci95']:.2g} ({x['sigmas']:.1f} times the bar: the two 95 % "
+              f"intervals combined, widened for the comparisons made)")
     if res.leave_one_out:
         p("\nleave one run out (fitted on the others, judged on it):")
         for x in res.leave_one_out:
