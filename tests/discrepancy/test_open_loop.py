@@ -83,3 +83,17 @@ def test_the_cli_says_which_replay_ran(rec, tmp_path, capsys):
     text = capsys.readouterr().out
     assert code == 0, text
     assert "replay: open loop (the recorded effort in, the motion out), multiple shooting" in text, text
+
+
+def test_a_campaign_of_torque_runs_is_held_out_within_runs_and_replayed_open_loop():
+    from cosim.discrepancy.campaign import diagnose_campaign, read_campaign
+
+    c = read_campaign([torque_run(duration=2.5, seed=s) for s in (4, 5)])
+    res = diagnose_campaign(c, held_out="within", effects=["coulomb", "viscous"], discovery=False, figures=False)
+    assert res.held_out == "the last 30 % of every run", res.held_out
+    assert [r["kind"] for r in res.replays] == ["open loop", "open loop"], res.replays
+    for r in res.replays:  # each run's held-out end, from its own recorded states
+        assert r["runs"]["fitted"]["rel_qd"][0] < 0.1 * r["runs"]["nominal"]["rel_qd"][0], r
+    fitted = {p: v for e in res.joint.effects for p, v in e["params"].items()}
+    for p, truth in HIDDEN.items():
+        assert abs(fitted[p]["value"] - truth) <= fitted[p]["ci95"], (p, fitted[p], truth)
