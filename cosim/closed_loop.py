@@ -26,8 +26,10 @@ Two back ends run the sequence:
   with a controller the core implements (``pkm_ctrl``: PD, PD + gravity, computed
   torque, PID, LTI, the discrete rig controller), in pieces of about 20 ms of wall time
   (the loop goes on exactly across pieces);
-* **stepwise**: any :class:`~cosim.plants.Plant` (the core plant or an FMU) and any
-  Python callable, one sample at a time.
+* **stepwise**: any :class:`~cosim.plants.Plant` (the core plant or an FMU), one sample
+  at a time: a controller the core implements through its compiled copy
+  (:class:`~cosim.core.CompiledController`, the same ``pkm_ctrl``), any other Python
+  callable as it is; the readings' delay is the core's line (``pkm_reading_delay``).
 
 By default the compiled back end runs whenever it can; :attr:`LoopRecord.note` says why
 it did not.  :func:`cosim.master.run` (scenarios, sweeps) and the discrepancy replay and
@@ -59,7 +61,7 @@ from ._native import STATUS, raise_for
 # foreign call); this module chains the calls and records.
 from .core.controller import KINDS, CompiledController
 from .core.loop import LOOP_FIELDS, closed_loop_call
-from .plants import CoreDrive, CorePlant
+from .plants import CoreDrive, CorePlant, _facts
 from .errors import InputError
 
 __all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
@@ -203,6 +205,22 @@ class ClosedLoop:
             return None, "the drive's model is not the plant's"
         return compile_controller(self.controller, model=plant.model, dt=h)
 
+    def _stepwise_law(self, h):
+        """What the stepwise back end calls each sample: the compiled copy of a controller
+        the core implements (on its own model, else the plant's or the drive's), else the
+        controller itself (a Python callable, or one whose copy cannot be built here)."""
+        if getattr(self.controller, "kind", None) not in KINDS:
+            return self.controller
+        model = next((m for m in (getattr(o, "model", None) for o in (self.controller, self.plant, self.drive))
+                      if m is not None), None)
+        robot = getattr(self.plant, "robot", None)
+        if model is None and isinstance(robot, str) and _facts(robot) is not None:
+            from .core.model import Model
+
+            model = Model(self.plant.robot)
+        cc, _ = compile_controller(self.controller, model=model, dt=h) if model is not None else (None, "")
+        return cc if cc is not None else self.controller
+
     # -------------------------------------------------------------------- run
     def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
             f_ext=None, history=None, started=None) -> LoopRecord:
@@ -292,18 +310,19 @@ class ClosedLoop:
         if started is not None:
             started()
         wall0 = _time.perf_counter()
-        failure = None
+        failure, law = None, None
         try:
             if cc is not None:
                 failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
                                          past)
             else:
-                failure = self._stepwise(reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop,
-                                         f_ext, past)
+                law = self._stepwise_law(h)
+                failure = self._stepwise(law, reference, start, t, h, rows, draws, x0, xd0, rec, progress,
+                                         should_stop, f_ext, past)
         except KeyboardInterrupt:
-            self._finish(rec, draws, wall0, cc)
+            self._finish(rec, draws, wall0, cc or law)
             raise LoopInterrupted(rec.head()) from None
-        self._finish(rec, draws, wall0, cc)
+        self._finish(rec, draws, wall0, cc or law)
         if failure is not None:
             exc, k = failure
             exc.partial = rec.head()
@@ -311,12 +330,15 @@ class ClosedLoop:
             raise exc
         return rec.head() if rec.n < n else rec
 
-    def _finish(self, rec, draws, wall0, cc):
+    def _finish(self, rec, draws, wall0, law):
         k = rec.n
         rec.wall = _time.perf_counter() - wall0
         rec.tau_logged[:k] = rec.tau_cmd[:k] + (draws["tau"][:k] if "tau" in draws else 0.0)
         rec.pose[:k] = rec.x[:k] + (draws["pose"][:k] if "pose" in draws else 0.0)
-        rec.saturated = cc.saturated if cc is not None else rec.saturated + getattr(self.controller, "saturated", 0)
+        if isinstance(law, CompiledController):
+            rec.saturated = law.saturated  # the run's own samples (prime keeps the count)
+        else:
+            rec.saturated = rec.saturated + getattr(law, "saturated", 0)
 
     def _history(self, reference, start, history):
         """``history`` checked: ``(rows, t, q, qd, ref)`` of the samples before ``start``, or None."""
@@ -393,18 +415,24 @@ class ClosedLoop:
                 break
         return None
 
-    def _stepwise(self, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past):
-        """One sample at a time through the Plant interface; returns None or
-        ``(exception, sample)``."""
+    def _stepwise(self, ctrl, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
+                  past):
+        """One sample at a time through the Plant interface, ``ctrl`` the compiled copy of
+        the controller (or the Python callable); returns None or ``(exception, sample)``."""
         n = len(t)
-        plant, drive, ctrl = self.plant, self.drive, self.controller
+        plant, drive = self.plant, self.drive
+        compiled = isinstance(ctrl, CompiledController)
         k = 0
         try:
             plant.initialize(float(t[0]), x0, xd0)
             y = plant.outputs()
-            if hasattr(ctrl, "reset"):
+            if compiled:
+                ctrl.reset(y.x)
+            elif hasattr(ctrl, "reset"):
                 ctrl.reset(float(t[0]), y.q, y.x)
-            if past is not None:
+            if past is not None and compiled:
+                ctrl.prime(*past[1:])
+            elif past is not None:
                 for j, k in enumerate(past[0]):
                     ctrl(float(past[1][j]), past[2][j], past[3][j], reference.at(k))
                 # the run counts its own saturated samples only

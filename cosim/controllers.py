@@ -20,7 +20,9 @@ and return the actuator efforts ``tau`` [N or N m] that the plant holds constant
 Gains are designed from the decoupled joint double integrator ``m qdd = tau`` with the
 effective joint mass ``m`` (:func:`joint_mass`) and checked on its zero-order-hold
 discretisation at ``dt`` (:func:`design_pd`, :func:`closed_loop`), with python-control.
-The physics (gravity load, inverse dynamics, kinematics) always comes from the core.
+The physics (gravity load, inverse dynamics, kinematics) always comes from the core, and
+so does every law: a controller here is its kind and gains as data, and calling it, or
+running it in a closed loop on either back end, runs the core's ``pkm_ctrl``.
 
 Example
 -------
@@ -97,47 +99,70 @@ class Reference:
     xdd: np.ndarray | None = None
 
 
-@dataclass
-class JointController:
-    """Base class: a sampled joint-space controller with optional saturation.
+#: the period a compiled copy of a law that does not use it (pd, pd_gravity,
+#: computed_torque) is given when it runs outside a loop: the core wants one [s]
+_ANY_PERIOD = 1.0
 
-    Call ``ctrl(t, q, qd, ref)`` at each sample; returns ``tau`` (nd,) [N or N m].
-    ``saturated`` counts the samples where the saturation clipped an effort.
+
+class _CoreLaw:
+    """What every controller the core implements shares: its law runs in the core
+    (``pkm_ctrl``) through a compiled copy (:class:`cosim.core.CompiledController`)
+    built on first use; ``saturated`` counts the samples the saturation clipped since
+    the last :meth:`reset`."""
+
+    model = None
+    dt = None
+    saturated = 0
+    _cc = None
+
+    def _compiled(self, model=None):
+        from .core.controller import CompiledController
+
+        if self._cc is None:
+            model = self.model or model
+            if model is None:
+                raise ControllerError(f"{self.kind} controller: its law is the core's and runs on a model: build "
+                                      f"it with model=m, or run it in a closed loop (which gives it the plant's)")
+            self._cc = CompiledController(self, model=model, dt=self.dt or _ANY_PERIOD)
+        return self._cc
+
+    def reset(self, t0: float, q0, x0=None) -> None:
+        """Start a run at time t0 [s] from joints q0 (and pose x0 [m, rad] if known: the
+        first guess of the forward kinematics of the measured joints)."""
+        self._compiled().reset(x0)
+        self.saturated = 0
+
+    def __call__(self, t, q, qd, ref) -> np.ndarray:
+        """One sample: ``tau`` [N or N m] from the readings ``q``, ``qd`` and the reference
+        row ``ref`` (:class:`Reference`), by the core's law."""
+        cc = self._compiled()
+        tau = cc(t, q, qd, ref)
+        self.saturated = cc.saturated
+        return tau
+
+
+@dataclass
+class JointController(_CoreLaw):
+    """A sampled joint-space controller of the core (``pkm.h`` ``pkm_ctrl_kind``): the
+    kind, gains and saturation as data, the law the core's.
+
+    Call ``ctrl(t, q, qd, ref)`` at each sample; returns ``tau`` (nd,) [N or N m].  A
+    closed loop (:class:`cosim.closed_loop.ClosedLoop`) runs the core's law itself on
+    either back end.  ``model`` is the model the controller believes in (gravity load,
+    kinematics, inverse dynamics; None for a PD, which uses none).
     """
 
     ndof: int
     kp: np.ndarray
     kd: np.ndarray
     saturation: np.ndarray | None = None
-    kind: str = "joint"
+    kind: str = "pd"
     units: tuple = ("N/m", "N s/m")
     saturated: int = 0
     info: dict = field(default_factory=dict)
-
-    def reset(self, t0: float, q0, x0=None) -> None:
-        """Start a run at time t0 from joints q0 (and pose x0 if known)."""
-        self.saturated = 0
-
-    def law(self, t, q, qd, ref: Reference) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def __call__(self, t, q, qd, ref: Reference) -> np.ndarray:
-        q = np.asarray(q, float)
-        qd = np.asarray(qd, float)
-        for name, v in (("q", q), ("qd", qd), ("qref", ref.q)):
-            if v.shape != (self.ndof,):
-                raise ControllerError(f"{self.kind} at t = {t:.6g} s: {name} has shape {v.shape}, "
-                                      f"expected ({self.ndof},)")
-            bad = np.flatnonzero(~np.isfinite(v))
-            if bad.size:
-                raise ControllerError(f"{self.kind} at t = {t:.6g} s: {name} of joint {bad[0] + 1} is {v[bad[0]]}")
-        tau = self.law(t, q, qd, ref)
-        if self.saturation is not None:
-            clipped = np.clip(tau, -self.saturation, self.saturation)
-            if np.any(clipped != tau):
-                self.saturated += 1
-            tau = clipped
-        return tau
+    model: object = field(default=None, repr=False)
+    #: where ``pd_gravity`` evaluates the gravity load: "measured" or "reference"
+    gravity: str = "measured"
 
     def describe(self) -> dict:
         """Type and gains with units, for the recording sidecar."""
@@ -149,84 +174,15 @@ class JointController:
         return d
 
 
-class PD(JointController):
-    def law(self, t, q, qd, ref):
-        return self.kp @ (ref.q - q) + self.kd @ (ref.qd - qd)
-
-
-class PDGravity(JointController):
-    """PD + gravity compensation; ``model`` gives the gravity load, ``gravity`` says where."""
-
-    def __init__(self, model, gravity="measured", **kw):
-        super().__init__(**kw)
-        self.model = model
-        self.gravity = gravity
-        self._x = None
-
-    def reset(self, t0, q0, x0=None):
-        super().reset(t0, q0, x0)
-        self._x = None if x0 is None else np.asarray(x0, float).copy()
-
-    def pose(self, t, q, ref):
-        """Pose of the measured joints by the core's forward kinematics from the last pose."""
-        guess = self._x if self._x is not None else (ref.x if ref.x is not None else self.model.home())
-        try:
-            self._x = self.model.fk(q, x_guess=guess)
-        except Exception as e:
-            raise ControllerError(f"{self.kind} at t = {t:.6g} s: forward kinematics of the measured joints "
-                                  f"failed: {e}") from e
-        return self._x
-
-    def law(self, t, q, qd, ref):
-        if self.gravity == "reference":
-            if ref.x is None:
-                raise ControllerError(f"{self.kind}: gravity='reference' needs the reference pose")
-            x = ref.x
-        else:
-            x = self.pose(t, q, ref)
-        return self.kp @ (ref.q - q) + self.kd @ (ref.qd - qd) + self.model.gravity_load(x)
-
-
-class ComputedTorque(PDGravity):
-    """Computed torque in joint space through the core's inverse dynamics."""
-
-    def law(self, t, q, qd, ref):
-        x = self.pose(t, q, ref)
-        try:
-            xd = self.model.pose_velocity(x, qd)
-            qdd = ref.qdd + self.kd @ (ref.qd - qd) + self.kp @ (ref.q - q)
-            xdd = self.model.pose_acceleration(x, xd, qdd)
-            return self.model.inverse_dynamics(x, xd, xdd)
-        except ControllerError:
-            raise
-        except Exception as e:
-            raise ControllerError(f"{self.kind} at t = {t:.6g} s: {e}") from e
-
-
 class PID(JointController):
     """PID with a filtered derivative, anti-windup and output limits, with an optional
-    gravity feed-forward: the core's law (``pkm.h`` ``PKM_CTRL_PID``), run through a
-    compiled copy, so that a Python loop, the compiled loop and the controller FMU do the
-    same arithmetic.  Build it with :func:`pid`."""
+    gravity feed-forward: the core's law (``pkm.h`` ``PKM_CTRL_PID``).  Build it with
+    :func:`pid`."""
 
     def __init__(self, model, *, ki, deriv_filter, gravity_feedforward, dt, **kw):
-        super().__init__(**kw)
-        self.model, self.ki, self.deriv_filter = model, ki, deriv_filter
+        super().__init__(model=model, **kw)
+        self.ki, self.deriv_filter = ki, deriv_filter
         self.gravity_feedforward, self.dt = gravity_feedforward, dt
-        self._cc = None
-
-    def reset(self, t0, q0, x0=None):
-        super().reset(t0, q0, x0)
-        from .core.controller import CompiledController
-
-        if self._cc is None:
-            self._cc = CompiledController(self, model=self.model, dt=self.dt)
-        self._cc.reset(x0)
-
-    def law(self, t, q, qd, ref):
-        if self._cc is None:
-            self.reset(t, q)
-        return self._cc(t, q, qd, ref)
 
     def describe(self) -> dict:
         d = super().describe()
@@ -249,7 +205,7 @@ def _joint_of(model):
     return model.joint_unit
 
 
-def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m") -> JointController:
+def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m", model=None) -> JointController:
     """Decentralised PD in joint space: ``tau = Kp (qref - q) + Kd (qdref - qd)``.
 
     Parameters
@@ -264,10 +220,24 @@ def pd(*, ndof: int = 6, kp, kd, saturation=None, joint: str = "m") -> JointCont
         Largest effort magnitude per actuator [N or N m]; efforts are clipped.
     joint : {"m", "rad"}
         Unit of the joints (sliders or revolute), for the gains' units.
+    model : cosim.core.Model, optional
+        A model of the robot, to call the controller outside a closed loop (the core
+        runs every law on a model; a closed loop gives it the plant's).
+
+    Example
+    -------
+    >>> from cosim.core import Model
+    >>> from cosim import controllers as ctl
+    >>> m = Model("6pus")
+    >>> c = ctl.pd(ndof=6, kp=300.0, kd=30.0, model=m)
+    >>> q = m.ik(m.home())
+    >>> tau = c(0.0, q, [0.0] * 6, ctl.Reference(q + 0.001, [0.0] * 6, [0.0] * 6))   # 0.3 N per rail
     """
     u = _pd_units(joint)
-    return PD(ndof=ndof, kp=_gain(kp, ndof, "kp", u[0]), kd=_gain(kd, ndof, "kd", u[1]),
-              saturation=_limit(saturation, ndof), kind="pd", units=u)
+    if model is not None and model.ndof != ndof:
+        raise ControllerError(f"pd: ndof = {ndof}, the model has {model.ndof} joints")
+    return JointController(ndof=ndof, kp=_gain(kp, ndof, "kp", u[0]), kd=_gain(kd, ndof, "kd", u[1]),
+                           saturation=_limit(saturation, ndof), kind="pd", units=u, model=model)
 
 
 def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> JointController:
@@ -288,8 +258,8 @@ def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> 
         raise ControllerError(f"gravity must be 'measured' or 'reference', got {gravity!r}")
     nd = model.ndof
     u = _pd_units(_joint_of(model))
-    c = PDGravity(model, gravity, ndof=nd, kp=_gain(kp, nd, "kp", u[0]), kd=_gain(kd, nd, "kd", u[1]),
-                  saturation=_limit(saturation, nd), kind="pd_gravity", units=u)
+    c = JointController(ndof=nd, kp=_gain(kp, nd, "kp", u[0]), kd=_gain(kd, nd, "kd", u[1]),
+                        saturation=_limit(saturation, nd), kind="pd_gravity", units=u, model=model, gravity=gravity)
     c.info = {"gravity": gravity}
     return c
 
@@ -359,9 +329,9 @@ def computed_torque(model, *, kp, kd, saturation=None) -> JointController:
         Largest effort magnitude per actuator [N or N m].
     """
     nd = model.ndof
-    return ComputedTorque(model, "measured", ndof=nd, kp=_gain(kp, nd, "kp", "1/s^2"),
-                          kd=_gain(kd, nd, "kd", "1/s"), saturation=_limit(saturation, nd),
-                          kind="computed_torque", units=("1/s^2", "1/s"))
+    return JointController(ndof=nd, kp=_gain(kp, nd, "kp", "1/s^2"), kd=_gain(kd, nd, "kd", "1/s"),
+                           saturation=_limit(saturation, nd), kind="computed_torque", units=("1/s^2", "1/s"),
+                           model=model)
 
 
 # ----------------------------------------------------------- design and analysis
@@ -614,6 +584,76 @@ def step_metrics(t, y, y0: float | None = None, yfinal: float | None = None,
     return out
 
 
+# ------------------------------------------------ a python-control LTI design
+
+class LTIController(_CoreLaw):
+    """A discrete LTI controller on the joint error, ``x+ = A x + B e``, ``tau = C x + D e``
+    (``e = qref - q``), with optional gravity feed-forward: what ``pkm_ctrl`` kind LTI runs.
+
+    Build it with :func:`lti_controller` from a python-control design.
+    """
+
+    kind = "lti"
+
+    def __init__(self, A, B, C, D, *, dt: float, model=None, gravity_feedforward: bool = False, saturation=None):
+        self.A, self.B, self.C, self.D = (np.atleast_2d(np.asarray(a, float)) for a in (A, B, C, D))
+        self.dt, self.model, self.gravity_feedforward, self.saturation = dt, model, gravity_feedforward, saturation
+        self.kp = self.kd = None
+
+    def describe(self) -> dict:
+        """Everything needed to rebuild it (the recording sidecar's ``controller``)."""
+        d = {"type": "lti", "nx": int(self.A.shape[0]), "dt": self.dt,
+             "gravity_feedforward": bool(self.gravity_feedforward),
+             "A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(), "D": self.D.tolist()}
+        if self.saturation is not None:
+            d["saturation"] = np.asarray(self.saturation, float).tolist()
+        return d
+
+
+def lti_controller(sys_d, *, ndof: int, model=None, gravity_feedforward: bool = False,
+                   saturation=None) -> LTIController:
+    """A python-control discrete ``StateSpace`` (inputs: the nd joint errors [m or rad];
+    outputs: the nd efforts [N or N m]) as a controller the core, the compiled loop and
+    the controller FMU run.  A SISO design is applied to every joint (block diagonal).
+
+    Parameters
+    ----------
+    sys_d : control.StateSpace
+        Discrete-time (``sys_d.dt > 0``), e.g. ``control.c2d(pid_tf, dt)`` converted with
+        ``control.ss``.
+    ndof : int
+        Number of joints.
+    model : cosim.core.Model, optional
+        The model the controller believes in (the gravity feed-forward; needed to call it
+        outside a closed loop).
+    gravity_feedforward : bool
+        Add the gravity load at the pose of the measured joints to the output.
+    saturation : float or array_like, shape (nd,), optional
+        Largest effort magnitude per actuator [N or N m].
+
+    Example
+    -------
+    >>> import control
+    >>> from cosim.core import Model
+    >>> from cosim import controllers as ctl
+    >>> m = Model("6pus")
+    >>> pd = control.c2d(control.tf([30.0, 300.0], [1.0]) * control.tf([1.0], [1e-3, 1.0]), 1e-3)
+    >>> c = ctl.lti_controller(control.ss(pd), ndof=6, model=m, gravity_feedforward=True)
+    """
+    if not (getattr(sys_d, "dt", None) and sys_d.dt is not True and sys_d.dt > 0):
+        raise ControllerError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
+    ss = control.ss(sys_d)
+    A, B, C, D = (np.asarray(a, float) for a in (ss.A, ss.B, ss.C, ss.D))
+    if B.shape[1] == 1 and C.shape[0] == 1 and ndof > 1:
+        I = np.eye(ndof)
+        A, B, C, D = np.kron(I, A), np.kron(I, B), np.kron(I, C), np.kron(I, D)
+    if B.shape[1] != ndof or C.shape[0] != ndof:
+        raise ControllerError(f"the design has {B.shape[1]} inputs and {C.shape[0]} outputs; the robot has {ndof} "
+                              f"joints")
+    return LTIController(A, B, C, D, dt=float(ss.dt), model=model, gravity_feedforward=gravity_feedforward,
+                         saturation=saturation)
+
+
 # ------------------------------------------------------------ a rig's controller as data
 
 #: the keys of a discrete controller's description (sidecar / scenario ``[controller]``)
@@ -621,7 +661,7 @@ DISCRETE_KEYS = ("kind", "type", "period", "law", "kp", "kv", "ki", "kd", "posit
                  "velocity_filter", "saturation", "output_gain", "delay_samples", "units")
 
 
-class DiscreteController:
+class DiscreteController(_CoreLaw):
     """A rig's sampled controller described as data (``pkm.h`` ``PKM_CTRL_DISCRETE``):
     position filter, velocity by backward difference or from the reading, velocity
     filter, law (``"cascade_pp"``: ``u = kv (kp (qref - qf) - v)``; ``"pid"``:
@@ -641,26 +681,7 @@ class DiscreteController:
         self.limits, self.output_gain, self.delay_samples = limits, output_gain, delay_samples
         self.saturation = None  # the limits act on the controller's output, in its own units
         self.model = model
-        self.saturated = 0
         self._desc = description
-        self._cc = None
-
-    def reset(self, t0, q0, x0=None):
-        from .core.controller import CompiledController
-
-        if self._cc is None:
-            if self.model is None:
-                raise ControllerError("discrete controller: give it the model (discrete(desc, model=...)) to run it "
-                                      "outside the compiled loop")
-            self._cc = CompiledController(self, model=self.model, dt=self.dt)
-        self._cc.reset(x0)
-
-    def __call__(self, t, q, qd, ref):
-        if self._cc is None:
-            self.reset(t, q)
-        tau = self._cc(t, q, qd, ref)
-        self.saturated = self._cc.saturated
-        return tau
 
     def describe(self) -> dict:
         """The description it was built from (plain numbers), for the recording sidecar."""

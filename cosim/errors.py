@@ -24,7 +24,7 @@ PKM_ERR_UNREACHABLE
 from __future__ import annotations
 
 __all__ = ["InputError", "is_input_error", "PkmError", "ArgumentError", "ParameterError", "UnreachableError", "SingularError",
-           "ConvergenceError", "JointLimitError", "IntegrationError", "UnsupportedError"]
+           "ConvergenceError", "JointLimitError", "IntegrationError", "UnsupportedError", "MasterError"]
 
 
 class InputError(ValueError):
@@ -108,3 +108,16 @@ def is_input_error(error: BaseException) -> bool:
     if isinstance(error, PkmError):
         return error.status not in _FAULTS
     return isinstance(error, InputError)
+
+
+class MasterError(RuntimeError):
+    """A co-simulation that could not go on (:func:`cosim.master.run`); says at which time
+    and why.
+
+    ``partial`` holds the :class:`cosim.master.RunResult` of the samples taken before the
+    failure.
+    """
+
+    def __init__(self, message, partial=None):
+        super().__init__(message)
+        self.partial = partial

@@ -97,34 +97,64 @@ PLATFORMS = ("linux64", "win64", "aarch64-linux")
 FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
 
-def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2) -> Path:
+def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, platforms=None) -> Path:
     """Build (or bring up to date) a robot's FMUs (plant, controller, source-code; FMI 2.0 and
     3.0) with CMake and return the FMI 2.0 plant's path.
 
     A description file anywhere (``"my_stewart.toml"``) is given to the build as
     ``PKM_FMU_DESCRIPTIONS`` (nothing in the checkout changes): its FMUs compile only their
-    FMU layer, the core of every platform being compiled already.
+    FMU layer, the core of every platform being compiled already.  ``platforms`` (names of
+    ``PLATFORMS``; None: the build's own) are the binaries to make, given as
+    ``PKM_FMU_PLATFORMS``.  Both settings hold for this build only: the build directory's
+    cache gets its own values back afterwards.
 
     Example
     -------
     >>> from cosim import fmu
-    >>> fmu.build("my_stewart.toml")             # build/fmu/PKM_MY_STEWART.fmu
+    >>> fmu.build("my_stewart.toml", platforms=["linux64"])   # build/fmu/PKM_MY_STEWART.fmu
     """
     ident = fmu_id(robot)
     b = Path(build or build_dir())
-    configure = ["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release"]
+    wanted = {}
     if _is_file(robot):
         desc = Path(robot).resolve()
         if not desc.is_file():
             raise FileNotFoundError(f"{robot}: no such description file")
-        configure.append(f"-DPKM_FMU_DESCRIPTIONS={desc}")
-    if _is_file(robot) or not (b / "CMakeCache.txt").exists():
-        subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
+        wanted["PKM_FMU_DESCRIPTIONS"] = str(desc)
+    if platforms is not None:
+        wanted["PKM_FMU_PLATFORMS"] = ";".join(p for p in platforms if p != "linux64") or "none"
+    saved = _cache_values(b, {"PKM_FMU_DESCRIPTIONS": "", "PKM_FMU_PLATFORMS": "auto"})
+    if wanted or not (b / "CMakeCache.txt").exists():
+        _configure_build(b, wanted)
     targets = [f"{ident}_fmu", f"{ident}_CTRL_fmu", f"{ident}_source_fmu", f"{ident}_CTRL_source_fmu",
                f"{ident}_fmu3", f"{ident}_CTRL_fmu3"]
-    subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *targets], check=True,
-                   stdout=subprocess.DEVNULL)
+    try:
+        subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *targets], check=True,
+                       stdout=subprocess.DEVNULL)
+    finally:
+        back = {k: saved[k] for k in wanted if saved[k] != wanted[k]}
+        if back:
+            _configure_build(b, back)
     return fmu_path(robot, b)
+
+
+def _configure_build(b: Path, values: dict) -> None:
+    subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release",
+                    *(f"-D{k}={v}" for k, v in values.items())], check=True, stdout=subprocess.DEVNULL)
+
+
+def _cache_values(b: Path, defaults: dict) -> dict:
+    """The values of some variables in a build directory's ``CMakeCache.txt`` (``defaults``
+    for those it does not set, or when there is none)."""
+    out = dict(defaults)
+    cache = b / "CMakeCache.txt"
+    if cache.exists():
+        for line in cache.read_text(errors="replace").splitlines():
+            name, sep, value = line.partition("=")
+            key = name.split(":", 1)[0]
+            if sep and key in out:
+                out[key] = value
+    return out
 
 
 _build_fmus = build  # for package(), whose ``build`` argument is the folder
@@ -174,9 +204,10 @@ def package(robot: str, *, out: str | Path, platforms=("linux64",), source: bool
     ident = fmu_id(robot)
     folder = b / "fmu" if fmi == 2 else b / "fmu" / "fmi3"
     made = [folder / f"{i}.fmu" for i in (ident, ident + "_CTRL")]
+    asked = list(platforms)
     platforms = [p if fmi == 2 else FMI3_PLATFORMS[p] for p in platforms]
     if _is_file(robot) or not all(p.exists() for p in made):
-        _build_fmus(robot, b)
+        _build_fmus(robot, b, platforms=asked)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []

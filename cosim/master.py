@@ -28,7 +28,8 @@ import numpy as np
 
 from .controllers import Reference
 # the plants a run steps, named by the master's interface too (``from cosim.master import CorePlant``)
-from .plants import CoreDrive, CorePlant, FMUPlant, MasterError, Plant, PlantOutputs, _facts  # noqa: F401
+from .errors import MasterError
+from .plants import CoreDrive, CorePlant, FMUPlant, Plant, PlantOutputs, _facts  # noqa: F401
 
 
 # -------------------------------------------------------------------- reference

@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import MasterError
+
 
 def _facts(robot):
     """The core's facts of a robot, or None for a name the core does not know (an FMU of
@@ -40,17 +42,6 @@ def _facts(robot):
         return robot_facts(robot)
     except PkmError:
         return None
-
-
-class MasterError(RuntimeError):
-    """A co-simulation that could not go on; says at which time and why.
-
-    ``partial`` holds the :class:`RunResult` of the samples taken before the failure.
-    """
-
-    def __init__(self, message, partial=None):
-        super().__init__(message)
-        self.partial = partial
 
 
 @dataclass
@@ -179,30 +170,22 @@ class CoreDrive:
     def __init__(self, model):
         self.model = model
         self.ndof = model.ndof
-        self._line = []  # the readings' delay line (sensor.delay)
+        self._line = None  # the readings' delay line (sensor.delay): the core's
 
     def delayed(self, t, q, qd):
         """The readings the sensors deliver at time t [s] (``sensor.delay``): the readings
         recorded at t, interpolated linearly between the samples around t - delay (the first
-        sample's before it).  The same delay line as the core's closed loop
-        (``Sim::delayed_reading``); :meth:`reset_delay` empties it."""
-        d = self.model.param("sensor.delay")
-        if not d > 0:
-            return q, qd
-        line = self._line
-        line.append((float(t), np.array(q, float), np.array(qd, float)))
-        s = t - d
-        while len(line) > 1 and line[1][0] <= s:
-            line.pop(0)
-        (ta, qa, qda) = line[0]
-        if s <= ta or len(line) == 1:
-            return qa.copy(), qda.copy()
-        tb, qb, qdb = line[1]
-        f = (s - ta) / (tb - ta)
-        return qa * (1 - f) + qb * f, qda * (1 - f) + qdb * f
+        sample's before it), by the core's delay line (``pkm_reading_delay``, the line of
+        its compiled loop); :meth:`reset_delay` empties it."""
+        if self._line is None:
+            self.reset_delay()
+        return self._line.read(t, q, qd)
 
     def reset_delay(self):
-        self._line = []
+        """A new, empty delay line, of the model's ``sensor.delay`` now."""
+        from .core.reading_delay import ReadingDelay
+
+        self._line = ReadingDelay(self.model)
 
     def applied(self, tau_cmd):
         """Effort reaching the mechanism [N or N m] for the commanded one."""

@@ -33,80 +33,12 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .closed_loop import KINDS
+# the LTI controller lives beside the others; named here too, where the exporter takes it
+from .controllers import LTIController, lti_controller  # noqa: F401
 from .fmu import fmu_id, fmu_path
 from .errors import InputError
 
 __all__ = ["controller_parameters", "lti_controller", "export_ssp", "LTIController"]
-
-
-class LTIController:
-    """A discrete LTI controller on the joint error, ``x+ = A x + B e``, ``tau = C x + D e``
-    (``e = qref - q``), with optional gravity feed-forward: what ``pkm_ctrl`` kind LTI runs.
-
-    Build it with :func:`lti_controller` from a python-control design.
-    """
-
-    kind = "lti"
-
-    def __init__(self, A, B, C, D, *, dt: float, model=None, gravity_feedforward: bool = False, saturation=None):
-        self.A, self.B, self.C, self.D = (np.atleast_2d(np.asarray(a, float)) for a in (A, B, C, D))
-        self.dt, self.model, self.gravity_feedforward, self.saturation = dt, model, gravity_feedforward, saturation
-        self.kp = self.kd = None
-        self.saturated = 0
-
-    def describe(self) -> dict:
-        """Everything needed to rebuild it (the recording sidecar's ``controller``)."""
-        d = {"type": "lti", "nx": int(self.A.shape[0]), "dt": self.dt,
-             "gravity_feedforward": bool(self.gravity_feedforward),
-             "A": self.A.tolist(), "B": self.B.tolist(), "C": self.C.tolist(), "D": self.D.tolist()}
-        if self.saturation is not None:
-            d["saturation"] = np.asarray(self.saturation, float).tolist()
-        return d
-
-    # The law is the core's (pkm_ctrl): a Python loop calls it through a compiled copy.
-    def reset(self, t0, q0, x0=None):
-        self._compiled().reset(x0)
-
-    def __call__(self, t, q, qd, ref):
-        return self._compiled()(t, q, qd, ref)
-
-    def _compiled(self):
-        from .closed_loop import CompiledController
-
-        if getattr(self, "_cc", None) is None:
-            if self.model is None:
-                raise InputError("an LTI controller run from Python needs the model (lti_controller(..., model=m))")
-            self._cc = CompiledController(self, model=self.model, dt=self.dt)
-        return self._cc
-
-
-def lti_controller(sys_d, *, ndof: int, model=None, gravity_feedforward: bool = False,
-                   saturation=None) -> LTIController:
-    """A python-control discrete ``StateSpace`` (inputs: the nd joint errors [m or rad];
-    outputs: the nd efforts [N or N m]) as a controller the core, the compiled loop and
-    the controller FMU run.  A SISO design is applied to every joint (block diagonal).
-
-    Parameters
-    ----------
-    sys_d : control.StateSpace
-        Discrete-time (``sys_d.dt > 0``), e.g. ``control.c2d(pid_tf, dt)`` converted with
-        ``control.ss``.
-    ndof : int
-        Number of joints.
-    """
-    import control
-
-    if not (getattr(sys_d, "dt", None) and sys_d.dt is not True and sys_d.dt > 0):
-        raise InputError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
-    ss = control.ss(sys_d)
-    A, B, C, D = (np.asarray(a, float) for a in (ss.A, ss.B, ss.C, ss.D))
-    if B.shape[1] == 1 and C.shape[0] == 1 and ndof > 1:
-        I = np.eye(ndof)
-        A, B, C, D = np.kron(I, A), np.kron(I, B), np.kron(I, C), np.kron(I, D)
-    if B.shape[1] != ndof or C.shape[0] != ndof:
-        raise InputError(f"the design has {B.shape[1]} inputs and {C.shape[0]} outputs; the robot has {ndof} joints")
-    return LTIController(A, B, C, D, dt=float(ss.dt), model=model, gravity_feedforward=gravity_feedforward,
-                         saturation=saturation)
 
 
 def _matrix(a, nd):

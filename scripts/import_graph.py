@@ -28,7 +28,9 @@ BEGIN, END = "<!-- import graph: scripts/import_graph.py --write -->", "<!-- end
 #: it; the root package ``cosim``, whose ``__init__`` imports nothing, names itself only).
 LAYERS = [
     ("binding", "the C declarations, the public exceptions and the core's Python face",
-     ["cosim._native", "cosim.errors", "cosim.core", "cosim"]),
+     ["cosim._native", "cosim.errors", "cosim.core", "cosim",
+      # robot files in other formats read into descriptions for the core (Model("arm.urdf"))
+      "cosim.robots"]),
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
      ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.trajectories", "cosim.simulate",
       "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",

@@ -1,10 +1,11 @@
-"""Every command of the README runs verbatim from a fresh clone.
+"""Every command of the README and of the tour it links to (docs/guide.md) runs verbatim from a
+fresh clone.
 
 The tracked files are copied into an empty folder (a clone without ``results/`` or
 ``out/``), with the checkout's ``.venv`` and ``build`` linked in (what
 ``scripts/bootstrap.sh`` makes).  There every shell block of the README runs, line by line
 in one bash per block (so that an ``export`` holds for the lines after it), in the README's
-order, then every Python block, in order, in one interpreter.  A file a command needs is
+order and then the tour's, then every Python block, in order, in one interpreter.  A file a command needs is
 shipped or written by an earlier README command; the description the README asks to save
 as ``my_delta.toml`` is saved there first.
 
@@ -22,7 +23,9 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-README = (REPO / "README.md").read_text()
+# the README, then the tour: one document, in the order a reader meets it
+PAGES = ("README.md", "docs/guide.md")
+README = "\n".join((REPO / p).read_text() for p in PAGES)
 
 # the commands not run here: what they are, and where the same code runs in the suite
 NOT_RUN = {

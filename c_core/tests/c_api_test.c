@@ -107,6 +107,43 @@ int main(void) {
   }
   CHECK(strcmp(pkm_status_name(PKM_ERR_SINGULAR), "PKM_ERR_SINGULAR") == 0, "status name");
 
+  /* The integrators are one table: every pkm_lmm constant once, with a name and a title. */
+  {
+    int seen[4] = {0, 0, 0, 0}, code = -1, avail = -1;
+    const char *name = NULL, *title = NULL;
+    CHECK(pkm_sim_method_count() == 4, "method count %d", pkm_sim_method_count());
+    for (int k = 0; k < pkm_sim_method_count(); ++k) {
+      CHECK(pkm_sim_method(k, &code, &name, &title, &avail) == PKM_OK, "method %d", k);
+      CHECK(code >= 0 && code < 4 && name && title && (avail == 0 || avail == 1), "method %d: code %d", k, code);
+      if (code >= 0 && code < 4) ++seen[code];
+      if (code == PKM_ERK) CHECK(strcmp(name, "erk") == 0, "PKM_ERK is named %s", name);
+    }
+    CHECK(seen[PKM_BDF] == 1 && seen[PKM_ADAMS] == 1 && seen[PKM_ERK] == 1 && seen[PKM_ERK23] == 1, "a code twice");
+    CHECK(pkm_sim_method(4, NULL, NULL, NULL, NULL) == PKM_ERR_ARGUMENT, "index past the table");
+  }
+
+  /* The readings' delay line: sensor.delay = 1.5 samples reads halfway between the two
+   * samples 1.5 periods back (the first sample's before it). */
+  {
+    int is = pkm_param_index(m, "sensor.delay");
+    CHECK(is >= 0 && pkm_param_set(m, is, 1.5e-3, err, sizeof err) == PKM_OK, "sensor.delay: %s", err);
+    CHECK(pkm_model_validate(m, err, sizeof err) == PKM_OK, "validate: %s", err);
+    pkm_reading_delay* r = pkm_reading_delay_create(m, err, sizeof err);
+    CHECK(r != NULL, "reading delay: %s", err);
+    if (r) {
+      double q = 0, qd = 0;
+      for (int k = 0; k < 4; ++k) {
+        q = 10.0 * k, qd = -(double)k;
+        CHECK(pkm_reading_delay_read(r, 1e-3 * k, &q, &qd) == PKM_OK, "read %d", k);
+      }
+      CHECK(fabs(q - 15.0) < 1e-9 && fabs(qd + 1.5) < 1e-12, "sample 3 reads %g, %g", q, qd);
+      q = 0;
+      CHECK(pkm_reading_delay_read(r, 0.0, &q, &qd) == PKM_ERR_ARGUMENT, "a time going back");
+      CHECK(strstr(pkm_reading_delay_error(r), "before the last one") != NULL, "%s", pkm_reading_delay_error(r));
+      pkm_reading_delay_destroy(r);
+    }
+  }
+
   pkm_data_destroy(d);
   pkm_model_destroy(m);
 done:

@@ -28,7 +28,7 @@ def robot_arg(value: str) -> str:
 
     if value in robots():
         return value
-    if value.endswith(".toml") or "/" in value:
+    if value.endswith((".toml", ".urdf")) or "/" in value:
         return input_file(value)
     raise argparse.ArgumentTypeError(
         f"unknown robot {value!r} (known: {', '.join(robots())}; or a path to a description file, docs/robots.md)")

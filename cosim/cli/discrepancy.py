@@ -107,7 +107,7 @@ def _diag_configure(p):
     p.add_argument("--no-discovery", action="store_true",
                    help="skip the search for forces no library effect names (the discovery step)")
     p.add_argument("--max-samples", type=_positive(int), default=None,
-                   help="most rows the diagnosis holds (default 200000); a longer recording is diagnosed on blocks "
+                   help="most rows the diagnosis holds (default 100000, discrepancy.working_set.MAX_SAMPLES); a longer recording is diagnosed on blocks "
                         "spread over all of it, each at the full rate (docs/discrepancy.md, Long recordings)")
     p.add_argument("--block-seconds", type=_positive(float), default=None,
                    help="length of those blocks [s] (default 20)")

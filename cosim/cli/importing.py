@@ -1,12 +1,24 @@
-"""``cosim import``: a recording as the rig wrote it (MATLAB, HDF5, CSV, TSV) made into a
-pkm-recording through a map file (docs/importing.md)."""
+"""``cosim import``: a recording as the rig wrote it (MATLAB, HDF5, CSV, TSV, Parquet, a ROS 2
+bag, MCAP) made into a pkm-recording through a map file (docs/importing.md)."""
 from __future__ import annotations
+
+from pathlib import Path
 
 from .common import command, input_file, output_dir, robot_arg, toml_file
 
 
+def source_path(value: str) -> str:
+    """argparse type of the source: a file (:func:`input_file`) or a ROS 2 bag's folder (the
+    one holding ``metadata.yaml``)."""
+    if Path(value).is_dir() and (Path(value) / "metadata.yaml").is_file():
+        return value
+    return input_file(value)
+
+
 def _configure(p):
-    p.add_argument("source", type=input_file, help="the rig's file: MATLAB .mat (v5 or v7.3), HDF5 .h5, CSV or TSV")
+    p.add_argument("source", type=source_path,
+                   help="the rig's file: MATLAB .mat (v5 or v7.3), HDF5 .h5, CSV, TSV, Parquet, MCAP, or a ROS 2 bag's "
+                        "folder")
     p.add_argument("--map", type=toml_file, required=True, metavar="MAP.toml",
                    help="which variable feeds which recording column, with units (docs/importing.md)")
     p.add_argument("--out", type=output_dir, required=True, metavar="DIR", help="folder of the pkm-recording (made if missing)")
@@ -16,7 +28,8 @@ def _configure(p):
                    help="the recording's table (default csv; parquet and hdf5 are read in blocks, for long recordings)")
 
 
-@command("import", "make a pkm-recording from a rig's file (MATLAB, HDF5, CSV, TSV) through a map of its variables")
+@command("import", "make a pkm-recording from a rig's file (MATLAB, HDF5, CSV, TSV, Parquet, ROS 2 bag, MCAP) through "
+                   "a map of its variables")
 def cmd_import(args):
     from ..importing import import_recording
 

@@ -72,7 +72,7 @@ cmd_robots.configure = _robots_configure
 def _load_plugins():
     # Capability modules register their own sub-commands on import (the registry is
     # cosim.cli.common), in the order `cosim --help` lists them.
-    from . import demo, scenario, calibration, quattro, discrepancy, sweep, benchmark, importing, fmu, parasitic  # noqa: F401, I001
+    from . import demo, scenario, calibration, quattro, discrepancy, sweep, benchmark, importing, fmu, parasitic, urdf  # noqa: F401, I001
 
 
 class _Parser(argparse.ArgumentParser):
@@ -126,7 +126,7 @@ def _main(argv, called) -> int:
 
         os.environ["TQDM_DISABLE"] = "1"  # every tqdm bar of the package (and of dask) stays off
     from ..fmu import FMUError
-    from ..plants import MasterError
+    from ..errors import MasterError
     from ..sweep.errors import SweepError
 
     prog = f"cosim {args.command}"

@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 from ..core.model import robot_facts
+from ..core.simulator import METHOD_TITLES
 from .common import command, output_dir, output_file, recording_file, toml_file
 
 
@@ -20,9 +21,8 @@ def _configure(p):
                    help="also write <name>_report.html: interactive, self-contained (3D robot in motion, errors, efforts)")
 
 
-#: the integrators of the core plant (cosim.simulate), as the run summary names them
-INTEGRATORS = {"erk": "explicit Runge-Kutta 5(4)", "erk23": "explicit Runge-Kutta 3(2)", "bdf": "CVODE BDF",
-               "adams": "CVODE Adams"}
+#: the integrators of the core plant (cosim.simulate), as the run summary names them: the core's table
+INTEGRATORS = METHOD_TITLES
 
 
 def _small(unit: str):

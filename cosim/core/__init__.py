@@ -12,6 +12,8 @@ One module per concern:
 - :mod:`cosim.core.simulator`: :class:`Simulator` (``pkm_sim``) and its options
 - :mod:`cosim.core.controller`: :class:`CompiledController` (``pkm_ctrl``)
 - :mod:`cosim.core.loop`: one ``pkm_closed_loop`` call
+- :mod:`cosim.core.reading_delay`: :class:`ReadingDelay` (``pkm_reading_delay``), the
+  readings' delay line of the stepwise loop
 - errors: :mod:`cosim.errors`
 
 The names below are the public API, importable from ``cosim.core``.
@@ -30,10 +32,11 @@ from ..errors import ArgumentError, ParameterError, PkmError, UnsupportedError
 from .controller import DISCRETE_LAWS, KINDS, CompiledController
 from .facts import ParamInfo, RobotFacts, quattro_index_names, quattro_index_units, robots
 from .loop import LOOP_FIELDS, closed_loop_call
+from .reading_delay import ReadingDelay
 from .model import Model, robot_facts
-from .simulator import METHOD_CODES, Simulator, default_options
+from .simulator import METHOD_CODES, METHODS, Simulator, default_options
 
 __all__ = ["Model", "ParamInfo", "RobotFacts", "robots", "robot_facts", "quattro_index_names",
-           "quattro_index_units", "Simulator", "default_options", "METHOD_CODES", "CompiledController", "KINDS",
-           "DISCRETE_LAWS", "LOOP_FIELDS", "closed_loop_call", "PkmError", "ParameterError", "ArgumentError",
+           "quattro_index_units", "Simulator", "default_options", "METHOD_CODES", "METHODS", "ReadingDelay",
+           "CompiledController", "KINDS", "DISCRETE_LAWS", "LOOP_FIELDS", "closed_loop_call", "PkmError", "ParameterError", "ArgumentError",
            "UnsupportedError"]

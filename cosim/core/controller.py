@@ -1,5 +1,6 @@
 """The core's sampled joint-space controllers (``pkm_ctrl``): a controller of
-:mod:`cosim.controllers` compiled into the core (docs/scenarios.md).
+:mod:`cosim.controllers` compiled into the core (docs/scenarios.md), the one place its law
+runs, whichever loop calls it.
 """
 from __future__ import annotations
 
@@ -123,6 +124,10 @@ class CompiledController:
         """One sample, as the Python controllers: ``tau`` [N or N m] from readings and reference."""
         a = [np.ascontiguousarray(v, dtype=float) if v is not None else None
              for v in (q, qd, ref.q, ref.qd, ref.qdd, ref.x)]
+        for name, v in zip(("q", "qd", "qref", "qdref", "qddref", "xref"), a):
+            if v is not None and v.shape != (self.ndof,):
+                raise ArgumentError(f"{self.kind} at t = {float(t):.6g} s: {name} has shape {v.shape}, expected "
+                                    f"({self.ndof},)", "PKM_ERR_ARGUMENT")
         tau = np.empty(self.ndof)
         self._check(lib.pkm_ctrl_update(self._c, float(t), *[ptr(v) for v in a], ptr(tau)))
         return tau

@@ -55,7 +55,8 @@ class Model:
     Parameters
     ----------
     robot : str
-        Robot kind, one of :func:`robots` ("6pus", "quattro", "fourbar").
+        Robot kind, one of :func:`robots` ("6pus", "quattro", "fourbar"), a description file
+        (docs/robots.md) or a serial arm's URDF file (``.urdf``, docs/robots.md, URDF).
     param_set : str, optional
         Named parameter set ("default"; the Quattro also has "appendix_a").
     params : dict, optional
@@ -72,6 +73,10 @@ class Model:
         h = C.c_void_p()
         if not isinstance(robot, str):
             raise ArgumentError(f"robot must be a name ({', '.join(robots())}), got {robot!r}", "PKM_ERR_ARGUMENT")
+        if robot.endswith(".urdf"):  # a serial arm's URDF, read into a description (cosim/robots/urdf.py)
+            from ..robots.urdf import register_urdf
+
+            robot = register_urdf(robot)
         s = lib.pkm_model_create_status(robot.encode(), param_set.encode() if param_set else None, C.byref(h), err,
                                         len(err))
         raise_for(s, err.value.decode())
@@ -178,7 +183,8 @@ class Model:
 
     def joint_limits(self):
         """``(qmin, qmax)`` of the actuated joints [m or rad], arrays of shape (nd,); NaN
-        where the robot has no limit (the current values of the limit parameters)."""
+        where the robot has no limit (a continuous axis, docs/robots.md; the current values
+        of the limit parameters)."""
         lo, hi = np.full(self.ndof, np.nan), np.full(self.ndof, np.nan)
         a, b = C.c_int(), C.c_int()
         for i in range(self.ndof):

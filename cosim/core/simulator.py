@@ -12,10 +12,24 @@ from ..errors import ArgumentError
 from ._handles import _release
 
 
-_METHODS = {"bdf": 0, "adams": 1, "erk": 2, "erk23": 3}
+def _method_table() -> dict:
+    """The core's table of integration methods (``pkm_sim_method``): ``{name: (code, title)}``."""
+    out = {}
+    for i in range(lib.pkm_sim_method_count()):
+        code, name, title, avail = C.c_int(), C.c_char_p(), C.c_char_p(), C.c_int()
+        if lib.pkm_sim_method(i, C.byref(code), C.byref(name), C.byref(title), C.byref(avail)) == 0:
+            out[name.value.decode()] = (code.value, title.value.decode())
+    return out
+
+
+#: integration methods of the core by short name: (pkm_lmm code, title), the core's one list
+METHODS = _method_table()
+_METHODS = {k: v[0] for k, v in METHODS.items()}
 _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 #: integration method names and their pkm.h codes (pkm_lmm; the FMUs' solver.method)
 METHOD_CODES = dict(_METHODS)
+#: integration method names and their titles ("explicit Runge-Kutta 5(4)")
+METHOD_TITLES = {k: v[1] for k, v in METHODS.items()}
 
 
 def default_options() -> dict:

@@ -729,10 +729,32 @@ def _not_excited(eng, sel) -> list:
         e = BY_KEY[key]
         unit = units.get(items[0][0].params[0], "")
         where = ", ".join(f"joint {g.joint + 1}" for g, _, _ in items if g.joint is not None)
-        worst = max(items, key=lambda it: it[1] / it[2])
-        out.append(f"{e.name}{' (' + where + ')' if where else ''}: this recording cannot reveal it below "
-                   f"{worst[1]:.3g} {unit} (a small one is {worst[2]:.3g} {unit}); it needs {e.requires}")
+        worst = max(items, key=lambda it: it[1] / it[2] if np.isfinite(it[1]) else math.inf)
+        out.append(f"{e.name}{' (' + where + ')' if where else ''}: {detection_limit_text(worst[1], worst[2], unit)}"
+                   f"; it needs {e.requires}")
     return out
+
+
+#: a smallest detectable size this many times an effect's small size is no size at all: the
+#: recording does not excite the effect (a limit of 6e300 kg says that, not a mass)
+UNDETECTABLE_RATIO = 1e3
+
+
+def detection_limit_text(size: float, ref: float, unit: str) -> str:
+    """How small an effect this recording could reveal, in words: the limit and the effect's
+    small size, or, when the limit is infinite, not a number or absurdly large
+    (above :data:`UNDETECTABLE_RATIO` times the small size), that the recording does not
+    show the effect at any size.
+
+    Example
+    -------
+    >>> detection_limit_text(float("inf"), 0.05, "kg")
+    'not detectable on this recording (it does not excite it: no size of it would show; a small one is 0.05 kg)'
+    """
+    if not (np.isfinite(size) and size <= UNDETECTABLE_RATIO * ref):
+        return (f"not detectable on this recording (it does not excite it: no size of it would show; a small one "
+                f"is {ref:.3g} {unit})")
+    return f"this recording cannot reveal it below {size:.3g} {unit} (a small one is {ref:.3g} {unit})"
 
 
 def _where(groups) -> str:

@@ -43,7 +43,7 @@ def controller_from(desc: dict, model):
     kind = desc["type"]
     sat = desc.get("saturation")
     if kind == "lti":
-        from ..ssp import LTIController
+        from ..controllers import LTIController
 
         try:
             A, B, Cm, D = (np.atleast_2d(np.asarray(desc[k], float)) for k in ("A", "B", "C", "D"))

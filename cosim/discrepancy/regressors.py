@@ -106,7 +106,7 @@ def reference_size(group: Group, sc: Scales, model) -> float:
     if k == "rotor_inertia":
         return 0.05 * float(_joint_mass(model)[i])
     if k in ("payload", "platform_mass"):
-        return 0.1 * max(model.param("platform.m"), 0.05)
+        return 0.1 * max(model.params().get("platform.m", 0.0), 0.05)  # a serial arm has no platform
     if k == "platform_inertia":
         return 0.2 * model.param("platform.Izz") if "platform.Izz" in model.param_names() else 1e-4
     if k == "gravity_tilt":

@@ -130,6 +130,33 @@ class _Scratch:
         return self.m
 
 
+def _check_joint_limits(model, t, q, where, whole=True):
+    """Refuse recorded joint positions outside the model's joint limits (a continuous joint
+    has none, but its angle must be unwrapped: no jump of more than pi between samples),
+    naming the first row (as the file counts it: the header is row 1; on a working
+    set of blocks, the time alone), the time, the value and what to do."""
+    lo, hi = model.joint_limits()
+    for j in range(model.ndof):
+        jump = np.flatnonzero(np.abs(np.diff(q[:, j])) > np.pi) if model.joint_unit == "rad" else []
+        if len(jump) and np.isnan(lo[j]) and np.isnan(hi[j]):
+            k = int(jump[0]) + 1
+            at = f"row {k + 2} (t = {t[k]:.6g} s)" if whole else f"t = {t[k]:.6g} s"
+            raise DiagnosisError(f"{where}: {at}: q{j + 1} of the continuous joint {j + 1} jumps by "
+                                 f"{q[k, j] - q[k - 1, j]:.6g} rad in one sample ({len(jump)} jumps in all): a "
+                                 f"wrapped angle; the toolkit's is unwrapped (import it with angle = \"unwrap\", "
+                                 f"docs/importing.md)")
+        out = np.flatnonzero((q[:, j] < lo[j]) | (q[:, j] > hi[j]))
+        if out.size:
+            k = int(out[0])
+            unit = model.joint_unit
+            at = f"row {k + 2} (t = {t[k]:.6g} s)" if whole else f"t = {t[k]:.6g} s"
+            hint = ("declare the joint continuous (continuous = true, docs/robots.md) if it turns without limit, or "
+                    "check the import map's unit, scale, offset or angle wrapping" if unit == "rad" else
+                    "check the import map's unit, scale and offset, or the robot's stroke")
+            raise DiagnosisError(f"{where}: {at}: joint {j + 1} q{j + 1} = {q[k, j]:.6g} {unit} is outside its "
+                                 f"limits [{lo[j]:.6g}, {hi[j]:.6g}] {unit} ({out.size} rows outside in all); {hint}")
+
+
 class Pipeline:
     """The residual pipeline of one recording against one model.
 
@@ -235,6 +262,7 @@ class Pipeline:
         self.f_ext = f_ext
         self.q = np.asarray(rec.q, float)
         self.qd = np.asarray(rec.qd, float)
+        _check_joint_limits(model, t, self.q, where, whole=segments is None)
         self.pose = None if rec.pose is None else np.asarray(rec.pose, float)
         self._smooth_args = dict(window_length=w, polyorder=polyorder, axis=0, mode="interp")
         self._coeffs = savgol_coeffs(w, polyorder, delta=dt)

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..recording import Recording, write_recording
 from ..recording_io import EXTENSION
+from . import angles
 from . import units as U
 from .errors import ImportFailure
 from .mapfile import DERIVATIONS, JOINT_COLUMN, ImportMap, check_columns, read_map, si_unit
@@ -54,6 +55,8 @@ def derive(x: np.ndarray, t: np.ndarray, method: str) -> np.ndarray:
 
 
 def _missing(src: Source, var: str, column: str, role: str = "") -> ImportFailure:
+    if hasattr(src, "missing"):  # a message log says topic and field (messages.py)
+        return src.missing(var, column)
     names = list(src.shapes)
     close = difflib.get_close_matches(var, names, n=1)
     have = ", ".join(names[:20]) + (f", ... ({len(names)} in all)" if len(names) > 20 else "")
@@ -177,7 +180,8 @@ def to_recording(source, map_path, *, robot: str | None = None, progress: bool |
 
 def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     m = read_map(map_path)
-    facts = _model(m, robot, {}).facts
+    model = _model(m, robot, {})
+    facts = model.facts
     check_columns(m, facts)
     src = open_source(source, m.source.get("format"), m.source.get("delimiter"), m.source.get("encoding"))
     scal = _Resolver(src)
@@ -216,14 +220,20 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
     scal.resolve(data)
     params = {k: scal.value(v["variable"] if isinstance(v, dict) else v) for k, v in m.parameters.items()}
     if params:
-        _model(m, robot, params)  # the names and values checked by the core
+        model = _model(m, robot, params)  # the names and values checked by the core
 
     # time first: every other column is checked against its length
     tc = m.columns["time"]
     cols, n, tvar = {}, None, tc.variable
     for name, c in present.items():
         if c.variable:
-            v = _vector(src, c.variable, data[c.variable], name, c.column)
+            a = data[c.variable]
+            if c.row is not None:  # one signal per row: its row, as a column
+                if c.row > a.shape[0]:
+                    raise ImportFailure(src.path, f"has {a.shape[0]} rows, the map asks for row {c.row}",
+                                        variable=c.variable, column=name)
+                a = a[c.row - 1:c.row, :].T
+            v = _vector(src, c.variable, a, name, c.column)
             if name == "time" or (tc.period is not None and n is None):
                 n = len(v)
             cols[name] = v
@@ -251,7 +261,7 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
         if bad.size:
             raise ImportFailure(src.path, f"has {bad.size} non-finite value(s) (NaN, Inf or an empty cell) at "
                                           f"{src.row_label(bad)}", variable=c.variable or tvar, column=name)
-        cols[name] = v
+        cols[name] = angles.wrap(v) if c.angle == "wrap" else angles.unwrap(v) if c.angle == "unwrap" else v
     t = cols["time"]
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
@@ -259,10 +269,12 @@ def _convert(source, map_path, robot, progress) -> tuple[Recording, Source]:
         more = f" ({back.size} places in all)" if back.size > 1 else ""
         raise ImportFailure(src.path, f"time is not strictly increasing at {src.row_label([k])}: {float(t[k - 1])!r} "
                                       f"then {float(t[k])!r} s{more}", variable=tvar, column="time")
+    angles.check_limits(model, src, cols, present)
     derived = {}
     for name, c in present.items():
         if c.derive:
-            cols[name] = derive(cols[c.source], t, c.derive)
+            x = cols[c.source]  # a wrapped angle's rate is its continuous angle's
+            cols[name] = derive(angles.unwrap(x) if present[c.source].angle == "wrap" else x, t, c.derive)
             derived[name] = {"from": c.source, "method": c.derive, "formula": DERIVATIONS[c.derive]}
     return _assemble(m, src, facts, cols, present, absent, derived, scal), src
 
@@ -306,6 +318,8 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
         what = c.variable if c.variable else f"{c.start:g} + {c.period:g} * k"
         if c.column:
             what += f"[:, {c.column}]"
+        if c.row:
+            what += f"[{c.row}, :]"
         sc, off = c.scale, c.offset
         if sc != 1.0:
             what += f" * {sc} ({scal.values[sc]:.17g})" if isinstance(sc, str) else f" * {sc:.17g}"
@@ -313,6 +327,8 @@ def _assemble(m, src, facts, cols, present, absent, derived, scal) -> Recording:
             what += f" + {off} ({scal.values[off]:.17g})" if isinstance(off, str) else f" + {off:.17g}"
         if c.unit is not None:
             what += f" [{c.unit}]"
+        if c.angle:
+            what += f", {c.angle}ped"
         made[name] = what
     side = {"source": {"file": src.path.name, "format": src.format, "map": m.path.name, "columns": made}}
     if absent:

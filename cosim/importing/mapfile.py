@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import units as U
+from .angles import ANGLE_OPTIONS, angle_column_error
 from .errors import ImportFailure
 from .sources import FORMATS
 
@@ -26,7 +27,8 @@ DERIVATIONS = {
 #: the map's top-level fields
 TOP = ("robot", "notes", "source", "columns", "controller", "sensors", "parameters")
 #: fields of a column
-COLUMN_FIELDS = ("variable", "column", "scale", "offset", "unit", "optional", "derive", "from", "period", "start")
+COLUMN_FIELDS = ("variable", "column", "row", "scale", "offset", "unit", "optional", "derive", "from", "period", "start",
+                 "angle", "topic", "field")
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
@@ -43,6 +45,7 @@ class Column:
     name: str
     variable: str | None = None
     column: int | None = None          # 1-based column of a matrix variable
+    row: int | None = None             # 1-based row of a matrix variable holding one signal per row
     scale: object = 1.0                # a number, or the name of a scalar variable (str)
     offset: object = 0.0               # idem, in the unit after the scale
     unit: str | None = None            # of the variable (after scale and offset); None: the SI unit
@@ -51,6 +54,7 @@ class Column:
     source: str | None = None          # the column a derived one comes from
     period: float | None = None        # time only: a sampling period instead of a variable
     start: float = 0.0
+    angle: str | None = None           # "wrap" or "unwrap" (angles.ANGLE_OPTIONS), an angle column only
 
 
 @dataclass
@@ -220,6 +224,8 @@ def _column(path, name, spec) -> Column:
         c.start = _number_or_variable(path, f"{f}.start", spec.get("start", 0.0), allow_variable=False)
     elif "start" in spec:
         _fail(path, f"{f}.start", "start goes with period (time = { period = ..., start = ... })")
+    elif "topic" in spec or "field" in spec:
+        c.variable = _topic_field(path, f, spec)
     else:
         v = spec.get("variable")
         if not isinstance(v, str) or not v:
@@ -230,17 +236,47 @@ def _column(path, name, spec) -> Column:
         if isinstance(k, bool) or not isinstance(k, int) or k < 1:
             _fail(path, f"{f}.column", f"must be a column number >= 1 of a matrix variable, got {k!r}")
         c.column = k
+    if "row" in spec:
+        k = spec["row"]
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            _fail(path, f"{f}.row", f"must be a row number >= 1 of a matrix variable, got {k!r}")
+        if c.column is not None:
+            _fail(path, f"{f}.row", "give column or row, not both: a column is one signal of an n x k matrix, a row "
+                                    "one of a k x n matrix")
+        c.row = k
     if "scale" in spec:
         c.scale = _number_or_variable(path, f"{f}.scale", spec["scale"])
     if "offset" in spec:
         c.offset = _number_or_variable(path, f"{f}.offset", spec["offset"])
     if "unit" in spec:
         c.unit = _unit(path, f"{f}.unit", spec["unit"])
+    if "angle" in spec:
+        if spec["angle"] not in ANGLE_OPTIONS:
+            _fail(path, f"{f}.angle", f"must be one of {', '.join(map(repr, ANGLE_OPTIONS))}, got {spec['angle']!r}")
+        c.angle = spec["angle"]
     if "optional" in spec:
         if not isinstance(spec["optional"], bool):
             _fail(path, f"{f}.optional", f"must be true or false, got {spec['optional']!r}")
         c.optional = spec["optional"]
     return c
+
+
+def _topic_field(path, f, spec) -> str:
+    """A message log's field (a ROS 2 bag, an MCAP file): ``topic`` and ``field``, as the
+    source's variable name (messages.py)."""
+    from .messages import variable_name
+
+    if "variable" in spec:
+        _fail(path, f"{f}.variable", "give either variable (a file's variable) or topic and field (a message "
+                                     "log's), not both")
+    for k in ("topic", "field"):
+        v = spec.get(k)
+        if not isinstance(v, str) or not v:
+            other = "field" if k == "topic" else "topic"
+            _fail(path, f"{f}.{k}", f"missing or not a string: a message log's column needs topic and field "
+                                    f"(e.g. topic = \"/joint_states\", field = \"position[0]\"), got {other} only"
+                  if k not in spec else f"must be a non-empty string, got {v!r}")
+    return variable_name(spec["topic"], spec["field"])
 
 
 def si_unit(name: str, facts) -> str | None:
@@ -279,6 +315,8 @@ def check_columns(m: ImportMap, facts) -> None:
                 U.factor(c.unit, si)
             except ValueError as e:
                 _fail(m.path, f"columns.{name}.unit", str(e))
+        if c.angle is not None and (why := angle_column_error(name, si, facts)):
+            _fail(m.path, f"columns.{name}.angle", why)
     for name in ["time"] + [f"{p}{i}" for i in range(1, nd + 1) for p in ("q", "qd", "tau")]:
         if name not in m.columns:
             hint = f' (or derive it: {name} = {{ derive = "central_difference" }})' if name.startswith("qd") else ""

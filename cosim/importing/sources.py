@@ -1,4 +1,6 @@
-"""Source files of an import: MATLAB (v5 and v7.3/HDF5), plain HDF5, CSV and TSV.
+"""Source files of an import: MATLAB (v5 and v7.3/HDF5), plain HDF5, CSV and TSV here; ROS 2
+bags and MCAP files in :mod:`.messages`, Parquet in :mod:`.tables` (dispatched by
+:func:`open_source`).
 
 :func:`open_source` looks at a file and lists its variables (name -> shape, cheap: nothing
 is loaded); :meth:`Source.load` reads the variables an import needs.  Arrays come back
@@ -18,10 +20,10 @@ import numpy as np
 from .errors import ImportFailure
 
 #: the formats a source may be read as (``[source] format`` in a map)
-FORMATS = ("matlab", "hdf5", "csv", "tsv")
+FORMATS = ("matlab", "hdf5", "csv", "tsv", "rosbag2", "mcap", "parquet")
 
 _EXTENSIONS = {".mat": "matlab", ".h5": "hdf5", ".hdf5": "hdf5", ".csv": "csv", ".tsv": "tsv", ".tab": "tsv",
-               ".txt": "csv"}
+               ".txt": "csv", ".db3": "rosbag2", ".mcap": "mcap", ".parquet": "parquet", ".pq": "parquet"}
 
 
 @dataclass
@@ -86,9 +88,11 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     Parameters
     ----------
     path : str or Path
+        A file, or a ROS 2 bag's folder (the one with ``metadata.yaml``).
     fmt : str, optional
         One of :data:`FORMATS`; default from the extension (``.mat``, ``.h5``/``.hdf5``,
-        ``.csv``/``.txt``, ``.tsv``/``.tab``), else from the content.
+        ``.csv``/``.txt``, ``.tsv``/``.tab``, ``.db3`` (a bag's), ``.mcap``,
+        ``.parquet``/``.pq``), else from the content.
     delimiter : str, optional
         Of a text file; default a tab for TSV, else the one of ``, ; <tab>`` the header
         line has most of.
@@ -108,6 +112,8 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     p = Path(path)
     if not p.exists():
         raise ImportFailure(p, "file not found")
+    if p.is_dir() and (p / "metadata.yaml").is_file() and fmt in (None, "rosbag2"):
+        return _open_other(p, "rosbag2")
     if p.is_dir():
         raise ImportFailure(p, "is a directory, not a source file")
     if not os.access(p, os.R_OK):
@@ -117,11 +123,24 @@ def open_source(path, fmt: str | None = None, delimiter: str | None = None, enco
     if fmt is not None and fmt not in FORMATS:
         raise ImportFailure(p, f"unknown source format {fmt!r} (one of: {', '.join(FORMATS)})")
     fmt = fmt or _EXTENSIONS.get(p.suffix.lower()) or _sniff(p)
+    if fmt in ("rosbag2", "mcap", "parquet"):
+        return _open_other(p, fmt)
     if fmt == "matlab":
         return _open_mat(p)
     if fmt == "hdf5":
         return _open_hdf5(p, matlab=False)
     return _open_text(p, "\t" if fmt == "tsv" and delimiter is None else delimiter, fmt, encoding or "utf-8")
+
+
+def _open_other(p: Path, fmt: str) -> Source:
+    """The readers of the formats kept in their own modules."""
+    if fmt == "parquet":
+        from .tables import open_parquet
+
+        return open_parquet(p)
+    from .messages import open_messages
+
+    return open_messages(p, fmt)
 
 
 def _sniff(p: Path) -> str:
@@ -130,6 +149,12 @@ def _sniff(p: Path) -> str:
         return "matlab"
     if head.startswith(b"\x89HDF"):
         return "hdf5"
+    if head.startswith(b"\x89MCAP"):
+        return "mcap"
+    if head.startswith(b"PAR1"):
+        return "parquet"
+    if head.startswith(b"SQLite format 3\x00"):
+        return "rosbag2"
     return "csv"
 
 
@@ -147,14 +172,62 @@ def _open_mat(p: Path) -> Source:
     try:
         listing = scipy.io.whosmat(str(p))
     except Exception as e:  # scipy raises ValueError, TypeError, OSError... on a foreign file
-        raise ImportFailure(p, f"is not a MATLAB file (v5, or v7.3 which is HDF5): {_reason(e)}") from None
+        listing = _listing_by_loading(p, e)
     shapes, what = {}, {}
     for name, shape, cls in listing:
         shapes[name] = tuple(shape)
         if cls not in ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
                        "logical"):
             what[name] = cls
+        if cls == "struct" and tuple(shape) == (1, 1):  # its fields, "name/field" as in a v7.3 (HDF5) file
+            for field_name, a in _struct_fields(name, _read_mat5(p, [name])[name]):
+                a = np.asarray(a)
+                shapes[field_name] = tuple(a.shape) if a.ndim == 2 else (a.size, 1) if a.ndim == 1 else a.shape
+                if a.dtype.kind not in "fiub":
+                    what[field_name] = "struct" if a.dtype.names else "char" if a.dtype.kind == "U" else str(a.dtype)
     return Source(p, "matlab-v5", shapes, what)
+
+
+def _listing_by_loading(p: Path, e: Exception) -> list:
+    """whosmat's (name, shape, class) from the loaded file: scipy's whosmat fails on some
+    files it reads (a MATLAB object among the variables, as a saved SerialLink)."""
+    import scipy.io
+
+    try:
+        raw = scipy.io.loadmat(str(p))
+    except Exception:
+        raise ImportFailure(p, f"is not a MATLAB file (v5, or v7.3 which is HDF5): {_reason(e)}") from None
+    out = []
+    for name, a in raw.items():
+        if name.startswith("__") or not isinstance(a, np.ndarray):
+            continue
+        cls = "struct" if a.dtype.names else "char" if a.dtype.kind == "U" else "object" if a.dtype.kind == "O" \
+            else "double" if a.dtype.kind in "fiub" else str(a.dtype)
+        out.append((name, a.shape, cls))
+    return out
+
+
+def _read_mat5(p: Path, names) -> dict:
+    import scipy.io
+
+    try:
+        return scipy.io.loadmat(str(p), variable_names=names)
+    except Exception as e:
+        raise ImportFailure(p, f"cannot be read as MATLAB v5: {_reason(e)}") from None
+
+
+def _struct_fields(name: str, a):
+    """("name/field", value) of a 1 x 1 MATLAB struct, nested 1 x 1 structs walked."""
+    a = np.asarray(a)
+    if not a.dtype.names or a.size != 1:
+        return
+    rec = a.reshape(-1)[0]
+    for f in a.dtype.names:
+        v = np.asarray(rec[f])
+        if v.dtype.names and v.size == 1:
+            yield from _struct_fields(f"{name}/{f}", v)
+        else:
+            yield f"{name}/{f}", v
 
 
 def _reason(e: Exception) -> str:
@@ -163,13 +236,10 @@ def _reason(e: Exception) -> str:
 
 
 def _load_mat5(src: Source, names) -> dict:
-    import scipy.io
-
-    try:
-        raw = scipy.io.loadmat(str(src.path), variable_names=names)
-    except Exception as e:
-        raise ImportFailure(src.path, f"cannot be read as MATLAB v5: {_reason(e)}") from None
-    return {n: _numbers(src, n, raw[n]) for n in names}
+    tops = sorted({n.split("/", 1)[0] for n in names})
+    raw = _read_mat5(src.path, tops)
+    fields = dict(kv for t in tops for kv in _struct_fields(t, raw[t]))  # a struct's fields, "name/field"
+    return {n: _numbers(src, n, fields[n] if n in fields else raw[n]) for n in names}
 
 
 def _numbers(src: Source, name: str, a) -> np.ndarray:

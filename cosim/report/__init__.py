@@ -45,10 +45,35 @@ def _segments(model, x):
     segs = {"links": [np.array([c[i, 0], c[i, 1]]) for i in range(len(c))],
             "legs": [np.array([c[i, 1], c[i, 2]]) for i in range(len(c))],
             "platform": [np.vstack([c[:, 2], c[:1, 2]])]}
+    if model.ndof == 1 and model.joint_unit == "rad":
+        segs.update(_rotary_axis(model, x, c[0]))
     return segs, {"base joints": c[:, 0], "joints": c[:, 1]}
 
 
-_COLORS = {"links": "#888888", "rails": "#888888", "legs": "#1f77b4", "platform": "#d62728", "arms": "#1f77b4", "forearms": "#2ca02c"}
+#: length of a rotary axis's drawn shaft and pointer when its bodies give none [m]
+_POINTER = 0.1
+
+
+def _rotary_axis(model, x, chain):
+    """A revolute axis drawn so that its turning shows: its shaft (a line along the axis
+    through the axis point) and a pointer from the axis point, fixed in the platform,
+    perpendicular to the axis (its direction at q = 0 turned by the platform's rotation,
+    from ``Model.platform_pose``), as long as the platform is far from the axis (at least
+    100 mm)."""
+    from scipy.spatial.transform import Rotation
+
+    k = np.array([model.param(f"axis[1].k{c}") for c in "xyz"])
+    X = model.platform_pose(np.atleast_1d(np.asarray(x, float)))[0]
+    o, A = X[:3], chain[0]
+    size = max(np.linalg.norm(o - A), _POINTER)
+    u = np.cross(k, np.eye(3)[int(np.argmin(np.abs(k)))])
+    u /= np.linalg.norm(u)
+    R = Rotation.from_euler("XYZ", X[3:]).as_matrix()  # R = Rx(rx) Ry(ry) Rz(rz), docs/robots.md
+    return {"shaft": [np.array([A - 0.5 * size * k, A + 0.5 * size * k])],
+            "pointer": [np.array([A, A + size * (R @ u)])]}
+
+
+_COLORS = {"shaft": "#555555", "pointer": "#ff7f0e", "links": "#888888", "rails": "#888888", "legs": "#1f77b4", "platform": "#d62728", "arms": "#1f77b4", "forearms": "#2ca02c"}
 
 
 def _traces(model, x):
@@ -70,7 +95,8 @@ def _traces(model, x):
     if model.ndof == 1:
         # a single axis has no platform polygon: its carriage (the platform point) is drawn as a block
         c = segs["platform"][0][0] * 1e3
-        traces.append(go.Scatter3d(x=[c[0]], y=[c[1]], z=[c[2]], mode="markers", name="carriage",
+        name = "platform" if model.joint_unit == "rad" else "carriage"
+        traces.append(go.Scatter3d(x=[c[0]], y=[c[1]], z=[c[2]], mode="markers", name=name,
                                    marker=dict(size=14, symbol="square", color=_COLORS["platform"])))
     return traces
 
@@ -100,7 +126,9 @@ def mechanism_figure(model, time, poses, *, max_frames: int = 120, title: str = 
     lo, hi = allp.min(axis=0) * 1e3, allp.max(axis=0) * 1e3
     # a flat or straight robot (a planar one, a single axis) gets a depth of a quarter of its
     # size on its thin axes, so the view stays a box and the mechanism is seen, not a sliver
-    mid, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 0.125 * (hi - lo).max())
+    # a robot with no extent at all (every point on one spot) gets a box of the pointer's size
+    extent = max((hi - lo).max(), _POINTER * 1e3)
+    mid, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 0.125 * extent)
     lo, hi = mid - half, mid + half
     pad = 0.05 * (hi - lo).max()
     scene = dict(xaxis=dict(title="x [mm]", range=[lo[0] - pad, hi[0] + pad]),

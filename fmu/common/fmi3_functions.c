@@ -9,8 +9,12 @@
  * indicators as variables, the experiment given to fmi3EnterInitializationMode, the
  * results of fmi3DoStep and fmi3UpdateDiscreteStates as output arguments.  The
  * Co-Simulation interface has no event mode (hasEventMode="false"): a step that meets a
- * stroke limit or a singularity returns Discard with terminateSimulation and the last
- * successful time, as FMI 2.0 reports them through its status functions.  Scheduled
+ * stroke limit or a singularity ends there, the FMI 3.0 way of a model that cannot go on
+ * (FMI 3.0, 4.2.1 fmi3DoStep, and its example of a stop time the FMU cannot pass): OK with
+ * terminateSimulation, lastSuccessfulTime the time of the stop, and earlyReturn where the
+ * importer allowed an early return at instantiation (mightReturnEarlyFromDoStep="true";
+ * otherwise false: the importer stops on terminateSimulation alone).  A step that runs out
+ * of its wall-time budget is still Discarded (a shorter step may pass).  Scheduled
  * Execution, clocks, and the types this FMU has no variable of are refused.
  */
 #include <math.h>
@@ -27,6 +31,7 @@ typedef struct instance {
   fmu_instance base;           /* first: an instance is an fmu_instance      */
   fmi3InstanceEnvironment env; /* the importer's, handed back to its logger */
   fmi3LogMessageCallback log;
+  fmi3Boolean early_return_allowed; /* fmi3InstantiateCoSimulation's earlyReturnAllowed */
 } instance;
 
 #define BASE(comp) ((fmu_instance*)(comp))
@@ -82,7 +87,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3InstanceEnvironment instanceEnvironment,
                                          fmi3LogMessageCallback logMessage,
                                          fmi3IntermediateUpdateCallback intermediateUpdate) {
-  (void)resourcePath, (void)visible, (void)earlyReturnAllowed, (void)requiredIntermediateVariables;
+  (void)resourcePath, (void)visible, (void)requiredIntermediateVariables;
   (void)intermediateUpdate;
   if (eventModeUsed || nRequiredIntermediateVariables > 0) {
     if (logMessage)
@@ -91,8 +96,10 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                  "Co-Simulation (hasEventMode=\"false\", providesIntermediateUpdate=\"false\")");
     return NULL;
   }
-  return instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, 1, loggingOn,
-                     instanceEnvironment, logMessage);
+  instance* c = (instance*)instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, 1, loggingOn,
+                                       instanceEnvironment, logMessage);
+  if (c) c->early_return_allowed = earlyReturnAllowed ? fmi3True : fmi3False;
+  return c;
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -542,5 +549,9 @@ fmi3Status fmi3DoStep(fmi3Instance comp, fmi3Float64 currentCommunicationPoint, 
   *earlyReturn = fmi3False;
   *terminateSimulation = st == FMU_DISCARD ? fmi3True : fmi3False;
   *lastSuccessfulTime = c->last_successful_time;
+  if (st == FMU_DISCARD && c->stopped) {
+    *earlyReturn = ((instance*)c)->early_return_allowed;
+    return fmi3OK;
+  }
   return STATUS(st);
 }

@@ -352,11 +352,14 @@ Table read_table(const std::string& path, pkm_model*& model) {
     f.erase(std::remove(f.begin(), f.end(), std::string()), f.end());
     if (f.size() == 1 && f[0] == "core") {
       // The core's own fact (pkm_model_joint_limits): the table does not restate the names.
+      // A robot whose joints have none (a continuous axis, docs/robots.md) gets no limit events.
       for (int k = 0; k < nd; ++k) {
         int lo = -1, hi = -1;
-        if (pkm_model_joint_limits(model, k, &lo, &hi) != PKM_OK || lo < 0 || hi < 0)
-          throw Fail(path + ": @joint-limits core: the robot declares no limit parameters for joint " +
-                     std::to_string(k + 1) + " (drop the line for a robot without joint limits)");
+        if (pkm_model_joint_limits(model, k, &lo, &hi) != PKM_OK) lo = hi = -1;
+        if (lo < 0 && hi < 0 && t.qmin.empty()) continue;
+        if (lo < 0 || hi < 0 || (k > 0 && t.qmin.empty()))
+          throw Fail(path + ": @joint-limits core: the robot declares limit parameters for some joints only (joint " +
+                     std::to_string(k + 1) + "): the FMU's limit events are per joint, all or none");
         t.qmin.push_back(lo);
         t.qmax.push_back(hi);
       }
@@ -650,7 +653,8 @@ std::string model_description3(const Table& t, const std::vector<Var3>& vars, co
       << " needsCompletedIntegratorStep=\"true\"/>\n";
   o << "  <CoSimulation modelIdentifier=\"" << xml(id) << "\"" << common
     << " canHandleVariableCommunicationStepSize=\"true\" maxOutputDerivativeOrder=\"0\" hasEventMode=\"false\""
-       " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\"/>\n";
+       " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\""
+    << (t.controller() ? "false" : "true") << "\"/>\n";
   std::set<std::string> units;
   for (const auto& v : vars)
     if (!no_unit(v.unit)) units.insert(v.unit);

@@ -634,6 +634,7 @@ fmu_status fmu_do_step(fmu_instance* c, const char* fn, double t, double h) {
      * is consistent and readable. */
     c->last_successful_time = plant_time(c->plant);
     c->terminated = 1;
+    c->stopped = s != PKM_ERR_STEP_BUDGET;
     c->state = S_STEP_FAILED;
     fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s from t = %.9g s to %.9g s: %s", fn, t, t_end, plant_error(c->plant));
     return FMU_DISCARD;

@@ -62,6 +62,8 @@ struct fmu_instance {
   int stop_defined;
   double last_successful_time;
   int terminated;
+  int stopped;           /* the last Co-Simulation step ended at a stop of the plant (a joint
+                            limit, a singularity, an unreachable pose), not at its budget */
 };
 
 /* ----------------------------------------------------------------- logging */

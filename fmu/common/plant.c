@@ -322,6 +322,29 @@ int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value) {
 
 /* ------------------------------------------------------------ apply / start */
 
+/* The core's integration methods (pkm_sim_method): whether code is one of them, and the
+ * list "2 (explicit Runge-Kutta 5(4)), ..., or 1 (CVODE Adams)" for a message. */
+static int method_known(int code) {
+  int c;
+  for (int i = 0; i < pkm_sim_method_count(); ++i)
+    if (pkm_sim_method(i, &c, NULL, NULL, NULL) == PKM_OK && c == code) return 1;
+  return 0;
+}
+
+static void method_list(char* out, size_t len) {
+  size_t k = 0;
+  const int n = pkm_sim_method_count();
+  out[0] = '\0';
+  for (int i = 0; i < n && k < len; ++i) {
+    int c;
+    const char* title;
+    if (pkm_sim_method(i, &c, NULL, &title, NULL) != PKM_OK) continue;
+    const int w = snprintf(out + k, len - k, "%s%d (%s)", i == 0 ? "" : (i + 1 == n ? " or " : ", "), c, title);
+    if (w < 0) break;
+    k += (size_t)w;
+  }
+}
+
 static int same_options(const pkm_sim_options* a, const pkm_sim_options* b) {
   return a->method == b->method && a->rtol == b->rtol && a->atol == b->atol && a->max_step == b->max_step &&
          a->max_steps == b->max_steps && a->sing_min == b->sing_min;
@@ -365,10 +388,11 @@ static int apply(fmu_plant* p) {
 
   pkm_sim_options o = p->opt;
   if (p->tol_override > 0) o.rtol = p->tol_override;
-  if (o.method != PKM_BDF && o.method != PKM_ADAMS && o.method != PKM_ERK && o.method != PKM_ERK23)
-    return fail(p, PKM_ERR_PARAMETER,
-                "%s = %d: use %d (explicit Runge-Kutta 5(4)), %d (explicit Runge-Kutta 3(2)), %d (BDF) or %d (Adams)",
-                var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, PKM_ERK, PKM_ERK23, PKM_BDF, PKM_ADAMS);
+  if (!method_known(o.method)) {
+    char known[256];
+    method_list(known, sizeof known);
+    return fail(p, PKM_ERR_PARAMETER, "%s = %d: use %s", var_name(p, FMU_CH_SOLVER_METHOD, 0), o.method, known);
+  }
   if (!(o.rtol > 0) || !(o.atol > 0))
     return fail(p, PKM_ERR_PARAMETER, "%s = %g and %s = %g must both be > 0", var_name(p, FMU_CH_SOLVER_RTOL, 0),
                 o.rtol, var_name(p, FMU_CH_SOLVER_ATOL, 0), o.atol);

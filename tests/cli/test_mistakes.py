@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim.cli.common import COMMANDS
@@ -31,6 +32,14 @@ def _scenario(tmp, name, body):
     p = tmp / name
     p.write_text(body)
     return str(p)
+
+
+def _emps_map(tmp, name, column, angle):
+    """The EMPS map with ``angle = ...`` (wrap or unwrap) on one column entry."""
+    text = (EMPS / "emps_map.toml").read_text()
+    entry = {"q1": 'q1 = { variable = "qm", unit = "m"', "time": 'time = { variable = "t", unit = "s"'}[column]
+    assert entry in text
+    return _scenario(tmp, name, text.replace(entry, f'{entry}, angle = "{angle}"'))
 
 
 def _recording_variants(tmp):
@@ -93,7 +102,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
           "parasitic": ["parasitic", "{}"], "map": ["map", "{}", "--out", "{tmp}/m.png"],
-          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"],
+          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
           "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
@@ -114,6 +123,7 @@ OUT_DIRS = {"run": ["run", str(SCEN / "6pus_step_pd.toml"), "--out", "{}"],
 OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
              "map": ["map", "tripod_3rps", "--out", "{}"],
+             "urdf": ["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 
@@ -198,6 +208,8 @@ def _cases(tmp):
         (["parasitic", "tripod_3rps", "--map", str(tmp / "m.png"), "--grid", "1"], "--grid 1: give 2 to 201 points"),
         (["parasitic", "tripod_3rps", "--pose", "0.9", "0.0", "0.0"], "leg 1 joint q = "),
         (["map", "tripod_3rps", "--slices", "0"], "--slices 0: give 1 to 9 rows"),
+        (["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--tip", "forearm_link"],
+         'tip link "forearm_link" is not fixed to the last moving link'),
         (["map", "tripod_3rps", "--span", "-1"], "span = -1.0: give the map's half-width about home as a positive"),
         (["map", "tripod_3rps", "--axes", "rx", "x"], "--axes: 'x' is not a coordinate of tripod_3rps"),
         # kept from the first corpus
@@ -255,6 +267,11 @@ def _cases(tmp):
           "--format", "xlsx"], "invalid choice: 'xlsx'"),
         (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _scenario(tmp, "map_syntax.toml", "[robot\n"), "--out",
           str(tmp / "imp")], "map_syntax.toml: not valid TOML"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _emps_map(tmp, "wrap_q.toml", "q1", "wrap"), "--out",
+          str(tmp / "imp")], "q1 is a position in m (a prismatic joint): only an angle column"),
+        (["import", str(EMPS / "DATA_EMPS.mat"), "--map", _emps_map(tmp, "wrap_t.toml", "time", "unwrap"), "--out",
+          str(tmp / "imp")], "field columns.time.angle: time is a time: only an angle column"),
+        *_log_mistakes(tmp),
         (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--solver", "bogus"], "invalid choice: 'bogus'"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--window", "-1"], "window = -1.0 must be"),
@@ -263,6 +280,36 @@ def _cases(tmp):
         (["run", _scenario(tmp, "unit.toml", STEP.replace('type = "step"\n', 'type = "step"\nangle_unit = "grad"\n')
                            + HOLD)], "reference.angle_unit: must be 'rad' or 'deg'"),
     ]
+
+
+def _log_mistakes(tmp):
+    """Imports of a ROS 2 bag (written by rosbags) naming a topic, a field or an index it does
+    not have, and of a bag with no messages: one line naming the file, topic and field."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    F = ts.types["std_msgs/msg/Float64MultiArray"]
+    for name, n in (("bag", 3), ("empty_bag", 0)):
+        with Writer(tmp / name, version=9) as w:
+            c = w.add_connection("/state", F.__msgtype__, typestore=ts)
+            for k in range(n):
+                m = F(layout=ts.types["std_msgs/msg/MultiArrayLayout"](dim=[], data_offset=0),
+                      data=np.array([0.1 * k, 1.0, 2.0]))
+                w.write(c, 1000 * k, ts.serialize_cdr(m, F.__msgtype__))
+    body = ('robot = "pendulum"\n[columns]\ntime = {{ topic = "/state", field = "log_time" }}\n'
+            'q1 = {{ topic = "{t}", field = "{f}" }}\nqd1 = {{ topic = "/state", field = "data[1]" }}\n'
+            'tau1 = {{ topic = "/state", field = "data[2]" }}\n')
+
+    def case(bag, t, f, expect):
+        mp = _scenario(tmp, f"log_map_{len(t)}_{len(f)}_{bag}.toml", body.format(t=t, f=f))
+        return ["import", str(tmp / bag), "--map", mp, "--out", str(tmp / "imp")], expect
+
+    return [case("bag", "/stat", "data[0]", "bag: topic '/stat', field 'data[0]' (column q1): no such topic"),
+            case("bag", "/state", "dta[0]", "topic '/state', field 'dta[0]' (column q1): std_msgs/msg/"
+                                            "Float64MultiArray has no field 'dta'"),
+            case("bag", "/state", "data[3]", "topic '/state', field 'data[3]' (column q1): index 3 is out of range"),
+            case("empty_bag", "/state", "data[0]", "empty_bag: the bag has no messages")]
 
 
 def _call(argv):

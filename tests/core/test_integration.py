@@ -27,6 +27,24 @@ def test_default_options_are_the_cores(model):
                                  "max_steps": 100000, "sing_min": 1e-4}
 
 
+def test_the_method_list_is_the_cores_and_each_method_integrates(model):
+    """One list of integrators (pkm_sim_method): the names, codes and titles every layer
+    reads; each named method runs, and the pkm.h codes are the enum's (PKM_BDF 0 ...)."""
+    from cosim.cli.scenario import INTEGRATORS
+    from cosim.core.simulator import METHOD_CODES, METHODS
+
+    assert METHOD_CODES == {"bdf": 0, "adams": 1, "erk": 2, "erk23": 3}   # pkm.h pkm_lmm
+    assert INTEGRATORS == {k: v[1] for k, v in METHODS.items()}
+    assert INTEGRATORS["erk"] == "explicit Runge-Kutta 5(4)" and INTEGRATORS["bdf"] == "CVODE BDF"
+    for name in METHODS:
+        sim = Simulator(model, method=name)
+        sim.set_input(model.gravity_load(model.home()))
+        sim.advance(0.01)
+        assert sim.state[0] == 0.01
+    with pytest.raises(ArgumentError, match=r"method must be one of \['adams', 'bdf', 'erk', 'erk23'\]"):
+        Simulator(model, method="rk4")
+
+
 @pytest.mark.parametrize("method", ["erk", "bdf"])
 def test_simulator_holds_the_robot_with_its_gravity_load(model, method):
     x0 = model.home()

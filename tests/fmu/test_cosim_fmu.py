@@ -9,6 +9,7 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim import fmu
@@ -56,13 +57,42 @@ def test_what_cannot_be_made_is_one_line_and_exit_2(tmp_path, args, says):
 
 @pytest.fixture(scope="module")
 def my_stewart(tmp_path_factory):
-    """A description file outside the repository (the bundled hexapod under another name);
-    the build's PKM_FMU_DESCRIPTIONS is emptied again afterwards."""
+    """A description file outside the repository (the bundled hexapod under another name)."""
     d = tmp_path_factory.mktemp("mine") / "my_stewart.toml"
     shutil.copyfile(REPO / "robots" / "hexapod_ups.toml", d)
-    yield d
-    subprocess.run(["cmake", "-S", str(REPO), "-B", str(fmu.build_dir()), "-DPKM_FMU_DESCRIPTIONS="],
-                   check=True, stdout=subprocess.DEVNULL)
+    return d
+
+
+def test_a_description_files_fmu_leaves_the_build_cache_as_it_was(tmp_path):
+    """``cosim fmu my.toml --platforms linux64`` builds its FMUs for linux64 only and puts the
+    build directory's PKM_FMU_DESCRIPTIONS and PKM_FMU_PLATFORMS back.  The robot is the
+    pendulum made a continuous axis without gravity: its FMU spins it past 100 rad on the
+    closed form q = tau t^2 / (2 M), M = m l^2 + I."""
+    from fmpy import read_model_description, simulate_fmu
+
+    desc = tmp_path / "my_pendulum.toml"
+    text = (REPO / "robots" / "pendulum.toml").read_text().replace("stroke = [-3.1, 3.1]", "continuous = true")
+    text = text.replace('name = "pendulum"', 'name = "my_pendulum"')
+    desc.write_text(text.replace("vector = [0.0, 0.0, -9.81]", "vector = [0.0, 0.0, 0.0]"))
+    cache = fmu.build_dir() / "CMakeCache.txt"
+    keys = {"PKM_FMU_DESCRIPTIONS": "", "PKM_FMU_PLATFORMS": "auto"}
+    before = fmu._cache_values(fmu.build_dir(), keys)
+    r = cosim("fmu", str(desc), "--platforms", "linux64", "--out", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    assert platforms_in(tmp_path / "out" / "PKM_MY_PENDULUM.fmu") == {"linux64"}
+    assert fmu._cache_values(fmu.build_dir(), keys) == before
+    assert str(desc) not in cache.read_text()
+    # no other platform was built for it
+    stage = fmu.build_dir() / "fmu"
+    assert not list(stage.glob("**/binaries/win64/PKM_MY_PENDULUM*")), list(stage.glob("**/PKM_MY_PENDULUM*"))
+    plant = tmp_path / "out" / "PKM_MY_PENDULUM.fmu"
+    (tau_name,) = [v.name for v in read_model_description(str(plant)).modelVariables if v.causality == "input"]
+    (q_name,) = [v.name for v in read_model_description(str(plant)).modelVariables if v.name.startswith("q[")]
+    r = simulate_fmu(str(plant), stop_time=10.0, output_interval=0.5, start_values={tau_name: 0.6},
+                     output=[q_name])
+    M = 1.0 * 0.5**2 + 1e-4
+    np.testing.assert_allclose(r[q_name], 0.6 * r["time"] ** 2 / (2 * M), rtol=1e-6, atol=1e-9)
+    assert r[q_name][-1] > 100
 
 
 def test_description_file_anywhere(my_stewart, tmp_path):

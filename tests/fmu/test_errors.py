@@ -23,6 +23,8 @@ def _fresh_instance_works(fmu_file, hold):
     ("solver.rtol", -1.0, ["solver.rtol", "-1"]),
     ("z0", 0.5, ["initial pose", "leg"]),
     ("sensor.delay", 0.002, ["sensor.delay = 0.002 s", "does not delay"]),  # refused, not ignored
+    # an unknown integrator: the message lists the core's method table (pkm_sim_method)
+    ("solver.method", 7, ["solver.method = 7", "2 (explicit Runge-Kutta 5(4))", "or 3 (explicit Runge-Kutta 3(2))"]),
 ])
 def test_bad_start_value_fails_initialization(fmu_file, hold, name, value, words):
     f = fmu.FMUInstance(fmu_file, params={name: value}, initialize=False)

@@ -123,7 +123,7 @@ def test_fmpy_runs_fmi3_equal_to_fmi2(robot, kind):
 class Instance:
     """An FMI 3.0 instance through fmpy's low-level class, its log lines kept."""
 
-    def __init__(self, path, kind="CoSimulation", name="plant", params=None, initialize=True):
+    def __init__(self, path, kind="CoSimulation", name="plant", params=None, initialize=True, early_return=False):
         self.md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.size = {v.name: (int(np.prod([int(d.start) for d in v.dimensions])) if v.dimensions else 1)
@@ -132,7 +132,8 @@ class Instance:
         cls = FMU3Slave if kind == "CoSimulation" else FMU3Model
         self.f = cls(guid=self.md.guid, unzipDirectory=extract(str(path)), modelIdentifier=self.md.coSimulation
                      .modelIdentifier, instanceName=name)
-        self.f.instantiate(logMessage=lambda env, st, cat, msg: self.log.append((st, msg.decode())))
+        more = {"earlyReturnAllowed": True} if early_return else {}
+        self.f.instantiate(logMessage=lambda env, st, cat, msg: self.log.append((st, msg.decode())), **more)
         self.time = 0.0
         for k, v in (params or {}).items():
             self.set(k, v)
@@ -272,40 +273,62 @@ def test_wrong_instantiation_token_is_refused():
     assert "instantiation token {00000000" in log[-1] and md.guid in log[-1], log
 
 
-def test_stroke_limit_discards_the_step_at_the_fmi2_time():
+def test_stroke_limit_ends_the_fmi3_step_with_terminate_simulation_at_the_fmi2_time():
+    """At a stroke limit fmi3DoStep returns OK with terminateSimulation and the time of the
+    stop (FMI 3.0, fmi3DoStep), the same time and message as FMI 2.0's Discard; earlyReturn
+    only where the importer allowed it at instantiation."""
     m = Model("6pus")
     tau = m.gravity_load(m.home())
     tau[0] -= 5.0  # drive slider 1 to its lower stop
-    f3 = Instance(fmu.fmu_path("6pus", fmi=3))
-    with pytest.raises(FMICallException) as e:
-        for _ in range(1000):
-            f3.step(tau)
-    assert e.value.status == 2  # Discard
-    assert f3.log[-1][0] == 2 and "leg 1" in f3.log[-1][1] and "rail[1].qmin" in f3.log[-1][1]
     with fmu.FMUInstance(fmu.fmu_path("6pus")) as f2:
         with pytest.raises(fmu.FMUError):
             for _ in range(1000):
                 f2.step(H, tau=tau)
         t2 = f2.last_successful_time()
-        assert f3.log[-1][1] == f2.log[-1].split("] ", 1)[1].replace("fmi2DoStep", "fmi3DoStep")
-    # fmi3DoStep's own outputs: terminate, and the time the state is at.
-    f3.close()
-    g = Instance(fmu.fmu_path("6pus", fmi=3))
-    do_step = g.f.dll.fmi3DoStep  # the raw call: fmpy's raises on a Discard, the outputs are wanted
-    B = C.POINTER(C.c_bool)
-    do_step.argtypes = [C.c_void_p, C.c_double, C.c_double, C.c_bool, B, B, B, C.POINTER(C.c_double)]
-    do_step.restype = C.c_int
-    ev, term, early, last = C.c_bool(), C.c_bool(), C.c_bool(), C.c_double()
-    g.set("tau", tau)
-    t = 0.0
-    while True:
-        st = do_step(g.f.component, t, H, True, C.byref(ev), C.byref(term), C.byref(early), C.byref(last))
-        if st != 0:
-            break
-        t += H
-    assert st == 2 and term.value and not early.value and not ev.value
-    assert last.value == t2 and abs(g.get("q")[0]) < 1e-9
-    g.close()
+        msg2 = f2.log[-1].split("] ", 1)[1]
+    for allowed in (False, True):
+        g = Instance(fmu.fmu_path("6pus", fmi=3), early_return=allowed)
+        do_step = g.f.dll.fmi3DoStep  # the raw call: the status and every output argument
+        B = C.POINTER(C.c_bool)
+        do_step.argtypes = [C.c_void_p, C.c_double, C.c_double, C.c_bool, B, B, B, C.POINTER(C.c_double)]
+        do_step.restype = C.c_int
+        ev, term, early, last = C.c_bool(), C.c_bool(), C.c_bool(), C.c_double()
+        g.set("tau", tau)
+        t = 0.0
+        for _ in range(1000):
+            st = do_step(g.f.component, t, H, True, C.byref(ev), C.byref(term), C.byref(early), C.byref(last))
+            if st != 0 or term.value:
+                break
+            t += H
+        assert st == 0 and term.value and early.value == allowed and not ev.value
+        assert t < last.value < t + H and last.value == t2 and abs(g.get("q")[0]) < 1e-9
+        assert g.log[-1][1] == msg2.replace("fmi2DoStep", "fmi3DoStep") and "rail[1].qmin" in g.log[-1][1]
+        g.f.terminate()
+        g.close()
+
+
+def test_fmpy_ends_an_fmi3_run_at_the_stroke_limit_quietly_as_an_fmi2_one():
+    """fmpy's simulate_fmu stops both FMI versions at the stop without raising, with or
+    without early return allowed; the last row is the slider at its lower stop."""
+    m = Model("6pus")
+    tau = m.gravity_load(m.home())
+    tau[0] -= 5.0
+    ends = {}
+    for fmi, kw in ((2, {}), (3, {}), (3, {"early_return_allowed": True})):
+        path = fmu.fmu_path("6pus", fmi=fmi)
+        if fmi == 2:
+            names = [v.name for v in read_model_description(str(path)).modelVariables if v.causality == "input"]
+            start = dict(zip(names, tau))
+        else:
+            start = {"tau": tau}
+        r = simulate_fmu(str(path), stop_time=1.0, output_interval=H, start_values=start,
+                         output=["q[1]"] if fmi == 2 else ["q"], **kw)
+        q1 = r["q[1]"] if fmi == 2 else r["q"].reshape(len(r), -1)[:, 0]
+        ends[(fmi, bool(kw))] = (r["time"][-1], q1[-1])
+    lo = Model("6pus").param("rail[1].qmin")
+    for key, (t_end, q_end) in ends.items():
+        assert t_end < 0.5, (key, t_end)  # stopped, not run to 1 s
+        assert abs(q_end - lo) < 2e-3, (key, q_end, lo)
 
 
 def test_model_exchange_stops_at_the_stroke_limit_like_fmi2():

@@ -89,3 +89,48 @@ def test_run_calibration_and_diagnosis_pages(recording, tmp_path):
     assert "replay: readings" in text and "fitted plant" in text
     with pytest.raises(ReportError, match="section 'bad'"):
         write_html(tmp_path / "x.html", "t", [("bad", 3)])
+
+
+TURNTABLE = """
+[robot]
+name = "turntable_on_axis"
+coordinates = ["rz"]
+home = [0.0]
+[gravity]
+vector = [0.0, 0.0, -9.81]
+[platform]
+mass = 2.0
+inertia = [0.01, 0.01, 0.02]
+[[leg]]
+type = "R"
+platform_point = [0.0, 0.0, 0.0]
+axis_point = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+continuous = true
+"""
+
+
+def test_a_rotary_axis_whose_points_lie_on_it_is_drawn_turning(tmp_path):
+    """A turntable with every chain point on its axis (no extent at all: the box once had a
+    size of 0 and plotly an aspect ratio of NaN) is drawn, with a shaft and a pointer that
+    turns with q: the pointer's end at q = pi/2 is the one at q = 0 turned by pi/2 about z."""
+    import json
+
+    from cosim.report import mechanism_figure
+
+    (tmp_path / "turntable_on_axis.toml").write_text(TURNTABLE)
+    m = Model(str(tmp_path / "turntable_on_axis.toml"))
+    t = np.linspace(0.0, 1.0, 5)
+    fig = mechanism_figure(m, t, (np.pi / 2 * 4 * t)[:, None])  # q = 0, pi/2, pi, 3 pi/2, 2 pi
+    ar = fig.layout.scene.aspectratio
+    assert all(np.isfinite([ar.x, ar.y, ar.z])) and min(ar.x, ar.y, ar.z) > 0, ar
+    ends = []
+    for fr in fig.frames[:2]:
+        (ptr,) = [d for d in fr.data if d.name == "pointer"]
+        ends.append(np.array([ptr.x[1] - ptr.x[0], ptr.y[1] - ptr.y[0], ptr.z[1] - ptr.z[0]]))
+    assert np.linalg.norm(ends[0]) > 0
+    turned = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]]) @ ends[0]  # Rz(pi/2)
+    np.testing.assert_allclose(ends[1], turned, atol=1e-9)
+    assert any(d.name == "shaft" for d in fig.frames[0].data)
+    out = write_html(tmp_path / "t.html", "turntable", [("the turntable", fig)])
+    assert "NaN" not in json.dumps(fig.layout.scene.to_plotly_json()) and out.exists()

@@ -224,7 +224,9 @@ PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, d
  * solved from the legs' passive revolute joints by Newton (PKM_ERR_NO_CONVERGENCE names the
  * pose if the constraints are not met to 1e-14 m) -- the parasitic motion of 3-PRS and 3-RPS heads
  * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
- * of held ones zero.  Described robots; PKM_ERR_UNSUPPORTED for those written in C++. */
+ * of held ones zero.  A serial arm's (docs/robots.md, Serial arms) X is its tool frame and S its
+ * Jacobian in these coordinates (position rows the geometric Jacobian's).  Described robots;
+ * PKM_ERR_UNSUPPORTED for those written in C++. */
 PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
                               double* S);
 
@@ -379,6 +381,17 @@ PKM_API int pkm_measure_joints_batch(const pkm_model* m, pkm_data* d, size_t n,
  * docs/integration.md compares them (speed, accuracy, when to use which). */
 typedef enum pkm_lmm { PKM_BDF = 0, PKM_ADAMS = 1, PKM_ERK = 2, PKM_ERK23 = 3 } pkm_lmm;
 
+/* The methods as a table, the one list every layer reads (the Python package's method
+ * names, the scenario summary, the FMUs' check of solver.method), in the way mujoco.h
+ * names its enums: for i in [0, pkm_sim_method_count()), pkm_sim_method gives the
+ * method's pkm_lmm code, its short name ("erk", "erk23", "bdf", "adams": cosim's
+ * method= and a scenario's [integrator] method), a title for messages ("explicit
+ * Runge-Kutta 5(4)") and whether this binary carries it (0: BDF and Adams in a build
+ * without SUNDIALS, PKM_NO_CVODE).  Any output pointer may be NULL.  PKM_ERR_ARGUMENT
+ * for i out of range. */
+PKM_API int pkm_sim_method_count(void);
+PKM_API int pkm_sim_method(int i, int* code, const char** name, const char** title, int* available);
+
 typedef struct pkm_sim_options {
   int method;        /* PKM_ERK (default), PKM_ERK23, PKM_BDF or PKM_ADAMS         */
   double rtol;       /* relative tolerance (default 1e-8)                         */
@@ -462,6 +475,21 @@ PKM_API int pkm_sim_state_load(pkm_sim* s, const double* buf, size_t n);
  * because a trial state left the workspace). */
 PKM_API int pkm_sim_get_stats(const pkm_sim* s, pkm_sim_stats* stats);
 PKM_API const char* pkm_sim_error(const pkm_sim* s);
+
+/* The delay line of a closed loop's joint readings (drive parameter sensor.delay), the
+ * one the sim keeps for pkm_closed_loop, for a loop stepped from outside the core (the
+ * stepwise loop of cosim.closed_loop around any plant).  Created from a validated model
+ * (its sensor.delay at creation); NULL on error, the reason in err. */
+typedef struct pkm_reading_delay pkm_reading_delay;
+PKM_API pkm_reading_delay* pkm_reading_delay_create(const pkm_model* m, char* err, size_t errlen);
+PKM_API void pkm_reading_delay_destroy(pkm_reading_delay* r);
+/* Records the sample (t, q[nd], qd[nd]) and replaces q and qd by the reading and rate of
+ * t - sensor.delay, interpolated linearly between the samples around it (the first
+ * sample's before it); without a delay q and qd stay.  Sample times must not decrease. */
+PKM_API int pkm_reading_delay_read(pkm_reading_delay* r, double t, double* q, double* qd);
+/* Forgets every sample (a new run). */
+PKM_API void pkm_reading_delay_reset(pkm_reading_delay* r);
+PKM_API const char* pkm_reading_delay_error(const pkm_reading_delay* r);
 
 /* ================================================================= control */
 /* Sampled joint-space controllers (docs/scenarios.md), the same laws as cosim.controllers.

@@ -1,6 +1,7 @@
 // The algorithms of a single-axis robot (axis_robot.hpp), over its kind's terms.
 #include "description/axis_robot.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace pkm {
@@ -18,8 +19,9 @@ std::unique_ptr<RobotModel> AxisRobot::compile(const std::vector<ParamSpec>& spe
   auto m = std::make_unique<AxisRobotModel>();
   m->kind = kind_;
   m->a.p = v.vec("leg", 0, "p");
+  m->a.continuous = description().continuous;
   kind_->compile(v, m->a);
-  if (!(m->a.qmin < m->a.qmax))
+  if (!m->a.continuous && !(m->a.qmin < m->a.qmax))
     v.bad(joint_limit_param(0, false) + " = " + num(m->a.qmin) + " must be below " + joint_limit_param(0, true) +
           " = " + num(m->a.qmax));
   m->b.m_platform = v("platform.m");
@@ -35,6 +37,7 @@ std::unique_ptr<RobotModel> AxisRobot::compile(const std::vector<ParamSpec>& spe
           (kind_->angular() ? " kg m2" : " kg") + "): give the platform a mass" +
           (kind_->angular() ? ", an inertia about the axis or a mass off the axis" : ""));
   m->home = description().home[0];
+  if (!std::isfinite(m->home)) v.bad("the home pose is not finite");
   if (!(m->home >= m->a.qmin && m->home <= m->a.qmax))
     v.bad("the home pose is not valid: leg 1 joint q = " + num(m->home) + " outside [" + num(m->a.qmin) + ", " +
           num(m->a.qmax) + "]");
@@ -42,6 +45,48 @@ std::unique_ptr<RobotModel> AxisRobot::compile(const std::vector<ParamSpec>& spe
 }
 
 void AxisRobot::home(const RobotModel& rm, double* x) const { x[0] = model_of(rm).home; }
+
+std::string AxisRobot::joint_limit_param(int i, bool upper) const {
+  return description().continuous ? std::string() : DescribedRobot::joint_limit_param(i, upper);
+}
+
+void AxisRobot::platform_pose(const RobotModel& rm, RobotData&, const double* x, double* X, double* S) const {
+  // X = (o, rx, ry, rz) with R = Rx(rx) Ry(ry) Rz(rz).  An axis along a world axis (a
+  // rail's R = I, a shaft along x, y or z) turns that one angle by q, unwrapped; another
+  // axis gives the angles of R, their rates from w = k qd through the Euler-rate map
+  // E = [ex, Rx ey, Rx Ry ez] (singular at ry = +-pi/2: refused there).
+  const AxisRobotModel& m = model_of(rm);
+  Eigen::Vector3d o;
+  Eigen::Matrix3d R;
+  kind_->place(m.a, x[0], o, R);
+  // do/dq: a rail moves o along s; a shaft turns o about k (o = A - R p).
+  const Eigen::Vector3d dodq = kind_->angular() ? Eigen::Vector3d(-m.a.dir.cross(R * m.a.p)) : m.a.dir;
+  Eigen::Vector3d ang = Eigen::Vector3d::Zero(), dang = Eigen::Vector3d::Zero();
+  if (kind_->angular()) {
+    int along = -1;
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(std::abs(m.a.dir[c]) - 1) < 1e-12) along = c;
+    if (along >= 0) {
+      const double sgn = m.a.dir[along] > 0 ? 1 : -1;
+      ang[along] = sgn * x[0], dang[along] = sgn;
+    } else {
+      ang[1] = std::asin(std::clamp(R(0, 2), -1.0, 1.0));
+      ang[0] = std::atan2(-R(1, 2), R(2, 2));
+      ang[2] = std::atan2(-R(0, 1), R(0, 0));
+      const Eigen::Matrix3d Rx = Eigen::AngleAxisd(ang[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
+      const Eigen::Matrix3d Ry = Eigen::AngleAxisd(ang[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
+      Eigen::Matrix3d E;
+      E << Eigen::Vector3d::UnitX(), Rx * Eigen::Vector3d::UnitY(), Rx * Ry * Eigen::Vector3d::UnitZ();
+      if (std::abs(std::cos(ang[1])) < 1e-9)
+        throw Error(PKM_ERR_SINGULAR, "the platform's angles (rx, ry, rz) are singular at q = " + num(x[0]) +
+                                          " (ry = +-pi/2): no rates");
+      dang = E.lu().solve(m.a.dir);
+    }
+  }
+  for (int k = 0; k < 3; ++k) X[k] = o[k], X[3 + k] = ang[k];
+  if (!S) return;
+  for (int k = 0; k < 3; ++k) S[k] = dodq[k], S[3 + k] = dang[k];
+}
 
 void AxisRobot::ik(const RobotModel& rm, RobotData&, const double* x, double* q) const {
   const AxisRobotModel& m = model_of(rm);

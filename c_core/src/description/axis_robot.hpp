@@ -28,6 +28,9 @@ class AxisRobot final : public DescribedRobot {
   const char* joint_noun() const override { return kind_->noun(); }
   bool joints_angular() const override { return kind_->angular(); }
   const char* geometry_param(int) const override { return nullptr; }
+  // None on a continuous axis (`continuous = true`): the sim's stops and every check skip it.
+  std::string joint_limit_param(int i, bool upper) const override;
+  void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const override;
 
   void ik(const RobotModel&, RobotData&, const double* x, double* q) const override;
   void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess, const pkm_fk_options& opt,

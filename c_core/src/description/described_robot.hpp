@@ -44,8 +44,8 @@ namespace pkm {
 namespace described {
 
 // rail, arm and strut legs join the base to a platform point; an axis (the kinds of
-// joint_kind.hpp) carries the platform itself.
-enum class Joint { rail, arm, strut, axis };
+// joint_kind.hpp) carries the platform itself; serial: an open chain (serial_chain.hpp).
+enum class Joint { rail, arm, strut, axis, serial };
 class AxisKind;
 class LegKind;
 
@@ -148,6 +148,7 @@ struct Description {
   // after the defaults: DescribedRobot::param_overrides)
   std::vector<std::pair<std::string, std::vector<Override>>> sets;
   std::vector<double> home;
+  bool continuous = false;              // a single R axis declared `continuous = true` (no limits)
   int home_line = 0;
   int name_line = 0;
   Joint joint = Joint::rail;
@@ -157,6 +158,7 @@ struct Description {
 
 // Reads and checks a description; throws Error(PKM_ERR_ARGUMENT, "file:line: field: what").
 Description read_description(const std::string& text, const std::string& file);
+Description read_description(const toml::Document& doc, const std::string& file);  // parsed already
 
 class DescribedRobot : public Robot {
  public:

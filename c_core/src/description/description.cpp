@@ -56,6 +56,22 @@ bool same_platform_point(const Reader& rd, const Legs& legs) {
   return true;
 }
 
+// `continuous = true` of a [[leg]]: an R axis that turns without limit (no stroke).  Only a
+// single R axis may: a leg's arm is held by its rod, a rail or strut ends.
+bool continuous_joint(const Reader& rd, const toml::Table& t, const LegType* type, const std::string& where) {
+  const toml::Value* v = t.find("continuous");
+  if (!v) return false;
+  if (v->kind != toml::Value::Bool)
+    rd.fail(v->line, where + ": continuous must be true or false, got a " + v->kind_name());
+  if (!v->b) return false;
+  if (type->joint != Joint::axis || !type->axis->may_be_continuous())
+    rd.fail(v->line, where + ": continuous: only a revolute axis (type R) turns without limit; a " +
+                         std::string(type->name) + " leg's joint has a stroke");
+  if (const toml::Value* st = t.find("stroke"))
+    rd.fail(st->line, where + ": a continuous joint has no stroke (remove stroke, or continuous = false)");
+  return true;
+}
+
 }  // namespace
 
 const LegType* find_leg_type(const std::string& name) {
@@ -71,7 +87,10 @@ std::string leg_type_names() {
 }
 
 Description read_description(const std::string& text, const std::string& file) {
-  const toml::Document doc = toml::parse(text, file);
+  return read_description(toml::parse(text, file), file);
+}
+
+Description read_description(const toml::Document& doc, const std::string& file) {
   Reader rd{doc};
   Description d;
   d.file = file;
@@ -301,7 +320,7 @@ Description read_description(const std::string& text, const std::string& file) {
     const toml::Table& t = *l.t;
     const std::string where = "leg " + std::to_string(i + 1) + (l.copy ? " (copy " + std::to_string(l.copy) + " of the [[leg]] on line " + std::to_string(t.line) + ")" : "");
     const Joint j = l.type->joint;
-    std::vector<std::string> known = {"type", "copies", "platform_point", "stroke"};
+    std::vector<std::string> known = {"type", "copies", "platform_point", "stroke", "continuous"};
     if (d.articulated) known.push_back("platform_offset");
     for (const auto& k : j == Joint::axis ? l.type->axis->fields() : l.type->leg->fields()) known.push_back(k);
     rd.only(t, known, where);
@@ -313,8 +332,12 @@ Description read_description(const std::string& text, const std::string& file) {
                                                  "pose itself)");
     const auto p = d.point ? std::vector<double>{0, 0, 0}
                            : vec("platform_point", "the leg's attachment point in the platform frame [m]");
-    const auto stroke = rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]"), "leg.stroke", 2);
-    if (!(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
+    const bool continuous = continuous_joint(rd, t, l.type, where);
+    const auto stroke = continuous ? std::vector<double>{}
+                                   : rd.numbers(rd.need(t, "stroke", where, "joint limits [min, max] [m or rad]; "
+                                                "an R axis that turns without limit: continuous = true"), "leg.stroke", 2);
+    if (!continuous && !(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
+    d.continuous = d.continuous || continuous;
     const std::string leg = "leg " + std::to_string(i + 1);
     if (j == Joint::axis) {
       const char* c[3] = {"x", "y", "z"};

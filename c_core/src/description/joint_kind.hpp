@@ -25,7 +25,8 @@ struct AxisModel {
   Eigen::Vector3d base;  // P: S0, the rail point the platform point sits on at q = 0; R: A, a point of the axis [m]
   Eigen::Vector3d dir;   // P: s, unit rail direction; R: k, unit axis (q by the right-hand rule) [1]
   Eigen::Vector3d p;     // the platform point on the rail / on the axis, platform frame [m]
-  double qmin = 0, qmax = 0;
+  double qmin = 0, qmax = 0;  // -inf, inf on a continuous joint
+  bool continuous = false;    // R: `continuous = true`, no limits (q the unwrapped angle)
 };
 
 // What the axis carries, in the platform frame.
@@ -45,12 +46,16 @@ class AxisKind {
   virtual const char* prefix() const = 0;  // joint parameters' group, drive layer's too ("rail" -> rail[1].coulomb)
   virtual const char* noun() const = 0;    // messages: "carriage 1"
   virtual bool angular() const = 0;        // q in rad (efforts N m) or m (N)
+  // May be declared `continuous = true` (no stroke): an axis that turns without limit.
+  virtual bool may_be_continuous() const { return false; }
 
   // Schema: the [[leg]] fields beyond type, copies, platform_point and stroke, and how
-  // they (and the stroke) become parameters, each checked at its line.
+  // they (and the stroke) become parameters, each checked at its line.  A continuous
+  // joint's stroke is empty: no limit parameters.
   virtual std::vector<std::string> fields() const = 0;
   virtual void read(const LegSchema& s, const std::vector<double>& stroke) const = 0;
-  // The parameters into the model, with the checks across parameters.
+  // The parameters into the model, with the checks across parameters (a.continuous is set
+  // before: its limits are then -inf, inf).
   virtual void compile(const ParamValues& v, AxisModel& a) const = 0;
 
   // Geometry: the platform frame at q (world point of platform point c: o + R c) and the

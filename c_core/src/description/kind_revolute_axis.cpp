@@ -22,6 +22,7 @@ class RevoluteAxis final : public AxisKind {
   const char* prefix() const override { return "axis"; }
   const char* noun() const override { return "axis"; }
   bool angular() const override { return true; }
+  bool may_be_continuous() const override { return true; }
 
   std::vector<std::string> fields() const override { return {"axis_point", "axis"}; }
 
@@ -36,6 +37,7 @@ class RevoluteAxis final : public AxisKind {
     for (int j = 0; j < 3; ++j)
       s.add(idx("axis", s.i, (std::string("k") + c[j]).c_str()), "1",
             std::string(c[j]) + " of the axis direction of " + leg + " (unit vector)", k[j], -1, 1, s.line_of("axis"));
+    if (stroke.empty()) return;  // continuous: no limits
     s.add(idx("axis", s.i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, s.line_of("stroke"));
     s.add(idx("axis", s.i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, s.line_of("stroke"));
   }
@@ -47,7 +49,10 @@ class RevoluteAxis final : public AxisKind {
       v.bad("axis[1].k = (" + num(a.dir.x()) + ", " + num(a.dir.y()) + ", " + num(a.dir.z()) +
             ") is not a unit vector");
     a.dir.normalize();
-    a.qmin = v("axis[1].qmin"), a.qmax = v("axis[1].qmax");
+    if (a.continuous)
+      a.qmin = -INFINITY, a.qmax = INFINITY;
+    else
+      a.qmin = v("axis[1].qmin"), a.qmax = v("axis[1].qmax");
   }
 
   void place(const AxisModel& a, double q, Eigen::Vector3d& o, Eigen::Matrix3d& R) const override {

@@ -108,6 +108,7 @@ class CvodeStepper final : public Stepper {
   bool sing_exact_ = true;      // the singularity root is evaluated (else reported far away)
   std::vector<double> y_save_;  // segment start, for a re-run with the singularity root on
   std::vector<double> g_;       // work buffer for root values
+  std::vector<double> g_prev_;  // the root values of the last state the stops could be computed at
 
   // Failure recorded inside a CVODE callback (no exception may cross CVODE's C frames).
   int cb_status_ = 0;
@@ -257,6 +258,14 @@ int CvodeStepper::root_cb(double t, N_Vector y, double* g, void* self) {
   try {
     s.stops_.roots(N_VGetArrayPointer(y), g, s.sing_exact_);
   } catch (const Error& e) {
+    const int nr = s.stops_.nroots();
+    if (e.status == PKM_ERR_JOINT_LIMIT && s.stops_.nlimits() > 0 && (int)s.g_prev_.size() == nr) {
+      // The robot refuses a joint past its limit (a fast motion: the trial state is past
+      // it): every limit margin negative, the other roots as they were, so that CVODE
+      // brackets the crossing and stops there as a joint limit (named at the stop).
+      for (int k = 0; k < nr; ++k) g[k] = k < s.stops_.nlimits() ? -1.0 : s.g_prev_[k];
+      return 0;
+    }
     s.cb_status_ = e.status;
     s.cb_time_ = t;
     s.cb_msg_ = std::string("stop-condition check: ") + e.what();
@@ -274,6 +283,7 @@ int CvodeStepper::root_cb(double t, N_Vector y, double* g, void* self) {
       s.cb_msg_ = "stop-condition check: a joint value or singularity measure is not finite";
       return -1;
     }
+  s.g_prev_.assign(g, g + s.stops_.nroots());
   return 0;
 }
 
@@ -483,6 +493,10 @@ void CvodeStepper::integrate(double t_end) {
     stop_inside(t_start);
     try {
       stops_.roots(y_.data(), g_.data(), sing_exact_);
+      // Several limits found at once (their margins set negative past a joint the robot
+      // refused, root_cb): the stop is the one with the least margin here.
+      for (int j = 0; j < stops_.nlimits(); ++j)
+        if (found[j] != 0 && k < stops_.nlimits() && g_[j] < g_[k]) k = j;
     } catch (const Error&) {
       // The root values at the stop are only for the message; keep CVODE's crossing.
       for (int j = 0; j < stops_.nroots(); ++j) g_[j] = 0.0;

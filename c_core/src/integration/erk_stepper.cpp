@@ -273,13 +273,14 @@ void ErkStepper<kPair>::stop_in_step(double t0, double h, const double* y0, cons
   const int n2 = ny_;
   double y[kMaxN], g[64];
   // violated(theta): some stop margin <= 0 or det J of the other sign than at the start.
+  int thrown = PKM_OK;  // the status of the robot's refusal of the state at the stop, if any
   auto violated = [&](double theta, int* which, bool* crossed) {
     hermite(n2, theta, h, y0, f0, y1, f1, y);
     double det = det0, bound = 0;
     try {
       stops_.guard(y, g, det, bound);
-    } catch (const Error&) {
-      if (which) *which = -1;
+    } catch (const Error& e) {
+      if (which) *which = -1, thrown = e.status;
       return true;  // outside the workspace: past the stop
     }
     for (int k = 0; k < stops_.nstop(); ++k)
@@ -315,6 +316,14 @@ void ErkStepper<kPair>::stop_in_step(double t0, double h, const double* y0, cons
     stops_.guard(y_.data(), g, det, bound);
   } catch (const Error&) {
     for (int k = 0; k < stops_.nroots(); ++k) g[k] = 0.0;
+  }
+  if (which < 0 && thrown == PKM_ERR_JOINT_LIMIT && stops_.nlimits() > 0) {
+    // Past the stop the robot refused a joint beyond its limit (a fast motion: the step
+    // jumped over the limit's zero into where the joint cannot be computed): the stop is that
+    // limit, the one with the least margin at the last state inside, not a singularity.
+    which = 0;
+    for (int k = 1; k < stops_.nlimits(); ++k)
+      if (g[k] < g[which]) which = k;
   }
   if (which < 0) which = stops_.nstop() > 0 ? stops_.nstop() - 1 : 0;
   const bool is_limit = which < stops_.nlimits();

@@ -19,6 +19,8 @@ struct Method {
   int id;
   const char* name;   // the pkm_lmm constant
   const char* label;  // how a message names it
+  const char* key;    // its short name (pkm_sim_method: cosim's method=, a scenario's [integrator])
+  const char* title;  // its title (pkm_sim_method)
   const char* needs;  // what a build must link to have it
   std::unique_ptr<Stepper> (*make)(int method, Ivp& ivp);  // nullptr: not in this build
 };
@@ -30,10 +32,10 @@ constexpr auto kCvode = &make_cvode_stepper;
 #endif
 
 const Method kMethods[] = {
-    {PKM_BDF, "PKM_BDF", "BDF", "SUNDIALS CVODE", kCvode},
-    {PKM_ADAMS, "PKM_ADAMS", "Adams", "SUNDIALS CVODE", kCvode},
-    {PKM_ERK, "PKM_ERK", "RK 5(4)", nullptr, &make_explicit},
-    {PKM_ERK23, "PKM_ERK23", "RK 3(2)", nullptr, &make_explicit},
+    {PKM_BDF, "PKM_BDF", "BDF", "bdf", "CVODE BDF", "SUNDIALS CVODE", kCvode},
+    {PKM_ADAMS, "PKM_ADAMS", "Adams", "adams", "CVODE Adams", "SUNDIALS CVODE", kCvode},
+    {PKM_ERK, "PKM_ERK", "RK 5(4)", "erk", "explicit Runge-Kutta 5(4)", nullptr, &make_explicit},
+    {PKM_ERK23, "PKM_ERK23", "RK 3(2)", "erk23", "explicit Runge-Kutta 3(2)", nullptr, &make_explicit},
 };
 
 const Method* find(int method) {
@@ -82,3 +84,19 @@ std::unique_ptr<Stepper> make_stepper(int method, Ivp& ivp) {
 }
 
 }  // namespace pkm
+
+extern "C" {
+
+int pkm_sim_method_count(void) { return (int)(sizeof(pkm::kMethods) / sizeof(pkm::kMethods[0])); }
+
+int pkm_sim_method(int i, int* code, const char** name, const char** title, int* available) {
+  if (i < 0 || i >= pkm_sim_method_count()) return PKM_ERR_ARGUMENT;
+  const pkm::Method& m = pkm::kMethods[i];
+  if (code) *code = m.id;
+  if (name) *name = m.key;
+  if (title) *title = m.title;
+  if (available) *available = m.make ? 1 : 0;
+  return PKM_OK;
+}
+
+}  // extern "C"
