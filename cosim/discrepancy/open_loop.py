@@ -10,7 +10,9 @@ free axis has no restoring force), and the comparison then measures the drift, n
 The replay is therefore **multiple shooting**: the held-out part is cut into consecutive
 windows of ``window`` seconds (0.5 s by default), and each window starts again from the
 recorded state at its first sample (the smoothed reading and rate: a Savitzky-Golay fit over
-``smooth`` seconds, so the rate noise of one sample does not set the start).  Inside a window
+``smooth`` seconds, so the rate noise of one sample does not set the start).  A held-out part of
+more than :data:`MAX_WINDOWS` windows is replayed on that many, spread evenly over it (the plant
+is stepped sample by sample from Python).  Inside a window
 the plant is the core's (:class:`cosim.plants.CorePlant`, drive layer included), the recorded
 effort held over each sample period as the rig's zero-order hold held it, and a measured
 external effort (``f_ext``) added as a known input.  The error is the RMS over all windows
@@ -32,6 +34,9 @@ from scipy.signal import savgol_filter
 WINDOW = 0.5
 #: smoothing span of the start state of each window [s]
 SMOOTH = 0.02
+#: most windows replayed (spread evenly over a longer held-out part): the replay steps the plant
+#: sample by sample, so a long part at a high rate is sampled, not replayed whole
+MAX_WINDOWS = 20
 
 
 def can_replay_open_loop(rec) -> tuple[bool, str]:
@@ -71,7 +76,7 @@ def _window(plant, drive, model, t, q0, qd0, tau, f_ext):
 
 
 def open_loop_replay(rec, plants: dict, *, start: int = 0, stop: int | None = None, window: float = WINDOW,
-                     smooth: float = SMOOTH) -> dict:
+                     smooth: float = SMOOTH, max_windows: int = MAX_WINDOWS) -> dict:
     """Replay rows ``start:stop`` of an open-loop recording with each plant, by multiple
     shooting over windows of ``window`` seconds (see the module's text).
 
@@ -88,6 +93,9 @@ def open_loop_replay(rec, plants: dict, *, start: int = 0, stop: int | None = No
         Length of a shooting window [s]; each starts from the recorded state.
     smooth : float
         Span of the smoothing of that start state [s].
+    max_windows : int
+        Most windows replayed: a held-out part holding more is replayed on that many,
+        spread evenly over it.
 
     Returns
     -------
@@ -113,9 +121,14 @@ def open_loop_replay(rec, plants: dict, *, start: int = 0, stop: int | None = No
     f_ext = getattr(rec, "f_ext", None)
     per = max(2, int(round(window / dt)))
     cuts = list(range(int(start), stop - 1, per))
+    spread = ""
+    if len(cuts) > max_windows:
+        spread = f" spread over {len(cuts)}"
+        cuts = [cuts[i] for i in np.linspace(0, len(cuts) - 1, max_windows).round().astype(int)]
     out = {"window": per * dt, "windows": len(cuts), "start": float(t[start]), "end": float(t[stop - 1]),
            "method": (f"open loop (the recorded effort in, the motion out), multiple shooting: {len(cuts)} windows "
-                      f"of {per * dt:.3g} s, each started from the recorded state (smoothed over {w * dt:.3g} s)"),
+                      f"of {per * dt:.3g} s{spread}, each started from the recorded state (smoothed over "
+                      f"{w * dt:.3g} s)"),
            "runs": {}}
     for name, model in plants.items():
         plant, drive = CorePlant(model, rtol=1e-8, atol=1e-10), CoreDrive(model)
@@ -131,7 +144,8 @@ def open_loop_replay(rec, plants: dict, *, start: int = 0, stop: int | None = No
             out["runs"][name] = {"error": f"{type(e).__name__}: {e}"}
             continue
         dq, dqd = np.vstack(dq), np.vstack(dqd)
-        ref = np.sqrt(np.mean(np.asarray(rec.qd[start:stop], float) ** 2, axis=0))
+        seen = np.vstack([np.asarray(rec.qd[a + 1:min(a + per + 1, stop)], float) for a in cuts])
+        ref = np.sqrt(np.mean(seen ** 2, axis=0))  # the recorded rates of the replayed windows
         rms_qd = np.sqrt(np.mean(dqd ** 2, axis=0))
         out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq ** 2, axis=0)).tolist(), "rms_qd": rms_qd.tolist(),
                              "rel_qd": (rms_qd / np.maximum(ref, 1e-300)).tolist()}
