@@ -76,7 +76,16 @@ def _positive(kind):
 
 
 def _diag_configure(p):
-    p.add_argument("recording", type=recording_file, help="pkm-recording/1 CSV (its JSON sidecar beside it)")
+    p.add_argument("recording", type=recording_file, nargs="+",
+                   help="pkm-recording/1 CSV (its JSON sidecar beside it); several: the runs of a campaign, diagnosed "
+                        "together (also a campaign file runs = [...], or one recording with a run column)")
+    p.add_argument("--held-out", default=None, metavar="run|within|K",
+                   help="campaign: hold out the last run (default), the end of every run, or run K (from 1)")
+    p.add_argument("--leave-one-out", action="store_true",
+                   help="campaign: also fit on all runs but one and judge on it, for every run")
+    p.add_argument("--per-run", action="append", default=[], metavar="PARAM",
+                   help="campaign: a core parameter each run has its own value of (an effort offset rail[1].offset, "
+                        "an encoder offset); repeatable")
     p.add_argument("--model", type=model_arg, default=None,
                    help="model to test: a named parameter set or a JSON parameter file (cosim params R --json); "
                         "default: the robot's default set with the sidecar's overrides")
@@ -114,7 +123,12 @@ def cmd_diagnose(args):
 
     from .common import working
 
-    out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording).stem
+    from .campaign import is_campaign, run_campaign
+
+    out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording[0]).stem
+    if is_campaign(args):
+        return run_campaign(args, out)
+    args.recording = args.recording[0]
     t0 = time.perf_counter()
     try:
         # read first (a bar of the rows on a terminal), then the diagnosis of what was kept
@@ -152,6 +166,8 @@ def print_diagnosis(d, file=None):
     file = file or sys.stdout
     p = lambda *a: print(*a, file=file)  # noqa: E731
     p(f"{d.recording} ({d.robot}): {d.conclusion}")
+    if d.details:
+        p(f"\ndetails: {d.details}")
     from ..discrepancy.working_set import sentence
 
     if sentence(d.settings.get("working_set")):
@@ -206,6 +222,10 @@ def print_diagnosis(d, file=None):
         nrmse = (f"NRMSE {c['nrmse_na']}" if c.get("nrmse_na") else
                  f"NRMSE {c['nrmse_before'] * 100:.2f} % -> {c['nrmse_after'] * 100:.2f} %")
         p(f"  {name}: RMS {c['rms_before']:.3g} -> {c['rms_after']:.3g} {c['unit']} ({nrmse}, noise {c['noise']:.2g})")
+    if d.replay:  # which replay ran (closed loop, open loop with its method), or why none did
+        from ..discrepancy.open_loop import sentence as replay_sentence
+
+        p(f"  {replay_sentence(d.replay)}")
     if d.replay and d.replay.get("runs"):
         for name, run in d.replay["runs"].items():
             if "rms_tau" in run:

@@ -118,6 +118,9 @@ class Diagnosis:
     #: with a measured effort (tau_meas columns): the channel the physics is fitted on and the
     #: drive's command-to-effort map per joint (:mod:`.effort_map`); None with one channel
     effort_map: dict | None = None
+    #: the full statement the conclusion's paragraph sums up (values, look-alikes, what was
+    #: withdrawn; :mod:`.verdict`), "" when the conclusion is the whole of it
+    details: str = ""
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -143,7 +146,7 @@ class Diagnosis:
         return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
-                                               "warnings", "unexplained", "discovered", "withdrawn")}
+                                               "warnings", "unexplained", "discovered", "withdrawn", "details")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -288,7 +291,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     rec, effort_map = effort_channels(rec, mdl.facts.effort_unit)
     timings = {"read": time.perf_counter() - t0}
     with one_blas_thread():
-        pipe = Pipeline(rec, mdl, window=window, segments=None if ws.whole else ws.segments)
+        # a working set of blocks, or a campaign's runs (.campaign): no window spans a seam
+        pipe = Pipeline(rec, mdl, window=window, segments=None if ws.whole and len(ws.segments) == 1 else ws.segments)
         groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
         groups, one_signed = _drop_unseen_gaps(groups, pipe)
         _check_motion(pipe)
@@ -304,6 +308,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         found, withdrawn, theta, ties = [], [], dict(sel.theta), []
         if discovery:
             found, withdrawn, theta, ties = _discover(eng, sel, threshold)
+        from .verdict import fit_problems, headline
+
+        problems = fit_problems(eng, theta) if theta else []  # a fit outside the physical ranges is refused
+        if problems:
+            theta, found, withdrawn, ties = {}, [], [], []
         t3b = time.perf_counter()
         held = heldout_fit(eng, sel, theta)
         loc = localise(eng, sel)
@@ -318,7 +327,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     # A fit that leaves structure anywhere may stand in for physics the library lacks: in
     # closed loop a missing force moves every joint's readings and efforts, and a stand-in often
     # acts on other channels than those it leaves structured (measured: docs/discrepancy.md)
-    effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone]
+    effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone and not problems]
     for t in found:  # the same for a discovered term: fitted on top of stand-ins, it may share their error
         t.partial = _partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t)
     not_excited = _not_excited(eng, sel) + one_signed
@@ -326,25 +335,35 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
+    head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied)
+    details, conclusion = (conclusion, head) if head else ("", conclusion)
+    if problems:
+        details, conclusion = "", ("fit refused, not physical: " + "; ".join(problems) + ". The effects fitted to "
+                                   "these values are not reported and the nominal model stands: the fit is degenerate "
+                                   "on this recording (nearly dependent effects, or a recording that is not what the "
+                                   "model thinks, such as runs joined end to end)")
 
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(theta),
                   held, loc, not_excited,
                   [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
                   {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
                    "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
-                  steps=list(sel.steps), refused=[f"{k}: {v}" for k, v in sel.refused.items()],
+                  steps=list(sel.steps), refused=[f"{k}: {v}" for k, v in sel.refused.items()] + problems,
                   settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window,
                             "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left,
-                  discovered=found, withdrawn=withdrawn, effort_map=effort_map)
+                  discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
     if effort_map is not None:
         d.conclusion += "; " + effort_map["statement"]
     if replay:
         t5 = time.perf_counter()
         d.replay = _replay(commanded, eng, sel, _compared(rec, mdl, compare), theta)
-        d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
+        if d.details:
+            d.details += _two_body_sentence(d.replay, mdl.joint_unit)
+        else:
+            d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
         timings["replay"] = time.perf_counter() - t5
     timings["diagnosis"] = time.perf_counter() - t0
     d.timings = timings
@@ -888,8 +907,10 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
-    if rec.qref is None:
-        return {"skipped": "the recording has no qref columns (the reference is needed to replay)"}
+    if rec.qref is None:  # no reference: an open-loop experiment is replayed open loop (.open_loop)
+        from .open_loop import heldout_replay
+
+        return heldout_replay(rec, eng, sel.theta if theta is None else theta, compared)
     mdl = eng.model
     pipe = eng.pipe
     test = eng.test

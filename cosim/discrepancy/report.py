@@ -35,7 +35,7 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
         files["velocity"] = _fig_velocity(d, eng, out / "velocity.png")
         files["workspace"] = _fig_workspace(d, eng, out / "workspace.png")
         files["heldout"] = _fig_heldout(d, eng, sel, out / "heldout.png")
-        if d.replay and d.replay.get("runs"):
+        if d.replay and d.replay.get("runs") and d.replay.get("kind") != "open loop":
             files["replay"] = _fig_replay(d, eng, out / "replay.png")
         for t in d.discovered:
             files[f"discovered{t.joint}"] = _fig_discovered(t, eng, out / f"discovered{t.joint}.png")
@@ -61,7 +61,7 @@ def _strip_arrays(d) -> str:
 
 def markdown(d, files: dict) -> str:
     L = [f"# Discrepancy diagnosis: {Path(d.recording).name}", ""]
-    L += [f"**{d.conclusion}**", ""]
+    L += [f"**{d.conclusion}**", ""] + ([f"Details: {d.details}", ""] if d.details else [])
     s = d.settings
     L += [f"Robot `{d.robot}`, {s['samples']} samples at {1 / s['dt']:.4g} Hz "
           f"({s['samples'] * s['dt']:.3g} s); residuals smoothed over {s['smoothing_samples']} samples "
@@ -179,6 +179,10 @@ def markdown(d, files: dict) -> str:
     if rp:
         if rp.get("skipped"):
             L += [f"Replay not run: {rp['skipped']}.", ""]
+        elif rp.get("kind") == "open loop":  # an open-loop experiment (.open_loop): rates and readings
+            from .open_loop import sentence
+
+            L += [sentence(rp)[0].upper() + sentence(rp)[1:] + ".", ""]
         else:
             from ..core.model import robot_facts
 

@@ -203,6 +203,9 @@ def _cases(tmp):
     return _file_system_cases(tmp) + _two_channel_rig(tmp) + [
         # messages that each say what is wrong and where
         (["diagnose", bad["binary"]], "is not a text CSV file (byte 0x82"),
+        # a campaign is several runs of one rig
+        (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), str(SCEN / "calibration_fourbar_seed002.csv"),
+          "--no-replay", "--no-figures"], "runs of two robots: calibration_fourbar_seed002 is of 'fourbar'"),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy)],
          'heavy.json: platform.m = "heavy" is not a finite number'),
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", str(heavy2)],

@@ -31,7 +31,8 @@ def test_the_truth_in_the_library_keeps_its_confident_name(backlash_case):
     first = d.effects[0]
     assert first["key"] == "backlash" and first["joint"] == truth["joints"][0], d.conclusion
     assert not d.ties("backlash"), first["lookalikes"]
-    assert "named with confidence" not in d.conclusion, d.conclusion
+    assert "named with confidence" not in d.details, d.details
+    assert d.conclusion.startswith("found with confidence"), d.conclusion
 
 
 def test_a_stand_in_that_leaves_structure_is_not_named_with_confidence(backlash_case):
@@ -46,7 +47,8 @@ def test_a_stand_in_that_leaves_structure_is_not_named_with_confidence(backlash_
         look = next(a for a in e["lookalikes"] if a["group"] == UNEXPLAINED)
         assert "not named with confidence" in look["statement"], look["statement"]
         assert any(c in look["statement"] for c in open_channels), look["statement"]
-    assert "none named with confidence" in d.conclusion, d.conclusion
+    assert "none named with confidence" in d.details, d.details
+    assert d.conclusion.startswith("structure left, not named"), d.conclusion  # the paragraph agrees with it
     for t in d.discovered:  # nor is a discovered term named as the physics
         assert t.partial, t
         if any(u["joint"] == t.joint for u in d.unexplained):

@@ -43,7 +43,7 @@ def test_a_force_in_no_library_is_found_as_an_equation(tmp_path, short_cfg, kind
     # no library effect named with confidence: every one left is tied with a discovered term
     for e in d.effects:
         assert d.ties(e["key"]), (e["title"], d.conclusion)
-    assert "missing physics no library effect names" in d.conclusion
+    assert "missing physics no library effect names" in d.details
 
 
 def test_the_fitted_plant_carries_the_discovered_term(tmp_path, short_cfg):

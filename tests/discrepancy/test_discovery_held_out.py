@@ -58,7 +58,7 @@ def test_a_term_fitted_beside_a_tied_library_effect_is_not_named_as_the_physics(
     (t,) = d.discovered
     assert t.joint == truth["joints"][0] == 6 and t.terms == ["fading"], t.equation
     assert t.partial.startswith("fitted beside viscous friction, joint 6"), t.partial
-    assert "[not named as the physics: fitted beside a tied library effect]" in d.conclusion
+    assert "[not named as the physics: fitted beside a tied library effect]" in d.details
     assert _confident(d) == [], d.conclusion
 
 
@@ -69,7 +69,7 @@ def test_offsets_a_discovered_inertia_refits_to_zero_are_withdrawn(tmp_path):
     assert not any(e["key"] == "offset" for e in d.effects), d.conclusion
     assert sorted(w["title"] for w in d.withdrawn if "refitted" in w) == [
         f"constant effort offset, joint {j}" for j in (1, 2, 3)], d.withdrawn
-    assert "refitted to zero with the terms" in d.conclusion
+    assert "refitted to zero with the terms" in d.details
     assert sorted(t.joint for t in d.discovered) == [1, 2, 3]
     for t in d.discovered:
         name = f"arm[{t.joint}].rotor_inertia"

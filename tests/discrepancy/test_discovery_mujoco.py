@@ -54,7 +54,7 @@ def test_a_force_hidden_in_mujoco_is_named_as_its_equation(tmp_path, kind, seed,
     # no library effect named with confidence: any one left is tied with the discovered term
     for e in d.effects:
         assert d.ties(e["key"]), (e["title"], d.conclusion)
-    assert "missing physics no library effect names" in d.conclusion
+    assert "missing physics no library effect names" in d.details
     if kind == "detent":  # the step's place and width are fitted: the truth inside their stated intervals
         for k in ("force_step_q", "force_step_w"):
             name = f"rail[{j}].{k}"

@@ -130,3 +130,23 @@ def test_the_discovered_term_is_a_friction_that_builds_up_over_a_velocity_scale(
     assert th["rail[1].force_cpos"] > 0 and th["rail[1].force_cneg"] > 0, term.equation
     pos, neg = th.get("rail[1].force_vpos", 0.0), th.get("rail[1].force_vneg", 0.0)
     assert th["rail[1].viscous"] + min(pos, neg) > 0, term.equation
+
+
+def test_the_conclusion_is_a_short_paragraph_that_says_first_how_sure_it_is(emps):
+    # issue 36: the conclusion was one line of ~1,900 characters whose headline named effects the
+    # body called not named with confidence; now one short paragraph, the full statement after it
+    c = emps.conclusion
+    assert c.split(":")[0] in ("found with confidence", "most likely, tied with another explanation",
+                               "structure left, not named"), c
+    assert "\n" not in c and len(c) < 600, (len(c), c)
+    assert emps.details and len(emps.details) > len(c)
+    # the paragraph and the details agree: structure left in one is structure left in the other, and
+    # then nothing is named with confidence in either
+    left = "structure left unexplained" in emps.details
+    assert left == c.startswith("structure left, not named"), (c, emps.details)
+    if left:
+        said = ("not named as the physics" in emps.details or "none named with confidence" in emps.details
+                or "no effect of the library explains" in emps.details)
+        assert "found with confidence" not in c and said, emps.details
+    else:
+        assert ("tie:" in emps.details) == c.startswith("most likely"), (c, emps.details)

@@ -86,4 +86,4 @@ def test_a_fitted_gap_is_replayed_as_two_bodies_closer_to_the_recorded_readings(
     # further from the recording than the nominal plant's (3.2 um against 1.6 um); the two
     # bodies' are 1.7 um
     assert gap["fitted, two bodies"] < 0.75 * gap["fitted"], gap
-    assert "replayed as two bodies (drive and carriage) the held-out readings come closer" in d.conclusion
+    assert "replayed as two bodies (drive and carriage) the held-out readings come closer" in d.details

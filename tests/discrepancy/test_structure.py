@@ -40,7 +40,8 @@ def test_a_type_missing_from_the_library_leaves_structure(tmp_path, hidden, seed
                  discovery=False)
     truth = json.loads(Path(key).read_text())["effects"][0]
     assert d.unexplained, d.conclusion
-    assert "structure left unexplained" in d.conclusion and "no missing physics" not in d.conclusion
+    assert "structure left unexplained" in d.details + d.conclusion and "no missing physics" not in d.conclusion
+    assert d.conclusion.startswith("structure left, not named"), d.conclusion
     top = d.unexplained[0]
     assert top["signature"] in (keyed if isinstance(keyed, tuple) else (keyed,)), d.unexplained
     joints = {int(p.split("[")[1].split("]")[0]) for p in truth["params"] if "[" in p}
@@ -65,7 +66,7 @@ def test_a_friction_peak_at_low_speed_held_out_leaves_structure_keyed_there(tmp_
     truth = json.loads(Path(key).read_text())["effects"][0]
     assert truth["joints"] == [1]
     assert [(u["joint"], u["signature"]) for u in d.unexplained] == [(1, "low_speed")], d.unexplained
-    assert "at low speed" in d.conclusion and not d.discovered, d.conclusion
+    assert "at low speed" in d.details + d.conclusion and not d.discovered, d.conclusion
 
 
 def test_nothing_is_left_with_the_full_library_or_on_a_clean_recording(tmp_path):
@@ -76,7 +77,7 @@ def test_nothing_is_left_with_the_full_library_or_on_a_clean_recording(tmp_path)
         rec, _ = _case(tmp_path, effects, seed)
         d = diagnose(rec, figures=False, replay=False)
         assert d.unexplained == [], (effects, d.unexplained)
-        assert "structure left unexplained" not in d.conclusion
+        assert "structure left" not in d.conclusion + d.details
 
 
 class _Named:

@@ -14,4 +14,5 @@ def test_a_centred_payload_and_a_heavier_platform_are_a_tie():
     assert other in d.ties(first["key"]), first["lookalikes"]
     look = next(a for a in first["lookalikes"] if a["effect"] == other)
     assert "ruled out" not in look["statement"] and "fits the data as well" in look["statement"], look
-    assert "tie:" in d.conclusion, d.conclusion
+    assert "tie:" in d.details, d.details
+    assert d.conclusion.startswith("most likely, tied with"), d.conclusion  # the paragraph says it first
