@@ -13,7 +13,7 @@ from cosim.core import Model
 
 COEF = {"force_qc": 0.25, "force_qv": 30.0, "force_cq1": 4.0, "force_cq2": -60.0, "force_czone": 0.9,
         "force_czone_q": 0.252, "force_czone_w": -0.004, "force_cv": 0.04}
-EFF = {"force_cload": 0.12, "force_ceff": 0.05, "force_eq": 0.8}
+EFF = {"force_cload": 0.12, "force_ceff": 0.05, "force_eq": 0.8, "force_eg": -0.03}
 
 
 def _state(m):
@@ -64,7 +64,7 @@ def test_the_effort_terms_solve_the_inverse_dynamics_by_hand_and_invert_the_forw
     s3 = math.tanh(qd[2] / COEF["force_cv"])
     g = np.zeros(6)
     mu = np.zeros(6)
-    g[2] = EFF["force_ceff"] * s3 + EFF["force_eq"] * (q[2] - COEF["force_qc"])
+    g[2] = EFF["force_ceff"] * s3 + EFF["force_eq"] * (q[2] - COEF["force_qc"]) + EFF["force_eg"]
     mu[2] = EFF["force_cload"] * s3
     mu[0] = 0.2 * math.tanh(qd[0] / m.params()["drive.v_eps"])
     want = b / (1 - g - mu * np.sign(b))

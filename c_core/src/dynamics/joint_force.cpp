@@ -16,18 +16,18 @@ const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "
                                    "force_inertia", "force_qv",   "force_cq1",    "force_cq2",
                                    "force_czone", "force_czone_q", "force_czone_w", "force_xj",
                                    "force_xqc",  "force_xk1",  "force_xv",     "force_cload",
-                                   "force_ceff", "force_eq"};
+                                   "force_ceff", "force_eq",   "force_eg"};
 namespace {
 enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, CV, INERTIA,
-       QV, CQ1, CQ2, CZONE, CZONE_Q, CZONE_W, XJ, XQC, XK1, XV, CLOAD, CEFF, EQ };
+       QV, CQ1, CQ2, CZONE, CZONE_Q, CZONE_W, XJ, XQC, XK1, XV, CLOAD, CEFF, EQ, EG };
 static_assert(INERTIA == kInertia, "kInertia names the acceleration term");
-static_assert(EQ + 1 == kNKeys, "one key per term");
+static_assert(EG + 1 == kNKeys, "one key per term");
 // keys that shape a term and are no force alone
 bool shape_key(int k) {
   return k == QC || k == PERIOD || k == STEP_Q || k == STEP_W || k == CV || k == INERTIA || k == CZONE_Q ||
          k == CZONE_W || k == XJ || k == XQC;
 }
-bool effort_key(int k) { return k == CLOAD || k == CEFF || k == EQ; }
+bool effort_key(int k) { return k == CLOAD || k == CEFF || k == EQ || k == EG; }
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -83,6 +83,7 @@ std::vector<ParamSpec> specs(const Robot& r) {
         -big);
     add(EQ, "1/" + Q, "force per unit of the applied effort and of z: force_eq z tau (an efficiency that changes "
                       "over the stroke)", -big);
+    add(EG, "", "force per unit of the applied effort: force_eg tau (a torque constant or ratio off)", -big);
   }
   return out;
 }
@@ -139,7 +140,7 @@ void effort_gains(const Coefficients& c, int nd, double v_eps, const double* q, 
   const auto& v = c.v;
   for (int i = 0; i < nd; ++i) {
     const double s = std::tanh(qd[i] / (v[CV][i] > 0 ? v[CV][i] : v_eps));
-    g[i] = v[CEFF][i] * s + v[EQ][i] * (q[i] - v[QC][i]);
+    g[i] = v[CEFF][i] * s + v[EQ][i] * (q[i] - v[QC][i]) + v[EG][i];
     mu[i] = v[CLOAD][i] * s;
   }
 }
@@ -153,7 +154,7 @@ void solve_effort(const Coefficients& c, int nd, double v_eps, const double* q, 
     const double a = 1.0 - g[i];
     if (!(a - std::fabs(mu[i]) > 0))
       throw Error(PKM_ERR_ARGUMENT, "the effort terms of joint " + std::to_string(i + 1) +
-                                        " (force_cload, force_ceff, force_eq) take " + num(1.0 - a + std::fabs(mu[i]), 4) +
+                                        " (force_cload, force_ceff, force_eq, force_eg) take " + num(1.0 - a + std::fabs(mu[i]), 4) +
                                         " of the applied effort at q = " + num(q[i], 6) + ", qd = " + num(qd[i], 6) +
                                         ": the drive self-locks (must be < 1)");
     tau[i] /= a - mu[i] * (tau[i] > 0 ? 1.0 : tau[i] < 0 ? -1.0 : 0.0);

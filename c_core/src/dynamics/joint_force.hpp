@@ -14,12 +14,12 @@
 //     + (force_cq1 z + force_cq2 z^2) s                               (a Coulomb level over the stroke)
 //     + force_czone s (1 + tanh((q - force_czone_q) / force_czone_w)) / 2   (a friction zone; width != 0)
 //     + force_xk1 (q_k - force_xqc) + force_xv qd_k                   (another joint's motion, k = force_xj)
-//     + force_cload |tau| s + force_ceff tau s + force_eq z tau       (the drive's applied effort tau)
+//     + force_cload |tau| s + force_ceff tau s + (force_eq z + force_eg) tau   (the drive's applied effort tau)
 //
 // The last line depends on the effort the drive applies (a friction that grows with the
 // load, a transmission whose efficiency changes with the position): the forward dynamics
 // subtract it from the given tau; the inverse dynamics solve tau = b + g tau + mu |tau| per
-// joint (b the effort without these terms, g = force_ceff s + force_eq z, mu = force_cload s):
+// joint (b the effort without these terms, g = force_ceff s + force_eq z + force_eg, mu = force_cload s):
 // tau = b / (1 - g - mu sign(b)), unique while 1 - g - |mu| > 0 (else the drive self-locks:
 // an error naming the joint).  force_xj is the 1-based index of the other joint (0: none).
 //
@@ -44,7 +44,7 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 30;
+constexpr int kNKeys = 31;
 // Index of "force_inertia" in kKeys (the acceleration term, not evaluated by force()).
 constexpr int kInertia = 16;
 extern const char* const kKeys[kNKeys];
@@ -53,7 +53,7 @@ struct Coefficients {
   // [key][joint], in the order of kKeys
   double v[kNKeys][kMaxJoints] = {};
   bool any = false;     // a coefficient of a term is set (force() or the effort terms are not zero)
-  bool effort = false;  // a coefficient of an effort term is set (force_cload, force_ceff, force_eq)
+  bool effort = false;  // a coefficient of an effort term is set (force_cload, force_ceff, force_eq, force_eg)
 };
 
 // Parameter specs of the robot's joints (units of its joints and efforts).
