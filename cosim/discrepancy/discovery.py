@@ -505,13 +505,14 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
 
     chosen = []
     chi2 = chi2_of(chosen)
+    model = held  # the model's parameters (the loop's "held" is the coefficients entered)
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
         for cand in search.candidates():
             if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
                 continue
-            if products.clash(search, c, chosen, cand):  # the core holds one shape per joint
+            if products.clash(search, c, chosen, cand, model):  # the core holds one shape per joint
                 continue
             c2 = chi2_of(chosen + [cand])
             gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
@@ -660,7 +661,8 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
     fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
         search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
-    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0])
+    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0],
+                               lambda ts: heldout(ts)[1])
     if fitted != terms:
         # the terms that stood in for the step's misplaced edge go again (the backward pass
         # of the selection, on the fitted step)

@@ -26,7 +26,7 @@ def _confident(d):
 
 
 @pytest.mark.parametrize("kind, seed", [
-    ("load_friction", 5),    # Coulomb friction mu |tau| sign(qd): the effort keeps one sign, tau s is not tried
+    ("load_friction", 5),    # Coulomb friction mu |tau| sign(qd) on a rail whose effort keeps one sign
     ("friction_zone", 7),    # a Coulomb level over one side of the stroke, its edge and width fitted
     ("cable_link", 7),       # a force on rail 4 in rail 3's position
     ("effort_position", 11),  # (force_eq z + force_eg) tau: the truth's centre shifts the gain

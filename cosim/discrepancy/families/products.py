@@ -7,7 +7,6 @@ nothing here restates a force).  With z = q - force_qc, s = tanh(qd / v_c) (v_c 
 term        force                                   grid (options per joint)
 =========== ======================================= ===========================================
 load        force_cload |tau| s                     sharp, and the fading friction's 3 scales
-effortdir   force_ceff tau s                        the same 4
 effortpos   (force_eq z + force_eg) tau             one (z about the recording's mean: the
                                                     centre of the truth shifts force_eg)
 posrate     force_qv z qd                           one
@@ -21,14 +20,15 @@ cross_v     force_xv qd_k                           each other joint k
 =========== ======================================= ===========================================
 
 Every option of every term is one candidate of the look-elsewhere count (``Search.n_tried``
-counts the columns the search holds): the families add 4 + 4 + 1 + 1 + 1 + 1 + 10 + 2 (n - 1)
-candidates per joint of an n-joint robot (32 on the 6-PUS, beside the 20 of the single-joint
-library).  Terms that share a shape parameter of the core on one joint (the Coulomb levels'
+counts the columns the search holds): the families add 4 + 1 + 1 + 1 + 1 + 10 + 2 (n - 1)
+candidates per joint of an n-joint robot (28 on the 6-PUS).  The core's force_ceff (tau s, a
+loss that differs between driving and being driven) is not searched: where the effort keeps one
+sign it is the load term, and on the Clavel delta's held-out rotor-inertia case it kept, on top
+of a drive dead zone, the dead zone the added inertias otherwise withdraw.  Terms that share a shape parameter of the core on one joint (the Coulomb levels'
 velocity scale force_cv, the other joint force_xj, the centre force_qc) enter together only
 where their values agree (:func:`clash`): the core holds one value per joint.
 
-Families (the unit the bench leaves out of the search, :func:`without`): ``load`` (load and
-effortdir), ``stroke`` (zone, stroke_1, stroke_2), ``cross`` (cross_q, cross_v),
+Families (the unit the bench leaves out of the search, :func:`without`): ``load``, ``stroke`` (zone, stroke_1, stroke_2), ``cross`` (cross_q, cross_v),
 ``effortpos``, ``posrate``.
 """
 from __future__ import annotations
@@ -42,8 +42,6 @@ import numpy as np
 #: scales beyond discovery's: "E" (the joint's RMS effort), "TE" (travel x effort), "TV" (travel x rate)
 TERMS = {
     "load": (("force_cload",), ("E",), ("force_cv",), "Coulomb friction growing with the load, |tau| s"),
-    "effortdir": (("force_ceff",), ("E",), ("force_cv",),
-                  "a force in proportion to the applied effort by direction of motion, tau s"),
     "effortpos": (("force_eq", "force_eg"), ("TE", "E"), ("force_qc",),
                   "a force in proportion to the applied effort, linear in the position (a ratio or efficiency "
                   "over the stroke)"),
@@ -57,10 +55,10 @@ TERMS = {
     "cross_v": (("force_xv",), ("V",), ("force_xj",), "a force in proportion to another joint's rate"),
 }
 #: the families: what a leave-one-family-out run removes from the search
-FAMILIES = {"load": ("load", "effortdir"), "stroke": ("zone", "stroke_1", "stroke_2"),
+FAMILIES = {"load": ("load",), "stroke": ("zone", "stroke_1", "stroke_2"),
             "cross": ("cross_q", "cross_v"), "effortpos": ("effortpos",), "posrate": ("posrate",)}
 #: terms whose columns carry the noise of the measured rates (instruments, as discovery's)
-RATE_TERMS = ("load", "effortdir", "posrate", "stroke_1", "stroke_2", "zone", "cross_v")
+RATE_TERMS = ("load", "posrate", "stroke_1", "stroke_2", "zone", "cross_v")
 #: coefficients with the sign of their physics: a friction growing with the load never negative
 SIGNED = ("force_cload",)
 #: the existing terms through the velocity's sign s and the velocity scale they hold (0: sharp)
@@ -69,8 +67,6 @@ SIGN_TERMS = {"coulomb_pos": 0, "coulomb_neg": 0, "coulomb_both": 0}
 MECHANISMS = {
     "load": "friction that grows with the load: a ball screw, nut, guide or gear whose contact force is the "
             "transmitted load (Coulomb's law, mu times the normal force)",
-    "effortdir": "a transmission whose loss differs between driving and being driven (a worm or screw near "
-                 "self-locking, a gear's efficiency by direction of power flow)",
     "effortpos": "an effort that changes over the stroke in proportion to itself: a lever ratio, screw lead or "
                  "belt transmission whose ratio or efficiency varies with the position",
     "posrate": "a damper or seal whose damping changes over the stroke (a dashpot engaging, lubricant spread "
@@ -128,7 +124,7 @@ def grids(search) -> dict:
     others = [np.array([(j + o + 1) % nd for j in range(nd)]) for o in range(max(nd - 1, 0))]
     cross_q = [{"force_xj": k + 1.0, "force_xqc": np.asarray(qc, float)[k]} for k in others]
     cross_v = [{"force_xj": k + 1.0} for k in others]
-    return {"load": signs, "effortdir": [dict(s) for s in signs], "effortpos": [centre], "posrate": [centre],
+    return {"load": signs, "effortpos": [centre], "posrate": [centre],
             "stroke_1": [dict(centre, **sharp)], "stroke_2": [dict(centre, **sharp)], "zone": zones,
             "cross_q": cross_q, "cross_v": cross_v}
 
@@ -171,25 +167,19 @@ def _full_shape(search, c, term, option):
     return cache[key]
 
 
-#: the smaller share of the recorded effort's signs on a joint below which a force in proportion
-#: to the effort by direction of motion (effortdir) is not tried there: with one sign, tau s is
-#: -|tau| s or |tau| s, the friction growing with the load (load), which names the physics
-ONE_SIGN = 0.05
+#: the library's frictions beside which no friction zone is tried on their joint: fitted before the
+#: discovery step and not refitted with its terms, a friction there has taken a share of any
+#: friction the recording holds, and a zone on top of it fits that friction's misfit (a viscous
+#: friction standing in for a Coulomb one left a zone beside it that beat the Coulomb pair)
+ZONE_NOT_BESIDE = ("coulomb", "viscous", "stribeck")
 
 
-def _one_signed(search, c) -> bool:
-    if not hasattr(search, "_fam_signs"):
-        tau = search.pipe.tau_s[search.pipe.idx][search.eng.train]
-        pos = np.mean(tau > 0, axis=0)
-        search._fam_signs = np.minimum(pos, 1.0 - pos) < ONE_SIGN
-    return bool(search._fam_signs[c])
-
-
-def clash(search, c, chosen, cand) -> bool:
+def clash(search, c, chosen, cand, held=None) -> bool:
     """Is ``cand`` no candidate on joint c beside ``chosen``: it sets a shape parameter of the
-    joint to another value than a term of ``chosen`` (the core holds one per joint), or it is
-    effortdir where the recorded effort keeps one sign (:data:`ONE_SIGN`)?"""
-    if cand[0] == "effortdir" and _one_signed(search, c):
+    joint to another value than a term of ``chosen`` (the core holds one per joint), or it is a
+    zone where the model ``held`` ({core parameter: value}) holds a library friction
+    (:data:`ZONE_NOT_BESIDE`)?"""
+    if cand[0] == "zone" and held and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE):
         return True
     a = _full_shape(search, c, *cand)
     for t in chosen:
@@ -211,7 +201,7 @@ def option_of(search, term_obj, name) -> int:
 
 def key_variable(names):
     """The report's key variable of a term holding these names, or None."""
-    if any(n in ("load", "effortdir") for n in names):
+    if "load" in names:
         return "velocity"
     if any(n in TERMS for n in names):
         return "position"
@@ -220,10 +210,20 @@ def key_variable(names):
 
 # ------------------------------------------------------------------------- the shape fit
 
-def fit_zone(search, c, y, terms, rows, ls_fit):
+#: the least share of the moving samples (faster than ZONE_SPEED times the joint's RMS rate: the
+#: fading friction's largest grid scale, where a Coulomb level has built up) a friction zone
+#: leaves off (else: a Coulomb friction)
+ZONE_OFF, ZONE_SPEED = 0.1, 0.2
+
+
+def fit_zone(search, c, y, terms, rows, ls_fit, heldout_gain):
     """The zone of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
     fitted part's chi-square, the other terms refitted with it: ``ls_fit(terms) -> chi2``),
-    the edge within the joint's range and its width within 2-100 % of the position spread."""
+    the edge within the joint's range and its width within 2-100 % of the position spread.
+    The zone is a Coulomb friction over the whole stroke (the pair ``coulomb_both``, the
+    simpler account) where it leaves hardly any moving samples off, or where the pair in its
+    place does as well on the held-out part (``heldout_gain(terms)``: the held-out chi-square's
+    drop)."""
     from scipy.optimize import minimize
 
     k = next((i for i, (t, _) in enumerate(terms) if t == "zone"), None)
@@ -246,9 +246,24 @@ def fit_zone(search, c, y, terms, rows, ls_fit):
     minimize(at, np.zeros(2), method="Nelder-Mead",
              options={"initial_simplex": [[0, 0], [0.7, 0], [0, 0.5]], "xatol": 0.01, "fatol": 0.1, "maxfev": 40})
     best = min(tried, key=tried.get, default=None)
-    if best is None or not tried[best] < ls_fit(terms):
-        return terms
-    return terms[:k] + [("zone", best)] + terms[k + 1:]
+    if best is not None and tried[best] < ls_fit(terms):
+        terms = terms[:k] + [("zone", best)] + terms[k + 1:]
+    # a zone whose off side holds hardly any of the moving samples is a Coulomb friction over
+    # the whole stroke (its edge then cuts off the slow samples about the reversals nearest an
+    # end of the stroke, where a sharp friction read at noisy rates misfits)
+    opt = search.fam["zone"][terms[k][1]]
+    qz, wz = float(opt["force_czone_q"][c]), float(opt["force_czone_w"][c])
+    pipe = search.pipe
+    moving = rows & (np.abs(pipe.qd_s[pipe.idx][:, c]) > ZONE_SPEED * search.rate[c])
+    on = 0.5 * (1.0 + np.tanh((pipe.q_s[pipe.idx][moving, c] - qz) / wz))
+    pair = terms[:k] + [("coulomb_both", 0)] + terms[k + 1:]
+    if on.size and np.mean(on < 0.5) < ZONE_OFF:
+        return pair
+    if ("coulomb_both", 0) in search.cols and not any(clash(search, c, [u], ("coulomb_both", 0)) or
+                                                      u[0].startswith("coulomb") for u in pair[:k] + pair[k + 1:]):
+        if heldout_gain(pair) >= heldout_gain(terms):
+            return pair
+    return terms
 
 
 # ------------------------------------------------------------------------- the equation
@@ -264,7 +279,7 @@ def equation_parts(search, c, names, get, shape_of, pm) -> list:
 
     parts = []
     z = f"(q - {shape_of('force_qc') or 0.0:.5g} {Q})" if shape_of("force_qc") is not None else "q"
-    for key, fmt in (("force_cload", "|tau| {s}"), ("force_ceff", "tau {s}"), ("force_eq", "{z} tau"),
+    for key, fmt in (("force_cload", "|tau| {s}"), ("force_eq", "{z} tau"),
                      ("force_eg", "tau"),
                      ("force_qv", "{z} qd"), ("force_cq1", "{z} {s}"), ("force_cq2", "{z}^2 {s}")):
         e = get(key)
@@ -288,7 +303,7 @@ def equation_parts(search, c, names, get, shape_of, pm) -> list:
 #: terms the core solves for implicitly (the applied effort): their columns are the core's
 #: residual's slope at the model's effort, and a coefficient of a few per cent bends it (the
 #: effort the plant applies differs from the model's by that much)
-EFFORT_TERMS = ("load", "effortdir", "effortpos")
+EFFORT_TERMS = ("load", "effortpos")
 
 
 def refine_effort(search, c, terms, coef, held, rows, keys_of, iterations=2):
