@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .effects import BY_KEY, geometry_layout, joint_prefix
+from .families.generator import KINDS as FAMILY_KINDS, sample as family_sample
 from ..errors import InputError
 from .diagnosis import UNEXPLAINED, tied
 
@@ -289,6 +290,8 @@ def sample_unlisted(kind, model, rng, motion) -> Hidden:
         p, js = {name(j, "vpos"): 2.0 * size * E[j] / V[j]}, [j]
     elif kind == "hardening_spring":
         p, js = {name(j, "qc"): float(home[j]), name(j, "k3"): size * E[j] / T[j] ** 3}, [j]
+    elif kind in FAMILY_KINDS:  # the term families' forces (families/generator.py)
+        p, js = family_sample(kind, rng, motion, lambda i, k: f"{pre}[{i + 1}].{k}", nd)
     else:
         raise InputError(f"the generator cannot hide force {kind!r} (it can hide: {', '.join(UNLISTED)})")
     nominal = model.params()
@@ -390,7 +393,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
                   "V": np.sqrt(np.mean(qd_ref**2, axis=0)), "span": np.ptp(ref.q[k0:], axis=0),
                   "home": nominal.ik(nominal.home())}
         try:
-            hidden = [sample_unlisted(k, nominal, rng, motion) if k in UNLISTED else
+            hidden = [sample_unlisted(k, nominal, rng, motion) if k in UNLISTED or k in FAMILY_KINDS else
                       sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]
         except _Redraw as e:
             failures.append(f"attempt {attempt + 1}: {e}")

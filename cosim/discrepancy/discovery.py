@@ -50,6 +50,7 @@ import numpy as np
 from ..errors import ParameterError
 from ._linalg import small_lstsq
 from .effects import joint_prefix
+from .families import products
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
 from .structure import LOW_SPEEDS, own_noise, samples_per_independent
@@ -79,12 +80,15 @@ TERMS = {
     "ripple": (("force_sin", "force_cos"), ("1", "1"), ("force_period",), "a ripple periodic in the position"),
     "step": (("force_step",), ("1",), ("force_step_q", "force_step_w"), "a smooth step in the position"),
     "inertia": (("force_inertia",), ("A",), (), "a force proportional to the acceleration (an inertia on the joint)"),
+    # products of the velocity's sign with the load or the position, couplings between joints
+    # (families/products.py)
+    **products.TERMS,
 }
 #: coefficients of dissipative terms (friction, drag): the friction they make never negative
 DISSIPATIVE = ("force_v2", "force_vpos", "force_vneg", "force_cpos", "force_cneg")
 #: coefficients with a sign of their physics: friction and drag dissipate, and the joint's
 #: inertia (the rotor's the model holds plus the added one) is no less than zero
-SIGNED = DISSIPATIVE + ("force_inertia",)
+SIGNED = DISSIPATIVE + ("force_inertia",) + products.SIGNED
 #: the library's parameter whose column on its joint is the coefficient's own (the same physics):
 #: where the model fits it, the coefficient is not searched
 SAME_COLUMN = {"force_inertia": "rotor_inertia"}
@@ -96,7 +100,7 @@ ADDS_TO = {"force_vpos": "viscous", "force_vneg": "viscous", "force_cpos": "coul
 #: instruments (an acceleration from the smoother is noisier than a rate: the library's rotor
 #: inertia is instrumented for the same reason)
 RATE_TERMS = ("drag", "viscous_pos", "viscous_neg", "coulomb_pos", "coulomb_neg", "viscous_both", "coulomb_both",
-              "fading", "inertia")
+              "fading", "inertia") + products.RATE_TERMS
 
 #: physical mechanisms that produce each kind of term (for the report's sentence)
 MECHANISMS = {
@@ -114,6 +118,7 @@ MECHANISMS = {
               "coupling that creeps, a drive whose friction compensation is smoothed",
     "ripple": "cogging of a motor (magnet pitch), ripple of a ball screw or gear (lead, tooth mesh), a bearing race "
               "or rack with a periodic defect",
+    **products.MECHANISMS,
     "step": "a detent, a cable carrier reaching its bend, a seal, cover or limit spring engaging at one position",
     "inertia": "a mass or inertia the drive moves that the model leaves out: a motor rotor, coupling, pulley, belt or "
                "screw, a tool, clamp or cable carrier riding on the carriage",
@@ -219,6 +224,7 @@ class Search:
         #: (term, option) of shapes fitted off the grid: no candidates
         self.off_grid = set()
         self.q_range = (q[train].min(axis=0), q[train].max(axis=0))
+        self.fam = products.grids(self)  # the options of the families' terms
         self.cols, self.instr = {}, {}
         self.w = np.zeros(self.nd)  # per channel: 1 / (own noise sqrt(samples per independent one))
         self._columns()
@@ -232,6 +238,8 @@ class Search:
         return self._Rb
 
     def shape(self, term: str, j: int, option: int = 0) -> dict:
+        if term in products.TERMS:
+            return products.shape(self, term, j, option)
         keys = TERMS[term][2]
         out = {}
         for k in keys:
@@ -250,6 +258,8 @@ class Search:
     def _delta(self, scale: str, j: int) -> float:
         # a coefficient whose force is 5 % of the joint's RMS effort at the typical position, rate
         # or acceleration
+        if scale in ("E", "TE", "TV"):
+            return 0.05 * float(self.effort[j]) / products.scale(self, scale, j)
         s = {"1": 1.0, "T": self.travel[j], "T2": self.travel[j] ** 2, "T3": self.travel[j] ** 3,
              "V": self.rate[j], "V2": self.rate[j] ** 2, "A": self.accel[j]}[scale]
         return 0.05 * float(self.effort[j]) / s
@@ -262,7 +272,8 @@ class Search:
         use_iv = eng.use_instruments
         ref0 = self._ref0 = self.pipe.reference_effort() if use_iv else None
         options = {t: {"step": len(self.steps), "fading": len(self.fades)}.get(t, 1)
-                   for t in TERMS if not t.endswith("_both")}
+                   if t not in products.TERMS else products.n_options(self, t)
+                   for t in TERMS if not t.endswith("_both") and t not in products.excluded()}
         if not np.any(self.period > 0):
             options.pop("ripple")
         for term, n_opt in options.items():
@@ -298,6 +309,8 @@ class Search:
                     self.instr[(term, o)] = zs
         for kind in ("viscous", "coulomb"):  # the two directions together: the single terms' columns
             parts = [(f"{kind}_pos", 0), (f"{kind}_neg", 0)]
+            if not all(p in self.cols for p in parts):
+                continue
             self.cols[(f"{kind}_both", 0)] = np.concatenate([self.cols[p] for p in parts], axis=2)
             if all(p in self.instr for p in parts):
                 self.instr[(f"{kind}_both", 0)] = np.concatenate([self.instr[p] for p in parts], axis=2)
@@ -492,11 +505,14 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
 
     chosen = []
     chi2 = chi2_of(chosen)
+    model = held  # the model's parameters (the loop's "held" is the coefficients entered)
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
         for cand in search.candidates():
             if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
+                continue
+            if products.clash(search, c, chosen, cand, model):  # the core holds one shape per joint
                 continue
             c2 = chi2_of(chosen + [cand])
             gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
@@ -645,6 +661,8 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
     fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
         search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
+    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0],
+                               lambda ts: heldout(ts)[1])
     if fitted != terms:
         # the terms that stood in for the step's misplaced edge go again (the backward pass
         # of the selection, on the fitted step)
@@ -671,6 +689,9 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
                                   refit=extra, held=held)
     terms = terms + extra
     f, d_held = heldout(terms)
+    # an effort term's column bends with its coefficient (the core solves for the applied effort)
+    f.coef = products.refine_effort(search, c, terms, f.coef, held, train,
+                                    lambda t: list(zip(TERMS[t][0], TERMS[t][1])))
     if not d_held > threshold:
         return None
     # the fit with instruments may leave the selection's least squares: a joint inertia below
@@ -850,6 +871,8 @@ def _shape_intervals(search, c, y, terms, coef, rows, s2):
             keys = ("force_period",)
         elif t == "fading":
             keys = ("force_cv",)
+        elif t == "zone":
+            keys = ("force_czone_q", "force_czone_w")
         else:
             continue
         for key in keys:
@@ -917,6 +940,9 @@ def _term(search, c, terms, coef, half, stab, before, after, d_held, base=None, 
 
 
 def _key_variable(names):
+    fam = products.key_variable(names)
+    if fam:
+        return fam
     pos = {"spring", "quadratic", "cubic", "ripple", "step"}
     if any(n in pos for n in names):
         return "position"
@@ -973,6 +999,7 @@ def equation(names, coefs, shape, search, c, shape_ci95=None) -> str:
     st = get("force_step")
     if st is not None:
         parts.append(f"{_pm(st.value, st.ci95, st.unit)} tanh((q - {sh('force_step_q', 5)}) / {sh('force_step_w', 3)})")
+    parts += products.equation_parts(search, c, names, get, lambda k: shape.get(search.name(c, k)), _pm)
     return "F = " + " + ".join(parts)
 
 
@@ -1030,6 +1057,8 @@ def _with_terms(R, search, terms, rows=slice(None)):
 
 
 def _option(search, t, name):
+    if name in products.TERMS:
+        return products.option_of(search, t, name)
     if name == "ripple":
         P = t.shape[search.name(t.joint - 1, "force_period")]
         return next((o for o, ps in search.periods.items() if ps[t.joint - 1] == P), 0)

@@ -64,11 +64,13 @@ def test_a_term_fitted_beside_a_tied_library_effect_is_not_named_as_the_physics(
 
 def test_offsets_a_discovered_inertia_refits_to_zero_are_withdrawn(tmp_path):
     # the library's offsets (1.6-2.5 N m) stood in for the missing arm inertias; refitted with the
-    # added inertias they are zero within their intervals
+    # added inertias they are zero within their intervals, or (arm 3, where a dead zone stood in
+    # too) the inertia alone in the place of both fits the held-out part better
     d, truth = _held_out(tmp_path, "delta_clavel", "rotor_inertia", 120)
     assert not any(e["key"] == "offset" for e in d.effects), d.conclusion
-    assert sorted(w["title"] for w in d.withdrawn if "refitted" in w) == [
-        f"constant effort offset, joint {j}" for j in (1, 2, 3)], d.withdrawn
+    gone = {w["title"]: w for w in d.withdrawn}
+    assert all(f"constant effort offset, joint {j}" in gone for j in (1, 2, 3)), d.withdrawn
+    assert sum("refitted" in w for w in gone.values()) >= 2, d.withdrawn
     assert "refitted to zero with the terms" in d.details
     assert sorted(t.joint for t in d.discovered) == [1, 2, 3]
     for t in d.discovered:
@@ -76,5 +78,8 @@ def test_offsets_a_discovered_inertia_refits_to_zero_are_withdrawn(tmp_path):
         want = truth["params"][name] - truth["nominal"][name]
         assert abs(t.coefficients[f"arm[{t.joint}].force_inertia"].value - want) < 0.05 * want, t.equation
         assert not t.partial, t.partial
-        offset = t.coefficients[f"arm[{t.joint}].offset"]
+        offset = t.coefficients.get(f"arm[{t.joint}].offset")
+        if offset is None:  # withdrawn by the trial: the plant holds none
+            assert d.plant_parameters().get(f"arm[{t.joint}].offset", 0.0) == 0.0
+            continue
         assert abs(d.plant_parameters()[f"arm[{t.joint}].offset"]) <= offset.ci95

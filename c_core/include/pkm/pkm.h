@@ -319,6 +319,12 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  *     + force_sin sin(2 pi q / force_period) + force_cos cos(2 pi q / force_period)   (period > 0)
  *     + force_step tanh((q - force_step_q) / force_step_w)                             (width > 0)
  *     + force_inertia qdd
+ *     + force_qv z qd + (force_cq1 z + force_cq2 z^2) s
+ *     + force_czone s (1 + tanh((q - force_czone_q) / force_czone_w)) / 2             (width != 0)
+ *     + force_xk1 (q_k - force_xqc) + force_xv qd_k          (k = force_xj, another joint, 1-based; 0: none)
+ *     + force_cload |tau| s + force_ceff tau s + (force_eq z + force_eg) tau
+ * (tau: the effort the drive applies; the inverse dynamics solve for it, tau = b / (1 - g - mu sign(b)),
+ * g = force_ceff s + force_eq z + force_eg, mu = force_cload s; an error where the drive self-locks)
  * [N | N m], an effort the drive spends on the joint like friction (added to the inverse
  * dynamics, subtracted from the applied effort in the forward dynamics and in the effort a
  * transmission carries).  All coefficients default to 0.  Its constant term is the drive's

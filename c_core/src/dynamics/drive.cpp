@@ -185,14 +185,19 @@ void add_joint_force_at(const drive::Params& dp, int n, const double* q, const d
   for (int i = 0; i < n; ++i) out[i] += sign * F[i];
 }
 
-// out += sign * the generic joint force at the pose x, xd; nothing when none is set.
-void add_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
-                     double sign, double* out) {
+// out -= the generic joint force at the pose x, xd with the applied effort tau (its effort
+// terms read it); nothing when none is set.
+void subtract_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x,
+                          const double* xd, const double* tau, double* out) {
   if (!dp.force.any) return;
   double q[6], qd[6];
   m->robot->ik(*m->compiled, *d->rd, x, q);
   joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
-  add_joint_force_at(dp, d->ndof, q, qd, sign, out);
+  add_joint_force_at(dp, d->ndof, q, qd, -1.0, out);
+  if (!dp.force.effort) return;
+  double g[6], mu[6];
+  joint_force::effort_gains(dp.force, d->ndof, dp.v_eps, q, qd, g, mu);
+  for (int i = 0; i < d->ndof; ++i) out[i] -= g[i] * tau[i] + mu[i] * std::fabs(tau[i]);
 }
 }  // namespace
 
@@ -224,6 +229,8 @@ void add_drive_efforts(const drive::Params& dp, int n, const double* q, const do
   }
   if (dp.any_inertia)
     for (int i = 0; i < n; ++i) tau[i] += dp.inertia[i] * qdd[i];
+  // the terms of the applied effort last: tau = b + g tau + mu |tau| solved for tau
+  if (dp.force.effort) joint_force::solve_effort(dp.force, n, dp.v_eps, q, qd, tau);
 }
 
 namespace {
@@ -272,7 +279,7 @@ void net_effort(const pkm_model* m, const drive::Params& dp, pkm_data* d, const 
                 const double* tau, double* net) {
   const int n = d->ndof;
   for (int i = 0; i < n; ++i) net[i] = tau[i];
-  add_joint_force(m, dp, d, x, xd, -1.0, net);
+  subtract_joint_force(m, dp, d, x, xd, tau, net);
   if (!dp.any_friction) return;
   double qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
   joint_velocity(*m->robot, *m->compiled, *d->rd, x, xd, qd);
@@ -296,6 +303,8 @@ bool total_forward_dynamics_response(const pkm_model* m, pkm_data* d, const doub
                                      const double* tau, double* xdd, double* B) {
   // A joint inertia (rotor, added) changes the mass matrix the robot factorises: no cheap response then.
   if (m->drive->any_inertia) return false;
+  // Effort terms of the joint force (force_cload, ...) make the net effort nonlinear in tau: none either.
+  if (m->drive->force.effort) return false;
   bool ok = false;
   with_overflow_message(d, xd, tau, [&] {
     double net[6];
@@ -418,7 +427,7 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   // its own friction, joint force and joint inertia (computed only when a gap or an elasticity reads it).
   double carried[6];
   for (int i = 0; i < n; ++i) carried[i] = tau[i];
-  if (flexible) add_joint_force(m, dp, d, x, xd, -1.0, carried);
+  if (flexible) subtract_joint_force(m, dp, d, x, xd, tau, carried);
   if (flexible && (dp.any_friction || dp.any_inertia)) {
     double J[36], qd[6], f[6], xdd[6], qdd[6];
     m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);

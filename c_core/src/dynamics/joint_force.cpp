@@ -13,10 +13,21 @@ const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "
                                    "force_v2",   "force_vpos", "force_vneg",   "force_cpos",
                                    "force_cneg", "force_sin",  "force_cos",    "force_period",
                                    "force_step", "force_step_q", "force_step_w", "force_cv",
-                                   "force_inertia"};
+                                   "force_inertia", "force_qv",   "force_cq1",    "force_cq2",
+                                   "force_czone", "force_czone_q", "force_czone_w", "force_xj",
+                                   "force_xqc",  "force_xk1",  "force_xv",     "force_cload",
+                                   "force_ceff", "force_eq",   "force_eg"};
 namespace {
-enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, CV, INERTIA };
-static_assert(INERTIA == kInertia, "kInertia names the last key");
+enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, CV, INERTIA,
+       QV, CQ1, CQ2, CZONE, CZONE_Q, CZONE_W, XJ, XQC, XK1, XV, CLOAD, CEFF, EQ, EG };
+static_assert(INERTIA == kInertia, "kInertia names the acceleration term");
+static_assert(EG + 1 == kNKeys, "one key per term");
+// keys that shape a term and are no force alone
+bool shape_key(int k) {
+  return k == QC || k == PERIOD || k == STEP_Q || k == STEP_W || k == CV || k == INERTIA || k == CZONE_Q ||
+         k == CZONE_W || k == XJ || k == XQC;
+}
+bool effort_key(int k) { return k == CLOAD || k == CEFF || k == EQ || k == EG; }
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -52,6 +63,27 @@ std::vector<ParamSpec> specs(const Robot& r) {
         "added inertia the drive carries on the joint (a coupling, pulley, belt, a mass riding on it): force per "
         "unit of joint acceleration, added to the rotor inertia",
         -big);
+    add(QV, F + " s/" + Q + "2", "force per z qd (a damping that changes over the stroke)", -big);
+    add(CQ1, F + "/" + Q, "Coulomb level per unit of z: force_cq1 z tanh(qd / v_c)", -big);
+    add(CQ2, F + "/" + Q + "2", "Coulomb level per z^2: force_cq2 z^2 tanh(qd / v_c)", -big);
+    add(CZONE, F, "Coulomb level of a friction zone: force_czone tanh(qd / v_c) (1 + tanh((q - force_czone_q) / "
+                  "force_czone_w)) / 2", -big);
+    add(CZONE_Q, Q, "position where the friction zone's level is half reached", -big);
+    add(CZONE_W, Q, "width of the friction zone's edge (0: no zone; negative: the zone lies below force_czone_q)",
+        -big);
+    add(XJ, "", "the other joint (1-based index; 0: none) whose motion the cross terms force_xk1, force_xv read",
+        0.0);
+    add(XQC, Q, "centre of the other joint's position in the cross term force_xk1 (q_k - force_xqc)", -big);
+    add(XK1, F + "/" + Q, "force per unit of the other joint's position (q_k - force_xqc): a cable carrier or hose "
+                          "linking two axes", -big);
+    add(XV, F + " s/" + Q, "force per unit of the other joint's rate qd_k", -big);
+    add(CLOAD, "", "Coulomb level per unit of the applied effort's magnitude: force_cload |tau| tanh(qd / v_c) "
+                   "(a friction that grows with the load)", -big);
+    add(CEFF, "", "force per unit of the applied effort, by direction of motion: force_ceff tau tanh(qd / v_c)",
+        -big);
+    add(EQ, "1/" + Q, "force per unit of the applied effort and of z: force_eq z tau (an efficiency that changes "
+                      "over the stroke)", -big);
+    add(EG, "", "force per unit of the applied effort: force_eg tau (a torque constant or ratio off)", -big);
   }
   return out;
 }
@@ -66,11 +98,19 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std
   for (int i = 0; i < r.ndof(); ++i)
     for (int k = 0; k < kNKeys; ++k) {
       c.v[k][i] = get(joint_param(r, i, kKeys[k]));
-      // The centre, the period, the step's position and width and the Coulomb levels' velocity scale
-      // shape terms; alone they are no force.  The inertia is the drive's joint inertia's
-      // (drive::compile), not a term of force().
-      if (k != QC && k != PERIOD && k != STEP_Q && k != STEP_W && k != CV && k != INERTIA) c.any |= c.v[k][i] != 0;
+      // The centre, the period, the step's and the zone's position and width, the Coulomb
+      // levels' velocity scale and the other joint's index and centre shape terms; alone they
+      // are no force.  The inertia is the drive's joint inertia's (drive::compile), not a term of force().
+      if (!shape_key(k)) c.any |= c.v[k][i] != 0;
+      if (effort_key(k)) c.effort |= c.v[k][i] != 0;
     }
+  for (int i = 0; i < r.ndof(); ++i) {
+    const double x = c.v[XJ][i];
+    if (x != std::floor(x) || x < 0 || x > r.ndof() || x == i + 1)
+      throw Error(PKM_ERR_PARAMETER, joint_param(r, i, kKeys[XJ]) + " = " + num(x, 6) +
+                                         " must be 0 or the 1-based index of another joint (1.." +
+                                         std::to_string(r.ndof()) + ", not " + std::to_string(i + 1) + ")");
+  }
   return c;
 }
 
@@ -87,7 +127,37 @@ void force(const Coefficients& c, int nd, double v_eps, const double* q, const d
       f += v[SIN][i] * std::sin(a) + v[COS][i] * std::cos(a);
     }
     if (v[STEP_W][i] > 0) f += v[STEP][i] * std::tanh((q[i] - v[STEP_Q][i]) / v[STEP_W][i]);
+    f += v[QV][i] * z * w + (v[CQ1][i] + v[CQ2][i] * z) * z * s;
+    if (v[CZONE_W][i] != 0) f += v[CZONE][i] * s * 0.5 * (1.0 + std::tanh((q[i] - v[CZONE_Q][i]) / v[CZONE_W][i]));
+    const int k = static_cast<int>(v[XJ][i]) - 1;
+    if (k >= 0 && k < nd) f += v[XK1][i] * (q[k] - v[XQC][i]) + v[XV][i] * qd[k];
     F[i] = f;
+  }
+}
+
+void effort_gains(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* g,
+                  double* mu) {
+  const auto& v = c.v;
+  for (int i = 0; i < nd; ++i) {
+    const double s = std::tanh(qd[i] / (v[CV][i] > 0 ? v[CV][i] : v_eps));
+    g[i] = v[CEFF][i] * s + v[EQ][i] * (q[i] - v[QC][i]) + v[EG][i];
+    mu[i] = v[CLOAD][i] * s;
+  }
+}
+
+void solve_effort(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* tau) {
+  double g[kMaxJoints], mu[kMaxJoints];
+  effort_gains(c, nd, v_eps, q, qd, g, mu);
+  for (int i = 0; i < nd; ++i) {
+    // tau (1 - g) - mu |tau| = b: with a = 1 - g > |mu| the left side rises strictly with tau,
+    // and tau has the sign of b
+    const double a = 1.0 - g[i];
+    if (!(a - std::fabs(mu[i]) > 0))
+      throw Error(PKM_ERR_ARGUMENT, "the effort terms of joint " + std::to_string(i + 1) +
+                                        " (force_cload, force_ceff, force_eq, force_eg) take " + num(1.0 - a + std::fabs(mu[i]), 4) +
+                                        " of the applied effort at q = " + num(q[i], 6) + ", qd = " + num(qd[i], 6) +
+                                        ": the drive self-locks (must be < 1)");
+    tau[i] /= a - mu[i] * (tau[i] > 0 ? 1.0 : tau[i] < 0 ? -1.0 : 0.0);
   }
 }
 

@@ -10,6 +10,18 @@
 //     + force_sin sin(2 pi q / P) + force_cos cos(2 pi q / P)         (ripple; P = force_period > 0)
 //     + force_step tanh((q - force_step_q) / force_step_w)            (a smooth step; force_step_w > 0)
 //     + force_inertia qdd                                             (an added inertia)
+//     + force_qv z qd                                                 (position x rate)
+//     + (force_cq1 z + force_cq2 z^2) s                               (a Coulomb level over the stroke)
+//     + force_czone s (1 + tanh((q - force_czone_q) / force_czone_w)) / 2   (a friction zone; width != 0)
+//     + force_xk1 (q_k - force_xqc) + force_xv qd_k                   (another joint's motion, k = force_xj)
+//     + force_cload |tau| s + force_ceff tau s + (force_eq z + force_eg) tau   (the drive's applied effort tau)
+//
+// The last line depends on the effort the drive applies (a friction that grows with the
+// load, a transmission whose efficiency changes with the position): the forward dynamics
+// subtract it from the given tau; the inverse dynamics solve tau = b + g tau + mu |tau| per
+// joint (b the effort without these terms, g = force_ceff s + force_eq z + force_eg, mu = force_cload s):
+// tau = b / (1 - g - mu sign(b)), unique while 1 - g - |mu| > 0 (else the drive self-locks:
+// an error naming the joint).  force_xj is the 1-based index of the other joint (0: none).
 //
 // F is an effort the drive spends on the joint, like friction: it adds to the inverse
 // dynamics and is subtracted from the applied effort in the forward dynamics.  Its
@@ -32,7 +44,7 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 17;
+constexpr int kNKeys = 31;
 // Index of "force_inertia" in kKeys (the acceleration term, not evaluated by force()).
 constexpr int kInertia = 16;
 extern const char* const kKeys[kNKeys];
@@ -40,7 +52,8 @@ extern const char* const kKeys[kNKeys];
 struct Coefficients {
   // [key][joint], in the order of kKeys
   double v[kNKeys][kMaxJoints] = {};
-  bool any = false;  // a coefficient of a term of q or qd is set (force() is not zero)
+  bool any = false;     // a coefficient of a term is set (force() or the effort terms are not zero)
+  bool effort = false;  // a coefficient of an effort term is set (force_cload, force_ceff, force_eq, force_eg)
 };
 
 // Parameter specs of the robot's joints (units of its joints and efforts).
@@ -50,6 +63,12 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& specs, const 
 // F[nd] at joint positions q[nd] and rates qd[nd], the acceleration term left out (the drive's
 // joint inertia carries it); v_eps the drive's velocity scale (of the Coulomb levels where force_cv is 0).
 void force(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* F);
+// The effort terms at q, qd: g[nd] and mu[nd] of F_effort = g tau + mu |tau| (see above).
+void effort_gains(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* g,
+                  double* mu);
+// tau[nd] (holding b, the effort without the effort terms) replaced by the solution of
+// tau = b + g tau + mu |tau|; an Error naming joint_names' joint where the drive self-locks.
+void solve_effort(const Coefficients& c, int nd, double v_eps, const double* q, const double* qd, double* tau);
 
 }  // namespace joint_force
 }  // namespace pkm
