@@ -154,7 +154,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
     t = pipe.t[pipe.idx]
     rows = np.ones(len(t), bool)
     R = eng.R(theta)
-    y = eng.vec(R, rows)
+    y = -eng.vec(R, rows)  # what a change of the parameters' columns must cancel
     tt = np.tile(t, eng.C)
     T = float(t.max() - t.min())
     if not T > 0:
