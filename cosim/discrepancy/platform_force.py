@@ -21,8 +21,9 @@ the chosen anchor and tension are then evaluated by the core's residual pipeline
 
 An option enters if its BIC decrease on the fitted part exceeds the library's threshold plus
 the look-elsewhere cost ``2 ln M`` (M: the options tried, each anchor search counted as one per
-start).  The library's selection is then made again with the platform force in the model
-(:func:`reselect`), and the platform force is kept only if it and that selection fit the
+start).  When the option alone describes the fitted part at least as well as the library's whole
+selection (BIC), the library's selection is made again with the platform force in the model
+(``reselect``), and the platform force is kept only if it and that selection fit the
 held-out part better than the library's selection alone by more than the threshold: then the
 library effects that stood in for it are gone and the report names a platform force with its
 equation in the world frame.
@@ -308,6 +309,12 @@ def platform_stage(eng, sel, threshold: float, reselect):
     if found is None:
         return None, eng, sel
     o, dbic, bar, tried = found
+    # only a force that alone describes the fitted part at least as well as the library's whole
+    # selection (BIC) is worth the library's selection made again with it
+    logn = math.log(eng.n_eff)
+    if o.chi2 + o.k * logn >= (eng.chi2(sel.theta) if sel.theta else float(eng.vec(eng.R0) @ eng.vec(eng.R0))) \
+            + len(sel.theta) * logn:
+        return None, eng, sel
     params = params_of(o)
     # the anchor search's column is the cable's direction applied per sample; the core's own
     # evaluation of the cable gives the chi-square compared below
