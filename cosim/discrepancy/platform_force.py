@@ -303,9 +303,14 @@ def platform_stage(eng, sel, threshold: float, reselect):
 
     Returns ``(PlatformForce or None, eng2, sel2)``: with a platform force, the selection made
     with it (its parameters relative to the model with the force); else ``eng, sel``."""
+    from .._native import PkmError
+
     if not has_platform_force(eng.model):
         return None, eng, sel
-    found = search(eng, threshold)
+    try:
+        found = search(eng, threshold)
+    except (PkmError, np.linalg.LinAlgError):  # a pose the core refuses (a dependent pose not solved): no stage
+        return None, eng, sel
     if found is None:
         return None, eng, sel
     o, dbic, bar, tried = found

@@ -38,6 +38,11 @@ class AxisRobot final : public DescribedRobot {
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
   void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
+  // An axis moves a carriage or a link, not a platform: no platform pose, no platform force.
+  void platform_pose(const RobotModel&, RobotData&, const double*, double*, double*) const override {
+    unsupported(*this, "the platform's full pose (an axis has no platform)");
+  }
+  bool has_platform() const override { return false; }
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd, const double* xdd,
                           double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd, const double* xdd,
