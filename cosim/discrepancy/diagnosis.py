@@ -308,15 +308,12 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t3 = time.perf_counter()
         eng0, plat = eng, None
         if platform:
-            from .platform_force import platform_stage
+            from .platform_force import diagnosis_stage
 
-            def reselect(params):  # the library's selection made again with the platform force in the model
-                m2 = mdl.copy()
-                m2.set_params(params)
-                p2 = Pipeline(rec, m2, window=window, segments=None if ws.whole else ws.segments)
-                return attribute(prepare(p2, groups, train_fraction=train_fraction, threshold=threshold,
-                                         max_groups=max_effects, instruments=instruments, verbose=verbose))
-            plat, eng, sel = platform_stage(eng, sel, threshold, reselect)
+            plat, eng, sel = diagnosis_stage(eng, sel, rec, mdl, groups, {
+                "window": window, "segments": None if ws.whole else ws.segments}, {
+                "train_fraction": train_fraction, "threshold": threshold, "max_groups": max_effects,
+                "instruments": instruments, "verbose": verbose})
         t3a = time.perf_counter()
         found, withdrawn, theta, ties = [], [], dict(sel.theta), []
         if discovery:
@@ -325,11 +322,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         if plat is not None:  # parameters relative to the user's model from here on
             theta = dict(plat.params, **theta)
         held = heldout_fit(eng0, sel, theta)
-        drifts = []
-        if drift:
-            from .drift import find_drifts
+        from .drift import find_drifts
 
-            drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()})
+        drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()}) if drift else []
         loc = localise(eng, sel)
         t4 = time.perf_counter()
     timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,

@@ -339,6 +339,20 @@ def platform_stage(eng, sel, threshold: float, reselect):
     return pf, eng2, sel2
 
 
+def diagnosis_stage(eng, sel, rec, model, groups, pipeline_kw: dict, prepare_kw: dict):
+    """:func:`platform_stage` in a diagnosis: the second selection is the diagnosis's own
+    (:func:`.engine.prepare` and :func:`.engine.attribute` with ``prepare_kw``) on the recording's
+    residual pipeline (``pipeline_kw``) for the model with the platform force."""
+    from .engine import attribute, prepare
+    from .residuals import Pipeline
+
+    def reselect(params):
+        m2 = model.copy()
+        m2.set_params(params)
+        return attribute(prepare(Pipeline(rec, m2, **pipeline_kw), groups, **prepare_kw))
+    return platform_stage(eng, sel, prepare_kw["threshold"], reselect)
+
+
 def _heldout_chi2(eng, R) -> float:
     y = eng.vec(R, eng.test)
     return float(y @ y)
