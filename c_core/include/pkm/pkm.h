@@ -225,7 +225,7 @@ PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, d
  * pose if the constraints are not met to 1e-14 m) -- the parasitic motion of 3-PRS and 3-RPS heads
  * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
  * of held ones zero.  Described robots, the 6-PUS (X = x) and the Quattro (X = (x, y, z, 0, 0,
- * theta)); PKM_ERR_UNSUPPORTED for the four-bar. */
+ * theta)); PKM_ERR_UNSUPPORTED for the four-bar and a single axis (the EMPS). */
 PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
                               double* S);
 
@@ -329,7 +329,8 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * dynamics); with drive.two_body = 1 it stays on the carriage while the rotor is the drive
  * body's. */
 
-/* A force on the platform (robots with one: the described robots, the 6-PUS, the Quattro) is
+/* A force on the platform (robots with one: the described mechanisms, not a single axis such as
+ * the EMPS; the 6-PUS, the Quattro) is
  * part of the mechanism's efforts like gravity (pkm_inverse_dynamics,
  * pkm_mechanism_inverse_dynamics_batch, pkm_gravity_load; subtracted from the applied effort in
  * pkm_forward_dynamics and the integrator).  World frame, on the platform, with P = p + R r the
