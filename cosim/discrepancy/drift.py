@@ -59,7 +59,7 @@ class Drift:
         The threshold plus the look-elsewhere cost.
     windows : dict
         The time course: ``t`` (window centres [s]), ``value`` and ``ci95`` of the parameter
-        refitted in each window.
+        refitted in each window, ``span`` the recording's first and last time [s].
     equation : str
         The drift as an equation in time.
     """
@@ -189,6 +189,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
         p = float(theta[k])
         course = _course(eng, y, c, t, rows, s2)
         course["value"] = [p + v for v in course["value"]]
+        course["span"] = [float(t.min()), float(t.max())]
         u = (units or {}).get(k, "")
         if d_trend >= d_step:
             X = np.stack([c, c * (tt - tm) / T], 1)
@@ -247,12 +248,12 @@ def figure(drifts, path):
     for ax, d in zip(axes[:, 0], drifts):
         w = d.windows
         ax.errorbar(w["t"], w["value"], yerr=w["ci95"], fmt="o", label="refitted per window (95 %)")
-        t0, t1 = w["t"][0], w["t"][-1]
+        t0, t1 = w["span"]
         if d.kind == "trend":
             ax.plot([t0, t1], [d.start, d.end], "-", label="trend")
         else:
             ax.step([t0, d.time, t1], [d.start, d.end, d.end], where="post", label="step")
-        ax.axhline(d.mean, color="grey", ls=":", label="constant fit (mean)")
+        ax.axhline(d.mean, color="grey", ls=":", label="the constant fitted (the plant's)")
         ax.set_ylabel(f"{d.param} [{d.unit}]")
         ax.legend(fontsize=7)
     axes[-1, 0].set_xlabel("time [s]")
