@@ -106,6 +106,10 @@ def _diag_configure(p):
                         "of instrumental variables from the reference (biased low by rate noise; for comparison)")
     p.add_argument("--no-discovery", action="store_true",
                    help="skip the search for forces no library effect names (the discovery step)")
+    p.add_argument("--no-platform", action="store_true",
+                   help="skip the search for one force on the platform (a wrench, a cable to an anchor, a drag)")
+    p.add_argument("--no-drift", action="store_true",
+                   help="skip the test of the fitted parameters for a drift over the recording (a trend, a step)")
     p.add_argument("--max-samples", type=_positive(int), default=None,
                    help="most rows the diagnosis holds (default 100000, discrepancy.working_set.MAX_SAMPLES); a longer recording is diagnosed on blocks "
                         "spread over all of it, each at the full rate (docs/discrepancy.md, Long recordings)")
@@ -139,7 +143,8 @@ def cmd_diagnose(args):
                          train_fraction=args.train_fraction, compare=args.compare,
                          effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares,
-                         discovery=not args.no_discovery)
+                         discovery=not args.no_discovery, platform=not args.no_platform,
+                         drift=not args.no_drift)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "
                           f"({out}/report.md and diagnosis.json are written at the end)") from None
@@ -186,6 +191,17 @@ def print_diagnosis(d, file=None):
                 p(f"    library effect it replaces: {x}")
             if t.partial:
                 p(f"    not named as the physics: {t.partial}")
+    pf = getattr(d, "platform_force", None)
+    if pf is not None:
+        p("\na force on the platform (one for the whole robot; the core's wrench.*, cable.*, platform_drag.*):")
+        p(f"  {pf.equation}")
+        p(f"    such a force comes from: {pf.mechanisms}")
+        for x in pf.instead_of:
+            p(f"    library effect it replaces: {x}")
+    for dr in getattr(d, "drifts", None) or []:
+        p(f"\ndrift: {dr.equation}")
+        p("  refitted per window: " + ", ".join(f"{v:.4g} +- {c:.2g} at {t:.3g} s" for t, v, c in
+                                               zip(dr.windows["t"], dr.windows["value"], dr.windows["ci95"])))
     if d.effects:
         p("\nwhy (most important first; importance = chi-square increase when the term is removed):")
         seen_bic = set()

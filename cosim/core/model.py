@@ -470,7 +470,8 @@ class Model:
         """The platform's full pose (x, y, z, rx, ry, rz) [m, rad] at pose(s) x and the motion
         map S = d(full pose)/dx, shapes (..., 6) and (..., 6, nd): the components a robot does
         not declare are held at 0 or, with PRS or RPS legs, dependent (the parasitic motion,
-        solved from the legs' passive revolute joints).  Described robots only.
+        solved from the legs' passive revolute joints).  Described robots, the 6-PUS and the
+        Quattro (not the four-bar or a single axis).
 
         Example: ``Model("robots/tripod_3rps.toml").platform_pose([0.45, 0.1, 0.05])[0]``."""
         xs = self._arr(x, "x")

@@ -121,6 +121,10 @@ class Diagnosis:
     #: the full statement the conclusion's paragraph sums up (values, look-alikes, what was
     #: withdrawn; :mod:`.verdict`), "" when the conclusion is the whole of it
     details: str = ""
+    #: a force on the platform found for the whole robot (cosim.discrepancy.platform_force), or None
+    platform_force: object = None
+    #: fitted parameters that drift over the recording (cosim.discrepancy.drift.Drift)
+    drifts: list = field(default_factory=list)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -146,7 +150,8 @@ class Diagnosis:
         return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
-                                               "warnings", "unexplained", "discovered", "withdrawn", "details")}
+                                               "warnings", "unexplained", "discovered", "withdrawn", "details",
+                                               "platform_force", "drifts")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -203,7 +208,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
              max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
-             verbose: bool = False) -> Diagnosis:
+             verbose: bool = False, platform: bool = True, drift: bool = True) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -247,6 +252,13 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         After the library, search each effort channel for a joint force no library effect
         names (:mod:`.discovery`), and withdraw a library effect a discovered term fits
         the held-out part better than.
+    platform : bool
+        Search one force on the platform for the whole robot (a constant wrench, a cable to an
+        anchor, a drag: :mod:`.platform_force`) before the discovery step, and keep it when it and
+        the library's selection made again with it fit the held-out part better.
+    drift : bool
+        Test every fitted parameter for a drift over the recording (a trend or a step in time,
+        :mod:`.drift`) and report its size and time course.
     max_samples : int, optional
         Most rows the diagnosis holds (default
         :data:`~cosim.discrepancy.working_set.MAX_SAMPLES`, 200,000): a longer recording is
@@ -305,6 +317,15 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t2 = time.perf_counter()
         eng, sel = attribute(eng)
         t3 = time.perf_counter()
+        eng0, plat = eng, None
+        if platform:
+            from .platform_force import diagnosis_stage
+
+            plat, eng, sel = diagnosis_stage(eng, sel, rec, mdl, groups, {
+                "window": window, "segments": None if ws.whole and len(ws.segments) == 1 else ws.segments}, {
+                "train_fraction": train_fraction, "threshold": threshold, "max_groups": max_effects,
+                "instruments": instruments, "verbose": verbose})
+        t3a = time.perf_counter()
         found, withdrawn, theta, ties = [], [], dict(sel.theta), []
         if discovery:
             found, withdrawn, theta, ties = _discover(eng, sel, threshold)
@@ -314,15 +335,21 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         if problems:
             theta, found, withdrawn, ties = {}, [], [], []
         t3b = time.perf_counter()
-        held = heldout_fit(eng, sel, theta)
+        if plat is not None:  # parameters relative to the user's model from here on
+            theta = dict(plat.params, **theta)
+        held = heldout_fit(eng0, sel, theta)
+        from .drift import find_drifts
+
+        drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()}) if drift else []
         loc = localise(eng, sel)
         t4 = time.perf_counter()
-    timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, discovery=t3b - t3,
+    timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,
+                   discovery=t3b - t3a,
                    heldout_localisation=t4 - t3b)
     from .structure import sentence, unexplained
 
     gone = {w["group"] for w in withdrawn}
-    r_after = eng.R(theta) if theta else eng.R0
+    r_after = eng0.R(theta) if theta else eng0.R0
     left = unexplained(pipe, r_after, floor=eng.accuracy())
     # A fit that leaves structure anywhere may stand in for physics the library lacks: in
     # closed loop a missing force moves every joint's readings and efforts, and a stand-in often
@@ -332,6 +359,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t.partial = _partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t)
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
+    if plat is not None:
+        from .platform_force import sentence as platform_sentence
+
+        conclusion = platform_sentence(plat, conclusion)
+    if drifts:
+        from .drift import sentence as drift_sentence
+
+        conclusion += "; " + drift_sentence(drifts)
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
@@ -353,13 +388,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                             "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
                             "smoothing_samples": pipe.window,
                             "working_set": ws.summary()},
-                  residual={"time": pipe.t[pipe.idx], "before": eng.R0, "after": r_after}, unexplained=left,
+                  residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
                   discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
+    d.platform_force, d.drifts = plat, drifts
     if effort_map is not None:
         d.conclusion += "; " + effort_map["statement"]
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(commanded, eng, sel, _compared(rec, mdl, compare), theta)
+        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta)
         if d.details:
             d.details += _two_body_sentence(d.replay, mdl.joint_unit)
         else:

@@ -39,6 +39,10 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
             files["replay"] = _fig_replay(d, eng, out / "replay.png")
         for t in d.discovered:
             files[f"discovered{t.joint}"] = _fig_discovered(t, eng, out / f"discovered{t.joint}.png")
+        if getattr(d, "drifts", None):
+            from .drift import figure
+
+            files["drifts"] = figure(d.drifts, out / "drifts.png")
     files["json"] = str(out / "diagnosis.json")
     md = out / "report.md"
     files["report"] = str(md)
@@ -153,6 +157,14 @@ def markdown(d, files: dict) -> str:
             L += ["Plant parameters with the discovered terms (core / FMU names):", "", "```json",
                   json.dumps(d.theta, indent=2), "```", ""]
 
+    if getattr(d, "platform_force", None) is not None:
+        from .platform_force import markdown as platform_markdown
+
+        L += platform_markdown(d.platform_force)
+    if getattr(d, "drifts", None):
+        from .drift import markdown as drift_markdown
+
+        L += drift_markdown(d.drifts, files)
     L += ["## How much better: held-out fit", ""]
     h = d.heldout
     if d.theta and h["affected"] and np.isfinite(h["gain"]):

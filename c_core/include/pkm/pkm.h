@@ -225,8 +225,9 @@ PKM_API int pkm_chain_points(const pkm_model* m, pkm_data* d, const double* x, d
  * pose if the constraints are not met to 1e-14 m) -- the parasitic motion of 3-PRS and 3-RPS heads
  * (docs/robots.md, Dependent coordinates).  S's rows of declared coordinates are unit rows,
  * of held ones zero.  A serial arm's (docs/robots.md, Serial arms) X is its tool frame and S its
- * Jacobian in these coordinates (position rows the geometric Jacobian's).  Described robots;
- * PKM_ERR_UNSUPPORTED for those written in C++. */
+ * Jacobian in these coordinates (position rows the geometric Jacobian's); a single axis' X is
+ * the pose of the carriage or link it moves.  Described robots, the 6-PUS (X = x) and the
+ * Quattro (X = (x, y, z, 0, 0, theta)); PKM_ERR_UNSUPPORTED for the four-bar. */
 PKM_API int pkm_platform_pose(const pkm_model* m, pkm_data* d, const double* x, double* X,
                               double* S);
 
@@ -335,6 +336,18 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * must not be negative, is in pkm_mass_matrix, pkm_energy and the implicit forward
  * dynamics); with drive.two_body = 1 it stays on the carriage while the rotor is the drive
  * body's. */
+
+/* A force on the platform (robots with one: the described mechanisms, not a single axis such as
+ * the EMPS; the 6-PUS, the Quattro) is
+ * part of the mechanism's efforts like gravity (pkm_inverse_dynamics,
+ * pkm_mechanism_inverse_dynamics_batch, pkm_gravity_load; subtracted from the applied effort in
+ * pkm_forward_dynamics and the integrator).  World frame, on the platform, with P = p + R r the
+ * platform point r = "cable.point_*" of the full pose (pkm_platform_pose, R = Rx Ry Rz):
+ *   f = "wrench.f*" + ("cable.tension" + "cable.stiffness" (|A - P| - "cable.rest_length"))
+ *       (A - P) / |A - P| - "platform_drag.linear" v        (A = "cable.anchor_*", v = dp/dt)
+ *   m = "wrench.m*" + (R r) x f_cable - "platform_drag.angular" w            (about p)
+ * [N, N m, m, N/m, N s/m, N m s/rad]; the joints' efforts are -J^-T S' [f; E' m] (S the motion
+ * map, w = E (rx, ry, rz)_dot).  Every parameter defaults to 0. */
 
 /* Joint friction efforts f[nd] at joint velocities qd[nd] (the part of the actuator
  * effort spent on friction): (coulomb + stribeck exp(-(qd/stribeck_v)^2)) sgn(qd) + viscous qd

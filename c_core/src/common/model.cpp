@@ -71,6 +71,8 @@ int pkm_model_create_status(const char* robot, const char* param_set, pkm_model*
     m->robot = r;
     m->robot_name = r->name();
     m->specs = r->param_specs(param_set ? param_set : "default");
+    // the force on the platform is the mechanism's (a load like gravity), before the drive layer's
+    for (auto& s : pkm::platform_force::specs(*r)) m->specs.push_back(std::move(s));
     for (auto& s : pkm::drive::specs(*r)) m->specs.push_back(std::move(s));
     for (const auto& o : r->param_overrides(param_set ? param_set : "default"))
       for (auto& s : m->specs)

@@ -118,6 +118,9 @@ class Robot {
   // components held (0) or dependent (solved from passive joints), and the motion map
   // S[6,nd] = dX/dx (may be nullptr); default: unsupported.
   virtual void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const;
+  // The robot has a platform (or end effector) whose full pose platform_pose gives: the
+  // platform force (dynamics/platform_force.hpp) acts on it.  Default: none.
+  virtual bool has_platform() const { return false; }
   // What the integrator checks at every step, cheaply: a lower bound of the direct
   // singularity measure (measures[1]; a bound above a threshold proves the measure is
   // above it, so the exact measure is needed only near its threshold) and a value whose

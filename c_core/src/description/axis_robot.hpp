@@ -41,6 +41,9 @@ class AxisRobot final : public DescribedRobot {
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
   void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
+  // The carriage or link an axis moves is its platform for the pose (platform_pose), but the
+  // platform force (dynamics/platform_force.hpp) is not declared for it: one joint carries it.
+  bool has_platform() const override { return false; }
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd, const double* xdd,
                           double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd, const double* xdd,

@@ -200,6 +200,7 @@ class DescribedRobot : public Robot {
                                 double* det_j) const override;
   void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
   void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const override;
+  bool has_platform() const override { return true; }
   void joint_acceleration(const RobotModel&, RobotData&, const double* x, const double* xd,
                           const double* xdd, double* qdd) const override;
   void inverse_dynamics(const RobotModel&, RobotData&, const double* x, const double* xd,

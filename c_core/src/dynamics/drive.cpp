@@ -126,6 +126,7 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
                                          "faces) where a backlash is set");
   }
   p->force = joint_force::compile(r, sp, values);
+  p->platform = platform_force::compile(r, sp, values);
   for (int i = 0; i < p->nd; ++i) {
     p->any_friction |= p->coulomb[i] != 0 || p->viscous[i] != 0 || p->stribeck[i] != 0 || p->offset[i] != 0;
     p->inertia[i] = p->rotor[i] + p->force.v[joint_force::kInertia][i];
@@ -201,9 +202,15 @@ void subtract_joint_force(const pkm_model* m, const drive::Params& dp, pkm_data*
 }
 }  // namespace
 
+void mechanism_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau) {
+  m->robot->inverse_dynamics(*m->compiled, *d->rd, x, xd, xdd, tau);
+  platform_force::add(m, d, m->drive->platform, x, xd, 1.0, tau);
+}
+
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd, const double* xdd,
                             double* tau) {
-  m->robot->inverse_dynamics(*m->compiled, *d->rd, x, xd, xdd, tau);
+  mechanism_inverse_dynamics(m, d, x, xd, xdd, tau);
   add_drive_inverse_dynamics(m, d, x, xd, xdd, tau);
 }
 
@@ -279,6 +286,7 @@ void net_effort(const pkm_model* m, const drive::Params& dp, pkm_data* d, const 
                 const double* tau, double* net) {
   const int n = d->ndof;
   for (int i = 0; i < n; ++i) net[i] = tau[i];
+  platform_force::add(m, d, dp.platform, x, xd, -1.0, net);
   subtract_joint_force(m, dp, d, x, xd, tau, net);
   if (!dp.any_friction) return;
   double qd[6] = {0, 0, 0, 0, 0, 0}, f[6];
@@ -322,7 +330,7 @@ namespace {
 void forward_dynamics_of(const pkm_model* m, const drive::Params& dp, pkm_data* d, const double* x, const double* xd,
                          const double* tau, double* xdd) {
   const RobotModel& rm = *m->compiled;
-  if (!dp.any_friction && !dp.any_inertia && !dp.force.any) {
+  if (!dp.any_friction && !dp.any_inertia && !dp.force.any && !dp.platform.any) {
     m->robot->forward_dynamics(rm, *d->rd, x, xd, tau, xdd);
     return;
   }
@@ -428,6 +436,7 @@ void measure_joints(const pkm_model* m, pkm_data* d, const double* x, const doub
   double carried[6];
   for (int i = 0; i < n; ++i) carried[i] = tau[i];
   if (flexible) subtract_joint_force(m, dp, d, x, xd, tau, carried);
+  if (flexible) platform_force::add(m, d, dp.platform, x, xd, -1.0, carried);
   if (flexible && (dp.any_friction || dp.any_inertia)) {
     double J[36], qd[6], f[6], xdd[6], qdd[6];
     m->robot->jacobians(rm, *d->rd, x, nullptr, nullptr, J);

@@ -25,6 +25,7 @@
 
 #include "common/handles.hpp"
 #include "dynamics/joint_force.hpp"
+#include "dynamics/platform_force.hpp"
 
 namespace pkm {
 namespace drive {
@@ -58,6 +59,8 @@ struct Params {
   double inertia[kMaxJoints] = {};
   bool any_friction = false, any_inertia = false;
   joint_force::Coefficients force;      // the generic per-joint force (joint_force.hpp); force.any: a q or qd term is set
+  platform_force::Params platform;      // the force on the platform (platform_force.hpp): the mechanism's inverse
+                                        // dynamics add it; the forward dynamics subtract it from the applied effort
   // Joint i is two bodies: drive.two_body and a gap or a compliance on it.
   bool two_body_joint(int i) const { return two_body && (backlash[i] > 0 || compliance[i] > 0); }
 };
@@ -96,6 +99,10 @@ double transmitted_effort(const Params& p, int i, double delta, double delta_dot
 
 }  // namespace drive
 
+// The mechanism's efforts alone: the robot's inverse dynamics and the force on its platform
+// (platform_force.hpp), a load like gravity that no drive-layer parameter changes.
+void mechanism_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,
+                                const double* xdd, double* tau);
 // Total dynamics = robot mechanics + drive (friction, joint force, rotor and added inertia).  m must be
 // validated; d prepared.  Throw Error like the robot functions.
 void total_inverse_dynamics(const pkm_model* m, pkm_data* d, const double* x, const double* xd,

@@ -36,8 +36,8 @@ int pkm_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const 
 int pkm_mechanism_inverse_dynamics_batch(const pkm_model* m, pkm_data* d, size_t n, const double* x,
                                          const double* xd, const double* xdd, double* tau, int* status) {
   return rows_batch(m, d, n, status, {pose_rows(x), rate_rows(xd), acceleration_rows(xdd)}, tau, "tau",
-                    [&](const RobotModel& rm, auto xk, auto xdk, auto xddk, double* tk) {
-                      m->robot->inverse_dynamics(rm, *d->rd, xk, xdk, xddk, tk);
+                    [&](const RobotModel&, auto xk, auto xdk, auto xddk, double* tk) {
+                      mechanism_inverse_dynamics(m, d, xk, xdk, xddk, tk);
                     });
 }
 
@@ -97,6 +97,8 @@ int pkm_gravity_load(const pkm_model* m, pkm_data* d, const double* x, double* g
     check_out(g, "g");
     double zero[6] = {0, 0, 0, 0, 0, 0};
     d->robot->inverse_dynamics(rm, *d->rd, x, zero, zero, g);
+    // so is a constant force on the platform (a wrench, a cable: at rest, no drag)
+    platform_force::add(m, d, m->drive->platform, x, nullptr, 1.0, g);
     // a constant effort offset is a load like gravity: holding still needs it too
     for (int i = 0; i < d->ndof; ++i) g[i] += m->drive->offset[i];
   });

@@ -348,6 +348,17 @@ class Quattro final : public Robot {
     x[3] = 0;
   }
 
+  // The travelling plate's full pose: (x, y, z) its tool point, theta its rotation about z (rz);
+  // rx, ry held at 0.
+  void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const override {
+    const double full[6] = {x[0], x[1], x[2], 0.0, 0.0, x[3]};
+    for (int k = 0; k < 6; ++k) X[k] = full[k];
+    if (!S) return;
+    for (int k = 0; k < 6 * N; ++k) S[k] = 0.0;
+    S[0 * N + 0] = S[1 * N + 1] = S[2 * N + 2] = S[5 * N + 3] = 1.0;
+  }
+  bool has_platform() const override { return true; }
+
   void ik(const RobotModel& rm, RobotData&, const double* x, double* q) const override {
     Pose p;
     pose_kinematics(static_cast<const Model&>(rm), x, p);

@@ -208,6 +208,12 @@ static void chain_of(const Model& sm, const double* x, double* pts) {
   }
 }
 
+void SixPus::platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const {
+  for (int k = 0; k < 6; ++k) X[k] = x[k];
+  if (S)
+    for (int k = 0; k < 36; ++k) S[k] = k % 7 == 0 ? 1.0 : 0.0;
+}
+
 void SixPus::chain_points(const RobotModel& rm, RobotData&, const double* x, double* pts) const {
   chain_of(model_of(rm), x, pts);
 }

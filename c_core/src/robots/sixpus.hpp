@@ -171,6 +171,9 @@ class SixPus final : public Robot {
                     double* Jdot) const override;
   void singularity(const RobotModel&, RobotData&, const double* x, double* measures) const override;
   void chain_points(const RobotModel&, RobotData&, const double* x, double* pts) const override;
+  // The pose is the platform's full pose (p, rx, ry, rz): X = x, S = I.
+  void platform_pose(const RobotModel&, RobotData&, const double* x, double* X, double* S) const override;
+  bool has_platform() const override { return true; }
   void direct_singularity_guard(const RobotModel&, RobotData&, const double* x, double* measure_bound,
                                 double* det_j) const override;
   void fk(const RobotModel&, RobotData&, const double* q, const double* x_guess,
