@@ -370,7 +370,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
-    head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied)
+    from .platform_force import short_name
+
+    others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
+    head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
     details, conclusion = (conclusion, head) if head else ("", conclusion)
     if problems:
         details, conclusion = "", ("fit refused, not physical: " + "; ".join(problems) + ". The effects fitted to "

@@ -358,11 +358,14 @@ def _heldout_chi2(eng, R) -> float:
     return float(y @ y)
 
 
+def short_name(pf: PlatformForce) -> str:
+    """The force in a few words, for the conclusion's first paragraph."""
+    return WORDS[pf.family.split("+")[0]] + (" and a drag on its velocity" if pf.family.endswith("+drag") else "")
+
+
 def sentence(pf: PlatformForce, conclusion: str) -> str:
     """The diagnosis's conclusion with the platform force first."""
-    head = (f"missing physics on the platform: {WORDS[pf.family.split('+')[0]]}"
-            + (" and a drag on its velocity" if pf.family.endswith("+drag") else "")
-            + f", {pf.equation} ({pf.mechanisms})")
+    head = f"missing physics on the platform: {short_name(pf)}, {pf.equation} ({pf.mechanisms})"
     if pf.instead_of:
         head += "; instead of the library's " + ", ".join(pf.instead_of)
     if conclusion.startswith("no missing physics"):

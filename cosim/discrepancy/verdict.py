@@ -111,7 +111,7 @@ def _title(e) -> str:
     return f"{e['title']} ({vals})" if vals else e["title"]
 
 
-def headline(effects, found, left, gain=None, unexplained_group: str = "unexplained", tied=None) -> str:
+def headline(effects, found, left, gain=None, unexplained_group: str = "unexplained", tied=None, others=()) -> str:
     """The conclusion's first paragraph (see the module's text).
 
     Parameters
@@ -128,18 +128,21 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
         Group of the look-alike that marks structure left.
     tied : callable
         ``tied(alternative) -> bool`` (:func:`.diagnosis.tied`).
+    others : sequence of str
+        Further findings by their short names, named like the library's effects: a force on the
+        platform (:mod:`.platform_force`), parameters that drift (:mod:`.drift`).
 
     Returns
     -------
     str
         "" when nothing was fitted and nothing left (the caller's own sentence stands).
     """
-    if not effects and not found and not left:
+    if not effects and not found and not left and not others:
         return ""
     better = f" Held-out residual RMS {gain:.3g}x lower." if gain and math.isfinite(gain) and gain > 0 else ""
     # a discovered term by its kinds (its equation, long, is in the details)
     short = {id(t): f"a force on {t.channel} no library effect names ({', '.join(t.terms)})" for t in found}
-    names = [_title(e) for e in effects] + [short[id(t)] for t in found]
+    names = [_title(e) for e in effects] + [short[id(t)] for t in found] + list(others)
     if left:
         where = "; ".join(dict.fromkeys(f"{s['channel']} (keyed on {s['keyed_on']})" for s in left))
         fit = (f" The fit with {', '.join(names)} may stand in for what is missing; none of it is named as the "
@@ -154,7 +157,7 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
     if ties or partial:
         what = "; ".join(ties + [f"{eq} (a partial fit)" for eq in partial])
         sure = [n for e, n in zip(effects, names) if not any(t.startswith(_title(e) + ", tied") for t in ties)]
-        sure = [n for n in sure if n not in partial]
+        sure = [n for n in sure if n not in partial] + list(others)
         rest = f" Named alone: {', '.join(sure)}." if sure else ""
         return f"most likely, tied with another explanation: {what}.{rest}{better}"
     return f"found with confidence: {', '.join(names)}.{better}"

@@ -52,7 +52,9 @@ def test_a_cable_is_found_as_a_platform_force_with_its_anchor_and_tension(cable_
     # it: the stage replaced them); the report's equation is in the world frame
     assert not d.effects, [e["title"] for e in d.effects]
     assert "platform mass error" in pf.instead_of
-    assert "world frame" in pf.equation and d.conclusion.startswith("missing physics on the platform")
+    assert "world frame" in pf.equation
+    assert d.conclusion.startswith("found with confidence: a cable of constant tension"), d.conclusion
+    assert d.details.startswith("missing physics on the platform"), d.details
     # the plant parameters carry it, relative to the user's model
     assert d.theta["cable.tension"] == pf.params["cable.tension"]
     assert d.heldout["gain"] > 3

@@ -62,7 +62,8 @@ def test_a_friction_falling_over_the_recording_is_a_trend_with_its_size():
     assert abs(x.size - want) < 0.2 * abs(want), (x.size, want)
     assert abs(x.size - want) < max(x.ci95, 0.05 * abs(want)) * 3
     assert len(x.windows["value"]) == 6 and x.windows["value"][0] > x.windows["value"][-1]
-    assert "drift: rail[2].coulomb drifts from" in d.conclusion
+    assert "drift: rail[2].coulomb drifts from" in d.details
+    assert "a drift of rail[2].coulomb (a trend)" in d.conclusion
 
 
 def test_a_payload_changed_half_way_is_a_step_at_its_time():
