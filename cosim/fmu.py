@@ -135,7 +135,26 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, p
         back = {k: saved[k] for k in wanted if saved[k] != wanted[k]}
         if back:
             _configure_build(b, back)
+            if "PKM_FMU_PLATFORMS" in back:
+                _repack_fmi3(b, jobs)
     return fmu_path(robot, b)
+
+
+def _repack_fmi3(b: Path, jobs: int) -> None:
+    """Pack again the FMI 3.0 FMUs a change of the platforms took away.
+
+    The packing command of an FMI 3.0 FMU lists the binaries it copies, so a configure that
+    changes ``PKM_FMU_PLATFORMS`` changes it, and CMake's Makefiles delete the outputs of
+    commands that changed: configured back, the FMUs of every robot are gone until packed again
+    (their binaries are built: packing is a copy and a zip)."""
+    import re
+
+    listed = subprocess.run(["cmake", "--build", str(b), "--target", "help"], capture_output=True, text=True).stdout
+    gone = [t for t in re.findall(r"^\.\.\. (\S+)_fmu3$", listed, flags=re.M)
+            if not (b / "fmu" / "fmi3" / f"{t}.fmu").exists()]
+    if gone:
+        subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *(f"{t}_fmu3" for t in gone)],
+                       check=True, stdout=subprocess.DEVNULL)
 
 
 def _configure_build(b: Path, values: dict) -> None:

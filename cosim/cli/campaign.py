@@ -37,8 +37,9 @@ def _held_out(value):
     return int(value) - 1  # the CLI counts runs from 1
 
 
-def run_campaign(args, out: Path):
-    """Diagnose the campaign ``args.recording`` names and print it; returns the exit code."""
+def run_campaign(args, out: Path, print_diagnosis):
+    """Diagnose the campaign ``args.recording`` names and print it, each fit with
+    ``print_diagnosis(d, file=...)`` (the one of ``cosim diagnose``); returns the exit code."""
     from ..discrepancy.campaign import diagnose_campaign, read_campaign
     from .common import working
 
@@ -54,17 +55,17 @@ def run_campaign(args, out: Path):
     if args.json:
         print(res.to_json())
         return 0
-    print_campaign(res)
+    print_campaign(res, print_diagnosis)
     print(f"\nreport of the joint fit: {res.joint.files.get('report')}; campaign: {out / 'campaign.json'}")
     if args.html:  # the page draws one recording's motion; a campaign has several
         print("(no report.html for a campaign: the page draws one recording; diagnose a run alone for it)")
     return 0
 
 
-def print_campaign(res, file=None):
-    """The campaign: its conclusion, the joint fit, each run's own fit, the replays."""
+def print_campaign(res, print_diagnosis, file=None):
+    """The campaign: its conclusion, the joint fit (by ``print_diagnosis``), each run's own fit,
+    the replays."""
     from ..discrepancy.campaign_replay import sentence
-    from .discrepancy import print_diagnosis
 
     file = file or sys.stdout
     p = lambda *a: print(*a, file=file)  # noqa: E731

@@ -131,7 +131,7 @@ def cmd_diagnose(args):
 
     out = Path(args.out) if args.out else Path("results") / "diagnosis" / Path(args.recording[0]).stem
     if is_campaign(args):
-        return run_campaign(args, out)
+        return run_campaign(args, out, print_diagnosis)
     args.recording = args.recording[0]
     t0 = time.perf_counter()
     try:

@@ -107,7 +107,7 @@ def open_loop_replay(rec, plants: dict, *, start: int = 0, stop: int | None = No
 
     Example
     -------
-    >>> out = open_loop_replay(rec, {"nominal": Model("emps")}, window=0.5)  # doctest: +SKIP
+    >>> out = open_loop_replay(rec, {"nominal": Model(rec.robot)}, window=0.5)  # doctest: +SKIP
     """
     from ..plants import CoreDrive, CorePlant
 

@@ -131,7 +131,7 @@ def test_a_csv_cell_only_the_careful_reader_takes_is_read_as_read_recording_read
 
 
 def test_the_working_set_default_is_one_number_in_the_code_the_help_and_the_docs(capsys):
-    """--help, docs/discrepancy.md, docs/recording.md and the README say the default the
+    """--help, docs/discrepancy.md, docs/recording.md and docs/guide.md say the default the
     code uses (they once said 200000 and 100000)."""
     import re
     from pathlib import Path
@@ -147,7 +147,7 @@ def test_the_working_set_default_is_one_number_in_the_code_the_help_and_the_docs
     said = re.findall(r"most rows the diagnosis holds \(default (\d+)", helptext)
     assert said == [str(MAX_SAMPLES)], helptext
     root = Path(__file__).resolve().parents[2]
-    for page in ("docs/discrepancy.md", "docs/recording.md", "README.md"):
+    for page in ("docs/discrepancy.md", "docs/recording.md", "docs/guide.md"):
         text = (root / page).read_text()
         nums = re.findall(r"(?:max.samples[^\n]{0,60}?|default )([\d,]{6,})", text)
         assert nums and all(int(n.replace(",", "")) == MAX_SAMPLES for n in nums), (page, nums)

@@ -86,19 +86,24 @@ def test_generator_rejects_an_inconsistent_table(tmp_path, edit, message):
     assert not (tmp_path / "md.xml").exists()
 
 
-def test_joint_limits_come_from_the_core_and_a_robot_without_them_is_told(tmp_path):
+def test_joint_limits_come_from_the_core_and_a_robot_without_them_gets_no_limit_events(tmp_path):
     # "@joint-limits core" reads pkm_model_joint_limits: the 6-PUS header lists rail[i].qmin /
-    # .qmax (checked above through the 13 event indicators); the toy slider-crank has none,
-    # and a table that asks for them is refused naming the joint.
+    # .qmax (checked above through the 13 event indicators); the toy slider-crank declares none
+    # (a crank turns without limit, like a continuous axis), so the line adds no limit event: the
+    # same model description as the table without it (its one event indicator, the singularity).
     exe = fmu.build_dir() / "bin" / "fmu_gen_toy"
     assert exe.exists(), f"{exe} is not built"
     src = REPO / "c_core/tests/robots/slider_crank_fmu/variables.txt"
     table = tmp_path / "variables.txt"
     table.write_text(src.read_text().replace("@paramset    default", "@paramset    default\n@joint-limits core"))
-    r = subprocess.run([str(exe), str(table), str(tmp_path / "md.xml"), str(tmp_path / "v.h")],
-                       capture_output=True, text=True)
-    assert r.returncode == 1
-    assert "declares no limit parameters for joint 1" in r.stderr and str(table) in r.stderr, r.stderr
+    assert "@joint-limits core" in table.read_text()
+    for t, d in ((table, tmp_path / "with"), (src, tmp_path / "without")):
+        d.mkdir()
+        r = subprocess.run([str(exe), str(t), str(d / "md.xml"), str(d / "v.h")], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+    with_line = (tmp_path / "with" / "md.xml").read_text()
+    assert 'numberOfEventIndicators="1"' in with_line
+    assert with_line == (tmp_path / "without" / "md.xml").read_text()
 
 
 def test_generator_is_deterministic(tmp_path):

@@ -159,6 +159,9 @@ struct Description {
 // Reads and checks a description; throws Error(PKM_ERR_ARGUMENT, "file:line: field: what").
 Description read_description(const std::string& text, const std::string& file);
 Description read_description(const toml::Document& doc, const std::string& file);  // parsed already
+struct Reader;
+// A description's [defaults] and [sets.NAME] tables into d.sets (the first set "default").
+void read_sets(const Reader& rd, const toml::Document& doc, Description& d);
 
 class DescribedRobot : public Robot {
  public:

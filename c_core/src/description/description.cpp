@@ -383,26 +383,33 @@ Description read_description(const toml::Document& doc, const std::string& file)
   add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, g_line);
   add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, g_line);
 
-  // [defaults] and [sets.NAME]: values by parameter name (checked against the table and
-  // the drive layer's names once the robot exists, in load_described).
+  read_sets(rd, doc, d);
+  return d;
+}
+
+// [defaults] and [sets.NAME]: values by parameter name (checked against the table and the
+// drive layer's names once the robot exists, in load_described).  Each set keeps its own
+// values (a set starts from the defaults when it is used), so the work stays linear in the
+// file however many keys and sets it has.
+void read_sets(const Reader& rd, const toml::Document& doc, Description& d) {
   auto overrides = [&](const toml::Table& t) {
     std::vector<Override> out;
     for (const auto& kv : t.keys) out.push_back({kv.first, rd.number(kv.second, t.name + "." + kv.first), kv.second.line});
     return out;
   };
-  // Each set keeps its own values (a set starts from the defaults when it is used), so the
-  // work stays linear in the file however many keys and sets it has.
   d.sets.emplace_back("default", std::vector<Override>{});
   if (auto dt = doc.named("defaults"); !dt.empty()) d.sets[0].second = overrides(*dt[0]);
   for (const toml::Table& t : doc.tables)
     if (t.name.rfind("sets.", 0) == 0) {
+      const std::string set = t.name.substr(5);
+      if (set.empty() || set.find_first_of(" \t") != std::string::npos || set == "default")
+        rd.fail(t.line, "[" + t.name + "]: a set's name is one word, not empty and not 'default'");
       // Every set is compiled and checked when the robot loads: a bound on their number keeps
       // that bounded (a real robot has a handful).
       if (d.sets.size() > kMaxSets)
         rd.fail(t.line, "[" + t.name + "]: more than " + std::to_string(kMaxSets) + " parameter sets");
-      d.sets.emplace_back(t.name.substr(5), overrides(t));
+      d.sets.emplace_back(set, overrides(t));
     }
-  return d;
 }
 
 }  // namespace described

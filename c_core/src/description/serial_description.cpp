@@ -207,22 +207,7 @@ Description read_serial_description(const toml::Document& doc, const std::string
   d.joint = Joint::serial;
   d.mobility = (int)jt.size();
   read_ends(rd, doc, rt, d);
-  // [defaults] and [sets.NAME] as in any description (described by read_description).
-  auto overrides = [&](const toml::Table& t) {
-    std::vector<Override> out;
-    for (const auto& kv : t.keys) out.push_back({kv.first, rd.number(kv.second, t.name + "." + kv.first), kv.second.line});
-    return out;
-  };
-  d.sets.emplace_back("default", std::vector<Override>{});
-  if (auto dt = doc.named("defaults"); !dt.empty()) d.sets[0].second = overrides(*dt[0]);
-  for (const toml::Table& t : doc.tables)
-    if (t.name.rfind("sets.", 0) == 0) {
-      const std::string set = t.name.substr(5);
-      if (set.empty() || set.find_first_of(" \t") != std::string::npos || set == "default")
-        rd.fail(t.line, "[" + t.name + "]: a set's name is one word, not empty and not 'default'");
-      if (d.sets.size() > kMaxSets) rd.fail(t.line, "[" + t.name + "]: more than " + std::to_string(kMaxSets) + " parameter sets");
-      d.sets.emplace_back(set, overrides(t));
-    }
+  read_sets(rd, doc, d);  // [defaults] and [sets.NAME] as in any description
   return d;
 }
 
