@@ -5,6 +5,7 @@ inference (:mod:`.selection`) -> localisation -> held-out fit -> the answer, a
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import time
@@ -208,7 +209,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
              max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
-             verbose: bool = False, platform: bool = True, drift: bool = True) -> Diagnosis:
+             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -252,6 +253,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         After the library, search each effort channel for a joint force no library effect
         names (:mod:`.discovery`), and withdraw a library effect a discovered term fits
         the held-out part better than.
+    families : bool
+        The discovery step also searches the term families of :mod:`.families` (friction
+        growing with the load, friction zones, a Coulomb level over the stroke, couplings to
+        another joint, effort x position, position x rate; docs/discovery_families.md says why
+        they are off by default).
     platform : bool
         Search one force on the platform for the whole robot (a constant wrench, a cable to an
         anchor, a drag: :mod:`.platform_force`) before the discovery step, and keep it when it and
@@ -328,7 +334,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         t3a = time.perf_counter()
         found, withdrawn, theta, ties = [], [], dict(sel.theta), []
         if discovery:
-            found, withdrawn, theta, ties = _discover(eng, sel, threshold)
+            from .families import searched
+
+            with searched() if families else contextlib.nullcontext():
+                found, withdrawn, theta, ties = _discover(eng, sel, threshold)
         from .verdict import fit_problems, headline
 
         problems = fit_problems(eng, theta) if theta else []  # a fit outside the physical ranges is refused

@@ -55,8 +55,7 @@ def test_a_library_friction_and_a_load_dependent_one_on_one_joint_are_both_found
     # load term's coefficient is right, and the plant's viscous friction (the library's level and
     # a direction pair the discovery step adds to it, ADDS_TO) is the hidden one
     rec, hidden = _case(tmp_path, short_cfg, ["viscous", "load_friction"], 12)
-    with searched():  # the families are off by default (families/products.py)
-        d = diagnose(rec, figures=False, replay=False)
+    d = diagnose(rec, figures=False, replay=False, families=True)  # the keyword of searched()
     visc, load = hidden
     assert visc["joints"] == load["joints"] == [2], hidden
     assert "viscous" in d.named(), d.conclusion
@@ -68,3 +67,21 @@ def test_a_library_friction_and_a_load_dependent_one_on_one_joint_are_both_found
     want = visc["params"]["rail[2].viscous"]
     assert abs(total / want - 1) < 0.15, (total, want, d.conclusion)
     assert set(_confident(d)) <= {"viscous"}, d.conclusion
+
+
+def test_the_command_line_searches_the_families_only_when_asked(tmp_path, short_cfg):
+    # `cosim diagnose --families` is diagnose(families=True): the load-dependent friction of the
+    # first case above is found as its family with the flag, and no term of the family without it
+    import subprocess
+    import sys
+
+    rec, _ = _case(tmp_path, short_cfg, ["load_friction"], 5)
+    found = {}
+    for flag in ((), ("--families",)):
+        r = subprocess.run([sys.executable, "-m", "cosim", "diagnose", str(rec), "--no-replay", "--no-figures",
+                            "--json", "--out", str(tmp_path / f"out{len(flag)}"), *flag], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        d = json.loads(r.stdout)
+        found[bool(flag)] = {t for term in d["discovered"] for t in term["terms"]}
+    assert "load" in found[True], found
+    assert "load" not in found[False], found
