@@ -133,8 +133,8 @@ def test_the_discovered_term_is_a_friction_that_builds_up_over_a_velocity_scale(
 
 
 def test_the_conclusion_is_a_short_paragraph_that_says_first_how_sure_it_is(emps):
-    # issue 36: the conclusion was one line of ~1,900 characters whose headline named effects the
-    # body called not named with confidence; now one short paragraph, the full statement after it
+    # the conclusion is one short paragraph whose first words say how sure it is, consistent with
+    # the body; the full statement follows it in the details
     c = emps.conclusion
     assert c.split(":")[0] in ("found with confidence", "most likely, tied with another explanation",
                                "structure left, not named"), c

@@ -13,7 +13,7 @@ def test_the_ranges():
     nominal = {"platform.m": 90.0, "rail[1].effort_max": 0.0, "platform.Izz": 0.02}
     units = {"platform.m": "kg", "rail[1].effort_max": "N", "rail[1].coulomb": "N", "platform.Izz": "kg m2"}
     peak, rate = [80.0], [0.2]
-    # the degenerate fits of runs joined end to end (issue 36): a limit, an inertia at ~0, huge forces
+    # the degenerate fits of runs joined end to end: a limit, an inertia at ~0, huge forces
     bad = unphysical({"rail[1].effort_max": 3.309e-24, "platform.Izz": 3.619e-25, "rail[1].coulomb": 1e20,
                       "rail[1].viscous": 1e9, "platform.m": float("nan")}, nominal, peak, rate, units)
     assert len(bad) == 5, bad
