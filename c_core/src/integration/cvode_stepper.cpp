@@ -37,7 +37,7 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include "common/guard.hpp"
-#include "integration/plant.hpp"
+#include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
 #include "integration/stop_conditions.hpp"
@@ -137,8 +137,8 @@ void CvodeStepper::check_cvode(int flag, const char* call) const {
 
 CvodeStepper::CvodeStepper(int lmm, Ivp& ivp)
     : Stepper(ivp),
-      nd_(ivp.plant.nd()),
-      ny_(ivp.plant.ny()),
+      nd_(ivp.ode.nd()),
+      ny_(ivp.ode.ny()),
       lmm_(lmm) {
   const int n2 = ny_;
   const int nroots = stops_.nroots();
@@ -229,7 +229,7 @@ int CvodeStepper::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
   }
   try {
     // Mechanics plus the drive layer (joint friction, rotor inertia, two-body joints).
-    s.plant_.rates(Y, s.applied_.data(), F);
+    s.ode_.rates(Y, s.applied_.data(), F);
   } catch (const Error& e) {
     s.cb_status_ = e.status;
     s.cb_time_ = t;

@@ -27,7 +27,7 @@
 #include <sstream>
 
 #include "common/guard.hpp"
-#include "integration/plant.hpp"
+#include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
 #include "integration/stop_conditions.hpp"
@@ -102,13 +102,13 @@ class ErkStepper final : public Stepper {
  public:
   ErkStepper(Ivp& ivp, bool stiff_fallback)
       : Stepper(ivp),
-        nd_(ivp.plant.nd()),
-        ny_(ivp.plant.ny()),
+        nd_(ivp.ode.nd()),
+        ny_(ivp.ode.ny()),
         stiff_fallback_(stiff_fallback) {
     fsal_f_.assign(ny_, 0.0);
     fsal_B_.assign((size_t)nd_ * nd_, 0.0);
     g_cached_.assign(stops_.nroots() + 1, 0.0);
-    reuse_input_ = plant_.bodies().empty();  // a two-body joint's effort depends on the state
+    reuse_input_ = ode_.bodies().empty();  // a two-body joint's effort depends on the state
   }
 
   void restart() override {
@@ -216,9 +216,9 @@ bool ErkStepper<kPair>::rhs(double t, const double* y, double* f, const double* 
   try {
     static const double zero[6] = {0, 0, 0, 0, 0, 0};
     if (!tau) tau = zero;
-    if (!B || !plant_.rates_response(y, tau, f, B)) {
+    if (!B || !ode_.rates_response(y, tau, f, B)) {
       if (B) reuse_input_ = false;  // this robot or drive has no cheap response: call FD each time
-      plant_.rates(y, tau, f);
+      ode_.rates(y, tau, f);
     }
   } catch (const Error& e) {
     cb_status_ = e.status;
