@@ -27,6 +27,7 @@
 #include <sstream>
 
 #include "common/guard.hpp"
+#include "integration/erk_pairs.hpp"
 #include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
@@ -34,50 +35,11 @@
 
 namespace pkm {
 
+using erk::kBS32;
+using erk::kDP54;
+using erk::Tableau;
+
 namespace {
-
-// An embedded explicit Runge-Kutta pair with the first-same-as-last property: stage s-1
-// is f at the new point (and the next step's first stage when the input stays), the
-// solution uses b over the first s-1 stages, the error estimate e = b - b_hat over all s.
-struct Tableau {
-  int s;
-  double c[7];
-  double a[7][7];
-  double b[7];
-  double e[7];
-  double expo;  // step-size exponent: -1 / (order of the embedded estimate + 1)
-  double stiff_bound;  // ~0.9 x where the stability region ends on the negative real axis
-  bool last_two_at_end;  // the last two stages are both at the step's end (c = 1)
-  double start_expo;     // exponent of the starting step's estimate: 1 / (order + 1)
-};
-
-// Dormand and Prince's 5(4) pair (J. Comput. Appl. Math. 6, 1980).
-constexpr Tableau kDP54{7,
-                        {0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1},
-                        {{0},
-                         {1.0 / 5},
-                         {3.0 / 40, 9.0 / 40},
-                         {44.0 / 45, -56.0 / 15, 32.0 / 9},
-                         {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
-                         {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
-                         {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}},
-                        {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84, 0},
-                        {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40},
-                        -1.0 / 5,
-                        3.25,
-                        true,
-                        1.0 / 5};
-
-// Bogacki and Shampine's 3(2) pair (Appl. Math. Lett. 2, 1989): three new stages a step.
-constexpr Tableau kBS32{4,
-                        {0, 1.0 / 2, 3.0 / 4, 1},
-                        {{0}, {1.0 / 2}, {0, 3.0 / 4}, {2.0 / 9, 1.0 / 3, 4.0 / 9}},
-                        {2.0 / 9, 1.0 / 3, 4.0 / 9, 0},
-                        {2.0 / 9 - 7.0 / 24, 1.0 / 3 - 1.0 / 4, 4.0 / 9 - 1.0 / 3, -1.0 / 8},
-                        -1.0 / 3,
-                        2.25,
-                        false,
-                        1.0 / 3};
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr int kMaxN = 24;  // 4 x 6: pose, rates, and the drive bodies of two-body joints
@@ -93,8 +55,6 @@ void hermite(int n, double theta, double h, const double* y0, const double* f0, 
   for (int i = 0; i < n; ++i)
     y[i] = (1 - t) * y0[i] + t * y1[i] + t * t1 * ((1 - 2 * t) * (y1[i] - y0[i]) + t1 * h * f0[i] + t * h * f1[i]);
 }
-
-}  // namespace
 
 // The pair is a template argument: its coefficients are constants of the compiled steps.
 template <const Tableau& kPair>
@@ -589,6 +549,8 @@ bool ErkStepper<kPair>::advance(double t_end) {
   }
   return true;
 }
+
+}  // namespace
 
 std::unique_ptr<Stepper> make_erk_stepper(int method, Ivp& ivp, bool stiff_fallback) {
   if (method == PKM_ERK23) return std::make_unique<ErkStepper<kBS32>>(ivp, stiff_fallback);
