@@ -71,7 +71,9 @@ def base_parameters(W, names, tol: float = 1e-8) -> BaseParameters:
     Parameters
     ----------
     W : array_like, shape (m, p)
-        A regressor over a motion that excites the arm (rows: samples x joints).
+        A regressor over a motion that excites the arm (rows: samples x joints); a column
+        whose norm is below 1e-11 of the largest is rounding (a parameter the motion does
+        not move) and counts as zero.
     names : sequence of str
         The p columns' names (the standard parameters).
     tol : float
@@ -89,7 +91,7 @@ def base_parameters(W, names, tol: float = 1e-8) -> BaseParameters:
     if not np.all(np.isfinite(W)):
         raise InputError("regressor holds a NaN or an infinite value")
     scale = np.linalg.norm(W, axis=0)
-    live = scale > 0
+    live = scale > 1e-11 * scale.max()  # below: rounding of a column the motion does not move
     Ws = W[:, live] / scale[live]
     _, R, piv = scipy.linalg.qr(Ws, mode="economic", pivoting=True)
     d = np.abs(np.diag(R))

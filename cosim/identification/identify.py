@@ -103,13 +103,13 @@ def prepare(time, q, qd, tau, cutoff: float):
 def _parallel_filter(W, y, nd, cutoff, fs, stride):
     """The regressor's columns through the low-pass the efforts went through (Gautier's parallel
     filtering: filter(W) phi = filter(tau) also for the terms nonlinear in the motion, such as
-    Coulomb friction), the filter's transients at both ends (2 / cutoff) dropped, one sample in
-    ``stride`` kept (default: about 5 cutoff per second)."""
+    Coulomb friction), the filter's transients at both ends (1 / cutoff) dropped, one sample in
+    ``stride`` kept (default: about 10 cutoff per second)."""
     b, a = _lowpass(cutoff, fs)
     n = len(y) // nd
     Wf = scipy.signal.filtfilt(b, a, W.reshape(n, nd * W.shape[1]), axis=0).reshape(W.shape)
-    edge = int(np.ceil(2.0 * fs / cutoff))
-    stride = stride or max(1, int(fs / (5 * cutoff)))
+    edge = int(np.ceil(fs / cutoff))
+    stride = stride or max(1, int(fs / (10 * cutoff)))
     keep = np.arange(edge, n - edge, stride)
     rows = (keep[:, None] * nd + np.arange(nd)).ravel()
     return Wf[rows], y[rows], keep
@@ -154,7 +154,7 @@ def _refuse(base, beta, beta_c, se, phi, nlinks, gap, bound):
         "boundary (a mass, inertia or friction the recording makes non-physical, or missing physics in the model)")
 
 
-def identify(recording, robot=None, *, param_set: str | None = None, params: dict | None = None, drive=DRIVE,
+def identify(recording, robot=None, *, param_set: str | None = None, params: dict | None = None, drive=DRIVE, extra=(),
              cutoff: float = 10.0, stride: int | None = None, tol: float = 1e-8, windows: int = 20,
              bootstrap: int = 200, seed: int = 0, strict: bool = True) -> Identification:
     """Identify a serial arm's base inertial and drive parameters from a recording.
@@ -176,6 +176,9 @@ def identify(recording, robot=None, *, param_set: str | None = None, params: dic
         Named set and overrides of that description.
     drive : sequence of str
         Drive-layer terms identified on every joint (effort linear in each).
+    extra : sequence of str
+        Further parameters identified, by full name, the efforts linear in each (e.g.
+        ``joint[2].force_k1``, ``joint[2].force_k2``: a force polynomial in the position).
     cutoff : float
         Low-pass filter cut-off of positions, rates and efforts [Hz].
     stride, tol, windows, bootstrap, seed
@@ -208,12 +211,12 @@ def identify(recording, robot=None, *, param_set: str | None = None, params: dic
         raise InputError(f"the recording has {rec.q.shape[1]} joints, {model.robot} {nd}")
     with one_blas_thread():
         q, qd, qdd, tau, fs = prepare(rec.time, rec.q, rec.qd, rec.tau, cutoff)
-        W0, names, rest = regressor(model, q, qd, qdd, drive)
+        W0, names, rest = regressor(model, q, qd, qdd, drive, extra)
         W, y, keep = _parallel_filter(W0, tau.ravel() - rest, nd, cutoff, fs, stride)
         base = base_parameters(W, names, tol)
         beta, se, R, _ = _weighted_ls(W[:, base.independent], y, nd, windows, bootstrap, seed)
         L = R * (np.sqrt(np.sum(np.linalg.inv(R) ** 2, axis=1)) / se)[None, :]  # L'L: the inverse covariance of se
-        phi0 = standard_values(model, drive)
+        phi0 = standard_values(model, drive, extra)
         phi, gap = consistent_fit(base.matrix, L, beta, phi0, names, nd)
     bound = float(scipy.stats.chi2.ppf(0.999, len(beta)))
     beta_c = base.project(phi)

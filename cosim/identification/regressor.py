@@ -61,14 +61,14 @@ def link_params(i: int, phi) -> dict:
     return {f"link[{i}].m": m, **{f"link[{i}].{n}": float(v) for n, v in zip(names, [*c, *ic])}}
 
 
-def standard_names(nd: int, drive=DRIVE) -> list[str]:
+def standard_names(nd: int, drive=DRIVE, extra=()) -> list[str]:
     """Names of the standard parameters: ``link[i].m ... link[i].ZZ`` for each link, then
-    ``joint[i].<drive term>`` for each joint and each name in ``drive``."""
+    ``joint[i].<drive term>`` for each joint and each name in ``drive``, then ``extra``."""
     return [f"link[{i}].{p}" for i in range(1, nd + 1) for p in LINK] + \
-        [f"joint[{i}].{p}" for i in range(1, nd + 1) for p in drive]
+        [f"joint[{i}].{p}" for i in range(1, nd + 1) for p in drive] + list(extra)
 
 
-def standard_values(model, drive=DRIVE) -> np.ndarray:
+def standard_values(model, drive=DRIVE, extra=()) -> np.ndarray:
     """The model's standard parameters, in the order of :func:`standard_names`."""
     p, nd = model.params(), model.ndof
     out = []
@@ -77,6 +77,7 @@ def standard_values(model, drive=DRIVE) -> np.ndarray:
         out.extend(link_to_standard(p[f"link[{i}].m"], c, [p[f"link[{i}].I{a}"] for a in
                                                             ("xx", "xy", "xz", "yy", "yz", "zz")]))
     out.extend(p[f"joint[{i}].{d}"] for i in range(1, nd + 1) for d in drive)
+    out.extend(p[n] for n in extra)
     return np.array(out)
 
 
@@ -86,7 +87,7 @@ def _check_serial(model) -> None:
                          "docs/robots.md, Serial arms); this robot has no link[i].m ... Izz")
 
 
-def regressor(model, q, qd, qdd, drive=DRIVE) -> tuple[np.ndarray, list[str], np.ndarray]:
+def regressor(model, q, qd, qdd, drive=DRIVE, extra=()) -> tuple[np.ndarray, list[str], np.ndarray]:
     """The regressor of a serial arm's inverse dynamics at the states (q, qd, qdd).
 
     Parameters
@@ -99,6 +100,8 @@ def regressor(model, q, qd, qdd, drive=DRIVE) -> tuple[np.ndarray, list[str], np
         The drive layer's terms identified per joint (default rotor inertia, viscous and
         Coulomb friction, effort offset; any parameter ``joint[i].<name>`` the effort is
         linear in, e.g. ``force_k1`` for a position-proportional force).
+    extra : sequence of str
+        Further parameters the efforts are linear in, by full name (``joint[2].force_k1``).
 
     Returns
     -------
@@ -115,7 +118,11 @@ def regressor(model, q, qd, qdd, drive=DRIVE) -> tuple[np.ndarray, list[str], np
     work = model.copy()
     nd = work.ndof
     q, qd, qdd = (np.ascontiguousarray(np.reshape(a, (-1, nd)), dtype=float) for a in (q, qd, qdd))
-    names = standard_names(nd, drive)
+    names = standard_names(nd, drive, extra)
+    known = set(work.param_names())
+    for n in names[10 * nd:]:
+        if n not in known:
+            raise InputError(f"{model.robot} has no parameter {n!r} to identify")
     W = np.empty((q.shape[0] * nd, len(names)))
     unit = np.array([1.0, 0, 0, 0, 1.0, 0, 0, 1.0, 0, 1.0])  # 1 kg, centre at the origin, inertia 1 kg m2
     work.set_params({k: v for i in range(1, nd + 1) for k, v in link_params(i, unit).items()})
@@ -127,12 +134,10 @@ def regressor(model, q, qd, qdd, drive=DRIVE) -> tuple[np.ndarray, list[str], np
             work.set_params_unchecked(link_params(i, phi))
             W[:, (i - 1) * 10 + k] = (work.inverse_dynamics(q, qd, qdd).ravel() - base) / _STEP
         work.set_params_unchecked(link_params(i, unit))
-    for i in range(1, nd + 1):
-        for d in drive:
-            name = f"joint[{i}].{d}"
-            v0 = work.param(name)
-            work.set_params_unchecked({name: v0 + 1.0})
-            W[:, names.index(name)] = work.inverse_dynamics(q, qd, qdd).ravel() - base
-            work.set_params_unchecked({name: v0})
-    rest = model.inverse_dynamics(q, qd, qdd).ravel() - W @ standard_values(model, drive)
+    for k, name in enumerate(names[10 * nd:], start=10 * nd):
+        v0 = work.param(name)
+        work.set_params_unchecked({name: v0 + 1.0})
+        W[:, k] = work.inverse_dynamics(q, qd, qdd).ravel() - base
+        work.set_params_unchecked({name: v0})
+    rest = model.inverse_dynamics(q, qd, qdd).ravel() - W @ standard_values(model, drive, extra)
     return W, names, rest

@@ -1,0 +1,200 @@
+"""The KUKA KR300 R2500 ultra end to end (docs/kuka.md): rigid model identified on trajectory A,
+judged on B and C; drive terms against the makers' ``para``; gear elasticity and backlash from the
+motor and link encoders; the axis-2 counterbalance as a position-dependent torque (a figure).
+
+Data: data/kuka_kr300/kr300_<A|B|C>.mat (JonasWeigand/Robot_Identification, MIT licence), imported
+with data/kuka_kr300/kr300_map.toml.  Run: ``PYTHONPATH=. .venv/bin/python bench/kuka_bench.py
+[--cutoff 2] [--figure docs/figures/kuka_counterbalance.png] [--out out/kuka]``.  About 30 s.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+import scipy.signal
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from cosim.core import Model  # noqa: E402
+from cosim.identification import identify  # noqa: E402
+from cosim.identification.identify import _lowpass, prepare  # noqa: E402
+from cosim.importing import to_recording  # noqa: E402
+
+DATA = REPO / "data" / "kuka_kr300"
+ROBOT = str(REPO / "robots" / "kr300.toml")
+
+
+def recordings() -> dict:
+    return {t: to_recording(str(DATA / f"kr300_{t}.mat"), str(DATA / "kr300_map.toml")) for t in "ABC"}
+
+
+def para() -> dict:
+    p = scipy.io.loadmat(str(DATA / "kr300_A.mat"), squeeze_me=True, struct_as_record=False)["para"]
+    return {k: np.atleast_1d(getattr(p, k)).astype(float) for k in p._fieldnames}
+
+
+def held_out(model, rec, cutoff):
+    """Per axis: RMS of (predicted - recorded) efforts over RMS of the recorded ones [%], the
+    mean error [N m], the filtered q, the error series (the efforts and the model's inverse
+    dynamics through the identification's low-pass, its transients dropped)."""
+    q, qd, qdd, tau, fs = prepare(rec.time, rec.q, rec.qd, rec.tau, cutoff)
+    b, a = _lowpass(cutoff, fs)
+    pred = scipy.signal.filtfilt(b, a, model.inverse_dynamics(q, qd, qdd), axis=0)
+    tf = scipy.signal.filtfilt(b, a, tau, axis=0)
+    e = int(np.ceil(fs / cutoff))
+    d, tf = (pred - tf)[e:-e], tf[e:-e]
+    return 100 * np.sqrt(np.mean(d ** 2, 0) / np.mean(tf ** 2, 0)), d.mean(0), q[e:-e], d
+
+
+def encoders(cutoff):
+    """Axes 1-3: motor-encoder angle (link units) minus link-side encoder angle against the link
+    effort, fitted by least squares on the core's sensor model: the columns are the change of
+    ``Model.measure_joints`` per unit of ``joint[i].compliance`` and of ``joint[i].backlash``
+    (the reading deflects by compliance x effort and by +-backlash / 2 with the effort's sign),
+    plus a constant (the encoders' relative offset).  Returns per trajectory and axis
+    (stiffness [N m/rad], backlash [rad], RMS of the difference [rad], of the fit's residual)."""
+    m = Model(ROBOT)
+    out = {}
+    for t in "ABC":
+        r = scipy.io.loadmat(str(DATA / f"kr300_{t}.mat"), squeeze_me=True, struct_as_record=False)["rec"]
+        rec = to_recording(str(DATA / f"kr300_{t}.mat"), str(DATA / "kr300_map.toml"))
+        fs = 1.0 / np.median(np.diff(rec.time))
+        b, a = _lowpass(cutoff, fs)
+        qs = np.radians([0, -90, 90, 0, 0, 0])
+        link = np.radians(r.act_pos_se_deg.T) + qs
+        diff = scipy.signal.filtfilt(b, a, rec.q - link, axis=0)
+        tau = scipy.signal.filtfilt(b, a, rec.tau, axis=0)
+        x = link.copy()
+        zero = m.measure_joints(x, rec.qd, tau)
+        rows = []
+        for j in range(3):
+            cols = []
+            for name, step in ((f"joint[{j + 1}].compliance", 1e-6), (f"joint[{j + 1}].backlash", 1e-3)):
+                w = m.copy()
+                w.set_params({name: step})
+                cols.append((w.measure_joints(x, rec.qd, tau)[:, j] - zero[:, j]) / step)
+            A = np.column_stack(cols + [np.ones(len(x))])
+            coef, *_ = np.linalg.lstsq(A, diff[:, j], rcond=None)
+            res = diff[:, j] - A @ coef
+            rows.append((1.0 / coef[0] if coef[0] != 0 else np.inf, coef[1], float(np.std(diff[:, j])),
+                         float(np.sqrt(np.mean(res ** 2)))))
+        out[t] = rows
+    return out
+
+
+def counterbalance_torque(q2):
+    """The repository's hydraulic counterbalance (ident_functions/hydraulic_weight_counterbalance.m)
+    at the model's q2 [rad] (its angle_ax_2 is the recorded angle, q2 + 90 deg, in rad) [N m]."""
+    D, k = 0.8, 0.2
+    area = np.pi * (0.055 ** 2 - 0.030 ** 2) / 4
+    delta = (q2 + np.pi / 2) + np.radians(95)
+    dl = np.sqrt(D ** 2 + k ** 2 - 2 * D * k * np.cos(delta)) - (D - k)
+    h = np.sin(delta) * D * k / (dl + D - k)
+    press = 1.01 * 296.8 * 328 * 2 * 0.0795 / (2 * 0.00048 - dl * area)
+    return h * press * area
+
+
+def figure(path, resid, cutoff):
+    """Axis 2's held-out effort error of the identified rigid model (its constant offset
+    included) against q2, with the repository's counterbalance torque less its mean over the
+    same samples."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for t, (q, d) in resid.items():
+        ax.plot(np.degrees(q[:, 1]), -d[:, 1], ".", ms=2, label=f"trajectory {t}: recorded - identified model")
+    qq = np.concatenate([q[:, 1] for q, _ in resid.values()])
+    g = np.linspace(qq.min(), qq.max(), 200)
+    ref = counterbalance_torque(g)
+    ax.plot(np.degrees(g), ref - np.mean(counterbalance_torque(qq)), "k-",
+            label="repository's counterbalance model, less its mean")
+    ax.set_xlabel("q2 [deg] (model coordinates: recorded angle - 90 deg)")
+    ax.set_ylabel("axis 2 effort [N m]")
+    ax.set_title(f"KR300 axis 2: recorded - rigid model identified on A ({cutoff} Hz low-pass)", fontsize=10)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def counterbalance(ident, recs, resid, cutoff):
+    """Axis 2's missing torque as a line in q2, fitted on A's residual only: its slope beside the
+    repository's counterbalance model's over the same angles; then the identified model with it
+    (``joint[2].force_k1`` about ``force_qc``, the line's level in the offset) judged on B and C."""
+    q2, miss = resid["A"][0][:, 1], -resid["A"][1][:, 1]
+    slope, level = np.polyfit(q2 - q2.mean(), miss, 1)
+    ref = np.polyfit(q2, counterbalance_torque(q2), 1)[0]
+    allq = np.concatenate([resid[t][0][:, 1] for t in "ABC"])
+    ref_all = np.polyfit(allq, counterbalance_torque(allq), 1)[0]
+    print(f"\naxis 2 missing torque on A: {slope:.0f} N m/rad x (q2 - {np.degrees(q2.mean()):.1f} deg) + {level:.0f} N m; "
+          f"the repository's counterbalance: slope {ref:.0f} N m/rad over A's angles, {ref_all:.0f} over A, B, C's")
+    m = ident.model(ROBOT)
+    base = m.inverse_dynamics(m.home(), np.zeros(6), np.zeros(6))
+    m.set_params({"joint[2].force_qc": float(q2.mean()), "joint[2].force_k1": 1.0})
+    probe = m.inverse_dynamics(m.home(), np.zeros(6), np.zeros(6)) - base  # the core's sign of force_k1 in tau
+    sign = np.sign(probe[1] / (m.home()[1] - q2.mean()))
+    m.set_params({"joint[2].force_k1": float(sign * slope),
+                  "joint[2].offset": ident.params["joint[2].offset"] + float(level)})
+    for t in "BC":
+        _row(f"{t}: identified + axis-2 line [%]", held_out(m, recs[t], cutoff)[0])
+
+
+def _row(label, vals, fmt="{:8.1f}"):
+    print(f"{label:34s}" + " ".join(fmt.format(v) for v in vals))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cutoff", type=float, default=2.0, help="low-pass cut-off [Hz] (default 2)")
+    ap.add_argument("--figure", default=str(REPO / "docs" / "figures" / "kuka_counterbalance.png"))
+    ap.add_argument("--out", default=str(REPO / "out" / "kuka"), help="where the identified model's JSON goes")
+    a = ap.parse_args(argv)
+    recs, p = recordings(), para()
+    ident = identify(recs["A"], ROBOT, cutoff=a.cutoff, strict=False)
+    path = ident.write(Path(a.out) / "kr300_identified_A.json", ROBOT)
+    print(f"identified on A: {len(ident.names)} base parameters of {len(ident.base.standard)} standard, "
+          f"{ident.samples} samples, consistent-fit cost {ident.gap:.3g} (0.1 % bound {ident.gap_bound:.3g}); {path}")
+    _row("fit on A: residual / RMS [%]", 100 * ident.sigma / ident.rms)
+    models = {"nominal (set para)": Model(ROBOT, "para"), "identified on A": ident.model(ROBOT)}
+    resid = {}
+    for t in "BC":
+        for label, m in models.items():
+            err, mean, q, d = held_out(m, recs[t], a.cutoff)
+            _row(f"{t}: {label} [%]", err)
+            _row(f"{t}: {label} mean error [N m]", mean, "{:8.0f}")
+            if label.startswith("identified"):
+                resid[t] = (q, d)
+    print("\ndrive terms, link side: identified on A (+- se) | para")
+    pv = ident.params
+    se = dict(zip(ident.names, ident.se))
+    for j in range(6):
+        i = j + 1
+        print(f"axis {i}: viscous {pv[f'joint[{i}].viscous']:7.0f} +-{se.get(f'joint[{i}].viscous', np.nan):5.0f}"
+              f" | f_vis {p['f_vis'][j]:6.0f};  Coulomb {pv[f'joint[{i}].coulomb']:6.1f} "
+              f"+-{se.get(f'joint[{i}].coulomb', np.nan):5.1f} | f_coul + f_a {p['f_coul'][j] + p['f_a'][j]:6.1f};"
+              f"  offset {pv[f'joint[{i}].offset']:7.1f} +-{se.get(f'joint[{i}].offset', np.nan):6.1f}"
+              f" | f_asym {p['f_asym'][j]:7.1f};  rotor {pv[f'joint[{i}].rotor_inertia']:6.1f} | J_mr u^2 "
+              f"{p['J_mr'][j] * p['u'][j] ** 2:6.1f}")
+    print("\nmotor - link encoders, axes 1-3 (stiffness [N m/rad], backlash [rad], RMS diff, RMS residual [rad])")
+    for t, rows in encoders(a.cutoff).items():
+        for j, (k, bl, rms, res) in enumerate(rows):
+            print(f"{t} axis {j + 1}: stiffness {k:10.4g} | c_rad {p['c_rad_ff'][j]:9.4g};  backlash {bl:10.3g} | "
+                  f"q_back {p['q_back'][j]:.3g};  diff RMS {rms:.3g}, residual {res:.3g}")
+    resid["A"] = held_out(models["identified on A"], recs["A"], a.cutoff)[2:]
+    counterbalance(ident, recs, resid, a.cutoff)
+    figure(a.figure, {t: resid[t] for t in "ABC"}, a.cutoff)
+    print(f"\nfigure: {a.figure}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
