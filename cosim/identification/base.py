@@ -82,7 +82,7 @@ def base_parameters(W, names, tol: float = 1e-8) -> BaseParameters:
     Returns
     -------
     BaseParameters
-        Entries of K below 1e-10 (relative to the column scales) are set to zero: they are
+        Entries of K below 1e-8 (relative to the column scales) are set to zero: they are
         rounding, not a regrouping.
     """
     W = np.asarray(W, dtype=float)
@@ -102,7 +102,7 @@ def base_parameters(W, names, tol: float = 1e-8) -> BaseParameters:
     ind, dep_live = cols[piv[:r]], cols[piv[r:]]
     Ks = scipy.linalg.solve_triangular(R[:r, :r], R[:r, r:])
     K_live = Ks * scale[dep_live][None, :] / scale[ind][:, None]
-    K_live[np.abs(Ks) < 1e-10] = 0.0
+    K_live[np.abs(Ks) < 1e-8] = 0.0
     dead = np.flatnonzero(~live)
     dep = np.concatenate([dep_live, dead]).astype(int)
     K = np.concatenate([K_live, np.zeros((r, dead.size))], axis=1)
