@@ -21,6 +21,7 @@ sys.path.insert(0, str(REPO))
 
 from cosim.core import Model  # noqa: E402
 from cosim.identification import identify  # noqa: E402
+from cosim.identification.encoders import drive_elasticity  # noqa: E402
 from cosim.identification.identify import _lowpass, prepare  # noqa: E402
 from cosim.importing import to_recording  # noqa: E402
 
@@ -50,39 +51,21 @@ def held_out(model, rec, cutoff):
     return 100 * np.sqrt(np.mean(d ** 2, 0) / np.mean(tf ** 2, 0)), d.mean(0), q[e:-e], d
 
 
-def encoders(cutoff):
-    """Axes 1-3: motor-encoder angle (link units) minus link-side encoder angle against the link
-    effort, fitted by least squares on the core's sensor model: the columns are the change of
-    ``Model.measure_joints`` per unit of ``joint[i].compliance`` and of ``joint[i].backlash``
-    (the reading deflects by compliance x effort and by +-backlash / 2 with the effort's sign),
-    plus a constant (the encoders' relative offset).  Returns per trajectory and axis
-    (stiffness [N m/rad], backlash [rad], RMS of the difference [rad], of the fit's residual)."""
-    m = Model(ROBOT)
+def encoders(model, cutoff, effort="motor"):
+    """Axes 1-3: :func:`cosim.identification.encoders.drive_elasticity` of the motor encoder
+    (link units) against the link-side encoder, the recorded effort taken as the motor's
+    (``effort="motor"``: the model's rotor inertia, friction and offset taken off it) or as the
+    transmitted one as recorded (``effort="transmitted"``).  Per
+    trajectory and axis: (stiffness [N m/rad], backlash [rad], RMS of the difference, of the
+    fit's residual [rad])."""
     out = {}
     for t in "ABC":
         r = scipy.io.loadmat(str(DATA / f"kr300_{t}.mat"), squeeze_me=True, struct_as_record=False)["rec"]
         rec = to_recording(str(DATA / f"kr300_{t}.mat"), str(DATA / "kr300_map.toml"))
-        fs = 1.0 / np.median(np.diff(rec.time))
-        b, a = _lowpass(cutoff, fs)
-        qs = np.radians([0, -90, 90, 0, 0, 0])
-        link = np.radians(r.act_pos_se_deg.T) + qs
-        diff = scipy.signal.filtfilt(b, a, rec.q - link, axis=0)
-        tau = scipy.signal.filtfilt(b, a, rec.tau, axis=0)
-        x = link.copy()
-        zero = m.measure_joints(x, rec.qd, tau)
-        rows = []
-        for j in range(3):
-            cols = []
-            for name, step in ((f"joint[{j + 1}].compliance", 1e-6), (f"joint[{j + 1}].backlash", 1e-3)):
-                w = m.copy()
-                w.set_params({name: step})
-                cols.append((w.measure_joints(x, rec.qd, tau)[:, j] - zero[:, j]) / step)
-            A = np.column_stack(cols + [np.ones(len(x))])
-            coef, *_ = np.linalg.lstsq(A, diff[:, j], rcond=None)
-            res = diff[:, j] - A @ coef
-            rows.append((1.0 / coef[0] if coef[0] != 0 else np.inf, coef[1], float(np.std(diff[:, j])),
-                         float(np.sqrt(np.mean(res ** 2)))))
-        out[t] = rows
+        link = np.radians(r.act_pos_se_deg.T) + np.radians([0, -90, 90, 0, 0, 0])
+        est = drive_elasticity(model, rec.time, rec.q, link, rec.qd, rec.tau, joints=[1, 2, 3], effort=effort,
+                               cutoff=cutoff)
+        out[t] = [(e["stiffness"], e["backlash"], e["rms_difference"], e["rms_residual"]) for e in est]
     return out
 
 
@@ -184,11 +167,13 @@ def main(argv=None) -> int:
               f"  offset {pv[f'joint[{i}].offset']:7.1f} +-{se.get(f'joint[{i}].offset', np.nan):6.1f}"
               f" | f_asym {p['f_asym'][j]:7.1f};  rotor {pv[f'joint[{i}].rotor_inertia']:6.1f} | J_mr u^2 "
               f"{p['J_mr'][j] * p['u'][j] ** 2:6.1f}")
-    print("\nmotor - link encoders, axes 1-3 (stiffness [N m/rad], backlash [rad], RMS diff, RMS residual [rad])")
-    for t, rows in encoders(a.cutoff).items():
-        for j, (k, bl, rms, res) in enumerate(rows):
-            print(f"{t} axis {j + 1}: stiffness {k:10.4g} | c_rad {p['c_rad_ff'][j]:9.4g};  backlash {bl:10.3g} | "
-                  f"q_back {p['q_back'][j]:.3g};  diff RMS {rms:.3g}, residual {res:.3g}")
+    for effort in ("motor", "transmitted"):
+        print(f"\nmotor - link encoders, axes 1-3, effort={effort} (stiffness [N m/rad], backlash [rad], RMS diff, "
+              "RMS residual [rad])")
+        for t, rows in encoders(models["identified on A"], a.cutoff, effort).items():
+            for j, (k, bl, rms, res) in enumerate(rows):
+                print(f"{t} axis {j + 1}: stiffness {k:10.4g} | c_rad {p['c_rad_ff'][j]:9.4g};  backlash {bl:10.3g} | "
+                      f"q_back {p['q_back'][j]:.3g};  diff RMS {rms:.3g}, residual {res:.3g}")
     resid["A"] = held_out(models["identified on A"], recs["A"], a.cutoff)[2:]
     counterbalance(ident, recs, resid, a.cutoff)
     figure(a.figure, {t: resid[t] for t in "ABC"}, a.cutoff)
