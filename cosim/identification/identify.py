@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -9,11 +10,20 @@ import numpy as np
 import scipy.signal
 import scipy.stats
 
-from ..discrepancy._threads import one_blas_thread
 from ..errors import InputError
 from .base import BaseParameters, base_parameters
 from .consistent import consistent_fit, pseudo_inertia
 from .regressor import DRIVE, link_params, regressor, standard_values
+
+
+def one_blas_thread():
+    """BLAS on one thread while the identification runs (many small solves: on a busy machine a
+    multi-threaded OpenBLAS spends more time handing them between threads than solving them)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - threadpoolctl is in requirements.txt
+        return nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 class IdentificationError(InputError):

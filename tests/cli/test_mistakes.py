@@ -102,7 +102,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
           "parasitic": ["parasitic", "{}"], "map": ["map", "{}", "--out", "{tmp}/m.png"],
-          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"],
+          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"], "identify": ["identify", "{}"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
           "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
