@@ -13,7 +13,7 @@ import scipy.stats
 from ..errors import InputError
 from .base import BaseParameters, base_parameters
 from .consistent import consistent_fit, pseudo_inertia
-from .regressor import DRIVE, link_params, regressor, standard_values
+from .regressor import DRIVE, _check_serial, link_params, regressor, standard_values
 
 
 def one_blas_thread():
@@ -214,6 +214,7 @@ def identify(recording, robot=None, *, param_set: str | None = None, params: dic
     rec = recording if isinstance(recording, Recording) else read_recording(str(recording))
     model = robot if isinstance(robot, Model) else Model(robot or rec.robot, param_set, params)
     model = model.copy()
+    _check_serial(model)
     if "payload.m" in model.params():
         model.set_params({"payload.m": 0.0})
     nd = model.ndof

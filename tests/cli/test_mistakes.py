@@ -124,6 +124,7 @@ OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
              "map": ["map", "tripod_3rps", "--out", "{}"],
              "urdf": ["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--out", "{}"],
+             "identify": ["identify", "{rec}", "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 
