@@ -4,7 +4,8 @@ motor and link encoders; the axis-2 counterbalance as a position-dependent torqu
 
 Data: data/kuka_kr300/kr300_<A|B|C>.mat (JonasWeigand/Robot_Identification, MIT licence), imported
 with data/kuka_kr300/kr300_map.toml.  Run: ``PYTHONPATH=. .venv/bin/python bench/kuka_bench.py
-[--cutoff 2] [--figure docs/figures/kuka_counterbalance.png] [--out out/kuka]``.  About 30 s.
+[--cutoff 2] [--figure docs/figures/kuka_counterbalance.png] [--out out/kuka] [--no-diagnose]``.  About 2 min
+(30 s without the diagnoses).
 """
 from __future__ import annotations
 
@@ -131,6 +132,34 @@ def counterbalance(ident, recs, resid, cutoff):
         _row(f"{t}: identified + axis-2 line [%]", held_out(m, recs[t], cutoff)[0])
 
 
+def diagnosed(ident_path, recs, cutoff, out):
+    """``cosim diagnose`` of B and of C with the identified model as nominal (the command line, as
+    a user runs it); the fitted parameters of each (diagnosis.json's theta) added to the identified
+    model and judged on the other trajectory; and the engine's own held-out figures (each
+    recording's last 30 %)."""
+    import json
+    import subprocess
+
+    from cosim.recording import write_recording
+
+    base = {k: v["value"] for k, v in json.loads(Path(ident_path).read_text())["parameters"].items()}
+    theta = {}
+    for t in "BC":
+        csv, _ = write_recording(Path(out) / f"kr300_{t}.csv", recs[t])
+        d = Path(out) / f"diagnosis_{t}"
+        subprocess.run([sys.executable, "-m", "cosim", "--quiet", "diagnose", str(csv), "--model", str(ident_path),
+                        "--out", str(d), "--no-figures"], check=True, capture_output=True, cwd=REPO)
+        res = json.loads((d / "diagnosis.json").read_text())
+        theta[t] = res["theta"]
+        h = res["heldout"]["channels"]
+        _row(f"{t} last 30 %: before diagnosis [%]", [100 * h[f"tau{i}"]["nrmse_before"] for i in range(1, 7)])
+        _row(f"{t} last 30 %: after diagnosis [%]", [100 * h[f"tau{i}"]["nrmse_after"] for i in range(1, 7)])
+        print(f"  {t}: {res['conclusion'][:160]}...")
+    for src, dst in (("B", "C"), ("C", "B")):
+        m = Model(ROBOT, params={**base, **theta[src]})
+        _row(f"{dst}: identified + diagnosed on {src} [%]", held_out(m, recs[dst], cutoff)[0])
+
+
 def _row(label, vals, fmt="{:8.1f}"):
     print(f"{label:34s}" + " ".join(fmt.format(v) for v in vals))
 
@@ -140,6 +169,7 @@ def main(argv=None) -> int:
     ap.add_argument("--cutoff", type=float, default=2.0, help="low-pass cut-off [Hz] (default 2)")
     ap.add_argument("--figure", default=str(REPO / "docs" / "figures" / "kuka_counterbalance.png"))
     ap.add_argument("--out", default=str(REPO / "out" / "kuka"), help="where the identified model's JSON goes")
+    ap.add_argument("--no-diagnose", action="store_true", help="skip cosim diagnose of B and C (about 1 min)")
     a = ap.parse_args(argv)
     recs, p = recordings(), para()
     ident = identify(recs["A"], ROBOT, cutoff=a.cutoff, strict=False)
@@ -174,6 +204,9 @@ def main(argv=None) -> int:
             for j, (k, bl, rms, res) in enumerate(rows):
                 print(f"{t} axis {j + 1}: stiffness {k:10.4g} | c_rad {p['c_rad_ff'][j]:9.4g};  backlash {bl:10.3g} | "
                       f"q_back {p['q_back'][j]:.3g};  diff RMS {rms:.3g}, residual {res:.3g}")
+    if not a.no_diagnose:
+        print("\ncosim diagnose with the identified model as nominal")
+        diagnosed(path, recs, a.cutoff, a.out)
     resid["A"] = held_out(models["identified on A"], recs["A"], a.cutoff)[2:]
     counterbalance(ident, recs, resid, a.cutoff)
     figure(a.figure, {t: resid[t] for t in "ABC"}, a.cutoff)
