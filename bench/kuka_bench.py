@@ -119,8 +119,9 @@ def counterbalance(ident, recs, resid, cutoff):
     ref = np.polyfit(q2, counterbalance_torque(q2), 1)[0]
     allq = np.concatenate([resid[t][0][:, 1] for t in "ABC"])
     ref_all = np.polyfit(allq, counterbalance_torque(allq), 1)[0]
-    print(f"\naxis 2 missing torque on A: {slope:.0f} N m/rad x (q2 - {np.degrees(q2.mean()):.1f} deg) + {level:.0f} N m; "
-          f"the repository's counterbalance: slope {ref:.0f} N m/rad over A's angles, {ref_all:.0f} over A, B, C's")
+    print(f"\naxis 2 missing torque on A: {slope:.0f} N m/rad x (q2 - {np.degrees(q2.mean()):.1f} deg) "
+          f"+ {level:.0f} N m; the repository's counterbalance: slope {ref:.0f} N m/rad over A's angles, "
+          f"{ref_all:.0f} over A, B, C's")
     m = ident.model(ROBOT)
     base = m.inverse_dynamics(m.home(), np.zeros(6), np.zeros(6))
     m.set_params({"joint[2].force_qc": float(q2.mean()), "joint[2].force_k1": 1.0})

@@ -16,7 +16,7 @@ Example
 >>> W = np.array([[1.0, 2.0, 0.0], [3.0, 6.0, 0.0], [0.0, 0.0, 1.0]])
 >>> b = base_parameters(W, ["a", "b", "c"])
 >>> b.names, b.combination(0)
-(['b', 'c'], 'b + 0.5 a')
+(['a', 'c'], 'a + 2 b')
 """
 from __future__ import annotations
 

@@ -8,8 +8,9 @@ effort, ``joint[i].backlash``: the reading +- gap / 2 by the sign of the transmi
 ``Model.measure_joints``), so the fit takes its columns from the core by linearity: the change of
 ``measure_joints`` per unit of each parameter, at the link-side positions and the transmitted
 effort (on a working copy with the drive's friction and rotor inertia off: ``measure_joints``
-otherwise takes the effort it is given as the motor's and takes their share off it itself).  The effort is referred to the link side (N m at the joint, as ``tau`` of a recording);
-a recorded motor effort is first made the transmitted one by taking off the drive layer's own
+otherwise takes the effort it is given as the motor's and takes their share off it itself).
+The effort is referred to the link side (N m at the joint, as ``tau`` of a recording); a
+recorded motor effort is first made the transmitted one by taking off the drive layer's own
 share (rotor inertia, friction, offset of the model: ``Model.add_drive_efforts`` at the motor
 side's motion).
 
