@@ -11,7 +11,8 @@ import numpy as np
 
 from .data import SEED000_POSES, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params
 from .design import observability, pose_rows, select_poses, sixpus_seed_comparison
-from .problems import CalibrationWarning, SixpusProblem
+from .joint_problem import JointProblem
+from .problems import CalibrationWarning
 from .solvers import solve
 from ..core.model import Model
 
@@ -40,7 +41,7 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
     t = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(rec.pose, rec.q, nom)
+        P = JointProblem(rec.pose, rec.q, nom)
     setup = time.perf_counter() - t
     truth = np.array([real[n] for n in P.names])
 
@@ -116,7 +117,7 @@ def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 
     cand = sixpus_candidate_poses(nom, ncand, rng=seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(cand, nom.ik(cand), nom)
+        P = JointProblem(cand, nom.ik(cand), nom)
     A, _ = pose_rows(P)
     idx, _ = select_poses(A, n)
     rng = np.random.default_rng(seed)
@@ -143,7 +144,7 @@ def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 
         val = sixpus_campaign(real, sixpus_candidate_poses(nom, nval, rng=2000 + t), rng=3000 + t)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", CalibrationWarning)
-            Pv = SixpusProblem(val.pose, val.q, nom)
+            Pv = JointProblem(val.pose, val.q, nom)
             for name, ii in (("random", rng.choice(len(cand), n, replace=False)), ("D-optimal", idx)):
                 rec = sixpus_campaign(real, cand[ii], rng=4000 + t)
                 r = calibrate(rec, model="prediction")

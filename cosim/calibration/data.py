@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .problems import sixpus_leg_names
+from .error_model import error_model
 from ..core.model import Model
 from ..recording import Recording, write_recording
 
@@ -67,8 +67,7 @@ def sixpus_real_params(nominal: Model, max_length: float = 0.5e-3, max_angle_deg
     """
     rng = np.random.default_rng(rng)
     out = {}
-    for i in range(1, 7):
-        names = sixpus_leg_names(i)
+    for names in error_model(nominal).joint_parameters:  # Tiberi 2020 eq. 4.1, per leg
         for n in names[:7]:
             out[n] = nominal.param(n) + rng.uniform(-max_length, max_length)
         s = np.array([nominal.param(n) for n in names[7:]])

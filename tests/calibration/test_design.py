@@ -6,7 +6,8 @@ import pytest
 
 from cosim.calibration.data import sixpus_candidate_poses
 from cosim.calibration.design import common_scale, observability, pose_rows, select_poses, sixpus_seed_comparison
-from cosim.calibration.problems import CalibrationWarning, SixpusProblem
+from cosim.calibration.joint_problem import JointProblem
+from cosim.calibration.problems import CalibrationWarning
 from cosim.core import Model
 
 
@@ -25,7 +26,7 @@ def rows():
     cand = sixpus_candidate_poses(m, 400, rng=3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(cand, m.ik(cand), m)
+        P = JointProblem(cand, m.ik(cand), m)
     return pose_rows(P)[0]
 
 

@@ -9,8 +9,8 @@ import pytest
 from cosim.calibration import calibrate, measurements, problem_from_recording
 from cosim.calibration.data import (read_truth, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params,
                                     write_campaign)
-from cosim.calibration.problems import (SIXPUS_ERROR_MODEL, CalibrationDataError, CalibrationWarning,
-                                        SixpusProblem)
+from cosim.calibration.joint_problem import JointProblem
+from cosim.calibration.problems import CalibrationDataError, CalibrationWarning
 from cosim.core import Model
 from cosim.recording import Recording, RecordingError, read_recording, write_recording
 
@@ -56,7 +56,7 @@ def test_generator_makes_the_specified_real_robot(nominal, campaign):
 
 def test_jacobian_matches_central_differences_of_the_core(nominal):
     x = sixpus_candidate_poses(nominal, 15, rng=3)
-    P = _quiet(SixpusProblem, x, nominal.ik(x), nominal)
+    P = _quiet(JointProblem, x, nominal.ik(x), nominal)
     p = P.p0 + np.random.default_rng(0).uniform(-3e-4, 3e-4, P.p0.size)
     J = P.jacobian(p)
     h = 1e-7
@@ -71,12 +71,14 @@ def test_jacobian_matches_central_differences_of_the_core(nominal):
 def test_error_model_columns_are_the_seeds_unconstrained_derivatives(nominal):
     # the 60 columns, |s| not kept: the core takes s as given within 1e-6 of unit length
     x = sixpus_candidate_poses(nominal, 6, rng=4)
-    P = _quiet(SixpusProblem, x, nominal.ik(x), nominal, min_poses=1)
+    P = _quiet(JointProblem, x, nominal.ik(x), nominal, min_poses=1)
     J60 = P.error_model_jacobian()
     work = P.working_model()
-    base = {n: work.param(n) for n in SIXPUS_ERROR_MODEL}
+    names = P.error_model.parameters  # robots/calibration/6pus.toml: Tiberi 2020 eq. 4.1, leg by leg
+    assert len(names) == 60 and P.error_model.source.startswith("Tiberi 2020")
+    base = {n: work.param(n) for n in names}
     h = 1e-7
-    for j, n in enumerate(SIXPUS_ERROR_MODEL):
+    for j, n in enumerate(names):
         qs = []
         for sgn in (1, -1):
             m = work.copy()
@@ -209,7 +211,7 @@ def test_nan_in_arrays_is_named_by_row_and_column(nominal):
     q = nominal.ik(x)
     x[4, 2] = np.nan
     with pytest.raises(CalibrationDataError, match="row 4, column 'z'"):
-        SixpusProblem(x, q, nominal)
+        JointProblem(x, q, nominal)
 
 
 @pytest.mark.filterwarnings("ignore:no pose held out")
