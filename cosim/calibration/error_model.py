@@ -33,6 +33,11 @@ Keys (all optional but ``parameters`` or ``per_joint``):
     origin turns orientation into position noise) with one accuracy; default none.
 ``prior``
     Expected size of the errors by unit, e.g. ``{m = 1e-3, "1" = 1e-2}``.
+``workspace``
+    Where synthetic campaigns put their poses (:func:`cosim.calibration.data.candidate_poses`):
+    per pose coordinate a range ``[low, high]`` (``<name>_deg`` for an angle given in degrees),
+    ``joint_margin`` (how far inside its range every joint stays, in the joint unit) and
+    ``min_singularity`` (the lowest inverse and direct singularity measures kept).
 
 Example
 -------
@@ -48,15 +53,17 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 
-__all__ = ["ErrorModel", "error_model", "ERROR_MODEL_DIR"]
+__all__ = ["ErrorModel", "error_model", "output", "ERROR_MODEL_DIR"]
 
 #: where the robots' calibration error models live
 ERROR_MODEL_DIR = Path(__file__).resolve().parents[2] / "robots" / "calibration"
 
 _KEYS = {"source", "measure", "parameters", "per_joint", "block_label", "columns", "unit_vectors",
-         "working_overrides", "weighting", "tracker_points", "prior"}
+         "working_overrides", "weighting", "tracker_points", "prior", "workspace"}
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,8 @@ class ErrorModel:
         Per joint, the names of a point's x and y seen by the tracker.
     prior : dict
         Expected error size by unit.
+    workspace : dict
+        The pose box of synthetic campaigns (empty: the core's reach).
     path : str
     """
 
@@ -92,6 +101,7 @@ class ErrorModel:
     working_overrides: dict = field(default_factory=dict)
     tracker_points: tuple = ()
     prior: dict = field(default_factory=dict)
+    workspace: dict = field(default_factory=dict)
     path: str = ""
 
 
@@ -145,4 +155,26 @@ def error_model(model, path=None) -> ErrorModel | None:
                       weighting=d.get("weighting", "none"), block_label=d.get("block_label", "joint"),
                       joint_parameters=joint, unit_vectors=tuple(tuple(u) for u in units),
                       working_overrides=overrides, tracker_points=points,
-                      prior={str(k): float(v) for k, v in d.get("prior", {}).items()}, path=str(p))
+                      prior={str(k): float(v) for k, v in d.get("prior", {}).items()},
+                      workspace=_workspace(d.get("workspace", {}), model, p), path=str(p))
+
+
+def _workspace(ws, model, p) -> dict:
+    if not ws:
+        return {}
+    names = list(model.facts.pose_names)
+    need = [n for n in names if n not in ws and n + "_deg" not in ws]
+    extra = sorted(set(ws) - set(names) - {n + "_deg" for n in names} - {"joint_margin", "min_singularity"})
+    if need or extra or "joint_margin" not in ws or "min_singularity" not in ws:
+        raise InputError(f"{p}: workspace needs a range for each of {', '.join(names)} (or <name>_deg), "
+                         f"joint_margin and min_singularity"
+                         + (f"; missing {need[0]!r}" if need else "") + (f"; unknown {extra[0]!r}" if extra else ""))
+    return dict(ws)
+
+
+def output(model, q, jacobian: bool = True):
+    """The core's output of a robot whose error model measures one (``measure = "output"``: the
+    four-bar's X [m] of the coupler mid point, ``Model.fourbar_output``) at joint values q,
+    shape (n, 1) or (n,); with ``jacobian`` also its derivatives over the error model's
+    parameters, shape (n, k)."""
+    return model.fourbar_output(np.asarray(q, float).reshape(-1), jacobian=jacobian)

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import ArgumentError, InputError, PkmError
 from ..recording import FULL_POSE as _FULL, FULL_POSE_UNITS as _FULL_UNITS  # a 6-DOF tracker's columns
-from .error_model import error_model as _error_model
+from .error_model import error_model as _error_model, output as _output
 from .problems import (CalibrationDataError, CalibrationWarning, Problem, _check_finite, _joint_blocks, _select,
                        geometry_candidates)
 
@@ -245,7 +245,7 @@ class JointProblem(Problem):
     def _core(self, model, jacobian):
         """The core's prediction (and analytic columns over the error model's parameters)."""
         if self.measure == "output":
-            r = model.fourbar_output(self.q[:, 0], jacobian=jacobian)
+            r = _output(model, self.q, jacobian=jacobian)
             return r if jacobian else (r, None)
         if not jacobian:
             return self._ik(model), None

@@ -4,7 +4,7 @@ import warnings
 import numpy as np
 import pytest
 
-from cosim.calibration.data import sixpus_candidate_poses
+from cosim.calibration.data import candidate_poses
 from cosim.calibration.design import common_scale, observability, pose_rows, select_poses, sixpus_seed_comparison
 from cosim.calibration.joint_problem import JointProblem
 from cosim.calibration.problems import CalibrationWarning
@@ -23,7 +23,7 @@ def test_beats_the_seeds_ten_poses_on_the_seeds_own_problem():
 @pytest.fixture(scope="module")
 def rows():
     m = Model("6pus")
-    cand = sixpus_candidate_poses(m, 400, rng=3)
+    cand = candidate_poses(m, 400, rng=3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
         P = JointProblem(cand, m.ik(cand), m)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from cosim.calibration import calibrate
-from cosim.calibration.data import fourbar_campaign
+from cosim.calibration.data import output_campaign
 from cosim.calibration.joint_problem import JointProblem
 from cosim.calibration.problems import CalibrationDataError
 from cosim.calibration.seed import fourbar_seed_study
@@ -121,7 +121,7 @@ def test_identifiability_of_the_seven_angles(problem):
 def test_calibrate_from_recording(tmp_path):
     from cosim.recording import write_recording
 
-    rec = fourbar_campaign(REAL, THETA)
+    rec = output_campaign(Model("fourbar"), REAL, THETA)
     path, _ = write_recording(tmp_path / "fb.csv", rec)
     with pytest.warns(UserWarning, match="no pose held out"):
         res = calibrate(path, model="full")
