@@ -118,6 +118,9 @@ class Diagnosis:
     platform_force: object = None
     #: fitted parameters that drift over the recording (cosim.discrepancy.drift.Drift)
     drifts: list = field(default_factory=list)
+    #: gear elasticity and backlash of each joint read by a link-side encoder too (q_link<i>
+    #: columns; cosim.discrepancy.encoders_step): core parameters with intervals, the effort's side
+    encoders: list = field(default_factory=list)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -144,7 +147,7 @@ class Diagnosis:
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
                                                "warnings", "unexplained", "discovered", "withdrawn", "details",
-                                               "platform_force", "drifts")}
+                                               "platform_force", "drifts", "encoders")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -299,6 +302,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
 
     commanded = rec  # two effort channels: the physics on the measured one, the drive's map fitted
     rec, effort_map = effort_channels(rec, mdl.facts.effort_unit)
+    from .encoders_step import encoder_findings
+
+    enc = encoder_findings(rec, mdl)  # the two encoders' difference, when a joint has both
     timings = {"read": time.perf_counter() - t0}
     with one_blas_thread():
         # a working set of blocks, or a campaign's runs (.campaign): no window spans a seam
@@ -308,7 +314,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         _check_motion(pipe)
         warnings = convention_contradictions(pipe, mdl)
         if warnings:
-            return _contradicted(rec, pipe, warnings, out, t0)
+            return _contradicted(rec, pipe, warnings, out, t0, enc)
         t1 = time.perf_counter()
         eng = prepare(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
                       instruments=instruments, verbose=verbose)
@@ -394,7 +400,11 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                             "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
                   discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
-    d.platform_force, d.drifts = plat, drifts
+    d.platform_force, d.drifts, d.encoders = plat, drifts, enc
+    if enc:
+        from .encoders_step import sentence as encoder_sentence
+
+        d.conclusion = d.conclusion.rstrip(".") + "; " + encoder_sentence(enc)
     if effort_map is not None:
         d.conclusion += "; " + effort_map["statement"]
     if replay:
@@ -417,18 +427,25 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     return d
 
 
-def _contradicted(rec, pipe, warnings, out, t0) -> Diagnosis:
+def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:
     """The answer for a recording that contradicts the model: the warnings, no effects
     (a fit would name the convention as some physics), and a short report."""
     conclusion = ("cannot diagnose: the recording contradicts the model: " + "; ".join(warnings))
+    if enc:
+        from .encoders_step import sentence as encoder_sentence
+
+        conclusion += "; " + encoder_sentence(enc)
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, [], {}, {}, {}, [], [],
                   pipe.channels, {}, warnings=list(warnings),
-                  settings={"samples": pipe.n, "dt": pipe.dt})
+                  settings={"samples": pipe.n, "dt": pipe.dt}, encoders=enc)
     if out is not None:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         lines = [f"# Diagnosis of {d.recording}", "", f"**{conclusion}**", "", "## Warnings", ""]
-        lines += [f"- {w}" for w in warnings]
+        lines += [f"- {w}" for w in warnings] + [""]
+        from .encoders_step import markdown as encoder_markdown
+
+        lines += encoder_markdown(enc)
         (out / "report.md").write_text("\n".join(lines) + "\n")
         (out / "diagnosis.json").write_text(d.to_json())
         d.files = {"report": str(out / "report.md"), "json": str(out / "diagnosis.json")}
