@@ -156,6 +156,8 @@ def diagnosed(ident_path, recs, cutoff, out):
         _row(f"{t} last 30 %: before diagnosis [%]", [100 * h[f"tau{i}"]["nrmse_before"] for i in range(1, 7)])
         _row(f"{t} last 30 %: after diagnosis [%]", [100 * h[f"tau{i}"]["nrmse_after"] for i in range(1, 7)])
         print(f"  {t}: {res['conclusion'][:160]}...")
+        for f in res.get("encoders", []):  # the link-side encoders of axes 1-3 (q_link1..3)
+            print(f"  {t} encoders: {f['statement']}")
     for src, dst in (("B", "C"), ("C", "B")):
         m = Model(ROBOT, params={**base, **theta[src]})
         _row(f"{dst}: identified + diagnosed on {src} [%]", held_out(m, recs[dst], cutoff)[0])

@@ -8,8 +8,15 @@ with 95 % intervals.
 The effort is referred to the link side: the recording's ``tau`` is the motor's effort in joint
 units (gear ratio x motor torque, N m or N at the joint); the transmitted one is that less the
 drive layer's share of the model diagnosed against (rotor inertia, friction, offset at the motor
-side's motion). The encoders are taken as recorded (no low-pass). The intervals are the least-squares ones widened for the residual's serial
-correlation (``se_factor`` of ``drive_elasticity``).
+side's motion). The encoders are taken as recorded (no low-pass). The 95 % intervals allow for the
+residual's serial correlation: the least-squares standard errors times sqrt((1 + r) / (1 - r)), r
+the residual's lag-1 autocorrelation (the AR(1) variance inflation, Wilks 2011, sec. 5.2.4; for
+regressors as smooth as the residual it is the factor of the coefficients too).  The engine's HAC
+covariance (:mod:`.intervals`) is not used here: its AR(1) plug-in bandwidth is bounded at r = 0.97,
+and the residual of this fit is mostly the core's backlash model (a jump of the reading at the
+effort's sign change, where a real gear drifts through its gap), correlated over whole crossings
+(r near 1): measured on the two-mass drive of tests/discrepancy/test_link_encoders.py, the HAC
+interval of the backlash was 2.8e-6 rad for an error of 3.3e-6, this one 1.2e-5.
 
 Example
 -------
@@ -30,6 +37,14 @@ LINK_COLUMN = re.compile(r"^q_link([1-9][0-9]*)$")
 #: which side the effort of a recording is referred to, as the report says it
 EFFORT_SIDE = ("link side: the recording's tau is the motor's effort times the gear ratio (at the joint); the "
                "transmitted effort is that less the nominal drive's rotor inertia, friction and offset")
+
+
+def _inflation(res: np.ndarray) -> float:
+    """sqrt((1 + r) / (1 - r)), r the lag-1 autocorrelation of ``res`` in [0, 0.999]."""
+    r = 0.0
+    if res.size > 3 and np.std(res) > 0:
+        r = float(np.clip(np.corrcoef(res[:-1], res[1:])[0, 1], 0.0, 0.999))
+    return float(np.sqrt((1 + r) / (1 - r)))
 
 
 def link_joints(rec) -> list[int]:
@@ -67,15 +82,15 @@ def encoder_findings(rec, model) -> list[dict]:
     # unfiltered: a low-pass of the difference and the effort biases the backlash (the sensor
     # model is not linear in the effort), measured on the two-mass drive of the test: 10 Hz gave
     # the stiffness 7 % and the backlash 29 % low, none 0.2 % and 0.5 %
-    est = drive_elasticity(model, rec.time, rec.q, ql, rec.qd, rec.tau, joints=joints, effort="motor")
+    est = drive_elasticity(model, rec.time, rec.q, ql, rec.qd, rec.tau, joints=joints, effort="motor", design=True)
     pre, ju = model.facts.joint_prefix, model.joint_unit
     eu = model.facts.effort_unit
     nominal = model.params()
     out = []
     for e in est:
         j = e["joint"]
-        ci_c = 1.96 * e["compliance_se"] * e["se_factor"]
-        ci_b = 1.96 * e["backlash_se"] * e["se_factor"]
+        f = _inflation(e["residual"])
+        ci_c, ci_b = 1.96 * f * e["compliance_se"], 1.96 * f * e["backlash_se"]
         c = e["compliance"]
         lo = 1.0 / (c + ci_c) if c + ci_c > 0 else float("inf")
         hi = 1.0 / (c - ci_c) if c - ci_c > 0 else float("inf")
@@ -83,6 +98,7 @@ def encoder_findings(rec, model) -> list[dict]:
         params = {kc: ParamEstimate(c, ci_c, float(nominal.get(kc, np.nan)), f"{ju}/({eu})"),
                   kb: ParamEstimate(e["backlash"], ci_b, float(nominal.get(kb, np.nan)), ju)}
         nid = "" if abs(e["backlash"]) > ci_b else " (its interval includes zero)"
+        left = 100 * e["rms_residual"] / max(e["rms_difference"], 1e-300)
         stiff = (f"stiffness {e['stiffness']:.4g} {eu}/{ju} (95 %: {lo:.4g} to {hi:.4g})" if c > 0 else
                  f"no stiffness (compliance {c:.3g} +- {ci_c:.2g}, not positive)")
         out.append({"joint": j, "name": "gear elasticity and backlash (two encoders)", "params": params,
@@ -90,7 +106,7 @@ def encoder_findings(rec, model) -> list[dict]:
                     "rms_difference": e["rms_difference"], "rms_residual": e["rms_residual"],
                     "effort_side": EFFORT_SIDE,
                     "statement": f"joint {j} (motor - link encoder, RMS {e['rms_difference']:.3g} {ju}, "
-                                 f"{100 * e['rms_residual'] / max(e['rms_difference'], 1e-300):.0f} % left by the fit): "
+                                 f"{left:.0f} % left by the fit): "
                                  f"{stiff}, {kc} = {c:.4g} +- {ci_c:.2g}, {kb} = {e['backlash']:.4g} +- {ci_b:.2g} "
                                  f"{ju}{nid}"})
     return out

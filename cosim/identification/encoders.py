@@ -58,7 +58,7 @@ def _effort_terms_off(model, pre, nd) -> dict:
 
 
 def drive_elasticity(model, time, q_motor, q_link, qd_motor, tau, *, joints=None, effort: str = "transmitted",
-                     cutoff: float | None = None) -> list[dict]:
+                     cutoff: float | None = None, design: bool = False) -> list[dict]:
     """Stiffness and backlash of each joint's transmission from its two encoders.
 
     Parameters
@@ -80,16 +80,18 @@ def drive_elasticity(model, time, q_motor, q_link, qd_motor, tau, *, joints=None
     effort : {"transmitted", "motor"}
     cutoff : float, optional
         Zero-phase low-pass of the encoders' difference and the effort [Hz] (default none).
+    design : bool
+        Also return the fit's columns and residual (below).
 
     Returns
     -------
     list of dict, one per joint in ``joints``
         ``joint``, ``stiffness`` [N m/rad or N/m] (1 / compliance), ``compliance`` and its ``se``,
         ``backlash`` [rad or m] and its ``se``, ``offset`` (the encoders' relative zero),
-        ``rms_difference`` and ``rms_residual`` [rad or m], ``se_factor`` (how much wider the
-        standard errors are with the residual's serial correlation: sqrt((1 + r) / (1 - r)), r its
-        lag-1 autocorrelation, the AR(1) variance inflation; the ``se`` are those of independent
-        residuals), ``effort_side`` ("link").
+        ``rms_difference`` and ``rms_residual`` [rad or m], ``effort_side`` ("link"); the ``se``
+        are those of independent residuals.  With ``design``: ``columns`` (n, 3), the fit's columns
+        (compliance, backlash, offset) and ``residual`` (n,), for a covariance that allows for the
+        residual's serial correlation (``cosim.discrepancy.encoders_step``).
     """
     t = np.asarray(time, dtype=float)
     nd = model.ndof
@@ -123,12 +125,11 @@ def drive_elasticity(model, time, q_motor, q_link, qd_motor, tau, *, joints=None
         res = y - A @ coef
         cov = np.sum(res ** 2) / max(t.size - 3, 1) * np.linalg.inv(A.T @ A)
         se = np.sqrt(np.diag(cov))
-        rho = 0.0
-        if t.size > 3 and np.std(res) > 0:
-            rho = float(np.clip(np.corrcoef(res[:-1], res[1:])[0, 1], 0.0, 0.999))
         out.append({"joint": j, "compliance": float(coef[0]), "compliance_se": float(se[0]),
                     "stiffness": float(1.0 / coef[0]) if coef[0] > 0 else float("inf"),
                     "backlash": float(coef[1]), "backlash_se": float(se[1]), "offset": float(coef[2]),
                     "rms_difference": float(np.std(y)), "rms_residual": float(np.sqrt(np.mean(res ** 2))),
-                    "se_factor": float(np.sqrt((1 + rho) / (1 - rho))), "effort_side": "link"})
+                    "effort_side": "link"})
+        if design:
+            out[-1].update(columns=A, residual=res)
     return out
