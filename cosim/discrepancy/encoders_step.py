@@ -47,6 +47,10 @@ def _inflation(res: np.ndarray) -> float:
     return float(np.sqrt((1 + r) / (1 - r)))
 
 
+def _bound(x) -> str:
+    return "inf" if x is None else f"{x:.4g}"
+
+
 def link_joints(rec) -> list[int]:
     """The joints (from 1) of ``rec`` with a link-side encoder column, in order."""
     return sorted(int(m.group(1)) for k in rec.extra if (m := LINK_COLUMN.match(k)))
@@ -68,7 +72,8 @@ def encoder_findings(rec, model) -> list[dict]:
         One per joint: ``joint``, ``name`` ("gear elasticity and backlash (two encoders)"),
         ``params`` ({``<joint>[i].compliance`` [rad/(N m) or m/N], ``<joint>[i].backlash`` [rad
         or m]: :class:`~cosim.discrepancy.results.ParamEstimate`}), ``stiffness`` [N m/rad or N/m]
-        and ``stiffness_ci95`` (low, high; high inf when the compliance's interval reaches
+        (None when the compliance is not positive) and ``stiffness_ci95`` (low, high; high None,
+        unbounded, when the compliance's interval reaches zero; low None too when it is all below
         zero), ``rms_difference``, ``rms_residual`` [rad or m], ``effort_side``, ``statement``.
     """
     joints = [j for j in link_joints(rec) if j <= model.ndof]
@@ -92,17 +97,17 @@ def encoder_findings(rec, model) -> list[dict]:
         f = _inflation(e["residual"])
         ci_c, ci_b = 1.96 * f * e["compliance_se"], 1.96 * f * e["backlash_se"]
         c = e["compliance"]
-        lo = 1.0 / (c + ci_c) if c + ci_c > 0 else float("inf")
-        hi = 1.0 / (c - ci_c) if c - ci_c > 0 else float("inf")
+        lo = 1.0 / (c + ci_c) if c + ci_c > 0 else None  # None: no bound (JSON null, not Infinity)
+        hi = 1.0 / (c - ci_c) if c - ci_c > 0 else None
         kc, kb = f"{pre}[{j}].compliance", f"{pre}[{j}].backlash"
-        params = {kc: ParamEstimate(c, ci_c, float(nominal.get(kc, np.nan)), f"{ju}/({eu})"),
-                  kb: ParamEstimate(e["backlash"], ci_b, float(nominal.get(kb, np.nan)), ju)}
+        params = {kc: ParamEstimate(c, ci_c, float(nominal[kc]), f"{ju}/({eu})"),
+                  kb: ParamEstimate(e["backlash"], ci_b, float(nominal[kb]), ju)}
         nid = "" if abs(e["backlash"]) > ci_b else " (its interval includes zero)"
         left = 100 * e["rms_residual"] / max(e["rms_difference"], 1e-300)
-        stiff = (f"stiffness {e['stiffness']:.4g} {eu}/{ju} (95 %: {lo:.4g} to {hi:.4g})" if c > 0 else
+        stiff = (f"stiffness {e['stiffness']:.4g} {eu}/{ju} (95 %: {_bound(lo)} to {_bound(hi)})" if c > 0 else
                  f"no stiffness (compliance {c:.3g} +- {ci_c:.2g}, not positive)")
         out.append({"joint": j, "name": "gear elasticity and backlash (two encoders)", "params": params,
-                    "stiffness": e["stiffness"], "stiffness_ci95": (lo, hi),
+                    "stiffness": e["stiffness"] if c > 0 else None, "stiffness_ci95": (lo, hi),
                     "rms_difference": e["rms_difference"], "rms_residual": e["rms_residual"],
                     "effort_side": EFFORT_SIDE,
                     "statement": f"joint {j} (motor - link encoder, RMS {e['rms_difference']:.3g} {ju}, "
@@ -131,6 +136,7 @@ def markdown(found: list[dict]) -> list[str]:
         for k, p in f["params"].items():
             L.append(f"| {f['joint']} | `{k}` | {p.value:.4g} {p.unit} | +- {p.ci95:.2g} | {p.nominal:.4g} |")
         lo, hi = f["stiffness_ci95"]
-        L.append(f"| {f['joint']} | stiffness (1 / compliance) | {f['stiffness']:.4g} | {lo:.4g} to {hi:.4g} | |")
+        k = _bound(f["stiffness"])
+        L.append(f"| {f['joint']} | stiffness (1 / compliance) | {k} | {_bound(lo)} to {_bound(hi)} | |")
     L += [""] + [f"- {f['statement']}" for f in found] + [""]
     return L

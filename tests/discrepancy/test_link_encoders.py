@@ -9,6 +9,8 @@ The recording holds the motor angle (q1), its rate (qd1), the motor torque (tau1
 angle (q_link1), each encoder with white noise of 2e-7 rad; the map gives the nominal drive (JM,
 BM) and the link's inertia (JL) as the recording's parameters, its friction BL left out: the
 diagnosis proper runs on a model that differs from the drive by that friction and the spring."""
+import json
+
 import numpy as np
 import pytest
 import scipy.integrate
@@ -17,6 +19,7 @@ import scipy.io
 from cosim.discrepancy import diagnose
 from cosim.importing import to_recording
 from cosim.importing.errors import ImportFailure
+from cosim.jsonable import jsonable
 
 JM, BM, JL, BL = 0.5, 1.5, 2.0, 4.0  # kg m2, N m s/rad
 K, GAP = 3.0e4, 6e-4  # N m/rad, rad
@@ -79,6 +82,8 @@ def test_stiffness_and_backlash_within_their_intervals(drive_files):
     assert c.ci95 < 0.05 / K and b.ci95 < 0.2 * GAP  # intervals that say something
     lo, hi = f["stiffness_ci95"]
     assert lo <= K <= hi
+    enc = json.dumps(d.to_dict()["encoders"], default=jsonable, allow_nan=False)  # strict JSON
+    assert '"axis[1].backlash"' in enc
     assert "link side" in f["effort_side"]
     assert "axis[1].compliance" in d.conclusion and "effort referred to the link side" in d.conclusion
     report = (drive_files / "both" / "report.md").read_text()
