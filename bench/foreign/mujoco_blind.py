@@ -1,7 +1,7 @@
 """The discrepancy engine on recordings from MuJoCo, a simulator the project did not write.
 
     .venv/bin/python bench/foreign/mujoco_blind.py [--clean 4] [--seed 11] [--duration 9] [--out results/foreign]
-        [--controller pid] [--two] [--hold-out type] [--only backlash,clean] [--any-rail]
+        [--controller pid] [--two] [--hold-out type] [--only backlash,clean] [--any-rail] [--gap-model mujoco]
 
 Each case is a 6-PUS run in MuJoCo (PyPI ``mujoco``; bench/requirements.txt): a model
 built from the core's nominal parameters (free platform, six slide joints with their
@@ -15,7 +15,8 @@ joint ``damping``, joint ``armature`` (rotor inertia), a payload body on the pla
 heavier platform, tilted gravity, a command delay, an encoder offset, a dead zone, and, as
 two bodies (drive with the encoder and the motor, carriage with the leg) joined through the
 rail, a backlash (a gap with stiff faces: the contact side is whatever the transmitted force
-makes it) or an elasticity (a spring).  The
+makes it) or an elasticity (a spring); with ``--gap-model mujoco`` the gap is MuJoCo's own joint
+limit (soft faces of time constant ``LIMIT_TC``) and the spring the gap joint's stiffness.  The
 recording is written in MuJoCo's joint coordinates (zero at home) with the convention
 declared in the sidecar (``joint_convention``), so the reader converts it.
 
