@@ -9,7 +9,7 @@ import contextlib
 import json
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace as _replace
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +126,9 @@ class Diagnosis:
     platform_force: object = None
     #: fitted parameters that drift over the recording (cosim.discrepancy.drift.Drift)
     drifts: list = field(default_factory=list)
+    #: where structure is left: a flexible model of it and its dependence
+    #: (cosim.discrepancy.flexible.FlexibleFit, one per effort channel fitted)
+    flexible: list = field(default_factory=list)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -148,11 +151,11 @@ class Diagnosis:
         return dict(self.theta)
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
+        return {k: getattr(self, k) if k != "flexible" else [f.to_dict() for f in self.flexible] for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
                                                "warnings", "unexplained", "discovered", "withdrawn", "details",
-                                               "platform_force", "drifts")}
+                                               "platform_force", "drifts", "flexible")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -209,7 +212,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
              max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
-             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False) -> Diagnosis:
+             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False,
+             flexible: bool = True, black_box: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -265,6 +269,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     drift : bool
         Test every fitted parameter for a drift over the recording (a trend or a step in time,
         :mod:`.drift`) and report its size and time course.
+    flexible : bool
+        Where structure is left, fit it with a flexible model (boosted trees) on every recorded
+        input and report how much of it is explainable and on which inputs it depends
+        (:mod:`.flexible`).
+    black_box : bool
+        With ``replay``, also replay the fitted plant plus the flexible model's force as a
+        black-box term (evaluated along the recorded motion; ``replay["runs"]`` entry "fitted +
+        black box", ``FlexibleFit.black_box`` set).
     max_samples : int, optional
         Most rows the diagnosis holds (default
         :data:`~cosim.discrepancy.working_set.MAX_SAMPLES`, 200,000): a longer recording is
@@ -376,6 +388,13 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         from .drift import sentence as drift_sentence
 
         conclusion += "; " + drift_sentence(drifts)
+    flex = []
+    if flexible:
+        from .flexible import flexible_stage, sentence as flexible_sentence
+
+        t3c = time.perf_counter()
+        flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
+        timings["flexible"] = time.perf_counter() - t3c
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
@@ -383,6 +402,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
 
     others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
     head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
+    if flex and flexible_sentence(flex):
+        conclusion += "; " + flexible_sentence(flex)
     details, conclusion = (conclusion, head) if head else ("", conclusion)
     if problems:
         details, conclusion = "", ("fit refused, not physical: " + "; ".join(problems) + ". The effects fitted to "
@@ -402,12 +423,18 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                             "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
                   discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
-    d.platform_force, d.drifts = plat, drifts
+    d.platform_force, d.drifts, d.flexible = plat, drifts, flex
     if effort_map is not None:
         d.conclusion += "; " + effort_map["statement"]
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta)
+        bb = None
+        if black_box and any(f.explained for f in flex):
+            from .flexible import black_box_force
+
+            bb = black_box_force(eng0, r_after, flex, len(rec.time))
+            d.flexible = [f if not f.explained else _replace(f, black_box=True) for f in flex]
+        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb)
         if d.details:
             d.details += _two_body_sentence(d.replay, mdl.joint_unit)
         else:
@@ -941,7 +968,7 @@ def _compared(rec, mdl, compare) -> dict:
     return out
 
 
-def _replay(rec, eng, sel, compared=None, theta=None):
+def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
@@ -951,7 +978,9 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     rig's controller had them: started at rest, a rig's controller with a delay outputs
     nothing at first and sees no velocity, a kick of hundreds of newtons on a real drive).
     Per run the RMS differences and the relative error of the efforts, norm of the
-    difference over the norm of the recorded effort."""
+    difference over the norm of the recorded effort.  ``black_box`` (rows x joints, the
+    flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
+    box", the fitted plant with that force as a known external effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
@@ -983,10 +1012,13 @@ def _replay(rec, eng, sel, compared=None, theta=None):
 
     injected = from_recording(rec)  # a test signal the rig added into its loop, replayed at its point
 
-    def run(plant, ref, start):
+    def run(plant, ref, start, extra=None):
         ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
+        f_ext = getattr(rec, "f_ext", None)
+        if extra is not None:
+            f_ext = extra[: len(rec.time)] + (0.0 if f_ext is None else f_ext)
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
-                           rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None),  # a known input, replayed
+                           rtol=1e-8, atol=1e-10, f_ext=f_ext,  # a known input, replayed
                            history=(rec.q[:start], rec.qd[:start]) if start > 0 else None, inject=injected)
 
     out = {"start": float(rec.time[k0]), "runs": {}}
@@ -1008,9 +1040,11 @@ def _replay(rec, eng, sel, compared=None, theta=None):
                                "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
                                "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
     plants.update(compared or {})
+    if black_box is not None:
+        plants["fitted + black box"] = plants["fitted"]
     for name, plant in plants.items():
         try:
-            res = run(plant, ref, k0)
+            res = run(plant, ref, k0, black_box if name == "fitted + black box" else None)
         except Exception as e:  # noqa: BLE001 - a failing replay is reported
             out["runs"][name] = {"error": str(e)}
             continue
