@@ -55,7 +55,7 @@ def test_where_a_curve_acts(curve, expect):
 def cross_case():
     from cosim.discrepancy.flexible_cases import simulate
 
-    return simulate("cross_acceleration", 7104)
+    return simulate("cross_acceleration", 7112)
 
 
 def test_a_force_keyed_on_another_joints_acceleration(cross_case):
