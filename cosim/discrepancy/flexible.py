@@ -18,8 +18,8 @@ It is fitted on the engine's fitted part and judged on its held-out part (the la
   samples per independent one) above :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
 * **inputs**: grouped permutation importance on the held-out samples (a group is one input of
   one joint: "position of slider 3", or the pose, or time); a group is named when permuting
-  it costs at least :data:`IMPORTANCE_MIN` of the held-out variance and :data:`RELATIVE_MIN`
-  of the explained share;
+  it costs at least :data:`IMPORTANCE_MIN` of the held-out variance, :data:`RELATIVE_MIN`
+  of the explained share and :data:`TOP_MIN` of the strongest group's importance;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
   (:func:`sklearn.inspection.partial_dependence`), in the input's and the effort's units;
 * **whether a found family already says it**: a discovered term or a library effect of the
@@ -44,6 +44,10 @@ SHARE_MIN, CHI2_MIN = 0.05, 25.0
 IMPORTANCE_MIN = 0.04
 #: ... and this fraction of the explained share
 RELATIVE_MIN = 0.15
+#: ... and this fraction of the strongest group's importance (inputs that move with the true one
+#: take a few % of it: 3.7 % on a tuning case keyed on another joint's acceleration, while two
+#: true inputs of one force took 36 % of each other's)
+TOP_MIN = 0.1
 #: a channel with no structure flagged is still fitted when its residual's RMS exceeds its own
 #: noise by this factor (a force keyed on another joint, which :mod:`.structure` does not test)
 RMS_OVER_NOISE = 2.0
@@ -233,8 +237,9 @@ def fit_channel(pipe, X, columns, y, train, test, noise, unit) -> FlexibleFit:
                 groups.setdefault(col[1], []).append(i)
             rng = np.random.default_rng(0)
             imp = _importance(model, Xt, yt, mse, groups, rng)
+            top = max(imp.values())
             named = [g for g in sorted(imp, key=lambda g: -imp[g])
-                     if imp[g] >= IMPORTANCE_MIN and imp[g] >= RELATIVE_MIN * share]
+                     if imp[g] >= IMPORTANCE_MIN and imp[g] >= RELATIVE_MIN * share and imp[g] >= TOP_MIN * top]
             deps = tuple(_dependence(model, X, Xt, yt, mse, columns, groups[g], g, imp[g], unit, rng) for g in named)
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.sqrt(np.mean((yt - yt.mean()) ** 2))), float(noise), deps,
