@@ -94,3 +94,14 @@ def test_cli_prints_and_reports_it(cross_case, tmp_path, capsys):
     assert "where no equation was found" in out
     md = (tmp_path / "r" / "report.md").read_text()
     assert "flexible model" in md and (tmp_path / "r" / "flexible.png").exists()
+
+
+def test_black_box_replay_term_lowers_the_channels_replay_error(cross_case):
+    from cosim.discrepancy import diagnose
+
+    rec, key = cross_case
+    d = diagnose(rec, figures=False, black_box=True)
+    c = key["joint"] - 1
+    runs = d.replay["runs"]
+    assert [f.black_box for f in d.flexible if f.joint == key["joint"]] == [True]
+    assert runs["fitted + black box"]["rms_tau"][c] < 0.5 * runs["fitted"]["rms_tau"][c]
