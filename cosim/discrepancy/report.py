@@ -175,6 +175,9 @@ def markdown(d, files: dict) -> str:
         from .drift import markdown as drift_markdown
 
         L += drift_markdown(d.drifts, files)
+    from .encoders_step import markdown as encoder_markdown
+
+    L += encoder_markdown(getattr(d, "encoders", []))
     L += ["## How much better: held-out fit", ""]
     h = d.heldout
     if d.theta and h["affected"] and np.isfinite(h["gain"]):
