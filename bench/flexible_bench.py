@@ -72,7 +72,7 @@ def main(argv=None):
             print(f"{r['kind']:20s} seed {r['seed']} joint {r['joint']}: share {r['share']:.2f} truth "
                   f"{r['truth_share']:.2f} | named {r['named']} truth {r['truth_inputs']} | "
                   f"{'OK' if r['inputs_ok'] else 'wrong'} inputs, share {'OK' if r['share_ok'] else 'off'} | "
-                  f"cpu {r['cpu']:.1f} s (flexible {r['flex_cpu']:.2f} s) | other channels {r['others']}", flush=True)
+                  f"cpu {r['cpu']:.1f} s (flexible stage, elapsed {r['flex_cpu']:.2f} s) | other channels {r['others']}", flush=True)
     for i in range(a.clean):
         rows.append(one(None, base + 500 + i, a.duration))
         r = rows[-1]
@@ -89,7 +89,7 @@ def main(argv=None):
                   f"{np.median([abs(r['share'] - r['truth_share']) for r in rs]):.2f} |")
     if clean:
         print(f"clean recordings with no flexible claim: {sum(r['ok'] for r in clean)} of {len(clean)}")
-    print(f"diagnosis CPU: max {max(r['cpu'] for r in rows):.1f} s, flexible stage max "
+    print(f"diagnosis CPU: max {max(r['cpu'] for r in rows):.1f} s, flexible stage max (elapsed) "
           f"{max(r['flex_cpu'] for r in rows):.2f} s")
 
 
