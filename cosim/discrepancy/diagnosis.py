@@ -8,7 +8,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -121,6 +121,9 @@ class Diagnosis:
     #: gear elasticity and backlash of each joint read by a link-side encoder too (q_link<i>
     #: columns; cosim.discrepancy.encoders_step): core parameters with intervals, the effort's side
     encoders: list = field(default_factory=list)
+    #: where structure is left: a flexible model of it and its dependence
+    #: (cosim.discrepancy.flexible.FlexibleFit, one per effort channel fitted)
+    flexible: list = field(default_factory=list)
 
     def named(self) -> list:
         """Effect keys in the order they are named (most important first)."""
@@ -143,11 +146,11 @@ class Diagnosis:
         return dict(self.theta)
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
+        return {k: getattr(self, k) if k != "flexible" else [f.to_dict() for f in self.flexible] for k in ("recording", "robot", "conclusion", "effects", "theta", "heldout",
                                                "localisation", "not_excited", "unavailable", "refused", "channels",
                                                "noise", "replay", "timings", "files", "steps", "settings",
                                                "warnings", "unexplained", "discovered", "withdrawn", "details",
-                                               "platform_force", "drifts", "encoders")}
+                                               "platform_force", "drifts", "encoders", "flexible")}
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent, default=jsonable)
@@ -204,7 +207,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
              max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
-             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False) -> Diagnosis:
+             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False,
+             flexible: bool = True, black_box: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
     Parameters
@@ -260,6 +264,14 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     drift : bool
         Test every fitted parameter for a drift over the recording (a trend or a step in time,
         :mod:`.drift`) and report its size and time course.
+    flexible : bool
+        Where structure is left, fit it with a flexible model (boosted trees) on every recorded
+        input and report how much of it is explainable and on which inputs it depends
+        (:mod:`.flexible`).
+    black_box : bool
+        With ``replay``, also replay the fitted plant plus the flexible model's force as a
+        black-box term (evaluated along the recorded motion; ``replay["runs"]`` entry "fitted +
+        black box", ``FlexibleFit.black_box`` set).
     max_samples : int, optional
         Most rows the diagnosis holds (default
         :data:`~cosim.discrepancy.working_set.MAX_SAMPLES`, 200,000): a longer recording is
@@ -374,6 +386,13 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         from .drift import sentence as drift_sentence
 
         conclusion += "; " + drift_sentence(drifts)
+    flex = []
+    if flexible:
+        from .flexible import flexible_stage, sentence as flexible_sentence
+
+        t3c = time.perf_counter()
+        flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
+        timings["flexible"] = time.perf_counter() - t3c
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
@@ -381,6 +400,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
 
     others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
     head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
+    if flex and flexible_sentence(flex):
+        conclusion += "; " + flexible_sentence(flex)
     details, conclusion = (conclusion, head) if head else ("", conclusion)
     if problems:
         details, conclusion = "", ("fit refused, not physical: " + "; ".join(problems) + ". The effects fitted to "
@@ -400,7 +421,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
                             "working_set": ws.summary()},
                   residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
                   discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
-    d.platform_force, d.drifts, d.encoders = plat, drifts, enc
+    d.platform_force, d.drifts, d.encoders, d.flexible = plat, drifts, enc, flex
     if enc:
         from .encoders_step import sentence as encoder_sentence
 
@@ -409,7 +430,13 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         d.conclusion += "; " + effort_map["statement"]
     if replay:
         t5 = time.perf_counter()
-        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta)
+        bb = None
+        if black_box and any(f.explained for f in flex):
+            from .flexible import black_box_force
+
+            bb = black_box_force(eng0, r_after, flex, len(rec.time))
+            d.flexible = [replace(f, black_box=True) if f.explained else f for f in flex]
+        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb)
         if d.details:
             d.details += _two_body_sentence(d.replay, mdl.joint_unit)
         else:

@@ -70,7 +70,7 @@ def _compared(rec, mdl, compare) -> dict:
     return out
 
 
-def _replay(rec, eng, sel, compared=None, theta=None):
+def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
@@ -80,7 +80,9 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     rig's controller had them: started at rest, a rig's controller with a delay outputs
     nothing at first and sees no velocity, a kick of hundreds of newtons on a real drive).
     Per run the RMS differences and the relative error of the efforts, norm of the
-    difference over the norm of the recorded effort."""
+    difference over the norm of the recorded effort.  ``black_box`` (rows x joints, the
+    flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
+    box", the fitted plant with that force as a known external effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .plant import closed_loop, controller_from, reference_from_recording
 
@@ -112,10 +114,13 @@ def _replay(rec, eng, sel, compared=None, theta=None):
 
     injected = from_recording(rec)  # a test signal the rig added into its loop, replayed at its point
 
-    def run(plant, ref, start):
+    def run(plant, ref, start, extra=None):
         ctrl, _ = controller_from(rec.controller, mdl)  # a fresh controller (its own state) per run
+        f_ext = getattr(rec, "f_ext", None)
+        if extra is not None:
+            f_ext = extra[: len(rec.time)] + (0.0 if f_ext is None else f_ext)
         return closed_loop(plant, ctrl, ref, x0=pipe.x_f[start], xd0=pipe.xd_f[start], start=start,
-                           rtol=1e-8, atol=1e-10, f_ext=getattr(rec, "f_ext", None),  # a known input, replayed
+                           rtol=1e-8, atol=1e-10, f_ext=f_ext,  # a known input, replayed
                            history=(rec.q[:start], rec.qd[:start]) if start > 0 else None, inject=injected)
 
     out = {"start": float(rec.time[k0]), "runs": {}}
@@ -137,9 +142,11 @@ def _replay(rec, eng, sel, compared=None, theta=None):
                                "window": [float(rec.time[k_fit]), float(rec.time[k_fit + n_fit])],
                                "score": min(r["score"] for r in rows if "score" in r), "grid": rows}
     plants.update(compared or {})
+    if black_box is not None:
+        plants["fitted + black box"] = plants["fitted"]
     for name, plant in plants.items():
         try:
-            res = run(plant, ref, k0)
+            res = run(plant, ref, k0, black_box if name == "fitted + black box" else None)
         except Exception as e:  # noqa: BLE001 - a failing replay is reported
             out["runs"][name] = {"error": str(e)}
             continue
