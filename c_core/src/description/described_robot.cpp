@@ -225,7 +225,8 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData& rd, const dou
                                   double* Jdot) const {
   // J_i = dq_i/dP JP_i, so Jdot_i = (d/dt dq_i/dP) JP_i + dq_i/dP JPdot_i; the first in closed
   // form per joint kind along P(t) = P + t vP, the second from JP = Jt - [rP]x Jw.  (The tests
-  // hold J xdd + Jdot xd against joint_acceleration's forward-mode Taylor coefficients.)
+  // hold J xdd + Jdot xd against joint_acceleration's closed form of the closure's second
+  // derivative and second differences of the inverse kinematics.)
   const Model& m = model_of(rm);
   const State& st = state_at(m, rd, x, false);
   const Platform& pf = st.pf;
@@ -325,25 +326,15 @@ void DescribedRobot::direct_singularity_guard(const RobotModel& rm, RobotData& r
   else lu_singularity_guard(Mat(A.topLeftCorner(m.n, m.n)), measure_bound, det_j);
 }
 
-void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData&, const double* x, const double* xd,
+void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                         const double* xdd, double* qdd) const {
-  // Forward-mode Taylor coefficients of the leg closure along P(t) = P + t vP + t^2/2 aP
-  // (independent of leg_load's closed forms, which the tests compare with this).
+  // The leg closures differentiated twice, in closed form per kind at the kept state (the
+  // tests hold them against J xdd + Jdot xd and second differences of the inverse kinematics).
   const Model& m = model_of(rm);
-  Platform pf;
-  platform_of(m, x, pf);
+  const State& st = state_at(m, rd, x, false);
   PlatformMotion pm;
-  platform_motion(m, pf, xd, xdd, pm);
-  for (int i = 0; i < m.n; ++i) {
-    V3 rP;
-    const V3 P = attachment(m, pf, i, rP), vP = pm.v + pm.om.cross(rP);
-    const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
-    const P3<TT> Pt{TT(P.x(), vP.x(), aP.x()), TT(P.y(), vP.y(), aP.y()), TT(P.z(), vP.z(), aP.z())};
-    TT q;
-    P3<TT> pts[4];
-    m.legs[i].kind->geometry(m.legs[i], Pt, q, pts, LegWhere{m, i, x});
-    qdd[i] = q.d2;
-  }
+  platform_motion(m, st.pf, xd, xdd, pm);
+  m.kind->qdd_all(m, st.lg, pm, qdd);
 }
 
 void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,

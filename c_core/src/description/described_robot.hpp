@@ -25,12 +25,13 @@
 // lumped: half the mass at each joint; a parallelogram's rod pair is one rod of their
 // total mass: its rods translate), a strut's cylinder and piston as uniform slender tubes.
 //
-// Algorithms.  The positions of all body points are written once as a template of the
-// pose (closed-form inverse kinematics per leg); the Jacobians, their rate and the loads use
-// the closure's derivatives in closed form per joint kind, and forward-mode differentiation
-// (description/jet.hpp) of the same template gives the joint accelerations exactly (the
-// tests hold the two together).  Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia
-// and gravity force of b), the bodies' inertia assembled in twist space.
+// Algorithms.  Each leg kind (joint_kind.hpp, one file per kind) holds its geometry (the
+// positions of its body points from its platform point, closed-form inverse kinematics), the
+// closure's first and second derivatives in closed form, its mass and force terms; the
+// algorithms here (described_robot.cpp, described_platform.cpp) are written once over them
+// (the tests hold the derivatives against finite differences of the inverse kinematics).
+// Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia and gravity force of b), the
+// bodies' inertia assembled in twist space.
 #pragma once
 
 #include <Eigen/Dense>

@@ -97,10 +97,9 @@ class LegMotion {
   virtual int moving_point() const = 0;
 
   // Geometry, closed form: the joint value q and the leg's body points (point 1 is P) from
-  // the platform point P.  Only the values decide (reachability); derivatives ride along.
+  // the platform point P.
   virtual void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts,
                         const LegWhere& at) const = 0;
-  virtual void geometry(const LegModel& l, const P3<TT>& P, TT& q, P3<TT>* pts, const LegWhere& at) const = 0;
   // Geometry and first derivatives of every leg of the robot (all of this kind) at the
   // platform pf: lg's rP, q, pos, w, dq, j and the kind's D, t, tb.
   virtual void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const = 0;
@@ -116,15 +115,19 @@ class LegMotion {
   // Force: each leg's inertia-and-gravity load seen at its platform point (virtual power)
   // for the platform's motion pm, into the wrench W about the platform origin.  The joint
   // acceleration and the body points' accelerations in closed form (the second derivative
-  // of the closure; the tests hold it against the forward-mode Taylor coefficients of
-  // geometry).
+  // of the closure; the tests hold the joint accelerations against J xdd + Jdot xd and
+  // second differences of the inverse kinematics).
   virtual void add_loads_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, V6& W) const = 0;
+  // The joint accelerations qdd of every leg for the platform's motion pm (the closure
+  // differentiated twice, as in the loads).
+  virtual void qdd_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, double* qdd) const = 0;
 };
 
 // The loops over a robot's legs, written once and compiled per kind K (a robot's legs share
 // one kind; the reader refuses a mix), with K's per-leg terms inlined: K::grad_of (geometry
 // and first derivatives at P), K::add_mass_of (the leg's inertia at P into the twist-space
-// sum) and K::load_of (its load at P for P's velocity vP and acceleration aP under gravity g).
+// sum), K::load_of (its load at P for P's velocity vP and acceleration aP under gravity g)
+// and K::qdd_of (the joint acceleration there).
 template <class K>
 class LegMotionOf : public LegMotion {
  public:
@@ -146,6 +149,14 @@ class LegMotionOf : public LegMotion {
       const V3 vP = pm.v + pm.om.cross(rP);
       const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
       add_load(W, K::load_of(m.legs[i], lg[i], vP, aP, m.g), rP);
+    }
+  }
+  void qdd_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, double* qdd) const override {
+    for (int i = 0; i < m.n; ++i) {
+      const V3& rP = lg[i].rP;
+      const V3 vP = pm.v + pm.om.cross(rP);
+      const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
+      qdd[i] = K::qdd_of(m.legs[i], lg[i], vP, aP);
     }
   }
 };

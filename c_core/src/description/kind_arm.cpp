@@ -53,9 +53,6 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
   void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
     geometry_of(l, P, q, pts, at);
   }
-  void geometry(const LegModel& l, const P3<TT>& P, TT& q, P3<TT>* pts, const LegWhere& at) const override {
-    geometry_of(l, P, q, pts, at);
-  }
   // |P - B(q)| = L: w . (dP - t dq) = 0 with t = dB/dq = r e'(q); the centre of mass moves
   // along tb = rc (com_c e' - com_s e).
   static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
@@ -80,15 +77,31 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
   }
   static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
   // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+  // The joint's rate and acceleration, and e(q).
+  struct Accel {
+    double qd, qdd;
+    V3 e;
+  };
+  static Accel accel(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+    Accel a;
     const V3& w = lg.w;
-    const double qd = lg.dq.dot(vP);
+    const double qd = a.qd = lg.dq.dot(vP);
     double sq, cq;
     sin_cos(lg.q, sq, cq);
-    const V3 e = cq * l.u + sq * l.w;
+    const V3 e = a.e = cq * l.u + sq * l.w;
     const V3& t = lg.t;
     const V3 wd = vP - qd * t;
-    const double qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+    a.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+    return a;
+  }
+  static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+    return accel(l, lg, vP, aP).qdd;
+  }
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+    const Accel a = accel(l, lg, vP, aP);
+    const double qd = a.qd, qdd = a.qdd;
+    const V3& e = a.e;
+    const V3& t = lg.t;
     const V3 aS = qdd * t - (l.r * qd * qd) * e;
     const V3 aB = qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * (t / l.r));
     return rod_leg_load(l, lg, aP, aS, aB, qdd, g);

@@ -38,9 +38,6 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
     geometry_of(l, P, q, pts, at);
   }
-  void geometry(const LegModel& l, const P3<TT>& P, TT& q, P3<TT>* pts, const LegWhere& at) const override {
-    geometry_of(l, P, q, pts, at);
-  }
   // |P - S(q)| = L: w . (dP - s dq) = 0.
   static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
     geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
@@ -55,11 +52,14 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   }
   static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
   // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+  static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
     const V3& w = lg.w;
     const double qd = lg.dq.dot(vP);
     const V3 wd = vP - qd * l.dir;
-    const double qdd = (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+    return (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+  }
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+    const double qdd = qdd_of(l, lg, vP, aP);
     const V3 aS = qdd * l.dir;
     return rod_leg_load(l, lg, aP, aS, aS, qdd, g);
   }

@@ -37,9 +37,6 @@ class StrutMotion final : public LegMotionOf<StrutMotion> {
   void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
     geometry_of(l, P, q, pts, at);
   }
-  void geometry(const LegModel& l, const P3<TT>& P, TT& q, P3<TT>* pts, const LegWhere& at) const override {
-    geometry_of(l, P, q, pts, at);
-  }
   // dq/dP = n' (n = w / q), d n / dP = (I - n n') / q.
   static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
     geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
@@ -72,12 +69,16 @@ class StrutMotion final : public LegMotionOf<StrutMotion> {
     add_point_inertia(tm.Mt, MP, lg.rP);
   }
   // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
+  static double qdd_of(const LegModel&, const LegGrad& lg, const V3& vP, const V3& aP) {
+    const double qd = lg.dq.dot(vP);
+    return (vP.squaredNorm() - qd * qd + lg.w.dot(aP)) / lg.q;
+  }
   static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
     const V3& w = lg.w;
     const double qd = lg.dq.dot(vP);
     const double q = lg.q;
     const V3 n = w / q, nd = (vP - qd * n) / q;
-    const double qdd = (vP.squaredNorm() - qd * qd + w.dot(aP)) / q;
+    const double qdd = qdd_of(l, lg, vP, aP);
     const V3 ndd = (aP - qdd * n - (2 * qd) * nd) / q;
     V3 acc[4];
     acc[0].setZero();
