@@ -30,16 +30,10 @@ void LegWhere::unreachable(const std::string& why) const {
   throw Error(PKM_ERR_UNREACHABLE, "leg " + std::to_string(i + 1) + " cannot reach " + pose_text(m, x) + ": " + why);
 }
 
-// R = Rx Ry Rz of the full pose, and the sines and cosines E needs.
-void rotation_of(const Model& m, Platform& pf) {
-  double sx, cx, sy, cy, sz, cz;
-  sin_cos(pf.x6[3], sx, cx);
-  sin_cos(pf.x6[4], sy, cy);
-  sin_cos(pf.x6[5] + m.rz0, sz, cz);
-  pf.sx = sx, pf.cx = cx, pf.sy = sy, pf.cy = cy;
-  pf.R << cy * cz, -(cy * sz), sy, sx * sy * cz + cx * sz, cx * cz - sx * sy * sz, -(sx * cy),
-      sx * sz - cx * sy * cz, cx * sy * sz + sx * cz, cx * cy;
-  pf.p = V3(pf.x6[0], pf.x6[1], pf.x6[2]);
+void LegWhere::joint_limit(double q) const {
+  const LegModel& l = m.legs[i];
+  throw Error(PKM_ERR_JOINT_LIMIT, "leg " + std::to_string(i + 1) + " joint q = " + g6(q) + " outside [" +
+                                       g6(l.qmin) + ", " + g6(l.qmax) + "] at " + pose_text(m, x));
 }
 
 void constraints_of(const Model& m, const Platform& pf, const M3& E, VD& c, CD& C) {
@@ -56,7 +50,6 @@ void constraints_of(const Model& m, const Platform& pf, const M3& E, VD& c, CD& 
   }
 }
 
-namespace {
 // The dependent components of the full pose by Newton from 0 (the parasitic motion is
 // small; Newton converges in a few steps), to 1e-14 m of constraint.
 void solve_dependent(const Model& m, Platform& pf, const double* xval) {
@@ -84,24 +77,7 @@ void solve_dependent(const Model& m, Platform& pf, const double* xval) {
                                           " m of constraint (no pose near the home branch holds them, or a singularity)");
 }
 
-}  // namespace
-
-void platform_of(const Model& m, const double* x, Platform& pf, bool rates) {
-  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
-  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = x[j];
-  if (m.ndep) solve_dependent(m, pf, x);
-  rotation_of(m, pf);
-  if (!rates) return;
-  pf.E = angle_map(pf);
-  pf.Jt.setZero();
-  pf.Jw.setZero();
-  if (!m.ndep) {
-    for (int j = 0; j < m.n; ++j) {
-      if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
-      else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
-    }
-    return;
-  }
+void dependent_rates(const Model& m, const double* x, Platform& pf) {
   // C S = 0 with S's declared rows unit rows: S_dep = -C_dep^-1 C_ind.
   VD c;
   Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 3, 6> C;

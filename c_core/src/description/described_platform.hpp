@@ -23,7 +23,16 @@ struct Platform {
 };
 
 // R = Rx Ry Rz of the full pose, and the sines and cosines E needs.
-void rotation_of(const Model& m, Platform& pf);
+inline void rotation_of(const Model& m, Platform& pf) {
+  double sx, cx, sy, cy, sz, cz;
+  sin_cos(pf.x6[3], sx, cx);
+  sin_cos(pf.x6[4], sy, cy);
+  sin_cos(pf.x6[5] + m.rz0, sz, cz);
+  pf.sx = sx, pf.cx = cx, pf.sy = sy, pf.cy = cy;
+  pf.R << cy * cz, -(cy * sz), sy, sx * sy * cz + cx * sz, cx * cz - sx * sy * sz, -(sx * cy),
+      sx * sz - cx * sy * cz, cx * sy * sz + sx * cz, cx * cy;
+  pf.p = V3(pf.x6[0], pf.x6[1], pf.x6[2]);
+}
 
 // E (omega = E (rx, ry, rz)_dot) and its rate for the angle rates ax, ay.
 inline M3 angle_map(const Platform& pf) {
@@ -42,10 +51,31 @@ inline M3 angle_map_rate(const Platform& pf, double ax, double ay) {
 // Jacobian over the full pose, row k = (a, (R p) x a)' blockdiag(I, E).
 void constraints_of(const Model& m, const Platform& pf, const M3& E, VD& c, CD& C);
 
+// The dependent components of the full pose by Newton from 0 (the parasitic motion is
+// small), to 1e-14 m of constraint; the motion map S and Jt, Jw from them.
+void solve_dependent(const Model& m, Platform& pf, const double* xval);
+void dependent_rates(const Model& m, const double* x, Platform& pf);
+
 // The platform at pose x; with rates = false only R and p (what inverse kinematics needs).
-// Dependent coordinates are solved by Newton from 0 (the parasitic motion is small), to
-// 1e-14 m of constraint.
-void platform_of(const Model& m, const double* x, Platform& pf, bool rates = true);
+inline void platform_of(const Model& m, const double* x, Platform& pf, bool rates = true) {
+  for (int k = 0; k < 6; ++k) pf.x6[k] = 0;
+  for (int j = 0; j < m.n; ++j) pf.x6[m.coord[j]] = x[j];
+  if (m.ndep) solve_dependent(m, pf, x);
+  rotation_of(m, pf);
+  if (!rates) return;
+  pf.E = angle_map(pf);
+  pf.Jt.setZero();
+  pf.Jw.setZero();
+  if (!m.ndep) {
+    for (int j = 0; j < m.n; ++j) {
+      if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
+      else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
+    }
+    return;
+  }
+  dependent_rates(m, x, pf);
+}
+
 
 // The rate of the motion map along the full pose rates (om the angular velocity, Ed the rate
 // of E).

@@ -17,13 +17,6 @@ namespace {
 
 const Model& model_of(const RobotModel& rm) { return static_cast<const Model&>(rm); }
 
-void check_limits(const Model& m, int i, double q, const double* x) {
-  const LegModel& l = m.legs[i];
-  if (q < l.qmin || q > l.qmax)
-    throw Error(PKM_ERR_JOINT_LIMIT, "leg " + std::to_string(i + 1) + " joint q = " + g6(q) + " outside [" +
-                                         g6(l.qmin) + ", " + g6(l.qmax) + "] at " + pose_text(m, x));
-}
-
 // Everything of a pose the dynamics need.
 struct State {
   Platform pf;
@@ -188,13 +181,7 @@ void DescribedRobot::ik(const RobotModel& rm, RobotData&, const double* x, doubl
   const Model& m = model_of(rm);
   Platform pf;
   platform_of(m, x, pf, false);
-  for (int i = 0; i < m.n; ++i) {
-    V3 rP;
-    const V3 P = attachment(m, pf, i, rP);
-    P3<double> pts[4];
-    m.legs[i].kind->geometry(m.legs[i], P3<double>{P.x(), P.y(), P.z()}, q[i], pts, LegWhere{m, i, x});
-    check_limits(m, i, q[i], x);
-  }
+  m.kind->ik_all(m, pf, x, q);
 }
 
 void DescribedRobot::jacobians(const RobotModel& rm, RobotData& rd, const double* x, double* Jx, double* Jq,

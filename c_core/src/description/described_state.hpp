@@ -48,12 +48,14 @@ template <class T> inline P3<T> along(const T& s, const V3& v) { return {s * v.x
 inline V3 v3(const P3<double>& p) { return V3(p.x, p.y, p.z); }
 
 // Leg i of a robot at pose x: a leg kind's geometry throws through it when the leg cannot
-// reach its platform point ("leg 2 cannot reach pose (...) = (...): why").
+// reach its platform point ("leg 2 cannot reach pose (...) = (...): why") or its joint value
+// q is outside its limits.
 struct LegWhere {
   const Model& m;
   int i;
   const double* x;
   [[noreturn]] void unreachable(const std::string& why) const;
+  [[noreturn]] void joint_limit(double q) const;
 };
 
 // One leg, differentiated with respect to its platform point: the first derivatives in

@@ -100,6 +100,9 @@ class LegMotion {
   // the platform point P.
   virtual void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts,
                         const LegWhere& at) const = 0;
+  // The inverse kinematics of every leg of the robot at the platform pf, each joint value
+  // checked against its limits.
+  virtual void ik_all(const Model& m, const Platform& pf, const double* x, double* q) const = 0;
   // Geometry and first derivatives of every leg of the robot (all of this kind) at the
   // platform pf: lg's rP, q, pos, w, dq, j and the kind's D, t, tb.
   virtual void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const = 0;
@@ -124,13 +127,24 @@ class LegMotion {
 };
 
 // The loops over a robot's legs, written once and compiled per kind K (a robot's legs share
-// one kind; the reader refuses a mix), with K's per-leg terms inlined: K::grad_of (geometry
+// one kind; the reader refuses a mix), with K's per-leg terms inlined: K::geometry_of (the
+// joint value and body points at P), K::grad_of (geometry
 // and first derivatives at P), K::add_mass_of (the leg's inertia at P into the twist-space
 // sum), K::load_of (its load at P for P's velocity vP and acceleration aP under gravity g)
 // and K::qdd_of (the joint acceleration there).
 template <class K>
 class LegMotionOf : public LegMotion {
  public:
+  void ik_all(const Model& m, const Platform& pf, const double* x, double* q) const override {
+    for (int i = 0; i < m.n; ++i) {
+      V3 rP;
+      const V3 P = attachment(m, pf, i, rP);
+      P3<double> pts[4];
+      const LegWhere at{m, i, x};
+      K::geometry_of(m.legs[i], P3<double>{P.x(), P.y(), P.z()}, q[i], pts, at);
+      if (q[i] < m.legs[i].qmin || q[i] > m.legs[i].qmax) at.joint_limit(q[i]);
+    }
+  }
   void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const override {
     for (int i = 0; i < m.n; ++i) {
       LegGrad& g = lg[i];
