@@ -126,9 +126,13 @@ def test_closed_form_derivatives_agree_with_forward_mode_and_finite_differences(
         # J (closed form) against central differences of the inverse kinematics
         Jfd = np.column_stack([(m.ik(x + h * e) - m.ik(x - h * e)) / (2 * h) for e in np.eye(m.ndof)])
         assert np.abs(J - Jfd).max() < 1e-6 * max(1.0, np.abs(J).max())
-        # qdd from forward-mode Taylor coefficients = J xdd + Jdot xd (J and Jdot in closed form)
+        # qdd (the closure differentiated twice) = J xdd + Jdot xd (J and Jdot in closed form),
+        # and the second difference of the inverse kinematics along x(t) = x + t xd + t^2/2 xdd
         qdd = m.joint_acceleration(x, xd, xdd)
         assert rel(qdd, J @ xdd + m.jacobian_dot(x, xd) @ xd) < 1e-10
+        t = 1e-4
+        q2 = (m.ik(x + t * xd + t * t / 2 * xdd) - 2 * m.ik(x) + m.ik(x - t * xd + t * t / 2 * xdd)) / (t * t)
+        assert np.abs(qdd - q2).max() < 1e-5 * max(1.0, np.abs(qdd).max())
         # Jx xd = Jq qd
         Jx, Jq, _ = m.jacobians(x)
         assert rel(Jx @ xd, Jq @ (J @ xd)) < 1e-10

@@ -25,12 +25,13 @@
 // lumped: half the mass at each joint; a parallelogram's rod pair is one rod of their
 // total mass: its rods translate), a strut's cylinder and piston as uniform slender tubes.
 //
-// Algorithms.  The positions of all body points are written once as a template of the
-// pose (closed-form inverse kinematics per leg); the Jacobians, their rate and the loads use
-// the closure's derivatives in closed form per joint kind, and forward-mode differentiation
-// (description/jet.hpp) of the same template gives the joint accelerations exactly (the
-// tests hold the two together).  Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia
-// and gravity force of b), the bodies' inertia assembled in twist space.
+// Algorithms.  Each leg kind (joint_kind.hpp, one file per kind) holds its geometry (the
+// positions of its body points from its platform point, closed-form inverse kinematics), the
+// closure's first and second derivatives in closed form, its mass and force terms; the
+// algorithms here (described_robot.cpp, described_platform.cpp) are written once over them
+// (the tests hold the derivatives against finite differences of the inverse kinematics).
+// Dynamics by virtual power: J^T tau = sum_b J_b^T (inertia and gravity force of b), the
+// bodies' inertia assembled in twist space.
 #pragma once
 
 #include <Eigen/Dense>
@@ -43,23 +44,27 @@
 namespace pkm {
 namespace described {
 
-// rail, arm and strut legs join the base to a platform point; an axis (the kinds of
-// joint_kind.hpp) carries the platform itself; serial: an open chain (serial_chain.hpp).
-enum class Joint { rail, arm, strut, axis, serial };
+// What the robot is made of, which decides its class (loader.cpp): legs from the base to a
+// platform point (rail, arm and strut kinds: DescribedRobot), a single axis carrying the
+// platform itself (AxisRobot), an open chain (SerialRobot, serial_chain.hpp).
+enum class Structure { legs, axis, serial };
+class Kind;
 class AxisKind;
 class LegKind;
+class LegMotion;
 
 // A leg architecture: which actuated joint, and what the Grubler-Kutzbach count sees
 // (bodies, joints, their freedoms, idle freedoms such as a rod's spin between two
 // spherical joints).
 struct LegType {
   const char* name;
-  Joint joint;
+  Structure structure;
   int bodies, joints, freedoms, idle;
   bool planar;  // a planar chain (only with planar robots)
   const char* what;
+  const Kind* kind;                // its schema
   const LegKind* leg = nullptr;    // rail, arm, strut: its kind
-  const AxisKind* axis = nullptr;  // Joint::axis: its kind
+  const AxisKind* axis = nullptr;  // a single axis: its kind
   int constraints = 0;             // passive constraints on the platform (PRS, RPS: its plane, 1)
 };
 const LegType* find_leg_type(const std::string& name);
@@ -80,7 +85,7 @@ struct Rod {  // uniform slender rod between points a and b
 
 struct LegModel {
   const LegType* type = nullptr;
-  Joint joint = Joint::rail;  // type->joint, at hand in the legs' loops
+  const LegMotion* kind = nullptr;  // type->leg->motion(), at hand in the legs' loops
   Eigen::Vector3d p;  // platform point in the platform frame [m]
   Eigen::Vector3d f = Eigen::Vector3d::Zero();  // articulated platform: fixed offset of the point [m]
   Eigen::Vector3d base;  // rail: S0; arm: axis point A; strut: base point B [m]
@@ -116,6 +121,7 @@ struct Model final : RobotModel {
   bool articulated = false;
   double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
   std::vector<LegModel> legs;
+  const LegMotion* kind = nullptr;  // the legs' kind (one for all)
   double m_platform = 0;
   Eigen::Vector3d c_platform = Eigen::Vector3d::Zero();  // articulated: centre (axis frame) [m]
   Eigen::Vector3d end_bars[2];  // articulated: the end bars (half the mass each), axis frame [m]
@@ -151,7 +157,7 @@ struct Description {
   bool continuous = false;              // a single R axis declared `continuous = true` (no limits)
   int home_line = 0;
   int name_line = 0;
-  Joint joint = Joint::rail;
+  Structure structure = Structure::legs;
   bool planar = false;
   int mobility = 0;  // Grubler-Kutzbach count
 };
@@ -165,12 +171,7 @@ void read_sets(const Reader& rd, const toml::Document& doc, Description& d);
 
 class DescribedRobot : public Robot {
  public:
-  DescribedRobot(Description d, int serial) : d_(std::move(d)), serial_(serial) {
-    // A geometric error is a rod-length error, leg by leg (a strut has no rod: its length
-    // is the joint, so the toolkit takes every length parameter instead).
-    if (d_.joint == Joint::rail || d_.joint == Joint::arm)
-      for (int k = 0; k < ndof(); ++k) geometry_names_.push_back("leg[" + std::to_string(k + 1) + "].L");
-  }
+  DescribedRobot(Description d, int serial);
   const Description& description() const { return d_; }
   int serial() const { return serial_; }  // order of loading
   const char* name() const override { return d_.name.c_str(); }
@@ -186,7 +187,7 @@ class DescribedRobot : public Robot {
   std::unique_ptr<RobotData> make_data(const RobotModel&) const override;
   const char* joint_prefix() const override;
   const char* joint_noun() const override;
-  bool joints_angular() const override { return d_.joint == Joint::arm; }
+  bool joints_angular() const override;
   const char* limb_noun() const override { return "leg"; }
   const char* pose_name(int i) const override;
   const char* pose_unit(int i) const override;

@@ -16,24 +16,24 @@ namespace {
 
 // bodies, joints, freedoms, idle: what the Grubler-Kutzbach count sees of one leg.
 const LegType kLegTypes[] = {
-    {"PUS", Joint::rail, 2, 3, 6, 0, false, "slider on a rail at the base, universal joint, rod, spherical joint", &rail_leg()},
-    {"PSS", Joint::rail, 2, 3, 7, 1, false, "slider on a rail, rod between two spherical joints", &rail_leg()},
-    {"P(SS)2", Joint::rail, 3, 5, 13, 2, false, "slider on a rail, parallelogram of two rods (linear Delta)", &rail_leg()},
-    {"PRR", Joint::rail, 2, 3, 3, 0, true, "planar: slider on a rail, rod between two revolute joints", &rail_leg()},
-    {"RUS", Joint::arm, 2, 3, 6, 0, false, "revolute arm at the base, universal joint, rod, spherical joint", &arm_leg()},
-    {"RSS", Joint::arm, 2, 3, 7, 1, false, "revolute arm, rod between two spherical joints", &arm_leg()},
-    {"R(SS)2", Joint::arm, 3, 5, 13, 2, false, "revolute arm, parallelogram of two rods (Delta)", &arm_leg()},
-    {"RRR", Joint::arm, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints", &arm_leg()},
-    {"UPS", Joint::strut, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint", &strut_leg()},
-    {"SPS", Joint::strut, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint", &strut_leg()},
+    {"PUS", Structure::legs, 2, 3, 6, 0, false, "slider on a rail at the base, universal joint, rod, spherical joint", &rail_leg(), &rail_leg()},
+    {"PSS", Structure::legs, 2, 3, 7, 1, false, "slider on a rail, rod between two spherical joints", &rail_leg(), &rail_leg()},
+    {"P(SS)2", Structure::legs, 3, 5, 13, 2, false, "slider on a rail, parallelogram of two rods (linear Delta)", &rail_leg(), &rail_leg()},
+    {"PRR", Structure::legs, 2, 3, 3, 0, true, "planar: slider on a rail, rod between two revolute joints", &rail_leg(), &rail_leg()},
+    {"RUS", Structure::legs, 2, 3, 6, 0, false, "revolute arm at the base, universal joint, rod, spherical joint", &arm_leg(), &arm_leg()},
+    {"RSS", Structure::legs, 2, 3, 7, 1, false, "revolute arm, rod between two spherical joints", &arm_leg(), &arm_leg()},
+    {"R(SS)2", Structure::legs, 3, 5, 13, 2, false, "revolute arm, parallelogram of two rods (Delta)", &arm_leg(), &arm_leg()},
+    {"RRR", Structure::legs, 2, 3, 3, 0, true, "planar: revolute arm, rod between two revolute joints", &arm_leg(), &arm_leg()},
+    {"UPS", Structure::legs, 2, 3, 6, 0, false, "universal joint, actuated strut (cylinder and piston), spherical joint", &strut_leg(), &strut_leg()},
+    {"SPS", Structure::legs, 2, 3, 7, 1, false, "spherical joint, actuated strut, spherical joint", &strut_leg(), &strut_leg()},
     // A passive revolute joint holds the platform point in the leg's plane: one constraint.
-    {"PRS", Joint::rail, 2, 3, 5, 0, false, "slider on a rail, revolute joint, rod, spherical joint (3-PRS heads)",
-     &rail_revolute_leg(), nullptr, 1},
-    {"RPS", Joint::strut, 2, 3, 5, 0, false, "revolute joint at the base, actuated strut, spherical joint (3-RPS tripods)",
-     &revolute_strut_leg(), nullptr, 1},
+    {"PRS", Structure::legs, 2, 3, 5, 0, false, "slider on a rail, revolute joint, rod, spherical joint (3-PRS heads)",
+     &rail_revolute_leg(), &rail_revolute_leg(), nullptr, 1},
+    {"RPS", Structure::legs, 2, 3, 5, 0, false, "revolute joint at the base, actuated strut, spherical joint (3-RPS tripods)",
+     &revolute_strut_leg(), &revolute_strut_leg(), nullptr, 1},
     // Single axes: the joint carries the platform (no body of its own, one joint, one freedom).
-    {prismatic_axis().type(), Joint::axis, 0, 1, 1, 0, false, prismatic_axis().what(), nullptr, &prismatic_axis()},
-    {revolute_axis().type(), Joint::axis, 0, 1, 1, 0, false, revolute_axis().what(), nullptr, &revolute_axis()},
+    {prismatic_axis().type(), Structure::axis, 0, 1, 1, 0, false, prismatic_axis().what(), &prismatic_axis(), nullptr, &prismatic_axis()},
+    {revolute_axis().type(), Structure::axis, 0, 1, 1, 0, false, revolute_axis().what(), &revolute_axis(), nullptr, &revolute_axis()},
 };
 
 const char* kCoordNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
@@ -64,7 +64,7 @@ bool continuous_joint(const Reader& rd, const toml::Table& t, const LegType* typ
   if (v->kind != toml::Value::Bool)
     rd.fail(v->line, where + ": continuous must be true or false, got a " + v->kind_name());
   if (!v->b) return false;
-  if (type->joint != Joint::axis || !type->axis->may_be_continuous())
+  if (!type->kind->may_be_continuous())
     rd.fail(v->line, where + ": continuous: only a revolute axis (type R) turns without limit; a " +
                          std::string(type->name) + " leg's joint has a stroke");
   if (const toml::Value* st = t.find("stroke"))
@@ -90,12 +90,10 @@ Description read_description(const std::string& text, const std::string& file) {
   return read_description(toml::parse(text, file), file);
 }
 
-Description read_description(const toml::Document& doc, const std::string& file) {
-  Reader rd{doc};
-  Description d;
-  d.file = file;
+namespace {
 
-  // Tables the format knows.
+// The tables a description may have, each written the right way ([x] or [[x]]).
+void check_tables(const Reader& rd, const toml::Document& doc) {
   for (const toml::Table& t : doc.tables) {
     if (t.name.empty()) {
       if (!t.keys.empty())
@@ -117,7 +115,11 @@ Description read_description(const toml::Document& doc, const std::string& file)
     }
   }
 
-  // [robot]
+}
+
+// [robot]: name, title, source, coordinates (sorted into x y z rx ry rz order with the home
+// pose), redundant constraints.
+const toml::Table& read_robot(const Reader& rd, const toml::Document& doc, Description& d) {
   const auto robots = doc.named("robot");
   if (robots.empty()) rd.fail(1, "[robot] table is missing (name, coordinates, home)");
   const toml::Table& rt = *robots.front();
@@ -158,19 +160,36 @@ Description read_description(const toml::Document& doc, const std::string& file)
   for (int j : order) sorted.push_back(d.coords[j]), d.home.push_back(home_as_written[j]);
   d.coords = sorted;
 
-  // [gravity], [platform], [payload]
+  return rt;
+}
+
+// [gravity], [platform], [payload] as written (the parameters come after the legs').
+struct Bodies {
   double g[3] = {0, 0, -9.81};
-  int g_line = rt.line;  // where a refused value is reported: its own line ([robot] when not written)
+  int g_line = 0;  // where a refused value is reported: its own line ([robot] when not written)
+  const toml::Table* pt = nullptr;
+  double pm = 0;
+  std::vector<double> pI;
+  int inertia_line = 0;
+  double pay_m = 0;
+  std::vector<double> pay_c = {0, 0, 0};
+  int pay_m_line = 0, pay_c_line = 0;
+};
+Bodies read_bodies(const Reader& rd, const toml::Document& doc, const toml::Table& rt, int cv_line, Description& d) {
+  Bodies b;
+  int& g_line = b.g_line;
+  g_line = rt.line;  // where a refused value is reported: its own line ([robot] when not written)
   if (auto gt = doc.named("gravity"); !gt.empty()) {
     rd.only(*gt[0], {"vector"}, "[gravity]");
     const toml::Value& gval = rd.need(*gt[0], "vector", "gravity", "the gravity acceleration [m/s2]");
     g_line = gval.line;
     auto gv = rd.numbers(gval, "gravity.vector", 3);
-    std::copy(gv.begin(), gv.end(), g);
+    std::copy(gv.begin(), gv.end(), b.g);
   }
   const auto pts = doc.named("platform");
   if (pts.empty()) rd.fail(rt.line, "[platform] table is missing (mass, inertia)");
   const toml::Table& pt = *pts[0];
+  b.pt = &pt;
   const std::string kind = rd.text(pt, "kind", "platform", "", false);
   if (!(kind.empty() || kind == "rigid" || kind == "articulated" || kind == "point"))
     rd.fail(pt.find("kind")->line, "platform.kind '" + kind + "' is not known (known: rigid, articulated, point)");
@@ -179,44 +198,49 @@ Description read_description(const toml::Document& doc, const std::string& file)
   if (d.point)
     for (int k : d.coords)
       if (k >= 3)
-        rd.fail(cv.line, std::string("legs that meet at a point (platform.kind = \"point\") move it in x, y, z only; '") +
+        rd.fail(cv_line, std::string("legs that meet at a point (platform.kind = \"point\") move it in x, y, z only; '") +
                              kCoordNames[k] + "' is an angle");
   if (d.articulated) {
     rd.only(pt, {"kind", "mass", "inertia", "axis_angle", "ends", "centre"}, "[platform] (articulated)");
     if (d.coords != std::vector<int>{0, 1, 2, 5})
-      rd.fail(cv.line, "an articulated platform moves in x, y, z and its articulation angle rz: robot.coordinates "
+      rd.fail(cv_line, "an articulated platform moves in x, y, z and its articulation angle rz: robot.coordinates "
                        "must be [\"x\", \"y\", \"z\", \"rz\"]");
   } else {
     rd.only(pt, {"kind", "mass", "inertia"}, "[platform]");
   }
-  const double pm = rd.number(rd.need(pt, "mass", "platform", "platform mass [kg]"), "platform.mass");
+  const double pm = b.pm = rd.number(rd.need(pt, "mass", "platform", "platform mass [kg]"), "platform.mass");
   // A point (the legs' common joint) has no inertia to give: zero unless written.
-  const auto pI = d.point && !pt.find("inertia")
+  const auto pI = b.pI = d.point && !pt.find("inertia")
                       ? std::vector<double>{0, 0, 0}
                       : rd.numbers(rd.need(pt, "inertia", "platform",
                                            "principal inertias [Ixx, Iyy, Izz] about its centre of mass [kg m2]"),
                                    "platform.inertia", 3);
-  const int inertia_line = pt.find("inertia") ? pt.find("inertia")->line : pt.line;
+  b.inertia_line = pt.find("inertia") ? pt.find("inertia")->line : pt.line;
   if (pm < 0) rd.fail(pt.find("mass")->line, "platform.mass = " + num(pm) + " kg must be >= 0");
   for (double v : pI)
-    if (v < 0) rd.fail(inertia_line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
-  double pay_m = 0;
-  std::vector<double> pay_c = {0, 0, 0};
-  int pay_m_line = pt.line, pay_c_line = pt.line;
+    if (v < 0) rd.fail(b.inertia_line, "platform.inertia has " + num(v) + " kg m2: inertias must be >= 0");
+  double& pay_m = b.pay_m;
+  b.pay_m_line = b.pay_c_line = pt.line;
   if (auto yt = doc.named("payload"); !yt.empty()) {
     rd.only(*yt[0], {"mass", "position"}, "[payload]");
-    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass"), pay_m_line = v->line;
-    if (auto v = yt[0]->find("position")) pay_c = rd.numbers(*v, "payload.position", 3), pay_c_line = v->line;
+    if (auto v = yt[0]->find("mass")) pay_m = rd.number(*v, "payload.mass"), b.pay_m_line = v->line;
+    if (auto v = yt[0]->find("position")) b.pay_c = rd.numbers(*v, "payload.position", 3), b.pay_c_line = v->line;
     if (pay_m < 0) rd.fail(yt[0]->find("mass")->line, "payload.mass = " + num(pay_m) + " kg must be >= 0");
   }
 
-  // [[leg]]: expanded copies, each with the line of its table.
-  struct LegIn {
-    const toml::Table* t;
-    const LegType* type;
-    double angle;
-    int copy;
-  };
+  return b;
+}
+
+// [[leg]]: expanded copies, each with the line of its table.
+struct LegIn {
+  const toml::Table* t;
+  const LegType* type;
+  double angle;
+  int copy;
+};
+std::vector<LegIn> read_legs(const Reader& rd, const toml::Document& doc, const toml::Table& rt, int cv_line,
+                             const Description& d) {
+  const int n = (int)d.coords.size();
   std::vector<LegIn> legs;
   for (const toml::Table* t : doc.named("leg")) {
     const std::string tn = rd.text(*t, "type", "leg", "the leg architecture (" + leg_type_names() + ")");
@@ -246,7 +270,7 @@ Description read_description(const toml::Document& doc, const std::string& file)
   if (legs.size() == 1 && legs[0].type->axis && n == 1) {
     const bool angle = d.coords[0] >= 3, angular = legs[0].type->axis->angular();
     if (angle != angular)
-      rd.fail(cv.line, std::string("robot.coordinates: a leg of type ") + legs[0].type->name + " moves the platform " +
+      rd.fail(cv_line, std::string("robot.coordinates: a leg of type ") + legs[0].type->name + " moves the platform " +
                            (angular ? "by an angle: its coordinate is one of rx, ry, rz"
                                     : "along its rail: its coordinate is one of x, y, z") +
                            ", not '" + kCoordNames[d.coords[0]] + "'");
@@ -255,6 +279,13 @@ Description read_description(const toml::Document& doc, const std::string& file)
     rd.fail(legs.back().t->line, std::to_string(legs.size()) + " legs for " + std::to_string(n) +
                                      " coordinates: the toolkit needs one actuated leg per degree of freedom");
 
+  return legs;
+}
+
+// Planar or spatial, the Grubler-Kutzbach count against the coordinates, the dependent
+// coordinates of legs with a passive revolute joint.
+void check_mobility(const Reader& rd, const std::vector<LegIn>& legs, int cv_line, Description& d) {
+  const int n = (int)d.coords.size();
   // Planar or spatial.
   bool any_planar = false, all_planar = true;
   for (const auto& l : legs) any_planar |= l.type->planar, all_planar &= l.type->planar;
@@ -263,7 +294,7 @@ Description read_description(const toml::Document& doc, const std::string& file)
   if (d.planar)
     for (int k : d.coords)
       if (k != 0 && k != 1 && k != 5)
-        rd.fail(cv.line, std::string("a planar robot moves in x, y, rz; '") + kCoordNames[k] + "' is not planar");
+        rd.fail(cv_line, std::string("a planar robot moves in x, y, rz; '") + kCoordNames[k] + "' is not planar");
 
   // Grubler-Kutzbach: lambda (n_bodies - n_joints - 1) + sum f - idle (+ the dependent
   // constraints the description declares).  An articulated platform is two end bars and
@@ -277,10 +308,10 @@ Description read_description(const toml::Document& doc, const std::string& file)
   if (d.point) nb -= 1, nj -= 1, f -= d.planar ? 1 : 3;
   for (const auto& l : legs) {
     nb += l.type->bodies, nj += l.type->joints, f += l.type->freedoms - l.type->idle;
-    if (l.type->joint != legs.front().type->joint)
+    if (l.type->leg && &l.type->leg->motion() != &legs.front().type->leg->motion())
       rd.fail(l.t->line, "legs with different actuated joints (rail, arm, strut) are not supported in one robot");
   }
-  d.joint = legs.front().type->joint;
+  d.structure = legs.front().type->structure;
   d.mobility = lambda * (nb - nj - 1) + f + d.redundant;
   if (d.mobility != n) {
     std::ostringstream os;
@@ -291,7 +322,7 @@ Description read_description(const toml::Document& doc, const std::string& file)
     if (!d.point && !d.articulated && legs.size() >= 2 && same_platform_point(rd, legs))
       os << ". Every leg ends at the same platform point: legs whose rods meet at one joint (the five-bar, "
             "2-RRR) have no platform; write [platform] kind = \"point\" (docs/robots.md, Legs that meet at a point)";
-    rd.fail(cv.line, os.str());
+    rd.fail(cv_line, os.str());
   }
   // Dependent coordinates: each PRS or RPS leg holds its platform point in a plane, fixing
   // one pose component; the components not declared are those the legs decide.
@@ -305,24 +336,24 @@ Description read_description(const toml::Document& doc, const std::string& file)
       os << "robot.coordinates: " << nc << " legs with a passive revolute joint (PRS, RPS) fix " << nc
          << " pose components, so " << 6 - nc << " coordinates are declared (e.g. z, rx, ry for three) and the other "
          << nc << " follow from the legs; " << n << " are declared";
-      rd.fail(cv.line, os.str());
+      rd.fail(cv_line, os.str());
     }
     for (int k = 0; k < 6; ++k)
       if (std::find(d.coords.begin(), d.coords.end(), k) == d.coords.end()) d.dependent.push_back(k);
   }
 
-  // Parameter table, leg by leg (names as the hand-written 6-PUS names its own).
+}
+
+// The legs' parameters, leg by leg (names as the hand-written 6-PUS names its own).
+void add_leg_params(const Reader& rd, const std::vector<LegIn>& legs, Description& d) {
   auto& P = d.params;
-  auto add = [&](const std::string& name, const char* unit, const std::string& desc, double v, double lo, double hi,
-                 int line) { rd.add(P, name, unit, desc, v, lo, hi, line); };
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < (int)legs.size(); ++i) {
     const LegIn& l = legs[i];
     const toml::Table& t = *l.t;
     const std::string where = "leg " + std::to_string(i + 1) + (l.copy ? " (copy " + std::to_string(l.copy) + " of the [[leg]] on line " + std::to_string(t.line) + ")" : "");
-    const Joint j = l.type->joint;
     std::vector<std::string> known = {"type", "copies", "platform_point", "stroke", "continuous"};
     if (d.articulated) known.push_back("platform_offset");
-    for (const auto& k : j == Joint::axis ? l.type->axis->fields() : l.type->leg->fields()) known.push_back(k);
+    for (const auto& k : l.type->kind->fields()) known.push_back(k);
     rd.only(t, known, where);
     const LegSchema schema{rd, t, i, l.angle, where, P};
     auto vec = [&](const char* key, const char* what) { return schema.vec(key, what); };
@@ -338,31 +369,26 @@ Description read_description(const toml::Document& doc, const std::string& file)
                                                 "an R axis that turns without limit: continuous = true"), "leg.stroke", 2);
     if (!continuous && !(stroke[0] < stroke[1])) rd.fail(line_of("stroke"), where + ": stroke [" + num(stroke[0]) + ", " + num(stroke[1]) + "] must have min < max");
     d.continuous = d.continuous || continuous;
-    const std::string leg = "leg " + std::to_string(i + 1);
-    if (j == Joint::axis) {
-      const char* c[3] = {"x", "y", "z"};
-      for (int k = 0; k < 3; ++k)
-        add(idx("leg", i, (std::string("p") + c[k]).c_str()), "m",
-            std::string(c[k]) + " of the platform point on the " + (l.type->axis->angular() ? "axis" : "rail") + " of " +
-                leg + ", platform frame",
-            p[k], -1e3, 1e3, line_of("platform_point"));
-      l.type->axis->read(schema, stroke);
-      d.lumped_rods.push_back(false);
-    } else {
-      d.lumped_rods.push_back(l.type->leg->read(schema, p, stroke, d.articulated));
-    }
+    d.lumped_rods.push_back(l.type->kind->read(schema, p, stroke, d.articulated));
     d.legs.push_back(l.type);
     d.leg_lines.push_back(t.line);
   }
+}
+
+// The platform's, the payload's and gravity's parameters.
+void add_body_params(const Reader& rd, const Bodies& b, Description& d) {
+  auto add = [&](const std::string& name, const char* unit, const std::string& desc, double v, double lo, double hi,
+                 int line) { rd.add(d.params, name, unit, desc, v, lo, hi, line); };
+  const toml::Table& pt = *b.pt;
   const bool art = d.articulated;
   add("platform.m", "kg", art ? "platform mass, half on each end bar (articulated platform)"
-                              : "platform mass (its centre of mass is the platform frame origin)", pm, 0, 1e6, pt.find("mass")->line);
+                              : "platform mass (its centre of mass is the platform frame origin)", b.pm, 0, 1e6, pt.find("mass")->line);
   add("platform.Ixx", "kg m2", art ? "inertia turning with the articulation, about the axis-frame x axis (no effect: rz only)"
-                                   : "platform principal inertia about the platform x axis through its origin", pI[0], 0, 1e6, inertia_line);
+                                   : "platform principal inertia about the platform x axis through its origin", b.pI[0], 0, 1e6, b.inertia_line);
   add("platform.Iyy", "kg m2", art ? "inertia turning with the articulation, about the axis-frame y axis (no effect: rz only)"
-                                   : "platform principal inertia about the platform y axis through its origin", pI[1], 0, 1e6, inertia_line);
+                                   : "platform principal inertia about the platform y axis through its origin", b.pI[1], 0, 1e6, b.inertia_line);
   add("platform.Izz", "kg m2", art ? "inertia about the articulation (a geared tool: ratio^2 x its inertia)"
-                                   : "platform principal inertia about the platform z axis through its origin", pI[2], 0, 1e6, inertia_line);
+                                   : "platform principal inertia about the platform z axis through its origin", b.pI[2], 0, 1e6, b.inertia_line);
   if (d.articulated) {
     auto field = [&](const char* key, const char* what) -> const toml::Value& { return rd.need(pt, key, "platform", what); };
     const double ang = rd.number(field("axis_angle", "direction of the end-to-end axis at rz = 0, from x [rad]"), "platform.axis_angle");
@@ -375,14 +401,30 @@ Description read_description(const toml::Document& doc, const std::string& file)
     add("platform.cy", "m", "platform centre from the pose point across the axis", c[1], -1e3, 1e3, pt.find("centre")->line);
     add("platform.cz", "m", "platform centre from the pose point, vertical", c[2], -1e3, 1e3, pt.find("centre")->line);
   }
-  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", pay_m, 0, 1e6, pay_m_line);
-  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[0], -1e3, 1e3, pay_c_line);
-  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[1], -1e3, 1e3, pay_c_line);
-  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), pay_c[2], -1e3, 1e3, pay_c_line);
-  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", g[0], -100, 100, g_line);
-  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", g[1], -100, 100, g_line);
-  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", g[2], -100, 100, g_line);
+  add("payload.m", "kg", "payload point mass rigidly fixed on the platform", b.pay_m, 0, 1e6, b.pay_m_line);
+  add("payload.x", "m", std::string("x of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), b.pay_c[0], -1e3, 1e3, b.pay_c_line);
+  add("payload.y", "m", std::string("y of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), b.pay_c[1], -1e3, 1e3, b.pay_c_line);
+  add("payload.z", "m", std::string("z of the payload in the ") + (art ? "axis frame, from the pose point" : "platform frame"), b.pay_c[2], -1e3, 1e3, b.pay_c_line);
+  add("gravity.x", "m/s2", "x of the gravity acceleration (world frame)", b.g[0], -100, 100, b.g_line);
+  add("gravity.y", "m/s2", "y of the gravity acceleration (world frame)", b.g[1], -100, 100, b.g_line);
+  add("gravity.z", "m/s2", "z of the gravity acceleration (world frame)", b.g[2], -100, 100, b.g_line);
 
+}
+
+}  // namespace
+
+Description read_description(const toml::Document& doc, const std::string& file) {
+  Reader rd{doc};
+  Description d;
+  d.file = file;
+  check_tables(rd, doc);
+  const toml::Table& rt = read_robot(rd, doc, d);
+  const int cv_line = rt.find("coordinates")->line;
+  const Bodies b = read_bodies(rd, doc, rt, cv_line, d);
+  const std::vector<LegIn> legs = read_legs(rd, doc, rt, cv_line, d);
+  check_mobility(rd, legs, cv_line, d);
+  add_leg_params(rd, legs, d);
+  add_body_params(rd, b, d);
   read_sets(rd, doc, d);
   return d;
 }

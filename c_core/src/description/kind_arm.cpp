@@ -1,16 +1,112 @@
 // Joint kind `arm` (RUS, RSS, R(SS)2, RRR): a revolute arm at the base, elbow
 // B = A + r (cos q u + sin q (k x u)), its mass at its centre of mass plus an inertia, then the
-// rod to the platform point (kind_rod.cpp).  Its schema and compiled form; the geometry and
-// dynamics are in described_robot.cpp.
+// rod to the platform point (kind_rod.cpp): its schema, compiled form, geometry, derivatives,
+// mass and force terms.
 #include <cmath>
 
 #include "description/described_robot.hpp"
 #include "description/joint_kind.hpp"
+#include "description/kind_rod.hpp"
 
 namespace pkm {
 namespace described {
 
 namespace {
+
+class ArmMotion final : public LegMotionOf<ArmMotion> {
+ public:
+  const char* prefix() const override { return "arm"; }
+  const char* noun() const override { return "arm"; }
+  bool angular() const override { return true; }
+  bool has_rod() const override { return true; }
+  const char* plane_through() const override { return "base joint"; }
+  int moving_point() const override { return 0; }  // the elbow
+
+  // alpha cos q + beta sin q = K with d = P - A in the (u, w) frame of the arm.  Points: the
+  // elbow B, P, the arm's centre of mass.
+  template <class T>
+  static void geometry_of(const LegModel& l, const P3<T>& P, T& q, P3<T>* out, const LegWhere& at) {
+    using std::acos;
+    using std::atan2;
+    using std::sqrt;
+    const P3<T> d = P - l.base;
+    out[1] = P;
+    const T al = dot(l.u, d), be = dot(l.w, d);
+    const T K = (0.5 / l.r) * (dot(d, d) + (l.r * l.r - l.L * l.L));
+    const T rho = sqrt(al * al + be * be);
+    const double c = value_of(K) / value_of(rho);
+    if (!(std::abs(c) <= 1 - 1e-12))
+      at.unreachable(std::abs(c) > 1 ? "the rod's sphere misses the elbow circle (|K| / rho = " + g6(std::abs(c)) + ")"
+                                     : "the rod is in line with the arm (inverse-kinematic singularity)");
+    q = atan2(be, al) + l.branch * acos(K / rho);
+    T sq, cq;
+    sin_cos(q, sq, cq);
+    const P3<T> e = along(cq, l.u) + along(sq, l.w);
+    out[0] = l.base + T(l.r) * e;   // elbow B
+    if (l.com_s == 0) {
+      out[2] = l.base + T(l.rc) * e;  // arm centre of mass
+    } else {                          // off the arm line by an angle: e(q + phi)
+      const P3<T> ep = along(-sq, l.u) + along(cq, l.w);
+      out[2] = l.base + (T(l.rc * l.com_c) * e + T(l.rc * l.com_s) * ep);
+    }
+  }
+  void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
+    geometry_of(l, P, q, pts, at);
+  }
+  // |P - B(q)| = L: w . (dP - t dq) = 0 with t = dB/dq = r e'(q); the centre of mass moves
+  // along tb = rc (com_c e' - com_s e).
+  static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
+    geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
+    const V3 w = lg.w = P - v3(lg.pos[0]);
+    double sq, cq;
+    sin_cos(lg.q, sq, cq);
+    const V3 e = cq * l.u + sq * l.w, ep = cq * l.w - sq * l.u;
+    lg.t = l.r * ep;
+    lg.tb = l.rc * (l.com_c * ep - l.com_s * e);
+    lg.dq = w.transpose() / w.dot(lg.t);
+  }
+  double closure_dq(const LegModel& l, const LegGrad& lg) const override {
+    return l.r * lg.w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
+  }
+  double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * l.r); }
+  // t's rate is -r qd e(q).
+  Eigen::RowVector3d dq_rate(const LegModel& l, const LegGrad& lg, const V3& vP, double qd) const override {
+    double sq, cq;
+    sin_cos(lg.q, sq, cq);
+    return rod_dq_rate(lg, vP, qd, l.r * qd * lg.w.dot(cq * l.u + sq * l.w));
+  }
+  static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
+  // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).
+  // The joint's rate and acceleration, and e(q).
+  struct Accel {
+    double qd, qdd;
+    V3 e;
+  };
+  static Accel accel(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+    Accel a;
+    const V3& w = lg.w;
+    const double qd = a.qd = lg.dq.dot(vP);
+    double sq, cq;
+    sin_cos(lg.q, sq, cq);
+    const V3 e = a.e = cq * l.u + sq * l.w;
+    const V3& t = lg.t;
+    const V3 wd = vP - qd * t;
+    a.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+    return a;
+  }
+  static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+    return accel(l, lg, vP, aP).qdd;
+  }
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+    const Accel a = accel(l, lg, vP, aP);
+    const double qd = a.qd, qdd = a.qdd;
+    const V3& e = a.e;
+    const V3& t = lg.t;
+    const V3 aS = qdd * t - (l.r * qd * qd) * e;
+    const V3 aB = qdd * lg.tb - (qd * qd * l.rc) * (l.com_c * e + l.com_s * (t / l.r));
+    return rod_leg_load(l, lg, aP, aS, aB, qdd, g);
+  }
+};
 
 class ArmLeg final : public LegKind {
  public:
@@ -72,6 +168,11 @@ class ArmLeg final : public LegKind {
     l.npt = 3, l.nmass = 1, l.nrod = 1;
     l.mass[0] = {2, l.m_body};
     l.rod[0] = {0, 1, l.m_rod};
+  }
+
+  const LegMotion& motion() const override {
+    static const ArmMotion k;
+    return k;
   }
 };
 

@@ -23,7 +23,9 @@ class PrismaticAxis final : public AxisKind {
 
   std::vector<std::string> fields() const override { return {"rail_origin", "rail_direction"}; }
 
-  void read(const LegSchema& s, const std::vector<double>& stroke) const override {
+  bool read(const LegSchema& s, const std::vector<double>& p, const std::vector<double>& stroke,
+            bool /*articulated: an axis carries a rigid platform*/) const override {
+    add_axis_point(s, p, angular());
     const auto S0 = s.vec("rail_origin", "where the platform point is at q = 0 [m]");
     const auto dir = s.unit_vec("rail_direction", "unit rail direction, q grows along it");
     const std::string leg = "leg " + std::to_string(s.i + 1);
@@ -38,6 +40,7 @@ class PrismaticAxis final : public AxisKind {
             s.line_of("rail_direction"));
     s.add(idx("rail", s.i, "qmin"), "m", "lower stroke limit of " + leg, stroke[0], -1e3, 1e3, s.line_of("stroke"));
     s.add(idx("rail", s.i, "qmax"), "m", "upper stroke limit of " + leg, stroke[1], -1e3, 1e3, s.line_of("stroke"));
+    return false;
   }
 
   void compile(const ParamValues& v, AxisModel& a) const override {
@@ -62,6 +65,16 @@ class PrismaticAxis final : public AxisKind {
 };
 
 }  // namespace
+
+void add_axis_point(const LegSchema& s, const std::vector<double>& p, bool angular) {
+  const std::string leg = "leg " + std::to_string(s.i + 1);
+  const char* c[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k)
+    s.add(idx("leg", s.i, (std::string("p") + c[k]).c_str()), "m",
+          std::string(c[k]) + " of the platform point on the " + (angular ? "axis" : "rail") + " of " + leg +
+              ", platform frame",
+          p[k], -1e3, 1e3, s.line_of("platform_point"));
+}
 
 const AxisKind& prismatic_axis() {
   static const PrismaticAxis k;

@@ -1,15 +1,69 @@
 // Joint kind `rail` (PUS, PSS, P(SS)2, PRR): a slider S = S0 + q s on a prismatic rail at the
-// base (its mass a point at S), then the rod to the platform point (kind_rod.cpp).  Its
-// schema and compiled form; the geometry and dynamics are in described_robot.cpp.
+// base (its mass a point at S), then the rod to the platform point (kind_rod.cpp): its schema,
+// compiled form, geometry, derivatives, mass and force terms.
 #include <cmath>
 
 #include "description/described_robot.hpp"
 #include "description/joint_kind.hpp"
+#include "description/kind_rod.hpp"
 
 namespace pkm {
 namespace described {
 
 namespace {
+
+class RailMotion final : public LegMotionOf<RailMotion> {
+ public:
+  const char* prefix() const override { return "rail"; }
+  const char* noun() const override { return "slider"; }
+  bool angular() const override { return false; }
+  bool has_rod() const override { return true; }
+  const char* plane_through() const override { return "rail"; }
+  int moving_point() const override { return 0; }  // the slider
+
+  // |d - q s|^2 = L^2 with d = P - S0: ss q^2 - 2 b q + |d|^2 - L^2 = 0.  Points: S, P.
+  template <class T>
+  static void geometry_of(const LegModel& l, const P3<T>& P, T& q, P3<T>* out, const LegWhere& at) {
+    using std::sqrt;
+    const P3<T> d = P - l.base;
+    out[1] = P;
+    const T b = dot(l.dir, d);
+    const T disc = b * b - l.ss * (dot(d, d) - l.L * l.L);
+    if (!(value_of(disc) >= l.disc_tol))
+      at.unreachable(value_of(disc) < -l.disc_tol ? "the rod is too short to meet the rail"
+                                                  : "the rod is perpendicular to its rail (inverse-kinematic singularity)");
+    q = l.inv_ss * (b - l.branch * sqrt(disc));
+    out[0] = l.base + along(q, l.dir);
+  }
+  void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
+    geometry_of(l, P, q, pts, at);
+  }
+  // |P - S(q)| = L: w . (dP - s dq) = 0.
+  static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
+    geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
+    const V3 w = lg.w = P - v3(lg.pos[0]);
+    lg.t = lg.tb = l.dir;
+    lg.dq = w.transpose() / w.dot(lg.t);
+  }
+  double closure_dq(const LegModel& l, const LegGrad& lg) const override { return lg.w.dot(l.dir); }
+  double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * std::sqrt(l.ss)); }
+  Eigen::RowVector3d dq_rate(const LegModel&, const LegGrad& lg, const V3& vP, double qd) const override {
+    return rod_dq_rate(lg, vP, qd, 0.0);  // s does not turn
+  }
+  static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
+  // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
+  static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
+    const V3& w = lg.w;
+    const double qd = lg.dq.dot(vP);
+    const V3 wd = vP - qd * l.dir;
+    return (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+  }
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+    const double qdd = qdd_of(l, lg, vP, aP);
+    const V3 aS = qdd * l.dir;
+    return rod_leg_load(l, lg, aP, aS, aS, qdd, g);
+  }
+};
 
 class RailLeg final : public LegKind {
  public:
@@ -47,6 +101,11 @@ class RailLeg final : public LegKind {
     l.npt = 2, l.nmass = 1, l.nrod = 1;
     l.mass[0] = {0, l.m_body};
     l.rod[0] = {0, 1, l.m_rod};
+  }
+
+  const LegMotion& motion() const override {
+    static const RailMotion k;
+    return k;
   }
 };
 

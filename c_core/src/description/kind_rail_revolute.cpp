@@ -42,6 +42,8 @@ class RailRevoluteLeg final : public LegKind {
       v.bad("leg " + std::to_string(i + 1) + ": its revolute axis is not perpendicular to its rail");
     l.plane_o = l.base;  // the plane through the rail
   }
+
+  const LegMotion& motion() const override { return rail_leg().motion(); }
 };
 
 }  // namespace

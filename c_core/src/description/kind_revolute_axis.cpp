@@ -26,7 +26,9 @@ class RevoluteAxis final : public AxisKind {
 
   std::vector<std::string> fields() const override { return {"axis_point", "axis"}; }
 
-  void read(const LegSchema& s, const std::vector<double>& stroke) const override {
+  bool read(const LegSchema& s, const std::vector<double>& p, const std::vector<double>& stroke,
+            bool /*articulated: an axis carries a rigid platform*/) const override {
+    add_axis_point(s, p, angular());
     const auto A = s.vec("axis_point", "a point of the axis, world frame [m]");
     const auto k = s.unit_vec("axis", "unit axis; q turns the platform about it by the right-hand rule");
     const std::string leg = "leg " + std::to_string(s.i + 1);
@@ -37,9 +39,10 @@ class RevoluteAxis final : public AxisKind {
     for (int j = 0; j < 3; ++j)
       s.add(idx("axis", s.i, (std::string("k") + c[j]).c_str()), "1",
             std::string(c[j]) + " of the axis direction of " + leg + " (unit vector)", k[j], -1, 1, s.line_of("axis"));
-    if (stroke.empty()) return;  // continuous: no limits
+    if (stroke.empty()) return false;  // continuous: no limits
     s.add(idx("axis", s.i, "qmin"), "rad", "lower joint limit of " + leg, stroke[0], -100, 100, s.line_of("stroke"));
     s.add(idx("axis", s.i, "qmax"), "rad", "upper joint limit of " + leg, stroke[1], -100, 100, s.line_of("stroke"));
+    return false;
   }
 
   void compile(const ParamValues& v, AxisModel& a) const override {

@@ -35,6 +35,8 @@ class RevoluteStrutLeg final : public LegKind {
     compile_revolute_axis(v, i, l);
     l.plane_o = l.base;  // the plane through the base joint
   }
+
+  const LegMotion& motion() const override { return strut_leg().motion(); }
 };
 
 }  // namespace

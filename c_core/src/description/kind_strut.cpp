@@ -1,7 +1,8 @@
 // Joint kind `strut` (UPS, SPS): an actuated strut of length q = |P - B| between a base joint
-// and the platform point, a cylinder and a piston as uniform slender tubes.  Its schema and
-// compiled form; the geometry and dynamics are in described_robot.cpp.
+// and the platform point, a cylinder and a piston as uniform slender tubes: its schema,
+// compiled form, geometry, derivatives, mass and force terms.
 #include <cmath>
+#include <limits>
 
 #include "description/described_robot.hpp"
 #include "description/joint_kind.hpp"
@@ -10,6 +11,93 @@ namespace pkm {
 namespace described {
 
 namespace {
+
+class StrutMotion final : public LegMotionOf<StrutMotion> {
+ public:
+  const char* prefix() const override { return "strut"; }
+  const char* noun() const override { return "strut"; }
+  bool angular() const override { return false; }
+  bool has_rod() const override { return false; }
+  const char* plane_through() const override { return "base joint"; }
+  int moving_point() const override { return 2; }  // the cylinder's end
+
+  // q = |P - B|.  Points: B, P, the cylinder's end, the piston's end.
+  template <class T>
+  static void geometry_of(const LegModel& l, const P3<T>& P, T& q, P3<T>* out, const LegWhere& at) {
+    using std::sqrt;
+    const P3<T> d = P - l.base;
+    out[1] = P;
+    q = sqrt(dot(d, d));
+    if (!(value_of(q) > 1e-9)) at.unreachable("the platform point is on the strut's base joint");
+    const P3<T> nn = (T(1.0) / q) * d;
+    out[0] = {T(l.base.x()), T(l.base.y()), T(l.base.z())};
+    out[2] = l.base + T(l.l_cyl) * nn;  // cylinder end
+    out[3] = P - T(l.l_pis) * nn;       // piston end
+  }
+  void geometry(const LegModel& l, const P3<double>& P, double& q, P3<double>* pts, const LegWhere& at) const override {
+    geometry_of(l, P, q, pts, at);
+  }
+  // dq/dP = n' (n = w / q), d n / dP = (I - n n') / q.
+  static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
+    geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
+    const V3 w = lg.w = P - v3(lg.pos[0]);
+    const V3 n = w / lg.q;
+    lg.dq = n.transpose();
+    const M3 Pn = (M3::Identity() - n * n.transpose()) / lg.q;  // d n / dP
+    lg.D[0].setZero();
+    lg.D[2] = l.l_cyl * Pn;
+    lg.D[3] = M3::Identity() - l.l_pis * Pn;
+    lg.D[1].setIdentity();
+  }
+  double closure_dq(const LegModel&, const LegGrad& lg) const override { return lg.q; }
+  double ik_measure(const LegModel&, double) const override { return std::numeric_limits<double>::infinity(); }
+  Eigen::RowVector3d dq_rate(const LegModel&, const LegGrad& lg, const V3& vP, double qd) const override {
+    return ((vP - qd * lg.dq.transpose()) / lg.q).transpose();
+  }
+  // The general form over the body points: KE = 1/2 vP' MP vP, a point inertia at P.
+  static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
+    M3 MP;
+    MP.setZero();
+    for (int k = 0; k < l.nmass; ++k) MP.noalias() += l.mass[k].m * lg.D[l.mass[k].a].transpose() * lg.D[l.mass[k].a];
+    for (int k = 0; k < l.nrod; ++k) {
+      const Rod& r = l.rod[k];
+      const M3& A = lg.D[r.a];
+      const M3& B = lg.D[r.b];
+      const M3 C = A.transpose() * B;
+      MP.noalias() += (r.m / 3) * (A.transpose() * A + B.transpose() * B) + (r.m / 6) * (C + C.transpose());
+    }
+    add_point_inertia(tm.Mt, MP, lg.rP);
+  }
+  // q^2 = w.w: q qdd = |vP|^2 - qd^2 + w.aP; n = w / q, ndd = (aP - qdd n - 2 qd nd) / q.
+  static double qdd_of(const LegModel&, const LegGrad& lg, const V3& vP, const V3& aP) {
+    const double qd = lg.dq.dot(vP);
+    return (vP.squaredNorm() - qd * qd + lg.w.dot(aP)) / lg.q;
+  }
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+    const V3& w = lg.w;
+    const double qd = lg.dq.dot(vP);
+    const double q = lg.q;
+    const V3 n = w / q, nd = (vP - qd * n) / q;
+    const double qdd = qdd_of(l, lg, vP, aP);
+    const V3 ndd = (aP - qdd * n - (2 * qd) * nd) / q;
+    V3 acc[4];
+    acc[0].setZero();
+    acc[1] = aP;
+    acc[2] = l.l_cyl * ndd;
+    acc[3] = aP - l.l_pis * ndd;
+    V3 f = V3::Zero();
+    for (int k = 0; k < l.nmass; ++k)
+      f.noalias() += lg.D[l.mass[k].a].transpose() * (l.mass[k].m * (acc[l.mass[k].a] - g));
+    for (int k = 0; k < l.nrod; ++k) {
+      const Rod& r = l.rod[k];
+      const V3 Fa = (r.m / 3) * acc[r.a] + (r.m / 6) * acc[r.b] - (r.m / 2) * g;
+      const V3 Fb = (r.m / 6) * acc[r.a] + (r.m / 3) * acc[r.b] - (r.m / 2) * g;
+      f.noalias() += lg.D[r.a].transpose() * Fa + lg.D[r.b].transpose() * Fb;
+    }
+    if (l.I_arm != 0) f += (l.I_arm * qdd) * lg.dq.transpose();
+    return f;
+  }
+};
 
 class StrutLeg final : public LegKind {
  public:
@@ -47,6 +135,11 @@ class StrutLeg final : public LegKind {
     l.npt = 4, l.nrod = 2;
     l.rod[0] = {0, 2, l.m_cyl};
     l.rod[1] = {3, 1, l.m_pis};
+  }
+
+  const LegMotion& motion() const override {
+    static const StrutMotion k;
+    return k;
   }
 };
 

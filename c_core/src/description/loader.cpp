@@ -72,8 +72,8 @@ const Robot* make(const std::string& path, const std::string& text) {
   const toml::Document doc = toml::parse(text, path);
   Description desc = is_serial_description(doc) ? read_serial_description(doc, path, chain) : read_description(doc, path);
   std::unique_ptr<DescribedRobot> r;
-  if (desc.joint == Joint::serial) r = std::make_unique<SerialRobot>(std::move(desc), std::move(chain), ++serial);
-  else if (desc.joint == Joint::axis) r = std::make_unique<AxisRobot>(std::move(desc), ++serial);
+  if (desc.structure == Structure::serial) r = std::make_unique<SerialRobot>(std::move(desc), std::move(chain), ++serial);
+  else if (desc.structure == Structure::axis) r = std::make_unique<AxisRobot>(std::move(desc), ++serial);
   else r = std::make_unique<DescribedRobot>(std::move(desc), ++serial);
   const Description& d = r->description();
   // Every named value must be a parameter of the robot or of its drive layer, inside the

@@ -204,7 +204,7 @@ Description read_serial_description(const toml::Document& doc, const std::string
   d.home = rd.numbers(hv, "robot.home", jt.size());
   d.home_line = hv.line;
   for (size_t i = 0; i < jt.size(); ++i) d.coords.push_back((int)i);
-  d.joint = Joint::serial;
+  d.structure = Structure::serial;
   d.mobility = (int)jt.size();
   read_ends(rd, doc, rt, d);
   read_sets(rd, doc, d);  // [defaults] and [sets.NAME] as in any description
