@@ -78,7 +78,7 @@ def whole_file_replay(rec_path, plants: dict) -> dict:
         xd0 = m.pose_velocity(x0, rec.qd[0])
         res = closed_loop(m, ctrl, ref, x0=x0, xd0=xd0, start=0, rtol=1e-8, atol=1e-10)
         s = slice(0, len(res.time))
-        out[name] = float(np.linalg.norm(res.tau - rec.tau[s]) / np.linalg.norm(rec.tau[s]))
+        out[name] = float(np.linalg.norm(res.tau_logged - rec.tau[s]) / np.linalg.norm(rec.tau[s]))
     return out
 
 

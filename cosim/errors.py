@@ -114,7 +114,7 @@ class MasterError(RuntimeError):
     """A co-simulation that could not go on (:func:`cosim.master.run`); says at which time
     and why.
 
-    ``partial`` holds the :class:`cosim.master.RunResult` of the samples taken before the
+    ``partial`` holds the :class:`cosim.run_record.RunRecord` of the samples taken before the
     failure.
     """
 

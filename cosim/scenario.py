@@ -82,7 +82,7 @@ class ScenarioResult:
     """What :func:`run_scenario` produced: the run, its metrics and the files written."""
 
     scenario: Scenario
-    result: object          # cosim.master.RunResult
+    result: object          # cosim.run_record.RunRecord
     metrics: dict
     files: dict = field(default_factory=dict)
 
@@ -579,7 +579,7 @@ def compute_metrics(sc: Scenario, res, model, traj, ctrl, design=None) -> dict:
     elif kind == "excitation":
         e = res["xref"] - res["x"]
         m["excitation"] = {"pose_error_rms": np.sqrt(np.mean(e ** 2, axis=0)).tolist(),
-                           "effort_max": np.max(np.abs(res["tau"]), axis=0).tolist()}
+                           "effort_max": np.max(np.abs(res["tau_applied"]), axis=0).tolist()}
     else:
         m.update(pose_set_metrics(sc, res))
     return m
@@ -700,7 +700,7 @@ def tracking_metrics(sc, res) -> dict:
         "pen_error_max_time": float(res["time"][int(err.argmax())]),
         "joint_error_rms": float(np.sqrt(np.mean(ej**2))),
         "joint_error_max": float(np.max(np.abs(ej))),
-        "effort_max": float(np.max(np.abs(res["tau"]))),
+        "effort_max": float(np.max(np.abs(res["tau_applied"]))),
     }}
 
 
@@ -721,7 +721,7 @@ def pose_set_metrics(sc, res) -> dict:
         poses.append({"label": int(k), "rows": int(len(rows)), "t_start": float(res["time"][rows[0]]),
                       "t_end": float(res["time"][rows[-1]]), "pose_ref": res["xref"][rows[0]].tolist(),
                       "pose_error": err.tolist(), "position_error": float(np.linalg.norm(err[lengths])),
-                      "tracker_std": res["x_meas"][last].std(axis=0).tolist(),
+                      "tracker_std": res["pose"][last].std(axis=0).tolist(),
                       "joint_speed_max": float(np.max(np.abs(res["qd_true"][last])))})
     ej = res["qref"] - res["q_true"]
     ex = res["xref"] - res["x"]
@@ -729,5 +729,5 @@ def pose_set_metrics(sc, res) -> dict:
               "joint_error_max": float(np.max(np.abs(ej))),
               "joint_error_max_time": float(res["time"][int(np.argmax(np.max(np.abs(ej), axis=1)))]),
               "pose_error_rms": np.sqrt(np.mean(ex ** 2, axis=0)).tolist(),
-              "effort_max": np.max(np.abs(res["tau"]), axis=0).tolist()}
+              "effort_max": np.max(np.abs(res["tau_applied"]), axis=0).tolist()}
     return {"poses": poses, "held_poses": len(poses), "motion": motion}

@@ -145,10 +145,10 @@ def _replay(rec, eng, sel, compared=None, theta=None):
             continue
         s = slice(k0, k0 + len(res.time))
         dq = res.q - rec.q[s]
-        dt_ = res.tau - rec.tau[s]
+        dt_ = res.tau_logged - rec.tau[s]
         out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq**2, axis=0)).tolist(),
                              "rms_tau": np.sqrt(np.mean(dt_**2, axis=0)).tolist(),
                              "rel_tau": (np.linalg.norm(dt_, axis=0)
                                          / np.maximum(np.linalg.norm(rec.tau[s], axis=0), 1e-300)).tolist(),
-                             "time": res.time, "q": res.q, "tau": res.tau}
+                             "time": res.time, "q": res.q, "tau": res.tau_logged}
     return out

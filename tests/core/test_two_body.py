@@ -38,7 +38,7 @@ def test_static_deflection_is_the_reading_models():
     ref = make_reference(m, tr.step(x0, x0), duration=2.0)
     res = run(CorePlant(m), ctl.pd_gravity(m, kp=3e3, kd=60), ref, drive=CoreDrive(m))
     assert res.loop == "compiled"
-    q, q_true, tau = np.asarray(res["q"]), np.asarray(res["q_true"]), np.asarray(res["tau"])
+    q, q_true, tau = np.asarray(res["q"]), np.asarray(res["q_true"]), np.asarray(res["tau_applied"])
     defl = q[-1] - q_true[-1]                      # the drive body less the carriage
     load = tau[-1]                                 # what the transmission carries at rest
     expect = np.zeros(6)

@@ -52,7 +52,7 @@ def test_the_sidecar_controller_is_rebuilt_and_replayed(tmp_path, make):
     assert "error" not in nominal, nominal
     # The recorded motion is the nominal plant under this controller: the replay follows
     # it (1e-4 of the stroke here; the integral starts from zero at the replay's start).
-    stroke = np.ptp(res.data["q"], axis=0)
+    stroke = np.ptp(res["q"], axis=0)
     assert np.all(np.asarray(nominal["rms_q"]) < 1e-3 * stroke), (nominal["rms_q"], stroke)
 
 
