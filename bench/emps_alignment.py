@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.core import Model
-from cosim.discrepancy.plant import closed_loop, controller_from, reference_from_recording
+from cosim.discrepancy.runs import closed_loop, controller_from, reference_from_recording
 from cosim.importing import to_recording
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "emps"

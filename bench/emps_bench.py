@@ -61,7 +61,7 @@ def fitted_values(d, nominal: dict) -> dict:
 
 def whole_file_replay(rec_path, plants: dict) -> dict:
     """Relative force error of each plant replayed over the whole file in the recorded loop."""
-    from cosim.discrepancy.plant import closed_loop, controller_from, reference_from_recording
+    from cosim.discrepancy.runs import closed_loop, controller_from, reference_from_recording
     from cosim.recording import read_recording
 
     rec = read_recording(rec_path)

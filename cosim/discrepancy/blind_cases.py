@@ -120,7 +120,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
     from ..core.model import Model
     from ..master import make_reference
     from .excitation import excitation
-    from .plant import closed_loop
+    from .runs import closed_loop
 
     from .._native import PkmError
 

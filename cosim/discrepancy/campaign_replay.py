@@ -25,7 +25,7 @@ def _plants(joint, model, rec):
 
 def _closed(rec, plants, a, b):
     """Closed-loop replay of rows a:b of one run (its controller primed with its rows before a)."""
-    from .plant import closed_loop, controller_from, reference_from_recording
+    from .runs import closed_loop, controller_from, reference_from_recording
 
     m = plants["nominal"]
     ctrl, why = controller_from(rec.controller, m)

@@ -82,7 +82,7 @@ def _replay(rec, eng, sel, compared=None, theta=None):
     Per run the RMS differences and the relative error of the efforts, norm of the
     difference over the norm of the recorded effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
-    from .plant import closed_loop, controller_from, reference_from_recording
+    from .runs import closed_loop, controller_from, reference_from_recording
 
     if rec.qref is None:  # no reference: an open-loop experiment is replayed open loop (.open_loop)
         from .open_loop import heldout_replay

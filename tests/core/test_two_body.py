@@ -169,9 +169,9 @@ def test_the_fmu_plant_has_the_drive_bodies_too():
 
 
 def test_the_discrepancy_replay_reads_the_drive_bodies_on_both_of_its_paths():
-    """cosim.discrepancy.plant.closed_loop: the compiled loop and its Python loop (a
+    """cosim.discrepancy.runs.closed_loop: the compiled loop and its Python loop (a
     controller the core does not implement) give the same readings of a two-body plant."""
-    from cosim.discrepancy.plant import closed_loop
+    from cosim.discrepancy.runs import closed_loop
 
     m = two_body_model()
     x0 = m.home()

@@ -6,7 +6,7 @@ import numpy as np
 from cosim.core import Model
 from cosim.discrepancy import blind
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
 
 

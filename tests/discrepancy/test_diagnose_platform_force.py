@@ -8,7 +8,7 @@ import pytest
 from cosim.core import Model
 from cosim.discrepancy import blind, diagnose
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
 
 TENSION = 0.4  # N (typical rail effort 0.5-0.9 N, effort noise 5 mN)

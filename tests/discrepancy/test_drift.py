@@ -10,7 +10,7 @@ import pytest
 from cosim.core import Model
 from cosim.discrepancy import blind, diagnose
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
 from cosim.recording import Recording
 

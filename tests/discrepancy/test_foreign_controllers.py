@@ -8,7 +8,7 @@ import pytest
 from cosim import controllers as ctl, trajectories as tr
 from cosim.core import Model
 from cosim.discrepancy import diagnose
-from cosim.discrepancy.plant import controller_from
+from cosim.discrepancy.runs import controller_from
 from cosim.master import CorePlant, make_reference, run
 from cosim.recording import write_recording
 from cosim.ssp import lti_controller

@@ -7,7 +7,7 @@ import pytest
 from cosim import controllers as ctl
 from cosim import trajectories as tr
 from cosim.core import Model
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.discrepancy.residuals import Pipeline
 from cosim.master import CoreDrive, CorePlant, make_reference, run
 
