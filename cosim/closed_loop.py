@@ -284,18 +284,7 @@ class ClosedLoop:
         rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd",
                                                        "tau_applied", "tau_logged", "pose", "tau_inj")}
         draws = self._draws(n)
-        if f_ext is not None:
-            f_ext = np.asarray(f_ext, float)
-            if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
-                raise InputError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
-                                 f"got {f_ext.shape}")
-            f_ext = np.ascontiguousarray(f_ext[start:start + n])
-            bad = np.argwhere(~np.isfinite(f_ext))
-            if bad.size:
-                raise InputError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
-                                 f"{f_ext[tuple(bad[0])]}")
-            if not hasattr(self.plant, "set_external"):
-                raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+        f_ext = None if f_ext is None else self._f_ext_rows(f_ext, reference, start, t)
         past = self._history(reference, start, history)
         inj = None if inject is None else inject.bind(len(reference.time), nd, start, n, reference.time)
         rec = RunRecord(time=t, **rows)
@@ -310,10 +299,16 @@ class ClosedLoop:
                for k in ("q", "qd", "qdd", "x")}
         if started is not None:
             started()
-        wall0 = _time.perf_counter()
-        failure, law = None, None
         run = _Run(t=t, h=h, ref=ref, rows=rows, draws=draws, rec=rec, x0=x0, xd0=xd0, progress=progress,
                    should_stop=should_stop, f_ext=f_ext, past=past, inject=inj, reference=reference, start=start)
+        return self._execute(cc, run)
+
+    def _execute(self, cc, run: _Run) -> RunRecord:
+        """The back end's run, timed and finished: the record of the rows (the failure
+        raised with the rows before it as ``partial``)."""
+        t, h, draws, rec, n = run.t, run.h, run.draws, run.rec, len(run.t)
+        wall0 = _time.perf_counter()
+        failure, law = None, None
         try:
             if cc is not None:
                 failure = self._compiled(cc, run)
@@ -330,6 +325,22 @@ class ClosedLoop:
             exc.loop_time = float(t[min(k, n - 1)])
             raise exc
         return rec.head() if rec.n < n else rec
+
+    def _f_ext_rows(self, f_ext, reference, start, t):
+        """``f_ext`` checked: its rows of the run's samples, C-contiguous (n, nd) [N or N m]."""
+        n, nd = len(t), self.ndof
+        f_ext = np.asarray(f_ext, float)
+        if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
+            raise InputError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
+                             f"got {f_ext.shape}")
+        f_ext = np.ascontiguousarray(f_ext[start:start + n])
+        bad = np.argwhere(~np.isfinite(f_ext))
+        if bad.size:
+            raise InputError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
+                             f"{f_ext[tuple(bad[0])]}")
+        if not hasattr(self.plant, "set_external"):
+            raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+        return f_ext
 
     def _finish(self, rec, draws, wall0, law):
         k = rec.n

@@ -114,6 +114,24 @@ def _units(robot, nd):
             "pose": pose, "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
 
 
+def _recorder(plant, controller, reference, sig, seed):
+    """``result(rec)``: the loop's record with what :func:`run` adds to it (the reference's
+    rows, the units, the robot, the step and the descriptions)."""
+    h = float(reference.time[1] - reference.time[0])
+    units = _units(plant.robot, plant.ndof)
+    ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
+    noise = {"q": sig["q"].tolist(), "qd": sig["qd"].tolist(), "pose": sig["pose"].tolist(), "seed": seed}
+
+    def result(rec):
+        k = rec.n
+        return replace(rec.head(k), robot=plant.robot, step=h, units=units, qref=reference.q[:k].copy(),
+                       qdref=reference.qd[:k].copy(), xref=reference.x[:k].copy(),
+                       label=np.asarray(reference.label[:k], dtype=np.int32), plant=plant.describe(),
+                       controller=ctrl_desc, noise=noise, reference_name=reference.name)
+
+    return result
+
+
 def _stopped(plant, t, h, why) -> str:
     """The message of a run that stopped in the communication step from ``t`` [s]: the
     step's two ends (the cause names the time inside it), and a word on a step that is long
@@ -178,9 +196,8 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     Returns
     -------
     cosim.run_record.RunRecord
-        The rows with the reference (``qref``, ``qdref``, ``xref``, ``label``), the units,
-        the robot, the step and the descriptions; ``loop`` says which loop ran
-        ("compiled" or "python").
+        The rows with the reference (``qref``, ``qdref``, ``xref``, ``label``), units, robot,
+        step and descriptions; ``loop`` says which loop ran ("compiled" or "python").
 
     Raises
     ------
@@ -194,11 +211,10 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
 
     from .closed_loop import ClosedLoop, LoopInterrupted
 
-    t = reference.time
-    n = len(t)
+    n = len(reference.time)
     if n < 2:
         raise MasterError("the reference needs at least two communication points")
-    h = float(t[1] - t[0])
+    h = float(reference.time[1] - reference.time[0])
     nd = plant.ndof
     if reference.q.shape[1] != nd:
         raise MasterError(f"reference has {reference.q.shape[1]} joints, the plant {nd}")
@@ -209,18 +225,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     except ValueError as e:
         raise MasterError(str(e).replace("noise 'pose'", "pose_noise").replace("noise 'q'", "q_noise")
                           .replace("noise 'qd'", "qd_noise")) from e
-    sig = loop.noise
-
-    units = _units(plant.robot, nd)
-    ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
-    noise = {"q": sig["q"].tolist(), "qd": sig["qd"].tolist(), "pose": sig["pose"].tolist(), "seed": seed}
-
-    def result(rec):
-        k = rec.n
-        return replace(rec.head(k), robot=plant.robot, step=h, units=units, qref=reference.q[:k].copy(),
-                       qdref=reference.qd[:k].copy(), xref=reference.x[:k].copy(),
-                       label=np.asarray(reference.label[:k], dtype=np.int32), plant=plant.describe(),
-                       controller=ctrl_desc, noise=noise, reference_name=reference.name)
+    result = _recorder(plant, controller, reference, loop.noise, seed)
 
     # default: a bar only on a terminal and only once the run has taken two seconds
     bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,
