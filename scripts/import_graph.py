@@ -32,7 +32,7 @@ LAYERS = [
       # robot files in other formats read into descriptions for the core (Model("arm.urdf"))
       "cosim.robots"]),
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
-     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.run_record", "cosim.trajectories", "cosim.simulate",
+     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.recording_data", "cosim.recording_read", "cosim.run_record", "cosim.trajectories", "cosim.simulate",
       "cosim.controllers", "cosim.controller_laws", "cosim.controller_design", "cosim.controller_discrete",
       "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
       "cosim.injection",
