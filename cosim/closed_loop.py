@@ -67,7 +67,7 @@ from ._native import STATUS, raise_for
 from .core.controller import KINDS, CompiledController
 from .core.loop import LOOP_FIELDS, closed_loop_call
 from .plants import CoreDrive, CorePlant, _facts
-from .errors import InputError
+from .errors import InputError, LoopInterrupted
 from .run_record import RunRecord
 
 __all__ = ["ClosedLoop", "RunRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
@@ -114,14 +114,6 @@ class _Run:
     inject: object = None
     reference: object = None
     start: int = 0
-
-
-class LoopInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a run: ``partial`` holds what was recorded before it."""
-
-    def __init__(self, partial):
-        super().__init__("closed loop interrupted")
-        self.partial = partial
 
 
 class ClosedLoop:

@@ -9,11 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError
-
-
-class ControllerError(InputError):
-    """A controller that cannot be built or cannot act (says which gain/joint/time)."""
+from .errors import ControllerError
 
 
 # ---------------------------------------------------------------------- helpers

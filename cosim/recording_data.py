@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import RecordingError
 
 FORMAT = "pkm-recording/1"
 
@@ -87,19 +87,6 @@ def _known():
     from .core.facts import robots
 
     return ", ".join(robots())
-
-
-class RecordingError(InputError):
-    """A malformed recording; the message names the file, row and column."""
-
-    def __init__(self, path, message, row=None, column=None):
-        where = str(path)
-        if row is not None:
-            where += f", row {row}"
-        if column is not None:
-            where += f", column {column!r}"
-        super().__init__(f"{where}: {message}")
-        self.path, self.row, self.column = path, row, column
 
 
 @dataclass

@@ -9,17 +9,13 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import InputError
+from .errors import ScenarioError
 
 REPO = Path(__file__).resolve().parent.parent
 
 _TOP_KEYS = {"name", "description", "robot", "param_set", "plant", "duration", "step", "seed", "parameters",
              "plant_parameters", "plant_scale", "plant_offset", "integrator", "controller", "reference", "initial", "noise",
              "output", "fmu", "tracker"}
-
-
-class ScenarioError(InputError):
-    """A scenario file that cannot be run; names the file and the key."""
 
 
 @dataclass
