@@ -32,14 +32,13 @@ LAYERS = [
       # robot files in other formats read into descriptions for the core (Model("arm.urdf"))
       "cosim.robots"]),
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
-     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.recording_data", "cosim.recording_read", "cosim.run_record", "cosim.trajectories", "cosim.simulate",
-      "cosim.controllers", "cosim.controller_laws", "cosim.controller_design", "cosim.controller_discrete",
-      "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
+     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.run_record", "cosim.trajectories", "cosim.simulate",
+      "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
       "cosim.injection",
       # exciting trajectories: a leaf (it imports nothing of cosim) that scenarios and calibration use too
       "cosim.discrepancy.excitation"]),
     ("loop", "plants, the one closed loop, scenarios and their SSP export",
-     ["cosim.plants", "cosim.closed_loop", "cosim.master", "cosim.scenario", "cosim.scenario_spec", "cosim.scenario_metrics", "cosim.ssp"]),
+     ["cosim.plants", "cosim.closed_loop", "cosim.master", "cosim.scenario", "cosim.ssp"]),
     ("capabilities", "one subpackage per family of work over the loop",
      ["cosim.calibration", "cosim.quattro", "cosim.discrepancy", "cosim.importing", "cosim.report"]),
     ("sweeps", "many runs of any capability on a Dask cluster", ["cosim.sweep"]),

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ControllerError
+from ..errors import ControllerError
 
 
 # ---------------------------------------------------------------------- helpers
@@ -81,7 +81,7 @@ class _CoreLaw:
     _cc = None
 
     def _compiled(self, model=None):
-        from .core.controller import CompiledController
+        from ..core.controller import CompiledController
 
         if self._cc is None:
             model = self.model or model

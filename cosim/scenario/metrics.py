@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import controllers as ctl
-from . import trajectories as tr
-from .scenario_spec import Scenario
+from .. import controllers as ctl
+from .. import trajectories as tr
+from .spec import Scenario
 
 
 # ------------------------------------------------------------------- metrics
@@ -161,7 +161,7 @@ def pose_set_metrics(sc, res) -> dict:
     """Per held pose: rows, final pose error (``position_error``: the norm over the pose
     coordinates in metres, as the core names their units), tracker scatter; over the whole
     run (``motion``): the joint and pose tracking errors and the largest effort."""
-    from .core.model import robot_facts
+    from ..core.model import robot_facts
 
     units = robot_facts(sc.spec["robot"]).pose_units
     lengths = [i for i, u in enumerate(units) if u == "m"]

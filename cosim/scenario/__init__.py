@@ -32,14 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import controllers as ctl
-from . import trajectories as tr
-from .closed_loop import LoopInterrupted
-from .jsonable import jsonable
-from .master import CoreDrive, CorePlant, FMUPlant, make_reference, run
-from .scenario_metrics import (compute_metrics, pose_set_metrics, predicted_equilibrium_error,  # noqa: F401
+from .. import controllers as ctl
+from .. import trajectories as tr
+from ..closed_loop import LoopInterrupted
+from ..jsonable import jsonable
+from ..master import CoreDrive, CorePlant, FMUPlant, make_reference, run
+from .metrics import (compute_metrics, pose_set_metrics, predicted_equilibrium_error,  # noqa: F401
                                step_response_metrics, tracking_metrics)
-from .scenario_spec import REPO, Scenario, ScenarioError, ScenarioResult, load_scenario, scenario_from_dict  # noqa: F401
+from .spec import REPO, Scenario, ScenarioError, ScenarioResult, load_scenario, scenario_from_dict  # noqa: F401
 
 
 # ------------------------------------------------------------------ building
@@ -63,7 +63,7 @@ def _angles(pose, unit, units=None):
 
 def build_models(sc: Scenario):
     """The controller's (nominal) model and the plant's ("true") model."""
-    from .core.model import Model
+    from ..core.model import Model
 
     robot, pset = sc.spec["robot"], sc.spec.get("param_set")
     nominal = Model(robot, pset, sc.spec["parameters"] or None)
@@ -103,7 +103,7 @@ def build_trajectory(sc: Scenario, model):
         return tr.step(x0, x1, t_step=float(r.get("t_step", 0.0)), name="step")
     if kind == "excitation":
         # the discrepancy engine's exciting trajectory (any robot: amplitudes from the core's reach)
-        from .discrepancy.excitation import excitation
+        from ..discrepancy.excitation import excitation
 
         lead_in = float(r.get("lead_in", 0.5))
         return excitation(model, float(sc.spec["duration"]) - lead_in, seed=int(r.get("seed", sc.spec.get("seed", 0))),
@@ -176,7 +176,7 @@ def fmu_path(sc: Scenario) -> Path:
 
 def built_fmu(robot: str) -> Path:
     """The Co-Simulation FMU of ``robot`` from the CMake build (``cosim.fmu`` knows where)."""
-    from .fmu import build, fmu_path as fmu_file
+    from ..fmu import build, fmu_path as fmu_file
 
     try:
         try:
@@ -193,7 +193,7 @@ def built_fmu(robot: str) -> Path:
 def build_plant(sc: Scenario, true_model, truth: dict):
     integ = sc.spec["integrator"]
     rtol, atol = float(integ.get("rtol", 1e-10)), float(integ.get("atol", 1e-12))
-    from .simulate import METHOD_CODES, default_options
+    from ..simulate import METHOD_CODES, default_options
 
     method = integ.get("method", default_options()["method"])
     if method not in METHOD_CODES:
@@ -271,7 +271,7 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
         if export:
             out.files.update(export_run(out, d))
         if figures:
-            from .plots import scenario_figure
+            from ..plots import scenario_figure
 
             out.files["figure"] = scenario_figure(out, d / f"{sc.name}.png")
     return out
@@ -279,7 +279,7 @@ def run_scenario(sc, *, plant: str | None = None, duration: float | None = None,
 
 def export_run(out: ScenarioResult, d: Path) -> dict:
     """Write the recording (``pkm-recording/1``) and the metrics JSON into ``d``."""
-    from .recording import write_recording
+    from ..recording import write_recording
 
     sc = out.scenario
     notes = (f"scenario {sc.name} ({sc.spec.get('description', '').strip()}); plant {sc.spec['plant']}; "
@@ -314,7 +314,7 @@ def export_partial(sc: Scenario, stop: LoopInterrupted, d: Path) -> dict:
     KeyboardInterrupt carrying the samples taken), up to the interruption, in ``d``; the
     metrics and figure of an earlier complete run there are removed (they would not match
     it).  Nothing is written when fewer than two samples were taken."""
-    from .recording import write_recording
+    from ..recording import write_recording
 
     for old in (d / f"{sc.name}_metrics.json", d / f"{sc.name}.png"):
         old.unlink(missing_ok=True)

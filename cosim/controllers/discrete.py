@@ -7,7 +7,7 @@ from __future__ import annotations
 import control
 import numpy as np
 
-from .controller_laws import ControllerError, _CoreLaw
+from .laws import ControllerError, _CoreLaw
 
 
 # ------------------------------------------------ a python-control LTI design

@@ -9,9 +9,9 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import ScenarioError
+from ..errors import ScenarioError
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 _TOP_KEYS = {"name", "description", "robot", "param_set", "plant", "duration", "step", "seed", "parameters",
              "plant_parameters", "plant_scale", "plant_offset", "integrator", "controller", "reference", "initial", "noise",
@@ -128,7 +128,7 @@ def _check(spec, path):
                 fail(f"{sec}.{k}", f"must be a number, got {v!r}")
     c = spec["controller"]
     if c.get("kind") == "discrete" or c.get("type") == "discrete":
-        from .controllers import ControllerError, discrete
+        from ..controllers import ControllerError, discrete
 
         try:
             discrete(c, ndof=1 if not isinstance(c.get("kp"), list) else len(c["kp"]))
@@ -190,8 +190,8 @@ def _check_tracker(spec, fail):
         fail("tracker.pose", f"must be 'declared' (the robot's coordinates) or 'full' (x y z rx ry rz), got "
                              f"{t['pose']!r}")
     if t.get("pose") == "full":
-        from .core.model import robot_facts
-        from .recording import full_pose_allowed
+        from ..core.model import robot_facts
+        from ..recording import full_pose_allowed
 
         if not full_pose_allowed(robot_facts(spec["robot"])):
             fail("tracker.pose", f"'full' is for a robot that declares some of x y z rx ry rz; {spec['robot']} "
@@ -210,8 +210,8 @@ def _check_pose_units(spec, fail):
     """A reference pose whose lengths or angles are far outside any robot's range is
     almost always a unit slip: say which (mm for m, degrees for rad) instead of letting
     the inverse kinematics report an unreachable pose."""
-    from .errors import PkmError
-    from .core.model import robot_facts
+    from ..errors import PkmError
+    from ..core.model import robot_facts
 
     try:  # a robot name, or a description file (its own errors name their line)
         robot_facts(spec["robot"])

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RecordingError
+from ..errors import RecordingError
 
 FORMAT = "pkm-recording/1"
 
@@ -18,8 +18,8 @@ FORMAT = "pkm-recording/1"
 def _facts(robot):
     """The core's facts of a robot (joints, tracker columns; cached by the core module), or
     None if it knows none."""
-    from .core.model import robot_facts
-    from .errors import PkmError
+    from ..core.model import robot_facts
+    from ..errors import PkmError
 
     try:
         return robot_facts(robot)
@@ -32,8 +32,8 @@ def _described(side, name, file, text=None):
     sidecar names (relative to the sidecar, or absolute in recordings written before the
     path was made relative), else from the description the sidecar carries.  The core then
     knows the robot by name for the rest of the process."""
-    from .core.model import Model
-    from .errors import PkmError
+    from ..core.model import Model
+    from ..errors import PkmError
 
     src = None
     if isinstance(file, str):
@@ -84,7 +84,7 @@ def full_pose_allowed(facts) -> bool:
 
 
 def _known():
-    from .core.facts import robots
+    from ..core.facts import robots
 
     return ", ".join(robots())
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from .controller_laws import ControllerError, _gain
+from .laws import ControllerError, _gain
 
 
 # ----------------------------------------------------------- design and analysis

@@ -48,10 +48,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .jsonable import jsonable
-from .recording_data import (FORMAT, FULL_POSE, FULL_POSE_UNITS, Recording, RecordingError, _RESERVED, _facts,  # noqa: F401
+from ..jsonable import jsonable
+from .data import (FORMAT, FULL_POSE, FULL_POSE_UNITS, Recording, RecordingError, _RESERVED, _facts,  # noqa: F401
                              _si_units, _validate, full_pose_allowed, sidecar_path)
-from .recording_read import iter_recording, read_recording  # noqa: F401
+from .read import iter_recording, read_recording  # noqa: F401
 
 
 def write_recording(path, rec: Recording, float_format: str | None = None, progress: bool | None = False,
@@ -84,7 +84,7 @@ def write_recording(path, rec: Recording, float_format: str | None = None, progr
     """
     from tqdm import tqdm
 
-    from .recording_io import SUFFIXES, write_table
+    from ..recording_io import SUFFIXES, write_table
 
     path = Path(path)
     if path.suffix.lower() not in SUFFIXES:
@@ -120,7 +120,7 @@ def write_recording_blocks(path, blocks, progress: bool | None = False) -> tuple
     """
     from tqdm import tqdm
 
-    from .recording_io import SUFFIXES, TableWriter
+    from ..recording_io import SUFFIXES, TableWriter
 
     path = Path(path)
     if path.suffix.lower() not in SUFFIXES:

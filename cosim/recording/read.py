@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .recording_data import (FORMAT, FULL_POSE, FULL_POSE_UNITS, Recording, RecordingError, _RESERVED,
+from .data import (FORMAT, FULL_POSE, FULL_POSE_UNITS, Recording, RecordingError, _RESERVED,
                              _declared, _described, _facts, _known, full_pose_allowed, sidecar_path)
 
 
@@ -64,7 +64,7 @@ def iter_recording(path, robot: str | None = None, chunk_rows: int = 100_000):
     >>> [len(b) for b in iter_recording(csv_path, chunk_rows=4)]
     [4, 4, 2]
     """
-    from .recording_io import TableUnreadable, iter_blocks, table_format
+    from ..recording_io import TableUnreadable, iter_blocks, table_format
 
     path, side, meta, rname, nd, pose_cols = _open(path, robot)
     fmt = table_format(path)
@@ -92,7 +92,7 @@ def iter_recording(path, robot: str | None = None, chunk_rows: int = 100_000):
 def _open(path, robot):
     """The table's path, its sidecar's path and content, the robot's name, joints and pose
     columns (the sidecar checked)."""
-    from .recording_io import SUFFIXES
+    from ..recording_io import SUFFIXES
 
     path = Path(path)
     if not path.exists():
@@ -131,7 +131,7 @@ def _open(path, robot):
 
 
 def _table_header(path, fmt):
-    from .recording_io import TableUnreadable, read_header
+    from ..recording_io import TableUnreadable, read_header
 
     try:
         return read_header(path, fmt)
@@ -142,7 +142,7 @@ def _table_header(path, fmt):
 def _read_table(path):
     """(header, data (n, ncol)) of a table: Arrow's readers; for a CSV they refuse (a word,
     a short row, a non-finite value), the careful reader that names the line and column."""
-    from .recording_io import TableUnreadable, read_table, table_format
+    from ..recording_io import TableUnreadable, read_table, table_format
 
     fmt = table_format(path)
     if fmt == "csv":
@@ -176,7 +176,7 @@ def _check_units(side, units, robot):
         return
     if not isinstance(units, dict):
         raise RecordingError(side, f"units must be an object of column: unit, got {units!r}")
-    from .core.model import robot_facts
+    from ..core.model import robot_facts
 
     f = robot_facts(robot)
     want = {"time": "s", "q": f.joint_unit, "qref": f.joint_unit, "qd": f"{f.joint_unit}/s",
@@ -195,7 +195,7 @@ def _check_units(side, units, robot):
 def _check_pose_scale(path, robot, pose_cols, col):
     """Pose columns far beyond any robot's reach are a unit slip (mm for m, degrees for rad):
     say so, naming the column, instead of letting a later step fail on unreachable poses."""
-    from .core.model import robot_facts
+    from ..core.model import robot_facts
 
     facts = robot_facts(robot)
     units = FULL_POSE_UNITS if list(pose_cols) == list(FULL_POSE) else facts.tracker_units
@@ -270,7 +270,7 @@ class _Layout:
 
 
 def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
-    from .recording_io import table_format
+    from ..recording_io import table_format
 
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)

@@ -35,8 +35,8 @@ Example
 """
 from __future__ import annotations
 
-from .controller_design import (PDDesign, analyse_pd, closed_loop, design_pd, double_integrator, joint_mass,  # noqa: F401
+from .design import (PDDesign, analyse_pd, closed_loop, design_pd, double_integrator, joint_mass,  # noqa: F401
                                 predicted_steady_state_error, step_metrics)
-from .controller_discrete import DISCRETE_KEYS, DiscreteController, LTIController, discrete, lti_controller  # noqa: F401
-from .controller_laws import (ControllerError, JointController, PID, Reference, _gain, _joint_of,  # noqa: F401
+from .discrete import DISCRETE_KEYS, DiscreteController, LTIController, discrete, lti_controller  # noqa: F401
+from .laws import (ControllerError, JointController, PID, Reference, _gain, _joint_of,  # noqa: F401
                               computed_torque, pd, pd_gravity, pid)
