@@ -217,7 +217,7 @@ def pd_gravity(model, *, kp, kd, saturation=None, gravity: str = "measured") -> 
     kp, kd, saturation : see :func:`pd`.
     gravity : {"measured", "reference"}
         Evaluate ``g`` at the pose of the measured joints (forward kinematics, the
-        seed's choice) or at the reference pose.
+        source thesis' choice) or at the reference pose.
     """
     if gravity not in ("measured", "reference"):
         raise ControllerError(f"gravity must be 'measured' or 'reference', got {gravity!r}")
