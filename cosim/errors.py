@@ -4,10 +4,11 @@ subclasses) and the statuses of the core (``pkm.h``, status section).
 :class:`InputError` is what every check of the caller's input raises: a file, a row or
 column of it, a parameter, a joint, a time, an option.  Its subclasses (:class:`ArgumentError`,
 :class:`ParameterError`, :class:`ScenarioError`, :class:`RecordingError`,
-:class:`DiagnosisError`...) say which input.  Every exception of the package's modules is
-defined here (and importable from the module that raises it, e.g. ``cosim.scenario.ScenarioError``).  It is a ``ValueError``, so a
+:class:`DiagnosisError`...) say which input.  :class:`InputError` is a ``ValueError``, so a
 caller that catches ``ValueError`` catches it too; the command line tells it (one line,
 exit code 2) from a fault of the toolkit (any other exception: one line, exit code 70).
+Every exception of the package's modules is defined here (and importable from the module
+that raises it, e.g. ``cosim.scenario.ScenarioError``).
 
 Every core call that fails raises one of these, with the core's message (what and where:
 leg, pose, time, parameter) and ``status``, the C status name.  They subclass the built-in
