@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.core import Model
-from cosim.discrepancy.plant import closed_loop, controller_from, reference_from_recording
+from cosim.discrepancy.runs import closed_loop, controller_from, reference_from_recording
 from cosim.importing import to_recording
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "emps"
@@ -37,7 +37,7 @@ def errors(rec, model, start: int) -> dict:
     res = closed_loop(model, ctrl, ref, x0=rec.q[start], xd0=rec.qd[start], start=start, rtol=1e-8, atol=1e-10,
                       f_ext=getattr(rec, "f_ext", None), history=hist)
     y = rec.tau[start:start + len(res.time), 0]
-    u = res.tau[:, 0]
+    u = res.tau_logged[:, 0]
     out = {}
     for s in (-1, 0, 1):
         a, b = (u[s:], y[:len(y) - s]) if s >= 0 else (u[:s], y[-s:])

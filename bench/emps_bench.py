@@ -61,7 +61,7 @@ def fitted_values(d, nominal: dict) -> dict:
 
 def whole_file_replay(rec_path, plants: dict) -> dict:
     """Relative force error of each plant replayed over the whole file in the recorded loop."""
-    from cosim.discrepancy.plant import closed_loop, controller_from, reference_from_recording
+    from cosim.discrepancy.runs import closed_loop, controller_from, reference_from_recording
     from cosim.recording import read_recording
 
     rec = read_recording(rec_path)
@@ -78,7 +78,7 @@ def whole_file_replay(rec_path, plants: dict) -> dict:
         xd0 = m.pose_velocity(x0, rec.qd[0])
         res = closed_loop(m, ctrl, ref, x0=x0, xd0=xd0, start=0, rtol=1e-8, atol=1e-10)
         s = slice(0, len(res.time))
-        out[name] = float(np.linalg.norm(res.tau - rec.tau[s]) / np.linalg.norm(rec.tau[s]))
+        out[name] = float(np.linalg.norm(res.tau_logged - rec.tau[s]) / np.linalg.norm(rec.tau[s]))
     return out
 
 

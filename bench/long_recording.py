@@ -6,7 +6,7 @@ effects, written block by block, then diagnosed, beside the diagnosis of its fir
     .venv/bin/python bench/long_recording.py --io [--minutes 60] [--chunk 100000]
                                              [--formats csv,parquet,hdf5] [--no-whole]
 
-The recording is the engine's own blind-case loop (:mod:`cosim.discrepancy.plant`: the core
+The recording is the engine's own blind-case loop (:mod:`cosim.discrepancy.runs`: the core
 plant, its drive and sensors, a PD + gravity controller at 1 kHz, the sensor noise of
 ``scenarios/blind/config.toml``) along one exciting trajectory of the whole length
 (:mod:`cosim.discrepancy.excitation`), run in pieces of one minute, each from the true state
@@ -57,7 +57,7 @@ def simulated_blocks(minutes: float, seed: int = 1, robot: str = "6pus"):
     from cosim.core import Model
     from cosim.discrepancy import blind
     from cosim.discrepancy.excitation import excitation
-    from cosim.discrepancy.plant import closed_loop
+    from cosim.discrepancy.runs import closed_loop
     from cosim.master import make_reference
     from cosim.recording import Recording
 

@@ -14,7 +14,7 @@ sample ``t_k`` (``k = 0 .. n-1``):
    A signal injected into the loop (``inject``, :mod:`cosim.injection`) is added at
    its point: to the controller's output before or after its saturation, to the
    reference, or to the position reading the controller sees (the recorded reading
-   stays the sensor's); ``LoopRecord.tau_inj`` is the part of the command it makes;
+   stays the sensor's); ``RunRecord.tau_inj`` is the part of the command it makes;
 4. the plant holds the command (saturation and ``actuator.delay`` are the plant's: the
    core keeps the delay line) and, if given, the known external effort of the sample
    (``f_ext``, added to the actuator effort), and advances to ``t_k + h`` (not after
@@ -35,9 +35,10 @@ Two back ends run the sequence:
   (:class:`~cosim.core.CompiledController`, the same ``pkm_ctrl``), any other Python
   callable as it is; the readings' delay is the core's line (``pkm_reading_delay``).
 
-By default the compiled back end runs whenever it can; :attr:`LoopRecord.note` says why
+By default the compiled back end runs whenever it can; ``RunRecord.loop_note`` says why
 it did not.  :func:`cosim.master.run` (scenarios, sweeps) and the discrepancy replay and
-blind generator (:func:`cosim.discrepancy.plant.closed_loop`) are this loop.
+blind generator (:func:`cosim.discrepancy.runs.closed_loop`) are this loop; each run gives
+one :class:`cosim.run_record.RunRecord`.
 
 Example
 -------
@@ -66,9 +67,10 @@ from ._native import STATUS, raise_for
 from .core.controller import KINDS, CompiledController
 from .core.loop import LOOP_FIELDS, closed_loop_call
 from .plants import CoreDrive, CorePlant, _facts
-from .errors import InputError
+from .errors import InputError, LoopInterrupted
+from .run_record import RunRecord
 
-__all__ = ["ClosedLoop", "LoopRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
+__all__ = ["ClosedLoop", "RunRecord", "LoopInterrupted", "CompiledController", "compile_controller", "KINDS",
            "NOISE_CHANNELS"]
 
 #: the noise channels, in the order of their draws
@@ -90,56 +92,28 @@ def compile_controller(controller, *, model, dt: float):
         return None, str(e)
 
 
-@dataclass
-class LoopRecord:
-    """What a closed-loop run recorded, one row per sample, the first ``n`` rows filled.
+@dataclass(frozen=True)
+class _Run:
+    """What a back end needs of one run: the samples' times ``t`` [s] and period ``h`` [s],
+    the reference rows ``ref``, the record ``rec`` it fills (its arrays are ``rows``), the
+    noise ``draws``, the initial state ``x0``, ``xd0``, the callbacks, the external effort
+    ``f_ext``, the ``past`` readings to prime the controller with and the bound ``inject``."""
 
-    ``q``, ``qd``: the readings the controller saw (noise included); ``q_true``,
-    ``qd_true``, ``x``, ``xd``: the plant's joints and pose; ``tau_cmd``: the command;
-    ``tau``: the effort applied (the drive's saturation; the command without a drive);
-    ``tau_logged``: the command plus the ``tau`` noise; ``pose``: the tracker's pose
-    (``x`` plus the ``pose`` noise).  Arrays (n_samples, nd) [joint and pose units,
-    N or N m]; ``time`` (n_samples,) [s].
-    """
-
-    time: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    q_true: np.ndarray
-    qd_true: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    tau_cmd: np.ndarray
-    tau: np.ndarray
-    tau_logged: np.ndarray
-    pose: np.ndarray
-    n: int = 0
-    #: which back end ran: "compiled" or "python"
-    loop: str = "python"
-    #: why the stepwise back end ran ("" for the compiled one)
-    note: str = ""
-    saturated: int = 0
-    wall: float = 0.0
-    #: the run ended early because ``should_stop`` said so
-    stopped: bool = False
-    #: (n_samples, nd): the part of ``tau_cmd`` an injected signal makes (zeros without one)
-    tau_inj: np.ndarray | None = None
-
-    def head(self) -> "LoopRecord":
-        """The filled rows only."""
-        k = self.n
-        cut = {f: getattr(self, f)[:k] for f in ("time", "q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd",
-                                                  "tau", "tau_logged", "pose")}
-        return LoopRecord(**cut, n=k, loop=self.loop, note=self.note, saturated=self.saturated, wall=self.wall,
-                          stopped=self.stopped, tau_inj=None if self.tau_inj is None else self.tau_inj[:k])
-
-
-class LoopInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a run: ``partial`` holds what was recorded before it."""
-
-    def __init__(self, partial):
-        super().__init__("closed loop interrupted")
-        self.partial = partial
+    t: np.ndarray
+    h: float
+    ref: dict
+    rows: dict
+    draws: dict
+    rec: RunRecord
+    x0: np.ndarray
+    xd0: object = None
+    progress: object = None
+    should_stop: object = None
+    f_ext: object = None
+    past: object = None
+    inject: object = None
+    reference: object = None
+    start: int = 0
 
 
 class ClosedLoop:
@@ -155,8 +129,8 @@ class ClosedLoop:
         the core implements (then the compiled back end can run it).
     drive : cosim.plants.CoreDrive, optional
         The plant's drive and sensor model: readings through its reading model and delay,
-        ``tau`` the effort it applies.  Without it the readings are the plant's joints
-        and ``tau`` the command.
+        ``tau_applied`` the effort it applies.  Without it the readings are the plant's joints
+        and ``tau_applied`` the command.
     noise : dict, optional
         Standard deviations of white noise, scalars or per joint/coordinate: ``q`` [m or
         rad] and ``qd`` [per s] on the readings the controller sees, ``tau`` [N or N m] on
@@ -229,7 +203,7 @@ class ClosedLoop:
 
     # -------------------------------------------------------------------- run
     def run(self, reference, *, start: int = 0, x0=None, xd0=None, progress=None, should_stop=None,
-            f_ext=None, history=None, started=None, inject=None) -> LoopRecord:
+            f_ext=None, history=None, started=None, inject=None) -> RunRecord:
         """Run over the reference samples ``start:``.
 
         Parameters
@@ -247,7 +221,7 @@ class ClosedLoop:
         should_stop : callable, optional
             ``should_stop() -> bool``, asked between pieces (compiled: about every 20 ms)
             or samples (stepwise); True ends the run there with the rows so far
-            (``LoopRecord.stopped``).
+            (``RunRecord.stopped``).
         f_ext : array_like, shape (len(reference.time), nd), optional
             A known external effort per joint at every reference sample [N or N m],
             positive along +q (e.g. a recording's measured force, ``Recording.f_ext``):
@@ -275,13 +249,15 @@ class ClosedLoop:
 
         Returns
         -------
-        LoopRecord
+        cosim.run_record.RunRecord
+            The rows of the run (``robot``, ``step``, the reference and the descriptions
+            are :func:`cosim.master.run`'s to fill).
 
         Raises
         ------
         Exception
             The plant's or the controller's error (the core's classes for the core's
-            failures), with ``partial`` (the :class:`LoopRecord` of the rows before the
+            failures), with ``partial`` (the :class:`~cosim.run_record.RunRecord` of the rows before the
             failing sample) and ``loop_time`` (that sample's time [s]) attached.
         LoopInterrupted
             On ctrl-C, with ``partial``.
@@ -297,29 +273,16 @@ class ClosedLoop:
             x0 = reference.x[start] if getattr(reference, "x", None) is not None \
                 else self.plant.model.fk(reference.q[start])
         x0 = np.asarray(x0, float)
-        rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau",
-                                                       "tau_inj")}
+        rows = {f: np.full((n, nd), np.nan) for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd",
+                                                       "tau_applied", "tau_logged", "pose", "tau_inj")}
         draws = self._draws(n)
-        if f_ext is not None:
-            f_ext = np.asarray(f_ext, float)
-            if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
-                raise InputError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
-                                 f"got {f_ext.shape}")
-            f_ext = np.ascontiguousarray(f_ext[start:start + n])
-            bad = np.argwhere(~np.isfinite(f_ext))
-            if bad.size:
-                raise InputError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
-                                 f"{f_ext[tuple(bad[0])]}")
-            if not hasattr(self.plant, "set_external"):
-                raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+        f_ext = None if f_ext is None else self._f_ext_rows(f_ext, reference, start, t)
         past = self._history(reference, start, history)
         inj = None if inject is None else inject.bind(len(reference.time), nd, start, n, reference.time)
-        rec = LoopRecord(t, rows["q"], rows["qd"], rows["q_true"], rows["qd_true"], rows["x"], rows["xd"],
-                         rows["tau_cmd"], rows["tau"], np.full((n, nd), np.nan), np.full((n, nd), np.nan),
-                         tau_inj=rows["tau_inj"])
-        cc, rec.note = self._compiled_controller(h)
+        rec = RunRecord(time=t, **rows)
+        cc, rec.loop_note = self._compiled_controller(h)
         if self.compiled and cc is None:
-            raise ValueError(f"the loop cannot run compiled: {rec.note}")
+            raise ValueError(f"the loop cannot run compiled: {rec.loop_note}")
         rec.loop = "compiled" if cc is not None else "python"
         if cc is None and inj is not None and inj.refusal(self.controller):
             raise InputError(inj.refusal(self.controller))
@@ -328,16 +291,22 @@ class ClosedLoop:
                for k in ("q", "qd", "qdd", "x")}
         if started is not None:
             started()
+        run = _Run(t=t, h=h, ref=ref, rows=rows, draws=draws, rec=rec, x0=x0, xd0=xd0, progress=progress,
+                   should_stop=should_stop, f_ext=f_ext, past=past, inject=inj, reference=reference, start=start)
+        return self._execute(cc, run)
+
+    def _execute(self, cc, run: _Run) -> RunRecord:
+        """The back end's run, timed and finished: the record of the rows (the failure
+        raised with the rows before it as ``partial``)."""
+        t, h, draws, rec, n = run.t, run.h, run.draws, run.rec, len(run.t)
         wall0 = _time.perf_counter()
         failure, law = None, None
         try:
             if cc is not None:
-                failure = self._compiled(cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
-                                         past, inj)
+                failure = self._compiled(cc, run)
             else:
                 law = self._stepwise_law(h)
-                failure = self._stepwise(law, reference, start, t, h, rows, draws, x0, xd0, rec, progress,
-                                         should_stop, f_ext, past, inj)
+                failure = self._stepwise(law, run)
         except KeyboardInterrupt:
             self._finish(rec, draws, wall0, cc or law)
             raise LoopInterrupted(rec.head()) from None
@@ -349,9 +318,25 @@ class ClosedLoop:
             raise exc
         return rec.head() if rec.n < n else rec
 
+    def _f_ext_rows(self, f_ext, reference, start, t):
+        """``f_ext`` checked: its rows of the run's samples, C-contiguous (n, nd) [N or N m]."""
+        n, nd = len(t), self.ndof
+        f_ext = np.asarray(f_ext, float)
+        if f_ext.ndim != 2 or f_ext.shape[1] != nd or f_ext.shape[0] < start + n:
+            raise InputError(f"f_ext must have shape ({len(reference.time)}, {nd}) (a row per reference sample), "
+                             f"got {f_ext.shape}")
+        f_ext = np.ascontiguousarray(f_ext[start:start + n])
+        bad = np.argwhere(~np.isfinite(f_ext))
+        if bad.size:
+            raise InputError(f"f_ext: row {start + bad[0][0]} (t = {t[bad[0][0]]:.6g} s), joint {bad[0][1] + 1} is "
+                             f"{f_ext[tuple(bad[0])]}")
+        if not hasattr(self.plant, "set_external"):
+            raise InputError(f"the plant ({type(self.plant).__name__}) takes no external effort (f_ext)")
+        return f_ext
+
     def _finish(self, rec, draws, wall0, law):
         k = rec.n
-        rec.wall = _time.perf_counter() - wall0
+        rec.wall_time = _time.perf_counter() - wall0
         rec.tau_logged[:k] = rec.tau_cmd[:k] + (draws["tau"][:k] if "tau" in draws else 0.0)
         rec.pose[:k] = rec.x[:k] + (draws["pose"][:k] if "pose" in draws else 0.0)
         if isinstance(law, CompiledController):
@@ -383,9 +368,11 @@ class ClosedLoop:
         return range(start - m, start), np.ascontiguousarray(reference.time[s], dtype=float), q, qd, ref
 
     # ------------------------------------------------------------ back ends
-    def _compiled(self, cc, t, h, ref, rows, draws, x0, xd0, rec, progress, should_stop, f_ext, past, inject):
+    def _compiled(self, cc, run: _Run):
         """``pkm_closed_loop`` in pieces of about :data:`PIECE_SECONDS`; returns None or
         ``(exception, sample)``."""
+        t, h, ref, rows, draws, x0, xd0, rec = run.t, run.h, run.ref, run.rows, run.draws, run.x0, run.xd0, run.rec
+        progress, should_stop, f_ext, past, inject = run.progress, run.should_stop, run.f_ext, run.past, run.inject
         n = len(t)
         plant = self.plant
         try:
@@ -404,7 +391,7 @@ class ClosedLoop:
             k1 = min(n, k0 + piece)
             # A piece ends on a recorded sample the plant has not advanced from: the next
             # piece starts at its successor after the advance below.
-            before = None if k0 == 0 else rows["tau"][k0 - 1]
+            before = None if k0 == 0 else rows["tau_applied"][k0 - 1]
             w = _time.perf_counter()
             st, done, message = closed_loop_call(sim, cc, t=t, dt=h, ref=ref, rows=rows, k0=k0, k1=k1,
                                                  tau_before=before, q_noise=qn, qd_noise=qdn,
@@ -435,10 +422,12 @@ class ClosedLoop:
                 break
         return None
 
-    def _stepwise(self, ctrl, reference, start, t, h, rows, draws, x0, xd0, rec, progress, should_stop, f_ext,
-                  past, inject):
+    def _stepwise(self, ctrl, run: _Run):
         """One sample at a time through the Plant interface, ``ctrl`` the compiled copy of
         the controller (or the Python callable); returns None or ``(exception, sample)``."""
+        t, h, rows, draws, x0, xd0, rec = run.t, run.h, run.rows, run.draws, run.x0, run.xd0, run.rec
+        progress, should_stop, f_ext, past, inject = run.progress, run.should_stop, run.f_ext, run.past, run.inject
+        reference, start = run.reference, run.start
         n = len(t)
         plant, drive = self.plant, self.drive
         compiled = isinstance(ctrl, CompiledController)
@@ -477,7 +466,7 @@ class ClosedLoop:
                 applied = drive.applied(tau) if drive is not None else tau
                 rows["q"][k], rows["qd"][k], rows["q_true"][k], rows["qd_true"][k] = qm, qdm, y.q, y.qd
                 rows["x"][k], rows["xd"][k] = y.x, y.xd
-                rows["tau_cmd"][k], rows["tau"][k] = tau, applied
+                rows["tau_cmd"][k], rows["tau_applied"][k] = tau, applied
                 rec.n = k + 1
                 if k == n - 1:
                     break

@@ -2,11 +2,13 @@
 subclasses) and the statuses of the core (``pkm.h``, status section).
 
 :class:`InputError` is what every check of the caller's input raises: a file, a row or
-column of it, a parameter, a joint, a time, an option.  Its subclasses across the package
-(:class:`ArgumentError`, :class:`ParameterError` here; ``ScenarioError``,
-``RecordingError``, ``DiagnosisError``...) say which input.  It is a ``ValueError``, so a
+column of it, a parameter, a joint, a time, an option.  Its subclasses (:class:`ArgumentError`,
+:class:`ParameterError`, :class:`ScenarioError`, :class:`RecordingError`,
+:class:`DiagnosisError`...) say which input.  :class:`InputError` is a ``ValueError``, so a
 caller that catches ``ValueError`` catches it too; the command line tells it (one line,
 exit code 2) from a fault of the toolkit (any other exception: one line, exit code 70).
+Every exception of the package's modules is defined here (and importable from the module
+that raises it, e.g. ``cosim.scenario.ScenarioError``).
 
 Every core call that fails raises one of these, with the core's message (what and where:
 leg, pose, time, parameter) and ``status``, the C status name.  They subclass the built-in
@@ -23,8 +25,11 @@ PKM_ERR_UNREACHABLE
 """
 from __future__ import annotations
 
-__all__ = ["InputError", "is_input_error", "PkmError", "ArgumentError", "ParameterError", "UnreachableError", "SingularError",
-           "ConvergenceError", "JointLimitError", "IntegrationError", "UnsupportedError", "MasterError"]
+__all__ = ["InputError", "is_input_error", "PkmError", "ArgumentError", "ParameterError", "UnreachableError",
+           "SingularError", "ConvergenceError", "JointLimitError", "IntegrationError", "UnsupportedError",
+           "MasterError", "InjectionError", "DiagnosisError", "CampaignError", "FMUError", "RecordingError",
+           "ControllerError", "ReportError", "LoopInterrupted", "TrajectoryError", "ImportFailure", "URDFError",
+           "ScenarioError"]
 
 
 class InputError(ValueError):
@@ -114,10 +119,107 @@ class MasterError(RuntimeError):
     """A co-simulation that could not go on (:func:`cosim.master.run`); says at which time
     and why.
 
-    ``partial`` holds the :class:`cosim.master.RunResult` of the samples taken before the
+    ``partial`` holds the :class:`cosim.run_record.RunRecord` of the samples taken before the
     failure.
     """
 
     def __init__(self, message, partial=None):
         super().__init__(message)
         self.partial = partial
+
+
+# ------------------------------------------- the exceptions of the package's modules
+
+
+#: raised by :mod:`cosim.injection` (and importable from it)
+class InjectionError(InputError):
+    """An injected signal or its declaration is wrong; the message says what and where."""
+
+
+#: raised by :mod:`cosim.discrepancy.residuals` (and importable from it)
+class DiagnosisError(InputError):
+    """A recording (or model) the engine cannot diagnose; the message says what is missing."""
+
+
+#: raised by :mod:`cosim.discrepancy.campaign` (and importable from it)
+class CampaignError(InputError):
+    """A campaign the engine cannot diagnose: runs of two robots, sampled at different
+    rates, a per-run quantity of a kind it cannot take out, a campaign file without runs."""
+
+
+#: raised by :mod:`cosim.fmu` (and importable from it)
+class FMUError(RuntimeError):
+    """An FMI call failed; ``log`` holds the FMU's log lines of that instance."""
+
+    def __init__(self, message: str, log: list[str] | None = None):
+        super().__init__(message)
+        self.log = list(log or [])
+
+
+#: raised by :mod:`cosim.recording` (and importable from it)
+class RecordingError(InputError):
+    """A malformed recording; the message names the file, row and column."""
+
+    def __init__(self, path, message, row=None, column=None):
+        where = str(path)
+        if row is not None:
+            where += f", row {row}"
+        if column is not None:
+            where += f", column {column!r}"
+        super().__init__(f"{where}: {message}")
+        self.path, self.row, self.column = path, row, column
+
+
+#: raised by :mod:`cosim.controllers` (and importable from it)
+class ControllerError(InputError):
+    """A controller that cannot be built or cannot act (says which gain/joint/time)."""
+
+
+#: raised by :mod:`cosim.report` (and importable from it)
+class ReportError(InputError):
+    """A recording or robot the report cannot draw (says which and why)."""
+
+
+#: raised by :mod:`cosim.closed_loop` (and importable from it)
+class LoopInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a run: ``partial`` holds what was recorded before it."""
+
+    def __init__(self, partial):
+        super().__init__("closed loop interrupted")
+        self.partial = partial
+
+
+#: raised by :mod:`cosim.trajectories` (and importable from it)
+class TrajectoryError(InputError):
+    """A trajectory specification that cannot be evaluated (says which item is wrong)."""
+
+
+#: raised by :mod:`cosim.importing.errors` (and importable from it)
+class ImportFailure(InputError):
+    """A source file or a map that cannot be imported.
+
+    The message is one line: the file, then the variable (of the source) or the field (of
+    the map) and the recording column it feeds, then what is wrong.  The CLI prints it and
+    exits with status 2.
+    """
+
+    def __init__(self, path, message, variable=None, column=None, field=None):
+        where = str(path)
+        if field is not None:
+            where += f", field {field}"
+        if variable is not None:
+            where += f", variable {variable!r}"
+        if column is not None:
+            where += f" (column {column})"
+        super().__init__(f"{where}: {message}")
+        self.path, self.variable, self.column, self.field = path, variable, column, field
+
+
+#: raised by :mod:`cosim.robots.urdf` (and importable from it)
+class URDFError(InputError):
+    """A URDF the toolkit cannot read as a serial arm; the message names file, line and element."""
+
+
+#: raised by :mod:`cosim.scenario` (and importable from it)
+class ScenarioError(InputError):
+    """A scenario file that cannot be run; names the file and the key."""

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import FMUError, InputError
 
 __all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "restore_fmpy_logger",
            "FMUInstance", "FMUError"]
@@ -60,14 +60,6 @@ class _FmuIds(dict):
 
 
 FMU_IDS = _FmuIds()
-
-
-class FMUError(RuntimeError):
-    """An FMI call failed; ``log`` holds the FMU's log lines of that instance."""
-
-    def __init__(self, message: str, log: list[str] | None = None):
-        super().__init__(message)
-        self.log = list(log or [])
 
 
 def build_dir() -> Path:

@@ -44,16 +44,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .core.controller import INJECT_POINTS, KINDS, CompiledController
-from .errors import InputError
+from .errors import InjectionError
 
 __all__ = ["Injection", "INJECT_POINTS", "COMMAND_POINTS", "from_recording", "declaration_errors"]
 
 #: the points at which the signal is part of the command (an effort)
 COMMAND_POINTS = ("command", "command_after_saturation")
-
-
-class InjectionError(InputError):
-    """An injected signal or its declaration is wrong; the message says what and where."""
 
 
 def declaration_errors(decl, *, where: str = "injection") -> str:

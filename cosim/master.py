@@ -6,8 +6,8 @@ loop (:class:`cosim.closed_loop.ClosedLoop`: inside the core when the plant is t
 the controller one the core implements, else sample by sample in Python).  At each
 communication point ``t_k = t0 + k h`` the loop reads the plant's joints, adds the optional
 sensor noise, asks the controller for the efforts, holds them as inputs over the step and
-advances the plant to ``t_k + h``.  The result (:class:`RunResult`) is a numpy structured
-array with one row per communication point and a unit per field.
+advances the plant to ``t_k + h``.  The result is the run's record
+(:class:`cosim.run_record.RunRecord`): one row per communication point, a unit per field.
 
 Example
 -------
@@ -22,7 +22,7 @@ Example
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from .controllers import Reference
 # the plants a run steps, named by the master's interface too (``from cosim.master import CorePlant``)
 from .errors import MasterError
 from .plants import CoreDrive, CorePlant, FMUPlant, Plant, PlantOutputs, _facts  # noqa: F401
+from .run_record import RunRecord
 
 
 # -------------------------------------------------------------------- reference
@@ -103,81 +104,32 @@ def _nsteps(duration, step):
 
 # ------------------------------------------------------------------------ run
 
-@dataclass
-class RunResult:
-    """One co-simulation run.
-
-    ``data`` is a structured array, one row per communication point, with the fields
-    of ``units``: ``time``; ``q``, ``qd`` (joint readings, with sensor noise),
-    ``q_true``, ``qd_true``; ``tau_cmd`` (the controller's command, held over the
-    following step) and ``tau`` (the effort applied: the command after the drive's
-    saturation);
-    ``qref``, ``qdref``; ``x`` (true pose), ``x_meas`` (the pose an external tracker
-    sees: true pose + noise), ``xd``, ``xref``; ``label`` (reference segment tag).
-    ``result["q"]`` is a field.
-    """
-
-    data: np.ndarray
-    units: dict
-    robot: str
-    plant: dict
-    controller: dict
-    step: float
-    wall_time: float
-    reference_name: str = ""
-    noise: dict = field(default_factory=dict)
-    saturated: int = 0
-    #: which loop ran: "compiled" (pkm_closed_loop, one C call) or "python" (sample by sample)
-    loop: str = "python"
-    #: why the Python loop ran when it did ("" for the compiled loop)
-    loop_note: str = ""
-
-    def __getitem__(self, name):
-        return self.data[name]
-
-    def __len__(self):
-        return len(self.data)
-
-    @property
-    def time(self):
-        return self.data["time"]
-
-    def to_recording(self, parameters=None, notes: str = ""):
-        """The run as a ``pkm-recording/1`` :class:`cosim.recording.Recording`.
-
-        Joint readings ``q``/``qd`` as the encoders give them, ``tau`` the efforts
-        applied, ``qref``, and the pose columns from the external tracker
-        (``x_meas``); the segment label goes in an extra column ``label``, and the
-        commands in ``tau_cmd<i>`` when the drive saturated them.
-        """
-        from .recording import Recording
-
-        d = self.data
-        extra = {"label": d["label"].astype(float)}
-        if np.any(d["tau_cmd"] != d["tau"]):  # saturated: keep what the controller asked for too
-            extra.update({f"tau_cmd{i + 1}": d["tau_cmd"][:, i].copy() for i in range(d["tau"].shape[1])})
-        return Recording(robot=self.robot, time=d["time"].copy(), q=d["q"].copy(), qd=d["qd"].copy(),
-                         tau=d["tau"].copy(), qref=d["qref"].copy(), pose=d["x_meas"].copy(),
-                         extra=extra, parameters=dict(parameters or {}),
-                         controller=dict(self.controller), notes=notes)
-
-
-def _dtype(nd):
-    f = [("time", "f8")]
-    for name in ("q", "qd", "q_true", "qd_true", "tau", "tau_cmd", "qref", "qdref", "x", "x_meas", "xd", "xref"):
-        f.append((name, "f8", (nd,)))
-    f.append(("label", "i4"))
-    return np.dtype(f)
-
-
 def _units(robot, nd):
     facts = _facts(robot)
     j = facts.joint_unit if facts else "m or rad"
     effort = facts.effort_unit if facts else "N or N m"
     pose = list(facts.pose_units) if facts else ["m or rad"] * nd
-    return {"time": "s", "q": j, "qd": f"{j}/s", "q_true": j, "qd_true": f"{j}/s",
-            "tau": effort, "tau_cmd": effort, "qref": j, "qdref": f"{j}/s", "x": pose, "x_meas": pose,
-            "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
+    return {"time": "s", "q": j, "qd": f"{j}/s", "q_true": j, "qd_true": f"{j}/s", "tau_applied": effort,
+            "tau_cmd": effort, "tau_logged": effort, "tau_inj": effort, "qref": j, "qdref": f"{j}/s", "x": pose,
+            "pose": pose, "xd": [f"{u}/s" for u in pose], "xref": pose, "label": "-"}
+
+
+def _recorder(plant, controller, reference, sig, seed):
+    """``result(rec)``: the loop's record with what :func:`run` adds to it (the reference's
+    rows, the units, the robot, the step and the descriptions)."""
+    h = float(reference.time[1] - reference.time[0])
+    units = _units(plant.robot, plant.ndof)
+    ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
+    noise = {"q": sig["q"].tolist(), "qd": sig["qd"].tolist(), "pose": sig["pose"].tolist(), "seed": seed}
+
+    def result(rec):
+        k = rec.n
+        return replace(rec.head(k), robot=plant.robot, step=h, units=units, qref=reference.q[:k].copy(),
+                       qdref=reference.qd[:k].copy(), xref=reference.x[:k].copy(),
+                       label=np.asarray(reference.label[:k], dtype=np.int32), plant=plant.describe(),
+                       controller=ctrl_desc, noise=noise, reference_name=reference.name)
+
+    return result
 
 
 def _stopped(plant, t, h, why) -> str:
@@ -194,7 +146,7 @@ def _stopped(plant, t, h, why) -> str:
 
 def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=None, q_noise=0.0, qd_noise=0.0,
         pose_noise=0.0, seed: int | None = 0, drive=None, progress: bool | None = None,
-        compiled: bool | None = None, should_stop=None, f_ext=None, started=None) -> RunResult:
+        compiled: bool | None = None, should_stop=None, f_ext=None, started=None) -> RunRecord:
     """Step ``plant`` and ``controller`` together over the reference's time grid
     (:class:`cosim.closed_loop.ClosedLoop`).
 
@@ -219,10 +171,10 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     seed : int, optional
         Seed of the noise generator.
     drive : CoreDrive, optional
-        The plant's drive and sensor model: the recorded ``tau`` is the effort it
+        The plant's drive and sensor model: the recorded ``tau_applied`` is the effort it
         applies (saturation) and the joint readings go through its encoder model
         (offset, backlash, compliance) and delay before the noise.  Without it the
-        readings are the plant's joints and ``tau`` the command.
+        readings are the plant's joints and ``tau_applied`` the command.
     progress : bool, optional
         Show a tqdm progress bar; by default it appears on a terminal when the run
         lasts more than two seconds of wall time.
@@ -230,7 +182,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         Run the whole loop inside the core (one C call per piece of about 20 ms, no
         Python per sample).  By default it does whenever it can: a :class:`CorePlant`
         and a controller the core implements (PD, PD + gravity, computed torque, PID,
-        LTI, discrete); otherwise the stepwise loop runs and ``RunResult.loop_note``
+        LTI, discrete); otherwise the stepwise loop runs and ``RunRecord.loop_note``
         says why.  ``True`` raises if it cannot, ``False`` forces the stepwise loop.
     should_stop : callable, optional
         ``should_stop() -> bool``, asked between pieces or samples; True ends the run
@@ -243,8 +195,9 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
 
     Returns
     -------
-    RunResult
-        ``loop`` says which loop ran ("compiled" or "python").
+    cosim.run_record.RunRecord
+        The rows with the reference (``qref``, ``qdref``, ``xref``, ``label``), units, robot,
+        step and descriptions; ``loop`` says which loop ran ("compiled" or "python").
 
     Raises
     ------
@@ -252,17 +205,16 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
         When the plant or the controller fails; says at which time, and carries the
         samples taken so far in ``partial``.
     cosim.closed_loop.LoopInterrupted
-        On ctrl-C, with the samples taken so far (a :class:`RunResult`) in ``partial``.
+        On ctrl-C, with the samples taken so far (a :class:`~cosim.run_record.RunRecord`) in ``partial``.
     """
     from tqdm import tqdm
 
     from .closed_loop import ClosedLoop, LoopInterrupted
 
-    t = reference.time
-    n = len(t)
+    n = len(reference.time)
     if n < 2:
         raise MasterError("the reference needs at least two communication points")
-    h = float(t[1] - t[0])
+    h = float(reference.time[1] - reference.time[0])
     nd = plant.ndof
     if reference.q.shape[1] != nd:
         raise MasterError(f"reference has {reference.q.shape[1]} joints, the plant {nd}")
@@ -273,25 +225,7 @@ def run(plant: Plant, controller, reference: ReferenceTable, *, x0=None, xd0=Non
     except ValueError as e:
         raise MasterError(str(e).replace("noise 'pose'", "pose_noise").replace("noise 'q'", "q_noise")
                           .replace("noise 'qd'", "qd_noise")) from e
-    sig = loop.noise
-
-    data = np.zeros(n, dtype=_dtype(nd))
-    data["time"] = t
-    data["qref"] = reference.q
-    data["qdref"] = reference.qd
-    data["xref"] = reference.x
-    data["label"] = reference.label
-    units = _units(plant.robot, nd)
-    ctrl_desc = controller.describe() if hasattr(controller, "describe") else {"type": type(controller).__name__}
-    noise = {"q": sig["q"].tolist(), "qd": sig["qd"].tolist(), "pose": sig["pose"].tolist(), "seed": seed}
-
-    def result(rec):
-        k = rec.n
-        for f in ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau"):
-            data[f][:k] = getattr(rec, f)[:k]
-        data["x_meas"][:k] = rec.pose[:k]
-        return RunResult(data[:k], units, plant.robot, plant.describe(), ctrl_desc, h, rec.wall, reference.name,
-                         noise, rec.saturated, rec.loop, rec.note)
+    result = _recorder(plant, controller, reference, loop.noise, seed)
 
     # default: a bar only on a terminal and only once the run has taken two seconds
     bar = tqdm(total=n - 1, unit="step", delay=2.0, disable=None if progress is None else not progress, leave=False,

@@ -68,9 +68,9 @@ def step_figure(out, path, coords: str = "moved") -> Path:
     lim = np.max(np.abs(e[len(e) // 3:])) if len(e) > 3 else 1.0
     ax[1].set_ylim(-3 * lim - 1e-6, 3 * lim + 1e-6)
     ax[1].legend(ncol=6, fontsize=7)
-    for j in range(res["tau"].shape[1]):
-        ax[2].plot(t, res["tau"][:, j], label=f"tau{j + 1}")
-    ax[2].set_ylabel(f"effort [{res.units['tau']}]")
+    for j in range(res["tau_applied"].shape[1]):
+        ax[2].plot(t, res["tau_applied"][:, j], label=f"tau{j + 1}")
+    ax[2].set_ylabel(f"effort [{res.units['tau_applied']}]")
     ax[2].set_xlabel("time [s]")
     ax[2].legend(ncol=6, fontsize=7)
     fig.tight_layout()
@@ -104,10 +104,10 @@ def tracking_figure(out, path) -> Path:
     a1.set_title(f"RMS {m['tracking']['pen_error_rms'] * 1e6:.3g} um, max {m['tracking']['pen_error_max'] * 1e6:.3g} um",
                  fontsize=9)
     a2 = fig.add_subplot(2, 1, 2)
-    for j in range(res["tau"].shape[1]):
-        a2.plot(res["time"], res["tau"][:, j], label=f"tau{j + 1}")
+    for j in range(res["tau_applied"].shape[1]):
+        a2.plot(res["time"], res["tau_applied"][:, j], label=f"tau{j + 1}")
     a2.set_xlabel("time [s]")
-    a2.set_ylabel(f"effort [{res.units['tau']}]")
+    a2.set_ylabel(f"effort [{res.units['tau_applied']}]")
     a2.legend(ncol=6, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -122,7 +122,7 @@ def pose_set_figure(out, path) -> Path:
     t = res["time"]
     fig, ax = plt.subplots(2, 1, figsize=(9, 7))
     for i, nm in enumerate(["x", "y", "z"][: res["x"].shape[1]]):
-        ax[0].plot(t, res["x_meas"][:, i] * 1e3, lw=0.8, label=f"{nm} (tracker)")
+        ax[0].plot(t, res["pose"][:, i] * 1e3, lw=0.8, label=f"{nm} (tracker)")
     for p in m["poses"]:
         ax[0].axvspan(p["t_start"], p["t_end"], color="0.9")
     ax[0].set_xlabel("time [s]")

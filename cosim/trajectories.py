@@ -26,11 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError
-
-
-class TrajectoryError(InputError):
-    """A trajectory specification that cannot be evaluated (says which item is wrong)."""
+from .errors import TrajectoryError
 
 
 def _blend(u):

@@ -32,8 +32,8 @@ LAYERS = [
       # robot files in other formats read into descriptions for the core (Model("arm.urdf"))
       "cosim.robots"]),
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
-     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.trajectories", "cosim.simulate",
-      "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
+     ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.run_record", "cosim.trajectories",
+      "cosim.simulate", "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
       "cosim.injection",
       # exciting trajectories: a leaf (it imports nothing of cosim) that scenarios and calibration use too
       "cosim.discrepancy.excitation"]),

@@ -61,9 +61,9 @@ def test_the_compliance_reads_under_the_effort_the_core_applies_after_the_actuat
     m = Model("6pus", params={"rail[3].compliance": c3, "actuator.delay": delay_samples * H})
     for rec in _both(m, _reference(m, 0.008)).values():
         lag = max(delay_samples, 1)
-        acting = np.vstack([np.zeros((lag, 6)), rec.tau[:-lag]])
+        acting = np.vstack([np.zeros((lag, 6)), rec.tau_applied[:-lag]])
         np.testing.assert_allclose(rec.q[:, 2] - rec.q_true[:, 2], c3 * acting[:, 2], rtol=1e-12, atol=1e-16)
-        other = np.vstack([np.zeros((lag + 1, 6)), rec.tau[:-lag - 1]])  # one sample off: a different answer
+        other = np.vstack([np.zeros((lag + 1, 6)), rec.tau_applied[:-lag - 1]])  # one sample off: a different answer
         assert np.max(np.abs(c3 * (other[:, 2] - acting[:, 2]))) > 1e-8
 
 
@@ -94,7 +94,7 @@ def test_the_compiled_loop_goes_on_exactly_in_pieces_and_stops_when_asked(monkey
     seen = []
     pieces = go(progress=seen.append)
     assert len(seen) > 50 and whole.n == pieces.n == len(ref.time)
-    for f in ("q", "qd", "x", "xd", "tau_cmd", "tau"):
+    for f in ("q", "qd", "x", "xd", "tau_cmd", "tau_applied"):
         np.testing.assert_array_equal(getattr(pieces, f), getattr(whole, f), err_msg=f)
     asked = []
     stopped = go(should_stop=lambda: asked.append(1) or len(asked) == 3)
@@ -113,7 +113,7 @@ def test_the_two_back_ends_give_the_same_samples(robot, dz):
         slow = run(CorePlant(m), c, ref, compiled=False, **kw)
         fast = run(CorePlant(m), c, ref, **kw)
         assert slow.loop == "python" and fast.loop == "compiled", (slow.loop_note, fast.loop_note)
-        for f in ("x", "xd", "q", "qd", "q_true", "tau_cmd", "tau", "x_meas"):
+        for f in ("x", "xd", "q", "qd", "q_true", "tau_cmd", "tau_applied", "pose"):
             np.testing.assert_allclose(fast[f], slow[f], rtol=0, atol=1e-12, err_msg=f"{robot} {c.kind} {f}")
         assert fast.saturated == slow.saturated
         assert np.ptp(fast["x"][:, 2]) > 0.5 * abs(dz)
@@ -163,9 +163,9 @@ def test_a_run_after_its_history_starts_where_the_whole_run_was_on_both_back_end
     for compiled in (True, False):
         part = ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m), compiled=compiled).run(
             ref, start=k0, x0=whole.x[k0], xd0=whole.xd[k0], history=(whole.q[:k0], whole.qd[:k0]))
-        np.testing.assert_allclose(part.tau[:50], whole.tau[k0:k0 + 50], atol=1e-6 * np.abs(whole.tau).max())
+        np.testing.assert_allclose(part.tau_applied[:50], whole.tau_applied[k0:k0 + 50], atol=1e-6 * np.abs(whole.tau_applied).max())
     cold = ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m)).run(ref, start=k0, x0=whole.x[k0], xd0=whole.xd[k0])
-    assert np.abs(cold.tau[0] - whole.tau[k0]).max() > 1e-3 * np.abs(whole.tau).max()
+    assert np.abs(cold.tau_applied[0] - whole.tau_applied[k0]).max() > 1e-3 * np.abs(whole.tau_applied).max()
     with pytest.raises(ValueError, match="history"):
         ClosedLoop(CorePlant(m), pid(), drive=CoreDrive(m)).run(ref, start=k0, history=(whole.q[:k0 + 1],
                                                                                         whole.qd[:k0 + 1]))

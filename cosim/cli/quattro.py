@@ -102,7 +102,7 @@ def cmd_quattro(args):
         if args.json:
             print(json.dumps(rows, indent=2))
             return 0
-        print("On the robot axis x = y = 0, theta = 0 (default set with platform.offset = 0 as in the seed's maps):")
+        print("On the robot axis x = y = 0, theta = 0 (default set with platform.offset = 0 as in the thesis' maps):")
         print(f"{'index':<9} {'feature':<7} {'stated':>8} {'appendix_a':>11} {'default':>9}  what")
         for r in rows:
             print(f"{r['index']:<9} {r['feature']:<7} {r['stated_mm']:>8.0f} {r['appendix_a']:>11.0f} "

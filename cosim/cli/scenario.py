@@ -85,7 +85,7 @@ def print_summary(out, file=None) -> None:
     if "tracking" in m:
         tr = m["tracking"]
         print(f"  pen-point tracking error: RMS {tr['pen_error_rms'] * 1e6:.4g} um, max {tr['pen_error_max'] * 1e6:.4g} um "
-              f"at t = {tr['pen_error_max_time']:.3f} s; largest effort {tr['effort_max']:.3g} {res.units['tau']}",
+              f"at t = {tr['pen_error_max_time']:.3f} s; largest effort {tr['effort_max']:.3g} {res.units['tau_applied']}",
               file=f)
     if "poses" in m:
         errs = [p["position_error"] for p in m["poses"]]
@@ -97,7 +97,7 @@ def print_summary(out, file=None) -> None:
         print(f"  tracking over the run: joint error RMS [{jname}] "
               + " ".join(f"{e * jscale:.4g}" for e in mo["joint_error_rms"])
               + f", max {mo['joint_error_max'] * jscale:.4g} {jname} at t = {mo['joint_error_max_time']:.3f} s; "
-              f"largest effort {max(mo['effort_max']):.3g} {res.units['tau']}", file=f)
+              f"largest effort {max(mo['effort_max']):.3g} {res.units['tau_applied']}", file=f)
     if m["saturated_samples"]:
         print(f"  actuator saturation active at {m['saturated_samples']} samples", file=f)
     for k, p in out.files.items():

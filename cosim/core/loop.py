@@ -12,8 +12,9 @@ from .simulator import Simulator
 from .controller import CompiledController
 
 
-#: the recorded channels of ``pkm_closed_loop`` (pkm_loop_record), in its order
-LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau", "tau_inj")
+#: the recorded channels of ``pkm_closed_loop`` (pkm_loop_record), in its order, named as the
+#: fields of :class:`cosim.run_record.RunRecord` (``tau_applied``: the record's ``tau``)
+LOOP_FIELDS = ("q", "qd", "q_true", "qd_true", "x", "xd", "tau_cmd", "tau_applied", "tau_inj")
 
 
 def closed_loop_call(sim: Simulator, ctrl: CompiledController, *, t, dt: float, ref: dict, rows: dict,

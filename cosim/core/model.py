@@ -625,7 +625,7 @@ class Model:
         """6-PUS calibration regression rows, shape (..., 6, 10): dq_i / d eta_i per leg.
 
         eta_i = [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (Tiberi 2020 eq. 4.1).  ``frame="world"``
-        differentiates with respect to the world position of the platform point (the seed's
+        differentiates with respect to the world position of the platform point (the thesis'
         tables), ``"platform"`` with respect to ``leg[i].px/py/pz``.  Stroke limits are not
         applied (the rows are geometry); an unreachable or singular pose raises.
         """

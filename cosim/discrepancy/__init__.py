@@ -12,7 +12,7 @@ the library of effects (:mod:`.effects`), the attribution engine (:mod:`.engine`
 :mod:`.fitting`, forward selection :mod:`.selection`, inference: intervals, ties,
 detectability :mod:`.inference`), localisation (:mod:`.localisation`), structure left
 unexplained (:mod:`.structure`), the diagnosis that puts them together (:mod:`.diagnosis`),
-the replay (:mod:`.plant`; a fitted gap or compliance as two bodies: :mod:`.drive_bodies`) and
+the replay (:mod:`.runs`; a fitted gap or compliance as two bodies: :mod:`.drive_bodies`) and
 the report (:mod:`.report`).  Blind cases and the benchmark:
 :mod:`.blind`.  See docs/discrepancy.md.
 """

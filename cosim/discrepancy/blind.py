@@ -1,6 +1,6 @@
 """Blind cases: recordings with hidden effects, their answer keys, and the benchmark.
 
-A case is a closed-loop recording (:func:`cosim.discrepancy.plant.closed_loop`) of a
+A case is a closed-loop recording (:func:`cosim.discrepancy.runs.closed_loop`) of a
 core plant in which one or two effects of the library are set (the "hidden" physics)
 while the recording's sidecar gives the nominal model only.  The controller (PD +
 gravity compensation or computed torque, designed on the nominal model) tracks an

@@ -119,9 +119,8 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
     tests pass a copy with a shorter duration."""
     from ..core.model import Model
     from ..master import make_reference
-    from ..recording import Recording
     from .excitation import excitation
-    from .plant import closed_loop
+    from .runs import closed_loop
 
     from .._native import PkmError
 
@@ -175,12 +174,11 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
     else:
         raise RuntimeError(f"blind case {spec.case}: no closed-loop run succeeded: " + "; ".join(failures))
     s = slice(k0, None)
-    rec = Recording(nominal.robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau[s].copy(),
-                    qref=ref.q[s].copy(), pose=res.pose[s].copy(),
-                    extra={"label": ref.label[s].astype(float)},
-                    controller=dict(ctrl.describe(), rate_hz=gen["rate"]),
-                    notes=f"blind case {spec.case}: closed-loop recording of a plant that may hide effects the "
-                          f"model lacks (the answer key is elsewhere)")
+    rec = res.to_recording(effort="logged", start=k0, robot=nominal.robot, qref=ref.q,
+                           extra={"label": ref.label.astype(float)},
+                           controller=dict(ctrl.describe(), rate_hz=gen["rate"]),
+                           notes=f"blind case {spec.case}: closed-loop recording of a plant that may hide effects "
+                                 f"the model lacks (the answer key is elsewhere)")
     info = {"controller": kind, "noise": noise, "tau_peak": tau_peak[0].tolist(), "trajectory": traj.name,
             "spread": ref.q[k0:].std(axis=0).tolist(),
             "failed_attempts": failures}

@@ -50,18 +50,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import CampaignError
 from ..jsonable import jsonable
 
 #: effect kinds a per-run quantity may be (additive: taken out of the run's data exactly)
 PER_RUN_KINDS = {"offset": "tau", "encoder_offset": "q"}
 #: time between two pieces of a campaign on its joined time axis [s] (no sample there)
 GAP = 1.0
-
-
-class CampaignError(InputError):
-    """A campaign the engine cannot diagnose: runs of two robots, sampled at different
-    rates, a per-run quantity of a kind it cannot take out, a campaign file without runs."""
 
 
 @dataclass

@@ -25,7 +25,7 @@ def _plants(joint, model, rec):
 
 def _closed(rec, plants, a, b):
     """Closed-loop replay of rows a:b of one run (its controller primed with its rows before a)."""
-    from .plant import closed_loop, controller_from, reference_from_recording
+    from .runs import closed_loop, controller_from, reference_from_recording
 
     m = plants["nominal"]
     ctrl, why = controller_from(rec.controller, m)
@@ -46,7 +46,7 @@ def _closed(rec, plants, a, b):
             out["runs"][name] = {"error": str(e)}
             continue
         sl = slice(s, s + len(res.time))
-        d_tau = res.tau - run.tau[sl]
+        d_tau = res.tau_logged - run.tau[sl]
         out["runs"][name] = {"rms_q": np.sqrt(np.mean((res.q - run.q[sl]) ** 2, axis=0)).tolist(),
                              "rms_tau": np.sqrt(np.mean(d_tau ** 2, axis=0)).tolist(),
                              "rel_tau": (np.linalg.norm(d_tau, axis=0)

@@ -84,7 +84,7 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
     box", the fitted plant with that force as a known external effort."""
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
-    from .plant import closed_loop, controller_from, reference_from_recording
+    from .runs import closed_loop, controller_from, reference_from_recording
 
     if rec.qref is None:  # no reference: an open-loop experiment is replayed open loop (.open_loop)
         from .open_loop import heldout_replay
@@ -152,10 +152,10 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
             continue
         s = slice(k0, k0 + len(res.time))
         dq = res.q - rec.q[s]
-        dt_ = res.tau - rec.tau[s]
+        dt_ = res.tau_logged - rec.tau[s]
         out["runs"][name] = {"rms_q": np.sqrt(np.mean(dq**2, axis=0)).tolist(),
                              "rms_tau": np.sqrt(np.mean(dt_**2, axis=0)).tolist(),
                              "rel_tau": (np.linalg.norm(dt_, axis=0)
                                          / np.maximum(np.linalg.norm(rec.tau[s], axis=0), 1e-300)).tolist(),
-                             "time": res.time, "q": res.q, "tau": res.tau}
+                             "time": res.time, "q": res.q, "tau": res.tau_logged}
     return out

@@ -100,7 +100,7 @@ def fit_two_body(rec, pipe, plant, joints, run, ref, k_fit: int, n_fit: int):
         res = run(p, ref, k_fit)
         s = slice(k_fit, k_fit + len(res.time))
         return (np.sqrt(np.mean((res.q - rec.q[s]) ** 2, axis=0))[idx],
-                np.sqrt(np.mean((res.tau - rec.tau[s]) ** 2, axis=0))[idx])
+                np.sqrt(np.mean((res.tau_logged - rec.tau[s]) ** 2, axis=0))[idx])
 
     try:
         q0, t0 = errors(plant)

@@ -15,6 +15,7 @@ fit before/after, replay), then the method settings.  Figures:
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -24,7 +25,8 @@ PHASE_COLOURS = ["#7f7f7f", "#d62728", "#ff7f0e", "#2ca02c", "#1f77b4"]
 
 
 def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
-    """Write ``report.md``, ``diagnosis.json`` and the figures into ``out``."""
+    """Write ``report.md``, ``diagnosis.json`` (the diagnosis with these files) and the figures
+    into ``out``; returns the files {name: path}.  ``d`` is left as it is."""
     out.mkdir(parents=True, exist_ok=True)
     files = {}
     if figures:
@@ -51,8 +53,7 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
     files["json"] = str(out / "diagnosis.json")
     md = out / "report.md"
     files["report"] = str(md)
-    d.files = files
-    (out / "diagnosis.json").write_text(_strip_arrays(d))
+    (out / "diagnosis.json").write_text(_strip_arrays(dataclasses.replace(d, files=files)))
     md.write_text(markdown(d, files))
     return files
 

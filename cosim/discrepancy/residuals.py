@@ -53,11 +53,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
-from ..errors import InputError
-
-
-class DiagnosisError(InputError):
-    """A recording (or model) the engine cannot diagnose; the message says what is missing."""
+from ..errors import DiagnosisError
 
 
 #: parameters of the actuator (applied to the recorded command) and of the sensors

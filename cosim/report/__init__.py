@@ -22,13 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ReportError
 
 __all__ = ["mechanism_figure", "write_html", "view", "ReportError"]
-
-
-class ReportError(InputError):
-    """A recording or robot the report cannot draw (says which and why)."""
 
 
 def _segments(model, x):

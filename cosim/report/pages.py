@@ -73,7 +73,7 @@ def run_page(out, path) -> Path:
         ("the robot in motion (true pose)", view),
         ("joint errors", _series(res.time, err, [f"e{i + 1}" for i in range(facts.ndof)],
                                  f"qref - q [{'mm' if facts.joint_unit == 'm' else 'mrad'}]", "tracking error")),
-        ("efforts", _series(res.time, res["tau"], [f"tau{i + 1}" for i in range(facts.ndof)],
+        ("efforts", _series(res.time, res["tau_applied"], [f"tau{i + 1}" for i in range(facts.ndof)],
                             f"effort [{facts.effort_unit}]", "applied efforts")),
         ("metrics", json.dumps(out.metrics, indent=1, default=str)[:20000]),
     ]

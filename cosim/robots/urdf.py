@@ -31,15 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import URDFError
 
 MAX_JOINTS = 6  # the core's serial arms (the drive layer's joints)
 MOVING = ("revolute", "continuous", "prismatic")
 NOT_READ = ("floating", "planar")
-
-
-class URDFError(InputError):
-    """A URDF the toolkit cannot read as a serial arm; the message names file, line and element."""
 
 
 @dataclass

@@ -68,7 +68,7 @@ def test_the_compiled_loop_stops_within_0_2_s_of_the_signal_and_keeps_its_sample
     assert part.loop == "compiled"
     assert 2 < len(part) < len(ref.time), len(part)  # stopped inside the loop
     assert latency < 0.2, f"{latency:.3f} s from the signal to the exception"
-    assert np.all(np.isfinite(part["q"])) and np.all(np.isfinite(part["tau"]))
+    assert np.all(np.isfinite(part["q"])) and np.all(np.isfinite(part["tau_applied"]))
     # the samples kept are the ones an uninterrupted run gives
     short = run(CorePlant(m), ctl.pd_gravity(m, kp=300, kd=30),
                 make_reference(m, tr.step(m.home(), m.home() + [0, 0, 0.01, 0, 0, 0]), duration=0.5))

@@ -104,8 +104,8 @@ def test_saturation_clips_and_counts(toy):
     limit = (3.0, 2.0)[j]
     c = ctl.pd(ndof=1, kp=1000.0, kd=10.0, saturation=limit)
     res = run(plant, c, ref, x0=[0.0])
-    assert np.all(np.abs(res["tau"]) <= limit)
-    np.testing.assert_allclose(res["tau"][0], [limit])
+    assert np.all(np.abs(res["tau_applied"]) <= limit)
+    np.testing.assert_allclose(res["tau_applied"][0], [limit])
     # clipped while kp e + kd ed > limit: counted against the samples that exceed it, recomputed here
     raw = 1000.0 * (res["qref"][:, 0] - res["q"][:, 0]) + 10.0 * (res["qdref"][:, 0] - res["qd"][:, 0])
     assert res.saturated == np.count_nonzero(np.abs(raw) > limit) > 10
@@ -147,10 +147,10 @@ def test_sensor_and_tracker_noise(toy):
     kw = dict(q_noise=1e-5, pose_noise=2e-5, seed=3)
     res = run(plant, ctl.pd_gravity(m, kp=100.0, kd=10.0), ref, **kw)
     assert np.std(res["q"][:, 0] - res["q_true"][:, 0]) == pytest.approx(1e-5, rel=0.1)
-    assert np.std(res["x_meas"][:, 0] - res["x"][:, 0]) == pytest.approx(2e-5, rel=0.1)
+    assert np.std(res["pose"][:, 0] - res["x"][:, 0]) == pytest.approx(2e-5, rel=0.1)
     again = run(plant, ctl.pd_gravity(m, kp=100.0, kd=10.0), ref, **kw)
     np.testing.assert_array_equal(again["q"], res["q"])
     quiet = run(plant, ctl.pd_gravity(m, kp=100.0, kd=10.0), ref, q_noise=1e-5, seed=3)
-    np.testing.assert_array_equal(quiet["x_meas"], quiet["x"])
+    np.testing.assert_array_equal(quiet["pose"], quiet["x"])
     with pytest.raises(MasterError, match="pose_noise must be standard deviations >= 0"):
         run(plant, ctl.pd(ndof=1, kp=1.0, kd=1.0), ref, pose_noise=-1.0)

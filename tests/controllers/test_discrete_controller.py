@@ -234,7 +234,7 @@ def test_the_compiled_loop_runs_it_and_a_scenario_file_takes_it():
     slow = run(CorePlant(m), discrete(desc, ndof=6, model=m), ref, drive=CoreDrive(m), compiled=False)
     assert fast.loop == "compiled" and slow.loop == "python"
     np.testing.assert_allclose(fast["x"], slow["x"], rtol=0, atol=1e-12)
-    assert fast["tau"][0].tolist() == [0.0] * 6  # the computation delay: nothing before the first output
+    assert fast["tau_applied"][0].tolist() == [0.0] * 6  # the computation delay: nothing before the first output
     assert abs(fast["x"][-1, 2] - (h[2] + 0.005)) < 5e-4  # it follows the step
     sc = scenario_from_dict({"robot": "6pus", "step": T, "duration": 0.2, "controller": desc,
                              "reference": {"type": "step", "from": h.tolist(),

@@ -133,8 +133,8 @@ def test_the_fmu_plant_runs_the_step_like_the_core_plant(robot):
     fmu = run_scenario(sc, plant="fmu", export=False, figures=False)
     assert fmu.result.plant["kind"] == "fmu"
     np.testing.assert_allclose(fmu.result["q"], core.result["q"], rtol=0, atol=1e-10)
-    tau = core.result["tau"]
-    np.testing.assert_allclose(fmu.result["tau"], tau, rtol=0, atol=1e-8 * np.abs(tau).max())
+    tau = core.result["tau_applied"]
+    np.testing.assert_allclose(fmu.result["tau_applied"], tau, rtol=0, atol=1e-8 * np.abs(tau).max())
 
 
 # -------------------------------------------------------------- calibration

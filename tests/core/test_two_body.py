@@ -38,7 +38,7 @@ def test_static_deflection_is_the_reading_models():
     ref = make_reference(m, tr.step(x0, x0), duration=2.0)
     res = run(CorePlant(m), ctl.pd_gravity(m, kp=3e3, kd=60), ref, drive=CoreDrive(m))
     assert res.loop == "compiled"
-    q, q_true, tau = np.asarray(res["q"]), np.asarray(res["q_true"]), np.asarray(res["tau"])
+    q, q_true, tau = np.asarray(res["q"]), np.asarray(res["q_true"]), np.asarray(res["tau_applied"])
     defl = q[-1] - q_true[-1]                      # the drive body less the carriage
     load = tau[-1]                                 # what the transmission carries at rest
     expect = np.zeros(6)
@@ -169,9 +169,9 @@ def test_the_fmu_plant_has_the_drive_bodies_too():
 
 
 def test_the_discrepancy_replay_reads_the_drive_bodies_on_both_of_its_paths():
-    """cosim.discrepancy.plant.closed_loop: the compiled loop and its Python loop (a
+    """cosim.discrepancy.runs.closed_loop: the compiled loop and its Python loop (a
     controller the core does not implement) give the same readings of a two-body plant."""
-    from cosim.discrepancy.plant import closed_loop
+    from cosim.discrepancy.runs import closed_loop
 
     m = two_body_model()
     x0 = m.home()

@@ -1,6 +1,6 @@
 """Recordings for the discrepancy-engine tests, simulated once per test run.
 
-Closed-loop runs of the core plants (cosim.discrepancy.plant.closed_loop) with effects
+Closed-loop runs of the core plants (cosim.discrepancy.runs.closed_loop) with effects
 set in the plant: the engine must find what the plant holds, so the expected values
 come from the plant's parameters, never from the engine.
 """

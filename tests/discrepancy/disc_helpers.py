@@ -6,9 +6,8 @@ import numpy as np
 from cosim.core import Model
 from cosim.discrepancy import blind
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
-from cosim.recording import Recording
 
 
 #: hidden effects of the combined noiseless runs (one plant holding many effects)
@@ -40,8 +39,7 @@ def run(robot, hidden=None, duration=3.0, seed=5, noise=None, scale=1.0):
     ctrl = blind._controller("pd_gravity", m, cfg, 1e-3)
     res = closed_loop(plant, ctrl, ref, noise=noise, seed=seed)
     k0 = 500
-    return Recording(robot, res.time[k0:], res.q[k0:], res.qd[k0:], res.tau[k0:], qref=ref.q[k0:],
-                     pose=res.pose[k0:], controller=ctrl.describe())
+    return res.to_recording(effort="logged", start=k0, qref=ref.q, controller=ctrl.describe())
 
 
 #: the fixed-seed blind subset: (robot, hidden types, seed)

@@ -8,9 +8,8 @@ import pytest
 from cosim.core import Model
 from cosim.discrepancy import blind, diagnose
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
-from cosim.recording import Recording
 
 TENSION = 0.4  # N (typical rail effort 0.5-0.9 N, effort noise 5 mN)
 ANCHOR_OFFSET = np.array([0.12, -0.08, 0.25])  # m from the home position (0.29 m away)
@@ -27,8 +26,7 @@ def _record(hidden, duration=6.0, seed=3):
     ctrl = blind._controller("pd_gravity", m, cfg, dt)
     res = closed_loop(plant, ctrl, ref, noise=cfg["noise"]["6pus"], seed=seed + 1)
     k0 = int(lead / dt)
-    return Recording("6pus", res.time[k0:], res.q[k0:], res.qd[k0:], res.tau[k0:], qref=ref.q[k0:],
-                     pose=res.pose[k0:], controller=dict(ctrl.describe(), rate_hz=1000.0))
+    return res.to_recording(effort="logged", start=k0, qref=ref.q, controller=dict(ctrl.describe(), rate_hz=1000.0))
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ import pytest
 from cosim.core import Model
 from cosim.discrepancy import blind, diagnose
 from cosim.discrepancy.excitation import excitation
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
 from cosim.recording import Recording
 
@@ -35,13 +35,12 @@ def _record(params_at, pieces, seed=11):
         hist = (np.concatenate([p.q for p in parts]), np.concatenate([p.qd for p in parts])) if parts else None
         res = closed_loop(plant, blind._controller("pd_gravity", m, cfg, DT), sub, x0=x0, xd0=xd0, start=a,
                           noise=cfg["noise"]["6pus"], seed=seed + 17 * k, history=hist)
-        keep = slice(0, b - a) if k < pieces - 1 else slice(0, None)
-        parts.append(dataclasses.replace(res, **{f.name: getattr(res, f.name)[keep] for f in dataclasses.fields(res)}))
+        parts.append(res.head(b - a) if k < pieces - 1 else res)
         if k < pieces - 1:
             x0, xd0 = res.x[b - a], res.xd[b - a]
-    cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(parts[0])}
+    cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in ("time", "q", "qd", "tau_logged", "pose")}
     s = slice(k0, None)
-    return Recording("6pus", cat["time"][s], cat["q"][s], cat["qd"][s], cat["tau"][s], qref=ref.q[s],
+    return Recording("6pus", cat["time"][s], cat["q"][s], cat["qd"][s], cat["tau_logged"][s], qref=ref.q[s],
                      pose=cat["pose"][s], controller=dict(ctrl.describe(), rate_hz=1000.0)), edges
 
 

@@ -8,7 +8,7 @@ import pytest
 from cosim import controllers as ctl, trajectories as tr
 from cosim.core import Model
 from cosim.discrepancy import diagnose
-from cosim.discrepancy.plant import controller_from
+from cosim.discrepancy.runs import controller_from
 from cosim.master import CorePlant, make_reference, run
 from cosim.recording import write_recording
 from cosim.ssp import lti_controller
@@ -52,7 +52,7 @@ def test_the_sidecar_controller_is_rebuilt_and_replayed(tmp_path, make):
     assert "error" not in nominal, nominal
     # The recorded motion is the nominal plant under this controller: the replay follows
     # it (1e-4 of the stroke here; the integral starts from zero at the replay's start).
-    stroke = np.ptp(res.data["q"], axis=0)
+    stroke = np.ptp(res["q"], axis=0)
     assert np.all(np.asarray(nominal["rms_q"]) < 1e-3 * stroke), (nominal["rms_q"], stroke)
 
 

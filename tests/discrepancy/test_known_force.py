@@ -7,10 +7,9 @@ import pytest
 from cosim import controllers as ctl
 from cosim import trajectories as tr
 from cosim.core import Model
-from cosim.discrepancy.plant import closed_loop
+from cosim.discrepancy.runs import closed_loop
 from cosim.discrepancy.residuals import Pipeline
 from cosim.master import CoreDrive, CorePlant, make_reference, run
-from cosim.recording import Recording
 
 H = 1e-3
 
@@ -49,8 +48,7 @@ def test_the_force_acts_like_that_much_more_command(compiled):
 def _recording(m, plant, ref, f, k0=500):
     ctrl = ctl.pd_gravity(m, kp=300.0, kd=30.0)
     res = closed_loop(plant, ctrl, ref, f_ext=f)
-    rec = Recording(m.robot, res.time[k0:], res.q[k0:], res.qd[k0:], res.tau[k0:], qref=ref.q[k0:],
-                    pose=res.pose[k0:], controller=ctrl.describe())
+    rec = res.to_recording(effort="logged", start=k0, qref=ref.q, controller=ctrl.describe())
     rec.f_ext = f[k0:]
     return rec, res
 
@@ -66,7 +64,7 @@ def test_the_replay_reproduces_a_recording_with_a_known_force_only_with_it():
     blind = closed_loop(plant, ctl.pd_gravity(m, kp=300.0, kd=30.0), ref)
     assert np.max(np.abs(replay.x - res.x)) < 1e-12
     assert np.max(np.abs(blind.x - res.x)) > 1e-4
-    np.testing.assert_allclose(replay.tau, res.tau, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(replay.tau_logged, res.tau_logged, rtol=0, atol=1e-9)
 
 
 def test_the_effort_residual_accounts_for_the_force():

@@ -7,13 +7,13 @@ keyed on the velocity (the crossing time the reading model lacks), on 3 of 5, as
 two bodies (docs/discrepancy.md).  The answer key is read only after the diagnosis."""
 import pytest
 
-import cosim.discrepancy.plant as plant_mod
+import cosim.discrepancy.runs as runs_mod
 from cosim.discrepancy import blind, diagnose
 
 
 @pytest.fixture
 def two_body_generator(monkeypatch):
-    loop = plant_mod.closed_loop
+    loop = runs_mod.closed_loop
 
     def closed_loop(plant, controller, ref, **kw):
         pre = plant.facts.joint_prefix
@@ -24,7 +24,7 @@ def two_body_generator(monkeypatch):
                                   f"{pre}[{i + 1}].transmission_damping": 130.0})
         return loop(plant, controller, ref, **kw)
 
-    monkeypatch.setattr(plant_mod, "closed_loop", closed_loop)
+    monkeypatch.setattr(runs_mod, "closed_loop", closed_loop)
 
 
 @pytest.mark.parametrize("seed", [1, 3])

@@ -24,10 +24,10 @@ def _run(tmp_path, plant):
     np.testing.assert_array_equal(res["q"][:, [0, 2, 3, 4, 5]], res["q_true"][:, [0, 2, 3, 4, 5]])
     # saturation: the 70 mm step asks for ~18 N at first; slider 1 gets at most 5 N
     assert np.max(np.abs(res["tau_cmd"][:, 0])) > 10.0
-    assert np.max(np.abs(res["tau"][:, 0])) == pytest.approx(5.0)
-    np.testing.assert_array_equal(res["tau"][:, 1:], res["tau_cmd"][:, 1:])
+    assert np.max(np.abs(res["tau_applied"][:, 0])) == pytest.approx(5.0)
+    np.testing.assert_array_equal(res["tau_applied"][:, 1:], res["tau_cmd"][:, 1:])
     rec = read_recording(out.files["recording"])
-    np.testing.assert_array_equal(rec.tau, res["tau"])
+    np.testing.assert_array_equal(rec.tau, res["tau_applied"])
     np.testing.assert_array_equal(rec.extra["tau_cmd1"], res["tau_cmd"][:, 0])
     # the two plants integrate the same clipped efforts
     return res

@@ -27,7 +27,7 @@ def test_campaign_export_reloads_with_held_poses(campaign):
     rec = read_recording(out.files["recording"], robot="6pus")
     res = out.result
     assert rec.robot == "6pus" and len(rec) == len(res) == 2301
-    for name, field in (("q", "q"), ("qd", "qd"), ("tau", "tau"), ("qref", "qref"), ("pose", "x_meas")):
+    for name, field in (("q", "q"), ("qd", "qd"), ("tau", "tau_applied"), ("qref", "qref"), ("pose", "pose")):
         np.testing.assert_array_equal(getattr(rec, name), res[field], err_msg=name)
     # each held pose: 500 rows labelled with its number, the tracker pose scattered by its noise
     lab = rec.extra["label"]

@@ -23,7 +23,7 @@ def test_fmu_and_core_give_the_same_run(name, duration):
     core, fmu = _both(SCEN / name, duration)
     assert len(core) == len(fmu) == int(round(duration / 1e-3)) + 1
     assert np.ptp(core["x"], axis=0).max() > 1e-3          # the robot moved
-    for field, tol in (("q", 1e-10), ("qd", 1e-8), ("x", 1e-10), ("tau", 1e-6)):
+    for field, tol in (("q", 1e-10), ("qd", 1e-8), ("x", 1e-10), ("tau_applied", 1e-6)):
         np.testing.assert_allclose(fmu[field], core[field], rtol=0, atol=tol, err_msg=field)
 
 

@@ -11,12 +11,14 @@ No physics is computed in Python.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace
 
 import numpy as np
 from scipy.signal import savgol_filter
 
 from ..master import ReferenceTable
+from ..run_record import RunRecord
+
 
 def controller_from(desc: dict, model):
     """Rebuild the recorded controller from its sidecar description.
@@ -91,25 +93,9 @@ def reference_from_recording(rec, model) -> ReferenceTable:
     return ReferenceTable(t, rec.qref, qd, qdd, x)
 
 
-@dataclass
-class LoopResult:
-    """A closed-loop run, one row per sample: readings ``q``, ``qd`` (what the
-    controller saw, noise included), ``tau`` (commanded), ``pose`` (tracker), true
-    ``x``, ``xd``, ``q_true``."""
-
-    time: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    tau: np.ndarray
-    pose: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    q_true: np.ndarray
-
-
 def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None = None, seed=None,
                 start: int = 0, rtol: float = 1e-9, atol: float = 1e-11, f_ext=None, history=None,
-                inject=None) -> LoopResult:
+                inject=None) -> RunRecord:
     """Run ``controller`` on the core plant ``plant`` over the reference samples
     (:class:`cosim.closed_loop.ClosedLoop` with the plant's drive and sensor model).
 
@@ -142,12 +128,14 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
         controller was (:meth:`cosim.closed_loop.ClosedLoop.run`).
     inject : cosim.injection.Injection, optional
         A signal injected into the loop (a recording's, :func:`cosim.injection.from_recording`):
-        the loop adds it at its point, and ``tau`` is the command as the recording logs
-        it (with the signal's part, or without it when the recorded effort excludes it).
+        the loop adds it at its point, and ``tau_logged`` is the command as the recording
+        logs it (with the signal's part, or without it when the recorded effort excludes it).
 
     Returns
     -------
-    LoopResult
+    cosim.run_record.RunRecord
+        The run's rows (``tau_logged`` the command as logged, ``pose`` the tracker's), its
+        ``robot`` and ``step``; ``to_recording(effort="logged")`` makes it a recording.
 
     Raises
     ------
@@ -159,5 +147,5 @@ def closed_loop(plant, controller, ref, *, x0=None, xd0=None, noise: dict | None
 
     rec = ClosedLoop(CorePlant(plant, rtol=rtol, atol=atol), controller, drive=CoreDrive(plant), noise=noise,
                      seed=seed).run(ref, start=start, x0=x0, xd0=xd0, f_ext=f_ext, history=history, inject=inject)
-    tau = rec.tau_logged if inject is None else inject.effort_seen(rec.tau_logged, rec.tau_inj)
-    return LoopResult(rec.time, rec.q, rec.qd, tau, rec.pose, rec.x, rec.xd, rec.q_true)
+    logged = rec.tau_logged if inject is None else inject.effort_seen(rec.tau_logged, rec.tau_inj)
+    return replace(rec, tau_logged=logged, robot=plant.robot, step=float(ref.time[1] - ref.time[0]))
