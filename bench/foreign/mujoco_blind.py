@@ -163,13 +163,16 @@ def controller(kind: str, m: Model):
                    gravity_feedforward=True)
 
 
-def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None):
+def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None, hook=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
     ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
     hidden in MuJoCo's physics: ``force(q, qd)`` of the six rails' true positions (the model's
     coordinates) and rates gives the six forces [N] pushing them along +q, applied at every
-    MuJoCo step (``qfrc_applied``)."""
+    MuJoCo step (``qfrc_applied``).  ``hook``, if given, is called before every MuJoCo step as
+    ``hook(model, data, t, q, qd, cmd)`` (t [s], the rails' true positions and rates, the six
+    commanded forces [N]) and returns six more rail forces along +q [N] or None; it may also set
+    MuJoCo's ``xfrc_applied`` or the model's masses (bench/foreign/mujoco_unnamed.py)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
@@ -237,6 +240,10 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
             data.ctrl[:] = cmd
             if force is not None:
                 data.qfrc_applied[drails] = applied + force(q0 + data.qpos[rails], data.qvel[drails])
+            if hook is not None:
+                more = hook(model, data, ts, q0 + data.qpos[rails], data.qvel[drails].copy(), cmd)
+                base = data.qfrc_applied[drails] if force is not None else applied
+                data.qfrc_applied[drails] = base + (0.0 if more is None else more)
             for adr, dof, eff, val in gaps:
                 data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)

@@ -82,23 +82,15 @@ MECHANISMS = {
 _EXCLUDED: set = set()
 
 
-#: the families are searched on request only (:func:`searched`): in the default search their
-#: candidates raise the look-elsewhere bar of every joint (2 ln 132 -> 2 ln 300 on the 6-PUS), and
-#: on real recordings they took the place of what the library and the joint's own terms say: the
-#: Silverbox's damping is no longer selected (structure left instead of its Duffing model), the
-#: EMPS drive's viscous friction gives way to effort-proportional terms
-_SEARCHED: list = []
-
-
 def excluded() -> frozenset:
-    """Terms left out of the search (see :func:`without`): every term of the families unless
-    :func:`searched` turned them on."""
-    return frozenset(_EXCLUDED | (set() if _SEARCHED else set(TERMS)))
+    """Terms left out of the search (see :func:`without`)."""
+    return frozenset(_EXCLUDED)
 
 
 @contextlib.contextmanager
 def searched():
-    """Search the families' terms too while the block runs (they are off by default).
+    """Search the families' terms while the block runs, even inside a :func:`without` block that
+    left them out (they are searched by default; ``diagnose(families=False)`` leaves them out).
 
     Examples
     --------
@@ -106,11 +98,12 @@ def searched():
     >>> with searched():
     ...     pass  # diagnose(...) here searches load-dependent friction, friction zones, couplings
     """
-    _SEARCHED.append(True)
+    back = _EXCLUDED & set(TERMS)
+    _EXCLUDED.difference_update(back)
     try:
         yield
     finally:
-        _SEARCHED.pop()
+        _EXCLUDED.update(back)
 
 
 @contextlib.contextmanager
