@@ -1293,7 +1293,7 @@ def judge_library(eng, sel, threshold: float):
 
 def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
     """The library's effects of one joint that stay, on trial once more with the families searched
-    on both sides where the term on top of them holds a family term that may withdraw one
+    on both sides where the terms in their place hold a family term that may withdraw one
     (:data:`.families.acceptance.WITHDRAWING`): an effect whose place such terms take is
     withdrawn by the tie rule's test (significantly better on the held-out part, or fewer free
     coefficients and a gain above the bar), and ``base`` (channel -> term) takes the terms in its
@@ -1301,8 +1301,7 @@ def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover
     for a in sel.selected:
         g = a.group
         c = g.joint
-        if (g.effect.family not in ("effort", "both") or c is None or not all(p in theta for p in g.params)
-                or base.get(c) is None or not acceptance.withdrawing(base[c])):
+        if g.effect.family not in ("effort", "both") or c is None or not all(p in theta for p in g.params):
             continue
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)

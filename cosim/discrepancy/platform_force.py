@@ -217,10 +217,11 @@ def _search_anchor(eng, y, cols, P, f0, extra):
     return A, coef, cov, best[1]
 
 
-def search(eng, threshold: float, theta=None, tried0: int = 0):
+def search(eng, threshold: float, theta=None, tried0: int = 0, drag_cable: bool = True):
     """The best platform-force option on the residual of the nominal model (with the parameters
     ``theta``, default none), or None when no option passes the threshold plus its look-elsewhere
-    cost (``tried0`` options tried before count too).  Returns ``(option, delta_bic, bar, M)``."""
+    cost (``tried0`` options tried before count too; ``drag_cable`` False: no anchor search for a
+    cable with a drag).  Returns ``(option, delta_bic, bar, M)``."""
     y = -eng.vec(eng.R(theta) if theta else eng.R0)  # what the parameters' columns must cancel
     chi0 = float(y @ y)
     cols, _ = unit_columns(eng, FORCE + MOMENT + DRAG)
@@ -234,7 +235,7 @@ def search(eng, threshold: float, theta=None, tried0: int = 0):
     tried = tried0 + len(options)
     f0 = options[0].coef
     P = _platform_positions(eng)
-    for fam, extra in (("cable", None), ("cable+drag", stack[DRAG[0]])):
+    for fam, extra in (("cable", None), ("cable+drag", stack[DRAG[0]]))[:2 if drag_cable else 1]:
         found = _search_anchor(eng, y, cols, P, f0, extra)
         tried += len(ANCHOR_STARTS)
         if found is None:
@@ -331,7 +332,8 @@ def platform_stage(eng, sel, threshold: float, reselect):
         if not joint:
             return None, eng, sel
         try:
-            found = search(eng, threshold, joint, tried0=found[3] if found else _TRIED)
+            # (the cable with a drag not searched again: half the time of a second search)
+            found = search(eng, threshold, joint, tried0=found[3] if found else _TRIED, drag_cable=False)
         except (PkmError, np.linalg.LinAlgError):
             return None, eng, sel
         if found is None or found[0].chi2 + (found[0].k + len(joint)) * logn >= lib_bic:

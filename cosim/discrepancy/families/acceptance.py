@@ -15,8 +15,8 @@ beyond what a term of the library of one joint's position and rate must.
   part better than the viscous friction with the terms on top of it (whose search had refused
   that term on the held-out part) and withdrew it.
 * **On trial again.**  A library effect of one joint that stays after the trials is put on trial
-  once more with the families searched on both sides, where the term on top of it and the terms
-  in its place hold a family term that may withdraw it (:func:`withdrawing`: a load-dependent
+  once more with the families searched on both sides, where the terms in its place hold a family
+  term that may withdraw it (:func:`withdrawing`: a load-dependent
   friction, a zone, a level over the stroke, another joint's position or rate): a Coulomb
   friction standing in for a friction zone, a saturation standing in for a cable carrier linking
   two rails, are withdrawn when the terms in their place do better.  A damping over the stroke
