@@ -6,7 +6,8 @@
 The MuJoCo model is bench/foreign/mujoco_blind.py's (the hand-written 6-PUS, PD + gravity, the
 engine's exciting trajectory, the generator's sensor noise); this file hides one mechanism per
 case in MuJoCo's step (``simulate(..., hook=...)``), computed here from MuJoCo's own state, so
-neither the core nor its joint force computes it:
+neither the core nor its joint force computes it; each case is diagnosed with the defaults and
+the term families (``diagnose(families=True)``):
 
 * ``load_friction``: a Coulomb friction mu |u| tanh(qd / v) on one rail, u the force the motor
   applies (MuJoCo's ``ctrl``): the engine's family ``load`` (force_cload = mu);
@@ -192,7 +193,7 @@ def _run(job):
     rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook)
     csv = mb.write_case(m, rec, csv)
     t0 = time.process_time()
-    d = diagnose(csv, figures=False, replay=False)  # blind, the defaults
+    d = diagnose(csv, figures=False, replay=False, families=True)  # blind, the defaults and the families
     cpu = time.process_time() - t0
     confident = [e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"])]
     own = {"friction_drift": "viscous", "payload_step": "platform_mass"}.get(kind)

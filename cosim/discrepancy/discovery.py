@@ -1287,11 +1287,11 @@ def judge_library(eng, sel, threshold: float):
     search.fam_on = True
     if acceptance.split(search.candidates())[1]:
         base = discover_all(R_lib, range(eng.nd), theta, asymmetry=confirmed)
-        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
+        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all)
     return theta, withdrawn, ties, search, base
 
 
-def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
+def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all):
     """The library's effects of one joint that stay, on trial once more with the families searched
     on both sides where the terms in their place hold a family term that may withdraw one
     (:data:`.families.acceptance.WITHDRAWING`): an effect whose place such terms take is
@@ -1305,7 +1305,8 @@ def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover
             continue
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
-        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed).get(c)
+        # as in the trial (no asymmetry): the trial's search without the families is then made already
+        in_place = discover_all(R_minus, [c], th_minus).get(c)
         if in_place is None or not acceptance.withdrawing(in_place):
             continue
         on_top = [base[c]] if base.get(c) is not None else []

@@ -51,7 +51,7 @@ def zone_and_coulomb():
     m = Model("6pus")
     q_home = m.ik(m.home())
     hidden = dict(ZONE, **{"rail[5].force_czone_q": float(q_home[4]), "rail[1].coulomb": COULOMB})
-    return diagnose(_record(hidden, seed=6), figures=False, replay=False), hidden
+    return diagnose(_record(hidden, seed=6), figures=False, replay=False, families=True), hidden
 
 
 def test_a_friction_zone_beside_a_library_coulomb_friction_both_found(zone_and_coulomb):
