@@ -1,6 +1,6 @@
 """Interval coverage: how often the engine's stated 95 % intervals hold the truth.
 
-    .venv/bin/python bench/coverage_bench.py [--seeds 2] [--jobs 2] [--short]
+    .venv/bin/python bench/coverage_bench.py [--seeds 2] [--first-seed 0] [--jobs 2] [--short]
 
 Blind cases with a known answer from two generators, every estimated coefficient that has a
 truth counted (each joint's apart):
@@ -26,9 +26,11 @@ stroke), with the half width of the two coefficients' combined; a spring's centr
 not fitted, and not counted.
 
 Printed: per source the count holding the truth, then every miss with its distance to the
-truth in half widths.  ``--short`` runs the cases of tests/discrepancy/test_coverage.py
-(:data:`SHORT`: shorter recordings, the own generator's library types on the 6-PUS only, at
-500 Hz, with every joint effect on every joint).
+truth in half widths, then per source and hidden type.  ``--short`` runs the profile of
+tests/discrepancy/test_coverage.py (:data:`SHORT`: shorter recordings, the own generator's
+library types on the 6-PUS only, at 500 Hz, with every joint effect on every joint); with the
+default seed (0) its cases.  ``--first-seed`` keeps a report set apart from the test's seed and
+from a tuning set.
 """
 from __future__ import annotations
 
@@ -177,24 +179,29 @@ def run_case(job) -> dict:
     "estimates"`` (:func:`estimates`), ``"named", "discovered", "t_simulate", "t_diagnose"}``
     [s], or ``"failed"`` with no estimates: a case the generator could not make, reported in the
     table, never dropped silently."""
-    case, profile, folder = job
-    from cosim.discrepancy import diagnose
+    case, profile, folder, *spread = job
+    from cosim.discrepancy import diagnose, intervals
+
+    intervals.WINDOW_SPREAD = bool(spread[0]) if spread else True
 
     t0 = time.perf_counter()
     try:
         csv, truth = _simulate(case, profile, Path(folder))
     except Exception as e:  # noqa: BLE001 - a drawn case the controller cannot hold is reported
         return {"case": case.name, "source": case.source, "failed": f"{type(e).__name__}: {e}", "estimates": []}
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     d = diagnose(csv, figures=False, replay=False)
-    return {"case": case.name, "source": case.source, "estimates": estimates(d, truth), "named": d.named(),
+    cpu = time.process_time() - c1
+    return {"case": case.name, "source": case.source, "kind": case.kind, "estimates": estimates(d, truth), "named": d.named(),
             "discovered": [t.equation for t in d.discovered], "t_simulate": t1 - t0,
-            "t_diagnose": time.perf_counter() - t1}
+            "t_diagnose": time.perf_counter() - t1, "cpu_diagnose": cpu}
 
 
-def run_all(case_list, profile: Profile, folder, jobs: int = 1, progress=None) -> list:
-    """:func:`run_case` over ``case_list``, ``jobs`` processes (spawned: each its own BLAS)."""
-    args = [(c, profile, str(folder)) for c in case_list]
+def run_all(case_list, profile: Profile, folder, jobs: int = 1, progress=None, window_spread: bool = True) -> list:
+    """:func:`run_case` over ``case_list``, ``jobs`` processes (spawned: each its own BLAS);
+    ``window_spread=False`` states the library's intervals without the estimate's spread across
+    windows (``cosim.discrepancy.intervals.WINDOW_SPREAD``), to measure what it adds."""
+    args = [(c, profile, str(folder), window_spread) for c in case_list]
     rows = []
     if jobs <= 1:
         for a in args:
@@ -234,6 +241,20 @@ def table(rows) -> str:
     return "\n".join(lines)
 
 
+def by_type(rows) -> str:
+    """Per source and hidden type: estimates holding the truth, and the time of the diagnoses."""
+    lines = ["| source | type | cases | estimates | truth inside | diagnosis CPU [s] (largest) |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for s in SOURCES:
+        for kind in sorted({r.get("kind", "?") for r in rows if r["source"] == s}):
+            g = [r for r in rows if r["source"] == s and r.get("kind", "?") == kind]
+            est = [e for r in g for e in r["estimates"]]
+            k = sum(abs(v - t) <= h for _, v, h, t in est)
+            t = max((r.get("cpu_diagnose", 0.0) for r in g), default=0.0)
+            lines.append(f"| {s} | {kind} | {len(g)} | {len(est)} | {k} | {t:.1f} |")
+    return "\n".join(lines)
+
+
 def coverage(rows) -> tuple:
     """(estimates holding the truth, estimates)."""
     est = [e for r in rows for e in r["estimates"]]
@@ -243,8 +264,14 @@ def coverage(rows) -> tuple:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, default=1, help="cases per type (default 1)")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="seeds first-seed .. first-seed + seeds - 1 (default 0; keep a tuning set apart from a report set)")
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--short", action="store_true", help="the test's cases and shorter recordings (--seeds ignored)")
+    ap.add_argument("--no-window-spread", action="store_true",
+                    help="the library's intervals from the noise alone (without the spread across windows)")
+    ap.add_argument("--short", action="store_true",
+                    help="the test's profile: shorter recordings, the own generator on the 6-PUS only (with the "
+                         "default seeds, the test's cases)")
     ap.add_argument("--sources", default=",".join(SOURCES), help="comma-separated subset of: " + ", ".join(SOURCES))
     ap.add_argument("--out", type=Path, default=REPO / "results" / "coverage")
     a = ap.parse_args(argv)
@@ -252,16 +279,19 @@ def main(argv=None) -> int:
     if not want <= set(SOURCES):
         ap.error(f"--sources: unknown {', '.join(sorted(want - set(SOURCES)))}")
     t0 = time.perf_counter()
-    sel = [c for c in (short_cases() if a.short else cases(range(a.seeds))) if c.source in want]
-    rows = run_all(sel, SHORT if a.short else BENCH, a.out, a.jobs,
+    seeds = range(a.first_seed, a.first_seed + a.seeds)
+    sel = [c for c in cases(seeds, ("6pus",) if a.short else ("6pus", "quattro")) if c.source in want]
+    rows = run_all(sel, SHORT if a.short else BENCH, a.out, a.jobs, window_spread=not a.no_window_spread,
                    progress=lambda r: print(f"{r['case']:48s} {len(r['estimates'])} estimate(s) "
                                             f"{r.get('failed', '')}", flush=True))
     print()
     print(table(rows))
+    print()
+    print(by_type(rows))
     k, n = coverage(rows)
     print(f"\n{k}/{n} stated 95 % intervals hold the truth; {len(rows)} cases, {time.perf_counter() - t0:.0f} s")
     a.out.mkdir(parents=True, exist_ok=True)
-    (a.out / "rows.json").write_text(json.dumps(rows, indent=1))
+    (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
     return 0
 
 

@@ -24,7 +24,7 @@ foreach(f fmi2Functions.h fmi2FunctionTypes.h fmi2TypesPlatform.h)
   file(COPY ${FMI2_HEADERS_DIR}/${f} DESTINATION ${src})
 endforeach()
 file(COPY ${SOURCE_DIR}/fmu/common/fmi2_functions.c ${SOURCE_DIR}/fmu/common/fmu_instance.c
-     ${SOURCE_DIR}/fmu/common/fmu_instance.h ${SOURCE_DIR}/fmu/common/fmu_plant.h ${HOOKS} ${GEN}/fmu_vars.h
+     ${SOURCE_DIR}/fmu/common/fmu_instance.h ${SOURCE_DIR}/fmu/common/fmu_model.h ${HOOKS} ${GEN}/fmu_vars.h
      DESTINATION ${src})
 # the model folder's model.c as fmu_model.c: the core has a common/model.cpp (one model.o)
 configure_file(${MODEL_C} ${src}/fmu_model.c COPYONLY)

@@ -124,3 +124,31 @@ def test_every_parameter_is_documented(modname):
         doc = fn.__doc__ or ""
         missing += [f"{name}({p})" for p in inspect.signature(fn).parameters if p not in doc]
     assert not missing, missing
+
+
+def test_a_move_is_the_quintic_that_numpy_solves_from_its_rest_to_rest_conditions():
+    # Oracle: the minimum-jerk rest-to-rest move is the quintic with zero speed and acceleration
+    # at both ends (Flash and Hogan 1985); its six coefficients are solved here with numpy from
+    # those six conditions, not taken from the module
+    T, x0, x1 = 0.8, np.array([0.0, 0.07]), np.array([0.02, 0.05])
+    traj = tr.waypoints([x0, x1], move_time=[T])
+    A = np.array([[T ** k if d == 0 else (k * T ** (k - 1) if d == 1 else k * (k - 1) * T ** max(k - 2, 0))
+                   for k in range(6)] for d in range(3)])
+    A0 = np.array([[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 2, 0, 0, 0]], float)
+    t = np.linspace(0.0, T, 41)
+    x, xd, xdd = traj.evaluate(t)
+    for j in range(2):
+        c = np.linalg.solve(np.vstack([A0, A]), [x0[j], 0, 0, x1[j], 0, 0])
+        p = np.polynomial.Polynomial(c)
+        np.testing.assert_allclose(x[:, j], p(t), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(xd[:, j], p.deriv(1)(t), rtol=0, atol=1e-13)
+        np.testing.assert_allclose(xdd[:, j], p.deriv(2)(t), rtol=0, atol=1e-11)
+
+
+def test_rotation_is_scipys_intrinsic_xyz_euler_rotation():
+    # Oracle: scipy's Rotation, intrinsic x-y-z Euler angles (R = Rx Ry Rz)
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(3)
+    for r in rng.uniform(-0.5, 0.5, (20, 3)):
+        np.testing.assert_allclose(tr.rotation(r), Rotation.from_euler("XYZ", r).as_matrix(), rtol=0, atol=1e-15)

@@ -1,7 +1,7 @@
 """The discrepancy engine on recordings from MuJoCo, a simulator the project did not write.
 
     .venv/bin/python bench/foreign/mujoco_blind.py [--clean 4] [--seed 11] [--duration 9] [--out results/foreign]
-        [--controller pid] [--two] [--hold-out type] [--only backlash,clean] [--any-rail]
+        [--controller pid] [--two] [--hold-out type] [--only backlash,clean] [--any-rail] [--gap-model mujoco]
 
 Each case is a 6-PUS run in MuJoCo (PyPI ``mujoco``; bench/requirements.txt): a model
 built from the core's nominal parameters (free platform, six slide joints with their
@@ -15,7 +15,8 @@ joint ``damping``, joint ``armature`` (rotor inertia), a payload body on the pla
 heavier platform, tilted gravity, a command delay, an encoder offset, a dead zone, and, as
 two bodies (drive with the encoder and the motor, carriage with the leg) joined through the
 rail, a backlash (a gap with stiff faces: the contact side is whatever the transmitted force
-makes it) or an elasticity (a spring).  The
+makes it) or an elasticity (a spring); with ``--gap-model mujoco`` the gap is MuJoCo's own joint
+limit (soft faces of time constant ``LIMIT_TC``) and the spring the gap joint's stiffness.  The
 recording is written in MuJoCo's joint coordinates (zero at home) with the convention
 declared in the sidecar (``joint_convention``), so the reader converts it.
 
@@ -83,6 +84,10 @@ ALSO_RIGHT = {"coulomb": {"smooth_coulomb"}}
 #: rail's rotor inertia), the contact stiffness of the gap's faces [N/m] and the damping ratio of
 #: the contact and of the spring
 DRIVE_MASS, CONTACT_K, DAMPING_RATIO = 0.05, 1e6, 0.3
+#: time constant [s] of a gap's faces made as MuJoCo's joint limit (``--gap-model mujoco``):
+#: MuJoCo's default is 0.02 (faces so soft that the effort deflects them by millimetres, a
+#: spring rather than a gap); 0.0005 gives faces deflecting a few um under the rail's effort
+LIMIT_TC = 0.0005
 
 
 def euler_xyz(R):
@@ -91,12 +96,13 @@ def euler_xyz(R):
     return math.atan2(-R[1, 2], R[2, 2]), ry, math.atan2(-R[0, 1], R[0, 0])
 
 
-def case_xml(m: Model, hidden: list, rng) -> tuple[str, dict]:
+def case_xml(m: Model, hidden: list, rng, gap_model: str = "applied") -> tuple[str, dict]:
     """MJCF of the nominal robot with the ``hidden`` effects ((type, value, joint) each) that
-    live in MuJoCo's physics; the truth."""
+    live in MuJoCo's physics; the truth.  ``gap_model`` (see :func:`simulate`) says how a
+    two-body rail's gap or spring is made."""
     xml, truth = mujoco_xml(m), {}
     for effect, value, joint in hidden:
-        xml = _hide(xml, m, effect, value, joint, rng, truth)
+        xml = _hide(xml, m, effect, value, joint, rng, truth, gap_model)
     # stiff loop closure: MuJoCo's default connect (time constant 20 ms) sags by ~1 mm
     xml = xml.replace('"/>\n    <connect', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n    <connect')
     xml = xml.replace('"/>\n  </equality>', '" solref="0.0002 1" solimp="0.999 0.9999 0.0001"/>\n  </equality>')
@@ -104,7 +110,7 @@ def case_xml(m: Model, hidden: list, rng) -> tuple[str, dict]:
     return xml, truth
 
 
-def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict) -> str:
+def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict, gap_model: str = "applied") -> str:
     p = m.params()
     j = joint
     rail = f'<joint name="rail{j}" type="slide"'
@@ -129,10 +135,19 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
         head = xml[start:xml.index("<geom", start)]
         axis = head.split('axis="')[1].split('"')[0]
         pos = head.split('pos="')[1].split('"')[0]
+        gap_attr = ""
+        if gap_model == "mujoco" and effect == "backlash":
+            # MuJoCo's own joint limit: a soft constraint at +-b/2 (time constant LIMIT_TC,
+            # critically damped), no force inside the band
+            gap_attr = (f' limited="true" range="{-0.5 * value:.17g} {0.5 * value:.17g}" '
+                        f'solreflimit="{LIMIT_TC:.17g} 1"')
+        elif gap_model == "mujoco":
+            k = 1.0 / value
+            gap_attr = f' stiffness="{k:.17g}" damping="{2 * DAMPING_RATIO * math.sqrt(k * DRIVE_MASS):.17g}"'
         new_head = (f'<body name="drive{j}" pos="{pos}">\n      <joint name="rail{j}" type="slide" axis="{axis}"/>\n'
                     f'      <geom type="box" size="0.004 0.004 0.004" mass="{DRIVE_MASS}" contype="0" '
                     f'conaffinity="0"/>\n    <body name="slider{j}">\n      <joint name="gap{j}" type="slide" '
-                    f'axis="{axis}"/>\n      ')
+                    f'axis="{axis}"{gap_attr}/>\n      ')
         xml = xml[:start] + new_head + xml[start + len(head):]
         leg = xml.index(f'<body name="leg{j}"', start)
         close = xml.index("\n    </body>", leg)
@@ -163,21 +178,26 @@ def controller(kind: str, m: Model):
                    gravity_feedforward=True)
 
 
-def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None, hook=None):
+def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None,
+             gap_model="applied", hook=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
     ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
     hidden in MuJoCo's physics: ``force(q, qd)`` of the six rails' true positions (the model's
     coordinates) and rates gives the six forces [N] pushing them along +q, applied at every
-    MuJoCo step (``qfrc_applied``).  ``hook``, if given, is called before every MuJoCo step as
-    ``hook(model, data, t, q, qd, cmd)`` (t [s], the rails' true positions and rates, the six
-    commanded forces [N]) and returns six more rail forces along +q [N] or None; it may also set
-    MuJoCo's ``xfrc_applied`` or the model's masses (bench/foreign/mujoco_unnamed.py)."""
+    MuJoCo step (``qfrc_applied``).  ``gap_model`` makes a two-body rail's backlash or
+    elasticity: ``"applied"`` a force of :func:`gap_force` applied at every step (stiff,
+    damped faces), ``"mujoco"`` MuJoCo's own constraint (a joint limit at +-b/2 with its default
+    soft reference, or the gap joint's ``stiffness`` and ``damping``).  ``hook``, if given, is
+    called before every MuJoCo step as ``hook(model, data, t, q, qd, cmd)`` (t [s], the rails'
+    true positions and rates, the six commanded forces [N]) and returns six more rail forces
+    along +q [N] or None; it may also set MuJoCo's ``xfrc_applied`` or the model's masses
+    (bench/foreign/mujoco_unnamed.py)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
     hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
-    xml, truth = case_xml(m, hidden, rng)
+    xml, truth = case_xml(m, hidden, rng, gap_model)
     model = mujoco.MjModel.from_xml_string(xml)
     gaps = [(model.joint(f"gap{j}").qposadr[0], model.joint(f"gap{j}").dofadr[0], eff, val)
             for eff, val, j in hidden if eff in ("backlash", "compliance")]
@@ -244,7 +264,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
                 more = hook(model, data, ts, q0 + data.qpos[rails], data.qvel[drails].copy(), cmd)
                 base = data.qfrc_applied[drails] if force is not None else applied
                 data.qfrc_applied[drails] = base + (0.0 if more is None else more)
-            for adr, dof, eff, val in gaps:
+            for adr, dof, eff, val in (gaps if gap_model == "applied" else ()):
                 data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)
         if len(issued) > 20:
@@ -329,7 +349,7 @@ def gap_joint(m: Model, seed: int, duration: float, joint: int) -> int:
 def _pair(m, hidden, seed, a, noise, rows):
     """A case hiding two effects: both must be named, each parameter within 15 %."""
     name = "+".join(e for e, _, _ in hidden) + f"_{seed}"
-    rec, truth = simulate(m, hidden, 0.0, 0, seed, a.duration, noise, a.controller)
+    rec, truth = simulate(m, hidden, 0.0, 0, seed, a.duration, noise, a.controller, gap_model=a.gap_model)
     csv = write_case(m, rec, a.out / f"{name}.csv")
     d = diagnose(csv, figures=False, replay=False)
     named = d.named()
@@ -360,6 +380,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=REPO / "results" / "foreign", help="where the recordings go")
     ap.add_argument("--controller", choices=["pd_gravity", "pid"], default="pd_gravity",
                     help="the recordings' controller (default pd_gravity)")
+    ap.add_argument("--gap-model", choices=["applied", "mujoco"], default="applied",
+                    help="a two-body rail's gap or spring: a force applied per step (stiff faces, default) or "
+                         "MuJoCo's own soft joint limit / joint stiffness")
     ap.add_argument("--two", action="store_true", help="hide two effects at once (PAIRS) instead of one")
     ap.add_argument("--hold-out", choices=["type", "family"], default=None,
                     help="diagnose each effect case with its type (or its type and the type's declared "
@@ -389,7 +412,8 @@ def main(argv=None) -> int:
         if effect == "backlash" and not a.any_rail:
             joint = gap_joint(m, seed, a.duration, joint)
         try:
-            rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller)
+            rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller,
+                                  gap_model=a.gap_model)
         except ControllerError as e:  # the drawn case drove a rail off its stroke: not a recording
             print(f"{name:22s} NOT GENERATED ({e})", flush=True)
             continue

@@ -1,4 +1,4 @@
-// The four-bar of Vitali 2020 through the C API: the seed's tables, dX/dl against central
+// The four-bar of Vitali 2020 through the C API: the source's tables, dX/dl against central
 // finite differences, and errors that name the crank angle.
 #include <gtest/gtest.h>
 
@@ -37,7 +37,7 @@ const double kA[7][4] = {{1.2343, 0.8090, -0.5164, -0.1379}, {1.1503, 0.7409, -0
                          {0.8731, 0.6107, -0.2603, -0.0552}, {0.7787, 0.5836, -0.2264, -0.0393},
                          {0.6839, 0.5616, -0.1992, -0.0257}};
 
-TEST_F(Fourbar, ParameterTableHasTheSeedLengths) {
+TEST_F(Fourbar, ParameterTableHasTheSourceLengths) {
   ASSERT_EQ(pkm_model_ndof(m), 1);
   // the robot's own table comes first (the drive layer appends joint[1].* etc.)
   ASSERT_GE(pkm_model_nparam(m), 4);
@@ -51,19 +51,19 @@ TEST_F(Fourbar, ParameterTableHasTheSeedLengths) {
   }
 }
 
-TEST_F(Fourbar, ReproducesSeedOutputTableNominal) {
+TEST_F(Fourbar, ReproducesSourceOutputTableNominal) {
   for (int k = 0; k < 7; ++k) EXPECT_NEAR(X_mm(30 + 5 * k), kXp[k], 0.5e-4) << "theta = " << 30 + 5 * k;
 }
 
-TEST_F(Fourbar, ReproducesSeedOutputTableOfTheRealLinkage) {
+TEST_F(Fourbar, ReproducesSourceOutputTableOfTheRealLinkage) {
   const double lr[4] = {600.30, 750.50, 790.55, 900.70};
   set_lengths_mm(lr);
   for (int k = 0; k < 7; ++k) EXPECT_NEAR(X_mm(30 + 5 * k), kXpr[k], 0.5e-4) << "theta = " << 30 + 5 * k;
 }
 
 // The coupler angle is not an output; recover it from X = l1 cos(theta) + l2/2 cos(phi)
-// (phi > 0 on this branch) and compare with the seed's 4-decimal radians.
-TEST_F(Fourbar, CouplerAngleOfTheSeedBranch) {
+// (phi > 0 on this branch) and compare with the source's 4-decimal radians.
+TEST_F(Fourbar, CouplerAngleOfTheSourceBranch) {
   for (int k = 0; k < 7; ++k) {
     const double th = rad(30 + 5 * k);
     const double X = X_mm(30 + 5 * k);
@@ -72,7 +72,7 @@ TEST_F(Fourbar, CouplerAngleOfTheSeedBranch) {
   }
 }
 
-TEST_F(Fourbar, ReproducesSeedJacobianA) {
+TEST_F(Fourbar, ReproducesSourceJacobianA) {
   for (int k = 0; k < 7; ++k) {
     double dX[4];
     X_mm(30 + 5 * k, dX);

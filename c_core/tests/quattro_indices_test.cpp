@@ -48,7 +48,7 @@ TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
     Eigen::Matrix<double, 4, 3> JT = JD.leftCols<3>();
     EXPECT_NEAR(out[col("mu_T")], 1 / std::sqrt((JT.transpose() * JT).determinant()), 1e-10);
     EXPECT_NEAR(out[col("mu_z")], 1 / JD.col(2).norm(), 1e-10);
-    // Eigenvalue variant on the z axis equals the sub-matrix one there (seed ch. 3.5).
+    // Eigenvalue variant on the z axis equals the sub-matrix one there (source ch. 3.5).
     if (x[0] == 0 && x[1] == 0 && param("platform.offset") == 0) {
       EXPECT_NEAR(out[col("mu_z_eig")], out[col("mu_z")], 1e-9);
       EXPECT_NEAR(out[col("mu_T_eig")], out[col("mu_T")], 1e-9);
@@ -77,7 +77,7 @@ TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
 }
 
 TEST_P(QuattroIdx, GimreIsTheKineticEnergyOfLinksAndPlatform) {
-  // Independent bookkeeping: link 1 rotates about A_i with the seed's inertia (m_b lg^2 +
+  // Independent bookkeeping: link 1 rotates about A_i with the source's inertia (m_b lg^2 +
   // I_G), each forearm pair is a uniform rod of mass 2 m_c between B_i and C_i, the
   // platform is m_p / 2 at each end of its axis; velocities by finite differences of the
   // points the core reports.

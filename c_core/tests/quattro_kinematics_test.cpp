@@ -1,4 +1,4 @@
-// Quattro (Virzi 2010) kinematics through the C API: the closure equations of the seed
+// Quattro (Virzi 2010) kinematics through the C API: the closure equations of the source
 // (eqs. 2.6-2.9, typed here independently of the core), Jx / Jq / J and dJ/dt against
 // central finite differences, IK/FK round trip, the root choice, and errors naming the arm.
 #include <gtest/gtest.h>
@@ -21,9 +21,9 @@ struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
     return {{0.0, 0.0, -0.95, 0.0}, {0.12, -0.05, -1.0, 0.1}, {-0.2, 0.15, -0.9, -0.2},
             {0.05, 0.25, -1.1, 0.3}, {-0.1, -0.1, -0.80, 0.05}, {0.3, 0.0, -1.05, -0.1}};
   }
-  // Seed eqs. 2.6-2.9: F_i(q, x) = |C_i - B_i|^2 - c^2 with the seed's coordinates
+  // Source eqs. 2.6-2.9: F_i(q, x) = |C_i - B_i|^2 - c^2 with the source's coordinates
   // x0 = x + offset cos(pi/4 + th), y0 = ..., z0 = z + base + ee (ch. 1.5).
-  void seed_closure(const double* q, const double* x, double* F) {
+  void source_closure(const double* q, const double* x, double* F) {
     const double a = param("base.a"), base = param("base.h"), br = param("arm.b_r"), rb = param("arm.r_b"),
                  c = param("forearm.c"), dd = param("platform.d"), off = param("platform.offset"),
                  ee = param("tool.length");
@@ -38,7 +38,7 @@ struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
   }
 };
 
-TEST_P(Quattro, ParameterSetsCarryTheSeedValues) {
+TEST_P(Quattro, ParameterSetsCarryTheSourceValues) {
   EXPECT_EQ(pkm_model_ndof(m), 4);
   const bool app = std::string(GetParam()) == "appendix_a";
   EXPECT_DOUBLE_EQ(param("base.a"), app ? 0.28 : 0.275);
@@ -53,19 +53,19 @@ TEST_P(Quattro, ParameterSetsCarryTheSeedValues) {
   EXPECT_NEAR(param("joint.q_max") * 180 / kPi, 123, 1e-12);
 }
 
-TEST_P(Quattro, IkSatisfiesTheSeedClosureEquations) {
+TEST_P(Quattro, IkSatisfiesTheSourceClosureEquations) {
   for (auto& x : poses()) {
     double q[4], F[4];
     ASSERT_EQ(pkm_ik(m, d, x.data(), q), PKM_OK) << pkm_data_error(d);
-    seed_closure(q, x.data(), F);
+    source_closure(q, x.data(), F);
     for (int i = 0; i < 4; ++i) EXPECT_NEAR(F[i], 0.0, 1e-12) << "arm " << i + 1;
   }
 }
 
-TEST_P(Quattro, IkTakesTheSeedRootElbowOut) {
-  // Seed ch. 1.4.1: of the two roots of each arm's closure, the larger x_B for arm 1
+TEST_P(Quattro, IkTakesTheSourceRootElbowOut) {
+  // Source ch. 1.4.1: of the two roots of each arm's closure, the larger x_B for arm 1
   // (smaller for arm 3; y_B for arms 2, 4), i.e. the larger cos q: the elbow out.  Both
-  // roots are found here by scanning the seed's closure equation over q.
+  // roots are found here by scanning the source's closure equation over q.
   for (auto& x : poses()) {
     double q[4];
     ASSERT_EQ(pkm_ik(m, d, x.data(), q), PKM_OK);
@@ -76,9 +76,9 @@ TEST_P(Quattro, IkTakesTheSeedRootElbowOut) {
       for (int k = 0; k < n; ++k) {
         const double a0 = -kPi + 2 * kPi * k / n, a1 = -kPi + 2 * kPi * (k + 1) / n;
         qq[i] = a0;
-        seed_closure(qq, x.data(), F0);
+        source_closure(qq, x.data(), F0);
         qq[i] = a1;
-        seed_closure(qq, x.data(), F1);
+        source_closure(qq, x.data(), F1);
         if (F0[i] * F1[i] <= 0) roots.push_back(0.5 * (a0 + a1));
       }
       ASSERT_EQ(roots.size(), 2u) << "arm " << i + 1;
@@ -103,12 +103,12 @@ TEST_P(Quattro, JacobiansMatchFiniteDifferences) {
       double qp[4], qm[4], Fp[4], Fm[4];
       ASSERT_EQ(pkm_ik(m, d, xp.data(), qp), PKM_OK);
       ASSERT_EQ(pkm_ik(m, d, xm.data(), qm), PKM_OK);
-      seed_closure(q, xp.data(), Fp);
-      seed_closure(q, xm.data(), Fm);
+      source_closure(q, xp.data(), Fp);
+      source_closure(q, xm.data(), Fm);
       for (int i = 0; i < 4; ++i) {
         const double fd = (qp[i] - qm[i]) / (2 * h);
         EXPECT_NEAR(J[4 * i + j], fd, 1e-6 * std::max(1.0, std::fabs(fd))) << "J " << i << j;
-        const double fdx = (Fp[i] - Fm[i]) / (2 * h);  // Jx = dF/dx (seed eq. 2.2)
+        const double fdx = (Fp[i] - Fm[i]) / (2 * h);  // Jx = dF/dx (source eq. 2.2)
         EXPECT_NEAR(Jx[4 * i + j], fdx, 1e-6 * std::max(1.0, std::fabs(fdx))) << "Jx " << i << j;
       }
     }
@@ -117,8 +117,8 @@ TEST_P(Quattro, JacobiansMatchFiniteDifferences) {
       for (int k = 0; k < 4; ++k) qp[k] = qm[k] = q[k];
       qp[i] += h;
       qm[i] -= h;
-      seed_closure(qp, x.data(), Fp);
-      seed_closure(qm, x.data(), Fm);
+      source_closure(qp, x.data(), Fp);
+      source_closure(qm, x.data(), Fm);
       for (int k = 0; k < 4; ++k) {
         const double fd = -(Fp[k] - Fm[k]) / (2 * h);
         EXPECT_NEAR(Jq[4 * k + i], fd, 1e-6 * std::max(1.0, std::fabs(fd))) << "Jq " << k << i;

@@ -482,13 +482,13 @@ TEST_F(SixPus, CalibrationRowsMatchFiniteDifferences) {
 
 // Leg 1 regression rows [dq/dX dY dZ dS0x dS0y dS0z dL dsx dsy dsz], typed from Tiberi 2020
 // Tables 4.3, 4.5, ..., 4.21; poses from Tables 4.2, 4.4, ..., 4.20 (angles in degrees).
-const double kSeedPose[10][6] = {
+const double kSourcePose[10][6] = {
     // theta_x, theta_y, theta_z [deg], x, y, z [m]
     {0, 0, 0, 0, 0, 0.085},           {1, 1, 1, 0, 0, 0.085},         {1, 4, -3, 0.050, 0.050, 0.090},
     {-1, 1, 2, 0.02, 0, 0.075},       {0, 4, 0, 0.015, 0.02, 0.040},  {5, 4, 1, -0.010, 0.07, 0.018},
     {-4, 3, -5, -0.040, 0.010, 0.065}, {0, 2, -3, -0.023, -0.019, 0.100}, {5, 5, 5, -0.038, -0.009, 0.100},
     {2, 5, 0, 0.050, -0.040, 0.063}};
-const double kSeedRow[10][10] = {
+const double kSourceRow[10][10] = {
     {1, 0.1019, 1.0824, -1, -0.1019, -1.0824, -1.4771, -0.0550, -0.0056, -0.0595},
     {1, 0.1121, 1.0738, -1, -0.1121, -1.0738, -1.4716, -0.0542, -0.0061, -0.0582},
     {1, 1.0480, 1.6470, -1, -1.0480, -1.6470, -2.1934, -0.1319, -0.1383, -0.2173},
@@ -503,7 +503,7 @@ const double kSeedRow[10][10] = {
 // last digit (plus floating-point slack).
 constexpr double k4dec = 5e-5 + 1e-9;
 
-struct SeedTables : SixPus {
+struct SourceTables : SixPus {
   // The tables concern leg 1 only.  Poses 3 and 8 are out of reach of legs 5 and 6 of
   // the completed layout (the sources fix leg 1 only): lengthen those legs so the
   // poses are valid for the whole robot; leg 1 keeps Table 4.1's parameters.
@@ -515,12 +515,12 @@ struct SeedTables : SixPus {
     ASSERT_EQ(param("leg[1].L"), 0.116);
     ASSERT_EQ(param("rail[1].S0x"), -0.085);
   }
-  // Leg 1 row at a pose given by the seed's angles, read with the core's convention
+  // Leg 1 row at a pose given by the source's angles, read with the core's convention
   // R = Rx Ry Rz (pkm.h, docs/6pus.md, Tiberi 2020 eq. 2.5).
   Eigen::Matrix<double, 10, 1> row_contract(int k) {
     Vec6 x;
-    x << kSeedPose[k][3], kSeedPose[k][4], kSeedPose[k][5], rad(kSeedPose[k][0]), rad(kSeedPose[k][1]),
-        rad(kSeedPose[k][2]);
+    x << kSourcePose[k][3], kSourcePose[k][4], kSourcePose[k][5], rad(kSourcePose[k][0]), rad(kSourcePose[k][1]),
+        rad(kSourcePose[k][2]);
     return row(x);
   }
   // The same angles read as R = Rz(theta_z) Ry(theta_y) Rx(theta_x), converted to the
@@ -528,12 +528,12 @@ struct SeedTables : SixPus {
   // R22 = cos a cos b, R01 = -cos b sin c, R00 = cos b cos c.
   Eigen::Matrix<double, 10, 1> row_zyx(int k) {
     using AA = Eigen::AngleAxisd;
-    const Eigen::Matrix3d R = (AA(rad(kSeedPose[k][2]), Eigen::Vector3d::UnitZ()) *
-                               AA(rad(kSeedPose[k][1]), Eigen::Vector3d::UnitY()) *
-                               AA(rad(kSeedPose[k][0]), Eigen::Vector3d::UnitX()))
+    const Eigen::Matrix3d R = (AA(rad(kSourcePose[k][2]), Eigen::Vector3d::UnitZ()) *
+                               AA(rad(kSourcePose[k][1]), Eigen::Vector3d::UnitY()) *
+                               AA(rad(kSourcePose[k][0]), Eigen::Vector3d::UnitX()))
                                   .toRotationMatrix();
     Vec6 x;
-    x << kSeedPose[k][3], kSeedPose[k][4], kSeedPose[k][5], std::atan2(-R(1, 2), R(2, 2)), std::asin(R(0, 2)),
+    x << kSourcePose[k][3], kSourcePose[k][4], kSourcePose[k][5], std::atan2(-R(1, 2), R(2, 2)), std::asin(R(0, 2)),
         std::atan2(-R(0, 1), R(0, 0));
     return row(x);
   }
@@ -542,17 +542,17 @@ struct SeedTables : SixPus {
     EXPECT_EQ(pkm_6pus_calib_rows(m, d, x.data(), PKM_FRAME_WORLD, rows.data()), PKM_OK) << pkm_data_error(d);
     return rows.row(0).transpose();
   }
-  static Eigen::Matrix<double, 10, 1> seed(int k) { return Eigen::Map<const Eigen::Matrix<double, 10, 1>>(kSeedRow[k]); }
+  static Eigen::Matrix<double, 10, 1> table_row(int k) { return Eigen::Map<const Eigen::Matrix<double, 10, 1>>(kSourceRow[k]); }
 };
 
-// Entries the seed got wrong (checked to be wrong in the way stated, below).
-bool seed_sign_erratum(int k, int c) { return (k == 7 && (c == 1 || c == 4 || c == 8)) || (k == 9 && c == 8); }
+// Entries the source got wrong (checked to be wrong in the way stated, below).
+bool source_sign_erratum(int k, int c) { return (k == 7 && (c == 1 || c == 4 || c == 8)) || (k == 9 && c == 8); }
 
-TEST_F(SeedTables, RowsWithTheContractConventionRxRyRz) {
+TEST_F(SourceTables, RowsWithTheContractConventionRxRyRz) {
   for (int k = 0; k < 10; ++k) {
-    const auto r = row_contract(k), s = seed(k);
+    const auto r = row_contract(k), s = table_row(k);
     for (int c = 0; c < 10; ++c) {
-      if (seed_sign_erratum(k, c) || k == 8) continue;
+      if (source_sign_erratum(k, c) || k == 8) continue;
       // Rows 1 and 5 rotate about at most one axis (the order of rotations does not matter
       // there): they reproduce to the table's 4 decimals.
       if (k == 0 || k == 4)
@@ -562,20 +562,20 @@ TEST_F(SeedTables, RowsWithTheContractConventionRxRyRz) {
     }
   }
   // Expected rows 1, 4, 5 to reproduce to 4 decimals; with R = Rx Ry Rz row 4
-  // (and rows 2, 3) do not: the seed's numbers were computed with the other order of
+  // (and rows 2, 3) do not: the source's numbers were computed with the other order of
   // rotations (next test).  This assertion fails if that finding is wrong.
-  for (int k : {1, 2, 3}) EXPECT_GT((row_contract(k) - seed(k)).cwiseAbs().maxCoeff(), 1e-4) << "row " << k + 1;
+  for (int k : {1, 2, 3}) EXPECT_GT((row_contract(k) - table_row(k)).cwiseAbs().maxCoeff(), 1e-4) << "row " << k + 1;
   // Row 9 (5 deg about every axis) is where the order matters most: off by more than
   // 2e-2 with R = Rx Ry Rz (an erratum of the table), exact with R = Rz Ry Rx.
-  EXPECT_GT((row_contract(8) - seed(8)).cwiseAbs().maxCoeff(), 2e-2);
+  EXPECT_GT((row_contract(8) - table_row(8)).cwiseAbs().maxCoeff(), 2e-2);
 }
 
-TEST_F(SeedTables, RowsReproduceToFourDecimalsWithRzRyRxAndTheErrataAreWhatTheySeem) {
+TEST_F(SourceTables, RowsReproduceToFourDecimalsWithRzRyRxAndTheErrataAreWhatTheySeem) {
   for (int k = 0; k < 10; ++k) {
-    const auto r = row_zyx(k), s = seed(k);
+    const auto r = row_zyx(k), s = table_row(k);
     for (int c = 0; c < 10; ++c) {
       const bool s_col = c >= 7;
-      if (seed_sign_erratum(k, c)) {
+      if (source_sign_erratum(k, c)) {
         // Erratum: right magnitude, wrong sign (row 8: dq/dY, dq/dS0y, dq/dsy, as if the
         // pose had y = +0.019 for those columns only; row 10: dq/dsy).
         EXPECT_NEAR(r[c], -s[c], k4dec) << "row " << k + 1 << " col " << c + 1;

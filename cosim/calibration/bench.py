@@ -9,9 +9,10 @@ import warnings
 
 import numpy as np
 
-from .data import SEED000_POSES, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params
+from .data import SEED000_POSES, candidate_poses, joint_campaign, real_params
 from .design import observability, pose_rows, select_poses, sixpus_seed_comparison
-from .problems import CalibrationWarning, SixpusProblem
+from .joint_problem import JointProblem
+from .problems import CalibrationWarning
 from .solvers import solve
 from ..core.model import Model
 
@@ -20,9 +21,9 @@ __all__ = ["benchmark", "design_study"]
 
 def _campaign(npose, seed):
     nom = Model("6pus")
-    real = sixpus_real_params(nom, rng=seed)
-    poses = sixpus_candidate_poses(nom, npose, rng=seed + 1)
-    return nom, real, sixpus_campaign(real, poses, rng=seed + 2)
+    real = real_params(nom, rng=seed)
+    poses = candidate_poses(nom, npose, rng=seed + 1)
+    return nom, real, joint_campaign(nom, real, poses, rng=seed + 2)
 
 
 def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool = True) -> str:
@@ -40,7 +41,7 @@ def benchmark(npose: int = 1000, seed: int = 1, repeat: int = 3, baseline: bool 
     t = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(rec.pose, rec.q, nom)
+        P = JointProblem(rec.pose, rec.q, nom)
     setup = time.perf_counter() - t
     truth = np.array([real[n] for n in P.names])
 
@@ -113,10 +114,10 @@ def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 
     from .fit import accuracy, calibrate
 
     nom = Model("6pus")
-    cand = sixpus_candidate_poses(nom, ncand, rng=seed)
+    cand = candidate_poses(nom, ncand, rng=seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(cand, nom.ik(cand), nom)
+        P = JointProblem(cand, nom.ik(cand), nom)
     A, _ = pose_rows(P)
     idx, _ = select_poses(A, n)
     rng = np.random.default_rng(seed)
@@ -139,13 +140,13 @@ def design_study(n: int = 10, ncand: int = 1000, nval: int = 200, trials: int = 
                  f"{o['cond']:.3g}")
     res = {"random": [], "D-optimal": []}
     for t in range(trials):
-        real = sixpus_real_params(nom, rng=1000 + t)
-        val = sixpus_campaign(real, sixpus_candidate_poses(nom, nval, rng=2000 + t), rng=3000 + t)
+        real = real_params(nom, rng=1000 + t)
+        val = joint_campaign(nom, real, candidate_poses(nom, nval, rng=2000 + t), rng=3000 + t)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", CalibrationWarning)
-            Pv = SixpusProblem(val.pose, val.q, nom)
+            Pv = JointProblem(val.pose, val.q, nom)
             for name, ii in (("random", rng.choice(len(cand), n, replace=False)), ("D-optimal", idx)):
-                rec = sixpus_campaign(real, cand[ii], rng=4000 + t)
+                rec = joint_campaign(nom, real, cand[ii], rng=4000 + t)
                 r = calibrate(rec, model="prediction")
                 a = accuracy(Pv, r.solution.p)
                 res[name].append((a.position[0], a.position[1]))

@@ -22,19 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .problems import sixpus_leg_names
+from .error_model import error_model, output
 from ..core.model import Model
 from ..recording import Recording, write_recording
 
 __all__ = [
     "SEED000_POSES",
-    "sixpus_real_params",
-    "sixpus_candidate_poses",
-    "sixpus_campaign",
-    "fourbar_campaign",
     "real_params",
     "candidate_poses",
     "joint_campaign",
+    "output_campaign",
     "write_campaign",
     "read_truth",
 ]
@@ -56,65 +53,109 @@ SEED000_POSES_DEG = np.array([
 SEED000_POSES = np.column_stack([SEED000_POSES_DEG[:, :3], np.radians(SEED000_POSES_DEG[:, 3:])])
 
 
-def sixpus_real_params(nominal: Model, max_length: float = 0.5e-3, max_angle_deg: float = 0.5,
-                       rng=None) -> dict:
-    """A "real" 6-PUS: the 60 geometric parameters of ``nominal`` with random errors.
+def _tilt(s, max_angle_deg, rng):
+    """The unit vector s tilted by an angle uniform in [0, max_angle_deg] about a random axis
+    perpendicular to it (Rodrigues), so that it stays a unit vector."""
+    a = rng.normal(size=3)
+    a -= (a @ s) * s
+    a /= np.linalg.norm(a)
+    ang = np.radians(rng.uniform(0.0, max_angle_deg))
+    s2 = s * np.cos(ang) + np.cross(a, s) * np.sin(ang)
+    return s2 / np.linalg.norm(s2)
 
-    Lengths and points (platform points, rail origins, leg lengths) get errors uniform in
-    +-``max_length`` [m]; each rail direction is tilted by an angle uniform in
-    [0, ``max_angle_deg``] about a random axis perpendicular to it (so it stays a unit
-    vector).  Returns the overrides ``{name: value}``.
+
+def real_params(nominal: Model, max_length: float = 0.5e-3, rng=None, names=None, poses=None,
+                max_angle_deg: float = 0.5) -> dict:
+    """A "real" robot for any model: its geometric parameters with random errors.
+
+    Lengths get errors uniform in +-``max_length`` [m].  ``names`` (names or shell patterns,
+    e.g. ``["leg[*].L"]``) chooses the parameters; default the robot's error model
+    (:mod:`cosim.calibration.error_model`: the 6-PUS's 60, whose rail directions are tilted by an
+    angle uniform in [0, ``max_angle_deg``] about a random axis perpendicular to them, so they
+    stay unit vectors), else every length that moves a joint at ``poses`` (default: home), as
+    the generic calibration fits them (:func:`cosim.calibration.problems.geometry_candidates`).
+    Returns the overrides ``{name: value}``.
+    """
+    from .problems import _select, geometry_candidates
+
+    rng = np.random.default_rng(rng)
+    em = error_model(nominal) if names is None else None
+    if em is not None:
+        units = {n: u for u in em.unit_vectors for n in u}
+        out = {}
+        for n in em.parameters:  # in the error model's order (Tiberi 2020 eq. 4.1, leg by leg)
+            if n not in units:
+                out[n] = nominal.param(n) + rng.uniform(-max_length, max_length)
+            elif n not in out:
+                u = units[n]
+                s = _tilt(np.array([nominal.param(c) for c in u]), max_angle_deg, rng)
+                out.update(zip(u, map(float, s)))
+        return out
+    x = nominal.home()[None, :] if poses is None else np.atleast_2d(poses)
+    geo = geometry_candidates(nominal, x)
+    chosen = geo if names is None else _select(nominal, geo, list(names))
+    return {n: nominal.param(n) + float(rng.uniform(-max_length, max_length)) for n in chosen}
+
+
+def _box_draw(box, m, rng):
+    """m poses uniform in ``box`` (per coordinate (low, high, in degrees)); consecutive
+    coordinates with the same range are drawn together."""
+    X = np.zeros((m, len(box)))
+    k = 0
+    while k < len(box):
+        j = k
+        while j + 1 < len(box) and box[j + 1] == box[k]:
+            j += 1
+        lo, hi, deg = box[k]
+        v = rng.uniform(lo, hi, (m, j - k + 1))
+        X[:, k:j + 1] = np.radians(v) if deg else v
+        k = j + 1
+    return X
+
+
+def candidate_poses(model: Model, n: int, rng=None, fraction: float = 0.5, joint_margin: float = 0.05,
+                    min_singularity: float = 0.05, workspace: dict | None = None) -> np.ndarray:
+    """Up to n random poses of any robot that ``model`` reaches comfortably.
+
+    A robot whose error model declares a ``workspace`` (the 6-PUS: Tiberi 2020's box, x, y in
+    +-50 mm, z in 20-100 mm, rotations in +-5 deg) gets poses uniform in that box, kept if every
+    joint is at least its ``joint_margin`` [joint unit] inside its range and the singularity
+    measures (inverse, direct) are above its ``min_singularity``; ``workspace`` overrides its
+    entries (``{"rx_deg": [0, 0], ...}``).  Any other robot: uniform in a box about home of
+    ``fraction`` of its reach along each pose coordinate (the core's reach, as the discrepancy
+    engine's excitation probes it: :func:`cosim.discrepancy.excitation.derived_profile`); kept
+    if every joint is at least ``joint_margin`` of its range inside it and both singularity
+    measures are above ``min_singularity``.
     """
     rng = np.random.default_rng(rng)
-    out = {}
-    for i in range(1, 7):
-        names = sixpus_leg_names(i)
-        for n in names[:7]:
-            out[n] = nominal.param(n) + rng.uniform(-max_length, max_length)
-        s = np.array([nominal.param(n) for n in names[7:]])
-        a = rng.normal(size=3)
-        a -= (a @ s) * s
-        a /= np.linalg.norm(a)
-        ang = np.radians(rng.uniform(0.0, max_angle_deg))
-        s2 = s * np.cos(ang) + np.cross(a, s) * np.sin(ang)  # Rodrigues, axis a perpendicular to s
-        s2 /= np.linalg.norm(s2)
-        out.update(zip(names[7:], map(float, s2)))
-    return out
+    lo, hi = (np.asarray(v, float) for v in model.joint_limits())
+    em = error_model(model)
+    ws = {**(em.workspace if em is not None else {}), **(workspace or {})}
+    if ws:
+        box = [(*ws[c], False) if c in ws else (*ws[c + "_deg"], True) for c in model.facts.pose_names]
+        margin, mins = np.full(lo.shape, ws["joint_margin"]), np.asarray(ws["min_singularity"], float)
+        draw = lambda m: _box_draw(box, m, rng)  # noqa: E731
+    else:
+        from ..discrepancy.excitation import derived_profile
 
-
-def sixpus_candidate_poses(model: Model, n: int, rng=None, xy: float = 0.05, z=(0.02, 0.10),
-                           rot_deg: float = 5.0, stroke_margin: float = 5e-3, min_direct: float = 0.02,
-                           min_inverse: float = 0.15) -> np.ndarray:
-    """Up to n random poses in the Tiberi 2020 workspace that ``model`` reaches comfortably.
-
-    Poses are uniform in x, y in +-``xy``, z in ``z``, each rotation in +-``rot_deg``;
-    kept if every stroke is at least ``stroke_margin`` inside its range (a real robot that
-    differs by a fraction of a millimetre reaches them too), the direct-singularity
-    measure is above ``min_direct`` and the inverse one (a leg close to perpendicular to
-    its rail, at the edge of its reach) above ``min_inverse``.
-    """
-    rng = np.random.default_rng(rng)
-    out = []
-    qmin = np.array([model.param(f"rail[{i}].qmin") for i in range(1, 7)])
-    qmax = np.array([model.param(f"rail[{i}].qmax") for i in range(1, 7)])
-    tries = 0
+        home = np.asarray(model.home(), float)
+        reach = np.asarray(derived_profile(model)["amp"], float) / 0.30
+        margin = joint_margin * np.where(np.isfinite(hi - lo), hi - lo, np.inf)
+        mins = min_singularity
+        draw = lambda m: home + rng.uniform(-1.0, 1.0, (m, home.size)) * fraction * reach  # noqa: E731
+    out, tries = [], 0
     while sum(len(o) for o in out) < n and tries < 50:
         tries += 1
-        m = max(4 * n, 100)
-        X = np.zeros((m, 6))
-        X[:, :2] = rng.uniform(-xy, xy, (m, 2))
-        X[:, 2] = rng.uniform(z[0], z[1], m)
-        X[:, 3:] = np.radians(rng.uniform(-rot_deg, rot_deg, (m, 3)))
+        X = draw(max(4 * n, 100))
         q, st = model.ik(X, errors="status")
         ok = st == 0
-        ok[ok] &= np.all((q[ok] > qmin + stroke_margin) & (q[ok] < qmax - stroke_margin), axis=1)
+        with np.errstate(invalid="ignore"):
+            ok[ok] &= np.all(~(q[ok] < lo + margin) & ~(q[ok] > hi - margin), axis=1)
         X = X[ok]
         if X.size:
-            meas = model.singularity(X)
-            X = X[(meas[:, 1] > min_direct) & (meas[:, 0] > min_inverse)]
+            X = X[np.all(model.singularity(X) > mins, axis=1)]
         out.append(X)
-    X = np.concatenate(out)[:n]
-    return X
+    return np.concatenate(out)[:n]
 
 
 def _tau_hold(real: Model, poses):
@@ -125,129 +166,15 @@ def _tau_hold(real: Model, poses):
         return np.zeros_like(poses)
 
 
-def sixpus_campaign(real_params: dict, poses, tracker_noise: float = 10e-6, angle_noise: float | None = None,
-                    encoder_noise: float = 0.0, rng=None, nominal_params: dict | None = None,
-                    dwell: float = 1.0, notes: str = "") -> Recording:
-    """A 6-PUS calibration recording: the real robot held at ``poses``.
-
-    Parameters
-    ----------
-    real_params : dict
-        Overrides of the default parameters that make the real robot.
-    poses : array_like, shape (n, 6)
-        True poses [m, rad].
-    tracker_noise : float
-        Standard deviation of the tracker's position noise [m] (default 10 um).
-    angle_noise : float, optional
-        Standard deviation of its orientation noise [rad]; default: ``tracker_noise``
-        over the platform radius (a tracker that sees the platform points with
-        ``tracker_noise``).
-    encoder_noise : float
-        Standard deviation of the joint readings' noise [m].
-    nominal_params : dict, optional
-        Overrides of the nominal model, stored in the sidecar.
-    dwell : float
-        Time between two held poses [s] (the ``time`` column).
-
-    Returns
-    -------
-    Recording
-        Columns q, qd (0: held), tau (gravity load), pose (x, y, z, rx, ry, rz as measured).
-        Poses the real robot cannot reach are skipped (counted in the notes).
-    """
-    rng = np.random.default_rng(rng)
-    real = Model("6pus", params=real_params)
-    poses = np.asarray(poses, float).reshape(-1, 6)
-    q, st = real.ik(poses, errors="status")
-    skipped = int(np.sum(st != 0))
-    poses, q = poses[st == 0], q[st == 0]  # a real robot skips the poses it cannot reach
-    n = poses.shape[0]
-    r = np.mean([np.hypot(real.param(f"leg[{i}].px"), real.param(f"leg[{i}].py")) for i in range(1, 7)])
-    if angle_noise is None:
-        angle_noise = tracker_noise / r
-    meas = poses.copy()
-    meas[:, :3] += rng.normal(0.0, tracker_noise, (n, 3))
-    meas[:, 3:] += rng.normal(0.0, angle_noise, (n, 3))
-    qm = q + (rng.normal(0.0, encoder_noise, q.shape) if encoder_noise > 0 else 0.0)
-    return Recording(
-        robot="6pus", time=np.arange(n) * dwell, q=qm, qd=np.zeros_like(q), tau=_tau_hold(real, poses), pose=meas,
-        parameters=dict(nominal_params or {}),
-        notes=(notes or "6-PUS calibration campaign (synthetic): the robot is held at each pose; q are its joint "
-               "readings, x..rz the pose measured by an external tracker")
-        + f"; tracker noise {tracker_noise:g} m and {angle_noise:g} rad, encoder noise {encoder_noise:g} m"
-        + (f"; {skipped} planned pose(s) skipped (out of the real robot's reach)" if skipped else ""),
-    )
-
-
-def fourbar_campaign(real_params: dict, theta, noise: float = 0.0, rng=None, nominal_params: dict | None = None,
-                     dwell: float = 1.0, notes: str = "") -> Recording:
-    """A four-bar calibration recording: X of the real linkage measured at crank angles theta [rad]."""
-    from ..fourbar import output
-
-    rng = np.random.default_rng(rng)
-    real = Model("fourbar", params=real_params)
-    theta = np.asarray(theta, float).ravel()
-    X = output(real, theta, jacobian=False)
-    if noise > 0:
-        X = X + rng.normal(0.0, noise, X.shape)
-    n = theta.size
-    return Recording(
-        robot="fourbar", time=np.arange(n) * dwell, q=theta[:, None], qd=np.zeros((n, 1)), tau=np.zeros((n, 1)),
-        pose=X[:, None], parameters=dict(nominal_params or {}),
-        notes=(notes or "four-bar calibration campaign (synthetic): crank angle q1 = theta, X measured") +
-        f"; measurement noise {noise:g} m",
-    )
-
-
-def real_params(nominal: Model, max_length: float = 0.5e-3, rng=None, names=None, poses=None) -> dict:
-    """A "real" robot for any model: its geometric parameters with errors uniform in
-    +-``max_length`` [m].
-
-    ``names`` (names or shell patterns, e.g. ``["leg[*].L"]``) chooses the parameters;
-    default every length that moves a joint at ``poses`` (default: home), as the generic
-    calibration fits them (:func:`cosim.calibration.problems.geometry_candidates`).
-    Returns the overrides ``{name: value}``.
-    """
-    from .problems import _select, geometry_candidates
-
-    rng = np.random.default_rng(rng)
-    x = nominal.home()[None, :] if poses is None else np.atleast_2d(poses)
-    geo = geometry_candidates(nominal, x)
-    chosen = geo if names is None else _select(nominal, geo, list(names))
-    return {n: nominal.param(n) + float(rng.uniform(-max_length, max_length)) for n in chosen}
-
-
-def candidate_poses(model: Model, n: int, rng=None, fraction: float = 0.5, joint_margin: float = 0.05,
-                    min_singularity: float = 0.05) -> np.ndarray:
-    """Up to n random poses of any robot that ``model`` reaches comfortably.
-
-    Uniform in a box about home of ``fraction`` of the robot's reach along each pose
-    coordinate (the core's reach, as the discrepancy engine's excitation probes it:
-    :func:`cosim.discrepancy.excitation.derived_profile`); kept if every joint is at least
-    ``joint_margin`` of its range inside it and both singularity measures are above
-    ``min_singularity``.
-    """
-    from ..discrepancy.excitation import derived_profile
-
-    rng = np.random.default_rng(rng)
-    home = np.asarray(model.home(), float)
-    reach = np.asarray(derived_profile(model)["amp"], float) / 0.30
-    lo, hi = (np.asarray(v, float) for v in model.joint_limits())
-    span = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
-    out, tries = [], 0
-    while sum(len(o) for o in out) < n and tries < 50:
-        tries += 1
-        m = max(4 * n, 100)
-        X = home + rng.uniform(-1.0, 1.0, (m, home.size)) * fraction * reach
-        q, st = model.ik(X, errors="status")
-        ok = st == 0
-        with np.errstate(invalid="ignore"):
-            ok[ok] &= np.all(~(q[ok] < lo + joint_margin * span) & ~(q[ok] > hi - joint_margin * span), axis=1)
-        X = X[ok]
-        if X.size:
-            X = X[np.all(model.singularity(X) > min_singularity, axis=1)]
-        out.append(X)
-    return np.concatenate(out)[:n]
+def _tracker_noise(seen, units, tracker_noise, angle_noise, rng):
+    """The tracker's noise on ``seen``: ``tracker_noise`` on the coordinates in metres, then
+    ``angle_noise`` on those in radians (each group drawn at once)."""
+    meas = seen.copy()
+    for unit, sd in (("m", tracker_noise), ("rad", angle_noise)):
+        cols = [k for k, u in enumerate(units) if u == unit]
+        if cols:
+            meas[:, cols] += rng.normal(0.0, sd, (seen.shape[0], len(cols)))
+    return meas
 
 
 def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: float = 10e-6,
@@ -257,13 +184,20 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
     held at ``poses``, its joints read (its inverse kinematics at the true pose, plus
     ``encoder_noise``) and the pose measured by a tracker (``tracker_noise`` [m] on the
     coordinates in metres, ``angle_noise`` [rad] on those in radians; default
-    ``tracker_noise`` / 0.1 m: a tracker seeing points 10 cm apart).  Poses the real robot
-    cannot reach are skipped (counted in the notes).  The sidecar names the nominal model
-    (its robot and parameter set overrides), never the real one.
+    ``tracker_noise`` over the mean distance of the tracker's points when the robot's error
+    model names them (the 6-PUS: its platform points), else over 0.1 m: a tracker seeing points
+    10 cm apart).  Poses the real robot cannot reach are skipped (counted in the notes).  The
+    sidecar names the nominal model (its robot and parameter set overrides), never the real one.
 
     ``full_pose``: a 6-DOF tracker measures all of x, y, z [m], rx, ry, rz [rad] (a robot
     that declares fewer: the real robot's undeclared components as the core holds or solves
-    them, the parasitic motion of a 3-PRS or 3-RPS head, ``Model.platform_pose``)."""
+    them, the parasitic motion of a 3-PRS or 3-RPS head, ``Model.platform_pose``).
+
+    Returns
+    -------
+    Recording
+        Columns q, qd (0: held), tau (gravity load), pose (as measured).
+    """
     rng = np.random.default_rng(rng)
     real = nominal.copy()
     real.set_params(real_params)
@@ -274,14 +208,16 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
     poses, q = poses[st == 0], q[st == 0]
     n = poses.shape[0]
     if angle_noise is None:
-        angle_noise = tracker_noise / 0.1
+        em = error_model(nominal)
+        r = (np.mean([np.hypot(*(real.param(c) for c in pt)) for pt in em.tracker_points])
+             if em is not None and em.tracker_points else 0.1)
+        angle_noise = tracker_noise / r
     units = nominal.facts.pose_units
     seen = poses
     if full_pose:
         seen = np.asarray(real.platform_pose(poses)[0], float).reshape(-1, 6)
         units = ("m", "m", "m", "rad", "rad", "rad")
-    sd = np.array([tracker_noise if u == "m" else angle_noise for u in units])
-    meas = seen + rng.normal(0.0, 1.0, seen.shape) * sd
+    meas = _tracker_noise(seen, units, tracker_noise, angle_noise, rng)
     qm = q + (rng.normal(0.0, encoder_noise, q.shape) if encoder_noise > 0 else 0.0)
     base = Model(nominal.source, nominal.param_set)
     overrides = {k: v for k, v in nominal.params().items() if v != base.param(k)}
@@ -297,6 +233,29 @@ def joint_campaign(nominal: Model, real_params: dict, poses, tracker_noise: floa
     if full_pose:
         rec.set_full_pose(meas)
     return rec
+
+
+def output_campaign(nominal: Model, real_params: dict, q, noise: float = 0.0, rng=None, dwell: float = 1.0,
+                    notes: str = "") -> Recording:
+    """A calibration recording of a robot whose error model measures an output (the four-bar's
+    X, :func:`cosim.calibration.error_model.output`): the real robot's output at joint values
+    ``q`` (the crank angle theta [rad]), plus Gaussian ``noise`` [m]."""
+    rng = np.random.default_rng(rng)
+    real = nominal.copy()
+    real.set_params(real_params)
+    q = np.asarray(q, float).reshape(-1, nominal.ndof)
+    X = output(real, q, jacobian=False)
+    if noise > 0:
+        X = X + rng.normal(0.0, noise, X.shape)
+    n = q.shape[0]
+    base = Model(nominal.source, nominal.param_set)
+    overrides = {k: v for k, v in nominal.params().items() if v != base.param(k)}
+    return Recording(
+        robot=nominal.robot, time=np.arange(n) * dwell, q=q, qd=np.zeros_like(q), tau=np.zeros_like(q),
+        pose=X[:, None], parameters=overrides,
+        notes=(notes or f"{nominal.robot} calibration campaign (synthetic): joint q1 set, the output X measured")
+        + f"; measurement noise {noise:g} m",
+    )
 
 
 def truth_path(csv_path) -> Path:
@@ -328,14 +287,14 @@ def _main(argv=None):
     out = Path(a.outdir)
     # 6-PUS: a real robot with errors up to 0.5 mm / 0.5 deg, 120 poses, 10 um tracker
     nominal = Model("6pus")
-    real = sixpus_real_params(nominal, rng=20240501)
-    poses = sixpus_candidate_poses(nominal, 120, rng=7)
-    rec = sixpus_campaign(real, poses, tracker_noise=10e-6, rng=11)
+    real = real_params(nominal, rng=20240501)
+    poses = candidate_poses(nominal, 120, rng=7)
+    rec = joint_campaign(nominal, real, poses, tracker_noise=10e-6, rng=11)
     print(*write_campaign(out / "calibration_6pus_campaign.csv", rec, real))
     # four-bar: the Vitali 2020 linkage, theta = 30..60 deg, noise-free
     real4 = {"link[1].l": 0.60030, "link[2].l": 0.75050, "link[3].l": 0.79055, "link[4].l": 0.90070}
-    rec4 = fourbar_campaign(real4, np.radians(np.arange(30, 61, 5)),
-                            notes="Vitali 2020: four-bar with true errors (0.30, 0.50, 0.55, 0.70) mm, "
+    rec4 = output_campaign(Model("fourbar"), real4, np.radians(np.arange(30, 61, 5)),
+                           notes="Vitali 2020: four-bar with true errors (0.30, 0.50, 0.55, 0.70) mm, "
                                   "crank angle q1 = theta, X of the coupler mid point measured (noise-free)")
     print(*write_campaign(out / "calibration_fourbar_seed002.csv", rec4, real4))
 

@@ -176,17 +176,18 @@ def sixpus_seed_comparison(n: int = 10, ncand: int = 1000, seed: int = 5) -> dic
     """
     import warnings as _w
 
-    from .data import sixpus_candidate_poses
-    from .problems import PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem, calib_rows
+    from .data import candidate_poses
+    from .joint_problem import JointProblem
+    from .problems import PKM_FRAME_WORLD, CalibrationWarning, calib_rows
     from .seed import SEED000_TABLE_4_22
     from ..core.model import Model
 
     cols = [0, 1, 2, 6, 7, 8, 9]  # X, Y, Z, L, sx, sy, sz
     nom = Model("6pus")
-    cand = sixpus_candidate_poses(nom, ncand, rng=seed)
+    cand = candidate_poses(nom, ncand, rng=seed)
     with _w.catch_warnings():
         _w.simplefilter("ignore", CalibrationWarning)
-        work = SixpusProblem(cand, nom.ik(cand), nom).working_model()
+        work = JointProblem(cand, nom.ik(cand), nom).working_model()
     rows = calib_rows(work, cand, PKM_FRAME_WORLD)[:, 0, cols]  # leg 1
     A = rows[:, None, None, :]
     idx, _ = select_poses(A, n)

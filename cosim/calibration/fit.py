@@ -5,12 +5,17 @@ calibration problem of its robot on the nominal model named by the sidecar, anal
 which parameters the data can identify, estimates them with one of the solvers, and
 verifies the accuracy gain on held-out poses.
 
-* 6-PUS (Tiberi 2020): each row is a held pose: joint readings ``q1..q6`` and the pose
-  ``x, y, z, rx, ry, rz`` measured by an external tracker.  Error model: 10 parameters
-  per leg (platform point in the platform frame, rail origin, leg length, rail
-  direction), 60 in all; 54 calibrated coordinates because each rail direction keeps
-  |s| = 1 (see :mod:`cosim.calibration.problems`).
-* Four-bar (Vitali 2020): ``q1`` = crank angle theta, pose column ``X`` = measured output.
+One problem class for every robot (:class:`~cosim.calibration.joint_problem.JointProblem`):
+the parameters are the error model the robot ships as data (``robots/calibration/<robot>.toml``,
+:mod:`cosim.calibration.error_model`), else every length parameter that moves a joint.
+
+* 6-PUS (Tiberi 2020, ``robots/calibration/6pus.toml``): each row is a held pose: joint
+  readings ``q1..q6`` and the pose ``x, y, z, rx, ry, rz`` measured by an external tracker.
+  Error model: 10 parameters per leg (platform point in the platform frame, rail origin,
+  leg length, rail direction), 60 in all; 54 calibrated coordinates because each rail
+  direction keeps |s| = 1.
+* Four-bar (Vitali 2020, ``robots/calibration/fourbar.toml``): ``q1`` = crank angle theta,
+  pose column ``X`` = measured output.
 
 Example
 -------
@@ -35,16 +40,9 @@ from pathlib import Path
 import numpy as np
 
 from .ident import IdentifiabilityReport, identifiability
-from .problems import (
-    SIXPUS_ERROR_MODEL,
-    CalibrationDataError,
-    CalibrationWarning,
-    FourbarProblem,
-    FullPoseProblem,
-    JointProblem,
-    Problem,
-    SixpusProblem,
-)
+from .error_model import error_model
+from .joint_problem import FullPoseProblem, JointProblem
+from .problems import CalibrationDataError, CalibrationWarning, Problem
 from .solvers import METHODS, Solution, solve
 from ..core.model import Model
 from ..recording import Recording, read_recording
@@ -144,17 +142,18 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
     nominal : Model, optional
         Nominal model (default: the sidecar's robot with its parameter overrides).
     unreachable : {"drop", "raise"}
-        6-PUS poses the nominal model cannot reach: dropped with a warning, or an error.
+        Poses the nominal model cannot reach: dropped with a warning, or an error.
     min_poses : int, optional
         Poses required (default: enough to calibrate; 1 for a verification set).
     use : {"auto", "held", "rows"}
         See :func:`measurements`.
     weighting : {"tracker", "none"}
-        6-PUS equation weights (see :class:`~cosim.calibration.problems.SixpusProblem`).
+        Equation weights, for an error model that declares tracker weights (the 6-PUS; see
+        :class:`~cosim.calibration.joint_problem.JointProblem`).
     params : list of str, optional
-        The parameters to calibrate, by name or shell pattern (``["leg[*].L"]``), for the
-        robots calibrated by :class:`~cosim.calibration.problems.JointProblem` (default: every
-        length that moves a joint).  The 6-PUS and the four-bar have their fixed error models.
+        The parameters to calibrate, by name or shell pattern (``["leg[*].L"]``); default the
+        error model the robot ships (``robots/calibration/<robot>.toml``: the 6-PUS, the
+        four-bar), else every length that moves a joint.
     """
     meas = rec if isinstance(rec, Measurements) else measurements(rec, use)
     idx = np.arange(len(meas)) if rows is None else np.asarray(rows)
@@ -165,26 +164,17 @@ def problem_from_recording(rec, rows=None, nominal: Model | None = None, unreach
             raise CalibrationDataError(f"{meas.source}: the sidecar's parameters do not make a valid {meas.robot} "
                                        f"model: {e}") from None
     labels = [meas.labels[k] for k in idx]
-    # A robot with its own error model (the core says which) is calibrated by it.
-    own_model = nominal.has("6pus_calib_rows") or nominal.has("fourbar_output")
-    if params and own_model:
-        raise CalibrationDataError(f"{meas.source}: the {meas.robot} calibration has its own error model; choosing "
-                                   f"the parameters (params) is for the other robots")
-    if nominal.has("6pus_calib_rows"):
-        return SixpusProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, unreachable=unreachable,
-                             min_poses=min_poses, weighting=weighting)
-    if nominal.has("fourbar_output"):
-        return FourbarProblem(meas.q[idx, 0], meas.pose[idx, 0], nominal, row_labels=labels,
-                              min_poses=4 if min_poses is None else min_poses)
+    few = 1 if min_poses is not None and min_poses <= 1 else min_poses
     if meas.pose is not None and meas.pose.shape[1] == 6 and nominal.ndof < 6:
         # a 6-DOF tracker of a robot that declares fewer components: the parasitic motion too
-        return FullPoseProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels,
-                               min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses, params=params)
-    if meas.pose is None or meas.pose.shape[1] != nominal.ndof:
+        return FullPoseProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, min_poses=few,
+                               params=params)
+    em = error_model(nominal) if params is None else None
+    if (em is None or em.measure == "joints") and meas.pose.shape[1] != nominal.ndof:
         raise CalibrationDataError(f"{meas.source}: calibrating {meas.robot!r} needs tracker columns of its pose "
                                    f"({', '.join(nominal.facts.pose_names)})")
-    return JointProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels,
-                        min_poses=1 if min_poses is not None and min_poses <= 1 else min_poses, params=params)
+    return JointProblem(meas.pose[idx], meas.q[idx], nominal, row_labels=labels, min_poses=few, params=params,
+                        unreachable=unreachable, weighting=weighting, error_model=em)
 
 
 def split_holdout(n: int, fraction: float, seed: int = 0):
@@ -200,10 +190,11 @@ def split_holdout(n: int, fraction: float, seed: int = 0):
 class Accuracy:
     """Model accuracy on a set of poses, nominal vs calibrated.
 
-    6-PUS: ``position`` is the RMS over poses of |p_FK(q_measured) - p_measured| [m],
-    ``orientation`` the RMS of the Euler-angle difference norm [rad], ``joint`` the RMS of
-    q_measured - q_IK(pose_measured) [m].  Four-bar: ``position`` is the RMS of the output
-    error X_measured - X(theta) [m], the others are 0.
+    Joint measurements: ``position`` is the RMS over poses of |p_FK(q_measured) - p_measured|
+    over the pose coordinates in metres [m], ``orientation`` the RMS of the difference norm of
+    those in radians [rad], ``joint`` the RMS of q_measured - q_IK(pose_measured).  An output
+    measurement (the four-bar): ``position`` is the RMS of the output error X_measured - X(q)
+    [m], the others are 0.
     """
 
     n: int
@@ -226,33 +217,13 @@ def accuracy(problem: Problem, p_cal) -> Accuracy:
     """Accuracy of the nominal (``problem.p0``) and calibrated (``p_cal``) models on the
     problem's poses.
 
-    A 6-PUS pose whose measured joints a model cannot assemble (its forward kinematics
+    A pose whose measured joints a model cannot assemble (its forward kinematics
     fails: a badly wrong model near the edge of the workspace) is left out of the RMS
     values of both models and named in ``Accuracy.excluded``.
     """
-    if isinstance(problem, SixpusProblem):
-        res, ok = [], np.ones(len(problem.q), bool)
-        for p in (problem.p0, p_cal):
-            m = problem.working_model(p)
-            x, st = m.fk(problem.q, x_guess=problem.pose, errors="status")
-            ok &= st == 0
-            res.append((m, x))
-        if not ok.any():
-            raise CalibrationDataError("forward kinematics of the measured joints failed at every pose: the models "
-                                       "cannot assemble the recorded joint readings")
-        out = []
-        for m, x in res:
-            dp = np.linalg.norm(x[ok, :3] - problem.pose[ok, :3], axis=1)
-            da = np.linalg.norm(x[ok, 3:] - problem.pose[ok, 3:], axis=1)
-            dq = problem.q[ok] - m.ik(problem.pose[ok])
-            out.append((dp, da, dq))
-        rms = lambda v: float(np.sqrt(np.mean(v ** 2)))  # noqa: E731
-        return Accuracy(int(ok.sum()), (rms(out[0][0]), rms(out[1][0])), (rms(out[0][1]), rms(out[1][1])),
-                        (rms(out[0][2]), rms(out[1][2])), np.column_stack([out[0][0], out[1][0]]),
-                        [l for l, k in zip(problem.pose_labels, ok) if not k])
     if isinstance(problem, FullPoseProblem):
         return _full_pose_accuracy(problem, p_cal)
-    if isinstance(problem, JointProblem):
+    if isinstance(problem, JointProblem) and problem.measure == "joints":
         return _joint_accuracy(problem, p_cal)
     e0, e1 = problem.residual(problem.p0), problem.residual(p_cal)
     rms0, rms1 = float(np.sqrt(np.mean(e0 ** 2))), float(np.sqrt(np.mean(e1 ** 2)))
@@ -333,7 +304,7 @@ class CalibrationResult:
     problem: Problem
     model_kind: str
     identifiability: IdentifiabilityReport
-    error_model: IdentifiabilityReport | None  # the seed's 60-column analysis (6-PUS)
+    error_model: IdentifiabilityReport | None  # the error model's own analysis (the 6-PUS: Tiberi 2020's 60 columns)
     solution: Solution
     calibration_accuracy: Accuracy
     holdout_accuracy: Accuracy | None
@@ -357,13 +328,17 @@ class CalibrationResult:
                  + (f", {self.holdout_accuracy.n} poses held out" if self.holdout_accuracy else ", no pose held out"))
         if self.error_model is not None:
             L.append("")
-            L.append("Tiberi 2020 error model (60 parameters, |s| not kept): per leg")
+            em = self.problem.error_model
+            per = len(em.joint_parameters[0]) if em.joint_parameters else len(em.parameters)
+            L.append(f"{em.source.split(',')[0]} error model ({len(em.parameters)} parameters, unit vectors not "
+                     f"kept): per {em.block_label}")
             for b in self.error_model.blocks:
                 dropped = ", ".join(c.parameter.split(".")[-1] for c in b.combinations)
-                L.append(f"  [{b.label}] rank {b.rank}/10, cond {b.cond_scaled:.3g} -> {b.cond_after:.3g} after "
+                L.append(f"  [{b.label}] rank {b.rank}/{per}, cond {b.cond_scaled:.3g} -> {b.cond_after:.3g} after "
                          f"dropping {dropped or 'nothing'}")
-            L.append("  the radial rail-direction combination (ds along s, column -q) is a stroke scale the unit "
-                     "rail direction cannot represent: calibrated coordinates keep |s| = 1 (9 per leg)")
+            L.append(f"  the radial combination of a unit vector (ds along s: for a rail direction the column -q, a "
+                     f"stroke scale) is what a unit vector cannot represent: the calibrated coordinates keep |s| = 1 "
+                     f"({len(self.problem.names)} in all)")
         L.append("")
         L.append(idr.text())
         L.append("")
@@ -388,12 +363,7 @@ class CalibrationResult:
         for label, a in (("calibration poses", self.calibration_accuracy), ("held-out poses", self.holdout_accuracy)):
             if a is None:
                 continue
-            if isinstance(self.problem, SixpusProblem):
-                L.append(f"Accuracy on {label} ({a.n}): position RMS {a.position[0] * 1e6:.4g} um -> "
-                         f"{a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x); orientation RMS "
-                         f"{a.orientation[0] * 1e6:.4g} -> {a.orientation[1] * 1e6:.4g} urad; joint RMS "
-                         f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} um")
-            elif isinstance(self.problem, FullPoseProblem):
+            if isinstance(self.problem, FullPoseProblem):
                 para = "; ".join(f"{c} {v[0] * 1e6:.4g} -> {v[1] * 1e6:.4g} {'um' if c in ('x', 'y', 'z') else 'urad'}"
                                  for c, v in a.parasitic.items())
                 L.append(f"Accuracy on {label} ({a.n}): position RMS (forward kinematics of the joints and the "
@@ -403,7 +373,7 @@ class CalibrationResult:
                          f"{a.joint[0] * 1e6:.4g} -> {a.joint[1] * 1e6:.4g} "
                          f"{'um' if self.problem.nominal.facts.joint_unit == 'm' else 'urad'}")
                 L.append(f"  parasitic motion, measured - predicted at the measured pose (RMS): {para}")
-            elif isinstance(self.problem, JointProblem):
+            elif isinstance(self.problem, JointProblem) and self.problem.measure == "joints":
                 units = self.problem.nominal.facts.pose_units
                 jo = (f"joint RMS {a.joint[0] * 1e6:.4g} {mu} -> {a.joint[1] * 1e6:.4g} {mu}")
                 if "m" not in units:
@@ -415,8 +385,7 @@ class CalibrationResult:
                          f"tracker) {a.position[0] * 1e6:.4g} um -> {a.position[1] * 1e6:.4g} um (gain {a.gain:.3g}x)"
                          f"{ori}; {jo}")
             else:
-                what = "joint" if isinstance(self.problem, JointProblem) else "output"
-                L.append(f"Accuracy on {label} ({a.n}): {what} RMS {a.position[0] * 1e6:.4g} {mu} -> "
+                L.append(f"Accuracy on {label} ({a.n}): output RMS {a.position[0] * 1e6:.4g} {mu} -> "
                          f"{a.position[1] * 1e6:.4g} {mu} (gain {a.gain:.3g}x)")
         for w in self.warnings:
             L.append("warning: " + w)
@@ -436,6 +405,20 @@ class CalibrationResult:
                                  indent=2))
         (out / "calibration_report.txt").write_text(self.text() + "\n")
         return paths + [pj, out / "calibration_report.txt"]
+
+
+def _error_model_analysis(prob, cond_max):
+    """The identifiability of the error model's own parameters when the calibrated coordinates
+    differ from them (the 6-PUS: Tiberi 2020's 60 columns, unit vectors unconstrained), else None."""
+    em = getattr(prob, "error_model", None)
+    if em is None or len(em.parameters) == len(prob.names):
+        return None
+    info = {i.name: i.unit for i in prob.nominal.param_info()}
+    Je = prob.error_model_jacobian()
+    if prob.weights is not None:
+        Je = prob.weights[:, None] * Je
+    return identifiability(Je, list(em.parameters), [info[n] for n in em.parameters], cond_max=cond_max,
+                           blocks=prob.error_model_blocks())
 
 
 def calibrate(recording, solver: str = "gauss-newton", model: str = "structural", holdout: float = 0.0,
@@ -464,10 +447,11 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     use : {"auto", "held", "rows"}
         Which rows make the measurements (see :func:`measurements`).
     weighting : {"tracker", "none"}
-        6-PUS: weight the equations by their expected noise (default) or not.
+        Weight the equations by their expected noise (default; for an error model that
+        declares tracker weights, the 6-PUS) or not.
     params : list of str, optional
-        Robots other than the 6-PUS and the four-bar: the parameters to calibrate, by name or
-        shell pattern (``["leg[*].L"]``); default every length parameter that moves a joint.
+        The parameters to calibrate, by name or shell pattern (``["leg[*].L"]``); default the
+        robot's error model, else every length parameter that moves a joint.
     **solver_options
         Passed to :func:`cosim.calibration.solvers.solve` (tol, max_iter, width, basis...).
 
@@ -486,9 +470,10 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CalibrationWarning)
         prob = problem_from_recording(meas, cal_idx, nominal, weighting=weighting, params=params)
-        # the held-out poses are scored with the calibrated coordinates, whatever moves a joint there
+        # the held-out poses are scored with the calibrated coordinates (the error model's, or
+        # the lengths that moved a joint in the calibration poses)
         hold = problem_from_recording(meas, hold_idx, nominal, min_poses=1, weighting=weighting,
-                                      params=prob.names if isinstance(prob, JointProblem) else params) \
+                                      params=prob.names if prob.error_model is None else params) \
             if hold_idx.size else None
     msgs = [str(w.message) for w in caught]
     notes = []
@@ -499,13 +484,7 @@ def calibrate(recording, solver: str = "gauss-newton", model: str = "structural"
     J0 = prob.wjacobian(prob.p0)
     idr = identifiability(J0, prob.names, prob.units, cond_max=cond_max, blocks=prob.blocks)
     msgs += idr.warnings
-    err_model = None
-    if isinstance(prob, SixpusProblem):
-        units = ["1" if n.split(".")[-1] in ("sx", "sy", "sz") else "m" for n in SIXPUS_ERROR_MODEL]
-        J60 = prob.error_model_jacobian()
-        if prob.weights is not None:
-            J60 = prob.weights[:, None] * J60
-        err_model = identifiability(J60, SIXPUS_ERROR_MODEL, units, cond_max=cond_max, blocks=prob.blocks_60())
+    err_model = _error_model_analysis(prob, cond_max)
     rcond = 1e-10
     if model == "structural":
         free = idr.retained_mask()

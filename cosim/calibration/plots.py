@@ -27,11 +27,12 @@ def plot_result(res, outdir) -> list:
     # 1. accuracy per pose, nominal vs calibrated
     acc = res.holdout_accuracy or res.calibration_accuracy
     which = "held-out" if res.holdout_accuracy else "calibration"
-    from .problems import JointProblem, SixpusProblem
+    from .joint_problem import JointProblem
 
-    if isinstance(res.problem, SixpusProblem) or (isinstance(res.problem, JointProblem) and "m" in res.problem.nominal.facts.pose_units):
+    joints = isinstance(res.problem, JointProblem) and res.problem.measure == "joints"
+    if joints and "m" in res.problem.nominal.facts.pose_units:
         what = "position error |p_FK(q) - p_measured|"
-    elif isinstance(res.problem, JointProblem):
+    elif joints:
         what = "joint error |q - q_IK(pose)|"
     else:
         what = "output error |X - X_model|"

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .ident import identifiability
-from .problems import FourbarProblem
+from .joint_problem import JointProblem
 from .solvers import solve
 
 __all__ = ["SEED002", "SEED000_TABLE_4_22", "fourbar_seed_study", "sixpus_seed_leg1"]
@@ -82,7 +82,7 @@ def fourbar_seed_study() -> dict:
     Xn, A = output(nom, th)
     Xr = output(real, th, jacobian=False)
     dX = (Xr - Xn) * 1e3
-    prob = FourbarProblem(th, Xr, nom)
+    prob = JointProblem(Xr, th, nom)
     gn = solve(prob, "gauss-newton")
     out = {
         "A": A, "dX": dX,

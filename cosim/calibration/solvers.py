@@ -185,6 +185,113 @@ def _golden_1d(f, a, b, tol, fa_cache=None):
     return (xa, fa, n) if fa < fb else (xb, fb, n)
 
 
+class _Cost:
+    """The weighted cost L = |w r|^2 of a problem, counting its evaluations."""
+
+    def __init__(self, problem):
+        self.problem, self.nfev, self.first = problem, 0, None
+
+    def __call__(self, p):
+        self.nfev += 1
+        r = self.problem.wresidual(p)
+        L = float(r @ r)
+        if self.first is None:
+            self.first = L
+        return L, r
+
+
+def _linear_steps(problem, method, p, L, r, fi, cost, rcond, fblocks, tol, prior, max_iter):
+    """pinv (one step), pinv-iter (full steps) and Gauss-Newton (a step halved until L decreases,
+    Vitali 2020 eq. 3.3) from p: (p, L, r, the costs after each step, iterations, converged,
+    message)."""
+    iters = 1 if method == "pinv" else max_iter
+    costs, it = [], 0
+    for it in range(1, iters + 1):
+        J = problem.wjacobian(p)[:, fi]
+        dp, _ = _step(J, r, rcond, fblocks)
+        alpha = 1.0
+        if method == "gauss-newton":
+            # Vitali 2020 eq. 3.3: accept only a step that lowers L
+            for _ in range(30):
+                Lt, rt = cost(_with(p, fi, dp * alpha))
+                if Lt < L:
+                    break
+                alpha *= 0.5
+            else:
+                return p, L, r, costs, it, True, "no step lowers L further (at the numerical floor)"
+        else:
+            Lt, rt = cost(_with(p, fi, dp))
+        p = _with(p, fi, dp * alpha)
+        small_step = np.all(np.abs(dp * alpha) <= tol * prior)
+        small_gain = abs(L - Lt) <= tol * max(L, 1e-300)
+        L, r = Lt, rt
+        costs.append(L)
+        if method == "pinv":
+            return p, L, r, costs, it, True, "one pseudo-inverse step"
+        if small_step or small_gain:
+            return p, L, r, costs, it, True, "step below tolerance" if small_step else "L no longer decreases"
+    return p, L, r, costs, it, False, f"not converged after {iters} iterations"
+
+
+def _levenberg_marquardt(problem, p0, fi, cost, max_iter):
+    """Levenberg-Marquardt (MINPACK through scipy) with the analytic Jacobian, from p0."""
+    from scipy.optimize import least_squares
+
+    def fun(x):
+        cost.nfev += 1
+        return -problem.wresidual(_set(p0, fi, x))
+
+    def jac(x):
+        return problem.wjacobian(_set(p0, fi, x))[:, fi]
+
+    res = least_squares(fun, p0[fi], jac=jac, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15,
+                        gtol=1e-15, max_nfev=max(100, 20 * max_iter))
+    p = _set(p0, fi, res.x)
+    L, r = cost(p)
+    return p, L, r, [L], int(res.njev or 0), bool(res.status > 0), res.message
+
+
+def _golden_search(problem, p0, L, fi, cost, width, prior, tol, basis, max_sweeps):
+    """Golden-section line searches along the parameters (or the principal axes of the scaled
+    Jacobian, ``basis="svd"``), swept until nothing moves by more than its tolerance."""
+    if basis == "svd":
+        J0 = problem.wjacobian(p0)[:, fi]
+        h = column_scale(J0)
+        _, s, Vt = np.linalg.svd(J0 * h, full_matrices=False)
+        D = (h[:, None] * Vt.T)  # columns: principal directions in parameter units
+        D = D / np.abs(D).max(axis=0)
+        half = np.array([np.max(np.abs(D[:, k]) * width) / np.max(np.abs(D[:, k])) for k in range(D.shape[1])])
+    elif basis == "parameters":
+        D = np.eye(fi.size)
+        half = width
+    else:
+        raise InputError(f"basis must be 'parameters' or 'svd', got {basis!r}")
+    tols = tol * np.array([np.max(np.abs(D[:, k]) * prior) for k in range(D.shape[1])]) / \
+        np.maximum(np.abs(D).max(axis=0), 1e-300)
+    p, costs, converged, message = p0.copy(), [], False, ""
+    for it in range(1, max_sweeps + 1):
+        moved = 0.0
+        for k in range(D.shape[1]):
+            base = p.copy()
+
+            def f(t):
+                return cost(_with(base, fi, D[:, k] * t))[0]
+
+            t, Lt, _ = _golden_1d(f, -half[k], half[k], tols[k])
+            if Lt < L:
+                p = _with(base, fi, D[:, k] * t)
+                L = Lt
+                moved = max(moved, abs(t) / max(tols[k], 1e-300))
+        costs.append(L)
+        if moved <= 1.0:
+            converged, message = True, "no coordinate moves by more than its tolerance"
+            break
+    else:
+        message = f"not converged after {max_sweeps} sweeps (coordinate search on an ill-conditioned cost)"
+    L, r = cost(p)
+    return p, L, r, costs, it, converged, message
+
+
 def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond: float = 1e-10,
           tol: float = 1e-10, max_iter: int = 50, width=None, basis: str = "parameters",
           max_sweeps: int = 200, se: str = "hc2") -> Solution:
@@ -224,6 +331,8 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
     t0 = time.perf_counter()
     n = len(problem.names)
     p0 = np.asarray(problem.p0 if p_start is None else p_start, float).copy()
+    if method == "golden" and basis not in ("parameters", "svd"):
+        raise InputError(f"basis must be 'parameters' or 'svd', got {basis!r}")
     if free is None:
         mask = np.ones(n, bool)
     elif len(free) and isinstance(next(iter(free)), str):
@@ -242,108 +351,19 @@ def solve(problem, method: str = "gauss-newton", free=None, p_start=None, rcond:
                          f"at least as many measurements as parameters")
     prior = np.asarray(problem.prior, float)
     fblocks = _free_blocks(problem.blocks, fi, m)
-    nfev = 0
-
-    def cost_at(p):
-        nonlocal nfev
-        nfev += 1
-        r = problem.wresidual(p)
-        return float(r @ r), r
-
-    p = p0.copy()
-    L, r = cost_at(p)
-    costs = [L]
-    converged, message, it = False, "", 0
-    rank = fi.size
-
+    cost = _Cost(problem)
+    L, r = cost(p0)
     if method in ("pinv", "pinv-iter", "gauss-newton"):
-        iters = 1 if method == "pinv" else max_iter
-        for it in range(1, iters + 1):
-            J = problem.wjacobian(p)[:, fi]
-            dp, rank = _step(J, r, rcond, fblocks)
-            alpha = 1.0
-            if method == "gauss-newton":
-                # Vitali 2020 eq. 3.3: accept only a step that lowers L
-                for _ in range(30):
-                    Lt, rt = cost_at(_with(p, fi, dp * alpha))
-                    if Lt < L:
-                        break
-                    alpha *= 0.5
-                else:
-                    converged, message = True, "no step lowers L further (at the numerical floor)"
-                    break
-            else:
-                Lt, rt = cost_at(_with(p, fi, dp))
-            p = _with(p, fi, dp * alpha)
-            small_step = np.all(np.abs(dp * alpha) <= tol * prior[fi])
-            small_gain = abs(L - Lt) <= tol * max(L, 1e-300)
-            L, r = Lt, rt
-            costs.append(L)
-            if method == "pinv":
-                converged, message = True, "one pseudo-inverse step"
-                break
-            if small_step or small_gain:
-                converged = True
-                message = "step below tolerance" if small_step else "L no longer decreases"
-                break
-        else:
-            message = f"not converged after {iters} iterations"
+        p, L, r, more, it, converged, message = _linear_steps(problem, method, p0, L, r, fi, cost, rcond, fblocks,
+                                                              tol, prior[fi], max_iter)
     elif method == "lm":
-        from scipy.optimize import least_squares
-
-        def fun(x):
-            nonlocal nfev
-            nfev += 1
-            return -problem.wresidual(_set(p0, fi, x))
-
-        def jac(x):
-            return problem.wjacobian(_set(p0, fi, x))[:, fi]
-
-        res = least_squares(fun, p0[fi], jac=jac, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15,
-                            gtol=1e-15, max_nfev=max(100, 20 * max_iter))
-        p = _set(p0, fi, res.x)
-        L, r = cost_at(p)
-        costs.append(L)
-        it = int(res.njev or 0)
-        converged = bool(res.status > 0)
-        message = res.message
-    else:  # golden
+        p, L, r, more, it, converged, message = _levenberg_marquardt(problem, p0, fi, cost, max_iter)
+    else:
         w = 2.0 * prior if width is None else np.broadcast_to(np.asarray(width, float), (n,)).copy()
-        if basis == "svd":
-            J0 = problem.wjacobian(p0)[:, fi]
-            h = column_scale(J0)
-            _, s, Vt = np.linalg.svd(J0 * h, full_matrices=False)
-            D = (h[:, None] * Vt.T)  # columns: principal directions in parameter units
-            D = D / np.abs(D).max(axis=0)
-            half = np.array([np.max(np.abs(D[:, k]) * w[fi]) / np.max(np.abs(D[:, k])) for k in range(D.shape[1])])
-        elif basis == "parameters":
-            D = np.eye(fi.size)
-            half = w[fi]
-        else:
-            raise InputError(f"basis must be 'parameters' or 'svd', got {basis!r}")
-        tols = tol * np.array([np.max(np.abs(D[:, k]) * prior[fi]) for k in range(D.shape[1])]) / \
-            np.maximum(np.abs(D).max(axis=0), 1e-300)
-        for it in range(1, max_sweeps + 1):
-            moved = 0.0
-            for k in range(D.shape[1]):
-                base = p.copy()
-
-                def f(t):
-                    return cost_at(_with(base, fi, D[:, k] * t))[0]
-
-                t, Lt, _ = _golden_1d(f, -half[k], half[k], tols[k])
-                if Lt < L:
-                    p = _with(base, fi, D[:, k] * t)
-                    L = Lt
-                    moved = max(moved, abs(t) / max(tols[k], 1e-300))
-            costs.append(L)
-            if moved <= 1.0:
-                converged, message = True, "no coordinate moves by more than its tolerance"
-                break
-        else:
-            message = f"not converged after {max_sweeps} sweeps (coordinate search on an ill-conditioned cost)"
-        L, r = cost_at(p)
-
+        p, L, r, more, it, converged, message = _golden_search(problem, p0, L, fi, cost, w[fi], prior[fi], tol,
+                                                               basis, max_sweeps)
+    costs = [cost.first] + more
+    nfev = cost.nfev
     J = problem.wjacobian(p)[:, fi]
     r_plain = problem.residual(p)
     r0 = problem.residual(p0)

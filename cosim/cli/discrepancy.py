@@ -111,6 +111,12 @@ def _diag_configure(p):
                         "to another joint and effort x position terms (off by default: docs/discovery_families.md)")
     p.add_argument("--no-platform", action="store_true",
                    help="skip the search for one force on the platform (a wrench, a cable to an anchor, a drag)")
+    p.add_argument("--no-flexible", action="store_true",
+                   help="skip the flexible model of the structure left (boosted trees: how much of it is explainable "
+                        "and on which inputs it depends; docs/flexible.md)")
+    p.add_argument("--black-box", action="store_true",
+                   help="the replay also runs the fitted plant plus the flexible model's force as a black-box term "
+                        "(marked as such in the report)")
     p.add_argument("--no-drift", action="store_true",
                    help="skip the test of the fitted parameters for a drift over the recording (a trend, a step)")
     p.add_argument("--max-samples", type=_positive(int), default=None,
@@ -147,7 +153,8 @@ def cmd_diagnose(args):
                          effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares,
                          discovery=not args.no_discovery, platform=not args.no_platform,
-                         drift=not args.no_drift, families=args.families)
+                         drift=not args.no_drift, families=args.families, flexible=not args.no_flexible,
+                         black_box=args.black_box)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "
                           f"({out}/report.md and diagnosis.json are written at the end)") from None
@@ -194,6 +201,10 @@ def print_diagnosis(d, file=None):
                 p(f"    library effect it replaces: {x}")
             if t.partial:
                 p(f"    not named as the physics: {t.partial}")
+    if getattr(d, "flexible", None):
+        p("\nwhere no equation was found (a flexible model of what is left, judged on the held-out part):")
+        for f in d.flexible:
+            p(f"  {f.statement}")
     pf = getattr(d, "platform_force", None)
     if pf is not None:
         p("\na force on the platform (one for the whole robot; the core's wrench.*, cable.*, platform_drag.*):")

@@ -73,6 +73,7 @@ def _load_plugins():
     # Capability modules register their own sub-commands on import (the registry is
     # cosim.cli.common), in the order `cosim --help` lists them.
     from . import demo, scenario, calibration, quattro, discrepancy, sweep, benchmark, importing, fmu, parasitic, urdf  # noqa: F401, I001
+    from . import identify  # noqa: F401, I001
 
 
 class _Parser(argparse.ArgumentParser):

@@ -111,6 +111,7 @@ def cmd_quattro(args):
     if args.action == "cycle":
         from pathlib import Path
 
+        from ..quattro import cycle_fit as cf
         from ..quattro import cycle_time as ct
         from .common import working
 
@@ -130,7 +131,7 @@ def cmd_quattro(args):
         if args.fit.strip().lower() != "none":
             fit_tables = tuple(t.strip() for t in args.fit.split(",") if t.strip())
             with working(f"fitting the cycle model on table(s) {', '.join(fit_tables)}"):
-                fit = ct.select_cycle_model(fit_tables=fit_tables, param_set=args.param_set, n=args.n)
+                fit = cf.select_cycle_model(fit_tables=fit_tables, param_set=args.param_set, n=args.n)
             f = Path(args.out) / "quattro_cycle_model.csv"
             with open(f, "w") as fh:
                 fh.write("table,layout,cycle,z_mm,measured_s,torque_limited_s,model_s,used_for_fit\n")

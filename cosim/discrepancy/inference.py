@@ -15,7 +15,8 @@ from dataclasses import replace
 import numpy as np
 
 from .fitting import best_option, jacobian, without
-from .intervals import hac_covariance
+from . import intervals
+from .intervals import block_jackknife, hac_covariance
 from .regressors import reference_size
 from .selection import Selection
 
@@ -64,9 +65,17 @@ def infer(st, sel: Selection) -> Selection:
         Zc = J if Z is None else Z
         A = np.linalg.pinv(Zc.T @ J, rcond=1e-12)
         classical = A @ (Zc.T @ Zc) @ A.T * s2
-        cov, z95 = hac_covariance(J, st.vec(st.R(theta)), Z, n_series=st.C)
+        e = st.vec(st.R(theta))
+        cov, z95 = hac_covariance(J, e, Z, n_series=st.C)
         half = np.maximum(z95 * np.sqrt(np.maximum(np.diag(cov), 0.0)),
                           1.96 * np.sqrt(np.maximum(np.diag(classical), 0.0)))
+        # and the model-form error the data show: the estimate's spread across the
+        # recording's windows (a block jackknife), which a model that is not the plant's
+        # widens however white its residual looks
+        if intervals.WINDOW_SPREAD:
+            cov_j, t95 = block_jackknife(J, e, Z, n_series=st.C)
+            if np.all(np.isfinite(np.diag(cov_j))):
+                half = np.maximum(half, t95 * np.sqrt(np.maximum(np.diag(cov_j), 0.0)))
         ci = dict(zip(names, half))
         selected = [replace(a, values={p: theta.get(p, st.nominal[p]) for p in a.group.params},
                             ci={p: float(ci.get(p, float("nan"))) for p in a.group.params})

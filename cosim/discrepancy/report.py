@@ -43,6 +43,11 @@ def write_report(d, eng, sel, out: Path, figures: bool = True) -> dict:
             from .drift import figure
 
             files["drifts"] = figure(d.drifts, out / "drifts.png")
+        if getattr(d, "flexible", None):
+            from .flexible import figure as flexible_figure
+
+            if flexible_figure(d.flexible, out / "flexible.png"):
+                files["flexible"] = str(out / "flexible.png")
     files["json"] = str(out / "diagnosis.json")
     md = out / "report.md"
     files["report"] = str(md)
@@ -157,6 +162,11 @@ def markdown(d, files: dict) -> str:
             L += ["Plant parameters with the discovered terms (core / FMU names):", "", "```json",
                   json.dumps(d.theta, indent=2), "```", ""]
 
+    if getattr(d, "flexible", None):
+        from .flexible import markdown as flexible_markdown
+
+        L += flexible_markdown(d.flexible, files)
+
     if getattr(d, "platform_force", None) is not None:
         from .platform_force import markdown as platform_markdown
 
@@ -165,6 +175,9 @@ def markdown(d, files: dict) -> str:
         from .drift import markdown as drift_markdown
 
         L += drift_markdown(d.drifts, files)
+    from .encoders_step import markdown as encoder_markdown
+
+    L += encoder_markdown(getattr(d, "encoders", []))
     L += ["## How much better: held-out fit", ""]
     h = d.heldout
     if d.theta and h["affected"] and np.isfinite(h["gain"]):

@@ -32,9 +32,10 @@ COLUMN_FIELDS = ("variable", "column", "row", "scale", "offset", "unit", "option
 #: fields of a sensor
 SENSOR_FIELDS = ("resolution", "noise_std", "unit")
 #: a per-joint recording column: prefix and joint number
-JOINT_COLUMN = re.compile(r"^(q|qd|tau|qref|qdref|f_ext|inject|tau_meas)([1-9][0-9]*)$")
-#: per-joint columns kept in the recording's extra columns (not its own arrays)
-EXTRA_PREFIXES = ("qdref", "inject", "tau_meas")
+JOINT_COLUMN = re.compile(r"^(q|qd|tau|qref|qdref|f_ext|inject|tau_meas|q_link)([1-9][0-9]*)$")
+#: per-joint columns kept in the recording's extra columns (not its own arrays); q_link<i>: a
+#: link-side encoder of joint i (q<i> is then the motor side in joint units), on any joints
+EXTRA_PREFIXES = ("qdref", "inject", "tau_meas", "q_link")
 #: the injection points at which a signal is an effort (cosim.injection)
 COMMAND_POINTS = ("command", "command_after_saturation")
 #: the position column each derivable velocity column comes from
@@ -302,7 +303,7 @@ def si_unit(name: str, facts, injection: dict | None = None) -> str | None:
         ju = facts.joint_unit
         inj = facts.effort_unit if (injection or {}).get("point", "command") in COMMAND_POINTS else ju
         return {"q": ju, "qref": ju, "qd": f"{ju}/s", "qdref": f"{ju}/s", "tau": facts.effort_unit,
-                "f_ext": facts.effort_unit, "inject": inj, "tau_meas": facts.effort_unit}[m.group(1)]
+                "f_ext": facts.effort_unit, "inject": inj, "tau_meas": facts.effort_unit, "q_link": ju}[m.group(1)]
     if name in facts.tracker_names:
         return facts.tracker_units[list(facts.tracker_names).index(name)]
     return None
@@ -322,7 +323,7 @@ def check_columns(m: ImportMap, facts) -> None:
         si = si_unit(name, facts, m.injection)
         if si is None:
             known = ["time"] + [f"{p}1..{p}{nd}" for p in ("q", "qd", "tau", "qref", "qdref", "f_ext", "inject",
-                                                             "tau_meas")]
+                                                             "tau_meas", "q_link")]
             known += list(facts.tracker_names)
             _fail(m.path, f"columns.{name}", f"not a recording column of robot {facts.name} ({nd} joint"
                                              f"{'s' if nd > 1 else ''}; columns: {', '.join(known)})")

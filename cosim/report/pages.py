@@ -168,6 +168,13 @@ def diagnosis_page(d, path, model=None) -> Path:
                         height=380, xaxis_title=f"{t.key_variable} of joint {t.joint}",
                         yaxis_title=t.channel)
         sections.append((f"discovered: {t.channel}", f))
+    for fl in getattr(d, "flexible", []):
+        for dep in fl.inputs:  # the flexible model's partial dependence on each input it names
+            f = go.Figure([go.Scatter(x=list(dep.grid), y=list(dep.curve), mode="lines", line=dict(color="#d62728"),
+                                      name="partial dependence")])
+            f.update_layout(title=fl.statement, height=380, xaxis_title=f"{dep.feature} [{dep.unit}]",
+                            yaxis_title=f"{fl.channel} [{fl.unit}]")
+            sections.append((f"flexible model: {fl.channel} on {dep.group}", f))
     hc = d.heldout["channels"]
     rows = [(label, c, hc[c]["unit"], hc[c][key]) for label, key in (("nominal model", "rms_before"),
                                                                       ("fitted model", "rms_after")) for c in hc]

@@ -177,8 +177,8 @@ CALIBRATION_DEFAULTS = {
     "angle_noise": -1.0,        # rad; < 0: tracker_noise over the platform radius
     "encoder_noise": 0.0,       # m
     "max_length": 0.5e-3,       # m, geometric errors of the real robot (uniform +-)
-    "max_angle_deg": 0.5,       # deg, rail tilt of the real 6-PUS
-    "theta_min_deg": 30.0,      # four-bar crank range
+    "max_angle_deg": 0.5,       # deg, tilt of the error model's unit vectors in the real robot (6-PUS rails)
+    "theta_min_deg": 30.0,      # joint range of an output campaign (the four-bar's crank)
     "theta_max_deg": 60.0,
     "solver": "gauss-newton",
     "model": "structural",
@@ -187,8 +187,8 @@ CALIBRATION_DEFAULTS = {
     "weighting": "tracker",
     "validation_poses": 100,    # noise-free poses of the real robot the calibrated model is scored on
     "params": "",               # generic robots: parameters calibrated (comma-separated names / patterns; "": all)
-    "error_params": "",         # generic robots: parameters of the real robot that differ ("": every geometric one)
-    "pose_fraction": 0.5,       # generic robots: poses in this fraction of the core's reach about home
+    "error_params": "",         # parameters of the real robot that differ ("": the error model, or every geometric one)
+    "pose_fraction": 0.5,       # robots without a declared workspace: poses in this fraction of the core's reach
 }
 
 
@@ -203,27 +203,19 @@ class CalibrationKind(Kind):
     def run(self, base, params, ctx):
         from ..calibration import data as cd
         from ..calibration import calibrate
+        from ..calibration.error_model import error_model
         from ..core.model import Model
 
         p = {**CALIBRATION_DEFAULTS, **base, **params}
         seed, n = int(p["seed"]), int(p["n_poses"])
         nominal = Model(p["robot"])
-        if nominal.has("6pus_calib_rows"):  # the 60-parameter error model and its pose sampler
-            real = cd.sixpus_real_params(nominal, max_length=p["max_length"], max_angle_deg=p["max_angle_deg"],
-                                         rng=[seed, 1])
-            poses = cd.sixpus_candidate_poses(nominal, n, rng=[seed, 2])
-            rec = cd.sixpus_campaign(real, poses, tracker_noise=p["tracker_noise"],
-                                     angle_noise=None if p["angle_noise"] < 0 else p["angle_noise"],
-                                     encoder_noise=p["encoder_noise"], rng=[seed, 3])
-        elif nominal.has("fourbar_output"):  # the four-bar's link lengths, crank-angle campaign
-            g = np.random.default_rng([seed, 1])
-            real = {k: nominal.param(k) + g.uniform(-p["max_length"], p["max_length"])
-                    for k in nominal.param_names() if re.fullmatch(r"link\[\d\]\.l", k)}
+        em = error_model(nominal)
+        real = cd.real_params(nominal, max_length=p["max_length"], max_angle_deg=p["max_angle_deg"], rng=[seed, 1],
+                              names=_names(p["error_params"]) or None)
+        if em is not None and em.measure == "output":  # an output measured at joint values (the four-bar)
             theta = np.radians(np.linspace(p["theta_min_deg"], p["theta_max_deg"], n))
-            rec = cd.fourbar_campaign(real, theta, noise=p["tracker_noise"], rng=[seed, 3])
-        else:  # any other robot: its geometric parameters from the core, poses in its reach
-            real = cd.real_params(nominal, max_length=p["max_length"], rng=[seed, 1],
-                                  names=_names(p["error_params"]) or None)
+            rec = cd.output_campaign(nominal, real, theta, noise=p["tracker_noise"], rng=[seed, 3])
+        else:  # joints at poses in the robot's workspace (its error model's, or the core's reach)
             poses = cd.candidate_poses(nominal, n, rng=[seed, 2], fraction=p["pose_fraction"])
             rec = cd.joint_campaign(nominal, real, poses, tracker_noise=p["tracker_noise"],
                                     angle_noise=None if p["angle_noise"] < 0 else p["angle_noise"],
@@ -240,7 +232,7 @@ class CalibrationKind(Kind):
                 continue
             out.update({f"{label}.poses": a.n, f"{label}.position_rms_nominal": a.position[0],
                         f"{label}.position_rms_calibrated": a.position[1], f"{label}.gain": a.gain})
-            if not nominal.has("fourbar_output") and {"m", "rad"} <= set(nominal.facts.pose_units):
+            if res.problem.measure == "joints" and {"m", "rad"} <= set(nominal.facts.pose_units):
                 out.update({f"{label}.orientation_rms_nominal": a.orientation[0],
                             f"{label}.orientation_rms_calibrated": a.orientation[1]})
         out.update(self._truth(p, nominal, real, res, seed))
@@ -257,16 +249,15 @@ class CalibrationKind(Kind):
         real = nominal.copy()
         real.set_params(real_params)
         cal = res.calibrated_model()
-        if nominal.has("fourbar_output"):
-            from ..fourbar import output
+        if res.problem.measure == "output":
+            from ..calibration.error_model import output
 
             th = np.radians(np.linspace(p["theta_min_deg"], p["theta_max_deg"], nv))
             x = output(real, th, jacobian=False)
             e0 = output(nominal, th, jacobian=False) - x
             e1 = output(cal, th, jacobian=False) - x
         else:
-            X = (cd.sixpus_candidate_poses(nominal, nv, rng=[seed, 4]) if nominal.has("6pus_calib_rows")
-                 else cd.candidate_poses(nominal, nv, rng=[seed, 4], fraction=p["pose_fraction"]))
+            X = cd.candidate_poses(nominal, nv, rng=[seed, 4], fraction=p["pose_fraction"])
             q, st = real.ik(X, errors="status")
             X, q = X[st == 0], q[st == 0]
             lin = [i for i, u in enumerate(nominal.facts.pose_units) if u == "m"]

@@ -1,5 +1,5 @@
 /*
- * controller.c -- the hooks of fmu_plant.h for a controller FMU: the core's sampled
+ * controller.c -- the hooks of fmu_model.h for a controller FMU: the core's sampled
  * controller (pkm.h "control", pkm_ctrl) behind the same generic FMI layer
  * (fmi2_functions.c) as the plant FMUs.  Co-Simulation only.
  *
@@ -21,9 +21,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmu_plant.h"
+#include "fmu_model.h"
 
-struct fmu_plant {
+struct fmu_model {
   const fmu_model_desc* desc;
   int nd, np, nx_max;
   pkm_model* m;
@@ -39,16 +39,16 @@ struct fmu_plant {
   char msg[2048];
 };
 
-const char* plant_error(const fmu_plant* p) { return p ? p->msg : "controller is NULL"; }
-double plant_time(const fmu_plant* p) { return p->t; }
-int plant_nstates(const fmu_plant* p) {
+const char* fmu_model_error(const fmu_model* p) { return p ? p->msg : "controller is NULL"; }
+double fmu_model_time(const fmu_model* p) { return p->t; }
+int fmu_model_nstates(const fmu_model* p) {
   (void)p;
   return 0;
 }
-int plant_dirty(const fmu_plant* p) { return p->dirty || !p->started; }
+int fmu_model_dirty(const fmu_model* p) { return p->dirty || !p->started; }
 
 /* The block of a channel's values: [count] doubles. */
-static double* block(fmu_plant* p, fmu_channel ch, size_t* count) {
+static double* block(fmu_model* p, fmu_channel ch, size_t* count) {
   const size_t nd = (size_t)p->nd, nx = (size_t)p->nx_max;
   switch (ch) {
     case FMU_CH_CTRL_Q: *count = nd; return p->q;
@@ -75,12 +75,12 @@ static size_t arrays_size(int nd, int np, int nx) {
   return (size_t)np + 6 * (size_t)nd + 4 * (size_t)nd * nd + (size_t)nx * nx + 2 * (size_t)nx * nd;
 }
 
-fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
+fmu_model* fmu_model_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
   if (!cosimulation) {
     if (err && errlen) snprintf(err, errlen, "%s is a Co-Simulation FMU only", desc->identifier);
     return NULL;
   }
-  fmu_plant* p = (fmu_plant*)calloc(1, sizeof *p);
+  fmu_model* p = (fmu_model*)calloc(1, sizeof *p);
   if (!p) return NULL;
   p->desc = desc;
   if (desc->description && pkm_robot_register_description(desc->description, desc->robot, err, errlen) != PKM_OK) {
@@ -120,18 +120,18 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
   a += nd * nx;
   p->sat = (double*)calloc(nd, sizeof(double));
   if (!p->sat) {
-    plant_destroy(p);
+    fmu_model_destroy(p);
     return NULL;
   }
-  if (plant_reset(p) != PKM_OK) {
+  if (fmu_model_reset(p) != PKM_OK) {
     if (err && errlen) snprintf(err, errlen, "%s", p->msg);
-    plant_destroy(p);
+    fmu_model_destroy(p);
     return NULL;
   }
   return p;
 }
 
-void plant_destroy(fmu_plant* p) {
+void fmu_model_destroy(fmu_model* p) {
   if (!p) return;
   pkm_ctrl_destroy(p->c);
   pkm_model_destroy(p->m);
@@ -140,7 +140,7 @@ void plant_destroy(fmu_plant* p) {
   free(p);
 }
 
-int plant_reset(fmu_plant* p) {
+int fmu_model_reset(fmu_model* p) {
   pkm_ctrl_destroy(p->c);
   p->c = NULL;
   memset(p->par, 0, arrays_size(p->nd, p->np, p->nx_max) * sizeof(double));
@@ -149,7 +149,7 @@ int plant_reset(fmu_plant* p) {
   for (int k = 0; k < p->desc->nvars; ++k) {
     const fmu_var* v = &p->desc->vars[k];
     if (v->causality == FMU_OUTPUT) continue;
-    int s = v->type == FMU_INTEGER ? plant_set_integer(p, v, (int)v->start) : plant_set_real(p, v, v->start);
+    int s = v->type == FMU_INTEGER ? fmu_model_set_integer(p, v, (int)v->start) : fmu_model_set_real(p, v, v->start);
     if (s) return s;
   }
   p->t = 0;
@@ -159,7 +159,7 @@ int plant_reset(fmu_plant* p) {
   return PKM_OK;
 }
 
-int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
+int fmu_model_set_real(fmu_model* p, const fmu_var* v, double value) {
   if (!isfinite(value)) return fail(p, PKM_ERR_ARGUMENT, "%s = %g at t = %.9g s is not finite", v->name, value, p->t);
   switch (v->channel) {
     case FMU_CH_CTRL_DT: p->dt = value; break;
@@ -176,7 +176,7 @@ int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
   return PKM_OK;
 }
 
-int plant_set_integer(fmu_plant* p, const fmu_var* v, int value) {
+int fmu_model_set_integer(fmu_model* p, const fmu_var* v, int value) {
   switch (v->channel) {
     case FMU_CH_CTRL_KIND: p->kind = value; break;
     case FMU_CH_CTRL_GRAVITY_REF: p->gravity_ref = value; break;
@@ -192,7 +192,7 @@ int plant_set_integer(fmu_plant* p, const fmu_var* v, int value) {
   return PKM_OK;
 }
 
-int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
+int fmu_model_get_real(fmu_model* p, const fmu_var* v, double* value) {
   switch (v->channel) {
     case FMU_CH_CTRL_DT: *value = p->dt; return PKM_OK;
     case FMU_CH_CTRL_TF: *value = p->tf; return PKM_OK;
@@ -207,7 +207,7 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
   }
 }
 
-int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value) {
+int fmu_model_get_integer(fmu_model* p, const fmu_var* v, int* value) {
   switch (v->channel) {
     case FMU_CH_CTRL_KIND: *value = p->kind; return PKM_OK;
     case FMU_CH_CTRL_GRAVITY_REF: *value = p->gravity_ref; return PKM_OK;
@@ -217,11 +217,11 @@ int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value) {
   }
 }
 
-void plant_set_tolerance(fmu_plant* p, double rtol) { (void)p, (void)rtol; }
-void plant_set_time(fmu_plant* p, double t) { p->t = t; }
+void fmu_model_set_tolerance(fmu_model* p, double rtol) { (void)p, (void)rtol; }
+void fmu_model_set_time(fmu_model* p, double t) { p->t = t; }
 
 /* The core model (parameters through pkm_param_set + validate) and the law (pkm_ctrl_create). */
-int plant_start(fmu_plant* p, double t0) {
+int fmu_model_start(fmu_model* p, double t0) {
   char cerr[1024] = "";
   for (int i = 0; i < p->np; ++i)
     if (pkm_param_get(p->m, i) != p->par[i] && pkm_param_set(p->m, i, p->par[i], cerr, sizeof cerr) != PKM_OK)
@@ -265,7 +265,7 @@ int plant_start(fmu_plant* p, double t0) {
 }
 
 /* One sample at the current time from the inputs as set; tau is held until the next. */
-int plant_step(fmu_plant* p, double t_end) {
+int fmu_model_step(fmu_model* p, double t_end) {
   if (!p->c) return fail(p, PKM_ERR_INTERNAL, "the controller is not initialized");
   double tau[64];
   int s = pkm_ctrl_update(p->c, p->t, p->q, p->qd, p->qref, p->qdref, p->qddref, NULL, tau);
@@ -276,23 +276,23 @@ int plant_step(fmu_plant* p, double t_end) {
 }
 
 /* No continuous states, derivatives or event indicators. */
-int plant_set_states(fmu_plant* p, const double* s, size_t n) {
+int fmu_model_set_states(fmu_model* p, const double* s, size_t n) {
   (void)s;
   return n == 0 ? PKM_OK : fail(p, PKM_ERR_UNSUPPORTED, "a controller FMU has no continuous states");
 }
-int plant_get_states(const fmu_plant* p, double* s, size_t n) {
+int fmu_model_get_states(const fmu_model* p, double* s, size_t n) {
   (void)p, (void)s;
   return n == 0 ? PKM_OK : PKM_ERR_UNSUPPORTED;
 }
-int plant_get_derivatives(fmu_plant* p, double* ds, size_t n) {
+int fmu_model_get_derivatives(fmu_model* p, double* ds, size_t n) {
   (void)ds;
   return n == 0 ? PKM_OK : fail(p, PKM_ERR_UNSUPPORTED, "a controller FMU has no continuous states");
 }
-int plant_get_indicators(fmu_plant* p, double* z, size_t n) {
+int fmu_model_get_indicators(fmu_model* p, double* z, size_t n) {
   (void)z;
   return n == 0 ? PKM_OK : fail(p, PKM_ERR_UNSUPPORTED, "a controller FMU has no event indicators");
 }
-int plant_check_limits(fmu_plant* p, double tol) {
+int fmu_model_check_limits(fmu_model* p, double tol) {
   (void)p, (void)tol;
   return PKM_OK;
 }
@@ -301,15 +301,15 @@ int plant_check_limits(fmu_plant* p, double tol) {
  * saturation, then the law's own state (pkm_ctrl_state_save) when started. */
 enum { CSNAP_HEAD = 9 };
 
-static size_t fixed_size(const fmu_plant* p) {
+static size_t fixed_size(const fmu_model* p) {
   return CSNAP_HEAD + arrays_size(p->nd, p->np, p->nx_max) + (size_t)p->nd + 1;
 }
-size_t plant_snapshot_min_size(const fmu_plant* p) { return fixed_size(p); }
-size_t plant_snapshot_size(const fmu_plant* p) {
+size_t fmu_model_snapshot_min_size(const fmu_model* p) { return fixed_size(p); }
+size_t fmu_model_snapshot_size(const fmu_model* p) {
   return fixed_size(p) + (p->started && p->c ? pkm_ctrl_state_size(p->c) : 0);
 }
 
-void plant_snapshot_save(const fmu_plant* p, double* b) {
+void fmu_model_snapshot_save(const fmu_model* p, double* b) {
   b[0] = p->t, b[1] = p->started, b[2] = p->dirty, b[3] = p->kind, b[4] = p->gravity_ref, b[5] = p->gravity_ff;
   b[6] = p->nx, b[7] = p->dt, b[8] = p->tf;
   double* v = b + CSNAP_HEAD;
@@ -327,7 +327,7 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
  * value finite, flags, the kind and the LTI state count whole and in range (nx sizes the
  * copies plant_start makes); the gains then go through pkm_ctrl_create and the law's state
  * through pkm_ctrl_state_load, which checks it against the law's own layout. */
-int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
+int fmu_model_snapshot_check(fmu_model* p, const double* b, size_t n) {
   const size_t fixed = fixed_size(p);
   if (n < fixed)
     return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
@@ -352,7 +352,7 @@ int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
 }
 
 /* Loads a snapshot that passed plant_snapshot_check. */
-int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+int fmu_model_snapshot_load(fmu_model* p, const double* b, size_t n) {
   const size_t fixed = fixed_size(p);
   p->t = b[0];
   const int started = b[1] != 0, dirty = b[2] != 0;
@@ -369,7 +369,7 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
   double tau[64];
   memcpy(tau, p->tau, sizeof(double) * (size_t)p->nd);
   const double t = p->t;
-  int s = plant_start(p, t);
+  int s = fmu_model_start(p, t);
   if (s) return s;
   memcpy(p->tau, tau, sizeof(double) * (size_t)p->nd);
   if (pkm_ctrl_state_load(p->c, b + fixed, n - fixed) != PKM_OK) {

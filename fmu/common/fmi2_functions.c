@@ -1,7 +1,7 @@
 /*
  * fmi2_functions.c -- the FMI 2.0 functions (Model Exchange and Co-Simulation), written
  * once for every PKM FMU.  A model folder supplies FMU_MODEL (its generated variable
- * table); the physics is in the plant (plant.c), which calls the reference core.
+ * table); the physics is in the model (robot.c, or controller.c for a controller FMU), which calls the reference core.
  *
  * What FMI 2.0 and FMI 3.0 share (the state machine, the checks, the messages, the FMU
  * state, the steps) is fmu_instance.c; this file translates the FMI 2.0 signatures and

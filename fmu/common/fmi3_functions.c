@@ -1,8 +1,8 @@
 /*
  * fmi3_functions.c -- the FMI 3.0 functions (Model Exchange and Co-Simulation), written
- * once for every PKM FMU, over the same instance (fmu_instance.c) and plant hooks as
+ * once for every PKM FMU, over the same instance (fmu_instance.c) and model hooks as
  * the FMI 2.0 functions: the two interfaces refuse the same things with the same
- * messages and run the same plant.
+ * messages and run the same model.
  *
  * What FMI 3.0 adds is translated here: array variables (an FMI 3.0 value reference
  * stands for consecutive rows of the generated table, fmu_vars3.h), time and the event
@@ -190,7 +190,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance comp, const fmi3ValueReference vr[], size
   for (size_t i = 0; i < nvr; ++i) {
     const fmu3_var* v = &FMU3_VARS[vr[i]];
     if (v->kind == FMU3_TIME) {
-      values[at] = plant_time(c->plant);
+      values[at] = fmu_model_time(c->model);
       if (fmu_finite_or_error(c, fn, "time", &values[at], 1) != FMU_OK) return fmi3Error;
     } else if (v->kind == FMU3_INDICATORS) {
       fmu_status s = fmu_get_indicators(c, fn, &values[at], (size_t)v->count);
@@ -517,7 +517,7 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance comp, size_t* nContinuou
   fmu_instance* c = BASE(comp);
   if (fmu_bad_call(c, "fmi3GetNumberOfContinuousStates", S_ANY)) return fmi3Error;
   if (!nContinuousStates) return STATUS(fmu_error(c, "fmi3GetNumberOfContinuousStates", "NULL output argument"));
-  *nContinuousStates = (size_t)plant_nstates(c->plant);
+  *nContinuousStates = (size_t)fmu_model_nstates(c->model);
   return fmi3OK;
 }
 

@@ -3,7 +3,7 @@
  * written once for the FMI 2.0 and the FMI 3.0 layer.
  *
  * Every call checks the instance's state against the state machine, every failure is
- * logged with the function name and the plant's what/where message, and the status
+ * logged with the function name and the model's what/where message, and the status
  * escalates the state (Error -> error state; a Discarded Co-Simulation step -> step
  * failed, with the state at the event time).  An instance owns all its memory, the
  * importer's callbacks are copied at instantiation; nothing here is global and mutable,
@@ -40,7 +40,7 @@ void fmu_log(const fmu_instance* c, fmu_status st, int cat, const char* fmt, ...
   va_end(ap);
 }
 
-int plant_fail(char* msg, size_t size, int status, const char* fmt, ...) {
+int fmu_model_fail(char* msg, size_t size, int status, const char* fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   vsnprintf(msg, size, fmt, ap);
@@ -60,12 +60,12 @@ fmu_status fmu_error(fmu_instance* c, const char* fn, const char* fmt, ...) {
 }
 
 /* The last line of defence of the array getters: no value leaves as an infinity or a NaN
- * with OK (the variable getters have their own, per variable, in the plant). */
+ * with OK (the variable getters have their own, per variable, in the model). */
 fmu_status fmu_finite_or_error(fmu_instance* c, const char* fn, const char* what, const double* v, size_t n) {
   for (size_t i = 0; i < n; ++i)
     if (!isfinite(v[i]))
       return fmu_error(c, fn, "%s %zu is not finite (%g) at t = %.9g s: a state or an input is too large", what, i,
-                       v[i], plant_time(c->plant));
+                       v[i], fmu_model_time(c->model));
   return FMU_OK;
 }
 
@@ -123,8 +123,8 @@ fmu_status fmu_set_debug_logging(fmu_instance* c, const char* fn, int on, size_t
 
 /* In initialization mode the outputs are computed from the pending start values. */
 static fmu_status ensure_started(fmu_instance* c, const char* fn) {
-  if (!plant_dirty(c->plant)) return FMU_OK;
-  if (plant_start(c->plant, c->start_time)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  if (!fmu_model_dirty(c->model)) return FMU_OK;
+  if (fmu_model_start(c->model, c->start_time)) return fmu_error(c, fn, "%s", fmu_model_error(c->model));
   return FMU_OK;
 }
 
@@ -145,7 +145,7 @@ fmu_instance* fmu_instantiate(const char* fn, fmu_instance* head, size_t size, c
     return NULL;
   }
   char err[1024] = "";
-  fmu_plant* p = plant_create(&FMU_MODEL, cosimulation, err, sizeof err);
+  fmu_model* p = fmu_model_create(&FMU_MODEL, cosimulation, err, sizeof err);
   if (!p) {
     fmu_log(head, FMU_ERROR, LOG_ERROR, "%s: %s", fn, err);
     return NULL;
@@ -156,14 +156,14 @@ fmu_instance* fmu_instantiate(const char* fn, fmu_instance* head, size_t size, c
     fmu_log(head, FMU_ERROR, LOG_ERROR, "%s: out of memory", fn);
     free(c);
     free(copy);
-    plant_destroy(p);
+    fmu_model_destroy(p);
     return NULL;
   }
   strcpy(copy, name);
   memcpy(c, head, size);
   c->name = copy;
   c->cosimulation = cosimulation;
-  c->plant = p;
+  c->model = p;
   c->state = S_INSTANTIATED;
   fmu_log(c, FMU_OK, LOG_EVENTS, "%s: %s %s (%s), token %s", fn, FMU_MODEL.identifier,
           cosimulation ? "Co-Simulation" : "Model Exchange", FMU_MODEL.robot, token);
@@ -172,14 +172,14 @@ fmu_instance* fmu_instantiate(const char* fn, fmu_instance* head, size_t size, c
 
 void fmu_free(fmu_instance* c) {
   if (!c) return;
-  plant_destroy(c->plant);
+  fmu_model_destroy(c->model);
   free(c->name);
   free(c);
 }
 
 fmu_status fmu_reset(fmu_instance* c, const char* fn) {
   if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
-  plant_reset(c->plant);
+  fmu_model_reset(c->model);
   c->start_time = c->stop_time = 0;
   c->stop_defined = 0;
   c->terminated = 0;
@@ -198,8 +198,8 @@ fmu_status fmu_setup(fmu_instance* c, const char* fn, int tolerance_defined, dou
   c->stop_time = stop_time;
   c->stop_defined = stop_defined != 0;
   /* The importer's tolerance, when given, is the integrator's relative tolerance. */
-  plant_set_tolerance(c->plant, tolerance_defined ? tolerance : 0.0);
-  plant_set_time(c->plant, start_time);
+  fmu_model_set_tolerance(c->model, tolerance_defined ? tolerance : 0.0);
+  fmu_model_set_time(c->model, start_time);
   return FMU_OK;
 }
 
@@ -252,31 +252,31 @@ static int settable(fmu_instance* c, const char* fn, const fmu_var* v) {
 
 fmu_status fmu_get_real(fmu_instance* c, const char* fn, const fmu_var* v, double* value) {
   if (c->state == S_INIT && v->causality == FMU_OUTPUT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
-  if (plant_get_real(c->plant, v, value)) return fmu_error(c, fn, "%s: %s", v->name, plant_error(c->plant));
+  if (fmu_model_get_real(c->model, v, value)) return fmu_error(c, fn, "%s: %s", v->name, fmu_model_error(c->model));
   return FMU_OK;
 }
 
 fmu_status fmu_get_integer(fmu_instance* c, const char* fn, const fmu_var* v, int* value) {
-  if (plant_get_integer(c->plant, v, value)) return fmu_error(c, fn, "%s: %s", v->name, plant_error(c->plant));
+  if (fmu_model_get_integer(c->model, v, value)) return fmu_error(c, fn, "%s: %s", v->name, fmu_model_error(c->model));
   return FMU_OK;
 }
 
 fmu_status fmu_set_real(fmu_instance* c, const char* fn, const fmu_var* v, double value) {
   if (!settable(c, fn, v)) return FMU_ERROR;
-  if (plant_set_real(c->plant, v, value)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  if (fmu_model_set_real(c->model, v, value)) return fmu_error(c, fn, "%s", fmu_model_error(c->model));
   return FMU_OK;
 }
 
 fmu_status fmu_set_integer(fmu_instance* c, const char* fn, const fmu_var* v, int value) {
   if (!settable(c, fn, v)) return FMU_ERROR;
-  if (plant_set_integer(c->plant, v, value)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  if (fmu_model_set_integer(c->model, v, value)) return fmu_error(c, fn, "%s", fmu_model_error(c->model));
   return FMU_OK;
 }
 
 /* ---------------------------------------------------------------- FMU state */
 
 /* The header ties a state block to this model (GUID or token), layout (version), FMI
- * layer (magic) and interface; the plant writes the rest.  A checksum over the whole
+ * layer (magic) and interface; the model writes the rest.  A checksum over the whole
  * block (its own field read as zero) catches a block damaged in storage or transit; every
  * value is checked again when the state is restored (a block edited on purpose and sealed
  * again must not crash or poison the instance either). */
@@ -286,16 +286,16 @@ typedef struct fmu_state {
   char guid[48];
   int32_t type;       /* 0 Model Exchange, 1 Co-Simulation      */
   int32_t mode;       /* state-machine state                   */
-  uint64_t nplant;    /* doubles in plant[]                     */
+  uint64_t nmodel;    /* doubles in model[]                     */
   double start_time, stop_time, last_successful_time;
   int32_t stop_defined, terminated;
   uint32_t version;   /* STATE_VERSION                          */
   uint32_t reserved;  /* 0                                      */
   uint64_t checksum;  /* FNV-1a 64 of the block, this field as 0 */
-  double plant[];
+  double model[];
 } fmu_state;
 
-static size_t state_bytes(size_t nplant) { return sizeof(fmu_state) + nplant * sizeof(double); }
+static size_t state_bytes(size_t nmodel) { return sizeof(fmu_state) + nmodel * sizeof(double); }
 
 /* FNV-1a (64 bit) of the n bytes of a state block, its checksum field read as zero. */
 static uint64_t state_checksum(const unsigned char* bytes, size_t n) {
@@ -317,11 +317,11 @@ static int mode_ok(int cosimulation, int32_t mode) {
 
 /* The header s of a state block (block: its bytes, size of them; size 0: the size the
  * header declares, for a block this FMU made in memory): magic, GUID, interface, layout
- * version, the plant's length against this model's, the checksum, and every header value
+ * version, the model's length against this model's, the checksum, and every header value
  * in its range. */
 static int state_ok(fmu_instance* c, const char* fn, const char* magic, const fmu_state* s, const void* block,
                     size_t size) {
-  size_t n = plant_snapshot_min_size(c->plant);
+  size_t n = fmu_model_snapshot_min_size(c->model);
   if (!s || memcmp(s->magic, magic, 8) != 0) {
     fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: not an FMU state of %s", fn, FMU_MODEL.identifier);
     return 0;
@@ -339,14 +339,14 @@ static int state_ok(fmu_instance* c, const char* fn, const char* magic, const fm
             fn, guid, (int)s->type, (unsigned)s->version, c->token, c->cosimulation, STATE_VERSION);
     return 0;
   }
-  if (s->nplant < n || s->nplant > n + (1u << 24) || (size && size != state_bytes(s->nplant))) {
+  if (s->nmodel < n || s->nmodel > n + (1u << 24) || (size && size != state_bytes(s->nmodel))) {
     fmu_log(c, FMU_ERROR, LOG_ERROR,
-            "%s: FMU state of %zu bytes declares %llu plant values (this model: %zu + the "
+            "%s: FMU state of %zu bytes declares %llu model values (this model: %zu + the "
             "integrator's): it is truncated or damaged",
-            fn, size ? size : state_bytes(s->nplant), (unsigned long long)s->nplant, n);
+            fn, size ? size : state_bytes(s->nmodel), (unsigned long long)s->nmodel, n);
     return 0;
   }
-  const uint64_t sum = state_checksum((const unsigned char*)block, state_bytes(s->nplant));
+  const uint64_t sum = state_checksum((const unsigned char*)block, state_bytes(s->nmodel));
   if (sum != s->checksum) {
     fmu_log(c, FMU_ERROR, LOG_ERROR,
             "%s: FMU state checksum %016llx does not match its content (%016llx): the block "
@@ -376,10 +376,10 @@ static int state_ok(fmu_instance* c, const char* fn, const char* magic, const fm
 fmu_status fmu_state_get(fmu_instance* c, const char* fn, const char* magic, void** state) {
   if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
   if (!state) return fmu_error(c, fn, "FMUstate pointer is NULL");
-  size_t n = plant_snapshot_size(c->plant);
+  size_t n = fmu_model_snapshot_size(c->model);
   fmu_state* s = (fmu_state*)*state;
   /* A state handed back for overwriting is reused; anything else gets a new block. */
-  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nplant != n) {
+  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nmodel != n) {
     s = (fmu_state*)calloc(1, state_bytes(n));
     if (!s) return fmu_error(c, fn, "out of memory");
   }
@@ -388,7 +388,7 @@ fmu_status fmu_state_get(fmu_instance* c, const char* fn, const char* magic, voi
   strncpy(s->guid, c->token, sizeof s->guid - 1);
   s->type = (int32_t)c->cosimulation;
   s->mode = c->state;
-  s->nplant = n;
+  s->nmodel = n;
   s->start_time = c->start_time;
   s->stop_time = c->stop_time;
   s->last_successful_time = c->last_successful_time;
@@ -396,20 +396,20 @@ fmu_status fmu_state_get(fmu_instance* c, const char* fn, const char* magic, voi
   s->terminated = c->terminated;
   s->version = STATE_VERSION;
   s->reserved = 0;
-  plant_snapshot_save(c->plant, s->plant);
+  fmu_model_snapshot_save(c->model, s->model);
   s->checksum = state_checksum((const unsigned char*)s, state_bytes(n));
   *state = s;
   return FMU_OK;
 }
 
 /* Is the restored instance one the state machine can go on from?  Past initialization
- * the plant must be started (its model validated, its state checked); a Co-Simulation
- * step's last successful time is the plant's time. */
+ * the model must be started (its model validated, its state checked); a Co-Simulation
+ * step's last successful time is the model's time. */
 static const char* restored_inconsistency(const fmu_instance* c) {
   const int running = c->state & (S_EVENT | S_CONT | S_STEP_COMPLETE | S_STEP_FAILED);
-  if (running && plant_dirty(c->plant))
+  if (running && fmu_model_dirty(c->model))
     return "its state-machine state is past initialization but the model was not started";
-  if ((c->state & (S_STEP_COMPLETE | S_STEP_FAILED)) && c->last_successful_time != plant_time(c->plant))
+  if ((c->state & (S_STEP_COMPLETE | S_STEP_FAILED)) && c->last_successful_time != fmu_model_time(c->model))
     return "its last successful time differs from the model's time";
   return NULL;
 }
@@ -418,21 +418,21 @@ fmu_status fmu_state_set(fmu_instance* c, const char* fn, const char* magic, con
   if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
   const fmu_state* s = (const fmu_state*)state;
   if (!state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
-  if (plant_snapshot_check(c->plant, s->plant, s->nplant)) {
-    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s; the instance keeps its previous state", fn, plant_error(c->plant));
+  if (fmu_model_snapshot_check(c->model, s->model, s->nmodel)) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: %s; the instance keeps its previous state", fn, fmu_model_error(c->model));
     return FMU_ERROR;
   }
   /* What the core refuses while loading leaves the instance as it was too: keep what it
    * has now to put back. */
   fmu_instance before = *c;
-  const size_t nkeep = plant_snapshot_size(c->plant);
+  const size_t nkeep = fmu_model_snapshot_size(c->model);
   double* keep = (double*)malloc(nkeep * sizeof(double));
   if (!keep) return fmu_error(c, fn, "out of memory");
-  plant_snapshot_save(c->plant, keep);
+  fmu_model_snapshot_save(c->model, keep);
   const char* why = NULL;
   char msg[2600];
-  if (plant_snapshot_load(c->plant, s->plant, s->nplant)) {
-    snprintf(msg, sizeof msg, "%s", plant_error(c->plant));
+  if (fmu_model_snapshot_load(c->model, s->model, s->nmodel)) {
+    snprintf(msg, sizeof msg, "%s", fmu_model_error(c->model));
     why = msg;
   } else {
     c->start_time = s->start_time;
@@ -447,7 +447,7 @@ fmu_status fmu_state_set(fmu_instance* c, const char* fn, const char* magic, con
     }
   }
   if (why) {
-    const int restored = plant_snapshot_load(c->plant, keep, nkeep) == 0;
+    const int restored = fmu_model_snapshot_load(c->model, keep, nkeep) == 0;
     free(keep);
     *c = before;
     if (!restored) return fmu_error(c, fn, "%s (and the previous state could not be put back)", why);
@@ -471,7 +471,7 @@ fmu_status fmu_state_size(fmu_instance* c, const char* fn, const char* magic, co
   if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
   const fmu_state* s = (const fmu_state*)state;
   if (!size || !state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
-  *size = state_bytes(s->nplant);
+  *size = state_bytes(s->nmodel);
   return FMU_OK;
 }
 
@@ -480,11 +480,11 @@ fmu_status fmu_state_serialize(fmu_instance* c, const char* fn, const char* magi
   if (fmu_bad_call(c, fn, S_ANY)) return FMU_ERROR;
   const fmu_state* s = (const fmu_state*)state;
   if (!bytes || !state_ok(c, fn, magic, s, s, 0)) return FMU_ERROR;
-  if (size < state_bytes(s->nplant)) {
-    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: buffer of %zu bytes, %zu needed", fn, size, state_bytes(s->nplant));
+  if (size < state_bytes(s->nmodel)) {
+    fmu_log(c, FMU_ERROR, LOG_ERROR, "%s: buffer of %zu bytes, %zu needed", fn, size, state_bytes(s->nmodel));
     return FMU_ERROR;
   }
-  memcpy(bytes, s, state_bytes(s->nplant));
+  memcpy(bytes, s, state_bytes(s->nmodel));
   return FMU_OK;
 }
 
@@ -500,7 +500,7 @@ fmu_status fmu_state_deserialize(fmu_instance* c, const char* fn, const char* ma
   if (!state_ok(c, fn, magic, &head, bytes, size)) return FMU_ERROR;
   /* A state of ours handed back for overwriting is reused (same model: same size). */
   fmu_state* s = (fmu_state*)*state;
-  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nplant != head.nplant) {
+  if (!s || memcmp(s->magic, magic, 8) != 0 || s->nmodel != head.nmodel) {
     s = (fmu_state*)malloc(size);
     if (!s) return fmu_error(c, fn, "out of memory");
   }
@@ -529,10 +529,10 @@ fmu_status fmu_enter_continuous_time_mode(fmu_instance* c, const char* fn) {
 /* In Model Exchange the importer owns time: at the edge of the usable workspace the
  * FMU can only ask it to stop (terminateSimulation), saying why, where and when. */
 static int reached_limit(fmu_instance* c, const char* fn) {
-  if (!plant_check_limits(c->plant, LIMIT_TOL)) return 0;
+  if (!fmu_model_check_limits(c->model, LIMIT_TOL)) return 0;
   c->terminated = 1;
-  c->last_successful_time = plant_time(c->plant);
-  fmu_log(c, FMU_WARNING, LOG_WARNING, "%s: stopping the simulation: %s", fn, plant_error(c->plant));
+  c->last_successful_time = fmu_model_time(c->model);
+  fmu_log(c, FMU_WARNING, LOG_WARNING, "%s: stopping the simulation: %s", fn, fmu_model_error(c->model));
   return 1;
 }
 
@@ -549,32 +549,32 @@ fmu_status fmu_completed_integrator_step(fmu_instance* c, const char* fn, int* e
   *enter_event_mode = 0;
   /* Also catches an importer that steps past a limit without locating the event. */
   *terminate = reached_limit(c, fn);
-  if (!*terminate) c->last_successful_time = plant_time(c->plant);
+  if (!*terminate) c->last_successful_time = fmu_model_time(c->model);
   return *terminate ? FMU_WARNING : FMU_OK;
 }
 
 fmu_status fmu_set_time(fmu_instance* c, const char* fn, double time) {
   if (fmu_bad_call(c, fn, S_EVENT | S_CONT)) return FMU_ERROR;
   if (!isfinite(time)) return fmu_error(c, fn, "time %g is not finite", time);
-  plant_set_time(c->plant, time);
+  fmu_model_set_time(c->model, time);
   return FMU_OK;
 }
 
 fmu_status fmu_set_states(fmu_instance* c, const char* fn, const double* x, size_t nx) {
   if (fmu_bad_call(c, fn, S_CONT)) return FMU_ERROR;
   if (!x) return fmu_error(c, fn, "x is NULL");
-  if (plant_set_states(c->plant, x, nx)) return fmu_error(c, fn, "%s", plant_error(c->plant));
+  if (fmu_model_set_states(c->model, x, nx)) return fmu_error(c, fn, "%s", fmu_model_error(c->model));
   return FMU_OK;
 }
 
-/* A plant status of a model evaluation: an error of the model or the arguments moves to
+/* A model status of a model evaluation: an error of the model or the arguments moves to
  * the error state; a singular pose is a Discard (the solver may retry with a smaller step,
  * or stop). */
 static fmu_status evaluation(fmu_instance* c, const char* fn, int s, const char* what, const double* v, size_t n) {
   if (s == PKM_OK) return fmu_finite_or_error(c, fn, what, v, n);
   if (s == PKM_ERR_ARGUMENT || s == PKM_ERR_PARAMETER || s == PKM_ERR_INTERNAL)
-    return fmu_error(c, fn, "%s", plant_error(c->plant));
-  fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s: %s", fn, plant_error(c->plant));
+    return fmu_error(c, fn, "%s", fmu_model_error(c->model));
+  fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s: %s", fn, fmu_model_error(c->model));
   return FMU_DISCARD;
 }
 
@@ -582,7 +582,7 @@ fmu_status fmu_get_derivatives(fmu_instance* c, const char* fn, double* dx, size
   if (fmu_bad_call(c, fn, S_ME_VALUES)) return FMU_ERROR;
   if (!dx) return fmu_error(c, fn, "derivatives is NULL");
   if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
-  return evaluation(c, fn, plant_get_derivatives(c->plant, dx, nx), "derivative", dx, nx);
+  return evaluation(c, fn, fmu_model_get_derivatives(c->model, dx, nx), "derivative", dx, nx);
 }
 
 fmu_status fmu_get_indicators(fmu_instance* c, const char* fn, double* z, size_t nz) {
@@ -590,22 +590,22 @@ fmu_status fmu_get_indicators(fmu_instance* c, const char* fn, double* z, size_t
   if (fmu_bad_call(c, fn, S_ME_VALUES | S_STEP_COMPLETE | S_STEP_FAILED)) return FMU_ERROR;
   if (!z && nz > 0) return fmu_error(c, fn, "eventIndicators is NULL");
   if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
-  return evaluation(c, fn, plant_get_indicators(c->plant, z, nz), "event indicator", z, nz);
+  return evaluation(c, fn, fmu_model_get_indicators(c->model, z, nz), "event indicator", z, nz);
 }
 
 fmu_status fmu_get_states(fmu_instance* c, const char* fn, double* x, size_t nx) {
   if (fmu_bad_call(c, fn, S_ME_VALUES)) return FMU_ERROR;
   if (!x) return fmu_error(c, fn, "x is NULL");
   if (c->state == S_INIT && ensure_started(c, fn) != FMU_OK) return FMU_ERROR;
-  if (plant_get_states(c->plant, x, nx))
-    return fmu_error(c, fn, "%zu states asked for, the model has %d", nx, plant_nstates(c->plant));
+  if (fmu_model_get_states(c->model, x, nx))
+    return fmu_error(c, fn, "%zu states asked for, the model has %d", nx, fmu_model_nstates(c->model));
   return fmu_finite_or_error(c, fn, "continuous state", x, nx);
 }
 
 fmu_status fmu_get_nominals(fmu_instance* c, const char* fn, double* nominals, size_t nx) {
   if (fmu_bad_call(c, fn, S_INSTANTIATED | S_ME_VALUES)) return FMU_ERROR;
-  if (!nominals || nx != (size_t)plant_nstates(c->plant))
-    return fmu_error(c, fn, "%zu nominals asked for, the model has %d states", nx, plant_nstates(c->plant));
+  if (!nominals || nx != (size_t)fmu_model_nstates(c->model))
+    return fmu_error(c, fn, "%zu nominals asked for, the model has %d states", nx, fmu_model_nstates(c->model));
   for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
   return FMU_OK;
 }
@@ -614,7 +614,7 @@ fmu_status fmu_get_nominals(fmu_instance* c, const char* fn, double* nominals, s
 
 fmu_status fmu_do_step(fmu_instance* c, const char* fn, double t, double h) {
   if (fmu_bad_call(c, fn, S_STEP_COMPLETE)) return FMU_ERROR;
-  double now = plant_time(c->plant);
+  double now = fmu_model_time(c->model);
   if (!isfinite(t) || !isfinite(h) || h < 0)
     return fmu_error(c, fn, "communication point %g and step %g: need finite values and step >= 0", t, h);
   /* The importer keeps its own clock; accept its rounding, not a jump. */
@@ -624,20 +624,20 @@ fmu_status fmu_do_step(fmu_instance* c, const char* fn, double t, double h) {
   if (c->stop_defined && t_end > c->stop_time * (1 + 1e-12) + 1e-12)
     return fmu_error(c, fn, "step to t = %.17g s goes past the stop time %.17g s", t_end, c->stop_time);
   if (h == 0) return FMU_OK;
-  int s = plant_step(c->plant, t_end);
+  int s = fmu_model_step(c->model, t_end);
   if (s == PKM_OK) {
     c->last_successful_time = t_end;
     return FMU_OK;
   }
   if (s == PKM_ERR_SINGULAR || s == PKM_ERR_JOINT_LIMIT || s == PKM_ERR_UNREACHABLE || s == PKM_ERR_STEP_BUDGET) {
-    /* The plant stopped at the event (or where its step budget ran out): the state there
+    /* The model stopped at the event (or where its step budget ran out): the state there
      * is consistent and readable. */
-    c->last_successful_time = plant_time(c->plant);
+    c->last_successful_time = fmu_model_time(c->model);
     c->terminated = 1;
     c->stopped = s != PKM_ERR_STEP_BUDGET;
     c->state = S_STEP_FAILED;
-    fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s from t = %.9g s to %.9g s: %s", fn, t, t_end, plant_error(c->plant));
+    fmu_log(c, FMU_DISCARD, LOG_DISCARD, "%s from t = %.9g s to %.9g s: %s", fn, t, t_end, fmu_model_error(c->model));
     return FMU_DISCARD;
   }
-  return fmu_error(c, fn, "from t = %.9g s to %.9g s: %s", t, t_end, plant_error(c->plant));
+  return fmu_error(c, fn, "from t = %.9g s to %.9g s: %s", t, t_end, fmu_model_error(c->model));
 }

@@ -1,6 +1,6 @@
 /*
  * fmu_instance.h -- what the FMI 2.0 layer (fmi2_functions.c) and the FMI 3.0 layer
- * (fmi3_functions.c) share: one FMU instance over the plant hooks of fmu_plant.h, its
+ * (fmi3_functions.c) share: one FMU instance over the model hooks of fmu_model.h, its
  * state machine, its logging, the checks of every argument, the FMU state (saved,
  * validated, restored, serialised) and the Model Exchange and Co-Simulation steps.
  *
@@ -15,7 +15,7 @@
 
 #include <stddef.h>
 
-#include "fmu_plant.h"
+#include "fmu_model.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,12 +57,12 @@ struct fmu_instance {
   const char* token;     /* GUID (FMI 2.0) or instantiation token (FMI 3.0) of the model */
   unsigned log_mask;     /* enabled categories (debug logging)                          */
   int state;
-  fmu_plant* plant;
+  fmu_model* model;
   double start_time, stop_time;
   int stop_defined;
   double last_successful_time;
   int terminated;
-  int stopped;           /* the last Co-Simulation step ended at a stop of the plant (a joint
+  int stopped;           /* the last Co-Simulation step ended at a stop of the model (a joint
                             limit, a singularity, an unreachable pose), not at its budget */
 };
 
@@ -81,7 +81,7 @@ fmu_status fmu_set_debug_logging(fmu_instance* c, const char* fn, int on, size_t
 /* ------------------------------------------------------- life of an instance */
 
 /* Checks the name and the token (against head->token; token_word names it in the
- * message: "GUID", "instantiation token"), creates the plant and returns a new instance
+ * message: "GUID", "instantiation token"), creates the model and returns a new instance
  * of size bytes (the FMI layer's struct, which starts with an fmu_instance) copied from
  * head (emit, token and whatever the layer keeps after it already filled in), or NULL
  * after logging why through head. */
@@ -110,7 +110,7 @@ fmu_status fmu_set_integer(fmu_instance* c, const char* fn, const fmu_var* v, in
 
 /* ------------------------------------------------------------------ FMU state */
 
-/* An FMU state is one flat block (header + the plant's snapshot): serialising it is a copy.
+/* An FMU state is one flat block (header + the model's snapshot): serialising it is a copy.
  * magic tells the FMI layer's blocks apart ("PKMFMU2S", "PKMFMU3S"). */
 fmu_status fmu_state_get(fmu_instance* c, const char* fn, const char* magic, void** state);
 fmu_status fmu_state_set(fmu_instance* c, const char* fn, const char* magic, const void* state);
@@ -125,7 +125,7 @@ fmu_status fmu_state_deserialize(fmu_instance* c, const char* fn, const char* ma
 
 fmu_status fmu_enter_event_mode(fmu_instance* c, const char* fn);
 fmu_status fmu_enter_continuous_time_mode(fmu_instance* c, const char* fn);
-/* The plant has no discrete states and no time events; a state event is the edge of the
+/* The model has no discrete states and no time events; a state event is the edge of the
  * usable workspace, where the FMU asks the importer to stop (*terminate = 1, Warning). */
 fmu_status fmu_update_discrete_states(fmu_instance* c, const char* fn, int* terminate);
 fmu_status fmu_completed_integrator_step(fmu_instance* c, const char* fn, int* enter_event_mode, int* terminate);
@@ -138,7 +138,7 @@ fmu_status fmu_get_nominals(fmu_instance* c, const char* fn, double* nominals, s
 
 /* ------------------------------------------------------------- Co-Simulation */
 
-/* One communication step from t to t + h with the inputs held.  FMU_DISCARD: the plant
+/* One communication step from t to t + h with the inputs held.  FMU_DISCARD: the model
  * stopped at an event (stroke limit, singularity, step budget), its state at that time
  * (c->last_successful_time), c->terminated set. */
 fmu_status fmu_do_step(fmu_instance* c, const char* fn, double t, double h);

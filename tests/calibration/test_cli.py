@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from cosim.calibration.data import sixpus_campaign, sixpus_candidate_poses, sixpus_real_params, write_campaign
+from cosim.calibration.data import candidate_poses, joint_campaign, real_params, write_campaign
 from cosim.cli import main
 from cosim.core import Model
 
@@ -12,8 +12,8 @@ from cosim.core import Model
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     nom = Model("6pus")
-    real = sixpus_real_params(nom, rng=31)
-    rec = sixpus_campaign(real, sixpus_candidate_poses(nom, 60, rng=32), rng=33)
+    real = real_params(nom, rng=31)
+    rec = joint_campaign(Model("6pus"), real, candidate_poses(nom, 60, rng=32), rng=33)
     return write_campaign(tmp_path_factory.mktemp("cli") / "camp.csv", rec, real)[0]
 
 
@@ -41,7 +41,7 @@ def test_solver_option(recording, capsys, solver):
 
 def test_bad_recording_is_an_error_not_a_traceback(tmp_path, capsys):
     nom = Model("6pus")
-    rec = sixpus_campaign(sixpus_real_params(nom, rng=1), sixpus_candidate_poses(nom, 4, rng=2), rng=3)
+    rec = joint_campaign(Model("6pus"), real_params(nom, rng=1), candidate_poses(nom, 4, rng=2), rng=3)
     path = write_campaign(tmp_path / "few.csv", rec, {})[0]
     assert main(["calibrate", str(path)]) == 2
     assert "too few poses" in capsys.readouterr().err

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from cosim.calibration import calibrate
-from cosim.calibration.data import fourbar_campaign
-from cosim.calibration.problems import CalibrationDataError, FourbarProblem
+from cosim.calibration.data import output_campaign
+from cosim.calibration.joint_problem import JointProblem
+from cosim.calibration.problems import CalibrationDataError
 from cosim.calibration.seed import fourbar_seed_study
 from cosim.calibration.solvers import _golden_1d, solve
 from cosim.core import Model
@@ -27,7 +28,7 @@ REAL = dict(zip(LENGTHS, (np.array([600, 750, 790, 900]) + TRUE_DL) * 1e-3))
 @pytest.fixture(scope="module")
 def problem():
     X = output(Model("fourbar", params=REAL), THETA, jacobian=False)
-    return FourbarProblem(THETA, X, Model("fourbar"))
+    return JointProblem(X, THETA, Model("fourbar"))
 
 
 def test_binding_reproduces_seed_table_and_A():
@@ -120,7 +121,7 @@ def test_identifiability_of_the_seven_angles(problem):
 def test_calibrate_from_recording(tmp_path):
     from cosim.recording import write_recording
 
-    rec = fourbar_campaign(REAL, THETA)
+    rec = output_campaign(Model("fourbar"), REAL, THETA)
     path, _ = write_recording(tmp_path / "fb.csv", rec)
     with pytest.warns(UserWarning, match="no pose held out"):
         res = calibrate(path, model="full")
@@ -130,15 +131,15 @@ def test_calibrate_from_recording(tmp_path):
 
 
 def test_too_few_angles_is_an_error():
-    with pytest.raises(CalibrationDataError, match="too few poses: 3 crank angle"):
-        FourbarProblem(THETA[:3], np.zeros(3), Model("fourbar"))
+    with pytest.raises(CalibrationDataError, match="too few poses: 3 usable pose.*4 calibrated parameters"):
+        JointProblem(np.zeros(3), THETA[:3], Model("fourbar"))
 
 
 def test_nan_output_is_an_error_naming_the_row():
     X = output(Model("fourbar"), THETA, jacobian=False)
     X[2] = np.nan
     with pytest.raises(CalibrationDataError, match="row 2"):
-        FourbarProblem(THETA, X, Model("fourbar"))
+        JointProblem(X, THETA, Model("fourbar"))
 
 
 def test_seed_direct_search_evaluated_the_prediction_not_the_residual():

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from cosim.calibration.ident import column_scale, identifiability
-from cosim.calibration.problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning, SixpusProblem,
+from cosim.calibration.joint_problem import JointProblem
+from cosim.calibration.problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning,
                                         calib_rows)
 from cosim.core import Model
 
@@ -156,7 +157,7 @@ def test_sixpus_block_structure_one_leg_per_block():
     x[:, 3:] += np.radians(rng.uniform(-4, 4, (12, 3)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CalibrationWarning)
-        P = SixpusProblem(x, m.ik(x), m)
+        P = JointProblem(x, m.ik(x), m)
     J = P.jacobian(P.p0)
     for b, (_, rows, cols) in enumerate(P.blocks):
         other = np.setdiff1d(np.arange(J.shape[1]), cols)

@@ -7,12 +7,15 @@ import numpy as np
 import pytest
 
 from cosim.calibration import calibrate, measurements, problem_from_recording
-from cosim.calibration.data import (read_truth, sixpus_campaign, sixpus_candidate_poses, sixpus_real_params,
+from cosim.calibration.data import (candidate_poses, joint_campaign, read_truth, real_params,
                                     write_campaign)
-from cosim.calibration.problems import (SIXPUS_ERROR_MODEL, CalibrationDataError, CalibrationWarning,
-                                        SixpusProblem)
+from cosim.calibration.joint_problem import JointProblem
+from cosim.calibration.problems import CalibrationDataError, CalibrationWarning
 from cosim.core import Model
 from cosim.recording import Recording, RecordingError, read_recording, write_recording
+
+#: Tiberi 2020's workspace without rotations (pure translations)
+NO_ROTATION = {"rx_deg": [0.0, 0.0], "ry_deg": [0.0, 0.0], "rz_deg": [0.0, 0.0]}
 
 
 @pytest.fixture(scope="module")
@@ -23,9 +26,9 @@ def nominal():
 @pytest.fixture(scope="module")
 def campaign(nominal, tmp_path_factory):
     """120 held poses of a real robot with errors up to 0.5 mm / 0.5 deg, 10 um tracker."""
-    real = sixpus_real_params(nominal, max_length=0.5e-3, max_angle_deg=0.5, rng=20240501)
-    poses = sixpus_candidate_poses(nominal, 120, rng=7)
-    rec = sixpus_campaign(real, poses, tracker_noise=10e-6, rng=11)
+    real = real_params(nominal, max_length=0.5e-3, max_angle_deg=0.5, rng=20240501)
+    poses = candidate_poses(nominal, 120, rng=7)
+    rec = joint_campaign(Model("6pus"), real, poses, tracker_noise=10e-6, rng=11)
     path, _, _ = write_campaign(tmp_path_factory.mktemp("cal") / "campaign.csv", rec, real)
     return path, real
 
@@ -55,8 +58,8 @@ def test_generator_makes_the_specified_real_robot(nominal, campaign):
 
 
 def test_jacobian_matches_central_differences_of_the_core(nominal):
-    x = sixpus_candidate_poses(nominal, 15, rng=3)
-    P = _quiet(SixpusProblem, x, nominal.ik(x), nominal)
+    x = candidate_poses(nominal, 15, rng=3)
+    P = _quiet(JointProblem, x, nominal.ik(x), nominal)
     p = P.p0 + np.random.default_rng(0).uniform(-3e-4, 3e-4, P.p0.size)
     J = P.jacobian(p)
     h = 1e-7
@@ -70,13 +73,15 @@ def test_jacobian_matches_central_differences_of_the_core(nominal):
 
 def test_error_model_columns_are_the_seeds_unconstrained_derivatives(nominal):
     # the 60 columns, |s| not kept: the core takes s as given within 1e-6 of unit length
-    x = sixpus_candidate_poses(nominal, 6, rng=4)
-    P = _quiet(SixpusProblem, x, nominal.ik(x), nominal, min_poses=1)
+    x = candidate_poses(nominal, 6, rng=4)
+    P = _quiet(JointProblem, x, nominal.ik(x), nominal, min_poses=1)
     J60 = P.error_model_jacobian()
     work = P.working_model()
-    base = {n: work.param(n) for n in SIXPUS_ERROR_MODEL}
+    names = P.error_model.parameters  # robots/calibration/6pus.toml: Tiberi 2020 eq. 4.1, leg by leg
+    assert len(names) == 60 and P.error_model.source.startswith("Tiberi 2020")
+    base = {n: work.param(n) for n in names}
     h = 1e-7
-    for j, n in enumerate(SIXPUS_ERROR_MODEL):
+    for j, n in enumerate(names):
         qs = []
         for sgn in (1, -1):
             m = work.copy()
@@ -137,7 +142,7 @@ def test_held_out_accuracy_improves_at_least_10x(kind, structural, full):
 def test_accuracy_against_the_truth_without_tracker_noise(nominal, full, campaign):
     # independent of the recording: true poses, the real robot's joints, FK of each model
     real = Model("6pus", params=campaign[1])
-    x = sixpus_candidate_poses(nominal, 40, rng=99)
+    x = candidate_poses(nominal, 40, rng=99)
     q = real.ik(x)
     err = []
     for m in (nominal, full.calibrated_model()):
@@ -159,8 +164,8 @@ def test_solvers_agree_on_the_same_problem(campaign):
 
 
 def test_too_few_poses_is_an_error(nominal):
-    x = sixpus_candidate_poses(nominal, 5, rng=1)
-    rec = sixpus_campaign(sixpus_real_params(nominal, rng=2), x, rng=3)
+    x = candidate_poses(nominal, 5, rng=1)
+    rec = joint_campaign(Model("6pus"), real_params(nominal, rng=2), x, rng=3)
     with pytest.raises(CalibrationDataError, match="too few poses: 5 usable pose"):
         calibrate(rec)
 
@@ -168,8 +173,8 @@ def test_too_few_poses_is_an_error(nominal):
 @pytest.mark.filterwarnings("ignore:no pose held out")
 def test_rank_deficient_pose_set_warns_or_refuses(nominal):
     # pure translations: with R = I the platform point and the rail origin move together
-    x = sixpus_candidate_poses(nominal, 30, rng=5, rot_deg=0.0)
-    rec = sixpus_campaign(sixpus_real_params(nominal, rng=6), x, tracker_noise=0.0, angle_noise=0.0, rng=7)
+    x = candidate_poses(nominal, 30, rng=5, workspace=NO_ROTATION)
+    rec = joint_campaign(Model("6pus"), real_params(nominal, rng=6), x, tracker_noise=0.0, angle_noise=0.0, rng=7)
     with pytest.warns(CalibrationWarning, match="rank-deficient: the measurements determine only 6 of 9"):
         res = calibrate(rec)
     for b in res.identifiability.blocks:
@@ -184,8 +189,8 @@ def test_rank_deficient_pose_set_warns_or_refuses(nominal):
 def test_nearly_rank_deficient_pose_set_warns(nominal):
     # the same with tracker noise: the measured rotations are not exactly zero, so the
     # matrix has full rank, with singular values at the noise level
-    x = sixpus_candidate_poses(nominal, 30, rng=5, rot_deg=0.0)
-    rec = sixpus_campaign(sixpus_real_params(nominal, rng=6), x, rng=7)
+    x = candidate_poses(nominal, 30, rng=5, workspace=NO_ROTATION)
+    rec = joint_campaign(Model("6pus"), real_params(nominal, rng=6), x, rng=7)
     with pytest.warns(CalibrationWarning, match=r"nearly rank-deficient: 3 direction\(s\)") as rec_w:
         calibrate(rec)
     msg = next(str(w.message) for w in rec_w if "nearly" in str(w.message))
@@ -205,17 +210,17 @@ def test_nan_in_a_recording_is_named_by_row_and_column(campaign, tmp_path):
 
 
 def test_nan_in_arrays_is_named_by_row_and_column(nominal):
-    x = sixpus_candidate_poses(nominal, 12, rng=8)
+    x = candidate_poses(nominal, 12, rng=8)
     q = nominal.ik(x)
     x[4, 2] = np.nan
     with pytest.raises(CalibrationDataError, match="row 4, column 'z'"):
-        SixpusProblem(x, q, nominal)
+        JointProblem(x, q, nominal)
 
 
 @pytest.mark.filterwarnings("ignore:no pose held out")
 def test_unreachable_pose_is_dropped_with_a_warning_naming_it(nominal):
-    x = sixpus_candidate_poses(nominal, 20, rng=9)
-    rec = sixpus_campaign(sixpus_real_params(nominal, rng=10), x, rng=11)
+    x = candidate_poses(nominal, 20, rng=9)
+    rec = joint_campaign(Model("6pus"), real_params(nominal, rng=10), x, rng=11)
     rec.pose[3] = [0.0, 0.0, 0.5, 0.0, 0.0, 0.0]  # 0.5 m up: no leg reaches
     with pytest.warns(CalibrationWarning, match=r"row 5 \(t = 3 s\).*cannot reach"):
         res = calibrate(rec, holdout=0.0)
@@ -230,8 +235,8 @@ def test_recording_without_pose_columns_is_an_error(nominal, tmp_path):
 
 
 def test_labelled_recording_uses_one_measurement_per_hold(nominal):
-    x = sixpus_candidate_poses(nominal, 12, rng=12)
-    real = sixpus_real_params(nominal, rng=13)
+    x = candidate_poses(nominal, 12, rng=12)
+    real = real_params(nominal, rng=13)
     # each pose held for 20 samples; 5 samples of motion (label 0) in between
     rows_x, rows_lab = [], []
     for k in range(12):
@@ -241,7 +246,7 @@ def test_labelled_recording_uses_one_measurement_per_hold(nominal):
             for t in np.linspace(0, 1, 7)[1:-1]:
                 rows_x.append((1 - t) * x[k] + t * x[k + 1])
                 rows_lab.append(0)
-    rec = sixpus_campaign(real, np.array(rows_x), tracker_noise=10e-6, rng=14, dwell=1e-3)
+    rec = joint_campaign(Model("6pus"), real, np.array(rows_x), tracker_noise=10e-6, rng=14, dwell=1e-3)
     rec.extra["label"] = np.array(rows_lab, float)
     meas = measurements(rec)
     assert meas.averaged and len(meas) == 12
@@ -258,8 +263,8 @@ def test_standard_errors_are_calibrated_over_campaigns(nominal):
     # error spread like a standard normal: the SEs are neither optimistic nor padded.
     z = []
     for k in range(5):
-        real = sixpus_real_params(nominal, rng=500 + k)
-        rec = sixpus_campaign(real, sixpus_candidate_poses(nominal, 80, rng=600 + k), rng=700 + k)
+        real = real_params(nominal, rng=500 + k)
+        rec = joint_campaign(Model("6pus"), real, candidate_poses(nominal, 80, rng=600 + k), rng=700 + k)
         res = _quiet(calibrate, rec, model="full")
         d = _true_delta(res, real)
         z += [(res.solution.dp[j] - d[n]) / res.solution.se[j] for j, n in enumerate(res.solution.names)]

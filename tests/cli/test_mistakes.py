@@ -102,7 +102,7 @@ INPUTS = {"run": ["run", "{}"], "export-ssp": ["export-ssp", "{}", "--out", "{tm
           "blind-benchmark --robot": ["blind-benchmark", "--robot", "{}"],
           "discrepancy-demo --robot": ["discrepancy-demo", "--robot", "{}"],
           "parasitic": ["parasitic", "{}"], "map": ["map", "{}", "--out", "{tmp}/m.png"],
-          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"],
+          "fmu": ["fmu", "{}", "--out", "{tmp}/fmus"], "urdf": ["urdf", "{}"], "identify": ["identify", "{}"],
           "import": ["import", "{}", "--map", str(EMPS / "emps_map.toml"), "--out", "{tmp}/imp"],
           "import --map": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", "{}", "--out", "{tmp}/imp"],
           "import --robot": ["import", str(EMPS / "DATA_EMPS.mat"), "--map", str(EMPS / "emps_map.toml"), "--out",
@@ -124,6 +124,7 @@ OUT_FILES = {"view": ["view", "{rec}", "--out", "{}"],
              "parasitic": ["parasitic", "tripod_3rps", "--map", "{}"],
              "map": ["map", "tripod_3rps", "--out", "{}"],
              "urdf": ["urdf", str(REPO / "robots" / "urdf" / "ur5.urdf"), "--out", "{}"],
+             "identify": ["identify", "{rec}", "--out", "{}"],
              "export-ssp": ["export-ssp", str(SCEN / "6pus_step_pdg.toml"), "--out", "{}"]}
 
 

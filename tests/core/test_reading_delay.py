@@ -35,3 +35,16 @@ def test_no_delay_passes_the_reading_and_bad_input_is_named():
         line.read(0.001, [0, 0, 0, np.nan, 0, 0], q)
     with pytest.raises(ArgumentError, match="before the last one"):
         line.read(-1.0, q, q)
+
+
+def test_the_line_is_numpys_linear_interpolation_of_the_samples():
+    # Oracle: numpy.interp of the samples at t - delay (the first sample before it), on
+    # irregular readings and a delay that is not a multiple of the sample time
+    m = Model("6pus", params={"sensor.delay": 3.7e-3})
+    line = ReadingDelay(m)
+    t = np.arange(40) * 1e-3
+    rng = np.random.default_rng(2)
+    Q, QD = rng.normal(size=(40, 6)), rng.normal(size=(40, 6))
+    got = np.array([line.read(t[k], Q[k], QD[k])[0] for k in range(40)])
+    for j in range(6):
+        np.testing.assert_allclose(got[:, j], np.interp(t - 3.7e-3, t, Q[:, j]), rtol=0, atol=1e-12)

@@ -87,3 +87,28 @@ def test_a_fitted_gap_is_replayed_as_two_bodies_closer_to_the_recorded_readings(
     # bodies' are 1.7 um
     assert gap["fitted, two bodies"] < 0.75 * gap["fitted"], gap
     assert "replayed as two bodies (drive and carriage) the held-out readings come closer" in d.details
+
+
+def test_a_payload_at_the_platforms_centre_of_mass_is_tied_with_a_heavier_platform(tmp_path, monkeypatch):
+    """MuJoCo's payload body put at the platform's centre of mass (its offsets drawn as zero):
+    the same physics as a heavier platform on any recording.  Whichever is named first, the
+    other is declared its tie ("fits the data as well"), never ruled out."""
+    class Centred:  # the generator's draws of the payload's offset, all zero
+        def __init__(self, rng):
+            self.rng = rng
+
+        def uniform(self, lo, hi):
+            return 0.0
+
+        def __getattr__(self, name):
+            return getattr(self.rng, name)
+
+    xml = mb.case_xml
+    monkeypatch.setattr(mb, "case_xml", lambda m, hidden, rng, gap_model="applied": xml(m, hidden, Centred(rng),
+                                                                                         gap_model))
+    truth, d = _case(tmp_path, "payload", 0.05, 0)
+    assert (truth["payload.x"], truth["payload.y"], truth["payload.z"]) == (0.0, 0.0, 0.0)
+    first = d.named()[0]
+    assert first in ("platform_mass", "payload"), d.conclusion
+    other = "payload" if first == "platform_mass" else "platform_mass"
+    assert other in d.ties(first), d.effects[0]["lookalikes"]

@@ -28,6 +28,11 @@ def test_the_map_reads_the_struct_fields_row_by_row():
     np.testing.assert_allclose(rec.qd, np.radians(r.act_vel_mot_deg_per_s.T), rtol=1e-15)
     np.testing.assert_allclose(rec.tau, r.act_torque_abs_nm.T * u, rtol=1e-12)
     np.testing.assert_allclose(rec.qref, np.radians(r.ref_pos_deg.T) + qs, rtol=0, atol=1e-15)
+    # the secondary encoders of axes 1-3, the link side, as q_link1..3 (none on axes 4-6)
+    assert sorted(k for k in rec.extra if k.startswith("q_link")) == ["q_link1", "q_link2", "q_link3"]
+    for j in range(3):
+        np.testing.assert_allclose(rec.extra[f"q_link{j + 1}"], np.radians(r.act_pos_se_deg[j]) + qs[j], rtol=0,
+                                   atol=1e-15)
 
 
 def test_the_description_is_the_repositorys_model_at_the_start_pose():

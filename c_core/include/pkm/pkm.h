@@ -603,7 +603,7 @@ PKM_API pkm_ctrl* pkm_ctrl_create(const pkm_model* m, const pkm_ctrl_spec* spec,
                                   size_t errlen);
 PKM_API void pkm_ctrl_destroy(pkm_ctrl* c);
 /* Starts a run: clears integrator, filter and LTI states, the saturation counter; x0 (may
- * be NULL: the home pose) seeds the forward kinematics of the measured joints. */
+ * be NULL: the home pose) is the first guess of the forward kinematics of the measured joints. */
 PKM_API int pkm_ctrl_reset(pkm_ctrl* c, const double* x0);
 /* One sample at time t: tau[nd] from the readings and the reference (qddref and xref may
  * be NULL where the kind does not need them).  A non-finite reading, a failed FK or ID
@@ -611,7 +611,7 @@ PKM_API int pkm_ctrl_reset(pkm_ctrl* c, const double* x0);
 PKM_API int pkm_ctrl_update(pkm_ctrl* c, double t, const double* q, const double* qd,
                             const double* qref, const double* qdref, const double* qddref,
                             const double* xref, double* tau);
-/* Seeds the controller's history: feeds n past samples (oldest first; rows of t [n], q, qd,
+/* Primes the controller's history: feeds n past samples (oldest first; rows of t [n], q, qd,
  * qref, qdref, qddref, xref [n,nd], qddref and xref may be NULL where the kind does not need
  * them) through pkm_ctrl_update, outputs discarded, the saturation counter unchanged.  A run
  * that starts in the middle of a recording (the replay of a held-out part) calls it after
@@ -725,7 +725,7 @@ enum { PKM_FRAME_WORLD = 0, PKM_FRAME_PLATFORM = 1 };
 /* Calibration regression rows rows[6,10]: dq_i / d eta_i for each leg i, eta_i =
  * [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (Tiberi 2020 eq. 4.1).  frame selects the
  * coordinates of the platform point: PKM_FRAME_WORLD differentiates with respect to
- * the world position of P_i at this pose (the seed's tables), PKM_FRAME_PLATFORM with
+ * the world position of P_i at this pose (the source's tables), PKM_FRAME_PLATFORM with
  * respect to its platform-frame coordinates leg[i].px/py/pz (what calibration needs:
  * constant over poses).  The rail-direction columns are the implicit derivatives of
  * the constraint without keeping |s| = 1, i.e. -q w / (s . w). */
@@ -744,13 +744,13 @@ PKM_API int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta, do
 
 /* ================================================ Quattro specific (Virzi 2010) */
 
-/* Quattro conventions: pose x = (x, y, z, theta), the tool point in the seed's model
+/* Quattro conventions: pose x = (x, y, z, theta), the tool point in the source's model
  * frame (arm 1 along +x, arm 2 along +y, z up) with the Adept origin `base.h` above the
- * motor-axis plane [m], and the platform articulation angle theta (seed theta_0) [rad].
- * q_i is the seed's arm angle at the gearbox output (positive downwards) [rad] and tau_i
+ * motor-axis plane [m], and the platform articulation angle theta (source symbol theta_0) [rad].
+ * q_i is the source's arm angle at the gearbox output (positive downwards) [rad] and tau_i
  * the arm-side torque [N m] = gear.ratio x motor torque (rotor inertia included).
  *
- * Performance indices per pose, one column each (seed ch. 3-5; docs/quattro.md):
+ * Performance indices per pose, one column each (source ch. 3-5; docs/quattro.md):
  *  0 mu_T      translational manipulability 1/sqrt(det(JD^T JD)), JD = b_r J[:,0:3] [-]
  *  1 mu_xy     horizontal, sub-matrix variant (columns x, y of b_r J)           [-]
  *  2 mu_z      vertical, sub-matrix variant (column z of b_r J)                  [-]
@@ -768,7 +768,7 @@ PKM_API int pkm_fourbar_output(const pkm_model* m, pkm_data* d, double theta, do
  * 18 Fcc_xy   the same at xd = (1,1,0,0)/sqrt(2) m/s                             [N]
  * 19 Fgr      |translational gravity force| (task-space gradient of V)           [N]
  * 20 alfa_z   largest vertical acceleration with every |tau_i| <= ratio x tau_nominal,
- *             from rest, gravity left out as in the seed                         [m/s^2]
+ *             from rest, gravity left out as in the source                         [m/s^2]
  * 21 alfa_x   the same along (-1,-1,0)/sqrt(2), the Adept platform x axis        [m/s^2] */
 enum { PKM_QUATTRO_NINDEX = 22 };
 
@@ -780,7 +780,7 @@ PKM_API const char* pkm_quattro_index_unit(int i);
  * gets its status in status[n] (may be NULL) and a NaN row. */
 PKM_API int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double* x,
                                 double* out, int* status);
-/* Generalized inertia matrix reduced to the end effector N[4,4] (seed ch. 4; no motor
+/* Generalized inertia matrix reduced to the end effector N[4,4] (source ch. 4; no motor
  * rotors): kinetic energy of links and platform = 0.5 xd' N xd. */
 PKM_API int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, double* N);
 /* Points at pose x, each [4,3] in the world frame [m]: A (motor axes), B (elbows,

@@ -37,7 +37,7 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include "common/guard.hpp"
-#include "integration/plant.hpp"
+#include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
 #include "integration/stop_conditions.hpp"
@@ -99,6 +99,10 @@ class CvodeStepper final : public Stepper {
   void check_cvode(int flag, const char* call) const;
   // Integrates one segment [t, b] with CVODE; throws on a stop.
   void integrate(double b);
+  // Adds CVODE's counters of the last segment to the statistics and the step budget.
+  void count_segment();
+  // CVODE found a root at tret (state v): stops there and throws the stop's error.
+  [[noreturn]] void stop_at_root(double tret, const double* v);
   void stop_inside(double t_start);
   void stop_before_singularity(double t_start);
 
@@ -133,8 +137,8 @@ void CvodeStepper::check_cvode(int flag, const char* call) const {
 
 CvodeStepper::CvodeStepper(int lmm, Ivp& ivp)
     : Stepper(ivp),
-      nd_(ivp.plant.nd()),
-      ny_(ivp.plant.ny()),
+      nd_(ivp.ode.nd()),
+      ny_(ivp.ode.ny()),
       lmm_(lmm) {
   const int n2 = ny_;
   const int nroots = stops_.nroots();
@@ -225,7 +229,7 @@ int CvodeStepper::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
   }
   try {
     // Mechanics plus the drive layer (joint friction, rotor inertia, two-body joints).
-    s.plant_.rates(Y, s.applied_.data(), F);
+    s.ode_.rates(Y, s.applied_.data(), F);
   } catch (const Error& e) {
     s.cb_status_ = e.status;
     s.cb_time_ = t;
@@ -417,6 +421,62 @@ bool CvodeStepper::advance(double t_end) {
   return true;
 }
 
+void CvodeStepper::count_segment() {
+  long nst = 0, nfe = 0, nfeLS = 0, nje = 0, netf = 0, nncf = 0;
+  CVodeGetNumSteps(cvode_, &nst);
+  CVodeGetNumRhsEvals(cvode_, &nfe);
+  CVodeGetNumErrTestFails(cvode_, &netf);
+  CVodeGetNumNonlinSolvConvFails(cvode_, &nncf);
+  if (lmm_ == PKM_BDF) {
+    CVodeGetNumLinRhsEvals(cvode_, &nfeLS);
+    CVodeGetNumJacEvals(cvode_, &nje);
+  }
+  stats_.steps += nst;
+  stats_.rhs_evals += nfe + nfeLS;
+  stats_.jac_evals += nje;
+  stats_.error_test_fails += netf;
+  stats_.nonlin_conv_fails += nncf;
+  budget_.spend(nst);
+}
+
+void CvodeStepper::stop_at_root(double tret, const double* v) {
+  const int n2 = ny_;
+  std::vector<int> found(stops_.nroots(), 0);
+  CVodeGetRootInfo(cvode_, found.data());
+  int k = 0;
+  while (k < stops_.nroots() && found[k] == 0) ++k;
+  if (k == stops_.nroots()) k = 0;
+  const double t_start = t_;
+  for (int i = 0; i < n2; ++i) y_[i] = v[i];
+  t_ = tret;
+  if (k == stops_.nstop()) {
+    // det J changed sign: the motion crossed a direct singularity inside the last step.
+    // Stop where the measure first reached sing_min, found on CVODE's interpolant.
+    const double t_cross = t_;
+    stop_before_singularity(t_start);
+    k = stops_.nstop() - 1;
+    try {
+      stops_.roots(y_.data(), g_.data(), sing_exact_);
+    } catch (const Error&) {
+      for (int j = 0; j < stops_.nroots(); ++j) g_[j] = 0.0;
+    }
+    throw Error(PKM_ERR_SINGULAR, stops_.message(k, g_.data(), t_, false) + " (the motion crosses the singularity at t = " +
+                                      num(t_cross) + " s)");
+  }
+  stop_inside(t_start);
+  try {
+    stops_.roots(y_.data(), g_.data(), sing_exact_);
+    // Several limits found at once (their margins set negative past a joint the robot
+    // refused, root_cb): the stop is the one with the least margin here.
+    for (int j = 0; j < stops_.nlimits(); ++j)
+      if (found[j] != 0 && k < stops_.nlimits() && g_[j] < g_[k]) k = j;
+  } catch (const Error&) {
+    // The root values at the stop are only for the message; keep CVODE's crossing.
+    for (int j = 0; j < stops_.nroots(); ++j) g_[j] = 0.0;
+  }
+  throw Error(stops_.status(k), stops_.message(k, g_.data(), t_, false));
+}
+
 void CvodeStepper::integrate(double t_end) {
   // An interval CVODE cannot resolve (tout too close to t0) only moves the clock: the
   // state changes by |xd| * dt ~ 1e-16 relative, below any tolerance.
@@ -439,22 +499,7 @@ void CvodeStepper::integrate(double t_end) {
   double tret = t_;
   const int flag = CVode(cvode_, t_end, nv_, &tret, CV_NORMAL);
 
-  long nst = 0, nfe = 0, nfeLS = 0, nje = 0, netf = 0, nncf = 0;
-  CVodeGetNumSteps(cvode_, &nst);
-  CVodeGetNumRhsEvals(cvode_, &nfe);
-  CVodeGetNumErrTestFails(cvode_, &netf);
-  CVodeGetNumNonlinSolvConvFails(cvode_, &nncf);
-  if (lmm_ == PKM_BDF) {
-    CVodeGetNumLinRhsEvals(cvode_, &nfeLS);
-    CVodeGetNumJacEvals(cvode_, &nje);
-  }
-  stats_.steps += nst;
-  stats_.rhs_evals += nfe + nfeLS;
-  stats_.jac_evals += nje;
-  stats_.error_test_fails += netf;
-  stats_.nonlin_conv_fails += nncf;
-  budget_.spend(nst);
-
+  count_segment();
   v = N_VGetArrayPointer(nv_);
   bool finite = true;
   for (int i = 0; i < n2; ++i) finite = finite && std::isfinite(v[i]);
@@ -468,40 +513,7 @@ void CvodeStepper::integrate(double t_end) {
 
   if (flag == CV_ROOT_RETURN) {
     PKM_REQUIRE(finite, PKM_ERR_INTERNAL, "advance: CVODE returned a non-finite state at t = " + num(tret) + " s");
-    std::vector<int> found(stops_.nroots(), 0);
-    CVodeGetRootInfo(cvode_, found.data());
-    int k = 0;
-    while (k < stops_.nroots() && found[k] == 0) ++k;
-    if (k == stops_.nroots()) k = 0;
-    const double t_start = t_;
-    for (int i = 0; i < n2; ++i) y_[i] = v[i];
-    t_ = tret;
-    if (k == stops_.nstop()) {
-      // det J changed sign: the motion crossed a direct singularity inside the last step.
-      // Stop where the measure first reached sing_min, found on CVODE's interpolant.
-      const double t_cross = t_;
-      stop_before_singularity(t_start);
-      k = stops_.nstop() - 1;
-      try {
-        stops_.roots(y_.data(), g_.data(), sing_exact_);
-      } catch (const Error&) {
-        for (int j = 0; j < stops_.nroots(); ++j) g_[j] = 0.0;
-      }
-      throw Error(PKM_ERR_SINGULAR, stops_.message(k, g_.data(), t_, false) + " (the motion crosses the singularity at t = " +
-                                        num(t_cross) + " s)");
-    }
-    stop_inside(t_start);
-    try {
-      stops_.roots(y_.data(), g_.data(), sing_exact_);
-      // Several limits found at once (their margins set negative past a joint the robot
-      // refused, root_cb): the stop is the one with the least margin here.
-      for (int j = 0; j < stops_.nlimits(); ++j)
-        if (found[j] != 0 && k < stops_.nlimits() && g_[j] < g_[k]) k = j;
-    } catch (const Error&) {
-      // The root values at the stop are only for the message; keep CVODE's crossing.
-      for (int j = 0; j < stops_.nroots(); ++j) g_[j] = 0.0;
-    }
-    throw Error(stops_.status(k), stops_.message(k, g_.data(), t_, false));
+    stop_at_root(tret, v);
   }
 
   // A failure: keep the farthest state CVODE reached, if it is a valid one.

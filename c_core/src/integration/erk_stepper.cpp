@@ -27,57 +27,19 @@
 #include <sstream>
 
 #include "common/guard.hpp"
-#include "integration/plant.hpp"
+#include "integration/erk_pairs.hpp"
+#include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
 #include "integration/stop_conditions.hpp"
 
 namespace pkm {
 
+using erk::kBS32;
+using erk::kDP54;
+using erk::Tableau;
+
 namespace {
-
-// An embedded explicit Runge-Kutta pair with the first-same-as-last property: stage s-1
-// is f at the new point (and the next step's first stage when the input stays), the
-// solution uses b over the first s-1 stages, the error estimate e = b - b_hat over all s.
-struct Tableau {
-  int s;
-  double c[7];
-  double a[7][7];
-  double b[7];
-  double e[7];
-  double expo;  // step-size exponent: -1 / (order of the embedded estimate + 1)
-  double stiff_bound;  // ~0.9 x where the stability region ends on the negative real axis
-  bool last_two_at_end;  // the last two stages are both at the step's end (c = 1)
-  double start_expo;     // exponent of the starting step's estimate: 1 / (order + 1)
-};
-
-// Dormand and Prince's 5(4) pair (J. Comput. Appl. Math. 6, 1980).
-constexpr Tableau kDP54{7,
-                        {0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1},
-                        {{0},
-                         {1.0 / 5},
-                         {3.0 / 40, 9.0 / 40},
-                         {44.0 / 45, -56.0 / 15, 32.0 / 9},
-                         {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
-                         {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
-                         {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}},
-                        {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84, 0},
-                        {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40},
-                        -1.0 / 5,
-                        3.25,
-                        true,
-                        1.0 / 5};
-
-// Bogacki and Shampine's 3(2) pair (Appl. Math. Lett. 2, 1989): three new stages a step.
-constexpr Tableau kBS32{4,
-                        {0, 1.0 / 2, 3.0 / 4, 1},
-                        {{0}, {1.0 / 2}, {0, 3.0 / 4}, {2.0 / 9, 1.0 / 3, 4.0 / 9}},
-                        {2.0 / 9, 1.0 / 3, 4.0 / 9, 0},
-                        {2.0 / 9 - 7.0 / 24, 1.0 / 3 - 1.0 / 4, 4.0 / 9 - 1.0 / 3, -1.0 / 8},
-                        -1.0 / 3,
-                        2.25,
-                        false,
-                        1.0 / 3};
 
 constexpr double kSafety = 0.9, kFacMin = 0.2, kFacMax = 5.0;
 constexpr int kMaxN = 24;  // 4 x 6: pose, rates, and the drive bodies of two-body joints
@@ -94,21 +56,19 @@ void hermite(int n, double theta, double h, const double* y0, const double* f0, 
     y[i] = (1 - t) * y0[i] + t * y1[i] + t * t1 * ((1 - 2 * t) * (y1[i] - y0[i]) + t1 * h * f0[i] + t * h * f1[i]);
 }
 
-}  // namespace
-
 // The pair is a template argument: its coefficients are constants of the compiled steps.
 template <const Tableau& kPair>
 class ErkStepper final : public Stepper {
  public:
   ErkStepper(Ivp& ivp, bool stiff_fallback)
       : Stepper(ivp),
-        nd_(ivp.plant.nd()),
-        ny_(ivp.plant.ny()),
+        nd_(ivp.ode.nd()),
+        ny_(ivp.ode.ny()),
         stiff_fallback_(stiff_fallback) {
     fsal_f_.assign(ny_, 0.0);
     fsal_B_.assign((size_t)nd_ * nd_, 0.0);
     g_cached_.assign(stops_.nroots() + 1, 0.0);
-    reuse_input_ = plant_.bodies().empty();  // a two-body joint's effort depends on the state
+    reuse_input_ = ode_.bodies().empty();  // a two-body joint's effort depends on the state
   }
 
   void restart() override {
@@ -151,6 +111,32 @@ class ErkStepper final : public Stepper {
   [[noreturn]] void stop_in_step(double t0, double h, const double* y0, const double* f0, const double* y1,
                                  const double* f1, double det0);
 
+  // The pieces of advance(), in the order a step takes them.
+  using Stages = double[7][kMaxN];
+  // The first stage of a segment, f0 = f(y0) under the held input (from the kept split
+  // when there is one).
+  void first_stage(const double* y0, double* f0);
+  // Throws when the step size hh has fallen below the clock's resolution (naming the
+  // refused trial state that shrank it, if any).
+  void check_step_size(double hh) const;
+  // The stages k[1..s-1] and the new point y1 of a trial step hh from y0 (k[0] = f(y0));
+  // ys: the state of the last intermediate stage.  A step that ends the segment (last)
+  // evaluates its last stage split into F1 and B1 (B1_fresh).  false: a trial state refused.
+  bool trial_step(double hh, bool last, const double* y0, Stages& k, double* ys, double* y1, double* F1,
+                  double* B1, bool& B1_fresh);
+  // The weighted RMS norm of the step's error estimate.
+  double error_norm(double hh, const double* y0, const double* y1, const Stages& k) const;
+  // The stop values g at the accepted point y1 (det1, bound1 updated): true when a stop
+  // condition is violated there or det J changed sign from det0.
+  bool stop_at(const double* y1, double* g, double det0, double& det1, double& bound1);
+  // Steps in one segment at the edge of the stability region, and steps in a row away from it.
+  struct StiffCount {
+    int hits = 0, calm = 0;
+  };
+  // After an accepted step hh ending at y1: true when the stiffness detection hands the
+  // rest of the segment to the stiff stepper.
+  bool stiff_step(double hh, const double* y1, const double* ys, const Stages& k, StiffCount& count);
+
   const int nd_, ny_;
   const bool stiff_fallback_;  // a stiff stepper takes over a stiff stretch
 
@@ -190,9 +176,9 @@ bool ErkStepper<kPair>::rhs(double t, const double* y, double* f, const double* 
   try {
     static const double zero[6] = {0, 0, 0, 0, 0, 0};
     if (!tau) tau = zero;
-    if (!B || !plant_.rates_response(y, tau, f, B)) {
+    if (!B || !ode_.rates_response(y, tau, f, B)) {
       if (B) reuse_input_ = false;  // this robot or drive has no cheap response: call FD each time
-      plant_.rates(y, tau, f);
+      ode_.rates(y, tau, f);
     }
   } catch (const Error& e) {
     cb_status_ = e.status;
@@ -333,6 +319,142 @@ void ErkStepper<kPair>::stop_in_step(double t0, double h, const double* y0, cons
 }
 
 template <const Tableau& kPair>
+void ErkStepper<kPair>::first_stage(const double* y0, double* f0) {
+  if (reuse_input_ && !fsal_valid_) {  // after a reset or a load: the split of the last stage anew
+    if (!rhs(t_, y0, fsal_f_.data(), nullptr, fsal_B_.data()))
+      throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
+    ++stats_.rhs_evals;
+    fsal_valid_ = reuse_input_;
+  }
+  if (reuse_input_) {
+    stage(fsal_f_.data(), fsal_B_.data(), f0);
+  } else {
+    if (!rhs(t_, y0, f0, applied_.data())) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
+    ++stats_.rhs_evals;
+  }
+}
+
+template <const Tableau& kPair>
+void ErkStepper<kPair>::check_step_size(double hh) const {
+  if (hh > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t_))) return;
+  std::string msg = "explicit Runge-Kutta: the step size fell to " + num(hh) + " s at t = " + num(t_) + " s";
+  if (cb_status_ != 0) {
+    msg = cb_msg_ + " at t = " + num(cb_time_) + " s (" + msg + ")";
+    throw Error(cb_status_, msg);
+  }
+  throw Error(PKM_ERR_INTEGRATION, msg);
+}
+
+template <const Tableau& kPair>
+bool ErkStepper<kPair>::trial_step(double hh, bool last, const double* y0, Stages& k, double* ys, double* y1,
+                                   double* F1, double* B1, bool& B1_fresh) {
+  const Tableau& tb = kPair;
+  const int n2 = ny_;
+  bool ok = true;
+  int evals = 0;
+  for (int j = 1; ok && j < tb.s - 1; ++j) {
+    for (int i = 0; i < n2; ++i) {
+      double acc = 0;
+      for (int l = 0; l < j; ++l) acc += tb.a[j][l] * k[l][i];
+      ys[i] = y0[i] + hh * acc;
+    }
+    ok = rhs(t_ + tb.c[j] * hh, ys, k[j], applied_.data());
+    ++evals;
+  }
+  if (ok) {
+    for (int i = 0; i < n2; ++i) {
+      double acc = 0;
+      for (int l = 0; l < tb.s - 1; ++l) acc += tb.b[l] * k[l][i];
+      y1[i] = y0[i] + hh * acc;
+    }
+    // A step that ends the segment evaluates its last stage split, f(y1, 0) + B tau, so
+    // that the next segment starts from it whatever its input.
+    B1_fresh = last && reuse_input_;
+    if (B1_fresh) {
+      ok = rhs(t_ + hh, y1, F1, nullptr, B1);
+      B1_fresh = ok && reuse_input_;
+      if (B1_fresh) stage(F1, B1, k[tb.s - 1]);
+    }
+    if (!B1_fresh) ok = rhs(t_ + hh, y1, k[tb.s - 1], applied_.data());
+    ++evals;
+  }
+  stats_.rhs_evals += evals;
+  return ok;
+}
+
+template <const Tableau& kPair>
+double ErkStepper<kPair>::error_norm(double hh, const double* y0, const double* y1, const Stages& k) const {
+  const Tableau& tb = kPair;
+  const int n2 = ny_;
+  double err = 0;
+  for (int i = 0; i < n2; ++i) {
+    double e = 0;
+    for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
+    e *= hh;
+    const double sc = opt_.atol + opt_.rtol * std::max(std::fabs(y0[i]), std::fabs(y1[i]));
+    err += (e / sc) * (e / sc);
+  }
+  return std::sqrt(err / n2);
+}
+
+template <const Tableau& kPair>
+bool ErkStepper<kPair>::stop_at(const double* y1, double* g, double det0, double& det1, double& bound1) {
+  bool stop = false;
+  try {
+    stops_.guard(y1, g, det1, bound1);
+    for (int k = 0; k < stops_.nstop(); ++k) stop = stop || g[k] <= 0;
+    stop = stop || (stops_.singularity() && (det1 > 0) != (det0 > 0));
+  } catch (const Error&) {
+    stop = true;  // the new point is outside the workspace: locate where it left
+  }
+  return stop;
+}
+
+// Stiffness (Hairer and Wanner, Solving ODEs II, IV.2): h times a local Lipschitz
+// estimate |f(ya) - f(yb)| / |ya - yb| near the edge of the method's stability region
+// means the step size is held by stability, not accuracy.  DP5's last two stages are
+// both at the step's end, so their difference is the error, which at the edge is the
+// stiff mode's (no extra call).  BS3 has no such pair (stages at another time differ
+// by the smooth motion too): from its 16th step in a segment it compares the solution
+// with the embedded one, at one extra call a step.  kStiffHits such steps in one
+// segment (forgotten after kCalmSteps in a row without) hand the rest to BDF.
+template <const Tableau& kPair>
+bool ErkStepper<kPair>::stiff_step(double hh, const double* y1, const double* ys, const Stages& k,
+                                   StiffCount& count) {
+  const Tableau& tb = kPair;
+  const int n2 = ny_;
+  const double* fa = k[tb.s - 1];
+  const double* fb = k[tb.s - 2];
+  const double* yb = ys;
+  double yh[kMaxN], fh[kMaxN];
+  bool have = true;
+  if (!tb.last_two_at_end) {
+    for (int i = 0; i < n2; ++i) {
+      double e = 0;
+      for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
+      yh[i] = y1[i] - hh * e;
+    }
+    have = rhs(t_, yh, fh, applied_.data());
+    ++stats_.rhs_evals;
+    fb = fh;
+    yb = yh;
+  }
+  double num2 = 0, den2 = 0;
+  for (int i = 0; have && i < n2; ++i) {
+    const double df = fa[i] - fb[i], dy = y1[i] - yb[i];
+    num2 += df * df;
+    den2 += dy * dy;
+  }
+  if (have && den2 > 0 && hh * std::sqrt(num2 / den2) > tb.stiff_bound) {
+    count.calm = 0;
+    if (++count.hits >= kStiffHits && stiff_fallback_) return true;
+  } else if (++count.calm >= kCalmSteps) {
+    count.hits = 0;
+  }
+  return false;
+}
+
+template <const Tableau& kPair>
 bool ErkStepper<kPair>::advance(double t_end) {
   // An interval below ~1e-15 s (relative to max(1 s, t)) moves only the clock: the state
   // would change by less than its own rounding (a denormal step is a zero step).
@@ -348,18 +470,7 @@ bool ErkStepper<kPair>::advance(double t_end) {
   double* f0 = k[0];
   for (int i = 0; i < n2; ++i) y0[i] = y_[i];
   const int n = nd_;
-  if (reuse_input_ && !fsal_valid_) {  // after a reset or a load: the split of the last stage anew
-    if (!rhs(t_, y0, fsal_f_.data(), nullptr, fsal_B_.data()))
-      throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
-    ++stats_.rhs_evals;
-    fsal_valid_ = reuse_input_;
-  }
-  if (reuse_input_) {
-    stage(fsal_f_.data(), fsal_B_.data(), f0);
-  } else {
-    if (!rhs(t_, y0, f0, applied_.data())) throw Error(cb_status_, cb_msg_ + " at t = " + num(t_) + " s");
-    ++stats_.rhs_evals;
-  }
+  first_stage(y0, f0);
   fsal_valid_ = false;  // y_ changes below
   // The split (f at zero effort, B) at the end of a step that ends the segment.
   double F1[kMaxN], B1[36];
@@ -374,66 +485,22 @@ bool ErkStepper<kPair>::advance(double t_end) {
   double h = h_next_ > 0 ? h_next_ : initial_step(t_end, f0);
   if (opt_.max_step > 0) h = std::min(h, opt_.max_step);
   long steps = 0;
-  int stiff_hits = 0, calm = 0;  // stiffness detection (see kStiffHits)
+  StiffCount stiff;  // stiffness detection (see kStiffHits)
   while (t_ < t_end) {
     if (budget_.left() <= 0 || budget_.past_deadline()) budget_.exceeded(t_, t_end, budget_.left() > 0);
     budget_.spend(1);
     const double rest = t_end - t_;
     const bool last = h >= rest * (1 - 1e-12);
     const double hh = last ? rest : h;
-    if (!(hh > 4 * DBL_EPSILON * std::max(1.0, std::fabs(t_)))) {
-      std::string msg = "explicit Runge-Kutta: the step size fell to " + num(hh) + " s at t = " + num(t_) + " s";
-      if (cb_status_ != 0) {
-        msg = cb_msg_ + " at t = " + num(cb_time_) + " s (" + msg + ")";
-        throw Error(cb_status_, msg);
-      }
-      throw Error(PKM_ERR_INTEGRATION, msg);
-    }
+    check_step_size(hh);
     ++steps;
-    bool ok = true;
-    int evals = 0;
-    for (int j = 1; ok && j < tb.s - 1; ++j) {
-      for (int i = 0; i < n2; ++i) {
-        double acc = 0;
-        for (int l = 0; l < j; ++l) acc += tb.a[j][l] * k[l][i];
-        ys[i] = y0[i] + hh * acc;
-      }
-      ok = rhs(t_ + tb.c[j] * hh, ys, k[j], applied_.data());
-      ++evals;
-    }
-    if (ok) {
-      for (int i = 0; i < n2; ++i) {
-        double acc = 0;
-        for (int l = 0; l < tb.s - 1; ++l) acc += tb.b[l] * k[l][i];
-        y1[i] = y0[i] + hh * acc;
-      }
-      // A step that ends the segment evaluates its last stage split, f(y1, 0) + B tau, so
-      // that the next segment starts from it whatever its input.
-      B1_fresh = last && reuse_input_;
-      if (B1_fresh) {
-        ok = rhs(t_ + hh, y1, F1, nullptr, B1);
-        B1_fresh = ok && reuse_input_;
-        if (B1_fresh) stage(F1, B1, k[tb.s - 1]);
-      }
-      if (!B1_fresh) ok = rhs(t_ + hh, y1, k[tb.s - 1], applied_.data());
-      ++evals;
-    }
-    stats_.rhs_evals += evals;
-    if (!ok) {
+    if (!trial_step(hh, last, y0, k, ys, y1, F1, B1, B1_fresh)) {
       // A trial state outside the workspace (or a non-finite one): a smaller step.
       ++stats_.nonlin_conv_fails;
       h = hh * 0.25;
       continue;
     }
-    double err = 0;
-    for (int i = 0; i < n2; ++i) {
-      double e = 0;
-      for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
-      e *= hh;
-      const double sc = opt_.atol + opt_.rtol * std::max(std::fabs(y0[i]), std::fabs(y1[i]));
-      err += (e / sc) * (e / sc);
-    }
-    err = std::sqrt(err / n2);
+    const double err = error_norm(hh, y0, y1, k);
     const double fac = err > 0 ? std::clamp(kSafety * std::pow(err, tb.expo), kFacMin, kFacMax) : kFacMax;
     if (!(err <= 1.0)) {
       ++stats_.error_test_fails;
@@ -442,14 +509,7 @@ bool ErkStepper<kPair>::advance(double t_end) {
     }
     // Accepted: stop conditions at the new point.
     double det1 = det0, bound1 = bound0;
-    bool stop = false;
-    try {
-      stops_.guard(y1, g, det1, bound1);
-      for (int k = 0; k < stops_.nstop(); ++k) stop = stop || g[k] <= 0;
-      stop = stop || (stops_.singularity() && (det1 > 0) != (det0 > 0));
-    } catch (const Error&) {
-      stop = true;  // the new point is outside the workspace: locate where it left
-    }
+    const bool stop = stop_at(y1, g, det0, det1, bound1);
     ++stats_.steps;
     double* f1 = k[tb.s - 1];
     if (stop) stop_in_step(t_, hh, y0, f0, y1, f1, det0);
@@ -472,44 +532,8 @@ bool ErkStepper<kPair>::advance(double t_end) {
     }
     det0 = det1;
     bound0 = bound1;
-    // Stiffness (Hairer and Wanner, Solving ODEs II, IV.2): h times a local Lipschitz
-    // estimate |f(ya) - f(yb)| / |ya - yb| near the edge of the method's stability region
-    // means the step size is held by stability, not accuracy.  DP5's last two stages are
-    // both at the step's end, so their difference is the error, which at the edge is the
-    // stiff mode's (no extra call).  BS3 has no such pair (stages at another time differ
-    // by the smooth motion too): from its 16th step in a segment it compares the solution
-    // with the embedded one, at one extra call a step.  kStiffHits such steps in one
-    // segment (forgotten after kCalmSteps in a row without) hand the rest to BDF.
-    if (t_ < t_end && (tb.last_two_at_end || steps > kStiffCheckFrom)) {
-      const double* fa = k[tb.s - 1];
-      const double* fb = k[tb.s - 2];
-      const double* yb = ys;
-      double yh[kMaxN], fh[kMaxN];
-      bool have = true;
-      if (!tb.last_two_at_end) {
-        for (int i = 0; i < n2; ++i) {
-          double e = 0;
-          for (int l = 0; l < tb.s; ++l) e += tb.e[l] * k[l][i];
-          yh[i] = y1[i] - hh * e;
-        }
-        have = rhs(t_, yh, fh, applied_.data());
-        ++stats_.rhs_evals;
-        fb = fh;
-        yb = yh;
-      }
-      double num2 = 0, den2 = 0;
-      for (int i = 0; have && i < n2; ++i) {
-        const double df = fa[i] - fb[i], dy = y1[i] - yb[i];
-        num2 += df * df;
-        den2 += dy * dy;
-      }
-      if (have && den2 > 0 && hh * std::sqrt(num2 / den2) > tb.stiff_bound) {
-        calm = 0;
-        if (++stiff_hits >= kStiffHits && stiff_fallback_) return false;
-      } else if (++calm >= kCalmSteps) {
-        stiff_hits = 0;
-      }
-    }
+    if (t_ < t_end && (tb.last_two_at_end || steps > kStiffCheckFrom) && stiff_step(hh, y1, ys, k, stiff))
+      return false;
   }
   h_next_ = h;
   if (steps > 0 && B1_fresh) {
@@ -525,6 +549,8 @@ bool ErkStepper<kPair>::advance(double t_end) {
   }
   return true;
 }
+
+}  // namespace
 
 std::unique_ptr<Stepper> make_erk_stepper(int method, Ivp& ivp, bool stiff_fallback) {
   if (method == PKM_ERK23) return std::make_unique<ErkStepper<kBS32>>(ivp, stiff_fallback);

@@ -42,19 +42,19 @@ pkm_sim_options checked_options(const pkm_model* m, const pkm_sim_options& o) {
 
 Sim::Sim(const pkm_model* m, const pkm_sim_options& opt)
     : opt_(checked_options(m, opt)),
-      plant_(m, [this](pkm_model* copy) { stops_.find(copy, opt_.sing_min); }),
-      nd_(plant_.nd()),
-      ny_(plant_.ny()),
-      ivp_{opt_, plant_, stops_, budget_, stats_, t_, y_, applied_} {
+      ode_(m, [this](pkm_model* copy) { stops_.find(copy, opt_.sing_min); }),
+      nd_(ode_.nd()),
+      ny_(ode_.ny()),
+      ivp_{opt_, ode_, stops_, budget_, stats_, t_, y_, applied_} {
   y_.assign(ny_, 0.0);
   tau_.assign(nd_, 0.0);
   applied_.assign(nd_, 0.0);
   external_.assign(nd_, 0.0);
-  const pkm_model* copy = plant_.model();
+  const pkm_model* copy = ode_.model();
   commands_ = CommandDelay(nd_, copy->drive ? copy->drive->actuator_delay : 0.0);
   readings_ = ReadingDelay(nd_, copy->drive ? copy->drive->sensor_delay : 0.0);
-  plant_.home(y_.data());
-  stops_.bind(plant_.robot(), plant_.robot_model(), plant_.robot_data(), y_.data());
+  ode_.home(y_.data());
+  stops_.bind(ode_.robot(), ode_.robot_model(), ode_.robot_data(), y_.data());
   g_.assign(stops_.nroots(), 0.0);
   stepper_ = make_stepper(opt_.method, ivp_);
   budget_ = StepBudget(opt_.max_steps, stepper_->budget_advice());
@@ -75,11 +75,11 @@ void Sim::reset(double t0, const double* x, const double* xd) {
   // A start whose energy overflows (a rate of 1e200 m/s) is no state of a robot.
   double kinetic = 0, potential = 0;
   try {
-    total_energy(plant_.model(), plant_.data(), y.data(), y.data() + nd_, &kinetic, &potential);
+    total_energy(ode_.model(), ode_.data(), y.data(), y.data() + nd_, &kinetic, &potential);
     if (two_body()) {  // the drive bodies start at their joints, with their rates
       double q[6], qd[6];
-      plant_.joints(y.data(), q, qd);
-      plant_.bodies().start(q, qd, y.data());
+      ode_.joints(y.data(), q, qd);
+      ode_.bodies().start(q, qd, y.data());
     }
   } catch (const Error& e) {
     throw Error(e.status, std::string("reset: ") + e.what());
@@ -96,7 +96,7 @@ void Sim::set_input(const double* tau) {
   check_finite(tau, nd_, "input tau");
   double sat[6];
   // Saturation (drive parameters <j>[i].effort_max) acts on the command itself.
-  plant_.saturate(tau, sat);
+  ode_.saturate(tau, sat);
   for (int i = 0; i < nd_; ++i) tau_[i] = sat[i];
 }
 
@@ -122,10 +122,10 @@ void Sim::get_state(double* t, double* x, double* xd) const {
 }
 
 void Sim::drive_state(double* theta, double* theta_d) {
-  const DriveBodies& bodies = plant_.bodies();
+  const DriveBodies& bodies = ode_.bodies();
   if (!bodies.all()) {
     double q[6], qd[6];
-    plant_.joints(y_.data(), q, qd);
+    ode_.joints(y_.data(), q, qd);
     for (int i = 0; i < nd_; ++i) {
       if (theta) theta[i] = q[i];
       if (theta_d) theta_d[i] = qd[i];
@@ -137,8 +137,8 @@ void Sim::drive_state(double* theta, double* theta_d) {
 void Sim::acceleration(const double* tau, double* xdd) {
   check_finite(tau, nd_, "acceleration: tau");
   double u[6], f[24];
-  plant_.saturate(tau, u);
-  plant_.rates(y_.data(), u, f);
+  ode_.saturate(tau, u);
+  ode_.rates(y_.data(), u, f);
   for (int i = 0; i < nd_; ++i) xdd[i] = f[nd_ + i];
 }
 

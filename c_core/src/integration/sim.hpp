@@ -2,8 +2,8 @@
 // implementation behind pkm_sim (see integration/sim_api.cpp and docs/integration.md).
 //
 // The sim holds the state and the inputs and delegates each concern to a part of its own:
-//   Plant           (plant.hpp)            the model copy and the state equation dy/dt = f(y, u)
-//   DriveBodies     (drive_bodies.hpp)     the two-body joints' drive states, inside the plant
+//   Ode             (ode.hpp)              the model copy and the state equation dy/dt = f(y, u)
+//   DriveBodies     (drive_bodies.hpp)     the two-body joints' drive states, inside the ODE
 //   StopConditions  (stop_conditions.hpp)  joint limits and the direct singularity
 //   CommandDelay, ReadingDelay (delay_line.hpp)  actuator.delay and sensor.delay
 //   StepBudget      (step_budget.hpp)      max_steps and the wall-clock limit of an advance
@@ -19,7 +19,7 @@
 
 #include "common/handles.hpp"
 #include "integration/delay_line.hpp"
-#include "integration/plant.hpp"
+#include "integration/ode.hpp"
 #include "integration/step_budget.hpp"
 #include "integration/stepper.hpp"
 #include "integration/stop_conditions.hpp"
@@ -45,7 +45,7 @@ class Sim {
   // Drive-side position and rate per joint: the drive body's for a two-body joint
   // (drive.two_body), the joint's own otherwise.
   void drive_state(double* theta, double* theta_d);
-  bool two_body() const { return !plant_.bodies().empty(); }
+  bool two_body() const { return !ode_.bodies().empty(); }
   // Pose acceleration at the current state under the command tau (dead zone, saturation).
   void acceleration(const double* tau, double* xdd);
   const pkm_sim_stats& stats() const { return stats_; }
@@ -64,8 +64,8 @@ class Sim {
   std::string error;  // message of the last failure (pkm_sim_error)
 
   // The sim's own model copy and work data (for the closed loop's joint readings).
-  const pkm_model* model() const { return plant_.model(); }
-  pkm_data* data() const { return plant_.data(); }
+  const pkm_model* model() const { return ode_.model(); }
+  pkm_data* data() const { return ode_.data(); }
   const double* held_input() const { return tau_.data(); }
   // The effort acting on the mechanism at the sim's time from the commands issued before
   // it: the held input, or with an actuator delay the command issued at t - delay (zero
@@ -89,7 +89,7 @@ class Sim {
 
   pkm_sim_options opt_{};
   StopConditions stops_;
-  Plant plant_;
+  Ode ode_;
   int nd_ = 0;
   int ny_ = 0;  // state length: 2 nd, or 4 nd with two-body joints (y = [x, xd, theta, theta_d])
 

@@ -18,7 +18,7 @@
 
 namespace pkm {
 
-class Plant;
+class Ode;
 class StopConditions;
 class StepBudget;
 
@@ -27,7 +27,7 @@ class StepBudget;
 // conditions and the work bound are.  Owned by the sim; a stepper keeps a reference.
 struct Ivp {
   const pkm_sim_options& opt;
-  Plant& plant;
+  Ode& ode;
   StopConditions& stops;
   StepBudget& budget;
   pkm_sim_stats& stats;
@@ -40,7 +40,7 @@ class Stepper {
  public:
   explicit Stepper(Ivp& ivp)
       : opt_(ivp.opt),
-        plant_(ivp.plant),
+        ode_(ivp.ode),
         stops_(ivp.stops),
         budget_(ivp.budget),
         stats_(ivp.stats),
@@ -73,7 +73,7 @@ class Stepper {
  protected:
   // The parts of the Ivp, by name.
   const pkm_sim_options& opt_;
-  Plant& plant_;
+  Ode& ode_;
   StopConditions& stops_;
   StepBudget& budget_;
   pkm_sim_stats& stats_;

@@ -9,8 +9,8 @@
 // Loop closure for phi.  With u = B - D = (l1 cos(theta) - l4, l1 sin(theta)), the
 // rocker length gives |u + l2 e(phi)| = l3, i.e.  u . e(phi) = k = (l3^2 - l2^2 - |u|^2)/(2 l2),
 // so phi = atan2(u_y, u_x) - acos(k / |u|).  The minus sign is the assembly mode of the
-// seed (phi = 37.9585 deg at theta = 30 deg; the other mode gives phi = 245.5 deg).  This
-// form replaces the seed's tangent-half-angle quadratic, which divides by a coefficient
+// source (phi = 37.9585 deg at theta = 30 deg; the other mode gives phi = 245.5 deg).  This
+// form replaces the source's tangent-half-angle quadratic, which divides by a coefficient
 // that can vanish.  |k / |u|| > 1 means the links cannot be assembled at that theta.
 //
 // dX/dl by implicit differentiation of F(phi, l) = |w|^2 - l3^2 = 0, w = C - D = u + l2 e(phi):
@@ -125,13 +125,13 @@ struct Fourbar final : Robot {
          << " m is not shorter than the sum of the other three links (" << sum - longest << " m)";
       throw Error(PKM_ERR_PARAMETER, os.str());
     }
-    // Home: the seed's first measurement angle (30 deg) if the linkage assembles there,
+    // Home: the source's first measurement angle (30 deg) if the linkage assembles there,
     // otherwise the middle of the first assemblable interval of a 0.1 deg scan.
     Config c;
     double ratio;
-    const double seed_home = 30.0 * kPi / 180.0;
-    if (try_assemble(m->l, seed_home, c, ratio) && std::fabs(c.sin_tr) > 1e-6) {
-      m->home_theta = seed_home;
+    const double source_home = 30.0 * kPi / 180.0;
+    if (try_assemble(m->l, source_home, c, ratio) && std::fabs(c.sin_tr) > 1e-6) {
+      m->home_theta = source_home;
     } else {
       int first = -1, last = -1;
       for (int k = 0; k < 3600; ++k) {

@@ -40,7 +40,7 @@ void pose_kinematics(const Model& m, const double* x, Pose& p, bool check_limits
     p.C[i] = p.P + (0.5 * m.d) * (m.sigma[i] * p.ep + Eigen::Vector3d(m.w[i].x(), m.w[i].y(), 0));
     p.k[i] = m.off + m.sigma[i] * 0.5 * m.d;
     // In the arm's vertical plane the closure |C - B| = c reads r cos q - s sin q = K
-    // (seed eqs. 1.3-1.7 solved for the angle directly); RAD >= 0 <=> |K| <= R.
+    // (source eqs. 1.3-1.7 solved for the angle directly); RAD >= 0 <=> |K| <= R.
     const Eigen::Vector3d D = p.C[i] - m.A[i];
     const double r = D.dot(m.u[i]), s = D.z();
     const double K = (D.squaredNorm() + m.b * m.b - m.c * m.c) / (2 * m.b);
@@ -49,7 +49,7 @@ void pose_kinematics(const Model& m, const double* x, Pose& p, bool check_limits
       throw Error(PKM_ERR_UNREACHABLE,
                   arm_name(i) + ": pose out of reach (RAD < 0: the forearm sphere misses the elbow circle, |K|/R = " +
                       fmt(R > 0 ? std::fabs(K) / R : INFINITY, 4) + ")");
-    // The seed keeps the larger x_B for arm 1 (smaller for arm 3, y_B for arms 2 and 4):
+    // The source keeps the larger x_B for arm 1 (smaller for arm 3, y_B for arms 2 and 4):
     // the elbow out, which with C below the motor plane (s < 0) is the root gam - del.
     // The elbow-in root lies beyond the joint range everywhere in the workspace.
     const double gam = std::atan2(-s, r), del = std::acos(K / R);
@@ -93,7 +93,7 @@ Eigen::Matrix4d jacobian_dot(const Model& m, const Pose& p, const Eigen::Vector4
 
 namespace {
 // The platform-side point masses: (mass, ell) with position E + ell e_psi + const, so
-// d r / d theta = ell e_psi'.  M34 is the seed's point A (tool side), M12 its point B.
+// d r / d theta = ell e_psi'.  M34 is the source's point A (tool side), M12 its point B.
 struct PointMass {
   double m, ell;
 };
@@ -173,7 +173,7 @@ Eigen::Matrix4d gimre(const Model& m, const Pose& p) {
   for (int i = 0; i < N; ++i) {
     // A forearm (two rods, 2 m_c, length c) as one uniform rod between B_i and C_i:
     // T = (2 m_c / 6) (|vB|^2 + vB.vC + |vC|^2); its spin about its own axis is neglected
-    // (r_c is small, seed ch. 4.4.2).
+    // (r_c is small, source ch. 4.4.2).
     Eigen::Matrix<double, 3, 4> Bm = p.t[i] * p.J.row(i), Cm;
     Cm.leftCols<3>().setIdentity();
     Cm.col(3) = p.k[i] * p.epd;
@@ -238,31 +238,31 @@ class Quattro final : public Robot {
       throw Error(PKM_ERR_ARGUMENT, "quattro: unknown parameter set '" + set + "' (known: default, appendix_a)");
     ParamTable t;
     const double big = 1e3;
-    t.add("base.a", "m", app ? 0.28 : 0.275, 1e-3, 10, "distance of each motor axis A_i from the base centre (seed a)");
+    t.add("base.a", "m", app ? 0.28 : 0.275, 1e-3, 10, "distance of each motor axis A_i from the base centre (source symbol a)");
     t.add("base.h", "m", app ? 0.20 : 0.19, -10, 10,
-          "height of the world (Adept) origin above the motor-axis plane, tool flange drop included (seed base)");
-    t.add("arm.b_r", "m", 0.375, 1e-3, 10, "upper arm (link 1) length (seed br)");
-    t.add("arm.r_b", "m", 0.028, 0, 1, "upper arm radius; the forearm joint sits r_b below the arm axis (seed r_b)");
-    t.add("arm.m", "kg", app ? 1.85 : 1.45, 0, big, "upper arm mass (seed m_b; 1.85 kg with the 8 screws)");
-    t.add("arm.lg", "m", 0.121, 0, 10, "centre of mass of the upper arm from A_i (seed lg)");
-    t.add("forearm.c", "m", 0.825, 1e-3, 10, "forearm rod length (seed c)");
-    t.add("forearm.r_c", "m", 0.00675, 0, 1, "forearm rod radius (seed r_c; inertia about the rod axis neglected)");
-    t.add("forearm.m", "kg", 0.24, 0, big, "mass of ONE forearm rod, two rods per arm (seed m_c)");
-    t.add("platform.d", "m", 0.15, 1e-3, 10, "side of the square of the platform joints C_i (seed d)");
+          "height of the world (Adept) origin above the motor-axis plane, tool flange drop included (source symbol base)");
+    t.add("arm.b_r", "m", 0.375, 1e-3, 10, "upper arm (link 1) length (source symbol br)");
+    t.add("arm.r_b", "m", 0.028, 0, 1, "upper arm radius; the forearm joint sits r_b below the arm axis (source symbol r_b)");
+    t.add("arm.m", "kg", app ? 1.85 : 1.45, 0, big, "upper arm mass (source symbol m_b; 1.85 kg with the 8 screws)");
+    t.add("arm.lg", "m", 0.121, 0, 10, "centre of mass of the upper arm from A_i (source symbol lg)");
+    t.add("forearm.c", "m", 0.825, 1e-3, 10, "forearm rod length (source symbol c)");
+    t.add("forearm.r_c", "m", 0.00675, 0, 1, "forearm rod radius (source symbol r_c; inertia about the rod axis neglected)");
+    t.add("forearm.m", "kg", 0.24, 0, big, "mass of ONE forearm rod, two rods per arm (source symbol m_c)");
+    t.add("platform.d", "m", 0.15, 1e-3, 10, "side of the square of the platform joints C_i (source symbol d)");
     t.add("platform.m", "kg", app ? 2.62 : 0.262, 0, big,
-          "platform mass, half at each end M12 / M34 of its central axis (seed m_p)");
+          "platform mass, half at each end M12 / M34 of its central axis (source symbol m_p)");
     t.add("platform.offset", "m", app ? 0.0 : 0.075, 0, 1,
-          "tool point offset from the platform centre towards M34 (seed offset; 0 in the seed's maps)");
-    t.add("tool.length", "m", 0.0, -1, 1, "extra end-effector length below the flange (seed ee)");
+          "tool point offset from the platform centre towards M34 (source symbol offset; 0 in the source's maps)");
+    t.add("tool.length", "m", 0.0, -1, 1, "extra end-effector length below the flange (source symbol ee)");
     t.add("tool.ratio", "1", 4.0, 0, 100, "tool rotation per platform articulation angle (belt 1:4)");
-    t.add("payload.m", "kg", 0.0, 0, big, "payload mass at the tool point (seed m_load)");
+    t.add("payload.m", "kg", 0.0, 0, big, "payload mass at the tool point (source symbol m_load)");
     t.add("payload.J", "kg.m2", 0.0, 0, big, "payload inertia about the tool axis");
-    t.add("motor.J", "kg.m2", 0.811e-4, 0, 1, "rotor inertia of one motor (seed I_mot)");
+    t.add("motor.J", "kg.m2", 0.811e-4, 0, 1, "rotor inertia of one motor (source symbol I_mot)");
     t.add("gear.ratio", "1", 50.0, 1e-3, 1e4, "gear reduction i: motor angle = i * arm angle");
     t.add("motor.tau_nominal", "N.m", 2.39, 0, big,
           "nominal motor torque; i * tau is the arm-side limit of the alfa indices (119.5 N m)");
-    t.add("joint.q_min", "rad", -51 * kDeg, -kPi, kPi, "lower end of the arm range (seed -51 deg, upwards)");
-    t.add("joint.q_max", "rad", 123 * kDeg, -kPi, kPi, "upper end of the arm range (seed +123 deg, downwards)");
+    t.add("joint.q_min", "rad", -51 * kDeg, -kPi, kPi, "lower end of the arm range (source: -51 deg, upwards)");
+    t.add("joint.q_max", "rad", 123 * kDeg, -kPi, kPi, "upper end of the arm range (source: +123 deg, downwards)");
     t.add("gravity.x", "m/s2", 0.0, -100, 100, "gravity acceleration, x component");
     t.add("gravity.y", "m/s2", 0.0, -100, 100, "gravity acceleration, y component");
     t.add("gravity.z", "m/s2", -9.81, -100, 100, "gravity acceleration, z component");
@@ -305,7 +305,7 @@ class Quattro final : public Robot {
                                          fmt(m->qmax) + " rad");
     if (m->lg > m->br)
       throw Error(PKM_ERR_PARAMETER, "arm.lg = " + fmt(m->lg) + " m lies beyond the arm length arm.b_r = " + fmt(m->br) + " m");
-    // Seed ch. 5.3.1 / 5.2: rotor through the gear, link 1 as a rod about its end, the
+    // Source ch. 5.3.1 / 5.2: rotor through the gear, link 1 as a rod about its end, the
     // elbow half of both forearm rods; the platform ends carry half the platform and the
     // other halves of the rods (2 m_c each end = 4 arms x m_c / 2).
     m->Ieq = m->ratio * m->ratio * m->Jm + m->mb * m->br * m->br / 3 + m->mc * m->b * m->b;
@@ -341,7 +341,7 @@ class Quattro final : public Robot {
 
   void home(const RobotModel& rm, double* x) const override {
     const Model& m = static_cast<const Model&>(rm);
-    // Tool point centred over the robot axis, at the seed's best cycle height band.
+    // Tool point centred over the robot axis, at the source's best cycle height band.
     x[0] = 0;
     x[1] = 0;
     x[2] = -0.76 - m.h - m.ee;  // z0 = z + base + ee = -0.76 m (z = -0.95 m by default)
@@ -422,7 +422,7 @@ class Quattro final : public Robot {
     Eigen::Map<const Eigen::Vector4d> v(xd), a(xdd);
     const Eigen::Matrix4d Jd = quattro::jacobian_dot(m, p, v);
     const Eigen::Vector4d qdd = p.J * a + Jd * v;
-    // Joint friction (the seed's f_s, f_v) is the drive layer's joint[i].coulomb/.viscous,
+    // Joint friction (the source's f_s, f_v) is the drive layer's joint[i].coulomb/.viscous,
     // added by the C API (dynamics/drive.hpp).  Arm side directly in joint space; the platform side as a task-space force mapped by
     // J^-T (virtual power), so a near-singular J only touches what passes through it.
     Eigen::Vector4d fp = Eigen::Vector4d::Zero();

@@ -2,14 +2,14 @@
 // shared by the robot (quattro.cpp) and the batched index maps (quattro_indices.cpp).
 //
 // Frames and coordinates (docs/quattro.md has the figures):
-//  * World frame: the seed's model frame (arm 1 in the x-z plane along +x, arm 2 along +y,
+//  * World frame: the source's model frame (arm 1 in the x-z plane along +x, arm 2 along +y,
 //    z up) with the origin `base.h` above the plane of the motor axes, so A_i = a u_i - h e_z.
-//    The seed's `base` (190 mm = 105 mm Adept origin above the motor plane + 85 mm tool
+//    The source's `base` (190 mm = 105 mm Adept origin above the motor plane + 85 mm tool
 //    flange below the platform) folds the tool drop into that offset (ch. 1.5).
 //  * Pose x = (x, y, z, theta): the tool point E in that frame [m] and the articulation
-//    angle theta of the platform (seed theta_0) [rad].  Platform centre P = E + offset
+//    angle theta of the platform (source symbol theta_0) [rad].  Platform centre P = E + offset
 //    e_psi + ee e_z with psi = pi/4 + theta, e_psi = (cos psi, sin psi, 0).
-//  * q_i: the seed's arm angle (A_i -> B_i against the horizontal, positive downwards)
+//  * q_i: the source's arm angle (A_i -> B_i against the horizontal, positive downwards)
 //    at the gearbox output [rad]; tau_i: torque at the gearbox output [N m] (arm side).
 #pragma once
 
@@ -29,9 +29,9 @@ struct Model final : RobotModel {
   double a, h, br, rb, b, alp, c, rc, d, off, ee;
   // masses [kg] and inertias [kg m^2]
   double mb, lg, mc, mp, mload, Jload, tool_ratio, Jm, ratio, tau_motor;
-  double Ieq;        // equivalent arm inertia at A_i (seed ch. 5.3.1)
-  double I1_gimre;   // link-1 inertia about A_i used by the GIMRE (seed ch. 4.4.2)
-  double mA, mB;     // platform point masses at M34 (tool side) and M12 (seed ch. 5.2)
+  double Ieq;        // equivalent arm inertia at A_i (source ch. 5.3.1)
+  double I1_gimre;   // link-1 inertia about A_i used by the GIMRE (source ch. 4.4.2)
+  double mA, mB;     // platform point masses at M34 (tool side) and M12 (source ch. 5.2)
   double qmin, qmax;
   Eigen::Vector3d grav;
   std::array<Eigen::Vector3d, N> u;       // horizontal direction of arm i
@@ -52,14 +52,14 @@ struct Pose {
   Eigen::Vector4d Jq;                  // diagonal of Jq
 };
 
-// Pose kinematics: IK with the seed's root (branch) and RAD test, joint range check,
+// Pose kinematics: IK with the source's root (branch) and RAD test, joint range check,
 // Jx, Jq, J.  Throws Error(PKM_ERR_UNREACHABLE / JOINT_LIMIT / SINGULAR) naming the arm.
 void pose_kinematics(const Model& m, const double* x, Pose& p, bool check_limits = true);
 
 // dJ/dt at (pose, xd).
 Eigen::Matrix4d jacobian_dot(const Model& m, const Pose& p, const Eigen::Vector4d& xd);
 
-// Simplified dynamic model of seed ch. 5 (rigid platform points, forearm mass split).
+// Simplified dynamic model of source ch. 5 (rigid platform points, forearm mass split).
 Eigen::Matrix4d mass_matrix(const Model& m, const Pose& p);
 // Task-space velocity force h_v(x, xd) (Coriolis/centrifugal): J^T (M-part) such that
 // J^T tau = M xdd + h_v + grad V (friction is the drive layer's).
@@ -72,7 +72,7 @@ Eigen::Vector4d gravity_force(const Model& m, const Pose& p);
 double potential_energy(const Model& m, const Pose& p);
 // y = J^-T f; throws PKM_ERR_SINGULAR at a direct (parallel) singularity.
 Eigen::Vector4d solve_JT(const Pose& p, const Eigen::Vector4d& f, const char* what);
-// Generalized inertia matrix reduced to the end effector (seed ch. 4), no motor rotors.
+// Generalized inertia matrix reduced to the end effector (source ch. 4), no motor rotors.
 Eigen::Matrix4d gimre(const Model& m, const Pose& p);
 
 }  // namespace quattro

@@ -29,7 +29,7 @@ const Model& quattro_model(const pkm_model* m, pkm_data* d) {
 }
 
 // Largest scale s of a unit task acceleration a such that |J^-T M a| <= tau_max on every
-// arm: the seed's alfa (ch. 5.6-5.7), from rest and without gravity.
+// arm: the source's alfa (ch. 5.6-5.7), from rest and without gravity.
 double alfa(const Model& m, const Pose& p, const Eigen::Matrix4d& M, const Eigen::Vector4d& a) {
   const Eigen::Vector4d tau = solve_JT(p, M * a, "alfa index");
   const double t = tau.cwiseAbs().maxCoeff();
@@ -48,7 +48,7 @@ void indices(const Model& m, const double* x, double* out) {
   o[0] = 1 / std::sqrt((JT.transpose() * JT).determinant());
   o[1] = 1 / std::sqrt((Jxy.transpose() * Jxy).determinant());
   o[2] = 1 / JD.col(2).norm();
-  // Eigenvalue variants: the seed reads the smallest eigenvalue of JD^T JD as the rotation,
+  // Eigenvalue variants: the source reads the smallest eigenvalue of JD^T JD as the rotation,
   // the largest as z and the two middle ones as the horizontal directions.
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(JD.transpose() * JD, Eigen::EigenvaluesOnly);
   const Eigen::Vector4d l = es.eigenvalues();

@@ -254,7 +254,7 @@ int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x, int fr
     Frame f;
     frame_of(x, f);
     Leg legs[NLEG];
-    // The regression rows are geometry: they exist outside the stroke range too (seed
+    // The regression rows are geometry: they exist outside the stroke range too (source
     // 000 pose 7 has a negative stroke for leg 1).
     legs_at(sm, x, f, legs, Strokes::ignore);
     for (int i = 0; i < NLEG; ++i) {

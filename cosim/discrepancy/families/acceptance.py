@@ -107,3 +107,11 @@ def withdrawing(term) -> bool:
     """Does the discovered ``term`` hold a family term that may withdraw a library effect
     (:data:`WITHDRAWING`)?"""
     return any(t in WITHDRAWING for t in term.terms)
+
+
+def or_library(terms, library, heldout, threshold: float, search) -> list:
+    """``terms`` (holding family terms), or the library-only selection ``library()`` where the
+    family terms do not earn their place on the held-out part (:func:`held_out_keeps`;
+    ``heldout(terms)[1]``: the held-out chi-square gain of a selection)."""
+    lib = library()
+    return terms if held_out_keeps(heldout(terms)[1], heldout(lib)[1], threshold, search) else lib

@@ -13,15 +13,15 @@
 
 namespace pkm {
 
-class Plant {
+class Ode {
  public:
-  // Copies m (later changes of the caller's model do not reach the plant); adjust may
+  // Copies m (later changes of the caller's model do not reach the ODE); adjust may
   // change the copy's parameters before the work data are made (the stop conditions
   // open the joint limits there).  Throws Error.
-  Plant(const pkm_model* m, const std::function<void(pkm_model*)>& adjust);
-  ~Plant();
-  Plant(const Plant&) = delete;
-  Plant& operator=(const Plant&) = delete;
+  Ode(const pkm_model* m, const std::function<void(pkm_model*)>& adjust);
+  ~Ode();
+  Ode(const Ode&) = delete;
+  Ode& operator=(const Ode&) = delete;
 
   int nd() const { return nd_; }
   int ny() const { return bodies_.state_size(); }

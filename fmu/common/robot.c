@@ -1,12 +1,13 @@
 /*
- * plant.c -- the robot-generic plant behind every PKM FMU.
+ * robot.c -- the hooks of fmu_model.h for a robot FMU: the robot-generic model behind every
+ * PKM robot FMU.
  *
- * The plant holds the state (t, x, xd), the input tau and the pending parameters of one
+ * The model holds the state (t, x, xd), the input tau and the pending parameters of one
  * FMU instance, and computes outputs by calling the reference core (pkm.h).  It contains
- * no physics: everything a robot-specific table can name (channels of fmu_plant.h) is
+ * no physics: everything a robot-specific table can name (channels of fmu_model.h) is
  * one core call.  See docs/fmu.md.
  */
-#include "fmu_plant.h"
+#include "fmu_model.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,7 +19,7 @@
 
 enum { V_KIN = 1, V_ACC = 2, V_SING = 4, V_ENERGY = 8, V_DRIVE = 16 };
 
-struct fmu_plant {
+struct fmu_model {
   const fmu_model_desc* desc;
   int cs;            /* Co-Simulation (owns a pkm_sim) or Model Exchange */
   int nd, np;
@@ -44,13 +45,13 @@ struct fmu_plant {
   char msg[2048];
 };
 
-const char* plant_error(const fmu_plant* p) { return p ? p->msg : "plant is NULL"; }
-double plant_time(const fmu_plant* p) { return p->t; }
-int plant_nstates(const fmu_plant* p) { return 2 * p->nd; }
-int plant_dirty(const fmu_plant* p) { return p->dirty || !p->started; }
+const char* fmu_model_error(const fmu_model* p) { return p ? p->msg : "model is NULL"; }
+double fmu_model_time(const fmu_model* p) { return p->t; }
+int fmu_model_nstates(const fmu_model* p) { return 2 * p->nd; }
+int fmu_model_dirty(const fmu_model* p) { return p->dirty || !p->started; }
 
 /* Name of the table row of a channel entry, for messages. */
-static const char* var_name(const fmu_plant* p, fmu_channel ch, int index) {
+static const char* var_name(const fmu_model* p, fmu_channel ch, int index) {
   for (int k = 0; k < p->desc->nvars; ++k)
     if (p->desc->vars[k].channel == ch && p->desc->vars[k].index == index) return p->desc->vars[k].name;
   return "?";
@@ -58,12 +59,12 @@ static const char* var_name(const fmu_plant* p, fmu_channel ch, int index) {
 
 /* The effort the core is given: the inputs times input.gain (a Quattro driven with motor
  * torques has input.gain = gear.ratio). */
-static const double* effort(fmu_plant* p) {
+static const double* effort(fmu_model* p) {
   for (int i = 0; i < p->nd; ++i) p->tau_eff[i] = p->input_gain * p->tau[i];
   return p->tau_eff;
 }
 
-static void set_starts(fmu_plant* p) {
+static void set_starts(fmu_model* p) {
   pkm_sim_default_options(&p->opt);
   p->input_gain = 1.0;
   for (int k = 0; k < p->desc->nvars; ++k) {
@@ -92,7 +93,7 @@ static void set_starts(fmu_plant* p) {
   p->tol_override = 0;
 }
 
-fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
+fmu_model* fmu_model_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen) {
   char cerr[1024] = "";
   /* A described robot: the FMU carries its description; the core compiles it once. */
   if (desc->description &&
@@ -131,7 +132,7 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
     return NULL;
   }
 
-  fmu_plant* p = (fmu_plant*)calloc(1, sizeof *p);
+  fmu_model* p = (fmu_model*)calloc(1, sizeof *p);
   double* buf = (double*)calloc((size_t)(10 * nd + np), sizeof(double));
   pkm_data* d = pkm_data_create(m);
   if (!p || !buf || !d) {
@@ -164,7 +165,7 @@ fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err,
   return p;
 }
 
-void plant_destroy(fmu_plant* p) {
+void fmu_model_destroy(fmu_model* p) {
   if (!p) return;
   pkm_sim_destroy(p->sim);
   pkm_data_destroy(p->d);
@@ -173,20 +174,20 @@ void plant_destroy(fmu_plant* p) {
   free(p);
 }
 
-int plant_reset(fmu_plant* p) {
+int fmu_model_reset(fmu_model* p) {
   set_starts(p);
   p->msg[0] = '\0';
   return PKM_OK;
 }
 
-void plant_set_tolerance(fmu_plant* p, double rtol) {
+void fmu_model_set_tolerance(fmu_model* p, double rtol) {
   if (rtol != p->tol_override) p->dirty = 1;
   p->tol_override = rtol;
 }
 
 /* ----------------------------------------------------------------- set / get */
 
-int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
+int fmu_model_set_real(fmu_model* p, const fmu_var* v, double value) {
   int i = v->index;
   switch (v->channel) {
     case FMU_CH_TAU:
@@ -214,7 +215,7 @@ int plant_set_real(fmu_plant* p, const fmu_var* v, double value) {
   return PKM_OK;
 }
 
-int plant_set_integer(fmu_plant* p, const fmu_var* v, int value) {
+int fmu_model_set_integer(fmu_model* p, const fmu_var* v, int value) {
   switch (v->channel) {
     case FMU_CH_SOLVER_METHOD: p->opt.method = value; break;
     case FMU_CH_SOLVER_MAX_STEPS: p->opt.max_steps = value; break;
@@ -224,17 +225,17 @@ int plant_set_integer(fmu_plant* p, const fmu_var* v, int value) {
   return PKM_OK;
 }
 
-static int need_model(fmu_plant* p, const char* what) {
+static int need_model(fmu_model* p, const char* what) {
   if (!p->started || !p->model_ok)
     return fail(p, PKM_ERR_ARGUMENT, "%s is computed from the state, which exists after initialization", what);
   return PKM_OK;
 }
 
-static int core_fail(fmu_plant* p, int s, const char* what) {
+static int core_fail(fmu_model* p, int s, const char* what) {
   return fail(p, s, "%s at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
 }
 
-static int ensure(fmu_plant* p, unsigned bit, const char* what) {
+static int ensure(fmu_model* p, unsigned bit, const char* what) {
   if (p->valid & bit) return PKM_OK;
   int s = need_model(p, what);
   if (s) return s;
@@ -274,7 +275,7 @@ static int ensure(fmu_plant* p, unsigned bit, const char* what) {
   return PKM_OK;
 }
 
-int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
+int fmu_model_get_real(fmu_model* p, const fmu_var* v, double* value) {
   int i = v->index, s = PKM_OK;
   /* Outputs computed on demand: the quantity they need (ensure) and where it lands. */
   unsigned need = 0;
@@ -312,7 +313,7 @@ int plant_get_real(fmu_plant* p, const fmu_var* v, double* value) {
   return s;
 }
 
-int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value) {
+int fmu_model_get_integer(fmu_model* p, const fmu_var* v, int* value) {
   switch (v->channel) {
     case FMU_CH_SOLVER_METHOD: *value = p->opt.method; return PKM_OK;
     case FMU_CH_SOLVER_MAX_STEPS: *value = (int)p->opt.max_steps; return PKM_OK;
@@ -351,7 +352,7 @@ static int same_options(const pkm_sim_options* a, const pkm_sim_options* b) {
 }
 
 /* Pending parameters into the core model, pending solver settings into a (new) sim. */
-static int apply(fmu_plant* p) {
+static int apply(fmu_model* p) {
   char cerr[1024] = "";
   int changed = !p->model_ok;
   for (int i = 0; i < p->np; ++i) {
@@ -416,7 +417,7 @@ static int apply(fmu_plant* p) {
   return PKM_OK;
 }
 
-static int check_pose(fmu_plant* p, const char* what) {
+static int check_pose(fmu_model* p, const char* what) {
   int s = pkm_ik(p->m, p->d, p->x, p->q);
   if (s) return fail(p, s, "%s at t = %.9g s: %s", what, p->t, pkm_data_error(p->d));
   s = pkm_singularity(p->m, p->d, p->x, p->sing);
@@ -428,7 +429,7 @@ static int check_pose(fmu_plant* p, const char* what) {
   return PKM_OK;
 }
 
-int plant_start(fmu_plant* p, double t0) {
+int fmu_model_start(fmu_model* p, double t0) {
   p->started = 0;
   p->valid = 0;
   int s = apply(p);
@@ -453,7 +454,7 @@ int plant_start(fmu_plant* p, double t0) {
 
 /* ------------------------------------------------------------- co-simulation */
 
-int plant_step(fmu_plant* p, double t_end) {
+int fmu_model_step(fmu_model* p, double t_end) {
   int s = pkm_sim_set_input(p->sim, effort(p));
   if (s) return fail(p, s, "input at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
   s = pkm_sim_advance(p->sim, t_end);
@@ -466,13 +467,13 @@ int plant_step(fmu_plant* p, double t_end) {
 
 /* ------------------------------------------------------------ model exchange */
 
-void plant_set_time(fmu_plant* p, double t) {
+void fmu_model_set_time(fmu_model* p, double t) {
   if (t != p->t) p->valid = 0;
   p->t = t;
 }
 
 /* A state (x, xd) the robot can be in: finite, with an energy that does not overflow. */
-static int check_states(fmu_plant* p, const double* x, const double* xd, const char* what) {
+static int check_states(fmu_model* p, const double* x, const double* xd, const char* what) {
   for (int i = 0; i < 2 * p->nd; ++i) {
     const double v = i < p->nd ? x[i] : xd[i - p->nd];
     if (!isfinite(v))
@@ -485,7 +486,7 @@ static int check_states(fmu_plant* p, const double* x, const double* xd, const c
   return PKM_OK;
 }
 
-int plant_set_states(fmu_plant* p, const double* s, size_t n) {
+int fmu_model_set_states(fmu_model* p, const double* s, size_t n) {
   if (n != (size_t)(2 * p->nd))
     return fail(p, PKM_ERR_ARGUMENT, "%zu continuous states given, the model has %d", n, 2 * p->nd);
   /* A state the robot cannot be in (an energy that overflows) is refused, as a start is. */
@@ -497,14 +498,14 @@ int plant_set_states(fmu_plant* p, const double* s, size_t n) {
   return PKM_OK;
 }
 
-int plant_get_states(const fmu_plant* p, double* s, size_t n) {
+int fmu_model_get_states(const fmu_model* p, double* s, size_t n) {
   if (n != (size_t)(2 * p->nd)) return PKM_ERR_ARGUMENT;
   memcpy(s, p->x, sizeof(double) * p->nd);
   memcpy(s + p->nd, p->xd, sizeof(double) * p->nd);
   return PKM_OK;
 }
 
-int plant_get_derivatives(fmu_plant* p, double* ds, size_t n) {
+int fmu_model_get_derivatives(fmu_model* p, double* ds, size_t n) {
   if (n != (size_t)(2 * p->nd))
     return fail(p, PKM_ERR_ARGUMENT, "%zu derivatives asked for, the model has %d states", n, 2 * p->nd);
   int s = ensure(p, V_ACC, "state derivative");
@@ -514,7 +515,7 @@ int plant_get_derivatives(fmu_plant* p, double* ds, size_t n) {
   return PKM_OK;
 }
 
-int plant_get_indicators(fmu_plant* p, double* z, size_t n) {
+int fmu_model_get_indicators(fmu_model* p, double* z, size_t n) {
   const fmu_model_desc* D = p->desc;
   if (n != (size_t)D->nindicators)
     return fail(p, PKM_ERR_ARGUMENT, "%zu event indicators asked for, the model has %d", n, D->nindicators);
@@ -538,7 +539,7 @@ int plant_get_indicators(fmu_plant* p, double* z, size_t n) {
   return PKM_OK;
 }
 
-int plant_check_limits(fmu_plant* p, double tol) {
+int fmu_model_check_limits(fmu_model* p, double tol) {
   const fmu_model_desc* D = p->desc;
   int s = ensure(p, V_SING, "singularity check");
   if (s) return s;
@@ -571,16 +572,16 @@ int plant_check_limits(fmu_plant* p, double tol) {
  * original did. */
 enum { SNAP_HEAD = 12 };
 
-static size_t snapshot_fixed(const fmu_plant* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np + 1); }
+static size_t snapshot_fixed(const fmu_model* p) { return (size_t)(SNAP_HEAD + 5 * p->nd + p->np + 1); }
 
-size_t plant_snapshot_min_size(const fmu_plant* p) { return snapshot_fixed(p); }
+size_t fmu_model_snapshot_min_size(const fmu_model* p) { return snapshot_fixed(p); }
 
-size_t plant_snapshot_size(const fmu_plant* p) {
+size_t fmu_model_snapshot_size(const fmu_model* p) {
   const size_t nsim = (p->cs && p->sim && p->started) ? pkm_sim_state_size(p->sim) : 0;
   return snapshot_fixed(p) + nsim;
 }
 
-void plant_snapshot_save(const fmu_plant* p, double* b) {
+void fmu_model_snapshot_save(const fmu_model* p, double* b) {
   b[0] = p->t;
   b[1] = p->started;
   b[2] = p->dirty;
@@ -604,7 +605,7 @@ void plant_snapshot_save(const fmu_plant* p, double* b) {
 }
 
 /* The name of value k of a snapshot, for messages. */
-static void snapshot_field(const fmu_plant* p, size_t k, char* out, size_t len) {
+static void snapshot_field(const fmu_model* p, size_t k, char* out, size_t len) {
   static const char* const head[SNAP_HEAD] = {"t", "started", "dirty", "reserved", "tolerance", "solver.method",
                                               "solver.rtol", "solver.atol", "solver.maxStep", "solver.maxSteps",
                                               "solver.singMin", "input.gain"};
@@ -627,7 +628,7 @@ static void snapshot_field(const fmu_plant* p, size_t k, char* out, size_t len) 
  * that were checked when they were set (the input gain) are checked again; the parameters
  * and solver settings in force go through the core again when loaded (apply), and the
  * integrator's state through pkm_sim_state_load, which checks the state as a reset does. */
-int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
+int fmu_model_snapshot_check(fmu_model* p, const double* b, size_t n) {
   const size_t fixed = snapshot_fixed(p);
   if (n < fixed)
     return fail(p, PKM_ERR_ARGUMENT, "FMU state is damaged: %zu values where the layout needs at least %zu", n, fixed);
@@ -656,7 +657,7 @@ int plant_snapshot_check(fmu_plant* p, const double* b, size_t n) {
 }
 
 /* Loads a snapshot that passed plant_snapshot_check. */
-int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
+int fmu_model_snapshot_load(fmu_model* p, const double* b, size_t n) {
   const size_t fixed = snapshot_fixed(p);
   const size_t nsim = n - fixed;
   const double* simstate = b + fixed;
@@ -689,7 +690,7 @@ int plant_snapshot_load(fmu_plant* p, const double* b, size_t n) {
     else
       s = pkm_sim_reset(p->sim, p->t, p->x, p->xd);
     if (s) return fail(p, s, "restoring the integrator at t = %.9g s: %s", p->t, pkm_sim_error(p->sim));
-    /* The integrator's time and state are the plant's: one state, not two. */
+    /* The integrator's time and state are the model's: one state, not two. */
     double t = 0, x[16], xd[16];
     pkm_sim_get_state(p->sim, &t, x, xd);
     if (t != p->t || memcmp(x, p->x, sizeof(double) * p->nd) != 0 || memcmp(xd, p->xd, sizeof(double) * p->nd) != 0)

@@ -1,11 +1,11 @@
-#include "integration/plant.hpp"
+#include "integration/ode.hpp"
 
 #include "common/guard.hpp"
 #include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
 
-Plant::Plant(const pkm_model* m, const std::function<void(pkm_model*)>& adjust) {
+Ode::Ode(const pkm_model* m, const std::function<void(pkm_model*)>& adjust) {
   try {
     model_ = pkm_model_copy(m);
     PKM_REQUIRE(model_ != nullptr, PKM_ERR_INTERNAL, "out of memory copying the model");
@@ -25,12 +25,12 @@ Plant::Plant(const pkm_model* m, const std::function<void(pkm_model*)>& adjust) 
   }
 }
 
-Plant::~Plant() {
+Ode::~Ode() {
   if (data_) pkm_data_destroy(data_);
   if (model_) pkm_model_destroy(model_);
 }
 
-void Plant::home(double* y) const {
+void Ode::home(double* y) const {
   robot_->home(*rm_, y);
   if (!bodies_.empty()) {  // the drive bodies at their joints, at rest
     double q[6];
@@ -39,7 +39,7 @@ void Plant::home(double* y) const {
   }
 }
 
-void Plant::rates(const double* y, const double* u, double* f) const {
+void Ode::rates(const double* y, const double* u, double* f) const {
   const int n = nd_;
   for (int i = 0; i < n; ++i) f[i] = y[n + i];
   if (bodies_.empty()) {
@@ -54,16 +54,16 @@ void Plant::rates(const double* y, const double* u, double* f) const {
   total_forward_dynamics(model_, bodies_.carriage(), data_, y, y + n, eff, f + n);
 }
 
-bool Plant::rates_response(const double* y, const double* tau, double* f, double* B) const {
+bool Ode::rates_response(const double* y, const double* tau, double* f, double* B) const {
   return bodies_.empty() && total_forward_dynamics_response(model_, data_, y, y + nd_, tau, f + nd_, B);
 }
 
-void Plant::joints(const double* y, double* q, double* qd) const {
+void Ode::joints(const double* y, double* q, double* qd) const {
   robot_->ik(*rm_, *rd_, y, q);
   joint_velocity(*robot_, *rm_, *rd_, y, y + nd_, qd);
 }
 
-void Plant::saturate(const double* tau, double* u) const {
+void Ode::saturate(const double* tau, double* u) const {
   if (model_->drive)
     actuator_effort(*model_->drive, tau, u);
   else

@@ -1,20 +1,21 @@
 /*
- * fmu_plant.h -- the contract between the generic FMI 2.0 layer (fmi2_functions.c)
- * and the robot-generic plant (plant.c), and the shape of the variable table that
+ * fmu_model.h -- the contract between the generic FMI layer (fmi2_functions.c,
+ * fmi3_functions.c) and the model behind an FMU (robot.c for a robot, controller.c for a
+ * controller), and the shape of the variable table that
  * fmu_gen writes for each model folder (fmu/<robot>/variables.txt -> <ID>_vars.h).
  *
  * Conventions:
- *  1. The plant owns a pkm_model, a pkm_data and (Co-Simulation) a pkm_sim: one plant
+ *  1. The model owns a pkm_model, a pkm_data and (Co-Simulation) a pkm_sim: one model
  *     per FMU instance, no global mutable state.
- *  2. Every plant function returns a pkm status (PKM_OK or a negative pkm_status) and,
- *     on failure, leaves a message saying what and where in plant_error().
+ *  2. Every model function returns a pkm status (PKM_OK or a negative pkm_status) and,
+ *     on failure, leaves a message saying what and where in fmu_model_error().
  *  3. A variable is addressed by its row in the generated table: the table gives the
- *     channel (what the value means to the plant) and the index within the channel.
- *  4. Parameter changes are pending until plant_apply(): then they go through
+ *     channel (what the value means to the model) and the index within the channel.
+ *  4. Parameter changes are pending until fmu_model_apply(): then they go through
  *     pkm_param_set + pkm_model_validate, so the core decides what is valid.
  */
-#ifndef PKM_FMU_PLANT_H
-#define PKM_FMU_PLANT_H
+#ifndef PKM_FMU_MODEL_H
+#define PKM_FMU_MODEL_H
 
 #include <math.h>
 #include <stddef.h>
@@ -35,7 +36,7 @@ typedef enum fmu_causality {
   FMU_OUTPUT = 2
 } fmu_causality;
 
-/* What a variable means to the plant.  Indexed channels use fmu_var.index (0-based). */
+/* What a variable means to the model.  Indexed channels use fmu_var.index (0-based). */
 typedef enum fmu_channel {
   FMU_CH_PARAM = 0,     /* core parameter number index (pkm_param_*)                   */
   FMU_CH_TAU,           /* actuator effort tau[index], input                            */
@@ -54,7 +55,7 @@ typedef enum fmu_channel {
   FMU_CH_SOLVER_MAX_STEP,
   FMU_CH_SOLVER_MAX_STEPS, /* Integer */
   FMU_CH_SOLVER_SING_MIN,
-  FMU_CH_INPUT_GAIN,    /* effort on the joint per unit of input tau (plant parameter)  */
+  FMU_CH_INPUT_GAIN,    /* effort on the joint per unit of input tau (model parameter)  */
   FMU_CH_Q_DRIVE,       /* drive-side position of joint index (drive.two_body), output  */
   FMU_CH_QD_DRIVE,      /* drive-side rate of joint index, output                       */
   /* controller FMUs (fmu/common/controller.c, pkm.h "control"): */
@@ -120,81 +121,81 @@ typedef struct fmu_model_desc {
   const int* qmin_param;
   const int* qmax_param;
   int nindicators;        /* 1 (singularity margin) + 2 ndof if limits are given          */
-  int lti_states;         /* controller FMUs: room for LTI states (0 for plants)           */
+  int lti_states;         /* controller FMUs: room for LTI states (0 for robots)           */
   const char* description; /* a described robot's description text (docs/robots.md), or NULL */
 } fmu_model_desc;
 
 /* Defined by the model folder (fmu/<robot>/model.c). */
 extern const fmu_model_desc FMU_MODEL;
 
-/* --------------------------------------------------------------- the plant */
+/* --------------------------------------------------------------- the model */
 
-typedef struct fmu_plant fmu_plant;
+typedef struct fmu_model fmu_model;
 
 /* Creates the core model of desc->robot, checks that the table's parameter rows match
  * the core's parameter table (names and order), and sets every value to its start.
  * Returns NULL and writes the reason into err[errlen]. */
-fmu_plant* plant_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen);
-void plant_destroy(fmu_plant* p);
-const char* plant_error(const fmu_plant* p);
+fmu_model* fmu_model_create(const fmu_model_desc* desc, int cosimulation, char* err, size_t errlen);
+void fmu_model_destroy(fmu_model* p);
+const char* fmu_model_error(const fmu_model* p);
 
 /* How a hook fails (convention 2): formats the message (printf-style) into msg, the
- * buffer of size bytes that plant_error() returns, and gives back status.  Both hook
- * sets (plant.c, controller.c) keep that buffer as p->msg and call it as
+ * buffer of size bytes that fmu_model_error() returns, and gives back status.  Both hook
+ * sets (robot.c, controller.c) keep that buffer as p->msg and call it as
  * fail(p, status, fmt, ...).  Defined in fmu_instance.c, which every FMU compiles. */
-int plant_fail(char* msg, size_t size, int status, const char* fmt, ...);
-#define fail(p, status, ...) plant_fail((p)->msg, sizeof (p)->msg, (status), __VA_ARGS__)
+int fmu_model_fail(char* msg, size_t size, int status, const char* fmt, ...);
+#define fail(p, status, ...) fmu_model_fail((p)->msg, sizeof (p)->msg, (status), __VA_ARGS__)
 
 /* Back to the start values of every variable (fmi2Reset). */
-int plant_reset(fmu_plant* p);
+int fmu_model_reset(fmu_model* p);
 
 /* Pending values: parameters, initial state, solver settings, inputs. */
-int plant_set_real(fmu_plant* p, const fmu_var* v, double value);
-int plant_set_integer(fmu_plant* p, const fmu_var* v, int value);
+int fmu_model_set_real(fmu_model* p, const fmu_var* v, double value);
+int fmu_model_set_integer(fmu_model* p, const fmu_var* v, int value);
 /* Values, computing outputs on demand (kinematics, dynamics) from the current state. */
-int plant_get_real(fmu_plant* p, const fmu_var* v, double* value);
-int plant_get_integer(fmu_plant* p, const fmu_var* v, int* value);
+int fmu_model_get_real(fmu_model* p, const fmu_var* v, double* value);
+int fmu_model_get_integer(fmu_model* p, const fmu_var* v, int* value);
 
 /* Relative tolerance imposed by the importer (fmi2SetupExperiment), <= 0 for none. */
-void plant_set_tolerance(fmu_plant* p, double rtol);
+void fmu_model_set_tolerance(fmu_model* p, double rtol);
 /* Applies pending parameters and solver settings (pkm_param_set + pkm_model_validate),
  * then puts the state at (t0, x0, xd0) and checks it (reachable, not singular). */
-int plant_start(fmu_plant* p, double t0);
+int fmu_model_start(fmu_model* p, double t0);
 /* 1 if parameters or the initial state changed since the last plant_start. */
-int plant_dirty(const fmu_plant* p);
+int fmu_model_dirty(const fmu_model* p);
 
 /* Co-Simulation: integrates to t_end with the input held.  On a stroke limit, a
  * singularity or a CVODE failure the state is left at the event time. */
-int plant_step(fmu_plant* p, double t_end);
-double plant_time(const fmu_plant* p);
+int fmu_model_step(fmu_model* p, double t_end);
+double fmu_model_time(const fmu_model* p);
 
 /* Model Exchange: states s = (x, xd), derivatives ds = (xd, xdd); n = 2 * ndof. */
-int plant_nstates(const fmu_plant* p);
-void plant_set_time(fmu_plant* p, double t);
-int plant_set_states(fmu_plant* p, const double* s, size_t n);
-int plant_get_states(const fmu_plant* p, double* s, size_t n);
-int plant_get_derivatives(fmu_plant* p, double* ds, size_t n);
+int fmu_model_nstates(const fmu_model* p);
+void fmu_model_set_time(fmu_model* p, double t);
+int fmu_model_set_states(fmu_model* p, const double* s, size_t n);
+int fmu_model_get_states(const fmu_model* p, double* s, size_t n);
+int fmu_model_get_derivatives(fmu_model* p, double* ds, size_t n);
 /* Event indicators z[nindicators], each > 0 inside the usable workspace:
  * z[0] = singularity.direct - solver.singMin, then per joint i q_i - qmin_i, qmax_i - q_i. */
-int plant_get_indicators(fmu_plant* p, double* z, size_t n);
+int fmu_model_get_indicators(fmu_model* p, double* z, size_t n);
 /* PKM_OK, or the status (PKM_ERR_SINGULAR, PKM_ERR_JOINT_LIMIT, the core's IK status)
  * and a message naming the joint, the limit and the time when an indicator is <= tol:
  * the pose reached the edge of the usable workspace and the importer should stop. */
-int plant_check_limits(fmu_plant* p, double tol);
+int fmu_model_check_limits(fmu_model* p, double tol);
 
-/* Snapshot of everything that determines the future of the plant (fmi2GetFMUstate),
+/* Snapshot of everything that determines the future of the model (fmi2GetFMUstate),
  * the integrator's own state included.  Its size (in doubles) varies with that state
  * (the actuator-delay history): plant_snapshot_size now, never below
  * plant_snapshot_min_size. */
-size_t plant_snapshot_size(const fmu_plant* p);
-size_t plant_snapshot_min_size(const fmu_plant* p);
-void plant_snapshot_save(const fmu_plant* p, double* buf);
+size_t fmu_model_snapshot_size(const fmu_model* p);
+size_t fmu_model_snapshot_min_size(const fmu_model* p);
+void fmu_model_snapshot_save(const fmu_model* p, double* buf);
 /* plant_snapshot_check validates the n values (length, every value finite, flags, counts
  * and enumerations in range) and changes nothing; plant_snapshot_load loads a checked
  * snapshot, putting parameters and the integrator's or law's state through the core, and
- * may leave the plant changed when the core refuses them (the caller restores). */
-int plant_snapshot_check(fmu_plant* p, const double* buf, size_t n);
-int plant_snapshot_load(fmu_plant* p, const double* buf, size_t n);
+ * may leave the model changed when the core refuses them (the caller restores). */
+int fmu_model_snapshot_check(fmu_model* p, const double* buf, size_t n);
+int fmu_model_snapshot_load(fmu_model* p, const double* buf, size_t n);
 
 /* 1 if v, a value read back from an FMU state, is a whole number in [lo, hi]: a flag, a
  * count or an enumeration that may be converted to an integer (a conversion of a value
@@ -204,4 +205,4 @@ static inline int fmu_whole(double v, double lo, double hi) { return v >= lo && 
 #ifdef __cplusplus
 }
 #endif
-#endif /* PKM_FMU_PLANT_H */
+#endif /* PKM_FMU_MODEL_H */

@@ -1,0 +1,526 @@
+"""The discovery's fit: stepwise selection of the terms on one channel, the block bootstrap,
+the shape parameters (a step's position and width, a ripple's period, a fading friction's
+velocity scale) and their intervals (:func:`discover_channel`; :mod:`.discovery`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._linalg import small_lstsq
+from .discovery_search import FADE_RANGE
+from .discovery_terms import ADDS_TO, BLOCK, MAX_STEPS, N_BOOT, SAME_COLUMN, SIGNED, STABILITY, TERMS, _term
+from .families import acceptance, products
+from .intervals import hac_covariance
+from .regressors import MIN_RELEVANCE, fit
+from .structure import own_noise, samples_per_independent
+
+
+# ------------------------------------------------------------------------- fitting
+
+@dataclass
+class _Fit:
+    terms: list          # [(term, option)]
+    coef: np.ndarray     # in units of the columns' deltas (= the core parameter values)
+    chi2: float
+    cov: np.ndarray
+    z95: float = 1.96    # multiplier of the HAC standard errors for 95 % intervals
+    cov_classical: np.ndarray | None = None  # (Z'X)^-1 Z'Z (X'Z)^-1, in the weights' units
+
+
+def _design(search, c, terms, rows):
+    eng = search.eng
+    w = search.w[c] * eng.use[rows, c]
+    X = np.concatenate([search.cols[t][rows, c, :] for t in terms], axis=1) * w[:, None] if terms else None
+    Zs = []
+    for t in terms:
+        z = search.instr.get(t)
+        Zs.append(search.cols[t][rows, c, :] if z is None else z[rows, c, :])
+    Z = np.concatenate(Zs, axis=1) * w[:, None] if terms else None
+    return X, Z, w
+
+
+def _relevant_z(X, Z):
+    for j in range(X.shape[1]):
+        nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
+        if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
+            Z[:, j] = X[:, j]  # a column the reference does not image: least squares for it
+    return Z
+
+
+def fit_terms(search, c, y, terms, rows, instruments=True) -> _Fit:
+    """Fit ``terms`` to channel c's residual y on ``rows`` (boolean mask of samples)."""
+    X, Z, w = _design(search, c, terms, rows)
+    t = y[rows] * w
+    if not terms:
+        return _Fit([], np.zeros(0), float(t @ t), np.zeros((0, 0)))
+    Zr = _relevant_z(X, Z) if instruments else None
+    coef = fit(X, t, Zr)
+    e = t + X @ coef
+    chi2 = float(e @ e)
+    # two covariances for the intervals: HAC (the scores' correlation in time: the residual
+    # drifts where the model is not quite right) and the classical one (scaled by the caller)
+    cov, z95 = hac_covariance(X, e, Zr)
+    Zc = X if Zr is None else Zr
+    A = np.linalg.pinv(Zc.T @ X)
+    return _Fit(list(terms), coef, chi2, cov, z95, A @ (Zc.T @ Zc) @ A.T)
+
+
+#: terms that span a constant while the joint moves: the library's offset is not refitted beside them
+SPAN_CONSTANT = ("constant", "coulomb_pos", "coulomb_neg", "coulomb_both", "fading")
+
+
+def offset_refit(search, c, held, terms) -> list:
+    """``[("constant", 0)]`` when the library's offset held on joint c (in ``held``) is
+    refitted beside ``terms`` (none of them spans a constant while the joint moves), else []."""
+    if search.name(c, "offset") in held and not any(t in SPAN_CONSTANT for t, _ in terms):
+        return [("constant", 0)]
+    return []
+
+
+def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None, held=None,
+             library_only=False):
+    """Forward selection (then backward elimination) of terms for channel c by BIC in
+    effective samples: a term enters when it lowers chi2 + k log N_eff by more than
+    ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
+    boolean mask or an index array (a bootstrap resample); ``fixed``: coefficient keys the
+    model already fits on this channel (the library's offset), not searched; ``floor``: the
+    smallest value of each dissipative coefficient (default 0; minus the library's level of the
+    friction it adds to, :data:`ADDS_TO`); ``held``: the model's parameters, whose offset on
+    this joint is refitted beside the terms (:func:`offset_refit`), so that no term enters as
+    a stand-in for the offset's share of them.  A term of the families pays more to enter
+    (``families/acceptance.py``); ``library_only``: the library's candidates only.  Returns
+    the terms."""
+    floor = floor or {}
+    logn = math.log(max(n_eff, 2.0))
+    gram = _Gram(search, c, y, rows)
+
+    def chi2_of(terms):
+        c2, coef = gram.fit(terms + offset_refit(search, c, held or {}, terms))
+        keys = [k for t, _ in terms for k in TERMS[t][0]]
+        # friction and drag dissipate: a negative level is no such term (a Coulomb pair of
+        # opposite signs is a constant force while moving), refused as the library refuses
+        # a negative friction
+        if any(k in SIGNED and v < floor.get(k, 0.0) for k, v in zip(keys, coef)):
+            return math.inf
+        return c2
+
+    def part_of(terms, cand, cols):  # chi-square with only the columns ``cols`` of cand
+        ts = terms + offset_refit(search, c, model or {}, terms + [cand])
+        return gram.fit_idx(np.concatenate([gram.at[u] for u in ts] + [np.asarray(cols, int)]))[0]
+
+    chosen = []
+    chi2 = chi2_of(chosen)
+    model = held  # the model's parameters (the loop's "held" is the coefficients entered)
+    cost = lambda t: acceptance.cost(search, t, threshold)  # noqa: E731
+    # the library's terms first, then every candidate on top of them (families/acceptance.py)
+    candidates, refused = acceptance.searched(search, library_only), set()
+    for _ in range(MAX_STEPS):
+        best = None
+        held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
+        for cand in candidates:
+            if cand in refused or held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
+                continue
+            if products.clash(search, c, chosen, cand, model):  # the core holds one shape per joint
+                continue
+            c2 = chi2_of(chosen + [cand])
+            gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn - cost(cand)  # a family term pays more
+            if best is None or gain > best[0]:
+                best = (gain, cand, c2)
+        if best is None or best[0] <= 0.0:
+            break
+        if not acceptance.own_part(lambda cols: part_of(chosen, best[1], cols), best[2], best[1], gram.at,
+                                   logn, cost(best[1])):  # a whole-effort gain is no effort x position
+            refused.add(best[1])
+            continue
+        chosen.append(best[1])
+        chi2 = best[2]
+        # backward: a term the newer ones made redundant leaves
+        for t in list(chosen[:-1]):
+            rest = [u for u in chosen if u != t]
+            c2 = chi2_of(rest)
+            if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= cost(t):
+                chosen, chi2 = rest, c2
+    return chosen
+
+
+class _Gram:
+    """The least-squares fits of any set of candidate terms on channel c and ``rows``, from the
+    cross products of all candidate columns taken once (a selection fits hundreds of subsets of
+    the same columns: a solve of a few unknowns each instead of a least-squares problem over
+    the samples)."""
+
+    def __init__(self, search, c, y, rows):
+        w = search.w[c] * search.eng.use[rows, c]
+        t = y[rows] * w
+        self.at, n = {}, 0
+        blocks = []
+        for cand in search.candidates():
+            col = search.cols[cand][rows, c, :] * w[:, None]
+            self.at[cand] = np.arange(n, n + col.shape[1])
+            n += col.shape[1]
+            blocks.append(col)
+        X = np.concatenate(blocks, axis=1)
+        self.G, self.b, self.tt = X.T @ X, X.T @ t, float(t @ t)
+
+    def fit(self, terms):
+        """(chi-square, coefficients) of the least-squares fit of ``terms``, as :func:`_ls_fit`."""
+        if not terms:
+            return self.tt, np.zeros(0)
+        return self.fit_idx(np.concatenate([self.at[u] for u in terms]))
+
+    def fit_idx(self, i):
+        """(chi-square, coefficients) of the fit of the candidates' columns ``i`` (indices)."""
+        if len(i) == 0:
+            return self.tt, np.zeros(0)
+        G, b = self.G[i][:, i], self.b[i]
+        coef = -small_lstsq(G, b)
+        # |t + X c|^2 = t't + 2 c'X't + c'X'X c
+        return max(self.tt + 2.0 * float(coef @ b) + float(coef @ G @ coef), 0.0), coef
+
+
+def _blocks(rows, rng):
+    """A moving-block bootstrap resample of the True rows (indices, with repetition)."""
+    where = np.flatnonzero(rows)
+    n = len(where)
+    nb = max(1, n // BLOCK)
+    starts = rng.integers(0, max(1, n - BLOCK), nb)
+    return where[(starts[:, None] + np.arange(BLOCK)[None, :]).ravel() % n]
+
+
+def _ls_fit(search, c, y, terms, rows):
+    """(chi-square, coefficients) of the least-squares fit of ``terms`` to channel c on
+    ``rows`` (mask or index array): the comparison baseline, as in the library's selection."""
+    w = search.w[c] * search.eng.use[rows, c]
+    t = y[rows] * w
+    if not terms:
+        return float(t @ t), np.zeros(0)
+    X = np.concatenate([search.cols[u][rows, c, :] for u in terms], axis=1) * w[:, None]
+    coef = fit(X, t)
+    e = t + X @ coef
+    return float(e @ e), coef
+
+
+def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=frozenset(), floor=None, refit=(),
+              held=None):
+    """Share of block-bootstrap resamples whose stepwise selection picks each of ``terms``,
+    and the spread (standard deviation) of the coefficients of ``terms`` and ``refit`` (terms
+    fitted with them, not selected) over them."""
+    rng = np.random.default_rng(seed + 7 * c)
+    hits = {t: 0 for t in terms}
+    coefs = []
+    for _ in range(N_BOOT):
+        pick = _blocks(rows, rng)
+        chosen = stepwise(search, c, y, pick, threshold, phi, n_eff, fixed, floor, held)
+        for t in terms:
+            hits[t] += any(set(TERMS[u[0]][0]) & set(TERMS[t[0]][0]) for u in chosen)
+        coefs.append(_ls_fit(search, c, y, list(terms) + list(refit), pick)[1])
+    spread = np.std(np.array(coefs), axis=0) if terms else np.zeros(0)
+    return {t: hits[t] / N_BOOT for t in terms}, spread
+
+
+# ------------------------------------------------------------------------- the step
+
+def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), library_result=None):
+    """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
+    model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
+    holds on this joint (the library's offset) is not searched: it is fitted already.  For the
+    library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
+    the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
+    the coefficient, must not be negative); otherwise each split level is a friction of its
+    own.  ``library_result``: a function giving this search's result without the families' terms
+    (made already), returned when the selection holds none of them."""
+    eng = search.eng
+    train, test = eng.train, eng.test
+    # The yardstick is the residual's own high-frequency noise (as the structure test's):
+    # the engine's noise model is inflated by the very force searched for.
+    phi = samples_per_independent(eng.pipe)
+    n_eff = float((eng.use[train, c] > 0).sum()) / phi
+    lee = 2.0 * math.log(acceptance.n_library(search))  # a family term pays more (search.fam_extra)
+    thr = threshold + lee
+    held = search.theta if theta is None else theta
+    fixed = frozenset(k for t in TERMS.values() for k in t[0]
+                      if search.name(c, k) in held or search.name(c, SAME_COLUMN.get(k, k)) in held)
+    floor = {k: -float(held.get(search.name(c, lib), 0.0)) if lib in asymmetry else 0.0 for k, lib in ADDS_TO.items()}
+    # an added inertia may lower the rotor's the model holds, never below zero
+    rotor = search.name(c, "rotor_inertia")
+    floor["force_inertia"] = -float(held.get(rotor, eng.model.param(rotor)))
+
+    def heldout(terms):
+        # the channel's held-out chi-square without and with the terms, coefficients held
+        f = fit_terms(search, c, y, terms, train)
+        if not terms:
+            return f, 0.0
+        Xt, _, wt = _design(search, c, terms, test)
+        tt = y[test] * wt
+        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
+
+    r, terms = y, []
+    search.w[c] = 0.0
+    for _ in range(3):
+        # the force searched for also shows in the differences one window apart when it varies
+        # fast (a spring on a quick arm): the noise is measured again on the residual of the
+        # terms found, and the search repeated with it
+        sigma = own_noise(eng.pipe, r[train], eng.accuracy()[c])
+        if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
+            break
+        search.w[c] = 1.0 / (sigma * math.sqrt(phi))
+        terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
+        if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
+            terms = acceptance.or_library(terms, lambda: stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor,
+                                                                  held, library_only=True), heldout, threshold, search)
+        if not terms:
+            break
+        f0 = fit_terms(search, c, y, terms, np.ones_like(train))
+        r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
+
+    if library_result is not None and not any(acceptance.is_family(t) for t in terms):
+        return library_result()  # the same selection as without the families: its result
+    # the cheap held-out check first, then the bootstrap's stability
+    if not terms or not heldout(terms)[1] > threshold:
+        return None
+    # The library's offset on this joint is refitted with the terms: fitted before them, it
+    # took the part of their force the recording's mean leaves (a spring's force at the mean
+    # position: its rest position would be missed).  Not beside Coulomb friction split by
+    # direction: while the joint moves the two levels span the constant already.
+    refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
+    fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
+        search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
+    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0],
+                               lambda ts: heldout(ts)[1])
+    if fitted != terms:
+        # the terms that stood in for the step's misplaced edge go again (the backward pass
+        # of the selection, on the fitted step)
+        terms = _backward(search, c, y, fitted, train, thr, n_eff)
+    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                             refit=refit(terms), held=held)
+    # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
+    # constant and a step at the end of the stroke) split the resamples' votes between them.
+    full = heldout(terms)[1]
+    kept = [t for t in terms if stab[t] >= STABILITY or full - heldout([u for u in terms if u != t])[1] > threshold]
+    if not kept:
+        return None
+    if kept != terms:
+        terms = kept
+        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                              refit=refit(terms), held=held)
+    extra = refit(terms)
+    if extra:
+        # terms that stood in for the offset's part (a step at the end of the stroke) leave
+        pruned = _backward(search, c, y, terms, train, thr, n_eff, keep=extra)
+        if pruned != terms:
+            terms = pruned
+            _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
+                                  refit=extra, held=held)
+    terms = terms + extra
+    f, d_held = heldout(terms)
+    # an effort term's column bends with its coefficient (the core solves for the applied effort)
+    f.coef = products.refine_effort(search, c, terms, f.coef, held, train,
+                                    lambda t: list(zip(TERMS[t][0], TERMS[t][1])))
+    if not d_held > threshold:
+        return None
+    # the fit with instruments may leave the selection's least squares: a joint inertia below
+    # zero is no body (and no plant of the core)
+    keys = [k for t, _ in terms for k in TERMS[t][0]]
+    if any(k == "force_inertia" and v < floor[k] for k, v in zip(keys, f.coef)):
+        return None
+    # the widest of: the HAC interval, the classical one of the residual's own noise in effective
+    # samples (s^2 >= 1: never narrower than that noise allows), and the bootstrap's spread of
+    # the coefficients (which also sees the selection of the terms)
+    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
+    half = np.maximum(np.maximum(f.z95 * np.sqrt(np.maximum(np.diag(f.cov), 0.0)),
+                                 1.96 * np.sqrt(np.maximum(np.diag(f.cov_classical), 0.0) * s2)), 1.96 * spread)
+    use_t = eng.use[test, c] > 0
+    rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
+    yt = y[test]
+    Xraw = np.concatenate([search.cols[t][test, c, :] for t in terms], axis=1)
+    base = {search.name(c, "offset"): float(held[search.name(c, "offset")])} if extra else {}
+    term = _term(search, c, terms, f.coef, half, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held, base=base,
+                 shape_ci95=_shape_intervals(search, c, y, terms, f.coef, train, s2))
+    return term
+
+
+def _fit_step(search, c, y, terms, rows):
+    """The step of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
+    fitted part's chi-square, every other term refitted with it, from the grid's step; the
+    width kept within 2-100 % of the joint's position spread, the position within its range):
+    ``terms`` with the step's option replaced by the fitted one."""
+    from scipy.optimize import minimize
+
+    k = next((i for i, (t, _) in enumerate(terms) if t == "step"), None)
+    if k is None:
+        return terms
+    qs, ws = search.steps[terms[k][1]]
+    q0, w0 = float(qs[c]), float(ws[c])
+    lo, hi = float(search.q_range[0][c]), float(search.q_range[1][c])
+    T = float(search.travel[c])
+    tried = {}
+
+    def at(x):
+        q, w = q0 + x[0] * w0, w0 * math.exp(x[1])
+        if not (lo <= q <= hi and 0.02 * T <= w <= T):
+            return math.inf, None
+        o = search.add_step(c, q, w)
+        chi2 = _ls_fit(search, c, y, terms[:k] + [("step", o)] + terms[k + 1:], rows)[0]
+        tried[o] = chi2
+        return chi2, o
+
+    r = minimize(lambda x: at(x)[0], np.zeros(2), method="Nelder-Mead",
+                 options={"initial_simplex": [[0, 0], [0.5, 0], [0, 0.5]], "xatol": 0.01, "fatol": 0.1,
+                          "maxfev": 40})
+    best = min(tried, key=tried.get, default=None)
+    start = _ls_fit(search, c, y, terms, rows)[0]
+    if best is None or not tried[best] < start or not np.isfinite(r.fun):
+        return terms
+    return terms[:k] + [("step", best)] + terms[k + 1:]
+
+
+def _fit_period(search, c, y, terms, rows):
+    """The ripple of ``terms`` (if any) with its period fitted (:func:`_fit_shape`), from the
+    spectrum's period P0 as P0 (1 + x), x from 0.5 % either side, within +-3 %."""
+    k = next((i for i, (t, _) in enumerate(terms) if t == "ripple"), None)
+    if k is None:
+        return terms
+    P0 = float(search.periods[terms[k][1]][c])
+    if not P0 > 0:
+        return terms
+    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_ripple(c, P0 * (1.0 + x)), 0.005,
+                      (-0.03, 0.03))
+
+
+def _fit_fade(search, c, y, terms, rows):
+    """The fading friction of ``terms`` (if any) with its velocity scale fitted (:func:`_fit_shape`),
+    from the grid's v0 as v0 exp(x), x from 0.3 either side, within :data:`FADE_RANGE` of the
+    joint's RMS rate and no slower than three times the rate readings' noise."""
+    k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
+    if k is None:
+        return terms
+    v0 = float(search.fades[terms[k][1]][c])
+    lo, hi = (math.log(max(f * search.rate[c], search.v_floor[c]) / v0) for f in FADE_RANGE)
+    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
+
+
+def _resolved_fade(search, c, y, terms, rows):
+    """``terms`` with a fading friction whose velocity scale the recording does not resolve
+    (its 95 % interval reaches down to :attr:`Search.v_floor`, the slowest scale the rate
+    readings tell from a sharp friction) taken as the sharp pair, the simpler account."""
+    k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
+    if k is None:
+        return terms
+    f = fit_terms(search, c, y, terms, rows)
+    n_eff = float((search.eng.use[rows, c] > 0).sum()) / samples_per_independent(search.eng.pipe)
+    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
+    name = search.name(c, "force_cv")
+    v = search.shape("fading", c, terms[k][1])[name]
+    half = _shape_intervals(search, c, y, terms, f.coef, rows, s2).get(name, math.inf)
+    if v - half > search.v_floor[c]:
+        return terms
+    return terms[:k] + [("coulomb_both", 0)] + terms[k + 1:]
+
+
+def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
+    """Term k of ``terms`` with one shape parameter fitted: Newton steps on the fitted part's
+    chi-square (the other terms refitted with it) from the parabola through the three best
+    values of x tried (``option_at(x)``: the search's option of the term at x; x = 0 is the
+    term's own), starting at 0 and +-h, within ``bounds``; done when the step is below a tenth
+    of x's standard error the parabola's curvature gives (a chi-square rise of 1), or after
+    four steps.  ``terms`` with the term's option replaced by the best one tried."""
+    name = terms[k][0]
+    start = _ls_fit(search, c, y, terms, rows)[0]
+    tried = {0.0: (start, None)}  # x -> (chi-square, option)
+    lo, hi = bounds
+
+    def at(x):
+        if x not in tried:
+            o = option_at(x)
+            tried[x] = (_ls_fit(search, c, y, terms[:k] + [(name, o)] + terms[k + 1:], rows)[0], o)
+        return tried[x][0]
+
+    for x in (-h, h):
+        if lo <= x <= hi:
+            at(x)
+    for _ in range(4):
+        xs = sorted(tried, key=lambda x: tried[x][0])[:3]
+        if len(xs) < 3:
+            break
+        a2, a1, _ = np.polyfit(xs, [tried[x][0] for x in xs], 2)
+        best = xs[0]
+        if a2 > 0:
+            x = float(np.clip(-a1 / (2 * a2), lo, hi))
+            if abs(x - best) < 0.1 / math.sqrt(a2):
+                break
+        else:  # no minimum between them: on towards the lower side
+            x = float(np.clip(best + (2 * h if best >= max(xs) else -2 * h), lo, hi))
+        if x in tried:
+            break
+        at(x)
+    best = min(tried, key=lambda x: tried[x][0])
+    if tried[best][1] is None or not tried[best][0] < start:
+        return terms
+    return terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
+
+
+def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):
+    """The backward pass of :func:`stepwise` on ``terms`` (least squares, with the terms
+    ``keep`` fitted beside them): a term leaves when the others without it lose no more than
+    ``threshold`` plus its BIC price."""
+    logn = math.log(max(n_eff, 2.0))
+    keep = list(keep)
+    chi2 = _ls_fit(search, c, y, terms + keep, rows)[0]
+    for t in list(terms):
+        rest = [u for u in terms if u != t]
+        if not rest:
+            break
+        c2 = _ls_fit(search, c, y, rest + keep, rows)[0]
+        if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= acceptance.cost(search, t, threshold):
+            terms, chi2 = rest, c2
+    return terms
+
+
+def _shape_intervals(search, c, y, terms, coef, rows, s2):
+    """95 % half widths of the shape parameters a fit moves (a step's position and width, a
+    ripple's period, a fading friction's velocity scale), from the fit linearised in them: the
+    derivative of the term's force over each shape parameter (central differences of the
+    pipeline's columns) as one more column beside the terms' own; the wider of the classical
+    (s^2 >= 1) and the HAC interval."""
+    out, extra = {}, []
+    i = 0
+    for t, o in terms:
+        n = len(TERMS[t][0])
+        a = coef[i:i + n]
+        i += n
+        shape = search.shape(t, c, o)
+        if t == "step":
+            keys = ("force_step_q", "force_step_w")
+        elif t == "ripple":
+            keys = ("force_period",)
+        elif t == "fading":
+            keys = ("force_cv",)
+        elif t == "zone":
+            keys = ("force_czone_q", "force_czone_w")
+        else:
+            continue
+        for key in keys:
+            name = search.name(c, key)
+            v = shape[name]
+            h = 1e-3 * (v if key in ("force_period", "force_cv") else search.travel[c])
+            force = []
+            for sgn in (1, -1):
+                sh = dict(shape, **{name: v + sgn * h})
+                force.append(sum(a[b] * search.column(c, k2, sc, sh)
+                                 for b, (k2, sc) in enumerate(zip(TERMS[t][0], TERMS[t][1]))))
+            extra.append((name, (force[0] - force[1]) / (2 * h)))
+    if not extra:
+        return out
+    w = search.w[c] * search.eng.use[rows, c]
+    X = np.concatenate([search.cols[u][rows, c, :] for u in terms] + [d[rows, None] for _, d in extra], axis=1)
+    X = X * w[:, None]
+    e = y[rows] * w + X[:, :len(coef)] @ coef
+    cov_c = np.linalg.pinv(X.T @ X) * s2
+    cov_h, z95 = hac_covariance(X, e)
+    for j, (name, _) in enumerate(extra):
+        jj = len(coef) + j
+        out[name] = float(max(1.96 * math.sqrt(max(cov_c[jj, jj], 0.0)), z95 * math.sqrt(max(cov_h[jj, jj], 0.0))))
+    return out
