@@ -280,11 +280,11 @@ def _families_pass(eng, sel, search, theta, R_lib, base, bar, withdrawn, discove
     search.fam_on = True
     if acceptance.split(search.candidates())[1]:
         base = discover_all(R_lib, range(eng.nd), theta, asymmetry=confirmed)
-        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all)
+        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
     return theta, base
 
 
-def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all):
+def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
     """The library's effects of one joint that stay, on trial once more with the families searched
     on both sides where the terms in their place hold a family term that may withdraw one
     (:data:`.families.acceptance.WITHDRAWING`): an effect whose place such terms take is
@@ -298,8 +298,7 @@ def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover
             continue
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
-        # as in the trial (no asymmetry): the trial's search without the families is then made already
-        in_place = discover_all(R_minus, [c], th_minus).get(c)
+        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed).get(c)
         if in_place is None or not acceptance.withdrawing(in_place):
             continue
         on_top = [base[c]] if base.get(c) is not None else []
