@@ -179,7 +179,7 @@ def controller(kind: str, m: Model):
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None,
-             gap_model="applied"):
+             gap_model="applied", hook=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
     ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
@@ -188,7 +188,11 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     MuJoCo step (``qfrc_applied``).  ``gap_model`` makes a two-body rail's backlash or
     elasticity: ``"applied"`` a force of :func:`gap_force` applied at every step (stiff,
     damped faces), ``"mujoco"`` MuJoCo's own constraint (a joint limit at +-b/2 with its default
-    soft reference, or the gap joint's ``stiffness`` and ``damping``)."""
+    soft reference, or the gap joint's ``stiffness`` and ``damping``).  ``hook``, if given, is
+    called before every MuJoCo step as ``hook(model, data, t, q, qd, cmd)`` (t [s], the rails'
+    true positions and rates, the six commanded forces [N]) and returns six more rail forces
+    along +q [N] or None; it may also set MuJoCo's ``xfrc_applied`` or the model's masses
+    (bench/foreign/mujoco_unnamed.py)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
@@ -256,6 +260,10 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
             data.ctrl[:] = cmd
             if force is not None:
                 data.qfrc_applied[drails] = applied + force(q0 + data.qpos[rails], data.qvel[drails])
+            if hook is not None:
+                more = hook(model, data, ts, q0 + data.qpos[rails], data.qvel[drails].copy(), cmd)
+                base = data.qfrc_applied[drails] if force is not None else applied
+                data.qfrc_applied[drails] = base + (0.0 if more is None else more)
             for adr, dof, eff, val in (gaps if gap_model == "applied" else ()):
                 data.qfrc_applied[dof] = gap_force(eff, val, data.qpos[adr], data.qvel[dof])
             mujoco.mj_step(model, data)

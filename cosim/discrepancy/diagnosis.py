@@ -255,8 +255,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     families : bool
         The discovery step also searches the term families of :mod:`.families` (friction
         growing with the load, friction zones, a Coulomb level over the stroke, couplings to
-        another joint, effort x position, position x rate; docs/discovery_families.md says why
-        they are off by default).
+        another joint, effort x position, position x rate; a family term pays more than a library
+        term; docs/discovery_families.md says why they are off by default).
     platform : bool
         Search one force on the platform for the whole robot (a constant wrench, a cable to an
         anchor, a drag: :mod:`.platform_force`) before the discovery step, and keep it when it and

@@ -12,7 +12,7 @@ import numpy as np
 from ._linalg import small_lstsq
 from .discovery_search import FADE_RANGE
 from .discovery_terms import ADDS_TO, BLOCK, MAX_STEPS, N_BOOT, SAME_COLUMN, SIGNED, STABILITY, TERMS, _term
-from .families import products
+from .families import acceptance, products
 from .intervals import hac_covariance
 from .regressors import MIN_RELEVANCE, fit
 from .structure import own_noise, samples_per_independent
@@ -80,7 +80,8 @@ def offset_refit(search, c, held, terms) -> list:
     return []
 
 
-def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None, held=None):
+def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor=None, held=None,
+             library_only=False):
     """Forward selection (then backward elimination) of terms for channel c by BIC in
     effective samples: a term enters when it lowers chi2 + k log N_eff by more than
     ``threshold`` (chi2 in effective samples: the weights carry 1 / sqrt(phi)).  ``rows`` is a
@@ -89,7 +90,9 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     smallest value of each dissipative coefficient (default 0; minus the library's level of the
     friction it adds to, :data:`ADDS_TO`); ``held``: the model's parameters, whose offset on
     this joint is refitted beside the terms (:func:`offset_refit`), so that no term enters as
-    a stand-in for the offset's share of them.  Returns the terms."""
+    a stand-in for the offset's share of them.  A term of the families pays more to enter
+    (``families/acceptance.py``); ``library_only``: the library's candidates only.  Returns
+    the terms."""
     floor = floor or {}
     logn = math.log(max(n_eff, 2.0))
     gram = _Gram(search, c, y, rows)
@@ -104,30 +107,41 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
             return math.inf
         return c2
 
+    def part_of(terms, cand, cols):  # chi-square with only the columns ``cols`` of cand
+        ts = terms + offset_refit(search, c, model or {}, terms + [cand])
+        return gram.fit_idx(np.concatenate([gram.at[u] for u in ts] + [np.asarray(cols, int)]))[0]
+
     chosen = []
     chi2 = chi2_of(chosen)
     model = held  # the model's parameters (the loop's "held" is the coefficients entered)
+    cost = lambda t: acceptance.cost(search, t, threshold)  # noqa: E731
+    # the library's terms first, then every candidate on top of them (families/acceptance.py)
+    candidates, refused = acceptance.searched(search, library_only), set()
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
-        for cand in search.candidates():
-            if held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
+        for cand in candidates:
+            if cand in refused or held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
                 continue
             if products.clash(search, c, chosen, cand, model):  # the core holds one shape per joint
                 continue
             c2 = chi2_of(chosen + [cand])
-            gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn
+            gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn - cost(cand)  # a family term pays more
             if best is None or gain > best[0]:
                 best = (gain, cand, c2)
-        if best is None or best[0] <= threshold:
+        if best is None or best[0] <= 0.0:
             break
+        if not acceptance.own_part(lambda cols: part_of(chosen, best[1], cols), best[2], best[1], gram.at,
+                                   logn, cost(best[1])):  # a whole-effort gain is no effort x position
+            refused.add(best[1])
+            continue
         chosen.append(best[1])
         chi2 = best[2]
         # backward: a term the newer ones made redundant leaves
         for t in list(chosen[:-1]):
             rest = [u for u in chosen if u != t]
             c2 = chi2_of(rest)
-            if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
+            if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= cost(t):
                 chosen, chi2 = rest, c2
     return chosen
 
@@ -155,7 +169,12 @@ class _Gram:
         """(chi-square, coefficients) of the least-squares fit of ``terms``, as :func:`_ls_fit`."""
         if not terms:
             return self.tt, np.zeros(0)
-        i = np.concatenate([self.at[u] for u in terms])
+        return self.fit_idx(np.concatenate([self.at[u] for u in terms]))
+
+    def fit_idx(self, i):
+        """(chi-square, coefficients) of the fit of the candidates' columns ``i`` (indices)."""
+        if len(i) == 0:
+            return self.tt, np.zeros(0)
         G, b = self.G[i][:, i], self.b[i]
         coef = -small_lstsq(G, b)
         # |t + X c|^2 = t't + 2 c'X't + c'X'X c
@@ -204,21 +223,22 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=fr
 
 # ------------------------------------------------------------------------- the step
 
-def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
+def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), library_result=None):
     """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
     model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
     holds on this joint (the library's offset) is not searched: it is fitted already.  For the
     library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
     the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
     the coefficient, must not be negative); otherwise each split level is a friction of its
-    own."""
+    own.  ``library_result``: a function giving this search's result without the families' terms
+    (made already), returned when the selection holds none of them."""
     eng = search.eng
     train, test = eng.train, eng.test
     # The yardstick is the residual's own high-frequency noise (as the structure test's):
     # the engine's noise model is inflated by the very force searched for.
     phi = samples_per_independent(eng.pipe)
     n_eff = float((eng.use[train, c] > 0).sum()) / phi
-    lee = 2.0 * math.log(search.n_tried())
+    lee = 2.0 * math.log(acceptance.n_library(search))  # a family term pays more (search.fam_extra)
     thr = threshold + lee
     held = search.theta if theta is None else theta
     fixed = frozenset(k for t in TERMS.values() for k in t[0]
@@ -227,6 +247,16 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
     # an added inertia may lower the rotor's the model holds, never below zero
     rotor = search.name(c, "rotor_inertia")
     floor["force_inertia"] = -float(held.get(rotor, eng.model.param(rotor)))
+
+    def heldout(terms):
+        # the channel's held-out chi-square without and with the terms, coefficients held
+        f = fit_terms(search, c, y, terms, train)
+        if not terms:
+            return f, 0.0
+        Xt, _, wt = _design(search, c, terms, test)
+        tt = y[test] * wt
+        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
+
     r, terms = y, []
     search.w[c] = 0.0
     for _ in range(3):
@@ -238,20 +268,16 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=()):
             break
         search.w[c] = 1.0 / (sigma * math.sqrt(phi))
         terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
+        if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
+            terms = acceptance.or_library(terms, lambda: stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor,
+                                                                  held, library_only=True), heldout, threshold, search)
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))
         r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
 
-    def heldout(terms):
-        # the channel's held-out chi-square without and with the terms, coefficients held
-        f = fit_terms(search, c, y, terms, train)
-        if not terms:
-            return f, 0.0
-        Xt, _, wt = _design(search, c, terms, test)
-        tt = y[test] * wt
-        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
-
+    if library_result is not None and not any(acceptance.is_family(t) for t in terms):
+        return library_result()  # the same selection as without the families: its result
     # the cheap held-out check first, then the bootstrap's stability
     if not terms or not heldout(terms)[1] > threshold:
         return None
@@ -448,7 +474,7 @@ def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):
         if not rest:
             break
         c2 = _ls_fit(search, c, y, rest + keep, rows)[0]
-        if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= threshold:
+        if (c2 - chi2) - len(TERMS[t[0]][0]) * logn <= acceptance.cost(search, t, threshold):
             terms, chi2 = rest, c2
     return terms
 

@@ -13,7 +13,7 @@ import numpy as np
 from .discovery_fit import discover_channel
 from .discovery_search import Search
 from .discovery_terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
-from .families import products
+from .families import acceptance, products
 from .structure import own_noise
 
 
@@ -121,7 +121,7 @@ def judge_library(eng, sel, threshold: float):
     and the terms discovered per channel on the final library model."""
     theta = dict(sel.theta)
     search = Search(eng, theta)
-    bar = threshold + 2.0 * math.log(search.n_tried())
+    bar = threshold + 2.0 * math.log(acceptance.n_library(search))
     withdrawn, ties = [], []
     acting = []  # (selected group, the channels it acts on), in the order put on trial
     confirmed = {}  # channel -> library frictions that the terms in their place restated
@@ -138,14 +138,21 @@ def judge_library(eng, sel, threshold: float):
             asym = tuple((asymmetry or {}).get(c, ()))
             own = search.name(c, "")
             key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
-                   tuple(sorted((k, v) for k, v in th.items() if k.startswith(own))), tuple(sorted(asym)))
+                   tuple(sorted((k, v) for k, v in th.items() if k.startswith(own))), tuple(sorted(asym)),
+                   search.fam_on)
             if key not in memo:
-                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym), search.w[c])
+                lib = key[:-1] + (False,)  # the same search without the families, if made
+                done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
+                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
+                                              library_result=done), search.w[c])
             term, search.w[c] = memo[key]
             out[c] = copy.deepcopy(term)
         return out
 
     R_lib = eng.R(theta)
+    # the trials weigh the library's effects against the library's own terms; the families' terms
+    # are searched on the model that stays, on top of it (families/acceptance.py)
+    search.fam_on = False
     base = discover_all(R_lib, range(eng.nd), theta)
     # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
     # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
@@ -262,7 +269,51 @@ def judge_library(eng, sel, threshold: float):
     # a friction kept only as a tie may be a stand-in, whose asymmetry would be no physics)
     again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
     base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
+    theta, base = _families_pass(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
     return theta, withdrawn, ties, search, base
+
+
+def _families_pass(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
+    """With the families in the search: their terms searched on every channel of the model that
+    stays, and the library's effects of one joint on trial again (:func:`_trials_again`).
+    Returns ``(theta, base)``."""
+    search.fam_on = True
+    if acceptance.split(search.candidates())[1]:
+        base = discover_all(R_lib, range(eng.nd), theta, asymmetry=confirmed)
+        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
+    return theta, base
+
+
+def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
+    """The library's effects of one joint that stay, on trial once more with the families searched
+    on both sides where the terms in their place hold a family term that may withdraw one
+    (:data:`.families.acceptance.WITHDRAWING`): an effect whose place such terms take is
+    withdrawn by the tie rule's test (significantly better on the held-out part, or fewer free
+    coefficients and a gain above the bar), and ``base`` (channel -> term) takes the terms in its
+    place.  Returns ``(theta, R_lib)``."""
+    for a in sel.selected:
+        g = a.group
+        c = g.joint
+        if g.effect.family not in ("effort", "both") or c is None or not all(p in theta for p in g.params):
+            continue
+        th_minus = {k: v for k, v in theta.items() if k not in g.params}
+        R_minus = eng.R(th_minus)
+        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed).get(c)
+        if in_place is None or not acceptance.withdrawing(in_place):
+            continue
+        on_top = [base[c]] if base.get(c) is not None else []
+        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, [in_place])
+        k_A = len(g.params) - 1 + _rank(search, [R_lib - R_minus], on_top, [c])
+        k_B = _rank(search, [], [in_place], [c])
+        better, gain, se = significant(search, R_A, R_B, [c], bar)
+        if better or (k_B < k_A and gain > bar):
+            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+                              "replaced_by": [in_place.channel], "heldout_chi2_library": heldout_chi2(search, R_A, [c]),
+                              "heldout_chi2_discovered": heldout_chi2(search, R_B, [c]), "gain": gain, "se": se,
+                              "bar": bar, "coefficients": [k_A, k_B]})
+            theta, R_lib, base[c] = th_minus, R_minus, in_place
+    return theta, R_lib
 
 
 def _tie(ties, groups, in_place, extra, figures, channels):

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import ParameterError
 from .discovery_terms import RATE_TERMS, TERMS
 from .effects import joint_prefix
-from .families import products
+from .families import acceptance, products
 from .structure import LOW_SPEEDS
 
 
@@ -47,6 +47,8 @@ class Search:
         self.cols, self.instr = {}, {}
         self.w = np.zeros(self.nd)  # per channel: 1 / (own noise sqrt(samples per independent one))
         self._columns()
+        self.fam_extra = acceptance.extra_cost(self)  # what a family term pays beyond a library one
+        self.fam_on = True  # the families' terms are searched (not in the library's trials)
 
     def name(self, j: int, key: str) -> str:
         return f"{self.pre}[{j + 1}].{key}"

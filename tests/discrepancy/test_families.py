@@ -12,7 +12,7 @@ import pytest
 
 from cosim.discrepancy import blind, diagnose
 from cosim.discrepancy.diagnosis import tied
-from cosim.discrepancy.families import generator, searched
+from cosim.discrepancy.families import generator
 
 
 def _case(tmp_path, cfg, hidden, seed):
@@ -34,8 +34,7 @@ def _confident(d):
 ])
 def test_a_force_of_a_family_is_found_with_its_structure_and_coefficient(tmp_path, short_cfg, kind, seed):
     rec, (truth,) = _case(tmp_path, short_cfg, [kind], seed)
-    with searched():  # the families are off by default (families/products.py)
-        d = diagnose(rec, figures=False, replay=False)
+    d = diagnose(rec, figures=False, replay=False, families=True)  # the families are off by default
     found = {t.joint: t for t in d.discovered}
     (j,) = truth["joints"]
     assert j in found, (d.conclusion, truth)
@@ -55,7 +54,7 @@ def test_a_library_friction_and_a_load_dependent_one_on_one_joint_are_both_found
     # load term's coefficient is right, and the plant's viscous friction (the library's level and
     # a direction pair the discovery step adds to it, ADDS_TO) is the hidden one
     rec, hidden = _case(tmp_path, short_cfg, ["viscous", "load_friction"], 12)
-    d = diagnose(rec, figures=False, replay=False, families=True)  # the keyword of searched()
+    d = diagnose(rec, figures=False, replay=False, families=True)
     visc, load = hidden
     assert visc["joints"] == load["joints"] == [2], hidden
     assert "viscous" in d.named(), d.conclusion

@@ -6,4 +6,4 @@ motion and the effort x position and position x velocity terms, each a named par
 core's joint force (``<j>[i].force_*``, ``pkm.h``); :mod:`.generator` draws physics at random
 from every family for the unnamed-force bench (``bench/unnamed_bench.py``).
 """
-from .products import excluded, searched, without  # noqa: F401
+from .products import FAMILIES, excluded, searched, without  # noqa: F401

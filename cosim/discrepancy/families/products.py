@@ -82,11 +82,10 @@ MECHANISMS = {
 _EXCLUDED: set = set()
 
 
-#: the families are searched on request only (:func:`searched`): in the default search their
-#: candidates raise the look-elsewhere bar of every joint (2 ln 132 -> 2 ln 300 on the 6-PUS), and
-#: on real recordings they took the place of what the library and the joint's own terms say: the
-#: Silverbox's damping is no longer selected (structure left instead of its Duffing model), the
-#: EMPS drive's viscous friction gives way to effort-proportional terms
+#: the families are searched on request only (:func:`searched`, ``diagnose(families=True)``):
+#: with the acceptance rules of :mod:`.acceptance` the real recordings' answers are those without
+#: them, but on the Clavel delta's held-out rotor inertia they keep an offset the added inertia
+#: refits to zero without them (docs/discovery_families.md)
 _SEARCHED: list = []
 
 
