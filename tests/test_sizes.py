@@ -23,14 +23,14 @@ OVER_LIMIT = {
     # functions over 100 lines
     "c_core/src/description/description.cpp:read_description": 296,
     "cosim/discrepancy/diagnosis.py:diagnose": 225,
-    "cosim/discrepancy/discovery_judgement.py:judge_library": 183,  # + the families kept out of the trials
+    "cosim/discrepancy/discovery/judgement.py:judge_library": 183,  # + the families kept out of the trials
     "cosim/discrepancy/report.py:markdown": 172,
     "cosim/discrepancy/regressors.py:candidates": 153,
     "cosim/discrepancy/selection.py:select": 126,
     "cosim/closed_loop.py:ClosedLoop.run": 120,
     "cosim/discrepancy/residuals.py:Pipeline.__init__": 120,
     "cosim/master.py:run": 118,
-    "cosim/discrepancy/discovery_fit.py:discover_channel": 117,  # + the families' held-out check
+    "cosim/discrepancy/discovery/fit.py:discover_channel": 117,  # + the families' held-out check
     "cosim/discrepancy/working_set.py:working_set": 103,
     "cosim/discrepancy/blind_sampling.py:sample_effect": 102,
 }

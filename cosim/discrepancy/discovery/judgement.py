@@ -10,11 +10,11 @@ import math
 
 import numpy as np
 
-from .discovery_fit import discover_channel
-from .discovery_search import Search
-from .discovery_terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
-from .families import acceptance, products
-from .structure import own_noise
+from .fit import discover_channel
+from .search import Search
+from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
+from ..families import acceptance, products
+from ..structure import own_noise
 
 
 def heldout_chi2(search, R, channels):

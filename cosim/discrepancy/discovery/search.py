@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ParameterError
-from .discovery_terms import RATE_TERMS, TERMS
-from .effects import joint_prefix
-from .families import acceptance, products
-from .structure import LOW_SPEEDS
+from ...errors import ParameterError
+from .terms import RATE_TERMS, TERMS
+from ..effects import joint_prefix
+from ..families import acceptance, products
+from ..structure import LOW_SPEEDS
 
 
 class Search:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .families import products
+from ..families import products
 
 #: term -> (core keys of its coefficients, scale of its basis function: "1", "T", "T2", "T3",
 #: "V", "V2", "A" (the acceleration)), shape parameters it needs, what it is in words

@@ -9,13 +9,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._linalg import small_lstsq
-from .discovery_search import FADE_RANGE
-from .discovery_terms import ADDS_TO, BLOCK, MAX_STEPS, N_BOOT, SAME_COLUMN, SIGNED, STABILITY, TERMS, _term
-from .families import acceptance, products
-from .intervals import hac_covariance
-from .regressors import MIN_RELEVANCE, fit
-from .structure import own_noise, samples_per_independent
+from .._linalg import small_lstsq
+from .search import FADE_RANGE
+from .terms import ADDS_TO, BLOCK, MAX_STEPS, N_BOOT, SAME_COLUMN, SIGNED, STABILITY, TERMS, _term
+from ..families import acceptance, products
+from ..intervals import hac_covariance
+from ..regressors import MIN_RELEVANCE, fit
+from ..structure import own_noise, samples_per_independent
 
 
 # ------------------------------------------------------------------------- fitting
