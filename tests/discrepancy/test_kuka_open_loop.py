@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from cosim.core import Model
-from cosim.discrepancy.open_loop import open_loop_replay
+from cosim.discrepancy.open_loop import can_replay_open_loop, open_loop_replay
 from cosim.identification import identify
 from cosim.importing import to_recording
 
@@ -31,6 +31,7 @@ def replay():
     ident = identify(recs["A"], ROBOT, cutoff=2.0, strict=False)
     plants = {"para": Model(ROBOT, "para"), "identified": ident.model(ROBOT)}
     rec = recs["B"]
+    assert rec.qref is not None and can_replay_open_loop(rec) == (True, "")  # the map declares it
     out = open_loop_replay(rec, plants, window=0.5)
     limp = dataclasses.replace(rec, tau=np.zeros_like(rec.tau))
     out0 = open_loop_replay(limp, {"identified": plants["identified"]}, window=0.5)
