@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .open_loop import can_replay_open_loop, open_loop_replay
+from .open_loop import can_replay_open_loop, declared_open_loop, open_loop_replay
 
 #: rows of a run's start the controller is primed with before a held-out piece that starts the run
 PRIME_ROWS = 50
@@ -64,7 +64,7 @@ def replay_held_out(c, pieces, joint, model) -> list:
             continue
         rec = c.runs[k]
         plants = _plants(joint, model, rec)
-        if rec.qref is not None and rec.controller:
+        if rec.qref is not None and rec.controller and not declared_open_loop(rec):
             r = _closed(rec, plants, a, b)
         elif can_replay_open_loop(rec)[0]:
             r = {"kind": "open loop", **open_loop_replay(rec, plants, start=a, stop=b)}

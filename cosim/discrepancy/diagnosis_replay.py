@@ -86,9 +86,9 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     from .drive_bodies import drive_joints, fit_two_body, fitting_window
     from .runs import closed_loop, controller_from, reference_from_recording
 
-    if rec.qref is None:  # no reference: an open-loop experiment is replayed open loop (.open_loop)
-        from .open_loop import heldout_replay
+    from .open_loop import declared_open_loop, heldout_replay
 
+    if rec.qref is None or declared_open_loop(rec):  # an open-loop experiment, or declared: open loop
         return heldout_replay(rec, eng, sel.theta if theta is None else theta, compared)
     mdl = eng.model
     pipe = eng.pipe

@@ -39,9 +39,20 @@ SMOOTH = 0.02
 MAX_WINDOWS = 20
 
 
+def declared_open_loop(rec) -> bool:
+    """Whether the sidecar declares the recorded effort the plant's input to replay open loop
+    (``"controller": {"kind": "open loop"}``, an import map's ``[controller] kind = "open loop"``):
+    a closed-loop recording whose controller is not described (a reference but no controller
+    law), replayed with its recorded efforts."""
+    return isinstance(rec.controller, dict) and rec.controller.get("kind") == "open loop"
+
+
 def can_replay_open_loop(rec) -> tuple[bool, str]:
-    """Whether ``rec`` is an open-loop experiment: no controller in its sidecar and no
-    reference columns.  Returns (True, "") or (False, why not)."""
+    """Whether ``rec`` is replayed open loop: no controller in its sidecar and no reference
+    columns, or the sidecar declares it (:func:`declared_open_loop`).  Returns (True, "") or
+    (False, why not)."""
+    if declared_open_loop(rec):
+        return True, ""
     if rec.controller:
         return False, "the sidecar describes a controller (a closed-loop recording)"
     if rec.qref is not None:
