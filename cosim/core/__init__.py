@@ -8,7 +8,9 @@ C call, so a million poses are one call.  Units are SI: m, rad, kg, N, N m, s.
 One module per concern:
 
 - :mod:`cosim.core.facts`: robot names, named parameters, :class:`RobotFacts`
-- :mod:`cosim.core.model`: :class:`Model` (parameters, kinematics, dynamics, drive layer)
+- :mod:`cosim.core.model`: :class:`Model` (parameters, kinematics, dynamics), with its
+  drive-layer methods from :mod:`cosim.core.model_drive` and its robot-specific families
+  from :mod:`cosim.core.model_families`
 - :mod:`cosim.core.simulator`: :class:`Simulator` (``pkm_sim``) and its options
 - :mod:`cosim.core.controller`: :class:`CompiledController` (``pkm_ctrl``)
 - :mod:`cosim.core.loop`: one ``pkm_closed_loop`` call

@@ -9,10 +9,12 @@ import json
 
 import numpy as np
 
-from .._native import c_int_p, fast, lib, pkm_fk_info, pkm_fk_options, ptr, raise_for
+from .._native import fast, lib, pkm_fk_info, pkm_fk_options, ptr, raise_for
 from ..errors import ArgumentError, ParameterError, PkmError, UnsupportedError
 from ._handles import _errbuf
-from .facts import ParamInfo, RobotFacts, quattro_index_names, robots
+from .facts import ParamInfo, RobotFacts, robots
+from .model_drive import DriveLayerMethods
+from .model_families import RobotFamilyMethods
 
 
 def _fk_options(tol, max_iter, damping) -> pkm_fk_options:
@@ -49,7 +51,7 @@ def robot_facts(robot: str) -> RobotFacts:
 
 
 
-class Model:
+class Model(DriveLayerMethods, RobotFamilyMethods):
     """A robot model (constant parameters) with its own work data.
 
     Parameters
@@ -510,46 +512,6 @@ class Model:
                 return tau
         return self._batch(lib.pkm_inverse_dynamics_batch, [x, xd, xdd], ["x", "xd", "xdd"], errors)
 
-    def mechanism_inverse_dynamics(self, x, xd, xdd):
-        """The mechanism's part of :meth:`inverse_dynamics` [N or N m], shape (n, nd): links,
-        platform, payload and gravity, without the drive layer (no parameter of
-        :meth:`drive_layer_params` changes it; ``pkm_mechanism_inverse_dynamics_batch``).
-
-        Example: ``m.add_drive_inverse_dynamics(x, xd, xdd, m.mechanism_inverse_dynamics(x, xd, xdd))``
-        equals ``m.inverse_dynamics(x, xd, xdd)`` bit for bit."""
-        return self._batch(lib.pkm_mechanism_inverse_dynamics_batch, [x, xd, xdd], ["x", "xd", "xdd"])
-
-    def add_drive_inverse_dynamics(self, x, xd, xdd, mechanism):
-        """``mechanism`` (n, nd) plus the drive layer's efforts at (x, xd, xdd): joint force and
-        offset, friction, rotor inertia [N or N m]; a new array
-        (``pkm_add_drive_inverse_dynamics_batch``).  With ``mechanism`` from
-        :meth:`mechanism_inverse_dynamics` of a model with the same mechanism parameters, the
-        result is :meth:`inverse_dynamics` bit for bit."""
-        return self._add_to(lib.pkm_add_drive_inverse_dynamics_batch, (x, xd, xdd), ("x", "xd", "xdd"), mechanism)
-
-    def add_drive_efforts(self, q, qd, qdd, mechanism):
-        """:meth:`add_drive_inverse_dynamics` from the joint motion at the poses: ``q`` =
-        :meth:`ik` [m or rad], ``qd`` = :meth:`joint_velocity`, ``qdd`` = :meth:`joint_acceleration`
-        (``pkm_add_drive_efforts_batch``), for several drive layers added along one motion: the
-        same result bit for bit."""
-        return self._add_to(lib.pkm_add_drive_efforts_batch, (q, qd, qdd), ("q", "qd", "qdd"), mechanism)
-
-    def _add_to(self, fn, inputs, names, mechanism):
-        arrs = [np.ascontiguousarray(self._arr(a, n).reshape(-1, self.ndof)) for a, n in zip(inputs, names)]
-        tau = np.array(self._arr(mechanism, "mechanism"), dtype=np.float64, order="C").reshape(-1, self.ndof)
-        if len({len(a) for a in arrs + [tau]}) != 1:
-            raise ArgumentError(f"{', '.join(names)} and mechanism must have the same number of rows, got "
-                                f"{[len(a) for a in arrs + [tau]]}", "PKM_ERR_ARGUMENT")
-        status = np.zeros(len(tau), dtype=np.intc)
-        self._check(fn(self._m, self._d, len(tau), *[ptr(a) for a in arrs], ptr(tau),
-                       status.ctypes.data_as(C.POINTER(C.c_int))))
-        return tau
-
-    def drive_layer_params(self) -> frozenset:
-        """Names of the drive layer's parameters (``pkm_param_in_drive_layer``): friction, rotor
-        inertia, joint force and offset, actuators, sensors; the others are the mechanism's."""
-        return frozenset(n for i, n in enumerate(self.param_names()) if lib.pkm_param_in_drive_layer(self._m, i) == 1)
-
     def forward_dynamics(self, x, xd, tau, errors: str = "raise"):
         """Pose acceleration xdd, shape (..., nd), from (x, xd, tau)."""
         if errors == "raise":
@@ -578,116 +540,7 @@ class Model:
             self._loop(name, inputs, names, (self.ndof,), times=times, what=what)
         return out
 
-    def measure_joints(self, x, xd, tau, times=None, what="item"):
-        """Joint readings of the model's sensors at (x, xd) with applied effort tau, shape
-        (..., nd) (``pkm_measure_joints``: encoder offset, backlash, compliance).  A failing
-        row is named in the error (with its time from ``times``, if given)."""
-        q = self._single("pkm_measure_joints", (x, xd, tau), (self.ndof,))
-        if q is not None:
-            return q
-        return self._batch_or_loop("pkm_measure_joints_batch", "pkm_measure_joints", [x, xd, tau],
-                                   ["x", "xd", "tau"], times, what)
-
-    def sensor_readings(self, x, xd, tau, drive=None):
-        """``(q, qd)``: the sensors' joint readings and rates at one state (x, xd) [m, rad] under
-        the applied effort tau (``pkm_sensor_readings``): :meth:`measure_joints` and the joint
-        rates, and on a joint that is two bodies, given ``drive = (theta, theta_d)`` (e.g.
-        ``Simulator.drive_state``), its drive body plus the encoder offset, and its rate."""
-        v = [np.ascontiguousarray(a, dtype=np.float64) for a in (x, xd, tau)]
-        th, thd = (None, None) if drive is None else (np.ascontiguousarray(a, dtype=np.float64) for a in drive)
-        q, qd = np.empty(self.ndof), np.empty(self.ndof)
-        self._check(lib.pkm_sensor_readings(self._m, self._d, *(ptr(a) for a in v), ptr(th), ptr(thd), ptr(q),
-                                            ptr(qd)))
-        return q, qd
-
-    def two_body_joints(self) -> int:
-        """How many joints are two bodies (``drive.two_body = 1`` and a backlash or a compliance
-        on them; docs/integration.md)."""
-        return int(lib.pkm_model_two_body_joints(self._m))
-
-    def actuator_effort(self, tau_cmd, times=None, what="item"):
-        """Effort reaching the mechanism for a commanded one, shape (..., nd) (``pkm_actuator_effort``:
-        dead zone, saturation).  A failing row is named in the error (with its time from
-        ``times``, if given)."""
-        u = self._single("pkm_actuator_effort", (tau_cmd,), (self.ndof,))
-        if u is not None:
-            return u
-        return self._batch_or_loop("pkm_actuator_effort_batch", "pkm_actuator_effort", [tau_cmd], ["tau_cmd"],
-                                   times, what)
-
     def energy(self, x, xd):
         """(kinetic, potential) energy [J], each shape (...)."""
         e = self._loop("pkm_energy", [x, xd], ["x", "xd"], (2,), out_parts=2)
         return e[..., 0], e[..., 1]
-
-    # ------------------------------------------------- robot-specific functions (:meth:`has`)
-    def calib_rows(self, x, frame: str = "world"):
-        """6-PUS calibration regression rows, shape (..., 6, 10): dq_i / d eta_i per leg.
-
-        eta_i = [X, Y, Z, S0x, S0y, S0z, L, sx, sy, sz] (Tiberi 2020 eq. 4.1).  ``frame="world"``
-        differentiates with respect to the world position of the platform point (the thesis'
-        tables), ``"platform"`` with respect to ``leg[i].px/py/pz``.  Stroke limits are not
-        applied (the rows are geometry); an unreachable or singular pose raises.
-        """
-        self._require("6pus_calib_rows", "calib_rows")
-        frames = {"world": 0, "platform": 1}
-        if frame not in frames:
-            raise ArgumentError(f"frame must be 'world' or 'platform', got {frame!r}", "PKM_ERR_ARGUMENT")
-        f = frames[frame]
-        return self._loop("pkm_6pus_calib_rows", [x], ["x"], (6, 10), extra=(f,), what="pose")
-
-    def leg_points(self, x):
-        """6-PUS world positions ``(P, S)`` of the platform points and sliders, each (..., 6, 3) [m]."""
-        self._require("6pus_leg_points", "leg_points")
-        ps = self._loop("pkm_6pus_leg_points", [x], ["x"], (2, 6, 3), out_parts=2)
-        return ps[..., 0, :, :], ps[..., 1, :, :]
-
-    def fourbar_output(self, theta, jacobian: bool = True):
-        """Four-bar coupler mid-point X [m] at crank angle(s) theta [rad], and dX/d(l1..l4)
-        [m/m] of shape ``theta.shape + (4,)`` if ``jacobian`` (``pkm_fourbar_output``)."""
-        self._require("fourbar_output", "fourbar_output")
-        th = np.asarray(theta, dtype=float)
-        flat = th.reshape(-1)
-        X = np.empty(flat.shape)
-        J = np.empty(flat.shape + (4,))
-        out = np.empty(1)
-        for k, t in enumerate(flat):
-            row = J[k] if jacobian else None
-            self._check(lib.pkm_fourbar_output(self._m, self._d, float(t), ptr(out), ptr(row)))
-            X[k] = out[0]
-        X = X.reshape(th.shape)
-        return X if not jacobian else (X, J.reshape(th.shape + (4,)))
-
-    def quattro_indices(self, poses) -> tuple[np.ndarray, np.ndarray]:
-        """Performance indices of poses (..., 4) -> (values (..., n_index), status (...)), one
-        core call (``pkm_quattro_indices``); names and units in :func:`quattro_index_names`."""
-        self._require("quattro_indices", "quattro_indices")
-        x = np.ascontiguousarray(poses, dtype=np.float64)
-        if x.shape[-1:] != (4,):
-            raise ArgumentError(f"poses must have 4 coordinates (x, y, z, theta) in the last axis, got {x.shape}",
-                                "PKM_ERR_ARGUMENT")
-        flat = x.reshape(-1, 4)
-        n = flat.shape[0]
-        nidx = len(quattro_index_names())
-        out = np.empty((n, nidx))
-        status = np.zeros(n, dtype=np.intc)
-        lib.pkm_quattro_indices(self._m, self._d, n, ptr(flat), ptr(out), status.ctypes.data_as(c_int_p))
-        return out.reshape(x.shape[:-1] + (nidx,)), status.reshape(x.shape[:-1])
-
-    def quattro_gimre(self, x) -> np.ndarray:
-        """Quattro generalized inertia matrix reduced to the end effector, (4, 4) at pose x
-        [kg, kg m, kg m^2] (``pkm_quattro_gimre``)."""
-        self._require("quattro_gimre", "quattro_gimre")
-        xv = np.ascontiguousarray(x, dtype=np.float64)
-        N = np.empty((4, 4))
-        self._check(lib.pkm_quattro_gimre(self._m, self._d, ptr(xv), ptr(N)))
-        return N
-
-    def quattro_points(self, x) -> dict:
-        """Quattro world points A, B, C (4, 3) [m] of the four arms at pose x (motor axis,
-        elbow, platform joint) (``pkm_quattro_points``)."""
-        self._require("quattro_points", "quattro_points")
-        xv = np.ascontiguousarray(x, dtype=np.float64)
-        A, B, Cp = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
-        self._check(lib.pkm_quattro_points(self._m, self._d, ptr(xv), ptr(A), ptr(B), ptr(Cp)))
-        return {"A": A, "B": B, "C": Cp}

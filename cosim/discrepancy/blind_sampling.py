@@ -86,18 +86,7 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
              f"{pre}[{j}].{vel}": _uniform(rng, eff[kind + "_v"])}
         return Hidden(kind, p, [j], {k: nominal[k] for k in p})
     if kind == "saturation":
-        # tau_peak = (peak effort, largest gravity load) per joint: a limit below the
-        # gravity load would drop the robot, so the level stays above it, on a joint whose
-        # peaks are well above its gravity load.
-        peak, static = tau_peak[:2]
-        ok = [j for j in range(nd) if peak[j] > 1.25 * static[j]]
-        if not ok:
-            raise _Redraw("no joint's peak effort is well above its gravity load on this trajectory")
-        j = int(rng.choice(ok)) + 1
-        level = min(max(_uniform(rng, eff["saturation"]) * float(peak[j - 1]), 1.15 * float(static[j - 1])),
-                    0.95 * float(peak[j - 1]))
-        p = {f"{pre}[{j}].effort_max": level}
-        return Hidden(kind, p, [j], {k: nominal[k] for k in p})
+        return _saturation(rng, eff, pre, nominal, tau_peak, nd)
     if kind == "payload":
         p = {"payload.m": _uniform(rng, eff["payload_m"])}
         if "payload_xy" in eff:
@@ -128,18 +117,37 @@ def sample_effect(kind, model, rng, cfg, tau_peak) -> Hidden:
         name = kind.replace("_", ".")
         return Hidden(kind, {name: _uniform(rng, eff[kind])}, [], {name: nominal[name]})
     if kind == "geometry":
-        # The parameters the core names for a geometric error: one per joint (a joint is
-        # drawn), else the first of the robot's list (derived lists: a random one).
-        geo, per_joint = geometry_layout(model)
-        if per_joint:
-            j = int(rng.integers(1, nd + 1))
-            name, js = geo[j - 1], [j]
-        elif model.facts.geometry_params:
-            name, js = geo[0], []
-        else:
-            name, js = geo[int(rng.integers(len(geo)))], []
-        return Hidden(kind, {name: nominal[name] + sign * _uniform(rng, eff[kind])}, js, {name: nominal[name]})
+        return _geometry_error(model, rng, eff, nominal, sign)
     raise InputError(f"the generator cannot hide effect type {kind!r} (it can hide: {', '.join(TYPES)})")
+
+
+def _saturation(rng, eff, pre, nominal, tau_peak, nd) -> Hidden:
+    """An effort limit on one joint.  ``tau_peak`` = (peak effort, largest gravity load) per
+    joint: a limit below the gravity load would drop the robot, so the level stays above it,
+    on a joint whose peaks are well above its gravity load."""
+    peak, static = tau_peak[:2]
+    ok = [j for j in range(nd) if peak[j] > 1.25 * static[j]]
+    if not ok:
+        raise _Redraw("no joint's peak effort is well above its gravity load on this trajectory")
+    j = int(rng.choice(ok)) + 1
+    level = min(max(_uniform(rng, eff["saturation"]) * float(peak[j - 1]), 1.15 * float(static[j - 1])),
+                0.95 * float(peak[j - 1]))
+    p = {f"{pre}[{j}].effort_max": level}
+    return Hidden("saturation", p, [j], {k: nominal[k] for k in p})
+
+
+def _geometry_error(model, rng, eff, nominal, sign) -> Hidden:
+    """A geometric error, added with ``sign`` to a parameter the core names for one: one per
+    joint (a joint is drawn), else the first of the robot's list (derived lists: a random one)."""
+    geo, per_joint = geometry_layout(model)
+    if per_joint:
+        j = int(rng.integers(1, model.ndof + 1))
+        name, js = geo[j - 1], [j]
+    elif model.facts.geometry_params:
+        name, js = geo[0], []
+    else:
+        name, js = geo[int(rng.integers(len(geo)))], []
+    return Hidden("geometry", {name: nominal[name] + sign * _uniform(rng, eff["geometry"])}, js, {name: nominal[name]})
 
 
 #: forces in no effect of the library, for the discovery step's proof: kind -> what it is.

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -533,7 +533,7 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
             d = _diagnose(wsk, model, tfk, kw, effects=lib, discovery=discovery)
             loro.append({"name": name, "gain": d.heldout.get("gain"), "named": d.named(), "conclusion": d.conclusion})
     words = _held_out_words(used, held_out if not first or held_out == "within" else "run", train_fraction)
-    joint.recording = f"joint fit of {', '.join(used.names)}"
+    joint = replace(joint, recording=f"joint fit of {', '.join(used.names)}")
     res = CampaignDiagnosis("", joint, c.names, words, per, disagree, first, loro)
     if replay:
         from .campaign_replay import replay_held_out

@@ -28,7 +28,7 @@ from .ties import TIE_MARGIN, UNEXPLAINED, tied  # noqa: F401
 __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class Diagnosis:
     """The answer of :func:`diagnose`.
 
@@ -294,17 +294,23 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         A recording the engine cannot use (too short, not uniformly sampled, no
         dynamics for the robot, ...): says what is missing.
     """
+    return _diagnose(recording, model, out=out, window=window, threshold=threshold, train_fraction=train_fraction,
+                     effects=effects, replay=replay, figures=figures, max_effects=max_effects, instruments=instruments,
+                     compare=compare, discovery=discovery, max_samples=max_samples, block_seconds=block_seconds,
+                     progress=progress, verbose=verbose, platform=platform, drift=drift, families=families,
+                     flexible=flexible, black_box=black_box)
+
+
+def _diagnose(recording, model, *, out, window, threshold, train_fraction, effects, replay, figures, max_effects,
+              instruments, compare, discovery, max_samples, block_seconds, progress, verbose, platform, drift,
+              families, flexible, black_box) -> Diagnosis:
+    """:func:`diagnose`'s work, stage after stage (its arguments, all given)."""
     from ._threads import one_blas_thread
     from .localisation import localise
     from .engine import attribute, prepare
-
-    for name, v, lo in (("window", window, 0.0), ("threshold", threshold, 0.0)):
-        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > lo):
-            raise DiagnosisError(f"{name} = {v!r} must be a positive number")
-    if not (0.0 < train_fraction < 1.0):
-        raise DiagnosisError(f"train_fraction = {train_fraction!r} must be in (0, 1)")
     from .working_set import BLOCK_SECONDS, MAX_SAMPLES
 
+    _check_settings(window, threshold, train_fraction)
     t0 = time.perf_counter()
     ws = _load(recording, MAX_SAMPLES if max_samples is None else max_samples,
                BLOCK_SECONDS if block_seconds is None else block_seconds, progress)
@@ -318,9 +324,10 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
 
     enc = encoder_findings(rec, mdl)  # the two encoders' difference, when a joint has both
     timings = {"read": time.perf_counter() - t0}
+    # a working set of blocks, or a campaign's runs (.campaign): no window spans a seam
+    segments = None if ws.whole and len(ws.segments) == 1 else ws.segments
     with one_blas_thread():
-        # a working set of blocks, or a campaign's runs (.campaign): no window spans a seam
-        pipe = Pipeline(rec, mdl, window=window, segments=None if ws.whole and len(ws.segments) == 1 else ws.segments)
+        pipe = Pipeline(rec, mdl, window=window, segments=segments)
         groups, unavailable = groups_for(mdl, pipe.has_pose, effects)
         groups, one_signed = _drop_unseen_gaps(groups, pipe)
         _check_motion(pipe)
@@ -328,8 +335,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         if warnings:
             return _contradicted(rec, pipe, warnings, out, t0, enc)
         t1 = time.perf_counter()
-        eng = prepare(pipe, groups, train_fraction=train_fraction, threshold=threshold, max_groups=max_effects,
-                      instruments=instruments, verbose=verbose)
+        fit = {"train_fraction": train_fraction, "threshold": threshold, "max_groups": max_effects,
+               "instruments": instruments, "verbose": verbose}
+        eng = prepare(pipe, groups, **fit)
         t2 = time.perf_counter()
         eng, sel = attribute(eng)
         t3 = time.perf_counter()
@@ -337,22 +345,9 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         if platform:
             from .platform_force import diagnosis_stage
 
-            plat, eng, sel = diagnosis_stage(eng, sel, rec, mdl, groups, {
-                "window": window, "segments": None if ws.whole and len(ws.segments) == 1 else ws.segments}, {
-                "train_fraction": train_fraction, "threshold": threshold, "max_groups": max_effects,
-                "instruments": instruments, "verbose": verbose})
+            plat, eng, sel = diagnosis_stage(eng, sel, rec, mdl, groups, {"window": window, "segments": segments}, fit)
         t3a = time.perf_counter()
-        found, withdrawn, theta, ties = [], [], dict(sel.theta), []
-        if discovery:
-            from .families import searched
-
-            with searched() if families else contextlib.nullcontext():
-                found, withdrawn, theta, ties = _discover(eng, sel, threshold)
-        from .verdict import fit_problems, headline
-
-        problems = fit_problems(eng, theta) if theta else []  # a fit outside the physical ranges is refused
-        if problems:
-            theta, found, withdrawn, ties = {}, [], [], []
+        found, withdrawn, theta, ties, problems = _discovered_and_checked(eng, sel, threshold, discovery, families)
         t3b = time.perf_counter()
         if plat is not None:  # parameters relative to the user's model from here on
             theta = dict(plat.params, **theta)
@@ -365,7 +360,50 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,
                    discovery=t3b - t3a,
                    heldout_localisation=t4 - t3b)
-    from .structure import sentence, unexplained
+    r_after, left, effects_out, not_excited, flex, conclusion, details = _statement(
+        pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, plat, drifts, held, one_signed, enc,
+        effort_map, flexible, timings)
+    replayed = None
+    if replay:
+        t5 = time.perf_counter()
+        flex, replayed = _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box)
+        if details:
+            details += _two_body_sentence(replayed, mdl.joint_unit)
+        else:
+            conclusion += _two_body_sentence(replayed, mdl.joint_unit)
+        timings["replay"] = time.perf_counter() - t5
+    timings["diagnosis"] = time.perf_counter() - t0
+    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(theta),
+                  held, loc, not_excited,
+                  [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
+                  {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
+                   "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
+                  replay=replayed, timings=timings,
+                  steps=list(sel.steps), refused=[f"{k}: {v}" for k, v in sel.refused.items()] + problems,
+                  settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
+                            "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
+                            "smoothing_samples": pipe.window,
+                            "working_set": ws.summary()},
+                  residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
+                  discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map,
+                  platform_force=plat, drifts=drifts, encoders=enc, flexible=flex)
+    if out is not None:
+        from .report import write_report
+
+        t6 = time.perf_counter()
+        d = replace(d, files=write_report(d, eng, sel, Path(out), figures=figures))  # the report is the diagnosis'
+        timings["report"] = time.perf_counter() - t6
+    timings["total"] = time.perf_counter() - t0  # the same dict as d.timings: the whole call's time
+    return d
+
+
+def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, plat, drifts, held, one_signed, enc,
+               effort_map, flexible, timings):
+    """``(r_after, left, effects, not_excited, flex, conclusion, details)`` of a fit: the residual
+    after it and the structure left in it, the effects reported, what the recording cannot
+    reveal, the flexible model of the structure left (when ``flexible``; its time into
+    ``timings``), and the statement of it all."""
+    from .structure import unexplained
 
     gone = {w["group"] for w in withdrawn}
     r_after = eng0.R(theta) if theta else eng0.R0
@@ -377,6 +415,52 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
     for t in found:  # the same for a discovered term: fitted on top of stand-ins, it may share their error
         t.partial = _partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t)
     not_excited = _not_excited(eng, sel) + one_signed
+    conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
+    flex = []
+    if flexible:
+        from .flexible import flexible_stage
+
+        t3c = time.perf_counter()
+        flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
+        timings["flexible"] = time.perf_counter() - t3c
+    conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
+                                                  problems)
+    conclusion = _with_drive_statements(conclusion, enc, effort_map)
+    return r_after, left, effects_out, not_excited, flex, conclusion, details
+
+
+def _check_settings(window, threshold, train_fraction) -> None:
+    """Raise :class:`DiagnosisError` for a window or threshold that is not a positive number, or
+    a training fraction outside (0, 1)."""
+    for name, v, lo in (("window", window, 0.0), ("threshold", threshold, 0.0)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > lo):
+            raise DiagnosisError(f"{name} = {v!r} must be a positive number")
+    if not (0.0 < train_fraction < 1.0):
+        raise DiagnosisError(f"train_fraction = {train_fraction!r} must be in (0, 1)")
+
+
+def _discovered_and_checked(eng, sel, threshold, discovery, families):
+    """``(found, withdrawn, theta, ties, problems)``: the discovery step's terms, the library
+    effects they withdraw, the fitted parameters and ties after it, and why the fit is not
+    physical; a fit outside the physical ranges is refused as a whole (empty terms and
+    parameters, the problems kept)."""
+    found, withdrawn, theta, ties = [], [], dict(sel.theta), []
+    if discovery:
+        from .families import searched
+
+        with searched() if families else contextlib.nullcontext():
+            found, withdrawn, theta, ties = _discover(eng, sel, threshold)
+    from .verdict import fit_problems
+
+    problems = fit_problems(eng, theta) if theta else []  # a fit outside the physical ranges is refused
+    if problems:
+        theta, found, withdrawn, ties = {}, [], [], []
+    return found, withdrawn, theta, ties, problems
+
+
+def _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts) -> str:
+    """The statement of what the library, the discovery step, the platform force and the
+    drifts found."""
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if plat is not None:
         from .platform_force import sentence as platform_sentence
@@ -386,85 +470,72 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         from .drift import sentence as drift_sentence
 
         conclusion += "; " + drift_sentence(drifts)
-    flex = []
-    if flexible:
-        from .flexible import flexible_stage, sentence as flexible_sentence
+    return conclusion
 
-        t3c = time.perf_counter()
-        flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
-        timings["flexible"] = time.perf_counter() - t3c
+
+def _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex, problems):
+    """``(conclusion, details)``: the headline that sums up the full statement (and the full
+    statement as details), with the structure left and the flexible model's finding; a fit
+    refused as not physical says so instead."""
+    from .platform_force import short_name
+    from .structure import sentence
+    from .verdict import headline
+
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
-    from .platform_force import short_name
-
     others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
     head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
-    if flex and flexible_sentence(flex):
-        conclusion += "; " + flexible_sentence(flex)
+    if flex:
+        from .flexible import sentence as flexible_sentence
+
+        if flexible_sentence(flex):
+            conclusion += "; " + flexible_sentence(flex)
     details, conclusion = (conclusion, head) if head else ("", conclusion)
     if problems:
         details, conclusion = "", ("fit refused, not physical: " + "; ".join(problems) + ". The effects fitted to "
                                    "these values are not reported and the nominal model stands: the fit is degenerate "
                                    "on this recording (nearly dependent effects, or a recording that is not what the "
                                    "model thinks, such as runs joined end to end)")
+    return conclusion, details
 
-    d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, effects_out, dict(theta),
-                  held, loc, not_excited,
-                  [f"{e.name}: {why}" for e, why in unavailable], pipe.channels,
-                  {"sigma": dict(zip(pipe.channels, sel.sigma.tolist())),
-                   "phi": dict(zip(pipe.channels, sel.phi.tolist())), "n_eff": sel.n_eff},
-                  steps=list(sel.steps), refused=[f"{k}: {v}" for k, v in sel.refused.items()] + problems,
-                  settings={"window": window, "threshold": threshold, "train_fraction": train_fraction,
-                            "samples": pipe.n, "dt": pipe.dt, "decimation": pipe.step,
-                            "smoothing_samples": pipe.window,
-                            "working_set": ws.summary()},
-                  residual={"time": pipe.t[pipe.idx], "before": eng0.R0, "after": r_after}, unexplained=left,
-                  discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map)
-    d.platform_force, d.drifts, d.encoders, d.flexible = plat, drifts, enc, flex
+
+def _with_drive_statements(conclusion, enc, effort_map) -> str:
+    """The conclusion with what the link-side encoders and the measured effort's map say."""
     if enc:
         from .encoders_step import sentence as encoder_sentence
 
-        d.conclusion = d.conclusion.rstrip(".") + "; " + encoder_sentence(enc)
+        conclusion = conclusion.rstrip(".") + "; " + encoder_sentence(enc)
     if effort_map is not None:
-        d.conclusion += "; " + effort_map["statement"]
-    if replay:
-        t5 = time.perf_counter()
-        bb = None
-        if black_box and any(f.explained for f in flex):
-            from .flexible import black_box_force
+        conclusion += "; " + effort_map["statement"]
+    return conclusion
 
-            bb = black_box_force(eng0, r_after, flex, len(rec.time))
-            d.flexible = [replace(f, black_box=True) if f.explained else f for f in flex]
-        d.replay = _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb)
-        if d.details:
-            d.details += _two_body_sentence(d.replay, mdl.joint_unit)
-        else:
-            d.conclusion += _two_body_sentence(d.replay, mdl.joint_unit)
-        timings["replay"] = time.perf_counter() - t5
-    timings["diagnosis"] = time.perf_counter() - t0
-    d.timings = timings
-    if out is not None:
-        from .report import write_report
 
-        t6 = time.perf_counter()
-        d.files = write_report(d, eng, sel, Path(out), figures=figures)
-        timings["report"] = time.perf_counter() - t6
-    timings["total"] = time.perf_counter() - t0
-    return d
+def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box):
+    """``(flex, replay)``: the closed-loop replay of the held-out part, with the flexible
+    model's force as a black-box term when asked and one is explained (its fits then marked
+    ``black_box``)."""
+    bb = None
+    if black_box and any(f.explained for f in flex):
+        from .flexible import black_box_force
+
+        bb = black_box_force(eng0, r_after, flex, len(rec.time))
+        flex = [replace(f, black_box=True) if f.explained else f for f in flex]
+    return flex, _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb)
 
 
 def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:
     """The answer for a recording that contradicts the model: the warnings, no effects
     (a fit would name the convention as some physics), and a short report."""
     conclusion = ("cannot diagnose: the recording contradicts the model: " + "; ".join(warnings))
+    timings = {}  # the whole call's time, once the report is written
     if enc:
         from .encoders_step import sentence as encoder_sentence
 
         conclusion += "; " + encoder_sentence(enc)
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, [], {}, {}, {}, [], [],
                   pipe.channels, {}, warnings=list(warnings),
-                  settings={"samples": pipe.n, "dt": pipe.dt}, encoders=enc)
+                  settings={"samples": pipe.n, "dt": pipe.dt}, encoders=enc, timings=timings)
     if out is not None:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
@@ -475,6 +546,6 @@ def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:
         lines += encoder_markdown(enc)
         (out / "report.md").write_text("\n".join(lines) + "\n")
         (out / "diagnosis.json").write_text(d.to_json())
-        d.files = {"report": str(out / "report.md"), "json": str(out / "diagnosis.json")}
-    d.timings = {"total": time.perf_counter() - t0}
+        d = replace(d, files={"report": str(out / "report.md"), "json": str(out / "diagnosis.json")})
+    timings["total"] = time.perf_counter() - t0
     return d

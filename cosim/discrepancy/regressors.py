@@ -249,27 +249,7 @@ def candidates(st) -> Candidates:
                         instr[:, :st.nd, j] = _reference_change(st, key, {p: st.nominal[p] + h}) / h
                 options[g.label] = [Option(g, cols, None, {}, len(g.params), instr=_relevant(st, cols, instr))]
         elif key == "payload":
-            g = gs[0]
-            pm = g.params[0]
-            mref = max(0.1 * st.nominal.get("platform.m", 0.1), 1e-3)
-            cols = np.zeros((m, st.C, 4))
-            Rm = st.R({pm: st.nominal[pm] + mref})
-            cols[:, :, 0] = (Rm - R0) / mref
-            hc = 0.01
-            moves = [({p: st.nominal[p] + hc}, {p: st.nominal[p] - hc}) for p in g.params[1:]]
-            for j, (up, down) in enumerate(moves):
-                Rp = st.R({pm: st.nominal[pm] + mref, **up})
-                Rn = st.R({pm: st.nominal[pm] + mref, **down})
-                cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
-            instr = None
-            if st.use_instruments:
-                instr = cols.copy()
-                instr[:, :st.nd, 0] = _reference_change(st, key, {pm: st.nominal[pm] + mref}) / mref
-                for j, (up, down) in enumerate(moves):
-                    instr[:, :st.nd, j + 1] = (_reference_change(st, key, {pm: st.nominal[pm] + mref, **up})
-                                                 - _reference_change(st, key, {pm: st.nominal[pm] + mref,
-                                                                                **down})) / (2 * hc * mref)
-            options[g.label] = [Option(g, cols, None, {}, 4, instr=_relevant(st, cols, instr))]
+            options.update(_payload_options(st, key, gs[0], R0))
         elif key == "geometry":
             for g in gs:
                 cols = np.zeros((m, st.C, len(g.params)))
@@ -283,61 +263,108 @@ def candidates(st) -> Candidates:
                     continue
                 options[g.label] = [Option(g, cols, None, {"rank": rank}, rank)]
         elif key in VELOCITY_SCALED:
-            grid = st.velocity_grid()
-            opts = {g.label: [] for g in gs}
-            for vs in grid:
-                steps = {g: st.step(g, g.params[0]) for g in gs}
-                par = {}
-                for g, h in steps.items():
-                    par[g.params[0]] = st.nominal[g.params[0]] + h
-                    par[g.params[1]] = vs
-                D = st.R(par) - R0
-                for g in gs:
-                    col = np.zeros((m, st.C, 1))
-                    for c in st.channels(g):
-                        col[:, c, 0] = D[:, c] / steps[g]
-                    opts[g.label].append(Option(g, col, None, {"v": float(vs)}, 2))
-            options.update(opts)
+            options.update(_velocity_scaled_options(st, gs, R0))
         elif key in ("actuator_delay", "sensor_delay"):
-            g = gs[0]
-            p = g.params[0]
-            dmax = (st.pipe.max_shift - 2) * st.pipe.dt
-            grid = np.arange(0.25e-3, dmax + 1e-12, 0.25e-3)
-            opts = []
-            for d in grid:
-                off = st.R({p: st.nominal[p] + d}) - R0
-                opts.append(Option(g, None, off, {"params": {p: st.nominal[p] + d}}, 1))
-            options[g.label] = opts
-            if st.pipe.tau_ref_s is not None:
-                h = 0.25e-3
-                instrument_cols[g.label] = _delay_change(st, p, st.nominal[p] + h, {}, R0) / h
+            label, opts, instrument = _delay_options(st, gs[0], R0)
+            options[label] = opts
+            if instrument is not None:
+                instrument_cols[label] = instrument
         elif key in ("saturation", "dead_zone"):
-            # a profile over the level: the effort limit as a fraction of the largest
-            # command, the dead-zone width as a fraction of the typical effort
-            if key == "saturation":
-                base = np.abs(st.pipe.tau_c).max(axis=0)
-                fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
-            else:
-                base = np.asarray(st.sc.effort)
-                fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
-            tmax = base
-            opts = {g.label: [] for g in gs}
-            for f in fracs:
-                par = {g.params[0]: f * tmax[g.joint] for g in gs}
-                D = st.R(par) - R0
-                for g in gs:
-                    off = np.zeros((m, st.C))
-                    for c in st.channels(g):
-                        off[:, c] = D[:, c]
-                    if np.any(off[st.train] != 0):
-                        opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]},
-                                                                   "fraction": f}, 1))
-            for lab, o in opts.items():
-                if o:
-                    options[lab] = o
+            options.update(_level_options(st, key, gs, R0))
         if st.settings.verbose:
             print(f"  columns of {key}: done")
     return Candidates({lab: tuple(o) for lab, o in options.items()}, instrument_cols)
+
+
+def _payload_options(st, key, g, R0) -> dict:
+    """The payload's option {label: [Option]}: its mass's column, and its offset's as central
+    differences of a reference mass moved (instruments along the reference motion when used)."""
+    m = R0.shape[0]
+    pm = g.params[0]
+    mref = max(0.1 * st.nominal.get("platform.m", 0.1), 1e-3)
+    cols = np.zeros((m, st.C, 4))
+    Rm = st.R({pm: st.nominal[pm] + mref})
+    cols[:, :, 0] = (Rm - R0) / mref
+    hc = 0.01
+    moves = [({p: st.nominal[p] + hc}, {p: st.nominal[p] - hc}) for p in g.params[1:]]
+    for j, (up, down) in enumerate(moves):
+        Rp = st.R({pm: st.nominal[pm] + mref, **up})
+        Rn = st.R({pm: st.nominal[pm] + mref, **down})
+        cols[:, :, j + 1] = (Rp - Rn) / (2 * hc * mref)
+    instr = None
+    if st.use_instruments:
+        instr = cols.copy()
+        instr[:, :st.nd, 0] = _reference_change(st, key, {pm: st.nominal[pm] + mref}) / mref
+        for j, (up, down) in enumerate(moves):
+            instr[:, :st.nd, j + 1] = (_reference_change(st, key, {pm: st.nominal[pm] + mref, **up})
+                                         - _reference_change(st, key, {pm: st.nominal[pm] + mref,
+                                                                        **down})) / (2 * hc * mref)
+    return {g.label: [Option(g, cols, None, {}, 4, instr=_relevant(st, cols, instr))]}
+
+
+def _velocity_scaled_options(st, gs, R0) -> dict:
+    """{label: [Option per velocity scale of the grid]} of the groups ``gs`` of a velocity-scaled
+    effect (fading or Stribeck friction): the column of the amplitude at each scale."""
+    m = R0.shape[0]
+    grid = st.velocity_grid()
+    opts = {g.label: [] for g in gs}
+    for vs in grid:
+        steps = {g: st.step(g, g.params[0]) for g in gs}
+        par = {}
+        for g, h in steps.items():
+            par[g.params[0]] = st.nominal[g.params[0]] + h
+            par[g.params[1]] = vs
+        D = st.R(par) - R0
+        for g in gs:
+            col = np.zeros((m, st.C, 1))
+            for c in st.channels(g):
+                col[:, c, 0] = D[:, c] / steps[g]
+            opts[g.label].append(Option(g, col, None, {"v": float(vs)}, 2))
+    return opts
+
+
+def _delay_options(st, g, R0) -> tuple:
+    """``(label, options, instrument)`` of a delay group: the residual's change at each delay of
+    a 0.25 ms grid up to what the pipeline's margin allows, and the instrument column (the
+    change along the reference's effort; None without a reference)."""
+    p = g.params[0]
+    dmax = (st.pipe.max_shift - 2) * st.pipe.dt
+    grid = np.arange(0.25e-3, dmax + 1e-12, 0.25e-3)
+    opts = []
+    for d in grid:
+        off = st.R({p: st.nominal[p] + d}) - R0
+        opts.append(Option(g, None, off, {"params": {p: st.nominal[p] + d}}, 1))
+    instrument = None
+    if st.pipe.tau_ref_s is not None:
+        h = 0.25e-3
+        instrument = _delay_change(st, p, st.nominal[p] + h, {}, R0) / h
+    return g.label, opts, instrument
+
+
+def _level_options(st, key, gs, R0) -> dict:
+    """{label: [Option per level]} of saturation or dead-zone groups: a profile over the level,
+    the effort limit as a fraction of the largest command, the dead-zone width as a fraction of
+    the typical effort (labels whose every level leaves the training part unchanged left out)."""
+    m = R0.shape[0]
+    if key == "saturation":
+        base = np.abs(st.pipe.tau_c).max(axis=0)
+        fracs = (0.5, 0.6, 0.7, 0.75, 0.8, 0.84, 0.88, 0.91, 0.94, 0.96, 0.98)
+    else:
+        base = np.asarray(st.sc.effort)
+        fracs = tuple(0.004 * 1.12 ** np.arange(38))  # 0.4 % to 27 %, 12 % apart
+    tmax = base
+    opts = {g.label: [] for g in gs}
+    for f in fracs:
+        par = {g.params[0]: f * tmax[g.joint] for g in gs}
+        D = st.R(par) - R0
+        for g in gs:
+            off = np.zeros((m, st.C))
+            for c in st.channels(g):
+                off[:, c] = D[:, c]
+            if np.any(off[st.train] != 0):
+                opts[g.label].append(Option(g, None, off, {"params": {g.params[0]: f * tmax[g.joint]},
+                                                           "fraction": f}, 1))
+    return {lab: o for lab, o in opts.items() if o}
 
 
 def _one_sided(st, g, p, R0):

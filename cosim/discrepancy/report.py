@@ -91,7 +91,41 @@ def markdown(d, files: dict) -> str:
               f"(chi-square {e['chi2']:.0f}); the library effects of that kind: {', '.join(e['closest'])}"
               for e in d.unexplained]
         L += [""]
-    L += ["## Where the model goes wrong", ""]
+    L += _where_section(d, files)
+    L += _why_section(d, files)
+    L += _discovery_section(d, files)
+    if getattr(d, "flexible", None):
+        from .flexible import markdown as flexible_markdown
+
+        L += flexible_markdown(d.flexible, files)
+
+    if getattr(d, "platform_force", None) is not None:
+        from .platform_force import markdown as platform_markdown
+
+        L += platform_markdown(d.platform_force)
+    if getattr(d, "drifts", None):
+        from .drift import markdown as drift_markdown
+
+        L += drift_markdown(d.drifts, files)
+    from .encoders_step import markdown as encoder_markdown
+
+    L += encoder_markdown(getattr(d, "encoders", []))
+    L += _heldout_section(d, files)
+    L += _replay_section(d, files)
+    L += ["## Method", "",
+          "Residuals: effort = recorded command (zero-order hold, smoothed) minus the core's inverse dynamics of "
+          "the recorded motion (smoothed identically); readings = recorded joints minus the core's sensor model at "
+          "the tracker pose.  Every regressor is a finite difference of these residuals over a core parameter.  "
+          f"Selection: forward BIC over effect groups with N_eff = {d.noise['n_eff']:.0f} effectively independent "
+          "samples; intervals from the final Jacobian.  See docs/discrepancy.md.", ""]
+    t = d.timings
+    L.append("Timings [s]: " + ", ".join(f"{k} {v:.2f}" for k, v in t.items()))
+    return "\n".join(L) + "\n"
+
+
+def _where_section(d, files: dict) -> list:
+    """The section where the model goes wrong: the localisation's summary, its table per channel and the figures."""
+    L = ["## Where the model goes wrong", ""]
     loc = d.localisation
     if loc["summary"]:
         L += [f"- {x}" for x in loc["summary"]]
@@ -110,8 +144,13 @@ def markdown(d, files: dict) -> str:
                        ("workspace", "Residual over the workspace")):
         if key in files:
             L += [f"![{title}]({Path(files[key]).name})", ""]
+    return L
 
-    L += ["## Why: the missing physics", ""]
+
+def _why_section(d, files: dict) -> list:
+    """The section of the missing physics: the effects' table, their look-alikes, the plant parameters, the
+    selection's steps and what was not excited, not tested or refused."""
+    L = ["## Why: the missing physics", ""]
     if d.effects:
         L += ["| rank | effect | core parameter | fitted value | 95 % interval | unit | delta BIC | importance |",
               "| --- | --- | --- | --- | --- | --- | --- | --- |"]
@@ -128,8 +167,9 @@ def markdown(d, files: dict) -> str:
         L += ["", "Plant parameters that put the fitted effects into the model (core / FMU names):", "",
               "```json", json.dumps(d.theta, indent=2), "```", ""]
     else:
+        threshold = d.settings["threshold"]
         L += ["No effect of the library is supported by the data "
-              f"(an effect must lower the BIC by more than {s['threshold']:g})." if "cannot" not in d.conclusion
+              f"(an effect must lower the BIC by more than {threshold:g})." if "cannot" not in d.conclusion
               else "Nothing could be tested.", ""]
     if d.steps:
         L += ["Forward selection: " + " -> ".join(f"{x['group']} ({x['delta_bic']:.0f})" for x in d.steps), ""]
@@ -139,7 +179,13 @@ def markdown(d, files: dict) -> str:
         L += ["Not tested:", ""] + [f"- {x}" for x in d.unavailable] + [""]
     if d.refused:
         L += ["Refused although the residual pointed at them:", ""] + [f"- {x}" for x in d.refused] + [""]
+    return L
 
+
+def _discovery_section(d, files: dict) -> list:
+    """The discovery step's section (none when it found and withdrew nothing): each term, why it was kept, what
+    it replaces."""
+    L = []
     if d.discovered or d.withdrawn:
         L += ["## Missing physics no library effect names (discovery)", "",
               "Searched on every effort channel after the library: a constant, a spring and its quadratic and cubic "
@@ -162,24 +208,12 @@ def markdown(d, files: dict) -> str:
         if d.theta:
             L += ["Plant parameters with the discovered terms (core / FMU names):", "", "```json",
                   json.dumps(d.theta, indent=2), "```", ""]
+    return L
 
-    if getattr(d, "flexible", None):
-        from .flexible import markdown as flexible_markdown
 
-        L += flexible_markdown(d.flexible, files)
-
-    if getattr(d, "platform_force", None) is not None:
-        from .platform_force import markdown as platform_markdown
-
-        L += platform_markdown(d.platform_force)
-    if getattr(d, "drifts", None):
-        from .drift import markdown as drift_markdown
-
-        L += drift_markdown(d.drifts, files)
-    from .encoders_step import markdown as encoder_markdown
-
-    L += encoder_markdown(getattr(d, "encoders", []))
-    L += ["## How much better: held-out fit", ""]
+def _heldout_section(d, files: dict) -> list:
+    """The held-out fit's section: the gain and the table per channel before and after."""
+    L = ["## How much better: held-out fit", ""]
     h = d.heldout
     if d.theta and h["affected"] and np.isfinite(h["gain"]):
         windows = (f", **{h['gain_windows']:.1f}x** in the windows where the nominal residual was out of band"
@@ -201,6 +235,12 @@ def markdown(d, files: dict) -> str:
     L.append("")
     if "heldout" in files:
         L += ["![Held-out overlay](heldout.png)", ""]
+    return L
+
+
+def _replay_section(d, files: dict) -> list:
+    """The closed-loop (or open-loop) replay's part of the held-out section, empty without a replay."""
+    L = []
     rp = d.replay
     if rp:
         if rp.get("skipped"):
@@ -237,15 +277,7 @@ def markdown(d, files: dict) -> str:
                 L += [f"No two-body replay: {tb['skipped']}.", ""]
             if "replay" in files:
                 L += ["![Replay](replay.png)", ""]
-    L += ["## Method", "",
-          "Residuals: effort = recorded command (zero-order hold, smoothed) minus the core's inverse dynamics of "
-          "the recorded motion (smoothed identically); readings = recorded joints minus the core's sensor model at "
-          "the tracker pose.  Every regressor is a finite difference of these residuals over a core parameter.  "
-          f"Selection: forward BIC over effect groups with N_eff = {d.noise['n_eff']:.0f} effectively independent "
-          "samples; intervals from the final Jacobian.  See docs/discrepancy.md.", ""]
-    t = d.timings
-    L.append("Timings [s]: " + ", ".join(f"{k} {v:.2f}" for k, v in t.items()))
-    return "\n".join(L) + "\n"
+    return L
 
 
 def _first_run(rp):

@@ -155,6 +155,51 @@ def _check_joint_limits(model, t, q, where, whole=True):
                                  f"limits [{lo[j]:.6g}, {hi[j]:.6g}] {unit} ({out.size} rows outside in all); {hint}")
 
 
+def _uniform_step(t, segments, where, whole) -> float:
+    """The sampling step [s] of the stretches ``segments`` ([start, stop) rows of ``t``),
+    refusing a step more than 1 % off it (naming the rows, or the time on a working set of
+    blocks: ``whole`` False)."""
+    n = len(t)
+    dt = (sum(t[b - 1] - t[a] for a, b in segments)
+          / max(sum(b - a - 1 for a, b in segments), 1))
+    inside = np.ones(n - 1, bool)
+    inside[[a - 1 for a, _ in segments[1:]]] = False  # the jumps between stretches
+    dev = np.where(inside, np.abs(np.diff(t) - dt), 0.0)
+    if dev.max() > 0.01 * dt:
+        k = int(np.argmax(dev))
+        at = (f"rows {k + 2}-{k + 3}" if whole else f"t = {t[k]:.6g} s")
+        raise DiagnosisError(f"{where}: the sampling is not uniform ({at}: step "
+                             f"{t[k + 1] - t[k]:.6g} s, mean {dt:.6g} s); resample it to a constant step")
+    return dt
+
+
+def _applied_efforts(rec, n, nd, zoh, where):
+    """``(tau_c, f_ext)``: the command that reached the drives and the measured external
+    effort per joint (None without f_ext columns), (n, nd) each, as the mean of the held values
+    on both sides of a sample when ``zoh``."""
+    tau = np.asarray(rec.tau, float)
+    # A test signal added to the command and logged without it (cosim.injection) reached
+    # the drive all the same: the command is the recorded one plus it.
+    from ..injection import from_recording
+
+    injected = from_recording(rec)
+    if injected is not None:
+        tau = injected.applied_from_recorded(tau)
+    if zoh:
+        tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
+    # A measured external effort per joint (f_ext columns) is a known input: the mechanism
+    # feels the actuator's effort plus it, so it joins the effort side of the residual,
+    # sampled and smoothed like the effort (never left for the engine to explain).
+    f_ext = getattr(rec, "f_ext", None)
+    if f_ext is not None:
+        f_ext = np.asarray(f_ext, float)
+        if f_ext.shape != (n, nd):
+            raise DiagnosisError(f"{where}: f_ext has shape {f_ext.shape}, the recording ({n}, {nd})")
+        if zoh:
+            f_ext = np.vstack([f_ext[:1], 0.5 * (f_ext[1:] + f_ext[:-1])])
+    return tau, f_ext
+
+
 class Pipeline:
     """The residual pipeline of one recording against one model.
 
@@ -203,16 +248,7 @@ class Pipeline:
         if n < 3:
             raise DiagnosisError(f"{where}: {n} samples; a diagnosis needs a recording of at least a second")
         self.segments = [(0, n)] if segments is None else [(int(a), int(b)) for a, b in segments]
-        dt = (sum(t[b - 1] - t[a] for a, b in self.segments)
-              / max(sum(b - a - 1 for a, b in self.segments), 1))
-        inside = np.ones(n - 1, bool)
-        inside[[a - 1 for a, _ in self.segments[1:]]] = False  # the jumps between stretches
-        dev = np.where(inside, np.abs(np.diff(t) - dt), 0.0)
-        if dev.max() > 0.01 * dt:
-            k = int(np.argmax(dev))
-            at = (f"rows {k + 2}-{k + 3}" if segments is None else f"t = {t[k]:.6g} s")
-            raise DiagnosisError(f"{where}: the sampling is not uniform ({at}: step "
-                                 f"{t[k + 1] - t[k]:.6g} s, mean {dt:.6g} s); resample it to a constant step")
+        dt = _uniform_step(t, self.segments, where, whole=segments is None)
         w = int(round(window / dt)) | 1
         w = max(w, 7)
         self.dt, self.n, self.nd, self.window, self.polyorder = dt, n, nd, w, polyorder
@@ -243,28 +279,7 @@ class Pipeline:
             raise DiagnosisError(f"{where}: the {model.robot} model of the core has no inverse dynamics, so the "
                                  f"effort residual cannot be formed") from None
         self.zoh = zoh
-        tau = np.asarray(rec.tau, float)
-        # A test signal added to the command and logged without it (cosim.injection) reached
-        # the drive all the same: the command is the recorded one plus it.
-        from ..injection import from_recording
-
-        injected = from_recording(rec)
-        if injected is not None:
-            tau = injected.applied_from_recorded(tau)
-        if zoh:
-            tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
-        self.tau_c = tau
-        # A measured external effort per joint (f_ext columns) is a known input: the mechanism
-        # feels the actuator's effort plus it, so it joins the effort side of the residual,
-        # sampled and smoothed like the effort (never left for the engine to explain).
-        f_ext = getattr(rec, "f_ext", None)
-        if f_ext is not None:
-            f_ext = np.asarray(f_ext, float)
-            if f_ext.shape != (n, nd):
-                raise DiagnosisError(f"{where}: f_ext has shape {f_ext.shape}, the recording ({n}, {nd})")
-            if zoh:
-                f_ext = np.vstack([f_ext[:1], 0.5 * (f_ext[1:] + f_ext[:-1])])
-        self.f_ext = f_ext
+        self.tau_c, self.f_ext = _applied_efforts(rec, n, nd, zoh, where)
         self.q = np.asarray(rec.q, float)
         self.qd = np.asarray(rec.qd, float)
         _check_joint_limits(model, t, self.q, where, whole=segments is None)

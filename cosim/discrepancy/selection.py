@@ -176,30 +176,7 @@ def select(st) -> tuple:
         # so the baseline is the projection's, or every candidate would be credited
         # with the difference.
         chi2 = float(y_perp @ y_perp) if Z is not None else float(y @ y)
-        best = None
-        last_best = {}
-        taken = {a.group.label for a in selected} | removed
-        # A group that shares a parameter with a selected one (a fading and a step
-        # Coulomb friction of one joint) would fight over it: the first one in stays.
-        held = {p for a in selected for p in a.group.params}
-        for lab, opts in list(st.options.items()) + list(_joint_sets(st, taken).items()):
-            if lab in taken or held & set(opts[0].group.params):
-                continue
-            c2, o2 = best_option(st, opts, Q, y_perp, J, y)
-            if c2 is None:
-                continue
-            gbest = (c2 - chi2 + o2.k * logn, o2, c2)
-            last_best[lab] = gbest[0]
-            # Two candidates that are the same physics here (a dead zone under a command
-            # of one sign that never enters the zone, and an offset of that sign) fit
-            # equally to rounding: rounding does not choose.  The linear one is named (a
-            # constant force is all the recording shows; the dead zone's behaviour near
-            # zero command is nowhere in it), the other stays its tie; between two of a
-            # kind, the first in the library's order.
-            tol = 1e-9 * abs(chi2)
-            if (best is None or gbest[0] < best[0] - tol
-                    or (gbest[0] <= best[0] + tol and _plainer(o2.group, best[1].group))):
-                best = gbest
+        best, last_best = _best_entry(st, selected, removed, (Q, y_perp, J, y), chi2, logn)
         if best is None or best[0] > -st.settings.threshold:
             break
         dbic, opt, c2 = best
@@ -224,23 +201,7 @@ def select(st) -> tuple:
         # Statistically supported but physically negligible (a tenth of a 'small'
         # effect, e.g. a 5 us delay): model misfit leaking into a candidate, not physics.
         for a in list(selected):
-            size = _magnitude(st, a.group, theta)
-            ref = reference_size(a.group, st.sc, st.model)
-            why = None
-            # (a saturation's parameter is its limit, not the size of what it does; a dead zone's is
-            # the constant it takes off a one-signed command, an offset's size: both are judged)
-            if a.group.key != "saturation" and ref > 0 and size < 0.1 * ref:
-                why = f"fitted size {size:.3g} is below a tenth of a small one ({ref:.3g}): negligible"
-            elif a.group.key in VELOCITY_SCALED:
-                # A velocity scale that left the grid upwards is not resolved by this recording:
-                # a fading friction never reaches its full value (friction proportional to
-                # speed), a Stribeck peak never fades (a constant friction: Coulomb).
-                v, top = theta.get(a.group.params[1], 0.0), float(st.velocity_grid()[-1])
-                if v > 1.5 * top:
-                    what = ("a friction proportional to speed" if a.group.key == "smooth_coulomb" else
-                            "a friction that never fades, Coulomb friction")
-                    why = (f"its velocity scale {v:.3g} is above the joint speeds of the recording "
-                           f"({top:.3g}): on this recording it is {what}")
+            why = _why_refused(st, a.group, theta)
             if why:
                 selected.remove(a)
                 for p in a.group.params:
@@ -250,6 +211,63 @@ def select(st) -> tuple:
                 theta = refine(st, selected, theta)
     return st, Selection(tuple(selected), theta, chi2_nom, st.chi2(theta), st.n_eff, st.sig, st.phi, tuple(steps),
                          last_best, {}, st.settings.threshold, refused)
+
+
+def _best_entry(st, selected, removed, projected, chi2, logn):
+    """``(best, last_best)``: the entry that lowers the BIC most, ``(delta BIC, option,
+    chi2)`` or None, among the groups not selected, not removed and sharing no parameter
+    with a selected one, and every candidate's delta BIC by label.  ``projected`` is
+    ``(Q, y_perp, J, y)`` of the current fit, ``chi2`` its baseline."""
+    Q, y_perp, J, y = projected
+    best = None
+    last_best = {}
+    taken = {a.group.label for a in selected} | removed
+    # A group that shares a parameter with a selected one (a fading and a step
+    # Coulomb friction of one joint) would fight over it: the first one in stays.
+    held = {p for a in selected for p in a.group.params}
+    for lab, opts in list(st.options.items()) + list(_joint_sets(st, taken).items()):
+        if lab in taken or held & set(opts[0].group.params):
+            continue
+        c2, o2 = best_option(st, opts, Q, y_perp, J, y)
+        if c2 is None:
+            continue
+        gbest = (c2 - chi2 + o2.k * logn, o2, c2)
+        last_best[lab] = gbest[0]
+        # Two candidates that are the same physics here (a dead zone under a command
+        # of one sign that never enters the zone, and an offset of that sign) fit
+        # equally to rounding: rounding does not choose.  The linear one is named (a
+        # constant force is all the recording shows; the dead zone's behaviour near
+        # zero command is nowhere in it), the other stays its tie; between two of a
+        # kind, the first in the library's order.
+        tol = 1e-9 * abs(chi2)
+        if (best is None or gbest[0] < best[0] - tol
+                or (gbest[0] <= best[0] + tol and _plainer(o2.group, best[1].group))):
+            best = gbest
+    return best, last_best
+
+
+def _why_refused(st, group, theta):
+    """Why a selected group is refused though statistically supported, or None: physically
+    negligible (a tenth of a 'small' effect, e.g. a 5 us delay: model misfit leaking into a
+    candidate, not physics), or a velocity scale above the recording's joint speeds."""
+    size = _magnitude(st, group, theta)
+    ref = reference_size(group, st.sc, st.model)
+    why = None
+    # (a saturation's parameter is its limit, not the size of what it does; a dead zone's is
+    # the constant it takes off a one-signed command, an offset's size: both are judged)
+    if group.key != "saturation" and ref > 0 and size < 0.1 * ref:
+        why = f"fitted size {size:.3g} is below a tenth of a small one ({ref:.3g}): negligible"
+    elif group.key in VELOCITY_SCALED:
+        # A velocity scale that left the grid upwards is not resolved by this recording:
+        # a fading friction never reaches its full value (friction proportional to
+        # speed), a Stribeck peak never fades (a constant friction: Coulomb).
+        v, top = theta.get(group.params[1], 0.0), float(st.velocity_grid()[-1])
+        if v > 1.5 * top:
+            what = ("a friction proportional to speed" if group.key == "smooth_coulomb" else
+                    "a friction that never fades, Coulomb friction")
+            why = (f"its velocity scale {v:.3g} is above the joint speeds of the recording "
+                   f"({top:.3g}): on this recording it is {what}")
+    return why
 
 
 def _plainer(a, b) -> bool:

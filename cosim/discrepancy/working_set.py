@@ -320,7 +320,15 @@ def working_set(source, *, max_samples: int = MAX_SAMPLES, block_seconds: float 
             if len(strata) > k_max:  # twice as long strata: neighbours merged, the better block kept
                 per *= 2
                 strata = [_merge(strata[i:i + 2]) for i in range(0, len(strata), 2)]
-    # a contiguous run of kept blocks is one segment (all of them when nothing was dropped)
+    rec, segments = _joined(strata)
+    return WorkingSet(rec, segments, rows, float(t1 - t0) if t0 is not None else 0.0,
+                      block_rows, per, [s[1] for s in strata] if per > 1 else [])
+
+
+def _joined(strata) -> tuple:
+    """``(recording, segments)``: the kept blocks of ``strata`` ([block, score, blocks seen,
+    start row] each) end to end, and the (start, end) rows of each contiguous run of them in
+    it (one segment for all of them when nothing was dropped)."""
     segs, kept, start = [], [], 0
     for s in strata:
         b = s[0]
@@ -331,9 +339,7 @@ def working_set(source, *, max_samples: int = MAX_SAMPLES, block_seconds: float 
             segs.append([start, start + len(b), s[3] + len(b)])
         kept.append(b)
         start += len(b)
-    rec = concat(kept)
-    return WorkingSet(rec, [(a, b) for a, b, _ in segs], rows, float(t1 - t0) if t0 is not None else 0.0,
-                      block_rows, per, [s[1] for s in strata] if per > 1 else [])
+    return concat(kept), [(a, b) for a, b, _ in segs]
 
 
 def sentence(summary: dict) -> str:
