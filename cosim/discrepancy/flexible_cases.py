@@ -3,7 +3,7 @@
 Each case is a closed-loop recording made like a blind case (:mod:`.blind`: the engine's
 exciting trajectory, its noise and a PD + gravity controller designed on the nominal model)
 with a force added to the plant as a known external effort along the reference
-(:func:`cosim.discrepancy.plant.closed_loop`, ``f_ext``) that the recording does not carry.
+(:func:`cosim.discrepancy.runs.closed_loop`, ``f_ext``) that the recording does not carry.
 None of the forces is a family of the discovery step, and none is added as one:
 
 * ``position_threshold``: on one joint, zero below a position q0 (the 55-70 % quantile of its
@@ -82,7 +82,7 @@ def simulate(kind: str | None, seed: int, robot: str = "6pus", duration: float |
     from ..recording import Recording
     from .blind import load_config, with_robot
     from .excitation import excitation
-    from .plant import closed_loop
+    from .runs import closed_loop
 
     model = Model(robot)
     cfg = with_robot(load_config(), model)
@@ -107,7 +107,7 @@ def simulate(kind: str | None, seed: int, robot: str = "6pus", duration: float |
     ctrl = ctl.pd_gravity(model, kp=mass * wn ** 2, kd=2 * wn * mass)
     res = closed_loop(model, ctrl, ref, noise=cfg["noise"][robot], seed=seed + 7919, f_ext=-force)
     s = slice(k0, None)
-    rec = Recording(robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau[s].copy(),
+    rec = Recording(robot, res.time[s].copy(), res.q[s].copy(), res.qd[s].copy(), res.tau_logged[s].copy(),
                     qref=ref.q[s].copy(), pose=res.pose[s].copy(), controller=dict(ctrl.describe(), rate_hz=gen["rate"]),
                     notes="flexible case: a closed-loop recording that may hide a force (the key is elsewhere)")
     key["force"] = force[s][: len(rec.time)]
