@@ -319,7 +319,7 @@ def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover
 def _tie(ties, groups, in_place, extra, figures, channels):
     """Each of ``groups`` tied with the terms ``in_place`` (once): named, not with confidence; the
     record says on which ``channels`` and with which parameters (a discovered term fitted
-    beside it there is no physics of its own either, diagnosis_answer._beside_tie_sentence)."""
+    beside it there is no physics of its own either, diagnosis.answer._beside_tie_sentence)."""
     for g in groups:
         if not any(t["group"] == g.label for t in ties):
             ties.append({"group": g.label, "title": g.title, "params": list(g.params), "channels": list(channels),

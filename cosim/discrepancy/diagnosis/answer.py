@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from .effects import BY_KEY, separating_motion
-from .results import Alternative, FoundEffect, ParamEstimate
-from .ties import TIE_MARGIN, UNEXPLAINED, tied
+from ..effects import BY_KEY, separating_motion
+from ..results import Alternative, FoundEffect, ParamEstimate
+from ..ties import TIE_MARGIN, UNEXPLAINED, tied
 
 
 def _open_statement(items) -> str:
@@ -113,7 +113,7 @@ def _effects(eng, sel, ties=(), left=()) -> list:
 
 
 def _prefix(model):
-    from .effects import joint_prefix
+    from ..effects import joint_prefix
 
     return joint_prefix(model)
 

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from .blind_sampling import TYPES, UNLISTED, _Redraw, sample_effect, sample_unlisted
-from .effects import BY_KEY
-from .families.generator import KINDS as FAMILY_KINDS
+from ...errors import InputError
+from .sampling import TYPES, UNLISTED, _Redraw, sample_effect, sample_unlisted
+from ..effects import BY_KEY
+from ..families.generator import KINDS as FAMILY_KINDS
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 CONFIG = REPO / "scenarios" / "blind" / "config.toml"
 
 
@@ -51,9 +51,9 @@ def derived_sizes(model) -> tuple[dict, dict]:
     4e-3 V on the rates, 7e-3 E on the efforts, 5e-4 of the motion's amplitude on the tracker.
     Only effects whose parameters the robot has are listed.
     """
-    from .. import controllers as ctl
-    from ..master import make_reference
-    from .excitation import excitation
+    from ... import controllers as ctl
+    from ...master import make_reference
+    from ..excitation import excitation
 
     traj = excitation(model, 4.0, seed=0)
     ref = make_reference(model, traj, step=1e-3, duration=round(traj.duration / 1e-3) * 1e-3)
@@ -103,7 +103,7 @@ class CaseSpec:
 
 
 def _controller(kind, model, cfg, dt):
-    from .. import controllers as ctl
+    from ... import controllers as ctl
 
     wn = 2 * math.pi * cfg["general"].get("bandwidth_hz", 8.0)
     if kind == "computed_torque":
@@ -117,12 +117,12 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
 
     ``cfg`` is the generator configuration (default: ``scenarios/blind/config.toml``);
     tests pass a copy with a shorter duration."""
-    from ..core.model import Model
-    from ..master import make_reference
-    from .excitation import excitation
-    from .runs import closed_loop
+    from ...core.model import Model
+    from ...master import make_reference
+    from ..excitation import excitation
+    from ..runs import closed_loop
 
-    from .._native import PkmError
+    from ..._native import PkmError
 
     nominal = Model(spec.robot)
     cfg = with_robot(cfg or load_config(), nominal)
@@ -188,7 +188,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
 def make_case(spec: CaseSpec, out_dir, key_dir, cfg: dict | None = None):
     """Write the case's recording to ``out_dir/<case>.csv`` (+ sidecar) and its answer
     key to ``key_dir/<case>.json``; returns both paths."""
-    from ..recording import write_recording
+    from ...recording import write_recording
 
     out_dir, key_dir = Path(out_dir), Path(key_dir)
     if out_dir.resolve() == key_dir.resolve():
@@ -207,7 +207,7 @@ def plan(n_effect: int, n_clean: int, seed: int, robots=("6pus",), cfg: dict | N
     """Case specs: ``n_effect`` cases cycling over the effect types of each robot (so
     every type gets its share), a fraction with a second non-look-alike effect, and
     ``n_clean`` clean cases; robots alternate."""
-    from ..core.model import Model
+    from ...core.model import Model
 
     cfg = cfg or load_config()
     for r in robots:

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .residuals import DiagnosisError
+from ..residuals import DiagnosisError
 
 _DECLARE = ('Declare it in the sidecar ("joint_convention": {"sign": [...], "offset": [...]}, recorded = sign * '
             'model + offset)')

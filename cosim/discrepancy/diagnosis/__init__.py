@@ -13,17 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .._native import PkmError
-from ..jsonable import jsonable
-from .diagnosis_answer import (GAP_MINORITY, UNDETECTABLE_RATIO, _beside_tie_sentence, _conclusion,  # noqa: F401
+from ..._native import PkmError
+from ...jsonable import jsonable
+from .answer import (GAP_MINORITY, UNDETECTABLE_RATIO, _beside_tie_sentence, _conclusion,  # noqa: F401
                                _drop_unseen_gaps, _effects, _not_excited, _partial_sentence, _two_body_sentence,
                                detection_limit_text)
-from .diagnosis_checks import (SURE, _check_motion, convention_contradictions, effort_contradictions,  # noqa: F401
+from .checks import (SURE, _check_motion, convention_contradictions, effort_contradictions,  # noqa: F401
                                heldout_fit, joint_contradictions)
-from .diagnosis_replay import _compared, _discover, _replay  # noqa: F401
-from .effects import LIBRARY, groups_for
-from .residuals import DiagnosisError, Pipeline
-from .ties import TIE_MARGIN, UNEXPLAINED, tied  # noqa: F401
+from .replay import _compared, _discover, _replay  # noqa: F401
+from ..effects import LIBRARY, groups_for
+from ..residuals import DiagnosisError, Pipeline
+from ..ties import TIE_MARGIN, UNEXPLAINED, tied  # noqa: F401
 
 __all__ = ["diagnose", "Diagnosis", "DiagnosisError", "LIBRARY"]
 
@@ -161,14 +161,14 @@ class Diagnosis:
 def _load(recording, max_samples, block_seconds, progress):
     """The working set of ``recording`` (:mod:`.working_set`): the whole recording when it
     has at most ``max_samples`` rows, else blocks of it."""
-    from .working_set import WorkingSet, working_set
+    from ..working_set import WorkingSet, working_set
 
     if isinstance(recording, WorkingSet):
         return recording
     try:
         return working_set(recording, max_samples=max_samples, block_seconds=block_seconds, progress=progress)
     except ValueError as e:
-        from ..recording import RecordingError
+        from ...recording import RecordingError
 
         if isinstance(e, RecordingError):
             raise
@@ -176,14 +176,14 @@ def _load(recording, max_samples, block_seconds, progress):
 
 
 def _model_for(rec, model):
-    from ..core.model import Model
+    from ...core.model import Model
 
     def sidecar_params(m):
         if rec.parameters:
             try:
                 m.set_params(rec.parameters)
             except PkmError as e:
-                from ..recording import sidecar_path
+                from ...recording import sidecar_path
 
                 where = sidecar_path(rec.path) if rec.path else "the recording's sidecar"
                 raise DiagnosisError(f"{where}: parameters: {e}") from None
@@ -305,10 +305,10 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
               instruments, compare, discovery, max_samples, block_seconds, progress, verbose, platform, drift,
               families, flexible, black_box) -> Diagnosis:
     """:func:`diagnose`'s work, stage after stage (its arguments, all given)."""
-    from ._threads import one_blas_thread
-    from .localisation import localise
-    from .engine import attribute, prepare
-    from .working_set import BLOCK_SECONDS, MAX_SAMPLES
+    from .._threads import one_blas_thread
+    from ..localisation import localise
+    from ..engine import attribute, prepare
+    from ..working_set import BLOCK_SECONDS, MAX_SAMPLES
 
     _check_settings(window, threshold, train_fraction)
     t0 = time.perf_counter()
@@ -316,11 +316,11 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
                BLOCK_SECONDS if block_seconds is None else block_seconds, progress)
     rec = ws.recording
     mdl = _model_for(rec, model)
-    from .effort_map import effort_channels
+    from ..effort_map import effort_channels
 
     commanded = rec  # two effort channels: the physics on the measured one, the drive's map fitted
     rec, effort_map = effort_channels(rec, mdl.facts.effort_unit)
-    from .encoders_step import encoder_findings
+    from ..encoders_step import encoder_findings
 
     enc = encoder_findings(rec, mdl)  # the two encoders' difference, when a joint has both
     timings = {"read": time.perf_counter() - t0}
@@ -343,7 +343,7 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
         t3 = time.perf_counter()
         eng0, plat = eng, None
         if platform:
-            from .platform_force import diagnosis_stage
+            from ..platform_force import diagnosis_stage
 
             plat, eng, sel = diagnosis_stage(eng, sel, rec, mdl, groups, {"window": window, "segments": segments}, fit)
         t3a = time.perf_counter()
@@ -352,7 +352,7 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
         if plat is not None:  # parameters relative to the user's model from here on
             theta = dict(plat.params, **theta)
         held = heldout_fit(eng0, sel, theta)
-        from .drift import find_drifts
+        from ..drift import find_drifts
 
         drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()}) if drift else []
         loc = localise(eng, sel)
@@ -388,7 +388,7 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
                   discovered=found, withdrawn=withdrawn, details=details, effort_map=effort_map,
                   platform_force=plat, drifts=drifts, encoders=enc, flexible=flex)
     if out is not None:
-        from .report import write_report
+        from ..report import write_report
 
         t6 = time.perf_counter()
         d = replace(d, files=write_report(d, eng, sel, Path(out), figures=figures))  # the report is the diagnosis'
@@ -403,7 +403,7 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
     after it and the structure left in it, the effects reported, what the recording cannot
     reveal, the flexible model of the structure left (when ``flexible``; its time into
     ``timings``), and the statement of it all."""
-    from .structure import unexplained
+    from ..structure import unexplained
 
     gone = {w["group"] for w in withdrawn}
     r_after = eng0.R(theta) if theta else eng0.R0
@@ -418,7 +418,7 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
     conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     flex = []
     if flexible:
-        from .flexible import flexible_stage
+        from ..flexible import flexible_stage
 
         t3c = time.perf_counter()
         flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
@@ -446,11 +446,11 @@ def _discovered_and_checked(eng, sel, threshold, discovery, families):
     parameters, the problems kept)."""
     found, withdrawn, theta, ties = [], [], dict(sel.theta), []
     if discovery:
-        from .families import searched
+        from ..families import searched
 
         with searched() if families else contextlib.nullcontext():
             found, withdrawn, theta, ties = _discover(eng, sel, threshold)
-    from .verdict import fit_problems
+    from ..verdict import fit_problems
 
     problems = fit_problems(eng, theta) if theta else []  # a fit outside the physical ranges is refused
     if problems:
@@ -463,11 +463,11 @@ def _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, pl
     drifts found."""
     conclusion = _conclusion(effects_out, not_excited, eng, sel, found, withdrawn)
     if plat is not None:
-        from .platform_force import sentence as platform_sentence
+        from ..platform_force import sentence as platform_sentence
 
         conclusion = platform_sentence(plat, conclusion)
     if drifts:
-        from .drift import sentence as drift_sentence
+        from ..drift import sentence as drift_sentence
 
         conclusion += "; " + drift_sentence(drifts)
     return conclusion
@@ -477,9 +477,9 @@ def _conclusion_and_details(conclusion, effects_out, found, left, held, plat, dr
     """``(conclusion, details)``: the headline that sums up the full statement (and the full
     statement as details), with the structure left and the flexible model's finding; a fit
     refused as not physical says so instead."""
-    from .platform_force import short_name
-    from .structure import sentence
-    from .verdict import headline
+    from ..platform_force import short_name
+    from ..structure import sentence
+    from ..verdict import headline
 
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
@@ -487,7 +487,7 @@ def _conclusion_and_details(conclusion, effects_out, found, left, held, plat, dr
     others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
     head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
     if flex:
-        from .flexible import sentence as flexible_sentence
+        from ..flexible import sentence as flexible_sentence
 
         if flexible_sentence(flex):
             conclusion += "; " + flexible_sentence(flex)
@@ -503,7 +503,7 @@ def _conclusion_and_details(conclusion, effects_out, found, left, held, plat, dr
 def _with_drive_statements(conclusion, enc, effort_map) -> str:
     """The conclusion with what the link-side encoders and the measured effort's map say."""
     if enc:
-        from .encoders_step import sentence as encoder_sentence
+        from ..encoders_step import sentence as encoder_sentence
 
         conclusion = conclusion.rstrip(".") + "; " + encoder_sentence(enc)
     if effort_map is not None:
@@ -517,7 +517,7 @@ def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, bla
     ``black_box``)."""
     bb = None
     if black_box and any(f.explained for f in flex):
-        from .flexible import black_box_force
+        from ..flexible import black_box_force
 
         bb = black_box_force(eng0, r_after, flex, len(rec.time))
         flex = [replace(f, black_box=True) if f.explained else f for f in flex]
@@ -530,7 +530,7 @@ def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:
     conclusion = ("cannot diagnose: the recording contradicts the model: " + "; ".join(warnings))
     timings = {}  # the whole call's time, once the report is written
     if enc:
-        from .encoders_step import sentence as encoder_sentence
+        from ..encoders_step import sentence as encoder_sentence
 
         conclusion += "; " + encoder_sentence(enc)
     d = Diagnosis(str(rec.path) if rec.path else "recording", rec.robot, conclusion, [], {}, {}, {}, [], [],
@@ -541,7 +541,7 @@ def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:
         out.mkdir(parents=True, exist_ok=True)
         lines = [f"# Diagnosis of {d.recording}", "", f"**{conclusion}**", "", "## Warnings", ""]
         lines += [f"- {w}" for w in warnings] + [""]
-        from .encoders_step import markdown as encoder_markdown
+        from ..encoders_step import markdown as encoder_markdown
 
         lines += encoder_markdown(enc)
         (out / "report.md").write_text("\n".join(lines) + "\n")

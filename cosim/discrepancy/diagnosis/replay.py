@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._native import PkmError
-from .diagnosis_answer import _withdrawn_sentence
-from .residuals import DiagnosisError
+from ..._native import PkmError
+from .answer import _withdrawn_sentence
+from ..residuals import DiagnosisError
 
 
 def _discover(eng, sel, threshold):
@@ -16,7 +16,7 @@ def _discover(eng, sel, threshold):
     discovered terms, then the terms found on every effort channel of what is left.
     Returns (terms, withdrawn groups, parameters: library kept + discovered, the groups tied
     with discovered terms)."""
-    from .discovery import judge_library
+    from ..discovery import judge_library
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
@@ -53,7 +53,7 @@ def _offsets_refitted_away(sel, found, gone) -> list:
 
 def _compared(rec, mdl, compare) -> dict:
     """The plants ``compare`` names for the replay: {name: Model}."""
-    from ..core.model import Model
+    from ...core.model import Model
 
     if not compare:
         return {}
@@ -83,10 +83,10 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     difference over the norm of the recorded effort.  ``black_box`` (rows x joints, the
     flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
     box", the fitted plant with that force as a known external effort."""
-    from .drive_bodies import drive_joints, fit_two_body, fitting_window
-    from .runs import closed_loop, controller_from, reference_from_recording
+    from ..drive_bodies import drive_joints, fit_two_body, fitting_window
+    from ..runs import closed_loop, controller_from, reference_from_recording
 
-    from .open_loop import declared_open_loop, heldout_replay
+    from ..open_loop import declared_open_loop, heldout_replay
 
     if rec.qref is None or declared_open_loop(rec):  # an open-loop experiment, or declared: open loop
         return heldout_replay(rec, eng, sel.theta if theta is None else theta, compared)
@@ -110,7 +110,7 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     ctrl, why = controller_from(rec.controller, mdl)
     if ctrl is None:
         return {"skipped": why}
-    from ..injection import from_recording
+    from ...injection import from_recording
 
     injected = from_recording(rec)  # a test signal the rig added into its loop, replayed at its point
 

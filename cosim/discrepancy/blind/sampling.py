@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
-from .effects import geometry_layout, joint_prefix
-from .families.generator import KINDS as FAMILY_KINDS, sample as family_sample
+from ...errors import InputError
+from ..effects import geometry_layout, joint_prefix
+from ..families.generator import KINDS as FAMILY_KINDS, sample as family_sample
 
 #: effect types the generator can hide, per robot (those with magnitudes in the config)
 TYPES = ["coulomb", "viscous", "stribeck", "smooth_coulomb", "rotor_inertia", "payload", "platform_mass", "platform_inertia",

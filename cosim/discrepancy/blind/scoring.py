@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .blind_cases import load_config, make_case, plan
-from .diagnosis import UNEXPLAINED, tied
+from .cases import load_config, make_case, plan
+from ..diagnosis import UNEXPLAINED, tied
 
 
 # ------------------------------------------------------------------- scoring
@@ -114,8 +114,8 @@ def same_physics_stand_in(kind: str, changes: dict, diag) -> bool:
     effort keeps one sign (all but the engine's ``GAP_MINORITY`` of the samples) is an
     encoder offset of b/2 (within 10 %); a payload at the platform's centre is a heavier platform
     (its extra mass the payload's within 10 %)."""
-    from ..recording import read_recording
-    from .diagnosis import GAP_MINORITY
+    from ...recording import read_recording
+    from ..diagnosis import GAP_MINORITY
 
     est, named = diag.plant_parameters(), diag.named()
     first = named[0] if named else None
@@ -140,8 +140,8 @@ def same_physics_stand_in(kind: str, changes: dict, diag) -> bool:
 
 def _run_one(args):
     spec, out_dir, key_dir, diag_kw, report, cfg, hold_out = args
-    from . import diagnose
-    from .effects import LIBRARY
+    from .. import diagnose
+    from ..effects import LIBRARY
 
     t0 = time.perf_counter()
     try:

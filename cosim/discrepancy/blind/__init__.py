@@ -18,9 +18,9 @@ Example
 """
 from __future__ import annotations
 
-from .blind_cases import (CONFIG, CaseSpec, REPO, _controller, derived_sizes, load_config, make_case, plan,  # noqa: F401
+from .cases import (CONFIG, CaseSpec, REPO, _controller, derived_sizes, load_config, make_case, plan,  # noqa: F401
                           simulate_case, types_for, with_robot)
-from .blind_sampling import (Hidden, TYPES, UNLISTED, UNLISTED_TERMS, sample_effect, sample_unlisted,  # noqa: F401
+from .sampling import (Hidden, TYPES, UNLISTED, UNLISTED_TERMS, sample_effect, sample_unlisted,  # noqa: F401
                              unlisted_errors, unlisted_structure_ok)
-from .blind_scoring import (HOLD_OUT_WITH, benchmark, format_summary, interval_holds, same_physics_stand_in,  # noqa: F401
+from .scoring import (HOLD_OUT_WITH, benchmark, format_summary, interval_holds, same_physics_stand_in,  # noqa: F401
                             score, stated_intervals, summarize)
