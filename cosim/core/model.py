@@ -13,6 +13,7 @@ from .._native import fast, lib, pkm_fk_info, pkm_fk_options, ptr, raise_for
 from ..errors import ArgumentError, ParameterError, PkmError, UnsupportedError
 from ._handles import _errbuf
 from .facts import ParamInfo, RobotFacts, robots
+from .model_courses import CourseMethods
 from .model_drive import DriveLayerMethods
 from .model_families import RobotFamilyMethods
 
@@ -51,7 +52,7 @@ def robot_facts(robot: str) -> RobotFacts:
 
 
 
-class Model(DriveLayerMethods, RobotFamilyMethods):
+class Model(DriveLayerMethods, RobotFamilyMethods, CourseMethods):
     """A robot model (constant parameters) with its own work data.
 
     Parameters
@@ -198,8 +199,11 @@ class Model(DriveLayerMethods, RobotFamilyMethods):
         return lo, hi
 
     def copy(self) -> "Model":
-        """An independent model with the same parameters (and its own work data)."""
-        return Model(self.source, self.param_set, self.params())
+        """An independent model with the same parameters and time courses (and its own work data)."""
+        out = Model(self.source, self.param_set, self.params())
+        for name, c in self.courses().items():
+            out.set_course(name, c.pop("kind"), **c)
+        return out
 
     def __repr__(self) -> str:
         return f"Model({self.robot!r}, ndof={self.ndof}, nparam={len(self.param_names())})"

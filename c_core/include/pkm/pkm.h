@@ -158,6 +158,34 @@ PKM_API int pkm_param_set(pkm_model* m, int i, double value, char* err, size_t e
  * directions of unit length, home pose reachable).  Call after pkm_param_set and
  * before computing; computations on an unvalidated model return PKM_ERR_PARAMETER. */
 PKM_API int pkm_model_validate(pkm_model* m, char* err, size_t errlen);
+/* Time courses of named parameters (drifts: a friction falling as a drive warms up, a
+ * payload changed half way).  A course is part of the model (pkm_model_copy and
+ * pkm_sim_create copy it) and acts in pkm_sim only: its integrator evaluates the parameter
+ * at its own time t, while every other function uses the parameter's value p =
+ * pkm_param_get (pkm_param_value_at evaluates the course):
+ *   PKM_COURSE_NONE   p(t) = p (the default; setting it clears a course)
+ *   PKM_COURSE_TREND  p(t) = p + change (t - t0), change a rate [unit/s], evaluated at every
+ *                     stage of every step (the dynamics stay continuous in time); drive-layer
+ *                     parameters only (pkm_param_in_drive_layer: friction, offsets, joint
+ *                     forces, rotor inertia)
+ *   PKM_COURSE_STEP   p(t) = p for t < t0, p + change from t0 on [unit]: an advance across t0
+ *                     integrates to t0 and goes on from there (the state is continuous, the
+ *                     parameter jumps, no step straddles the jump); any parameter but those
+ *                     below, a mechanism one (a mass, the payload) recompiled at t0.
+ * t0 [s] finite and >= 0 (the sim's time: a recording's), change finite.  Errors
+ * (err may be NULL): PKM_ERR_ARGUMENT for an unknown index or kind, a non-finite change, a
+ * negative or non-finite t0; PKM_ERR_PARAMETER for a trend on a mechanism parameter, a
+ * course on a joint limit (the integrator's stops), drive.two_body, actuator.delay or
+ * sensor.delay (read when a sim is created), and a step whose value after t0 is outside the
+ * parameter's range.  A trend leaving the range stops pkm_sim_advance there with
+ * PKM_ERR_PARAMETER naming the parameter and the time. */
+typedef enum pkm_course_kind { PKM_COURSE_NONE = 0, PKM_COURSE_TREND = 1, PKM_COURSE_STEP = 2 } pkm_course_kind;
+PKM_API int pkm_param_set_course(pkm_model* m, int i, int kind, double change, double t0, char* err,
+                                 size_t errlen);
+/* The course of parameter i (kind PKM_COURSE_NONE, change and t0 0 if none); outputs may be NULL. */
+PKM_API int pkm_param_course(const pkm_model* m, int i, int* kind, double* change, double* t0);
+/* The value of parameter i at time t [s] under its course [the parameter's unit]. */
+PKM_API int pkm_param_value_at(const pkm_model* m, int i, double t, double* value);
 /* The robot's home pose x[nd] (a reachable, non-singular reference pose). */
 PKM_API int pkm_model_home(const pkm_model* m, double* x);
 

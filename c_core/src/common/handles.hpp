@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "common/course.hpp"
 #include "common/robot.hpp"
 
 namespace pkm {
@@ -21,6 +22,7 @@ struct pkm_model {
   // Null until pkm_model_validate succeeds; reset by pkm_param_set.
   std::shared_ptr<const pkm::RobotModel> compiled;
   std::shared_ptr<const pkm::drive::Params> drive;  // the drive layer's parameters (dynamics/drive.hpp)
+  std::vector<pkm::Course> courses;  // the parameters' time courses (pkm_param_set_course), one per parameter at most
 };
 
 struct pkm_data {

@@ -229,6 +229,7 @@ int CvodeStepper::rhs_cb(double t, N_Vector y, N_Vector ydot, void* self) {
   }
   try {
     // Mechanics plus the drive layer (joint friction, rotor inertia, two-body joints).
+    s.ode_.trends_at(t);  // the parameters' trends at the stage's time (pkm_param_set_course)
     s.ode_.rates(Y, s.applied_.data(), F);
   } catch (const Error& e) {
     s.cb_status_ = e.status;

@@ -176,6 +176,7 @@ bool ErkStepper<kPair>::rhs(double t, const double* y, double* f, const double* 
   try {
     static const double zero[6] = {0, 0, 0, 0, 0, 0};
     if (!tau) tau = zero;
+    ode_.trends_at(t);  // the parameters' trends at the stage's time (pkm_param_set_course)
     if (!B || !ode_.rates_response(y, tau, f, B)) {
       if (B) reuse_input_ = false;  // this robot or drive has no cheap response: call FD each time
       ode_.rates(y, tau, f);

@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "common/handles.hpp"
 #include "integration/drive_bodies.hpp"
@@ -46,6 +47,19 @@ class Ode {
   // The effort reaching the mechanism for the command tau (the drive's saturation).
   void saturate(const double* tau, double* u) const;
 
+  // The parameters' time courses (pkm_param_set_course), on the copy's values: the
+  // steppers call trends_at(t) before each evaluation of f (the trends at the stage's
+  // time, the drive layer recompiled); the sim splits an advance at next_step(a, b) (the
+  // first step time, or time a trend reaches the end of its range, in (a, b), else b) and
+  // calls steps_at(t) before each segment (every step on its side at t).  steps_at returns
+  // 0 if nothing changed, 1 if the drive layer did, 2 if the mechanism was recompiled (new
+  // work data: whoever holds them binds again), and throws Error naming the parameter and
+  // the time once a trend has reached the end of its range (trends_at for a value out of it).
+  bool has_courses() const { return !model_->courses.empty(); }
+  void trends_at(double t);
+  double next_step(double a, double b) const;
+  int steps_at(double t);
+
  private:
   pkm_model* model_ = nullptr;  // owned copy
   pkm_data* data_ = nullptr;    // owned work data
@@ -54,6 +68,10 @@ class Ode {
   RobotData* rd_ = nullptr;
   int nd_ = 0;
   DriveBodies bodies_;
+  std::vector<double> base_;  // the coursed parameters' own values, as model_->courses
+  bool trends_ = false;       // a course is a trend
+
+  void recompile_drive();
 };
 
 }  // namespace pkm

@@ -137,6 +137,7 @@ void Sim::drive_state(double* theta, double* theta_d) {
 void Sim::acceleration(const double* tau, double* xdd) {
   check_finite(tau, nd_, "acceleration: tau");
   double u[6], f[24];
+  courses_at(t_);
   ode_.saturate(tau, u);
   ode_.rates(y_.data(), u, f);
   for (int i = 0; i < nd_; ++i) xdd[i] = f[nd_ + i];
@@ -161,7 +162,7 @@ void Sim::advance(double t_end) {
   for (int k = 0; k < stops_.nstop(); ++k)
     if (g_[k] <= 0) throw Error(stops_.status(k), stops_.message(k, g_.data(), t_, true));
 
-  if (!commands_.active()) {
+  if (!commands_.active() && !ode_.has_courses()) {
     applied_ = tau_;
     add_external();
     segment(t_end);
@@ -169,16 +170,32 @@ void Sim::advance(double t_end) {
   }
 
   // With an actuator delay the applied effort switches wherever a past command's start
-  // plus the delay falls inside the interval: integrate piecewise, restarting the stepper's
+  // plus the delay falls inside the interval, and a parameter's step (pkm_param_set_course)
+  // switches the dynamics at its time: integrate piecewise, restarting the stepper's
   // segment at each switch so no step straddles a discontinuity.
-  commands_.issue(t_, tau_.data());
+  if (commands_.active()) commands_.issue(t_, tau_.data());
   while (t_ < t_end) {
-    const double b = commands_.next_switch(t_, t_end);
-    commands_.command_at(0.5 * (t_ + b) - commands_.delay(), applied_.data());
+    const double b = ode_.next_step(t_, commands_.active() ? commands_.next_switch(t_, t_end) : t_end);
+    courses_at(t_);
+    if (commands_.active())
+      commands_.command_at(0.5 * (t_ + b) - commands_.delay(), applied_.data());
+    else
+      applied_ = tau_;
     add_external();
     segment(b);
   }
-  commands_.forget_before(t_);
+  if (commands_.active()) commands_.forget_before(t_);
+}
+
+void Sim::courses_at(double t) {
+  if (!ode_.has_courses()) return;
+  const int changed = ode_.steps_at(t);
+  ode_.trends_at(t);
+  if (changed == 2) stops_.bind(ode_.robot(), ode_.robot_model(), ode_.robot_data(), y_.data());
+  if (changed) {  // what the steppers carried was computed with the values before the step
+    stepper_->restart();
+    if (stiff_) stiff_->restart();
+  }
 }
 
 void Sim::segment(double b) {

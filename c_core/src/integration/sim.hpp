@@ -83,6 +83,9 @@ class Sim {
  private:
   // Integrates one segment [t_, b] with a constant applied effort; throws on a stop.
   void segment(double b);
+  // Puts the parameters' time courses at time t (steps on their side, trends at t),
+  // binding the stops again and restarting the steppers where a step changed something.
+  void courses_at(double t);
   void add_external() {
     for (int i = 0; i < nd_; ++i) applied_[i] += external_[i];
   }
