@@ -15,13 +15,18 @@ A drift is named when its BIC decrease over the constant exceeds the diagnosis's
 plus the look-elsewhere cost ``2 ln M`` (M: every parameter times every model and step time
 tried).  Its time course is also measured directly: the parameter refitted on its own in
 :data:`WINDOWS` consecutive windows (the others held), each with its 95 % interval, for the
-report and its figure.  The drift model is the report's: the core's parameters are constants,
-so the plant keeps the mean value.
+report and its figure.
+
+The replay's plant carries a drift the core can model (a parameter's time course in its
+integrator, ``pkm_param_set_course``: a trend of a drive-layer parameter, a step of any
+parameter): :func:`for_plant` fits it again on the fitting rows alone, so that the held-out
+part it is judged on played no part in its size, and :func:`apply` gives it to the plant.  A
+trend of a mechanism parameter (a mass) is held at its mean, and the report says so.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -77,13 +82,18 @@ class Drift:
     bar: float
     windows: dict = field(default_factory=dict)
     equation: str = ""
+    #: the course the replay's plant carries (:meth:`cosim.core.Model.set_course`'s arguments
+    #: and ``value``, the parameter's value), fitted on the fitting rows; None: the mean
+    course: dict | None = None
+    #: why the plant holds the mean instead ("" when it carries the course)
+    held: str = ""
 
     def __getitem__(self, k):
         return getattr(self, k)
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("param", "unit", "kind", "mean", "size", "ci95", "time", "start", "end",
-                                               "delta_bic", "bar", "windows", "equation")}
+                                               "delta_bic", "bar", "windows", "equation", "course", "held")}
 
 
 def _column(eng, theta, R, k):
@@ -124,7 +134,7 @@ def _course(eng, y_all, c_all, t, rows, s2):
     return out
 
 
-def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -> list:
+def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, rows=None, only=None) -> list:
     """Drifts of the fitted parameters ``theta`` over the recording (all its rows).
 
     Parameters
@@ -137,6 +147,10 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
         BIC decrease a drift must bring, before the look-elsewhere cost.
     units : dict, optional
         Core name -> unit, for the report.
+    rows : array of bool, optional
+        The rows of ``eng``'s recording to fit on (default: all of them).
+    only : iterable of str, optional
+        The parameters to try (default: every one of ``theta``).
 
     Returns
     -------
@@ -152,17 +166,18 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
         return []
     pipe = eng.pipe
     t = pipe.t[pipe.idx]
-    rows = np.ones(len(t), bool)
+    rows = np.ones(len(t), bool) if rows is None else np.asarray(rows, bool)
     R = eng.R(theta)
     y = -eng.vec(R, rows)  # what a change of the parameters' columns must cancel
-    tt = np.tile(t, eng.C)
-    T = float(t.max() - t.min())
+    tr = t[rows]
+    tt = np.tile(tr, eng.C)
+    T = float(tr.max() - tr.min()) if len(tr) else 0.0
     if not T > 0:
         return []
-    tm = 0.5 * (t.max() + t.min())
-    cuts = t.min() + STEP_GRID * T
+    tm = 0.5 * (tr.max() + tr.min())
+    cuts = tr.min() + STEP_GRID * T
     logn = math.log(eng.n_eff)
-    keys = [k for k in theta if np.isfinite(theta[k])]
+    keys = [k for k in theta if np.isfinite(theta[k]) and (only is None or k in only)]
     tried = len(keys) * (1 + len(cuts))
     bar = threshold + 2.0 * math.log(max(tried, 1))
     found = []
@@ -189,7 +204,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
         p = float(theta[k])
         course = _course(eng, y, c, t, rows, s2)
         course["value"] = [p + v for v in course["value"]]
-        course["span"] = [float(t.min()), float(t.max())]
+        course["span"] = [float(tr.min()), float(tr.max())]
         u = (units or {}).get(k, "")
         if d_trend >= d_step:
             X = np.stack([c, c * (tt - tm) / T], 1)
@@ -212,17 +227,67 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None) -
     return sorted(found, key=lambda d: -d.delta_bic)
 
 
+def _course_of(d: Drift) -> dict:
+    """The core course of drift ``d`` (:meth:`cosim.core.Model.set_course`'s keywords and the
+    parameter's ``value``): a trend through its middle value at the middle of its span, a step
+    from its value before to its value after."""
+    if d.kind == "trend":
+        t0, t1 = d.windows["span"]
+        return {"kind": "trend", "value": 0.5 * (d.start + d.end), "rate": d.size / (t1 - t0), "t0": 0.5 * (t0 + t1)}
+    return {"kind": "step", "value": d.start, "size": d.end - d.start, "t0": d.time}
+
+
+def for_plant(eng, theta: dict, drifts: list, threshold: float, model) -> list:
+    """``drifts`` with the course the replay's plant carries: each drift fitted again on the
+    fitting rows alone (``~eng.test``: the held-out part plays no part in it), kept where it is
+    still named there and the core can model it (``Drift.course``), else the mean with the
+    reason (``Drift.held``)."""
+    from ..errors import PkmError
+
+    if not drifts:
+        return drifts
+    train = ~np.asarray(eng.test, bool)
+    again = {d.param: d for d in find_drifts(eng, theta, threshold, rows=train, only={d.param for d in drifts})}
+    out = []
+    for d in drifts:
+        a = again.get(d.param)
+        if a is None or a.kind != d.kind:
+            out.append(replace(d, held="not named on the fitting rows alone: the plant holds the mean"))
+            continue
+        c = _course_of(a)
+        try:
+            apply(model.copy(), [replace(d, course=c)])
+        except PkmError as e:  # the core cannot carry it (a trend of a mechanism parameter)
+            out.append(replace(d, held=f"the plant holds the mean: {e}"))
+            continue
+        out.append(replace(d, course=c))
+    return out
+
+
+def apply(model, drifts) -> None:
+    """Give ``model`` the courses of ``drifts`` (those with one): each parameter set to the
+    course's value, then its course (:meth:`cosim.core.Model.set_course`)."""
+    for d in drifts:
+        if d.course is None:
+            continue
+        c = dict(d.course)
+        model.set_params({d.param: c.pop("value")})
+        model.set_course(d.param, c.pop("kind"), **c)
+
+
 def sentence(drifts) -> str:
     """The conclusion's clause on the drifts."""
     parts = []
     for d in drifts:
         if d.kind == "trend":
-            parts.append(f"{d.param} drifts from {d.start:.4g} to {d.end:.4g} {d.unit} over the recording "
-                         f"({d.size:+.3g} ± {d.ci95:.2g} {d.unit})")
+            p = (f"{d.param} drifts from {d.start:.4g} to {d.end:.4g} {d.unit} over the recording "
+                 f"({d.size:+.3g} ± {d.ci95:.2g} {d.unit})")
         else:
-            parts.append(f"{d.param} steps from {d.start:.4g} to {d.end:.4g} {d.unit} at t = {d.time:.3g} s "
-                         f"({d.size:+.3g} ± {d.ci95:.2g} {d.unit})")
-    return "drift: " + "; ".join(parts) + " (the plant holds the mean)"
+            p = (f"{d.param} steps from {d.start:.4g} to {d.end:.4g} {d.unit} at t = {d.time:.3g} s "
+                 f"({d.size:+.3g} ± {d.ci95:.2g} {d.unit})")
+        parts.append(p + (", modelled as a drift" if d.course is not None else
+                          " (the plant holds the mean)"))
+    return "drift: " + "; ".join(parts)
 
 
 def markdown(drifts, files: dict) -> list:
@@ -230,9 +295,18 @@ def markdown(drifts, files: dict) -> list:
     L = ["## Drifts", "",
          "Every fitted parameter tried as a trend or a step in time over the whole recording (BIC with the "
          "look-elsewhere cost of every parameter and step time tried); the time course is the parameter refitted "
-         f"alone in {WINDOWS} windows.  The plant holds the mean.", ""]
+         f"alone in {WINDOWS} windows.  A drift the core can model is modelled as a drift: the replay's plant "
+         "carries it as its parameter's time course, fitted again on the fitting rows alone.", ""]
     for d in drifts:
-        L += [f"- **{d.equation}** (BIC decrease {d.delta_bic:.0f}, bar {d.bar:.1f})",
+        if d.course is not None:
+            c = d.course
+            how = (f"a trend of {c['rate']:.4g} {d.unit}/s through {c['value']:.4g} {d.unit} at {c['t0']:.3g} s"
+                   if c["kind"] == "trend" else
+                   f"a step of {c['size']:.4g} {d.unit} at {c['t0']:.3g} s from {c['value']:.4g} {d.unit}")
+            plant = f"modelled as a drift: the plant carries {how}"
+        else:
+            plant = d.held or "the plant holds the mean"
+        L += [f"- **{d.equation}** (BIC decrease {d.delta_bic:.0f}, bar {d.bar:.1f}); {plant}",
               "  - windows: " + ", ".join(f"{v:.4g} ± {c:.2g} at {t:.3g} s"
                                           for t, v, c in zip(d.windows["t"], d.windows["value"], d.windows["ci95"]))]
     if "drifts" in files:

@@ -140,6 +140,25 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
   return p;
 }
 
+namespace {
+// The friction keys friction_slot knows: their fields feed nothing but friction() and any_friction.
+constexpr int kFrictionKeys[] = {0, 1, 2, 12};  // coulomb, viscous, stribeck, offset
+}  // namespace
+
+int friction_slot(const Robot& r, const std::string& name) {
+  for (int k : kFrictionKeys)
+    for (int i = 0; i < r.ndof(); ++i)
+      if (joint_param(r, i, kKeys[k]) == name) return k * kMaxJoints + i;
+  return -1;
+}
+
+void set_friction(Params& p, int slot, double v) {
+  field(p, slot / kMaxJoints)[slot % kMaxJoints] = v;
+  p.any_friction = false;
+  for (int i = 0; i < p.nd; ++i)
+    p.any_friction |= p.coulomb[i] != 0 || p.viscous[i] != 0 || p.stribeck[i] != 0 || p.offset[i] != 0;
+}
+
 double smooth_sign(double v, double eps) { return std::tanh(v / eps); }
 
 void friction(const Params& p, const double* qd, double* f) {

@@ -81,6 +81,13 @@ std::vector<ParamSpec> specs(const Robot& r);
 std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpec>& specs,
                                       const std::vector<double>& values);
 
+// A per-joint friction parameter's place in Params ("<j>[i].coulomb", ".viscous", ".stribeck",
+// ".offset"; -1 for any other name), and the parameters with the value at that place changed
+// (what compile gives for the changed value, without reading the table again: the time
+// courses of integration/ode.cpp set a trend at every stage).
+int friction_slot(const Robot& r, const std::string& name);
+void set_friction(Params& p, int slot, double v);
+
 // Smooth sign, tanh(v / eps): friction (and the backlash side, over an effort scale) switch over a scale eps so
 // the dynamics stay Lipschitz for the integrator; sign(0) = 0, so a robot at rest
 // feels no friction force.

@@ -22,6 +22,7 @@ Ode::Ode(const pkm_model* m, const std::function<void(pkm_model*)>& adjust) {
     bodies_ = DriveBodies(model_, nd_);
     for (const auto& c : model_->courses) {
       base_.push_back(model_->values[c.param]);
+      slot_.push_back(c.kind == PKM_COURSE_TREND ? drive::friction_slot(*robot_, model_->specs[c.param].name) : -1);
       trends_ |= c.kind == PKM_COURSE_TREND;
     }
     PKM_REQUIRE(nd_ <= 6, PKM_ERR_INTERNAL, "the simulator supports up to 6 actuated joints");
@@ -90,7 +91,8 @@ void Ode::recompile_drive() {
 
 void Ode::trends_at(double t) {
   if (!trends_) return;
-  bool changed = false;
+  bool changed = false, patched = false;
+  std::shared_ptr<drive::Params> fast;  // the friction trends' values set in place of a compile
   const auto& cs = model_->courses;
   for (size_t k = 0; k < cs.size(); ++k) {
     if (cs[k].kind != PKM_COURSE_TREND) continue;
@@ -99,9 +101,20 @@ void Ode::trends_at(double t) {
     if (v == p) continue;
     check_course_value(model_->specs[cs[k].param], cs[k], v, t);
     p = v;
-    changed = true;
+    if (slot_[k] < 0) {
+      changed = true;
+      continue;
+    }
+    if (!fast) fast = std::make_shared<drive::Params>(*model_->drive);
+    drive::set_friction(*fast, slot_[k], v);
+    patched = true;
   }
-  if (changed) recompile_drive();
+  if (changed) {
+    recompile_drive();  // reads every value, the friction's set above included
+  } else if (patched) {
+    model_->drive = fast;
+    if (!bodies_.empty()) recompile_drive();  // the carriage side is derived from the drive layer
+  }
 }
 
 // When a trend reaches the end of its parameter's range (inf: never).

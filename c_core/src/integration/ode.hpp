@@ -69,6 +69,7 @@ class Ode {
   int nd_ = 0;
   DriveBodies bodies_;
   std::vector<double> base_;  // the coursed parameters' own values, as model_->courses
+  std::vector<int> slot_;     // a friction trend's place in the drive layer (drive::friction_slot), else -1
   bool trends_ = false;       // a course is a trend
 
   void recompile_drive();

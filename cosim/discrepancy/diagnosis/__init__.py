@@ -352,9 +352,10 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
         if plat is not None:  # parameters relative to the user's model from here on
             theta = dict(plat.params, **theta)
         held = heldout_fit(eng0, sel, theta)
-        from ..drift import find_drifts
+        from ..drift import find_drifts, for_plant
 
         drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()}) if drift else []
+        drifts = for_plant(eng0, theta, drifts, threshold, mdl)  # the courses the replay's plant carries
         loc = localise(eng, sel)
         t4 = time.perf_counter()
     timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,
@@ -366,7 +367,7 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
     replayed = None
     if replay:
         t5 = time.perf_counter()
-        flex, replayed = _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box)
+        flex, replayed = _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box, drifts)
         if details:
             details += _two_body_sentence(replayed, mdl.joint_unit)
         else:
@@ -511,7 +512,7 @@ def _with_drive_statements(conclusion, enc, effort_map) -> str:
     return conclusion
 
 
-def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box):
+def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, black_box, drifts=()):
     """``(flex, replay)``: the closed-loop replay of the held-out part, with the flexible
     model's force as a black-box term when asked and one is explained (its fits then marked
     ``black_box``)."""
@@ -521,7 +522,7 @@ def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, bla
 
         bb = black_box_force(eng0, r_after, flex, len(rec.time))
         flex = [replace(f, black_box=True) if f.explained else f for f in flex]
-    return flex, _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb)
+    return flex, _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb, drifts=drifts)
 
 
 def _contradicted(rec, pipe, warnings, out, t0, enc) -> Diagnosis:

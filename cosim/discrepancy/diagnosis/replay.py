@@ -70,7 +70,7 @@ def _compared(rec, mdl, compare) -> dict:
     return out
 
 
-def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
+def _replay(rec, eng, sel, compared=None, theta=None, black_box=None, drifts=()):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
     :mod:`.drive_bodies`, then the ``compared`` ones) driven by the recorded controller and
@@ -82,7 +82,9 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     Per run the RMS differences and the relative error of the efforts, norm of the
     difference over the norm of the recorded effort.  ``black_box`` (rows x joints, the
     flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
-    box", the fitted plant with that force as a known external effort."""
+    box", the fitted plant with that force as a known external effort.  ``drifts`` (:mod:`.drift`,
+    :func:`.drift.for_plant`): the fitted plant carries those with a course as its parameters'
+    time courses, and one more run, "fitted, mean", holds every parameter at the constant fitted."""
     from ..drive_bodies import drive_joints, fit_two_body, fitting_window
     from ..runs import closed_loop, controller_from, reference_from_recording
 
@@ -128,6 +130,11 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None):
     plants = {"nominal": mdl.copy(), "fitted": mdl.copy()}
     if theta:
         plants["fitted"].set_params(theta)
+    if any(d.course is not None for d in drifts):
+        from ..drift import apply
+
+        plants["fitted, mean"] = plants["fitted"].copy()
+        apply(plants["fitted"], drifts)
     joints = drive_joints(theta, mdl)
     if joints:
         k_fit, n_fit = fitting_window(pipe, joints, fit_from, fit_to)
