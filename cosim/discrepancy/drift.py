@@ -134,7 +134,7 @@ def _course(eng, y_all, c_all, t, rows, s2):
     return out
 
 
-def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, rows=None, only=None) -> list:
+def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, rows=None, kinds=None) -> list:
     """Drifts of the fitted parameters ``theta`` over the recording (all its rows).
 
     Parameters
@@ -149,8 +149,9 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
         Core name -> unit, for the report.
     rows : array of bool, optional
         The rows of ``eng``'s recording to fit on (default: all of them).
-    only : iterable of str, optional
-        The parameters to try (default: every one of ``theta``).
+    kinds : dict, optional
+        Parameter -> ``trend`` or ``step``: those parameters only, each fitted as that kind
+        whatever its BIC (a drift already named, fitted again on other rows).
 
     Returns
     -------
@@ -177,7 +178,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     tm = 0.5 * (tr.max() + tr.min())
     cuts = tr.min() + STEP_GRID * T
     logn = math.log(eng.n_eff)
-    keys = [k for k in theta if np.isfinite(theta[k]) and (only is None or k in only)]
+    keys = [k for k in theta if np.isfinite(theta[k]) and (kinds is None or k in kinds)]
     tried = len(keys) * (1 + len(cuts))
     bar = threshold + 2.0 * math.log(max(tried, 1))
     found = []
@@ -198,7 +199,8 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
                 best_s = (ts, chi_s, coef_s, h)
         d_trend = chi_c - chi_t - logn
         d_step = chi_c - best_s[1] - 2 * logn
-        if max(d_trend, d_step) <= bar:
+        forced = None if kinds is None else kinds[k]
+        if forced is None and max(d_trend, d_step) <= bar:
             continue
         s2 = max(1.0, min(chi_t, best_s[1]) / max(len(y) - 2, 1))
         p = float(theta[k])
@@ -206,7 +208,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
         course["value"] = [p + v for v in course["value"]]
         course["span"] = [float(tr.min()), float(tr.max())]
         u = (units or {}).get(k, "")
-        if d_trend >= d_step:
+        if d_trend >= d_step if forced is None else forced == "trend":
             X = np.stack([c, c * (tt - tm) / T], 1)
             size = float(coef_t[1])
             ci = 1.96 * math.sqrt(s2 * np.linalg.pinv(X.T @ X)[1, 1])
@@ -233,26 +235,27 @@ def _course_of(d: Drift) -> dict:
     from its value before to its value after."""
     if d.kind == "trend":
         t0, t1 = d.windows["span"]
-        return {"kind": "trend", "value": 0.5 * (d.start + d.end), "rate": d.size / (t1 - t0), "t0": 0.5 * (t0 + t1)}
-    return {"kind": "step", "value": d.start, "size": d.end - d.start, "t0": d.time}
+        return {"kind": "trend", "value": float(0.5 * (d.start + d.end)), "rate": float(d.size / (t1 - t0)),
+                "t0": float(0.5 * (t0 + t1))}
+    return {"kind": "step", "value": float(d.start), "size": float(d.end - d.start), "t0": float(d.time)}
 
 
 def for_plant(eng, theta: dict, drifts: list, threshold: float, model) -> list:
-    """``drifts`` with the course the replay's plant carries: each drift fitted again on the
-    fitting rows alone (``~eng.test``: the held-out part plays no part in it), kept where it is
-    still named there and the core can model it (``Drift.course``), else the mean with the
-    reason (``Drift.held``)."""
+    """``drifts`` with the course the replay's plant carries: each drift, of the kind named on
+    the whole recording, fitted again on the fitting rows alone (``~eng.test``: its size, value
+    and step time owe nothing to the held-out part), where the core can model it
+    (``Drift.course``), else the mean with the reason (``Drift.held``)."""
     from ..errors import PkmError
 
     if not drifts:
         return drifts
     train = ~np.asarray(eng.test, bool)
-    again = {d.param: d for d in find_drifts(eng, theta, threshold, rows=train, only={d.param for d in drifts})}
+    again = {d.param: d for d in find_drifts(eng, theta, threshold, rows=train, kinds={d.param: d.kind for d in drifts})}
     out = []
     for d in drifts:
         a = again.get(d.param)
-        if a is None or a.kind != d.kind:
-            out.append(replace(d, held="not named on the fitting rows alone: the plant holds the mean"))
+        if a is None:
+            out.append(replace(d, held="no column on the fitting rows: the plant holds the mean"))
             continue
         c = _course_of(a)
         try:
