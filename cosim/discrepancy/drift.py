@@ -278,6 +278,22 @@ def apply(model, drifts) -> None:
         model.set_course(d.param, c.pop("kind"), **c)
 
 
+def residual(eng, theta: dict, drifts, R):
+    """The residual ``R`` (m, C) of ``eng``'s rows at ``theta`` with the modelled drifts' courses in
+    place of their constants, to first order: each parameter's residual column times its course
+    less its constant.  What the structure test reads after a fit whose plant carries drifts."""
+    t = eng.pipe.t[eng.pipe.idx]
+    for d in drifts:
+        col = None if d.course is None else _column(eng, theta, R, d.param)
+        if col is None:
+            continue
+        c = d.course
+        p = (c["value"] + c["rate"] * (t - c["t0"]) if c["kind"] == "trend" else
+             np.where(t >= c["t0"], c["value"] + c["size"], c["value"]))
+        R = R + col * (p - theta[d.param])[:, None]
+    return R
+
+
 def sentence(drifts) -> str:
     """The conclusion's clause on the drifts."""
     parts = []

@@ -181,10 +181,11 @@ def sentence(replay: dict | None) -> str:
             f"started from the recorded state)")
 
 
-def heldout_replay(rec, eng, theta: dict, compared: dict | None = None) -> dict:
+def heldout_replay(rec, eng, theta: dict, compared: dict | None = None, drifts=()) -> dict:
     """The open-loop replay of a diagnosis: the held-out part of the stretch of motion where
     it starts (a block, a run), with the nominal, the fitted and the ``compared`` plants; or
-    ``{"skipped": why}`` when the recording is not an open-loop experiment."""
+    ``{"skipped": why}`` when the recording is not an open-loop experiment.  ``drifts`` with a
+    course (:func:`.drift.for_plant`): the fitted plant carries them, "fitted, mean" does not."""
     ok, why = can_replay_open_loop(rec)
     if not ok:
         return {"skipped": f"the recording has no qref columns (the reference is needed to replay in closed loop), "
@@ -196,6 +197,11 @@ def heldout_replay(rec, eng, theta: dict, compared: dict | None = None) -> dict:
     plants = {"nominal": eng.model.copy(), "fitted": eng.model.copy()}
     if theta:
         plants["fitted"].set_params(theta)
+    if any(d.course is not None for d in drifts):
+        from .drift import apply
+
+        plants["fitted, mean"] = plants["fitted"].copy()
+        apply(plants["fitted"], drifts)
     plants.update(compared or {})
     out = open_loop_replay(rec, plants, start=k0, stop=pipe.segment_of(k0)[1])
     out["kind"], out["unit"] = "open loop", eng.model.joint_unit

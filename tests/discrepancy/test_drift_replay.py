@@ -16,7 +16,7 @@ def _rms(run):
 
 @pytest.mark.parametrize("kind, seed", [("trend", 1), ("step", 11)])
 def test_the_replay_with_the_drift_beats_the_mean(kind, seed):
-    rec, truth = drift_case(kind, seed)
+    rec, truth = drift_case(kind, seed, duration=4.0)
     d = diagnose(rec, figures=False, replay=True, discovery=False, platform=False)
     modelled = [x for x in d.drifts if x.course is not None and x.kind == kind]
     assert modelled, (d.conclusion, [(x.equation, x.held) for x in d.drifts])

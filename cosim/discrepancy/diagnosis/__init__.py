@@ -356,6 +356,10 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
 
         drifts = find_drifts(eng0, theta, threshold, {p.name: p.unit for p in mdl.param_info()}) if drift else []
         drifts = for_plant(eng0, theta, drifts, threshold, mdl)  # the courses the replay's plant carries
+        if any(d.course is not None for d in drifts):  # judged on the held-out part with them
+            from ..drift import residual as drift_residual
+
+            held = heldout_fit(eng0, sel, theta, R_after=drift_residual(eng0, theta, drifts, eng0.R(theta)))
         loc = localise(eng, sel)
         t4 = time.perf_counter()
     timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,
@@ -408,6 +412,10 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
 
     gone = {w["group"] for w in withdrawn}
     r_after = eng0.R(theta) if theta else eng0.R0
+    if any(d.course is not None for d in drifts):  # the fit's residual with the drifts the plant carries
+        from ..drift import residual as drift_residual
+
+        r_after = drift_residual(eng0, theta, drifts, r_after)
     left = unexplained(pipe, r_after, floor=eng.accuracy())
     # A fit that leaves structure anywhere may stand in for physics the library lacks: in
     # closed loop a missing force moves every joint's readings and efforts, and a stand-in often

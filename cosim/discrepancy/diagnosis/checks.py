@@ -112,16 +112,17 @@ def _check_motion(pipe):
                              f"record a motion with accelerations, constant-velocity phases and reversals")
 
 
-def heldout_fit(eng, sel, theta: dict | None = None) -> dict:
+def heldout_fit(eng, sel, theta: dict | None = None, R_after=None) -> dict:
     """Residuals on the held-out samples before (nominal) and after (fitted) modelling.
 
     RMS over the samples each channel uses (a joint's rest phases, where its friction
     and backlash depend on a rate below the reading noise, are left out, as in the
-    fit); ``rms_all_*`` over every held-out sample."""
+    fit); ``rms_all_*`` over every held-out sample.  ``R_after`` (every row of ``eng``): the
+    fitted residual when it is not ``eng.R(theta)`` (the plant carries drifts, :func:`.drift.residual`)."""
     test = eng.test
     theta = sel.theta if theta is None else theta
     Rb = eng.R({})[test]
-    Ra = eng.R(theta)[test] if theta else Rb
+    Ra = (eng.R(theta) if R_after is None else R_after)[test] if theta else Rb
     use = eng.use[test] > 0
     pipe = eng.pipe
     chans = pipe.channels

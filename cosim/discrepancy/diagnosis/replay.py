@@ -91,7 +91,7 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None, drifts=())
     from ..open_loop import declared_open_loop, heldout_replay
 
     if rec.qref is None or declared_open_loop(rec):  # an open-loop experiment, or declared: open loop
-        return heldout_replay(rec, eng, sel.theta if theta is None else theta, compared)
+        return heldout_replay(rec, eng, sel.theta if theta is None else theta, compared, drifts)
     mdl = eng.model
     pipe = eng.pipe
     test = eng.test
