@@ -346,7 +346,14 @@ def figure(drifts, path):
             ax.plot([t0, t1], [d.start, d.end], "-", label="trend")
         else:
             ax.step([t0, d.time, t1], [d.start, d.end, d.end], where="post", label="step")
-        ax.axhline(d.mean, color="grey", ls=":", label="the constant fitted (the plant's)")
+        if d.course is not None:  # what the replay's plant carries (fitted on the fitting rows)
+            c, tt = d.course, np.array([t0, t1])
+            if c["kind"] == "trend":
+                ax.plot(tt, c["value"] + c["rate"] * (tt - c["t0"]), "--", label="the plant's course")
+            else:
+                ax.step([t0, c["t0"], t1], [c["value"], c["value"] + c["size"], c["value"] + c["size"]], "--",
+                        where="post", label="the plant's course")
+        ax.axhline(d.mean, color="grey", ls=":", label="the constant fitted (the mean)")
         ax.set_ylabel(f"{d.param} [{d.unit}]")
         ax.legend(fontsize=7)
     axes[-1, 0].set_xlabel("time [s]")
