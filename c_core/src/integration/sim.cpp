@@ -71,6 +71,9 @@ void Sim::reset(double t0, const double* x, const double* xd) {
     y[i] = x[i];
     y[nd_ + i] = xd[i];
   }
+  // The parameters' courses at t0 first (a rollback across a step takes the values before
+  // it), so the advance after a state load finds them in place and keeps the loaded step size.
+  courses_at(t0);
   stops_.check_start(y.data());
   // A start whose energy overflows (a rate of 1e200 m/s) is no state of a robot.
   double kinetic = 0, potential = 0;
