@@ -178,7 +178,8 @@ PKM_API int pkm_model_validate(pkm_model* m, char* err, size_t errlen);
  * course on a joint limit (the integrator's stops), drive.two_body, actuator.delay or
  * sensor.delay (read when a sim is created), and a step whose value after t0 is outside the
  * parameter's range.  A trend leaving the range stops pkm_sim_advance there with
- * PKM_ERR_PARAMETER naming the parameter and the time. */
+ * PKM_ERR_PARAMETER naming the parameter and the time.  pkm_sim_reset and pkm_sim_state_load
+ * take the values at their time (a rollback across a step repeats the run bit for bit). */
 typedef enum pkm_course_kind { PKM_COURSE_NONE = 0, PKM_COURSE_TREND = 1, PKM_COURSE_STEP = 2 } pkm_course_kind;
 PKM_API int pkm_param_set_course(pkm_model* m, int i, int kind, double change, double t0, char* err,
                                  size_t errlen);
