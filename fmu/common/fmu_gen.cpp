@@ -253,6 +253,16 @@ Table read_table(const std::string& path, pkm_model*& model) {
         model = pkm_model_create(val.c_str(), set, err, sizeof err);
         if (!model) throw Fail(where() + "robot '" + val + "': " + err);
         t.robot_name = pkm_model_robot(model);
+        // A robot the core serves by name from its description (robots/6pus.toml for "6pus"):
+        // the FMU carries that description too, so it needs no file where it runs.
+        const std::string served = pkm_robot_file(val.c_str());
+        if (t.description.empty() && !served.empty()) {
+          std::ifstream df(served);
+          if (!df) throw Fail(where() + "cannot read the description " + served + " of robot '" + val + "'");
+          std::stringstream ds;
+          ds << df.rdbuf();
+          t.description = ds.str();
+        }
         nd = pkm_model_ndof(model);
         home.assign(nd, 0.0);
         int st = pkm_model_home(model, home.data());
