@@ -134,10 +134,12 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   m->kind = m->legs.front().kind;
   m->m_platform = get("platform.m");
   m->I_platform = V3(get("platform.Ixx"), get("platform.Iyy"), get("platform.Izz"));
-  // Principal moments of a real body obey the triangle inequality (a rigid platform's: an
-  // articulated one turns about its axis only, a point has none).
+  // Principal moments of a real body obey the triangle inequality (those of a rigid platform
+  // that turns: a translating one's have no effect, an articulated one turns about its axis
+  // only, a point has none).
   const char* inames[3] = {"platform.Ixx", "platform.Iyy", "platform.Izz"};
-  for (int k = 0; k < (d_.articulated || d_.point ? 0 : 3); ++k) {
+  const bool rigid_turning = m->rotates && !d_.articulated && !d_.point;
+  for (int k = 0; k < (rigid_turning ? 3 : 0); ++k) {
     const double a = m->I_platform[k], b = m->I_platform[(k + 1) % 3], c = m->I_platform[(k + 2) % 3];
     if (a > b + c + 1e-15)
       bad(std::string(inames[k]) + " = " + g6(a) + " kg m2 exceeds " + inames[(k + 1) % 3] + " + " +
