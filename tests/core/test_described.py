@@ -59,6 +59,9 @@ def test_6pus_is_served_from_its_description_and_equals_the_hand_written_oracle(
 
     assert Path(Model("6pus").facts.file).resolve() == REPO / "robots" / "6pus.toml"
     assert Model("6pus_described").robot == "6pus"
+    from cosim.cli.common import robot_arg  # the CLI's --robot takes the former name too
+
+    assert robot_arg("6pus_described") == "6pus_described" and "6pus_described" not in robots()
     lib = Path(os.environ.get("PKM_BUILD_DIR", REPO / "build")) / "lib" / "libpkm_oracle.so"
     assert lib.exists(), f"{lib} is missing: cmake builds it with the core (target pkm_oracle)"
     r = subprocess.run([sys.executable, str(Path(__file__).with_name("oracle_6pus.py"))], cwd=REPO,

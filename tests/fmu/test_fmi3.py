@@ -20,14 +20,14 @@ from cosim.core import Model
 REPO = Path(__file__).resolve().parents[2]
 
 H = 1e-3
-ROBOTS = ["6pus", "quattro", "hexapod_ups"]  # written in C++ (two) and compiled from a description
+ROBOTS = ["6pus", "quattro", "hexapod_ups"]  # with a table of its own (6pus, quattro) and the described FMUs' table
 
 
 def fmi3_files():
     """Every plant and controller FMU of the robots the toolkit lists, as FMI 3.0 (a missing
     one is a failure: the build makes one per FMI 2.0 FMU, never a skip)."""
     listed = [ln.split("#")[0].strip() for ln in (REPO / "robots" / "robots.list").read_text().splitlines()]
-    robots = ["6pus", "quattro"] + [r for r in listed if r]
+    robots = ["quattro"] + [r for r in listed if r]  # "6pus" is listed (robots/6pus.toml)
     return [fmu.build_dir() / "fmu" / "fmi3" / f"{fmu.fmu_id(r)}{s}.fmu" for r in robots for s in ("", "_CTRL")]
 
 
