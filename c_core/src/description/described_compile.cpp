@@ -135,10 +135,14 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   m->m_platform = get("platform.m");
   m->I_platform = V3(get("platform.Ixx"), get("platform.Iyy"), get("platform.Izz"));
   // Principal moments of a real body obey the triangle inequality (those of a rigid platform
-  // that turns: a translating one's have no effect, an articulated one turns about its axis
-  // only, a point has none).
+  // that turns about two axes or more: a translating or planar one's other moments have no
+  // effect, an articulated one turns about its axis only, a point has none).
   const char* inames[3] = {"platform.Ixx", "platform.Iyy", "platform.Izz"};
-  const bool rigid_turning = m->rotates && !d_.articulated && !d_.point;
+  int turns = 0;
+  for (int k = 3; k < 6; ++k)
+    turns += std::find(d_.coords.begin(), d_.coords.end(), k) != d_.coords.end() ||
+             std::find(d_.dependent.begin(), d_.dependent.end(), k) != d_.dependent.end();
+  const bool rigid_turning = turns >= 2 && !d_.articulated && !d_.point;
   for (int k = 0; k < (rigid_turning ? 3 : 0); ++k) {
     const double a = m->I_platform[k], b = m->I_platform[(k + 1) % 3], c = m->I_platform[(k + 2) % 3];
     if (a > b + c + 1e-15)

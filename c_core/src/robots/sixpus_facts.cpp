@@ -8,6 +8,7 @@
 
 #include "common/guard.hpp"
 #include "description/described_robot.hpp"
+#include "description/joint_kind.hpp"
 
 namespace pkm {
 namespace sixpus {
@@ -41,8 +42,12 @@ bool is_6pus(const Robot& r) {
   if (desc.structure != described::Structure::legs || desc.articulated || desc.point || !desc.dependent.empty() ||
       desc.coords != std::vector<int>{0, 1, 2, 3, 4, 5} || desc.legs.size() != kLegs)
     return false;
-  for (const described::LegType* t : desc.legs)
-    if (std::string(t->name) != "PUS") return false;
+  // Every leg a slider on a rail and a rod to its platform point (its kind's traits): the
+  // geometry the rows differentiate, |P - S0 - q s| = L.
+  for (const described::LegType* t : desc.legs) {
+    const described::LegMotion& k = t->leg->motion();
+    if (k.angular() || !k.has_rod()) return false;
+  }
   return true;
 }
 
