@@ -249,12 +249,12 @@ def test_refusals_say_the_same_as_fmi2():
     f3.close()
 
     # A bad start value fails the end of initialization with the FMI 2.0 message.
-    g2 = fmu.FMUInstance(p2, params={"platform.m": 0.0}, initialize=False)
+    g2 = fmu.FMUInstance(p2, params={"platform.Izz": 9e-4}, initialize=False)
     with pytest.raises(fmu.FMUError):
         g2.initialize()
     init2 = g2.log[-1].split("] ", 1)[1]
     g2.close()
-    g3 = Instance(fmu.fmu_path("6pus", fmi=3), params={"platform.m": 0.0}, initialize=False)
+    g3 = Instance(fmu.fmu_path("6pus", fmi=3), params={"platform.Izz": 9e-4}, initialize=False)
     g3.f.enterInitializationMode(startTime=0.0)
     with pytest.raises(FMICallException):
         g3.f.exitInitializationMode()
