@@ -1,7 +1,10 @@
 // described_bench: a description-compiled robot against its hand-written twin, same
 // process, calls alternated, medians of repeats (the machines are noisy).
 //
-//   described_bench [HAND DESCRIBED] [--repeats R]     (default: 6pus 6pus_described)
+//   described_bench [HAND DESCRIBED] [--repeats R]     (default: 6pus_hand 6pus)
+//
+// The hand-written models are test oracles (c_core/tests/oracles/, "6pus_hand"): the program
+// links libpkm_oracle.so, the core plus those oracles.
 //
 // Rows: inverse kinematics, inverse dynamics, forward dynamics and the Jacobian, ns per
 // call through the public C API over 2000 poses and rates around home; the ratio
@@ -44,8 +47,8 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const char* hand_name = "6pus";
-  const char* desc_name = "6pus_described";
+  const char* hand_name = "6pus_hand";
+  const char* desc_name = "6pus";
   int repeats = 9;
   std::vector<const char*> pos;
   for (int i = 1; i < argc; ++i) {

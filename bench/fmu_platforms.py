@@ -24,7 +24,7 @@ from cosim import fmu  # noqa: E402
 
 
 def robots_with_fmus():
-    names = ["6pus", "quattro"]
+    names = ["quattro"]  # and every listed description ("6pus" among them)
     listed = (REPO / "robots" / "robots.list").read_text().splitlines()
     names += [n.split("#")[0].strip() for n in listed if n.split("#")[0].strip()]
     return names

@@ -1109,9 +1109,9 @@ def free_pose(qpos, qvel, qacc):
 
 def run_blind(seconds: float = 4.0, seed: int = 1, integrator: str | None = None, f_pd: float = 15.0) -> Result:
     """The same check on bench/foreign/mujoco_blind.py's clean MuJoCo 6-PUS (built from the
-    hand-written core model "6pus"'s parameters: free platform, capsule legs, connect at
+    6-PUS's parameters: free platform, capsule legs, connect at
     solref 0.0002, implicitfast at 0.1 ms), driven along the same excitation (that of
-    robots/6pus_described.toml, the same robot) by the same PD."""
+    robots/6pus.toml, the same robot) by the same PD."""
     import mujoco
 
     sys.path.insert(0, str(REPO / "bench"))
@@ -1137,7 +1137,7 @@ def run_blind(seconds: float = 4.0, seed: int = 1, integrator: str | None = None
     mujoco.mj_forward(model, data)
     gap = lambda: float(np.max(np.linalg.norm(data.site_xpos[ends] - data.site_xpos[plats], axis=1)))  # noqa: E731
     home_closure = gap()
-    rob = read(resolve("6pus_described"))
+    rob = read(resolve("6pus"))
     Kp, Kd = _gains(model, data, av, f_pd)
     qref, qdref, scale, nrec, sub = _reference(rob, seconds, seed, model.opt.timestep)
     rec = _drive(model, data, lambda: q0 + data.qpos[aq], av,

@@ -1,5 +1,6 @@
-// Robots compiled from description files, through the C API: the 6-PUS description
-// against the hand-written 6-PUS, a description registered from text (what an FMU does),
+// Robots compiled from description files, through the C API: the 6-PUS the core serves from
+// robots/6pus.toml against the hand-written 6-PUS kept as a test oracle ("6pus_hand",
+// c_core/tests/oracles/), a description registered from text (what an FMU does),
 // its errors with file and line, and forward kinematics of an arm robot.
 #include <cmath>
 #include <cstring>
@@ -26,7 +27,7 @@ std::string tiny_delta() {
 }  // namespace
 
 TEST(Described, SixPusDescriptionEqualsTheHandWrittenModel) {
-  auto a = make_model("6pus"), b = make_model("6pus_described");
+  auto a = make_model("6pus_hand"), b = make_model("6pus");
   ASSERT_TRUE(a && b);
   auto da = make_data(a.get()), db = make_data(b.get());
   ASSERT_EQ(pkm_model_nparam(a.get()), pkm_model_nparam(b.get()));

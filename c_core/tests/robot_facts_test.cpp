@@ -89,7 +89,8 @@ TEST(RobotFacts, ModelCreationReportsAStatus) {
   pkm_model* m = reinterpret_cast<pkm_model*>(0x1);
   EXPECT_EQ(pkm_model_create_status("hexapod9", nullptr, &m, err, sizeof err), PKM_ERR_ARGUMENT);
   EXPECT_EQ(m, nullptr);
-  EXPECT_NE(std::string(err).find("known: 6pus"), std::string::npos) << err;
+  EXPECT_NE(std::string(err).find("known: quattro, fourbar, "), std::string::npos) << err;
+  EXPECT_NE(std::string(err).find(" 6pus, "), std::string::npos) << err;
   EXPECT_EQ(pkm_model_create_status("quattro", "appendix_b", &m, err, sizeof err), PKM_ERR_ARGUMENT);
   EXPECT_NE(std::string(err).find("appendix_a"), std::string::npos) << err;
   ASSERT_EQ(pkm_model_create_status("quattro", "appendix_a", &m, err, sizeof err), PKM_OK) << err;

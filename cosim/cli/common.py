@@ -22,14 +22,18 @@ def command(name, help):
 
 
 def robot_arg(value: str) -> str:
-    """argparse type of every ``--robot``: a robot the core lists, or a path to a
-    description file (checked when the command makes the model, with the file's line)."""
+    """argparse type of every ``--robot``: a robot the core lists or knows by another name
+    (``6pus_described`` for ``6pus``), or a path to a description file (checked when the
+    command makes the model, with the file's line)."""
+    from .._native import lib
     from ..core.facts import robots
 
     if value in robots():
         return value
     if value.endswith((".toml", ".urdf")) or "/" in value:
         return input_file(value)
+    if lib.pkm_robot_param_set_count(value.encode()) >= 0:  # the core's -1: no such robot
+        return value
     raise argparse.ArgumentTypeError(
         f"unknown robot {value!r} (known: {', '.join(robots())}; or a path to a description file, docs/robots.md)")
 

@@ -239,20 +239,22 @@ Table read_table(const std::string& path, pkm_model*& model) {
       t.head[key] = val;
       if (key == "lti-states") t.nx = std::stoi(val);
       if (key == "robot") {
-        // A description file (docs/robots.md): the FMU carries its text and compiles it when
-        // instantiated, so the binary needs no file and no code of the robot.
-        if (val.find('/') != std::string::npos || (val.size() > 5 && val.compare(val.size() - 5, 5, ".toml") == 0)) {
-          std::ifstream df(val);
-          if (!df) throw Fail(where() + "cannot read the robot description " + val);
-          std::stringstream ds;
-          ds << df.rdbuf();
-          t.description = ds.str();
-        }
         char err[1024] = "";
         const char* set = t.head.count("paramset") ? t.head["paramset"].c_str() : nullptr;
         model = pkm_model_create(val.c_str(), set, err, sizeof err);
         if (!model) throw Fail(where() + "robot '" + val + "': " + err);
         t.robot_name = pkm_model_robot(model);
+        // A robot from a description (docs/robots.md), given as a file or served by name
+        // (robots/6pus.toml for "6pus"): the FMU carries its text and compiles it when
+        // instantiated, so the binary needs no file and no code of the robot.
+        const std::string file = pkm_robot_file(val.c_str());
+        if (!file.empty()) {
+          std::ifstream df(file);
+          if (!df) throw Fail(where() + "cannot read the description " + file + " of robot '" + val + "'");
+          std::stringstream ds;
+          ds << df.rdbuf();
+          t.description = ds.str();
+        }
         nd = pkm_model_ndof(model);
         home.assign(nd, 0.0);
         int st = pkm_model_home(model, home.data());

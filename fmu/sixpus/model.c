@@ -1,7 +1,8 @@
 /* The 6-PUS FMU: binds the generated variable table (from variables.txt and the core's
- * parameter table) to the generic FMI layer.  All behaviour is in fmu/common. */
+ * parameter table) and the packed description the core serves the robot from
+ * (robots/6pus.toml) to the generic FMI layer.  All behaviour is in fmu/common. */
 #include "fmu_vars.h"
 
 const fmu_model_desc FMU_MODEL = {FMU_IDENTIFIER, FMU_GUID,  FMU_ROBOT, FMU_PARAM_SET, FMU_NDOF,
                                   FMU_NPARAM,     FMU_NVARS, FMU_VARS,  FMU_QMIN_PARAM, FMU_QMAX_PARAM,
-                                  FMU_NINDICATORS, FMU_LTI_STATES};
+                                  FMU_NINDICATORS, FMU_LTI_STATES, FMU_DESCRIPTION};

@@ -38,7 +38,9 @@ def cosim(*args, cwd):
 
 def test_the_package_never_names_a_described_robot():
     listed = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
-    listed = [n for n in listed if n]
+    # "6pus", served from its description since its hand-written model became a test oracle,
+    # is the toolkit's default robot: the package names it in defaults and examples.
+    listed = [n for n in listed if n and n != "6pus"]
     assert set(ROBOTS) <= set(listed)
     # a name as a string of its own ("delta_clavel", 'emps'): what a dispatch on the robot would
     # write (a data path such as "data/emps/..." in an example is not one)

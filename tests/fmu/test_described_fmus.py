@@ -42,7 +42,7 @@ def test_described_fmu_validates_and_names_its_variables_from_the_core(name):
     assert f"resources/{name}.toml" in zipfile.ZipFile(f).namelist()
 
 
-@pytest.mark.parametrize("name", [n for n in LISTED if n != "6pus_described"])
+@pytest.mark.parametrize("name", [n for n in LISTED if n != "6pus"])  # PKM_6PUS (its own table): test_simulate.py
 def test_described_fmu_integrates_like_the_core_plant(name, tmp_path):
     """Constant efforts that start the platform from home at 0.1 m/s2 (0.5 rad/s2) along every
     coordinate, 0.2 s: the FMU's pose against the core's Simulator with the same method and

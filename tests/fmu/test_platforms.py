@@ -4,7 +4,7 @@ host cross-compiled for each
 (tests/fmu/host/fmi_host.c built as fmi2_host), against the linux64 binary through the same host; and the
 linux64 host against fmpy's importer, so the host itself is checked by another one.
 
-Two robots here (the hand-written 6-PUS and the described Gough-Stewart hexapod, plant and
+Two robots here (the 6-PUS, whose FMUs have tables of their own, and the described Gough-Stewart hexapod, plant and
 controller FMUs); bench/fmu_platforms.py runs every FMU the build makes.
 """
 import numpy as np

@@ -77,7 +77,7 @@ def test_a_failing_case_is_reported_with_its_parameters_and_the_others_kept(clie
     bad = res.failed[0]
     assert bad["reference.to"] == [0.0, 0.0, 0.30, 0.0, 0.0, 0.0] and bad["index"] == 2
     assert bad["error_type"] == "MasterError"
-    assert "leg 1 cannot reach the pose" in bad["error"] and "0.3" in bad["error"]
+    assert "leg 1 cannot reach pose" in bad["error"] and "0.3" in bad["error"]
     assert "FAILED case 2" in res.text() and "leg 1 cannot reach" in res.text()
     # the table on disk has the failed case with its parameters and message
     rows = list(csv.DictReader(open(res.files["table"])))

@@ -171,16 +171,16 @@ const char* pkm_model_geometry_param(const pkm_model* m, int i) {
 const char* pkm_model_joint_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "rad" : "m") : ""; }
 const char* pkm_model_effort_unit(const pkm_model* m) { return m ? (m->robot->joints_angular() ? "N m" : "N") : ""; }
 int pkm_model_feature_count(const pkm_model* m) {
-  return m ? static_cast<int>(m->robot->features().size()) : 0;
+  return m ? static_cast<int>(pkm::robot_features(*m->robot).size()) : 0;
 }
 const char* pkm_model_feature(const pkm_model* m, int i) {
   if (!m || i < 0) return "";
-  const auto f = m->robot->features();
+  const auto f = pkm::robot_features(*m->robot);
   return i < static_cast<int>(f.size()) ? f[static_cast<size_t>(i)] : "";
 }
 int pkm_model_has(const pkm_model* m, const char* feature) {
   if (!m || !feature) return 0;
-  for (const char* f : m->robot->features())
+  for (const char* f : pkm::robot_features(*m->robot))
     if (std::strcmp(f, feature) == 0) return 1;
   return 0;
 }

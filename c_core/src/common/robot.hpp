@@ -100,7 +100,8 @@ class Robot {
   // How limit and singularity messages name the chain of joint i ("leg 3", "joint 2").
   virtual const char* limb_noun() const { return joint_noun(); }
   // The robot-specific C function families this robot provides beyond the common set
-  // (pkm_model_has): "6pus_calib_rows" stands for pkm_6pus_calib_rows, and so on.
+  // (pkm_model_has, through robot_features): "fourbar_output" stands for pkm_fourbar_output,
+  // and so on.
   virtual std::vector<const char*> features() const { return {}; }
 
   // --- kinematics (x[nd] pose, q[nd] joints; matrices row-major [nd,nd])
@@ -168,6 +169,10 @@ const char* robot_name_at(int i);  // "" if out of range
 std::string known_robots();
 // A robot written in C++ goes by this name (a description may not take it).
 bool is_builtin_robot(const std::string& name);
+// The robot-specific C function families a robot provides (pkm_model_has): its own
+// features() and those of the facts modules of robots/ that apply to it (the 6-PUS
+// calibration rows of robots/sixpus_facts.cpp for a described 6-PUS).
+std::vector<const char*> robot_features(const Robot& r);
 
 [[noreturn]] void unsupported(const Robot& r, const char* what);
 

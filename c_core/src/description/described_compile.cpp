@@ -122,7 +122,11 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
     l.type = d_.legs[i];
     l.kind = &l.type->leg->motion();
     l.type->leg->compile(get, i, d_.lumped_rods[i], l);
-    if (!(l.qmin < l.qmax)) bad("leg " + std::to_string(i + 1) + ": joint limits must have min < max");
+    if (!(l.qmin < l.qmax)) {
+      const std::string j = std::string(l.kind->prefix()) + "[" + std::to_string(i + 1) + "].";
+      bad("leg " + std::to_string(i + 1) + ": joint limits " + j + "qmin = " + g6(l.qmin) + " and " + j + "qmax = " +
+          g6(l.qmax) + " must have min < max");
+    }
     if (d_.articulated) l.f = vec("leg", i, "f");
     rsum += l.p.norm();
     m->legs.push_back(l);
@@ -130,6 +134,21 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
   m->kind = m->legs.front().kind;
   m->m_platform = get("platform.m");
   m->I_platform = V3(get("platform.Ixx"), get("platform.Iyy"), get("platform.Izz"));
+  // Principal moments of a real body obey the triangle inequality (those of a rigid platform
+  // that turns about two axes or more: a translating or planar one's other moments have no
+  // effect, an articulated one turns about its axis only, a point has none).
+  const char* inames[3] = {"platform.Ixx", "platform.Iyy", "platform.Izz"};
+  int turns = 0;
+  for (int k = 3; k < 6; ++k)
+    turns += std::find(d_.coords.begin(), d_.coords.end(), k) != d_.coords.end() ||
+             std::find(d_.dependent.begin(), d_.dependent.end(), k) != d_.dependent.end();
+  const bool rigid_turning = turns >= 2 && !d_.articulated && !d_.point;
+  for (int k = 0; k < (rigid_turning ? 3 : 0); ++k) {
+    const double a = m->I_platform[k], b = m->I_platform[(k + 1) % 3], c = m->I_platform[(k + 2) % 3];
+    if (a > b + c + 1e-15)
+      bad(std::string(inames[k]) + " = " + g6(a) + " kg m2 exceeds " + inames[(k + 1) % 3] + " + " +
+          inames[(k + 2) % 3] + " = " + g6(b + c) + ": no rigid body has these principal moments");
+  }
   m->m_payload = get("payload.m");
   m->c_payload = V3(get("payload.x"), get("payload.y"), get("payload.z"));
   m->g = V3(get("gravity.x"), get("gravity.y"), get("gravity.z"));

@@ -95,7 +95,9 @@ class RailLeg final : public LegKind {
     l.dir = v.vec("rail", i, "s");
     l.ss = l.dir.squaredNorm();
     l.inv_ss = 1.0 / l.ss;
-    if (std::abs(std::sqrt(l.ss) - 1) > 1e-6) v.bad("rail " + std::to_string(i + 1) + " direction is not a unit vector");
+    if (std::abs(std::sqrt(l.ss) - 1) > 1e-6)
+      v.bad("rail " + std::to_string(i + 1) + " direction (" + name("rail", i, "sx") + ", " + name("rail", i, "sy") + ", " +
+            name("rail", i, "sz") + ") has length " + std::to_string(std::sqrt(l.ss)) + ": it must be a unit vector within 1e-6");
     l.qmin = v(name("rail", i, "qmin")), l.qmax = v(name("rail", i, "qmax"));
     l.m_body = v(name("slider", i, "m"));
     l.npt = 2, l.nmass = 1, l.nrod = 1;

@@ -13,6 +13,25 @@ static pkm_fk_options fk_defaults(const pkm_fk_options* o) {
   return d;
 }
 
+// Joint values outside the range of their joint have no pose: refused up front, naming the
+// joint, its value and its range (the robot's joint_limit_param; none for a joint without).
+static void check_joint_range(const pkm_model* m, const double* q) {
+  const Robot& r = *m->robot;
+  for (int i = 0; i < r.ndof(); ++i) {
+    double lim[2];
+    for (int up = 0; up < 2; ++up) {
+      const std::string name = r.joint_limit_param(i, up != 0);
+      const int k = name.empty() ? -1 : pkm_param_index(m, name.c_str());
+      if (k < 0) return;
+      lim[up] = m->values[(size_t)k];
+    }
+    if (q[i] < lim[0] || q[i] > lim[1])
+      throw Error(PKM_ERR_JOINT_LIMIT, std::string(r.limb_noun()) + " " + std::to_string(i + 1) + " joint q = " +
+                                           num(q[i], 6) + " outside [" + num(lim[0], 6) + ", " + num(lim[1], 6) +
+                                           "]: no pose has these joints");
+  }
+}
+
 extern "C" {
 
 int pkm_ik(const pkm_model* m, pkm_data* d, const double* x, double* q) {
@@ -40,6 +59,7 @@ int pkm_fk(const pkm_model* m, pkm_data* d, const double* q, const double* x_gue
     check_out(x, "x");
     pkm_fk_info tmp{0, 0.0};
     pkm_fk_info& inf = info ? *info : tmp;
+    check_joint_range(m, q);
     d->robot->fk(rm, *d->rd, q, x_guess, fk_defaults(opt), x, inf);
   });
 }
@@ -53,6 +73,7 @@ int pkm_fk_batch(const pkm_model* m, pkm_data* d, size_t n, const double* q, con
     const double* qk = row_at(q, k, nd, "joints q");
     const double* gk = row_at(x_guess, k, nd, "pose guess x_guess");
     pkm_fk_info info{0, 0.0};
+    check_joint_range(m, qk);
     d->robot->fk(rm, *d->rd, qk, gk, o, x + k * nd, info);
   });
 }

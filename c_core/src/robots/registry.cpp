@@ -1,12 +1,13 @@
-// The robots compiled into the core.  A new robot is one file in robots/ plus a line here.
+// The robots the core serves: the ones written in C++ (a file in robots/ plus a line here) and
+// the descriptions of the search path (robots/robots.list; "6pus" is robots/6pus.toml).
 #include <vector>
 
 #include "common/robot.hpp"
 #include "description/described_robot.hpp"
+#include "robots/sixpus_facts.hpp"
 
 namespace pkm {
 
-const Robot* robot_6pus();
 const Robot* robot_quattro();
 const Robot* robot_fourbar();
 
@@ -14,17 +15,25 @@ const Robot* robot_fourbar();
 // two (c_core/tests/robots/, built into libpkm_toy.so).  In libpkm.so they stay undefined.
 [[gnu::weak]] int test_robot_count();
 [[gnu::weak]] const Robot* test_robot_at(int i);
+// The hand-written models kept as test oracles (c_core/tests/oracles/, libpkm_oracle.so).
+[[gnu::weak]] int oracle_robot_count();
+[[gnu::weak]] const Robot* oracle_robot_at(int i);
 
 namespace {
 const std::vector<const Robot*>& all_robots() {
   static const std::vector<const Robot*> robots = [] {
-    std::vector<const Robot*> v = {robot_6pus(), robot_quattro(), robot_fourbar()};
+    std::vector<const Robot*> v = {robot_quattro(), robot_fourbar()};
     if (test_robot_count && test_robot_at)
       for (int i = 0; i < test_robot_count(); ++i) v.push_back(test_robot_at(i));
+    if (oracle_robot_count && oracle_robot_at)
+      for (int i = 0; i < oracle_robot_count(); ++i) v.push_back(oracle_robot_at(i));
     return v;
   }();
   return robots;
 }
+// Former names of served robots: the description "6pus" was "6pus_described" while a
+// hand-written "6pus" existed.
+const char* alias_of(const std::string& name) { return name == "6pus_described" ? "6pus" : nullptr; }
 }  // namespace
 
 // Names of the descriptions in the search path (robots/robots.list), read once.
@@ -36,6 +45,7 @@ const std::vector<std::string>& described_names() {
 const Robot* find_robot(const std::string& name) {
   for (const Robot* r : all_robots())
     if (r && name == r->name()) return r;
+  if (const char* a = alias_of(name)) return find_robot(a);
   return described::load_described(name);  // nullptr if it is no description either
 }
 
@@ -63,6 +73,12 @@ bool is_builtin_robot(const std::string& name) {
   for (const Robot* r : all_robots())
     if (r && name == r->name()) return true;
   return false;
+}
+
+std::vector<const char*> robot_features(const Robot& r) {
+  std::vector<const char*> f = r.features();
+  if (sixpus::is_6pus(r)) f.insert(f.end(), {"6pus_calib_rows", "6pus_leg_points"});
+  return f;
 }
 
 std::string known_robots() {

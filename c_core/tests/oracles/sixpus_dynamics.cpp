@@ -17,7 +17,7 @@
 // Equations and symbols: docs/6pus.md.
 #include <sstream>
 
-#include "robots/sixpus.hpp"
+#include "oracles/sixpus.hpp"
 
 namespace pkm {
 namespace sixpus {

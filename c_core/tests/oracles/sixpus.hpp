@@ -1,5 +1,6 @@
-// 6-PUS robot (Tiberi 2020 and Zavala-Yoe et al. 2015): private interface shared by sixpus.cpp (parameters,
-// compile, registration, 6-PUS specific C functions), sixpus_kinematics.cpp and
+// The hand-written 6-PUS (Tiberi 2020 and Zavala-Yoe et al. 2015), kept as a test oracle of the
+// described robot "6pus" (robots/6pus.toml) under the name "6pus_hand": private interface shared
+// by sixpus.cpp (parameters, compile, registration), sixpus_kinematics.cpp and
 // sixpus_dynamics.cpp.  See docs/6pus.md for the equations and conventions.
 //
 // Notation (all in the world frame unless said otherwise):
@@ -135,8 +136,8 @@ const Model& model_of(const RobotModel& rm);
 
 class SixPus final : public Robot {
  public:
-  const char* name() const override { return "6pus"; }
-  const char* title() const override { return "6-PUS laser-cutting platform (Tiberi 2020; Zavala-Yoe et al. 2015), hand-written"; }
+  const char* name() const override { return "6pus_hand"; }
+  const char* title() const override { return "6-PUS laser-cutting platform (Tiberi 2020; Zavala-Yoe et al. 2015), hand-written test oracle"; }
   int ndof() const override { return 6; }
   std::vector<ParamSpec> param_specs(const std::string& set) const override;
   std::unique_ptr<RobotModel> compile(const std::vector<ParamSpec>& specs,
@@ -146,7 +147,6 @@ class SixPus final : public Robot {
   // (dynamics/drive.hpp): its parameters are "rail[i].coulomb", "rail[i].viscous", ...
   const char* joint_prefix() const override { return "rail"; }
   const char* joint_noun() const override { return "slider"; }
-  std::vector<const char*> features() const override { return {"6pus_calib_rows", "6pus_leg_points"}; }
   bool joints_angular() const override { return false; }
   const char* limb_noun() const override { return "leg"; }
   const char* pose_name(int i) const override {

@@ -1,11 +1,11 @@
-// 6-PUS robot: parameter table, compilation of a parameter set into the constant
-// model, registration, and the 6-PUS specific C functions (calibration rows, leg points).
+// The hand-written 6-PUS, a test oracle for the robot the core serves from robots/6pus.toml:
+// parameter table, compilation of a parameter set into the constant model, registration
+// under the name "6pus_hand" (test and benchmark builds only, libpkm_oracle.so).
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
 
-#include "common/guard.hpp"
-#include "robots/sixpus.hpp"
+#include "oracles/sixpus.hpp"
 
 namespace pkm {
 namespace sixpus {
@@ -225,68 +225,11 @@ void SixPus::home(const RobotModel& rm, double* x) const {
 
 }  // namespace sixpus
 
-const Robot* robot_6pus() {
+// The hand-written 6-PUS as a test oracle (robots/registry.cpp's hook for the robots of a
+// test build: libpkm_oracle.so, linked into the C++ tests and benchmarks).
+const Robot* oracle_6pus() {
   static sixpus::SixPus r;
   return &r;
 }
 
 }  // namespace pkm
-
-using namespace pkm;
-using namespace pkm::sixpus;
-
-static const Model& sixpus_model(const pkm_model* m, pkm_data* d) {
-  const RobotModel& rm = prepare(m, d);
-  if (m->robot_name != "6pus")
-    throw Error(PKM_ERR_UNSUPPORTED, "this function is for the 6pus robot, not '" + m->robot_name + "'");
-  return model_of(rm);
-}
-
-extern "C" {
-
-int pkm_6pus_calib_rows(const pkm_model* m, pkm_data* d, const double* x, int frame, double* rows) {
-  return guard(d, [&] {
-    const Model& sm = sixpus_model(m, d);
-    check_finite(x, 6, "pose x");
-    check_out(rows, "rows");
-    PKM_REQUIRE(frame == PKM_FRAME_WORLD || frame == PKM_FRAME_PLATFORM, PKM_ERR_ARGUMENT,
-            "frame = " + std::to_string(frame) + " must be PKM_FRAME_WORLD (0) or PKM_FRAME_PLATFORM (1)");
-    Frame f;
-    frame_of(x, f);
-    Leg legs[NLEG];
-    // The regression rows are geometry: they exist outside the stroke range too (source
-    // 000 pose 7 has a negative stroke for leg 1).
-    legs_at(sm, x, f, legs, Strokes::ignore);
-    for (int i = 0; i < NLEG; ++i) {
-      const Leg& l = legs[i];
-      double* r = rows + 10 * i;
-      // Implicit derivatives of |P - S0 - q s|^2 = L^2 (Tiberi 2020 eq. 4.9).
-      V3 dP = l.w / l.c;
-      if (frame == PKM_FRAME_PLATFORM) dP = f.R.transpose() * dP;  // dq/dp_local = dq/dP R
-      for (int k = 0; k < 3; ++k) {
-        r[k] = dP[k];
-        r[3 + k] = -l.w[k] / l.c;
-        r[7 + k] = -l.q * l.w[k] / l.c;
-      }
-      r[6] = -sm.L[i] / l.c;
-    }
-  });
-}
-
-int pkm_6pus_leg_points(const pkm_model* m, pkm_data* d, const double* x, double* P, double* S) {
-  return guard(d, [&] {
-    const Model& sm = sixpus_model(m, d);
-    check_finite(x, 6, "pose x");
-    check_out(P, "P");
-    check_out(S, "S");
-    double pts[NLEG * 9];
-    chain_of(sm, x, pts);
-    for (int i = 0; i < NLEG; ++i)
-      for (int k = 0; k < 3; ++k) {
-        S[3 * i + k] = pts[9 * i + 3 + k];
-        P[3 * i + k] = pts[9 * i + 6 + k];
-      }
-  });
-}
-
-}  // extern "C"

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "kinematics/generic_kinematics.hpp"
-#include "robots/sixpus.hpp"
+#include "oracles/sixpus.hpp"
 
 namespace pkm {
 namespace sixpus {
