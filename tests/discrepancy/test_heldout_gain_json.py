@@ -10,6 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from cosim.discrepancy.campaign import CampaignDiagnosis
 from cosim.discrepancy.diagnosis import Diagnosis
 from cosim.discrepancy.diagnosis.checks import heldout_fit
 from cosim.discrepancy.report import _strip_arrays
@@ -57,6 +58,15 @@ def test_an_unmeasurable_gain_is_null_with_its_reason_in_the_json():
         back = _strict(text)["heldout"]
         assert back["gain"] is None and back["gain_windows"] is None, back
         assert back["gain_note"] == held["gain_note"]
+
+
+def test_a_campaign_writes_an_unmeasurable_gain_as_null_too():
+    eng, sel = _engine(effect_changes_residual=False)
+    held = heldout_fit(eng, sel)
+    loro = [{"name": "run 1", "gain": held["gain"], "gain_note": held["gain_note"], "named": [], "conclusion": "c"}]
+    back = _strict(CampaignDiagnosis("c", _diagnosis(held), ["run 1", "run 2"], "run", leave_one_out=loro).to_json())
+    assert back["joint"]["heldout"]["gain"] is None and back["leave_one_out"][0]["gain"] is None
+    assert back["leave_one_out"][0]["gain_note"] == held["gain_note"]
 
 
 def test_a_measured_gain_is_written_as_it_is():
