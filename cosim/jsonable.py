@@ -3,6 +3,7 @@
 diagnoses alike."""
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, is_dataclass
 from pathlib import Path
 
@@ -23,3 +24,18 @@ def jsonable(o):
     if isinstance(o, complex):
         return str(o)
     raise TypeError(f"cannot write {type(o).__name__} to JSON")
+
+
+def finite(o):
+    """``o`` with every non-finite number (NaN, +-inf), in containers and arrays too, replaced by None:
+    what JSON can carry (it has no NaN), for ``json.dumps(finite(o), allow_nan=False, default=jsonable)``.
+    Whoever writes a None in place of a number says why beside it."""
+    if isinstance(o, float):
+        return o if math.isfinite(o) else None
+    if isinstance(o, dict):
+        return {k: finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [finite(v) for v in o]
+    if o is None or isinstance(o, (str, int)):
+        return o
+    return finite(jsonable(o))

@@ -9,7 +9,7 @@
 #
 # Inputs (-D): ID, SOURCE_DIR (repository), STAGE (the binary FMU's staged folder: resources/
 # and documentation/ are taken from it), GEN (folder of fmu_vars.h), MD (the source FMU's
-# modelDescription.xml, from fmu_gen), HOOKS, MODEL_C, EIGEN_DIR (holds Eigen/), FMI2_HEADERS_DIR,
+# modelDescription.xml, from fmu_gen), HOOKS (","-list of the hooks files), MODEL_C, EIGEN_DIR (holds Eigen/), FMI2_HEADERS_DIR,
 # WRAPPERS (","-list of "wrapper=core file"), OUT (.fmu), WORK (a scratch folder).
 file(REMOVE_RECURSE ${WORK})
 set(src ${WORK}/sources)
@@ -23,8 +23,10 @@ file(COPY ${EIGEN_DIR}/Eigen DESTINATION ${src})
 foreach(f fmi2Functions.h fmi2FunctionTypes.h fmi2TypesPlatform.h)
   file(COPY ${FMI2_HEADERS_DIR}/${f} DESTINATION ${src})
 endforeach()
+string(REPLACE "," ";" HOOKS "${HOOKS}")
 file(COPY ${SOURCE_DIR}/fmu/common/fmi2_functions.c ${SOURCE_DIR}/fmu/common/fmu_instance.c
-     ${SOURCE_DIR}/fmu/common/fmu_instance.h ${SOURCE_DIR}/fmu/common/fmu_model.h ${HOOKS} ${GEN}/fmu_vars.h
+     ${SOURCE_DIR}/fmu/common/fmu_state.c ${SOURCE_DIR}/fmu/common/fmu_instance.h
+     ${SOURCE_DIR}/fmu/common/fmu_model.h ${SOURCE_DIR}/fmu/common/fmu_robot.h ${HOOKS} ${GEN}/fmu_vars.h
      DESTINATION ${src})
 # the model folder's model.c as fmu_model.c: the core has a common/model.cpp (one model.o)
 configure_file(${MODEL_C} ${src}/fmu_model.c COPYONLY)

@@ -1,5 +1,5 @@
-"""Small pieces: no module over 600 lines and no function over 100 lines in ``cosim/`` and
-``c_core/src/`` (scripts/code_sizes.py: Python through ``ast``, C and C++ through a
+"""Small pieces: no module over 600 lines and no function over 100 lines in ``cosim/``,
+``c_core/src/`` and ``fmu/`` (scripts/code_sizes.py: Python through ``ast``, C and C++ through a
 brace-matching scanner), except the entries of OVER_LIMIT, which may shrink but not grow."""
 import importlib.util
 import textwrap
@@ -67,6 +67,9 @@ def test_the_scanner_measures_planted_functions(tmp_path):
     (tmp_path / "cosim" / "m.py").write_text(py)
     (tmp_path / "c_core" / "src").mkdir(parents=True)
     (tmp_path / "c_core" / "src" / "m.cpp").write_text(cpp)
+    # and the FMU layer's C: a function of 102 lines (header, 100 statements, closing brace)
+    (tmp_path / "fmu" / "common").mkdir(parents=True)
+    (tmp_path / "fmu" / "common" / "m.c").write_text("static int f(void) {\n" + _lines(100, "  ") + "}\n")
 
     found = {name: (line, n) for name, line, n in sizes.c_functions(cpp)}
     assert found == {"S": (8, 3), "get": (11, 1), "fn": (16, 10), "big": (26, 102)}
@@ -74,7 +77,7 @@ def test_the_scanner_measures_planted_functions(tmp_path):
 
     modules, functions = sizes.over(tmp_path)
     assert modules == {"cosim/m.py": 601}
-    assert functions == {"cosim/m.py:big": 101, "c_core/src/m.cpp:big": 102}
+    assert functions == {"cosim/m.py:big": 101, "c_core/src/m.cpp:big": 102, "fmu/common/m.c:f": 102}
 
 
 def test_no_module_or_function_over_the_limits_outside_the_list():

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CampaignError
-from ..jsonable import jsonable
+from ..jsonable import finite, jsonable
 
 #: effect kinds a per-run quantity may be (additive: taken out of the run's data exactly)
 PER_RUN_KINDS = {"offset": "tau", "encoder_offset": "q"}
@@ -328,7 +328,8 @@ class CampaignDiagnosis:
                 "leave_one_out": self.leave_one_out, "replays": self.replays}
 
     def to_json(self, indent: int | None = 2) -> str:
-        return json.dumps(self.to_dict(), indent=indent, default=jsonable)
+        # JSON has no NaN: an unmeasured gain is null, its reason beside it (gain_note)
+        return json.dumps(finite(self.to_dict()), indent=indent, allow_nan=False, default=jsonable)
 
 
 def _params(d) -> dict:
@@ -531,7 +532,8 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
         for k, name in enumerate(used.names):
             wsk, tfk = joined(used, pieces_of(used, k, train_fraction))
             d = _diagnose(wsk, model, tfk, kw, effects=lib, discovery=discovery)
-            loro.append({"name": name, "gain": d.heldout.get("gain"), "named": d.named(), "conclusion": d.conclusion})
+            loro.append({"name": name, "gain": d.heldout.get("gain"), "gain_note": d.heldout.get("gain_note"),
+                         "named": d.named(), "conclusion": d.conclusion})
     words = _held_out_words(used, held_out if not first or held_out == "within" else "run", train_fraction)
     joint = replace(joint, recording=f"joint fit of {', '.join(used.names)}")
     res = CampaignDiagnosis("", joint, c.names, words, per, disagree, first, loro)

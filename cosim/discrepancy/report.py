@@ -64,9 +64,9 @@ def _strip_arrays(d) -> str:
     if dd.get("replay") and dd["replay"].get("runs"):
         dd["replay"] = {**dd["replay"], "runs": {k: {kk: vv for kk, vv in v.items() if kk not in ("time", "q", "tau")}
                                                  for k, v in dd["replay"]["runs"].items()}}
-    from ..jsonable import jsonable
+    from ..jsonable import finite, jsonable
 
-    return json.dumps(dd, indent=2, default=jsonable)
+    return json.dumps(finite(dd), indent=2, allow_nan=False, default=jsonable)  # JSON has no NaN: null
 
 
 def markdown(d, files: dict) -> str:

@@ -108,7 +108,7 @@ fmu_status fmu_get_integer(fmu_instance* c, const char* fn, const fmu_var* v, in
 fmu_status fmu_set_real(fmu_instance* c, const char* fn, const fmu_var* v, double value);
 fmu_status fmu_set_integer(fmu_instance* c, const char* fn, const fmu_var* v, int value);
 
-/* ------------------------------------------------------------------ FMU state */
+/* ------------------------------------------------------ FMU state (fmu_state.c) */
 
 /* An FMU state is one flat block (header + the model's snapshot): serialising it is a copy.
  * magic tells the FMI layer's blocks apart ("PKMFMU2S", "PKMFMU3S"). */

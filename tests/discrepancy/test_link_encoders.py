@@ -1,19 +1,20 @@
 """`cosim diagnose` with a link-side encoder (q_link<i> columns of an import map): the gear's
 stiffness and backlash reported as the two-body drive's core parameters with intervals.
 
-Oracle: a two-mass drive simulated here by scipy's solve_ivp, not by the core: a motor inertia JM
-with viscous friction BM driven by a torque u(t), a link inertia JL with viscous friction BL, and
-between them a spring of stiffness K with a dead band of total width GAP (transmitted torque
+Oracle: a two-mass drive simulated by scipy's solve_ivp, not by the core (tests/oracles/two_mass.py):
+a motor inertia JM with viscous friction BM driven by a torque u(t), a link inertia JL with viscous
+friction BL, and between them a spring of stiffness K with a dead band of total width GAP (transmitted torque
 K (d - GAP/2) for d > GAP/2, K (d + GAP/2) for d < -GAP/2, 0 between; d = motor - link angle).
 The recording holds the motor angle (q1), its rate (qd1), the motor torque (tau1) and the link
 angle (q_link1), each encoder with white noise of 2e-7 rad; the map gives the nominal drive (JM,
 BM) and the link's inertia (JL) as the recording's parameters, its friction BL left out: the
 diagnosis proper runs on a model that differs from the drive by that friction and the spring."""
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.integrate
 import scipy.io
 
 from cosim.discrepancy import diagnose
@@ -21,31 +22,23 @@ from cosim.importing import to_recording
 from cosim.importing.errors import ImportFailure
 from cosim.jsonable import jsonable
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "oracles"))
+from two_mass import two_mass_drive  # noqa: E402
+
 JM, BM, JL, BL = 0.5, 1.5, 2.0, 4.0  # kg m2, N m s/rad
 K, GAP = 3.0e4, 6e-4  # N m/rad, rad
 NOISE = 2e-7  # rad
-
-
-def _spring(d):
-    return K * (np.maximum(d - GAP / 2, 0.0) + np.minimum(d + GAP / 2, 0.0))
 
 
 def _u(t):
     return 50 * np.sin(2 * np.pi * 0.9 * t) + 20 * np.sin(2 * np.pi * 3.1 * t + 0.5) + 8 * np.sin(2 * np.pi * 7 * t)
 
 
-def _two_mass(T=4.0, fs=1000.0):
-    def f(t, s):
-        th, q, thd, qd = s
-        ts = _spring(th - q)
-        return [thd, qd, (_u(t) - BM * thd - ts) / JM, (ts - BL * qd) / JL]
-
-    t = np.arange(0, T, 1 / fs)
-    sol = scipy.integrate.solve_ivp(f, (0, T), [0, 0, 0, 0], t_eval=t, method="DOP853", rtol=1e-9, atol=1e-12,
-                                    max_step=1e-3)
-    th, q, thd, _ = sol.y
+def _two_mass():
+    d = two_mass_drive(_u, jm=JM, bm=BM, jl=JL, bl=BL, k=K, gap=GAP)
     rng = np.random.default_rng(7)
-    return t, th + NOISE * rng.standard_normal(t.size), q + NOISE * rng.standard_normal(t.size), thd, _u(t)
+    return (d.t, d.motor + NOISE * rng.standard_normal(d.t.size), d.link + NOISE * rng.standard_normal(d.t.size),
+            d.motor_rate, d.u)
 
 
 @pytest.fixture(scope="module")

@@ -1,39 +1,32 @@
 """Gear stiffness and backlash from a motor and a link encoder, against a two-mass drive simulated
-here (not by the core): a motor inertia Jm with viscous friction bm, driven by a torque u(t), joined
-to a link inertia Jl with viscous friction bl by a spring of stiffness k with a dead band of total
-width b (transmitted torque k (d - b/2) for d > b/2, k (d + b/2) for d < -b/2, 0 between; d = motor
-angle - link angle), integrated by scipy's solve_ivp.  The recorded effort is the motor's, u; the
-fit takes the model's rotor inertia and motor friction off it (effort="motor")."""
+by scipy's solve_ivp, not by the core (tests/oracles/two_mass.py): a motor inertia Jm with viscous
+friction bm, driven by a torque u(t), joined to a link inertia Jl with viscous friction bl by a
+spring of stiffness k with a dead band of total width b.  The recorded effort is the motor's, u;
+the fit takes the model's rotor inertia and motor friction off it (effort="motor")."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
-import scipy.integrate
 
 from cosim.core import Model
 from cosim.errors import InputError
 from cosim.identification.encoders import drive_elasticity
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "oracles"))
+from two_mass import two_mass_drive  # noqa: E402
+
 JM, BM, JL, BL = 0.8, 2.0, 3.0, 5.0  # kg m2, N m s/rad
 K, GAP = 2.0e4, 4e-4  # N m/rad, rad
 
 
-def _spring(d):
-    return K * (np.maximum(d - GAP / 2, 0.0) + np.minimum(d + GAP / 2, 0.0))
+def _u(t):
+    return 60 * np.sin(2 * np.pi * 0.7 * t) + 25 * np.sin(2 * np.pi * 2.3 * t + 1.0)
 
 
-def _simulate(T=4.0, fs=1000.0):
-    def u(t):
-        return 60 * np.sin(2 * np.pi * 0.7 * t) + 25 * np.sin(2 * np.pi * 2.3 * t + 1.0)
-
-    def f(t, s):
-        th, q, thd, qd = s
-        ts = _spring(th - q)
-        return [thd, qd, (u(t) - BM * thd - ts) / JM, (ts - BL * qd) / JL]
-
-    t = np.arange(0, T, 1 / fs)
-    sol = scipy.integrate.solve_ivp(f, (0, T), [0, 0, 0, 0], t_eval=t, method="DOP853", rtol=1e-9, atol=1e-12,
-                                    max_step=1e-3)
-    th, q, thd, _ = sol.y
-    return t, th, q, thd, u(t), _spring(th - q)
+def _simulate():
+    d = two_mass_drive(_u, jm=JM, bm=BM, jl=JL, bl=BL, k=K, gap=GAP)
+    return d.t, d.motor, d.link, d.motor_rate, d.u, d.transmitted
 
 
 def test_stiffness_and_backlash_recovered_from_the_two_encoders():

@@ -404,10 +404,15 @@ PKM_API int pkm_effort_map(size_t n, double dt, const double* u, double gain, do
                            double limit, double y0, double* y, char* err, size_t errlen);
 /* Joint readings at (x, xd) with applied effort tau[nd]:
  * q_meas = q + encoder_offset + backlash/2 sgn(c) + compliance c, with c the effort the
- * transmission carries: tau less the drive side's own friction, joint force and joint inertia
- * ((rotor_inertia + force_inertia) qdd, qdd from the forward dynamics at (x, xd, tau)).  The encoder is on the drive side, the
- * carriage leans on the side of the gap c pushes it to (smooth sign tanh(c / drive.f_eps)),
- * and the transmission deflects by compliance c. */
+ * transmission carries.  tau is the drive's whole effort (what pkm_forward_dynamics is given),
+ * not the transmitted one: this function takes c from it by removing the joint friction
+ * (pkm_joint_friction at the joint rates of xd: Coulomb, Stribeck, viscous), the joint force
+ * and offset, the joints' share of the platform force, and the rotor's inertial share
+ * (rotor_inertia + force_inertia) qdd, qdd from the forward dynamics at (x, xd, tau).  A
+ * caller that has already taken friction or the rotor's share off tau has them removed twice.
+ * Without a backlash or a compliance the readings do not depend on tau (c is not computed).
+ * The encoder is on the drive side, the carriage leans on the side of the gap c pushes it to
+ * (smooth sign tanh(c / drive.f_eps)), and the transmission deflects by compliance c. */
 PKM_API int pkm_measure_joints(const pkm_model* m, pkm_data* d, const double* x,
                                const double* xd, const double* tau, double* q_meas);
 /* Readings and rates of the sensors at (x, xd) with applied effort tau[nd]: pkm_measure_joints's

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._native import PkmError
-from ...jsonable import jsonable
+from ...jsonable import finite, jsonable
 from .answer import (GAP_MINORITY, UNDETECTABLE_RATIO, _beside_tie_sentence, _conclusion,  # noqa: F401
                                _drop_unseen_gaps, _effects, _not_excited, _partial_sentence, _two_body_sentence,
                                detection_limit_text)
@@ -54,7 +54,9 @@ class Diagnosis:
         ``nrmse_na``, for a joint that did not move or an effort that stayed zero over the
         held-out part: no scale to divide by); ``gain`` (noise-normalised RMS
         ratio on the affected channels), ``gain_windows`` (the same over the samples
-        where the nominal residual is out of its noise band), ``affected`` channels.
+        where the nominal residual is out of its noise band), ``affected`` channels; a gain
+        that cannot be measured is NaN (null in ``diagnosis.json``) with the reason in
+        ``gain_note`` / ``gain_windows_note`` (else None).
     localisation : dict
         Per channel: windows (start, end, peak, phase mix), phase enrichment,
         workspace region.
@@ -153,7 +155,8 @@ class Diagnosis:
                                                "platform_force", "drifts", "encoders", "flexible")}
 
     def to_json(self, indent: int | None = 2) -> str:
-        return json.dumps(self.to_dict(), indent=indent, default=jsonable)
+        # JSON has no NaN: a figure that could not be measured is null, its reason beside it
+        return json.dumps(finite(self.to_dict()), indent=indent, allow_nan=False, default=jsonable)
 
 
 

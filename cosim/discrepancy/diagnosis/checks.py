@@ -152,6 +152,8 @@ def heldout_fit(eng, sel, theta: dict | None = None, R_after=None) -> dict:
     num = sum(np.sum((Rb[band[:, i], i] / sig[i]) ** 2) for i in pick)
     den = sum(np.sum((Ra[band[:, i], i] / sig[i]) ** 2) for i in pick)
     gain_w = float(np.sqrt(num / den)) if den > 0 else float("nan")
+    note_w = None if den > 0 else ("no held-out sample of the affected channels leaves the nominal residual's "
+                                   "3-sigma noise band: no window to measure a gain on")
     rb_all, ra_all = np.sqrt(np.mean(Rb**2, axis=0)), np.sqrt(np.mean(Ra**2, axis=0))
     per = {c: {"rms_before": float(rb[i]), "rms_after": float(ra[i]),
                **_nrmse(rb[i], ra[i], scale[i], i < nd), "noise": float(sig[i]),
@@ -159,12 +161,17 @@ def heldout_fit(eng, sel, theta: dict | None = None, R_after=None) -> dict:
                "unit": _unit(pipe, i)} for i, c in enumerate(chans)}
     tt = pipe.t[pipe.idx[test]]
     fitted = bool(theta)
+    note = None
     if fitted and not affected:
         # The fitted effects change nothing on the held-out part beyond the noise (a
         # saturation never reached there): no gain can be measured.
         gain = gain_w = float("nan")
+        note = note_w = ("the fitted effects change no held-out channel by more than twice the noise on 2 % "
+                         "of its samples: no gain can be measured")
+    # A gain that cannot be measured is NaN here and null in diagnosis.json, with its reason.
     return {"channels": per, "gain": gain if fitted else 1.0,
             "gain_windows": gain_w if fitted else 1.0,
+            "gain_note": note if fitted else None, "gain_windows_note": note_w if fitted else None,
             "window_fraction": float(band[:, pick].mean()) if pick else 0.0,
             "affected": [chans[i] for i in affected],
             "samples": int(test.sum()), "start": float(tt[0]) if test.any() else None,
