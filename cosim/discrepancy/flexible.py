@@ -6,7 +6,8 @@ flexible regression, scikit-learn's :class:`~sklearn.ensemble.HistGradientBoosti
 (boosted trees), on every input the recording offers at the decimated samples: each joint's
 position, rate, acceleration and the fitted model's effort (not the measured one: it holds the
 residual itself), the low-passed |rate| and effort of each joint (time constants
-:data:`TIME_CONSTANTS`), the platform pose where the recording gives one, and time.
+:data:`TIME_CONSTANTS`) and its low-passed dissipated power |effort x rate|
+(:data:`POWER_TIME_CONSTANTS`), the platform pose where the recording gives one, and time.
 
 It is fitted on the engine's fitted part and judged on its held-out part (the last
 ``1 - train_fraction`` of the recording):
@@ -16,10 +17,13 @@ It is fitted on the engine's fitted part and judged on its held-out part (the la
   significant against the residual's own noise: a chi-square in independent samples (the
   held-out samples' explained sum of squares over the noise variance, divided by the decimated
   samples per independent one) above :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
-* **inputs**: grouped permutation importance on the held-out samples (a group is one input of
-  one joint: "position of slider 3", or the pose, or time); a group is named when permuting
-  it costs at least :data:`IMPORTANCE_MIN` of the held-out variance, :data:`RELATIVE_MIN`
-  of the explained share and :data:`TOP_MIN` of the strongest group's importance;
+* **inputs**: grouped permutation importance on the held-out samples, per held-out block (a
+  group is one input of one joint: "position of slider 3", or the pose, or time); a group
+  passes when permuting it costs at least :data:`IMPORTANCE_MIN` of the held-out variance,
+  :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN` of the strongest group's
+  importance, above :data:`BLOCK_Z` standard errors over the blocks; it is named when the trees
+  refitted without it (on the other passing groups) lose :data:`DROP_MIN` of the held-out
+  variance; the share claimed is then that of the trees on the named groups alone;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
   (:func:`sklearn.inspection.partial_dependence`), in the input's and the effort's units;
 * **whether a found family already says it**: a discovered term or a library effect of the
