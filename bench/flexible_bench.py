@@ -1,8 +1,9 @@
 """The flexible stage (cosim.discrepancy.flexible) on forces no term family covers.
 
 Cases (cosim.discrepancy.flexible_cases): a force on one rail above a position threshold, a
-friction keyed on the low-passed |rate| (heating), a force on one joint keyed on another joint's
-acceleration; and clean recordings.  Each recording is diagnosed knowing only the recording; the
+friction falling with the low-passed dissipated power (heating), a force on one joint keyed on
+another joint's acceleration, a bump on one joint keyed on another joint's position; and clean
+recordings.  Each recording is diagnosed knowing only the recording; the
 key is read afterwards.  Per case: the inputs the flexible model names against the true ones, its
 held-out explained share against the truth's (the hidden force, less what the fitted model took,
 as the predictor: flexible_cases.truth_share), the CPU time of the diagnosis.
