@@ -6,7 +6,8 @@ flexible regression, scikit-learn's :class:`~sklearn.ensemble.HistGradientBoosti
 (boosted trees), on every input the recording offers at the decimated samples: each joint's
 position, rate, acceleration and the fitted model's effort (not the measured one: it holds the
 residual itself), the low-passed |rate| and effort of each joint (time constants
-:data:`TIME_CONSTANTS`), the platform pose where the recording gives one, and time.
+:data:`TIME_CONSTANTS`) and its low-passed dissipated power |effort x rate|
+(:data:`POWER_TIME_CONSTANTS`), the platform pose where the recording gives one, and time.
 
 It is fitted on the engine's fitted part and judged on its held-out part (the last
 ``1 - train_fraction`` of the recording):
@@ -16,10 +17,13 @@ It is fitted on the engine's fitted part and judged on its held-out part (the la
   significant against the residual's own noise: a chi-square in independent samples (the
   held-out samples' explained sum of squares over the noise variance, divided by the decimated
   samples per independent one) above :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
-* **inputs**: grouped permutation importance on the held-out samples (a group is one input of
-  one joint: "position of slider 3", or the pose, or time); a group is named when permuting
-  it costs at least :data:`IMPORTANCE_MIN` of the held-out variance, :data:`RELATIVE_MIN`
-  of the explained share and :data:`TOP_MIN` of the strongest group's importance;
+* **inputs**: grouped permutation importance on the held-out samples, per held-out block (a
+  group is one input of one joint: "position of slider 3", or the pose, or time); a group
+  passes when permuting it costs at least :data:`IMPORTANCE_MIN` of the held-out variance,
+  :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN` of the strongest group's
+  importance, above :data:`BLOCK_Z` standard errors over the blocks; it is named when the trees
+  refitted without it (on the other passing groups) lose :data:`DROP_MIN` of the held-out
+  variance; the share claimed is then that of the trees on the named groups alone;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
   (:func:`sklearn.inspection.partial_dependence`), in the input's and the effort's units;
 * **whether a found family already says it**: a discovered term or a library effect of the
@@ -34,25 +38,36 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-#: time constants of the low-passed histories [s]
+#: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
+#: power |effort x rate| (a first-order thermal model's temperature rise)
 TIME_CONSTANTS = (1.0, 4.0)
-#: fewest held-out decimated samples for a fit
+POWER_TIME_CONSTANTS = (0.5, 2.0, 8.0)
+#: fewest held-out decimated samples for a fit, and per held-out block of the importance
 BLOCK = 25
+#: held-out blocks the importance is measured on (its standard error is their spread)
+N_BLOCKS = 5
+#: the last share of the fitted samples that chooses the trees' number of iterations
+EARLY_BLOCK = 0.2
 #: smallest explained share claimed, and the chi-square (independent samples) it must explain
 SHARE_MIN, CHI2_MIN = 0.05, 25.0
 #: an input is named when permuting it costs this share of the held-out variance...
 IMPORTANCE_MIN = 0.04
 #: ... and this fraction of the explained share
 RELATIVE_MIN = 0.15
-#: ... and this fraction of the strongest group's importance (inputs that move with the true one
-#: take a few % of it: 3.7 % on a tuning case keyed on another joint's acceleration, while two
-#: true inputs of one force took 36 % of each other's)
+#: ... and this fraction of the strongest group's importance
 TOP_MIN = 0.1
+#: ... and it exceeds this many standard errors over the held-out blocks
+BLOCK_Z = 2.0
+#: ... at most this many are checked by refitting without each ...
+MAX_INPUTS = 4
+#: ... and one is kept when the trees refitted without it lose this share of the held-out variance
+DROP_MIN = 0.03
 #: a channel with no structure flagged is still fitted when its residual's RMS exceeds its own
 #: noise by this factor (a force keyed on another joint, which :mod:`.structure` does not test)
 RMS_OVER_NOISE = 2.0
-#: the boosted trees' settings (small: a few hundred decimated samples)
-TREES = dict(max_iter=120, learning_rate=0.08, max_leaf_nodes=12, min_samples_leaf=25, l2_regularization=1.0,
+#: the boosted trees' settings (small: a few hundred decimated samples; the number of
+#: iterations, at most max_iter, is chosen on the last fitted block)
+TREES = dict(max_iter=300, learning_rate=0.08, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
              early_stopping=False, random_state=0)
 
 _QUANTITIES = ("position", "rate", "acceleration", "effort", "history")
@@ -106,6 +121,8 @@ class FlexibleFit:
     black_box: bool = False
     model: object = field(default=None, repr=False, compare=False)
     columns: tuple = field(default=(), repr=False, compare=False)
+    #: the columns (indices into ``columns``) ``model`` takes: the named inputs' when any
+    use: tuple = field(default=(), repr=False, compare=False)
     #: the residual it was fitted on (decimated samples), in ``unit``
     target: object = field(default=None, repr=False, compare=False)
 
@@ -148,11 +165,15 @@ def inputs(pipe, R) -> tuple:
                                         (f"effort{k + 1}", effort[:, k], "effort", eu)):
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
+        group = f"history of {noun} {k + 1}"
         for tc in TIME_CONSTANTS:
             hist = _lowpass(np.column_stack([np.abs(qd), effort[:, k]]), dt, tc, starts)
             X += [hist[:, 0], hist[:, 1]]
-            cols += [(f"|qd{k + 1}| low-passed {tc:g} s", f"history of {noun} {k + 1}", k + 1, "history", rate_u),
-                     (f"effort{k + 1} low-passed {tc:g} s", f"history of {noun} {k + 1}", k + 1, "history", eu)]
+            cols += [(f"|qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", rate_u),
+                     (f"effort{k + 1} low-passed {tc:g} s", group, k + 1, "history", eu)]
+        for tc in POWER_TIME_CONSTANTS:
+            X.append(_lowpass(np.abs(effort[:, k] * qd)[:, None], dt, tc, starts)[:, 0])
+            cols.append((f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"))
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -198,62 +219,135 @@ def _where(grid, curve, unit) -> str:
     return f"over {x(0)} to {x(n - 1)} {unit}".rstrip()
 
 
-def _importance(model, X, y, base, groups, rng, repeats=2) -> dict:
+def _trees(X, y, train, test=None):
+    """Boosted trees on the ``train`` rows of (X, y); the number of iterations is chosen on a
+    held-out block, the last :data:`EARLY_BLOCK` of the fitted rows (the rows are in time order:
+    a random split would judge on neighbours of the fitted samples), then the trees are refitted
+    on all the fitted rows with it."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    rows = np.flatnonzero(train)
+    cut = int(len(rows) * (1.0 - EARLY_BLOCK))
+    a, b = rows[:cut], rows[cut:]
+    probe = HistGradientBoostingRegressor(**TREES).fit(X[a], y[a])
+    loss = [float(np.mean((y[b] - p) ** 2)) for p in probe.staged_predict(X[b])]
+    best = int(np.argmin(loss)) + 1
+    return HistGradientBoostingRegressor(**dict(TREES, max_iter=max(best, 5))).fit(X[rows], y[rows])
+
+
+def _block_losses(model, X, y, blocks, cols=None, rng=None) -> np.ndarray:
+    """Mean squared error of ``model`` on each held-out block (index arrays), with the columns
+    ``cols`` permuted together (within the held-out samples) when given."""
+    Xp = X
+    if cols is not None:
+        Xp = X.copy()
+        Xp[:, cols] = X[rng.permutation(len(X))][:, cols]
+    e = (y - model.predict(Xp)) ** 2
+    return np.array([float(np.mean(e[b])) for b in blocks])
+
+
+def _importance(model, X, y, groups, blocks, rng, repeats=2) -> dict:
+    """Grouped permutation importance on the held-out samples, per held-out block: the loss of
+    MSE when the group's columns are permuted, over the held-out variance.  Returns, per group,
+    ``(mean, standard error over the blocks)``."""
     var = float(np.var(y))
+    base = _block_losses(model, X, y, blocks)
     out = {}
     for g, cols in groups.items():
-        loss = 0.0
-        for _ in range(repeats):
-            Xp = X.copy()
-            Xp[:, cols] = X[rng.permutation(len(X))][:, cols]
-            loss += float(np.mean((y - model.predict(Xp)) ** 2)) - base
-        out[g] = loss / repeats / var
+        d = np.mean([_block_losses(model, X, y, blocks, cols, rng) for _ in range(repeats)], axis=0) - base
+        d = d / var
+        out[g] = (float(np.mean(d)), float(np.std(d, ddof=1) / math.sqrt(len(d))))
     return out
+
+
+def _screen(imp, share) -> list:
+    """Groups whose permutation importance passes the thresholds and is significant over the
+    held-out blocks, most important first (at most :data:`MAX_INPUTS`)."""
+    top = max(m for m, _ in imp.values())
+    ok = [g for g, (m, se) in imp.items() if m >= IMPORTANCE_MIN and m >= RELATIVE_MIN * share
+          and m >= TOP_MIN * top and m > BLOCK_Z * se]
+    return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
+
+
+def _select(X, y, train, test, groups, named, var):
+    """Conditional check of the screened groups: refit the trees without each one, on the
+    others of ``named``; a group is kept when leaving it out costs at least :data:`DROP_MIN`
+    of the held-out variance (an input that only moves with a kept one costs nothing).
+    When none is kept (interchangeable inputs), all are kept.  Returns ``(kept, model on the
+    kept groups' columns, its columns)``."""
+    def fit_on(gs):
+        cols = sorted(i for g in gs for i in groups[g])
+        m = _trees(X[:, cols], y, train)
+        return m, cols, float(np.mean((y[test] - m.predict(X[test][:, cols])) ** 2))
+
+    full, cols, mse = fit_on(named)
+    if len(named) == 1:
+        return named, full, cols
+    kept = [g for g in named if (fit_on([h for h in named if h != g])[2] - mse) / var >= DROP_MIN]
+    if not kept or kept == named:
+        return named, full, cols
+    model, cols, _ = fit_on(kept)
+    return kept, model, cols
 
 
 def fit_channel(pipe, X, columns, y, train, test, noise, unit) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples) on inputs ``X``: fitted on
-    ``train``, judged on ``test`` (boolean masks)."""
-    from sklearn.ensemble import HistGradientBoostingRegressor
+    ``train``, judged on ``test`` (boolean masks).  The inputs it names are screened by grouped
+    permutation importance, significant over the held-out blocks, then checked one by one by
+    refitting without them; the share claimed is that of the trees refitted on the named inputs
+    alone (the model the statement describes)."""
+    # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
+    # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
+    import sklearn.ensemble  # noqa: F401
     from threadpoolctl import threadpool_limits
 
     from .structure import samples_per_independent
 
     c = pipe.channels.index(unit[1]) if isinstance(unit, tuple) else None
     unit = unit[0] if isinstance(unit, tuple) else unit
+    yt = y[test]
+    var = float(np.var(yt))
     with threadpool_limits(limits=1):
-        model = HistGradientBoostingRegressor(**TREES).fit(X[train], y[train])
-        yt, Xt = y[test], X[test]
-        pred = model.predict(Xt)
-        var = float(np.var(yt))
+        model = _trees(X, y, train)
+        pred = model.predict(X[test])
         mse = float(np.mean((yt - pred) ** 2))
         share = 1.0 - mse / var if var > 0 else 0.0
         z = len(yt) * (var - mse) / max(noise, 1e-300) ** 2 / samples_per_independent(pipe)
         explained = share >= SHARE_MIN and z > CHI2_MIN
-        deps = ()
+        deps, use = (), tuple(range(X.shape[1]))
         if explained:
             groups = {}
             for i, col in enumerate(columns):
                 groups.setdefault(col[1], []).append(i)
             rng = np.random.default_rng(0)
-            imp = _importance(model, Xt, yt, mse, groups, rng)
-            top = max(imp.values())
-            named = [g for g in sorted(imp, key=lambda g: -imp[g])
-                     if imp[g] >= IMPORTANCE_MIN and imp[g] >= RELATIVE_MIN * share and imp[g] >= TOP_MIN * top]
-            deps = tuple(_dependence(model, X, Xt, yt, mse, columns, groups[g], g, imp[g], unit, rng) for g in named)
+            n_t = int(test.sum())
+            blocks = np.array_split(np.arange(n_t), max(2, min(N_BLOCKS, n_t // BLOCK)))
+            imp = _importance(model, X[test], yt, groups, blocks, rng)
+            named = _screen(imp, share)
+            if named:
+                named, model, cols = _select(X, y, train, test, groups, named, var)
+                use = tuple(cols)
+                share = 1.0 - float(np.mean((yt - model.predict(X[test][:, cols])) ** 2)) / var
+                sub = {g: [cols.index(i) for i in groups[g]] for g in named}
+                imp_k = _importance(model, X[test][:, cols], yt, sub, blocks, rng)
+                deps = tuple(_dependence(model, X[:, cols], [columns[i] for i in cols], sub[g], g, imp_k[g][0],
+                                         unit) for g in named)
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.sqrt(np.mean((yt - yt.mean()) ** 2))), float(noise), deps,
-                       model=model, columns=tuple(columns))
+                       model=model, columns=tuple(columns), use=use)
 
 
-def _dependence(model, X, Xt, yt, mse, columns, cols, group, importance, unit, rng) -> Dependence:
+def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
+    """The partial dependence of the trees (on the columns ``X``) on the group's strongest
+    column (``cols`` of ``columns``)."""
     from sklearn.inspection import partial_dependence
 
-    if len(cols) > 1:  # the group's strongest column carries the curve
-        single = _importance(model, Xt, yt, mse, {i: [i] for i in cols}, rng, repeats=1)
-        i = max(single, key=single.get)
-    else:
-        i = cols[0]
+    i = cols[0]
+    if len(cols) > 1:  # the group's strongest column carries the curve: the widest partial dependence
+        sub = X[:: max(1, len(X) // 150)]
+        spans = [np.ptp(partial_dependence(model, sub, [k], grid_resolution=10, percentiles=(0.02, 0.98),
+                                           kind="average")["average"][0]) for k in cols]
+        i = cols[int(np.argmax(spans))]
     sub = X[:: max(1, len(X) // 300)]
     pd = partial_dependence(model, sub, [i], grid_resolution=25, percentiles=(0.02, 0.98), kind="average")
     grid, curve = np.asarray(pd["grid_values"][0], float), np.asarray(pd["average"][0], float)
@@ -420,5 +514,6 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
-            out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, f.model.predict(X), left=0.0, right=0.0)
+            out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, f.model.predict(X[:, list(f.use)]), left=0.0,
+                                             right=0.0)
     return out

@@ -8,8 +8,11 @@ None of the forces is a family of the discovery step, and none is added as one:
 
 * ``position_threshold``: on one joint, zero below a position q0 (the 55-70 % quantile of its
   stroke) and A tanh((q - q0) / w)^2 above it (w a third of the stroke above q0);
-* ``heating``: a friction sign(qd) c |qd|_lp / V whose level follows the joint's |rate|
-  low-passed over 1.5 s (a drive that heats with its duty), V the RMS rate;
+* ``heating``: a friction that falls as the drive warms, sign(qd) c (1 - 0.6 T / T_max), its
+  temperature rise T the joint's dissipated power |effort x rate| low-passed over a thermal
+  time constant of 1.5-3 s (a first-order thermal model: T the dissipated energy history);
+* ``cross_position``: on joint j, a bump A exp(-((q_k - c) / w)^2) keyed on another joint k's
+  position (a hose or a cable carrier that catches when joint k passes c);
 * ``cross_acceleration``: on joint j, A tanh(qdd_k / s_k) keyed on another joint k's
   acceleration (s_k its RMS);
 * ``time_on``: on one joint, a force A that switches on smoothly at a time in the first half
@@ -27,7 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 
-KINDS = ("position_threshold", "heating", "cross_acceleration", "time_on")
+KINDS = ("position_threshold", "heating", "cross_acceleration", "cross_position", "time_on")
 
 
 def _lowpass(x, dt, tau):
@@ -39,9 +42,10 @@ def _lowpass(x, dt, tau):
     return y
 
 
-def hidden_force(kind, rng, t, q, qd, qdd, E, noun):
+def hidden_force(kind, rng, t, q, qd, qdd, E, noun, tau=None):
     """The force (the effort it costs each joint, (n, nd)) of ``kind`` along the reference
-    ``q, qd, qdd`` (n, nd) at times ``t``; ``E`` the joints' RMS effort.  Returns
+    ``q, qd, qdd`` (n, nd) at times ``t``; ``E`` the joints' RMS effort, ``tau`` (n, nd) the
+    nominal effort along the reference (for ``heating``; default E).  Returns
     ``(force, joint (1-based), truth groups, description)``."""
     n, nd = q.shape
     j = int(rng.integers(0, nd))
@@ -55,14 +59,23 @@ def hidden_force(kind, rng, t, q, qd, qdd, E, noun):
     elif kind == "heating":
         dt = float(t[1] - t[0])
         V = float(np.sqrt(np.mean(qd[:, j] ** 2)))
-        lp = _lowpass(np.abs(qd[:, j]), dt, 1.5)
-        f[:, j] = np.tanh(qd[:, j] / (0.02 * V)) * size * lp / V
-        truth, what = [f"rate of {noun} {j + 1}", f"history of {noun} {j + 1}"], f"sign(qd) {size:.3g} |qd|_lp/V"
+        effort = np.full(n, E[j]) if tau is None else tau[:, j]
+        tc = float(rng.uniform(1.5, 3.0))
+        T = _lowpass(np.abs(effort * qd[:, j]), dt, tc)
+        f[:, j] = np.tanh(qd[:, j] / (0.02 * V)) * size * (1.0 - 0.6 * T / T.max())
+        truth = [f"rate of {noun} {j + 1}", f"history of {noun} {j + 1}"]
+        what = f"sign(qd) {size:.3g} (1 - 0.6 T/T_max), T = |tau qd| low-passed over {tc:.2g} s"
     elif kind == "cross_acceleration":
         k = int((j + rng.integers(1, nd)) % nd)
         s = float(np.sqrt(np.mean(qdd[:, k] ** 2)))
         f[:, j] = size * np.tanh(qdd[:, k] / s)
         truth, what = [f"acceleration of {noun} {k + 1}"], f"{size:.3g} tanh(qdd{k + 1}/{s:.3g})"
+    elif kind == "cross_position":
+        k = int((j + rng.integers(1, nd)) % nd)
+        c = float(np.quantile(q[:, k], rng.uniform(0.3, 0.7)))
+        w = 0.15 * float(q[:, k].max() - q[:, k].min())
+        f[:, j] = 2.0 * size * np.exp(-(((q[:, k] - c) / w) ** 2))
+        truth, what = [f"position of {noun} {k + 1}"], f"{2 * size:.3g} exp(-((q{k + 1} - {c:.4g})/{w:.3g})^2)"
     elif kind == "time_on":
         t_on = float(t[0] + rng.uniform(0.15, 0.35) * (t[-1] - t[0]))
         f[:, j] = size * 0.5 * (1 + np.tanh((t - t_on) / 0.2))
@@ -99,8 +112,9 @@ def simulate(kind: str | None, seed: int, robot: str = "6pus", duration: float |
     force = np.zeros_like(ref.q)
     key = {"kind": kind or "clean", "seed": seed, "robot": robot, "joint": None, "truth": [], "what": ""}
     if kind is not None:
+        tau_ref = np.vstack([np.repeat(tau_ff[:1], k0, axis=0), tau_ff])[: len(ref.q)]
         force, key["joint"], key["truth"], key["what"] = hidden_force(kind, rng, ref.time, ref.q, qd, qdd, E,
-                                                                      model.facts.joint_noun)
+                                                                      model.facts.joint_noun, tau=tau_ref)
         force[:k0] = 0.0
     wn = 2 * math.pi * gen.get("bandwidth_hz", 8.0)
     mass = float(ctl.joint_mass(model, model.home()).diagonal().max())
