@@ -40,7 +40,8 @@ direction; a friction restated alone in place of two effects makes the other a s
 """
 from __future__ import annotations
 
-from .fit import SPAN_CONSTANT, bootstrap, discover_channel, fit_terms, offset_refit, stepwise  # noqa: F401
+from .channel import discover_channel  # noqa: F401
+from .fit import SPAN_CONSTANT, bootstrap, fit_terms, offset_refit, stepwise  # noqa: F401
 from .judgement import (ONE_FORCE, heldout_chi2, heldout_samples, judge_library, library_named,  # noqa: F401
                                   restates, significant)
 from .search import FADE_GRID, FADE_RANGE, Search  # noqa: F401

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .fit import discover_channel
+from .channel import discover_channel
 from .search import Search
 from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
 from ..families import acceptance, products
