@@ -73,13 +73,14 @@ def _bootstrap(search, ch, terms, refit):
                      fixed=ch.fixed, floor=ch.floor, refit=refit, held=ch.held)
 
 
-def _selected(search, ch) -> list:
-    """The terms selected on the channel, with the channel's noise weight (``search.w``) set
-    from the residual's own noise, measured again on the residual of the terms found."""
+def _selected(search, ch) -> tuple:
+    """``(search, terms)``: the terms selected on the channel, and the search with the channel's
+    noise weight (``search.w``) from the residual's own noise, measured again on the residual of
+    the terms found."""
     eng, c, y = search.eng, ch.c, ch.y
     train = eng.train
     r, terms = y, []
-    search.w[c] = 0.0
+    search = search.with_weight(c, 0.0)
     for _ in range(3):
         # the force searched for also shows in the differences one window apart when it varies
         # fast (a spring on a quick arm): the noise is measured again on the residual of the
@@ -87,7 +88,7 @@ def _selected(search, ch) -> list:
         sigma = own_noise(eng.pipe, r[train], eng.accuracy()[c])
         if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(ch.phi))) < math.log(1.25):
             break
-        search.w[c] = 1.0 / (sigma * math.sqrt(ch.phi))
+        search = search.with_weight(c, 1.0 / (sigma * math.sqrt(ch.phi)))
         terms = _stepwise(search, ch)
         if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
             terms = acceptance.or_library(terms, lambda: _stepwise(search, ch, library_only=True),
@@ -96,21 +97,23 @@ def _selected(search, ch) -> list:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))
         r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
-    return terms
+    return search, terms
 
 
-def _shapes_fitted(search, ch, terms) -> list:
-    """``terms`` with the shapes of a step, a ripple, a fading friction and a zone fitted, and
-    the terms that stood in for the step's misplaced edge gone again (the backward pass of the
-    selection, on the fitted step)."""
+def _shapes_fitted(search, ch, terms) -> tuple:
+    """``(search, terms)``: ``terms`` with the shapes of a step, a ripple, a fading friction and
+    a zone fitted (the search holding the shapes tried), and the terms that stood in for the
+    step's misplaced edge gone again (the backward pass of the selection, on the fitted step)."""
     c, y, train = ch.c, ch.y, search.eng.train
-    fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
-        search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
-    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0],
-                               lambda ts: _heldout(search, ch, ts)[1])
+    search, fitted = _fit_step(search, c, y, terms, train)
+    search, fitted = _fit_period(search, c, y, fitted, train)
+    search, fitted = _fit_fade(search, c, y, fitted, train)
+    fitted = _resolved_fade(search, c, y, fitted, train)
+    search, fitted = products.fit_zone(search, c, y, fitted, train, lambda s, ts: _ls_fit(s, c, y, ts, train)[0],
+                                       lambda s, ts: _heldout(s, ch, ts)[1])
     if fitted != terms:
         terms = _backward(search, c, y, fitted, train, ch.thr, ch.n_eff)
-    return terms
+    return search, terms
 
 
 def _stable(search, ch, terms):
@@ -177,8 +180,10 @@ def _term_fitted(search, ch, terms, stab, spread, extra):
 
 
 def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), library_result=None):
-    """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
-    model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
+    """``(term, search)``: the discovered term on effort channel c (joint c) for the residual y
+    (samples,) of the model with parameters ``theta`` (default the search's), or None, and the
+    search with the channel's noise weight and the shapes the fit tried (:class:`.Search` is a
+    value: the one given is unchanged).  A coefficient ``theta``
     holds on this joint (the library's offset) is not searched: it is fitted already.  For the
     library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
     the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
@@ -190,13 +195,14 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), 
     (:func:`_shapes_fitted`), the bootstrap's stability (:func:`_stable`), the final fit and its
     intervals (:func:`_term_fitted`)."""
     ch = _channel(search, c, y, threshold, seed, theta, asymmetry)
-    terms = _selected(search, ch)
+    search, terms = _selected(search, ch)
     if library_result is not None and not any(acceptance.is_family(t) for t in terms):
-        return library_result()  # the same selection as without the families: its result
+        return library_result(), search  # the same selection as without the families: its result
     # the cheap held-out check first, then the bootstrap's stability
     if not terms or not _heldout(search, ch, terms)[1] > threshold:
-        return None
-    stable = _stable(search, ch, _shapes_fitted(search, ch, terms))
+        return None, search
+    search, terms = _shapes_fitted(search, ch, terms)
+    stable = _stable(search, ch, terms)
     if stable is None:
-        return None
-    return _term_fitted(search, ch, *stable)
+        return None, search
+    return _term_fitted(search, ch, *stable), search

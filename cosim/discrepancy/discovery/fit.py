@@ -228,12 +228,13 @@ def _fit_step(search, c, y, terms, rows):
     """The step of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
     fitted part's chi-square, every other term refitted with it, from the grid's step; the
     width kept within 2-100 % of the joint's position spread, the position within its range):
-    ``terms`` with the step's option replaced by the fitted one."""
+    ``(search, terms)``, the search holding the steps tried and ``terms`` with the step's option
+    replaced by the fitted one."""
     from scipy.optimize import minimize
 
     k = next((i for i, (t, _) in enumerate(terms) if t == "step"), None)
     if k is None:
-        return terms
+        return search, terms
     qs, ws = search.steps[terms[k][1]]
     q0, w0 = float(qs[c]), float(ws[c])
     lo, hi = float(search.q_range[0][c]), float(search.q_range[1][c])
@@ -241,10 +242,11 @@ def _fit_step(search, c, y, terms, rows):
     tried = {}
 
     def at(x):
+        nonlocal search
         q, w = q0 + x[0] * w0, w0 * math.exp(x[1])
         if not (lo <= q <= hi and 0.02 * T <= w <= T):
             return math.inf, None
-        o = search.add_step(c, q, w)
+        search, o = search.with_step(c, q, w)
         chi2 = _ls_fit(search, c, y, terms[:k] + [("step", o)] + terms[k + 1:], rows)[0]
         tried[o] = chi2
         return chi2, o
@@ -255,33 +257,34 @@ def _fit_step(search, c, y, terms, rows):
     best = min(tried, key=tried.get, default=None)
     start = _ls_fit(search, c, y, terms, rows)[0]
     if best is None or not tried[best] < start or not np.isfinite(r.fun):
-        return terms
-    return terms[:k] + [("step", best)] + terms[k + 1:]
+        return search, terms
+    return search, terms[:k] + [("step", best)] + terms[k + 1:]
 
 
 def _fit_period(search, c, y, terms, rows):
-    """The ripple of ``terms`` (if any) with its period fitted (:func:`_fit_shape`), from the
+    """The ripple of ``terms`` (if any) with its period fitted (``(search, terms)`` as :func:`_fit_shape`), from the
     spectrum's period P0 as P0 (1 + x), x from 0.5 % either side, within +-3 %."""
     k = next((i for i, (t, _) in enumerate(terms) if t == "ripple"), None)
     if k is None:
-        return terms
+        return search, terms
     P0 = float(search.periods[terms[k][1]][c])
     if not P0 > 0:
-        return terms
-    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_ripple(c, P0 * (1.0 + x)), 0.005,
+        return search, terms
+    return _fit_shape(search, c, y, terms, rows, k, lambda s, x: s.with_ripple(c, P0 * (1.0 + x)), 0.005,
                       (-0.03, 0.03))
 
 
 def _fit_fade(search, c, y, terms, rows):
-    """The fading friction of ``terms`` (if any) with its velocity scale fitted (:func:`_fit_shape`),
+    """The fading friction of ``terms`` (if any) with its velocity scale fitted (``(search, terms)`` as
+    :func:`_fit_shape`),
     from the grid's v0 as v0 exp(x), x from 0.3 either side, within :data:`FADE_RANGE` of the
     joint's RMS rate and no slower than three times the rate readings' noise."""
     k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
     if k is None:
-        return terms
+        return search, terms
     v0 = float(search.fades[terms[k][1]][c])
     lo, hi = (math.log(max(f * search.rate[c], search.v_floor[c]) / v0) for f in FADE_RANGE)
-    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
+    return _fit_shape(search, c, y, terms, rows, k, lambda s, x: s.with_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
 
 
 def _resolved_fade(search, c, y, terms, rows):
@@ -305,18 +308,20 @@ def _resolved_fade(search, c, y, terms, rows):
 def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
     """Term k of ``terms`` with one shape parameter fitted: Newton steps on the fitted part's
     chi-square (the other terms refitted with it) from the parabola through the three best
-    values of x tried (``option_at(x)``: the search's option of the term at x; x = 0 is the
-    term's own), starting at 0 and +-h, within ``bounds``; done when the step is below a tenth
-    of x's standard error the parabola's curvature gives (a chi-square rise of 1), or after
-    four steps.  ``terms`` with the term's option replaced by the best one tried."""
+    values of x tried (``option_at(search, x)``: ``(search, option)``, the search with the term
+    at x as an option; x = 0 is the term's own), starting at 0 and +-h, within ``bounds``; done
+    when the step is below a tenth of x's standard error the parabola's curvature gives (a
+    chi-square rise of 1), or after four steps.  ``(search, terms)``: the search holding the
+    options tried, ``terms`` with the term's option replaced by the best one tried."""
     name = terms[k][0]
     start = _ls_fit(search, c, y, terms, rows)[0]
     tried = {0.0: (start, None)}  # x -> (chi-square, option)
     lo, hi = bounds
 
     def at(x):
+        nonlocal search
         if x not in tried:
-            o = option_at(x)
+            search, o = option_at(search, x)
             tried[x] = (_ls_fit(search, c, y, terms[:k] + [(name, o)] + terms[k + 1:], rows)[0], o)
         return tried[x][0]
 
@@ -340,8 +345,8 @@ def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
         at(x)
     best = min(tried, key=lambda x: tried[x][0])
     if tried[best][1] is None or not tried[best][0] < start:
-        return terms
-    return terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
+        return search, terms
+    return search, terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
 
 
 def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):

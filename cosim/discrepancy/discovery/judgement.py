@@ -7,12 +7,14 @@ from __future__ import annotations
 import copy
 import hashlib
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from types import MappingProxyType
 
 import numpy as np
 
 from .channel import discover_channel
-from .search import Search
+from .search import Search, make_search
 from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
 from ..families import acceptance, products
 from ..structure import own_noise
@@ -90,16 +92,30 @@ def _option(search, t, name):
 
 
 @dataclass(frozen=True)
+class _Court:
+    """What the trials hold fixed: the engine, the library's selection, the threshold a term pays
+    to enter the search and the bar of a trial (the threshold plus the look-elsewhere cost)."""
+    eng: object
+    sel: object
+    threshold: float
+    bar: float
+
+
+@dataclass(frozen=True)
 class _Verdicts:
     """Where the trials stand: the library's parameters and residual that stay, the terms
     discovered on them (channel -> term or None), the records of the withdrawn and the tied
-    groups, and per channel the library frictions the terms in their place restated."""
+    groups, per channel the library frictions the terms in their place restated, the search as
+    the last discovery left it (its noise weights are the held-out comparisons') and the
+    searches made (:func:`_discover_all`)."""
     theta: dict
     R_lib: np.ndarray
     base: dict
+    search: Search
     withdrawn: tuple = ()
     ties: tuple = ()
-    confirmed: dict = field(default_factory=dict)  # channel -> frozenset of effect keys
+    confirmed: Mapping = field(default_factory=lambda: MappingProxyType({}))  # channel -> frozenset of effect keys
+    memo: Mapping = field(default_factory=lambda: MappingProxyType({}))  # a channel's search -> (term, noise weight)
 
 
 def judge_library(eng, sel, threshold: float):
@@ -138,59 +154,58 @@ def judge_library(eng, sel, threshold: float):
     withdrawn groups', the withdrawn and the tied groups with their held-out figures, the search,
     and the terms discovered per channel on the final library model."""
     theta = dict(sel.theta)
-    search = Search(eng, theta)
-    bar = threshold + 2.0 * math.log(acceptance.n_library(search))
-    discover_all = _discoverer(search, threshold)
+    search = make_search(eng, theta)
+    court = _Court(eng, sel, threshold, threshold + 2.0 * math.log(acceptance.n_library(search)))
     R_lib = eng.R(theta)
     # the trials weigh the library's effects against the library's own terms; the families' terms
     # are searched on the model that stays, on top of it (families/acceptance.py)
-    search.fam_on = False
-    v = _Verdicts(theta, R_lib, discover_all(R_lib, range(eng.nd), theta))
-    v, acting = _single_trials(eng, sel, search, bar, discover_all, v)
+    v, base = _discover_all(court, _Verdicts(theta, R_lib, {}, replace(search, fam_on=False)), R_lib,
+                            range(eng.nd), theta)
+    v, acting = _single_trials(court, replace(v, base=base))
     # Two library effects on one channel may be one force the search names: Coulomb friction and
     # an offset are, while the joint moves, friction that differs by direction.  Alone on trial,
     # each lost to nothing (with the offset kept, the pair in Coulomb's place restated Coulomb);
     # they go on trial together against the terms discovered in their joint place.
     for (a1, ch1), (a2, ch2) in _pairs(acting):
-        v = _pair_trial(eng, sel, search, bar, discover_all, v, a1, a2, sorted(set(ch1) | set(ch2)))
+        v = _pair_trial(court, v, a1, a2, sorted(set(ch1) | set(ch2)))
     # On the library model that stays, a direction-split friction may now be the asymmetry of a
     # library friction that the terms in its place restated (on trial each level had to be a
     # friction of its own, so that the library effect stood against the discovered terms alone;
     # a friction kept only as a tie may be a stand-in, whose asymmetry would be no physics)
     again = [c for c in v.confirmed if any(search.name(c, lib) in v.theta for lib in v.confirmed[c])]
-    v = replace(v, base={**v.base, **discover_all(v.R_lib, again, v.theta, asymmetry=v.confirmed)})
-    v = _families_pass(eng, sel, search, bar, discover_all, v)
-    return v.theta, list(v.withdrawn), list(v.ties), search, v.base
+    v, found = _discover_all(court, v, v.R_lib, again, v.theta, asymmetry=v.confirmed)
+    v = _families_pass(court, replace(v, base={**v.base, **found}))
+    return v.theta, list(v.withdrawn), list(v.ties), v.search, v.base
 
 
-def _discoverer(search, threshold):
-    """``discover_all(R, channels, theta, asymmetry=None)``: {channel: the term discovered on
-    it (:func:`.discover_channel`) for the residual R of the model with parameters ``theta``}.
+def _discover_all(court, v, R, chans, th, asymmetry=None) -> tuple:
+    """``(verdicts, found)``: {channel: the term discovered on it (:func:`.discover_channel`) for
+    the residual R of the model with parameters ``th``} over ``chans``, and the verdicts with
+    the search it leaves (each channel's noise weight the one of its search) and the searches
+    made.
 
     The trials search the same channel with the same residual and the same parameters of its
     joint again and again (two thirds of the calls on a 6-PUS with six frictions on trial): a
-    search is a function of those, of the search's columns and of the joint's noise weight,
-    which it sets and which the held-out comparisons read, so both are kept."""
-    memo = {}
-
-    def discover_all(R, chans, th, asymmetry=None):
-        out = {}
-        for c in chans:
-            asym = tuple((asymmetry or {}).get(c, ()))
-            own = search.name(c, "")
-            key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
-                   tuple(sorted((k, v) for k, v in th.items() if k.startswith(own))), tuple(sorted(asym)),
-                   search.fam_on)
-            if key not in memo:
-                lib = key[:-1] + (False,)  # the same search without the families, if made
-                done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
-                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
-                                              library_result=done), search.w[c])
-            term, search.w[c] = memo[key]
-            out[c] = copy.deepcopy(term)
-        return out
-
-    return discover_all
+    search is a function of those and of the search's columns, and sets the joint's noise
+    weight, which the held-out comparisons read, so both are kept (``v.memo``)."""
+    search, memo = v.search, v.memo
+    out = {}
+    for c in chans:
+        asym = tuple((asymmetry or {}).get(c, ()))
+        own = search.name(c, "")
+        key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
+               tuple(sorted((k, x) for k, x in th.items() if k.startswith(own))), tuple(sorted(asym)),
+               search.fam_on)
+        if key not in memo:
+            lib = key[:-1] + (False,)  # the same search without the families, if made
+            done = (lambda m=memo: m[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
+            term, search = discover_channel(search, c, R[:, c], court.threshold, theta=th, asymmetry=asym,
+                                            library_result=done)
+            memo = MappingProxyType({**memo, key: (term, search.w[c])})
+        term, w = memo[key]
+        search = search.with_weight(c, w)
+        out[c] = copy.deepcopy(term)
+    return replace(v, search=search, memo=memo), out
 
 
 def _trial(search, R_lib, R_minus, on_top, in_place, chans, bar, n_lib, columns):
@@ -215,15 +230,16 @@ def _withdrawn_record(sel, g, in_place, figures) -> dict:
             "replaced_by": [t.channel for t in in_place], **figures}
 
 
-def _single_trials(eng, sel, search, bar, discover_all, v):
+def _single_trials(court, v):
     """Each effort-family group of the selection alone on trial, least important first, on the
     channels it acts on (:func:`_single_trial`).  Returns ``(verdicts, acting)``: acting the
     groups on trial with their channels, in trial order."""
+    eng = court.eng
     # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
     # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
     noise = np.array([own_noise(eng.pipe, v.R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
     acting = []  # (selected group, the channels it acts on), in the order put on trial
-    for a in sorted(sel.selected, key=lambda a: a.importance):
+    for a in sorted(court.sel.selected, key=lambda a: a.importance):
         g = a.group
         if g.effect.family not in ("effort", "both"):
             continue
@@ -234,47 +250,53 @@ def _single_trials(eng, sel, search, bar, discover_all, v):
         if not chans:
             continue
         acting.append((a, chans))
-        v = _single_trial(eng, sel, search, bar, discover_all, v, g, th_minus, R_minus, chans)
+        v = _single_trial(court, v, g, th_minus, R_minus, chans)
     return v, acting
 
 
-def _single_trial(eng, sel, search, bar, discover_all, v, g, th_minus, R_minus, chans):
+def _single_trial(court, v, g, th_minus, R_minus, chans):
     """Group g on trial on ``chans`` against the terms discovered in its place (the model
     ``th_minus``, residual ``R_minus``): the verdicts with g withdrawn, tied, or named."""
-    in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
+    v, found = _discover_all(court, v, R_minus, chans, th_minus)
+    in_place = [t for t in found.values() if t is not None]
     if not in_place or all(library_named(t) for t in in_place):
         return v
     on_top = [v.base[c] for c in chans if v.base.get(c) is not None]
     # free coefficients: a direction-split pair on top of the library's symmetric friction
     # adds one (its asymmetry), not two
-    better, figures = _trial(search, v.R_lib, R_minus, on_top, in_place, chans, bar, len(g.params) - 1,
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, in_place, chans, court.bar, len(g.params) - 1,
                              [v.R_lib - R_minus])
-    gain, se, (k_A, k_B) = figures["gain"], figures["se"], figures["coefficients"]
+    bar, gain, se, (k_A, k_B) = court.bar, figures["gain"], figures["se"], figures["coefficients"]
     restated = any(restates(t, g.key) for t in in_place)
     if restated:
-        v = replace(v, confirmed={**v.confirmed, **{c: v.confirmed.get(c, frozenset()) | {g.key} for c in chans}})
+        v = replace(v, confirmed=MappingProxyType({**v.confirmed,
+                                                   **{c: v.confirmed.get(c, frozenset()) | {g.key} for c in chans}}))
     # fewer free coefficients and a held-out gain above the bar, or a gain beyond its
     # uncertainty as well
     if (better or (k_B < k_A and gain > bar)) and not restated:
-        return replace(v, theta=th_minus, R_lib=R_minus, withdrawn=v.withdrawn + (_withdrawn_record(sel, g, in_place,
-                                                                                                     figures),),
-                       base={**v.base, **discover_all(R_minus, chans, th_minus)})
+        v = replace(v, theta=th_minus, R_lib=R_minus,
+                    withdrawn=v.withdrawn + (_withdrawn_record(court.sel, g, in_place, figures),))
+        v, found = _discover_all(court, v, R_minus, chans, th_minus)
+        return replace(v, base={**v.base, **found})
     if not restated and -gain <= max(bar, Z_ONE_SIDED * se):
         # not told apart on the held-out part: the library effect is named, not with confidence
-        return replace(v, ties=_tied(v.ties, (g,), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans]))
+        return replace(v, ties=_tied(v.ties, (g,), in_place, k_B - k_A, figures,
+                                     [court.eng.pipe.channels[c] for c in chans]))
     return v
 
 
-def _pair_trial(eng, sel, search, bar, discover_all, v, a1, a2, chans):
+def _pair_trial(court, v, a1, a2, chans):
     """Two selected effects acting on the common channels ``chans`` on trial together against
     the terms discovered in their joint place: the verdicts with both withdrawn, tied, or as
     they were."""
+    eng, bar = court.eng, court.bar
     g1, g2 = a1.group, a2.group
     if not all(p in v.theta for p in (*g1.params, *g2.params)):
         return v  # one of them was withdrawn already
     th_minus = {k: x for k, x in v.theta.items() if k not in g1.params and k not in g2.params}
     R_minus = eng.R(th_minus)
-    in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
+    v, found = _discover_all(court, v, R_minus, chans, th_minus)
+    in_place = [t for t in found.values() if t is not None]
     if not in_place or any(library_named(t) for t in in_place):
         return v
     # both frictions restated (split by direction, every level positive): they are named,
@@ -286,9 +308,10 @@ def _pair_trial(eng, sel, search, bar, discover_all, v, a1, a2, chans):
     alone = [g for g in (g1, g2) if any(restates(t, g.key, distinct=True) for t in in_place)]
     # the library's side as it would stay: with the asymmetry of the frictions the terms
     # in their place restated (searched on top of them)
-    on_top = [t for t in discover_all(v.R_lib, chans, v.theta, asymmetry=v.confirmed).values() if t is not None]
+    v, found = _discover_all(court, v, v.R_lib, chans, v.theta, asymmetry=v.confirmed)
+    on_top = [t for t in found.values() if t is not None]
     columns = [v.R_lib - eng.R({k: x for k, x in v.theta.items() if k not in g.params}) for g in (g1, g2)]
-    better, figures = _trial(search, v.R_lib, R_minus, on_top, in_place, chans, bar,
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, in_place, chans, bar,
                              len(g1.params) + len(g2.params) - 2, columns)
     gain, se, (k_A, k_B) = figures["gain"], figures["se"], figures["coefficients"]
     as_well = -gain <= max(bar, Z_ONE_SIDED * se)
@@ -310,28 +333,30 @@ def _pair_trial(eng, sel, search, bar, discover_all, v, a1, a2, chans):
                                                for c in a1.lookalikes)
     if better or (k_B < k_A and gain > bar) or (one and k_B <= k_A and as_well):
         figures = dict(figures, together=[g1.title, g2.title], as_well=not better)
-        return replace(v, theta=th_minus, R_lib=R_minus,
-                       withdrawn=v.withdrawn + tuple(_withdrawn_record(sel, g, in_place, figures) for g in (g1, g2)),
-                       ties=tuple(t for t in v.ties if t["group"] not in (g1.label, g2.label)),
-                       base={**v.base, **discover_all(R_minus, chans, th_minus)})
+        v = replace(v, theta=th_minus, R_lib=R_minus,
+                    withdrawn=v.withdrawn + tuple(_withdrawn_record(court.sel, g, in_place, figures) for g in (g1, g2)),
+                    ties=tuple(t for t in v.ties if t["group"] not in (g1.label, g2.label)))
+        v, found = _discover_all(court, v, R_minus, chans, th_minus)
+        return replace(v, base={**v.base, **found})
     # one force in place of both fits as well with no more free coefficients (Coulomb and
     # viscous friction for a friction that fades at low speed): neither is named with
     # confidence, the two may stand in for it together
     return tied if k_B <= k_A and as_well else v
 
 
-def _families_pass(eng, sel, search, bar, discover_all, v):
+def _families_pass(court, v):
     """With the families in the search: their terms searched on every channel of the model that
     stays, and the library's effects of one joint on trial again (:func:`_trial_again`)."""
-    search.fam_on = True
-    if acceptance.split(search.candidates())[1]:
-        v = replace(v, base=discover_all(v.R_lib, range(eng.nd), v.theta, asymmetry=v.confirmed))
-        for a in sel.selected:
-            v = _trial_again(eng, sel, search, bar, discover_all, v, a.group)
+    v = replace(v, search=replace(v.search, fam_on=True))
+    if acceptance.split(v.search.candidates())[1]:
+        v, base = _discover_all(court, v, v.R_lib, range(court.eng.nd), v.theta, asymmetry=v.confirmed)
+        v = replace(v, base=base)
+        for a in court.sel.selected:
+            v = _trial_again(court, v, a.group)
     return v
 
 
-def _trial_again(eng, sel, search, bar, discover_all, v, g):
+def _trial_again(court, v, g):
     """Group g, an effect of one joint that stays, on trial once more with the families searched
     on both sides where the terms in its place hold a family term that may withdraw it
     (:data:`.families.acceptance.WITHDRAWING`): withdrawn by the tie rule's test (significantly
@@ -341,18 +366,19 @@ def _trial_again(eng, sel, search, bar, discover_all, v, g):
     if g.effect.family not in ("effort", "both") or c is None or not all(p in v.theta for p in g.params):
         return v
     th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
-    R_minus = eng.R(th_minus)
-    in_place = discover_all(R_minus, [c], th_minus, asymmetry=v.confirmed).get(c)
+    R_minus = court.eng.R(th_minus)
+    v, found = _discover_all(court, v, R_minus, [c], th_minus, asymmetry=v.confirmed)
+    in_place = found.get(c)
     if in_place is None or not acceptance.withdrawing(in_place):
         return v
     on_top = [v.base[c]] if v.base.get(c) is not None else []
-    better, figures = _trial(search, v.R_lib, R_minus, on_top, [in_place], [c], bar, len(g.params) - 1,
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, [in_place], [c], court.bar, len(g.params) - 1,
                              [v.R_lib - R_minus])
     gain, (k_A, k_B) = figures["gain"], figures["coefficients"]
-    if not (better or (k_B < k_A and gain > bar)):
+    if not (better or (k_B < k_A and gain > court.bar)):
         return v
     return replace(v, theta=th_minus, R_lib=R_minus, base={**v.base, c: in_place},
-                   withdrawn=v.withdrawn + (_withdrawn_record(sel, g, [in_place], figures),))
+                   withdrawn=v.withdrawn + (_withdrawn_record(court.sel, g, [in_place], figures),))
 
 
 def _tied(ties, groups, in_place, extra, figures, channels) -> tuple:
