@@ -44,6 +44,9 @@ def _design(search, c, terms, rows):
 
 
 def _relevant_z(X, Z):
+    """The instruments ``Z`` with each column the reference does not image replaced by X's (a
+    new array)."""
+    Z = Z.copy()
     for j in range(X.shape[1]):
         nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
         if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:

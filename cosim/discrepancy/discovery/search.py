@@ -18,8 +18,10 @@ from ..structure import LOW_SPEEDS
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
+    """A read-only view of ``a``."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 @dataclass(frozen=True, eq=False)
