@@ -47,7 +47,8 @@ def _parts(fn, params) -> set:
                 derived.add(n.targets[0].id)
             if isinstance(n, (ast.For, ast.comprehension)):
                 it = n.iter
-                if isinstance(it, ast.Call) and isinstance(it.func, ast.Attribute) and it.func.attr in ("values", "items"):
+                if (isinstance(it, ast.Call) and isinstance(it.func, ast.Attribute)
+                        and it.func.attr in ("values", "items")):
                     it = it.func.value
                 if not isinstance(it, ast.Call) and _root(it) in derived:
                     derived |= {e.id for e in ast.walk(n.target) if isinstance(e, ast.Name)}

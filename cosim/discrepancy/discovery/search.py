@@ -1,6 +1,7 @@
 """The discovery's search: the candidate columns of every term on every effort channel
-(:class:`Search`, made by :func:`make_search`, a frozen value), the ripple's period from the residual's spectrum and the grids of the
-fading friction's velocity scale and of the smooth step (:mod:`.discovery`).
+(:class:`Search`, made by :func:`make_search`, a frozen value), the ripple's period from the
+residual's spectrum and the grids of the fading friction's velocity scale and of the smooth
+step (:mod:`.discovery`).
 """
 from __future__ import annotations
 
@@ -160,8 +161,8 @@ class Search:
                 d = s._delta(sc, c)
                 z[:, c, a] = (s.ref0 - s.pipe.reference_effort({**sh, s.name(c, k): d}))[:, c] / d
         instr = MappingProxyType({**s.instr, (term, o): _frozen(z)}) if z is not None else s.instr
-        return replace(s, off_grid=s.off_grid | {(term, o)}, cols=MappingProxyType({**s.cols, (term, o): _frozen(cols)}),
-                       instr=instr), o
+        every = MappingProxyType({**s.cols, (term, o): _frozen(cols)})
+        return replace(s, off_grid=s.off_grid | {(term, o)}, cols=every, instr=instr), o
 
 
 def make_search(eng, theta: dict, channels=None) -> Search:
