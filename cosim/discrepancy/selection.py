@@ -324,7 +324,9 @@ def _joint_sets(st, taken):
 
 def _prune(st, selected, theta, logn):
     """Backward elimination: drop groups at the edge of their physical range, then,
-    one at a time, the group whose removal costs less BIC than the threshold."""
+    one at a time, the group whose removal costs less BIC than the threshold.  Returns
+    ``(selected, theta)``, new ones (the given ones unchanged)."""
+    selected, theta = list(selected), dict(theta)
     for a in list(selected):
         if a.group.effect.sign == ">=0" and all(theta.get(p, st.nominal[p]) <= 0 for p in a.group.params[:1]):
             selected.remove(a)

@@ -40,9 +40,10 @@ direction; a friction restated alone in place of two effects makes the other a s
 """
 from __future__ import annotations
 
-from .fit import SPAN_CONSTANT, bootstrap, discover_channel, fit_terms, offset_refit, stepwise  # noqa: F401
+from .channel import discover_channel  # noqa: F401
+from .fit import SPAN_CONSTANT, bootstrap, fit_terms, offset_refit, stepwise  # noqa: F401
 from .judgement import (ONE_FORCE, heldout_chi2, heldout_samples, judge_library, library_named,  # noqa: F401
                                   restates, significant)
-from .search import FADE_GRID, FADE_RANGE, Search  # noqa: F401
+from .search import FADE_GRID, FADE_RANGE, Search, make_search  # noqa: F401
 from .terms import (ADDS_TO, BLOCK, Coefficient, DISSIPATIVE, DiscoveredTerm, MAX_STEPS, MECHANISMS,  # noqa: F401
                               N_BOOT, RATE_TERMS, SAME_COLUMN, SIGNED, STABILITY, TERMS, Z_ONE_SIDED, equation)

@@ -1,6 +1,7 @@
 """The discovery's fit: stepwise selection of the terms on one channel, the block bootstrap,
 the shape parameters (a step's position and width, a ripple's period, a fading friction's
-velocity scale) and their intervals (:func:`discover_channel`; :mod:`.discovery`).
+velocity scale) and their intervals (the steps of :func:`.channel.discover_channel`;
+:mod:`.discovery`).
 """
 from __future__ import annotations
 
@@ -11,11 +12,11 @@ import numpy as np
 
 from .._linalg import small_lstsq
 from .search import FADE_RANGE
-from .terms import ADDS_TO, BLOCK, MAX_STEPS, N_BOOT, SAME_COLUMN, SIGNED, STABILITY, TERMS, _term
+from .terms import BLOCK, MAX_STEPS, N_BOOT, SIGNED, TERMS
 from ..families import acceptance, products
 from ..intervals import hac_covariance
 from ..regressors import MIN_RELEVANCE, fit
-from ..structure import own_noise, samples_per_independent
+from ..structure import samples_per_independent
 
 
 # ------------------------------------------------------------------------- fitting
@@ -43,6 +44,9 @@ def _design(search, c, terms, rows):
 
 
 def _relevant_z(X, Z):
+    """The instruments ``Z`` with each column the reference does not image replaced by X's (a
+    new array)."""
+    Z = Z.copy()
     for j in range(X.shape[1]):
         nx, nz = np.linalg.norm(X[:, j]), np.linalg.norm(Z[:, j])
         if nx == 0 or nz == 0 or abs(X[:, j] @ Z[:, j]) < MIN_RELEVANCE * nx * nz:
@@ -221,137 +225,19 @@ def bootstrap(search, c, y, rows, terms, threshold, phi, n_eff, seed=0, fixed=fr
     return {t: hits[t] / N_BOOT for t in terms}, spread
 
 
-# ------------------------------------------------------------------------- the step
-
-def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), library_result=None):
-    """The discovered term on effort channel c (joint c) for the residual y (samples,) of the
-    model with parameters ``theta`` (default the search's), or None.  A coefficient ``theta``
-    holds on this joint (the library's offset) is not searched: it is fitted already.  For the
-    library frictions in ``asymmetry`` ("viscous", "coulomb") a direction-split friction may be
-    the asymmetry of the library's symmetric one on this joint (:data:`ADDS_TO`: the total, not
-    the coefficient, must not be negative); otherwise each split level is a friction of its
-    own.  ``library_result``: a function giving this search's result without the families' terms
-    (made already), returned when the selection holds none of them."""
-    eng = search.eng
-    train, test = eng.train, eng.test
-    # The yardstick is the residual's own high-frequency noise (as the structure test's):
-    # the engine's noise model is inflated by the very force searched for.
-    phi = samples_per_independent(eng.pipe)
-    n_eff = float((eng.use[train, c] > 0).sum()) / phi
-    lee = 2.0 * math.log(acceptance.n_library(search))  # a family term pays more (search.fam_extra)
-    thr = threshold + lee
-    held = search.theta if theta is None else theta
-    fixed = frozenset(k for t in TERMS.values() for k in t[0]
-                      if search.name(c, k) in held or search.name(c, SAME_COLUMN.get(k, k)) in held)
-    floor = {k: -float(held.get(search.name(c, lib), 0.0)) if lib in asymmetry else 0.0 for k, lib in ADDS_TO.items()}
-    # an added inertia may lower the rotor's the model holds, never below zero
-    rotor = search.name(c, "rotor_inertia")
-    floor["force_inertia"] = -float(held.get(rotor, eng.model.param(rotor)))
-
-    def heldout(terms):
-        # the channel's held-out chi-square without and with the terms, coefficients held
-        f = fit_terms(search, c, y, terms, train)
-        if not terms:
-            return f, 0.0
-        Xt, _, wt = _design(search, c, terms, test)
-        tt = y[test] * wt
-        return f, float(tt @ tt) - float(np.sum((tt + Xt @ f.coef) ** 2))
-
-    r, terms = y, []
-    search.w[c] = 0.0
-    for _ in range(3):
-        # the force searched for also shows in the differences one window apart when it varies
-        # fast (a spring on a quick arm): the noise is measured again on the residual of the
-        # terms found, and the search repeated with it
-        sigma = own_noise(eng.pipe, r[train], eng.accuracy()[c])
-        if search.w[c] > 0 and abs(math.log(search.w[c] * sigma * math.sqrt(phi))) < math.log(1.25):
-            break
-        search.w[c] = 1.0 / (sigma * math.sqrt(phi))
-        terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
-        if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
-            terms = acceptance.or_library(terms, lambda: stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor,
-                                                                  held, library_only=True), heldout, threshold, search)
-        if not terms:
-            break
-        f0 = fit_terms(search, c, y, terms, np.ones_like(train))
-        r = y + np.concatenate([search.cols[t][:, c, :] for t in terms], axis=1) @ f0.coef
-
-    if library_result is not None and not any(acceptance.is_family(t) for t in terms):
-        return library_result()  # the same selection as without the families: its result
-    # the cheap held-out check first, then the bootstrap's stability
-    if not terms or not heldout(terms)[1] > threshold:
-        return None
-    # The library's offset on this joint is refitted with the terms: fitted before them, it
-    # took the part of their force the recording's mean leaves (a spring's force at the mean
-    # position: its rest position would be missed).  Not beside Coulomb friction split by
-    # direction: while the joint moves the two levels span the constant already.
-    refit = lambda kept: offset_refit(search, c, held, kept)  # noqa: E731
-    fitted = _resolved_fade(search, c, y, _fit_fade(search, c, y, _fit_period(
-        search, c, y, _fit_step(search, c, y, terms, train), train), train), train)
-    fitted = products.fit_zone(search, c, y, fitted, train, lambda ts: _ls_fit(search, c, y, ts, train)[0],
-                               lambda ts: heldout(ts)[1])
-    if fitted != terms:
-        # the terms that stood in for the step's misplaced edge go again (the backward pass
-        # of the selection, on the fitted step)
-        terms = _backward(search, c, y, fitted, train, thr, n_eff)
-    stab, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
-                             refit=refit(terms), held=held)
-    # An unstable term goes unless the held-out part needs it: near-equivalent candidates (a
-    # constant and a step at the end of the stroke) split the resamples' votes between them.
-    full = heldout(terms)[1]
-    kept = [t for t in terms if stab[t] >= STABILITY or full - heldout([u for u in terms if u != t])[1] > threshold]
-    if not kept:
-        return None
-    if kept != terms:
-        terms = kept
-        _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
-                              refit=refit(terms), held=held)
-    extra = refit(terms)
-    if extra:
-        # terms that stood in for the offset's part (a step at the end of the stroke) leave
-        pruned = _backward(search, c, y, terms, train, thr, n_eff, keep=extra)
-        if pruned != terms:
-            terms = pruned
-            _, spread = bootstrap(search, c, y, train, terms, thr, phi, n_eff, seed=seed, fixed=fixed, floor=floor,
-                                  refit=extra, held=held)
-    terms = terms + extra
-    f, d_held = heldout(terms)
-    # an effort term's column bends with its coefficient (the core solves for the applied effort)
-    f.coef = products.refine_effort(search, c, terms, f.coef, held, train,
-                                    lambda t: list(zip(TERMS[t][0], TERMS[t][1])))
-    if not d_held > threshold:
-        return None
-    # the fit with instruments may leave the selection's least squares: a joint inertia below
-    # zero is no body (and no plant of the core)
-    keys = [k for t, _ in terms for k in TERMS[t][0]]
-    if any(k == "force_inertia" and v < floor[k] for k, v in zip(keys, f.coef)):
-        return None
-    # the widest of: the HAC interval, the classical one of the residual's own noise in effective
-    # samples (s^2 >= 1: never narrower than that noise allows), and the bootstrap's spread of
-    # the coefficients (which also sees the selection of the terms)
-    s2 = max(f.chi2 / max(n_eff - len(f.coef), 1.0), 1.0)
-    half = np.maximum(np.maximum(f.z95 * np.sqrt(np.maximum(np.diag(f.cov), 0.0)),
-                                 1.96 * np.sqrt(np.maximum(np.diag(f.cov_classical), 0.0) * s2)), 1.96 * spread)
-    use_t = eng.use[test, c] > 0
-    rms = lambda a: float(np.sqrt(np.mean(a[use_t] ** 2))) if use_t.any() else float("nan")  # noqa: E731
-    yt = y[test]
-    Xraw = np.concatenate([search.cols[t][test, c, :] for t in terms], axis=1)
-    base = {search.name(c, "offset"): float(held[search.name(c, "offset")])} if extra else {}
-    term = _term(search, c, terms, f.coef, half, stab, rms(yt), rms(yt + Xraw @ f.coef), d_held, base=base,
-                 shape_ci95=_shape_intervals(search, c, y, terms, f.coef, train, s2))
-    return term
-
+# ------------------------------------------------------------------------- the shapes
 
 def _fit_step(search, c, y, terms, rows):
     """The step of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
     fitted part's chi-square, every other term refitted with it, from the grid's step; the
     width kept within 2-100 % of the joint's position spread, the position within its range):
-    ``terms`` with the step's option replaced by the fitted one."""
+    ``(search, terms)``, the search holding the steps tried and ``terms`` with the step's option
+    replaced by the fitted one."""
     from scipy.optimize import minimize
 
     k = next((i for i, (t, _) in enumerate(terms) if t == "step"), None)
     if k is None:
-        return terms
+        return search, terms
     qs, ws = search.steps[terms[k][1]]
     q0, w0 = float(qs[c]), float(ws[c])
     lo, hi = float(search.q_range[0][c]), float(search.q_range[1][c])
@@ -359,10 +245,11 @@ def _fit_step(search, c, y, terms, rows):
     tried = {}
 
     def at(x):
+        nonlocal search
         q, w = q0 + x[0] * w0, w0 * math.exp(x[1])
         if not (lo <= q <= hi and 0.02 * T <= w <= T):
             return math.inf, None
-        o = search.add_step(c, q, w)
+        search, o = search.with_step(c, q, w)
         chi2 = _ls_fit(search, c, y, terms[:k] + [("step", o)] + terms[k + 1:], rows)[0]
         tried[o] = chi2
         return chi2, o
@@ -373,33 +260,34 @@ def _fit_step(search, c, y, terms, rows):
     best = min(tried, key=tried.get, default=None)
     start = _ls_fit(search, c, y, terms, rows)[0]
     if best is None or not tried[best] < start or not np.isfinite(r.fun):
-        return terms
-    return terms[:k] + [("step", best)] + terms[k + 1:]
+        return search, terms
+    return search, terms[:k] + [("step", best)] + terms[k + 1:]
 
 
 def _fit_period(search, c, y, terms, rows):
-    """The ripple of ``terms`` (if any) with its period fitted (:func:`_fit_shape`), from the
+    """The ripple of ``terms`` (if any) with its period fitted (``(search, terms)`` as :func:`_fit_shape`), from the
     spectrum's period P0 as P0 (1 + x), x from 0.5 % either side, within +-3 %."""
     k = next((i for i, (t, _) in enumerate(terms) if t == "ripple"), None)
     if k is None:
-        return terms
+        return search, terms
     P0 = float(search.periods[terms[k][1]][c])
     if not P0 > 0:
-        return terms
-    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_ripple(c, P0 * (1.0 + x)), 0.005,
+        return search, terms
+    return _fit_shape(search, c, y, terms, rows, k, lambda s, x: s.with_ripple(c, P0 * (1.0 + x)), 0.005,
                       (-0.03, 0.03))
 
 
 def _fit_fade(search, c, y, terms, rows):
-    """The fading friction of ``terms`` (if any) with its velocity scale fitted (:func:`_fit_shape`),
+    """The fading friction of ``terms`` (if any) with its velocity scale fitted (``(search, terms)`` as
+    :func:`_fit_shape`),
     from the grid's v0 as v0 exp(x), x from 0.3 either side, within :data:`FADE_RANGE` of the
     joint's RMS rate and no slower than three times the rate readings' noise."""
     k = next((i for i, (t, _) in enumerate(terms) if t == "fading"), None)
     if k is None:
-        return terms
+        return search, terms
     v0 = float(search.fades[terms[k][1]][c])
     lo, hi = (math.log(max(f * search.rate[c], search.v_floor[c]) / v0) for f in FADE_RANGE)
-    return _fit_shape(search, c, y, terms, rows, k, lambda x: search.add_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
+    return _fit_shape(search, c, y, terms, rows, k, lambda s, x: s.with_fade(c, v0 * math.exp(x)), 0.3, (lo, hi))
 
 
 def _resolved_fade(search, c, y, terms, rows):
@@ -423,18 +311,20 @@ def _resolved_fade(search, c, y, terms, rows):
 def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
     """Term k of ``terms`` with one shape parameter fitted: Newton steps on the fitted part's
     chi-square (the other terms refitted with it) from the parabola through the three best
-    values of x tried (``option_at(x)``: the search's option of the term at x; x = 0 is the
-    term's own), starting at 0 and +-h, within ``bounds``; done when the step is below a tenth
-    of x's standard error the parabola's curvature gives (a chi-square rise of 1), or after
-    four steps.  ``terms`` with the term's option replaced by the best one tried."""
+    values of x tried (``option_at(search, x)``: ``(search, option)``, the search with the term
+    at x as an option; x = 0 is the term's own), starting at 0 and +-h, within ``bounds``; done
+    when the step is below a tenth of x's standard error the parabola's curvature gives (a
+    chi-square rise of 1), or after four steps.  ``(search, terms)``: the search holding the
+    options tried, ``terms`` with the term's option replaced by the best one tried."""
     name = terms[k][0]
     start = _ls_fit(search, c, y, terms, rows)[0]
     tried = {0.0: (start, None)}  # x -> (chi-square, option)
     lo, hi = bounds
 
     def at(x):
+        nonlocal search
         if x not in tried:
-            o = option_at(x)
+            search, o = option_at(search, x)
             tried[x] = (_ls_fit(search, c, y, terms[:k] + [(name, o)] + terms[k + 1:], rows)[0], o)
         return tried[x][0]
 
@@ -458,8 +348,8 @@ def _fit_shape(search, c, y, terms, rows, k, option_at, h, bounds):
         at(x)
     best = min(tried, key=lambda x: tried[x][0])
     if tried[best][1] is None or not tried[best][0] < start:
-        return terms
-    return terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
+        return search, terms
+    return search, terms[:k] + [(name, tried[best][1])] + terms[k + 1:]
 
 
 def _backward(search, c, y, terms, rows, threshold, n_eff, keep=()):

@@ -7,11 +7,14 @@ from __future__ import annotations
 import copy
 import hashlib
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
 
 import numpy as np
 
-from .fit import discover_channel
-from .search import Search
+from .channel import discover_channel
+from .search import Search, make_search
 from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
 from ..families import acceptance, products
 from ..structure import own_noise
@@ -88,6 +91,33 @@ def _option(search, t, name):
     return 0
 
 
+@dataclass(frozen=True)
+class _Court:
+    """What the trials hold fixed: the engine, the library's selection, the threshold a term pays
+    to enter the search and the bar of a trial (the threshold plus the look-elsewhere cost)."""
+    eng: object
+    sel: object
+    threshold: float
+    bar: float
+
+
+@dataclass(frozen=True)
+class _Verdicts:
+    """Where the trials stand: the library's parameters and residual that stay, the terms
+    discovered on them (channel -> term or None), the records of the withdrawn and the tied
+    groups, per channel the library frictions the terms in their place restated, the search as
+    the last discovery left it (its noise weights are the held-out comparisons') and the
+    searches made (:func:`_discover_all`)."""
+    theta: dict
+    R_lib: np.ndarray
+    base: dict
+    search: Search
+    withdrawn: tuple = ()
+    ties: tuple = ()
+    confirmed: Mapping = field(default_factory=lambda: MappingProxyType({}))  # channel -> frozenset of effect keys
+    memo: Mapping = field(default_factory=lambda: MappingProxyType({}))  # a channel's search -> (term, noise weight)
+
+
 def judge_library(eng, sel, threshold: float):
     """The tie rule between the library's named effects and discovered terms.
 
@@ -116,214 +146,252 @@ def judge_library(eng, sel, threshold: float):
     the library's offset effect) are no discovered alternative: the library's own selection
     has weighed G against its look-alikes.
 
+    The steps: each effect alone on trial (:func:`_single_trials`), two effects on a common
+    channel together (:func:`_pair_trial`), the asymmetry of the restated frictions searched on
+    the model that stays, then the families' pass (:func:`_families_pass`).
+
     Returns ``(theta, withdrawn, ties, search, base)``: the library's parameters less the
     withdrawn groups', the withdrawn and the tied groups with their held-out figures, the search,
     and the terms discovered per channel on the final library model."""
     theta = dict(sel.theta)
-    search = Search(eng, theta)
-    bar = threshold + 2.0 * math.log(acceptance.n_library(search))
-    withdrawn, ties = [], []
-    acting = []  # (selected group, the channels it acts on), in the order put on trial
-    confirmed = {}  # channel -> library frictions that the terms in their place restated
-
-    # The trials search the same channel with the same residual and the same parameters of its
-    # joint again and again (two thirds of the calls on a 6-PUS with six frictions on trial): a
-    # search is a function of those, of the search's columns and of the joint's noise weight,
-    # which it sets and which the held-out comparisons read, so both are kept
-    memo = {}
-
-    def discover_all(R, chans, th, asymmetry=None):
-        out = {}
-        for c in chans:
-            asym = tuple((asymmetry or {}).get(c, ()))
-            own = search.name(c, "")
-            key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
-                   tuple(sorted((k, v) for k, v in th.items() if k.startswith(own))), tuple(sorted(asym)),
-                   search.fam_on)
-            if key not in memo:
-                lib = key[:-1] + (False,)  # the same search without the families, if made
-                done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
-                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
-                                              library_result=done), search.w[c])
-            term, search.w[c] = memo[key]
-            out[c] = copy.deepcopy(term)
-        return out
-
+    search = make_search(eng, theta)
+    court = _Court(eng, sel, threshold, threshold + 2.0 * math.log(acceptance.n_library(search)))
     R_lib = eng.R(theta)
     # the trials weigh the library's effects against the library's own terms; the families' terms
     # are searched on the model that stays, on top of it (families/acceptance.py)
-    search.fam_on = False
-    base = discover_all(R_lib, range(eng.nd), theta)
-    # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
-    # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
-    noise = np.array([own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
-    for a in sorted(sel.selected, key=lambda a: a.importance):
-        g = a.group
-        if g.effect.family not in ("effort", "both"):
-            continue
-        th_minus = {k: v for k, v in theta.items() if k not in g.params}
-        R_minus = eng.R(th_minus)
-        chans = [c for c in range(eng.nd)
-                 if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
-        if not chans:
-            continue
-        acting.append((a, chans))
-        in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
-        if not in_place or all(library_named(t) for t in in_place):
-            continue
-        on_top = [base[c] for c in chans if base.get(c) is not None]
-        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
-        A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
-        # free coefficients: a direction-split pair on top of the library's symmetric friction
-        # adds one (its asymmetry), not two
-        k_A = len(g.params) - 1 + _rank(search, [R_lib - R_minus], on_top, chans)
-        k_B = _rank(search, [], in_place, chans)
-        better, gain, se = significant(search, R_A, R_B, chans, bar)
-        restated = any(restates(t, g.key) for t in in_place)
-        if restated:
-            for c in chans:
-                confirmed.setdefault(c, set()).add(g.key)
-        figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se, "bar": bar,
-                   "coefficients": [k_A, k_B]}
-        # fewer free coefficients and a held-out gain above the bar, or a gain beyond its
-        # uncertainty as well
-        if (better or (k_B < k_A and gain > bar)) and not restated:
-            theta = th_minus
-            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
-                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                              "replaced_by": [t.channel for t in in_place], **figures})
-            R_lib = R_minus
-            base.update(discover_all(R_lib, chans, theta))
-        elif not restated and -gain <= max(bar, Z_ONE_SIDED * se):
-            # not told apart on the held-out part: the library effect is named, not with confidence
-            _tie(ties, (g,), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
+    v, base = _discover_all(court, _Verdicts(theta, R_lib, {}, replace(search, fam_on=False)), R_lib,
+                            range(eng.nd), theta)
+    v, acting = _single_trials(court, replace(v, base=base))
     # Two library effects on one channel may be one force the search names: Coulomb friction and
     # an offset are, while the joint moves, friction that differs by direction.  Alone on trial,
     # each lost to nothing (with the offset kept, the pair in Coulomb's place restated Coulomb);
     # they go on trial together against the terms discovered in their joint place.
     for (a1, ch1), (a2, ch2) in _pairs(acting):
-        g1, g2 = a1.group, a2.group
-        if not all(p in theta for p in (*g1.params, *g2.params)):
-            continue  # one of them was withdrawn already
-        th_minus = {k: v for k, v in theta.items() if k not in g1.params and k not in g2.params}
-        chans = sorted(set(ch1) | set(ch2))
-        R_minus = eng.R(th_minus)
-        in_place = [t for t in discover_all(R_minus, chans, th_minus).values() if t is not None]
-        if not in_place or any(library_named(t) for t in in_place):
-            continue
-        # both frictions restated (split by direction, every level positive): they are named,
-        # their asymmetry searched on top, as alone on trial
-        if all(any(restates(t, g.key) for t in in_place) for g in (g1, g2)):
-            continue
-        # one of them restated alone (equal levels): the terms in place of both need only it,
-        # and the other one stands on trial against them
-        alone = [g for g in (g1, g2) if any(restates(t, g.key, distinct=True) for t in in_place)]
-        other = [g for g in (g1, g2) if g not in alone]
-        # the library's side as it would stay: with the asymmetry of the frictions the terms
-        # in their place restated (searched on top of them)
-        on_top = [t for t in discover_all(R_lib, chans, theta, asymmetry=confirmed).values() if t is not None]
-        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
-        A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
-        k_A = (len(g1.params) + len(g2.params) - 2
-               + _rank(search, [R_lib - eng.R({k: v for k, v in theta.items() if k not in g.params})
-                                for g in (g1, g2)], on_top, chans))
-        k_B = _rank(search, [], in_place, chans)
-        better, gain, se = significant(search, R_A, R_B, chans, bar)
-        figures = {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se,
-                   "bar": bar, "coefficients": [k_A, k_B]}
-        as_well = -gain <= max(bar, Z_ONE_SIDED * se)
-        if alone:
-            # the other effect may be a stand-in the discovered terms do without: when they fit
-            # as well with no more free coefficients, it is tied (not named with confidence), and
-            # so is the restated one, whose level was fitted with the stand-in's share
-            if k_B <= k_A and as_well:
-                _tie(ties, (g1, g2), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
-            continue
-        # the pair is withdrawn by the rule of a single effect's trial (the terms in place of
-        # both significantly better, or fewer free coefficients and a held-out gain above the
-        # bar: a saturation and viscous friction that stand in for quadratic drag), or, for two
-        # effects whose sum is, while the joint moves, a term of the search (:data:`ONE_FORCE`)
-        # or that are one column on this recording (the inference's ``collinear`` look-alikes),
-        # with no more free coefficients and a held-out fit not worse beyond the bar or its
-        # uncertainty: the simpler account is the one force (the two effects are listed as
-        # look-alikes that fit as well, not named)
-        one = {g1.key, g2.key} in ONE_FORCE or any(c.get("collinear") and c["group"] == g2.label
-                                                   for c in a1.lookalikes)
-        if better or (k_B < k_A and gain > bar) or (one and k_B <= k_A and as_well):
-            figures.update(together=[g1.title, g2.title], as_well=not better)
-            for g in (g1, g2):
-                withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
-                                  "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                                  "replaced_by": [t.channel for t in in_place], **figures})
-            ties[:] = [t for t in ties if t["group"] not in (g1.label, g2.label)]
-            theta, R_lib = th_minus, R_minus
-            base.update(discover_all(R_lib, chans, theta))
-        elif k_B <= k_A and as_well:
-            # one force in place of both fits as well with no more free coefficients (Coulomb and
-            # viscous friction for a friction that fades at low speed): neither is named with
-            # confidence, the two may stand in for it together
-            _tie(ties, (g1, g2), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans])
+        v = _pair_trial(court, v, a1, a2, sorted(set(ch1) | set(ch2)))
     # On the library model that stays, a direction-split friction may now be the asymmetry of a
     # library friction that the terms in its place restated (on trial each level had to be a
     # friction of its own, so that the library effect stood against the discovered terms alone;
     # a friction kept only as a tie may be a stand-in, whose asymmetry would be no physics)
-    again = [c for c in confirmed if any(search.name(c, lib) in theta for lib in confirmed[c])]
-    base.update(discover_all(R_lib, again, theta, asymmetry=confirmed))
-    theta, base = _families_pass(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
-    return theta, withdrawn, ties, search, base
+    again = [c for c in v.confirmed if any(search.name(c, lib) in v.theta for lib in v.confirmed[c])]
+    v, found = _discover_all(court, v, v.R_lib, again, v.theta, asymmetry=v.confirmed)
+    v = _families_pass(court, replace(v, base={**v.base, **found}))
+    return v.theta, list(v.withdrawn), list(v.ties), v.search, v.base
 
 
-def _families_pass(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
-    """With the families in the search: their terms searched on every channel of the model that
-    stays, and the library's effects of one joint on trial again (:func:`_trials_again`).
-    Returns ``(theta, base)``."""
-    search.fam_on = True
-    if acceptance.split(search.candidates())[1]:
-        base = discover_all(R_lib, range(eng.nd), theta, asymmetry=confirmed)
-        theta, R_lib = _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed)
-    return theta, base
+def _discover_all(court, v, R, chans, th, asymmetry=None) -> tuple:
+    """``(verdicts, found)``: {channel: the term discovered on it (:func:`.discover_channel`) for
+    the residual R of the model with parameters ``th``} over ``chans``, and the verdicts with
+    the search it leaves (each channel's noise weight the one of its search) and the searches
+    made.
+
+    The trials search the same channel with the same residual and the same parameters of its
+    joint again and again (two thirds of the calls on a 6-PUS with six frictions on trial): a
+    search is a function of those and of the search's columns, and sets the joint's noise
+    weight, which the held-out comparisons read, so both are kept (``v.memo``)."""
+    search, memo = v.search, v.memo
+    out = {}
+    for c in chans:
+        asym = tuple((asymmetry or {}).get(c, ()))
+        own = search.name(c, "")
+        key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
+               tuple(sorted((k, x) for k, x in th.items() if k.startswith(own))), tuple(sorted(asym)),
+               search.fam_on)
+        if key not in memo:
+            lib = key[:-1] + (False,)  # the same search without the families, if made
+            done = (lambda m=memo: m[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
+            term, search = discover_channel(search, c, R[:, c], court.threshold, theta=th, asymmetry=asym,
+                                            library_result=done)
+            memo = MappingProxyType({**memo, key: (term, search.w[c])})
+        term, w = memo[key]
+        search = search.with_weight(c, w)
+        out[c] = copy.deepcopy(term)
+    return replace(v, search=search, memo=memo), out
 
 
-def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover_all, confirmed):
-    """The library's effects of one joint that stay, on trial once more with the families searched
-    on both sides where the terms in their place hold a family term that may withdraw one
-    (:data:`.families.acceptance.WITHDRAWING`): an effect whose place such terms take is
-    withdrawn by the tie rule's test (significantly better on the held-out part, or fewer free
-    coefficients and a gain above the bar), and ``base`` (channel -> term) takes the terms in its
-    place.  Returns ``(theta, R_lib)``."""
-    for a in sel.selected:
+def _trial(search, R_lib, R_minus, on_top, in_place, chans, bar, n_lib, columns):
+    """``(better, figures)`` of a trial on ``chans``: the library model (residual ``R_lib``)
+    with the terms ``on_top`` against the model without the effects on trial (``R_minus``) with
+    the terms ``in_place``; ``better`` as :func:`significant`, the figures as the records hold
+    them.  Free coefficients: the library's side ``n_lib`` plus the rank of ``columns`` (the
+    effects' residual differences) with the terms on top, the other side the rank of its terms'."""
+    R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, in_place)
+    A, B = heldout_chi2(search, R_A, chans), heldout_chi2(search, R_B, chans)
+    k_A = n_lib + _rank(search, columns, on_top, chans)
+    k_B = _rank(search, [], in_place, chans)
+    better, gain, se = significant(search, R_A, R_B, chans, bar)
+    return better, {"heldout_chi2_library": A, "heldout_chi2_discovered": B, "gain": gain, "se": se, "bar": bar,
+                    "coefficients": [k_A, k_B]}
+
+
+def _withdrawn_record(sel, g, in_place, figures) -> dict:
+    """The record of group g withdrawn for the terms ``in_place`` with the trial's figures."""
+    return {"group": g.label, "effect": g.effect.name, "title": g.title,
+            "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
+            "replaced_by": [t.channel for t in in_place], **figures}
+
+
+def _single_trials(court, v):
+    """Each effort-family group of the selection alone on trial, least important first, on the
+    channels it acts on (:func:`_single_trial`).  Returns ``(verdicts, acting)``: acting the
+    groups on trial with their channels, in trial order."""
+    eng = court.eng
+    # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
+    # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
+    noise = np.array([own_noise(eng.pipe, v.R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
+    acting = []  # (selected group, the channels it acts on), in the order put on trial
+    for a in sorted(court.sel.selected, key=lambda a: a.importance):
         g = a.group
-        c = g.joint
-        if g.effect.family not in ("effort", "both") or c is None or not all(p in theta for p in g.params):
+        if g.effect.family not in ("effort", "both"):
             continue
-        th_minus = {k: v for k, v in theta.items() if k not in g.params}
+        th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
-        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed).get(c)
-        if in_place is None or not acceptance.withdrawing(in_place):
+        chans = [c for c in range(eng.nd)
+                 if np.sqrt(np.mean((v.R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
+        if not chans:
             continue
-        on_top = [base[c]] if base.get(c) is not None else []
-        R_A, R_B = _with_terms(R_lib, search, on_top), _with_terms(R_minus, search, [in_place])
-        k_A = len(g.params) - 1 + _rank(search, [R_lib - R_minus], on_top, [c])
-        k_B = _rank(search, [], [in_place], [c])
-        better, gain, se = significant(search, R_A, R_B, [c], bar)
-        if better or (k_B < k_A and gain > bar):
-            withdrawn.append({"group": g.label, "effect": g.effect.name, "title": g.title,
-                              "params": {p: float(sel.theta.get(p, float('nan'))) for p in g.params},
-                              "replaced_by": [in_place.channel], "heldout_chi2_library": heldout_chi2(search, R_A, [c]),
-                              "heldout_chi2_discovered": heldout_chi2(search, R_B, [c]), "gain": gain, "se": se,
-                              "bar": bar, "coefficients": [k_A, k_B]})
-            theta, R_lib, base[c] = th_minus, R_minus, in_place
-    return theta, R_lib
+        acting.append((a, chans))
+        v = _single_trial(court, v, g, th_minus, R_minus, chans)
+    return v, acting
 
 
-def _tie(ties, groups, in_place, extra, figures, channels):
-    """Each of ``groups`` tied with the terms ``in_place`` (once): named, not with confidence; the
-    record says on which ``channels`` and with which parameters (a discovered term fitted
-    beside it there is no physics of its own either, diagnosis.answer._beside_tie_sentence)."""
+def _single_trial(court, v, g, th_minus, R_minus, chans):
+    """Group g on trial on ``chans`` against the terms discovered in its place (the model
+    ``th_minus``, residual ``R_minus``): the verdicts with g withdrawn, tied, or named."""
+    v, found = _discover_all(court, v, R_minus, chans, th_minus)
+    in_place = [t for t in found.values() if t is not None]
+    if not in_place or all(library_named(t) for t in in_place):
+        return v
+    on_top = [v.base[c] for c in chans if v.base.get(c) is not None]
+    # free coefficients: a direction-split pair on top of the library's symmetric friction
+    # adds one (its asymmetry), not two
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, in_place, chans, court.bar, len(g.params) - 1,
+                             [v.R_lib - R_minus])
+    bar, gain, se, (k_A, k_B) = court.bar, figures["gain"], figures["se"], figures["coefficients"]
+    restated = any(restates(t, g.key) for t in in_place)
+    if restated:
+        v = replace(v, confirmed=MappingProxyType({**v.confirmed,
+                                                   **{c: v.confirmed.get(c, frozenset()) | {g.key} for c in chans}}))
+    # fewer free coefficients and a held-out gain above the bar, or a gain beyond its
+    # uncertainty as well
+    if (better or (k_B < k_A and gain > bar)) and not restated:
+        v = replace(v, theta=th_minus, R_lib=R_minus,
+                    withdrawn=v.withdrawn + (_withdrawn_record(court.sel, g, in_place, figures),))
+        v, found = _discover_all(court, v, R_minus, chans, th_minus)
+        return replace(v, base={**v.base, **found})
+    if not restated and -gain <= max(bar, Z_ONE_SIDED * se):
+        # not told apart on the held-out part: the library effect is named, not with confidence
+        return replace(v, ties=_tied(v.ties, (g,), in_place, k_B - k_A, figures,
+                                     [court.eng.pipe.channels[c] for c in chans]))
+    return v
+
+
+def _pair_trial(court, v, a1, a2, chans):
+    """Two selected effects acting on the common channels ``chans`` on trial together against
+    the terms discovered in their joint place: the verdicts with both withdrawn, tied, or as
+    they were."""
+    eng, bar = court.eng, court.bar
+    g1, g2 = a1.group, a2.group
+    if not all(p in v.theta for p in (*g1.params, *g2.params)):
+        return v  # one of them was withdrawn already
+    th_minus = {k: x for k, x in v.theta.items() if k not in g1.params and k not in g2.params}
+    R_minus = eng.R(th_minus)
+    v, found = _discover_all(court, v, R_minus, chans, th_minus)
+    in_place = [t for t in found.values() if t is not None]
+    if not in_place or any(library_named(t) for t in in_place):
+        return v
+    # both frictions restated (split by direction, every level positive): they are named,
+    # their asymmetry searched on top, as alone on trial
+    if all(any(restates(t, g.key) for t in in_place) for g in (g1, g2)):
+        return v
+    # one of them restated alone (equal levels): the terms in place of both need only it,
+    # and the other one stands on trial against them
+    alone = [g for g in (g1, g2) if any(restates(t, g.key, distinct=True) for t in in_place)]
+    # the library's side as it would stay: with the asymmetry of the frictions the terms
+    # in their place restated (searched on top of them)
+    v, found = _discover_all(court, v, v.R_lib, chans, v.theta, asymmetry=v.confirmed)
+    on_top = [t for t in found.values() if t is not None]
+    columns = [v.R_lib - eng.R({k: x for k, x in v.theta.items() if k not in g.params}) for g in (g1, g2)]
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, in_place, chans, bar,
+                             len(g1.params) + len(g2.params) - 2, columns)
+    gain, se, (k_A, k_B) = figures["gain"], figures["se"], figures["coefficients"]
+    as_well = -gain <= max(bar, Z_ONE_SIDED * se)
+    tied = replace(v, ties=_tied(v.ties, (g1, g2), in_place, k_B - k_A, figures, [eng.pipe.channels[c] for c in chans]))
+    if alone:
+        # the other effect may be a stand-in the discovered terms do without: when they fit
+        # as well with no more free coefficients, it is tied (not named with confidence), and
+        # so is the restated one, whose level was fitted with the stand-in's share
+        return tied if k_B <= k_A and as_well else v
+    # the pair is withdrawn by the rule of a single effect's trial (the terms in place of
+    # both significantly better, or fewer free coefficients and a held-out gain above the
+    # bar: a saturation and viscous friction that stand in for quadratic drag), or, for two
+    # effects whose sum is, while the joint moves, a term of the search (:data:`ONE_FORCE`)
+    # or that are one column on this recording (the inference's ``collinear`` look-alikes),
+    # with no more free coefficients and a held-out fit not worse beyond the bar or its
+    # uncertainty: the simpler account is the one force (the two effects are listed as
+    # look-alikes that fit as well, not named)
+    one = {g1.key, g2.key} in ONE_FORCE or any(c.get("collinear") and c["group"] == g2.label
+                                               for c in a1.lookalikes)
+    if better or (k_B < k_A and gain > bar) or (one and k_B <= k_A and as_well):
+        figures = dict(figures, together=[g1.title, g2.title], as_well=not better)
+        v = replace(v, theta=th_minus, R_lib=R_minus,
+                    withdrawn=v.withdrawn + tuple(_withdrawn_record(court.sel, g, in_place, figures) for g in (g1, g2)),
+                    ties=tuple(t for t in v.ties if t["group"] not in (g1.label, g2.label)))
+        v, found = _discover_all(court, v, R_minus, chans, th_minus)
+        return replace(v, base={**v.base, **found})
+    # one force in place of both fits as well with no more free coefficients (Coulomb and
+    # viscous friction for a friction that fades at low speed): neither is named with
+    # confidence, the two may stand in for it together
+    return tied if k_B <= k_A and as_well else v
+
+
+def _families_pass(court, v):
+    """With the families in the search: their terms searched on every channel of the model that
+    stays, and the library's effects of one joint on trial again (:func:`_trial_again`)."""
+    v = replace(v, search=replace(v.search, fam_on=True))
+    if acceptance.split(v.search.candidates())[1]:
+        v, base = _discover_all(court, v, v.R_lib, range(court.eng.nd), v.theta, asymmetry=v.confirmed)
+        v = replace(v, base=base)
+        for a in court.sel.selected:
+            v = _trial_again(court, v, a.group)
+    return v
+
+
+def _trial_again(court, v, g):
+    """Group g, an effect of one joint that stays, on trial once more with the families searched
+    on both sides where the terms in its place hold a family term that may withdraw it
+    (:data:`.families.acceptance.WITHDRAWING`): withdrawn by the tie rule's test (significantly
+    better on the held-out part, or fewer free coefficients and a gain above the bar), ``base``
+    (channel -> term) then taking the terms in its place."""
+    c = g.joint
+    if g.effect.family not in ("effort", "both") or c is None or not all(p in v.theta for p in g.params):
+        return v
+    th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
+    R_minus = court.eng.R(th_minus)
+    v, found = _discover_all(court, v, R_minus, [c], th_minus, asymmetry=v.confirmed)
+    in_place = found.get(c)
+    if in_place is None or not acceptance.withdrawing(in_place):
+        return v
+    on_top = [v.base[c]] if v.base.get(c) is not None else []
+    better, figures = _trial(v.search, v.R_lib, R_minus, on_top, [in_place], [c], court.bar, len(g.params) - 1,
+                             [v.R_lib - R_minus])
+    gain, (k_A, k_B) = figures["gain"], figures["coefficients"]
+    if not (better or (k_B < k_A and gain > court.bar)):
+        return v
+    return replace(v, theta=th_minus, R_lib=R_minus, base={**v.base, c: in_place},
+                   withdrawn=v.withdrawn + (_withdrawn_record(court.sel, g, [in_place], figures),))
+
+
+def _tied(ties, groups, in_place, extra, figures, channels) -> tuple:
+    """``ties`` with each of ``groups`` tied with the terms ``in_place`` (once): named, not with
+    confidence; the record says on which ``channels`` and with which parameters (a discovered
+    term fitted beside it there is no physics of its own either,
+    diagnosis.answer._beside_tie_sentence)."""
+    out = tuple(ties)
     for g in groups:
-        if not any(t["group"] == g.label for t in ties):
-            ties.append({"group": g.label, "title": g.title, "params": list(g.params), "channels": list(channels),
-                         "terms": [t.equation for t in in_place], "extra_params": extra, **figures})
+        if not any(t["group"] == g.label for t in out):
+            out += ({"group": g.label, "title": g.title, "params": list(g.params), "channels": list(channels),
+                     "terms": [t.equation for t in in_place], "extra_params": extra, **figures},)
+    return out
 
 
 def _pairs(acting):

@@ -1,8 +1,13 @@
 """The discovery's search: the candidate columns of every term on every effort channel
-(:class:`Search`), the ripple's period from the residual's spectrum and the grids of the
-fading friction's velocity scale and of the smooth step (:mod:`.discovery`).
+(:class:`Search`, made by :func:`make_search`, a frozen value), the ripple's period from the
+residual's spectrum and the grids of the fading friction's velocity scale and of the smooth
+step (:mod:`.discovery`).
 """
 from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -13,50 +18,59 @@ from ..families import acceptance, products
 from ..structure import LOW_SPEEDS
 
 
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a``."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+@dataclass(frozen=True, eq=False)
 class Search:
-    """The candidate columns of the function library on one engine's recording.
+    """The candidate columns of the function library on one engine's recording (made by
+    :func:`make_search`), a value: what changes it (a channel's noise weight, an option of a
+    shape fitted off the grid, the families on or off) is a new Search (:meth:`with_weight`,
+    :meth:`with_step`, :meth:`with_ripple`, :meth:`with_fade`, :meth:`with_family_option`,
+    ``dataclasses.replace(search, fam_on=...)``), the old one unchanged.
 
     Columns are taken once, at the library's fitted parameters ``theta``: the force is
     additive in the inverse dynamics, so a column does not depend on what else is fitted."""
 
-    def __init__(self, eng, theta: dict, channels=None):
-        self.eng, self.pipe = eng, eng.pipe
-        self.theta = dict(theta)
-        self.nd = eng.nd
-        self.channels = list(range(self.nd)) if channels is None else list(channels)
-        self.pre = joint_prefix(eng.model)
-        pipe, idx, train = self.pipe, self.pipe.idx, eng.train
-        q = pipe.q_s[idx]
-        self.q_centre = q[train].mean(axis=0)
-        self.travel = np.maximum(q[train].std(axis=0), 1e-12)
-        self.rate = np.maximum(np.sqrt(np.mean(pipe.qd_s[idx][train] ** 2, axis=0)), 1e-12)
-        self.accel = np.maximum(np.sqrt(np.mean(pipe.qdd_s[idx][train] ** 2, axis=0)), 1e-12)
-        self.effort = eng.sc.effort
-        self.period = np.array([_period(q[train, j], self._base_residual()[train, j], self.travel[j])
-                                for j in range(self.nd)])
-        self.periods = {0: self.period}  # per ripple option: the spectrum's, then periods fitted
-        self.steps = _step_grid(q[train], self.travel)
-        # the slowest fading the rates resolve: below a few times their noise a sharp friction read
-        # at noisy rates looks the same (the pipeline leaves such samples out of the fit)
-        self.v_floor = 3.0 * np.asarray(pipe.qd_noise, float)
-        self.fades = [np.maximum(f * self.rate, self.v_floor) for f in FADE_GRID]  # per option: the scales
-        #: (term, option) of shapes fitted off the grid: no candidates
-        self.off_grid = set()
-        self.q_range = (q[train].min(axis=0), q[train].max(axis=0))
-        self.fam = products.grids(self)  # the options of the families' terms
-        self.cols, self.instr = {}, {}
-        self.w = np.zeros(self.nd)  # per channel: 1 / (own noise sqrt(samples per independent one))
-        self._columns()
-        self.fam_extra = acceptance.extra_cost(self)  # what a family term pays beyond a library one
-        self.fam_on = True  # the families' terms are searched (not in the library's trials)
+    eng: object
+    theta: Mapping            # the library's fitted parameters
+    channels: tuple           # the effort channels searched
+    pre: str                  # the joints' parameter prefix
+    q_centre: np.ndarray      # per joint: the fitted part's mean position,
+    travel: np.ndarray        # its position spread,
+    rate: np.ndarray          # RMS rate,
+    accel: np.ndarray         # RMS acceleration,
+    effort: np.ndarray        # RMS effort
+    period: np.ndarray        # per joint: the ripple's period from the spectrum (0: none)
+    v_floor: np.ndarray       # per joint: the slowest fading the rates resolve
+    q_range: tuple            # (lowest, highest) position per joint
+    base_residual: np.ndarray  # the residual at ``theta``
+    ref0: np.ndarray | None   # the reference effort (instruments), None without them
+    periods: Mapping          # ripple option -> period per joint: the spectrum's, then periods fitted
+    fades: tuple              # fading option -> velocity scale per joint
+    steps: tuple              # step option -> (positions, widths) per joint
+    fam: Mapping              # the families' terms -> their options (families/products.py)
+    cols: Mapping             # (term, option) -> columns (samples, joints, coefficients)
+    instr: Mapping            # (term, option) -> instruments of a rate term's columns
+    w: np.ndarray             # per channel: 1 / (own noise sqrt(samples per independent one))
+    off_grid: frozenset = frozenset()  # (term, option) of shapes fitted off the grid: no candidates
+    fam_extra: float = 0.0    # what a family term pays beyond a library one
+    fam_on: bool = True       # the families' terms are searched (not in the library's trials)
+
+    @property
+    def pipe(self):
+        return self.eng.pipe
+
+    @property
+    def nd(self) -> int:
+        return self.eng.nd
 
     def name(self, j: int, key: str) -> str:
         return f"{self.pre}[{j + 1}].{key}"
-
-    def _base_residual(self):
-        if not hasattr(self, "_Rb"):
-            self._Rb = self.eng.R(self.theta)
-        return self._Rb
 
     def shape(self, term: str, j: int, option: int = 0) -> dict:
         if term in products.TERMS:
@@ -85,57 +99,6 @@ class Search:
              "V": self.rate[j], "V2": self.rate[j] ** 2, "A": self.accel[j]}[scale]
         return 0.05 * float(self.effort[j]) / s
 
-    def _columns(self):
-        """One pipeline evaluation per coefficient key (every joint at once: the drive layer's
-        parameters act on their own joint only), per step position."""
-        eng, Rb = self.eng, self._base_residual()
-        nd = self.nd
-        use_iv = eng.use_instruments
-        ref0 = self._ref0 = self.pipe.reference_effort() if use_iv else None
-        options = {t: {"step": len(self.steps), "fading": len(self.fades)}.get(t, 1)
-                   if t not in products.TERMS else products.n_options(self, t)
-                   for t in TERMS if not t.endswith("_both") and t not in products.excluded()}
-        if not np.any(self.period > 0):
-            options.pop("ripple")
-        for term, n_opt in options.items():
-            keys, scales, _, _ = TERMS[term]
-            for o in range(n_opt):
-                shape = {}
-                for j in range(nd):
-                    shape.update(self.shape(term, j, o))
-                cols = np.zeros((Rb.shape[0], nd, len(keys)))
-                zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
-                for a, (k, s) in enumerate(zip(keys, scales)):
-                    deltas = [self._delta(s, j) for j in range(nd)]
-                    for attempt in range(4):
-                        # a step from the value the model holds (the library's offset, if fitted)
-                        p = dict(self.theta, **shape, **{self.name(j, k): self.theta.get(self.name(j, k), 0.0)
-                                                         + deltas[j] for j in range(nd)})
-                        try:
-                            R = eng.R(p)
-                            break
-                        except ParameterError:
-                            # a joint that hardly moves (a step response): the step of a cubic per
-                            # its tiny spread leaves the core's range; the column is linear in the
-                            # coefficient, and a smaller step gives the same column
-                            if attempt == 3:
-                                raise
-                            deltas = [1e-3 * d for d in deltas]
-                    cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
-                    if zs is not None:
-                        ref = self.pipe.reference_effort({**shape, **{self.name(j, k): deltas[j] for j in range(nd)}})
-                        zs[:, :, a] = (ref0 - ref) / np.array(deltas)
-                self.cols[(term, o)] = cols
-                if zs is not None:
-                    self.instr[(term, o)] = zs
-        for kind in ("viscous", "coulomb"):  # the two directions together: the single terms' columns
-            parts = [(f"{kind}_pos", 0), (f"{kind}_neg", 0)]
-            if not all(p in self.cols for p in parts):
-                continue
-            self.cols[(f"{kind}_both", 0)] = np.concatenate([self.cols[p] for p in parts], axis=2)
-            if all(p in self.instr for p in parts):
-                self.instr[(f"{kind}_both", 0)] = np.concatenate([self.instr[p] for p in parts], axis=2)
-
     def candidates(self):
         """The grid's candidate terms (a step fitted off the grid is no candidate)."""
         return [k for k in self.cols if k not in self.off_grid]
@@ -149,47 +112,142 @@ class Search:
         ``shape`` ({core name: value}): one pipeline evaluation."""
         d = self._delta(scale, c)
         p = dict(self.theta, **shape, **{self.name(c, key): self.theta.get(self.name(c, key), 0.0) + d})
-        return (self.eng.R(p)[:, c] - self._base_residual()[:, c]) / d
+        return (self.eng.R(p)[:, c] - self.base_residual[:, c]) / d
 
-    def add_ripple(self, c: int, period: float) -> int:
-        """A ripple on joint c of another period: its option number (no candidate)."""
+    def with_weight(self, c: int, w: float) -> Search:
+        """This search with channel c's noise weight ``w``."""
+        ws = self.w.copy()
+        ws[c] = w
+        return replace(self, w=_frozen(ws))
+
+    def with_ripple(self, c: int, period: float) -> tuple:
+        """``(search, option)``: a ripple on joint c of another period as a new option (no candidate)."""
         ps = self.periods[0].copy()
         ps[c] = period
         o = max(self.periods) + 1
-        self.periods[o] = ps
-        return self._off_grid("ripple", c, o)
+        return self._with_option("ripple", c, o, periods=MappingProxyType({**self.periods, o: _frozen(ps)}))
 
-    def add_fade(self, c: int, v: float) -> int:
-        """Fading Coulomb levels on joint c with velocity scale v: their option number (no candidate)."""
+    def with_fade(self, c: int, v: float) -> tuple:
+        """``(search, option)``: fading Coulomb levels on joint c with velocity scale v as a new
+        option (no candidate)."""
         vs = self.fades[0].copy()
         vs[c] = v
-        self.fades.append(vs)
-        return self._off_grid("fading", c, len(self.fades) - 1)
+        return self._with_option("fading", c, len(self.fades), fades=self.fades + (_frozen(vs),))
 
-    def add_step(self, c: int, q: float, w: float) -> int:
-        """A step on joint c at position q, width w: its option number (no candidate)."""
+    def with_step(self, c: int, q: float, w: float) -> tuple:
+        """``(search, option)``: a step on joint c at position q, width w as a new option (no candidate)."""
         qs, ws = (a.copy() for a in self.steps[0])
         qs[c], ws[c] = q, w
-        self.steps.append((qs, ws))
-        return self._off_grid("step", c, len(self.steps) - 1)
+        return self._with_option("step", c, len(self.steps), steps=self.steps + ((_frozen(qs), _frozen(ws)),))
 
-    def _off_grid(self, term: str, c: int, o: int) -> int:
-        """Option ``o`` of ``term``, whose shape differs from the grid's first option on joint c
-        only: that option's columns (and instruments, for a rate term) with joint c's taken
-        again at the new shape.  Fitted shapes are no candidates."""
-        self.off_grid.add((term, o))
-        sh = self.shape(term, c, o)
-        cols = self.cols[(term, 0)].copy()
-        z = self.instr[(term, 0)].copy() if (term, 0) in self.instr else None
+    def with_family_option(self, term: str, c: int, option: dict) -> tuple:
+        """``(search, option number)``: ``option`` ({core key: values per joint}, differing from
+        the grid's first on joint c only) a new option of the families' ``term`` (no candidate)."""
+        fam = MappingProxyType({**self.fam, term: self.fam[term] + (option,)})
+        return self._with_option(term, c, len(self.fam[term]), fam=fam)
+
+    def _with_option(self, term: str, c: int, o: int, **grown) -> tuple:
+        """``(search, o)``: option ``o`` of ``term``, whose shape (in ``grown``: the new fields)
+        differs from the grid's first option on joint c only, with that option's columns (and
+        instruments, for a rate term) with joint c's taken again at the new shape.  Fitted
+        shapes are no candidates."""
+        s = replace(self, **grown)
+        sh = s.shape(term, c, o)
+        cols = s.cols[(term, 0)].copy()
+        z = s.instr[(term, 0)].copy() if (term, 0) in s.instr else None
         for a, (k, sc) in enumerate(zip(TERMS[term][0], TERMS[term][1])):
-            cols[:, c, a] = self.column(c, k, sc, sh)
+            cols[:, c, a] = s.column(c, k, sc, sh)
             if z is not None:
-                d = self._delta(sc, c)
-                z[:, c, a] = (self._ref0 - self.pipe.reference_effort({**sh, self.name(c, k): d}))[:, c] / d
-        self.cols[(term, o)] = cols
-        if z is not None:
-            self.instr[(term, o)] = z
-        return o
+                d = s._delta(sc, c)
+                z[:, c, a] = (s.ref0 - s.pipe.reference_effort({**sh, s.name(c, k): d}))[:, c] / d
+        instr = MappingProxyType({**s.instr, (term, o): _frozen(z)}) if z is not None else s.instr
+        every = MappingProxyType({**s.cols, (term, o): _frozen(cols)})
+        return replace(s, off_grid=s.off_grid | {(term, o)}, cols=every, instr=instr), o
+
+
+def make_search(eng, theta: dict, channels=None) -> Search:
+    """The search of the function library on engine ``eng``'s recording at the library's fitted
+    parameters ``theta`` over ``channels`` (default every effort channel): the grid's columns,
+    one pipeline evaluation per coefficient key and option (:func:`_columns`)."""
+    pipe, idx, train = eng.pipe, eng.pipe.idx, eng.train
+    nd = eng.nd
+    q = pipe.q_s[idx]
+    travel = np.maximum(q[train].std(axis=0), 1e-12)
+    rate = np.maximum(np.sqrt(np.mean(pipe.qd_s[idx][train] ** 2, axis=0)), 1e-12)
+    Rb = eng.R(dict(theta))
+    period = np.array([_period(q[train, j], Rb[train, j], travel[j]) for j in range(nd)])
+    # the slowest fading the rates resolve: below a few times their noise a sharp friction read
+    # at noisy rates looks the same (the pipeline leaves such samples out of the fit)
+    v_floor = 3.0 * np.asarray(pipe.qd_noise, float)
+    s = Search(eng=eng, theta=MappingProxyType(dict(theta)),
+               channels=tuple(range(nd)) if channels is None else tuple(channels), pre=joint_prefix(eng.model),
+               q_centre=q[train].mean(axis=0), travel=travel, rate=rate,
+               accel=np.maximum(np.sqrt(np.mean(pipe.qdd_s[idx][train] ** 2, axis=0)), 1e-12),
+               effort=eng.sc.effort, period=period, v_floor=v_floor,
+               q_range=(q[train].min(axis=0), q[train].max(axis=0)), base_residual=Rb,
+               ref0=pipe.reference_effort() if eng.use_instruments else None,
+               periods=MappingProxyType({0: period}),
+               fades=tuple(np.maximum(f * rate, v_floor) for f in FADE_GRID),  # per option: the scales
+               steps=tuple(_step_grid(q[train], travel)), fam=MappingProxyType({}), cols=MappingProxyType({}),
+               instr=MappingProxyType({}), w=_frozen(np.zeros(nd)))
+    s = replace(s, fam=MappingProxyType({t: tuple(o) for t, o in products.grids(s).items()}))
+    cols, instr = _columns(s)
+    s = replace(s, cols=MappingProxyType(cols), instr=MappingProxyType(instr))
+    return replace(s, fam_extra=acceptance.extra_cost(s))
+
+
+def _columns(search) -> tuple:
+    """``(cols, instr)`` of the grid: one pipeline evaluation per coefficient key (every joint at
+    once: the drive layer's parameters act on their own joint only), per step position."""
+    eng, Rb, theta = search.eng, search.base_residual, search.theta
+    nd = search.nd
+    use_iv = eng.use_instruments
+    ref0 = search.ref0
+    options = {t: {"step": len(search.steps), "fading": len(search.fades)}.get(t, 1)
+               if t not in products.TERMS else products.n_options(search, t)
+               for t in TERMS if not t.endswith("_both") and t not in products.excluded()}
+    if not np.any(search.period > 0):
+        options.pop("ripple")
+    cols_of, instr_of = {}, {}
+    for term, n_opt in options.items():
+        keys, scales, _, _ = TERMS[term]
+        for o in range(n_opt):
+            shape = {}
+            for j in range(nd):
+                shape.update(search.shape(term, j, o))
+            cols = np.zeros((Rb.shape[0], nd, len(keys)))
+            zs = np.zeros_like(cols) if use_iv and term in RATE_TERMS else None
+            for a, (k, s) in enumerate(zip(keys, scales)):
+                deltas = [search._delta(s, j) for j in range(nd)]
+                for attempt in range(4):
+                    # a step from the value the model holds (the library's offset, if fitted)
+                    p = dict(theta, **shape, **{search.name(j, k): theta.get(search.name(j, k), 0.0)
+                                                + deltas[j] for j in range(nd)})
+                    try:
+                        R = eng.R(p)
+                        break
+                    except ParameterError:
+                        # a joint that hardly moves (a step response): the step of a cubic per
+                        # its tiny spread leaves the core's range; the column is linear in the
+                        # coefficient, and a smaller step gives the same column
+                        if attempt == 3:
+                            raise
+                        deltas = [1e-3 * d for d in deltas]
+                cols[:, :, a] = (R[:, :nd] - Rb[:, :nd]) / np.array(deltas)
+                if zs is not None:
+                    ref = search.pipe.reference_effort({**shape, **{search.name(j, k): deltas[j] for j in range(nd)}})
+                    zs[:, :, a] = (ref0 - ref) / np.array(deltas)
+            cols_of[(term, o)] = _frozen(cols)
+            if zs is not None:
+                instr_of[(term, o)] = _frozen(zs)
+    for kind in ("viscous", "coulomb"):  # the two directions together: the single terms' columns
+        parts = [(f"{kind}_pos", 0), (f"{kind}_neg", 0)]
+        if not all(p in cols_of for p in parts):
+            continue
+        cols_of[(f"{kind}_both", 0)] = _frozen(np.concatenate([cols_of[p] for p in parts], axis=2))
+        if all(p in instr_of for p in parts):
+            instr_of[(f"{kind}_both", 0)] = _frozen(np.concatenate([instr_of[p] for p in parts], axis=2))
+    return cols_of, instr_of
 
 
 def _period(q, r, travel):

@@ -163,14 +163,14 @@ def shape(search, term, j, option) -> dict:
     return {search.name(j, k): float(v[j]) for k, v in search.fam[term][option].items()}
 
 
-def add_option(search, term, c, values: dict) -> int:
-    """A new option of ``term``: the grid's first with joint c's shape set to ``values``
-    ({core key: value}); its columns taken again on joint c (``Search._off_grid``)."""
+def add_option(search, term, c, values: dict) -> tuple:
+    """``(search, option)``: the search with a new option of ``term``, the grid's first with joint
+    c's shape set to ``values`` ({core key: value}); its columns taken again on joint c
+    (``Search.with_family_option``)."""
     opt = {k: np.array(v, float).copy() for k, v in search.fam[term][0].items()}
     for k, v in values.items():
         opt[k][c] = v
-    search.fam[term].append(opt)
-    return search._off_grid(term, c, len(search.fam[term]) - 1)
+    return search.with_family_option(term, c, opt)
 
 
 def scale(search, s: str, j: int) -> float:
@@ -182,14 +182,10 @@ def scale(search, s: str, j: int) -> float:
 
 
 def _full_shape(search, c, term, option):
-    key = (term, option, c)
-    cache = search.__dict__.setdefault("_fam_shapes", {})
-    if key not in cache:
-        sh = dict(search.shape(term, c, option))
-        if term in SIGN_TERMS:
-            sh.setdefault(search.name(c, "force_cv"), float(SIGN_TERMS[term]))
-        cache[key] = sh
-    return cache[key]
+    sh = dict(search.shape(term, c, option))
+    if term in SIGN_TERMS:
+        sh.setdefault(search.name(c, "force_cv"), float(SIGN_TERMS[term]))
+    return sh
 
 
 #: the library's frictions beside which no friction zone is tried on their joint: fitted before the
@@ -242,18 +238,18 @@ ZONE_OFF, ZONE_SPEED = 0.1, 0.2
 
 
 def fit_zone(search, c, y, terms, rows, ls_fit, heldout_gain):
-    """The zone of ``terms`` (if any) with its position and width fitted (Nelder-Mead on the
-    fitted part's chi-square, the other terms refitted with it: ``ls_fit(terms) -> chi2``),
-    the edge within the joint's range and its width within 2-100 % of the position spread.
-    The zone is a Coulomb friction over the whole stroke (the pair ``coulomb_both``, the
-    simpler account) where it leaves hardly any moving samples off, or where the pair in its
-    place does as well on the held-out part (``heldout_gain(terms)``: the held-out chi-square's
-    drop)."""
+    """``(search, terms)``: the zone of ``terms`` (if any) with its position and width fitted
+    (Nelder-Mead on the fitted part's chi-square, the other terms refitted with it:
+    ``ls_fit(search, terms) -> chi2``), the edge within the joint's range and its width within
+    2-100 % of the position spread, and the search holding the zones tried.  The zone is a
+    Coulomb friction over the whole stroke (the pair ``coulomb_both``, the simpler account)
+    where it leaves hardly any moving samples off, or where the pair in its place does as well
+    on the held-out part (``heldout_gain(search, terms)``: the held-out chi-square's drop)."""
     from scipy.optimize import minimize
 
     k = next((i for i, (t, _) in enumerate(terms) if t == "zone"), None)
     if k is None:
-        return terms
+        return search, terms
     opt = search.fam["zone"][terms[k][1]]
     q0, w0 = float(opt["force_czone_q"][c]), float(opt["force_czone_w"][c])
     lo, hi = float(search.q_range[0][c]), float(search.q_range[1][c])
@@ -261,17 +257,18 @@ def fit_zone(search, c, y, terms, rows, ls_fit, heldout_gain):
     tried = {}
 
     def at(x):
+        nonlocal search
         q, w = q0 + x[0] * abs(w0), w0 * math.exp(x[1])
         if not (lo <= q <= hi and 0.02 * T <= abs(w) <= T):
             return math.inf
-        o = add_option(search, "zone", c, {"force_czone_q": q, "force_czone_w": w})
-        tried[o] = ls_fit(terms[:k] + [("zone", o)] + terms[k + 1:])
+        search, o = add_option(search, "zone", c, {"force_czone_q": q, "force_czone_w": w})
+        tried[o] = ls_fit(search, terms[:k] + [("zone", o)] + terms[k + 1:])
         return tried[o]
 
     minimize(at, np.zeros(2), method="Nelder-Mead",
              options={"initial_simplex": [[0, 0], [0.7, 0], [0, 0.5]], "xatol": 0.01, "fatol": 0.1, "maxfev": 40})
     best = min(tried, key=tried.get, default=None)
-    if best is not None and tried[best] < ls_fit(terms):
+    if best is not None and tried[best] < ls_fit(search, terms):
         terms = terms[:k] + [("zone", best)] + terms[k + 1:]
     # a zone whose off side holds hardly any of the moving samples is a Coulomb friction over
     # the whole stroke (its edge then cuts off the slow samples about the reversals nearest an
@@ -283,12 +280,12 @@ def fit_zone(search, c, y, terms, rows, ls_fit, heldout_gain):
     on = 0.5 * (1.0 + np.tanh((pipe.q_s[pipe.idx][moving, c] - qz) / wz))
     pair = terms[:k] + [("coulomb_both", 0)] + terms[k + 1:]
     if on.size and np.mean(on < 0.5) < ZONE_OFF:
-        return pair
+        return search, pair
     if ("coulomb_both", 0) in search.cols and not any(clash(search, c, [u], ("coulomb_both", 0)) or
                                                       u[0].startswith("coulomb") for u in pair[:k] + pair[k + 1:]):
-        if heldout_gain(pair) >= heldout_gain(terms):
-            return pair
-    return terms
+        if heldout_gain(search, pair) >= heldout_gain(search, terms):
+            return search, pair
+    return search, terms
 
 
 # ------------------------------------------------------------------------- the equation
