@@ -8,6 +8,7 @@
 
 #include "description/described_platform.hpp"
 #include "description/joint_kind.hpp"
+#include "description/small_solve.hpp"
 #include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
@@ -110,68 +111,54 @@ V6 load_wrench(const Model& m, const State& st, const double* xd, const double* 
   m.kind->add_loads_all(m, st.lg, pm, W);
   return W;
 }
-V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
-  return t_transpose(m, st.pf, load_wrench(m, st, xd, xdd));
-}
 
-// tau from J^T tau = Q (the n x n blocks).
-template <class MatT, class VecT>
-void solve_jt_n(const Model& m, const MatT& JT, const VecT& Q, const double* x, double* tau) {
-  Eigen::PartialPivLU<MatT> lu(JT);
-  const auto d = lu.matrixLU().diagonal().cwiseAbs();
-  if (!(d.minCoeff() > 1e-13 * std::max(1.0, d.maxCoeff())))
+// tau from J^T tau = Q: column i of J^T is the twist-space row of leg i, mapped by T' unless
+// the coordinates are the whole pose (T square: then Jc tau = W, the wrench itself).
+template <int N>
+void solve_jt(const Model& m, const State& st, const V6& W, const double* x, double* tau) {
+  double a[N][N], b[N], t[N];
+  const V6 Q = m.full_pose ? W : t_transpose(m, st.pf, W);
+  for (int i = 0; i < N; ++i) {
+    const V6 col = m.full_pose ? st.lg[i].j : t_transpose(m, st.pf, st.lg[i].j);
+    for (int r = 0; r < N; ++r) a[r][i] = col[r];
+    b[i] = Q[i];
+  }
+  if (!small_lu_solve<N>(a, b, t))
     throw Error(PKM_ERR_SINGULAR, "direct (parallel) singularity at " + pose_text(m, x) + ": J is singular");
-  const VecT t = lu.solve(Q);
-  for (int i = 0; i < m.n; ++i) tau[i] = t[i];
-}
-void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double* tau) {
-  if (m.n == 6) solve_jt_n(m, M6(J.transpose()), Q, x, tau);
-  else solve_jt_n(m, Mat(J.topLeftCorner(m.n, m.n).transpose()), Vec(Q.head(m.n)), x, tau);
+  for (int i = 0; i < N; ++i) tau[i] = t[i];
 }
 
-// Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
-// triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
-// general LLT at these sizes (the forward dynamics run at every integrator stage).
-// GCC's -Wmaybe-uninitialized reads L[i][k] (k < j) as possibly unset once the loops are
-// unrolled; every such entry is written at an earlier column j.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
-struct SmallCholesky {
-  int n = N;
-  double L[6][6] = {}, inv[6] = {};  // inv: reciprocals of the diagonal
-  int size() const { return N ? N : n; }
-  bool factor(const M6& A, int size_n = N) {  // false: a pivot is not positive (A not positive definite)
-    n = size_n;
-    for (int j = 0; j < size(); ++j) {
-      double d = A(j, j);
-      for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
-      if (!(d > 0)) return false;
-      inv[j] = 1.0 / std::sqrt(d);
-      for (int i = j + 1; i < size(); ++i) {
-        double s = A(i, j);
-        for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
-        L[i][j] = s * inv[j];
-      }
+// The forward dynamics' solve T' Mt T xdd = T' (Jc tau - W(0)) =: T' W and its response
+// B = M^-1 J^T (column j = M^-1 T' j_j); false when the mass matrix is not positive definite.
+// The coordinates the whole pose: T = blockdiag(I, E) is square, Mt (p_dd, E a_dd) = W.
+bool full_pose_response(const Model& m, const State& st, const M6& Mt, const M6& Jc, const V6& W, const double* x,
+                        double* xdd, double* B) {
+  SmallCholesky<6> llt;
+  if (!llt.factor(Mt)) return false;
+  auto to_pose = [&](const V6& y, double* out, int stride) {
+    double ad[3];
+    angle_rates(m, st.pf, x, y.tail<3>(), ad);
+    for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
+  };
+  to_pose(llt.solve(W), xdd, 1);
+  if (B)
+    for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
+  return true;
+}
+template <int N>
+bool pose_rate_response(const Model& m, const State& st, const M6& Mt, const M6& Jc, const V6& W, double* xdd,
+                        double* B) {
+  SmallCholesky<N> llt;
+  if (!llt.factor(t_congruence(m, st.pf, Mt))) return false;
+  const V6 a = llt.solve(t_transpose(m, st.pf, W));
+  for (int i = 0; i < N; ++i) xdd[i] = a[i];
+  if (B)
+    for (int j = 0; j < N; ++j) {
+      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
+      for (int i = 0; i < N; ++i) B[N * i + j] = b[i];
     }
-    return true;
-  }
-  V6 solve(const V6& b) const {
-    V6 y, x;
-    for (int i = 0; i < size(); ++i) {
-      double s = b[i];
-      for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
-      y[i] = s * inv[i];
-    }
-    for (int i = size() - 1; i >= 0; --i) {
-      double s = y[i];
-      for (int k = i + 1; k < size(); ++k) s -= L[k][i] * x[k];
-      x[i] = s * inv[i];
-    }
-    return x;
-  }
-};
-#pragma GCC diagnostic pop
+  return true;
+}
 
 }  // namespace
 
@@ -327,15 +314,9 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, con
 void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
-  const State& st = state_at(m, rd, x, !m.full_pose);
-  if (!m.full_pose) {
-    solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
-    return;
-  }
-  // T square: J^T tau = T' W is Jc tau = W, Jc's columns the legs' twist rows.
-  M6 Jc;
-  for (int i = 0; i < 6; ++i) Jc.col(i) = st.lg[i].j;
-  solve_jt_n(m, Jc, load_wrench(m, st, xd, xdd), x, tau);
+  const State& st = state_at(m, rd, x, false);
+  const V6 W = load_wrench(m, st, xd, xdd);
+  with_size(m.n, [&](auto N) { solve_jt<N()>(m, st, W, x, tau); });
 }
 
 void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData& rd, const double* x, double* M) const {
@@ -358,32 +339,10 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& 
     W += tau[i] * Jc.col(i);
   }
   const M6 Mt = twist_mass(m, st);
-  auto not_definite = [&] {
+  const bool ok = m.full_pose ? full_pose_response(m, st, Mt, Jc, W, x, xdd, B)
+                              : with_size(n, [&](auto N) { return pose_rate_response<N()>(m, st, Mt, Jc, W, xdd, B); });
+  if (!ok)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
-  };
-  if (m.full_pose) {
-    // T = blockdiag(I, E) is square: Mt (p_dd, E a_dd) = Jc tau - W(0).
-    SmallCholesky<6> llt;
-    if (!llt.factor(Mt)) not_definite();
-    auto to_pose = [&](const V6& y, double* out, int stride) {
-      double ad[3];
-      angle_rates(m, st.pf, x, y.tail<3>(), ad);
-      for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
-    };
-    to_pose(llt.solve(W), xdd, 1);
-    if (B)
-      for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
-    return true;
-  }
-  SmallCholesky<0> llt;
-  if (!llt.factor(t_congruence(m, st.pf, Mt), n)) not_definite();
-  const V6 a = llt.solve(t_transpose(m, st.pf, W));
-  for (int i = 0; i < n; ++i) xdd[i] = a[i];
-  if (B)  // B = M^-1 J^T, column j = M^-1 T' j_j
-    for (int j = 0; j < n; ++j) {
-      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
-      for (int i = 0; i < n; ++i) B[n * i + j] = b[i];
-    }
   return true;
 }
 
