@@ -42,15 +42,20 @@ void state_of(const Model& m, const double* x, State& st, bool rows) {
 // A pkm_data's part of a described robot: the state of the last pose it saw.  The calls at
 // one pose (the drive layer asks for J, the joint velocities, the dynamics and M in turn)
 // compute it once; a new pose (compared value by value) or a failed call starts afresh.
+// The inverse dynamics keep the joint accelerations of their loads at (xd, xdd), which the
+// drive layer asks for next (a joint's rotor inertia).
 struct Data final : RobotData {
   bool valid = false;
   double x[6];
   State st;
+  bool accel = false;  // qdd holds the joint accelerations at (x, xd, xdd)
+  double xd[6], xdd[6], qdd[6];
 };
+Data& data_of(RobotData& rd) { return static_cast<Data&>(rd); }  // every pkm_data of a described robot holds one (make_data)
 const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows) {
-  Data& d = static_cast<Data&>(rd);  // every pkm_data of a described robot holds one (make_data)
+  Data& d = data_of(rd);
   if (!(d.valid && std::equal(x, x + m.n, d.x))) {
-    d.valid = false;
+    d.valid = d.accel = false;
     state_of(m, x, d.st, rows);
     std::copy(x, x + m.n, d.x);
     d.valid = true;
@@ -90,7 +95,8 @@ M6 mass_of(const Model& m, const State& st) { return t_congruence(m, st.pf, twis
 
 // The inertia-and-gravity loads at (x, xd, xdd) as one wrench W = (force, moment) about
 // the platform origin: the generalised force is Q = T' W (J^T tau = Q).
-V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd) {
+// qdd: the joint accelerations of the legs on the way.
+V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd, double* qdd) {
   const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, xdd, pm);
@@ -108,7 +114,7 @@ V6 load_wrench(const Model& m, const State& st, const double* xd, const double* 
     W.tail<3>() += Iw * pm.al + pm.om.cross(Iw * pm.om);
   }
   if (m.m_payload != 0) point_load(m.m_payload, pf.R * m.c_payload);
-  m.kind->add_loads_all(m, st.lg, pm, W);
+  m.kind->add_loads_all(m, st.lg, pm, W, qdd);
   return W;
 }
 
@@ -306,6 +312,11 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, con
   // tests hold them against J xdd + Jdot xd and second differences of the inverse kinematics).
   const Model& m = model_of(rm);
   const State& st = state_at(m, rd, x, false);
+  const Data& d = data_of(rd);
+  if (d.accel && std::equal(xd, xd + m.n, d.xd) && std::equal(xdd, xdd + m.n, d.xdd)) {
+    std::copy(d.qdd, d.qdd + m.n, qdd);  // the inverse dynamics' at this motion
+    return;
+  }
   PlatformMotion pm;
   platform_motion(m, st.pf, xd, xdd, pm);
   m.kind->qdd_all(m, st.lg, pm, qdd);
@@ -315,8 +326,13 @@ void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
   const State& st = state_at(m, rd, x, false);
-  const V6 W = load_wrench(m, st, xd, xdd);
+  Data& d = data_of(rd);
+  d.accel = false;
+  const V6 W = load_wrench(m, st, xd, xdd, d.qdd);
   with_size(m.n, [&](auto N) { solve_jt<N()>(m, st, W, x, tau); });
+  std::copy(xd, xd + m.n, d.xd);
+  std::copy(xdd, xdd + m.n, d.xdd);
+  d.accel = true;
 }
 
 void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData& rd, const double* x, double* M) const {
@@ -333,7 +349,8 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& 
   const int n = m.n;
   const State& st = state_at(m, rd, x, false);
   M6 Jc = M6::Zero();
-  V6 W = -load_wrench(m, st, xd, nullptr);
+  double qdd[6];
+  V6 W = -load_wrench(m, st, xd, nullptr, qdd);
   for (int i = 0; i < n; ++i) {
     Jc.col(i) = st.lg[i].j;
     W += tau[i] * Jc.col(i);

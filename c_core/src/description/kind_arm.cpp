@@ -97,9 +97,10 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
   static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
     return accel(l, lg, vP, aP).qdd;
   }
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
     const Accel a = accel(l, lg, vP, aP);
-    const double qd = a.qd, qdd = a.qdd;
+    const double qd = a.qd;
+    qdd = a.qdd;
     const V3& e = a.e;
     const V3& t = lg.t;
     const V3 aS = qdd * t - (l.r * qd * qd) * e;

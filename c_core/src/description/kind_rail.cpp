@@ -58,8 +58,8 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     const V3 wd = vP - qd * l.dir;
     return (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
   }
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
-    const double qdd = qdd_of(l, lg, vP, aP);
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
+    qdd = qdd_of(l, lg, vP, aP);
     const V3 aS = qdd * l.dir;
     return rod_leg_load(l, lg, aP, aS, aS, qdd, g);
   }
