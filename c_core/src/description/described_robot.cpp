@@ -21,6 +21,7 @@ const Model& model_of(const RobotModel& rm) { return static_cast<const Model&>(r
 // Everything of a pose the dynamics need.
 struct State {
   Platform pf;
+  M3 Iw;  // the platform's inertia in the world frame (if it rotates)
   LegGrad lg[kMaxLegs];
   M6 J;              // dq/dx (zero beyond n), if rows
   bool rows = false;
@@ -34,6 +35,7 @@ void add_rows(const Model& m, State& st) {
 // rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
 void state_of(const Model& m, const double* x, State& st, bool rows) {
   platform_of(m, x, st.pf);
+  if (m.rotates) st.Iw = st.pf.R * m.I_platform.asDiagonal() * st.pf.R.transpose();
   st.rows = false;
   m.kind->grad_all(m, st.pf, x, st.lg);
   if (rows) add_rows(m, st);
@@ -70,15 +72,14 @@ const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows)
 // point masses on the platform (its end bars, the payload) summed into one mass, first
 // moment and inertia (mp at r adds (mp I, -mp [r]x; mp [r]x, mp (|r|^2 I - r r'))), and each
 // leg's inertia at its platform point from its kind (LegMotion::add_mass_all).
-M6 twist_mass(const Model& m, const State& st) {
+void twist_mass(const Model& m, const State& st, M6& Mt) {
   const Platform& pf = st.pf;
-  TwistMass tm;
+  TwistMass tm(Mt);
   tm.mr = m.articulated ? 0.0 : m.m_platform;
   if (m.articulated)  // half the mass at each end bar
     for (const V3& e : m.end_bars) tm.point(0.5 * m.m_platform, pf.R * e);
   if (m.m_payload != 0) tm.point(m.m_payload, pf.R * m.c_payload);
   m.kind->add_mass_all(m, st.lg, tm);
-  M6& Mt = tm.Mt;
   Mt += tm.A + tm.A.transpose();
   Mt.topLeftCorner<3, 3>().diagonal().array() += tm.mr;
   const M3 H = skew(tm.h);
@@ -86,12 +87,15 @@ M6 twist_mass(const Model& m, const State& st) {
   Mt.bottomLeftCorner<3, 3>() += H;
   Mt.bottomRightCorner<3, 3>() -= tm.G;
   Mt.bottomRightCorner<3, 3>().diagonal().array() += tm.G.trace();
-  if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
-  return Mt;
+  if (m.rotates) Mt.bottomRightCorner<3, 3>() += st.Iw;
 }
 
 // Task-space mass matrix M = T' Mt T.
-M6 mass_of(const Model& m, const State& st) { return t_congruence(m, st.pf, twist_mass(m, st)); }
+M6 mass_of(const Model& m, const State& st) {
+  M6 Mt;
+  twist_mass(m, st, Mt);
+  return t_congruence(m, st.pf, Mt);
+}
 
 // The inertia-and-gravity loads at (x, xd, xdd) as one wrench W = (force, moment) about
 // the platform origin: the generalised force is Q = T' W (J^T tau = Q).
@@ -110,7 +114,7 @@ V6 load_wrench(const Model& m, const State& st, const double* xd, const double* 
   else
     for (const V3& e : m.end_bars) point_load(0.5 * m.m_platform, pf.R * e);
   if (m.rotates) {
-    const M3 Iw = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
+    const M3& Iw = st.Iw;
     W.tail<3>() += Iw * pm.al + pm.om.cross(Iw * pm.om);
   }
   if (m.m_payload != 0) point_load(m.m_payload, pf.R * m.c_payload);
@@ -348,14 +352,15 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& 
   const Model& m = model_of(rm);
   const int n = m.n;
   const State& st = state_at(m, rd, x, false);
-  M6 Jc = M6::Zero();
+  M6 Jc;  // columns n.. unused
   double qdd[6];
   V6 W = -load_wrench(m, st, xd, nullptr, qdd);
   for (int i = 0; i < n; ++i) {
     Jc.col(i) = st.lg[i].j;
     W += tau[i] * Jc.col(i);
   }
-  const M6 Mt = twist_mass(m, st);
+  M6 Mt;
+  twist_mass(m, st, Mt);
   const bool ok = m.full_pose ? full_pose_response(m, st, Mt, Jc, W, x, xdd, B)
                               : with_size(n, [&](auto N) { return pose_rate_response<N()>(m, st, Mt, Jc, W, xdd, B); });
   if (!ok)
