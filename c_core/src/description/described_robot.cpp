@@ -139,10 +139,10 @@ void solve_jt(const Model& m, const State& st, const V6& W, const double* x, dou
 }
 
 // The forward dynamics' solve T' Mt T xdd = T' (Jc tau - W(0)) =: T' W and its response
-// B = M^-1 J^T (column j = M^-1 T' j_j); false when the mass matrix is not positive definite.
+// B = M^-1 J^T (column j = M^-1 T' j_j, j_j leg j's twist row); false when the mass matrix is not positive definite.
 // The coordinates the whole pose: T = blockdiag(I, E) is square, Mt (p_dd, E a_dd) = W.
-bool full_pose_response(const Model& m, const State& st, const M6& Mt, const M6& Jc, const V6& W, const double* x,
-                        double* xdd, double* B) {
+bool full_pose_response(const Model& m, const State& st, const M6& Mt, const V6& W, const double* x, double* xdd,
+                        double* B) {
   SmallCholesky<6> llt;
   if (!llt.factor(Mt)) return false;
   auto to_pose = [&](const V6& y, double* out, int stride) {
@@ -152,19 +152,18 @@ bool full_pose_response(const Model& m, const State& st, const M6& Mt, const M6&
   };
   to_pose(llt.solve(W), xdd, 1);
   if (B)
-    for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
+    for (int j = 0; j < 6; ++j) to_pose(llt.solve(st.lg[j].j), B + j, 6);
   return true;
 }
 template <int N>
-bool pose_rate_response(const Model& m, const State& st, const M6& Mt, const M6& Jc, const V6& W, double* xdd,
-                        double* B) {
+bool pose_rate_response(const Model& m, const State& st, const M6& Mt, const V6& W, double* xdd, double* B) {
   SmallCholesky<N> llt;
   if (!llt.factor(t_congruence(m, st.pf, Mt))) return false;
   const V6 a = llt.solve(t_transpose(m, st.pf, W));
   for (int i = 0; i < N; ++i) xdd[i] = a[i];
   if (B)
     for (int j = 0; j < N; ++j) {
-      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
+      const V6 b = llt.solve(t_transpose(m, st.pf, st.lg[j].j));
       for (int i = 0; i < N; ++i) B[N * i + j] = b[i];
     }
   return true;
@@ -352,17 +351,13 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& 
   const Model& m = model_of(rm);
   const int n = m.n;
   const State& st = state_at(m, rd, x, false);
-  M6 Jc;  // columns n.. unused
   double qdd[6];
   V6 W = -load_wrench(m, st, xd, nullptr, qdd);
-  for (int i = 0; i < n; ++i) {
-    Jc.col(i) = st.lg[i].j;
-    W += tau[i] * Jc.col(i);
-  }
+  for (int i = 0; i < n; ++i) W += tau[i] * st.lg[i].j;
   M6 Mt;
   twist_mass(m, st, Mt);
-  const bool ok = m.full_pose ? full_pose_response(m, st, Mt, Jc, W, x, xdd, B)
-                              : with_size(n, [&](auto N) { return pose_rate_response<N()>(m, st, Mt, Jc, W, xdd, B); });
+  const bool ok = m.full_pose ? full_pose_response(m, st, Mt, W, x, xdd, B)
+                              : with_size(n, [&](auto N) { return pose_rate_response<N()>(m, st, Mt, W, xdd, B); });
   if (!ok)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
   return true;
