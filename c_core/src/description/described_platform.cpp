@@ -133,24 +133,22 @@ void platform_motion(const Model& m, const Platform& pf, const double* xd, const
     pm.al = pf.E * a6.tail<3>() + Ed * r6.tail<3>();
     return;
   }
-  V6 v = V6::Zero();
-  for (int j = 0; j < m.n; ++j) v[j] = xd[j];
-  pm.v = pf.Jt * v;
-  pm.om = pf.Jw * v;
-  pm.a.setZero();
-  pm.al.setZero();
-  if (xdd) {
-    V6 a = V6::Zero();
-    for (int j = 0; j < m.n; ++j) a[j] = xdd[j];
-    pm.a = pf.Jt * a;
-    pm.al = pf.Jw * a;
+  // The coordinates are pose components: T xd is xd's translations and E times its angle rates.
+  double r6[6] = {0, 0, 0, 0, 0, 0}, a6[6] = {0, 0, 0, 0, 0, 0};
+  for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
+  if (xdd)
+    for (int j = 0; j < m.n; ++j) a6[m.coord[j]] = xdd[j];
+  const V3 ad(r6[3], r6[4], r6[5]);
+  pm.v = V3(r6[0], r6[1], r6[2]);
+  pm.a = V3(a6[0], a6[1], a6[2]);
+  if (!m.rotates) {
+    pm.om.setZero();
+    pm.al.setZero();
+    return;
   }
-  if (m.rotates) {
-    // alpha = E a_dd + E_dot a_d (E_dot from the angle rates of the coordinates)
-    double r6[6] = {0, 0, 0, 0, 0, 0};
-    for (int j = 0; j < m.n; ++j) r6[m.coord[j]] = xd[j];
-    pm.al += angle_map_rate(pf, r6[3], r6[4]) * V3(r6[3], r6[4], r6[5]);
-  }
+  // alpha = E a_dd + E_dot a_d (E_dot from the angle rates of the coordinates)
+  pm.om = pf.E * ad;
+  pm.al = pf.E * V3(a6[3], a6[4], a6[5]) + angle_map_rate(pf, r6[3], r6[4]) * ad;
 }
 
 void angle_rates(const Model& m, const Platform& pf, const double* x, const V3& w, double* ad) {

@@ -8,6 +8,7 @@
 
 #include "description/described_platform.hpp"
 #include "description/joint_kind.hpp"
+#include "description/small_solve.hpp"
 #include "kinematics/generic_kinematics.hpp"
 
 namespace pkm {
@@ -20,6 +21,7 @@ const Model& model_of(const RobotModel& rm) { return static_cast<const Model&>(r
 // Everything of a pose the dynamics need.
 struct State {
   Platform pf;
+  M3 Iw;  // the platform's inertia in the world frame (if it rotates)
   LegGrad lg[kMaxLegs];
   M6 J;              // dq/dx (zero beyond n), if rows
   bool rows = false;
@@ -33,6 +35,7 @@ void add_rows(const Model& m, State& st) {
 // rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
 void state_of(const Model& m, const double* x, State& st, bool rows) {
   platform_of(m, x, st.pf);
+  if (m.rotates) st.Iw = st.pf.R * m.I_platform.asDiagonal() * st.pf.R.transpose();
   st.rows = false;
   m.kind->grad_all(m, st.pf, x, st.lg);
   if (rows) add_rows(m, st);
@@ -41,15 +44,20 @@ void state_of(const Model& m, const double* x, State& st, bool rows) {
 // A pkm_data's part of a described robot: the state of the last pose it saw.  The calls at
 // one pose (the drive layer asks for J, the joint velocities, the dynamics and M in turn)
 // compute it once; a new pose (compared value by value) or a failed call starts afresh.
+// The inverse dynamics keep the joint accelerations of their loads at (xd, xdd), which the
+// drive layer asks for next (a joint's rotor inertia).
 struct Data final : RobotData {
   bool valid = false;
   double x[6];
   State st;
+  bool accel = false;  // qdd holds the joint accelerations at (x, xd, xdd)
+  double xd[6], xdd[6], qdd[6];
 };
+Data& data_of(RobotData& rd) { return static_cast<Data&>(rd); }  // every pkm_data of a described robot holds one (make_data)
 const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows) {
-  Data& d = static_cast<Data&>(rd);  // every pkm_data of a described robot holds one (make_data)
+  Data& d = data_of(rd);
   if (!(d.valid && std::equal(x, x + m.n, d.x))) {
-    d.valid = false;
+    d.valid = d.accel = false;
     state_of(m, x, d.st, rows);
     std::copy(x, x + m.n, d.x);
     d.valid = true;
@@ -64,15 +72,14 @@ const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows)
 // point masses on the platform (its end bars, the payload) summed into one mass, first
 // moment and inertia (mp at r adds (mp I, -mp [r]x; mp [r]x, mp (|r|^2 I - r r'))), and each
 // leg's inertia at its platform point from its kind (LegMotion::add_mass_all).
-M6 twist_mass(const Model& m, const State& st) {
+void twist_mass(const Model& m, const State& st, M6& Mt) {
   const Platform& pf = st.pf;
-  TwistMass tm;
+  TwistMass tm(Mt);
   tm.mr = m.articulated ? 0.0 : m.m_platform;
   if (m.articulated)  // half the mass at each end bar
     for (const V3& e : m.end_bars) tm.point(0.5 * m.m_platform, pf.R * e);
   if (m.m_payload != 0) tm.point(m.m_payload, pf.R * m.c_payload);
   m.kind->add_mass_all(m, st.lg, tm);
-  M6& Mt = tm.Mt;
   Mt += tm.A + tm.A.transpose();
   Mt.topLeftCorner<3, 3>().diagonal().array() += tm.mr;
   const M3 H = skew(tm.h);
@@ -80,16 +87,20 @@ M6 twist_mass(const Model& m, const State& st) {
   Mt.bottomLeftCorner<3, 3>() += H;
   Mt.bottomRightCorner<3, 3>() -= tm.G;
   Mt.bottomRightCorner<3, 3>().diagonal().array() += tm.G.trace();
-  if (m.rotates) Mt.bottomRightCorner<3, 3>() += pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
-  return Mt;
+  if (m.rotates) Mt.bottomRightCorner<3, 3>() += st.Iw;
 }
 
 // Task-space mass matrix M = T' Mt T.
-M6 mass_of(const Model& m, const State& st) { return t_congruence(m, st.pf, twist_mass(m, st)); }
+M6 mass_of(const Model& m, const State& st) {
+  M6 Mt;
+  twist_mass(m, st, Mt);
+  return t_congruence(m, st.pf, Mt);
+}
 
 // The inertia-and-gravity loads at (x, xd, xdd) as one wrench W = (force, moment) about
 // the platform origin: the generalised force is Q = T' W (J^T tau = Q).
-V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd) {
+// qdd: the joint accelerations of the legs on the way.
+V6 load_wrench(const Model& m, const State& st, const double* xd, const double* xdd, double* qdd) {
   const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, xdd, pm);
@@ -103,75 +114,60 @@ V6 load_wrench(const Model& m, const State& st, const double* xd, const double* 
   else
     for (const V3& e : m.end_bars) point_load(0.5 * m.m_platform, pf.R * e);
   if (m.rotates) {
-    const M3 Iw = pf.R * m.I_platform.asDiagonal() * pf.R.transpose();
+    const M3& Iw = st.Iw;
     W.tail<3>() += Iw * pm.al + pm.om.cross(Iw * pm.om);
   }
   if (m.m_payload != 0) point_load(m.m_payload, pf.R * m.c_payload);
-  m.kind->add_loads_all(m, st.lg, pm, W);
+  m.kind->add_loads_all(m, st.lg, pm, W, qdd);
   return W;
 }
-V6 generalised_force(const Model& m, const State& st, const double* xd, const double* xdd) {
-  return t_transpose(m, st.pf, load_wrench(m, st, xd, xdd));
-}
 
-// tau from J^T tau = Q (the n x n blocks).
-template <class MatT, class VecT>
-void solve_jt_n(const Model& m, const MatT& JT, const VecT& Q, const double* x, double* tau) {
-  Eigen::PartialPivLU<MatT> lu(JT);
-  const auto d = lu.matrixLU().diagonal().cwiseAbs();
-  if (!(d.minCoeff() > 1e-13 * std::max(1.0, d.maxCoeff())))
+// tau from J^T tau = Q: column i of J^T is the twist-space row of leg i, mapped by T' unless
+// the coordinates are the whole pose (T square: then Jc tau = W, the wrench itself).
+template <int N>
+void solve_jt(const Model& m, const State& st, const V6& W, const double* x, double* tau) {
+  double a[N][N], b[N], t[N];
+  const V6 Q = m.full_pose ? W : t_transpose(m, st.pf, W);
+  for (int i = 0; i < N; ++i) {
+    const V6 col = m.full_pose ? st.lg[i].j : t_transpose(m, st.pf, st.lg[i].j);
+    for (int r = 0; r < N; ++r) a[r][i] = col[r];
+    b[i] = Q[i];
+  }
+  if (!small_lu_solve<N>(a, b, t))
     throw Error(PKM_ERR_SINGULAR, "direct (parallel) singularity at " + pose_text(m, x) + ": J is singular");
-  const VecT t = lu.solve(Q);
-  for (int i = 0; i < m.n; ++i) tau[i] = t[i];
-}
-void solve_jt(const Model& m, const M6& J, const V6& Q, const double* x, double* tau) {
-  if (m.n == 6) solve_jt_n(m, M6(J.transpose()), Q, x, tau);
-  else solve_jt_n(m, Mat(J.topLeftCorner(m.n, m.n).transpose()), Vec(Q.head(m.n)), x, tau);
+  for (int i = 0; i < N; ++i) tau[i] = t[i];
 }
 
-// Cholesky factor of a symmetric positive-definite n x n matrix (n <= 6; its lower
-// triangle) and solves with it: plain loops over fixed arrays, a few times faster than the
-// general LLT at these sizes (the forward dynamics run at every integrator stage).
-// GCC's -Wmaybe-uninitialized reads L[i][k] (k < j) as possibly unset once the loops are
-// unrolled; every such entry is written at an earlier column j.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-template <int N>  // N > 0: the size, fixed (the loops unroll); N = 0: the size given to factor
-struct SmallCholesky {
-  int n = N;
-  double L[6][6] = {}, inv[6] = {};  // inv: reciprocals of the diagonal
-  int size() const { return N ? N : n; }
-  bool factor(const M6& A, int size_n = N) {  // false: a pivot is not positive (A not positive definite)
-    n = size_n;
-    for (int j = 0; j < size(); ++j) {
-      double d = A(j, j);
-      for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
-      if (!(d > 0)) return false;
-      inv[j] = 1.0 / std::sqrt(d);
-      for (int i = j + 1; i < size(); ++i) {
-        double s = A(i, j);
-        for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
-        L[i][j] = s * inv[j];
-      }
+// The forward dynamics' solve T' Mt T xdd = T' (Jc tau - W(0)) =: T' W and its response
+// B = M^-1 J^T (column j = M^-1 T' j_j, j_j leg j's twist row); false when the mass matrix is not positive definite.
+// The coordinates the whole pose: T = blockdiag(I, E) is square, Mt (p_dd, E a_dd) = W.
+bool full_pose_response(const Model& m, const State& st, const M6& Mt, const V6& W, const double* x, double* xdd,
+                        double* B) {
+  SmallCholesky<6> llt;
+  if (!llt.factor(Mt)) return false;
+  auto to_pose = [&](const V6& y, double* out, int stride) {
+    double ad[3];
+    angle_rates(m, st.pf, x, y.tail<3>(), ad);
+    for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
+  };
+  to_pose(llt.solve(W), xdd, 1);
+  if (B)
+    for (int j = 0; j < 6; ++j) to_pose(llt.solve(st.lg[j].j), B + j, 6);
+  return true;
+}
+template <int N>
+bool pose_rate_response(const Model& m, const State& st, const M6& Mt, const V6& W, double* xdd, double* B) {
+  SmallCholesky<N> llt;
+  if (!llt.factor(t_congruence(m, st.pf, Mt))) return false;
+  const V6 a = llt.solve(t_transpose(m, st.pf, W));
+  for (int i = 0; i < N; ++i) xdd[i] = a[i];
+  if (B)
+    for (int j = 0; j < N; ++j) {
+      const V6 b = llt.solve(t_transpose(m, st.pf, st.lg[j].j));
+      for (int i = 0; i < N; ++i) B[N * i + j] = b[i];
     }
-    return true;
-  }
-  V6 solve(const V6& b) const {
-    V6 y, x;
-    for (int i = 0; i < size(); ++i) {
-      double s = b[i];
-      for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
-      y[i] = s * inv[i];
-    }
-    for (int i = size() - 1; i >= 0; --i) {
-      double s = y[i];
-      for (int k = i + 1; k < size(); ++k) s -= L[k][i] * x[k];
-      x[i] = s * inv[i];
-    }
-    return x;
-  }
-};
-#pragma GCC diagnostic pop
+  return true;
+}
 
 }  // namespace
 
@@ -319,6 +315,11 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, con
   // tests hold them against J xdd + Jdot xd and second differences of the inverse kinematics).
   const Model& m = model_of(rm);
   const State& st = state_at(m, rd, x, false);
+  const Data& d = data_of(rd);
+  if (d.accel && std::equal(xd, xd + m.n, d.xd) && std::equal(xdd, xdd + m.n, d.xdd)) {
+    std::copy(d.qdd, d.qdd + m.n, qdd);  // the inverse dynamics' at this motion
+    return;
+  }
   PlatformMotion pm;
   platform_motion(m, st.pf, xd, xdd, pm);
   m.kind->qdd_all(m, st.lg, pm, qdd);
@@ -327,15 +328,14 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, con
 void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,
                                       const double* xdd, double* tau) const {
   const Model& m = model_of(rm);
-  const State& st = state_at(m, rd, x, !m.full_pose);
-  if (!m.full_pose) {
-    solve_jt(m, st.J, generalised_force(m, st, xd, xdd), x, tau);
-    return;
-  }
-  // T square: J^T tau = T' W is Jc tau = W, Jc's columns the legs' twist rows.
-  M6 Jc;
-  for (int i = 0; i < 6; ++i) Jc.col(i) = st.lg[i].j;
-  solve_jt_n(m, Jc, load_wrench(m, st, xd, xdd), x, tau);
+  const State& st = state_at(m, rd, x, false);
+  Data& d = data_of(rd);
+  d.accel = false;
+  const V6 W = load_wrench(m, st, xd, xdd, d.qdd);
+  with_size(m.n, [&](auto N) { solve_jt<N()>(m, st, W, x, tau); });
+  std::copy(xd, xd + m.n, d.xd);
+  std::copy(xdd, xdd + m.n, d.xdd);
+  d.accel = true;
 }
 
 void DescribedRobot::mass_matrix(const RobotModel& rm, RobotData& rd, const double* x, double* M) const {
@@ -351,39 +351,15 @@ bool DescribedRobot::forward_dynamics_response(const RobotModel& rm, RobotData& 
   const Model& m = model_of(rm);
   const int n = m.n;
   const State& st = state_at(m, rd, x, false);
-  M6 Jc = M6::Zero();
-  V6 W = -load_wrench(m, st, xd, nullptr);
-  for (int i = 0; i < n; ++i) {
-    Jc.col(i) = st.lg[i].j;
-    W += tau[i] * Jc.col(i);
-  }
-  const M6 Mt = twist_mass(m, st);
-  auto not_definite = [&] {
+  double qdd[6];
+  V6 W = -load_wrench(m, st, xd, nullptr, qdd);
+  for (int i = 0; i < n; ++i) W += tau[i] * st.lg[i].j;
+  M6 Mt;
+  twist_mass(m, st, Mt);
+  const bool ok = m.full_pose ? full_pose_response(m, st, Mt, W, x, xdd, B)
+                              : with_size(n, [&](auto N) { return pose_rate_response<N()>(m, st, Mt, W, xdd, B); });
+  if (!ok)
     throw Error(PKM_ERR_SINGULAR, "forward dynamics: the mass matrix is not positive definite at " + pose_text(m, x));
-  };
-  if (m.full_pose) {
-    // T = blockdiag(I, E) is square: Mt (p_dd, E a_dd) = Jc tau - W(0).
-    SmallCholesky<6> llt;
-    if (!llt.factor(Mt)) not_definite();
-    auto to_pose = [&](const V6& y, double* out, int stride) {
-      double ad[3];
-      angle_rates(m, st.pf, x, y.tail<3>(), ad);
-      for (int k = 0; k < 3; ++k) out[stride * k] = y[k], out[stride * (3 + k)] = ad[k];
-    };
-    to_pose(llt.solve(W), xdd, 1);
-    if (B)
-      for (int j = 0; j < 6; ++j) to_pose(llt.solve(Jc.col(j)), B + j, 6);
-    return true;
-  }
-  SmallCholesky<0> llt;
-  if (!llt.factor(t_congruence(m, st.pf, Mt), n)) not_definite();
-  const V6 a = llt.solve(t_transpose(m, st.pf, W));
-  for (int i = 0; i < n; ++i) xdd[i] = a[i];
-  if (B)  // B = M^-1 J^T, column j = M^-1 T' j_j
-    for (int j = 0; j < n; ++j) {
-      const V6 b = llt.solve(t_transpose(m, st.pf, Jc.col(j)));
-      for (int i = 0; i < n; ++i) B[n * i + j] = b[i];
-    }
   return true;
 }
 

@@ -70,6 +70,7 @@ struct LegGrad {
   V3 w;   // the rod (strut) vector from its proximal joint to P
   V3 t;   // rails and arms: d S / dq (D[0] = t dq)
   V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
+  double wt;  // rails and arms: w . t (dq = w' / wt)
   V6 j;   // the leg's twist row (dq, rP x dq): qd = j . (p_dot, omega)
 };
 
@@ -97,7 +98,9 @@ struct TwistMass {
   double mr = 0;
   V3 h = V3::Zero();
   M3 G = M3::Zero();
-  M6 Mt = M6::Zero(), A = M6::Zero();
+  M6& Mt;  // the sum (the caller's matrix)
+  M6 A = M6::Zero();
+  explicit TwistMass(M6& out) : Mt(out) { Mt.setZero(); }
   void point(double mp, const V3& r) {
     mr += mp;
     h += mp * r;

@@ -120,7 +120,9 @@ class LegMotion {
   // acceleration and the body points' accelerations in closed form (the second derivative
   // of the closure; the tests hold the joint accelerations against J xdd + Jdot xd and
   // second differences of the inverse kinematics).
-  virtual void add_loads_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, V6& W) const = 0;
+  // qdd: the joint accelerations on the way (those of qdd_all).
+  virtual void add_loads_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, V6& W,
+                             double* qdd) const = 0;
   // The joint accelerations qdd of every leg for the platform's motion pm (the closure
   // differentiated twice, as in the loads).
   virtual void qdd_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, double* qdd) const = 0;
@@ -130,7 +132,8 @@ class LegMotion {
 // one kind; the reader refuses a mix), with K's per-leg terms inlined: K::geometry_of (the
 // joint value and body points at P), K::grad_of (geometry
 // and first derivatives at P), K::add_mass_of (the leg's inertia at P into the twist-space
-// sum), K::load_of (its load at P for P's velocity vP and acceleration aP under gravity g)
+// sum), K::load_of (its load at P for P's velocity vP and acceleration aP under gravity g,
+// and the joint acceleration)
 // and K::qdd_of (the joint acceleration there).
 template <class K>
 class LegMotionOf : public LegMotion {
@@ -157,12 +160,13 @@ class LegMotionOf : public LegMotion {
   void add_mass_all(const Model& m, const LegGrad* lg, TwistMass& tm) const override {
     for (int i = 0; i < m.n; ++i) K::add_mass_of(m.legs[i], lg[i], tm);
   }
-  void add_loads_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, V6& W) const override {
+  void add_loads_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, V6& W,
+                     double* qdd) const override {
     for (int i = 0; i < m.n; ++i) {
       const V3& rP = lg[i].rP;
       const V3 vP = pm.v + pm.om.cross(rP);
       const V3 aP = pm.a + pm.al.cross(rP) + pm.om.cross(pm.om.cross(rP));
-      add_load(W, K::load_of(m.legs[i], lg[i], vP, aP, m.g), rP);
+      add_load(W, K::load_of(m.legs[i], lg[i], vP, aP, m.g, qdd[i]), rP);
     }
   }
   void qdd_all(const Model& m, const LegGrad* lg, const PlatformMotion& pm, double* qdd) const override {

@@ -63,7 +63,8 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
     const V3 e = cq * l.u + sq * l.w, ep = cq * l.w - sq * l.u;
     lg.t = l.r * ep;
     lg.tb = l.rc * (l.com_c * ep - l.com_s * e);
-    lg.dq = w.transpose() / w.dot(lg.t);
+    lg.wt = w.dot(lg.t);
+    lg.dq = w.transpose() / lg.wt;
   }
   double closure_dq(const LegModel& l, const LegGrad& lg) const override {
     return l.r * lg.w.dot(-std::sin(lg.q) * l.u + std::cos(lg.q) * l.w);
@@ -91,15 +92,16 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
     const V3 e = a.e = cq * l.u + sq * l.w;
     const V3& t = lg.t;
     const V3 wd = vP - qd * t;
-    a.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / w.dot(t);
+    a.qdd = (w.dot(aP) + wd.squaredNorm() + l.r * qd * qd * w.dot(e)) / lg.wt;
     return a;
   }
   static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
     return accel(l, lg, vP, aP).qdd;
   }
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
     const Accel a = accel(l, lg, vP, aP);
-    const double qd = a.qd, qdd = a.qdd;
+    const double qd = a.qd;
+    qdd = a.qdd;
     const V3& e = a.e;
     const V3& t = lg.t;
     const V3 aS = qdd * t - (l.r * qd * qd) * e;

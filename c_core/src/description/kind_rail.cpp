@@ -43,25 +43,33 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
     const V3 w = lg.w = P - v3(lg.pos[0]);
     lg.t = lg.tb = l.dir;
-    lg.dq = w.transpose() / w.dot(lg.t);
+    lg.wt = w.dot(l.dir);
+    lg.dq = w.transpose() / lg.wt;
   }
   double closure_dq(const LegModel& l, const LegGrad& lg) const override { return lg.w.dot(l.dir); }
   double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * std::sqrt(l.ss)); }
   Eigen::RowVector3d dq_rate(const LegModel&, const LegGrad& lg, const V3& vP, double qd) const override {
     return rod_dq_rate(lg, vP, qd, 0.0);  // s does not turn
   }
-  static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
+  // The slider and S move along s (tb = t = s): the inertia along q is (m_body + ms) |s|^2.
+  static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
+    add_rod_leg_mass(l, lg, tm, (l.m_body + l.m_rod * l.rod_self) * l.ss);
+  }
   // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
   static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
     const V3& w = lg.w;
     const double qd = lg.dq.dot(vP);
     const V3 wd = vP - qd * l.dir;
-    return (w.dot(aP) + wd.squaredNorm()) / w.dot(l.dir);
+    return (w.dot(aP) + wd.squaredNorm()) / lg.wt;
   }
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
-    const double qdd = qdd_of(l, lg, vP, aP);
-    const V3 aS = qdd * l.dir;
-    return rod_leg_load(l, lg, aP, aS, aS, qdd, g);
+  // rod_leg_load with the slider and S at a_S = qdd s (tb = t = s): the load along the rail
+  // qdd (m_body + ms) |s|^2 + mx s.aP - (m_body + m_rod / 2) s.g acts through dq.
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
+    qdd = qdd_of(l, lg, vP, aP);
+    const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
+    const V3 Fp = (mx * qdd) * l.dir + ms * aP - (mr / 2) * g;
+    const double along = qdd * (l.m_body + ms) * l.ss + mx * l.dir.dot(aP) - (l.m_body + mr / 2) * l.dir.dot(g);
+    return Fp + along * lg.dq.transpose();
   }
 };
 

@@ -9,12 +9,12 @@ namespace pkm {
 namespace described {
 
 // The leg's inertia at P, a rank-two twist-space term (and a point mass at P).
-inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
+// c: the leg's inertia along q, m_body |tb|^2 + ms |t|^2 + I_arm (a kind may know it cheaper).
+inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm, double c) {
   // At P: c g g' + mx (g t' + t g') + ms I (g = dq', the body along tb, S along t per unit
   // q).  The isotropic ms I is a point mass at P; the rest is rank two in twist space: with
   // j = (g, rP x g) and u = (t, rP x t) it is j v' + v j' for v = c/2 j + mx u.
   const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
-  const double c = l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm;
   tm.point(ms, lg.rP);
   V6 v;  // (0.5 c) j + mx (t, rP x t)
   v.head<3>() = (0.5 * c) * lg.j.head<3>() + mx * lg.t;
@@ -34,6 +34,11 @@ inline V3 rod_leg_load(const LegModel& l, const LegGrad& lg, const V3& aP, const
   return Fp + along * lg.dq.transpose();
 }
 
+inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
+  const double ms = l.m_rod * l.rod_self;
+  add_rod_leg_mass(l, lg, tm, l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm);
+}
+
 // dq/dP = w' / (w . t) for w = P - S(q): its rate, with t_term = w . (t's rate) (0 on a rail).
 inline Eigen::RowVector3d rod_dq_rate(const LegGrad& lg, const V3& vP, double qd, double t_term) {
   // dq/dP = w' / (w . t), w = P - S(q): wd = vP - qd t.
@@ -42,7 +47,7 @@ inline Eigen::RowVector3d rod_dq_rate(const LegGrad& lg, const V3& vP, double qd
   const V3 wd = vP - qd * t;
   double c_rate = wd.dot(t);
   c_rate -= t_term;
-  const double c = w.dot(t);
+  const double c = lg.wt;
   return (wd / c - (c_rate / (c * c)) * w).transpose();
 }
 

@@ -73,12 +73,12 @@ class StrutMotion final : public LegMotionOf<StrutMotion> {
     const double qd = lg.dq.dot(vP);
     return (vP.squaredNorm() - qd * qd + lg.w.dot(aP)) / lg.q;
   }
-  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g) {
+  static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
     const V3& w = lg.w;
     const double qd = lg.dq.dot(vP);
     const double q = lg.q;
     const V3 n = w / q, nd = (vP - qd * n) / q;
-    const double qdd = qdd_of(l, lg, vP, aP);
+    qdd = qdd_of(l, lg, vP, aP);
     const V3 ndd = (aP - qdd * n - (2 * qd) * nd) / q;
     V3 acc[4];
     acc[0].setZero();
