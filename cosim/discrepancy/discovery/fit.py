@@ -270,7 +270,9 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), 
         terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
         if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
             terms = acceptance.or_library(terms, lambda: stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor,
-                                                                  held, library_only=True), heldout, threshold, search)
+                                                                  held, library_only=True),
+                                          lambda ts: heldout(ts + offset_refit(search, c, held, ts)), threshold, search,
+                                          answer=library_result)
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))

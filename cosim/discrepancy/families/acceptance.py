@@ -109,9 +109,34 @@ def withdrawing(term) -> bool:
     return any(t in WITHDRAWING for t in term.terms)
 
 
-def or_library(terms, library, heldout, threshold: float, search) -> list:
+def or_library(terms, library, heldout, threshold: float, search, answer=None) -> list:
     """``terms`` (holding family terms), or the library-only selection ``library()`` where the
     family terms do not earn their place on the held-out part (:func:`held_out_keeps`;
-    ``heldout(terms)[1]``: the held-out chi-square gain of a selection)."""
+    ``heldout(terms)[1]``: the held-out chi-square gain of a selection, the library's offset
+    refitted beside it where it would be).  ``answer()``: the library-only search's answer on
+    this channel (a :class:`DiscoveredTerm` or None; None: not made), whose terms are weighed
+    too where they fit the held-out part better than the raw selection: its stability pruning
+    and offset refit may leave the terms that stood in for the library's offset
+    (:func:`answer_terms`)."""
     lib = library()
-    return terms if held_out_keeps(heldout(terms)[1], heldout(lib)[1], threshold, search) else lib
+    bar = heldout(lib)[1]
+    done = answer() if answer is not None else None
+    if done is not None:
+        bar = max(bar, heldout(answer_terms(search, done))[1])
+    return terms if held_out_keeps(heldout(terms)[1], bar, threshold, search) else lib
+
+
+def answer_terms(search, term) -> list:
+    """The (term, option) candidates of a discovered ``term`` (its offset refit as
+    ``("constant", 0)``).
+
+    The library's offset fitted before the discovery step takes the part of a missing force
+    the recording's mean leaves.  A Coulomb level of one direction (which spans a constant
+    while the joint moves, so the offset is not refitted beside it) with a friction zone and a
+    level over the stroke can rebuild that offset's share (on the Clavel delta's held-out rotor
+    inertia: arm 3, an offset of 2.52 N m kept beside inertia, coulomb_neg, zone and stroke_1),
+    where the library-only answer drops the stand-ins and refits the offset to zero.  The
+    family terms must beat that answer, not only the raw selection it started from."""
+    from ..discovery.judgement import _option
+
+    return [(name, _option(search, term, name)) for name in term.terms]
