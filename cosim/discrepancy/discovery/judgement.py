@@ -132,7 +132,9 @@ def judge_library(eng, sel, threshold: float):
     # which it sets and which the held-out comparisons read, so both are kept
     memo = {}
 
-    def discover_all(R, chans, th, asymmetry=None):
+    def discover_all(R, chans, th, asymmetry=None, family_only=False):
+        # family_only: the caller reads a term holding family terms only (the trials again): a
+        # selection without one ends there, None, not kept (acceptance.family_only_result)
         out = {}
         for c in chans:
             asym = tuple((asymmetry or {}).get(c, ()))
@@ -143,8 +145,13 @@ def judge_library(eng, sel, threshold: float):
             if key not in memo:
                 lib = key[:-1] + (False,)  # the same search without the families, if made
                 done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
-                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
-                                              library_result=done), search.w[c])
+                skip = family_only and done is None
+                term = discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
+                                        library_result=acceptance.family_only_result if skip else done)
+                if skip and term is None:
+                    out[c] = None
+                    continue
+                memo[key] = (term, search.w[c])
             term, search.w[c] = memo[key]
             out[c] = copy.deepcopy(term)
         return out
@@ -298,7 +305,7 @@ def _trials_again(eng, sel, search, theta, R_lib, base, bar, withdrawn, discover
             continue
         th_minus = {k: v for k, v in theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
-        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed).get(c)
+        in_place = discover_all(R_minus, [c], th_minus, asymmetry=confirmed, family_only=True).get(c)
         if in_place is None or not acceptance.withdrawing(in_place):
             continue
         on_top = [base[c]] if base.get(c) is not None else []
