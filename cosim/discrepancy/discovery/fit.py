@@ -234,8 +234,7 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), 
     (made already), returned when the selection holds none of them."""
     eng = search.eng
     train, test = eng.train, eng.test
-    # The yardstick is the residual's own high-frequency noise (as the structure test's):
-    # the engine's noise model is inflated by the very force searched for.
+    # the yardstick: the residual's own high-frequency noise (the engine's is inflated by the force searched for)
     phi = samples_per_independent(eng.pipe)
     n_eff = float((eng.use[train, c] > 0).sum()) / phi
     lee = 2.0 * math.log(acceptance.n_library(search))  # a family term pays more (search.fam_extra)
@@ -270,9 +269,8 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), 
         terms = stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor, held)
         if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
             terms = acceptance.or_library(terms, lambda: stepwise(search, c, y, train, thr, phi, n_eff, fixed, floor,
-                                                                  held, library_only=True),
-                                          lambda ts: heldout(ts + offset_refit(search, c, held, ts)), threshold, search,
-                                          answer=library_result)
+                                                                  held, True), heldout, threshold, search,
+                                          library_result, lambda ts: offset_refit(search, c, held, ts))
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))

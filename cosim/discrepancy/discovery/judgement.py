@@ -133,25 +133,18 @@ def judge_library(eng, sel, threshold: float):
     memo = {}
 
     def discover_all(R, chans, th, asymmetry=None, family_only=False):
-        # family_only: the caller reads a term holding family terms only (the trials again): a
-        # selection without one ends there, None, not kept (acceptance.family_only_result)
         out = {}
         for c in chans:
             asym = tuple((asymmetry or {}).get(c, ()))
             own = search.name(c, "")
             key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
                    tuple(sorted((k, v) for k, v in th.items() if k.startswith(own))), tuple(sorted(asym)),
-                   search.fam_on)
+                   search.fam_on, family_only)
             if key not in memo:
-                lib = key[:-1] + (False,)  # the same search without the families, if made
-                done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
-                skip = family_only and done is None
-                term = discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
-                                        library_result=acceptance.family_only_result if skip else done)
-                if skip and term is None:
-                    out[c] = None
-                    continue
-                memo[key] = (term, search.w[c])
+                lib = key[:-2] + (False, False)  # the same search without the families, if made
+                done = (lambda: memo[lib][0]) if search.fam_on and lib in memo else acceptance.no_term(family_only)
+                memo[key] = (discover_channel(search, c, R[:, c], threshold, theta=th, asymmetry=asym,
+                                              library_result=done), search.w[c])
             term, search.w[c] = memo[key]
             out[c] = copy.deepcopy(term)
         return out
