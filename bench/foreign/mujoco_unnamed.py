@@ -7,7 +7,7 @@ The MuJoCo model is bench/foreign/mujoco_blind.py's (the hand-written 6-PUS, PD 
 engine's exciting trajectory, the generator's sensor noise); this file hides one mechanism per
 case in MuJoCo's step (``simulate(..., hook=...)``), computed here from MuJoCo's own state, so
 neither the core nor its joint force computes it; each case is diagnosed with the defaults and
-the term families (``diagnose(families=True)``):
+the term families (``diagnose(families=True)``, the default):
 
 * ``load_friction``: a Coulomb friction mu |u| tanh(qd / v) on one rail, u the force the motor
   applies (MuJoCo's ``ctrl``): the engine's family ``load`` (force_cload = mu);

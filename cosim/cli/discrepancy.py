@@ -8,6 +8,7 @@
 """
 from __future__ import annotations
 
+import argparse
 import math
 
 import json
@@ -106,9 +107,11 @@ def _diag_configure(p):
                         "of instrumental variables from the reference (biased low by rate noise; for comparison)")
     p.add_argument("--no-discovery", action="store_true",
                    help="skip the search for forces no library effect names (the discovery step)")
-    p.add_argument("--families", action="store_true",
-                   help="the discovery step also searches friction growing with the load, friction zones, couplings "
-                        "to another joint and effort x position terms (off by default: docs/discovery_families.md)")
+    p.add_argument("--no-families", action="store_true",
+                   help="the discovery step searches one joint's position and rate only, not friction growing with "
+                        "the load, friction zones, couplings to another joint nor effort x position terms "
+                        "(docs/discovery_families.md)")
+    p.add_argument("--families", action="store_true", help=argparse.SUPPRESS)  # the default; kept for old scripts
     p.add_argument("--no-platform", action="store_true",
                    help="skip the search for one force on the platform (a wrench, a cable to an anchor, a drag)")
     p.add_argument("--no-flexible", action="store_true",
@@ -153,7 +156,7 @@ def cmd_diagnose(args):
                          effects=args.effects.split(",") if args.effects else None, replay=not args.no_replay,
                          figures=not args.no_figures, instruments=not args.least_squares,
                          discovery=not args.no_discovery, platform=not args.no_platform,
-                         drift=not args.no_drift, families=args.families, flexible=not args.no_flexible,
+                         drift=not args.no_drift, families=not args.no_families, flexible=not args.no_flexible,
                          black_box=args.black_box)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {time.perf_counter() - t0:.1f} s of diagnosis, no report written "

@@ -34,7 +34,7 @@ def _confident(d):
 ])
 def test_a_force_of_a_family_is_found_with_its_structure_and_coefficient(tmp_path, short_cfg, kind, seed):
     rec, (truth,) = _case(tmp_path, short_cfg, [kind], seed)
-    d = diagnose(rec, figures=False, replay=False, families=True)  # the families are off by default
+    d = diagnose(rec, figures=False, replay=False)  # the families are searched by default
     found = {t.joint: t for t in d.discovered}
     (j,) = truth["joints"]
     assert j in found, (d.conclusion, truth)
@@ -54,7 +54,7 @@ def test_a_library_friction_and_a_load_dependent_one_on_one_joint_are_both_found
     # load term's coefficient is right, and the plant's viscous friction (the library's level and
     # a direction pair the discovery step adds to it, ADDS_TO) is the hidden one
     rec, hidden = _case(tmp_path, short_cfg, ["viscous", "load_friction"], 12)
-    d = diagnose(rec, figures=False, replay=False, families=True)
+    d = diagnose(rec, figures=False, replay=False)
     visc, load = hidden
     assert visc["joints"] == load["joints"] == [2], hidden
     assert "viscous" in d.named(), d.conclusion
@@ -68,19 +68,19 @@ def test_a_library_friction_and_a_load_dependent_one_on_one_joint_are_both_found
     assert set(_confident(d)) <= {"viscous"}, d.conclusion
 
 
-def test_the_command_line_searches_the_families_only_when_asked(tmp_path, short_cfg):
-    # `cosim diagnose --families` is diagnose(families=True): the load-dependent friction of the
-    # first case above is found as its family with the flag, and no term of the family without it
+def test_the_command_line_searches_the_families_unless_told_not_to(tmp_path, short_cfg):
+    # `cosim diagnose` searches the families by default: the load-dependent friction of the first
+    # case above is found as its family without a flag, and no term of the family with --no-families
     import subprocess
     import sys
 
     rec, _ = _case(tmp_path, short_cfg, ["load_friction"], 5)
     found = {}
-    for flag in ((), ("--families",)):
+    for flag in ((), ("--no-families",)):
         r = subprocess.run([sys.executable, "-m", "cosim", "diagnose", str(rec), "--no-replay", "--no-figures",
                             "--json", "--out", str(tmp_path / f"out{len(flag)}"), *flag], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
         d = json.loads(r.stdout)
-        found[bool(flag)] = {t for term in d["discovered"] for t in term["terms"]}
+        found[not flag] = {t for term in d["discovered"] for t in term["terms"]}
     assert "load" in found[True], found
     assert "load" not in found[False], found

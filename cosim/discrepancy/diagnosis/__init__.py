@@ -5,7 +5,6 @@ inference (:mod:`.selection`) -> localisation -> held-out fit -> the answer, a
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import time
 from dataclasses import dataclass, field, replace
@@ -210,7 +209,7 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
              train_fraction: float = 0.7, effects=None, replay: bool = True, figures: bool = True,
              max_effects: int = 6, instruments: bool = True, compare=None, discovery: bool = True,
              max_samples: int | None = None, block_seconds: float | None = None, progress: bool | None = False,
-             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = False,
+             verbose: bool = False, platform: bool = True, drift: bool = True, families: bool = True,
              flexible: bool = True, black_box: bool = False) -> Diagnosis:
     """Diagnose a recording against the core model.
 
@@ -259,7 +258,8 @@ def diagnose(recording, model=None, *, out=None, window: float = 0.05, threshold
         The discovery step also searches the term families of :mod:`.families` (friction
         growing with the load, friction zones, a Coulomb level over the stroke, couplings to
         another joint, effort x position, position x rate; a family term pays more than a library
-        term; docs/discovery_families.md says why they are off by default).
+        term and must beat the library-only answer on the held-out part:
+        docs/discovery_families.md).  False: the library of one joint's position and rate only.
     platform : bool
         Search one force on the platform for the whole robot (a constant wrench, a cable to an
         anchor, a drag: :mod:`.platform_force`) before the discovery step, and keep it when it and
@@ -460,7 +460,7 @@ def _discovered_and_checked(eng, sel, threshold, discovery, families):
     if discovery:
         from ..families import searched
 
-        with searched() if families else contextlib.nullcontext():
+        with searched(families):
             found, withdrawn, theta, ties = _discover(eng, sel, threshold)
     from ..verdict import fit_problems
 

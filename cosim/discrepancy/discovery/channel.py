@@ -73,7 +73,7 @@ def _bootstrap(search, ch, terms, refit):
                      fixed=ch.fixed, floor=ch.floor, refit=refit, held=ch.held)
 
 
-def _selected(search, ch) -> tuple:
+def _selected(search, ch, library_result=None) -> tuple:
     """``(search, terms)``: the terms selected on the channel, and the search with the channel's
     noise weight (``search.w``) from the residual's own noise, measured again on the residual of
     the terms found."""
@@ -92,7 +92,8 @@ def _selected(search, ch) -> tuple:
         terms = _stepwise(search, ch)
         if any(acceptance.is_family(t) for t in terms):  # or the library-only selection (held out)
             terms = acceptance.or_library(terms, lambda: _stepwise(search, ch, library_only=True),
-                                          lambda ts: _heldout(search, ch, ts), ch.threshold, search)
+                                          lambda ts: _heldout(search, ch, ts), ch.threshold, search,
+                                          library_result, lambda ts: offset_refit(search, ch.c, ch.held, ts))
         if not terms:
             break
         f0 = fit_terms(search, c, y, terms, np.ones_like(train))
@@ -195,7 +196,7 @@ def discover_channel(search, c, y, threshold, seed=0, theta=None, asymmetry=(), 
     (:func:`_shapes_fitted`), the bootstrap's stability (:func:`_stable`), the final fit and its
     intervals (:func:`_term_fitted`)."""
     ch = _channel(search, c, y, threshold, seed, theta, asymmetry)
-    search, terms = _selected(search, ch)
+    search, terms = _selected(search, ch, library_result)
     if library_result is not None and not any(acceptance.is_family(t) for t in terms):
         return library_result(), search  # the same selection as without the families: its result
     # the cheap held-out check first, then the bootstrap's stability

@@ -99,7 +99,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     the terms."""
     floor = floor or {}
     logn = math.log(max(n_eff, 2.0))
-    gram = _Gram(search, c, y, rows)
+    gram = _Gram(search, c, y, rows, acceptance.searched(search, library_only))
 
     def chi2_of(terms):
         c2, coef = gram.fit(terms + offset_refit(search, c, held or {}, terms))
@@ -156,12 +156,12 @@ class _Gram:
     the same columns: a solve of a few unknowns each instead of a least-squares problem over
     the samples)."""
 
-    def __init__(self, search, c, y, rows):
+    def __init__(self, search, c, y, rows, candidates=None):
         w = search.w[c] * search.eng.use[rows, c]
         t = y[rows] * w
         self.at, n = {}, 0
         blocks = []
-        for cand in search.candidates():
+        for cand in search.candidates() if candidates is None else candidates:  # those the selection searches
             col = search.cols[cand][rows, c, :] * w[:, None]
             self.at[cand] = np.arange(n, n + col.shape[1])
             n += col.shape[1]

@@ -178,7 +178,7 @@ def judge_library(eng, sel, threshold: float):
     return v.theta, list(v.withdrawn), list(v.ties), v.search, v.base
 
 
-def _discover_all(court, v, R, chans, th, asymmetry=None) -> tuple:
+def _discover_all(court, v, R, chans, th, asymmetry=None, family_only=False) -> tuple:
     """``(verdicts, found)``: {channel: the term discovered on it (:func:`.discover_channel`) for
     the residual R of the model with parameters ``th``} over ``chans``, and the verdicts with
     the search it leaves (each channel's noise weight the one of its search) and the searches
@@ -195,10 +195,11 @@ def _discover_all(court, v, R, chans, th, asymmetry=None) -> tuple:
         own = search.name(c, "")
         key = (c, hashlib.sha1(np.ascontiguousarray(R[:, c]).tobytes()).hexdigest(),
                tuple(sorted((k, x) for k, x in th.items() if k.startswith(own))), tuple(sorted(asym)),
-               search.fam_on)
+               search.fam_on, family_only)
         if key not in memo:
-            lib = key[:-1] + (False,)  # the same search without the families, if made
-            done = (lambda m=memo: m[lib][0]) if search.fam_on and lib in memo else None  # noqa: E731
+            lib = key[:-2] + (False, False)  # the same search without the families, if made
+            done = ((lambda m=memo: m[lib][0]) if search.fam_on and lib in memo  # noqa: E731
+                    else acceptance.no_term(family_only))
             term, search = discover_channel(search, c, R[:, c], court.threshold, theta=th, asymmetry=asym,
                                             library_result=done)
             memo = MappingProxyType({**memo, key: (term, search.w[c])})
@@ -367,7 +368,7 @@ def _trial_again(court, v, g):
         return v
     th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
     R_minus = court.eng.R(th_minus)
-    v, found = _discover_all(court, v, R_minus, [c], th_minus, asymmetry=v.confirmed)
+    v, found = _discover_all(court, v, R_minus, [c], th_minus, asymmetry=v.confirmed, family_only=True)
     in_place = found.get(c)
     if in_place is None or not acceptance.withdrawing(in_place):
         return v

@@ -82,30 +82,29 @@ MECHANISMS = {
 _EXCLUDED: set = set()
 
 
-#: the families are searched on request only (:func:`searched`, ``diagnose(families=True)``):
-#: with the acceptance rules of :mod:`.acceptance` the real recordings' answers are those without
-#: them, but on the Clavel delta's held-out rotor inertia they keep an offset the added inertia
-#: refits to zero without them (docs/discovery_families.md)
+#: the stack of :func:`searched` blocks: the families are searched unless the innermost block
+#: turned them off (``diagnose(families=False)``, ``cosim diagnose --no-families``)
 _SEARCHED: list = []
 
 
 def excluded() -> frozenset:
-    """Terms left out of the search (see :func:`without`): every term of the families unless
-    :func:`searched` turned them on."""
-    return frozenset(_EXCLUDED | (set() if _SEARCHED else set(TERMS)))
+    """Terms left out of the search (see :func:`without`), and every term of the families
+    where the innermost :func:`searched` block turned them off."""
+    return frozenset(_EXCLUDED | (set(TERMS) if _SEARCHED and not _SEARCHED[-1] else set()))
 
 
 @contextlib.contextmanager
-def searched():
-    """Search the families' terms too while the block runs (they are off by default).
+def searched(on: bool = True):
+    """Search the families' terms (``on``, the default outside any block) or leave them all out
+    while the block runs.
 
     Examples
     --------
     >>> from cosim.discrepancy.families import searched
-    >>> with searched():
-    ...     pass  # diagnose(...) here searches load-dependent friction, friction zones, couplings
+    >>> with searched(False):
+    ...     pass  # diagnose(...) here searches the library of one joint's position and rate only
     """
-    _SEARCHED.append(True)
+    _SEARCHED.append(bool(on))
     try:
         yield
     finally:
@@ -202,12 +201,13 @@ def clash(search, c, chosen, cand, held=None) -> bool:
     (:data:`ZONE_NOT_BESIDE`)?"""
     if cand[0] == "zone" and held and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE):
         return True
-    a = _full_shape(search, c, *cand)
-    for t in chosen:
-        b = _full_shape(search, c, *t)
-        if any(k in b and b[k] != v for k, v in a.items()):
-            return True
-    return False
+    key = (c, cand, tuple(chosen))  # the bootstrap's selections ask the same again and again
+    cache = search.__dict__.setdefault("_fam_clash", {})
+    if key not in cache:
+        a = _full_shape(search, c, *cand)
+        cache[key] = any(any(k in b and b[k] != v for k, v in a.items())
+                         for b in (_full_shape(search, c, *t) for t in chosen))
+    return cache[key]
 
 
 def option_of(search, term_obj, name) -> int:
