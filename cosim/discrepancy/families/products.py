@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import weakref
 
 import numpy as np
 
@@ -85,6 +86,9 @@ _EXCLUDED: set = set()
 #: the stack of :func:`searched` blocks: the families are searched unless the innermost block
 #: turned them off (``diagnose(families=False)``, ``cosim diagnose --no-families``)
 _SEARCHED: list = []
+
+#: the answers of :func:`clash` per search (gone with the search)
+_CLASHES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def excluded() -> frozenset:
@@ -202,7 +206,7 @@ def clash(search, c, chosen, cand, held=None) -> bool:
     if cand[0] == "zone" and held and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE):
         return True
     key = (c, cand, tuple(chosen))  # the bootstrap's selections ask the same again and again
-    cache = search.__dict__.setdefault("_fam_clash", {})
+    cache = _CLASHES.setdefault(search, {})  # per search: a Search is a value (its shapes fixed)
     if key not in cache:
         a = _full_shape(search, c, *cand)
         cache[key] = any(any(k in b and b[k] != v for k, v in a.items())
