@@ -64,31 +64,13 @@ def _with_terms(R, search, terms, rows=slice(None)):
         c = t.joint - 1
         i = 0
         for name in t.terms:
-            opt = _option(search, t, name)
+            opt = search.option_of(t, name)
             cols = search.cols[(name, opt)]
             for a in range(cols.shape[2]):
                 p = list(t.coefficients.values())[i]
                 R[:, c] += cols[:, c, a] * (p.value - p.base)
                 i += 1
     return R
-
-
-def _option(search, t, name):
-    if name in products.TERMS:
-        return products.option_of(search, t, name)
-    if name == "ripple":
-        P = t.shape[search.name(t.joint - 1, "force_period")]
-        return next((o for o, ps in search.periods.items() if ps[t.joint - 1] == P), 0)
-    if name == "fading":
-        v = t.shape[search.name(t.joint - 1, "force_cv")]
-        return next((o for o, vs in enumerate(search.fades) if vs[t.joint - 1] == v), 0)
-    if name != "step":
-        return 0
-    q = t.shape[search.name(t.joint - 1, "force_step_q")]
-    for o, (qs, _) in enumerate(search.steps):
-        if qs[t.joint - 1] == q:
-            return o
-    return 0
 
 
 @dataclass(frozen=True)
@@ -410,7 +392,7 @@ def _rank(search, extra, terms, chans) -> int:
         if c not in chans:
             continue
         for name in t.terms:
-            block = search.cols[(name, _option(search, t, name))][:, c, :]
+            block = search.cols[(name, search.option_of(t, name))][:, c, :]
             for a in range(block.shape[1]):
                 v = np.zeros(n * len(chans))
                 k = chans.index(c)

@@ -146,6 +146,22 @@ class Search:
         fam = MappingProxyType({**self.fam, term: self.fam[term] + (option,)})
         return self._with_option(term, c, len(self.fam[term]), fam=fam)
 
+    def option_of(self, t, name: str) -> int:
+        """The option of the shaped term ``name`` that the discovered term ``t`` holds (its
+        fitted step, ripple period, fading rate or family shape; 0 for a term of one shape)."""
+        if name in products.TERMS:
+            return products.option_of(self, t, name)
+        if name == "ripple":
+            P = t.shape[self.name(t.joint - 1, "force_period")]
+            return next((o for o, ps in self.periods.items() if ps[t.joint - 1] == P), 0)
+        if name == "fading":
+            v = t.shape[self.name(t.joint - 1, "force_cv")]
+            return next((o for o, vs in enumerate(self.fades) if vs[t.joint - 1] == v), 0)
+        if name != "step":
+            return 0
+        q = t.shape[self.name(t.joint - 1, "force_step_q")]
+        return next((o for o, (qs, _) in enumerate(self.steps) if qs[t.joint - 1] == q), 0)
+
     def _with_option(self, term: str, c: int, o: int, **grown) -> tuple:
         """``(search, o)``: option ``o`` of ``term``, whose shape (in ``grown``: the new fields)
         differs from the grid's first option on joint c only, with that option's columns (and

@@ -154,6 +154,4 @@ def answer_terms(search, term) -> list:
     inertia: arm 3, an offset of 2.52 N m kept beside inertia, coulomb_neg, zone and stroke_1),
     where the library-only answer drops the stand-ins and refits the offset to zero.  The
     family terms must beat that answer, not only the raw selection it started from."""
-    from ..discovery.judgement import _option
-
-    return [(name, _option(search, term, name)) for name in term.terms]
+    return [(name, search.option_of(term, name)) for name in term.terms]
