@@ -34,10 +34,26 @@ def host_command(platform: str, fmi: int = 2) -> list[str]:
     if not exe.exists():
         raise FileNotFoundError(f"{exe} is not built (scripts/bootstrap.sh builds every platform's host)")
     if platform == "win64":
+        _wine_server()
         return [shutil.which("wine") or "wine", str(exe)]
     if platform == "aarch64-linux":
         return [shutil.which("qemu-aarch64") or "qemu-aarch64", "-L", AARCH64_SYSROOT, str(exe)]
     return [str(exe)]
+
+
+_WINE_SERVER_UP = []
+
+
+def _wine_server() -> None:
+    """One wineserver for every Wine run of the tests, kept 60 s after its last client: a wine
+    started while the previous run's server shuts down can exit 1 without a word (a full suite
+    run once did so), which is Wine's start-up, not the FMU."""
+    if not _WINE_SERVER_UP:
+        env = dict(os.environ, WINEDEBUG="-all")
+        # not captured: the server it starts keeps the pipes it was given open
+        subprocess.run([shutil.which("wineserver") or "wineserver", "-p60"], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, env=env, timeout=60)
+        _WINE_SERVER_UP.append(True)
 
 
 def _native_path(platform: str, p: Path) -> str:
@@ -224,7 +240,8 @@ def run(platform: str, script: str, folder: Path, timeout: float = 300, fmi: int
     r = subprocess.run(host_command(platform, fmi) + [_native_path(platform, path)], capture_output=True, text=True,
                        timeout=timeout, env=env)
     if r.returncode != 0:
-        raise RuntimeError(f"fmi{fmi}_host ({platform}) exited {r.returncode}: {r.stderr.strip()[-2000:]}")
+        raise RuntimeError(f"fmi{fmi}_host ({platform}) exited {r.returncode}: {r.stderr.strip()[-2000:]}"
+                           f" (stdout: {r.stdout.strip()[-1000:]!r})")
     out = {"values": [], "lines": []}
     for line in r.stdout.splitlines():
         if line.startswith("values "):
