@@ -73,12 +73,15 @@ class Campaign:
         Core parameters that differ from run to run (:data:`PER_RUN_KINDS`).
     where : str
         The campaign's source (a campaign file, or the first run's).
+    times : tuple of float
+        The runs' start times [s] when known (:mod:`.campaign_drift`), else empty.
     """
 
     runs: list
     names: list
     per_run: tuple = ()
     where: str = "campaign"
+    times: tuple = ()
 
     @property
     def robot(self) -> str:
@@ -123,10 +126,13 @@ def _campaign_file(path: Path):
     per = spec.get("per_run", [])
     if not isinstance(per, list) or not all(isinstance(p, str) for p in per):
         raise CampaignError(f"{path}: per_run must be a list of core parameter names")
-    return [path.parent / r for r in runs], tuple(per)
+    times = spec.get("times", [])
+    if not isinstance(times, list) or not all(isinstance(x, (int, float)) for x in times):
+        raise CampaignError(f"{path}: times must be a list of the runs' start times in seconds")
+    return [path.parent / r for r in runs], tuple(per), tuple(float(x) for x in times)
 
 
-def read_campaign(sources, *, per_run=()) -> Campaign:
+def read_campaign(sources, *, per_run=(), times=None) -> Campaign:
     """The runs of a campaign.
 
     Parameters
@@ -138,6 +144,8 @@ def read_campaign(sources, *, per_run=()) -> Campaign:
     per_run : iterable of str
         Core parameters that differ from run to run (``rail[1].offset``), besides those a
         campaign file declares.
+    times : sequence of float, optional
+        The runs' start times [s] (or a campaign file's ``times = [...]``), one per run.
 
     Returns
     -------
@@ -147,7 +155,8 @@ def read_campaign(sources, *, per_run=()) -> Campaign:
     ------
     CampaignError
         Runs of two robots, at different sampling steps, with different joint columns, or
-        a per-run parameter of a kind that cannot be taken out of a run.
+        a per-run parameter of a kind that cannot be taken out of a run, start times that are
+        not one finite time per run.
     cosim.recording.RecordingError
         A malformed run (names file, row, column).
 
@@ -164,8 +173,9 @@ def read_campaign(sources, *, per_run=()) -> Campaign:
     where = str(items[0]) if items and not isinstance(items[0], Recording) else "campaign"
     if len(items) == 1 and not isinstance(items[0], Recording) and Path(items[0]).suffix in (".toml", ".json") \
             and not Path(items[0]).with_suffix(".csv").exists():
-        items, more = _campaign_file(Path(items[0]))
+        items, more, file_times = _campaign_file(Path(items[0]))
         declared += more
+        times = times if times is not None else (file_times or None)
     runs, names = [], []
     for it in items:
         rec = it if isinstance(it, Recording) else _read(it)
@@ -177,7 +187,8 @@ def read_campaign(sources, *, per_run=()) -> Campaign:
         else:
             runs.append(rec)
             names.append(Path(rec.path).stem if rec.path else f"run {len(runs)}")
-    c = Campaign(runs, names, tuple(dict.fromkeys(declared)), where)
+    c = Campaign(runs, names, tuple(dict.fromkeys(declared)), where,
+                 () if times is None else tuple(float(x) for x in times))
     _check(c)
     return c
 
@@ -206,6 +217,9 @@ def _check(c: Campaign) -> None:
                 has, lacks = (n, n0) if getattr(r, col, None) is not None else (n0, n)
                 raise CampaignError(f"{has} has {col} columns and {lacks} has none: every run of a campaign "
                                     f"records the same columns")
+    if c.times and (len(c.times) != len(c.runs) or not all(math.isfinite(x) for x in c.times)):
+        raise CampaignError(f"{c.where}: start times {list(c.times)} are not one finite time in seconds per run "
+                            f"({len(c.runs)} runs)")
     names = set(Model(r0.robot).param_names())
     for p in c.per_run:
         kind = p.rsplit(".", 1)[-1]
@@ -309,6 +323,11 @@ class CampaignDiagnosis:
         nominal over fitted), ``conclusion``.
     replays : list of dict
         The replay of each held-out run (closed loop, or open loop with its method).
+    drifts : list of RunDrift
+        Parameters that drift between the runs (:mod:`.campaign_drift`).
+    drift_heldout : list of dict
+        The held-out runs' effort residual with the shared constants and with the drifts
+        (:func:`.campaign_drift.heldout`).
     """
 
     conclusion: str
@@ -320,12 +339,15 @@ class CampaignDiagnosis:
     first_joint: object = None
     leave_one_out: list = field(default_factory=list)
     replays: list = field(default_factory=list)
+    drifts: list = field(default_factory=list)
+    drift_heldout: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"conclusion": self.conclusion, "runs": self.names, "held_out": self.held_out,
                 "joint": self.joint.to_dict(), "per_run": self.per_run, "disagree": self.disagree,
                 "first_joint": None if self.first_joint is None else self.first_joint.to_dict(),
-                "leave_one_out": self.leave_one_out, "replays": self.replays}
+                "leave_one_out": self.leave_one_out, "replays": self.replays,
+                "drifts": [d.to_dict() for d in self.drifts], "drift_heldout": self.drift_heldout}
 
     def to_json(self, indent: int | None = 2) -> str:
         # JSON has no NaN: an unmeasured gain is null, its reason beside it (gain_note)
@@ -420,9 +442,12 @@ def odd_runs(per_run: list, names: list) -> tuple[list, list]:
 
 
 def _diagnose(ws, model, tf, kw, **more):
+    """One run's diagnosis, or joined pieces' (no drift in time there: see :mod:`.campaign_drift`)."""
+    from ..recording import Recording
     from .diagnosis import diagnose
 
-    return diagnose(ws, model, train_fraction=tf, **{"replay": False, "figures": False, **kw, **more})
+    return diagnose(ws, model, train_fraction=tf, **{"replay": False, "figures": False,
+                                                      "drift": isinstance(ws, Recording), **kw, **more})
 
 
 def _declared_values(c: Campaign, model, tf, kw, effects) -> list:
@@ -517,7 +542,9 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
         d = _diagnose(r, model, train_fraction, kw, effects=joint.named(), discovery=False) if joint.named() else None
         per.append({"name": c.names[k], "params": _params(d) if d else {}, "declared": declared[k],
                     "conclusion": d.conclusion if d else "nothing fitted jointly, nothing to compare"})
-    odd, disagree = odd_runs([p["params"] for p in per], c.names)
+    from . import campaign_drift as cd
+    drifts = cd.between_runs([p["params"] for p in per], c.names, c.times or None)
+    odd, disagree = odd_runs(cd.detrended([p["params"] for p in per], drifts), c.names)  # about the drifts' lines
     used, first = c, None
     if odd and len(runs) - len(odd) >= 2:
         keep = [k for k, n in enumerate(c.names) if n not in odd]
@@ -536,12 +563,13 @@ def diagnose_campaign(campaign, model=None, *, held_out="run", leave_one_out: bo
                          "named": d.named(), "conclusion": d.conclusion})
     words = _held_out_words(used, held_out if not first or held_out == "within" else "run", train_fraction)
     joint = replace(joint, recording=f"joint fit of {', '.join(used.names)}")
-    res = CampaignDiagnosis("", joint, c.names, words, per, disagree, first, loro)
+    pieces = pieces_of(used, held_out if not first or held_out == "within" else "run", train_fraction)
+    res = CampaignDiagnosis("", joint, c.names, words, per, disagree, first, loro, [], drifts,
+                            cd.stage(c, runs, [p["params"] for p in per], drifts, used, pieces, joint, model, window))
     if replay:
         from .campaign_replay import replay_held_out
 
-        pieces = pieces_of(used, held_out if not first or held_out == "within" else "run", train_fraction)
-        res.replays = replay_held_out(used, pieces, joint, model)
+        res.replays = replay_held_out(used, pieces, joint, model, cd.predicted(res.drift_heldout))
     res.conclusion = _conclusion(res, odd)
     if out is not None:
         Path(out).mkdir(parents=True, exist_ok=True)
@@ -564,4 +592,9 @@ def _conclusion(res: CampaignDiagnosis, odd: list) -> str:
             text += f"; the joint fit is of the {n - len(odd)} runs that agree, without {', '.join(odd)}"
     elif any(p["params"] for p in res.per_run):
         text += ". The runs agree: every parameter fitted on each run alone is within its interval of the others'"
+    if res.drifts:
+        from .campaign_drift import sentence
+
+        text += (" (about the drifts' lines). " if not res.disagree and any(p["params"] for p in res.per_run)
+                 else ". ") + sentence(res.drifts, res.drift_heldout, n)
     return text

@@ -13,14 +13,20 @@ from .open_loop import can_replay_open_loop, declared_open_loop, open_loop_repla
 PRIME_ROWS = 50
 
 
-def _plants(joint, model, rec):
+def _plants(joint, model, rec, drift=None):
+    """The nominal and the jointly fitted plant, and "fitted, drift" with ``drift``
+    ({parameter: value}, the run's predicted values of the parameters that drift) when given."""
     from .diagnosis import _model_for
 
     m = _model_for(rec, model)
     fitted = m.copy()
     if joint.theta:
         fitted.set_params(joint.theta)
-    return {"nominal": m, "fitted": fitted}
+    out = {"nominal": m, "fitted": fitted}
+    if drift:
+        out["fitted, drift"] = fitted.copy()
+        out["fitted, drift"].set_params(drift)
+    return out
 
 
 def _closed(rec, plants, a, b):
@@ -54,16 +60,18 @@ def _closed(rec, plants, a, b):
     return out
 
 
-def replay_held_out(c, pieces, joint, model) -> list:
+def replay_held_out(c, pieces, joint, model, drift=None) -> list:
     """Per held-out piece ``(run, a, b, True)`` of ``pieces``: ``run`` (name), ``rows``, and the
     replay (closed loop: ``rel_tau`` per plant; open loop: ``rel_qd``, with its ``method``; or
-    ``skipped`` with the reason)."""
+    ``skipped`` with the reason).  ``drift``: {run name: {parameter: value}}, the values of the
+    parameters that drift between runs predicted for that run (:mod:`.campaign_drift`), replayed
+    as the plant "fitted, drift"."""
     out = []
     for k, a, b, test in pieces:
         if not test:
             continue
         rec = c.runs[k]
-        plants = _plants(joint, model, rec)
+        plants = _plants(joint, model, rec, (drift or {}).get(c.names[k]))
         if rec.qref is not None and rec.controller and not declared_open_loop(rec):
             r = _closed(rec, plants, a, b)
         elif can_replay_open_loop(rec)[0]:

@@ -19,8 +19,9 @@ report and its figure.
 
 The replay's plant carries a drift the core can model (a parameter's time course in its
 integrator, ``pkm_param_set_course``: a trend of a drive-layer parameter, a step of any
-parameter): :func:`for_plant` fits it again on the fitting rows alone, so that the held-out
-part it is judged on played no part in its size, and :func:`apply` gives it to the plant.  A
+parameter): :func:`for_plant` fits it again on the fitting rows alone, its kind chosen there
+too, so that the held-out part it is judged on played no part in its kind or size, and
+:func:`apply` gives it to the plant.  A
 trend of a mechanism parameter (a mass) is held at its mean, and the report says so.
 """
 from __future__ import annotations
@@ -150,8 +151,9 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     rows : array of bool, optional
         The rows of ``eng``'s recording to fit on (default: all of them).
     kinds : dict, optional
-        Parameter -> ``trend`` or ``step``: those parameters only, each fitted as that kind
-        whatever its BIC (a drift already named, fitted again on other rows).
+        Parameter -> ``trend``, ``step`` or ``either``: those parameters only, each fitted as
+        that kind (``either``: the kind whose BIC decrease is larger on these rows) whatever its
+        BIC against the bar (a drift already named, fitted again on other rows).
 
     Returns
     -------
@@ -208,7 +210,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
         course["value"] = [p + v for v in course["value"]]
         course["span"] = [float(tr.min()), float(tr.max())]
         u = (units or {}).get(k, "")
-        if d_trend >= d_step if forced is None else forced == "trend":
+        if d_trend >= d_step if forced in (None, "either") else forced == "trend":
             X = np.stack([c, c * (tt - tm) / T], 1)
             size = float(coef_t[1])
             ci = 1.96 * math.sqrt(s2 * np.linalg.pinv(X.T @ X)[1, 1])
@@ -241,21 +243,28 @@ def _course_of(d: Drift) -> dict:
 
 
 def for_plant(eng, theta: dict, drifts: list, threshold: float, model) -> list:
-    """``drifts`` with the course the replay's plant carries: each drift, of the kind named on
-    the whole recording, fitted again on the fitting rows alone (``~eng.test``: its size, value
-    and step time owe nothing to the held-out part), where the core can model it
-    (``Drift.course``), else the mean with the reason (``Drift.held``)."""
+    """``drifts`` with the course the replay's plant carries: each drift named on the whole
+    recording fitted again on the fitting rows alone (``~eng.test``): its kind (trend or step,
+    the larger BIC decrease on those rows), size, value and step time owe nothing to the
+    held-out part.  The plant carries it (``Drift.course``) where the fitting rows support a
+    drift (a BIC decrease over the constant above ``threshold`` there) and the core can model
+    it; else it holds the mean, and ``Drift.held`` says why."""
     from ..errors import PkmError
 
     if not drifts:
         return drifts
     train = ~np.asarray(eng.test, bool)
-    again = {d.param: d for d in find_drifts(eng, theta, threshold, rows=train, kinds={d.param: d.kind for d in drifts})}
+    again = {d.param: d for d in find_drifts(eng, theta, threshold, rows=train,
+                                             kinds={d.param: "either" for d in drifts})}
     out = []
     for d in drifts:
         a = again.get(d.param)
         if a is None:
             out.append(replace(d, held="no column on the fitting rows: the plant holds the mean"))
+            continue
+        if not a.delta_bic > threshold:
+            out.append(replace(d, held=f"the fitting rows alone do not support a drift (BIC decrease "
+                                       f"{a.delta_bic:.1f} <= {threshold:g}): the plant holds the mean"))
             continue
         c = _course_of(a)
         try:
@@ -304,8 +313,13 @@ def sentence(drifts) -> str:
         else:
             p = (f"{d.param} steps from {d.start:.4g} to {d.end:.4g} {d.unit} at t = {d.time:.3g} s "
                  f"({d.size:+.3g} ± {d.ci95:.2g} {d.unit})")
-        parts.append(p + (", modelled as a drift" if d.course is not None else
-                          " (the plant holds the mean)"))
+        if d.course is None:
+            p += " (the plant holds the mean)"
+        elif d.course["kind"] != d.kind:  # the fitting rows alone chose the other kind
+            p += f", modelled as a drift ({'a trend' if d.course['kind'] == 'trend' else 'a step'} on the fitting rows)"
+        else:
+            p += ", modelled as a drift"
+        parts.append(p)
     return "drift: " + "; ".join(parts)
 
 
@@ -315,7 +329,7 @@ def markdown(drifts, files: dict) -> list:
          "Every fitted parameter tried as a trend or a step in time over the whole recording (BIC with the "
          "look-elsewhere cost of every parameter and step time tried); the time course is the parameter refitted "
          f"alone in {WINDOWS} windows.  A drift the core can model is modelled as a drift: the replay's plant "
-         "carries it as its parameter's time course, fitted again on the fitting rows alone.", ""]
+         "carries it as its parameter's time course, fitted again (its kind chosen too) on the fitting rows alone.", ""]
     for d in drifts:
         if d.course is not None:
             c = d.course

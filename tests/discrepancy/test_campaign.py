@@ -54,6 +54,7 @@ def test_the_joint_fit_recovers_the_shared_parameters_and_flags_the_odd_run(camp
         assert p in fitted, res.joint.conclusion
         assert abs(fitted[p]["value"] - truth) <= fitted[p]["ci95"], (p, fitted[p], truth)
     assert res.first_joint is not None  # the fit of all four runs, before r3 was set aside
+    assert res.drifts == []  # one odd run is no drift between the runs
     # each run's own offset, taken out of its data, is the simulated one
     for r, off in zip(res.per_run, OFFSETS):
         assert abs(r["declared"]["rail[1].offset"] - off) < 0.3, (r["name"], r["declared"], off)
