@@ -36,3 +36,16 @@ def test_a_drift_case_of_an_unknown_kind_is_refused():
 
     with pytest.raises(InputError, match="kind 'ramp' is none of"):
         drift_case("ramp", 1)
+
+
+def test_a_drift_only_the_held_out_part_shows_is_not_carried_by_the_plant():
+    """A Coulomb friction that steps down at 85 % of the recording, after the fitting rows end
+    (70 %): the whole recording names the step, the fitting rows alone see none, so the plant
+    that is judged on the held-out part holds the mean instead of a drift it never saw."""
+    rec, truth = drift_case("step", 11, duration=4.0,
+                            step={"param": "rail[2].coulomb", "value": 0.12, "size": -0.08, "at": 0.85})
+    d = diagnose(rec, figures=False, replay=False, discovery=False, platform=False)
+    named = [x for x in d.drifts if x.param == "rail[2].coulomb"]
+    assert named and named[0].kind == "step" and abs(named[0].time - truth["t0"]) < 0.1, d.drifts
+    assert named[0].course is None and "do not support a drift" in named[0].held, named[0]
+    assert "the plant holds the mean" in d.conclusion + d.details

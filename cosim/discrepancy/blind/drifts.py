@@ -26,7 +26,7 @@ DT, LEAD, DURATION = 1e-3, 0.5, 6.0
 KINDS = ("trend", "step")
 
 
-def drift_case(kind: str, seed: int, duration: float = DURATION):
+def drift_case(kind: str, seed: int, duration: float = DURATION, step: dict | None = None):
     """One drift case: ``(recording, truth)``.
 
     Parameters
@@ -37,6 +37,9 @@ def drift_case(kind: str, seed: int, duration: float = DURATION):
         Draws the drift and the excitation and noise.
     duration : float
         The run's length, lead-in included [s].
+    step : dict, optional
+        ``step``: the step instead of a payload drawn from the seed: ``param``, ``value`` (its
+        value before), ``size`` and ``at`` (when, as a fraction of the recording).
 
     Returns
     -------
@@ -67,9 +70,11 @@ def drift_case(kind: str, seed: int, duration: float = DURATION):
         param, course = f"rail[{j}].coulomb", {"rate": (c1 - c0) / duration, "t0": 0.0}
         plant.set_params({param: c0})
     else:
-        param = "payload.m"
-        course = {"size": float(rng.uniform(0.06, 0.15)),
-                  "t0": round(LEAD + float(rng.uniform(0.25, 0.55)) * (duration - LEAD), 3)}
+        param, size, at = "payload.m", float(rng.uniform(0.06, 0.15)), float(rng.uniform(0.25, 0.55))
+        if step is not None:
+            param, size, at = step["param"], step["size"], step["at"]
+            plant.set_params({param: step["value"]})
+        course = {"size": size, "t0": round(LEAD + at * (duration - LEAD), 3)}
     plant.set_course(param, kind, **course)
     traj = excitation(m, duration, seed=seed, lead_in=LEAD)
     ref = make_reference(m, traj, step=DT, duration=round(traj.duration / DT) * DT)
