@@ -238,7 +238,9 @@ def heldout(campaign, pieces, joint, model, drifts: list, per_run: list, x, wind
     Returns, per held-out piece ``(run, a, b, True)``: ``run`` (name), ``values``
     ({parameter: [constant, predicted]}), ``rms`` ({"nominal", "constant", "drift"} effort
     residual RMS), ``gain_constant`` and ``gain_drift`` (nominal RMS over each) and ``ratio``
-    (the constant's RMS over the drift's)."""
+    (the constant's RMS over the drift's); or ``skipped``, the core's reason, when the values
+    predicted cannot be evaluated (a line extrapolated out of its parameter's range)."""
+    from .._native import JointLimitError, ParameterError, UnreachableError
     from .diagnosis import _model_for
 
     out = []
@@ -256,8 +258,12 @@ def heldout(campaign, pieces, joint, model, drifts: list, per_run: list, x, wind
             continue
         run = campaign.runs[k].slice(a, b)
         m = _model_for(run, model)
-        rms = {"nominal": _rms(run, m, {}, window), "constant": _rms(run, m, joint.theta, window),
-               "drift": _rms(run, m, theta, window)}
+        try:
+            rms = {"nominal": _rms(run, m, {}, window), "constant": _rms(run, m, joint.theta, window),
+                   "drift": _rms(run, m, theta, window)}
+        except (ParameterError, JointLimitError, UnreachableError) as e:  # a value predicted out of range
+            out.append({"run": campaign.names[k], "values": values, "skipped": str(e)})
+            continue
         out.append({"run": campaign.names[k], "values": values, "rms": rms,
                     "gain_constant": rms["nominal"] / rms["constant"], "gain_drift": rms["nominal"] / rms["drift"],
                     "ratio": rms["constant"] / rms["drift"]})
@@ -281,7 +287,7 @@ def stage(c, runs, per_run: list, drifts: list, used, pieces, joint, model, wind
 def predicted(held: list) -> dict:
     """{run name: {parameter: predicted value}} of :func:`heldout`'s answer (the replay's
     "fitted, drift" plant)."""
-    return {h["run"]: {p: v[1] for p, v in h["values"].items()} for h in held}
+    return {h["run"]: {p: v[1] for p, v in h["values"].items()} for h in held if "skipped" not in h}
 
 
 def sentence(drifts: list, held: list, n: int) -> str:
@@ -300,6 +306,9 @@ def sentence(drifts: list, held: list, n: int) -> str:
                      f"{d.bar:.2g})")
     text = "Between the runs, " + "; ".join(parts)
     for h in held:
+        if "skipped" in h:
+            text += f"; the held-out run {h['run']} is not predicted with the drift: {h['skipped']}"
+            continue
         text += (f"; modelled as a drift, the held-out run {h['run']}'s effort residual is {h['ratio']:.2f}x lower "
                  f"than with the shared constant (held-out gain {h['gain_drift']:.2f} against "
                  f"{h['gain_constant']:.2f})")

@@ -98,3 +98,21 @@ def test_a_campaign_without_drift_is_not_called_drifting():
     assert res.drifts == [] and res.drift_heldout == [] and "Between the runs" not in res.conclusion
     with pytest.raises(CampaignError, match="not one finite time in seconds per run"):
         read_campaign(recs, times=times[:3])
+
+
+def test_a_line_extrapolated_out_of_its_range_is_said_not_raised():
+    """Runs whose Coulomb friction falls 8 N a run, the fourth predicted at -4 N: the held-out
+    comparison says the core's reason and the replay gets no drifting plant."""
+    from types import SimpleNamespace
+
+    from cosim.discrepancy.campaign_drift import heldout, predicted, sentence
+
+    recs, times, _ = drift_campaign(seed=7, runs=4, duration=1.2, drift=False)
+    c = read_campaign(recs, times=times)
+    per = [{"rail[1].coulomb": {"value": 20.0 - 8.0 * k, "ci95": 0.1, "unit": "N"}} for k in range(4)]
+    ds = between_runs(per, c.names)
+    h = heldout(c, [(3, 0, len(c.runs[3]), True)], SimpleNamespace(theta={"rail[1].coulomb": 10.0}), None, ds, per,
+                np.arange(4.0))
+    assert h[0]["values"]["rail[1].coulomb"] == pytest.approx([10.0, -4.0])
+    assert "outside its valid range" in h[0]["skipped"] and predicted(h) == {}
+    assert "not predicted with the drift" in sentence(ds, h, 4)
