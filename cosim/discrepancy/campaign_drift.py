@@ -187,7 +187,14 @@ def between_runs(per_run: list, names: list, times=None, alpha: float = ALPHA) -
 
 def detrended(per_run: list, drifts: list) -> list:
     """``per_run`` with each drifting parameter's values moved onto the line's mean: the
-    runs compared by :func:`.campaign.agreement` differ by what the drift does not say."""
+    runs compared by :func:`.campaign.agreement` differ by what the drift does not say.
+
+    Example
+    -------
+    >>> per = [{"c": {"value": 20.0 - 0.5 * k, "ci95": 0.1, "unit": "N"}} for k in range(5)]
+    >>> [round(p["c"]["value"], 6) for p in detrended(per, between_runs(per, list("abcde")))]
+    [19.0, 19.0, 19.0, 19.0, 19.0]
+    """
     out = [{p: dict(e) for p, e in pr.items()} for pr in per_run]
     for d in drifts:
         mid = float(np.mean([d.at(x) for x in d.x]))
@@ -199,7 +206,14 @@ def detrended(per_run: list, drifts: list) -> list:
 
 def predict(param: str, per_run: list, x, k: int) -> float | None:
     """Run ``k``'s value of ``param`` from the line through the other runs' values alone
-    (``per_run`` and positions ``x`` aligned; None when fewer than two other runs have one)."""
+    (``per_run`` and positions ``x`` aligned; None when fewer than two other runs have one).
+
+    Example
+    -------
+    >>> per = [{"c": {"value": 20.0 - 0.5 * k, "ci95": 0.1, "unit": "N"}} for k in range(5)]
+    >>> round(predict("c", per, [0.0, 1.0, 2.0, 3.0, 4.0], 4), 9)     # run 4 from runs 0-3
+    18.0
+    """
     others = [pr if j != k else {} for j, pr in enumerate(per_run)]
     xs, v, s = _usable(others, param, np.asarray(x, float))
     if len(xs) < 2:
