@@ -322,8 +322,14 @@ def sentence(drifts: list, held: list, n: int) -> str:
     for h in held:
         if "skipped" in h:
             text += f"; the held-out run {h['run']} is not predicted with the drift: {h['skipped']}"
-            continue
+    done = [h for h in held if "skipped" not in h]
+    if len(done) == 1:
+        h = done[0]
         text += (f"; modelled as a drift, the held-out run {h['run']}'s effort residual is {h['ratio']:.2f}x lower "
                  f"than with the shared constant (held-out gain {h['gain_drift']:.2f} against "
                  f"{h['gain_constant']:.2f})")
+    elif done:
+        r = [h["ratio"] for h in done]
+        text += (f"; modelled as a drift, the {len(done)} held-out pieces' effort residual is {min(r):.2f}-"
+                 f"{max(r):.2f}x lower than with the shared constant (median {float(np.median(r)):.2f})")
     return text
