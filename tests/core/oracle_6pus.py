@@ -8,7 +8,7 @@ import numpy as np
 
 from cosim.core import Model
 
-from described_states import rel, samples
+from described_checks import rel, samples
 
 
 def same_parameter_table(a, b):

@@ -1,6 +1,7 @@
-"""Random states of a robot near its home pose, shared by test_described.py and oracle_6pus.py
-(a plain module beside them: pytest puts this folder on ``sys.path``, and so does running
-oracle_6pus.py as a script)."""
+"""Checks shared by the tests of described robots (test_described.py, test_described_axes.py)
+and oracle_6pus.py: random states near the home pose, the relative difference, one clear error
+of a bad description.  A plain module beside them: pytest puts this folder on ``sys.path``, and
+so does running oracle_6pus.py as a script."""
 import numpy as np
 
 
@@ -25,3 +26,21 @@ def samples(m, n, seed):
     XD = rng.normal(size=(n, m.ndof)) * np.where(ang, 0.3, 0.05)
     XDD = rng.normal(size=(n, m.ndof)) * np.where(ang, 3.0, 1.0)
     return X, XD, XDD
+
+
+def assert_one_clear_error(path, line, words) -> str:
+    """``Model(path)`` raises an ArgumentError of one line that names ``path:line`` and each of
+    ``words``; returns its message."""
+    import pytest
+
+    from cosim.core import Model
+    from cosim.errors import ArgumentError
+
+    with pytest.raises(ArgumentError) as e:
+        Model(path)
+    msg = str(e.value)
+    assert f"{path}:{line}:" in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+    assert "\n" not in msg
+    return msg
