@@ -68,15 +68,20 @@ def step_figure(out, path, coords: str = "moved") -> Path:
     lim = np.max(np.abs(e[len(e) // 3:])) if len(e) > 3 else 1.0
     ax[1].set_ylim(-3 * lim - 1e-6, 3 * lim + 1e-6)
     ax[1].legend(ncol=6, fontsize=7)
-    for j in range(res["tau_applied"].shape[1]):
-        ax[2].plot(t, res["tau_applied"][:, j], label=f"tau{j + 1}")
-    ax[2].set_ylabel(f"effort [{res.units['tau_applied']}]")
-    ax[2].set_xlabel("time [s]")
-    ax[2].legend(ncol=6, fontsize=7)
+    _effort_panel(ax[2], res)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def _effort_panel(ax, res) -> None:
+    """The applied effort of every joint over time, on ``ax``."""
+    for j in range(res["tau_applied"].shape[1]):
+        ax.plot(res["time"], res["tau_applied"][:, j], label=f"tau{j + 1}")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"effort [{res.units['tau_applied']}]")
+    ax.legend(ncol=6, fontsize=7)
 
 
 def tracking_figure(out, path) -> Path:
@@ -103,12 +108,7 @@ def tracking_figure(out, path) -> Path:
     a1.set_ylabel("pen error [um]")
     a1.set_title(f"RMS {m['tracking']['pen_error_rms'] * 1e6:.3g} um, max {m['tracking']['pen_error_max'] * 1e6:.3g} um",
                  fontsize=9)
-    a2 = fig.add_subplot(2, 1, 2)
-    for j in range(res["tau_applied"].shape[1]):
-        a2.plot(res["time"], res["tau_applied"][:, j], label=f"tau{j + 1}")
-    a2.set_xlabel("time [s]")
-    a2.set_ylabel(f"effort [{res.units['tau_applied']}]")
-    a2.legend(ncol=6, fontsize=7)
+    _effort_panel(fig.add_subplot(2, 1, 2), res)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

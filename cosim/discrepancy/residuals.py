@@ -44,7 +44,6 @@ engine's regressors are finite differences of :meth:`Pipeline.evaluate`.
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,6 +52,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
+from ._memo import Memo
 from ..errors import DiagnosisError
 
 
@@ -78,54 +78,12 @@ class Residual:
         return self.eff if self.kin is None else np.hstack([self.eff, self.kin])
 
 
-#: the evaluation cache of a pipeline: at least this many entries, and more up to CACHE_BYTES.
-#: The least recently used entry leaves first: the nominal parts (the mechanism's efforts, the
-#: joint motion, the readings) are read by every candidate and stay, the evaluations of one
-#: selection step's Jacobian are read again within the next steps.  At 128 MB no evaluation of the
-#: benchmark's 10 s recordings is computed twice that 256 MB first in, first out computed once
-#: (docs/discrepancy.md, "Speed").
-CACHE_ENTRIES = 64
-CACHE_BYTES = 128 * 2**20
-
-
-def _nbytes(v) -> int:
-    """Bytes of the arrays of a cached value (an array or a tuple of arrays)."""
-    return sum(a.nbytes for a in (v if isinstance(v, tuple) else (v,)) if isinstance(a, np.ndarray))
-
-
 def _at(a, pos):
     """Linear interpolation of rows of a (n, c) at fractional row positions pos (m,)."""
     i0 = np.floor(pos).astype(int)
     f = (pos - i0)[:, None]
     i0 = np.clip(i0, 0, len(a) - 2)
     return a[i0] * (1.0 - f) + a[i0 + 1] * f
-
-
-class _Scratch:
-    """A model copy whose parameters are moved away from the nominal ones and back."""
-
-    def __init__(self, model, nominal):
-        self.m = model.copy()
-        self.nominal = nominal
-        self.current = {}
-
-    def set(self, params):
-        change = {k: self.nominal[k] for k in self.current if k not in params}
-        change.update({k: v for k, v in params.items() if self.current.get(k) != v})
-        if not change:
-            return self.m
-        try:
-            self.m.set_params_unchecked(change)
-            self.current = dict(params)
-        except PkmError:
-            back = {k: self.nominal[k] for k in set(self.current) | set(change)}
-            self.current = {}
-            try:
-                self.m.set_params_unchecked(back)
-            except PkmError:
-                pass
-            raise
-        return self.m
 
 
 def _check_joint_limits(model, t, q, where, whole=True):
@@ -319,14 +277,20 @@ class Pipeline:
 
             geometry = [p for g in groups_for(model, True)[0] if g.effect.kind == "geometry" for p in g.params]
         self.geometry = frozenset(geometry)
-        self._scratch = _Scratch(model, self.nominal)
-        self._cache: OrderedDict = OrderedDict()
-        self._cache_bytes = 0
+        # the evaluations' cache and scratch model: the pipeline's attributes are fixed from here on
+        self._memo = Memo(model, self.nominal)
         # The mechanism's inverse dynamics is kept apart from the drive layer's (friction,
         # rotor inertia, joint force): most candidates move only the drive layer, and the
         # mechanism's part, the costly one, is then the nominal one.
         self._drive_params = model.drive_layer_params()
         self._compliant = any(k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
+        self._built = True
+
+    def __setattr__(self, name, value):
+        if getattr(self, "_built", False):
+            raise AttributeError(f"Pipeline.{name}: a pipeline is fixed once built (its evaluations' cache and "
+                                 f"scratch model are its Memo)")
+        object.__setattr__(self, name, value)
 
     def _reference_effort(self, model):
         """Smoothed inverse dynamics of the reference (``qref``) through the nominal
@@ -461,22 +425,12 @@ class Pipeline:
         than the evaluation itself).  Valid until the next call."""
         if not params:
             return self.model
-        return self._scratch.set(params)
+        return self._memo.scratch.set(params)
 
     def _cached(self, key, fn):
-        """fn(), kept under ``key``; the least recently used entries leave when the cache holds
-        more than CACHE_ENTRIES entries and more than CACHE_BYTES (a short recording keeps
-        hundreds of evaluations, a long one's working set at least CACHE_ENTRIES)."""
-        v = self._cache.get(key)
-        if v is not None:
-            self._cache.move_to_end(key)
-        else:
-            v = fn()
-            self._cache[key] = v
-            self._cache_bytes += _nbytes(v)
-            while len(self._cache) > CACHE_ENTRIES and self._cache_bytes > CACHE_BYTES:
-                self._cache_bytes -= _nbytes(self._cache.popitem(last=False)[1])
-        return v
+        """fn(), kept under ``key`` in the pipeline's :class:`._memo.Memo` (least recently used
+        first out)."""
+        return self._memo.get(key, fn)
 
     def split(self, train_fraction: float = 0.7):
         """Boolean masks (train, held-out) over the sample positions: the last part of

@@ -67,6 +67,13 @@ bool no_unit(const std::string& u);
 std::string guid_of(const std::string& text);
 // <UnitDefinitions>, <LogCategories> and <DefaultExperiment> of both descriptions.
 std::string units_and_log_categories(const std::set<std::string>& units);
+// <fmiModelDescription ...> of both descriptions up to variableNamingConvention (tag left open):
+// id_attribute is "guid" (FMI 2.0) or "instantiationToken" (FMI 3.0).
+std::string description_head(const Table& t, const std::string& fmi_version, const std::string& id_attribute,
+                             const std::string& id_value);
+// name, valueReference, description, causality, variability and initial of a variable.
+std::string variable_attributes(const std::string& name, size_t vr, const std::string& description,
+                                const std::string& causality, bool integer);
 
 // ------------------------------------------------------------- table (fmu_gen_table.cpp)
 

@@ -8,27 +8,7 @@ import numpy as np
 
 from cosim.core import Model
 
-
-def rel(a, b):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return np.abs(a - b).max() / max(1e-300, np.abs(a).max())
-
-
-def samples(m, n, seed):
-    """Poses near home (up to 10 mm, 3 deg, inside the strokes), rates and accelerations."""
-    rng = np.random.default_rng(seed)
-    ang = np.array([u == "rad" for u in m.facts.pose_units])
-    step = np.where(ang, 0.05, 0.01)
-    X = np.empty((0, m.ndof))
-    while len(X) < n:
-        cand = m.home() + rng.uniform(-1, 1, (4 * n, m.ndof)) * step
-        _, status = m.ik(cand, errors="status")
-        X = np.vstack([X, cand[status == 0]])
-        step = step * 0.7
-    X = X[:n]
-    XD = rng.normal(size=(n, m.ndof)) * np.where(ang, 0.3, 0.05)
-    XDD = rng.normal(size=(n, m.ndof)) * np.where(ang, 3.0, 1.0)
-    return X, XD, XDD
+from described_checks import rel, samples
 
 
 def same_parameter_table(a, b):

@@ -13,32 +13,12 @@ import pytest
 from cosim.core import Model, robots
 from cosim.errors import ArgumentError, PkmError
 
+from described_checks import assert_one_clear_error, rel, samples
+
 REPO = Path(__file__).resolve().parents[2]
 LISTED = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
 LISTED = [n for n in LISTED if n]
 NEW = [n for n in LISTED if n != "6pus"]  # quattro_described too: its platform kind is new
-
-
-def rel(a, b):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return np.abs(a - b).max() / max(1e-300, np.abs(a).max())
-
-
-def samples(m, n, seed):
-    """Poses near home (up to 10 mm, 3 deg, inside the strokes), rates and accelerations."""
-    rng = np.random.default_rng(seed)
-    ang = np.array([u == "rad" for u in m.facts.pose_units])
-    step = np.where(ang, 0.05, 0.01)
-    X = np.empty((0, m.ndof))
-    while len(X) < n:
-        cand = m.home() + rng.uniform(-1, 1, (4 * n, m.ndof)) * step
-        _, status = m.ik(cand, errors="status")
-        X = np.vstack([X, cand[status == 0]])
-        step = step * 0.7
-    X = X[:n]
-    XD = rng.normal(size=(n, m.ndof)) * np.where(ang, 0.3, 0.05)
-    XDD = rng.normal(size=(n, m.ndof)) * np.where(ang, 3.0, 1.0)
-    return X, XD, XDD
 
 
 def test_every_listed_description_is_listed_by_the_core():
@@ -269,14 +249,7 @@ BAD = [
 
 @pytest.mark.parametrize("what,edit,line,words", BAD, ids=[b[0] for b in BAD])
 def test_bad_description_gives_one_clear_error(tmp_path, what, edit, line, words):
-    f = write(tmp_path, edit(GOOD))
-    with pytest.raises(ArgumentError) as e:
-        Model(f)
-    msg = str(e.value)
-    assert f"{f}:{line}:" in msg, msg
-    for w in words:
-        assert w in msg, (w, msg)
-    assert "\n" not in msg
+    msg = assert_one_clear_error(write(tmp_path, edit(GOOD)), line, words)
     assert "--robot" not in msg  # cosim params takes the file itself
 
 

@@ -100,30 +100,27 @@ def test_jacobian_against_central_differences(m):
         assert np.abs(J - fd).max() <= 1e-6 * np.abs(fd).max()
 
 
+def _dq_dparam(m, x, key, h=1e-6):
+    """Central difference of the joints at pose x in parameter ``key`` (set back afterwards)."""
+    v = m.param(key)
+    m.set_params({key: v + h})
+    qp = m.ik(x)
+    m.set_params({key: v - h})
+    qm = m.ik(x)
+    m.set_params({key: v})
+    return (qp - qm) / (2 * h)
+
+
 def test_calibration_rows_against_central_differences(m):
     x = m.home() + [0.01, -0.005, -0.01, 2 * DEG, -1 * DEG, 3 * DEG]
     rows_w = m.calib_rows(x, "world")
     rows_p = m.calib_rows(x, "platform")
-    h = 1e-6
     for i in (1, 4):
         for c, name in enumerate(["px", "py", "pz"]):
-            key = f"leg[{i}].{name}"
-            v = m.param(key)
-            m.set_params({key: v + h})
-            qp = m.ik(x)
-            m.set_params({key: v - h})
-            qm = m.ik(x)
-            m.set_params({key: v})
-            assert rows_p[i - 1, c] == pytest.approx((qp - qm)[i - 1] / (2 * h), rel=1e-6)
+            assert rows_p[i - 1, c] == pytest.approx(_dq_dparam(m, x, f"leg[{i}].{name}")[i - 1], rel=1e-6)
         for c, key in [(3, f"rail[{i}].S0y"), (6, f"leg[{i}].L"), (9, f"rail[{i}].sz")]:
-            v = m.param(key)
-            m.set_params({key: v + h})
-            qp = m.ik(x)
-            m.set_params({key: v - h})
-            qm = m.ik(x)
-            m.set_params({key: v})
             c = c + 1 if c == 3 else c
-            assert rows_w[i - 1, c] == pytest.approx((qp - qm)[i - 1] / (2 * h), rel=1e-6), key
+            assert rows_w[i - 1, c] == pytest.approx(_dq_dparam(m, x, key)[i - 1], rel=1e-6), key
     # World and platform frames differ by the rotation of the platform point only.
     np.testing.assert_array_equal(rows_w[:, 3:], rows_p[:, 3:])
 

@@ -38,3 +38,15 @@ def test_cached_evaluations_equal_the_direct_residual_bit_for_bit(clean_runs, ro
         if key in first:
             assert np.array_equal(got, first[key])
         first[key] = got
+
+
+def test_a_built_pipeline_is_fixed_and_its_evaluations_leave_its_attributes_alone(clean_runs):
+    """The cache and the scratch model are the pipeline's Memo: evaluating keeps every attribute
+    the same object, and setting one raises."""
+    pipe = Pipeline(clean_runs["6pus"], Model("6pus"))
+    before = dict(vars(pipe))
+    pipe.evaluate({f"{pipe.model.facts.joint_prefix}[1].coulomb": 0.05})
+    assert vars(pipe).keys() == before.keys() and all(vars(pipe)[k] is v for k, v in before.items())
+    assert len(pipe._memo.entries) > 0
+    with pytest.raises(AttributeError, match="fixed once built"):
+        pipe.idx = pipe.idx[:10]

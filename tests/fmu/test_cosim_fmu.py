@@ -1,6 +1,7 @@
 """``cosim fmu``: a robot's FMUs for the platforms asked for, for a listed robot or a
 description file anywhere (its FMUs made in the build directory, the checkout untouched), and
-a scenario whose robot is a file run with ``--plant fmu``."""
+a scenario whose robot is a file run with ``--plant fmu``.  The module leaves the build directory
+as it found it (fixture ``build_restored``)."""
 import json
 import shutil
 import subprocess
@@ -15,6 +16,8 @@ import pytest
 from cosim import fmu
 
 REPO = Path(__file__).resolve().parents[2]
+# the FMUs made here of description files leave the build directory afterwards (tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("build_restored")
 
 
 def cosim(*args):

@@ -368,9 +368,10 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
     timings.update(prepare=t1 - t0 - timings["read"], regressors=t2 - t1, selection=t3 - t2, platform=t3a - t3,
                    discovery=t3b - t3a,
                    heldout_localisation=t4 - t3b)
-    r_after, left, effects_out, not_excited, flex, conclusion, details = _statement(
+    r_after, left, effects_out, not_excited, flex, conclusion, details, found, spent = _statement(
         pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, plat, drifts, held, one_signed, enc,
-        effort_map, flexible, timings)
+        effort_map, flexible)
+    timings.update(spent)
     replayed = None
     if replay:
         t5 = time.perf_counter()
@@ -406,11 +407,12 @@ def _diagnose(recording, model, *, out, window, threshold, train_fraction, effec
 
 
 def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, plat, drifts, held, one_signed, enc,
-               effort_map, flexible, timings):
-    """``(r_after, left, effects, not_excited, flex, conclusion, details)`` of a fit: the residual
-    after it and the structure left in it, the effects reported, what the recording cannot
-    reveal, the flexible model of the structure left (when ``flexible``; its time into
-    ``timings``), and the statement of it all."""
+               effort_map, flexible):
+    """``(r_after, left, effects, not_excited, flex, conclusion, details, found, spent)`` of a fit:
+    the residual after it and the structure left in it, the effects reported, what the recording
+    cannot reveal, the flexible model of the structure left (when ``flexible``), the statement of
+    it all, the discovered terms with their ``partial`` sentence (new terms: ``found`` is left as
+    it was) and the time the flexible stage took ({"flexible": s}, or {} without it)."""
     from ..structure import unexplained
 
     gone = {w["group"] for w in withdrawn}
@@ -424,21 +426,22 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
     # closed loop a missing force moves every joint's readings and efforts, and a stand-in often
     # acts on other channels than those it leaves structured (measured: docs/discrepancy.md)
     effects_out = [e for e in _effects(eng, sel, ties, left) if e["group"] not in gone and not problems]
-    for t in found:  # the same for a discovered term: fitted on top of stand-ins, it may share their error
-        t.partial = _partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t)
+    # the same for a discovered term: fitted on top of stand-ins, it may share their error
+    found = [replace(t, partial=_partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t))
+             for t in found]
     not_excited = _not_excited(eng, sel) + one_signed
     conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
-    flex = []
+    flex, spent = [], {}
     if flexible:
         from ..flexible import flexible_stage
 
         t3c = time.perf_counter()
         flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
-        timings["flexible"] = time.perf_counter() - t3c
+        spent["flexible"] = time.perf_counter() - t3c
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)
     conclusion = _with_drive_statements(conclusion, enc, effort_map)
-    return r_after, left, effects_out, not_excited, flex, conclusion, details
+    return r_after, left, effects_out, not_excited, flex, conclusion, details, found, spent
 
 
 def _check_settings(window, threshold, train_fraction) -> None:

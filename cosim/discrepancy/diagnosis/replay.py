@@ -4,6 +4,8 @@ nominal, the fitted and the compared plants (:mod:`.diagnosis`).
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..._native import PkmError
@@ -20,18 +22,24 @@ def _discover(eng, sel, threshold):
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
-    withdrawn += _offsets_refitted_away(sel, found, {w["group"] for w in withdrawn})
+    withdrawn = withdrawn + _offsets_refitted_away(sel, found, {w["group"] for w in withdrawn})
+    found = [replace(t, instead_of=[_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]])
+             for t in found]
+    theta = dict(theta)
     for t in found:
-        t.instead_of = [_withdrawn_sentence(w) for w in withdrawn if t.channel in w["replaced_by"]]
         theta.update(t.params())
-    pipe = eng.pipe
     R_all = eng.R(theta) if found else None
-    for t in found:
-        c = t.joint - 1
-        without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
-        key = {"position": pipe.q_s, "velocity": pipe.qd_s, "acceleration": pipe.qdd_s}[t.key_variable][pipe.idx, c]
-        t.curve = {"key": key, "before": without, "after": R_all[:, c]}
-    return found, withdrawn, theta, ties
+    return [replace(t, curve=_curve(eng, theta, R_all, t)) for t in found], withdrawn, theta, ties
+
+
+def _curve(eng, theta, R_all, t) -> dict:
+    """For the report's figure of discovered term ``t``: its joint's position or rate (``key``)
+    and its channel's residual without and with the term (``before``, ``after``), at the
+    decimated samples; ``theta`` holds every parameter fitted, ``R_all`` is its residual."""
+    pipe, c = eng.pipe, t.joint - 1
+    without = eng.R({k: v for k, v in theta.items() if k not in t.params()})[:, c]
+    key = {"position": pipe.q_s, "velocity": pipe.qd_s, "acceleration": pipe.qdd_s}[t.key_variable][pipe.idx, c]
+    return {"key": key, "before": without, "after": R_all[:, c]}
 
 
 def _offsets_refitted_away(sel, found, gone) -> list:

@@ -4,4 +4,4 @@
 
 const fmu_model_desc FMU_MODEL = {FMU_IDENTIFIER, FMU_GUID,  FMU_ROBOT, FMU_PARAM_SET, FMU_NDOF,
                                   FMU_NPARAM,     FMU_NVARS, FMU_VARS,  FMU_QMIN_PARAM, FMU_QMAX_PARAM,
-                                  FMU_NINDICATORS, FMU_LTI_STATES};
+                                  FMU_NINDICATORS, FMU_LTI_STATES, FMU_DESCRIPTION};
