@@ -124,8 +124,8 @@ def _platform_mechanism(kind, rng, m, mo):
         k = float(rng.uniform(80.0, 160.0))
 
         def edit(xml):
-            xml = xml.replace("<worldbody>", f'<worldbody>\n    <site name="anchor" pos="{anchor[0]:.9g} {anchor[1]:.9g} '
-                                             f'{anchor[2]:.9g}"/>', 1)
+            site = f'<site name="anchor" pos="{anchor[0]:.9g} {anchor[1]:.9g} {anchor[2]:.9g}"/>'
+            xml = xml.replace("<worldbody>", f"<worldbody>\n    {site}", 1)
             xml = xml.replace("<freejoint/>", '<freejoint/>\n      <site name="tie" pos="0 0 0"/>', 1)
             return xml.replace("</equality>", f'''</equality>
   <tendon>
@@ -183,7 +183,8 @@ def _platform_mechanism(kind, rng, m, mo):
         c = 2 * zeta * mb * L * L * math.sqrt(9.81 / L)
 
         def edit(xml):
-            xml = xml.replace(f'<inertial pos="0 0 0" mass="{M:.17g}"', f'<inertial pos="0 0 0" mass="{M - mb:.17g}"', 1)
+            head = '<inertial pos="0 0 0" mass='
+            xml = xml.replace(f'{head}"{M:.17g}"', f'{head}"{M - mb:.17g}"', 1)
             return xml.replace("<freejoint/>", f'''<freejoint/>
       <body name="bob" pos="0 0 {L:.9g}"><joint name="slosh" type="ball" damping="{c:.9g}"/>
         <inertial pos="0 0 {-L:.9g}" mass="{mb:.9g}" diaginertia="1e-9 1e-9 1e-9"/></body>''', 1)
