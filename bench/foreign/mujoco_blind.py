@@ -179,7 +179,7 @@ def controller(kind: str, m: Model):
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", force=None,
-             gap_model="applied", hook=None):
+             gap_model="applied", hook=None, edit=None):
     """One case: (Recording in MuJoCo's joint coordinates with the convention declared, truth).
     ``effect`` is a type (with ``value`` and ``joint``), None (clean) or a list of
     ``(type, value, joint)`` to hide several at once.  ``force``, if given, is a force law
@@ -192,13 +192,15 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     called before every MuJoCo step as ``hook(model, data, t, q, qd, cmd)`` (t [s], the rails'
     true positions and rates, the six commanded forces [N]) and returns six more rail forces
     along +q [N] or None; it may also set MuJoCo's ``xfrc_applied`` or the model's masses
-    (bench/foreign/mujoco_unnamed.py)."""
+    (bench/foreign/mujoco_unnamed.py).  ``edit``, if given, maps the case's MJCF text to the one
+    simulated (a body, a tendon, a contact or a joint property added to MuJoCo's model;
+    bench/foreign/mujoco_unlisted.py)."""
     import mujoco
 
     rng = np.random.default_rng(seed)
     hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
     xml, truth = case_xml(m, hidden, rng, gap_model)
-    model = mujoco.MjModel.from_xml_string(xml)
+    model = mujoco.MjModel.from_xml_string(xml if edit is None else edit(xml))
     gaps = [(model.joint(f"gap{j}").qposadr[0], model.joint(f"gap{j}").dofadr[0], eff, val)
             for eff, val, j in hidden if eff in ("backlash", "compliance")]
     substeps = SUBSTEPS

@@ -62,3 +62,15 @@ def test_a_clean_recording_gets_no_platform_force():
     d = diagnose(_record({}, seed=4), figures=False, replay=False)
     assert d.platform_force is None
     assert d.conclusion == "no missing physics found", d.conclusion
+
+
+def test_a_drag_that_feeds_energy_in_or_a_cable_that_pushes_is_not_an_option():
+    # a fan's unbalance on MuJoCo's platform (bench/foreign/mujoco_unlisted.py) was named a
+    # platform drag of c = -6.0 N s/m: a force along the velocity is no drag, a pushing cable no cable
+    from cosim.discrepancy.platform_force import DRAG, FORCE, _Option, physical
+
+    def option(keys, coef):
+        return _Option("x", keys, np.asarray(coef, float), np.eye(len(keys)), 0.0, len(keys))
+    assert physical(option(DRAG, [2.0])) and physical(option(FORCE + DRAG, [-1.0, -1.0, -1.0, 0.0]))
+    assert not physical(option(DRAG, [-6.0])) and not physical(option(FORCE + DRAG, [1.0, 0.0, 0.0, -0.1]))
+    assert not physical(option(("cable.tension",), [-0.4])) and physical(option(("cable.tension",), [0.4]))
