@@ -195,13 +195,15 @@ def detrended(per_run: list, drifts: list) -> list:
     >>> [round(p["c"]["value"], 6) for p in detrended(per, between_runs(per, list("abcde")))]
     [19.0, 19.0, 19.0, 19.0, 19.0]
     """
-    out = [{p: dict(e) for p, e in pr.items()} for pr in per_run]
-    for d in drifts:
-        mid = float(np.mean([d.at(x) for x in d.x]))
-        for k, pr in enumerate(out):
-            if d.param in pr:
-                pr[d.param]["value"] = pr[d.param]["value"] - d.at(d.x[k]) + mid
-    return out
+    shift = {d.param: (d, float(np.mean([d.at(x) for x in d.x]))) for d in drifts}
+
+    def moved(p, e, k):
+        if p not in shift:
+            return dict(e)
+        d, mid = shift[p]
+        return {**e, "value": e["value"] - d.at(d.x[k]) + mid}
+
+    return [{p: moved(p, e, k) for p, e in pr.items()} for k, pr in enumerate(per_run)]
 
 
 def predict(param: str, per_run: list, x, k: int) -> float | None:
