@@ -174,7 +174,7 @@ def inputs(pipe, R) -> tuple:
                                         (f"effort{k + 1}", effort[:, k], "effort", eu)):
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
-        if rate_ref is not None:  # the commanded rate: its sign is the direction of motion where the smoothed reading lags
+        if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
             X.append(rate_ref[:, k])
             cols.append((f"qd{k + 1} reference", f"rate of {noun} {k + 1}", k + 1, "rate", rate_u))
         group = f"history of {noun} {k + 1}"
