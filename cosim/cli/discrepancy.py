@@ -205,7 +205,7 @@ def print_diagnosis(d, file=None):
             if t.partial:
                 p(f"    not named as the physics: {t.partial}")
     if getattr(d, "flexible", None):
-        p("\nwhere no equation was found (a flexible model of what is left, judged on the held-out part):")
+        p("\nwhere no equation was found (a flexible model of what is left, judged out of fold, over blocks in time):")
         for f in d.flexible:
             p(f"  {f.statement}")
     pf = getattr(d, "platform_force", None)

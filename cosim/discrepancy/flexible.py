@@ -1,29 +1,37 @@
 """Where no family fits: a flexible model of what is left, then its dependence.
 
 After the library, the discovery step and the platform force, an effort channel that still
-keeps structure (:mod:`.structure`, or a residual well above its own noise) is fitted with a
-flexible regression, scikit-learn's :class:`~sklearn.ensemble.HistGradientBoostingRegressor`
-(boosted trees), on every input the recording offers at the decimated samples: each joint's
-position, rate, acceleration and the fitted model's effort (not the measured one: it holds the
-residual itself), the low-passed |rate| and effort of each joint (time constants
-:data:`TIME_CONSTANTS`) and its low-passed dissipated power |effort x rate|
-(:data:`POWER_TIME_CONSTANTS`), the platform pose where the recording gives one, and time.
+keeps structure (:mod:`.structure`, or a residual above its own noise by :data:`RMS_OVER_NOISE`)
+is fitted with a flexible regression, scikit-learn's
+:class:`~sklearn.ensemble.HistGradientBoostingRegressor` (boosted trees), on every input the
+recording offers at the decimated samples: each joint's position, rate (the smoothed reading,
+and the commanded rate where the recording has a reference: its sign is the direction of
+motion where the smoothed reading lags at a reversal), acceleration and the fitted model's
+effort (not the measured one: it holds the residual itself), the low-passed |rate| and effort
+of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated power
+|effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
+(a friction level a slow state sets: a product greedy trees do not find from its factors), the
+platform pose where the recording gives one, and time.
 
-It is fitted on the engine's fitted part and judged on its held-out part (the last
-``1 - train_fraction`` of the recording):
+It is judged out of fold, by cross-validation over blocks in time spread through the recording
+(:mod:`.flexible_cv`): a slowly varying input takes in the held-out blocks the values the
+fitted ones span, where a held-out end of the recording would lie beyond them.
 
-* **explained share**: 1 - MSE(residual - prediction) / var(residual) on the held-out samples,
-  claimed only when it is at least :data:`SHARE_MIN` and the variance it explains is
-  significant against the residual's own noise: a chi-square in independent samples (the
-  held-out samples' explained sum of squares over the noise variance, divided by the decimated
-  samples per independent one) above :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
-* **inputs**: grouped permutation importance on the held-out samples, per held-out block (a
-  group is one input of one joint: "position of slider 3", or the pose, or time); a group
-  passes when permuting it costs at least :data:`IMPORTANCE_MIN` of the held-out variance,
-  :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN` of the strongest group's
-  importance, above :data:`BLOCK_Z` standard errors over the blocks; it is named when the trees
-  refitted without it (on the other passing groups) lose :data:`DROP_MIN` of the held-out
-  variance; the share claimed is then that of the trees on the named groups alone;
+* **explained share**: 1 - MSE(residual - out-of-fold prediction) / var(residual), claimed only
+  when it is at least :data:`SHARE_MIN` and the variance it explains is significant against
+  the residual's own noise: a chi-square in independent samples (the explained sum of squares
+  over the noise variance, divided by the decimated samples per independent one) above
+  :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
+* **inputs**: grouped permutation importance out of fold, per fold (a group is one input of one
+  joint: "position of slider 3", or the pose, or time; a signed power belongs to the joint's
+  rate and history); a group passes when permuting it costs at least :data:`IMPORTANCE_MIN`
+  of the residual's variance, :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN`
+  of the strongest group's importance (at most the share), above :data:`BLOCK_Z` standard
+  errors over the folds; it is named when the trees cross-validated without it (on the other
+  passing groups) lose :data:`DROP_MIN` of the variance; the share claimed is then that of
+  the trees on the named groups alone;
+* **where the trees extrapolate**: the share of samples whose named inputs lay outside the
+  range fitted without their block (``outside``), stated when above :data:`OUTSIDE_WARN`;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
   (:func:`sklearn.inspection.partial_dependence`), in the input's and the effort's units;
 * **whether a found family already says it**: a discovered term or a library effect of the
@@ -38,37 +46,34 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .flexible_cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
+
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
 TIME_CONSTANTS = (1.0, 4.0)
 POWER_TIME_CONSTANTS = (0.5, 2.0, 8.0)
-#: fewest held-out decimated samples for a fit, and per held-out block of the importance
+#: fewest decimated samples per cross-validation block for a fit
 BLOCK = 25
-#: held-out blocks the importance is measured on (its standard error is their spread)
-N_BLOCKS = 5
-#: the last share of the fitted samples that chooses the trees' number of iterations
-EARLY_BLOCK = 0.2
 #: smallest explained share claimed, and the chi-square (independent samples) it must explain
 SHARE_MIN, CHI2_MIN = 0.05, 25.0
-#: an input is named when permuting it costs this share of the held-out variance...
+#: an input is named when permuting it costs this share of the residual's variance (out of fold)...
 IMPORTANCE_MIN = 0.04
 #: ... and this fraction of the explained share
-RELATIVE_MIN = 0.15
+RELATIVE_MIN = 0.1
 #: ... and this fraction of the strongest group's importance
 TOP_MIN = 0.1
-#: ... and it exceeds this many standard errors over the held-out blocks
+#: ... and it exceeds this many standard errors over the folds
 BLOCK_Z = 2.0
 #: ... at most this many are checked by refitting without each ...
 MAX_INPUTS = 4
-#: ... and one is kept when the trees refitted without it lose this share of the held-out variance
+#: ... and one is kept when the trees cross-validated without it lose this share of the variance
 DROP_MIN = 0.03
 #: a channel with no structure flagged is still fitted when its residual's RMS exceeds its own
 #: noise by this factor (a force keyed on another joint, which :mod:`.structure` does not test)
-RMS_OVER_NOISE = 2.0
-#: the boosted trees' settings (small: a few hundred decimated samples; the number of
-#: iterations, at most max_iter, is chosen on the last fitted block)
-TREES = dict(max_iter=300, learning_rate=0.08, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
-             early_stopping=False, random_state=0)
+RMS_OVER_NOISE = 1.15
+#: the statement warns of extrapolation when the named inputs leave the fitted range in their
+#: held-out block at more than this share of the samples
+OUTSIDE_WARN = 0.1
 
 _QUANTITIES = ("position", "rate", "acceleration", "effort", "history")
 
@@ -80,7 +85,7 @@ class Dependence:
     ``group`` (e.g. ``"position of slider 3"``), ``feature`` (the column the curve is drawn
     over, e.g. ``"q3"``), ``joint`` (1-based; None for the pose and time), ``quantity``
     (position, rate, acceleration, effort, history, pose, time), ``importance`` (share of the
-    held-out residual variance lost when the group is permuted, 0-1), ``unit`` (of the
+    residual variance lost out of fold when the group is permuted, 0-1), ``unit`` (of the
     feature), ``grid`` and ``curve`` (partial dependence of the force on the feature, in the
     channel's effort unit), ``where`` (in words: "above 0.42 m")."""
 
@@ -99,10 +104,10 @@ class Dependence:
 class FlexibleFit:
     """The flexible model of one effort channel's residual and what it depends on.
 
-    ``channel`` and ``joint`` (1-based), ``share`` (held-out explained share, at most 1; below 0
+    ``channel`` and ``joint`` (1-based), ``share`` (explained share out of fold, at most 1; below 0
     when the model predicts worse than the mean), ``z`` (the chi-square it explains, in
     independent samples against the residual's own noise), ``explained`` (whether it is claimed),
-    ``rms_left`` (held-out RMS of the residual) and ``noise`` (its own noise), in ``unit``;
+    ``rms_left`` (RMS of the residual) and ``noise`` (its own noise), in ``unit``;
     ``inputs`` (:class:`Dependence`, most important first), ``family`` (a found term or effect
     keyed on the same input, "" if none), ``statement`` (the report's sentence), ``black_box``
     (whether the replay used it as a force)."""
@@ -119,6 +124,8 @@ class FlexibleFit:
     family: str = ""
     statement: str = ""
     black_box: bool = False
+    #: share of the samples whose named inputs lay outside the range fitted without their block
+    outside: float = 0.0
     model: object = field(default=None, repr=False, compare=False)
     columns: tuple = field(default=(), repr=False, compare=False)
     #: the columns (indices into ``columns``) ``model`` takes: the named inputs' when any
@@ -128,7 +135,7 @@ class FlexibleFit:
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
-                                             "noise", "family", "statement", "black_box")}
+                                             "noise", "family", "statement", "black_box", "outside")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
 
@@ -157,6 +164,8 @@ def inputs(pipe, R) -> tuple:
     starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
     dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
+    qref = getattr(pipe.rec, "qref", None)
+    rate_ref = None if qref is None else np.gradient(np.asarray(qref, float), pipe.dt, axis=0)[idx]
     cols, X = [], []
     for k in range(nd):
         q, qd, qdd = pipe.q_s[idx, k], pipe.qd_s[idx, k], pipe.qdd_s[idx, k]
@@ -165,6 +174,9 @@ def inputs(pipe, R) -> tuple:
                                         (f"effort{k + 1}", effort[:, k], "effort", eu)):
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
+        if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
+            X.append(rate_ref[:, k])
+            cols.append((f"qd{k + 1} reference", f"rate of {noun} {k + 1}", k + 1, "rate", rate_u))
         group = f"history of {noun} {k + 1}"
         for tc in TIME_CONSTANTS:
             hist = _lowpass(np.column_stack([np.abs(qd), effort[:, k]]), dt, tc, starts)
@@ -172,8 +184,11 @@ def inputs(pipe, R) -> tuple:
             cols += [(f"|qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", rate_u),
                      (f"effort{k + 1} low-passed {tc:g} s", group, k + 1, "history", eu)]
         for tc in POWER_TIME_CONSTANTS:
-            X.append(_lowpass(np.abs(effort[:, k] * qd)[:, None], dt, tc, starts)[:, 0])
-            cols.append((f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"))
+            power = _lowpass(np.abs(effort[:, k] * qd)[:, None], dt, tc, starts)[:, 0]
+            X += [power, np.sign(qd) * power]
+            cols += [(f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"),
+                     (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
+                      "history x direction", f"{eu} {rate_u}")]
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -183,6 +198,19 @@ def inputs(pipe, R) -> tuple:
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
+
+
+def input_groups(columns) -> dict:
+    """The inputs' groups: per group name, its columns (indices).  A column of a history signed
+    by the direction of motion belongs to the joint's history and to its rate: a friction
+    level that a slow state modulates is their product, which neither explains alone (greedy
+    trees do not find a split in either), and permuting or leaving out either input removes it."""
+    groups = {}
+    for i, col in enumerate(columns):
+        groups.setdefault(col[1], []).append(i)
+        if col[3] == "history x direction":
+            groups.setdefault(col[1].replace("history of", "rate of", 1), []).append(i)
+    return groups
 
 
 def candidates(pipe, R, left, noise) -> list:
@@ -219,83 +247,41 @@ def _where(grid, curve, unit) -> str:
     return f"over {x(0)} to {x(n - 1)} {unit}".rstrip()
 
 
-def _trees(X, y, train, test=None):
-    """Boosted trees on the ``train`` rows of (X, y); the number of iterations is chosen on a
-    held-out block, the last :data:`EARLY_BLOCK` of the fitted rows (the rows are in time order:
-    a random split would judge on neighbours of the fitted samples), then the trees are refitted
-    on all the fitted rows with it."""
-    from sklearn.ensemble import HistGradientBoostingRegressor
-
-    rows = np.flatnonzero(train)
-    cut = int(len(rows) * (1.0 - EARLY_BLOCK))
-    a, b = rows[:cut], rows[cut:]
-    probe = HistGradientBoostingRegressor(**TREES).fit(X[a], y[a])
-    loss = [float(np.mean((y[b] - p) ** 2)) for p in probe.staged_predict(X[b])]
-    best = int(np.argmin(loss)) + 1
-    return HistGradientBoostingRegressor(**dict(TREES, max_iter=max(best, 5))).fit(X[rows], y[rows])
-
-
-def _block_losses(model, X, y, blocks, cols=None, rng=None) -> np.ndarray:
-    """Mean squared error of ``model`` on each held-out block (index arrays), with the columns
-    ``cols`` permuted together (within the held-out samples) when given."""
-    Xp = X
-    if cols is not None:
-        Xp = X.copy()
-        Xp[:, cols] = X[rng.permutation(len(X))][:, cols]
-    e = (y - model.predict(Xp)) ** 2
-    return np.array([float(np.mean(e[b])) for b in blocks])
-
-
-def _importance(model, X, y, groups, blocks, rng, repeats=2) -> dict:
-    """Grouped permutation importance on the held-out samples, per held-out block: the loss of
-    MSE when the group's columns are permuted, over the held-out variance.  Returns, per group,
-    ``(mean, standard error over the blocks)``."""
-    var = float(np.var(y))
-    base = _block_losses(model, X, y, blocks)
-    out = {}
-    for g, cols in groups.items():
-        d = np.mean([_block_losses(model, X, y, blocks, cols, rng) for _ in range(repeats)], axis=0) - base
-        d = d / var
-        out[g] = (float(np.mean(d)), float(np.std(d, ddof=1) / math.sqrt(len(d))))
-    return out
-
-
 def _screen(imp, share) -> list:
     """Groups whose permutation importance passes the thresholds and is significant over the
-    held-out blocks, most important first (at most :data:`MAX_INPUTS`)."""
-    top = max(m for m, _ in imp.values())
+    folds, most important first (at most :data:`MAX_INPUTS`)."""
+    top = min(max(m for m, _ in imp.values()), share)  # a permuted sign can cost more than all the variance
     ok = [g for g, (m, se) in imp.items() if m >= IMPORTANCE_MIN and m >= RELATIVE_MIN * share
           and m >= TOP_MIN * top and m > BLOCK_Z * se]
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, train, test, groups, named, var):
-    """Conditional check of the screened groups: refit the trees without each one, on the
-    others of ``named``; a group is kept when leaving it out costs at least :data:`DROP_MIN`
-    of the held-out variance (an input that only moves with a kept one costs nothing).
-    When none is kept (interchangeable inputs), all are kept.  Returns ``(kept, model on the
-    kept groups' columns, its columns)``."""
-    def fit_on(gs):
-        cols = sorted(i for g in gs for i in groups[g])
-        m = _trees(X[:, cols], y, train)
-        return m, cols, float(np.mean((y[test] - m.predict(X[test][:, cols])) ** 2))
+def _select(X, y, fold_rows, groups, named, var):
+    """Conditional check of the screened groups: the trees cross-validated without each one,
+    on the others of ``named``; a group is kept when leaving it out costs at least
+    :data:`DROP_MIN` of the residual's variance out of fold (an input that only moves with a
+    kept one costs nothing).  When none is kept (interchangeable inputs), all are kept.
+    Returns ``(kept, cross-validation on the kept groups' columns, its columns)``."""
+    def cv_on(gs, without=()):  # a column two groups share leaves with either
+        cols = sorted({i for g in gs for i in groups[g]} - set(without))
+        return cross_validate(X[:, cols], y, fold_rows), cols
 
-    full, cols, mse = fit_on(named)
+    full, cols = cv_on(named)
     if len(named) == 1:
         return named, full, cols
-    kept = [g for g in named if (fit_on([h for h in named if h != g])[2] - mse) / var >= DROP_MIN]
+    kept = [g for g in named if (cv_on(named, groups[g])[0].mse - full.mse) / var >= DROP_MIN]
     if not kept or kept == named:
         return named, full, cols
-    model, cols, _ = fit_on(kept)
-    return kept, model, cols
+    cv, cols = cv_on(kept)
+    return kept, cv, cols
 
 
-def fit_channel(pipe, X, columns, y, train, test, noise, unit) -> FlexibleFit:
-    """The flexible model of residual ``y`` (decimated samples) on inputs ``X``: fitted on
-    ``train``, judged on ``test`` (boolean masks).  The inputs it names are screened by grouped
-    permutation importance, significant over the held-out blocks, then checked one by one by
-    refitting without them; the share claimed is that of the trees refitted on the named inputs
-    alone (the model the statement describes)."""
+def fit_channel(pipe, X, columns, y, noise, unit) -> FlexibleFit:
+    """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
+    cross-validated over blocks in time (:mod:`.flexible_cv`).  The inputs it names are screened
+    by grouped permutation importance out of fold, significant over the blocks, then checked one
+    by one by cross-validating without them; the share claimed is that of the trees on the named
+    inputs alone (the model the statement describes), out of fold."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -305,36 +291,32 @@ def fit_channel(pipe, X, columns, y, train, test, noise, unit) -> FlexibleFit:
 
     c = pipe.channels.index(unit[1]) if isinstance(unit, tuple) else None
     unit = unit[0] if isinstance(unit, tuple) else unit
-    yt = y[test]
-    var = float(np.var(yt))
+    var = float(np.var(y))
+    spi = samples_per_independent(pipe)
+    fold_rows = folds(len(y), gap_for(spi))
     with threadpool_limits(limits=1):
-        model = _trees(X, y, train)
-        pred = model.predict(X[test])
-        mse = float(np.mean((yt - pred) ** 2))
-        share = 1.0 - mse / var if var > 0 else 0.0
-        z = len(yt) * (var - mse) / max(noise, 1e-300) ** 2 / samples_per_independent(pipe)
+        cv = cross_validate(X, y, fold_rows)
+        share = 1.0 - cv.mse / var if var > 0 else 0.0
+        z = len(y) * (var - cv.mse) / max(noise, 1e-300) ** 2 / spi
         explained = share >= SHARE_MIN and z > CHI2_MIN
-        deps, use = (), tuple(range(X.shape[1]))
+        deps, use, beyond = (), list(range(X.shape[1])), 0.0
         if explained:
-            groups = {}
-            for i, col in enumerate(columns):
-                groups.setdefault(col[1], []).append(i)
+            groups = input_groups(columns)
             rng = np.random.default_rng(0)
-            n_t = int(test.sum())
-            blocks = np.array_split(np.arange(n_t), max(2, min(N_BLOCKS, n_t // BLOCK)))
-            imp = _importance(model, X[test], yt, groups, blocks, rng)
-            named = _screen(imp, share)
+            named = _screen(importance(cv, X, y, groups, rng), share)
             if named:
-                named, model, cols = _select(X, y, train, test, groups, named, var)
-                use = tuple(cols)
-                share = 1.0 - float(np.mean((yt - model.predict(X[test][:, cols])) ** 2)) / var
-                sub = {g: [cols.index(i) for i in groups[g]] for g in named}
-                imp_k = _importance(model, X[test][:, cols], yt, sub, blocks, rng)
-                deps = tuple(_dependence(model, X[:, cols], [columns[i] for i in cols], sub[g], g, imp_k[g][0],
-                                         unit) for g in named)
+                named, cv, use = _select(X, y, fold_rows, groups, named, var)
+                share = 1.0 - cv.mse / var
+                sub = {g: [use.index(i) for i in groups[g]] for g in named}
+                imp_k = importance(cv, X[:, use], y, sub, rng)
+                beyond = outside(X[:, use], cv, list(range(len(use))))
+        model = final_model(X[:, use], y, cv)
+        if explained and named:
+            deps = tuple(_dependence(model, X[:, use], [columns[i] for i in use], sub[g], g, imp_k[g][0], unit)
+                         for g in named)
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
-                       z, explained, float(np.sqrt(np.mean((yt - yt.mean()) ** 2))), float(noise), deps,
-                       model=model, columns=tuple(columns), use=use)
+                       z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
+                       model=model, columns=tuple(columns), use=tuple(use))
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -374,10 +356,10 @@ def statement(fit: FlexibleFit, noun: str) -> str:
     """The report's sentence for one channel."""
     if not fit.explained:
         return (f"{fit.channel}: the structure left is not explainable from the recorded inputs "
-                f"(held-out share {100 * max(fit.share, 0):.0f} %, not significant)")
+                f"(share out of fold {100 * max(fit.share, 0):.0f} %, not significant)")
     if not fit.inputs:
         return (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
-                f"(held out)")
+                f"(out of fold)")
     parts = []
     for d in fit.inputs:
         size = max(abs(min(d.curve)), abs(max(d.curve)))
@@ -388,19 +370,22 @@ def statement(fit: FlexibleFit, noun: str) -> str:
                      f"importance {100 * d.importance:.0f} %)")
     only = " and on nothing else" if len(parts) == 1 else ""
     s = (f"a force on {noun} {fit.joint} that depends on " + " and on ".join(parts) + only
-         + f": {100 * fit.share:.0f} % of what is left (held out, flexible model)")
+         + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model)")
+    if fit.outside > OUTSIDE_WARN:
+        s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
+              f"fitted on without them (extrapolated flat: the share is a lower bound there)")
     return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
 
 
 def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     """The flexible stage of a diagnosis: one :class:`FlexibleFit` per effort channel worth a
     fit (:func:`candidates`), on the residual ``R`` after the fitted model (decimated samples
-    x channels); fitted on the engine's fitted part, judged on its held-out part.
+    x channels), judged out of fold over blocks in time (:mod:`.flexible_cv`).
 
     A discovered term the diagnosis calls partial (``partial``: it may stand in for what is
     missing) is no equation found: on its channel the flexible model is fitted on the residual
     without it (the fitted parameters ``theta`` less the term's), and the statement says how
-    much of that the term explained on the held-out part beside the flexible model's share.
+    much of that the term explained on the engine's held-out part beside the flexible model's share.
 
     Example
     -------
@@ -412,8 +397,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
 
     pipe = eng.pipe
     R = np.asarray(R, float)
-    train, test = ~np.asarray(eng.test, bool), np.asarray(eng.test, bool)
-    if test.sum() < 3 * BLOCK or train.sum() < 4 * BLOCK:
+    if len(R) < N_FOLDS * BLOCK:
         return []
     floor = eng.accuracy()
     noise = [own_noise(pipe, R[:, c], floor[c]) for c in range(pipe.nd)]
@@ -432,11 +416,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     noun = pipe.model.facts.joint_noun
     out = []
     for c in chans:
-        fit = fit_channel(pipe, X, columns, R_fit[:, c], train, test, noise[c], (pipe.model.facts.effort_unit,
-                                                                                 pipe.channels[c]))
+        fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]))
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy())
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
+            test = np.asarray(eng.test, bool)
             yt, at = R_fit[test, c], R[test, c]
             term_share = 1.0 - float(np.mean((at - at.mean()) ** 2) / np.var(yt))
             said = (f"the discovered term ({stand_ins[c].equation}), which may stand in for it, explains "
@@ -485,12 +469,12 @@ def markdown(fits: list, files: dict) -> list:
     if not fits:
         return []
     L = ["## Where no equation was found: a flexible model and its dependence", "",
-         "Boosted trees (scikit-learn HistGradientBoostingRegressor) fitted on the fitted part of each channel "
-         "that keeps structure, on every joint's position, rate, acceleration and model effort, their low-passed "
-         "|rate| and effort, the pose and time; judged on the held-out part.  The inputs are those whose "
-         "permutation on the held-out part costs the most; the curves are partial dependences.  A black box: "
-         "it says what the force depends on, not its equation.", "",
-         "| channel | explained (held out) | chi-square | RMS left | own noise | inputs (importance) |",
+         "Boosted trees (scikit-learn HistGradientBoostingRegressor) on each channel that keeps structure, on "
+         "every joint's position, rate (and commanded rate), acceleration and model effort, their low-passed "
+         "|rate|, effort and power, the pose and time; judged out of fold over blocks in time spread through "
+         "the recording.  The inputs are those whose permutation costs the most out of fold; the curves are "
+         "partial dependences.  A black box: it says what the force depends on, not its equation.", "",
+         "| channel | explained (out of fold) | chi-square | RMS left | own noise | inputs (importance) |",
          "| --- | --- | --- | --- | --- | --- |"]
     for f in fits:
         ins = ", ".join(f"{d.group} ({100 * d.importance:.0f} %)" for d in f.inputs) or "-"

@@ -129,16 +129,17 @@ def simulate(kind: str | None, seed: int, robot: str = "6pus", duration: float |
     return rec, key
 
 
-def truth_share(diag, key, flexible=None) -> float:
+def truth_share(diag, key, flexible=None, held_out=False) -> float:
     """The hidden force's share of what is left on its channel, from the answer key and the
     fitted model (never from the flexible model's answer): the part of the force the fitted
     model did not take, g = force - (residual before - residual after), as a predictor of the
-    residual after, 1 - var(after - g) / var(after) on the held-out samples (what it leaves is
-    the noise).  The residual after is the one the flexible stage fitted: without a discovered
+    residual after, 1 - var(after - g) / var(after) over every decimated sample, as the
+    flexible stage judges its own share out of fold (``held_out``: on the engine's held-out
+    samples only); what it leaves is the noise.  The residual after is the one the flexible stage fitted: without a discovered
     term it set aside as a stand-in (``flexible``: its :class:`~.flexible.FlexibleFit`)."""
     c = key["joint"] - 1
     t = np.asarray(diag.residual["time"])
-    held = t >= diag.heldout["start"]
+    held = t >= diag.heldout["start"] if held_out else np.ones(len(t), bool)
     f = np.interp(t[held], np.asarray(key["time"]), key["force"][:, c])
     before = np.asarray(diag.residual["before"])[held, c]
     after = np.asarray(diag.residual["after"])[held, c]

@@ -5,12 +5,13 @@ The synthetic checks know their truth in closed form (a force of known variance 
 white noise of known variance); the recordings hide a force of flexible_cases (keyed on another
 joint's acceleration, which no family of the discovery step covers) or none.
 """
+import dataclasses
 import types
 
 import numpy as np
 import pytest
 
-from cosim.discrepancy import flexible
+from cosim.discrepancy import flexible, flexible_cv
 
 
 def _synthetic(force, n=1200, sigma=0.05, seed=0):
@@ -19,17 +20,16 @@ def _synthetic(force, n=1200, sigma=0.05, seed=0):
     f = force(X)
     y = f + rng.normal(0.0, sigma, n)
     cols = [(f"x{i}", f"input {i}", None, "position", "m") for i in range(6)]
-    test = np.arange(n) >= int(0.7 * n)
     pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
-    truth = float(np.var(f[test]) / (np.var(f[test]) + sigma ** 2))
-    return pipe, X, cols, y, test, truth
+    truth = float(np.var(f) / (np.var(f) + sigma ** 2))
+    return pipe, X, cols, y, truth
 
 
 def test_names_the_one_input_and_its_share_on_a_known_force():
     # a force on input 2 only above 0.6 (smooth, not a polynomial); share var(f) / (var(f) + sigma^2)
-    pipe, X, cols, y, test, truth = _synthetic(lambda X: np.where(X[:, 2] > 0.6, np.tanh((X[:, 2] - 0.6) / 0.15) ** 2,
+    pipe, X, cols, y, truth = _synthetic(lambda X: np.where(X[:, 2] > 0.6, np.tanh((X[:, 2] - 0.6) / 0.15) ** 2,
                                                                   0.0) * 0.3)
-    fit = flexible.fit_channel(pipe, X, cols, y, ~test, test, 0.05, ("N", "tau1"))
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
     assert fit.explained
     assert [d.group for d in fit.inputs] == ["input 2"]
     assert abs(fit.share - truth) < 0.1
@@ -38,9 +38,70 @@ def test_names_the_one_input_and_its_share_on_a_known_force():
 
 
 def test_noise_alone_is_not_claimed():
-    pipe, X, cols, y, test, _ = _synthetic(lambda X: np.zeros(len(X)))
-    fit = flexible.fit_channel(pipe, X, cols, y, ~test, test, 0.05, ("N", "tau1"))
+    pipe, X, cols, y, _ = _synthetic(lambda X: np.zeros(len(X)))
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
     assert not fit.explained and fit.inputs == ()
+
+
+def test_folds_hold_every_sample_out_once_spread_through_the_recording():
+    n, gap = 1000, 3
+    rows = flexible_cv.folds(n, gap)
+    held = np.concatenate([h for h, _ in rows])
+    assert sorted(held.tolist()) == list(range(n))
+    for h, fit in rows:
+        assert h.min() < n // 4 and h.max() > 3 * n // 4  # blocks in both ends of the recording
+        d = np.abs(fit[:, None] - h[None, :]).min(axis=1)
+        assert d.min() > gap  # no fitted sample within the gap of a held-out one
+        assert len(h) + len(fit) >= n - 2 * gap * flexible_cv.BLOCKS_PER_FOLD
+
+
+def test_a_slow_input_that_rises_once_is_learned_out_of_fold():
+    # a force on an input that rises once through the recording (a drive warming up) and on the
+    # direction of motion: at the end of the recording the input is beyond anything earlier, so a
+    # split that holds out the end leaves it outside the fitted range; the blocks spread through
+    # the recording cover it.  Truth share var(f) / (var(f) + sigma^2) in closed form.
+    n, sigma = 700, 0.05
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 1.0, n)
+    slow = 1.0 - np.exp(-3.0 * t) + rng.normal(0.0, 0.01, n)
+    X = np.column_stack([slow, rng.uniform(-1, 1, (n, 3))])
+    f = 0.5 * slow ** 2
+    y = f + rng.normal(0.0, sigma, n)
+    cols = [("T", "slow input", None, "history", "K")] + [(f"x{i}", f"input {i}", None, "position", "m")
+                                                          for i in range(3)]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    truth = float(np.var(f) / (np.var(f) + sigma ** 2))
+    assert fit.explained and [d.group for d in fit.inputs] == ["slow input"]
+    assert abs(fit.share - truth) < 0.1
+    assert fit.outside < 0.1  # only the first and last blocks reach beyond the others
+
+
+def test_outside_counts_the_held_out_samples_beyond_the_fitted_range():
+    n = 400
+    rows = flexible_cv.folds(n, 2)
+    X = np.zeros((n, 1))
+    h0 = rows[0][0]
+    first = h0[h0 < n // (flexible_cv.N_FOLDS * flexible_cv.BLOCKS_PER_FOLD) + 1]
+    X[first, 0] = 1.0  # one block's values never seen by the trees that predict it
+    cv = flexible_cv.CV(rows, (), 1, np.zeros(n), 0.0)
+    assert flexible_cv.outside(X, cv, [0]) == pytest.approx(len(first) / n)
+    assert flexible_cv.outside(np.zeros((n, 1)), cv, [0]) == 0.0
+
+
+def test_a_signed_history_belongs_to_the_rate_and_the_history():
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"), ("P1", "history of slider 1", 1, "history", "W"),
+            ("sign(qd1) P1", "history of slider 1", 1, "history x direction", "W")]
+    groups = flexible.input_groups(cols)
+    assert groups == {"rate of slider 1": [0, 2], "history of slider 1": [1, 2]}
+
+
+def test_the_statement_says_when_the_inputs_were_extrapolated():
+    d = flexible.Dependence("position of slider 2", "q2", 2, "position", 0.5, "m", (0.0, 0.1, 0.2, 0.3),
+                            (0.0, 0.0, 0.5, 1.0))
+    fit = flexible.FlexibleFit("tau2", 2, "N", 0.6, 100.0, True, 1.0, 0.1, (d,), outside=0.3)
+    assert "outside the range" in flexible.statement(fit, "slider")
+    assert "outside the range" not in flexible.statement(dataclasses.replace(fit, outside=0.02), "slider")
 
 
 @pytest.mark.parametrize("curve, expect", [((0, 0, 0, 0, 0, 0, 1, 2, 3, 4), "above"),
@@ -105,3 +166,26 @@ def test_black_box_replay_term_lowers_the_channels_replay_error(cross_case):
     runs = d.replay["runs"]
     assert [f.black_box for f in d.flexible if f.joint == key["joint"]] == [True]
     assert runs["fitted + black box"]["rms_tau"][c] < 0.5 * runs["fitted"]["rms_tau"][c]
+
+
+def test_a_friction_level_set_by_a_slow_state_names_the_rate_and_the_history():
+    # sign(qd) (T - mean T): neither the direction nor the state explains any of it alone (no
+    # greedy split finds it); the direction-signed state does, and leaving out either input
+    # removes it.  Truth share var(f) / (var(f) + sigma^2) in closed form.
+    n, sigma = 700, 0.03
+    rng = np.random.default_rng(5)
+    t = np.linspace(0.0, 12.0, n)
+    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
+    T = 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+    f = 0.4 * np.sign(qd) * (T - T.mean())
+    y = f + rng.normal(0.0, sigma, n)
+    X = np.column_stack([qd, T, np.sign(qd) * T, rng.uniform(-1, 1, (n, 2))])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"), ("T1", "history of slider 1", 1, "history", "W"),
+            ("sign(qd1) T1", "history of slider 1", 1, "history x direction", "W"),
+            ("q2", "position of slider 2", 2, "position", "m"), ("q3", "position of slider 3", 3, "position", "m")]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    truth = float(np.var(f) / (np.var(f) + sigma ** 2))
+    assert fit.explained
+    assert sorted(d.group for d in fit.inputs) == ["history of slider 1", "rate of slider 1"]
+    assert abs(fit.share - truth) < 0.1

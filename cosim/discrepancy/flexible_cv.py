@@ -1,0 +1,149 @@
+"""Blocked cross-validation of the flexible stage's boosted trees (:mod:`.flexible`).
+
+The recording's decimated samples are cut into ``N_FOLDS x BLOCKS_PER_FOLD`` contiguous blocks
+in time, dealt to :data:`N_FOLDS` folds in turn (each fold's blocks spread through the
+recording); each fold is held out in turn and the trees are fitted on the others, less
+:data:`GAP_INDEPENDENT` independent samples' worth on each side of each held-out block (the
+smoothed residual is correlated over a smoothing window: a neighbour of a fitted sample is no
+held-out sample).
+Every sample is predicted once by trees that never saw it, and a slowly varying input (a
+drive's temperature, the duty of the excitation) takes over the held-out blocks the values the
+fitted ones span, instead of lying beyond them as it does at the end of the recording.
+
+The trees' number of iterations (at most ``max_iter``) is the one with the smallest summed
+held-out loss over the folds; the explained share, the permutation importance (per fold: its
+standard error is their spread) and the refits of the input selection are all out of fold.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from itertools import islice
+
+import numpy as np
+
+#: folds of the cross-validation, and blocks in time per fold (spread through the recording:
+#: fold i holds out blocks i, i + N_FOLDS, ...)
+N_FOLDS, BLOCKS_PER_FOLD = 5, 4
+#: independent samples' worth left out of the fit on each side of a held-out block
+GAP_INDEPENDENT = 1.0
+#: fewest iterations the held-out loss may choose
+MIN_ITER = 5
+#: the boosted trees' settings (small: a few hundred decimated samples; the number of
+#: iterations, at most max_iter, is chosen on the held-out blocks)
+TREES = dict(max_iter=150, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
+             max_bins=64, early_stopping=False, random_state=0)
+#: an input's held-out value is outside the fitted range when it lies beyond it by this share
+#: of the fitted range
+RANGE_TOL = 0.02
+
+
+@dataclass(frozen=True)
+class CV:
+    """One blocked cross-validation: ``folds`` ((held-out rows, fitted rows) per fold),
+    ``models`` (per fold, fitted on its fitted rows), ``iterations`` (chosen), ``pred`` (the
+    out-of-fold prediction at every sample) and ``mse`` (its mean squared error)."""
+
+    folds: tuple
+    models: tuple
+    iterations: int
+    pred: np.ndarray
+    mse: float
+
+    def predict(self, b: int, X) -> np.ndarray:
+        """Fold ``b``'s trees at the chosen number of iterations on the rows ``X``."""
+        return next(islice(self.models[b].staged_predict(X), self.iterations - 1, None))
+
+
+def folds(n: int, gap: int, k: int = N_FOLDS, per_fold: int = BLOCKS_PER_FOLD) -> tuple:
+    """``k`` folds of ``range(n)``, each ``per_fold`` contiguous blocks spread through it (the
+    blocks in time order dealt to the folds in turn): per fold (its rows, the rows fitted when
+    it is held out: all others but ``gap`` on each side of each of its blocks).
+
+    Example
+    -------
+    >>> rows = folds(40, gap=1, k=2, per_fold=2)
+    >>> rows[0][0].tolist() == list(range(10)) + list(range(20, 30))
+    True
+    >>> rows[0][1].tolist() == list(range(11, 19)) + list(range(31, 40))
+    True
+    """
+    edges = np.linspace(0, n, k * per_fold + 1).astype(int)
+    every = np.arange(n)
+    out = []
+    for i in range(k):
+        held, near = np.zeros(n, bool), np.zeros(n, bool)
+        for a, b in zip(edges[i:-1:k], edges[i + 1::k]):
+            held[a:b] = True
+            near[max(0, a - gap):min(n, b + gap)] = True
+        out.append((every[held], every[~near]))
+    return tuple(out)
+
+
+def gap_for(spi: float) -> int:
+    """The gap in decimated samples for ``spi`` decimated samples per independent one."""
+    return int(math.ceil(GAP_INDEPENDENT * spi))
+
+
+def cross_validate(X, y, fold_rows) -> CV:
+    """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    models, losses, staged = [], [], []
+    for held, fit in fold_rows:
+        m = HistGradientBoostingRegressor(**TREES).fit(X[fit], y[fit])
+        p = np.array(list(m.staged_predict(X[held])))
+        models.append(m)
+        staged.append(p)
+        losses.append(np.sum((y[held][None, :] - p) ** 2, axis=1))
+    total = np.sum(losses, axis=0)
+    best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
+    pred = np.empty(len(y))
+    for (held, _), p in zip(fold_rows, staged):
+        pred[held] = p[best - 1]
+    return CV(tuple(fold_rows), tuple(models), best, pred, float(np.mean((y - pred) ** 2)))
+
+
+def final_model(X, y, cv: CV):
+    """The trees on every sample with the cross-validation's number of iterations (the model
+    the partial dependence and the black box use)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    return HistGradientBoostingRegressor(**dict(TREES, max_iter=cv.iterations)).fit(X, y)
+
+
+def importance(cv: CV, X, y, groups, rng, repeats=2) -> dict:
+    """Grouped permutation importance out of fold: per fold, the rise of its trees' mean
+    squared error on its held-out rows when the group's columns are replaced by those of rows
+    drawn at random from the whole recording (the inputs' marginal distribution), over the
+    residual's variance.  Returns, per group, ``(mean over the folds, standard error)``."""
+    var = float(np.var(y))
+    names = list(groups)
+    rise = np.zeros((len(names), len(cv.folds)))
+    for _ in range(repeats):
+        perm = rng.permutation(len(X))
+        for b, (h, _) in enumerate(cv.folds):  # every group's permuted copy of the block in one prediction
+            stack = np.tile(X[h], (len(names), 1))
+            for i, g in enumerate(names):
+                stack[i * len(h):(i + 1) * len(h), groups[g]] = X[perm[h]][:, groups[g]]
+            e = (np.tile(y[h], len(names)) - cv.predict(b, stack)) ** 2
+            rise[:, b] += e.reshape(len(names), len(h)).mean(axis=1)
+    base = np.array([np.mean((y[h] - cv.pred[h]) ** 2) for h, _ in cv.folds])
+    d = (rise / repeats - base[None, :]) / var
+    return {g: (float(np.mean(d[i])), float(np.std(d[i], ddof=1) / math.sqrt(len(cv.folds))))
+            for i, g in enumerate(names)}
+
+
+def outside(X, cv: CV, cols) -> float:
+    """The share of samples whose columns ``cols`` lie, in their held-out fold, outside the
+    range the fold's fitted rows span (beyond :data:`RANGE_TOL` of it): where the trees
+    extrapolate flat."""
+    if not cols:
+        return 0.0
+    out = 0
+    for held, fit in cv.folds:
+        lo, hi = X[fit][:, cols].min(axis=0), X[fit][:, cols].max(axis=0)
+        tol = RANGE_TOL * (hi - lo)
+        v = X[held][:, cols]
+        out += int(np.sum(np.any((v < lo - tol) | (v > hi + tol), axis=1)))
+    return out / len(X)
