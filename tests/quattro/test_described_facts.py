@@ -1,0 +1,59 @@
+"""The Quattro's own functions (the 22 indices of Virzi 2010, the GIMRE, the joint points) on
+the described Quattro (c_core/src/robots/quattro_facts.cpp over robots/quattro_described.toml)
+against the hand-written model (c_core/src/robots/quattro.cpp): two implementations written
+apart, the description's kinematics and dynamics compiled from the file, the hand-written
+ones from the source's equations.  Poses over the whole workspace grid of the thesis' maps,
+unreachable and out-of-range ones included (the same status expected)."""
+import numpy as np
+import pytest
+
+from cosim.core import Model
+
+# Hand-written payload.J (about the tool axis, turned tool.ratio = 4 times per articulation
+# radian) is the description's platform.Izz = 4^2 payload.J (tests/core/test_described.py).
+CASES = {
+    "default": (None, {}, {}),
+    "appendix_a": ("appendix_a", {}, {}),
+    "payload": (None, {"payload.m": 0.6, "payload.J": 2e-3}, {"payload.m": 0.6, "platform.Izz": 16 * 2e-3}),
+}
+
+
+def poses(n=400, seed=4):
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.uniform(-0.6, 0.6, n), rng.uniform(-0.6, 0.6, n), rng.uniform(-1.3, -0.7, n),
+                            rng.uniform(-0.8, 0.8, n)])
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_described_quattro_facts_equal_the_hand_written_ones(case):
+    st, pa, pb = CASES[case]
+    a, b = Model("quattro", param_set=st, params=pa), Model("quattro_described", param_set=st, params=pb)
+    assert b.has("quattro_indices") and b.has("quattro_gimre") and b.has("quattro_points")
+    X = poses()
+    Ia, sa = a.quattro_indices(X)
+    Ib, sb = b.quattro_indices(X)
+    ok = sa == 0
+    assert np.array_equal(sa != 0, sb != 0) and 100 < ok.sum() < len(X)  # both reachable and not
+    scale = np.abs(Ia[ok]).max(axis=0)
+    assert (np.abs(Ia[ok] - Ib[ok]).max(axis=0) / scale).max() < 1e-12
+    for x in X[ok][::10]:
+        Na, Nb = a.quattro_gimre(x), b.quattro_gimre(x)
+        assert np.abs(Na - Nb).max() < 1e-12 * np.abs(Na).max()
+        pa_, pb_ = a.quattro_points(x), b.quattro_points(x)
+        for k in "ABC":
+            assert np.abs(pa_[k] - pb_[k]).max() < 1e-14
+
+
+def test_described_quattro_facts_follow_the_description():
+    """The comparison can fail: a forearm 1 % longer, an arm 1 % heavier on one side only move
+    the indices that read them (the kinematic ones, the dynamic ones)."""
+    X = poses(60, seed=9)
+    a = Model("quattro_described")
+    Ia, sa = a.quattro_indices(X)
+    ok = sa == 0
+    rods = {f"leg[{i}].L": 0.825 * 1.01 for i in range(1, 5)}
+    Ib, _ = Model("quattro_described", params=rods).quattro_indices(X[ok])
+    assert np.abs(Ib[:, 0] - Ia[ok, 0]).max() > 1e-4 * np.abs(Ia[ok, 0]).max()   # mu_T
+    Ic, _ = Model("quattro_described", params={"arm[1].mass": 1.45 * 1.01}).quattro_indices(X[ok])
+    assert np.array_equal(Ic[:, :7], Ia[ok, :7])                                     # kinematic: unchanged
+    assert np.abs(Ic[:, 12] - Ia[ok, 12]).max() > 1e-6 * np.abs(Ia[ok, 12]).max()   # kat
