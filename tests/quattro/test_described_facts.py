@@ -57,3 +57,17 @@ def test_described_quattro_facts_follow_the_description():
     Ic, _ = Model("quattro_described", params={"arm[1].mass": 1.45 * 1.01}).quattro_indices(X[ok])
     assert np.array_equal(Ic[:, :7], Ia[ok, :7])                                     # kinematic: unchanged
     assert np.abs(Ic[:, 12] - Ia[ok, 12]).max() > 1e-6 * np.abs(Ia[ok, 12]).max()   # kat
+
+
+def test_described_quattro_constants_and_cycle_time_equal_the_hand_written_ones():
+    """The constants cosim.quattro reads (torque limit, Adept origin, link length) and a
+    time-optimal cycle of Virzi 2010 ch. 6 (cosim.quattro.cycle_time) on either model."""
+    from cosim.quattro import cycle_time as ct
+
+    for st in ("default", "appendix_a"):
+        a, b = Model("quattro", param_set=st), Model("quattro_described", param_set=st)
+        ca, cb = a.quattro_constants(), b.quattro_constants()
+        assert ca.keys() == cb.keys() and all(abs(ca[k] - cb[k]) < 1e-15 * abs(ca[k]) for k in ca)
+        assert ca["base_height"] == a.param("base.h") and ca["link_length"] == a.param("arm.b_r")
+    ta, tb = ct.cycle_time(a, z=-1.0, n=100), ct.cycle_time(b, z=-1.0, n=100)
+    assert abs(ta - tb) < 1e-9 * ta

@@ -821,6 +821,17 @@ PKM_API int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, 
  * forearm upper ends), C (platform joints).  Any output may be NULL. */
 PKM_API int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A,
                                double* B, double* C);
+/* The Quattro's constants that the indices and the cycle-time search read, out[PKM_QUATTRO_NCONSTANT]
+ * (feature "quattro_indices"); of a described Quattro, where a description carries no drive
+ * rating, the first two are the s650H's (source ch. 5.6):
+ *  0 tau_arm_max  arm-side torque limit of the alfa indices, gear_ratio x nominal motor torque [N m]
+ *  1 gear_ratio   motor to arm [-]
+ *  2 base_height  the Adept origin's height above the motor-axis plane (source symbol base) [m]
+ *  3 link_length  arm 1's link length b_r, which scales J in the indices [m] */
+enum { PKM_QUATTRO_NCONSTANT = 4 };
+PKM_API const char* pkm_quattro_constant_name(int i);
+PKM_API const char* pkm_quattro_constant_unit(int i);
+PKM_API int pkm_quattro_constants(const pkm_model* m, pkm_data* d, double* out);
 
 #ifdef __cplusplus
 }

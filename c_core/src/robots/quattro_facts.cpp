@@ -159,5 +159,13 @@ void points(const pkm_model* m, pkm_data* d, const double* x, double* A, double*
     }
 }
 
+void constants(const pkm_model* m, pkm_data* d, double* out) {
+  const described::LegModel& arm1 = checked_model(m, d).legs[0];
+  out[0] = kArmTorqueNominal;
+  out[1] = kGearRatio;
+  out[2] = -arm1.base.z();  // the world origin lies base_height above arm 1's motor axis
+  out[3] = link_length(arm1);
+}
+
 }  // namespace quattro_facts
 }  // namespace pkm

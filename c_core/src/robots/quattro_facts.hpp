@@ -21,7 +21,7 @@ constexpr int kArms = 4;
 // The arm-side torque limit of the alfa indices [N m]: the s650H's nominal motor torque
 // 2.39 N m through its 50:1 gear (Virzi 2010 ch. 5.6).  A description carries no drive
 // rating, so the facts module holds the source's figure.
-constexpr double kArmTorqueNominal = 50 * 2.39;
+constexpr double kGearRatio = 50, kArmTorqueNominal = kGearRatio * 2.39;
 
 // What the 22 indices read at one pose (quattro_indices.cpp computes them from it).
 struct IndexInputs {
@@ -45,6 +45,8 @@ bool is_described_quattro(const Robot& r);
 void index_inputs(const pkm_model* m, pkm_data* d, const double* x, IndexInputs& in);
 Eigen::Matrix4d gimre(const pkm_model* m, pkm_data* d, const double* x);
 void points(const pkm_model* m, pkm_data* d, const double* x, double* A, double* B, double* C);
+// pkm_quattro_constants of the described Quattro (m prepared).
+void constants(const pkm_model* m, pkm_data* d, double* out);
 
 }  // namespace quattro_facts
 }  // namespace pkm

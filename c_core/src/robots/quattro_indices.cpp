@@ -25,6 +25,9 @@ constexpr IndexInfo kIndex[PKM_QUATTRO_NINDEX] = {
     {"Fcc_xy", "N"},  {"Fgr", "N"},      {"alfa_z", "m/s2"}, {"alfa_x", "m/s2"}};
 
 // The hand-written Quattro of (m, d), or nullptr for a described one; throws for any other robot.
+constexpr IndexInfo kConstant[PKM_QUATTRO_NCONSTANT] = {
+    {"tau_arm_max", "N.m"}, {"gear_ratio", "1"}, {"base_height", "m"}, {"link_length", "m"}};
+
 const Model* quattro_model(const pkm_model* m, pkm_data* d) {
   const RobotModel& rm = prepare(m, d);
   if (quattro_facts::is_described_quattro(*m->robot)) return nullptr;
@@ -134,6 +137,21 @@ int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double*
     else
       quattro_facts::index_inputs(m, d, x + 4 * k, in);
     quattro_facts::indices(in, out + PKM_QUATTRO_NINDEX * k);
+  });
+}
+
+const char* pkm_quattro_constant_name(int i) { return i >= 0 && i < PKM_QUATTRO_NCONSTANT ? kConstant[i].name : ""; }
+const char* pkm_quattro_constant_unit(int i) { return i >= 0 && i < PKM_QUATTRO_NCONSTANT ? kConstant[i].unit : ""; }
+
+int pkm_quattro_constants(const pkm_model* m, pkm_data* d, double* out) {
+  return guard(d, [&] {
+    const Model* qm = quattro_model(m, d);
+    check_out(out, "out");
+    if (!qm) return quattro_facts::constants(m, d, out);
+    out[0] = qm->tau_arm_max();
+    out[1] = qm->ratio;
+    out[2] = qm->h;
+    out[3] = qm->br;
   });
 }
 
