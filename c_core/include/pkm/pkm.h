@@ -120,9 +120,10 @@ PKM_API const char* pkm_model_joint_unit(const pkm_model* m);
 PKM_API const char* pkm_model_effort_unit(const pkm_model* m);
 PKM_API const char* pkm_model_joint_noun(const pkm_model* m);
 /* Robot-specific function families the model provides beyond the common set, named by
- * their C function without the "pkm_" prefix: "6pus_calib_rows", "6pus_leg_points" (the
- * hand-written 6-PUS), "fourbar_output" (the four-bar), "quattro_indices", "quattro_gimre",
- * "quattro_points" (the hand-written Quattro).  Callers ask the model, never its name:
+ * their C function without the "pkm_" prefix: "6pus_calib_rows", "6pus_leg_points" (a
+ * described 6-PUS), "fourbar_output" (the four-bar), "quattro_indices", "quattro_gimre",
+ * "quattro_points" (the hand-written Quattro and a described one: four arm-and-rod legs on an
+ * articulated platform, robots/quattro_described.toml).  Callers ask the model, never its name:
  * pkm_model_has returns 1 if it provides feature, else 0; count and i-th name ("" past
  * the end) list them. */
 PKM_API int pkm_model_has(const pkm_model* m, const char* feature);

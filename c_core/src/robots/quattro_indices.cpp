@@ -32,7 +32,7 @@ const Model* quattro_model(const pkm_model* m, pkm_data* d) {
   const RobotModel& rm = prepare(m, d);
   if (quattro_facts::is_described_quattro(*m->robot)) return nullptr;
   if (std::strcmp(m->robot->name(), "quattro") != 0)
-    throw Error(PKM_ERR_ARGUMENT, "this function is for the Quattro (four arms on an articulated platform), not '" +
+    throw Error(PKM_ERR_ARGUMENT, "this function is for a Quattro ('quattro', or a description of four arms on an articulated platform), not '" +
                                       m->robot_name + "'");
   return &static_cast<const Model&>(rm);
 }
