@@ -266,6 +266,9 @@ _SIGNATURES = {
     "pkm_quattro_indices": (I, [P, P, S, D, D, c_int_p]),
     "pkm_quattro_gimre": (I, [P, P, D, D]),
     "pkm_quattro_points": (I, [P, P, D, D, D, D]),
+    "pkm_quattro_constant_name": (CH, [I]),
+    "pkm_quattro_constant_unit": (CH, [I]),
+    "pkm_quattro_constants": (I, [P, P, D]),
 }
 
 

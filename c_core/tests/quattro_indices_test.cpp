@@ -1,12 +1,15 @@
 // Quattro index maps (Virzi 2010 ch. 3-5) through the C API: each column against its
 // definition evaluated here from the core's J and M, the GIMRE against the kinetic energy
 // of the links computed from finite differences of the joint points, and the batch
-// conventions (NaN row + status + first failure) for poses outside the workspace.
+// conventions (NaN row + status + first failure) for poses outside the workspace; on the
+// hand-written Quattro and on its description (robots/quattro_described.toml, whose
+// parameters are per arm and leg: the bodies are read by each model's names).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include "pkm/pkm.h"
 #include "test_support.hpp"
@@ -15,8 +18,26 @@ namespace {
 
 using Mat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
 
-struct QuattroIdx : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
-  void SetUp() override { open("quattro", GetParam()); }
+using RobotSet = std::tuple<const char*, const char*>;
+
+struct QuattroIdx : pkm_test::ModelFixture<::testing::TestWithParam<RobotSet>> {
+  bool described = false;
+  void SetUp() override {
+    open(std::get<0>(GetParam()), std::get<1>(GetParam()));
+    described = std::string(std::get<0>(GetParam())) != "quattro";
+  }
+  // pkm_quattro_constants: 0 the arm torque limit [N m], 3 the link length b_r [m].
+  double constant(int i) {
+    double c[PKM_QUATTRO_NCONSTANT];
+    EXPECT_EQ(pkm_quattro_constants(m, d, c), PKM_OK) << pkm_data_error(d);
+    return c[i];
+  }
+  // The bodies the GIMRE reads, by each model's parameter names: arm mass, its centre of
+  // mass from the axis, mass of one arm's forearm rod pair, platform mass.
+  double arm_mass() { return param(described ? "arm[1].mass" : "arm.m"); }
+  double arm_com() { return param(described ? "arm[1].rc" : "arm.lg"); }
+  double rods_mass() { return described ? param("leg[1].m") : 2 * param("forearm.m"); }
+  bool centred() { return param(described ? "platform.cx" : "platform.offset") == 0; }
   int col(const char* name) {
     for (int i = 0; i < PKM_QUATTRO_NINDEX; ++i)
       if (std::string(pkm_quattro_index_name(i)) == name) return i;
@@ -35,7 +56,8 @@ TEST_P(QuattroIdx, NamesAndUnits) {
 
 TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
   const double xs[3][4] = {{0, 0, -1.0, 0}, {0.15, -0.1, -0.92, 0}, {-0.1, 0.2, -1.12, 0.2}};
-  const double br = param("arm.b_r"), lim = param("gear.ratio") * param("motor.tau_nominal");
+  const double br = constant(3), lim = constant(0);
+  EXPECT_EQ(lim, 50 * 2.39);
   for (auto& x : xs) {
     double out[PKM_QUATTRO_NINDEX];
     int st = -99;
@@ -49,7 +71,7 @@ TEST_P(QuattroIdx, ColumnsFollowTheirDefinitions) {
     EXPECT_NEAR(out[col("mu_T")], 1 / std::sqrt((JT.transpose() * JT).determinant()), 1e-10);
     EXPECT_NEAR(out[col("mu_z")], 1 / JD.col(2).norm(), 1e-10);
     // Eigenvalue variant on the z axis equals the sub-matrix one there (source ch. 3.5).
-    if (x[0] == 0 && x[1] == 0 && param("platform.offset") == 0) {
+    if (x[0] == 0 && x[1] == 0 && centred()) {
       EXPECT_NEAR(out[col("mu_z_eig")], out[col("mu_z")], 1e-9);
       EXPECT_NEAR(out[col("mu_T_eig")], out[col("mu_T")], 1e-9);
     }
@@ -91,8 +113,7 @@ TEST_P(QuattroIdx, GimreIsTheKineticEnergyOfLinksAndPlatform) {
   ASSERT_EQ(pkm_quattro_points(m, d, xm, nullptr, Bm, Cm), PKM_OK);
   ASSERT_EQ(pkm_ik(m, d, xp, qp), PKM_OK);
   ASSERT_EQ(pkm_ik(m, d, xm, qm), PKM_OK);
-  const double mb = param("arm.m"), lg = param("arm.lg"), br = param("arm.b_r"), mc = param("forearm.m"),
-               mp = param("platform.m");
+  const double mb = arm_mass(), lg = arm_com(), br = constant(3), mc = rods_mass() / 2, mp = param("platform.m");
   const double I1 = mb * lg * lg + mb * (br * br / 3 - br * lg + lg * lg);
   double T = 0;
   for (int i = 0; i < 4; ++i) {
@@ -129,7 +150,9 @@ TEST_P(QuattroIdx, OutsideTheWorkspaceIsANaNRowWithItsStatus) {
     EXPECT_TRUE(std::isnan(out[1][k]));
     EXPECT_TRUE(std::isnan(out[2][k]));
   }
-  EXPECT_NE(std::string(pkm_data_error(d)).find("item 1: arm"), std::string::npos) << pkm_data_error(d);
+  // the hand-written model names the arm ("item 1: arm 2: ..."), the description the leg
+  EXPECT_NE(std::string(pkm_data_error(d)).find(described ? "item 1: leg" : "item 1: arm"), std::string::npos)
+      << pkm_data_error(d);
 }
 
 TEST_P(QuattroIdx, RefusesAnotherRobot) {
@@ -143,6 +166,8 @@ TEST_P(QuattroIdx, RefusesAnotherRobot) {
   pkm_model_destroy(other);
 }
 
-INSTANTIATE_TEST_SUITE_P(Sets, QuattroIdx, ::testing::Values("default", "appendix_a"));
+INSTANTIATE_TEST_SUITE_P(Sets, QuattroIdx,
+                         ::testing::Combine(::testing::Values("quattro", "quattro_described"),
+                                            ::testing::Values("default", "appendix_a")));
 
 }  // namespace

@@ -23,7 +23,7 @@ def axis_feature(param_set: str | None, index: str, what: str, params: dict | No
     from .. import quattro
 
     m = quattro.model(param_set, params)
-    h = m.param("base.h")
+    h = m.quattro_constants()["base_height"]
     z = np.arange(-1.06 - h, -0.56 - h + dz / 2, dz)
     mp = quattro.index_map(x=[0.0], y=[0.0], z=z, model=m)
     v = mp[index][0, 0]

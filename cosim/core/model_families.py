@@ -69,6 +69,17 @@ class RobotFamilyMethods:
         lib.pkm_quattro_indices(self._m, self._d, n, ptr(flat), ptr(out), status.ctypes.data_as(c_int_p))
         return out.reshape(x.shape[:-1] + (nidx,)), status.reshape(x.shape[:-1])
 
+    def quattro_constants(self) -> dict:
+        """The Quattro's constants the indices and the cycle-time search read, by name
+        (``pkm_quattro_constants``): ``tau_arm_max`` [N m] (arm-side torque limit),
+        ``gear_ratio`` [-], ``base_height`` [m] (the Adept origin above the motor-axis plane),
+        ``link_length`` [m] (b_r, which scales J in the indices)."""
+        self._require("quattro_indices", "quattro_constants")
+        n = 4  # PKM_QUATTRO_NCONSTANT in pkm.h
+        out = np.empty(n)
+        self._check(lib.pkm_quattro_constants(self._m, self._d, ptr(out)))
+        return {lib.pkm_quattro_constant_name(i).decode(): float(out[i]) for i in range(n)}
+
     def quattro_gimre(self, x) -> np.ndarray:
         """Quattro generalized inertia matrix reduced to the end effector, (4, 4) at pose x
         [kg, kg m, kg m^2] (``pkm_quattro_gimre``)."""

@@ -84,7 +84,7 @@ class Profile:
 
 
 def _limits(m: Model) -> float:
-    return m.param("gear.ratio") * m.param("motor.tau_nominal")
+    return m.quattro_constants()["tau_arm_max"]
 
 
 def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
@@ -100,7 +100,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
     n : int
         Grid intervals along the path.
     tau_max : float, optional
-        Arm torque limit [N m] (default ``gear.ratio * motor.tau_nominal``).
+        Arm torque limit [N m] (default the core's ``tau_arm_max``, :meth:`Model.quattro_constants`).
     qd_max : float, optional
         Arm speed limit [rad/s] (default none).
 

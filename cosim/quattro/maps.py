@@ -148,7 +148,8 @@ def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None 
     ----------
     x, y, z : array_like, optional
         Grid axes of the tool point [m].  Defaults: the seed's listing grid, x and y in
-        -0.5..0.5 step 0.05 (21 each), z in 51 steps of 0.01 from -1.06 - base.h.
+        -0.5..0.5 step 0.05 (21 each), z in 51 steps of 0.01 from -1.06 - base_height
+        (:meth:`Model.quattro_constants`).
     theta : float
         Platform articulation angle [rad] (0 as in the seed's figures).
     param_set : {"default", "appendix_a"}
@@ -163,7 +164,7 @@ def index_map(x=None, y=None, z=None, theta: float = 0.0, param_set: str | None 
         the joint range or singular (the reason is in ``status``).
     """
     m = require_indices(model) if model is not None else _quattro_model(param_set, params)
-    h = m.param("base.h")
+    h = m.quattro_constants()["base_height"]
     x = np.linspace(-0.5, 0.5, 21) if x is None else np.atleast_1d(np.asarray(x, dtype=float))
     y = np.linspace(-0.5, 0.5, 21) if y is None else np.atleast_1d(np.asarray(y, dtype=float))
     z = np.linspace(-1.06 - h, -0.56 - h, 51) if z is None else np.atleast_1d(np.asarray(z, dtype=float))
@@ -298,11 +299,11 @@ def benchmark(param_set: str = "appendix_a", baseline_points: int = 400, repeat:
     reach = int((mp.status == 0).sum())
     # Baseline: per-pose core calls from Python.
     rng = np.random.default_rng(0)
-    h = m.param("base.h")
+    c = m.quattro_constants()
+    h = c["base_height"]
     poses = np.column_stack([rng.uniform(-0.2, 0.2, baseline_points), rng.uniform(-0.2, 0.2, baseline_points),
                              rng.uniform(-1.0 - h, -0.7 - h, baseline_points), np.zeros(baseline_points)])
-    br = m.param("arm.b_r")
-    lim = m.param("gear.ratio") * m.param("motor.tau_nominal")
+    br, lim = c["link_length"], c["tau_arm_max"]
     t0 = time.perf_counter()
     for x in poses:
         try:

@@ -435,7 +435,7 @@ class QuattroTileKind(Kind):
         from ..quattro import model
 
         m = model(p["param_set"])
-        h = m.param("base.h")
+        h = m.quattro_constants()["base_height"]
         x = _axis(p["x"], np.linspace(-0.5, 0.5, 21))
         y = _axis(p["y"], np.linspace(-0.5, 0.5, 21))
         z = _axis(p["z"], np.linspace(-1.06 - h, -0.56 - h, 51))

@@ -440,7 +440,8 @@ def test_robot_specific_functions_are_declared_by_the_core_not_by_the_name():
     from cosim.errors import UnsupportedError
 
     assert Model("6pus").facts.features == ("6pus_calib_rows", "6pus_leg_points")
-    assert Model("quattro").has("quattro_indices") and not Model("quattro_described").has("quattro_indices")
+    assert Model("quattro").has("quattro_indices") and Model("quattro_described").has("quattro_indices")
+    assert not Model("delta_clavel").has("quattro_indices")  # arms and rods, but a rigid platform
     assert Model("fourbar").has("fourbar_output") and not Model("hexapod_ups").facts.features
     m = Model("tripod_3prs")
     with pytest.raises(UnsupportedError, match="'6pus_calib_rows'.*'tripod_3prs' does not.*none"):

@@ -125,9 +125,14 @@ def test_a_model_without_the_quattro_indices_is_refused_by_capability_not_name()
     from cosim.core import Model
     from cosim.errors import UnsupportedError
 
-    # the described Quattro is the same machine but the core declares no index family for it
-    with pytest.raises(UnsupportedError, match="robot 'quattro_described' has no Quattro indices"):
-        quattro.index_map(x=[0.0], y=[0.0], z=[-1.0], model=Model("quattro_described"))
+    # a Delta of arms and rods, but a rigid platform: the core declares no index family for it
+    with pytest.raises(UnsupportedError, match="robot 'delta_clavel' has no Quattro indices"):
+        quattro.index_map(x=[0.0], y=[0.0], z=[-1.0], model=Model("delta_clavel"))
+    # the described Quattro has them (c_core/src/robots/quattro_facts.cpp): the same map
+    a = quattro.index_map(x=[0.0, 0.1], y=[0.0], z=[-1.0, -0.9], model=Model("quattro"))
+    b = quattro.index_map(x=[0.0, 0.1], y=[0.0], z=[-1.0, -0.9], model=Model("quattro_described"))
+    np.testing.assert_allclose(b["mu_T"], a["mu_T"], rtol=1e-12)
+    np.testing.assert_allclose(b["alfa_x"], a["alfa_x"], rtol=1e-12)
     with pytest.raises(UnsupportedError, match="robot '6pus' has no Quattro indices"):
         quattro.model(robot="6pus")
     assert quattro.model(param_set="appendix_a").has("quattro_indices")

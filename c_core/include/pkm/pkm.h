@@ -120,9 +120,10 @@ PKM_API const char* pkm_model_joint_unit(const pkm_model* m);
 PKM_API const char* pkm_model_effort_unit(const pkm_model* m);
 PKM_API const char* pkm_model_joint_noun(const pkm_model* m);
 /* Robot-specific function families the model provides beyond the common set, named by
- * their C function without the "pkm_" prefix: "6pus_calib_rows", "6pus_leg_points" (the
- * hand-written 6-PUS), "fourbar_output" (the four-bar), "quattro_indices", "quattro_gimre",
- * "quattro_points" (the hand-written Quattro).  Callers ask the model, never its name:
+ * their C function without the "pkm_" prefix: "6pus_calib_rows", "6pus_leg_points" (a
+ * described 6-PUS), "fourbar_output" (the four-bar), "quattro_indices", "quattro_gimre",
+ * "quattro_points" (the hand-written Quattro and a described one: four arm-and-rod legs on an
+ * articulated platform, robots/quattro_described.toml).  Callers ask the model, never its name:
  * pkm_model_has returns 1 if it provides feature, else 0; count and i-th name ("" past
  * the end) list them. */
 PKM_API int pkm_model_has(const pkm_model* m, const char* feature);
@@ -821,6 +822,17 @@ PKM_API int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, 
  * forearm upper ends), C (platform joints).  Any output may be NULL. */
 PKM_API int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A,
                                double* B, double* C);
+/* The Quattro's constants that the indices and the cycle-time search read, out[PKM_QUATTRO_NCONSTANT]
+ * (feature "quattro_indices"); of a described Quattro, where a description carries no drive
+ * rating, the first two are the s650H's (source ch. 5.6):
+ *  0 tau_arm_max  arm-side torque limit of the alfa indices, gear_ratio x nominal motor torque [N m]
+ *  1 gear_ratio   motor to arm [-]
+ *  2 base_height  the Adept origin's height above the motor-axis plane (source symbol base) [m]
+ *  3 link_length  arm 1's link length b_r, which scales J in the indices [m] */
+enum { PKM_QUATTRO_NCONSTANT = 4 };
+PKM_API const char* pkm_quattro_constant_name(int i);
+PKM_API const char* pkm_quattro_constant_unit(int i);
+PKM_API int pkm_quattro_constants(const pkm_model* m, pkm_data* d, double* out);
 
 #ifdef __cplusplus
 }

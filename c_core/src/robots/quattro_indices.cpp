@@ -1,9 +1,12 @@
 // C API specific to the Quattro: the kinematic and dynamic performance indices of Virzi 2010
-// ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points.
+// ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points, of the
+// hand-written Quattro (quattro.hpp) and of a described one (quattro_facts.hpp): the index
+// formulas once, over the inputs each model gives.
 #include <cstring>
 
 #include "common/guard.hpp"
 #include "robots/quattro.hpp"
+#include "robots/quattro_facts.hpp"
 
 using namespace pkm;
 using namespace pkm::quattro;
@@ -21,26 +24,51 @@ constexpr IndexInfo kIndex[PKM_QUATTRO_NINDEX] = {
     {"kat", "kg"},    {"kat_xy", "kg"},  {"kat_x", "kg"}, {"kat_y", "kg"},    {"kat_z", "kg"},     {"Fcc_z", "N"},
     {"Fcc_xy", "N"},  {"Fgr", "N"},      {"alfa_z", "m/s2"}, {"alfa_x", "m/s2"}};
 
-const Model& quattro_model(const pkm_model* m, pkm_data* d) {
+// The hand-written Quattro of (m, d), or nullptr for a described one; throws for any other robot.
+constexpr IndexInfo kConstant[PKM_QUATTRO_NCONSTANT] = {
+    {"tau_arm_max", "N.m"}, {"gear_ratio", "1"}, {"base_height", "m"}, {"link_length", "m"}};
+
+const Model* quattro_model(const pkm_model* m, pkm_data* d) {
   const RobotModel& rm = prepare(m, d);
+  if (quattro_facts::is_described_quattro(*m->robot)) return nullptr;
   if (std::strcmp(m->robot->name(), "quattro") != 0)
-    throw Error(PKM_ERR_ARGUMENT, "this function is for the 'quattro' robot, not '" + m->robot_name + "'");
-  return static_cast<const Model&>(rm);
+    throw Error(PKM_ERR_ARGUMENT, "this function is for a Quattro ('quattro', or a description of four arms on an articulated platform), not '" +
+                                      m->robot_name + "'");
+  return &static_cast<const Model&>(rm);
+}
+
+// The hand-written model's index inputs.
+void hand_inputs(const Model& m, const double* x, quattro_facts::IndexInputs& in) {
+  Pose p;
+  pose_kinematics(m, x, p);
+  in.JD = m.br * p.J;
+  in.N = gimre(m, p);
+  in.M = mass_matrix(m, p);
+  const double s2 = std::sqrt(0.5);
+  const Eigen::Vector4d vz(0, 0, 1, 0), vxy(s2, s2, 0, 0);
+  in.hv_z = velocity_force(m, p, vz);
+  in.hv_xy = velocity_force(m, p, vxy);
+  in.grav = gravity_force(m, p);
+  in.tau_z = solve_JT(p, in.M * vz, "alfa index");
+  in.tau_x = solve_JT(p, in.M * Eigen::Vector4d(-s2, -s2, 0, 0), "alfa index");
+  in.tau_max = m.tau_arm_max();
 }
 
 // Largest scale s of a unit task acceleration a such that |J^-T M a| <= tau_max on every
-// arm: the source's alfa (ch. 5.6-5.7), from rest and without gravity.
-double alfa(const Model& m, const Pose& p, const Eigen::Matrix4d& M, const Eigen::Vector4d& a) {
-  const Eigen::Vector4d tau = solve_JT(p, M * a, "alfa index");
+// arm: the source's alfa (ch. 5.6-5.7), from rest and without gravity; tau = J^-T M a.
+double alfa(double tau_max, const Eigen::Vector4d& tau) {
   const double t = tau.cwiseAbs().maxCoeff();
   if (!(t > 0)) throw Error(PKM_ERR_SINGULAR, "alfa index: zero torque for a unit acceleration");
-  return m.tau_arm_max() / t;
+  return tau_max / t;
 }
 
-void indices(const Model& m, const double* x, double* out) {
-  Pose p;
-  pose_kinematics(m, x, p);
-  const Eigen::Matrix4d JD = m.br * p.J;
+}  // namespace
+
+namespace pkm {
+namespace quattro_facts {
+
+void indices(const IndexInputs& in, double* out) {
+  const Eigen::Matrix4d& JD = in.JD;
   double* o = out;
   // Kinematic indices (ch. 3): sub-matrix variants on columns of the normalised J.
   const Eigen::Matrix<double, 4, 3> JT = JD.leftCols<3>();
@@ -58,7 +86,7 @@ void indices(const Model& m, const double* x, double* out) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es3(JT.transpose() * JT, Eigen::EigenvaluesOnly);
   o[6] = std::sqrt(es3.eigenvalues()[2] / es3.eigenvalues()[0]);
   // GIMRE (ch. 4).
-  const Eigen::Matrix4d Nm = gimre(m, p);
+  const Eigen::Matrix4d& Nm = in.N;
   const Eigen::Matrix3d TIM = Nm.topLeftCorner<3, 3>();
   const double tr = TIM.trace();
   o[7] = 27 * TIM.determinant() / (tr * tr * tr);
@@ -68,26 +96,25 @@ void indices(const Model& m, const double* x, double* out) {
   o[10] = Nm.row(1).norm();
   o[11] = Nm.row(2).norm();
   // Dynamic model (ch. 5): mass indices from L = M[0:3,0:3].
-  const Eigen::Matrix4d M = mass_matrix(m, p);
+  const Eigen::Matrix4d& M = in.M;
   const double kx = M.block<1, 3>(0, 0).norm(), ky = M.block<1, 3>(1, 0).norm(), kz = M.block<1, 3>(2, 0).norm();
   o[12] = (kx + ky + kz) / 3;
   o[13] = (kx + ky) / 2;
   o[14] = kx;
   o[15] = ky;
   o[16] = kz;
-  const double s2 = std::sqrt(0.5);
-  const Eigen::Vector4d vz(0, 0, 1, 0), vxy(s2, s2, 0, 0);
-  o[17] = velocity_force(m, p, vz).head<3>().norm();
-  o[18] = velocity_force(m, p, vxy).head<3>().norm();
-  o[19] = gravity_force(m, p).head<3>().norm();
-  o[20] = alfa(m, p, M, vz);
-  o[21] = alfa(m, p, M, Eigen::Vector4d(-s2, -s2, 0, 0));
+  o[17] = in.hv_z.head<3>().norm();
+  o[18] = in.hv_xy.head<3>().norm();
+  o[19] = in.grav.head<3>().norm();
+  o[20] = alfa(in.tau_max, in.tau_z);
+  o[21] = alfa(in.tau_max, in.tau_x);
   for (int k = 0; k < PKM_QUATTRO_NINDEX; ++k)
     if (!std::isfinite(o[k]))
       throw Error(PKM_ERR_SINGULAR, std::string("index ") + kIndex[k].name + " is not finite at this pose");
 }
 
-}  // namespace
+}  // namespace quattro_facts
+}  // namespace pkm
 
 extern "C" {
 
@@ -97,38 +124,66 @@ const char* pkm_quattro_index_unit(int i) { return i >= 0 && i < PKM_QUATTRO_NIN
 int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double* x, double* out, int* status) {
   const Model* qm = nullptr;
   int s = guard(d, [&] {
-    qm = &quattro_model(m, d);
+    qm = quattro_model(m, d);
     check_out(x, "x");
     check_out(out, "out");
   });
   if (s != PKM_OK) return s;
   return run_batch(d, n, status, out, PKM_QUATTRO_NINDEX, [&](size_t k) {
     check_finite(x + 4 * k, 4, "pose x");
-    indices(*qm, x + 4 * k, out + PKM_QUATTRO_NINDEX * k);
+    quattro_facts::IndexInputs in;
+    if (qm)
+      hand_inputs(*qm, x + 4 * k, in);
+    else
+      quattro_facts::index_inputs(m, d, x + 4 * k, in);
+    quattro_facts::indices(in, out + PKM_QUATTRO_NINDEX * k);
+  });
+}
+
+const char* pkm_quattro_constant_name(int i) { return i >= 0 && i < PKM_QUATTRO_NCONSTANT ? kConstant[i].name : ""; }
+const char* pkm_quattro_constant_unit(int i) { return i >= 0 && i < PKM_QUATTRO_NCONSTANT ? kConstant[i].unit : ""; }
+
+int pkm_quattro_constants(const pkm_model* m, pkm_data* d, double* out) {
+  return guard(d, [&] {
+    const Model* qm = quattro_model(m, d);
+    check_out(out, "out");
+    if (!qm) return quattro_facts::constants(m, d, out);
+    out[0] = qm->tau_arm_max();
+    out[1] = qm->ratio;
+    out[2] = qm->h;
+    out[3] = qm->br;
   });
 }
 
 int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, double* Nout) {
   return guard(d, [&] {
-    const Model& qm = quattro_model(m, d);
+    const Model* qm = quattro_model(m, d);
     check_finite(x, 4, "pose x");
     check_out(Nout, "N");
-    Pose p;
-    pose_kinematics(qm, x, p);
     Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> out(Nout);
-    out = gimre(qm, p);
+    if (!qm) {
+      out = quattro_facts::gimre(m, d, x);
+      return;
+    }
+    Pose p;
+    pose_kinematics(*qm, x, p);
+    out = gimre(*qm, p);
   });
 }
 
 int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A, double* B, double* C) {
   return guard(d, [&] {
-    const Model& qm = quattro_model(m, d);
+    const Model* qm = quattro_model(m, d);
     check_finite(x, 4, "pose x");
+    if (!qm) {
+      quattro_facts::points(m, d, x, A, B, C);
+      return;
+    }
     Pose p;
-    pose_kinematics(qm, x, p);
+    pose_kinematics(*qm, x, p);
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < 3; ++j) {
-        if (A) A[3 * i + j] = qm.A[i][j];
+        if (A) A[3 * i + j] = qm->A[i][j];
         if (B) B[3 * i + j] = p.B[i][j];
         if (C) C[3 * i + j] = p.C[i][j];
       }

@@ -4,6 +4,7 @@
 
 #include "common/robot.hpp"
 #include "description/described_robot.hpp"
+#include "robots/quattro_facts.hpp"
 #include "robots/sixpus_facts.hpp"
 
 namespace pkm {
@@ -78,6 +79,7 @@ bool is_builtin_robot(const std::string& name) {
 std::vector<const char*> robot_features(const Robot& r) {
   std::vector<const char*> f = r.features();
   if (sixpus::is_6pus(r)) f.insert(f.end(), {"6pus_calib_rows", "6pus_leg_points"});
+  if (quattro_facts::is_described_quattro(r)) f.insert(f.end(), {"quattro_indices", "quattro_gimre", "quattro_points"});
   return f;
 }
 
