@@ -156,8 +156,11 @@ def _term_fitted(search, ch, terms, stab, spread, extra):
     terms = terms + extra
     f, d_held = _heldout(search, ch, terms)
     # an effort term's column bends with its coefficient (the core solves for the applied effort)
-    f = replace(f, coef=products.refine_effort(search, c, terms, f.coef, ch.held, train,
-                                               lambda t: list(zip(TERMS[t][0], TERMS[t][1]))))
+    coef = products.refine_effort(search, c, terms, f.coef, ch.held, train,
+                                  lambda t: list(zip(TERMS[t][0], TERMS[t][1])))
+    if coef is None:  # coefficients no plant holds (the drive would self-lock)
+        return None
+    f = replace(f, coef=coef)
     if not d_held > ch.threshold:
         return None
     # the fit with instruments may leave the selection's least squares: a joint inertia below
