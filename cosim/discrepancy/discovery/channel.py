@@ -150,8 +150,8 @@ def _stable(search, ch, terms):
 
 def _term_fitted(search, ch, terms, stab, spread, extra):
     """The :class:`DiscoveredTerm` of ``terms`` with the library's offset terms ``extra``
-    refitted beside them, with intervals, or None when the held-out part does not need them or
-    an added inertia leaves the joint's below zero."""
+    refitted beside them, with intervals, or None when the held-out part does not need them, an
+    added inertia leaves the joint's below zero or its effort terms make the drive self-lock."""
     eng, c, y, train, test = search.eng, ch.c, ch.y, search.eng.train, search.eng.test
     terms = terms + extra
     f, d_held = _heldout(search, ch, terms)

@@ -37,7 +37,7 @@ import numpy as np
 
 from .terms import TERMS
 from ..families import acceptance
-from ..structure import own_noise
+from ..structure import own_noise, samples_per_independent
 
 #: per library effect, the coefficients of a discovered term that are its own column
 SAME_PHYSICS = {"coulomb": ("force_cpos", "force_cneg"), "smooth_coulomb": ("force_cpos", "force_cneg"),
@@ -101,22 +101,22 @@ def _term_columns(search, term, key) -> np.ndarray:
 
 
 def _centre_columns(search, theta, term) -> tuple:
-    """``(columns (samples, k), names, steps)``: the residual's slope on the term's channel over
-    each centre (:data:`CENTRES`) the term holds, by finite differences through the core (the
-    model ``theta`` with the term in it)."""
+    """``(columns (samples, k), names, joints)``: the residual's slope on the term's channel over
+    each centre (:data:`CENTRES`) the term holds (core names; the 0-based joint whose position
+    it is), by finite differences through the core (the model ``theta`` with the term in it)."""
     eng, c = search.eng, term.joint - 1
     full = dict(theta, **term.params())
     names = [k for k in term.shape if k.rsplit(".", 1)[1] in CENTRES]
     if not names:
         return np.zeros((eng.test.shape[0], 0)), [], []
     R0 = eng.R(full)[:, c]
-    cols, steps = [], []
+    cols, joints = [], []
     for k in names:
         j = int(term.shape.get(k.replace("force_xqc", "force_xj"), c + 1)) - 1 if k.endswith("force_xqc") else c
         d = CENTRE_STEP * float(search.travel[j])
         cols.append((eng.R(dict(full, **{k: full[k] + d}))[:, c] - R0) / d)
-        steps.append(j)
-    return np.column_stack(cols), names, steps
+        joints.append(j)
+    return np.column_stack(cols), names, joints
 
 
 def _fit(search, R0, chans, blocks, rows):
@@ -169,9 +169,9 @@ def rejudge(search, theta, R_lib, R_minus, g, base, threshold) -> Verdict | None
     train = eng.train
     own = {c: (R_lib - R_minus)[:, c][:, None] for c in chans}  # the effect at its size: scale free
     cols = {t.joint - 1: _term_columns(search, t, g.key) for t in terms if t is not None}
-    n_eff = sum(float((eng.use[train, c] > 0).sum()) / _phi(search) for c in chans)
+    n_eff = sum(float((eng.use[train, c] > 0).sum()) / samples_per_independent(eng.pipe) for c in chans)
     bar = threshold + math.log(max(n_eff, 2.0))
-    p_a, chi_a, R_a = _fit(search, R_minus, chans, _blocks(eng, chans, own, [cols]), train)
+    _, chi_a, R_a = _fit(search, R_minus, chans, _blocks(eng, chans, own, [cols]), train)
     _, chi_b, R_b = _fit(search, R_minus, chans, _blocks(eng, chans, {}, [cols]), train)
     k_b = sum(v.shape[1] for v in cols.values())
     if chi_b - chi_a <= bar:
@@ -209,12 +209,6 @@ def theta_of(base, key) -> float:
         if t is not None and key in t.shape:
             return t.shape[key]
     raise KeyError(key)
-
-
-def _phi(search) -> float:
-    from ..structure import samples_per_independent
-
-    return samples_per_independent(search.eng.pipe)
 
 
 @dataclass(frozen=True)
