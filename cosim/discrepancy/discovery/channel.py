@@ -150,14 +150,17 @@ def _stable(search, ch, terms):
 
 def _term_fitted(search, ch, terms, stab, spread, extra):
     """The :class:`DiscoveredTerm` of ``terms`` with the library's offset terms ``extra``
-    refitted beside them, with intervals, or None when the held-out part does not need them or
-    an added inertia leaves the joint's below zero."""
+    refitted beside them, with intervals, or None when the held-out part does not need them, an
+    added inertia leaves the joint's below zero or its effort terms make the drive self-lock."""
     eng, c, y, train, test = search.eng, ch.c, ch.y, search.eng.train, search.eng.test
     terms = terms + extra
     f, d_held = _heldout(search, ch, terms)
     # an effort term's column bends with its coefficient (the core solves for the applied effort)
-    f = replace(f, coef=products.refine_effort(search, c, terms, f.coef, ch.held, train,
-                                               lambda t: list(zip(TERMS[t][0], TERMS[t][1]))))
+    coef = products.refine_effort(search, c, terms, f.coef, ch.held, train,
+                                  lambda t: list(zip(TERMS[t][0], TERMS[t][1])))
+    if coef is None:  # coefficients no plant holds (the drive would self-lock)
+        return None
+    f = replace(f, coef=coef)
     if not d_held > ch.threshold:
         return None
     # the fit with instruments may leave the selection's least squares: a joint inertia below

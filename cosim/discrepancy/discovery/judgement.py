@@ -13,6 +13,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from . import refit
 from .channel import discover_channel
 from .search import Search, make_search
 from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
@@ -157,6 +158,7 @@ def judge_library(eng, sel, threshold: float):
     again = [c for c in v.confirmed if any(search.name(c, lib) in v.theta for lib in v.confirmed[c])]
     v, found = _discover_all(court, v, v.R_lib, again, v.theta, asymmetry=v.confirmed)
     v = _families_pass(court, replace(v, base={**v.base, **found}))
+    v = _refitted(court, v)
     return v.theta, list(v.withdrawn), list(v.ties), v.search, v.base
 
 
@@ -362,6 +364,46 @@ def _trial_again(court, v, g):
         return v
     return replace(v, theta=th_minus, R_lib=R_minus, base={**v.base, c: in_place},
                    withdrawn=v.withdrawn + (_withdrawn_record(court.sel, g, [in_place], figures),))
+
+
+def _refitted(court, v):
+    """Each library effect that stays, refitted beside the families' terms and judged again by
+    the library's entry criterion (:func:`.refit.rejudge`): withdrawn where the terms hold its
+    share and, searched again without it, fit the held-out part as well; tied where it is the
+    same force as the terms' centres moved, or where only the held-out part needs it."""
+    if not any(refit.holds_family(t) for t in v.base.values()):
+        return v
+    eng, bar = court.eng, court.bar
+    for a in sorted(court.sel.selected, key=lambda a: a.importance):
+        g = a.group
+        if g.effect.family not in ("effort", "both") or not all(p in v.theta for p in g.params):
+            continue
+        th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
+        R_minus = eng.R(th_minus)
+        verdict = refit.rejudge(v.search, v.theta, v.R_lib, R_minus, g, v.base, court.threshold)
+        if verdict is None or verdict.kind == "keep":
+            continue
+        chans = list(verdict.channels)
+        old = [v.base[c] for c in chans if v.base.get(c) is not None]
+        needed, gain, se = significant(v.search, verdict.R_without, verdict.R_with, chans, bar)
+        figures = {"heldout_chi2_library": heldout_chi2(v.search, verdict.R_with, chans),
+                   "heldout_chi2_discovered": heldout_chi2(v.search, verdict.R_without, chans),
+                   "gain": -gain, "se": se, "bar": bar, "coefficients": [verdict.k_with, verdict.k_without],
+                   "refit": {"gain": verdict.gain, "bar": verdict.bar, "centres": verdict.centres}}
+        if verdict.kind == "withdraw" and not needed:
+            v2, found = _discover_all(court, v, R_minus, chans, th_minus, asymmetry=v.confirmed)
+            new = [t for t in found.values() if t is not None]
+            worse = significant(v.search, _with_terms(R_minus, v2.search, new), _with_terms(v.R_lib, v.search, old),
+                                chans, bar)[0]
+            if new and not worse:
+                v = replace(v2, theta=th_minus, R_lib=R_minus, base={**v.base, **found},
+                            withdrawn=v2.withdrawn + (_withdrawn_record(court.sel, g, new, figures),),
+                            ties=tuple(t for t in v2.ties if t["group"] != g.label))
+                continue
+        in_place = [refit.centred(t, verdict.centres, eng.model.facts.joint_unit) for t in old]
+        v = replace(v, ties=_tied(v.ties, (g,), in_place, verdict.k_without - verdict.k_with, figures,
+                                  [eng.pipe.channels[c] for c in chans]))
+    return v
 
 
 def _tied(ties, groups, in_place, extra, figures, channels) -> tuple:

@@ -337,7 +337,11 @@ def refine_effort(search, c, terms, coef, held, rows, keys_of, iterations=2):
     the model ``held``) refined by Gauss-Newton steps on the core's residual of channel c over
     ``rows`` where ``terms`` hold an effort term (:data:`EFFORT_TERMS`): each step takes every
     coefficient's column again at the current coefficients (``keys_of(term)``: its (core key,
-    scale) pairs).  Returned unchanged otherwise, or where a step does not lower the chi-square."""
+    scale) pairs).  Returned unchanged otherwise, or where a step does not lower the chi-square
+    (or makes the drive self-lock); None where ``coef`` itself makes it self-lock (the core
+    refuses an effort term taking all of the applied effort: no plant holds them)."""
+    from ...errors import ArgumentError
+
     if not any(t in EFFORT_TERMS for t, _ in terms):
         return coef
     eng = search.eng
@@ -358,11 +362,17 @@ def refine_effort(search, c, terms, coef, held, rows, keys_of, iterations=2):
         return eng.R(at(x))[rows, c] * w
 
     x = np.array(coef, float)
-    r0 = r(x)
+    try:
+        r0 = r(x)
+    except ArgumentError:  # the drive self-locks at these coefficients
+        return None
     for _ in range(iterations):
-        J = np.column_stack([(r(x + d * np.eye(len(x))[i]) - r0) / d for i, d in enumerate(deltas)])
-        step = -np.linalg.lstsq(J, r0, rcond=None)[0]
-        r1 = r(x + step)
+        try:
+            J = np.column_stack([(r(x + d * np.eye(len(x))[i]) - r0) / d for i, d in enumerate(deltas)])
+            step = -np.linalg.lstsq(J, r0, rcond=None)[0]
+            r1 = r(x + step)
+        except ArgumentError:
+            break
         if not float(r1 @ r1) < float(r0 @ r0):
             break
         x, r0 = x + step, r1
