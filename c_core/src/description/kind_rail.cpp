@@ -1,6 +1,7 @@
 // Joint kind `rail` (PUS, PSS, P(SS)2, PRR): a slider S = S0 + q s on a prismatic rail at the
 // base (its mass a point at S), then the rod to the platform point (kind_rod.cpp): its schema,
 // compiled form, geometry, derivatives, mass and force terms.
+#include <algorithm>
 #include <cmath>
 
 #include "description/described_robot.hpp"
@@ -45,6 +46,42 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     lg.t = lg.tb = l.dir;
     lg.wt = w.dot(l.dir);
     lg.dq = w.transpose() / lg.wt;
+  }
+  // Every leg at once over the model's arrays (the loops vectorise; the same operations as
+  // grad_of); a leg that does not reach is handed to the leg-by-leg pass for its message.
+  void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const override {
+    const LegArrays& a = m.soa;
+    const M3& R = pf.R;
+    constexpr int K = kMaxLegs;
+    double rx[K], ry[K], rz[K], dx[K], dy[K], dz[K], b[K], disc[K], q[K];
+    for (int i = 0; i < K; ++i) {
+      rx[i] = R(0, 0) * a.px[i] + R(0, 1) * a.py[i] + R(0, 2) * a.pz[i];
+      ry[i] = R(1, 0) * a.px[i] + R(1, 1) * a.py[i] + R(1, 2) * a.pz[i];
+      rz[i] = R(2, 0) * a.px[i] + R(2, 1) * a.py[i] + R(2, 2) * a.pz[i];
+      dx[i] = pf.p.x() + rx[i] + a.fx[i] - a.bx[i];
+      dy[i] = pf.p.y() + ry[i] + a.fy[i] - a.by[i];
+      dz[i] = pf.p.z() + rz[i] + a.fz[i] - a.bz[i];
+      b[i] = a.sx[i] * dx[i] + a.sy[i] * dy[i] + a.sz[i] * dz[i];
+      disc[i] = b[i] * b[i] - a.ss[i] * (dx[i] * dx[i] + dy[i] * dy[i] + dz[i] * dz[i] - a.L2[i]);
+    }
+    int bad = 0;
+    for (int i = 0; i < m.n; ++i) bad |= !(disc[i] >= a.disc_tol[i]);
+    if (bad) return LegMotionOf<RailMotion>::grad_all(m, pf, x, lg);
+    for (int i = 0; i < K; ++i) q[i] = a.inv_ss[i] * (b[i] - a.branch[i] * std::sqrt(std::max(disc[i], 0.0)));
+    for (int i = 0; i < m.n; ++i) {
+      LegGrad& g = lg[i];
+      const LegModel& l = m.legs[i];
+      g.rP = V3(rx[i], ry[i], rz[i]);
+      g.q = q[i];
+      g.pos[1] = P3<double>{pf.p.x() + rx[i] + a.fx[i], pf.p.y() + ry[i] + a.fy[i], pf.p.z() + rz[i] + a.fz[i]};
+      g.pos[0] = l.base + along(q[i], l.dir);
+      const V3 w = g.w = v3(g.pos[1]) - v3(g.pos[0]);
+      g.t = g.tb = l.dir;
+      g.wt = w.dot(l.dir);
+      g.dq = w.transpose() / g.wt;
+      g.j.head<3>() = g.dq.transpose();
+      g.j.tail<3>() = g.rP.cross(g.j.head<3>());
+    }
   }
   double closure_dq(const LegModel& l, const LegGrad& lg) const override { return lg.w.dot(l.dir); }
   double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * std::sqrt(l.ss)); }

@@ -10,7 +10,7 @@ namespace described {
 
 // The leg's inertia at P, a rank-two twist-space term (and a point mass at P).
 // c: the leg's inertia along q, m_body |tb|^2 + ms |t|^2 + I_arm (a kind may know it cheaper).
-inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm, double c) {
+[[gnu::always_inline]] inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm, double c) {
   // At P: c g g' + mx (g t' + t g') + ms I (g = dq', the body along tb, S along t per unit
   // q).  The isotropic ms I is a point mass at P; the rest is rank two in twist space: with
   // j = (g, rP x g) and u = (t, rP x t) it is j v' + v j' for v = c/2 j + mx u.
