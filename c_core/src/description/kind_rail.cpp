@@ -43,7 +43,6 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
     geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
     const V3 w = lg.w = P - v3(lg.pos[0]);
-    lg.t = lg.tb = l.dir;
     lg.wt = w.dot(l.dir);
     lg.dq = w.transpose() / lg.wt;
   }
@@ -67,30 +66,35 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     int bad = 0;
     for (int i = 0; i < m.n; ++i) bad |= !(disc[i] >= a.disc_tol[i]);
     if (bad) return LegMotionOf<RailMotion>::grad_all(m, pf, x, lg);
-    for (int i = 0; i < K; ++i) q[i] = a.inv_ss[i] * (b[i] - a.branch[i] * std::sqrt(std::max(disc[i], 0.0)));
+    double wt[K];  // w . s = b - q ss = branch sqrt(disc)
+    for (int i = 0; i < K; ++i) wt[i] = a.branch[i] * std::sqrt(std::max(disc[i], 0.0));
+    for (int i = 0; i < K; ++i) q[i] = a.inv_ss[i] * (b[i] - wt[i]);
     for (int i = 0; i < m.n; ++i) {
+      // Every value first, then the stores (which might alias the model for the compiler).
+      const V3 rP(rx[i], ry[i], rz[i]);
+      const V3 P(pf.p.x() + rx[i] + a.fx[i], pf.p.y() + ry[i] + a.fy[i], pf.p.z() + rz[i] + a.fz[i]);
+      const V3 S(a.bx[i] + q[i] * a.sx[i], a.by[i] + q[i] * a.sy[i], a.bz[i] + q[i] * a.sz[i]);
+      const V3 w = P - S, dq = w / wt[i];
       LegGrad& g = lg[i];
-      const LegModel& l = m.legs[i];
-      g.rP = V3(rx[i], ry[i], rz[i]);
+      g.rP = rP;
       g.q = q[i];
-      g.pos[1] = P3<double>{pf.p.x() + rx[i] + a.fx[i], pf.p.y() + ry[i] + a.fy[i], pf.p.z() + rz[i] + a.fz[i]};
-      g.pos[0] = l.base + along(q[i], l.dir);
-      const V3 w = g.w = v3(g.pos[1]) - v3(g.pos[0]);
-      g.t = g.tb = l.dir;
-      g.wt = w.dot(l.dir);
-      g.dq = w.transpose() / g.wt;
-      g.j.head<3>() = g.dq.transpose();
-      g.j.tail<3>() = g.rP.cross(g.j.head<3>());
+      g.pos[1] = P3<double>{P.x(), P.y(), P.z()};
+      g.pos[0] = P3<double>{S.x(), S.y(), S.z()};
+      g.w = w;
+      g.wt = wt[i];
+      g.dq = dq.transpose();
+      g.j.head<3>() = dq;
+      g.j.tail<3>() = rP.cross(dq);
     }
   }
   double closure_dq(const LegModel& l, const LegGrad& lg) const override { return lg.w.dot(l.dir); }
   double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * std::sqrt(l.ss)); }
-  Eigen::RowVector3d dq_rate(const LegModel&, const LegGrad& lg, const V3& vP, double qd) const override {
-    return rod_dq_rate(lg, vP, qd, 0.0);  // s does not turn
+  Eigen::RowVector3d dq_rate(const LegModel& l, const LegGrad& lg, const V3& vP, double qd) const override {
+    return rod_dq_rate(lg, l.dir, vP, qd, 0.0);  // s does not turn
   }
   // The slider and S move along s (tb = t = s): the inertia along q is (m_body + ms) |s|^2.
   static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
-    add_rod_leg_mass(l, lg, tm, (l.m_body + l.m_rod * l.rod_self) * l.ss);
+    add_rod_leg_mass(l, lg, tm, (l.m_body + l.m_rod * l.rod_self) * l.ss, l.dir);
   }
   // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
   static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
@@ -102,10 +106,11 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   // rod_leg_load with the slider and S at a_S = qdd s (tb = t = s): the load along the rail
   // qdd (m_body + ms) |s|^2 + mx s.aP - (m_body + m_rod / 2) s.g acts through dq.
   static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
-    qdd = qdd_of(l, lg, vP, aP);
+    const double a = qdd_of(l, lg, vP, aP);
     const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
-    const V3 Fp = (mx * qdd) * l.dir + ms * aP - (mr / 2) * g;
-    const double along = qdd * (l.m_body + ms) * l.ss + mx * l.dir.dot(aP) - (l.m_body + mr / 2) * l.dir.dot(g);
+    const V3 Fp = (mx * a) * l.dir + ms * aP - (mr / 2) * g;
+    const double along = a * (l.m_body + ms) * l.ss + mx * l.dir.dot(aP) - (l.m_body + mr / 2) * l.dir.dot(g);
+    qdd = a;  // last: the compiler reloads what a store through qdd might change
     return Fp + along * lg.dq.transpose();
   }
 };
