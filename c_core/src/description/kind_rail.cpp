@@ -52,14 +52,13 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     const LegArrays& a = m.soa;
     const M3& R = pf.R;
     constexpr int K = kMaxLegs;
-    double rx[K], ry[K], rz[K], dx[K], dy[K], dz[K], b[K], disc[K], q[K];
+    double rx[K], ry[K], rz[K], Px[K], Py[K], Pz[K], dx[K], dy[K], dz[K], b[K], disc[K], q[K];
     for (int i = 0; i < K; ++i) {
       rx[i] = R(0, 0) * a.px[i] + R(0, 1) * a.py[i] + R(0, 2) * a.pz[i];
       ry[i] = R(1, 0) * a.px[i] + R(1, 1) * a.py[i] + R(1, 2) * a.pz[i];
       rz[i] = R(2, 0) * a.px[i] + R(2, 1) * a.py[i] + R(2, 2) * a.pz[i];
-      dx[i] = pf.p.x() + rx[i] + a.fx[i] - a.bx[i];
-      dy[i] = pf.p.y() + ry[i] + a.fy[i] - a.by[i];
-      dz[i] = pf.p.z() + rz[i] + a.fz[i] - a.bz[i];
+      Px[i] = pf.p.x() + rx[i] + a.fx[i], Py[i] = pf.p.y() + ry[i] + a.fy[i], Pz[i] = pf.p.z() + rz[i] + a.fz[i];
+      dx[i] = Px[i] - a.bx[i], dy[i] = Py[i] - a.by[i], dz[i] = Pz[i] - a.bz[i];
       b[i] = a.sx[i] * dx[i] + a.sy[i] * dy[i] + a.sz[i] * dz[i];
       disc[i] = b[i] * b[i] - a.ss[i] * (dx[i] * dx[i] + dy[i] * dy[i] + dz[i] * dz[i] - a.L2[i]);
     }
@@ -72,7 +71,7 @@ class RailMotion final : public LegMotionOf<RailMotion> {
     for (int i = 0; i < m.n; ++i) {
       // Every value first, then the stores (which might alias the model for the compiler).
       const V3 rP(rx[i], ry[i], rz[i]);
-      const V3 P(pf.p.x() + rx[i] + a.fx[i], pf.p.y() + ry[i] + a.fy[i], pf.p.z() + rz[i] + a.fz[i]);
+      const V3 P(Px[i], Py[i], Pz[i]);
       const V3 S(a.bx[i] + q[i] * a.sx[i], a.by[i] + q[i] * a.sy[i], a.bz[i] + q[i] * a.sz[i]);
       const V3 w = P - S, dq = w / wt[i];
       LegGrad& g = lg[i];
