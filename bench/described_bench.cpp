@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -59,19 +58,10 @@ int main(int argc, char** argv) {
   Robot a = open(hand_name), b = open(desc_name);
   if (a.n != b.n) die("the two robots have different numbers of coordinates");
   const int n = a.n;
-  double home[6];
-  pkm_model_home(a.m, home);
   const size_t K = 2000;
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> X(K * n), XD(K * n), XDD(K * n), T(K * n), out(K * n * n), out2(K * n * n);
-  for (size_t k = 0; k < K; ++k)
-    for (int j = 0; j < n; ++j) {
-      const bool ang = std::strcmp(pkm_model_pose_unit(a.m, j), "rad") == 0;
-      X[k * n + j] = home[j] + (ang ? 0.05 : 0.01) * u(rng);
-      XD[k * n + j] = 0.05 * u(rng);
-      XDD[k * n + j] = u(rng);
-    }
+  std::vector<double> X, XD, XDD;
+  bench::sample_states(a.m, K, X, XD, XDD);
+  std::vector<double> T(K * n), out(K * n * n), out2(K * n * n);
   for (size_t k = 0; k < K; ++k)
     if (pkm_inverse_dynamics(a.m, a.d, &X[k * n], &XD[k * n], &XDD[k * n], &T[k * n]) != PKM_OK)
       die("a sampled pose fails in the hand-written model");
@@ -133,53 +123,18 @@ int main(int argc, char** argv) {
     std::printf("| %s | %.0f | %.0f | %.2f | %s | %.1e |%s\n", op.name, ma, mb, ratio, op.targeted ? "<= 2" : "-",
                 worst / std::max(1e-300, scale), ok ? "" : "  <- over target");
   }
-  // The closed loop users run: 2 s of a joint PD at 1 ms (pkm_closed_loop, explicit
-  // Runge-Kutta), each joint a 1 Hz sine about home (3 mm or 0.02 rad), as bench/loop_bench.
+  // The closed loop users run (bench::pd_loop): 2 s of a joint PD at 1 ms.
   {
-    const double dt = 1e-3;
-    const size_t nk = 2001;
-    double q0[6];
-    if (pkm_ik(a.m, a.d, home, q0) != PKM_OK) die("home is not reachable");
-    const bool ang = std::strcmp(pkm_model_joint_unit(a.m), "rad") == 0;
-    std::vector<double> qref(nk * n), qdref(nk * n), kp(n * n, 0.0), kd(n * n, 0.0), xa(nk * n), xb(nk * n);
-    for (size_t k = 0; k < nk; ++k)
-      for (int i = 0; i < n; ++i) {
-        const double ph = 2 * bench::kPi * (k * dt) + i * bench::kPi / 3, amp = ang ? 0.02 : 0.003;
-        qref[k * n + i] = q0[i] + amp * std::sin(ph);
-        qdref[k * n + i] = amp * 2 * bench::kPi * std::cos(ph);
-      }
-    for (int i = 0; i < n; ++i) kp[i * n + i] = 2000.0, kd[i * n + i] = 30.0;
-    auto loop = [&](Robot& r, std::vector<double>& xs) {
-      pkm_sim_options o;
-      pkm_sim_default_options(&o);
-      char err[1024];
-      pkm_sim* sim = pkm_sim_create(r.m, &o, err, sizeof err);
-      if (!sim) die(err);
-      pkm_ctrl_spec c{};
-      c.kind = PKM_CTRL_PD;
-      c.dt = dt;
-      c.kp = kp.data();
-      c.kd = kd.data();
-      pkm_ctrl* ctrl = pkm_ctrl_create(r.m, &c, err, sizeof err);
-      if (!ctrl) die(err);
-      pkm_loop_reference ref{nk, 0.0, dt, nullptr, qref.data(), qdref.data(), nullptr, nullptr, nullptr};
-      pkm_loop_record rec{};
-      rec.x = xs.data();
-      size_t done = 0;
-      const double t0 = bench::now();
-      if (pkm_closed_loop(sim, ctrl, &ref, nullptr, nullptr, 0, &rec, &done) != PKM_OK) die(pkm_sim_error(sim));
-      const double wall = bench::now() - t0;
-      pkm_ctrl_destroy(ctrl);
-      pkm_sim_destroy(sim);
-      return wall;
-    };
+    const bench::PdLoop L = bench::pd_loop(a.m, "described_bench");
+    std::vector<double> xa, xb;
+    auto loop = [&](Robot& r, std::vector<double>& xs) { return bench::run_pd_loop(r.m, L, xs, "described_bench"); };
     std::vector<double> ta, tb;
     for (int r = 0; r < std::max(3, repeats / 2); ++r) {
       if (r % 2) tb.push_back(loop(b, xb)), ta.push_back(loop(a, xa));
       else ta.push_back(loop(a, xa)), tb.push_back(loop(b, xb));
     }
     double worst = 0;
-    for (size_t k = 0; k < nk * n; ++k) worst = std::max(worst, std::abs(xa[k] - xb[k]));
+    for (size_t k = 0; k < xa.size(); ++k) worst = std::max(worst, std::abs(xa[k] - xb[k]));
     const double ma = median(ta), mb = median(tb);
     std::printf("| closed loop, 2 s PD at 1 ms [ms/run] | %.1f | %.1f | %.2f | - | %.1e (pose, abs.) |\n", ma * 1e3,
                 mb * 1e3, mb / ma, worst);

@@ -106,6 +106,22 @@ std::vector<std::pair<std::string, double>> DescribedRobot::param_overrides(cons
   return out;
 }
 
+// Model::soa from the legs; the padding legs (n..) reach: p, f, base 0, dir x, L 1.
+static void fill_leg_arrays(Model& m) {
+  LegArrays& a = m.soa;
+  for (int i = 0; i < kMaxLegs; ++i) {
+    const bool pad = i >= m.n;
+    const LegModel l = pad ? LegModel() : m.legs[i];
+    const V3 p = pad ? V3::Zero() : l.p, f = pad ? V3::Zero() : l.f, b = pad ? V3::Zero() : l.base;
+    const V3 s = pad ? V3::UnitX() : l.dir;
+    a.px[i] = p.x(), a.py[i] = p.y(), a.pz[i] = p.z(), a.fx[i] = f.x(), a.fy[i] = f.y(), a.fz[i] = f.z();
+    a.bx[i] = b.x(), a.by[i] = b.y(), a.bz[i] = b.z(), a.sx[i] = s.x(), a.sy[i] = s.y(), a.sz[i] = s.z();
+    a.L2[i] = pad ? 1.0 : l.L * l.L;
+    a.ss[i] = pad ? 1.0 : l.ss, a.inv_ss[i] = pad ? 1.0 : l.inv_ss;
+    a.branch[i] = pad ? 1.0 : l.branch, a.disc_tol[i] = pad ? 0.0 : l.disc_tol;
+  }
+}
+
 std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>& specs,
                                                     const std::vector<double>& values) const {
   const ParamValues get(d_.name, specs, values);
@@ -132,6 +148,7 @@ std::unique_ptr<RobotModel> DescribedRobot::compile(const std::vector<ParamSpec>
     m->legs.push_back(l);
   }
   m->kind = m->legs.front().kind;
+  fill_leg_arrays(*m);
   m->m_platform = get("platform.m");
   m->I_platform = V3(get("platform.Ixx"), get("platform.Iyy"), get("platform.Izz"));
   // Principal moments of a real body obey the triangle inequality (those of a rigid platform

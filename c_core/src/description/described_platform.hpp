@@ -9,13 +9,13 @@
 namespace pkm {
 namespace described {
 
-// The platform at a pose: rotation, and the maps of the coordinate rates to its
-// translational and angular velocity (p_dot = Jt xd, omega = Jw xd).  With dependent
-// coordinates the full pose's rates are S xd (the motion map) and Jt, Jw include them.
+// The platform at a pose: rotation, and with dependent coordinates the maps of the
+// coordinate rates to its translational and angular velocity (p_dot = Jt xd, omega = Jw xd;
+// the full pose's rates are S xd, the motion map); coordinate_maps gives Jt, Jw for any robot.
 struct Platform {
   M3 R, E;
   V3 p;
-  M36 Jt, Jw;
+  M36 Jt, Jw;  // dependent coordinates only
   double x6[6];
   double sx, cx, sy, cy;  // sines and cosines of rx, ry (E and its rate)
   M6 S;                   // dependent coordinates: d(full pose)/dx (columns j < n)
@@ -64,16 +64,22 @@ inline void platform_of(const Model& m, const double* x, Platform& pf, bool rate
   rotation_of(m, pf);
   if (!rates) return;
   pf.E = angle_map(pf);
-  pf.Jt.setZero();
-  pf.Jw.setZero();
-  if (!m.ndep) {
-    for (int j = 0; j < m.n; ++j) {
-      if (m.coord[j] < 3) pf.Jt(m.coord[j], j) = 1;
-      else pf.Jw.col(j) = pf.E.col(m.coord[j] - 3);
-    }
+  if (m.ndep) dependent_rates(m, x, pf);
+}
+
+// Jt, Jw of the platform pf (p_dot = Jt xd, omega = Jw xd): unit translations and columns of
+// E for coordinates that are pose components, the motion map's with dependent coordinates.
+inline void coordinate_maps(const Model& m, const Platform& pf, M36& Jt, M36& Jw) {
+  if (m.ndep) {
+    Jt = pf.Jt, Jw = pf.Jw;
     return;
   }
-  dependent_rates(m, x, pf);
+  Jt.setZero();
+  Jw.setZero();
+  for (int j = 0; j < m.n; ++j) {
+    if (m.coord[j] < 3) Jt(m.coord[j], j) = 1;
+    else Jw.col(j) = pf.E.col(m.coord[j] - 3);
+  }
 }
 
 
@@ -129,8 +135,6 @@ inline V3 attachment(const Model& m, const Platform& pf, int i, V3& rP) {
   return pf.p + rP + m.legs[i].f;
 }
 
-// Jacobian of a point fixed on the platform at world offset rP from its origin.
-inline M36 point_jacobian(const Platform& pf, const V3& rP) { return pf.Jt - skew(rP) * pf.Jw; }
 
 // Velocity and acceleration of the platform (origin and angular) at (x, xd, xdd).
 struct PlatformMotion {

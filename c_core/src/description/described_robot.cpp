@@ -32,10 +32,21 @@ void add_rows(const Model& m, State& st) {
   for (int i = 0; i < m.n; ++i) st.J.row(i) = t_transpose(m, st.pf, st.lg[i].j).transpose();
   st.rows = true;
 }
+// R diag(I) R' (I principal inertias), entry by entry over its upper triangle.
+M3 world_inertia(const M3& R, const V3& I) {
+  const V3 a = R.col(0) * I[0], b = R.col(1) * I[1], c = R.col(2) * I[2];  // R diag(I)
+  auto at = [&](int r, int k) { return a[r] * R(k, 0) + b[r] * R(k, 1) + c[r] * R(k, 2); };
+  M3 Iw;
+  Iw(0, 0) = at(0, 0), Iw(1, 1) = at(1, 1), Iw(2, 2) = at(2, 2);
+  Iw(0, 1) = Iw(1, 0) = at(0, 1);
+  Iw(0, 2) = Iw(2, 0) = at(0, 2);
+  Iw(1, 2) = Iw(2, 1) = at(1, 2);
+  return Iw;
+}
 // rows = false: J is left unset (the forward dynamics map J^T tau in twist space instead).
 void state_of(const Model& m, const double* x, State& st, bool rows) {
   platform_of(m, x, st.pf);
-  if (m.rotates) st.Iw = st.pf.R * m.I_platform.asDiagonal() * st.pf.R.transpose();
+  if (m.rotates) st.Iw = world_inertia(st.pf.R, m.I_platform);
   st.rows = false;
   m.kind->grad_all(m, st.pf, x, st.lg);
   if (rows) add_rows(m, st);
@@ -54,12 +65,24 @@ struct Data final : RobotData {
   double xd[6], xdd[6], qdd[6];
 };
 Data& data_of(RobotData& rd) { return static_cast<Data&>(rd); }  // every pkm_data of a described robot holds one (make_data)
+// out = in, n values (a fixed loop for n = 6: no library call on the hot path).
+void copy_n(const double* in, int n, double* out) {
+  if (n == 6)
+    for (int k = 0; k < 6; ++k) out[k] = in[k];
+  else
+    std::copy(in, in + n, out);
+}
+bool equal_n(const double* a, int n, const double* b) {
+  bool same = true;
+  for (int k = 0; k < n; ++k) same &= a[k] == b[k];
+  return same;
+}
 const State& state_at(const Model& m, RobotData& rd, const double* x, bool rows) {
   Data& d = data_of(rd);
-  if (!(d.valid && std::equal(x, x + m.n, d.x))) {
+  if (!(d.valid && equal_n(x, m.n, d.x))) {
     d.valid = d.accel = false;
     state_of(m, x, d.st, rows);
-    std::copy(x, x + m.n, d.x);
+    copy_n(x, m.n, d.x);
     d.valid = true;
   } else if (rows && !d.st.rows) {
     add_rows(m, d.st);
@@ -215,6 +238,8 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData& rd, const dou
   const Platform& pf = st.pf;
   PlatformMotion pm;
   platform_motion(m, pf, xd, nullptr, pm);
+  M36 Jt, Jw;
+  coordinate_maps(m, pf, Jt, Jw);
   M36 Jwd = M36::Zero();  // d/dt of Jw: the columns of E_dot
   M36 Jtd = M36::Zero();  // d/dt of Jt: dependent coordinates only
   if (m.ndep) {
@@ -239,8 +264,8 @@ void DescribedRobot::jacobian_dot(const RobotModel& rm, RobotData& rd, const dou
     const V3& rP = lg.rP;
     const V3 vP = pm.v + pm.om.cross(rP);
     const Eigen::RowVector3d dqd = l.kind->dq_rate(l, lg, vP, lg.dq.dot(vP));
-    const M36 JP = point_jacobian(pf, rP);
-    const M36 JPd = Jtd - skew(pm.om.cross(rP)) * pf.Jw - skew(rP) * Jwd;
+    const M36 JP = Jt - skew(rP) * Jw;  // the Jacobian of the point at rP on the platform
+    const M36 JPd = Jtd - skew(pm.om.cross(rP)) * Jw - skew(rP) * Jwd;
     const Eigen::Matrix<double, 1, 6> row = dqd * JP + lg.dq * JPd;
     for (int j = 0; j < m.n; ++j) Jdot[m.n * i + j] = row[j];
   }
@@ -316,8 +341,8 @@ void DescribedRobot::joint_acceleration(const RobotModel& rm, RobotData& rd, con
   const Model& m = model_of(rm);
   const State& st = state_at(m, rd, x, false);
   const Data& d = data_of(rd);
-  if (d.accel && std::equal(xd, xd + m.n, d.xd) && std::equal(xdd, xdd + m.n, d.xdd)) {
-    std::copy(d.qdd, d.qdd + m.n, qdd);  // the inverse dynamics' at this motion
+  if (d.accel && equal_n(xd, m.n, d.xd) && equal_n(xdd, m.n, d.xdd)) {
+    copy_n(d.qdd, m.n, qdd);  // the inverse dynamics' at this motion
     return;
   }
   PlatformMotion pm;
@@ -333,8 +358,8 @@ void DescribedRobot::inverse_dynamics(const RobotModel& rm, RobotData& rd, const
   d.accel = false;
   const V6 W = load_wrench(m, st, xd, xdd, d.qdd);
   with_size(m.n, [&](auto N) { solve_jt<N()>(m, st, W, x, tau); });
-  std::copy(xd, xd + m.n, d.xd);
-  std::copy(xdd, xdd + m.n, d.xdd);
+  copy_n(xd, m.n, d.xd);
+  copy_n(xdd, m.n, d.xdd);
   d.accel = true;
 }
 

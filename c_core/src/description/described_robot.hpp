@@ -107,6 +107,16 @@ struct LegModel {
   Rod rod[2];
 };
 
+// The legs' constant data as arrays over the legs (entry i: leg i; entries n.. are a
+// harmless padding leg), for a kind's pass over every leg at once, which the compiler
+// vectorises: the platform point p and offset f, the base point, the direction (rail
+// s, arm axis k), L^2, |dir|^2 and its inverse, the branch and the reach tolerance.
+struct LegArrays {
+  double px[kMaxLegs], py[kMaxLegs], pz[kMaxLegs], fx[kMaxLegs], fy[kMaxLegs], fz[kMaxLegs];
+  double bx[kMaxLegs], by[kMaxLegs], bz[kMaxLegs], sx[kMaxLegs], sy[kMaxLegs], sz[kMaxLegs];
+  double L2[kMaxLegs], ss[kMaxLegs], inv_ss[kMaxLegs], branch[kMaxLegs], disc_tol[kMaxLegs];
+};
+
 struct Model final : RobotModel {
   int n = 0;
   int coord[6];    // pose index (0..5) of free coordinate j
@@ -121,6 +131,7 @@ struct Model final : RobotModel {
   bool articulated = false;
   double rz0 = 0;         // articulated: direction of the bar-to-bar axis at rz = 0 [rad]
   std::vector<LegModel> legs;
+  LegArrays soa;                    // the legs' data as arrays
   const LegMotion* kind = nullptr;  // the legs' kind (one for all)
   double m_platform = 0;
   Eigen::Vector3d c_platform = Eigen::Vector3d::Zero();  // articulated: centre (axis frame) [m]

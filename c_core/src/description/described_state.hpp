@@ -68,8 +68,8 @@ struct LegGrad {
   double q;
   V3 rP;
   V3 w;   // the rod (strut) vector from its proximal joint to P
-  V3 t;   // rails and arms: d S / dq (D[0] = t dq)
-  V3 tb;  // rails and arms: d (slider or arm centre of mass) / dq
+  V3 t;   // arms: d S / dq (D[0] = t dq); a rail's is its direction (LegModel::dir), not set here
+  V3 tb;  // arms: d (arm centre of mass) / dq; a rail's slider moves along its direction
   double wt;  // rails and arms: w . t (dq = w' / wt)
   V6 j;   // the leg's twist row (dq, rP x dq): qd = j . (p_dot, omega)
 };

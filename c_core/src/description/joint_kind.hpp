@@ -104,7 +104,7 @@ class LegMotion {
   // checked against its limits.
   virtual void ik_all(const Model& m, const Platform& pf, const double* x, double* q) const = 0;
   // Geometry and first derivatives of every leg of the robot (all of this kind) at the
-  // platform pf: lg's rP, q, pos, w, dq, j and the kind's D, t, tb.
+  // platform pf: lg's rP, q, pos, w, dq, j and the kind's D, t, tb (arms: t, tb; struts: D).
   virtual void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const = 0;
   // -d f / d q of the closure f = (|P - S(q)|^2 - L^2) / 2 (a strut: (|P - B|^2 - q^2) / 2).
   virtual double closure_dq(const LegModel& l, const LegGrad& lg) const = 0;

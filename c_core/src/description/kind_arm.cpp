@@ -74,7 +74,7 @@ class ArmMotion final : public LegMotionOf<ArmMotion> {
   Eigen::RowVector3d dq_rate(const LegModel& l, const LegGrad& lg, const V3& vP, double qd) const override {
     double sq, cq;
     sin_cos(lg.q, sq, cq);
-    return rod_dq_rate(lg, vP, qd, l.r * qd * lg.w.dot(cq * l.u + sq * l.w));
+    return rod_dq_rate(lg, lg.t, vP, qd, l.r * qd * lg.w.dot(cq * l.u + sq * l.w));
   }
   static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) { add_rod_leg_mass(l, lg, tm); }
   // B = A + r e(q), t = dB/dq = r e'(q), dt/dq = -r e(q).

@@ -1,6 +1,7 @@
 // Joint kind `rail` (PUS, PSS, P(SS)2, PRR): a slider S = S0 + q s on a prismatic rail at the
 // base (its mass a point at S), then the rod to the platform point (kind_rod.cpp): its schema,
 // compiled form, geometry, derivatives, mass and force terms.
+#include <algorithm>
 #include <cmath>
 
 #include "description/described_robot.hpp"
@@ -42,18 +43,57 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   static void grad_of(const LegModel& l, const V3& P, LegGrad& lg, const LegWhere& at) {
     geometry_of(l, P3<double>{P.x(), P.y(), P.z()}, lg.q, lg.pos, at);
     const V3 w = lg.w = P - v3(lg.pos[0]);
-    lg.t = lg.tb = l.dir;
     lg.wt = w.dot(l.dir);
     lg.dq = w.transpose() / lg.wt;
   }
+  // Every leg at once over the model's arrays (the loops vectorise; the same operations as
+  // grad_of); a leg that does not reach is handed to the leg-by-leg pass for its message.
+  void grad_all(const Model& m, const Platform& pf, const double* x, LegGrad* lg) const override {
+    const LegArrays& a = m.soa;
+    const M3& R = pf.R;
+    constexpr int K = kMaxLegs;
+    double rx[K], ry[K], rz[K], Px[K], Py[K], Pz[K], dx[K], dy[K], dz[K], b[K], disc[K], q[K];
+    for (int i = 0; i < K; ++i) {
+      rx[i] = R(0, 0) * a.px[i] + R(0, 1) * a.py[i] + R(0, 2) * a.pz[i];
+      ry[i] = R(1, 0) * a.px[i] + R(1, 1) * a.py[i] + R(1, 2) * a.pz[i];
+      rz[i] = R(2, 0) * a.px[i] + R(2, 1) * a.py[i] + R(2, 2) * a.pz[i];
+      Px[i] = pf.p.x() + rx[i] + a.fx[i], Py[i] = pf.p.y() + ry[i] + a.fy[i], Pz[i] = pf.p.z() + rz[i] + a.fz[i];
+      dx[i] = Px[i] - a.bx[i], dy[i] = Py[i] - a.by[i], dz[i] = Pz[i] - a.bz[i];
+      b[i] = a.sx[i] * dx[i] + a.sy[i] * dy[i] + a.sz[i] * dz[i];
+      disc[i] = b[i] * b[i] - a.ss[i] * (dx[i] * dx[i] + dy[i] * dy[i] + dz[i] * dz[i] - a.L2[i]);
+    }
+    int bad = 0;
+    for (int i = 0; i < m.n; ++i) bad |= !(disc[i] >= a.disc_tol[i]);
+    if (bad) return LegMotionOf<RailMotion>::grad_all(m, pf, x, lg);
+    double wt[K];  // w . s = b - q ss = branch sqrt(disc)
+    for (int i = 0; i < K; ++i) wt[i] = a.branch[i] * std::sqrt(std::max(disc[i], 0.0));
+    for (int i = 0; i < K; ++i) q[i] = a.inv_ss[i] * (b[i] - wt[i]);
+    for (int i = 0; i < m.n; ++i) {
+      // Every value first, then the stores (which might alias the model for the compiler).
+      const V3 rP(rx[i], ry[i], rz[i]);
+      const V3 P(Px[i], Py[i], Pz[i]);
+      const V3 S(a.bx[i] + q[i] * a.sx[i], a.by[i] + q[i] * a.sy[i], a.bz[i] + q[i] * a.sz[i]);
+      const V3 w = P - S, dq = w / wt[i];
+      LegGrad& g = lg[i];
+      g.rP = rP;
+      g.q = q[i];
+      g.pos[1] = P3<double>{P.x(), P.y(), P.z()};
+      g.pos[0] = P3<double>{S.x(), S.y(), S.z()};
+      g.w = w;
+      g.wt = wt[i];
+      g.dq = dq.transpose();
+      g.j.head<3>() = dq;
+      g.j.tail<3>() = rP.cross(dq);
+    }
+  }
   double closure_dq(const LegModel& l, const LegGrad& lg) const override { return lg.w.dot(l.dir); }
   double ik_measure(const LegModel& l, double jq) const override { return std::abs(jq) / (l.L * std::sqrt(l.ss)); }
-  Eigen::RowVector3d dq_rate(const LegModel&, const LegGrad& lg, const V3& vP, double qd) const override {
-    return rod_dq_rate(lg, vP, qd, 0.0);  // s does not turn
+  Eigen::RowVector3d dq_rate(const LegModel& l, const LegGrad& lg, const V3& vP, double qd) const override {
+    return rod_dq_rate(lg, l.dir, vP, qd, 0.0);  // s does not turn
   }
   // The slider and S move along s (tb = t = s): the inertia along q is (m_body + ms) |s|^2.
   static void add_mass_of(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
-    add_rod_leg_mass(l, lg, tm, (l.m_body + l.m_rod * l.rod_self) * l.ss);
+    add_rod_leg_mass(l, lg, tm, (l.m_body + l.m_rod * l.rod_self) * l.ss, l.dir);
   }
   // w = P - S0 - q s: w.w = L^2 twice differentiated: |wd|^2 + w.(aP - qdd s) = 0.
   static double qdd_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP) {
@@ -65,10 +105,11 @@ class RailMotion final : public LegMotionOf<RailMotion> {
   // rod_leg_load with the slider and S at a_S = qdd s (tb = t = s): the load along the rail
   // qdd (m_body + ms) |s|^2 + mx s.aP - (m_body + m_rod / 2) s.g acts through dq.
   static V3 load_of(const LegModel& l, const LegGrad& lg, const V3& vP, const V3& aP, const V3& g, double& qdd) {
-    qdd = qdd_of(l, lg, vP, aP);
+    const double a = qdd_of(l, lg, vP, aP);
     const double mr = l.m_rod, ms = mr * l.rod_self, mx = mr * l.rod_cross;
-    const V3 Fp = (mx * qdd) * l.dir + ms * aP - (mr / 2) * g;
-    const double along = qdd * (l.m_body + ms) * l.ss + mx * l.dir.dot(aP) - (l.m_body + mr / 2) * l.dir.dot(g);
+    const V3 Fp = (mx * a) * l.dir + ms * aP - (mr / 2) * g;
+    const double along = a * (l.m_body + ms) * l.ss + mx * l.dir.dot(aP) - (l.m_body + mr / 2) * l.dir.dot(g);
+    qdd = a;  // last: the compiler reloads what a store through qdd might change
     return Fp + along * lg.dq.transpose();
   }
 };

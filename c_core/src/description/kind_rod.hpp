@@ -9,16 +9,19 @@ namespace pkm {
 namespace described {
 
 // The leg's inertia at P, a rank-two twist-space term (and a point mass at P).
-// c: the leg's inertia along q, m_body |tb|^2 + ms |t|^2 + I_arm (a kind may know it cheaper).
-inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm, double c) {
+// c: the leg's inertia along q, m_body |tb|^2 + ms |t|^2 + I_arm (a kind may know it cheaper);
+// t: S per unit q (lg.t; a rail's is its direction, which its LegGrad leaves out).
+[[gnu::always_inline]] inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm, double c,
+                                                    const V3& t) {
   // At P: c g g' + mx (g t' + t g') + ms I (g = dq', the body along tb, S along t per unit
   // q).  The isotropic ms I is a point mass at P; the rest is rank two in twist space: with
   // j = (g, rP x g) and u = (t, rP x t) it is j v' + v j' for v = c/2 j + mx u.
   const double ms = l.m_rod * l.rod_self, mx = l.m_rod * l.rod_cross;
-  tm.point(ms, lg.rP);
+  const V3 r = lg.rP;  // a copy: tm's sums might alias lg for the compiler (no reloads)
+  tm.point(ms, r);
   V6 v;  // (0.5 c) j + mx (t, rP x t)
-  v.head<3>() = (0.5 * c) * lg.j.head<3>() + mx * lg.t;
-  v.tail<3>() = (0.5 * c) * lg.j.tail<3>() + mx * lg.rP.cross(lg.t);
+  v.head<3>() = (0.5 * c) * lg.j.head<3>() + mx * t;
+  v.tail<3>() = (0.5 * c) * lg.j.tail<3>() + mx * r.cross(t);
   tm.A.noalias() += lg.j * v.transpose();
 }
 
@@ -36,13 +39,13 @@ inline V3 rod_leg_load(const LegModel& l, const LegGrad& lg, const V3& aP, const
 
 inline void add_rod_leg_mass(const LegModel& l, const LegGrad& lg, TwistMass& tm) {
   const double ms = l.m_rod * l.rod_self;
-  add_rod_leg_mass(l, lg, tm, l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm);
+  add_rod_leg_mass(l, lg, tm, l.m_body * lg.tb.squaredNorm() + ms * lg.t.squaredNorm() + l.I_arm, lg.t);
 }
 
-// dq/dP = w' / (w . t) for w = P - S(q): its rate, with t_term = w . (t's rate) (0 on a rail).
-inline Eigen::RowVector3d rod_dq_rate(const LegGrad& lg, const V3& vP, double qd, double t_term) {
+// dq/dP = w' / (w . t) for w = P - S(q), t = dS/dq: its rate, with t_term = w . (t's rate) (0
+// on a rail).
+inline Eigen::RowVector3d rod_dq_rate(const LegGrad& lg, const V3& t, const V3& vP, double qd, double t_term) {
   // dq/dP = w' / (w . t), w = P - S(q): wd = vP - qd t.
-  const V3& t = lg.t;
   const V3& w = lg.w;
   const V3 wd = vP - qd * t;
   double c_rate = wd.dot(t);
