@@ -381,13 +381,13 @@ def statement(fit: FlexibleFit, noun: str) -> str:
                 f"its own noise (RMS {fit.rms_left:.3g} {fit.unit} against a noise of {fit.noise:.3g} {fit.unit})")
     if not fit.explained:
         return (f"{fit.channel}: the structure left is not explainable from the recorded inputs "
-                f"(share out of fold {100 * max(fit.share, 0):.0f} %, not significant)")
+                f"(share out of fold {100 * fit.share:.0f} %, chi-square {fit.z:.0f}, not significant)")
     if not fit.inputs:
         s = (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
              f"(out of fold)")
         if fit.screened:
-            s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) explain "
-                  f"{100 * max(fit.screened[1], 0):.0f} % alone, not significant")
+            s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) alone: share out of fold "
+                  f"{100 * fit.screened[1]:.0f} %, not significant")
         return s
     parts = []
     for d in fit.inputs:
