@@ -21,7 +21,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   when it is at least :data:`SHARE_MIN` and the variance it explains is significant against
   the residual's own noise: a chi-square in independent samples (the explained sum of squares
   over the noise variance, divided by the decimated samples per independent one) above
-  :data:`CHI2_MIN`, as for structure left (:mod:`.structure`);
+  :data:`CHI2_MIN`, as for structure left (:mod:`.structure`).  When nothing is claimed and even
+  a model predicting all but the noise would fall short of these two bars (``beyond_noise``
+  False: the residual holds nothing beyond its own noise), the sentence says that it cannot be
+  judged, not that it is not explainable;
 * **inputs**: grouped permutation importance out of fold, per fold (a group is one input of one
   joint: "position of slider 3", or the pose, or time; a signed power belongs to the joint's
   rate and history); a group passes when permuting it costs at least :data:`IMPORTANCE_MIN`
@@ -29,7 +32,9 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   of the strongest group's importance (at most the share), above :data:`BLOCK_Z` standard
   errors over the folds; it is named when the trees cross-validated without it (on the other
   passing groups) lose :data:`DROP_MIN` of the variance; the share claimed is then that of
-  the trees on the named groups alone;
+  the trees on the named groups alone, judged again by the same two bars: when it fails them,
+  no input is named and the claim is the full model's, on no single input (``screened`` holds
+  the groups and their share);
 * **where the trees extrapolate**: the share of samples whose named inputs lay outside the
   range fitted without their block (``outside``), stated when above :data:`OUTSIDE_WARN`;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
@@ -126,6 +131,13 @@ class FlexibleFit:
     black_box: bool = False
     #: share of the samples whose named inputs lay outside the range fitted without their block
     outside: float = 0.0
+    #: whether the residual holds more than its own noise: a model predicting all but the noise
+    #: would explain a share of at least SHARE_MIN and a chi-square above CHI2_MIN (False: whether
+    #: it is explainable cannot be judged, there is nothing beyond the noise to explain)
+    beyond_noise: bool = True
+    #: when the inputs the screen passed do not carry the claim alone: (their groups, the share
+    #: of the trees on them out of fold, not significant); the claim is then on no single input
+    screened: tuple = ()
     model: object = field(default=None, repr=False, compare=False)
     columns: tuple = field(default=(), repr=False, compare=False)
     #: the columns (indices into ``columns``) ``model`` takes: the named inputs' when any
@@ -135,7 +147,8 @@ class FlexibleFit:
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
-                                             "noise", "family", "statement", "black_box", "outside")}
+                                             "noise", "family", "statement", "black_box", "outside",
+                                             "beyond_noise", "screened")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
 
@@ -294,29 +307,38 @@ def fit_channel(pipe, X, columns, y, noise, unit) -> FlexibleFit:
     var = float(np.var(y))
     spi = samples_per_independent(pipe)
     fold_rows = folds(len(y), gap_for(spi))
+    def judged(mse):  # (share, chi-square, whether claimed) of a cross-validation's held-out error
+        share = 1.0 - mse / var if var > 0 else 0.0
+        z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
+        return share, z, share >= SHARE_MIN and z > CHI2_MIN
+
     with threadpool_limits(limits=1):
         cv = cross_validate(X, y, fold_rows)
-        share = 1.0 - cv.mse / var if var > 0 else 0.0
-        z = len(y) * (var - cv.mse) / max(noise, 1e-300) ** 2 / spi
-        explained = share >= SHARE_MIN and z > CHI2_MIN
-        deps, use, beyond = (), list(range(X.shape[1])), 0.0
+        share, z, explained = judged(cv.mse)
+        deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
         if explained:
             groups = input_groups(columns)
             rng = np.random.default_rng(0)
             named = _screen(importance(cv, X, y, groups, rng), share)
             if named:
-                named, cv, use = _select(X, y, fold_rows, groups, named, var)
-                share = 1.0 - cv.mse / var
-                sub = {g: [use.index(i) for i in groups[g]] for g in named}
-                imp_k = importance(cv, X[:, use], y, sub, rng)
-                beyond = outside(X[:, use], cv, list(range(len(use))))
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var)
+                share_k, z_k, ok = judged(cv_k.mse)
+                if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
+                    named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
+                    sub = {g: [use.index(i) for i in groups[g]] for g in named}
+                    imp_k = importance(cv, X[:, use], y, sub, rng)
+                    beyond = outside(X[:, use], cv, list(range(len(use))))
+                else:  # they do not carry it alone: the claim stays the full model's, on no single input
+                    named, screened = [], (tuple(kept), share_k)
         model = final_model(X[:, use], y, cv)
         if explained and named:
             deps = tuple(_dependence(model, X[:, use], [columns[i] for i in use], sub[g], g, imp_k[g][0], unit)
                          for g in named)
+    room = len(y) * (var - noise ** 2) / max(noise, 1e-300) ** 2 / spi  # what a perfect model would explain
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
-                       model=model, columns=tuple(columns), use=tuple(use))
+                       beyond_noise=bool(room > CHI2_MIN and var > 0 and noise ** 2 / var <= 1.0 - SHARE_MIN),
+                       screened=screened, model=model, columns=tuple(columns), use=tuple(use))
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -354,12 +376,19 @@ def family_says(fit: FlexibleFit, discovered, effects) -> str:
 
 def statement(fit: FlexibleFit, noun: str) -> str:
     """The report's sentence for one channel."""
+    if not fit.explained and not fit.beyond_noise:
+        return (f"{fit.channel}: whether what is left is explainable cannot be judged: it holds nothing beyond "
+                f"its own noise (RMS {fit.rms_left:.3g} {fit.unit} against a noise of {fit.noise:.3g} {fit.unit})")
     if not fit.explained:
         return (f"{fit.channel}: the structure left is not explainable from the recorded inputs "
-                f"(share out of fold {100 * max(fit.share, 0):.0f} %, not significant)")
+                f"(share out of fold {100 * fit.share:.0f} %, chi-square {fit.z:.0f}, not significant)")
     if not fit.inputs:
-        return (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
-                f"(out of fold)")
+        s = (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
+             f"(out of fold)")
+        if fit.screened:
+            s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) alone: share out of fold "
+                  f"{100 * fit.screened[1]:.0f} %, not significant")
+        return s
     parts = []
     for d in fit.inputs:
         size = max(abs(min(d.curve)), abs(max(d.curve)))

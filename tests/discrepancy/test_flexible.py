@@ -189,3 +189,40 @@ def test_a_friction_level_set_by_a_slow_state_names_the_rate_and_the_history():
     assert fit.explained
     assert sorted(d.group for d in fit.inputs) == ["history of slider 1", "rate of slider 1"]
     assert abs(fit.share - truth) < 0.1
+
+
+def test_the_claim_is_judged_again_on_the_named_inputs_refit(monkeypatch):
+    # the full model explains a known force on input 2; the refit on the inputs named is replaced by
+    # one on a target shuffled in time, which the inputs cannot predict: its held-out share is at
+    # most about 0 by construction, so the channel may not be called explained on them
+    pipe, X, cols, y, truth = _synthetic(lambda X: 0.3 * np.sin(6.0 * X[:, 2]))
+
+    def select(X, y, fold_rows, groups, named, var):
+        use = sorted(i for g in named for i in groups[g])
+        shuffled = np.random.default_rng(2).permutation(y)
+        return named, flexible_cv.cross_validate(X[:, use], shuffled, fold_rows), use
+
+    monkeypatch.setattr(flexible, "_select", select)
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
+    assert fit.explained  # the full model's claim, on no single input
+    assert fit.inputs == ()
+    assert fit.share >= flexible.SHARE_MIN and fit.z > flexible.CHI2_MIN
+    assert abs(fit.share - truth) < 0.1  # the stated share is the full model's, which holds the force
+    assert fit.screened[0] == ("input 2",) and fit.screened[1] < flexible.SHARE_MIN
+    s = flexible.statement(fit, "slider")
+    assert "no single input" in s and "input 2" in s and "not significant" in s
+
+
+def test_noise_alone_cannot_be_judged_structure_off_the_inputs_is_not_explainable():
+    # white noise at the stated noise level: nothing beyond the noise, so it cannot be judged
+    pipe, X, cols, y, _ = _synthetic(lambda X: np.zeros(len(X)))
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
+    s = flexible.statement(fit, "slider")
+    assert "cannot be judged" in s and "not explainable" not in s
+    assert not fit.explained and not fit.beyond_noise
+    # a force (RMS 6 times the noise) on a variable the inputs do not hold: structure the inputs do not explain
+    hidden = np.random.default_rng(1).normal(0.0, 0.3, len(y))
+    fit = flexible.fit_channel(pipe, X, cols, y + hidden, 0.05, ("N", "tau1"))
+    s = flexible.statement(fit, "slider")
+    assert "not explainable from the recorded inputs" in s and "cannot be judged" not in s
+    assert not fit.explained and fit.beyond_noise
