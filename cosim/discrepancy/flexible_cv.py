@@ -31,8 +31,8 @@ GAP_INDEPENDENT = 1.0
 MIN_ITER = 5
 #: the folds' trees grow to these numbers of iterations in turn (the last: TREES["max_iter"]),
 #: and stop when the summed held-out loss has not fallen for PATIENCE iterations (its minimum
-#: is then the chosen number)
-STEPS, PATIENCE = tuple(range(25, 151, 25)), 25
+#: is then the chosen number); each step bins the inputs again, hence two steps only
+STEPS, PATIENCE = (50, 150), 25
 #: the boosted trees' settings (small: a few hundred decimated samples; the number of
 #: iterations, at most max_iter, is chosen on the held-out blocks)
 TREES = dict(max_iter=150, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
@@ -92,9 +92,9 @@ def gap_for(spi: float) -> int:
 def cross_validate(X, y, fold_rows) -> CV:
     """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`).
 
-    The folds' trees grow together by :data:`CHUNK` iterations (warm start: the same trees as
-    one fit of as many iterations) and stop once the summed held-out loss has not fallen for
-    :data:`PATIENCE` iterations, or at ``TREES["max_iter"]``."""
+    The folds' trees grow together to each of :data:`STEPS` iterations in turn (warm start: the
+    same trees as one fit of as many iterations) and stop once the summed held-out loss has not
+    fallen for :data:`PATIENCE` iterations, or at the last."""
     from sklearn.ensemble import HistGradientBoostingRegressor
 
     models = [HistGradientBoostingRegressor(**dict(TREES, warm_start=True)) for _ in fold_rows]
