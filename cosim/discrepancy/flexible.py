@@ -275,9 +275,13 @@ def _select(X, y, fold_rows, groups, named, var):
     :data:`DROP_MIN` of the residual's variance out of fold (an input that only moves with a
     kept one costs nothing).  When none is kept (interchangeable inputs), all are kept.
     Returns ``(kept, cross-validation on the kept groups' columns, its columns)``."""
-    def cv_on(gs, without=()):  # a column two groups share leaves with either
+    done = {}
+
+    def cv_on(gs, without=()):  # a column two groups share leaves with either; one fit per set of columns
         cols = sorted({i for g in gs for i in groups[g]} - set(without))
-        return cross_validate(X[:, cols], y, fold_rows), cols
+        if tuple(cols) not in done:
+            done[tuple(cols)] = cross_validate(X[:, cols], y, fold_rows)
+        return done[tuple(cols)], cols
 
     full, cols = cv_on(named)
     if len(named) == 1:

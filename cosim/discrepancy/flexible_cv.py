@@ -29,6 +29,10 @@ N_FOLDS, BLOCKS_PER_FOLD = 5, 4
 GAP_INDEPENDENT = 1.0
 #: fewest iterations the held-out loss may choose
 MIN_ITER = 5
+#: the folds' trees grow to these numbers of iterations in turn (the last: TREES["max_iter"]),
+#: and stop when the summed held-out loss has not fallen for PATIENCE iterations (its minimum
+#: is then the chosen number); each step bins the inputs again, hence two steps only
+STEPS, PATIENCE = (50, 150), 25
 #: the boosted trees' settings (small: a few hundred decimated samples; the number of
 #: iterations, at most max_iter, is chosen on the held-out blocks)
 TREES = dict(max_iter=150, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
@@ -86,18 +90,24 @@ def gap_for(spi: float) -> int:
 
 
 def cross_validate(X, y, fold_rows) -> CV:
-    """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`)."""
+    """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`).
+
+    The folds' trees grow together to each of :data:`STEPS` iterations in turn (warm start: the
+    same trees as one fit of as many iterations) and stop once the summed held-out loss has not
+    fallen for :data:`PATIENCE` iterations, or at the last."""
     from sklearn.ensemble import HistGradientBoostingRegressor
 
-    models, losses, staged = [], [], []
-    for held, fit in fold_rows:
-        m = HistGradientBoostingRegressor(**TREES).fit(X[fit], y[fit])
-        p = np.array(list(m.staged_predict(X[held])))
-        models.append(m)
-        staged.append(p)
-        losses.append(np.sum((y[held][None, :] - p) ** 2, axis=1))
-    total = np.sum(losses, axis=0)
-    best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
+    models = [HistGradientBoostingRegressor(**dict(TREES, warm_start=True)) for _ in fold_rows]
+    staged = [np.empty((0, len(held))) for held, _ in fold_rows]
+    for n in STEPS:
+        for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
+            m.set_params(max_iter=n).fit(X[fit], y[fit])
+            new = list(islice(m.staged_predict(X[held]), len(staged[b]), None))
+            staged[b] = np.vstack([staged[b]] + new)
+        total = sum(np.sum((y[held][None, :] - p) ** 2, axis=1) for (held, _), p in zip(fold_rows, staged))
+        best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
+        if n - best >= PATIENCE:
+            break
     pred = np.empty(len(y))
     for (held, _), p in zip(fold_rows, staged):
         pred[held] = p[best - 1]
