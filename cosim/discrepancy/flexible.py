@@ -74,8 +74,10 @@ MAX_INPUTS = 4
 #: ... and one is kept when the trees cross-validated without it lose this share of the variance
 DROP_MIN = 0.03
 #: a channel with no structure flagged is still fitted when its residual's RMS exceeds its own
-#: noise by this factor (a force keyed on another joint, which :mod:`.structure` does not test)
-RMS_OVER_NOISE = 1.15
+#: noise by this factor (a force keyed on another joint, which :mod:`.structure` does not test).
+#: At 1.15 the stage also fitted near-clean channels of library cases (the 6-PUS Coulomb +
+#: payload time case: about 8 s of CPU, no claim) and claimed nothing more on any set measured
+RMS_OVER_NOISE = 2.0
 #: the statement warns of extrapolation when the named inputs leave the fitted range in their
 #: held-out block at more than this share of the samples
 OUTSIDE_WARN = 0.1
