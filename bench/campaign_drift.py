@@ -31,7 +31,7 @@ def _rel(res, plant):
 
 
 def case(seed, drift):
-    recs, times, truth = drift_campaign(seed, drift=drift)
+    recs, times, truth = drift_campaign(seed, robot="emps", drift=drift)
     w = time.process_time()
     res = diagnose_campaign(read_campaign(recs, times=times), effects=["coulomb", "viscous"], discovery=False,
                             figures=False)

@@ -69,7 +69,7 @@ def test_a_drift_of_four_intervals_is_found_with_its_size():
 
 @pytest.fixture(scope="module")
 def drifting():
-    recs, times, truth = drift_campaign(seed=7, runs=6)
+    recs, times, truth = drift_campaign(seed=7, robot="emps", runs=6)
     return truth, diagnose_campaign(read_campaign(recs, times=times), effects=["coulomb", "viscous"],
                                     discovery=False, figures=False)
 
@@ -92,7 +92,7 @@ def test_a_friction_that_drifts_between_runs_is_named_with_its_size_and_modelled
 
 
 def test_a_campaign_without_drift_is_not_called_drifting():
-    recs, times, _ = drift_campaign(seed=7, runs=6, drift=False)
+    recs, times, _ = drift_campaign(seed=7, robot="emps", runs=6, drift=False)
     res = diagnose_campaign(read_campaign(recs, times=times), effects=["coulomb", "viscous"], discovery=False,
                             replay=False, figures=False)
     assert res.drifts == [] and res.drift_heldout == [] and "Between the runs" not in res.conclusion
@@ -107,7 +107,7 @@ def test_a_line_extrapolated_out_of_its_range_is_said_not_raised():
 
     from cosim.discrepancy.campaign_drift import heldout, predicted, sentence
 
-    recs, times, _ = drift_campaign(seed=7, runs=4, duration=1.2, drift=False)
+    recs, times, _ = drift_campaign(seed=7, robot="emps", runs=4, duration=1.2, drift=False)
     c = read_campaign(recs, times=times)
     per = [{"rail[1].coulomb": {"value": 20.0 - 8.0 * k, "ci95": 0.1, "unit": "N"}} for k in range(4)]
     ds = between_runs(per, c.names)

@@ -11,7 +11,7 @@ up, a lubricant that thins); without, every run has the same values.
 
 Example
 -------
->>> runs, times, truth = drift_campaign(seed=3)            # doctest: +SKIP
+>>> runs, times, truth = drift_campaign(seed=3, robot=rail_robot)  # doctest: +SKIP
 >>> truth["param"], truth["values"][0], truth["values"][-1]  # doctest: +SKIP
 ('rail[1].coulomb', 21.3, 18.4)
 """
@@ -27,15 +27,15 @@ NOISE = {"q": 1e-6, "qd": 1e-4, "tau": 0.5}
 PARAMS = ("rail[1].coulomb", "rail[1].viscous")
 
 
-def _run(hidden: dict, duration: float, seed: int):
-    """One closed-loop EMPS run of a plant with ``hidden`` parameters, after the lead-in."""
+def _run(robot: str, hidden: dict, duration: float, seed: int):
+    """One closed-loop run of ``robot`` with ``hidden`` parameters, after the lead-in."""
     from ...core.model import Model
     from ...master import make_reference
     from ..excitation import excitation
     from ..runs import closed_loop
     from .cases import _controller, load_config
 
-    m = Model("emps")
+    m = Model(robot)
     traj = excitation(m, duration, seed=seed)
     ref = make_reference(m, traj, step=DT, duration=round(traj.duration / DT) * DT)
     plant = m.copy()
@@ -45,13 +45,16 @@ def _run(hidden: dict, duration: float, seed: int):
     return res.to_recording(effort="logged", start=int(LEAD / DT), qref=ref.q, controller=ctrl.describe())
 
 
-def drift_campaign(seed: int, runs: int = 8, duration: float = 2.0, drift: bool = True):
+def drift_campaign(seed: int, *, robot: str, runs: int = 8, duration: float = 2.0, drift: bool = True):
     """A campaign case: ``(recordings, start times [s], truth)``.
 
     Parameters
     ----------
     seed : int
         Draws the plant, the drift, the start times and every run's excitation and noise.
+    robot : str
+        A one-axis rail robot with ``rail[1].coulomb`` and ``rail[1].viscous`` (the EMPS axis
+        is the one measured in bench/campaign_drift.py).
     runs : int
         Number of runs.
     duration : float
@@ -81,5 +84,5 @@ def drift_campaign(seed: int, runs: int = 8, duration: float = 2.0, drift: bool 
     recs = []
     for k in range(runs):
         h = dict(hidden) if values is None else dict(hidden, **{truth["param"]: float(values[k])})
-        recs.append(_run(h, duration, seed * 1000 + k))
+        recs.append(_run(robot, h, duration, seed * 1000 + k))
     return recs, times, truth
