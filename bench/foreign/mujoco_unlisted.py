@@ -3,7 +3,7 @@
     .venv/bin/python bench/foreign/mujoco_unlisted.py [--kinds tendon_slack,...] [--clean 4] [--jobs 1]
         [--out results/mujoco_unlisted]
 
-A measurement of issue 37's held-back proof, not a tuning set: the engine has no library effect,
+A measurement, not a tuning set: the engine has no library effect,
 no term family and no platform force for any of these, so the honest answer is the structure
 and what it is keyed on (the flexible stage, cosim.discrepancy.flexible), and no library effect
 named with confidence.  The MuJoCo set-up is bench/foreign/mujoco_blind.py's (the hand-written

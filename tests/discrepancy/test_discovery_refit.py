@@ -15,8 +15,8 @@ from cosim.discrepancy.families import generator
 
 
 def test_a_viscous_friction_holding_a_dampers_centre_is_not_named_with_confidence(tmp_path):
-    # seed 61000 (not a seed of the bench's sets): before the refit the viscous friction on
-    # rail 1 was named with confidence beside the damping over the stroke it found
+    # seed 61000 (not a seed of the bench's sets): without the refit (discovery/refit.py) the
+    # viscous friction on rail 1 is named with confidence beside the damping over the stroke found
     csv, key = blind.make_case(blind.CaseSpec("position_damper_61000", "6pus", ["position_damper"], 61000),
                                tmp_path / "c", tmp_path / "k")
     (truth,) = json.loads(Path(key).read_text())["effects"]
