@@ -18,7 +18,6 @@ from .channel import discover_channel
 from .search import Search, make_search
 from .terms import BLOCK, DiscoveredTerm, Z_ONE_SIDED
 from ..families import acceptance, products
-from ..structure import own_noise
 
 
 def heldout_chi2(search, R, channels):
@@ -220,9 +219,7 @@ def _single_trials(court, v):
     channels it acts on (:func:`_single_trial`).  Returns ``(verdicts, acting)``: acting the
     groups on trial with their channels, in trial order."""
     eng = court.eng
-    # the yardstick of "acts on a channel": the residual's own noise (the engine's noise model
-    # is inflated by a missing force and would hide a small stand-in such as a gravity tilt)
-    noise = np.array([own_noise(eng.pipe, v.R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
+    noise = refit.channel_noise(eng, v.R_lib)
     acting = []  # (selected group, the channels it acts on), in the order put on trial
     for a in sorted(court.sel.selected, key=lambda a: a.importance):
         g = a.group
@@ -230,8 +227,7 @@ def _single_trials(court, v):
             continue
         th_minus = {k: x for k, x in v.theta.items() if k not in g.params}
         R_minus = eng.R(th_minus)
-        chans = [c for c in range(eng.nd)
-                 if np.sqrt(np.mean((v.R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
+        chans = refit.acting_channels(eng, v.R_lib, R_minus, noise)
         if not chans:
             continue
         acting.append((a, chans))

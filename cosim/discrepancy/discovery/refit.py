@@ -70,15 +70,18 @@ class Verdict:
     centres: dict
 
 
-def acting_channels(eng, R_lib, R_minus) -> list:
+def channel_noise(eng, R_lib) -> np.ndarray:
+    """Each channel's own noise on the fitted part of ``R_lib``: the yardstick of "acts on a
+    channel" (the engine's noise model is inflated by a missing force and would hide a small
+    stand-in such as a gravity tilt)."""
+    return np.array([own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c]) for c in range(eng.nd)])
+
+
+def acting_channels(eng, R_lib, R_minus, noise=None) -> list:
     """The channels an effect acts on: where its part of the residual (``R_lib - R_minus``)
-    is above 0.3 of the residual's own noise (the tie rule's yardstick)."""
-    out = []
-    for c in range(eng.nd):
-        noise = own_noise(eng.pipe, R_lib[eng.train, c], eng.accuracy()[c])
-        if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise:
-            out.append(c)
-    return out
+    is above 0.3 of the residual's own noise (:func:`channel_noise`, computed when not given)."""
+    noise = channel_noise(eng, R_lib) if noise is None else noise
+    return [c for c in range(eng.nd) if np.sqrt(np.mean((R_lib[:, c] - R_minus[:, c]) ** 2)) > 0.3 * noise[c]]
 
 
 def holds_family(term) -> bool:
