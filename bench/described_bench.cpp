@@ -3,7 +3,8 @@
 //
 //   described_bench [HAND DESCRIBED] [--repeats R]     (default: 6pus_hand 6pus)
 //
-// The hand-written models are test oracles (c_core/tests/oracles/, "6pus_hand"): the program
+// The hand-written models are test oracles (c_core/tests/oracles/, "6pus_hand", "quattro_hand":
+// described_bench quattro_hand quattro): the program
 // links libpkm_oracle.so, the core plus those oracles.
 //
 // Rows: inverse kinematics, inverse dynamics, forward dynamics and the Jacobian, ns per

@@ -2,8 +2,9 @@
 // definition evaluated here from the core's J and M, the GIMRE against the kinetic energy
 // of the links computed from finite differences of the joint points, and the batch
 // conventions (NaN row + status + first failure) for poses outside the workspace; on the
-// hand-written Quattro and on its description (robots/quattro_described.toml, whose
-// parameters are per arm and leg: the bodies are read by each model's names).
+// robot the core serves from robots/quattro.toml (parameters per arm and leg) and on the
+// hand-written test oracle "quattro_hand" (lumped parameters): the bodies are read by each
+// model's names.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -24,7 +25,7 @@ struct QuattroIdx : pkm_test::ModelFixture<::testing::TestWithParam<RobotSet>> {
   bool described = false;
   void SetUp() override {
     open(std::get<0>(GetParam()), std::get<1>(GetParam()));
-    described = std::string(std::get<0>(GetParam())) != "quattro";
+    described = std::string(std::get<0>(GetParam())) != "quattro_hand";
   }
   // pkm_quattro_constants: 0 the arm torque limit [N m], 3 the link length b_r [m].
   double constant(int i) {
@@ -167,7 +168,7 @@ TEST_P(QuattroIdx, RefusesAnotherRobot) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sets, QuattroIdx,
-                         ::testing::Combine(::testing::Values("quattro", "quattro_described"),
+                         ::testing::Combine(::testing::Values("quattro_hand", "quattro"),
                                             ::testing::Values("default", "appendix_a")));
 
 }  // namespace

@@ -1,10 +1,13 @@
 // Quattro (Virzi 2010) kinematics through the C API: the closure equations of the source
 // (eqs. 2.6-2.9, typed here independently of the core), Jx / Jq / J and dJ/dt against
-// central finite differences, IK/FK round trip, the root choice, and errors naming the arm.
+// central finite differences, IK/FK round trip, the root choice, and errors naming the arm;
+// on the robot the core serves from robots/quattro.toml and on the hand-written test oracle
+// "quattro_hand" (c_core/tests/oracles/), each read by its own parameter names.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "pkm/pkm.h"
@@ -14,20 +17,43 @@ namespace {
 
 using pkm_test::kPi;
 
-struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
-  void SetUp() override { open("quattro", GetParam()); }
+using RobotSet = std::tuple<const char*, const char*>;
+
+struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<RobotSet>> {
+  bool hand = false;
+  void SetUp() override {
+    open(std::get<0>(GetParam()), std::get<1>(GetParam()));
+    hand = std::string(std::get<0>(GetParam())) == "quattro_hand";
+  }
+  bool appendix() { return std::string(std::get<1>(GetParam())) == "appendix_a"; }
+  // The source's symbols (Virzi 2010 ch. 1.5) from each model's parameters: the description
+  // has them per arm and leg (arm 1 lies along +x), the hand-written model lumped.
+  double base_a() { return param(hand ? "base.a" : "arm[1].Ax"); }
+  double base_h() { return hand ? param("base.h") : -param("arm[1].Az"); }
+  double arm_b() { return hand ? std::hypot(param("arm.b_r"), param("arm.r_b")) : param("arm[1].r"); }
+  double forearm_c() { return param(hand ? "forearm.c" : "leg[1].L"); }
+  double platform_d() { return hand ? param("platform.d") : 2 * param("platform.ends"); }
+  double offset() { return param(hand ? "platform.offset" : "platform.cx"); }
+  double tool_length() { return hand ? param("tool.length") : 0.0; }
+  std::string qmin_name() { return hand ? "joint.q_min" : "arm[1].qmin"; }
+  double constant(int i) {
+    double c[PKM_QUATTRO_NCONSTANT];
+    EXPECT_EQ(pkm_quattro_constants(m, d, c), PKM_OK) << pkm_data_error(d);
+    return c[i];
+  }
   // Poses spread over the useful workspace (tool point, theta), all reachable.
   std::vector<std::vector<double>> poses() {
     return {{0.0, 0.0, -0.95, 0.0}, {0.12, -0.05, -1.0, 0.1}, {-0.2, 0.15, -0.9, -0.2},
             {0.05, 0.25, -1.1, 0.3}, {-0.1, -0.1, -0.80, 0.05}, {0.3, 0.0, -1.05, -0.1}};
   }
   // Source eqs. 2.6-2.9: F_i(q, x) = |C_i - B_i|^2 - c^2 with the source's coordinates
-  // x0 = x + offset cos(pi/4 + th), y0 = ..., z0 = z + base + ee (ch. 1.5).
+  // x0 = x + offset cos(pi/4 + th), y0 = ..., z0 = z + base + ee (ch. 1.5).  The description
+  // writes each closure as half of that, (|C_i - B_i|^2 - c^2) / 2: its Jx and Jq are half the
+  // source's (J = Jq^-1 Jx the same), so the closure is scaled by each model's convention.
   void source_closure(const double* q, const double* x, double* F) {
-    const double a = param("base.a"), base = param("base.h"), br = param("arm.b_r"), rb = param("arm.r_b"),
-                 c = param("forearm.c"), dd = param("platform.d"), off = param("platform.offset"),
-                 ee = param("tool.length");
-    const double b = std::sqrt(br * br + rb * rb), th = x[3], ps = kPi / 4 + th, r2 = std::sqrt(2.0) / 2;
+    const double a = base_a(), base = base_h(), b = arm_b(), c = forearm_c(), dd = platform_d(), off = offset(),
+                 ee = tool_length();
+    const double th = x[3], ps = kPi / 4 + th, r2 = std::sqrt(2.0) / 2;
     const double x0 = x[0] + off * std::cos(ps), y0 = x[1] + off * std::sin(ps), z0 = x[2] + base + ee;
     const double cp = dd / 2 * std::cos(ps), sp = dd / 2 * std::sin(ps), h = dd / 2 * r2;
     auto sq = [](double v) { return v * v; };
@@ -35,22 +61,24 @@ struct Quattro : pkm_test::ModelFixture<::testing::TestWithParam<const char*>> {
     F[1] = sq(x0 + cp - h) + sq(y0 + sp + h - (a + b * std::cos(q[1]))) + sq(z0 + b * std::sin(q[1])) - c * c;
     F[2] = sq(x0 - cp - h + (a + b * std::cos(q[2]))) + sq(y0 - sp + h) + sq(z0 + b * std::sin(q[2])) - c * c;
     F[3] = sq(x0 - cp + h) + sq(y0 - sp - h + (a + b * std::cos(q[3]))) + sq(z0 + b * std::sin(q[3])) - c * c;
+    for (int i = 0; i < 4; ++i) F[i] *= hand ? 1.0 : 0.5;
   }
 };
 
 TEST_P(Quattro, ParameterSetsCarryTheSourceValues) {
   EXPECT_EQ(pkm_model_ndof(m), 4);
-  const bool app = std::string(GetParam()) == "appendix_a";
-  EXPECT_DOUBLE_EQ(param("base.a"), app ? 0.28 : 0.275);
-  EXPECT_DOUBLE_EQ(param("base.h"), app ? 0.20 : 0.19);
+  const bool app = appendix();
+  EXPECT_DOUBLE_EQ(base_a(), app ? 0.28 : 0.275);
+  EXPECT_DOUBLE_EQ(base_h(), app ? 0.20 : 0.19);
   EXPECT_DOUBLE_EQ(param("platform.m"), app ? 2.62 : 0.262);
-  EXPECT_DOUBLE_EQ(param("arm.m"), app ? 1.85 : 1.45);
-  EXPECT_DOUBLE_EQ(param("platform.offset"), app ? 0.0 : 0.075);
-  EXPECT_DOUBLE_EQ(param("arm.b_r"), 0.375);
-  EXPECT_DOUBLE_EQ(param("forearm.c"), 0.825);
-  EXPECT_DOUBLE_EQ(param("gear.ratio") * param("motor.tau_nominal"), 119.5);
-  EXPECT_NEAR(param("joint.q_min") * 180 / kPi, -51, 1e-12);
-  EXPECT_NEAR(param("joint.q_max") * 180 / kPi, 123, 1e-12);
+  EXPECT_DOUBLE_EQ(param(hand ? "arm.m" : "arm[1].mass"), app ? 1.85 : 1.45);
+  EXPECT_DOUBLE_EQ(offset(), app ? 0.0 : 0.075);
+  EXPECT_NEAR(constant(3), 0.375, 1e-15);  // link length b_r
+  EXPECT_NEAR(arm_b(), std::hypot(0.375, 0.028), 1e-15);
+  EXPECT_DOUBLE_EQ(forearm_c(), 0.825);
+  EXPECT_DOUBLE_EQ(constant(0), 119.5);  // arm-side torque limit: 50 x 2.39 N m
+  EXPECT_NEAR(param(qmin_name()) * 180 / kPi, -51, 1e-12);
+  EXPECT_NEAR(param(hand ? "joint.q_max" : "arm[1].qmax") * 180 / kPi, 123, 1e-12);
 }
 
 TEST_P(Quattro, IkSatisfiesTheSourceClosureEquations) {
@@ -200,8 +228,9 @@ TEST_P(Quattro, OutOfReachNamesTheArm) {
   int s = pkm_ik(m, d, far, q);
   EXPECT_EQ(s, PKM_ERR_UNREACHABLE);
   std::string msg = pkm_data_error(d);
-  EXPECT_NE(msg.find("arm 1"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("RAD < 0"), std::string::npos) << msg;
+  // the hand-written model in the source's terms (RAD < 0), the description in its own
+  EXPECT_NE(msg.find(hand ? "arm 1" : "leg 1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(hand ? "RAD < 0" : "the rod's sphere misses the elbow circle"), std::string::npos) << msg;
 }
 
 TEST_P(Quattro, JointRangeNamesTheArmAndAngle) {
@@ -210,13 +239,16 @@ TEST_P(Quattro, JointRangeNamesTheArmAndAngle) {
   double q[4];
   int found = 0;
   for (double z0 = -0.50; z0 < -0.38 && !found; z0 += 0.001) {
-    const double x[4] = {0.0, 0.0, z0 - param("base.h"), 0.0};
+    const double x[4] = {0.0, 0.0, z0 - base_h(), 0.0};
     int s = pkm_ik(m, d, x, q);
     if (s == PKM_ERR_JOINT_LIMIT) {
       found = 1;
       std::string msg = pkm_data_error(d);
-      EXPECT_NE(msg.find("arm 1: q = -5"), std::string::npos) << msg;
-      EXPECT_NE(msg.find("deg outside the joint range [-51, 123] deg"), std::string::npos) << msg;
+      // the hand-written model in degrees, the description in radians
+      EXPECT_NE(msg.find(hand ? "arm 1: q = -5" : "leg 1 joint q = -0.89"), std::string::npos) << msg;
+      EXPECT_NE(msg.find(hand ? "deg outside the joint range [-51, 123] deg" : "outside [-0.890118, 2.14675]"),
+                std::string::npos)
+          << msg;
     }
   }
   EXPECT_TRUE(found);
@@ -241,26 +273,32 @@ TEST_P(Quattro, BadInputIsAnErrorNotANaN) {
 }
 
 TEST_P(Quattro, InvalidParametersAreRejectedWithTheirNames) {
-  int i = pkm_param_index(m, "joint.q_min");
+  int i = pkm_param_index(m, qmin_name().c_str());
   ASSERT_GE(i, 0);
   ASSERT_EQ(pkm_param_set(m, i, 2.5, err, sizeof err), PKM_OK);
   EXPECT_EQ(pkm_model_validate(m, err, sizeof err), PKM_ERR_PARAMETER);
-  EXPECT_NE(std::string(err).find("joint.q_min"), std::string::npos) << err;
+  EXPECT_NE(std::string(err).find(qmin_name()), std::string::npos) << err;
   double q[4], x[4] = {0, 0, -0.95, 0};
   EXPECT_EQ(pkm_ik(m, d, x, q), PKM_ERR_PARAMETER);  // an unvalidated model refuses to compute
   ASSERT_EQ(pkm_param_set(m, i, -0.5, err, sizeof err), PKM_OK);
   // A forearm too short to reach the home pose.
-  ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, "forearm.c"), 0.2, err, sizeof err), PKM_OK);
+  for (int k = 1; k <= (hand ? 1 : 4); ++k) {
+    const std::string c = hand ? "forearm.c" : "leg[" + std::to_string(k) + "].L";
+    ASSERT_EQ(pkm_param_set(m, pkm_param_index(m, c.c_str()), 0.2, err, sizeof err), PKM_OK);
+  }
   EXPECT_EQ(pkm_model_validate(m, err, sizeof err), PKM_ERR_PARAMETER);
   EXPECT_NE(std::string(err).find("home pose"), std::string::npos) << err;
-  EXPECT_EQ(pkm_param_set(m, pkm_param_index(m, "arm.m"), -1.0, err, sizeof err), PKM_ERR_PARAMETER);
-  EXPECT_NE(std::string(err).find("arm.m"), std::string::npos) << err;
+  const std::string mass = hand ? "arm.m" : "arm[1].mass";
+  EXPECT_EQ(pkm_param_set(m, pkm_param_index(m, mass.c_str()), -1.0, err, sizeof err), PKM_ERR_PARAMETER);
+  EXPECT_NE(std::string(err).find(mass), std::string::npos) << err;
   char e2[256];
-  pkm_model* bad = pkm_model_create("quattro", "no_such_set", e2, sizeof e2);
+  pkm_model* bad = pkm_model_create(std::get<0>(GetParam()), "no_such_set", e2, sizeof e2);
   EXPECT_EQ(bad, nullptr);
   EXPECT_NE(std::string(e2).find("appendix_a"), std::string::npos) << e2;
 }
 
-INSTANTIATE_TEST_SUITE_P(Sets, Quattro, ::testing::Values("default", "appendix_a"));
+INSTANTIATE_TEST_SUITE_P(Sets, Quattro,
+                         ::testing::Combine(::testing::Values("quattro", "quattro_hand"),
+                                            ::testing::Values("default", "appendix_a")));
 
 }  // namespace

@@ -48,7 +48,7 @@ TEST(RobotFacts, TheKnownRobotsFactsAreTheirs) {
   EXPECT_STREQ(pkm_model_joint_unit(six.get()), "m");
   EXPECT_STREQ(pkm_model_effort_unit(six.get()), "N");
   EXPECT_STREQ(pkm_model_joint_prefix(six.get()), "rail");
-  EXPECT_STREQ(pkm_model_pose_name(quattro.get(), 3), "theta");
+  EXPECT_STREQ(pkm_model_pose_name(quattro.get(), 3), "rz");
   EXPECT_STREQ(pkm_model_joint_unit(quattro.get()), "rad");
   EXPECT_STREQ(pkm_model_effort_unit(quattro.get()), "N m");
   EXPECT_EQ(pkm_robot_param_set_count("quattro"), 2);
@@ -65,12 +65,13 @@ TEST(RobotFacts, TheKnownRobotsFactsAreTheirs) {
   EXPECT_STREQ(pkm_model_tracker_unit(four.get(), 0), "m");
   EXPECT_STREQ(pkm_model_tracker_name(four.get(), 1), "");
   EXPECT_EQ(pkm_model_tracker_count(nullptr), -1);
-  // the parameters of a geometric error: per leg on the 6-PUS, the arm chain's lengths on
-  // the Quattro (forearm first), none named on the four-bar
+  // the parameters of a geometric error: the rod length of each leg on the 6-PUS and the
+  // Quattro, none named on the four-bar
   EXPECT_STREQ(pkm_model_geometry_param(six.get(), 0), "leg[1].L");
   EXPECT_STREQ(pkm_model_geometry_param(six.get(), 5), "leg[6].L");
   EXPECT_STREQ(pkm_model_geometry_param(six.get(), 6), "");
-  EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 0), "forearm.c");
+  EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 0), "leg[1].L");
+  EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 3), "leg[4].L");
   EXPECT_STREQ(pkm_model_geometry_param(quattro.get(), 4), "");
   EXPECT_STREQ(pkm_model_geometry_param(four.get(), 0), "");
   EXPECT_STREQ(pkm_model_geometry_param(six.get(), -1), "");
@@ -89,8 +90,9 @@ TEST(RobotFacts, ModelCreationReportsAStatus) {
   pkm_model* m = reinterpret_cast<pkm_model*>(0x1);
   EXPECT_EQ(pkm_model_create_status("hexapod9", nullptr, &m, err, sizeof err), PKM_ERR_ARGUMENT);
   EXPECT_EQ(m, nullptr);
-  EXPECT_NE(std::string(err).find("known: quattro, fourbar, "), std::string::npos) << err;
+  EXPECT_NE(std::string(err).find("known: fourbar, "), std::string::npos) << err;
   EXPECT_NE(std::string(err).find(" 6pus, "), std::string::npos) << err;
+  EXPECT_NE(std::string(err).find(" quattro, "), std::string::npos) << err;
   EXPECT_EQ(pkm_model_create_status("quattro", "appendix_b", &m, err, sizeof err), PKM_ERR_ARGUMENT);
   EXPECT_NE(std::string(err).find("appendix_a"), std::string::npos) << err;
   ASSERT_EQ(pkm_model_create_status("quattro", "appendix_a", &m, err, sizeof err), PKM_OK) << err;

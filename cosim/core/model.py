@@ -236,8 +236,19 @@ class Model(DriveLayerMethods, RobotFamilyMethods, CourseMethods):
     def _index(self, name: str) -> int:
         i = lib.pkm_param_index(self._m, name.encode())
         if i < 0:
-            raise ParameterError(f"{self.robot} has no parameter named {name!r}", "PKM_ERR_PARAMETER")
+            raise ParameterError(self._unknown_parameter(name), "PKM_ERR_PARAMETER")
         return i
+
+    def _unknown_parameter(self, name) -> str:
+        """The message for a parameter name the robot lacks: the closest names it has, and
+        the command that lists them all."""
+        import difflib
+
+        names = self.param_names()
+        close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.6)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        return (f"{self.robot} has no parameter named {name!r}{hint} "
+                f"(`cosim params {self.robot}` lists its {len(names)} parameters)")
 
     def set_params(self, values: dict) -> None:
         """Set parameters by name and re-validate the whole set.

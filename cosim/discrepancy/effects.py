@@ -178,8 +178,8 @@ LIBRARY = [
            "any",
            "tracker pose columns and poses spread over the workspace",
            ("encoder_offset", "compliance"),
-           "core/FMU geometry parameters as the core names them (pkm_model_geometry_param: 6-PUS leg[i].L; "
-           "Quattro forearm/base/arm/platform lengths; else every length that moves a joint)",
+           "core/FMU geometry parameters as the core names them (pkm_model_geometry_param: the rod "
+           "length leg[i].L of each leg of the 6-PUS and the Quattro; else every length that moves a joint)",
            "dIK/dp by central differences of the core's inverse kinematics"),
 ]
 

@@ -26,6 +26,7 @@ from ..core.model import Model
 from ..errors import InputError, PkmError, UnsupportedError
 
 __all__ = ["index_names", "index_units", "index_map", "IndexMap", "gimre", "points", "model", "require_indices",
+           "centred_tool",
            "adept_to_model", "model_to_adept", "plot_maps", "benchmark"]
 
 NINDEX = 22  # PKM_QUATTRO_NINDEX in pkm.h
@@ -67,6 +68,34 @@ def model(param_set: str | None = None, params: dict | None = None, robot: str =
     True
     """
     return require_indices(Model(robot, param_set, params))
+
+
+def centred_tool(m: Model) -> dict:
+    """Parameters that put the tool point of ``m`` at its platform's centre.
+
+    The thesis' maps (Virzi 2010 ch. 3.3) take the tool offset 0; the default set's tool point
+    sits ``platform.cx`` (75 mm) from the centre along the platform's axis.  Moving it there
+    shifts every leg's platform point ``leg[i].px`` by ``-platform.cx`` (the points are given
+    from the tool point) and sets ``platform.cx = 0``.
+
+    Parameters
+    ----------
+    m : Model
+        A Quattro (four legs on an articulated platform, ``Model.has("quattro_indices")``).
+
+    Returns
+    -------
+    dict
+        Overrides by name for :func:`model` or ``Model.set_params``.
+
+    Example
+    -------
+    >>> p = centred_tool(model())
+    >>> p["platform.cx"], round(p["leg[1].px"], 6), round(p["leg[3].px"], 6)
+    (0.0, 0.075, -0.075)
+    """
+    cx = require_indices(m).param("platform.cx")
+    return {"platform.cx": 0.0, **{f"leg[{i}].px": m.param(f"leg[{i}].px") - cx for i in range(1, m.ndof + 1)}}
 
 
 def require_indices(m: Model) -> Model:

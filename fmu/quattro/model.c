@@ -1,5 +1,6 @@
 /* The Adept Quattro FMU: binds the generated variable table (from variables.txt and the
- * core's parameter table) to the generic FMI layer.  All behaviour is in fmu/common. */
+ * core's parameter table) and the packed description the core serves the robot from
+ * (robots/quattro.toml) to the generic FMI layer.  All behaviour is in fmu/common. */
 #include "fmu_vars.h"
 
 const fmu_model_desc FMU_MODEL = {FMU_IDENTIFIER, FMU_GUID,  FMU_ROBOT, FMU_PARAM_SET, FMU_NDOF,

@@ -218,7 +218,7 @@ def _cases(tmp):
         (["diagnose", str(SCEN / "calibration_6pus_campaign.csv"), "--model", "appendix_a"],
          "no parameter set 'appendix_a'"),
         (["diagnose", str(SCEN)], f"{SCEN} is a folder; give a file"),
-        (["diagnose", bad["quattro"]], "names robot 'quattro' (4 joints, pose x y z theta) but the file has joint "
+        (["diagnose", bad["quattro"]], "names robot 'quattro' (4 arms, pose x y z rz) but the file has joint "
                                        "columns q1..q6 (6 joints): does the sidecar name the right robot?"),
         (["diagnose", bad["linear_delta"]], "names robot 'linear_delta' (3 sliders, pose x y z) but the file has joint "
                                             "columns q1..q6"),
@@ -248,7 +248,7 @@ def _cases(tmp):
         (["diagnose", bad["badpar"], "--no-replay", "--no-figures"], "badpar.json: parameters: 6pus has no parameter"),
         (["diagnose", bad["units"], "--no-replay", "--no-figures"], "units.q = 'mm'"),
         (["calibrate", bad["mm"]], "column 'x': values up to"),
-        (["params", "hexapod"], "unknown robot 'hexapod' (known: quattro, fourbar, 6pus"),
+        (["params", "hexapod"], "unknown robot 'hexapod' (known: fourbar, 6pus"),
         (["params", "no/such/robot.toml"], "cannot read robot description no/such/robot.toml"),
         (["params", "6pus", "--set", "nope"], "no parameter set 'nope' (known: default)"),
         (["params", "quattro", "--set", "appendix_b"], "known: default, appendix_a"),
@@ -278,7 +278,7 @@ def _cases(tmp):
         (["calibrate", str(garbage)], "garbage.csv"),
         (["calibrate", str(SCEN / "calibration_6pus_campaign.csv"), "--holdout", "2"], "holdout fraction"),
         (["quattro", "map", "--index", "alpha_x", "--out", str(tmp / "q")], "invalid choice: 'alpha_x'"),
-        (["quattro", "cycle", "--out", str(tmp / "q"), "--set", "nope"], "unknown parameter set 'nope'"),
+        (["quattro", "cycle", "--out", str(tmp / "q"), "--set", "nope"], "quattro has no parameter set 'nope' (known: default, appendix_a)"),
         (["quattro"], "the following arguments are required: action"),
         (["discrepancy-demo", "--effect", "friction"], "it can hide: coulomb"),
         (["blind-case", "--robot", "quattro", "--effect", "nope", "--seed", "1"], "it can hide: coulomb"),

@@ -2,7 +2,14 @@
 and oracle_6pus.py: random states near the home pose, the relative difference, one clear error
 of a bad description.  A plain module beside them: pytest puts this folder on ``sys.path``, and
 so does running oracle_6pus.py as a script."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def rel(a, b):
@@ -44,3 +51,13 @@ def assert_one_clear_error(path, line, words) -> str:
         assert w in msg, (w, msg)
     assert "\n" not in msg
     return msg
+
+
+def run_oracle(script, *args):
+    """Runs tests/core/<script> (oracle_quattro.py) with PKM_LIB at libpkm_oracle.so, the library
+    with the hand-written oracles the C++ tests link; asserts it printed "ok"."""
+    lib = Path(os.environ.get("PKM_BUILD_DIR", REPO / "build")) / "lib" / "libpkm_oracle.so"
+    assert lib.exists(), f"{lib} is missing: cmake builds it with the core (target pkm_oracle)"
+    r = subprocess.run([sys.executable, str(Path(__file__).with_name(script)), *args], cwd=REPO,
+                       env=dict(os.environ, PKM_LIB=str(lib)), capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stdout + r.stderr

@@ -1,7 +1,7 @@
 """Robots compiled from description files (robots/*.toml, docs/robots.md).
 
-The 6-PUS the core serves from its description against the hand-written oracle (1000 random
-poses and rates, 1e-10, oracle_6pus.py),
+The 6-PUS and the Quattro the core serves from their descriptions against the hand-written
+oracles (1000 random poses and rates, 1e-10, oracle_6pus.py and oracle_quattro.py),
 the closed-form derivatives of every leg kind against forward-mode differentiation and
 finite differences, energy conservation, and one clear error per kind of bad description.
 """
@@ -13,12 +13,12 @@ import pytest
 from cosim.core import Model, robots
 from cosim.errors import ArgumentError, PkmError
 
-from described_checks import assert_one_clear_error, rel, samples
+from described_checks import assert_one_clear_error, rel, run_oracle, samples
 
 REPO = Path(__file__).resolve().parents[2]
 LISTED = [n.split("#")[0].strip() for n in (REPO / "robots" / "robots.list").read_text().splitlines()]
 LISTED = [n for n in LISTED if n]
-NEW = [n for n in LISTED if n != "6pus"]  # quattro_described too: its platform kind is new
+NEW = [n for n in LISTED if n != "6pus"]  # quattro too: its platform kind is new
 
 
 def test_every_listed_description_is_listed_by_the_core():
@@ -49,47 +49,24 @@ def test_6pus_is_served_from_its_description_and_equals_the_hand_written_oracle(
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stdout + r.stderr
 
 
-# The Quattro description against the hand-written Quattro: the parameter names differ (the
-# description has no base.a or platform.d, only per-leg points), so each side gets its own
-# names for the same machine; with a payload the hand-written payload.J (about the tool axis,
-# turned 4 times per articulation radian) is the description's platform.Izz = 4^2 payload.J.
-QUATTRO_CASES = {
-    "default": ({}, {}),
-    "appendix_a": ({}, {}),
-    "payload": ({"payload.m": 0.6, "payload.J": 2e-3}, {"payload.m": 0.6, "platform.Izz": 16 * 2e-3}),
-}
+def test_quattro_is_served_from_its_description():
+    """"quattro" is robots/quattro.toml ("quattro_described" its former name)."""
+    assert Path(Model("quattro").facts.file).resolve() == REPO / "robots" / "quattro.toml"
+    assert Model("quattro_described").robot == "quattro" and "quattro_described" not in robots()
+    assert "quattro_hand" not in robots()  # the oracle is in libpkm_oracle.so only
 
 
-@pytest.mark.parametrize("case", sorted(QUATTRO_CASES))
-def test_quattro_description_equals_the_hand_written_model(case):
-    pa, pb = QUATTRO_CASES[case]
-    st = "appendix_a" if case == "appendix_a" else None
-    a, b = Model("quattro", param_set=st, params=pa), Model("quattro_described", param_set=st, params=pb)
-    X, XD, XDD = samples(a, 1000, seed=11)
-    assert rel(a.ik(X), b.ik(X)) < 1e-10
-    assert rel(a.jacobian(X), b.jacobian(X)) < 1e-10
-    T = a.inverse_dynamics(X, XD, XDD)
-    assert rel(T, b.inverse_dynamics(X, XD, XDD)) < 1e-10
-    assert rel(a.forward_dynamics(X, XD, T), b.forward_dynamics(X, XD, T)) < 1e-10
-    for x, xd, xdd in zip(X[::10], XD[::10], XDD[::10]):
-        Jx_a, Jq_a, J_a = a.jacobians(x)
-        Jx_b, Jq_b, J_b = b.jacobians(x)
-        # the hand-written closure is |C - B|^2 - c^2, the description's half of it
-        assert rel(Jx_a, 2 * Jx_b) < 1e-10 and rel(Jq_a, 2 * Jq_b) < 1e-10 and rel(J_a, J_b) < 1e-10
-        assert rel(a.jacobian_dot(x, xd), b.jacobian_dot(x, xd)) < 1e-10
-        assert rel(a.mass_matrix(x), b.mass_matrix(x)) < 1e-10
-        assert rel(a.joint_acceleration(x, xd, xdd), b.joint_acceleration(x, xd, xdd)) < 1e-10
-        assert rel(np.array(a.energy(x, xd)), np.array(b.energy(x, xd))) < 1e-10
-        assert rel(a.singularity(x), b.singularity(x)) < 1e-10
+@pytest.mark.parametrize("case", ["default", "appendix_a", "payload"])
+def test_quattro_equals_the_hand_written_oracle(case):
+    """oracle_quattro.py: IK, Jacobians, both dynamics, the mass matrix, joint accelerations,
+    energy, singularity measures and chain points at 1000 random states near home to 1e-10,
+    the two models' parameters given by each one's names."""
+    run_oracle("oracle_quattro.py", "motion", case)
 
 
-def test_quattro_description_differs_where_the_hand_written_model_differs():
+def test_quattro_differs_where_the_hand_written_oracle_differs():
     """The comparison can fail: one parameter of the description moved by 1 % shows."""
-    a, b = Model("quattro"), Model("quattro_described", params={"arm[2].com_angle": -0.0745 * 1.01})
-    X, XD, XDD = samples(a, 200, seed=3)
-    assert rel(a.inverse_dynamics(X, XD, XDD), b.inverse_dynamics(X, XD, XDD)) > 1e-6
-    b = Model("quattro_described", params={"platform.ends": 0.075 * 1.01})
-    assert rel(a.inverse_dynamics(X, XD, XDD), b.inverse_dynamics(X, XD, XDD)) > 1e-6
+    run_oracle("oracle_quattro.py", "differs")
 
 
 @pytest.mark.parametrize("name", NEW)
@@ -238,8 +215,8 @@ BAD = [
     ("a set named default", lambda s: s + '\n[sets.default]\n"payload.m" = 0.1\n', 22, ["'default'"]),
     ("branch a hair off -1", lambda s: s.replace("branch = -1", "branch = -1.0000000001"), 19,
      ["branch = -1.0000000001"]),
-    ("a C++ robot's name", lambda s: s.replace('name = "tiny_delta"', 'name = "quattro"'), 2,
-     ["robot.name 'quattro'", "written in C++"]),
+    ("a C++ robot's name", lambda s: s.replace('name = "tiny_delta"', 'name = "fourbar"'), 2,
+     ["robot.name 'fourbar'", "written in C++"]),
     ("a served robot's name", lambda s: s.replace('name = "tiny_delta"', 'name = "6pus"'), 2,
      ["robot.name '6pus'", "taken by the bundled", "6pus.toml"]),
     ("a bundled description's name", lambda s: s.replace('name = "tiny_delta"', 'name = "hexapod_ups"'), 2,
@@ -418,16 +395,10 @@ def test_chain_points_draw_the_legs_the_kinematics_solve(name):
     assert {t.name for t in fig.data} >= {"links", "legs", "platform"}
 
 
-def test_the_hand_written_quattro_gives_the_chain_points_of_its_described_twin():
-    """The hand-written Quattro's chain points equal those of its described twin (an
-    independent implementation: the description compiler; the 6-PUS's: oracle_6pus.py); the
-    four-bar has none."""
+def test_the_four_bar_has_no_chain_points():
+    """(The Quattro's chain points against the hand-written oracle's: oracle_quattro.py.)"""
     from cosim.errors import UnsupportedError
 
-    q = Model("quattro")
-    xq = q.home() + np.array([0.03, -0.02, 0.05, 0.1])
-    cq = q.chain_points(xq)
-    np.testing.assert_allclose(cq, Model("quattro_described").chain_points(xq), rtol=0, atol=1e-15)
     with pytest.raises(UnsupportedError, match="chain points"):
         Model("fourbar").chain_points(Model("fourbar").home())
 
@@ -440,7 +411,7 @@ def test_robot_specific_functions_are_declared_by_the_core_not_by_the_name():
     from cosim.errors import UnsupportedError
 
     assert Model("6pus").facts.features == ("6pus_calib_rows", "6pus_leg_points")
-    assert Model("quattro").has("quattro_indices") and Model("quattro_described").has("quattro_indices")
+    assert Model("quattro").has("quattro_indices")
     assert not Model("delta_clavel").has("quattro_indices")  # arms and rods, but a rigid platform
     assert Model("fourbar").has("fourbar_output") and not Model("hexapod_ups").facts.features
     m = Model("tripod_3prs")
@@ -454,12 +425,12 @@ def test_the_state_kept_for_the_last_pose_is_never_stale():
     """A pkm_data of a described robot keeps the legs' state of the last pose: calls that
     come back to a pose, follow a pose that failed or a parameter change give what a fresh
     model gives at that pose, to the bit."""
-    a = Model("quattro_described")
+    a = Model("quattro")
     X, XD, XDD = samples(a, 3, seed=5)
     far = a.home() + np.array([5.0, 0, 0, 0])  # no leg reaches it
 
     def fresh(k, params=None):
-        f = Model("quattro_described", params=params)
+        f = Model("quattro", params=params)
         return f.inverse_dynamics(X[k], XD[k], XDD[k]), f.mass_matrix(X[k]), f.jacobian(X[k])
     for k in [0, 1, 0, 2, 2, 1]:
         if k == 2:
@@ -473,3 +444,16 @@ def test_the_state_kept_for_the_last_pose_is_never_stale():
                          fresh(1, {"platform.m": a.param("platform.m")})):
         assert np.array_equal(got, want)
     assert not np.array_equal(a.mass_matrix(X[1]), fresh(1)[1])
+
+
+def test_the_hand_written_quattros_parameter_names_give_a_clear_error():
+    """The served Quattro takes the description's names (docs/robots.md maps the hand-written
+    model's to them): an old name is an unknown parameter, with the closest names and the
+    command that lists them all."""
+    from cosim.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"no parameter named 'joint\[1\]\.coulomb'; did you mean "
+                                             r"arm\[1\]\.coulomb.*`cosim params quattro` lists"):
+        Model("quattro").set_params({"joint[1].coulomb": 0.1})
+    with pytest.raises(ParameterError, match=r"no parameter named 'gear\.ratio' \(`cosim params quattro`"):
+        Model("quattro", params={"gear.ratio": 50.0})

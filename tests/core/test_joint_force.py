@@ -75,13 +75,13 @@ def test_shape_parameters_alone_are_no_force():
 
 def test_parameters_are_in_the_table_with_units_and_bounds():
     info = {p.name: p for p in Model("quattro").param_info()}
-    assert info["joint[2].force_k1"].unit == "N m/rad"
-    assert info["joint[2].force_v2"].unit == "N m s2/rad2"
+    assert info["arm[2].force_k1"].unit == "N m/rad"
+    assert info["arm[2].force_v2"].unit == "N m s2/rad2"
     with pytest.raises(Exception, match="force_period"):
-        Model("quattro", params={"joint[1].force_period": -0.1})
-    assert info["joint[2].force_cv"].unit == "rad/s"
+        Model("quattro", params={"arm[1].force_period": -0.1})
+    assert info["arm[2].force_cv"].unit == "rad/s"
     with pytest.raises(Exception, match="force_cv"):
-        Model("quattro", params={"joint[1].force_cv": -0.1})
+        Model("quattro", params={"arm[1].force_cv": -0.1})
 
 
 # ----------------------------------------------------------------- the Coulomb levels' velocity scale

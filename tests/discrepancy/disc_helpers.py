@@ -18,11 +18,11 @@ COMBINED = {
              "payload.y": -0.008, "payload.z": 0.01, "gravity.x": 0.1, "gravity.y": -0.08,
              "actuator.delay": 0.003, "sensor.delay": 0.002, "leg[4].L": 0.1162, "platform.Izz": 0.00062,
              "platform.m": 0.38},
-    "quattro": {"joint[1].coulomb": 0.3, "joint[2].viscous": 0.1, "joint[3].rotor_inertia": 0.025,
-                "joint[1].stribeck": 0.3, "joint[1].stribeck_v": 0.02, "joint[4].backlash": 1e-3,
-                "joint[2].compliance": 8e-5, "joint[3].encoder_offset": 1.2e-3, "payload.m": 0.1,
+    "quattro": {"arm[1].coulomb": 0.3, "arm[2].viscous": 0.1, "arm[3].rotor_inertia": 0.20275 + 0.025,
+                "arm[1].stribeck": 0.3, "arm[1].stribeck_v": 0.02, "arm[4].backlash": 1e-3,
+                "arm[2].compliance": 8e-5, "arm[3].encoder_offset": 1.2e-3, "payload.m": 0.1,
                 "gravity.x": 0.1, "gravity.y": -0.08, "actuator.delay": 0.003, "sensor.delay": 0.002,
-                "forearm.c": 0.826, "platform.m": 0.314},
+                "leg[1].L": 0.826, "leg[2].L": 0.826, "leg[3].L": 0.826, "leg[4].L": 0.826, "platform.m": 0.314},
 }
 
 

@@ -27,7 +27,7 @@ def fmi3_files():
     """Every plant and controller FMU of the robots the toolkit lists, as FMI 3.0 (a missing
     one is a failure: the build makes one per FMI 2.0 FMU, never a skip)."""
     listed = [ln.split("#")[0].strip() for ln in (REPO / "robots" / "robots.list").read_text().splitlines()]
-    robots = ["quattro"] + [r for r in listed if r]  # "6pus" is listed (robots/6pus.toml)
+    robots = [r for r in listed if r]  # "6pus" and "quattro" are listed (robots/6pus.toml, quattro.toml)
     return [fmu.build_dir() / "fmu" / "fmi3" / f"{fmu.fmu_id(r)}{s}.fmu" for r in robots for s in ("", "_CTRL")]
 
 

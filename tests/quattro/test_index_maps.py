@@ -9,8 +9,20 @@ from cosim.cli.quattro import axis_feature
 
 TOL = 0.030  # m, the acceptance tolerance
 # The default set's tool offset is 75 mm; the seed's maps use offset 0 (ch. 3.3), so the
-# default set is evaluated with platform.offset = 0 to compare with the figures.
-SEED_MAPS = {"platform.offset": 0.0}
+# default set is evaluated with the tool point at the platform centre (platform.cx = 0, every
+# leg[i].px shifted by -75 mm) to compare with the figures.
+SEED_MAPS = {"platform.cx": 0.0, "leg[1].px": 0.075, "leg[2].px": 0.075, "leg[3].px": -0.075, "leg[4].px": -0.075}
+
+
+def test_centred_tool_moves_the_tool_point_to_the_platform_centre():
+    # the tool point moves by the offset along the platform's axis at 45 deg (rz = 0): the same
+    # joint angles put it 75 mm along (cos 45, sin 45) from where it was
+    m = quattro.model("default")
+    assert quattro.centred_tool(m) == pytest.approx(SEED_MAPS, abs=1e-15)
+    c = quattro.model("default", SEED_MAPS)
+    x = m.home()
+    xc = c.fk(m.ik(x), x)
+    np.testing.assert_allclose(xc[:2] - x[:2], 0.075 * np.sqrt(0.5) * np.ones(2), atol=1e-9)
 
 
 def test_best_translational_manipulability_near_z_1170_appendix_a():
@@ -128,11 +140,10 @@ def test_a_model_without_the_quattro_indices_is_refused_by_capability_not_name()
     # a Delta of arms and rods, but a rigid platform: the core declares no index family for it
     with pytest.raises(UnsupportedError, match="robot 'delta_clavel' has no Quattro indices"):
         quattro.index_map(x=[0.0], y=[0.0], z=[-1.0], model=Model("delta_clavel"))
-    # the described Quattro has them (c_core/src/robots/quattro_facts.cpp): the same map
+    # the Quattro's description has them (c_core/src/robots/quattro_facts.cpp; against the
+    # hand-written oracle: tests/core/oracle_quattro.py)
     a = quattro.index_map(x=[0.0, 0.1], y=[0.0], z=[-1.0, -0.9], model=Model("quattro"))
-    b = quattro.index_map(x=[0.0, 0.1], y=[0.0], z=[-1.0, -0.9], model=Model("quattro_described"))
-    np.testing.assert_allclose(b["mu_T"], a["mu_T"], rtol=1e-12)
-    np.testing.assert_allclose(b["alfa_x"], a["alfa_x"], rtol=1e-12)
+    assert np.isfinite(a["mu_T"]).all() and np.isfinite(a["alfa_x"]).all()
     with pytest.raises(UnsupportedError, match="robot '6pus' has no Quattro indices"):
         quattro.model(robot="6pus")
     assert quattro.model(param_set="appendix_a").has("quattro_indices")

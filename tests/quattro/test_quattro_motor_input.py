@@ -1,5 +1,5 @@
-"""The Quattro FMU driven with motor torques: input.gain = gear.ratio makes a motor torque
-input u move the robot exactly as the arm-side torque gear.ratio x u does."""
+"""The Quattro FMU driven with motor torques: input.gain = the gear ratio (50) makes a motor
+torque input u move the robot exactly as the arm-side torque 50 u does."""
 import numpy as np
 
 from cosim import fmu
@@ -8,7 +8,8 @@ from cosim.core import Model
 
 def test_motor_torque_inputs_equal_arm_torques_times_the_gear_ratio():
     m = Model("quattro")
-    ratio = m.param("gear.ratio")
+    ratio = m.quattro_constants()["gear_ratio"]
+    assert ratio == 50
     g = m.gravity_load(m.home())
     arm = [g + np.array([2.0, -1.0, 0.5, 1.5]) * np.sin(0.01 * k) for k in range(50)]
     runs = []

@@ -70,8 +70,8 @@ PKM_API const char* pkm_status_name(int status);
 typedef struct pkm_model pkm_model;
 typedef struct pkm_data pkm_data;
 
-/* Create a model of a robot: "6pus", "quattro", "fourbar" (written in C++), a description
- * the core finds by name (PKM_ROBOT_PATH, then the project's robots/: "delta_clavel", ...)
+/* Create a model of a robot: "fourbar" (written in C++), a description the core finds by
+ * name (PKM_ROBOT_PATH, then the project's robots/: "6pus", "quattro", "delta_clavel", ...)
  * or a path to a description file (docs/robots.md), with a named parameter set (NULL or
  * "default"; the Quattro also has "appendix_a").  Returns NULL on error and writes the
  * reason into err[errlen] (a bad description: "file:line: field: what"). */
@@ -122,8 +122,8 @@ PKM_API const char* pkm_model_joint_noun(const pkm_model* m);
 /* Robot-specific function families the model provides beyond the common set, named by
  * their C function without the "pkm_" prefix: "6pus_calib_rows", "6pus_leg_points" (a
  * described 6-PUS), "fourbar_output" (the four-bar), "quattro_indices", "quattro_gimre",
- * "quattro_points" (the hand-written Quattro and a described one: four arm-and-rod legs on an
- * articulated platform, robots/quattro_described.toml).  Callers ask the model, never its name:
+ * "quattro_points" (a described Quattro: four arm-and-rod legs on an articulated platform,
+ * robots/quattro.toml).  Callers ask the model, never its name:
  * pkm_model_has returns 1 if it provides feature, else 0; count and i-th name ("" past
  * the end) list them. */
 PKM_API int pkm_model_has(const pkm_model* m, const char* feature);
@@ -823,8 +823,8 @@ PKM_API int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, 
 PKM_API int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A,
                                double* B, double* C);
 /* The Quattro's constants that the indices and the cycle-time search read, out[PKM_QUATTRO_NCONSTANT]
- * (feature "quattro_indices"); of a described Quattro, where a description carries no drive
- * rating, the first two are the s650H's (source ch. 5.6):
+ * (feature "quattro_indices"); a description carries no drive rating, so the first two are
+ * the s650H's (source ch. 5.6):
  *  0 tau_arm_max  arm-side torque limit of the alfa indices, gear_ratio x nominal motor torque [N m]
  *  1 gear_ratio   motor to arm [-]
  *  2 base_height  the Adept origin's height above the motor-axis plane (source symbol base) [m]

@@ -1,8 +1,8 @@
 // What the Adept Quattro offers beyond the common algorithms (pkm.h: the 22 indices of Virzi
 // 2010 ch. 3-5, the GIMRE of ch. 4, the joint points), on the robot the core serves from its
-// description (robots/quattro_described.toml, description/described_robot.hpp).  Any described
-// robot of four revolute arms with rods on an articulated platform (coordinates x y z rz) is a
-// Quattro in this sense, recognised by its legs' kind traits (angular, has_rod).
+// description (robots/quattro.toml, description/described_robot.hpp).  Any described robot of
+// four revolute arms with rods on an articulated platform (coordinates x y z rz) is a Quattro
+// in this sense, recognised by its legs' kind traits (angular, has_rod).
 //
 // The index formulas are written once (quattro_indices.cpp) over IndexInputs, which the
 // described model fills here.
@@ -36,6 +36,17 @@ struct IndexInputs {
 
 // The 22 indices of IndexInputs into out[PKM_QUATTRO_NINDEX] (quattro_indices.cpp).
 void indices(const IndexInputs& in, double* out);
+
+// A model that gives these facts itself: the hand-written Quattro kept as a test oracle
+// (c_core/tests/oracles/quattro.hpp, robot "quattro_hand" of libpkm_oracle.so only), so that
+// the C functions compare the two models.  No robot of the shipped library implements it.
+struct OwnFacts {
+  virtual ~OwnFacts() = default;
+  virtual void index_inputs(const double* x, IndexInputs& in) const = 0;
+  virtual Eigen::Matrix4d gimre(const double* x) const = 0;
+  virtual void points(const double* x, double* A, double* B, double* C) const = 0;
+  virtual void constants(double* out) const = 0;
+};
 
 // The robot is a described Quattro: four arm-and-rod legs on an articulated platform.
 bool is_described_quattro(const Robot& r);

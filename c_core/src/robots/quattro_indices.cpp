@@ -1,15 +1,13 @@
 // C API specific to the Quattro: the kinematic and dynamic performance indices of Virzi 2010
-// ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points, of the
-// hand-written Quattro (quattro.hpp) and of a described one (quattro_facts.hpp): the index
-// formulas once, over the inputs each model gives.
+// ch. 3-5 over a batch of poses (the workspace maps), the GIMRE and the joint points of a
+// described Quattro (quattro_facts.hpp), or of a model giving them itself (OwnFacts: the test
+// oracle): the index formulas once, over the inputs each model gives.
 #include <cstring>
 
 #include "common/guard.hpp"
-#include "robots/quattro.hpp"
 #include "robots/quattro_facts.hpp"
 
 using namespace pkm;
-using namespace pkm::quattro;
 
 namespace {
 
@@ -24,34 +22,17 @@ constexpr IndexInfo kIndex[PKM_QUATTRO_NINDEX] = {
     {"kat", "kg"},    {"kat_xy", "kg"},  {"kat_x", "kg"}, {"kat_y", "kg"},    {"kat_z", "kg"},     {"Fcc_z", "N"},
     {"Fcc_xy", "N"},  {"Fgr", "N"},      {"alfa_z", "m/s2"}, {"alfa_x", "m/s2"}};
 
-// The hand-written Quattro of (m, d), or nullptr for a described one; throws for any other robot.
 constexpr IndexInfo kConstant[PKM_QUATTRO_NCONSTANT] = {
     {"tau_arm_max", "N.m"}, {"gear_ratio", "1"}, {"base_height", "m"}, {"link_length", "m"}};
 
-const Model* quattro_model(const pkm_model* m, pkm_data* d) {
+// The model's own facts (the test oracle), or nullptr for a described Quattro; throws for any
+// other robot.
+const quattro_facts::OwnFacts* quattro_model(const pkm_model* m, pkm_data* d) {
   const RobotModel& rm = prepare(m, d);
   if (quattro_facts::is_described_quattro(*m->robot)) return nullptr;
-  if (std::strcmp(m->robot->name(), "quattro") != 0)
-    throw Error(PKM_ERR_ARGUMENT, "this function is for a Quattro ('quattro', or a description of four arms on an articulated platform), not '" +
-                                      m->robot_name + "'");
-  return &static_cast<const Model&>(rm);
-}
-
-// The hand-written model's index inputs.
-void hand_inputs(const Model& m, const double* x, quattro_facts::IndexInputs& in) {
-  Pose p;
-  pose_kinematics(m, x, p);
-  in.JD = m.br * p.J;
-  in.N = gimre(m, p);
-  in.M = mass_matrix(m, p);
-  const double s2 = std::sqrt(0.5);
-  const Eigen::Vector4d vz(0, 0, 1, 0), vxy(s2, s2, 0, 0);
-  in.hv_z = velocity_force(m, p, vz);
-  in.hv_xy = velocity_force(m, p, vxy);
-  in.grav = gravity_force(m, p);
-  in.tau_z = solve_JT(p, in.M * vz, "alfa index");
-  in.tau_x = solve_JT(p, in.M * Eigen::Vector4d(-s2, -s2, 0, 0), "alfa index");
-  in.tau_max = m.tau_arm_max();
+  if (const auto* own = dynamic_cast<const quattro_facts::OwnFacts*>(&rm)) return own;
+  throw Error(PKM_ERR_ARGUMENT, "this function is for a Quattro ('quattro', or a description of four arms on an articulated platform), not '" +
+                                    m->robot_name + "'");
 }
 
 // Largest scale s of a unit task acceleration a such that |J^-T M a| <= tau_max on every
@@ -122,7 +103,7 @@ const char* pkm_quattro_index_name(int i) { return i >= 0 && i < PKM_QUATTRO_NIN
 const char* pkm_quattro_index_unit(int i) { return i >= 0 && i < PKM_QUATTRO_NINDEX ? kIndex[i].unit : ""; }
 
 int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double* x, double* out, int* status) {
-  const Model* qm = nullptr;
+  const quattro_facts::OwnFacts* qm = nullptr;
   int s = guard(d, [&] {
     qm = quattro_model(m, d);
     check_out(x, "x");
@@ -133,7 +114,7 @@ int pkm_quattro_indices(const pkm_model* m, pkm_data* d, size_t n, const double*
     check_finite(x + 4 * k, 4, "pose x");
     quattro_facts::IndexInputs in;
     if (qm)
-      hand_inputs(*qm, x + 4 * k, in);
+      qm->index_inputs(x + 4 * k, in);
     else
       quattro_facts::index_inputs(m, d, x + 4 * k, in);
     quattro_facts::indices(in, out + PKM_QUATTRO_NINDEX * k);
@@ -145,48 +126,31 @@ const char* pkm_quattro_constant_unit(int i) { return i >= 0 && i < PKM_QUATTRO_
 
 int pkm_quattro_constants(const pkm_model* m, pkm_data* d, double* out) {
   return guard(d, [&] {
-    const Model* qm = quattro_model(m, d);
+    const quattro_facts::OwnFacts* qm = quattro_model(m, d);
     check_out(out, "out");
-    if (!qm) return quattro_facts::constants(m, d, out);
-    out[0] = qm->tau_arm_max();
-    out[1] = qm->ratio;
-    out[2] = qm->h;
-    out[3] = qm->br;
+    if (qm) return qm->constants(out);
+    quattro_facts::constants(m, d, out);
   });
 }
 
 int pkm_quattro_gimre(const pkm_model* m, pkm_data* d, const double* x, double* Nout) {
   return guard(d, [&] {
-    const Model* qm = quattro_model(m, d);
+    const quattro_facts::OwnFacts* qm = quattro_model(m, d);
     check_finite(x, 4, "pose x");
     check_out(Nout, "N");
     Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> out(Nout);
-    if (!qm) {
-      out = quattro_facts::gimre(m, d, x);
-      return;
-    }
-    Pose p;
-    pose_kinematics(*qm, x, p);
-    out = gimre(*qm, p);
+    out = qm ? qm->gimre(x) : quattro_facts::gimre(m, d, x);
   });
 }
 
 int pkm_quattro_points(const pkm_model* m, pkm_data* d, const double* x, double* A, double* B, double* C) {
   return guard(d, [&] {
-    const Model* qm = quattro_model(m, d);
+    const quattro_facts::OwnFacts* qm = quattro_model(m, d);
     check_finite(x, 4, "pose x");
-    if (!qm) {
+    if (qm)
+      qm->points(x, A, B, C);
+    else
       quattro_facts::points(m, d, x, A, B, C);
-      return;
-    }
-    Pose p;
-    pose_kinematics(*qm, x, p);
-    for (int i = 0; i < N; ++i)
-      for (int j = 0; j < 3; ++j) {
-        if (A) A[3 * i + j] = qm->A[i][j];
-        if (B) B[3 * i + j] = p.B[i][j];
-        if (C) C[3 * i + j] = p.C[i][j];
-      }
   });
 }
 

@@ -1,5 +1,6 @@
 // The robots the core serves: the ones written in C++ (a file in robots/ plus a line here) and
-// the descriptions of the search path (robots/robots.list; "6pus" is robots/6pus.toml).
+// the descriptions of the search path (robots/robots.list; "6pus" is robots/6pus.toml,
+// "quattro" robots/quattro.toml).
 #include <vector>
 
 #include "common/robot.hpp"
@@ -9,7 +10,6 @@
 
 namespace pkm {
 
-const Robot* robot_quattro();
 const Robot* robot_fourbar();
 
 // A test build may add robots without touching this file: it links a definition of these
@@ -23,7 +23,7 @@ const Robot* robot_fourbar();
 namespace {
 const std::vector<const Robot*>& all_robots() {
   static const std::vector<const Robot*> robots = [] {
-    std::vector<const Robot*> v = {robot_quattro(), robot_fourbar()};
+    std::vector<const Robot*> v = {robot_fourbar()};
     if (test_robot_count && test_robot_at)
       for (int i = 0; i < test_robot_count(); ++i) v.push_back(test_robot_at(i));
     if (oracle_robot_count && oracle_robot_at)
@@ -32,9 +32,13 @@ const std::vector<const Robot*>& all_robots() {
   }();
   return robots;
 }
-// Former names of served robots: the description "6pus" was "6pus_described" while a
-// hand-written "6pus" existed.
-const char* alias_of(const std::string& name) { return name == "6pus_described" ? "6pus" : nullptr; }
+// Former names of served robots: the descriptions "6pus" and "quattro" were "6pus_described"
+// and "quattro_described" while hand-written robots of those names existed.
+const char* alias_of(const std::string& name) {
+  if (name == "6pus_described") return "6pus";
+  if (name == "quattro_described") return "quattro";
+  return nullptr;
+}
 }  // namespace
 
 // Names of the descriptions in the search path (robots/robots.list), read once.

@@ -6,8 +6,9 @@
 namespace pkm {
 
 const Robot* oracle_6pus();
+const Robot* oracle_quattro();
 
-int oracle_robot_count() { return 1; }
-const Robot* oracle_robot_at(int i) { return i == 0 ? oracle_6pus() : nullptr; }
+int oracle_robot_count() { return 2; }
+const Robot* oracle_robot_at(int i) { return i == 0 ? oracle_6pus() : i == 1 ? oracle_quattro() : nullptr; }
 
 }  // namespace pkm

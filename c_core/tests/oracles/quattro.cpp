@@ -1,7 +1,8 @@
-// Adept Quattro s650H (4-RUU), Virzi 2010: parameters, inverse kinematics (ch. 1.4.1),
-// Jacobians and their time derivative (ch. 2.3, 2.5), the simplified Newton-Euler model of
-// ch. 5 written in task space, and the GIMRE of ch. 4.  Conventions in quattro.hpp.
-#include "robots/quattro.hpp"
+// The hand-written Adept Quattro s650H (4-RUU), Virzi 2010, a test oracle of the robot served
+// from robots/quattro.toml: parameters, inverse kinematics (ch. 1.4.1), Jacobians and their
+// time derivative (ch. 2.3, 2.5), the simplified Newton-Euler model of ch. 5 written in task
+// space, the GIMRE of ch. 4 and the inputs of the 22 indices.  Conventions in quattro.hpp.
+#include "oracles/quattro.hpp"
 
 #include <sstream>
 
@@ -25,6 +26,46 @@ std::string fmt(double v, int prec = 6) {
 std::string arm_name(int i) { return "arm " + std::to_string(i + 1); }
 
 }  // namespace
+
+void Model::index_inputs(const double* x, quattro_facts::IndexInputs& in) const {
+  Pose p;
+  pose_kinematics(*this, x, p);
+  in.JD = br * p.J;
+  in.N = quattro::gimre(*this, p);
+  in.M = mass_matrix(*this, p);
+  const double s2 = std::sqrt(0.5);
+  const Eigen::Vector4d vz(0, 0, 1, 0), vxy(s2, s2, 0, 0);
+  in.hv_z = velocity_force(*this, p, vz);
+  in.hv_xy = velocity_force(*this, p, vxy);
+  in.grav = gravity_force(*this, p);
+  in.tau_z = solve_JT(p, in.M * vz, "alfa index");
+  in.tau_x = solve_JT(p, in.M * Eigen::Vector4d(-s2, -s2, 0, 0), "alfa index");
+  in.tau_max = tau_arm_max();
+}
+
+Eigen::Matrix4d Model::gimre(const double* x) const {
+  Pose p;
+  pose_kinematics(*this, x, p);
+  return quattro::gimre(*this, p);
+}
+
+void Model::points(const double* x, double* Ao, double* Bo, double* Co) const {
+  Pose p;
+  pose_kinematics(*this, x, p);
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < 3; ++j) {
+      if (Ao) Ao[3 * i + j] = A[i][j];
+      if (Bo) Bo[3 * i + j] = p.B[i][j];
+      if (Co) Co[3 * i + j] = p.C[i][j];
+    }
+}
+
+void Model::constants(double* out) const {
+  out[0] = tau_arm_max();
+  out[1] = ratio;
+  out[2] = h;
+  out[3] = br;
+}
 
 void pose_kinematics(const Model& m, const double* x, Pose& p, bool check_limits) {
   p.th = x[3];
@@ -212,8 +253,8 @@ struct ParamTable {
 
 class Quattro final : public Robot {
  public:
-  const char* name() const override { return "quattro"; }
-  const char* title() const override { return "Adept Quattro s650H 4-RUU (Virzi 2010), hand-written"; }
+  const char* name() const override { return "quattro_hand"; }
+  const char* title() const override { return "Adept Quattro s650H 4-RUU (Virzi 2010), hand-written test oracle"; }
   int ndof() const override { return N; }
   std::vector<std::string> param_sets() const override { return {"default", "appendix_a"}; }
   std::vector<const char*> features() const override {
@@ -467,7 +508,7 @@ class Quattro final : public Robot {
 }  // namespace
 }  // namespace quattro
 
-const Robot* robot_quattro() {
+const Robot* oracle_quattro() {
   static quattro::Quattro r;
   return &r;
 }

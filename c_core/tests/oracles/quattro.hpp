@@ -1,5 +1,7 @@
-// Adept Quattro s650H (4-RUU), Virzi 2010: the constant model and the per-pose kinematics
-// shared by the robot (quattro.cpp) and the batched index maps (quattro_indices.cpp).
+// The hand-written Adept Quattro s650H (4-RUU), Virzi 2010, a test oracle for the robot the
+// core serves from robots/quattro.toml, registered as "quattro_hand" (test and benchmark
+// builds only, libpkm_oracle.so): the constant model and the per-pose kinematics of the robot
+// (quattro.cpp), which also gives the Quattro facts itself (quattro_facts::OwnFacts).
 //
 // Frames and coordinates (docs/quattro.md has the figures):
 //  * World frame: the source's model frame (arm 1 in the x-z plane along +x, arm 2 along +y,
@@ -18,13 +20,14 @@
 #include <cmath>
 
 #include "common/robot.hpp"
+#include "robots/quattro_facts.hpp"
 
 namespace pkm {
 namespace quattro {
 
 constexpr int N = 4;
 
-struct Model final : RobotModel {
+struct Model final : RobotModel, quattro_facts::OwnFacts {
   // geometry [m]
   double a, h, br, rb, b, alp, c, rc, d, off, ee;
   // masses [kg] and inertias [kg m^2]
@@ -39,6 +42,11 @@ struct Model final : RobotModel {
   std::array<double, N> sigma;            // +1 arms 1, 2 on M12; -1 arms 3, 4 on M34
   std::array<Eigen::Vector2d, N> w;       // fixed part of C_i - P (times 2/d)
   double tau_arm_max() const { return ratio * tau_motor; }
+  // The facts of the C functions pkm_quattro_* from this model (quattro.cpp).
+  void index_inputs(const double* x, quattro_facts::IndexInputs& in) const override;
+  Eigen::Matrix4d gimre(const double* x) const override;
+  void points(const double* x, double* A, double* B, double* C) const override;
+  void constants(double* out) const override;
 };
 
 // Everything about one pose that kinematics, dynamics and indices need.
