@@ -29,7 +29,7 @@ __all__ = ["CYCLE_TERMS", "CycleFit", "fit_cycle_model", "select_cycle_model"]
 #   time_scale [-]      : the controller runs the torque-limited profile stretched in time by this factor
 #                         (a speed override: velocities / scale, inertial torques / scale^2, gravity unchanged).
 #   torque_fraction [-] : the controller re-plans each move time-optimally with this fraction of the arm
-#                         torque capability (gear.ratio * motor.tau_nominal); gravity keeps its full share,
+#                         torque capability (gear ratio x nominal motor torque, tau_arm_max); gravity keeps its full share,
 #                         so the pose dependence of the cycle time grows as the fraction falls.
 #   settle [s]          : fine-positioning / settling time added at each of the six stops of a cycle.
 CYCLE_TERMS = {"time_scale": ("-", 1.0, (0.5, 10.0)), "torque_fraction": ("-", 1.0, (0.02, 1.0)),

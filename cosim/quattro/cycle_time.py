@@ -10,7 +10,8 @@ Each segment is timed by the torque-limited time-optimal profile along the strai
 (a time-optimal path parameterization by reachability analysis): along the path
 x(s) = x_a + s u, the arm torques are tau(s) = a(s) s_dd + b(s) s_d^2 + c(s), with a, b, c
 obtained from three batched calls of the core's inverse dynamics (nothing re-derived
-here), and every |tau_i| must stay below ``gear.ratio * motor.tau_nominal`` (119.5 N m at
+here), and every |tau_i| must stay below the gear ratio times the nominal motor torque
+(``Model.quattro_constants()["tau_arm_max"]``, 119.5 N m at
 the arm).  Optionally the arm speed is limited too.  The planned motion can be replayed
 through the core's forward dynamics (:func:`simulate_segment`).
 
@@ -96,7 +97,7 @@ def topp_segment(m: Model, xa, xb, n: int = 300, tau_max: float | None = None,
     m : Model
         Quattro model (friction-free: the path dynamics are taken as quadratic in s_d).
     xa, xb : array_like
-        Start and end poses (x, y, z, theta) [m, rad]; theta is kept (translation).
+        Start and end poses (x, y, z, rz) [m, rad]; rz is kept (translation).
     n : int
         Grid intervals along the path.
     tau_max : float, optional
