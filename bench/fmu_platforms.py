@@ -24,10 +24,8 @@ from cosim import fmu  # noqa: E402
 
 
 def robots_with_fmus():
-    names = ["quattro"]  # and every listed description ("6pus" among them)
-    listed = (REPO / "robots" / "robots.list").read_text().splitlines()
-    names += [n.split("#")[0].strip() for n in listed if n.split("#")[0].strip()]
-    return names
+    listed = (REPO / "robots" / "robots.list").read_text().splitlines()  # "6pus" and "quattro" among them
+    return [n.split("#")[0].strip() for n in listed if n.split("#")[0].strip()]
 
 
 def binary_sizes(path):
