@@ -30,10 +30,14 @@ def test_answer_keys_are_kept_apart(blind_subset):
         assert csv.parent != key.parent
         side = json.loads(csv.with_suffix(".json").read_text())
         assert side["parameters"] == {}
+        # the nominal robot's description (its parameter names, the Quattro's arm[i].rotor_inertia
+        # among them) travels with the recording; the hidden parameters and values do not
+        nominal = side.pop("robot_description", "")
         for h in json.loads(key.read_text())["effects"]:
-            for p in h["params"]:
+            for p, v in h["params"].items():
                 assert p not in csv.read_text().splitlines()[0]
                 assert p not in json.dumps(side)
+                assert repr(v) not in nominal and repr(v) not in json.dumps(side)
 
 
 @pytest.mark.parametrize("case", CASES)
