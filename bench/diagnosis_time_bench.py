@@ -12,6 +12,9 @@ The cases (written once into ``--dir`` and reused; each is 10 s at 1 kHz):
 * ``quattro_backlash``: the README's ``cosim blind-case --robot quattro --effect backlash --seed 4``, 10 s;
 * ``quattro_dead_zone``: the Quattro hiding a drive dead zone (seed 3: a profile over the width, many actuator efforts);
 * ``6pus_clean``: the 6-PUS with nothing hidden (seed 7);
+* ``6pus_cable``: the 6-PUS with a force on the platform, ``cosim diagnose``'s platform example
+  (``scenarios/6pus_cable.toml``: a cable of 0.4 N from the platform to an anchor 0.29 m away, PD +
+  gravity control, tracker poses), run for 10 s;
 * ``mujoco_spring``: MuJoCo's 6-PUS with a spring towards home on one rail, a force no library effect
   names (bench/discovery_mujoco_bench.py's generator, seed 1; left out with ``--no-mujoco`` or without
   the ``mujoco`` package);
@@ -72,6 +75,8 @@ OWN = {"6pus_library": ("6pus", ["coulomb", "payload"], 2024),
        "quattro_backlash": ("quattro", ["backlash"], 4),
        "quattro_dead_zone": ("quattro", ["dead_zone"], 3),
        "6pus_clean": ("6pus", [], 7)}
+#: case -> scenario file run for DURATION
+SCENARIO = {"6pus_cable": "scenarios/6pus_cable.toml"}
 MUJOCO = {"mujoco_spring": ("spring", 1), "mujoco_backlash": ("backlash", 4)}
 #: stage -> functions whose (outermost) time is the stage's, as "module:qualified name"; the first
 #: that exists is wrapped (in every module of the package that holds it), so the bench outlives a
@@ -100,6 +105,12 @@ def make_cases(out: Path, names, mujoco: bool) -> dict:
             if not csv.exists():
                 robot, hidden, seed = OWN[name]
                 csv, _ = blind.make_case(blind.CaseSpec(name, robot, hidden, seed), out, out / "keys", cfg)
+        elif name in SCENARIO:
+            if not csv.exists():
+                from cosim.scenario import run_scenario
+
+                csv = run_scenario(REPO / SCENARIO[name], duration=DURATION, out_dir=out, figures=False,
+                                   progress=False).files["recording"]
         elif name in MUJOCO and mujoco:
             if not csv.exists():
                 import discovery_mujoco_bench as dmb
@@ -258,7 +269,7 @@ def time_case(csv: Path, repeat: int, clock: StageClock):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--cases", nargs="+", default=list(OWN) + list(MUJOCO))
+    ap.add_argument("--cases", nargs="+", default=list(OWN) + list(SCENARIO) + list(MUJOCO))
     ap.add_argument("--dir", type=Path, default=Path("/tmp/diagnosis_time_cases"),
                     help="where the recordings are written once and reused")
     ap.add_argument("--no-mujoco", action="store_true")
@@ -277,6 +288,7 @@ def main(argv=None) -> int:
         except ImportError:
             mujoco = False
     paths = make_cases(args.dir, args.cases, mujoco)
+    from cosim.discrepancy.platform_force import short_name as platform_name
     clock = StageClock()
     print(f"one core ({core}), BLAS/OpenMP on one thread, median of {args.repeat}; CPU seconds per stage "
           f"(library: the rest of the diagnosis, mostly the candidate columns and the selection); wall: elapsed")
@@ -290,7 +302,8 @@ def main(argv=None) -> int:
         med["peak"] = peak_memory(csv)
         flag = "met" if med["total"] < TARGET else "MISSED"
         ok &= med["total"] < TARGET
-        named = ", ".join(d.named() + [t.equation for t in d.discovered]) or "clean"
+        named = ", ".join(d.named() + [t.equation for t in d.discovered]
+                          + ([platform_name(d.platform_force)] if d.platform_force is not None else [])) or "clean"
         print(f"{name:<18} {rows[0]['samples']:>7} {med['load']:>5.2f} " + " ".join(f"{med[c]:>8.2f}s" for c in COLUMNS)
               + f" {med['wall']:>7.2f}s {med['peak']:>8.0f}  {flag:<6}  {named}", flush=True)
         fig = figures(d)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
 
 from .laws import ControllerError, _gain
@@ -59,6 +58,8 @@ def double_integrator(mass: float, dt: float | None = None):
     """
     if not (mass > 0 and np.isfinite(mass)):
         raise ControllerError(f"the effective joint mass must be positive, got {mass}")
+    import control  # imported when used: it takes about 2 s of CPU with matplotlib, which a replay never needs
+
     sys = control.ss([[0, 1], [0, 0]], [[0, 0], [1 / mass, -1 / mass]], [[1, 0]], [[0, 0]],
                      inputs=["tau", "g"], outputs=["q"], states=["q", "qd"])
     return sys if dt is None else control.c2d(sys, dt, method="zoh")
@@ -93,6 +94,8 @@ def closed_loop(mass: float, kp: float, kd: float, dt: float | None = None, grav
     Bcl = np.column_stack([B[:, 0] * kp, B[:, 1] + (B[:, 0] if gravity_comp else 0.0)])
     C = np.array([[1.0, 0.0], [-1.0, 0.0]])
     D = np.array([[0.0, 0.0], [1.0, 0.0]])
+    import control
+
     return control.ss(Acl, Bcl, C, D, dt if dt is not None else 0,
                       inputs=["qref", "g"], outputs=["q", "e"], states=["q", "qd"])
 
@@ -150,6 +153,8 @@ def design_pd(*, mass: float, bandwidth_hz: float | None = None, wn: float | Non
     if not (damping > 0):
         raise ControllerError(f"the damping ratio must be positive, got {damping}")
     kp, kd = mass * w**2, 2 * damping * w * mass
+    import control
+
     cl = closed_loop(mass, kp, kd, dt)
     poles = control.poles(cl)
     stable = bool(np.all(np.abs(poles) < 1)) if dt else bool(np.all(np.real(poles) < 0))
@@ -184,6 +189,8 @@ def analyse_pd(*, mass: float, kp: float, kd: float, dt: float | None = 1e-3) ->
     """
     wn = np.sqrt(kp / mass)
     z = kd / (2 * np.sqrt(kp * mass))
+    import control
+
     cl = closed_loop(mass, kp, kd, dt)
     poles = control.poles(cl)
     stable = bool(np.all(np.abs(poles) < 1)) if dt else bool(np.all(np.real(poles) < 0))
@@ -255,6 +262,8 @@ def step_metrics(t, y, y0: float | None = None, yfinal: float | None = None,
     amp = yf - y0
     if amp == 0:
         raise ControllerError("step_metrics: the response does not move (zero amplitude)")
+    import control
+
     info = control.step_info(y - y0, T=t - t[0], yfinal=amp, SettlingTimeThreshold=settling_threshold)
     keep = ("RiseTime", "SettlingTime", "Overshoot", "Undershoot", "PeakTime")
     out = {k: float(info[k]) for k in keep}

@@ -4,7 +4,6 @@
 """
 from __future__ import annotations
 
-import control
 import numpy as np
 
 from .laws import ControllerError, _CoreLaw
@@ -68,6 +67,8 @@ def lti_controller(sys_d, *, ndof: int, model=None, gravity_feedforward: bool = 
     """
     if not (getattr(sys_d, "dt", None) and sys_d.dt is not True and sys_d.dt > 0):
         raise ControllerError("lti_controller needs a discrete-time system (sys.dt > 0): use control.c2d first")
+    import control  # imported when used (about 2 s of CPU with matplotlib)
+
     ss = control.ss(sys_d)
     A, B, C, D = (np.asarray(a, float) for a in (ss.A, ss.B, ss.C, ss.D))
     if B.shape[1] == 1 and C.shape[0] == 1 and ndof > 1:

@@ -61,3 +61,34 @@ def small_lstsq(a, b):
     if not math.isfinite(x @ x):  # LAPACK failed (a non-finite input): numpy's path and its LinAlgError
         return np.linalg.lstsq(a, b, rcond=None)[0]
     return x
+
+
+def small_lstsq_many(a, b):
+    """:func:`small_lstsq` of a stack of systems of one size, each solution bit for bit the one of
+    its own call: numpy's kernel loops over the stack with the same LAPACK routine, workspace
+    and cut-off (one call instead of one per system).
+
+    Parameters
+    ----------
+    a : ndarray, (k, m, n) float64
+    b : ndarray, (k, m) float64
+
+    Returns
+    -------
+    ndarray, (k, n)
+
+    Example
+    -------
+    >>> small_lstsq_many(np.array([[[2.0, 0.0], [0.0, 4.0]], [[1.0, 0.0], [0.0, 1.0]]]), np.ones((2, 2)))
+    array([[0.5 , 0.25],
+           [1.  , 1.  ]])
+    """
+    k, m, n = a.shape
+    if _umath_linalg is None or a.dtype != np.float64 or b.dtype != np.float64 or k == 0 or m == 0 or n == 0:
+        return np.array([small_lstsq(a[i], b[i]) for i in range(k)]).reshape(k, n)
+    with np.errstate(invalid="ignore"):  # a system LAPACK fails on is solved again alone, as small_lstsq does
+        x = _umath_linalg.lstsq(a, b[:, :, None], _EPS * max(m, n), signature="ddd->ddid")[0][:, :, 0]
+    bad = ~np.isfinite(np.einsum("ij,ij->i", x, x))
+    for i in np.flatnonzero(bad):
+        x[i] = small_lstsq(a[i], b[i])
+    return x

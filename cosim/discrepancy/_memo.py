@@ -59,9 +59,37 @@ class Memo:
     evaluations (:class:`Scratch`)."""
 
     def __init__(self, model, nominal):
+        self.model = model  # the nominal model (never changed here)
         self.scratch = Scratch(model, nominal)
+        self.probe = None  # a model copy for moves_joints
         self.entries: OrderedDict = OrderedDict()
         self.nbytes = 0
+
+    def moves_joints(self, name, motion) -> bool:
+        """Does the model's parameter ``name`` change the joint motion (positions, rates,
+        accelerations: ``ik``, ``joint_velocity``, ``joint_acceleration``) of the pose motion
+        ``motion`` = (x, xd, xdd)?  Tried on a copy of the nominal model with the parameter moved
+        twice (up by a thousandth and by a tenth of its size, and more): a value the core refuses
+        counts as a change."""
+        if self.probe is None:
+            self.probe = self.model.copy()
+        m, v = self.probe, float(self.scratch.nominal[name])
+
+        def joints():
+            x, xd, xdd = motion
+            return m.ik(x), m.joint_velocity(x, xd), m.joint_acceleration(x, xd, xdd)
+
+        before = joints()
+        try:
+            for moved in (v + 1e-3 * abs(v) + 1e-3, v + 0.1 * abs(v) + 0.05):
+                m.set_params_unchecked({name: moved})
+                if not all(np.array_equal(a, b) for a, b in zip(before, joints())):
+                    return True
+        except PkmError:
+            return True
+        finally:
+            m.set_params_unchecked({name: v})
+        return False
 
     def get(self, key, fn):
         """fn(), kept under ``key``."""

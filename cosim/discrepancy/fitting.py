@@ -244,21 +244,31 @@ def without(st, selected, theta, a):
     theta : dict
         The parameters of that refit.
     """
+    increase, th, th2 = removal(st, selected, theta, a)
+    return increase, th if th2 is None or st.try_R(th2) is None else th2
+
+
+def removal(st, selected, theta, a):
+    """:func:`without` with the refit's parameters not yet tried: ``(increase, th, th2)``, ``th``
+    the parameters without ``a`` and ``th2`` those of the others refitted (None without a refit),
+    which :func:`without` returns when the core can evaluate them.  The increase does not depend
+    on that: a caller that needs only it, or the parameters of one removal, tries one
+    evaluation instead of one per group."""
     rest = [b for b in selected if b is not a]
     th = {k: v for k, v in theta.items() if k not in a.group.params}
     Rt = st.try_R(th)
     if Rt is None:
-        return float("inf"), theta
+        return float("inf"), theta, None
     y = st.vec(Rt)
     # as in the selection: delays estimated by instruments are held (least squares
     # would pull them to the noise-biased value and credit the removal with that fit)
     Jr, names, Zr = jacobian(st, fitted_jointly(st, rest), th, instruments=True)
+    th2 = None
     if Jr.shape[1]:
         d = fit(Jr, y, Zr)
         y = y + Jr @ d
         th2 = st.clip({**th, **{n: th.get(n, st.nominal[n]) + dv for n, dv in zip(names, d)}})
-        th = th2 if st.try_R(th2) is not None else th
-    return float(y @ y) - st.chi2(theta), th
+    return float(y @ y) - st.chi2(theta), th, th2
 
 
 def best_option(st, opts, Q, y_perp, J, y):

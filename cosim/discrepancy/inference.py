@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .fitting import best_option, jacobian, without
+from .fitting import best_option, jacobian, removal
 from . import intervals
 from .intervals import block_jackknife, hac_covariance
 from .regressors import reference_size
@@ -81,7 +81,7 @@ def infer(st, sel: Selection) -> Selection:
                             ci={p: float(ci.get(p, float("nan"))) for p in a.group.params})
                     for a in sel.selected]
         # Importance: chi-square increase when the group is removed (others refitted).
-        importance = [without(st, selected, theta, a)[0] for a in selected]
+        importance = [removal(st, selected, theta, a)[0] for a in selected]
         selected = [replace(a, importance=i) for a, i in zip(selected, importance)]
         selected.sort(key=lambda a: -a.importance)
         sel = replace(sel, selected=tuple(selected))

@@ -279,6 +279,9 @@ class Pipeline:
         self.geometry = frozenset(geometry)
         # the evaluations' cache and scratch model: the pipeline's attributes are fixed from here on
         self._memo = Memo(model, self.nominal)
+        # a few recorded samples whose joint motion tells whether a parameter moves it (_moves_joints)
+        rows = np.linspace(0, n - 1, min(n, 16)).astype(int)
+        self._probe = (self.x_f[rows], self.xd_f[rows], self.xdd_f[rows])
         # The mechanism's inverse dynamics is kept apart from the drive layer's (friction,
         # rotor inertia, joint force): most candidates move only the drive layer, and the
         # mechanism's part, the costly one, is then the nominal one.
@@ -340,11 +343,23 @@ class Pipeline:
         (the model's parameters that differ from the nominal ones)."""
         mech = tuple(sorted((k, v) for k, v in params if k not in self._drive_params))
         M = self._cached(("M", motion, mech), lambda: m.mechanism_inverse_dynamics(x, xd, xdd))
-        if mech:
+        if any(self._moves_joints(k) for k, _ in mech):
             return m.add_drive_inverse_dynamics(x, xd, xdd, M)
         # the nominal mechanism's joint motion along this motion, for every drive layer tried on it
+        # (a mass, a payload, gravity or a platform force leaves the joint motion as it is)
         J = self._cached(("J", motion), lambda: (m.ik(x), m.joint_velocity(x, xd), m.joint_acceleration(x, xd, xdd)))
         return m.add_drive_efforts(*J, M)
+
+    def _moves_joints(self, name) -> bool:
+        """Does the mechanism's parameter ``name`` move the joint motion of a pose motion (the
+        joint positions, rates and accelerations of :meth:`Model.ik` and its rates)?  A geometry
+        parameter does (:attr:`geometry`); another one does when the joint motion of a few
+        recorded samples changes with it (a length, a position or a direction of the mechanism
+        not among the library's geometry), not when it is a mass, an inertia, gravity or a force
+        on the platform: the core's kinematics does not read those."""
+        if name in self.geometry:
+            return True
+        return self._cached(("moves joints", name), lambda: self._memo.moves_joints(name, self._probe))
 
     def delay_signature(self, name: str, d: float, positions=None):
         """Change of the effort residual for a delay ``d`` [s] of ``name``

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects import Group
-from .fitting import best_option, fitted_jointly, jacobian, refine, without
+from .fitting import best_option, fitted_jointly, jacobian, refine, removal
 from .regressors import LINEARISED, VELOCITY_SCALED, Option, fit, reference_size
 
 
@@ -335,14 +335,16 @@ def _prune(st, selected, theta, logn):
     while len(selected) > 1:
         worst = None
         for a in selected:
-            imp, th = without(st, selected, theta, a)
+            imp, th, th2 = removal(st, selected, theta, a)
             cost = imp - st.k(a.group) * logn
             if worst is None or cost < worst[0]:
-                worst = (cost, a, th)
+                worst = (cost, a, th, th2)
         if worst[0] >= st.settings.threshold:
             break
         selected = [b for b in selected if b is not worst[1]]
-        theta = refine(st, selected, worst[2])
+        # the others refitted, where the core can evaluate them (tried for the group removed only)
+        th = worst[2] if worst[3] is None or st.try_R(worst[3]) is None else worst[3]
+        theta = refine(st, selected, th)
         if st.settings.verbose:
             print(f"  - {worst[1].group.label}: removal costs {worst[0]:.1f} in BIC")
     return selected, theta

@@ -29,7 +29,10 @@ def test_cached_evaluations_equal_the_direct_residual_bit_for_bit(clean_runs, ro
     cases = [{}, {f"{j}[1].coulomb": 0.05}, {f"{j}[2].viscous": 0.4, f"{j}[1].coulomb": 0.05},
              {"payload.m": 0.05}, {"payload.m": 0.05, f"{j}[3].rotor_inertia": 0.02},
              {f"{j}[2].offset": 0.1, f"{j}[2].force_k1": 2.0}, {f"{j}[1].effort_max": 0.5 * np.abs(pipe.tau_c).max()},
-             {"actuator.delay": 0.002, f"{j}[1].coulomb": 0.05}, {f"{j}[1].coulomb": 0.05}, {}]
+             {"actuator.delay": 0.002, f"{j}[1].coulomb": 0.05}, {f"{j}[1].coulomb": 0.05},
+             {"payload.m": 0.05, f"{j}[2].coulomb": 0.03, f"{j}[2].force_k1": 1.5},
+             {"cable.tension": 0.3, "cable.anchor_z": 0.4, f"{j}[4].viscous": 0.2},
+             {"gravity.x": 0.05, f"{j}[1].rotor_inertia": 0.01}, {}]
     first = {}
     for params in cases:  # repeats come from the cache
         got = pipe.evaluate(params).eff
@@ -50,3 +53,20 @@ def test_a_built_pipeline_is_fixed_and_its_evaluations_leave_its_attributes_alon
     assert len(pipe._memo.entries) > 0
     with pytest.raises(AttributeError, match="fixed once built"):
         pipe.idx = pipe.idx[:10]
+
+
+@pytest.mark.parametrize("robot, moving, still", [
+    ("6pus", ["leg[1].L", "leg[3].px", "rail[2].S0x", "rail[5].sy"],
+     ["payload.m", "payload.x", "platform.m", "leg[2].m", "slider[1].m", "gravity.x", "cable.tension",
+      "cable.anchor_x", "wrench.fz", "platform_drag.linear"]),
+    ("quattro", ["base.a", "arm.b_r", "forearm.c", "platform.d"],
+     ["payload.m", "platform.m", "arm.m", "forearm.m", "gravity.y", "cable.tension", "wrench.fx"])])
+def test_the_joint_motion_moves_with_lengths_and_positions_not_with_masses_or_forces(clean_runs, robot, moving,
+                                                                                       still):
+    """The joint motion of the recorded poses is cached once for every drive layer added on a
+    mechanism whose masses, gravity or platform force differ from the nominal ones; a length,
+    position or direction of the mechanism moves it (the inverse kinematics of a pose reads
+    them), a mass or a force does not."""
+    pipe = Pipeline(clean_runs[robot], Model(robot))
+    assert all(pipe._moves_joints(n) for n in moving), [n for n in moving if not pipe._moves_joints(n)]
+    assert not any(pipe._moves_joints(n) for n in still), [n for n in still if pipe._moves_joints(n)]

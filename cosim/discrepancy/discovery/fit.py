@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._linalg import small_lstsq
+from .._linalg import small_lstsq, small_lstsq_many
 from .search import FADE_RANGE
 from .terms import BLOCK, MAX_STEPS, N_BOOT, SIGNED, TERMS
 from ..families import acceptance, products
@@ -99,7 +99,9 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     the terms."""
     floor = floor or {}
     logn = math.log(max(n_eff, 2.0))
-    gram = _Gram(search, c, y, rows, acceptance.searched(search, library_only))
+    # the library's terms first, then every candidate on top of them (families/acceptance.py)
+    candidates, refused = acceptance.searched(search, library_only), set()
+    gram = _Gram(search, c, y, rows, candidates)
 
     def chi2_of(terms):
         c2, coef = gram.fit(terms + offset_refit(search, c, held or {}, terms))
@@ -111,6 +113,12 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
             return math.inf
         return c2
 
+    def chi2_each(sets):  # [chi2_of(terms) for terms in sets], the solves of one size in one call
+        refit = search.name(c, "offset") in (held or {})  # offset_refit's first condition, for all
+        full = [terms + offset_refit(search, c, held, terms) if refit else terms for terms in sets]
+        fits = gram.fit_many([np.concatenate([gram.at[u] for u in ts]) if ts else np.zeros(0, int) for ts in full])
+        return [c2 if _above_floor(terms, coef, floor) else math.inf for terms, (c2, coef) in zip(sets, fits)]
+
     def part_of(terms, cand, cols):  # chi-square with only the columns ``cols`` of cand
         ts = terms + offset_refit(search, c, model or {}, terms + [cand])
         return gram.fit_idx(np.concatenate([gram.at[u] for u in ts] + [np.asarray(cols, int)]))[0]
@@ -118,19 +126,17 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     chosen = []
     chi2 = chi2_of(chosen)
     model = held  # the model's parameters (the loop's "held" is the coefficients entered)
-    cost = lambda t: acceptance.cost(search, t, threshold)  # noqa: E731
-    # the library's terms first, then every candidate on top of them (families/acceptance.py)
-    candidates, refused = acceptance.searched(search, library_only), set()
+    costs = {t: acceptance.cost(search, t, threshold) for t in candidates}
+    cost = lambda t: costs[t] if t in costs else acceptance.cost(search, t, threshold)  # noqa: E731
+    price = {t: len(TERMS[t[0]][0]) * logn for t in candidates}  # the BIC price of its coefficients
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
-        for cand in candidates:
-            if cand in refused or held & set(TERMS[cand[0]][0]):  # a coefficient is entered once
-                continue
-            if products.clash(search, c, chosen, cand, model):  # the core holds one shape per joint
-                continue
-            c2 = chi2_of(chosen + [cand])
-            gain = (chi2 - c2) - len(TERMS[cand[0]][0]) * logn - cost(cand)  # a family term pays more
+        tried = [cand for cand in candidates
+                 if not (cand in refused or held & set(TERMS[cand[0]][0]))  # a coefficient is entered once
+                 and not products.clash(search, c, chosen, cand, model)]  # the core holds one shape per joint
+        for cand, c2 in zip(tried, chi2_each([chosen + [cand] for cand in tried])):
+            gain = (chi2 - c2) - price[cand] - costs[cand]  # a family term pays more
             if best is None or gain > best[0]:
                 best = (gain, cand, c2)
         if best is None or best[0] <= 0.0:
@@ -150,6 +156,44 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     return chosen
 
 
+def _above_floor(terms, coef, floor) -> bool:
+    """No signed coefficient of ``terms`` (their columns first in ``coef``) below its floor
+    (``stepwise``'s test, coefficient by coefficient)."""
+    i = 0
+    for t, _ in terms:
+        for k in TERMS[t][0]:
+            if k in SIGNED and coef[i] < floor.get(k, 0.0):
+                return False
+            i += 1
+    return True
+
+
+#: the candidates' columns of one channel side by side, per search's columns (the last few):
+#: id(search.cols) -> (search.cols, {(channel, candidates): (columns, {candidate: their indices})})
+_SIDE_BY_SIDE: dict = {}
+
+
+def _side_by_side(search, c, candidates) -> tuple:
+    """``(X, at)``: the columns of ``candidates`` on channel c side by side (samples, columns) and
+    each candidate's column indices in X, kept for the searches that share the columns (a
+    selection and the bootstrap's resamples read the same ones)."""
+    held = _SIDE_BY_SIDE.get(id(search.cols))
+    if held is None or held[0] is not search.cols:
+        held = _SIDE_BY_SIDE[id(search.cols)] = (search.cols, {})
+        while len(_SIDE_BY_SIDE) > 4:  # the oldest out (a dict keeps the order of insertion)
+            del _SIDE_BY_SIDE[next(iter(_SIDE_BY_SIDE))]
+    key = (c, candidates)
+    if key not in held[1]:
+        at, n, blocks = {}, 0, []
+        for cand in candidates:
+            col = search.cols[cand][:, c, :]
+            at[cand] = np.arange(n, n + col.shape[1])
+            n += col.shape[1]
+            blocks.append(col)
+        held[1][key] = (np.concatenate(blocks, axis=1), at)
+    return held[1][key]
+
+
 class _Gram:
     """The least-squares fits of any set of candidate terms on channel c and ``rows``, from the
     cross products of all candidate columns taken once (a selection fits hundreds of subsets of
@@ -159,14 +203,9 @@ class _Gram:
     def __init__(self, search, c, y, rows, candidates=None):
         w = search.w[c] * search.eng.use[rows, c]
         t = y[rows] * w
-        self.at, n = {}, 0
-        blocks = []
-        for cand in search.candidates() if candidates is None else candidates:  # those the selection searches
-            col = search.cols[cand][rows, c, :] * w[:, None]
-            self.at[cand] = np.arange(n, n + col.shape[1])
-            n += col.shape[1]
-            blocks.append(col)
-        X = np.concatenate(blocks, axis=1)
+        # those the selection searches, their columns side by side (the same for every resample)
+        Xc, self.at = _side_by_side(search, c, tuple(search.candidates() if candidates is None else candidates))
+        X = Xc[rows] * w[:, None]
         self.G, self.b, self.tt = X.T @ X, X.T @ t, float(t @ t)
 
     def fit(self, terms):
@@ -174,6 +213,31 @@ class _Gram:
         if not terms:
             return self.tt, np.zeros(0)
         return self.fit_idx(np.concatenate([self.at[u] for u in terms]))
+
+    def fit_many(self, sets):
+        """``[fit_idx(i) for i in sets]``, bit for bit: the solves of one size in one call
+        (:func:`.small_lstsq_many`), each chi-square from copies of its rows laid out as
+        ``fit_idx`` takes them."""
+        out = [None] * len(sets)
+        by_size = {}
+        for k, i in enumerate(sets):
+            by_size.setdefault(len(i), []).append(k)
+        for p, ks in by_size.items():
+            if p == 0:
+                for k in ks:
+                    out[k] = (self.tt, np.zeros(0))
+                continue
+            idx = np.array([sets[k] for k in ks])
+            Gs, bs = self.G[idx[:, :, None], idx[:, None, :]], self.b[idx]
+            X = -small_lstsq_many(Gs, bs)
+            # each G in fit_idx's memory order (G[i][:, i] is Fortran-ordered), for BLAS to sum
+            # in that order: the transposes of a C-ordered stack of the transposed systems
+            Gt = np.ascontiguousarray(Gs.transpose(0, 2, 1))
+            tt = self.tt
+            for r, k in enumerate(ks):
+                coef, b, G = X[r], bs[r], Gt[r].T
+                out[k] = (max(tt + 2.0 * float(coef @ b) + float(coef @ G @ coef), 0.0), coef)
+        return out
 
     def fit_idx(self, i):
         """(chi-square, coefficients) of the fit of the candidates' columns ``i`` (indices)."""
