@@ -126,46 +126,64 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
     periodic = {x["channel"]: x for x in lines(pipe, R, floor, threshold)}
     out = []
     for c, name in enumerate(pipe.channels):
-        y = periodic[c]["clean"] if c in periodic else R[:, c]
-        mean = float(y.mean())
-        r = y - mean
-        sigma = own_noise(pipe, r, 0.0 if floor is None else floor[c])
-        if not sigma > 0:
-            continue
-        def scored(sig_name, F):
-            if sig_name in SIGNED:  # a sign carries its own mean (a one-signed command is an offset too)
-                z, X = y, F
-            else:
-                z, X = r, F - F.mean(axis=0)
-            beta, *_ = np.linalg.lstsq(X, z, rcond=None)
-            fit = X @ beta
-            chi2 = float(fit @ fit) / sigma ** 2 / phi
-            return chi2 - F.shape[1] * math.log(n_eff), sig_name, chi2, float(np.sqrt(np.mean(fit ** 2)))
-
-        families = _families(pipe, c % pipe.nd)
-        pose = families.pop("pose")
-        best = None
-        for sig_name, F in families.items():
-            cand = scored(sig_name, F)
-            if cand[0] > threshold and (best is None or cand[0] > best[0]):
-                best = cand
-        chi2 = n * mean ** 2 / sigma ** 2 / phi  # a constant alone: the mean against its noise
-        stat = chi2 - math.log(n_eff)
-        if stat > threshold and (best is None or stat > best[0]):  # a sign that fits as well is more specific
-            best = (stat, "offset", chi2, abs(mean))
-        if best is None and pose.shape[1]:
-            # the joint's own motion keys nothing: the pose as a whole (a length error of a leg
-            # moves its joint by a pose-dependent amount) is the last, least specific family
-            cand = scored("pose", pose)
-            if cand[0] > threshold:
-                best = cand
+        low = 0.0 if floor is None else floor[c]
+        best, sigma = _best_family(pipe, c, R[:, c], own_noise(pipe, R[:, c] - R[:, c].mean(), low), threshold)
         if c in periodic:
-            best = _periodic(periodic[c], best)
+            # the families again on the residual without the lines, against its own noise; the
+            # channel's answer changes only where the lines explain more than they do, or where
+            # the lines had hidden every family
+            y = periodic[c]["clean"]
+            best_clean, sigma_clean = _best_family(pipe, c, y, own_noise(pipe, y - y.mean(), low), threshold)
+            chosen = _periodic(periodic[c], best_clean)
+            if chosen is not best_clean or best is None:
+                best, sigma = chosen, sigma_clean
         if best:
             keyed, closest = SIGNATURES[best[1]] if len(best) < 5 else (best[4], SIGNATURES["periodic"][1])
             out.append(Structure(name, c % pipe.nd + 1, best[1], keyed, list(closest), best[2], best[3], sigma))
     out.sort(key=lambda e: -e.chi2)
     return out
+
+
+def _best_family(pipe, c, y, sigma, threshold):
+    """``(best, sigma)``: the family that explains the most of channel c's residual ``y``
+    against the noise ``sigma`` beyond its cost and ``threshold``, as ``(stat, signature, chi2,
+    rms)`` (None: none does, or no noise to judge against)."""
+    if not sigma > 0:
+        return None, sigma
+    n = len(y)
+    phi = samples_per_independent(pipe)
+    n_eff = n / phi
+    mean = float(y.mean())
+    r = y - mean
+
+    def scored(sig_name, F):
+        if sig_name in SIGNED:  # a sign carries its own mean (a one-signed command is an offset too)
+            z, X = y, F
+        else:
+            z, X = r, F - F.mean(axis=0)
+        beta, *_ = np.linalg.lstsq(X, z, rcond=None)
+        fit = X @ beta
+        chi2 = float(fit @ fit) / sigma ** 2 / phi
+        return chi2 - F.shape[1] * math.log(n_eff), sig_name, chi2, float(np.sqrt(np.mean(fit ** 2)))
+
+    families = _families(pipe, c % pipe.nd)
+    pose = families.pop("pose")
+    best = None
+    for sig_name, F in families.items():
+        cand = scored(sig_name, F)
+        if cand[0] > threshold and (best is None or cand[0] > best[0]):
+            best = cand
+    chi2 = n * mean ** 2 / sigma ** 2 / phi  # a constant alone: the mean against its noise
+    stat = chi2 - math.log(n_eff)
+    if stat > threshold and (best is None or stat > best[0]):  # a sign that fits as well is more specific
+        best = (stat, "offset", chi2, abs(mean))
+    if best is None and pose.shape[1]:
+        # the joint's own motion keys nothing: the pose as a whole (a length error of a leg
+        # moves its joint by a pose-dependent amount) is the last, least specific family
+        cand = scored("pose", pose)
+        if cand[0] > threshold:
+            best = cand
+    return best, sigma
 
 
 def _periodic(found, best):
