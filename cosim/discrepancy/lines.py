@@ -10,8 +10,10 @@ narrow line in the residual's spectrum, at a frequency where the motion has none
 between ``LOW_CYCLES`` cycles over the recording and 0.45 of the decimated samples' rate, its
 frequency refined by least squares on the samples' times, is a line when
 
-* the sinusoid at that frequency explains a share of the residual's variance more than
-  ``MOTION_RATIO`` times the largest share it explains of any joint's rate (a line the motion
+* the sinusoid at that frequency, fitted beside the joint's own families of :mod:`.structure`
+  (a friction's steps under a periodic motion repeat too), explains a share of the residual's
+  variance (of what those families leave) more than
+  ``MOTION_RATIO`` times the largest share it explains of any joint's position (a line the motion
   also holds is the motion's: an effect keyed on a periodic excitation), and
 * its chi-square against the own noise of the residual without the lines found
   (:func:`.structure.own_noise`), in independent samples, exceeds ``threshold`` plus the cost of
@@ -29,7 +31,7 @@ import numpy as np
 #: the lowest frequency searched, in cycles over the recording's span
 LOW_CYCLES = 10.0
 #: a line counts when its share of the residual's variance exceeds this many times its largest
-#: share of a joint's rate
+#: share of a joint's position (in closed loop the force moves the joints too, by a far smaller share)
 MOTION_RATIO = 20.0
 #: lines taken out per channel at most
 MAX_LINES = 6
@@ -69,7 +71,7 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
     Parameters
     ----------
     pipe : Pipeline
-        The recording's pipeline (times, rates, smoothing window and decimation).
+        The recording's pipeline (times, positions, smoothing window and decimation).
     R : numpy.ndarray, shape (n, C)
         The residual on the pipeline's decimated samples (``pipe.idx``), channels as
         ``pipe.channels``.
