@@ -100,7 +100,8 @@ class Structure(Record):
 
     ``channel`` (e.g. ``"tau3"``), ``joint`` (1-based), ``signature`` (what it is keyed on:
     ``"command_sign"``, ``"velocity_sign"``, ``"position"``, ``"velocity"``,
-    ``"acceleration"``, ``"offset"``), ``keyed_on`` (in words), ``closest`` (library effects
+    ``"acceleration"``, ``"offset"``, ``"pose"``, ``"low_speed"``, ``"periodic"``: spectral lines,
+    :mod:`.lines`), ``keyed_on`` (in words), ``closest`` (library effects
     of that kind), ``chi2`` (explained, in independent samples), ``rms`` (of the structured
     part) and ``noise`` (the residual's own high-frequency noise), in the channel's unit."""
 

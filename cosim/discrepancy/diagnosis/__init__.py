@@ -436,7 +436,9 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
         from ..flexible import flexible_stage
 
         t3c = time.perf_counter()
-        flex = flexible_stage(eng0, r_after, left, found, effects_out, theta)
+        # a channel whose structure is a spectral line has its model (frequency, amplitude): not refitted
+        flex = flexible_stage(eng0, r_after, [e for e in left if e["signature"] != "periodic"], found, effects_out,
+                              theta)
         spent["flexible"] = time.perf_counter() - t3c
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)

@@ -1,0 +1,138 @@
+"""Spectral lines in a residual: a force that repeats at a fixed frequency, not keyed on the motion.
+
+A deterministic fast force (a fan's or spindle's unbalance turning at a few hertz, a pump's
+pulsation) passes the pipeline's smoother and is, to a yardstick built on differences of samples
+some tens of milliseconds apart (:func:`.structure.own_noise`), noise: that yardstick then reads
+the force's amplitude, not the sensor's noise, and nothing is left to flag.  Such a force is a
+narrow line in the residual's spectrum, at a frequency where the motion has none.
+
+:func:`lines` finds them one channel at a time: the highest peak of the residual's periodogram
+between ``LOW_CYCLES`` cycles over the recording and 0.45 of the decimated samples' rate, its
+frequency refined by least squares on the samples' times, is a line when
+
+* the sinusoid at that frequency, fitted beside the joint's own families of :mod:`.structure`
+  (a friction's steps under a periodic motion repeat too), explains a share of the residual's
+  variance (of what those families leave) more than
+  ``MOTION_RATIO`` times the largest share it explains of any joint's position (a line the motion
+  also holds is the motion's: an effect keyed on a periodic excitation), and
+* its chi-square against the own noise of the residual without the lines found
+  (:func:`.structure.own_noise`), in independent samples, exceeds ``threshold`` plus the cost of
+  its two coefficients (``2 ln n_eff``) and of the frequencies searched (``ln`` of their number).
+
+A line found is taken out and the search repeated (an amplitude modulated by the pose leaves
+side lines), at most ``MAX_LINES`` times.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: the lowest frequency searched, in cycles over the recording's span
+LOW_CYCLES = 10.0
+#: a line counts when its share of the residual's variance exceeds this many times its largest
+#: share of a joint's position (in closed loop the force moves the joints too, by a far smaller share)
+MOTION_RATIO = 20.0
+#: lines taken out per channel at most
+MAX_LINES = 6
+
+
+def _sinusoid(t, y, f, F=None):
+    """(the sinusoid's part, its amplitude, the sum of squares it explains) of a fit of y with a
+    sinusoid at f beside the columns F (a constant when None)."""
+    a = 2.0 * math.pi * f * t
+    F = np.ones((len(t), 1)) if F is None else F
+    X = np.column_stack([F, np.cos(a), np.sin(a)])
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    fit = X[:, -2:] @ beta[-2:]
+    r = y - X @ beta
+    r0 = y - F @ np.linalg.lstsq(F, y, rcond=None)[0]
+    return fit, float(math.hypot(beta[-2], beta[-1])), float(r0 @ r0 - r @ r)
+
+
+def _peak(t, x, dt, f_lo, f_hi):
+    """The frequency [Hz] of the highest periodogram peak of x in [f_lo, f_hi], refined by least
+    squares over the bin around it (None when the band is empty)."""
+    n = len(x)
+    nfft = 1 << int(math.ceil(math.log2(4 * n)))
+    P = np.abs(np.fft.rfft(x * np.hanning(n), nfft))
+    f = np.fft.rfftfreq(nfft, dt)
+    band = np.flatnonzero((f >= f_lo) & (f <= f_hi))
+    if not len(band):
+        return None
+    k = band[np.argmax(P[band])]
+    grid = f[k] + np.linspace(-1.0, 1.0, 21) * (f[1] - f[0])
+    return float(grid[np.argmax([_sinusoid(t, x, g)[2] for g in grid])])
+
+
+def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
+    """Spectral lines of each residual channel that the motion does not hold.
+
+    Parameters
+    ----------
+    pipe : Pipeline
+        The recording's pipeline (times, positions, smoothing window and decimation).
+    R : numpy.ndarray, shape (n, C)
+        The residual on the pipeline's decimated samples (``pipe.idx``), channels as
+        ``pipe.channels``.
+    floor : numpy.ndarray, shape (C,), optional
+        The smallest noise level a channel is given (the engine's accuracy).
+    threshold : float
+        Chi-square (independent samples) a line must explain beyond its costs.
+
+    Returns
+    -------
+    list of dict
+        Per channel with lines: ``channel`` (index), ``lines`` (list of (frequency [Hz],
+        amplitude [channel unit]), strongest first), ``chi2`` (explained by them, independent
+        samples, against ``noise``), ``cost`` (of their coefficients and frequencies, in the
+        same unit), ``clean`` (the residual without them) and ``noise`` (its own noise).
+
+    Examples
+    --------
+    >>> found = lines(pipe, r_after, floor=eng.accuracy())     # doctest: +SKIP
+    >>> [(x["channel"], x["lines"][0]) for x in found]          # doctest: +SKIP
+    [(1, (5.39, 0.31))]
+    """
+    from .structure import _families, own_noise, samples_per_independent
+
+    R = np.asarray(R, float)
+    t = np.asarray(pipe.t[pipe.idx], float)
+    n = len(t)
+    if n < 64:
+        return []
+    dt = pipe.step * pipe.dt
+    f_lo, f_hi = LOW_CYCLES / max(t[-1] - t[0], dt), 0.45 / dt
+    phi = samples_per_independent(pipe)
+    n_eff = n / phi
+    cost = 2.0 * math.log(n_eff) + math.log(max((f_hi - f_lo) * (t[-1] - t[0]), 1.0))
+    pos = np.asarray(pipe.q_s[pipe.idx], float)
+    pos = pos - pos.mean(axis=0)
+    pos_ss = np.maximum(np.sum(pos ** 2, axis=0), 1e-300)
+    out = []
+    for c in range(R.shape[1]):
+        x0 = R[:, c] - R[:, c].mean()
+        # what the joint's own motion explains (a friction's steps under a periodic motion
+        # repeat too) is fitted beside each line, not taken for it
+        F = np.column_stack(list(_families(pipe, c % pipe.nd).values()))
+        F = np.column_stack([np.ones(n), F - F.mean(axis=0)])
+        x, found, explained = x0, [], 0.0
+        for _ in range(MAX_LINES):
+            base = x - F @ np.linalg.lstsq(F, x, rcond=None)[0]
+            total = float(base @ base)
+            f = _peak(t, base, dt, f_lo, f_hi) if total > 0 else None
+            if f is None:
+                break
+            fit, amp, ss = _sinusoid(t, base, f, F)
+            motion = max(_sinusoid(t, pos[:, j], f)[2] / pos_ss[j] for j in range(pos.shape[1]))
+            sigma = own_noise(pipe, x - fit, 0.0 if floor is None else floor[c])
+            if not (sigma > 0 and ss / total > MOTION_RATIO * motion and ss / sigma ** 2 / phi - cost > threshold):
+                break
+            x = x - fit
+            found.append((f, amp))
+            explained += ss
+        if found:
+            sigma = own_noise(pipe, x, 0.0 if floor is None else floor[c])
+            out.append({"channel": c, "lines": found, "chi2": explained / sigma ** 2 / phi,
+                        "cost": len(found) * cost, "clean": x + R[:, c].mean(), "noise": sigma})
+    return out
