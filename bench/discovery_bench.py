@@ -18,6 +18,9 @@ rule that a fit leaving structure names nothing with confidence.
 
     .venv/bin/python bench/discovery_bench.py --robots 6pus,delta_clavel --seeds 2 --clean 10 --jobs 2
     .venv/bin/python bench/discovery_bench.py --hold-out --robots 6pus --seeds 2 --jobs 2
+
+``--kinds`` names the hidden forces, or with ``--hold-out`` the library types held out
+(``--hold-out --kinds viscous``: that type alone).
 """
 from __future__ import annotations
 
