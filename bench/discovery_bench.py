@@ -18,6 +18,9 @@ rule that a fit leaving structure names nothing with confidence.
 
     .venv/bin/python bench/discovery_bench.py --robots 6pus,delta_clavel --seeds 2 --clean 10 --jobs 2
     .venv/bin/python bench/discovery_bench.py --hold-out --robots 6pus --seeds 2 --jobs 2
+
+``--kinds`` names the hidden forces, or with ``--hold-out`` the library types held out
+(``--hold-out --kinds viscous``: that type alone).
 """
 from __future__ import annotations
 
@@ -258,7 +261,8 @@ def main(argv=None):
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--robots", default="6pus,delta_clavel")
-    ap.add_argument("--kinds", default=",".join(blind.UNLISTED))
+    ap.add_argument("--kinds", help="the hidden forces (default: every one of blind.UNLISTED); with --hold-out, "
+                                    "the library types held out (default: every type of each robot)")
     ap.add_argument("--seeds", type=int, default=2, help="cases per kind and robot")
     ap.add_argument("--seed0", type=int, default=100)
     ap.add_argument("--clean", type=int, default=10, help="clean cases per robot")
@@ -269,8 +273,13 @@ def main(argv=None):
     robots = a.robots.split(",")
     jobs = []
     for r in robots:
-        kinds = blind.types_for(r, blind.with_robot(blind.load_config(), __import__("cosim.core").core.Model(r))) \
-            if a.hold_out else a.kinds.split(",")
+        if a.hold_out:
+            types = blind.types_for(r, blind.with_robot(blind.load_config(), __import__("cosim.core").core.Model(r)))
+            kinds = types if a.kinds is None else a.kinds.split(",")
+            if set(kinds) - set(types):
+                ap.error(f"--kinds: {r} has no library type {sorted(set(kinds) - set(types))} (its types: {types})")
+        else:
+            kinds = (a.kinds or ",".join(blind.UNLISTED)).split(",")
         for k in kinds:
             for s in range(a.seeds):
                 jobs.append((r, k, a.seed0 + 17 * s + 3, a.out, a.hold_out))

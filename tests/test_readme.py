@@ -53,8 +53,12 @@ NOT_RUN = {
 
 # benchmarks run here as the README writes them, with options appended that make them small
 # (argparse keeps an option's last value; an option the script does not take fails the run):
-# the command, its script and its table, in seconds
+# the command (the first key it starts with), the options and why
 SMALLER = {
+    ".venv/bin/python bench/discovery_bench.py --hold-out": ("--robots 6pus --kinds viscous --seeds 1",
+                                                             "36 blind diagnoses, one per library type, robot and "
+                                                             "seed, minutes (tests/discrepancy/"
+                                                             "test_discovery_held_out.py checks what they measure)"),
     ".venv/bin/python bench/discovery_bench.py": ("--robots 6pus --kinds drag --seeds 1 --clean 1",
                                                   "48 blind diagnoses, minutes (tests/discrepancy/test_discovery.py "
                                                   "checks what they measure)"),

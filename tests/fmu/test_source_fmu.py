@@ -39,28 +39,33 @@ def test_source_fmu_validates_and_lists_its_sources(robot):
 
 # A `gcc` first on PATH for FMPy's build: its one "gcc -c OPTIONS SOURCES..." call made one
 # gcc call per source with the same options, run side by side on the machine's cores (the
-# objects are those of the single call); any other call (the link) is gcc's own.
+# objects are those of the single call), each through ccache where it is installed (as the
+# build's compiles are, scripts/bootstrap.sh: an object compiled before from the same
+# preprocessed source, options and compiler is reused, any change compiles again); any other
+# call (the link) is gcc's own.
 PARALLEL_GCC = """#!{python}
 import os, subprocess, sys
 from concurrent.futures import ThreadPoolExecutor
-GCC, args = {gcc!r}, sys.argv[1:]
+GCC, CCACHE, args = {gcc!r}, {ccache!r}, sys.argv[1:]
 sources = [a for a in args if a.endswith((".c", ".cc", ".cpp")) and os.path.isfile(a)]
 if "-c" not in args or len(sources) < 2:
     os.execv(GCC, [GCC, *args])
 options = [a for a in args if a not in sources]
+compile_ = [CCACHE, GCC] if CCACHE else [GCC]
 with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-    codes = list(pool.map(lambda s: subprocess.call([GCC, *options, s]), sources))
+    codes = list(pool.map(lambda s: subprocess.call([*compile_, *options, s]), sources))
 sys.exit(next((c for c in codes if c), 0))
 """
 
 
 def test_fmpy_compiles_the_source_fmu_and_it_runs_like_the_binary(tmp_path, monkeypatch):
     """FMPy's gcc build (no optimisation: its default options; its sources compiled side by
-    side, PARALLEL_GCC), then 0.1 s of Co-Simulation under efforts near the gravity load:
-    the same pose as the build's binary to 1e-12 m."""
+    side, through ccache where installed, PARALLEL_GCC), then 0.1 s of Co-Simulation under
+    efforts near the gravity load: the same pose as the build's binary to 1e-12 m."""
     shim = tmp_path / "bin" / "gcc"
     shim.parent.mkdir()
-    shim.write_text(PARALLEL_GCC.format(python=sys.executable, gcc=shutil.which("gcc")))
+    shim.write_text(PARALLEL_GCC.format(python=sys.executable, gcc=shutil.which("gcc"),
+                                        ccache=shutil.which("ccache")))
     shim.chmod(0o755)
     monkeypatch.setenv("PATH", f"{shim.parent}{os.pathsep}{os.environ['PATH']}")
     out = tmp_path / "PKM_6PUS_compiled.fmu"
