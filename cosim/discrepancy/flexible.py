@@ -76,6 +76,13 @@ BLOCK_Z = 2.0
 MAX_INPUTS = 4
 #: ... and one is kept when the trees cross-validated without it lose this share of the variance
 DROP_MIN = 0.03
+#: a channel with no structure flagged and a residual RMS under this factor times its own noise
+#: (fitted because it holds more than its noise: :func:`beyond_noise`) carries at most a weak
+#: force, which the trees on every input spread over inputs that follow it and do not claim
+#: (the position-threshold cases of the tuning set report4: shares 0.03-0.10 out of fold against
+#: truths 0.41-0.74): only the strongest input alone is cross-validated there, one small fit
+#: instead of the full model's (library cases leave such channels on several joints)
+RMS_OVER_NOISE = 2.0
 #: the statement warns of extrapolation when the named inputs leave the fitted range in their
 #: held-out block at more than this share of the samples
 OUTSIDE_WARN = 0.1
@@ -316,12 +323,14 @@ def _strongest_alone(X, y, fold_rows, groups):
     return g, cross_validate(X[:, groups[g]], y, fold_rows)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.flexible_cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
     by one by cross-validating without them; the share claimed is that of the trees on the named
-    inputs alone (the model the statement describes), out of fold."""
+    inputs alone (the model the statement describes), out of fold.  When the trees on every
+    input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
+    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -342,14 +351,16 @@ def fit_channel(pipe, X, columns, y, noise, unit) -> FlexibleFit:
     groups = input_groups(columns)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
-        cv = cross_validate(X, y, fold_rows)
-        share, z, explained = judged(cv.mse)
+        cv = None if weak else cross_validate(X, y, fold_rows)
+        share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
         deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
         if not explained:  # the trees on every input spread a weak force over many: the strongest input alone
             g, cv_g = _strongest_alone(X, y, fold_rows, groups)
             share_g, z_g, ok = judged(cv_g.mse)
+            if ok or weak:
+                cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
             if ok:
-                named, cv, use, share, z, explained = [g], cv_g, list(groups[g]), share_g, z_g, True
+                named = [g]
                 sub = {g: list(range(len(use)))}
                 imp_k = importance(cv, X[:, use], y, sub, rng)
                 beyond = outside(X[:, use], cv, list(range(len(use))))
@@ -467,6 +478,9 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     chans = candidates(pipe, R, left, noise)
     if not chans:
         return []
+    flagged = {e["joint"] - 1 for e in left if e["channel"] in pipe.channels[:pipe.nd]}
+    rms = np.std(R[:, :pipe.nd], axis=0)
+    weak = {c for c in chans if c not in flagged and rms[c] <= RMS_OVER_NOISE * noise[c]}
     stand_ins = {t.joint - 1: t for t in discovered if t.partial and t.joint - 1 in chans}
     R_fit = R
     if stand_ins and theta is not None:
@@ -479,7 +493,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     noun = pipe.model.facts.joint_noun
     out = []
     for c in chans:
-        fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]))
+        fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
+                          weak=c in weak)
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy())
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
