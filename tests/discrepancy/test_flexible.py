@@ -137,7 +137,7 @@ def test_clean_recording_nothing_explained_on_any_channel(monkeypatch):
     from cosim.discrepancy import diagnose
     from cosim.discrepancy.flexible_cases import simulate
 
-    monkeypatch.setattr(flexible, "RMS_OVER_NOISE", 0.0)  # every effort channel fitted, structure or not
+    monkeypatch.setattr(flexible, "candidates", lambda pipe, R, left, noise: list(range(pipe.nd)))  # every channel
     rec, _ = simulate(None, 7600)
     d = diagnose(rec, replay=False, figures=False)
     assert len(d.flexible) == rec.q.shape[1]
@@ -226,3 +226,37 @@ def test_noise_alone_cannot_be_judged_structure_off_the_inputs_is_not_explainabl
     s = flexible.statement(fit, "slider")
     assert "not explainable from the recorded inputs" in s and "cannot be judged" not in s
     assert not fit.explained and fit.beyond_noise
+
+
+def test_a_weak_force_under_twice_the_noise_reaches_the_stage_and_noise_does_not():
+    # a residual whose RMS is 1.3 times its own noise (a force of variance 0.69 sigma^2): a model
+    # of all of it but the noise would explain a chi-square of 900 / 5 x 0.69 = 124 independent
+    # samples' worth, above the claim's 25; white noise alone holds none of it
+    rng = np.random.default_rng(3)
+    n, sigma = 900, 0.05
+    t = np.linspace(0.0, 9.0, n)
+    force = np.sqrt(2 * 0.69) * sigma * np.sin(2 * np.pi * 0.4 * t)
+    R = np.column_stack([force + rng.normal(0.0, sigma, n), rng.normal(0.0, sigma, n)])
+    pipe = types.SimpleNamespace(channels=["tau1", "tau2"], nd=2, window=5, step=1)
+    assert 1.2 < np.std(R[:, 0]) / sigma < 1.4
+    assert flexible.candidates(pipe, R, [], [sigma, sigma]) == [0]
+
+
+def test_when_the_trees_on_every_input_claim_nothing_the_strongest_input_alone_is_judged(monkeypatch):
+    # the cross-validation on every input is given a target shuffled in time (what trees spreading a
+    # weak force over many inputs make of it: nothing out of fold); the force, on input 2 only, is
+    # then found on that input alone, judged out of fold by the same bars, share var(f) / (var(f) + sigma^2)
+    pipe, X, cols, y, truth = _synthetic(lambda X: 0.3 * np.sin(6.0 * X[:, 2]))
+    real = flexible.cross_validate
+
+    def cross_validate(Xs, ys, fold_rows):
+        if Xs.shape[1] == X.shape[1]:
+            ys = np.random.default_rng(2).permutation(ys)
+        return real(Xs, ys, fold_rows)
+
+    monkeypatch.setattr(flexible, "cross_validate", cross_validate)
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
+    assert fit.explained
+    assert [d.group for d in fit.inputs] == ["input 2"]
+    assert abs(fit.share - truth) < 0.1
+    assert "and on nothing else" in flexible.statement(fit, "slider")
