@@ -142,6 +142,9 @@ class FlexibleFit:
     #: would explain a share of at least SHARE_MIN and a chi-square above CHI2_MIN (False: whether
     #: it is explainable cannot be judged, there is nothing beyond the noise to explain)
     beyond_noise: bool = True
+    #: fitted only because its residual holds more than its noise (no structure flagged, RMS
+    #: under RMS_OVER_NOISE times the noise): the report shows it only when a force was found
+    weak: bool = False
     #: when the inputs the screen passed do not carry the claim alone: (their groups, the share
     #: of the trees on them out of fold, not significant); the claim is then on no single input
     screened: tuple = ()
@@ -155,7 +158,7 @@ class FlexibleFit:
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
-                                             "beyond_noise", "screened")}
+                                             "beyond_noise", "screened", "weak")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
 
@@ -495,7 +498,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     for c in chans:
         fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
                           weak=c in weak)
-        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy())
+        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
             test = np.asarray(eng.test, bool)
@@ -543,7 +546,10 @@ def figure(fits: list, path):
 
 
 def markdown(fits: list, files: dict) -> list:
-    """The report's section (Markdown lines)."""
+    """The report's section (Markdown lines): the channels with structure flagged or a
+    residual above :data:`RMS_OVER_NOISE` times the noise, and the weak ones where a force was
+    found (a weak channel with nothing found says nothing a clean channel would not)."""
+    fits = [f for f in fits if f.explained or not f.weak]
     if not fits:
         return []
     L = ["## Where no equation was found: a flexible model and its dependence", "",

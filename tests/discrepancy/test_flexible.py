@@ -260,3 +260,16 @@ def test_when_the_trees_on_every_input_claim_nothing_the_strongest_input_alone_i
     assert [d.group for d in fit.inputs] == ["input 2"]
     assert abs(fit.share - truth) < 0.1
     assert "and on nothing else" in flexible.statement(fit, "slider")
+
+
+def test_the_report_leaves_out_a_weak_channel_where_nothing_was_found():
+    """A channel fitted only because its residual holds more than its noise (``weak``) and
+    where no force was found is not in the report's section: on a clean recording that
+    section would otherwise speak of structure nobody flagged."""
+    common = dict(channel="tau2", joint=2, unit="N", share=-0.03, z=-5.0, rms_left=0.0032, noise=0.0029)
+    quiet = flexible.FlexibleFit(explained=False, weak=True, statement="tau2: not explainable", **common)
+    assert flexible.markdown([quiet], {}) == []
+    flagged = flexible.FlexibleFit(explained=False, weak=False, statement="tau2: not explainable", **common)
+    assert "- tau2: not explainable" in flexible.markdown([flagged], {})
+    found = flexible.FlexibleFit(explained=True, weak=True, statement="a force on slider 2", **common)
+    assert "- a force on slider 2" in flexible.markdown([found], {})
