@@ -186,6 +186,7 @@ def print_diagnosis(d, file=None):
     p(f"{d.recording} ({d.robot}): {d.conclusion}")
     if d.details:
         p(f"\ndetails: {d.details}")
+    from ..discrepancy.flexible import reported
     from ..discrepancy.working_set import sentence
 
     if sentence(d.settings.get("working_set")):
@@ -204,9 +205,10 @@ def print_diagnosis(d, file=None):
                 p(f"    library effect it replaces: {x}")
             if t.partial:
                 p(f"    not named as the physics: {t.partial}")
-    if getattr(d, "flexible", None):
+    shown = reported(getattr(d, "flexible", None) or [])
+    if shown:
         p("\nwhere no equation was found (a flexible model of what is left, judged out of fold, over blocks in time):")
-        for f in d.flexible:
+        for f in shown:
             p(f"  {f.statement}")
     pf = getattr(d, "platform_force", None)
     if pf is not None:

@@ -545,11 +545,15 @@ def figure(fits: list, path):
     return str(path)
 
 
+def reported(fits: list) -> list:
+    """The fits a report states: every one but a weak channel's where no force was found (a
+    weak channel with nothing found says nothing a clean channel would not)."""
+    return [f for f in fits if f.explained or not f.weak]
+
+
 def markdown(fits: list, files: dict) -> list:
-    """The report's section (Markdown lines): the channels with structure flagged or a
-    residual above :data:`RMS_OVER_NOISE` times the noise, and the weak ones where a force was
-    found (a weak channel with nothing found says nothing a clean channel would not)."""
-    fits = [f for f in fits if f.explained or not f.weak]
+    """The report's section (Markdown lines) on the :func:`reported` fits."""
+    fits = reported(fits)
     if not fits:
         return []
     L = ["## Where no equation was found: a flexible model and its dependence", "",
