@@ -2,7 +2,7 @@
 
 A deterministic fast force (a fan's or spindle's unbalance turning at a few hertz, a pump's
 pulsation) passes the pipeline's smoother and is, to a yardstick built on differences of samples
-some tens of milliseconds apart (:func:`.structure.own_noise`), noise: that yardstick then reads
+some tens of milliseconds apart (:func:`.signatures.own_noise`), noise: that yardstick then reads
 the force's amplitude, not the sensor's noise, and nothing is left to flag.  Such a force is a
 narrow line in the residual's spectrum, at a frequency where the motion has none.
 
@@ -16,7 +16,7 @@ frequency refined by least squares on the samples' times, is a line when
   ``MOTION_RATIO`` times the largest share it explains of any joint's position (a line the motion
   also holds is the motion's: an effect keyed on a periodic excitation), and
 * its chi-square against the own noise of the residual without the lines found
-  (:func:`.structure.own_noise`), in independent samples, exceeds ``threshold`` plus the cost of
+  (:func:`.signatures.own_noise`), in independent samples, exceeds ``threshold`` plus the cost of
   its two coefficients (``2 ln n_eff``) and of the frequencies searched (``ln`` of their number).
 
 A line found is taken out and the search repeated (an amplitude modulated by the pose leaves
@@ -94,7 +94,7 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
     >>> [(x["channel"], x["lines"][0]) for x in found]          # doctest: +SKIP
     [(1, (5.39, 0.31))]
     """
-    from .structure import _families, own_noise, samples_per_independent
+    from .signatures import families, own_noise, samples_per_independent
 
     R = np.asarray(R, float)
     t = np.asarray(pipe.t[pipe.idx], float)
@@ -114,7 +114,7 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
         x0 = R[:, c] - R[:, c].mean()
         # what the joint's own motion explains (a friction's steps under a periodic motion
         # repeat too) is fitted beside each line, not taken for it
-        F = np.column_stack(list(_families(pipe, c % pipe.nd).values()))
+        F = np.column_stack(list(families(pipe, c % pipe.nd).values()))
         F = np.column_stack([np.ones(n), F - F.mean(axis=0)])
         x, found, explained = x0, [], 0.0
         for _ in range(MAX_LINES):
