@@ -141,11 +141,10 @@ struct PointMass {
 std::array<PointMass, 3> platform_points(const Model& m) {
   return {{{m.mA, m.off - 0.5 * m.d}, {m.mB, m.off + 0.5 * m.d}, {m.mload, 0.0}}};
 }
-}  // namespace
-
-Eigen::Matrix4d mass_matrix(const Model& m, const Pose& p) {
-  Eigen::Matrix4d M = m.Ieq * p.J.transpose() * p.J;
-  for (const auto& pm : platform_points(m)) {
+// Adds the platform's point masses (each at ell along the articulation) and the load's
+// inertia through the tool ratio to a 4x4 inertia in the coordinates (x, y, z, theta).
+void add_platform_inertia(const Model& m, const Pose& p, const std::array<PointMass, 3>& pts, Eigen::Matrix4d& M) {
+  for (const auto& pm : pts) {
     const Eigen::Vector3d v = pm.ell * p.epd;
     M.topLeftCorner<3, 3>().diagonal().array() += pm.m;
     M.block<3, 1>(0, 3) += pm.m * v;
@@ -153,6 +152,12 @@ Eigen::Matrix4d mass_matrix(const Model& m, const Pose& p) {
     M(3, 3) += pm.m * pm.ell * pm.ell;
   }
   M(3, 3) += m.tool_ratio * m.tool_ratio * m.Jload;
+}
+}  // namespace
+
+Eigen::Matrix4d mass_matrix(const Model& m, const Pose& p) {
+  Eigen::Matrix4d M = m.Ieq * p.J.transpose() * p.J;
+  add_platform_inertia(m, p, platform_points(m), M);
   return M;
 }
 
@@ -221,15 +226,7 @@ Eigen::Matrix4d gimre(const Model& m, const Pose& p) {
     Nm += (2 * m.mc / 3) * (Bm.transpose() * Bm + Cm.transpose() * Cm) +
           (m.mc / 3) * (Bm.transpose() * Cm + Cm.transpose() * Bm);
   }
-  const std::array<PointMass, 3> pts = {{{0.5 * m.mp, m.off - 0.5 * m.d}, {0.5 * m.mp, m.off + 0.5 * m.d}, {m.mload, 0.0}}};
-  for (const auto& pm : pts) {
-    const Eigen::Vector3d v = pm.ell * p.epd;
-    Nm.topLeftCorner<3, 3>().diagonal().array() += pm.m;
-    Nm.block<3, 1>(0, 3) += pm.m * v;
-    Nm.block<1, 3>(3, 0) += pm.m * v.transpose();
-    Nm(3, 3) += pm.m * pm.ell * pm.ell;
-  }
-  Nm(3, 3) += m.tool_ratio * m.tool_ratio * m.Jload;
+  add_platform_inertia(m, p, {{{0.5 * m.mp, m.off - 0.5 * m.d}, {0.5 * m.mp, m.off + 0.5 * m.d}, {m.mload, 0.0}}}, Nm);
   return Nm;
 }
 
