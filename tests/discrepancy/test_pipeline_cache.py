@@ -59,8 +59,8 @@ def test_a_built_pipeline_is_fixed_and_its_evaluations_leave_its_attributes_alon
     ("6pus", ["leg[1].L", "leg[3].px", "rail[2].S0x", "rail[5].sy"],
      ["payload.m", "payload.x", "platform.m", "leg[2].m", "slider[1].m", "gravity.x", "cable.tension",
       "cable.anchor_x", "wrench.fz", "platform_drag.linear"]),
-    ("quattro", ["base.a", "arm.b_r", "forearm.c", "platform.d"],
-     ["payload.m", "platform.m", "arm.m", "forearm.m", "gravity.y", "cable.tension", "wrench.fx"])])
+    ("quattro", ["leg[1].L", "leg[3].px", "arm[2].Ax", "arm[4].r"],
+     ["payload.m", "platform.m", "arm[1].mass", "leg[2].m", "gravity.y", "cable.tension", "wrench.fx"])])
 def test_the_joint_motion_moves_with_lengths_and_positions_not_with_masses_or_forces(clean_runs, robot, moving,
                                                                                        still):
     """The joint motion of the recorded poses is cached once for every drive layer added on a
