@@ -245,7 +245,13 @@ def without(st, selected, theta, a):
         The parameters of that refit.
     """
     increase, th, th2 = removal(st, selected, theta, a)
-    return increase, th if th2 is None or st.try_R(th2) is None else th2
+    return increase, evaluable(st, th, th2)
+
+
+def evaluable(st, th, th2):
+    """``th2`` (the others refitted after a removal, :func:`removal`) where the core can
+    evaluate it, else ``th`` (the parameters without the removed group)."""
+    return th if th2 is None or st.try_R(th2) is None else th2
 
 
 def removal(st, selected, theta, a):

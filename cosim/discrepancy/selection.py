@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects import Group
-from .fitting import best_option, fitted_jointly, jacobian, refine, removal
+from .fitting import best_option, evaluable, fitted_jointly, jacobian, refine, removal
 from .regressors import LINEARISED, VELOCITY_SCALED, Option, fit, reference_size
 
 
@@ -343,8 +343,7 @@ def _prune(st, selected, theta, logn):
             break
         selected = [b for b in selected if b is not worst[1]]
         # the others refitted, where the core can evaluate them (tried for the group removed only)
-        th = worst[2] if worst[3] is None or st.try_R(worst[3]) is None else worst[3]
-        theta = refine(st, selected, th)
+        theta = refine(st, selected, evaluable(st, worst[2], worst[3]))
         if st.settings.verbose:
             print(f"  - {worst[1].group.label}: removal costs {worst[0]:.1f} in BIC")
     return selected, theta
