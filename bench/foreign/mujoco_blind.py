@@ -471,7 +471,9 @@ def main(argv=None) -> int:
                      "same_physics": bool(same), "stand_in": bool(stand_in), "confident": confident,
                      "confident_before": confident_before,
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
-                     "conclusion": d.conclusion, "wall_s": wall})
+                     "conclusion": d.conclusion, "wall_s": wall,
+                     "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible
+                                  if f.explained]})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
               f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  interval holds {sum(holds)}/{len(holds)}  ({wall:.1f} s)"

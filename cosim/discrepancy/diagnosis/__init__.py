@@ -430,16 +430,19 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
     found = [replace(t, partial=_partial_sentence(left, t.joint) or _beside_tie_sentence(ties, gone, t))
              for t in found]
     not_excited = _not_excited(eng, sel) + one_signed
-    conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     flex, spent = [], {}
     if flexible:
         from ..flexible import flexible_stage
+        from ..keyed_elsewhere import withheld
 
         t3c = time.perf_counter()
         # a channel whose structure is a spectral line has its model (frequency, amplitude): not refitted
         flex = flexible_stage(eng0, r_after, [e for e in left if e["signature"] != "periodic"], found, effects_out,
                               theta)
+        # a part left on an effect's channel keyed on another joint: the effect may stand in for it
+        effects_out = withheld(effects_out, flex, pipe.model.facts.joint_noun)
         spent["flexible"] = time.perf_counter() - t3c
+    conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)
     conclusion = _with_drive_statements(conclusion, enc, effort_map)
