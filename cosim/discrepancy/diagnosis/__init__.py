@@ -433,15 +433,17 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
     flex, spent = [], {}
     if flexible:
         from ..flexible import flexible_stage
-        from ..keyed_elsewhere import withheld
 
         t3c = time.perf_counter()
         # a channel whose structure is a spectral line has its model (frequency, amplitude): not refitted
         flex = flexible_stage(eng0, r_after, [e for e in left if e["signature"] != "periodic"], found, effects_out,
                               theta)
-        # a part left on an effect's channel keyed on another joint: the effect may stand in for it
-        effects_out = withheld(effects_out, flex, pipe.model.facts.joint_noun)
         spent["flexible"] = time.perf_counter() - t3c
+    if theta:  # a part left on an effect's channel keyed on another joint: the effect may stand in for it
+        from ..keyed_elsewhere import modulations, withheld
+
+        effects_out = withheld(effects_out, flex, pipe.model.facts.joint_noun,
+                               modulations(eng0, theta, effects_out, r_after))
     conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)
