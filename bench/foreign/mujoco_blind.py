@@ -52,6 +52,7 @@ from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.excitation import excitation  # noqa: E402
 from cosim.master import make_reference  # noqa: E402
 from cosim.discrepancy.diagnosis import GAP_MINORITY, UNEXPLAINED, tied  # noqa: E402
+from cosim.discrepancy.keyed_elsewhere import KEYED_ELSEWHERE  # noqa: E402
 from cosim.recording import Recording, write_recording  # noqa: E402
 
 DT, SUBSTEPS = 1e-3, 10  # controller / recording period, MuJoCo steps per period (0.1 ms)
@@ -456,6 +457,9 @@ def main(argv=None) -> int:
         confident = bool(ok and effect and not a.hold_out and not any(tied(x) for x in looks))
         confident_before = bool(ok and effect and not a.hold_out
                                 and not any(tied(x) for x in looks if x["group"] != UNEXPLAINED))
+        # ... and without the look-alike that marks a part left keyed on another joint
+        confident_elsewhere = bool(ok and effect and not a.hold_out
+                                   and not any(tied(x) for x in looks if x["group"] != KEYED_ELSEWHERE))
         est = d.plant_parameters()
         perr = None
         key = EFFECTS[effect][1].format(j=joint + 1) if effect and EFFECTS[effect][1] else None
@@ -469,7 +473,7 @@ def main(argv=None) -> int:
         rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1, "holds": holds,
                      "named": first or "none", "ok": bool(ok if effect else first is None), "param_error": perr,
                      "same_physics": bool(same), "stand_in": bool(stand_in), "confident": confident,
-                     "confident_before": confident_before,
+                     "confident_before": confident_before, "confident_elsewhere": confident_elsewhere,
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall,
                      "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible
@@ -499,7 +503,8 @@ def main(argv=None) -> int:
         print(f"right effect named first:  {sum(r['ok'] for r in eff)}/{len(eff)} (of which a gap read as the offset "
               f"it is on a one-signed joint: {sum(r.get('same_physics', False) and r['ok'] for r in eff)})")
         print(f"right and named with confidence: {sum(r['confident'] for r in eff)}/{len(eff)} (without the "
-              f"structure rule: {sum(r['confident_before'] for r in eff)}/{len(eff)})")
+              f"structure rule: {sum(r['confident_before'] for r in eff)}/{len(eff)}; without the keyed-elsewhere "
+              f"rule: {sum(r['confident_elsewhere'] for r in eff)}/{len(eff)})")
     print(f"parameter within 15 %:     {sum(r['param_error'] < 0.15 for r in comparable)}/{len(comparable)} "
           f"comparable")
     print(f"clean cases called clean:  {sum(r['ok'] for r in clean)}/{len(clean)}")
