@@ -1,24 +1,26 @@
 """A library effect whose channel keeps a part keyed on another joint: not named with confidence.
 
 A library effect on joint j is a force of joint j's own motion (its position, rate,
-acceleration, effort).  When the flexible model of what is left on j's effort channel
-(:mod:`.flexible`) claims a part out of fold (a significant share, by the stage's own bars) and
-depends on an input of *another* joint, the fit leaves a force the effect cannot carry: the
-truth on that channel is keyed on something the effect does not use, and the effect may be
-fitted to the part of it that its own column happens to follow (a friction in proportion to a
-neighbouring rail's speed is, on average over the recording, a Coulomb friction of the mean
-level; a smooth Coulomb friction takes that mean and leaves the rest within the structure
-test's yardstick, which the same force inflates).  Such an effect gets a look-alike that is a
-tie, :data:`KEYED_ELSEWHERE`: "a force on slider 4 keyed on the history of slider 1 (flexible
-model, 13 % of what is left) fits beside it", so it is named tied, not with confidence.
+acceleration, effort).  When the truth on j's effort channel also depends on another joint's
+input, the effect can take the force's mean over the recording and leave the rest (a friction
+in proportion to a neighbouring rail's speed is, on average, a Coulomb friction of the mean
+level); the rest inflates the channel's own noise, the yardstick of the structure test
+(:mod:`.structure`), which keys a channel only on its own joint's motion and on the pose.  Two
+pieces of evidence that what is left is keyed on another joint give such an effect a look-alike
+that is a tie, :data:`KEYED_ELSEWHERE` ("a force on slider 4 keyed on another slider (its level
+changes with |qd2| ...)"), so it is named tied, not with confidence:
 
-The structure test (:mod:`.structure`) looks for structure keyed on the joint's own motion and on
-the pose; it never sees a dependence on another joint.  The flexible stage does, and its claim
-is judged out of fold; this rule only reads it.  What it does not count: a claim "on no single
-input" (what it is keyed on is unknown), a dependence on the pose or on time (the pose moves with
-the joint's own position; time is the drift stage's), and effects of no single joint (a platform
-mass, a tilt, a delay: they act through every joint's motion).  docs/discrepancy.md, section 4,
-"Named with confidence only where nothing is left", states the rule and what it was measured on.
+* :func:`modulations`: the effect's level changes with another joint's input (its force on the
+  channel times that input explains the residual, against the channel's own noise, beyond the
+  structure test's threshold and a look-elsewhere cost);
+* :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`.flexible`, judged out
+  of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
+  with the joint's own position), on time (the drift stage's subject) or on the joint's own
+  inputs (the effect's own shape against the plant's) does not count.
+
+Effects of no single joint (a platform mass, a tilt, a delay) act through every joint's motion
+and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
+joint", states the rule and what it was measured on.
 """
 from __future__ import annotations
 
@@ -61,8 +63,9 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
         other = foreign_inputs(fit, e["joint"]) if fit is not None else []
         why = []
         if other:
-            why.append(f"the flexible model of what is left there depends on the {' and '.join(d.group for d in other)} "
-                       f"({100 * fit.share:.0f} % of what is left, out of fold)")
+            on = " and ".join(d.group for d in other)
+            why.append(f"the flexible model of what is left there depends on the {on} ({100 * fit.share:.0f} % of "
+                       f"what is left, out of fold)")
         if i in modulated:
             feat, chi2, rms = modulated[i]
             why.append(f"its level changes with {feat} (chi-square {chi2:.0f} in independent samples, rms "
