@@ -210,21 +210,22 @@ class Model(DriveLayerMethods, RobotFamilyMethods, CourseMethods):
 
     # ----------------------------------------------------------------- parameters
     def param_names(self) -> list[str]:
-        return [lib.pkm_param_name(self._m, i).decode() for i in range(lib.pkm_model_nparam(self._m))]
+        return [name for name, _, _ in self._param_table()]
+
+    def _param_table(self) -> tuple:
+        """(name, unit, description) of every parameter, read from the core once per model (the
+        core fixes a model's table when it creates it; only the values change)."""
+        table = self.__dict__.get("_table")
+        if table is None:
+            table = self.__dict__["_table"] = tuple(
+                (lib.pkm_param_name(self._m, i).decode(), lib.pkm_param_unit(self._m, i).decode(),
+                 lib.pkm_param_description(self._m, i).decode()) for i in range(lib.pkm_model_nparam(self._m)))
+        return table
 
     def param_info(self) -> list[ParamInfo]:
         """Name, value, unit and description of every parameter."""
-        out = []
-        for i in range(lib.pkm_model_nparam(self._m)):
-            out.append(
-                ParamInfo(
-                    lib.pkm_param_name(self._m, i).decode(),
-                    float(lib.pkm_param_get(self._m, i)),
-                    lib.pkm_param_unit(self._m, i).decode(),
-                    lib.pkm_param_description(self._m, i).decode(),
-                )
-            )
-        return out
+        return [ParamInfo(name, float(lib.pkm_param_get(self._m, i)), unit, description)
+                for i, (name, unit, description) in enumerate(self._param_table())]
 
     def params(self) -> dict[str, float]:
         """Current parameter values by name [SI units]."""

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/guard.hpp"
+#include "common/param_lookup.hpp"
 #include "common/joint_param.hpp"
 #include "kinematics/generic_kinematics.hpp"
 
@@ -98,9 +99,9 @@ std::shared_ptr<const Params> compile(const Robot& r, const std::vector<ParamSpe
                                       const std::vector<double>& values) {
   auto p = std::make_shared<Params>();
   p->nd = r.ndof();
+  InOrderLookup table(sp, values);
   auto get = [&](const std::string& name) -> double {
-    for (size_t i = 0; i < sp.size(); ++i)
-      if (sp[i].name == name) return values[i];
+    if (const double* v = table.find(name)) return *v;
     throw Error(PKM_ERR_INTERNAL, "drive parameter " + name + " missing from the table");
   };
   for (int i = 0; i < p->nd; ++i)
@@ -164,10 +165,17 @@ double smooth_sign(double v, double eps) { return std::tanh(v / eps); }
 void friction(const Params& p, const double* qd, double* f) {
   for (int i = 0; i < p.nd; ++i) {
     const double v = qd[i];
-    const double r = v / p.stribeck_v[i];
-    const double vc = p.coulomb_v[i] > 0 ? p.coulomb_v[i] : p.v_eps;
-    f[i] = p.coulomb[i] * smooth_sign(v, vc) + p.stribeck[i] * std::exp(-r * r) * smooth_sign(v, p.v_eps) +
-           p.viscous[i] * v + p.offset[i];
+    // A term whose coefficient is zero is not evaluated: its value is the signed zero the
+    // product gives (the smooth sign has the sign of v, the exponential is >= 0), so the sum
+    // is the same bit for bit; a NaN rate still makes it NaN through the viscous term.
+    const double zero = std::copysign(1.0, v);
+    double coulomb = p.coulomb[i] * zero, stribeck = p.stribeck[i] * zero;
+    if (p.coulomb[i] != 0) coulomb = p.coulomb[i] * smooth_sign(v, p.coulomb_v[i] > 0 ? p.coulomb_v[i] : p.v_eps);
+    if (p.stribeck[i] != 0) {
+      const double r = v / p.stribeck_v[i];
+      stribeck = p.stribeck[i] * std::exp(-r * r) * smooth_sign(v, p.v_eps);
+    }
+    f[i] = coulomb + stribeck + p.viscous[i] * v + p.offset[i];
   }
 }
 

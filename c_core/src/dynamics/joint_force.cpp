@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/guard.hpp"
+#include "common/param_lookup.hpp"
 #include "common/joint_param.hpp"
 
 namespace pkm {
@@ -90,9 +91,9 @@ std::vector<ParamSpec> specs(const Robot& r) {
 
 Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std::vector<double>& values) {
   Coefficients c;
+  InOrderLookup table(sp, values);
   auto get = [&](const std::string& name) -> double {
-    for (size_t i = 0; i < sp.size(); ++i)
-      if (sp[i].name == name) return values[i];
+    if (const double* v = table.find(name)) return *v;
     throw Error(PKM_ERR_INTERNAL, "joint force parameter " + name + " missing from the table");
   };
   for (int i = 0; i < r.ndof(); ++i)
@@ -118,7 +119,12 @@ void force(const Coefficients& c, int nd, double v_eps, const double* q, const d
   const double two_pi = 6.283185307179586;
   for (int i = 0; i < nd; ++i) {
     const auto& v = c.v;
-    const double z = q[i] - v[QC][i], w = qd[i], s = std::tanh(w / (v[CV][i] > 0 ? v[CV][i] : v_eps));
+    // The smooth sign only where a Coulomb-like term reads it: else every term that would read
+    // it has a zero coefficient, and its sign (that of w) gives each the same signed zero.
+    const bool sign_read = v[CPOS][i] != 0 || v[CNEG][i] != 0 || v[CQ1][i] != 0 || v[CQ2][i] != 0 ||
+                           (v[CZONE][i] != 0 && v[CZONE_W][i] != 0);
+    const double z = q[i] - v[QC][i], w = qd[i];
+    const double s = sign_read ? std::tanh(w / (v[CV][i] > 0 ? v[CV][i] : v_eps)) : std::copysign(1.0, w);
     double f = z * (v[K1][i] + z * (v[K2][i] + z * v[K3][i])) + v[V2][i] * w * std::fabs(w) +
                v[VPOS][i] * std::fmax(w, 0.0) + v[VNEG][i] * std::fmin(w, 0.0) + v[CPOS][i] * std::fmax(s, 0.0) +
                v[CNEG][i] * std::fmin(s, 0.0);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/guard.hpp"
+#include "common/param_lookup.hpp"
 
 namespace pkm {
 namespace platform_force {
@@ -66,9 +67,9 @@ std::vector<ParamSpec> specs(const Robot& r) {
 Params compile(const Robot& r, const std::vector<ParamSpec>& sp, const std::vector<double>& values) {
   Params p;
   if (!r.has_platform()) return p;
+  InOrderLookup table(sp, values);
   auto get = [&](const std::string& name) -> double {
-    for (size_t i = 0; i < sp.size(); ++i)
-      if (sp[i].name == name) return values[i];
+    if (const double* v = table.find(name)) return *v;
     throw Error(PKM_ERR_INTERNAL, "platform force parameter " + name + " missing from the table");
   };
   for (int k = 0; k < 3; ++k) {
