@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .flexible_cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
-from .flexible_select import DROP_MIN, consequences, partners, select  # noqa: F401
+from .flexible_select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -300,17 +300,21 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
-def _screened_causes(X, y, fold_rows, groups, follow, rng, judged) -> list:
-    """The screen (:func:`_screen`) of the trees cross-validated on every input but the
-    consequences ``follow`` (:func:`.flexible_select.consequences`): the causes that explain the
-    residual without the inputs that follow it in closed loop; none when those trees claim nothing."""
+def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple:
+    """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
+    columns)`` of :func:`_select`, a consequence among them): the trees cross-validated on every
+    input but the consequences ``follow`` (:func:`.flexible_select.consequences`), screened and
+    checked as the full model's; ``chosen`` stays when those trees claim nothing or ``chosen``
+    beats the causes' refit significantly (:func:`.flexible_select.gain`)."""
     cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
     cv = cross_validate(X[:, cols], y, fold_rows)
     share, _, ok = judged(cv.mse)
-    if not ok:
-        return []
     sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
-    return _screen(importance(cv, X[:, cols], y, sub, rng), share)
+    causes = _screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
+    if not causes:
+        return chosen
+    alone = _select(X, y, fold_rows, groups, causes, float(np.var(y)), follow)
+    return chosen if gain(alone[1], chosen[1], y, float(np.var(y)))[1] else alone
 
 
 def _strongest_alone(X, y, fold_rows, groups):
@@ -367,10 +371,10 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
                 named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
         else:
             named = _screen(importance(cv, X, y, groups, rng), share)
-            if any(g in follow for g in named):  # consequences passed: the causes screened without them first
-                named = _screened_causes(X, y, fold_rows, groups, follow, rng, judged) + [g for g in named if g in follow]
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
+                if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
+                    kept, cv_k, use_k = _causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k))
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k

@@ -281,13 +281,13 @@ def _closed_loop_copy(n=900, sigma=0.05, seed=7):
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 9.0, n)
     q2 = np.sin(2 * np.pi * 0.23 * t) + 0.3 * np.sin(2 * np.pi * 0.71 * t + 1.0)
-    f = 0.4 * np.exp(-((q2 - 0.3) / 0.1) ** 2)
+    f = 0.4 * np.exp(-((q2 - 0.3) / 0.25) ** 2)
     a = np.exp(-(t[1] - t[0]) / 0.01)
     copy = np.empty(n)
     copy[0] = f[0]
     for i in range(1, n):
         copy[i] = a * copy[i - 1] + (1 - a) * f[i]
-    effort1 = 0.05 * np.sin(2 * np.pi * 0.4 * t) + copy
+    effort1 = copy
     y = f + rng.normal(0.0, sigma, n)
     X = np.column_stack([q2, effort1, rng.uniform(-1, 1, (n, 3))])
     cols = [("q2", "position of slider 2", 2, "position", "m"), ("effort1", "effort of slider 1", 1, "effort", "N"),
