@@ -31,7 +31,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   of the residual's variance, :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN`
   of the strongest group's importance (at most the share), above :data:`BLOCK_Z` standard
   errors over the folds; it is named when the trees cross-validated without it (on the other
-  passing groups) lose :data:`DROP_MIN` of the variance; the share claimed is then that of
+  passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (every
+  joint's model effort and the channel's own acceleration follow the force in closed loop: named
+  only where the other inputs cannot explain the same share) and a group sharing a named one's
+  columns named where those add (:mod:`.flexible_select`); the share claimed is then that of
   the trees on the named groups alone, judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
   the groups and their share).  When the trees on every input claim nothing (a weak force spread
