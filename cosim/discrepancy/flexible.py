@@ -31,8 +31,8 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   of the residual's variance, :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN`
   of the strongest group's importance (at most the share), above :data:`BLOCK_Z` standard
   errors over the folds; it is named when the trees cross-validated without it (on the other
-  passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (every
-  joint's model effort and the channel's own acceleration follow the force in closed loop: named
+  passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (the
+  channel's own model effort and acceleration follow the force in closed loop: named
   only where the other inputs cannot explain the same share) and a group sharing a named one's
   columns named where those add (:mod:`.flexible_select`); the share claimed is then that of
   the trees on the named groups alone, judged again by the same two bars: when it fails them,

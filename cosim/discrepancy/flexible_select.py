@@ -3,11 +3,11 @@ cross-validating without each, with two rules of cause before consequence.
 
 * **Causes before consequences.**  In closed loop the controller answers the residual force:
   the force first accelerates its own joint (the tracking error), and the drive's effort moves
-  with that acceleration at once.  The fitted model's effort of every joint (the inverse dynamics
-  along the measured motion) and the channel's own acceleration therefore carry a filtered copy
-  of the force itself: they predict it without being its cause, and beside the true input they
+  with that acceleration at once.  The channel's own model effort (the inverse dynamics along
+  the measured motion) and its own acceleration therefore carry a filtered copy of the force
+  itself: they predict it without being its cause, and beside the true input they
   absorb part of what it explains.  These groups (:func:`consequences`) are judged last: the
-  other screened groups (positions, rates, other joints' accelerations, histories, the pose,
+  other screened groups (positions, rates, other joints' accelerations and efforts, histories, the pose,
   time) are checked among themselves first, and a consequence is named only when the trees on
   those inputs plus it beat the trees on those inputs alone by :data:`DROP_MIN` of the variance,
   significantly over the folds (:func:`gain`): only when the exogenous inputs cannot explain
@@ -40,10 +40,12 @@ GAIN_Z = 2.0
 
 
 def consequences(columns, groups, joint) -> set:
-    """The groups that follow the residual force of ``joint``'s channel in closed loop: every
-    joint's model effort and the channel's own acceleration (all their columns of those kinds)."""
+    """The groups that follow the residual force of ``joint``'s channel in closed loop: the
+    joint's own model effort and acceleration (all their columns of those kinds).  Another
+    joint's effort moves with the force only through the mechanism's coupling, and it is the
+    cause of a force that one drive's load sets on another joint (a preloaded bearing)."""
     def follows(col):
-        return col[3] == "effort" or (col[3] == "acceleration" and col[2] == joint)
+        return col[3] in ("effort", "acceleration") and col[2] == joint
     return {g for g, idx in groups.items() if idx and all(follows(columns[i]) for i in idx)}
 
 
