@@ -31,7 +31,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   of the residual's variance, :data:`RELATIVE_MIN` of the explained share and :data:`TOP_MIN`
   of the strongest group's importance (at most the share), above :data:`BLOCK_Z` standard
   errors over the folds; it is named when the trees cross-validated without it (on the other
-  passing groups) lose :data:`DROP_MIN` of the variance; the share claimed is then that of
+  passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (the
+  channel's own model effort and acceleration follow the force in closed loop: named
+  only where the other inputs cannot explain the same share) and a group sharing a named one's
+  columns named where those add (:mod:`.flexible_select`); the share claimed is then that of
   the trees on the named groups alone, judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
   the groups and their share).  When the trees on every input claim nothing (a weak force spread
@@ -55,6 +58,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .flexible_cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
+from .flexible_select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -75,7 +79,7 @@ BLOCK_Z = 2.0
 #: ... at most this many are checked by refitting without each ...
 MAX_INPUTS = 4
 #: ... and one is kept when the trees cross-validated without it lose this share of the variance
-DROP_MIN = 0.03
+#: (DROP_MIN, :mod:`.flexible_select`: consequences of the force in closed loop last)
 #: a channel with no structure flagged and a residual RMS under this factor times its own noise
 #: (fitted because it holds more than its noise: :func:`beyond_noise`) carries at most a weak
 #: force, which the trees on every input spread over inputs that follow it and do not claim
@@ -293,28 +297,27 @@ def _screen(imp, share) -> list:
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, fold_rows, groups, named, var):
-    """Conditional check of the screened groups: the trees cross-validated without each one,
-    on the others of ``named``; a group is kept when leaving it out costs at least
-    :data:`DROP_MIN` of the residual's variance out of fold (an input that only moves with a
-    kept one costs nothing).  When none is kept (interchangeable inputs), all are kept.
-    Returns ``(kept, cross-validation on the kept groups' columns, its columns)``."""
-    done = {}
+def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
+    """The check of the screened groups (:func:`.flexible_select.select`, causes before
+    consequences): ``(kept, cross-validation on the kept groups' columns, its columns)``."""
+    return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
-    def cv_on(gs, without=()):  # a column two groups share leaves with either; one fit per set of columns
-        cols = sorted({i for g in gs for i in groups[g]} - set(without))
-        if tuple(cols) not in done:
-            done[tuple(cols)] = cross_validate(X[:, cols], y, fold_rows)
-        return done[tuple(cols)], cols
 
-    full, cols = cv_on(named)
-    if len(named) == 1:
-        return named, full, cols
-    kept = [g for g in named if (cv_on(named, groups[g])[0].mse - full.mse) / var >= DROP_MIN]
-    if not kept or kept == named:
-        return named, full, cols
-    cv, cols = cv_on(kept)
-    return kept, cv, cols
+def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple:
+    """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
+    columns)`` of :func:`_select`, a consequence among them): the trees cross-validated on every
+    input but the consequences ``follow`` (:func:`.flexible_select.consequences`), screened and
+    checked as the full model's; ``chosen`` stays when those trees claim nothing or ``chosen``
+    beats the causes' refit significantly (:func:`.flexible_select.gain`)."""
+    cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
+    cv = cross_validate(X[:, cols], y, fold_rows)
+    share, _, ok = judged(cv.mse)
+    sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
+    causes = _screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
+    if not causes:
+        return chosen
+    alone = _select(X, y, fold_rows, groups, causes, float(np.var(y)), follow)
+    return chosen if gain(alone[1], chosen[1], y, float(np.var(y)))[1] else alone
 
 
 def _strongest_alone(X, y, fold_rows, groups):
@@ -352,6 +355,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
     groups = input_groups(columns)
+    follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows)
@@ -362,23 +366,27 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
-            if ok:
-                named = [g]
-                sub = {g: list(range(len(use)))}
-                imp_k = importance(cv, X[:, use], y, sub, rng)
-                beyond = outside(X[:, use], cv, list(range(len(use))))
+            named = [g] if ok else []  # with the group sharing its columns where they add (partners)
+            kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, known={tuple(sorted(use)): cv_g}) \
+                if ok else (named, cv, use)
+            share_k, z_k, ok_k = judged(cv_k.mse)
+            if kept != named and ok_k:
+                named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
         else:
             named = _screen(importance(cv, X, y, groups, rng), share)
             if named:
-                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var)
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
+                if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
+                    kept, cv_k, use_k = _causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k))
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
-                    sub = {g: [use.index(i) for i in groups[g]] for g in named}
-                    imp_k = importance(cv, X[:, use], y, sub, rng)
-                    beyond = outside(X[:, use], cv, list(range(len(use))))
                 else:  # they do not carry it alone: the claim stays the full model's, on no single input
                     named, screened = [], (tuple(kept), share_k)
+        if explained and named:
+            sub = {g: [use.index(i) for i in groups[g] if i in use] for g in named}  # a partner: its shared columns
+            imp_k = importance(cv, X[:, use], y, sub, rng)
+            beyond = outside(X[:, use], cv, list(range(len(use))))
         model = final_model(X[:, use], y, cv)
         if explained and named:
             deps = tuple(_dependence(model, X[:, use], [columns[i] for i in use], sub[g], g, imp_k[g][0], unit)

@@ -197,7 +197,7 @@ def test_the_claim_is_judged_again_on_the_named_inputs_refit(monkeypatch):
     # most about 0 by construction, so the channel may not be called explained on them
     pipe, X, cols, y, truth = _synthetic(lambda X: 0.3 * np.sin(6.0 * X[:, 2]))
 
-    def select(X, y, fold_rows, groups, named, var):
+    def select(X, y, fold_rows, groups, named, var, *_, **__):
         use = sorted(i for g in named for i in groups[g])
         shuffled = np.random.default_rng(2).permutation(y)
         return named, flexible_cv.cross_validate(X[:, use], shuffled, fold_rows), use
@@ -273,3 +273,81 @@ def test_the_report_leaves_out_a_weak_channel_where_nothing_was_found():
     assert "- tau2: not explainable" in flexible.markdown([flagged], {})
     found = flexible.FlexibleFit(explained=True, weak=True, statement="a force on slider 2", **common)
     assert "- a force on slider 2" in flexible.markdown([found], {})
+
+
+def _closed_loop_copy(n=900, sigma=0.05, seed=7):
+    # a bump keyed on another joint's position q2; the channel's own model effort carries a
+    # copy of the force lagged by 10 ms (what a drive's controller answers in closed loop)
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 9.0, n)
+    q2 = np.sin(2 * np.pi * 0.23 * t) + 0.3 * np.sin(2 * np.pi * 0.71 * t + 1.0)
+    f = 0.4 * np.exp(-((q2 - 0.3) / 0.25) ** 2)
+    a = np.exp(-(t[1] - t[0]) / 0.01)
+    copy = np.empty(n)
+    copy[0] = f[0]
+    for i in range(1, n):
+        copy[i] = a * copy[i - 1] + (1 - a) * f[i]
+    effort1 = copy
+    y = f + rng.normal(0.0, sigma, n)
+    X = np.column_stack([q2, effort1, rng.uniform(-1, 1, (n, 3))])
+    cols = [("q2", "position of slider 2", 2, "position", "m"), ("effort1", "effort of slider 1", 1, "effort", "N"),
+            ("q3", "position of slider 3", 3, "position", "m"), ("q4", "position of slider 4", 4, "position", "m"),
+            ("q5", "position of slider 5", 5, "position", "m")]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    return pipe, X, cols, y, sigma, float(np.var(f) / (np.var(f) + sigma ** 2))
+
+
+def test_the_cause_is_named_not_the_effort_that_follows_the_force_in_closed_loop():
+    # the trees on every input prefer the effort (a clean copy of the force); the causal rule
+    # screens the inputs without the consequences first and names the effort only where it adds
+    pipe, X, cols, y, sigma, truth = _closed_loop_copy()
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    assert fit.explained
+    assert [d.group for d in fit.inputs] == ["position of slider 2"]
+    assert abs(fit.share - truth) < 0.15
+    assert flexible.consequences(cols, flexible.input_groups(cols), 1) == {"effort of slider 1"}
+
+
+def test_a_force_keyed_on_the_effort_itself_keeps_the_effort():
+    # a friction growing with the load: sign(qd1) (0.1 + 0.2 |effort1|): no exogenous input holds it
+    rng = np.random.default_rng(4)
+    n, sigma = 900, 0.03
+    t = np.linspace(0.0, 9.0, n)
+    qd = np.sin(2 * np.pi * 0.5 * t)
+    effort = np.sin(2 * np.pi * 0.13 * t + 0.4) + 0.5 * rng.uniform(-1, 1, n).cumsum() / np.sqrt(n)
+    f = np.tanh(qd / 0.05) * (0.1 + 0.2 * np.abs(effort))
+    y = f + rng.normal(0.0, sigma, n)
+    X = np.column_stack([qd, effort, rng.uniform(-1, 1, (n, 2))])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"), ("effort1", "effort of slider 1", 1, "effort", "N"),
+            ("q2", "position of slider 2", 2, "position", "m"), ("q3", "position of slider 3", 3, "position", "m")]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    assert fit.explained
+    assert sorted(d.group for d in fit.inputs) == ["effort of slider 1", "rate of slider 1"]
+
+
+def test_a_rate_named_alone_names_the_history_its_signed_columns_carry():
+    # the screen passed the rate only; its group holds the direction-signed history it shares with
+    # the history group, and the force is sign(qd) (1 + b (T - mean T)): those shared columns add
+    # a significant share, so the history is named beside the rate (without the rule: the rate alone)
+    n, sigma = 700, 0.03
+    rng = np.random.default_rng(5)
+    t = np.linspace(0.0, 12.0, n)
+    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
+    T = 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+    f = 0.4 * np.sign(qd) * (1.0 + 0.5 * (T - T.mean()) / T.std())
+    y = f + rng.normal(0.0, sigma, n)
+    X = np.column_stack([qd, T, np.sign(qd) * T, rng.uniform(-1, 1, n)])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"), ("T1", "history of slider 1", 1, "history", "W"),
+            ("sign(qd1) T1", "history of slider 1", 1, "history x direction", "W"),
+            ("q2", "position of slider 2", 2, "position", "m")]
+    groups = flexible.input_groups(cols)
+    rows = flexible_cv.folds(n, 1)
+    import sklearn.ensemble  # noqa: F401  (loaded before the limit, as fit_channel does)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        kept, cv, use = flexible._select(X, y, rows, groups, ["rate of slider 1"], float(np.var(y)))
+    assert kept == ["rate of slider 1", "history of slider 1"]
+    assert use == [0, 2]  # the model keeps the rate's columns: the history is named for its shared one
+    assert 1.0 - cv.mse / np.var(y) > 0.9

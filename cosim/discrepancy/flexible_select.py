@@ -1,0 +1,107 @@
+"""Which of the screened inputs the flexible stage names (:mod:`.flexible`): a check by
+cross-validating without each, with two rules of cause before consequence.
+
+* **Causes before consequences.**  In closed loop the controller answers the residual force:
+  the force first accelerates its own joint (the tracking error), and the drive's effort moves
+  with that acceleration at once.  The channel's own model effort (the inverse dynamics along
+  the measured motion) and its own acceleration therefore carry a filtered copy of the force
+  itself: they predict it without being its cause, and beside the true input they
+  absorb part of what it explains.  These groups (:func:`consequences`) are judged last: the
+  other screened groups (positions, rates, other joints' accelerations and efforts, histories, the pose,
+  time) are checked among themselves first, and a consequence is named only when the trees on
+  those inputs plus it beat the trees on those inputs alone by :data:`DROP_MIN` of the variance,
+  significantly over the folds (:func:`gain`): only when the exogenous inputs cannot explain
+  the same share.  A force truly keyed on the effort (a friction growing with the load) passes
+  this test; one that the effort only follows does not.
+* **A shared column names both groups.**  A history signed by the direction of motion belongs
+  to the joint's rate and to its history (:func:`~.flexible.input_groups`): a friction level
+  that a slow state sets is their product.  When one of the two is named and the other not,
+  the trees on the named inputs are cross-validated without the shared columns; when those
+  columns add :data:`DROP_MIN` significantly, the force depends on both factors and the other
+  group is named too (for those columns: its others are not added to the model), instead of
+  the product hiding behind one name.
+
+The check of the other screened groups is the one the stage always had: a group is kept when
+leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
+is kept (interchangeable inputs), all are.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: a group is kept (or a consequence or a partner added) when it is worth this share of the
+#: residual's variance out of fold ...
+DROP_MIN = 0.03
+#: ... and, for a consequence or a partner, when that gain exceeds this many standard errors
+#: over the folds
+GAIN_Z = 2.0
+
+
+def consequences(columns, groups, joint) -> set:
+    """The groups that follow the residual force of ``joint``'s channel in closed loop: the
+    joint's own model effort and acceleration (all their columns of those kinds).  Another
+    joint's effort moves with the force only through the mechanism's coupling, and it is the
+    cause of a force that one drive's load sets on another joint (a preloaded bearing)."""
+    def follows(col):
+        return col[3] in ("effort", "acceleration") and col[2] == joint
+    return {g for g, idx in groups.items() if idx and all(follows(columns[i]) for i in idx)}
+
+
+def gain(without, with_, y, var) -> tuple:
+    """What cross-validation ``with_`` gains over ``without`` (same folds): ``(share of the
+    variance, whether it is at least DROP_MIN and above GAIN_Z standard errors over the folds)``."""
+    def per_fold(cv):
+        return np.array([np.mean((y[h] - cv.pred[h]) ** 2) for h, _ in cv.folds])
+    d = (per_fold(without) - per_fold(with_)) / var
+    overall = (without.mse - with_.mse) / var
+    se = float(np.std(d, ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else 0.0
+    return float(overall), bool(overall >= DROP_MIN and float(np.mean(d)) > GAIN_Z * se)
+
+
+def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None):
+    """The named groups among the screened ``named``, their trees cross-validated on them
+    alone: ``(kept, cross-validation, its columns)``.  ``follow``: the consequence groups
+    (:func:`consequences`), judged after the others; ``known``: cross-validations already
+    made, by their sorted columns."""
+    if cross_validate is None:
+        from .flexible_cv import cross_validate
+    done = dict(known or {})
+
+    def cv_on(gs, without=()):  # a column two groups share leaves with either; one fit per set of columns
+        cols = sorted({i for g in gs for i in groups[g]} - set(without))
+        if tuple(cols) not in done:
+            done[tuple(cols)] = cross_validate(X[:, cols], y, fold_rows)
+        return done[tuple(cols)], cols
+
+    def check(gs):  # kept when leaving it out costs DROP_MIN; none kept: all
+        if len(gs) == 1:
+            return list(gs)
+        full = cv_on(gs)[0]
+        kept = [g for g in gs if (cv_on(gs, groups[g])[0].mse - full.mse) / var >= DROP_MIN]
+        return kept if kept else list(gs)
+
+    causes = [g for g in named if g not in follow]
+    kept = check(causes) if causes else check(named)
+    if causes:
+        base = cv_on(kept)[0]
+        kept += [g for g in named if g in follow and gain(base, cv_on(kept + [g])[0], y, var)[1]]
+    cv, cols = cv_on(kept)
+    return partners(kept, groups, y, var, cv_on), cv, cols
+
+
+def partners(kept, groups, y, var, cv_on) -> list:
+    """``kept`` with the groups that share columns with a kept one added where those shared
+    columns add a significant share (:func:`gain`) to the trees on the kept groups.  A partner
+    is named for its shared columns: its other columns are not added to the model (they were
+    not shown to add anything)."""
+    out = list(kept)
+    for g in kept:
+        for h, idx in groups.items():
+            shared = set(groups[g]) & set(idx)
+            if h in out or not shared or not {i for k in out for i in groups[k]} - shared:
+                continue
+            if gain(cv_on(out, shared)[0], cv_on(out)[0], y, var)[1]:
+                out.append(h)
+    return out
