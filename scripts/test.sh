@@ -11,7 +11,7 @@ echo "== C/C++ tests (ctest)"
 ctest --test-dir build --output-on-failure -j2
 echo "== Python tests (pytest)"
 set +e
-if [ "${PYTEST_WORKERS:-auto}" = 1 ]; then par=(); else par=(-n "${PYTEST_WORKERS:-auto}" --dist loadgroup --no-loadscope-reorder); fi
+if [ "${PYTEST_WORKERS:-auto}" = 1 ]; then par=(); else par=(-n "${PYTEST_WORKERS:-auto}"); fi
 .venv/bin/python -m pytest -q "${par[@]}" --durations=30 "$@"  # the 30 slowest tests: where the time goes
 rc=$?
 set -e
