@@ -10,7 +10,8 @@ the other on one worker, first: they share what no tmp folder separates.  ``cosi
 its build, and CMake then deletes every FMI 3.0 FMU until it is packed again
 (``cosim.fmu._repack_fmi3``), so no test may read ``build/fmu/fmi3`` meanwhile; the Wine runs
 share one wineserver kept 60 s after its last client (``tests/fmu/platform_host.py``); the
-browser runs share chromium's profile."""
+browser runs share chromium's profile.  The tests using the sweep tests' LocalCluster are one unit
+too (the cluster, two worker processes, started once)."""
 import functools
 import os
 import re
@@ -39,6 +40,8 @@ def _module_unit(module: str) -> str | None:
     text = (ROOT / module).read_text() if (ROOT / module).is_file() else ""
     if module in SERIAL or "build_restored" in text:
         return "serial"
+    if re.search(r"def test_\w+\([^)]*\b(client|cluster)\b", text):  # tests/sweep/conftest.py's LocalCluster
+        return "dask-cluster"
     if re.search(r"""scope=["'](module|package|class)["']""", text):
         return module
     return None
