@@ -1,13 +1,85 @@
-"""Fixtures shared by test folders."""
+"""Fixtures shared by test folders, and how the suite runs in parallel (pytest-xdist,
+``scripts/test.sh``: ``-n auto``).
+
+In parallel, the tests are handed out to the workers in units (:func:`unit`): a test module
+with a module-scoped fixture (a recording, a fresh clone, FMUs unzipped) runs whole on one
+worker, so that the fixture is made once; the other tests are handed out one by one.  The
+modules of ``SERIAL`` (and any module using ``build_restored``) are one unit, run one after
+the other on one worker, first: they share what no tmp folder separates.  ``cosim fmu
+<file>.toml`` configures the checkout's build directory with other platforms for the time of
+its build, and CMake then deletes every FMI 3.0 FMU until it is packed again
+(``cosim.fmu._repack_fmi3``), so no test may read ``build/fmu/fmi3`` meanwhile; the Wine runs
+share one wineserver kept 60 s after its last client (``tests/fmu/platform_host.py``); the
+browser runs share chromium's profile.  The tests using the sweep tests' LocalCluster are one unit
+too (the cluster, two worker processes, started once)."""
+import functools
+import os
+import re
 import shutil
+from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 #: what ``cosim fmu <file>.toml`` makes in the build directory for the tests' description files
 #: (my_stewart.toml, my_pendulum.toml, the README's my_delta.toml): named PKM_MY_* and my_*
 MADE_FOR_TESTS = ("fmu/PKM_MY_*", "fmu/*/PKM_MY_*", "fmu_described/my_*", "fmu_platform/*/*PKM_MY_*",
                   "fmu_platform/*/CMakeFiles/PKM_MY_*")
 
+#: the modules run one after the other on one worker, first (see the module's docstring):
+#: those that build FMUs of description files, read the FMI 3.0 FMUs, run Wine or chromium
+SERIAL = ("tests/test_readme.py", "tests/fmu/test_cosim_fmu.py", "tests/fmu/test_fmi3.py",
+          "tests/fmu/test_fmi3_host.py", "tests/fmu/test_fuzz.py", "tests/fmu/test_platforms.py",
+          "tests/report/test_html.py")
+
+
+@functools.cache
+def _module_unit(module: str) -> str | None:
+    """The unit of a whole module (``"serial"``, the module itself) or None (one by one)."""
+    text = (ROOT / module).read_text() if (ROOT / module).is_file() else ""
+    if module in SERIAL or "build_restored" in text:
+        return "serial"
+    if re.search(r"def test_\w+\([^)]*\b(client|cluster)\b", text):  # tests/sweep/conftest.py's LocalCluster
+        return "dask-cluster"
+    if re.search(r"""scope=["'](module|package|class)["']""", text):
+        return module
+    return None
+
+
+def unit(nodeid: str) -> str:
+    """The unit of work a test belongs to under pytest-xdist (see the module's docstring)."""
+    module = nodeid.split("::", 1)[0]
+    return _module_unit(module) or nodeid
+
+
+def _rank(nodeid: str) -> int:
+    u = unit(nodeid)
+    return 0 if u == "serial" else 1 if u != nodeid else 2
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist, the order the units are handed out in: the serial unit first, then
+    the whole modules, then the tests one by one (the longest work first, the small tests last
+    to even out the workers' ends)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        items.sort(key=lambda i: _rank(i.nodeid))  # stable: the collection's order within a rank
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """The units of :func:`unit`, handed out in the workers' collection order, when the tests
+    are distributed by pytest-xdist's default (``-n N``: ``--dist load``)."""
+    if config.getvalue("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class UnitScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            return unit(nodeid)
+
+    config.option.loadscopereorder = False
+    return UnitScheduling(config, log)
 
 @pytest.fixture(scope="module")
 def build_restored():

@@ -5,9 +5,10 @@ The tracked files are copied into an empty folder (a clone without ``results/`` 
 ``out/``), with the checkout's ``.venv`` and ``build`` linked in (what
 ``scripts/bootstrap.sh`` makes).  There every shell block of the README runs, line by line
 in one bash per block (so that an ``export`` holds for the lines after it), in the README's
-order and then the tour's, then every Python block, in order, in one interpreter.  A file a command needs is
-shipped or written by an earlier README command; the description the README asks to save
-as ``my_delta.toml`` is saved there first.
+order and then the tour's (a one-line command both give, the same but for its comment, runs
+the first time only: the second is the first's result), then every Python block, in order,
+in one interpreter.  A file a command needs is shipped or written by an earlier README
+command; the description the README asks to save as ``my_delta.toml`` is saved there first.
 
 A few commands are not run here, each for the reason given in NOT_RUN (minutes of work, or
 the whole test suite), and a benchmark runs with options appended that make it small
@@ -95,6 +96,12 @@ def _as_run(cmd):
     return f"{line.rstrip()} {SMALLER[k][0]}" + (f"  #{comment}" if hash_ else "")
 
 
+def _same(cmd):
+    """What a one-line command runs, its comment left out (two commands with one value do the
+    same); a command of several lines is itself."""
+    return cmd if "\n" in cmd or '"' in cmd or "'" in cmd else _as_run(cmd).partition(" #")[0].strip()
+
+
 @pytest.fixture(scope="module")
 def clone(tmp_path_factory):
     """A fresh clone where every README command has run: (folder, [(command, result)])."""
@@ -110,18 +117,28 @@ def clone(tmp_path_factory):
     (root / "my_delta.toml").write_text(toml)  # "Save this as my_delta.toml"
     env = {**os.environ, "TQDM_DISABLE": "1", "MPLBACKEND": "Agg"}
     env.pop("PKM_LIB", None)
-    ran = []
+    ran, passed = [], {}  # passed: what a command that exited 0 printed, by _same(command)
     for block in _blocks("bash"):
         cmds = [c for c in _commands(block) if not _skipped(c)]
-        if not cmds:
-            continue
-        # one bash per block, stopping at the first failure; each command echoed first
-        script = "set -e\n" + "\n".join(f"echo '>>> {i}' >&2\n{_as_run(c)}" for i, c in enumerate(cmds))
-        p = subprocess.run(["bash", "-c", script], cwd=root, capture_output=True, text=True, env=env, timeout=900)
-        done = [int(m) for m in re.findall(r"^>>> (\d+)$", p.stderr, flags=re.M)]
+        # a command the README and the tour both give runs once: the second time it is the
+        # first's result (in a block that exports nothing, it does the same in the same clone)
+        exports = any(c.lstrip().startswith("export ") for c in cmds)
+        todo = [i for i, c in enumerate(cmds) if exports or _same(c) not in passed]
+        p, done = None, []
+        if todo:
+            # one bash per block, stopping at the first failure; each command echoed first
+            script = "set -e\n" + "\n".join(f"echo '>>> {i}' >&2\n{_as_run(cmds[i])}" for i in todo)
+            p = subprocess.run(["bash", "-c", script], cwd=root, capture_output=True, text=True, env=env, timeout=900)
+            done = [int(m) for m in re.findall(r"^>>> (\d+)$", p.stderr, flags=re.M)]
         for i, c in enumerate(cmds):
+            if i not in todo:
+                ran.append((c, 0, passed[_same(c)]))
+                continue
             failed = p.returncode != 0 and done and i == done[-1]
-            ran.append((c, p if failed else (None if done and i > done[-1] else 0), p.stdout))
+            status = p if failed else (None if done and i > done[-1] else 0)
+            ran.append((c, status, p.stdout))
+            if status == 0 and not exports:
+                passed.setdefault(_same(c), p.stdout)
     return root, ran
 
 

@@ -8,6 +8,7 @@ import copy
 
 import pytest
 from disc_helpers import COMBINED, SUBSET, run
+from run_once import shared_once
 
 from cosim.discrepancy import blind
 
@@ -33,10 +34,13 @@ def short_cfg():
 @pytest.fixture(scope="session")
 def blind_subset(tmp_path_factory, short_cfg):
     """The subset's recordings (one directory) and answer keys (another)."""
-    rec_dir = tmp_path_factory.mktemp("blind_cases")
-    key_dir = tmp_path_factory.mktemp("blind_keys")
-    out = {}
-    for robot, hidden, seed in SUBSET:
-        name = f"{robot}_{'+'.join(hidden) or 'clean'}_{seed}"
-        out[name] = blind.make_case(blind.CaseSpec(name, robot, hidden, seed), rec_dir, key_dir, short_cfg)
-    return out
+    def make():
+        rec_dir = tmp_path_factory.mktemp("blind_cases")
+        key_dir = tmp_path_factory.mktemp("blind_keys")
+        out = {}
+        for robot, hidden, seed in SUBSET:
+            name = f"{robot}_{'+'.join(hidden) or 'clean'}_{seed}"
+            out[name] = blind.make_case(blind.CaseSpec(name, robot, hidden, seed), rec_dir, key_dir, short_cfg)
+        return out
+
+    return shared_once(tmp_path_factory, "blind_subset", make)  # once, also under pytest-xdist

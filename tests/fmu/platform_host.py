@@ -49,10 +49,15 @@ def _wine_server() -> None:
     started while the previous run's server shuts down can exit 1 without a word (a full suite
     run once did so), which is Wine's start-up, not the FMU."""
     if not _WINE_SERVER_UP:
-        env = dict(os.environ, WINEDEBUG="-all")
+        env = dict(os.environ, WINEDEBUG="-all", WINEDLLOVERRIDES="mscoree,mshtml=")
+        env.pop("DISPLAY", None)
         # not captured: the server it starts keeps the pipes it was given open
         subprocess.run([shutil.which("wineserver") or "wineserver", "-p60"], stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL, env=env, timeout=60)
+        # nor Wine's own processes (services, devices), started by the first program a new server
+        # runs: a captured first run would wait about 60 s for them to close its pipes
+        subprocess.run([shutil.which("wine") or "wine", "cmd", "/c", "exit"], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, env=env, timeout=120)
         _WINE_SERVER_UP.append(True)
 
 
