@@ -67,6 +67,7 @@ def pytest_collection_modifyitems(config, items):
         items.sort(key=lambda i: _rank(i.nodeid))  # stable: the collection's order within a rank
 
 
+@pytest.hookimpl(optionalhook=True)  # an xdist hook: without the plugin (-p no:xdist) the suite still runs
 def pytest_xdist_make_scheduler(config, log):
     """The units of :func:`unit`, handed out in the workers' collection order, when the tests
     are distributed by pytest-xdist's default (``-n N``: ``--dist load``)."""
@@ -80,6 +81,7 @@ def pytest_xdist_make_scheduler(config, log):
 
     config.option.loadscopereorder = False
     return UnitScheduling(config, log)
+
 
 @pytest.fixture(scope="module")
 def build_restored():
