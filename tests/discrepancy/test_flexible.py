@@ -168,15 +168,20 @@ def test_black_box_replay_term_lowers_the_channels_replay_error(cross_case):
     assert runs["fitted + black box"]["rms_tau"][c] < 0.5 * runs["fitted"]["rms_tau"][c]
 
 
+def _rate_and_slow_state(n):
+    """A joint's rate reversing about 1.4 times a second and a slow state (a temperature-like
+    history) with a 5 s period, over 12 s: ``(random generator, rate, state)``."""
+    t = np.linspace(0.0, 12.0, n)
+    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
+    return np.random.default_rng(5), qd, 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+
+
 def test_a_friction_level_set_by_a_slow_state_names_the_rate_and_the_history():
     # sign(qd) (T - mean T): neither the direction nor the state explains any of it alone (no
     # greedy split finds it); the direction-signed state does, and leaving out either input
     # removes it.  Truth share var(f) / (var(f) + sigma^2) in closed form.
     n, sigma = 700, 0.03
-    rng = np.random.default_rng(5)
-    t = np.linspace(0.0, 12.0, n)
-    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
-    T = 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+    rng, qd, T = _rate_and_slow_state(n)
     f = 0.4 * np.sign(qd) * (T - T.mean())
     y = f + rng.normal(0.0, sigma, n)
     X = np.column_stack([qd, T, np.sign(qd) * T, rng.uniform(-1, 1, (n, 2))])
@@ -331,10 +336,7 @@ def test_a_rate_named_alone_names_the_history_its_signed_columns_carry():
     # the history group, and the force is sign(qd) (1 + b (T - mean T)): those shared columns add
     # a significant share, so the history is named beside the rate (without the rule: the rate alone)
     n, sigma = 700, 0.03
-    rng = np.random.default_rng(5)
-    t = np.linspace(0.0, 12.0, n)
-    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
-    T = 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+    rng, qd, T = _rate_and_slow_state(n)
     f = 0.4 * np.sign(qd) * (1.0 + 0.5 * (T - T.mean()) / T.std())
     y = f + rng.normal(0.0, sigma, n)
     X = np.column_stack([qd, T, np.sign(qd) * T, rng.uniform(-1, 1, n)])
