@@ -69,7 +69,8 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
-         "rate_coupled_friction", "reversal_seal", "eddy_brake_zone", "cross_effort_friction")
+         "rate_coupled_friction", "reversal_seal", "eddy_brake_zone", "cross_effort_friction", "coulomb_zone",
+         "reversal_stiction")
 PLATFORM = KINDS[:7]
 #: seeds: SEED + the kind's index, clean cases SEED + 90 + i (fixed before any run); ``--second``
 #: draws every case again at SEED + 1000 + (the same): added after the first set's output was seen
@@ -102,9 +103,9 @@ def keyed(kind, j=None, k=None) -> dict:
     if kind == "cross_effort_friction":
         need = {own("rate"), other("effort")}
         return {"need": need, "any": set(), "allowed": need | {own("history"), other("history")}}
-    if kind == "reversal_seal":
+    if kind in ("reversal_seal", "reversal_stiction"):
         return {"need": {own("rate")}, "any": set(), "allowed": {own(q) for q in ("rate", "history", "acceleration")}}
-    if kind == "eddy_brake_zone":
+    if kind in ("eddy_brake_zone", "coulomb_zone"):
         need = {own("position"), own("rate")}
         return {"need": need, "any": set(), "allowed": need | {own("history")}}
     raise ValueError(kind)
@@ -260,6 +261,30 @@ def _rail_mechanism(kind, rng, mo):
             f[j] = -c * qd[j] * 0.5 * (math.tanh((q[j] - lo) / w) - math.tanh((q[j] - hi) / w))
             return f
         return hook, {"damping": c, "from": lo, "to": hi}, j, None
+    if kind == "coulomb_zone":
+        lo, hi = sorted(rng.uniform(mo["q10"][j], mo["q90"][j], 2))
+        hi = max(hi, lo + 0.3 * (mo["q90"][j] - mo["q10"][j]))
+        w = 0.05 * (mo["q90"][j] - mo["q10"][j])
+        c0, c1 = size * E[j], 1.5 * size * E[j]
+
+        def hook(model, data, t, q, qd, u):
+            f = np.zeros(n)
+            band = 0.5 * (math.tanh((q[j] - lo) / w) - math.tanh((q[j] - hi) / w))
+            f[j] = -(c0 + c1 * band) * math.tanh(qd[j] / V_FRICTION)
+            return f
+        return hook, {"level": c0, "rise": c1, "from": lo, "to": hi}, j, None
+    if kind == "reversal_stiction":
+        c0, c1, tau = size * E[j], 1.5 * size * E[j], float(rng.uniform(0.1, 0.3))
+        state = {"sign": 0.0, "since": 0.0}
+
+        def hook(model, data, t, q, qd, u):
+            s = math.copysign(1.0, qd[j]) if abs(qd[j]) > 2 * V_FRICTION else state["sign"]
+            if s != state["sign"]:
+                state["sign"], state["since"] = s, t
+            f = np.zeros(n)
+            f[j] = -(c0 + c1 * math.exp(-(t - state["since"]) / tau)) * math.tanh(qd[j] / V_FRICTION)
+            return f
+        return hook, {"level": c0, "peak": c1, "tau": tau}, j, None
     raise ValueError(kind)
 
 

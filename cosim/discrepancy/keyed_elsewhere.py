@@ -24,13 +24,17 @@ joint", states the rule and what it was measured on.
 """
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import replace
 
 import numpy as np
 
+from .keyed_own import gains
+
 #: group of the look-alike that marks an effect whose channel keeps a part keyed on another joint
 KEYED_ELSEWHERE = "keyed_elsewhere"
+_log = logging.getLogger(__name__)
 
 
 def foreign_inputs(fit, joint: int) -> list:
@@ -66,40 +70,50 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
             on = " and ".join(d.group for d in other)
             why.append(f"the flexible model of what is left there depends on the {on} ({100 * fit.share:.0f} % of "
                        f"what is left, out of fold)")
-        if i in modulated:
-            feat, chi2, rms = modulated[i]
-            why.append(f"its level changes with {feat} (chi-square {chi2:.0f} in independent samples, rms "
+        for feat, chi2, rms, where in modulated.get(i, ()):
+            what = {"elsewhere": feat, "position": f"its position ({feat})",
+                    "reversal": f"the time since it last reversed ({feat})"}[where]
+            why.append(f"its level changes with {what} (chi-square {chi2:.0f} in independent samples, rms "
                        f"{rms:.3g})")
         if not why or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        out.append(replace(e, lookalikes=[_alternative(e, noun, why)] + list(e["lookalikes"])))
+        keys = ([f"another {noun}"] if other or any(m[3] == "elsewhere" for m in modulated.get(i, ())) else [])
+        keys += [{"position": "its position", "reversal": "the time since its last reversal"}[m[3]]
+                 for m in modulated.get(i, ()) if m[3] != "elsewhere"]
+        out.append(replace(e, lookalikes=[_alternative(e, noun, " and ".join(keys), why)] + list(e["lookalikes"])))
     return out
 
 
-def _alternative(e, noun, why):
+def _alternative(e, noun, keys, why):
     from .results import Alternative
 
-    name = f"a force on {noun} {e['joint']} keyed on another {noun} ({'; '.join(why)})"
+    name = f"a force on {noun} {e['joint']} keyed on {keys} ({'; '.join(why)})"
     return Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
                        f"{name}: the truth on this channel depends on an input {e['name']} does not use, and the fit "
                        f"may stand in for part of it; {e['name']} is not named with confidence")
 
 
 def modulations(eng, theta: dict, effects: list, R, threshold: float | None = None) -> dict:
-    """Effects whose level changes with another joint's input: per effect index, ``(feature,
-    chi2, rms)`` of the strongest such modulation that passes, else absent.
+    """Effects whose level changes with another joint's input, with their own joint's position or
+    with the time since their joint last reversed: per effect index, a list of ``(feature, chi2,
+    rms, where)`` (``where`` "elsewhere", "position" or "reversal"), the strongest product of each
+    kind that passes; absent when none does.
 
     For an effect on joint j with its force g on j's effort channel (the residual without the
     effect's parameters less the residual ``R`` with them, ``theta`` the fitted parameters),
     the residual of that channel is fitted with g and g (z - mean z) for each input z of another
     joint (the flexible stage's inputs, :func:`.flexible.inputs`: position, rate, acceleration,
     effort, histories; each also as |z - median z|): a friction in proportion to a neighbour's
-    speed is g times that speed.  The chi-square the product explains beyond g, in independent
-    samples against the channel's own noise (:func:`.signatures.own_noise`), less ln n_eff for
-    its coefficient, passes above the structure test's threshold plus the look-elsewhere cost
-    2 ln M (M products tried for the effect)."""
+    speed is g times that speed; and with g z for each function z of the joint's own position
+    and of the time since its last reversal (:func:`.keyed_own.own_products`; not for the
+    kinematic effects, ``keyed_own.KINEMATIC``, whose force is such a function by nature).  The
+    chi-square the product explains beyond g, in independent samples against the channel's own
+    noise (:func:`.signatures.own_noise`), less ln n_eff for its coefficient, passes above the
+    structure test's threshold plus the look-elsewhere cost 2 ln M (M products tried for the
+    effect, every kind together)."""
     from .flexible import inputs
+    from .keyed_own import KINEMATIC, beyond, own_products
     from .signatures import own_noise, samples_per_independent
     from .structure import THRESHOLD
     from .ties import tied
@@ -126,24 +140,62 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
         sigma = own_noise(pipe, y, floor[c])
         if not (sigma > 0 and np.any(g != 0)):
             continue
-        other = [k for k, col in enumerate(columns) if col[2] is not None and col[2] != j]
-        Z = X[:, other]
-        Z = np.column_stack([Z, np.abs(Z - np.median(Z, axis=0))])
-        names = [columns[k][0] for k in other] + [f"|{columns[k][0]}|" for k in other]
-        Z = Z - Z.mean(axis=0)
-        keep = Z.std(axis=0) > 0
-        Z, names = Z[:, keep], [nm for nm, ok in zip(names, keep) if ok]
+        gc = g - g.mean()
+        if not float(gc @ gc) > 0:  # a constant (an offset): its products are the inputs themselves
+            continue
+        base = y - gc * float(gc @ y) / float(gc @ gc)  # the effect's own column refitted
+        P, names = _elsewhere_products(g, X, columns, j)
+        wheres = ["elsewhere"] * len(names)
+        if e["key"] not in KINEMATIC:
+            Z, own_names, own_wheres = own_products(pipe, j)
+            P = np.column_stack([P, beyond(g, Z)])
+            names, wheres = names + own_names, wheres + own_wheres
         if not names:
             continue
-        gc = g - g.mean()
-        base = y - gc * float(gc @ y) / float(gc @ gc)  # the effect's own column refitted
-        P = g[:, None] * Z
-        P = P - gc[:, None] * ((gc @ P) / float(gc @ gc))[None, :]  # the product beyond g
-        norm = np.einsum("ij,ij->j", P, P)
-        gain = np.where(norm > 0, (P.T @ base) ** 2 / np.where(norm > 0, norm, 1.0), 0.0)
-        best = int(np.argmax(gain))
-        chi2 = float(gain[best]) / sigma ** 2 / phi
-        bar = bar0 + 2.0 * math.log(len(names))
-        if chi2 - math.log(n_eff) > bar:
-            out[i] = (names[best], chi2, math.sqrt(float(gain[best]) / n))
+        passed = _passing(P, base, names, wheres, sigma ** 2 * phi, bar0 + 2.0 * math.log(len(names)),
+                          math.log(n_eff), e["key"])
+        if passed:
+            out[i] = [(f, c2, math.sqrt(gn / n), w) for f, c2, gn, w in passed]
     return out
+
+
+def _passing(P, base, names, wheres, var, bar, cost, key) -> list:
+    """``[(feature, chi2, sum of squares, where)]``: the product (a column of ``P``) that explains
+    most of ``base``, when its chi-square (the sum of squares over ``var``) less ``cost`` passes
+    ``bar``; then, beside it, the strongest product of each other kind (``wheres``) that passes
+    the same bar with the first in the fit (a position and a reversal keyed level are often
+    correlated on one recording: the second is named only for what the first leaves)."""
+    gain = gains(P, base)
+    first = int(np.argmax(gain))
+    chi2 = gain / var
+    for where in dict.fromkeys(wheres):  # the strongest of each kind alone, for the record
+        k = max((k for k, w in enumerate(wheres) if w == where), key=lambda k: gain[k])
+        _log.debug("%s: %s %s chi2 - ln n_eff = %.1f against %.1f", key, where, names[k], chi2[k] - cost, bar)
+    if not chi2[first] - cost > bar:
+        return []
+    out = [(names[first], float(chi2[first]), float(gain[first]), wheres[first])]
+    p = P[:, first] / math.sqrt(float(P[:, first] @ P[:, first]))
+    rest = P - p[:, None] * (p @ P)[None, :]
+    gain = gains(rest, base - p * float(p @ base))
+    for where in dict.fromkeys(wheres):
+        at = [k for k, w in enumerate(wheres) if w == where]
+        best = max(at, key=lambda k: gain[k])
+        if where != wheres[first] and gain[best] / var - cost > bar:
+            out.append((names[best], float(gain[best] / var), float(gain[best]), where))
+    return out
+
+
+def _elsewhere_products(g, X, columns, j) -> tuple:
+    """``(P, names)``: the products g (z - mean z) for every input z of a joint other than ``j``
+    (and |z - median z|), with what g explains of them taken out."""
+    other = [k for k, col in enumerate(columns) if col[2] is not None and col[2] != j]
+    Z = X[:, other]
+    Z = np.column_stack([Z, np.abs(Z - np.median(Z, axis=0))])
+    names = [columns[k][0] for k in other] + [f"|{columns[k][0]}|" for k in other]
+    Z = Z - Z.mean(axis=0)
+    keep = Z.std(axis=0) > 0
+    Z, names = Z[:, keep], [nm for nm, ok in zip(names, keep) if ok]
+    gc = g - g.mean()
+    P = g[:, None] * Z
+    P = P - gc[:, None] * ((gc @ P) / float(gc @ gc))[None, :]  # the product beyond g
+    return P, names

@@ -1,0 +1,101 @@
+"""A library friction whose level is keyed on its own joint's position or on the time since the
+joint last reversed is not named with confidence (cosim.discrepancy.keyed_elsewhere.modulations
+with cosim.discrepancy.keyed_own; docs/discrepancy.md, "Nor where what is left is keyed on another
+joint, on the joint's position or on its reversals").
+
+A synthetic two-joint recording as the rule reads it (decimated smoothed position, rate, the
+channels' residuals), no diagnosis: joint 1 carries a friction whose level is c0 + c1 b(q1) (b a
+band over a third of the stroke) or c0 + c1 exp(-s / tau) (s the time since q1 last reversed),
+and the library's Coulomb friction is fitted to it by least squares (the oracle: its level is the
+mean one).  The residual left is within the channel's own noise to the structure test's eye, but
+the Coulomb force times a function of the position, or of the time since the reversal, explains
+it.  A Coulomb friction that is the truth (constant level) is left alone, and so is a kinematic
+effect (its force is a function of the position by nature)."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cosim.discrepancy.keyed_elsewhere import KEYED_ELSEWHERE, modulations, withheld
+from cosim.discrepancy.keyed_own import time_since_reversal
+from cosim.discrepancy.results import FoundEffect
+from cosim.discrepancy.ties import tied
+
+DT, STEP, T = 1e-3, 5, 12.0
+V = 3e-4  # velocity scale of the friction's smooth sign [m/s]
+NOISE = 0.004  # effort noise [N]
+
+
+def _motion():
+    t = np.arange(0.0, T, DT)
+    q = np.column_stack([0.05 * np.sin(2 * math.pi * 0.37 * t) + 0.02 * np.sin(2 * math.pi * 1.13 * t + 0.4),
+                         0.04 * np.sin(2 * math.pi * 0.29 * t + 1.0)])
+    qd = np.gradient(q, DT, axis=0)
+    return t, q, qd, np.gradient(qd, DT, axis=0)
+
+
+def _case(level, key="coulomb", seed=1):
+    """(eng, theta, effects, R) of the stubbed engine: ``level`` (n,) the truth's friction level on
+    joint 1, its Coulomb friction fitted at the least-squares level."""
+    t, q, qd, qdd = _motion()
+    idx = np.arange(0, len(t), STEP)
+    rng = np.random.default_rng(seed)
+    sign = np.tanh(qd[:, 0] / V)
+    truth = level * sign
+    fc = float(truth[idx] @ sign[idx] / (sign[idx] @ sign[idx]))  # the library's Coulomb level fitted
+    noise = NOISE * rng.normal(size=(len(idx), 2))
+
+    def R(theta):
+        r = noise.copy()
+        r[:, 0] += truth[idx] - theta.get("rail[1].coulomb", 0.0) * sign[idx]
+        return r
+
+    tau = np.column_stack([truth, np.zeros(len(t))]) + 1.0
+    pipe = SimpleNamespace(idx=idx, nd=2, t=t, dt=DT, window=0.02, step=STEP * DT, segments=[(0, len(t))],
+                           q_s=q, qd_s=qd, qdd_s=qdd, tau_s=tau, rec=SimpleNamespace(), has_pose=False,
+                           usable=np.ones((len(idx), 2), bool), qd_noise=np.full(2, 1e-4),
+                           model=SimpleNamespace(facts=SimpleNamespace(joint_noun="slider", joint_unit="m",
+                                                                       effort_unit="N")))
+    eng = SimpleNamespace(pipe=pipe, R=R, accuracy=lambda: np.full(2, NOISE))
+    theta = {"rail[1].coulomb": fc}
+    effect = FoundEffect(key, "Coulomb friction", "coulomb[1]", "Coulomb friction, joint 1", 1, "effort",
+                         {"rail[1].coulomb": {}}, 50.0, 50.0, "", [])
+    return eng, theta, [effect], R(theta), t, q
+
+
+def test_a_friction_rising_over_part_of_the_stroke_is_keyed_on_the_position():
+    t, q, _, _ = _motion()
+    lo, hi = np.quantile(q[:, 0], [0.55, 0.85])
+    band = 0.5 * (np.tanh((q[:, 0] - lo) / 0.002) - np.tanh((q[:, 0] - hi) / 0.002))
+    eng, theta, effects, R, _, _ = _case(0.02 + 0.02 * band)
+    found = modulations(eng, theta, effects, R)
+    assert [m[3] for m in found.get(0, [])] == ["position"], found
+    feat = found[0][0][0]  # "q1 in a-b m": the band found overlaps the truth's
+    a, b = (float(v) for v in feat.split(" in ")[1].split()[0].split("-"))
+    assert a < hi and b > lo, feat
+    marked = withheld(effects, [], "slider", found)[0]
+    assert marked["lookalikes"][0]["group"] == KEYED_ELSEWHERE and tied(marked["lookalikes"][0])
+    assert "keyed on its position" in marked["lookalikes"][0]["name"]
+
+
+def test_a_friction_that_relaxes_after_each_reversal_is_keyed_on_the_time_since_it():
+    t, _, qd, _ = _motion()
+    s = time_since_reversal(qd[:, 0], t, 1e-3)
+    eng, theta, effects, R, _, _ = _case(0.02 + 0.03 * np.exp(-s / 0.15))
+    found = modulations(eng, theta, effects, R)
+    assert "reversal" in [m[3] for m in found.get(0, [])], found
+    marked = withheld(effects, [], "slider", found)[0]
+    assert "keyed on the time since its last reversal" in marked["lookalikes"][0]["name"]
+
+
+@pytest.mark.parametrize("key", ["coulomb", "backlash"])
+def test_a_constant_level_and_a_kinematic_effect_are_left_alone(key):
+    t, q, _, _ = _motion()
+    if key == "coulomb":  # the library's truth: a constant level
+        assert modulations(*_case(np.full(len(t), 0.03))[:4]) == {}
+    else:  # a position-keyed level, but on an effect whose force is position-keyed by nature
+        lo, hi = np.quantile(q[:, 0], [0.55, 0.85])
+        band = 0.5 * (np.tanh((q[:, 0] - lo) / 0.002) - np.tanh((q[:, 0] - hi) / 0.002))
+        found = modulations(*_case(0.02 + 0.02 * band, key="backlash")[:4])
+        assert not [m for m in found.get(0, []) if m[3] != "elsewhere"], found
