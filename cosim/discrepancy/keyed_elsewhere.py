@@ -1,4 +1,5 @@
-"""A library effect whose channel keeps a part keyed on another joint: not named with confidence.
+"""A library effect whose channel keeps a part keyed on another joint, on its joint's position or
+on the time since its joint reversed: not named with confidence.
 
 A library effect on joint j is a force of joint j's own motion (its position, rate,
 acceleration, effort).  When the truth on j's effort channel also depends on another joint's
@@ -12,7 +13,11 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
 
 * :func:`modulations`: the effect's level changes with another joint's input (its force on the
   channel times that input explains the residual, against the channel's own noise, beyond the
-  structure test's threshold and a look-elsewhere cost);
+  structure test's threshold and a look-elsewhere cost), or with a function of its own joint's
+  position or of the time since that joint last reversed (:mod:`.keyed_own`: a friction rising
+  over part of the stroke, one that relaxes after each reversal, taken by the library's
+  friction at its mean level); the look-alike then says "keyed on its position" or "keyed on
+  the time since its last reversal";
 * :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`.flexible`, judged out
   of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
@@ -20,7 +25,7 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
 
 Effects of no single joint (a platform mass, a tilt, a delay) act through every joint's motion
 and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
-joint", states the rule and what it was measured on.
+joint, on the joint's position or on its reversals", states the rule and what it was measured on.
 """
 from __future__ import annotations
 
@@ -131,7 +136,10 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
     out = {}
     for i, e in enumerate(effects):
         j = e["joint"]
-        if j is None or not e["params"] or any(tied(a) for a in e["lookalikes"]):  # named tied already
+        if j is None or not e["params"]:
+            continue
+        already = any(tied(a) for a in e["lookalikes"])  # named tied already: not tested (but for the record)
+        if already and not _log.isEnabledFor(logging.DEBUG):
             continue
         c = j - 1
         R_wo = eng.R({k: v for k, v in theta.items() if k not in e["params"]})
@@ -153,8 +161,8 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
         if not names:
             continue
         passed = _passing(P, base, names, wheres, sigma ** 2 * phi, bar0 + 2.0 * math.log(len(names)),
-                          math.log(n_eff), e["key"])
-        if passed:
+                          math.log(n_eff), f"{e['key']}[{j}]" + (" (tied already)" if already else ""))
+        if passed and not already:
             out[i] = [(f, c2, math.sqrt(gn / n), w) for f, c2, gn, w in passed]
     return out
 
