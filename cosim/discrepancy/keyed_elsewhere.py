@@ -25,7 +25,8 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
 
 Effects of no single joint (a platform mass, a tilt, a delay) act through every joint's motion
 and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
-joint, on the joint's position or on its reversals", states the rule and what it was measured on.
+joint" and "Nor where its level follows the joint's own position or its reversals", states the
+rule and what it was measured on.
 """
 from __future__ import annotations
 
@@ -54,9 +55,10 @@ def foreign_inputs(fit, joint: int) -> list:
 def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | None = None) -> list:
     """``effects`` (:class:`~.results.FoundEffect`) with a tied look-alike
     :data:`KEYED_ELSEWHERE` added to every effect on a joint whose effort channel keeps a part
-    keyed on another joint: its flexible fit (``fits``, :class:`~.flexible.FlexibleFit`) claims a
-    part keyed on another joint's input, or its level changes with one (``modulated``, per effect
-    index, from :func:`modulations`); the others as they are.
+    keyed elsewhere than the effect's own shape: its flexible fit (``fits``,
+    :class:`~.flexible.FlexibleFit`) claims a part keyed on another joint's input, or its level
+    changes with one, with the joint's position or with the time since it reversed
+    (``modulated``, per effect index, from :func:`modulations`); the others as they are.
 
     Example
     -------

@@ -23,6 +23,8 @@ the kinematic ones (an encoder offset, a backlash, an elasticity, a geometry err
 the readings, and the readings' error moves the inverse dynamics with the pose and flips at
 reversals): they are not tested here (``KINEMATIC``).  The products are zero on the samples
 whose smoothing window is mostly at rest (``pipe.usable``), where the fit does not look either.
+docs/discrepancy.md, section 4, "Nor where its level follows the joint's own position or its
+reversals", states the bars and what they were measured on.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """A library friction whose level is keyed on its own joint's position or on the time since the
 joint last reversed is not named with confidence (cosim.discrepancy.keyed_elsewhere.modulations
-with cosim.discrepancy.keyed_own; docs/discrepancy.md, "Nor where what is left is keyed on another
-joint, on the joint's position or on its reversals").
+with cosim.discrepancy.keyed_own; docs/discrepancy.md, "Nor where its level follows the joint's own
+position or its reversals").
 
 A synthetic two-joint recording as the rule reads it (decimated smoothed position, rate, the
 channels' residuals), no diagnosis: joint 1 carries a friction whose level is c0 + c1 b(q1) (b a
