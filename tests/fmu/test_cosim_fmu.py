@@ -1,7 +1,9 @@
 """``cosim fmu``: a robot's FMUs for the platforms asked for, for a listed robot or a
-description file anywhere (its FMUs made in the build directory, the checkout untouched), and
-a scenario whose robot is a file run with ``--plant fmu``.  The module leaves the build directory
-as it found it (fixture ``build_restored``)."""
+description file anywhere (its FMUs made in a tree of their own and copied into the build
+directory, the checkout untouched, no other FMU of the build removed or replaced while they
+build, two description files at once), and a scenario whose robot is a file run with
+``--plant fmu``.  The module leaves the build directory as it found it (fixture
+``build_restored``)."""
 import json
 import shutil
 import subprocess
@@ -19,6 +21,7 @@ from cosim import fmu
 
 REPO = Path(__file__).resolve().parents[2]
 # the FMUs made here of description files leave the build directory afterwards (tests/conftest.py)
+FMUS_MADE = ("PKM_MY_PENDULUM", "PKM_MY_STEWART")
 pytestmark = pytest.mark.usefixtures("build_restored")
 
 
