@@ -116,6 +116,9 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, p
         desc = Path(robot).resolve()
         if not desc.is_file():
             raise FileNotFoundError(f"{robot}: no such description file")
+        from .core import Model
+
+        Model(str(desc))  # a mistake in the file: its line, in one InputError, before any build
         _fmu_build.build_description(desc, ident, b, jobs, platforms)
     else:
         _fmu_build.build_listed(ident, b, jobs)

@@ -54,6 +54,16 @@ def test_fmi3_with_the_platforms_asked_for(tmp_path):
         assert fmu.validate(tmp_path / name) == []
 
 
+def test_a_mistake_in_the_description_file_is_one_line_and_exit_2(tmp_path):
+    """The file's line, before anything is built (no tree made for it)."""
+    desc = tmp_path / "my_broken.toml"
+    desc.write_text('title = "broken"\n[robot\n')
+    r = cosim("fmu", str(desc), "--out", str(tmp_path / "out"))
+    assert r.returncode == 2 and f"{desc}:2: table header not closed" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (fmu.build_dir() / "fmu_descriptions" / "PKM_MY_BROKEN").exists()
+
+
 @pytest.mark.parametrize("args, says", [
     (["--fmi", "3", "--source"], "FMI 3: the source-code FMUs are FMI 2.0 only"),
     (["--platforms", "darwin64"], "unknown platform 'darwin64'"),
