@@ -27,8 +27,9 @@ import subprocess
 from contextlib import contextmanager
 from pathlib import Path
 
+from .fmu import PLATFORMS  # cosim.fmu imports this module inside build() only
+
 REPO = Path(__file__).resolve().parent.parent
-PLATFORMS = ("linux64", "win64", "aarch64-linux")
 
 
 @contextmanager
@@ -128,7 +129,8 @@ def build_description(desc: Path, ident: str, b: Path, jobs: int, platforms) -> 
     ``platforms``: the binaries to make (linux64 always; None: those of the project's build)."""
     extra = _project_ready(b, platforms, jobs)
     tree = b / "fmu_descriptions" / ident
-    wanted = {"PKM_MAIN_BUILD": str(b.resolve()), "PKM_DESCRIPTION": str(desc), "PKM_FMU_PLATFORMS": ";".join(extra) or "none"}
+    wanted = {"PKM_MAIN_BUILD": str(b.resolve()), "PKM_DESCRIPTION": str(desc),
+              "PKM_FMU_PLATFORMS": ";".join(extra) or "none"}
     with _locked(b / "fmu_descriptions" / f"{ident}.lock"):
         if cache_values(tree, dict.fromkeys(wanted, "")) != wanted:
             subprocess.run(["cmake", "-S", str(REPO / "fmu" / "described"), "-B", str(tree),
