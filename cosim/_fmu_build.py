@@ -27,9 +27,9 @@ import subprocess
 from contextlib import contextmanager
 from pathlib import Path
 
-from .fmu import PLATFORMS  # cosim.fmu imports this module inside build() only
-
 REPO = Path(__file__).resolve().parent.parent
+#: the platforms an FMU may carry binaries for (``cosim.fmu.PLATFORMS``): the build machine's first
+PLATFORMS = ("linux64", "win64", "aarch64-linux")
 
 
 @contextmanager

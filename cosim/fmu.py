@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _fmu_build
+from ._fmu_build import PLATFORMS
 from .errors import FMUError, InputError
 
 __all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "restore_fmpy_logger",
@@ -83,7 +85,6 @@ def fmu_path(robot: str = "6pus", build: str | Path | None = None, fmi: int = 2)
     return p
 
 
-PLATFORMS = ("linux64", "win64", "aarch64-linux")
 # The binaries/ folder of each platform in an FMI 3.0 FMU (the platform tuples).
 FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
@@ -107,8 +108,6 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, p
     >>> from cosim import fmu
     >>> fmu.build("my_stewart.toml", platforms=["linux64"])   # build/fmu/PKM_MY_STEWART.fmu
     """
-    from . import _fmu_build
-
     ident = fmu_id(robot)
     b = Path(build or build_dir())
     if _is_file(robot):
