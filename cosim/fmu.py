@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import os
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
 
+from . import _fmu_build
+from ._fmu_build import PLATFORMS
 from .errors import FMUError, InputError
 
 __all__ = ["FMU_IDS", "PLATFORMS", "fmu_id", "fmu_path", "build", "package", "validate", "variable_names", "simulate", "restore_fmpy_logger",
@@ -84,7 +85,6 @@ def fmu_path(robot: str = "6pus", build: str | Path | None = None, fmi: int = 2)
     return p
 
 
-PLATFORMS = ("linux64", "win64", "aarch64-linux")
 # The binaries/ folder of each platform in an FMI 3.0 FMU (the platform tuples).
 FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
@@ -93,12 +93,15 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, p
     """Build (or bring up to date) a robot's FMUs (plant, controller, source-code; FMI 2.0 and
     3.0) with CMake and return the FMI 2.0 plant's path.
 
-    A description file anywhere (``"my_stewart.toml"``) is given to the build as
-    ``PKM_FMU_DESCRIPTIONS`` (nothing in the checkout changes): its FMUs compile only their
-    FMU layer, the core of every platform being compiled already.  ``platforms`` (names of
-    ``PLATFORMS``; None: the build's own) are the binaries to make, given as
-    ``PKM_FMU_PLATFORMS``.  Both settings hold for this build only: the build directory's
-    cache gets its own values back afterwards.
+    A robot the toolkit lists: its targets in the build directory, with the platforms it was
+    configured for (``platforms`` is not used).  A description file anywhere
+    (``"my_stewart.toml"``): its FMUs in a build tree of their own,
+    ``<build>/fmu_descriptions/<ID>/`` (nothing in the checkout changes), made from the build
+    directory's fmu_gen and core of every platform (only their FMU layer compiles), then copied
+    to ``<build>/fmu`` beside the listed robots' FMUs; ``platforms`` (names of ``PLATFORMS``,
+    each one the build directory makes; None: all it makes) are the binaries to make.  The
+    build directory is never configured again: no other FMU is removed or replaced meanwhile,
+    and two description files build at once.
 
     Example
     -------
@@ -107,65 +110,17 @@ def build(robot: str = "6pus", build: str | Path | None = None, jobs: int = 2, p
     """
     ident = fmu_id(robot)
     b = Path(build or build_dir())
-    wanted = {}
     if _is_file(robot):
         desc = Path(robot).resolve()
         if not desc.is_file():
             raise FileNotFoundError(f"{robot}: no such description file")
-        wanted["PKM_FMU_DESCRIPTIONS"] = str(desc)
-    if platforms is not None:
-        wanted["PKM_FMU_PLATFORMS"] = ";".join(p for p in platforms if p != "linux64") or "none"
-    saved = _cache_values(b, {"PKM_FMU_DESCRIPTIONS": "", "PKM_FMU_PLATFORMS": "auto"})
-    if wanted or not (b / "CMakeCache.txt").exists():
-        _configure_build(b, wanted)
-    targets = [f"{ident}_fmu", f"{ident}_CTRL_fmu", f"{ident}_source_fmu", f"{ident}_CTRL_source_fmu",
-               f"{ident}_fmu3", f"{ident}_CTRL_fmu3"]
-    try:
-        subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *targets], check=True,
-                       stdout=subprocess.DEVNULL)
-    finally:
-        back = {k: saved[k] for k in wanted if saved[k] != wanted[k]}
-        if back:
-            _configure_build(b, back)
-            if "PKM_FMU_PLATFORMS" in back:
-                _repack_fmi3(b, jobs)
+        from .core import Model
+
+        Model(str(desc))  # a mistake in the file: its line, in one InputError, before any build
+        _fmu_build.build_description(desc, ident, b, jobs, platforms)
+    else:
+        _fmu_build.build_listed(ident, b, jobs)
     return fmu_path(robot, b)
-
-
-def _repack_fmi3(b: Path, jobs: int) -> None:
-    """Pack again the FMI 3.0 FMUs a change of the platforms took away.
-
-    The packing command of an FMI 3.0 FMU lists the binaries it copies, so a configure that
-    changes ``PKM_FMU_PLATFORMS`` changes it, and CMake's Makefiles delete the outputs of
-    commands that changed: configured back, the FMUs of every robot are gone until packed again
-    (their binaries are built: packing is a copy and a zip)."""
-    import re
-
-    listed = subprocess.run(["cmake", "--build", str(b), "--target", "help"], capture_output=True, text=True).stdout
-    gone = [t for t in re.findall(r"^\.\.\. (\S+)_fmu3$", listed, flags=re.M)
-            if not (b / "fmu" / "fmi3" / f"{t}.fmu").exists()]
-    if gone:
-        subprocess.run(["cmake", "--build", str(b), "-j", str(jobs), "--target", *(f"{t}_fmu3" for t in gone)],
-                       check=True, stdout=subprocess.DEVNULL)
-
-
-def _configure_build(b: Path, values: dict) -> None:
-    subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release",
-                    *(f"-D{k}={v}" for k, v in values.items())], check=True, stdout=subprocess.DEVNULL)
-
-
-def _cache_values(b: Path, defaults: dict) -> dict:
-    """The values of some variables in a build directory's ``CMakeCache.txt`` (``defaults``
-    for those it does not set, or when there is none)."""
-    out = dict(defaults)
-    cache = b / "CMakeCache.txt"
-    if cache.exists():
-        for line in cache.read_text(errors="replace").splitlines():
-            name, sep, value = line.partition("=")
-            key = name.split(":", 1)[0]
-            if sep and key in out:
-                out[key] = value
-    return out
 
 
 _build_fmus = build  # for package(), whose ``build`` argument is the folder

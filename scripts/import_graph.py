@@ -33,7 +33,7 @@ LAYERS = [
       "cosim.robots"]),
     ("basics", "what the loop and every capability use: recordings, trajectories, controllers, the FMU wrapper",
      ["cosim.jsonable", "cosim.recording_io", "cosim.recording", "cosim.run_record", "cosim.trajectories",
-      "cosim.simulate", "cosim.controllers", "cosim.fmu", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
+      "cosim.simulate", "cosim.controllers", "cosim.fmu", "cosim._fmu_build", "cosim.fourbar", "cosim.indices", "cosim.parasitic", "cosim.plots",
       "cosim.injection",
       # exciting trajectories: a leaf (it imports nothing of cosim) that scenarios and calibration use too
       "cosim.discrepancy.excitation"]),

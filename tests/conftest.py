@@ -4,14 +4,14 @@
 In parallel, the tests are handed out to the workers in units (:func:`unit`): a test module
 with a module-scoped fixture (a recording, a fresh clone, FMUs unzipped) runs whole on one
 worker, so that the fixture is made once; the other tests are handed out one by one.  The
-modules of ``SERIAL`` (and any module using ``build_restored``) are one unit, run one after
-the other on one worker, first: they share what no tmp folder separates.  ``cosim fmu
-<file>.toml`` configures the checkout's build directory with other platforms for the time of
-its build, and CMake then deletes every FMI 3.0 FMU until it is packed again
-(``cosim.fmu._repack_fmi3``), so no test may read ``build/fmu/fmi3`` meanwhile; the Wine runs
-share one wineserver kept 60 s after its last client (``tests/fmu/platform_host.py``); the
-browser runs share chromium's profile.  The tests using the sweep tests' LocalCluster are one unit
-too (the cluster, two worker processes, started once)."""
+modules of ``SERIAL`` are one unit, run one after the other on one worker, first: they share
+a program's state that no tmp folder separates.  The Wine runs share one wineserver kept 60 s
+after its last client (``tests/fmu/platform_host.py``); the browser runs share chromium's
+profile (the README's tour takes a screenshot with it).  The tests using the sweep tests'
+LocalCluster are one unit too (the cluster, two worker processes, started once).  The tests
+that make FMUs of description files (``cosim fmu <file>.toml``) run beside the others: each
+file's FMUs build in a tree of their own and the build directory's FMUs stay in place
+(``cosim/_fmu_build.py``)."""
 import functools
 import os
 import re
@@ -22,15 +22,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: what ``cosim fmu <file>.toml`` makes in the build directory for the tests' description files
-#: (my_stewart.toml, my_pendulum.toml, the README's my_delta.toml): named PKM_MY_* and my_*
-MADE_FOR_TESTS = ("fmu/PKM_MY_*", "fmu/*/PKM_MY_*", "fmu_described/my_*", "fmu_platform/*/*PKM_MY_*",
-                  "fmu_platform/*/CMakeFiles/PKM_MY_*")
-
 #: the modules run one after the other on one worker, first (see the module's docstring):
-#: those that build FMUs of description files, read the FMI 3.0 FMUs, run Wine or chromium
-SERIAL = ("tests/test_readme.py", "tests/fmu/test_cosim_fmu.py", "tests/fmu/test_fmi3.py",
-          "tests/fmu/test_fmi3_host.py", "tests/fmu/test_fuzz.py", "tests/fmu/test_platforms.py",
+#: those that run Wine or chromium
+SERIAL = ("tests/test_readme.py", "tests/fmu/test_fmi3_host.py", "tests/fmu/test_platforms.py",
           "tests/report/test_html.py")
 
 
@@ -38,7 +32,7 @@ SERIAL = ("tests/test_readme.py", "tests/fmu/test_cosim_fmu.py", "tests/fmu/test
 def _module_unit(module: str) -> str | None:
     """The unit of a whole module (``"serial"``, the module itself) or None (one by one)."""
     text = (ROOT / module).read_text() if (ROOT / module).is_file() else ""
-    if module in SERIAL or "build_restored" in text:
+    if module in SERIAL:
         return "serial"
     if re.search(r"def test_\w+\([^)]*\b(client|cluster)\b", text):  # tests/sweep/conftest.py's LocalCluster
         return "dask-cluster"
@@ -84,26 +78,21 @@ def pytest_xdist_make_scheduler(config, log):
 
 
 @pytest.fixture(scope="module")
-def build_restored():
-    """The checkout's build directory as it was before the module's tests: the FMUs they made of
-    description files (PKM_MY_*) removed, and PKM_FMU_DESCRIPTIONS and PKM_FMU_PLATFORMS of its
-    CMakeCache.txt set back (``cosim fmu`` sets them back itself when it ends normally; a run
-    stopped in the middle of a cross build leaves them changed)."""
+def build_restored(request):
+    """The checkout's build directory as it was before the module's tests: the FMUs it made
+    of description files removed afterwards, those named in the module's ``FMUS_MADE``
+    (``"PKM_MY_DELTA"``: the FMI 2.0, FMI 3.0 and source-code FMUs, plant and controller, in
+    ``build/fmu``, and their tree ``build/fmu_descriptions/<ID>``), when they were not there
+    before."""
     from cosim import fmu
 
     b = fmu.build_dir()
-    keys = {"PKM_FMU_DESCRIPTIONS": "", "PKM_FMU_PLATFORMS": "auto"}
-    cache = fmu._cache_values(b, keys)
-    before = {p for pat in MADE_FOR_TESTS for p in b.glob(pat)}
+    patterns = [f"{where}/{ident}*" for ident in request.module.FMUS_MADE
+                for where in ("fmu", "fmu/*", "fmu_descriptions")]
+    before = {p for pat in patterns for p in b.glob(pat)}
     yield
-    for p in sorted({p for pat in MADE_FOR_TESTS for p in b.glob(pat)} - before, reverse=True):
+    for p in sorted({p for pat in patterns for p in b.glob(pat)} - before, reverse=True):
         if p.is_dir() and not p.is_symlink():
             shutil.rmtree(p, ignore_errors=True)
         else:
             p.unlink(missing_ok=True)
-    now = fmu._cache_values(b, keys)
-    back = {k: v for k, v in cache.items() if now[k] != v}
-    if back:
-        fmu._configure_build(b, back)
-        if "PKM_FMU_PLATFORMS" in back:
-            fmu._repack_fmi3(b, 2)

@@ -25,6 +25,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 # ``cosim fmu my_delta.toml`` makes PKM_MY_DELTA in the build directory: removed afterwards (conftest.py)
+FMUS_MADE = ("PKM_MY_DELTA",)
 pytestmark = pytest.mark.usefixtures("build_restored")
 # the README, then the tour: one document, in the order a reader meets it
 PAGES = ("README.md", "docs/guide.md")

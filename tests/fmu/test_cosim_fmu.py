@@ -1,11 +1,15 @@
 """``cosim fmu``: a robot's FMUs for the platforms asked for, for a listed robot or a
-description file anywhere (its FMUs made in the build directory, the checkout untouched), and
-a scenario whose robot is a file run with ``--plant fmu``.  The module leaves the build directory
-as it found it (fixture ``build_restored``)."""
+description file anywhere (its FMUs made in a tree of their own and copied into the build
+directory, the checkout untouched, no other FMU of the build removed or replaced while they
+build, two description files at once), and a scenario whose robot is a file run with
+``--plant fmu``.  The module leaves the build directory as it found it (fixture
+``build_restored``)."""
 import json
 import shutil
 import subprocess
 import sys
+import threading
+import time
 import tomllib
 import zipfile
 from pathlib import Path
@@ -17,6 +21,7 @@ from cosim import fmu
 
 REPO = Path(__file__).resolve().parents[2]
 # the FMUs made here of description files leave the build directory afterwards (tests/conftest.py)
+FMUS_MADE = ("PKM_MY_PENDULUM", "PKM_MY_STEWART")
 pytestmark = pytest.mark.usefixtures("build_restored")
 
 
@@ -49,6 +54,16 @@ def test_fmi3_with_the_platforms_asked_for(tmp_path):
         assert fmu.validate(tmp_path / name) == []
 
 
+def test_a_mistake_in_the_description_file_is_one_line_and_exit_2(tmp_path):
+    """The file's line, before anything is built (no tree made for it)."""
+    desc = tmp_path / "my_broken.toml"
+    desc.write_text('title = "broken"\n[robot\n')
+    r = cosim("fmu", str(desc), "--out", str(tmp_path / "out"))
+    assert r.returncode == 2 and f"{desc}:2: table header not closed" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (fmu.build_dir() / "fmu_descriptions" / "PKM_MY_BROKEN").exists()
+
+
 @pytest.mark.parametrize("args, says", [
     (["--fmi", "3", "--source"], "FMI 3: the source-code FMUs are FMI 2.0 only"),
     (["--platforms", "darwin64"], "unknown platform 'darwin64'"),
@@ -58,37 +73,84 @@ def test_what_cannot_be_made_is_one_line_and_exit_2(tmp_path, args, says):
     assert r.returncode == 2 and says in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
+def _fmus_of_the_build(b):
+    """The FMUs the build directory holds of the robots it lists (every ``.fmu`` under
+    ``fmu/``, FMI 2.0, FMI 3.0 and source-code, but those the tests make of description
+    files), and its ``CMakeCache.txt``: path -> (inode, mtime)."""
+    files = [p for p in (b / "fmu").rglob("*.fmu") if not p.name.startswith("PKM_MY_")]
+    files.append(b / "CMakeCache.txt")
+    return {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in files}
+
+
+class _Watch(threading.Thread):
+    """Polls files every 5 ms while it runs: ``events`` lists each one found missing or
+    replaced (another inode or mtime) against ``files`` (path -> (inode, mtime))."""
+
+    def __init__(self, files):
+        super().__init__(daemon=True)
+        self.files, self.events, self.stop = files, [], threading.Event()
+
+    def run(self):
+        while not self.stop.is_set():
+            for p, seen in self.files.items():
+                try:
+                    st = p.stat()
+                    now = (st.st_ino, st.st_mtime_ns)
+                except FileNotFoundError:
+                    now = None
+                if now != seen and (p, now) not in self.events:
+                    self.events.append((p, now))
+            time.sleep(0.005)
+
+
 @pytest.fixture(scope="module")
-def my_stewart(tmp_path_factory):
-    """A description file outside the repository (the bundled hexapod under another name)."""
-    d = tmp_path_factory.mktemp("mine") / "my_stewart.toml"
-    shutil.copyfile(REPO / "robots" / "hexapod_ups.toml", d)
-    return d
-
-
-def test_a_description_files_fmu_leaves_the_build_cache_as_it_was(tmp_path):
-    """``cosim fmu my.toml --platforms linux64`` builds its FMUs for linux64 only and puts the
-    build directory's PKM_FMU_DESCRIPTIONS and PKM_FMU_PLATFORMS back.  The robot is the
-    pendulum made a continuous axis without gravity: its FMU spins it past 100 rad on the
-    closed form q = tau t^2 / (2 M), M = m l^2 + I."""
-    from fmpy import read_model_description, simulate_fmu
-
-    desc = tmp_path / "my_pendulum.toml"
+def made(tmp_path_factory):
+    """Two description files outside the repository made into FMUs by two ``cosim fmu`` at
+    once, while every other FMU of the build directory is watched: ``my_pendulum.toml`` (the
+    pendulum made a continuous axis without gravity) for linux64, ``my_stewart.toml`` (the
+    bundled hexapod under another name) for the three platforms."""
+    d = tmp_path_factory.mktemp("mine")
     text = (REPO / "robots" / "pendulum.toml").read_text().replace("stroke = [-3.1, 3.1]", "continuous = true")
     text = text.replace('name = "pendulum"', 'name = "my_pendulum"')
-    desc.write_text(text.replace("vector = [0.0, 0.0, -9.81]", "vector = [0.0, 0.0, 0.0]"))
-    cache = fmu.build_dir() / "CMakeCache.txt"
-    keys = {"PKM_FMU_DESCRIPTIONS": "", "PKM_FMU_PLATFORMS": "auto"}
-    before = fmu._cache_values(fmu.build_dir(), keys)
-    r = cosim("fmu", str(desc), "--platforms", "linux64", "--out", str(tmp_path / "out"))
-    assert r.returncode == 0, r.stderr
-    assert platforms_in(tmp_path / "out" / "PKM_MY_PENDULUM.fmu") == {"linux64"}
-    assert fmu._cache_values(fmu.build_dir(), keys) == before
-    assert str(desc) not in cache.read_text()
-    # no other platform was built for it
-    stage = fmu.build_dir() / "fmu"
-    assert not list(stage.glob("**/binaries/win64/PKM_MY_PENDULUM*")), list(stage.glob("**/PKM_MY_PENDULUM*"))
-    plant = tmp_path / "out" / "PKM_MY_PENDULUM.fmu"
+    (d / "my_pendulum.toml").write_text(text.replace("vector = [0.0, 0.0, -9.81]", "vector = [0.0, 0.0, 0.0]"))
+    shutil.copyfile(REPO / "robots" / "hexapod_ups.toml", d / "my_stewart.toml")
+    runs = {"my_pendulum": "linux64", "my_stewart": "linux64,win64,aarch64-linux"}
+    status = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
+    others = _fmus_of_the_build(fmu.build_dir())
+    assert any(p.parent.name == "fmi3" for p in others), "no FMI 3.0 FMU in the build to watch"
+    watch = _Watch(others)
+    watch.start()
+    try:
+        procs = {name: subprocess.Popen([sys.executable, "-m", "cosim", "fmu", str(d / f"{name}.toml"), "--platforms",
+                                         platforms, "--out", str(d / name)], cwd=REPO, text=True,
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                 for name, platforms in runs.items()}
+        results = {name: (p.wait(), p.stdout.read(), p.stderr.read()) for name, p in procs.items()}
+    finally:
+        watch.stop.set()
+        watch.join()
+    after = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
+    return {"dir": d, "results": results, "events": watch.events, "others": others,
+            "status": (status, after)}
+
+
+def test_two_description_files_at_once_leave_every_other_fmu_in_place(made):
+    """Both runs succeed, and no FMU of another robot (nor the build's CMakeCache.txt) was
+    removed or replaced at any moment while they ran."""
+    for name, (rc, out, err) in made["results"].items():
+        assert rc == 0, (name, err)
+    assert [(str(p), what) for p, what in made["events"]] == []
+    assert _fmus_of_the_build(fmu.build_dir()) == made["others"]
+
+
+def test_a_description_files_fmu_for_linux64_only(made):
+    """``cosim fmu my.toml --platforms linux64`` builds its FMUs for linux64 only.  Its FMU
+    spins the pendulum past 100 rad on the closed form q = tau t^2 / (2 M), M = m l^2 + I."""
+    from fmpy import read_model_description, simulate_fmu
+
+    plant = made["dir"] / "my_pendulum" / "PKM_MY_PENDULUM.fmu"
+    assert platforms_in(plant) == {"linux64"}
+    assert platforms_in(fmu.fmu_path("PKM_MY_PENDULUM")) == {"linux64"}  # no other platform was built for it
     (tau_name,) = [v.name for v in read_model_description(str(plant)).modelVariables if v.causality == "input"]
     (q_name,) = [v.name for v in read_model_description(str(plant)).modelVariables if v.name.startswith("q[")]
     r = simulate_fmu(str(plant), stop_time=10.0, output_interval=0.5, start_values={tau_name: 0.6},
@@ -98,23 +160,21 @@ def test_a_description_files_fmu_leaves_the_build_cache_as_it_was(tmp_path):
     assert r[q_name][-1] > 100
 
 
-def test_description_file_anywhere(my_stewart, tmp_path):
-    before = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
-    r = cosim("fmu", str(my_stewart), "--platforms", "linux64,win64,aarch64-linux", "--out", str(tmp_path))
-    assert r.returncode == 0, r.stderr
-    plant = tmp_path / "PKM_MY_STEWART.fmu"
+def test_description_file_anywhere(made):
+    out = made["dir"] / "my_stewart"
+    plant = out / "PKM_MY_STEWART.fmu"
     assert platforms_in(plant) == {"linux64", "win64", "aarch64-linux"}
     assert fmu.validate(plant) == []
     assert "resources/my_stewart.toml" in zipfile.ZipFile(plant).namelist()
-    assert (tmp_path / "PKM_MY_STEWART_CTRL.fmu").exists()
-    after = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout
+    assert (out / "PKM_MY_STEWART_CTRL.fmu").exists()
+    before, after = made["status"]
     assert after == before  # nothing in the checkout changed
 
 
-def test_scenario_of_a_description_file_runs_with_the_fmu_plant(my_stewart, tmp_path):
+def test_scenario_of_a_description_file_runs_with_the_fmu_plant(made, tmp_path):
     spec = tomllib.loads((REPO / "scenarios" / "described" / "hexapod_ups_step_pd.toml").read_text())
     text = (REPO / "scenarios" / "described" / "hexapod_ups_step_pd.toml").read_text()
-    text = text.replace(f'robot = "{spec["robot"]}"', f'robot = "{my_stewart}"')
+    text = text.replace(f'robot = "{spec["robot"]}"', f'robot = "{made["dir"] / "my_stewart.toml"}"')
     sc = tmp_path / "mine.toml"
     sc.write_text(text)
     runs = {}
