@@ -49,3 +49,22 @@ def test_a_column_the_residual_does_not_follow_is_not_readjusted():
     cv = cross_validate(X[:, [2]], y, folds(len(y), 1))
     assert flexible_backfit.linear_gain(rng.normal(size=(len(y), 1)), y, cv) < flexible_backfit.LINEAR_MIN
     assert flexible_backfit.readjusted(X[:, [2]], y, (rng.normal(size=(len(y), 1)), ["p"]), cv)[1] == ()
+
+
+def test_a_parameter_the_core_refuses_to_take_out_is_left_out_not_raised():
+    # a residual linear in "a" (its column the line t) and a parameter "b" whose removal the core
+    # refuses (a drive's effort terms that self-lock): "a" gives its column, "b" none
+    from cosim.errors import ArgumentError
+
+    t = np.linspace(0.0, 1.0, 50)
+
+    def R(theta):
+        if "b" not in theta:
+            raise ArgumentError("the drive self-locks", "PKM_ERR_ARGUMENT")
+        return np.column_stack([1.0 + t - theta.get("a", 0.0) * t, np.zeros_like(t)])
+
+    eng = types.SimpleNamespace(R=R)
+    cols = flexible_backfit.fitted_columns(eng, {"a": 0.5, "b": 1.0}, [0, 1])
+    assert cols[0][1] == ["a"]
+    assert np.allclose(cols[0][0][:, 0], 0.5 * t)  # taken out: the residual rises by what it took
+    assert cols[1][1] == []
