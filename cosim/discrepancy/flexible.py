@@ -41,6 +41,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   over many inputs), the group whose strongest column alone explains the most out of fold as a
   step function (:func:`~.flexible_cv.binned_shares`) is cross-validated alone and, when that
   passes the same two bars, named with its share;
+* **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
+  channel are refitted linearly beside the trees on them, in turn, per fold
+  (:mod:`.flexible_backfit`), where that beats the trees alone as an added input must; the share
+  claimed is then that of the trees plus the refit, out of fold (``readjusted`` names them);
 * **where the trees extrapolate**: the share of samples whose named inputs lay outside the
   range fitted without their block (``outside``), stated when above :data:`OUTSIDE_WARN`;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
