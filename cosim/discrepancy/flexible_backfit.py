@@ -2,25 +2,29 @@
 
 The residual the flexible stage fits (:mod:`.flexible`) is what the fitted model left: the
 library effects and discovered terms were fitted before the stage, without the force nobody
-listed, and they may have taken part of it on their own columns (a saturation taking a third of
-a force in proportion to the effort, a Coulomb level the mean of a friction that falls as the
-drive warms).  What is left is then no function of the force's inputs alone, and trees on those
-inputs explain less of it than the force does.
+listed, and they may have taken part of it on their own columns (a rotor inertia taking part
+of a force keyed on another joint's acceleration, in proportion to its own joint's
+acceleration).  What is left is then no function of the force's inputs alone, and trees on
+those inputs explain less of it than the force does.
 
-Here each fitted parameter of the channel gives a column: what the channel's residual becomes
-when the parameter is taken out of the fit (its contribution; for a parameter acting linearly it
-spans the same line as its derivative) and, for one that does not act linearly, its derivative
-(:func:`fitted_columns`).  The trees and a linear refit of those columns are fitted in turn
+Here each fitted parameter that acts on the channel gives a column: what the channel's residual
+becomes when the parameter is taken out of the fit (its contribution; for a parameter acting
+linearly it spans the same line as its derivative) and, for one that does not act linearly, its
+derivative's part off that line (:func:`fitted_columns`; a parameter the core refuses to take
+out or move gives none).  The trees and a linear refit of those columns are fitted in turn
 (backfitting; Hastie & Tibshirani 1990, ch. 4; Breiman & Friedman 1985), per fold of the stage's
-blocked cross-validation on the fold's fitted rows only (:func:`backfit_cv`): the linear refit on
-the residual less the trees' prediction, the trees on the residual less the refit.  Every
-sample is predicted, trees plus refit, by a model that never saw it.
+blocked cross-validation on the fold's fitted rows only (:func:`backfit_cv`): the refit on the
+residual less the trees' prediction, the trees on the residual less the refit.  Every sample is
+predicted, trees plus refit, by a model that never saw it.  It is tried once inputs are named,
+when a linear refit of the columns on what the trees leave adds :data:`LINEAR_MIN` out of fold,
+and kept when it beats the trees alone as an added input must (:func:`readjusted`).
 
-The share the stage then reports is that of the force with the fitted model re-adjusted beside
-it, 1 - MSE(residual - out-of-fold prediction) / var(residual): the share the truth's predictor
-of ``bench/flexible_bench.py`` explains (the hidden force less what the fitted model took of it,
-g = force - (residual before - residual after)), which a force the fitted model partly took is no
-function of its inputs alone.
+The share the stage then reports is 1 - MSE(residual - out-of-fold prediction) / var(residual)
+with the refit in the prediction: what the force explains with the fitted model's parameters
+free to move beside it.  It is the measure of the truth's share in ``bench/flexible_bench.py``,
+whose predictor is the hidden force less what the fitted model took of it (g = force -
+(residual before - residual after)): where the fitted model took part of the force, g is no
+function of the force's inputs alone either.
 """
 from __future__ import annotations
 
@@ -167,7 +171,8 @@ def _trees(X, Y, fold_rows):
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
             m.set_params(max_iter=n).fit(X[fit], Y[fit, b])
             staged[b] = np.vstack([staged[b]] + list(islice(m.staged_predict(X[held]), len(staged[b]), None)))
-        total = sum(np.sum((Y[held, b][None, :] - p) ** 2, axis=1) for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
+        total = sum(np.sum((Y[held, b][None, :] - p) ** 2, axis=1)
+                    for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
         if n - best >= PATIENCE:
             break
