@@ -41,6 +41,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   over many inputs), the group whose strongest column alone explains the most out of fold as a
   step function (:func:`~.flexible_cv.binned_shares`) is cross-validated alone and, when that
   passes the same two bars, named with its share;
+* **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
+  channel are refitted linearly beside the trees on them, in turn, per fold
+  (:mod:`.flexible_backfit`), where that beats the trees alone as an added input must; the share
+  claimed is then that of the trees plus the refit, out of fold (``readjusted`` names them);
 * **where the trees extrapolate**: the share of samples whose named inputs lay outside the
   range fitted without their block (``outside``), stated when above :data:`OUTSIDE_WARN`;
 * **how**: the partial dependence of the prediction on each named input's strongest feature
@@ -57,6 +61,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .flexible_report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
+from .flexible_backfit import readjusted, stage_columns
 from .flexible_cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
 from .flexible_select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
 
@@ -158,11 +164,14 @@ class FlexibleFit:
     use: tuple = field(default=(), repr=False, compare=False)
     #: the residual it was fitted on (decimated samples), in ``unit``
     target: object = field(default=None, repr=False, compare=False)
+    #: the fitted model's parameters re-adjusted beside the trees (:mod:`.flexible_backfit`): the
+    #: share is then that of the trees plus the re-adjusted fit, out of fold
+    readjusted: tuple = ()
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
-                                             "beyond_noise", "screened", "weak")}
+                                             "beyond_noise", "screened", "weak", "readjusted")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
 
@@ -329,14 +338,16 @@ def _strongest_alone(X, y, fold_rows, groups):
     return g, cross_validate(X[:, groups[g]], y, fold_rows)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.flexible_cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
     by one by cross-validating without them; the share claimed is that of the trees on the named
     inputs alone (the model the statement describes), out of fold.  When the trees on every
     input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
-    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged."""
+    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged.  ``fitted``:
+    the fitted model's columns on the channel (:func:`.flexible_backfit.fitted_columns`), re-adjusted
+    beside the trees on the named inputs where that adds (:func:`.flexible_backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -383,18 +394,23 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False) -> FlexibleFit:
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
                 else:  # they do not carry it alone: the claim stays the full model's, on no single input
                     named, screened = [], (tuple(kept), share_k)
+        moved, y_t, cv_t = (), y, cv
         if explained and named:
+            cv, moved = readjusted(X[:, use], y, fitted, cv)
+            if moved:  # the share claimed is the trees' plus the fitted model re-adjusted beside them
+                share, z, _ = judged(cv.mse)
+                cv_t, y_t = cv.trees(y)
             sub = {g: [use.index(i) for i in groups[g] if i in use] for g in named}  # a partner: its shared columns
-            imp_k = importance(cv, X[:, use], y, sub, rng)
+            imp_k = importance(cv_t, X[:, use], y_t, sub, rng)
             beyond = outside(X[:, use], cv, list(range(len(use))))
-        model = final_model(X[:, use], y, cv)
+        model = final_model(X[:, use], cv.less_refit(y, fitted[0]) if moved else y, cv)
         if explained and named:
             deps = tuple(_dependence(model, X[:, use], [columns[i] for i in use], sub[g], g, imp_k[g][0], unit)
                          for g in named)
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
                        beyond_noise=beyond_noise(y, noise, spi),
-                       screened=screened, model=model, columns=tuple(columns), use=tuple(use))
+                       screened=screened, model=model, columns=tuple(columns), use=tuple(use), readjusted=moved)
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -454,8 +470,9 @@ def statement(fit: FlexibleFit, noun: str) -> str:
                      f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
                      f"importance {100 * d.importance:.0f} %)")
     only = " and on nothing else" if len(parts) == 1 else ""
+    beside = f", with the fitted {', '.join(fit.readjusted)} re-adjusted beside it" if fit.readjusted else ""
     s = (f"a force on {noun} {fit.joint} that depends on " + " and on ".join(parts) + only
-         + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model)")
+         + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model{beside})")
     if fit.outside > OUTSIDE_WARN:
         s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
               f"fitted on without them (extrapolated flat: the share is a lower bound there)")
@@ -502,10 +519,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
             R_fit[:, c] = R_wo[:, c]
     X, columns = inputs(pipe, R_fit)
     noun = pipe.model.facts.joint_noun
+    fitted = stage_columns(eng, theta, stand_ins, chans)
     out = []
     for c in chans:
         fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
-                          weak=c in weak)
+                          weak=c in weak, fitted=fitted.get(c))
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
@@ -529,57 +547,6 @@ def sentence(fits: list) -> str:
     """The conclusion's clause: the explained channels' statements."""
     told = [f.statement for f in fits if f.explained]
     return "where no equation was found: " + "; ".join(told) if told else ""
-
-
-def figure(fits: list, path):
-    """Partial-dependence figure of the explained channels (one panel per named input): the
-    flexible model's force against the input, in their units.  Returns the path, or None when
-    no channel is explained."""
-    panels = [(f, d) for f in fits if f.explained for d in f.inputs]
-    if not panels:
-        return None
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.4), squeeze=False)
-    for ax, (f, d) in zip(axes[0], panels):
-        ax.plot(d.grid, d.curve, color="#d62728")
-        ax.set_xlabel(f"{d.feature} [{d.unit}]" if d.unit else d.feature)
-        ax.set_ylabel(f"{f.channel}: partial dependence [{f.unit}]")
-        ax.set_title(f"{d.group}\n{100 * d.importance:.0f} % importance, {100 * f.share:.0f} % explained", fontsize=9)
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path)
-
-
-def reported(fits: list) -> list:
-    """The fits a report states: every one but a weak channel's where no force was found (a
-    weak channel with nothing found says nothing a clean channel would not)."""
-    return [f for f in fits if f.explained or not f.weak]
-
-
-def markdown(fits: list, files: dict) -> list:
-    """The report's section (Markdown lines) on the :func:`reported` fits."""
-    fits = reported(fits)
-    if not fits:
-        return []
-    L = ["## Where no equation was found: a flexible model and its dependence", "",
-         "Boosted trees (scikit-learn HistGradientBoostingRegressor) on each channel that keeps structure, on "
-         "every joint's position, rate (and commanded rate), acceleration and model effort, their low-passed "
-         "|rate|, effort and power, the pose and time; judged out of fold over blocks in time spread through "
-         "the recording.  The inputs are those whose permutation costs the most out of fold; the curves are "
-         "partial dependences.  A black box: it says what the force depends on, not its equation.", "",
-         "| channel | explained (out of fold) | chi-square | RMS left | own noise | inputs (importance) |",
-         "| --- | --- | --- | --- | --- | --- |"]
-    for f in fits:
-        ins = ", ".join(f"{d.group} ({100 * d.importance:.0f} %)" for d in f.inputs) or "-"
-        L.append(f"| {f.channel} | {100 * f.share:.0f} %{'' if f.explained else ' (not claimed)'} | {f.z:.0f} | "
-                 f"{f.rms_left:.3g} {f.unit} | {f.noise:.3g} {f.unit} | {ins} |")
-    L += [""] + [f"- {f.statement}" for f in fits] + [""]
-    if files.get("flexible"):
-        L += ["![Partial dependence of the flexible model](flexible.png)", ""]
-    return L
 
 
 def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
