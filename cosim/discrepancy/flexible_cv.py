@@ -32,10 +32,14 @@ MIN_ITER = 5
 #: the folds' trees grow to these numbers of iterations in turn (the last: TREES["max_iter"]),
 #: and stop when the summed held-out loss has not fallen for PATIENCE iterations (its minimum
 #: is then the chosen number); each step bins the inputs again, hence two steps only
-STEPS, PATIENCE = (50, 150), 25
+STEPS, PATIENCE = (50, 75), 25
 #: the boosted trees' settings (small: a few hundred decimated samples; the number of
-#: iterations, at most max_iter, is chosen on the held-out blocks)
-TREES = dict(max_iter=150, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
+#: iterations, at most max_iter, is chosen on the held-out blocks).  A tree costs about 0.5 ms
+#: whatever its inputs (scikit-learn's per-node work on some 800 rows): the stage's time is its
+#: number of trees.  A cross-validation whose held-out minimum lies within the first max_iter
+#: iterations is the same with any larger bound (the same trees, grown in the same order); a
+#: faster learning rate over fewer iterations names other inputs (docs/discrepancy.md, Speed)
+TREES = dict(max_iter=75, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
              max_bins=64, early_stopping=False, random_state=0)
 #: quantile bins of the single-input screen (:func:`binned_shares`)
 BINS = 16
@@ -161,6 +165,42 @@ def outside(X, cv: CV, cols) -> float:
     return out / len(X)
 
 
+def _bins(X, fold_rows, bins):
+    """Per fold, the quantile bins of every column of ``X`` on the fitted rows: ``(bin of each
+    fitted row, bin of each held-out row, bins per column)``, the bins of column ``c`` numbered
+    from the sum of the earlier columns' bins (one ``bincount`` serves every column).  They
+    depend on the inputs and the folds only, which a stage's channels share: the last inputs'
+    bins are kept (:data:`_BINS_KEPT`)."""
+    import hashlib
+
+    h = hashlib.blake2b(np.ascontiguousarray(X).tobytes(), digest_size=16)
+    for held, fit in fold_rows:
+        h.update(np.asarray(held).tobytes())
+        h.update(b"|")
+        h.update(np.asarray(fit).tobytes())
+    key = (X.shape, bins, h.digest())
+    if _BINS_KEPT.get("key") != key:
+        q = np.linspace(0.0, 1.0, bins + 1)[1:-1]
+        out = []
+        for held, fit in fold_rows:
+            Xf, Xh = X[fit], X[held]
+            cuts = np.quantile(Xf, q, axis=0)  # column by column, as np.quantile of each column
+            kf, kh, nb = np.empty(Xf.shape[::-1], np.intp), np.empty(Xh.shape[::-1], np.intp), []
+            for c in range(X.shape[1]):
+                edges = np.unique(cuts[:, c])
+                kf[c], kh[c] = np.searchsorted(edges, Xf[:, c]), np.searchsorted(edges, Xh[:, c])
+                nb.append(len(edges) + 1)
+            start = np.concatenate([[0], np.cumsum(nb)[:-1]]).astype(np.intp)
+            out.append((kf + start[:, None], kh + start[:, None], int(sum(nb))))
+        _BINS_KEPT.clear()
+        _BINS_KEPT.update(key=key, bins=out)
+    return _BINS_KEPT["bins"]
+
+
+#: the quantile bins of the last inputs (:func:`_bins`): their key and bins
+_BINS_KEPT: dict = {}
+
+
 def binned_shares(X, y, fold_rows, bins: int = BINS) -> np.ndarray:
     """Per column of ``X``, the share of ``y``'s variance a step function of that column
     alone explains out of fold: per fold, the means of ``y`` over ``bins`` quantile bins of
@@ -179,13 +219,12 @@ def binned_shares(X, y, fold_rows, bins: int = BINS) -> np.ndarray:
     X, y = np.asarray(X, float), np.asarray(y, float)
     var = float(np.var(y))
     sse = np.zeros(X.shape[1])
-    for held, fit in fold_rows:
+    for (held, fit), (kf, kh, total) in zip(fold_rows, _bins(X, fold_rows, bins)):
         yf = y[fit]
+        count = np.bincount(kf.ravel(), minlength=total)
+        sums = np.bincount(kf.ravel(), np.tile(yf, X.shape[1]), minlength=total)  # each bin's rows in order
+        mean = np.where(count > 0, sums / np.maximum(count, 1), yf.mean())
+        d = (y[held][None, :] - mean[kh]) ** 2
         for c in range(X.shape[1]):
-            edges = np.unique(np.quantile(X[fit, c], np.linspace(0.0, 1.0, bins + 1)[1:-1]))
-            kf, kh = np.searchsorted(edges, X[fit, c]), np.searchsorted(edges, X[held, c])
-            count = np.bincount(kf, minlength=len(edges) + 1)
-            mean = np.where(count > 0, np.bincount(kf, yf, minlength=len(edges) + 1) / np.maximum(count, 1),
-                            yf.mean())
-            sse[c] += float(np.sum((y[held] - mean[kh]) ** 2))
+            sse[c] += float(np.sum(d[c]))
     return 1.0 - sse / len(y) / var if var > 0 else np.zeros(X.shape[1])

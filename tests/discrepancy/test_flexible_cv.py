@@ -1,0 +1,41 @@
+"""The single-input screen of the flexible stage (cosim.discrepancy.flexible_cv.binned_shares):
+its bins computed once for the inputs a stage's channels share, and kept, give every channel the
+shares of the screen's definition.
+
+The oracle is the definition written out column by column: per fold, the quantile bins of the
+column on the fitted rows, the fitted rows' mean per bin (the fitted mean for an empty bin)
+predicting the held-out rows.
+"""
+import numpy as np
+
+from cosim.discrepancy import flexible_cv
+
+
+def _by_definition(X, y, fold_rows, bins=flexible_cv.BINS):
+    sse = np.zeros(X.shape[1])
+    for held, fit in fold_rows:
+        for c in range(X.shape[1]):
+            edges = np.unique(np.quantile(X[fit, c], np.linspace(0.0, 1.0, bins + 1)[1:-1]))
+            kf, kh = np.searchsorted(edges, X[fit, c]), np.searchsorted(edges, X[held, c])
+            count = np.bincount(kf, minlength=len(edges) + 1)
+            total = np.bincount(kf, y[fit], minlength=len(edges) + 1)
+            mean = np.where(count > 0, total / np.maximum(count, 1), y[fit].mean())
+            sse[c] += float(np.sum((y[held] - mean[kh]) ** 2))
+    return 1.0 - sse / len(y) / np.var(y)
+
+
+def test_kept_bins_give_each_channel_and_each_input_set_its_own_shares():
+    rng = np.random.default_rng(3)
+    n = 600
+    X = np.column_stack([rng.uniform(size=n), rng.normal(size=n), np.repeat([0.0, 1.0, 2.0], n // 3),
+                         np.full(n, 0.5)])  # a continuous, a normal, a three-level and a constant column
+    rows = flexible_cv.folds(n, gap=3)
+    X2 = X.copy()
+    X2[:, 0] = X[::-1, 0]  # the same shape, other values: the kept bins must not serve it
+    for inputs in (X, X, X2, X):
+        for k in range(3):  # three channels on the same inputs
+            y = np.sin(6.0 * inputs[:, 0] + k) + 0.3 * inputs[:, 2] + rng.normal(0.0, 0.2, n)
+            assert np.array_equal(flexible_cv.binned_shares(inputs, y, rows), _by_definition(inputs, y, rows))
+    other = flexible_cv.folds(n, gap=8)  # other folds on the same inputs
+    y = np.cos(4.0 * X[:, 0]) + rng.normal(0.0, 0.1, n)
+    assert np.array_equal(flexible_cv.binned_shares(X, y, other), _by_definition(X, y, other))
