@@ -179,7 +179,8 @@ def _bins(X, fold_rows, bins):
         h.update(b"|")
         h.update(np.asarray(fit).tobytes())
     key = (X.shape, bins, h.digest())
-    if _BINS_KEPT.get("key") != key:
+    kept = _BINS_KEPT.get("last")
+    if kept is None or kept[0] != key:
         q = np.linspace(0.0, 1.0, bins + 1)[1:-1]
         out = []
         for held, fit in fold_rows:
@@ -192,12 +193,12 @@ def _bins(X, fold_rows, bins):
                 nb.append(len(edges) + 1)
             start = np.concatenate([[0], np.cumsum(nb)[:-1]]).astype(np.intp)
             out.append((kf + start[:, None], kh + start[:, None], int(sum(nb))))
-        _BINS_KEPT.clear()
-        _BINS_KEPT.update(key=key, bins=out)
-    return _BINS_KEPT["bins"]
+        # one assignment: a diagnosis in another thread reads the old pair or the new one, whole
+        kept = _BINS_KEPT["last"] = (key, out)
+    return kept[1]
 
 
-#: the quantile bins of the last inputs (:func:`_bins`): their key and bins
+#: the quantile bins of the last inputs (:func:`_bins`): ``"last"`` holds their key and bins
 _BINS_KEPT: dict = {}
 
 
