@@ -215,6 +215,28 @@ def _platform_mechanism(kind, rng, m, mo):
     raise ValueError(kind)
 
 
+def _stroke_band(rng, mo, j):
+    """A band of rail j's stroke drawn between its 10th and 90th percentiles (at least 30 % of that
+    span, smooth edges of 5 %): ``(band(q) in 0..1, from, to)``."""
+    lo, hi = sorted(rng.uniform(mo["q10"][j], mo["q90"][j], 2))
+    hi = max(hi, lo + 0.3 * (mo["q90"][j] - mo["q10"][j]))
+    w = 0.05 * (mo["q90"][j] - mo["q10"][j])
+    return (lambda x: 0.5 * (math.tanh((x - lo) / w) - math.tanh((x - hi) / w))), lo, hi
+
+
+def _since_reversal(j):
+    """``since(t, qd)``: the time [s] since rail j last reversed (its speed beyond twice the smooth
+    sign's scale with the other sign), kept across MuJoCo's steps."""
+    state = {"sign": 0.0, "since": 0.0}
+
+    def since(t, qd):
+        s = math.copysign(1.0, qd[j]) if abs(qd[j]) > 2 * V_FRICTION else state["sign"]
+        if s != state["sign"]:
+            state["sign"], state["since"] = s, t
+        return t - state["since"]
+    return since
+
+
 def _rail_mechanism(kind, rng, mo):
     """(hook, truth, j, k) of a force on one rail (0-based j; k the other rail or None)."""
     n = len(mo["E"])
@@ -240,49 +262,38 @@ def _rail_mechanism(kind, rng, mo):
         return hook, {"mu": mu}, j, k
     if kind == "reversal_seal":
         c, tau = 2.0 * size * E[j], float(rng.uniform(0.2, 0.5))
-        state = {"sign": 0.0, "since": 0.0}
+        since = _since_reversal(j)
 
         def hook(model, data, t, q, qd, u):
-            s = math.copysign(1.0, qd[j]) if abs(qd[j]) > 2 * V_FRICTION else state["sign"]
-            if s != state["sign"]:
-                state["sign"], state["since"] = s, t
             f = np.zeros(n)
-            f[j] = -c * (1.0 - math.exp(-(t - state["since"]) / tau)) * math.tanh(qd[j] / V_FRICTION)
+            f[j] = -c * (1.0 - math.exp(-since(t, qd) / tau)) * math.tanh(qd[j] / V_FRICTION)
             return f
         return hook, {"level": c, "tau": tau}, j, None
     if kind == "eddy_brake_zone":
-        lo, hi = sorted(rng.uniform(mo["q10"][j], mo["q90"][j], 2))
-        hi = max(hi, lo + 0.3 * (mo["q90"][j] - mo["q10"][j]))
-        w = 0.05 * (mo["q90"][j] - mo["q10"][j])
+        band, lo, hi = _stroke_band(rng, mo, j)
         c = 2.0 * size * E[j] / V[j]
 
         def hook(model, data, t, q, qd, u):
             f = np.zeros(n)
-            f[j] = -c * qd[j] * 0.5 * (math.tanh((q[j] - lo) / w) - math.tanh((q[j] - hi) / w))
+            f[j] = -c * qd[j] * band(q[j])
             return f
         return hook, {"damping": c, "from": lo, "to": hi}, j, None
     if kind == "coulomb_zone":
-        lo, hi = sorted(rng.uniform(mo["q10"][j], mo["q90"][j], 2))
-        hi = max(hi, lo + 0.3 * (mo["q90"][j] - mo["q10"][j]))
-        w = 0.05 * (mo["q90"][j] - mo["q10"][j])
+        band, lo, hi = _stroke_band(rng, mo, j)
         c0, c1 = size * E[j], 1.5 * size * E[j]
 
         def hook(model, data, t, q, qd, u):
             f = np.zeros(n)
-            band = 0.5 * (math.tanh((q[j] - lo) / w) - math.tanh((q[j] - hi) / w))
-            f[j] = -(c0 + c1 * band) * math.tanh(qd[j] / V_FRICTION)
+            f[j] = -(c0 + c1 * band(q[j])) * math.tanh(qd[j] / V_FRICTION)
             return f
         return hook, {"level": c0, "rise": c1, "from": lo, "to": hi}, j, None
     if kind == "reversal_stiction":
         c0, c1, tau = size * E[j], 1.5 * size * E[j], float(rng.uniform(0.1, 0.3))
-        state = {"sign": 0.0, "since": 0.0}
+        since = _since_reversal(j)
 
         def hook(model, data, t, q, qd, u):
-            s = math.copysign(1.0, qd[j]) if abs(qd[j]) > 2 * V_FRICTION else state["sign"]
-            if s != state["sign"]:
-                state["sign"], state["since"] = s, t
             f = np.zeros(n)
-            f[j] = -(c0 + c1 * math.exp(-(t - state["since"]) / tau)) * math.tanh(qd[j] / V_FRICTION)
+            f[j] = -(c0 + c1 * math.exp(-since(t, qd) / tau)) * math.tanh(qd[j] / V_FRICTION)
             return f
         return hook, {"level": c0, "peak": c1, "tau": tau}, j, None
     raise ValueError(kind)
