@@ -33,7 +33,7 @@ from itertools import islice
 
 import numpy as np
 
-from .flexible_cv import CV, MIN_ITER, PATIENCE, STEPS, TREES
+from .flexible_cv import CV, grow
 
 #: backfitting rounds after the trees on the residual alone (each: a linear refit per fold, then the trees)
 ROUNDS = 2
@@ -159,26 +159,6 @@ def linear_gain(J, y, cv) -> float:
     return float((np.mean(r ** 2) - np.mean((r - pred) ** 2)) / np.var(y))
 
 
-def _trees(X, Y, fold_rows):
-    """Boosted trees per fold on per-fold targets ``Y`` (n, folds): the staged growth and the
-    number of iterations of :func:`~.flexible_cv.cross_validate` (the smallest summed held-out
-    loss), each fold's loss on its own target.  Returns ``(models, iterations, held-out predictions)``."""
-    from sklearn.ensemble import HistGradientBoostingRegressor
-
-    models = [HistGradientBoostingRegressor(**dict(TREES, warm_start=True)) for _ in fold_rows]
-    staged = [np.empty((0, len(held))) for held, _ in fold_rows]
-    for n in STEPS:
-        for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
-            m.set_params(max_iter=n).fit(X[fit], Y[fit, b])
-            staged[b] = np.vstack([staged[b]] + list(islice(m.staged_predict(X[held]), len(staged[b]), None)))
-        total = sum(np.sum((Y[held, b][None, :] - p) ** 2, axis=1)
-                    for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
-        best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
-        if n - best >= PATIENCE:
-            break
-    return models, best, [p[best - 1] for p in staged]
-
-
 def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
     """Trees on ``X`` and a linear refit of the fitted model's columns ``J`` (:func:`fitted_columns`)
     fitted in turn per fold of ``cv`` (the trees' cross-validation on ``y`` alone, its first
@@ -195,7 +175,7 @@ def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
             inside = next(islice(models[b].staged_predict(X[fit]), iters - 1, None))
             coef[b] = _refit(Js[fit], y[fit] - inside)
             Y[:, b] = y - Js @ coef[b]
-        models, iters, held_pred = _trees(X, Y, cv.folds)
+        models, iters, held_pred = grow(X, Y, cv.folds)
     pred, linear = np.empty(len(y)), np.empty(len(y))
     for b, (held, _) in enumerate(cv.folds):
         linear[held] = Js[held] @ coef[b]

@@ -96,28 +96,40 @@ def gap_for(spi: float) -> int:
 
 
 def cross_validate(X, y, fold_rows) -> CV:
-    """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`).
+    """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`), grown
+    as :func:`grow` grows them."""
+    models, best, held_pred = grow(X, y, fold_rows)
+    pred = np.empty(len(y))
+    for (held, _), p in zip(fold_rows, held_pred):
+        pred[held] = p
+    return CV(tuple(fold_rows), tuple(models), best, pred, float(np.mean((y - pred) ** 2)))
+
+
+def grow(X, Y, fold_rows) -> tuple:
+    """Boosted trees per fold of ``fold_rows`` on the target ``Y``: (n,), or (n, folds) with a
+    target per fold (each fold's loss on its own).
 
     The folds' trees grow together to each of :data:`STEPS` iterations in turn (warm start: the
     same trees as one fit of as many iterations) and stop once the summed held-out loss has not
-    fallen for :data:`PATIENCE` iterations, or at the last."""
+    fallen for :data:`PATIENCE` iterations, or at the last.  Returns ``(models, iterations, the
+    held-out predictions per fold at that number)``."""
     from sklearn.ensemble import HistGradientBoostingRegressor
 
+    Y = np.asarray(Y)
+    target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
     models = [HistGradientBoostingRegressor(**dict(TREES, warm_start=True)) for _ in fold_rows]
     staged = [np.empty((0, len(held))) for held, _ in fold_rows]
     for n in STEPS:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
-            m.set_params(max_iter=n).fit(X[fit], y[fit])
+            m.set_params(max_iter=n).fit(X[fit], target(b)[fit])
             new = list(islice(m.staged_predict(X[held]), len(staged[b]), None))
             staged[b] = np.vstack([staged[b]] + new)
-        total = sum(np.sum((y[held][None, :] - p) ** 2, axis=1) for (held, _), p in zip(fold_rows, staged))
+        total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
+                    for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
         if n - best >= PATIENCE:
             break
-    pred = np.empty(len(y))
-    for (held, _), p in zip(fold_rows, staged):
-        pred[held] = p[best - 1]
-    return CV(tuple(fold_rows), tuple(models), best, pred, float(np.mean((y - pred) ** 2)))
+    return models, best, [p[best - 1] for p in staged]
 
 
 def final_model(X, y, cv: CV):
