@@ -1,12 +1,12 @@
 """The flexible stage (cosim.discrepancy.flexible) on forces no term family covers.
 
-Cases (cosim.discrepancy.flexible_cases): a force on one rail above a position threshold, a
+Cases (cosim.discrepancy.flexible.cases): a force on one rail above a position threshold, a
 friction falling with the low-passed dissipated power (heating), a force on one joint keyed on
 another joint's acceleration, a bump on one joint keyed on another joint's position; and clean
 recordings.  Each recording is diagnosed knowing only the recording; the
 key is read afterwards.  Per case: the inputs the flexible model names against the true ones, its
 held-out explained share against the truth's (the hidden force, less what the fitted model took,
-as the predictor: flexible_cases.truth_share), the CPU time of the diagnosis.
+as the predictor: flexible.cases.truth_share), the CPU time of the diagnosis.
 
 Seed sets: ``--set tune`` (seeds 7100 +) is the set the thresholds of flexible.py were set on;
 ``--set report`` (seeds 8300 +) was the first reported set; its failure mode (inputs moving with the
@@ -23,14 +23,14 @@ not reported, not tuned on); ``--set report4`` (seeds 10700 +) was run once on t
 second fresh set.  The channel gate (a residual holding more than its noise by the bars of a
 claim) and the strongest single input alone were then set with report3 and report4 as tuning
 sets (the stage re-run on the diagnoses' captured inputs), and ``--set report5`` (seeds
-10900 +) was reported next.  The causal input preference (flexible_select: the model efforts and
+10900 +) was reported next.  The causal input preference (flexible.select: the model efforts and
 the channel's own acceleration judged after the other inputs; a shared signed-history column
 naming both the rate and the history) was then set with report3, report4 and report5 as tuning
 sets, and ``--set report6`` (seeds 11100 +) was run once on it.  The consequences were then
 narrowed to the channel's own effort and acceleration (another joint's effort is a cause where
 one drive's load sets a friction on another joint: bench/foreign/mujoco_unlisted.py's
 cross_effort_friction, seen), and ``--set report7`` (seeds 11300 +) was run once on that stage.
-The fitted model's parameters re-adjusted beside the trees (cosim.discrepancy.flexible_backfit)
+The fitted model's parameters re-adjusted beside the trees (cosim.discrepancy.flexible.backfit)
 were then set with tune and report3-report7 as tuning sets (the stage re-run on the diagnoses'
 captured inputs), and ``--set report8`` (seeds 11500 +) was run once on that stage.
 The truth's share is measured over every decimated sample, as the stage judges its own.
@@ -52,7 +52,7 @@ def one(kind, seed, duration=None):
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy import diagnose
-    from cosim.discrepancy.flexible_cases import simulate, truth_share
+    from cosim.discrepancy.flexible.cases import simulate, truth_share
 
     rec, key = simulate(kind, seed, duration=duration)
     with threadpool_limits(limits=1):
@@ -78,7 +78,7 @@ def one(kind, seed, duration=None):
 
 
 def main(argv=None):
-    from cosim.discrepancy.flexible_cases import KINDS
+    from cosim.discrepancy.flexible.cases import KINDS
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", choices=sorted(SEEDS), default="report8")

@@ -5,8 +5,8 @@
 The MuJoCo model is bench/foreign/mujoco_blind.py's (the hand-written 6-PUS, PD + gravity, the
 engine's exciting trajectory, the generator's sensor noise).  A force none of the discovery
 step's families covers is computed in MuJoCo's step from MuJoCo's own state (``simulate(...,
-hook=...)``: the rails' true positions, not the reference, unlike flexible_cases.py), so neither
-the core nor flexible_cases computes it:
+hook=...)``: the rails' true positions, not the reference, unlike flexible/cases.py), so neither
+the core nor flexible.cases computes it:
 
 * ``position_threshold``: on rail j, zero below q0 (50-70 % of the way from the 10th to the 90th
   percentile of its position) and 2A tanh((q - q0) / w)^2 above it (w half the way to the 90th);
@@ -18,7 +18,7 @@ the core nor flexible_cases computes it:
 
 A 15-30 % of the rail's RMS effort.  Each recording is diagnosed blind with the defaults; the
 key is read afterwards.  Per case, as bench/flexible_bench.py: the inputs named against the true
-ones, the share against the truth's (flexible_cases.truth_share, from the logged force).  No
+ones, the share against the truth's (flexible.cases.truth_share, from the logged force).  No
 threshold of the stage was set on these cases.
 """
 from __future__ import annotations
@@ -94,7 +94,7 @@ def one(kind, seed, out):
 
     from cosim.core import Model
     from cosim.discrepancy import blind, diagnose
-    from cosim.discrepancy.flexible_cases import truth_share
+    from cosim.discrepancy.flexible.cases import truth_share
 
     m = Model("6pus")
     hook, log, joint, truth = None, [], None, []

@@ -52,7 +52,7 @@ from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.excitation import excitation  # noqa: E402
 from cosim.master import make_reference  # noqa: E402
 from cosim.discrepancy.diagnosis import GAP_MINORITY, UNEXPLAINED, tied  # noqa: E402
-from cosim.discrepancy.keyed_elsewhere import KEYED_ELSEWHERE  # noqa: E402
+from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE  # noqa: E402
 from cosim.recording import Recording, write_recording  # noqa: E402
 
 DT, SUBSTEPS = 1e-3, 10  # controller / recording period, MuJoCo steps per period (0.1 ms)

@@ -42,7 +42,7 @@ explains, a rail's on that rail's channel.  The seeds (``SEED`` + the kind's ind
 first set's output, before its own; ``--first-seed 32700``, the same kinds drawn at other seeds,
 a third set run once as a report set after the spectral-line rule of the structure test was
 fixed; ``--first-seed 33700``, a fourth, run once after the keyed-elsewhere rule of the
-confidence, :mod:`cosim.discrepancy.keyed_elsewhere`, was fixed on the first three); the magnitudes are physical guesses at
+confidence, :mod:`cosim.discrepancy.keyed.elsewhere`, was fixed on the first three); the magnitudes are physical guesses at
 10-30 % of the rails' RMS efforts (0.4-0.9 N), not adjusted to the engine.
 
 Per case: what is named with confidence (library effects without a declared tie, discovered

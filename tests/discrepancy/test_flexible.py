@@ -2,7 +2,7 @@
 and on which inputs it depends.
 
 The synthetic checks know their truth in closed form (a force of known variance on one input,
-white noise of known variance); the recordings hide a force of flexible_cases (keyed on another
+white noise of known variance); the recordings hide a force of flexible.cases (keyed on another
 joint's acceleration, which no family of the discovery step covers) or none.
 """
 import dataclasses
@@ -11,7 +11,8 @@ import types
 import numpy as np
 import pytest
 
-from cosim.discrepancy import flexible, flexible_cv
+from cosim.discrepancy.flexible import cv as flexible_cv
+from cosim.discrepancy.flexible import stage as flexible
 
 
 def _synthetic(force, n=1200, sigma=0.05, seed=0):
@@ -114,14 +115,14 @@ def test_where_a_curve_acts(curve, expect):
 
 @pytest.fixture(scope="module")
 def cross_case():
-    from cosim.discrepancy.flexible_cases import simulate
+    from cosim.discrepancy.flexible.cases import simulate
 
     return simulate("cross_acceleration", 7112)
 
 
 def test_a_force_keyed_on_another_joints_acceleration(cross_case):
     from cosim.discrepancy import diagnose
-    from cosim.discrepancy.flexible_cases import truth_share
+    from cosim.discrepancy.flexible.cases import truth_share
 
     rec, key = cross_case
     d = diagnose(rec, replay=False, figures=False)
@@ -135,7 +136,7 @@ def test_a_force_keyed_on_another_joints_acceleration(cross_case):
 
 def test_clean_recording_nothing_explained_on_any_channel(monkeypatch):
     from cosim.discrepancy import diagnose
-    from cosim.discrepancy.flexible_cases import simulate
+    from cosim.discrepancy.flexible.cases import simulate
 
     monkeypatch.setattr(flexible, "candidates", lambda pipe, R, left, noise: list(range(pipe.nd)))  # every channel
     rec, _ = simulate(None, 7600)

@@ -1,4 +1,4 @@
-"""The fitted model re-adjusted beside the flexible stage's trees (cosim.discrepancy.flexible_backfit).
+"""The fitted model re-adjusted beside the flexible stage's trees (cosim.discrepancy.flexible.backfit).
 
 The synthetic case knows its truth in closed form: a force on one input, of which an earlier
 least-squares fit of another column (a library effect's, say) took its projection; what is left
@@ -9,7 +9,8 @@ import types
 
 import numpy as np
 
-from cosim.discrepancy import flexible, flexible_backfit
+from cosim.discrepancy.flexible import backfit as flexible_backfit
+from cosim.discrepancy.flexible import stage as flexible
 
 
 def _taken_in_part(seed=0, n=1200, sigma=0.05):
@@ -44,7 +45,7 @@ def test_a_column_the_residual_does_not_follow_is_not_readjusted():
     pipe, X, cols, _, J, sigma, _ = _taken_in_part()
     rng = np.random.default_rng(1)
     y = 0.3 * np.exp(-(((X[:, 2] - 0.5) / 0.1) ** 2)) + rng.normal(0.0, sigma, len(X))
-    from cosim.discrepancy.flexible_cv import cross_validate, folds
+    from cosim.discrepancy.flexible.cv import cross_validate, folds
 
     cv = cross_validate(X[:, [2]], y, folds(len(y), 1))
     assert flexible_backfit.linear_gain(rng.normal(size=(len(y), 1)), y, cv) < flexible_backfit.LINEAR_MIN

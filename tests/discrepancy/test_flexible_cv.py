@@ -1,4 +1,4 @@
-"""The single-input screen of the flexible stage (cosim.discrepancy.flexible_cv.binned_shares):
+"""The single-input screen of the flexible stage (cosim.discrepancy.flexible.cv.binned_shares):
 its bins computed once for the inputs a stage's channels share, and kept, give every channel the
 shares of the screen's definition.
 
@@ -8,7 +8,7 @@ predicting the held-out rows.
 """
 import numpy as np
 
-from cosim.discrepancy import flexible_cv
+from cosim.discrepancy.flexible import cv as flexible_cv
 
 
 def _by_definition(X, y, fold_rows, bins=flexible_cv.BINS):

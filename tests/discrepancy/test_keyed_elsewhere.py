@@ -1,5 +1,5 @@
 """A library effect whose channel keeps a part keyed on another joint is not named with confidence
-(cosim.discrepancy.keyed_elsewhere; docs/discrepancy.md, "Named with confidence only where nothing
+(cosim.discrepancy.keyed.elsewhere; docs/discrepancy.md, "Named with confidence only where nothing
 is left").
 
 The recording: bench/foreign/mujoco_unlisted.py's rate-coupled friction at its third set's seed
@@ -23,7 +23,7 @@ import mujoco_unlisted as mu  # noqa: E402
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.diagnosis import tied  # noqa: E402
-from cosim.discrepancy.keyed_elsewhere import KEYED_ELSEWHERE, withheld  # noqa: E402
+from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE, withheld  # noqa: E402
 from cosim.discrepancy.results import FoundEffect  # noqa: E402
 
 

@@ -1,6 +1,6 @@
 """A library friction whose level is keyed on its own joint's position or on the time since the
-joint last reversed is not named with confidence (cosim.discrepancy.keyed_elsewhere.modulations
-with cosim.discrepancy.keyed_own; docs/discrepancy.md, "Nor where its level follows the joint's own
+joint last reversed is not named with confidence (cosim.discrepancy.keyed.elsewhere.modulations
+with cosim.discrepancy.keyed.own; docs/discrepancy.md, "Nor where its level follows the joint's own
 position or its reversals").
 
 A synthetic two-joint recording as the rule reads it (decimated smoothed position, rate, the
@@ -17,8 +17,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cosim.discrepancy.keyed_elsewhere import KEYED_ELSEWHERE, modulations, withheld
-from cosim.discrepancy.keyed_own import time_since_reversal
+from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE, modulations, withheld
+from cosim.discrepancy.keyed.own import time_since_reversal
 from cosim.discrepancy.results import FoundEffect
 from cosim.discrepancy.ties import tied
 

@@ -440,7 +440,7 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
                               theta)
         spent["flexible"] = time.perf_counter() - t3c
     if theta:  # a part left on an effect's channel keyed on another joint: the effect may stand in for it
-        from ..keyed_elsewhere import modulations, withheld
+        from ..keyed.elsewhere import modulations, withheld
 
         effects_out = withheld(effects_out, flex, pipe.model.facts.joint_noun,
                                modulations(eng0, theta, effects_out, r_after))

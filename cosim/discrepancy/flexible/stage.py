@@ -14,7 +14,7 @@ of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated
 platform pose where the recording gives one, and time.
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
-(:mod:`.flexible_cv`): a slowly varying input takes in the held-out blocks the values the
+(:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
 fitted ones span, where a held-out end of the recording would lie beyond them.
 
 * **explained share**: 1 - MSE(residual - out-of-fold prediction) / var(residual), claimed only
@@ -34,16 +34,16 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (the
   channel's own model effort and acceleration follow the force in closed loop: named
   only where the other inputs cannot explain the same share) and a group sharing a named one's
-  columns named where those add (:mod:`.flexible_select`); the share claimed is then that of
+  columns named where those add (:mod:`.select`); the share claimed is then that of
   the trees on the named groups alone, judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
   the groups and their share).  When the trees on every input claim nothing (a weak force spread
   over many inputs), the group whose strongest column alone explains the most out of fold as a
-  step function (:func:`~.flexible_cv.binned_shares`) is cross-validated alone and, when that
+  step function (:func:`~.cv.binned_shares`) is cross-validated alone and, when that
   passes the same two bars, named with its share;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
-  (:mod:`.flexible_backfit`), where that beats the trees alone as an added input must; the share
+  (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
   claimed is then that of the trees plus the refit, out of fold (``readjusted`` names them);
 * **where the trees extrapolate**: the share of samples whose named inputs lay outside the
   range fitted without their block (``outside``), stated when above :data:`OUTSIDE_WARN`;
@@ -61,10 +61,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .flexible_report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
-from .flexible_backfit import readjusted, stage_columns
-from .flexible_cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
-from .flexible_select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
+from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
+from .backfit import readjusted, stage_columns
+from .cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
+from .select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -85,7 +85,7 @@ BLOCK_Z = 2.0
 #: ... at most this many are checked by refitting without each ...
 MAX_INPUTS = 4
 #: ... and one is kept when the trees cross-validated without it lose this share of the variance
-#: (DROP_MIN, :mod:`.flexible_select`: consequences of the force in closed loop last)
+#: (DROP_MIN, :mod:`.select`: consequences of the force in closed loop last)
 #: a channel with no structure flagged and a residual RMS under this factor times its own noise
 #: (fitted because it holds more than its noise: :func:`beyond_noise`) carries at most a weak
 #: force, which the trees on every input spread over inputs that follow it and do not claim
@@ -164,7 +164,7 @@ class FlexibleFit:
     use: tuple = field(default=(), repr=False, compare=False)
     #: the residual it was fitted on (decimated samples), in ``unit``
     target: object = field(default=None, repr=False, compare=False)
-    #: the fitted model's parameters re-adjusted beside the trees (:mod:`.flexible_backfit`): the
+    #: the fitted model's parameters re-adjusted beside the trees (:mod:`.backfit`): the
     #: share is then that of the trees plus the re-adjusted fit, out of fold
     readjusted: tuple = ()
 
@@ -264,7 +264,7 @@ def candidates(pipe, R, left, noise) -> list:
     residual that holds more than its own noise (``noise``, per channel) by the bars of a claim
     (:func:`beyond_noise`): a force keyed on another joint, which :mod:`.structure` does not
     test, or one too weak for its families."""
-    from .structure import samples_per_independent
+    from ..structure import samples_per_independent
 
     flagged = {e["joint"] - 1 for e in left if e["channel"] in pipe.channels[:pipe.nd]}
     spi = samples_per_independent(pipe)
@@ -307,7 +307,7 @@ def _screen(imp, share) -> list:
 
 
 def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
-    """The check of the screened groups (:func:`.flexible_select.select`, causes before
+    """The check of the screened groups (:func:`.select.select`, causes before
     consequences): ``(kept, cross-validation on the kept groups' columns, its columns)``."""
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
@@ -315,9 +315,9 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
 def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple:
     """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
     columns)`` of :func:`_select`, a consequence among them): the trees cross-validated on every
-    input but the consequences ``follow`` (:func:`.flexible_select.consequences`), screened and
+    input but the consequences ``follow`` (:func:`.select.consequences`), screened and
     checked as the full model's; ``chosen`` stays when those trees claim nothing or ``chosen``
-    beats the causes' refit significantly (:func:`.flexible_select.gain`)."""
+    beats the causes' refit significantly (:func:`.select.gain`)."""
     cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
     cv = cross_validate(X[:, cols], y, fold_rows)
     share, _, ok = judged(cv.mse)
@@ -331,7 +331,7 @@ def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple
 
 def _strongest_alone(X, y, fold_rows, groups):
     """The group whose strongest column alone explains the most out of fold as a step
-    function (:func:`~.flexible_cv.binned_shares`, on the same blocks), and the trees
+    function (:func:`~.cv.binned_shares`, on the same blocks), and the trees
     cross-validated on that group's columns: ``(group, cross-validation)``."""
     shares = binned_shares(X, y, fold_rows)
     g = max(groups, key=lambda k: float(np.max(shares[groups[k]])))
@@ -340,20 +340,20 @@ def _strongest_alone(X, y, fold_rows, groups):
 
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
-    cross-validated over blocks in time (:mod:`.flexible_cv`).  The inputs it names are screened
+    cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
     by one by cross-validating without them; the share claimed is that of the trees on the named
     inputs alone (the model the statement describes), out of fold.  When the trees on every
     input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
     :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged.  ``fitted``:
-    the fitted model's columns on the channel (:func:`.flexible_backfit.fitted_columns`), re-adjusted
-    beside the trees on the named inputs where that adds (:func:`.flexible_backfit.readjusted`)."""
+    the fitted model's columns on the channel (:func:`.backfit.fitted_columns`), re-adjusted
+    beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
     from threadpoolctl import threadpool_limits
 
-    from .structure import samples_per_independent
+    from ..structure import samples_per_independent
 
     c = pipe.channels.index(unit[1]) if isinstance(unit, tuple) else None
     unit = unit[0] if isinstance(unit, tuple) else unit
@@ -482,7 +482,7 @@ def statement(fit: FlexibleFit, noun: str) -> str:
 def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     """The flexible stage of a diagnosis: one :class:`FlexibleFit` per effort channel worth a
     fit (:func:`candidates`), on the residual ``R`` after the fitted model (decimated samples
-    x channels), judged out of fold over blocks in time (:mod:`.flexible_cv`).
+    x channels), judged out of fold over blocks in time (:mod:`.cv`).
 
     A discovered term the diagnosis calls partial (``partial``: it may stand in for what is
     missing) is no equation found: on its channel the flexible model is fitted on the residual
@@ -495,7 +495,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     >>> fits[0].statement                                      # doctest: +SKIP
     'a force on slider 3 that depends on the position of slider (q3, above 0.42 m; ...'
     """
-    from .structure import own_noise
+    from ..structure import own_noise
 
     pipe = eng.pipe
     R = np.asarray(R, float)

@@ -66,7 +66,7 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
     (:func:`consequences`), judged after the others; ``known``: cross-validations already
     made, by their sorted columns."""
     if cross_validate is None:
-        from .flexible_cv import cross_validate
+        from .cv import cross_validate
     done = dict(known or {})
 
     def cv_on(gs, without=()):  # a column two groups share leaves with either; one fit per set of columns

@@ -14,11 +14,11 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
 * :func:`modulations`: the effect's level changes with another joint's input (its force on the
   channel times that input explains the residual, against the channel's own noise, beyond the
   structure test's threshold and a look-elsewhere cost), or with a function of its own joint's
-  position or of the time since that joint last reversed (:mod:`.keyed_own`: a friction rising
+  position or of the time since that joint last reversed (:mod:`.own`: a friction rising
   over part of the stroke, one that relaxes after each reversal, taken by the library's
   friction at its mean level); the look-alike then says "keyed on its position" or "keyed on
   the time since its last reversal";
-* :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`.flexible`, judged out
+* :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`..flexible`, judged out
   of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
   inputs (the effect's own shape against the plant's) does not count.
@@ -36,7 +36,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .keyed_own import gains
+from .own import gains
 
 #: group of the look-alike that marks an effect whose channel keeps a part keyed on another joint
 KEYED_ELSEWHERE = "keyed_elsewhere"
@@ -45,7 +45,7 @@ _log = logging.getLogger(__name__)
 
 def foreign_inputs(fit, joint: int) -> list:
     """The inputs a claimed flexible ``fit`` depends on that belong to a joint other than
-    ``joint`` (1-based): their :class:`~.flexible.Dependence` entries, in the fit's order;
+    ``joint`` (1-based): their :class:`~..flexible.Dependence` entries, in the fit's order;
     [] when the fit claims nothing or names no input."""
     if not fit.explained:
         return []
@@ -93,7 +93,7 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
 
 
 def _alternative(e, noun, keys, why):
-    from .results import Alternative
+    from ..results import Alternative
 
     name = f"a force on {noun} {e['joint']} keyed on {keys} ({'; '.join(why)})"
     return Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
@@ -113,17 +113,17 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
     joint (the flexible stage's inputs, :func:`.flexible.inputs`: position, rate, acceleration,
     effort, histories; each also as |z - median z|): a friction in proportion to a neighbour's
     speed is g times that speed; and with g z for each function z of the joint's own position
-    and of the time since its last reversal (:func:`.keyed_own.own_products`; not for the
-    kinematic effects, ``keyed_own.KINEMATIC``, whose force is such a function by nature).  The
+    and of the time since its last reversal (:func:`.own.own_products`; not for the
+    kinematic effects, ``own.KINEMATIC``, whose force is such a function by nature).  The
     chi-square the product explains beyond g, in independent samples against the channel's own
     noise (:func:`.signatures.own_noise`), less ln n_eff for its coefficient, passes above the
     structure test's threshold plus the look-elsewhere cost 2 ln M (M products tried for the
     effect, every kind together)."""
-    from .flexible import inputs
-    from .keyed_own import KINEMATIC, beyond, own_products
-    from .signatures import own_noise, samples_per_independent
-    from .structure import THRESHOLD
-    from .ties import tied
+    from ..flexible.stage import inputs
+    from .own import KINEMATIC, beyond, own_products
+    from ..signatures import own_noise, samples_per_independent
+    from ..structure import THRESHOLD
+    from ..ties import tied
 
     pipe = eng.pipe
     R = np.asarray(R, float)

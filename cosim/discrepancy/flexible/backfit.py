@@ -33,7 +33,7 @@ from itertools import islice
 
 import numpy as np
 
-from .flexible_cv import CV, grow
+from .cv import CV, grow
 
 #: backfitting rounds after the trees on the residual alone (each: a linear refit per fold, then the trees)
 ROUNDS = 2
@@ -92,8 +92,8 @@ def _residual(eng, theta):
     parameter set or a reading outside a stroke (``try_R``), a parameter taken out or moved may
     leave a model the core refuses along the recording (a drive whose effort terms self-lock,
     a delay beyond the pipeline's shifts); that column is left out."""
-    from ..errors import PkmError
-    from .residuals import DiagnosisError
+    from ...errors import PkmError
+    from ..residuals import DiagnosisError
 
     try:
         return eng.R(theta)
@@ -128,12 +128,12 @@ class BackfitCV(CV):
 
     def trees(self, y) -> tuple:
         """``(cross-validation of the trees alone, y less the refit)`` on the same folds: what
-        :func:`~.flexible_cv.importance` reads (its held-out error is this one's)."""
+        :func:`~.cv.importance` reads (its held-out error is this one's)."""
         return CV(self.folds, self.models, self.iterations, self.pred - self.linear, self.mse), y - self.linear
 
     def less_refit(self, y, J) -> np.ndarray:
         """``y`` less the refit at every sample (the folds' refits averaged): what the trees on
-        every sample are fitted on (:func:`~.flexible_cv.final_model`)."""
+        every sample are fitted on (:func:`~.cv.final_model`)."""
         return y - (J / np.where(self.scale > 0, self.scale, 1.0)) @ np.mean(self.coef, axis=0)
 
 
@@ -186,14 +186,14 @@ def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
 
 def readjusted(X, y, fitted, cv):
     """The trees on ``X`` with the fitted model re-adjusted beside them (:func:`backfit_cv`), when
-    that beats the trees alone (``cv``, on ``y``): by :data:`~.flexible_select.DROP_MIN` of the
-    variance, above :data:`~.flexible_select.GAIN_Z` standard errors over the folds
-    (:func:`~.flexible_select.gain`, the test of an added input).  ``fitted`` is ``(J, names)``
+    that beats the trees alone (``cv``, on ``y``): by :data:`~.select.DROP_MIN` of the
+    variance, above :data:`~.select.GAIN_Z` standard errors over the folds
+    (:func:`~.select.gain`, the test of an added input).  ``fitted`` is ``(J, names)``
     of :func:`fitted_columns`.  Returns ``(cross-validation, the re-adjusted parameters)``, or
     ``(cv, ())`` when there is none to re-adjust, when a linear refit of the columns on what the
     trees leave adds under :data:`LINEAR_MIN` out of fold (no trees fitted), or when it does not
     beat them."""
-    from .flexible_select import gain
+    from .select import gain
 
     J, names = fitted if fitted is not None else (np.zeros((len(y), 0)), [])
     if J.shape[1] == 0 or linear_gain(J, y, cv) < LINEAR_MIN:

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 
 KINDS = ("position_threshold", "heating", "cross_acceleration", "cross_position", "time_on")
 
@@ -89,13 +89,13 @@ def simulate(kind: str | None, seed: int, robot: str = "6pus", duration: float |
     """One recording hiding a force of ``kind`` (None: clean).  Returns ``(recording, key)``;
     the key holds ``kind``, ``joint``, ``truth`` (groups), ``what`` and ``force`` (at every
     recording row)."""
-    from .. import controllers as ctl
-    from ..core.model import Model
-    from ..master import make_reference
-    from ..recording import Recording
-    from .blind import load_config, with_robot
-    from .excitation import excitation
-    from .runs import closed_loop
+    from ... import controllers as ctl
+    from ...core.model import Model
+    from ...master import make_reference
+    from ...recording import Recording
+    from ..blind import load_config, with_robot
+    from ..excitation import excitation
+    from ..runs import closed_loop
 
     model = Model(robot)
     cfg = with_robot(load_config(), model)

@@ -1,5 +1,5 @@
 """A library effect whose level is keyed on its own joint's position or on the time since the
-joint last reversed: the products the confidence rule of :mod:`.keyed_elsewhere` tries.
+joint last reversed: the products the confidence rule of :mod:`.elsewhere` tries.
 
 A friction of the library on joint j has one level over the whole stroke and at every moment.
 A friction that rises over part of the stroke (a rough zone of a rail, an eddy-current brake
@@ -17,7 +17,7 @@ s since the last reversal of its rate:
   smoothed rate last changed sign beyond a dead band (from the start of a stretch before the
   first reversal).
 
-Each product is counted in the look-elsewhere cost of the rule (:func:`.keyed_elsewhere.modulations`).
+Each product is counted in the look-elsewhere cost of the rule (:func:`.elsewhere.modulations`).
 The library's effects on the effort whose force is a function of position or of reversals are
 the kinematic ones (an encoder offset, a backlash, an elasticity, a geometry error act through
 the readings, and the readings' error moves the inverse dynamics with the pose and flips at

@@ -1,0 +1,21 @@
+"""Where no family fits: a flexible model of what is left, then its dependence (docs/flexible.md).
+
+* :mod:`.stage`: the stage itself (inputs, one channel's fit, the statement, the black-box force);
+* :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
+* :mod:`.select`: which inputs are named (causes before consequences);
+* :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
+* :mod:`.report`: the stage's figure and Markdown;
+* :mod:`.cases`: forces no term family covers, simulated with their truth (the stage's test cases).
+"""
+from .stage import (  # noqa: F401 (the stage's public names)
+    Dependence,
+    FlexibleFit,
+    black_box_force,
+    figure,
+    flexible_stage,
+    inputs,
+    markdown,
+    reported,
+    sentence,
+    statement,
+)

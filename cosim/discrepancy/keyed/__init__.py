@@ -1,0 +1,7 @@
+"""A library effect whose level is keyed on something else: the confidence rule's products.
+
+* :mod:`.own`: the effect's force times bands of the joint's own stroke, powers of its position and the
+  time since its last reversal;
+* :mod:`.elsewhere`: the effect's force times another joint's inputs, and the ties that follow
+  (docs/discrepancy.md, section 4).
+"""
