@@ -32,23 +32,81 @@ one drive's load sets a friction on another joint: bench/foreign/mujoco_unlisted
 cross_effort_friction, seen), and ``--set report7`` (seeds 11300 +) was run once on that stage.
 The fitted model's parameters re-adjusted beside the trees (cosim.discrepancy.flexible.backfit)
 were then set with tune and report3-report7 as tuning sets (the stage re-run on the diagnoses'
-captured inputs), and ``--set report8`` (seeds 11500 +) was run once on that stage.
+captured inputs), and ``--set report8`` (seeds 11500 +) was run once on that stage.  The smoothed
+commanded direction (a rate input) and the trees on fewer columns where named groups share a
+signed history were then set with tune and report3-report8 as tuning sets (``--capture`` /
+``--replay``), and ``--set report9`` (seeds 11700 +) was run once on that stage.
 The truth's share is measured over every decimated sample, as the stage judges its own.
 
     .venv/bin/python bench/flexible_bench.py --set report8 --per-kind 3 --clean 3
+
+``--capture DIR`` also keeps, per case, what the stage was given (the inputs' sources at the
+decimated samples, the residual, each fitted channel's target, noise and fitted-model columns)
+and the truth's share; ``--replay DIR`` re-runs only the stage on them (the same calls as in a
+diagnosis: ``flexible.stage.inputs`` and ``fit_channel``), which is how a change to the stage is
+measured on seen sets without diagnosing again.
 """
 from __future__ import annotations
 
 import argparse
+import pickle
 import time
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 SEEDS = {"tune": 7100, "report": 8300, "fresh": 9300, "report2": 10300, "report3": 10500, "report4": 10700, "report5": 10900, "report6": 11100, "report7": 11300,
-         "report8": 11500}
+         "report8": 11500, "report9": 11700}
 
 
-def one(kind, seed, duration=None):
+def _light(pipe):
+    """What ``flexible.stage.inputs`` and ``fit_channel`` read of the pipeline, without the core."""
+    f = pipe.model.facts
+    names = ("idx", "nd", "t", "segments", "dt", "tau_s", "q_s", "qd_s", "qdd_s", "has_pose", "channels", "window",
+             "step")
+    out = SimpleNamespace(**{k: getattr(pipe, k) for k in names})
+    out.x_s = pipe.x_s if pipe.has_pose else None
+    out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
+                                                      effort_unit=f.effort_unit))
+    out.rec = SimpleNamespace(qref=getattr(pipe.rec, "qref", None))
+    out.polyorder = pipe.polyorder
+    return out
+
+
+def _smoother(light):
+    """The pipeline's smoother (``Pipeline.S``) for a kept pipeline (its window and polyorder;
+    kept before the polyorder was: the pipeline's default, 3)."""
+    from scipy.signal import savgol_filter
+
+    order = getattr(light, "polyorder", 3)
+    return lambda a, deriv=0: savgol_filter(a, light.window, order, deriv=deriv, delta=light.dt, axis=0,
+                                            mode="interp")
+
+
+def _captured(run):
+    """Run ``run()`` (a diagnosis) keeping the flexible stage's inputs: ``(result, kept)``."""
+    from cosim.discrepancy.flexible import stage
+
+    kept = {"channels": []}
+    inputs, fit_channel = stage.inputs, stage.fit_channel
+
+    def inputs_kept(pipe, R):
+        kept["pipe"], kept["R"] = _light(pipe), np.asarray(R, float).copy()
+        return inputs(pipe, R)
+
+    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
+        kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
+        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted)
+
+    stage.inputs, stage.fit_channel = inputs_kept, fit_kept
+    try:
+        return run(), kept
+    finally:
+        stage.inputs, stage.fit_channel = inputs, fit_channel
+
+
+def one(kind, seed, duration=None, capture=None):
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy import diagnose
@@ -57,13 +115,14 @@ def one(kind, seed, duration=None):
     rec, key = simulate(kind, seed, duration=duration)
     with threadpool_limits(limits=1):
         t0 = time.process_time()
-        d = diagnose(rec, replay=False, figures=False)
+        d, kept = _captured(lambda: diagnose(rec, replay=False, figures=False))
         cpu = time.process_time() - t0
     row = {"kind": key["kind"], "seed": seed, "cpu": cpu, "flex_cpu": d.timings.get("flexible", 0.0),
            "truth_inputs": key["truth"], "joint": key["joint"]}
     if kind is None:
         row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for f in d.flexible if f.explained]
         row["ok"] = not row["claims"]
+        _keep(capture, row, kept)
         return row
     fit = next((f for f in d.flexible if f.joint == key["joint"]), None)
     row["truth_share"] = truth_share(d, key, fit)
@@ -74,6 +133,53 @@ def one(kind, seed, duration=None):
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
     row["others"] = [(f.channel, [x.group for x in f.inputs]) for f in d.flexible if f.explained and f.joint != key["joint"]]
     row["statement"] = fit.statement if fit is not None else "(no flexible fit on the force's channel)"
+    kept["force"] = np.interp(np.asarray(d.residual["time"]), key["time"], key["force"][:, key["joint"] - 1])
+    kept["before"] = np.asarray(d.residual["before"])[:, key["joint"] - 1]
+    _keep(capture, row, kept)
+    return row
+
+
+def _keep(capture, row, kept):
+    if capture is not None:
+        Path(capture).mkdir(parents=True, exist_ok=True)
+        with open(Path(capture) / f"{row['seed']}.pkl", "wb") as fh:
+            pickle.dump({"row": row, "kept": kept}, fh)
+
+
+def replay(path):
+    """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
+    with the new share, names and the stage's CPU time."""
+    from threadpoolctl import threadpool_limits
+
+    from cosim.discrepancy.flexible import stage
+
+    with open(path, "rb") as fh:
+        got = pickle.load(fh)
+    row, kept = dict(got["row"]), got["kept"]
+    if "pipe" in kept:
+        kept["pipe"].S = _smoother(kept["pipe"])
+    fits = []
+    with threadpool_limits(limits=1):
+        t0 = time.process_time()
+        if kept["channels"]:
+            X, columns = stage.inputs(kept["pipe"], kept["R"])
+            for ch in kept["channels"]:
+                f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
+                                      fitted=ch["fitted"])
+                fits.append((kept["pipe"].channels.index(ch["unit"][1]) + 1, f))
+        row["flex_cpu"] = time.process_time() - t0
+    claims = [(j, f) for j, f in fits if f.explained]
+    if row["kind"] == "clean":
+        row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for _, f in claims]
+        row["ok"] = not row["claims"]
+        return row
+    fit = next((f for j, f in fits if j == row["joint"]), None)
+    row["share"] = fit.share if fit is not None and fit.explained else 0.0
+    row["named"] = [x.group for x in fit.inputs] if fit is not None else []
+    row["readjusted"] = list(fit.readjusted) if fit is not None else []
+    row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(row["truth_inputs"])
+    row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
+    row["others"] = [(f.channel, [x.group for x in f.inputs]) for j, f in claims if j != row["joint"]]
     return row
 
 
@@ -86,13 +192,16 @@ def main(argv=None):
     ap.add_argument("--clean", type=int, default=4)
     ap.add_argument("--kinds", default="position_threshold,heating,cross_acceleration,cross_position")
     ap.add_argument("--duration", type=float, default=None, help="recorded seconds (default: the generator's, 9 s)")
+    ap.add_argument("--capture", default=None, help="keep each case's stage inputs in this directory")
+    ap.add_argument("--replay", default=None, help="re-run only the stage on the inputs kept there (--capture)")
     a = ap.parse_args(argv)
     base = SEEDS[a.set]
     kinds = [k for k in a.kinds.split(",") if k in KINDS]
     rows = []
     for i in range(a.per_kind):
         for k in kinds:
-            rows.append(one(k, base + 10 * i + kinds.index(k), a.duration))
+            seed = base + 10 * i + kinds.index(k)
+            rows.append(replay(Path(a.replay) / f"{seed}.pkl") if a.replay else one(k, seed, a.duration, a.capture))
             r = rows[-1]
             print(f"{r['kind']:20s} seed {r['seed']} joint {r['joint']}: share {r['share']:.2f} truth "
                   f"{r['truth_share']:.2f} | named {r['named']} truth {r['truth_inputs']} | "
@@ -100,7 +209,8 @@ def main(argv=None):
                   f"cpu {r['cpu']:.1f} s (flexible stage, elapsed {r['flex_cpu']:.2f} s) | re-adjusted {r['readjusted']} | "
                   f"other channels {r['others']}", flush=True)
     for i in range(a.clean):
-        rows.append(one(None, base + 500 + i, a.duration))
+        rows.append(replay(Path(a.replay) / f"{base + 500 + i}.pkl") if a.replay
+                    else one(None, base + 500 + i, a.duration, a.capture))
         r = rows[-1]
         print(f"{'clean':20s} seed {r['seed']}: claims {r['claims']} | cpu {r['cpu']:.1f} s", flush=True)
     eff = [r for r in rows if r["kind"] != "clean"]
