@@ -1,0 +1,86 @@
+"""The flexible stage's inputs (cosim.discrepancy.flexible.stage.inputs): the commanded direction
+of motion as the residual sees it.
+
+The residual is a smoothed effort (the pipeline's Savitzky-Golay smoother), so a friction that
+switches with the commanded direction shows in it as the smoothed sign, a ramp across each
+reversal whose course no instantaneous rate gives.  The synthetic case knows its truth in closed
+form: the residual is that smoothed friction less a Coulomb fitted on the joint's lagging reading
+(what the fitted model leaves at reversals), plus white noise of known variance.
+"""
+import types
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from cosim.discrepancy.flexible import stage as flexible
+
+
+def _reversing_joint(seed=0, n=9000, dt=1e-3, lag=0.015, window=51, step=10, sigma=0.3):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * dt
+    q = sum(a * np.sin(2 * np.pi * f * t + p)
+            for a, f, p in zip(rng.uniform(0.01, 0.03, 4), rng.uniform(0.2, 1.5, 4), rng.uniform(0.0, 6.0, 4)))
+
+    def S(a, deriv=0):
+        return savgol_filter(a, window, 3, deriv=deriv, delta=dt, axis=0, mode="interp")
+
+    rate = np.gradient(q, dt)
+    k = int(round(lag / dt))
+    q_read = np.concatenate([np.full(k, q[0]), q[:-k]])  # the joint follows its reference late
+    idx = np.arange(60, n - 60, step)
+    rate_read = S(q_read, deriv=1)
+    left = S(np.sign(rate))[idx] - np.tanh(rate_read[idx] / (0.02 * np.std(rate)))
+    noise = sigma * float(np.std(left))
+    y = left + rng.normal(0.0, noise, len(idx))
+    pipe = types.SimpleNamespace(
+        idx=idx, nd=1, t=t, segments=[(0, n)], dt=dt, tau_s=S(5.0 * S(q_read[:, None], deriv=2)),
+        q_s=S(q_read[:, None]), qd_s=rate_read[:, None], qdd_s=S(rate_read[:, None], deriv=1), has_pose=False,
+        channels=["tau1"], window=window, step=step, S=S, rec=types.SimpleNamespace(qref=q[:, None]),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    truth = 1.0 - noise ** 2 / float(np.var(y))
+    return pipe, y, noise, truth
+
+
+def test_the_smoothed_commanded_direction_is_a_rate_input():
+    pipe, y, _, _ = _reversing_joint()
+    X, cols = flexible.inputs(pipe, y[:, None])
+    i = [c[0] for c in cols].index("sign(qd1 reference) smoothed")
+    assert cols[i][1] == "rate of slider 1"
+    rate = np.gradient(pipe.rec.qref[:, 0], pipe.dt)
+    assert np.allclose(X[:, i], pipe.S(np.sign(rate))[pipe.idx])
+
+
+def test_a_friction_switching_with_the_commanded_direction_is_explained_at_its_share():
+    # without the smoothed direction the trees reach 0.76 here against a truth of 0.92 (measured)
+    pipe, y, noise, truth = _reversing_joint()
+    X, cols = flexible.inputs(pipe, y[:, None])
+    fit = flexible.fit_channel(pipe, X, cols, y, noise, ("N", "tau1"))
+    assert fit.explained
+    assert [d.group for d in fit.inputs] == ["rate of slider 1"]
+    assert abs(fit.share - truth) <= 0.1
+
+
+def test_named_groups_sharing_a_signed_history_drop_the_columns_that_add_only_variance():
+    # sign(qd) (T - mean T) on the rate and the signed state; the history group also holds slow
+    # columns the force does not depend on (other low-passed signals): the trees on the named
+    # groups are kept on the rate's columns and the shared signed one
+    n, sigma = 700, 0.03
+    t = np.linspace(0.0, 12.0, n)
+    rng = np.random.default_rng(5)
+    qd = np.sin(2 * np.pi * 0.7 * t + 0.5 * np.sin(t))
+    T = 0.5 + 0.5 * np.sin(2 * np.pi * t / 5.0)
+    f = 0.4 * np.sign(qd) * (T - T.mean())
+    y = f + rng.normal(0.0, sigma, n)
+    slow = [np.sin(2 * np.pi * t / p + rng.uniform(0, 6)) for p in (3.0, 4.0, 7.0, 9.0, 11.0)]
+    X = np.column_stack([qd, np.sign(qd) * T, T] + slow + [rng.uniform(-1, 1, n)])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"),
+            ("sign(qd1) T1", "history of slider 1", 1, "history x direction", "W"),
+            ("T1", "history of slider 1", 1, "history", "W")]
+    cols += [(f"h{i}", "history of slider 1", 1, "history", "") for i in range(len(slow))]
+    cols += [("q2", "position of slider 2", 2, "position", "m")]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    truth = float(np.var(f) / (np.var(f) + sigma ** 2))
+    assert sorted(d.group for d in fit.inputs) == ["history of slider 1", "rate of slider 1"]
+    assert sorted(fit.use) == [0, 1]
+    assert abs(fit.share - truth) < 0.1
