@@ -91,9 +91,9 @@ def _captured(run):
     kept = {"channels": []}
     inputs, fit_channel = stage.inputs, stage.fit_channel
 
-    def inputs_kept(pipe, R):
+    def inputs_kept(pipe, R, **kw):
         kept["pipe"], kept["R"] = _light(pipe), np.asarray(R, float).copy()
-        return inputs(pipe, R)
+        return inputs(pipe, R, **kw)
 
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
         kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
@@ -162,7 +162,7 @@ def replay(path):
     with threadpool_limits(limits=1):
         t0 = time.process_time()
         if kept["channels"]:
-            X, columns = stage.inputs(kept["pipe"], kept["R"])
+            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"])

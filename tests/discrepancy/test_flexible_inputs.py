@@ -43,17 +43,18 @@ def _reversing_joint(seed=0, n=9000, dt=1e-3, lag=0.015, window=51, step=10, sig
 
 def test_the_smoothed_commanded_direction_is_a_rate_input():
     pipe, y, _, _ = _reversing_joint()
-    X, cols = flexible.inputs(pipe, y[:, None])
+    X, cols = flexible.inputs(pipe, y[:, None], direction=True)
     i = [c[0] for c in cols].index("sign(qd1 reference) smoothed")
     assert cols[i][1] == "rate of slider 1"
     rate = np.gradient(pipe.rec.qref[:, 0], pipe.dt)
     assert np.allclose(X[:, i], pipe.S(np.sign(rate))[pipe.idx])
+    assert len(flexible.inputs(pipe, y[:, None])[1]) == len(cols) - 1  # the keyed products' inputs: without it
 
 
 def test_a_friction_switching_with_the_commanded_direction_is_explained_at_its_share():
     # without the smoothed direction the trees reach 0.76 here against a truth of 0.92 (measured)
     pipe, y, noise, truth = _reversing_joint()
-    X, cols = flexible.inputs(pipe, y[:, None])
+    X, cols = flexible.inputs(pipe, y[:, None], direction=True)
     fit = flexible.fit_channel(pipe, X, cols, y, noise, ("N", "tau1"))
     assert fit.explained
     assert [d.group for d in fit.inputs] == ["rate of slider 1"]

@@ -189,12 +189,13 @@ def _lowpass(x, dt, tau, starts):
     return y
 
 
-def inputs(pipe, R) -> tuple:
+def inputs(pipe, R, direction=False) -> tuple:
     """The flexible model's inputs at the decimated samples.
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
-    input is the model's, measured minus ``R``.  Returns ``(X, columns)``: X (n, p) and per
-    column ``(feature, group, joint or None, quantity, unit)``."""
+    input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
+    direction (the stage's own inputs; :mod:`..keyed.elsewhere` reads the others).  Returns
+    ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
     idx, nd = pipe.idx, pipe.nd
     facts = pipe.model.facts
     noun, qu, eu = facts.joint_noun, facts.joint_unit, facts.effort_unit
@@ -204,12 +205,13 @@ def inputs(pipe, R) -> tuple:
     dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
     qref = getattr(pipe.rec, "qref", None)
-    rate_ref = direction = None
+    rate_ref = smoothed = None
     if qref is not None:
         rate_full = np.gradient(np.asarray(qref, float), pipe.dt, axis=0)
         # the commanded direction as the residual sees it: the residual is a smoothed effort, so a
         # force that switches with the direction of motion shows there as the smoothed sign
-        rate_ref, direction = rate_full[idx], pipe.S(np.sign(rate_full))[idx]
+        rate_ref = rate_full[idx]
+        smoothed = pipe.S(np.sign(rate_full))[idx] if direction else None
     cols, X = [], []
     for k in range(nd):
         q, qd, qdd = pipe.q_s[idx, k], pipe.qd_s[idx, k], pipe.qdd_s[idx, k]
@@ -219,9 +221,11 @@ def inputs(pipe, R) -> tuple:
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
         if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
-            X += [rate_ref[:, k], direction[:, k]]
-            cols += [(f"qd{k + 1} reference", f"rate of {noun} {k + 1}", k + 1, "rate", rate_u),
-                     (f"sign(qd{k + 1} reference) smoothed", f"rate of {noun} {k + 1}", k + 1, "rate", "")]
+            X.append(rate_ref[:, k])
+            cols.append((f"qd{k + 1} reference", f"rate of {noun} {k + 1}", k + 1, "rate", rate_u))
+        if smoothed is not None:
+            X.append(smoothed[:, k])
+            cols.append((f"sign(qd{k + 1} reference) smoothed", f"rate of {noun} {k + 1}", k + 1, "rate", ""))
         group = f"history of {noun} {k + 1}"
         for tc in TIME_CONSTANTS:
             hist = _lowpass(np.column_stack([np.abs(qd), effort[:, k]]), dt, tc, starts)
@@ -342,9 +346,7 @@ def _lean(X, y, fold_rows, groups, named, use, cv) -> tuple:
     """The trees on fewer columns where named groups share columns (a signed history: the rate's
     and the history's): per such group, cross-validated without its columns no other named group
     holds (it stays named for its shared ones); ``(cv, use)`` of the smallest held-out error, the
-    full model's on a tie.  Columns that carry nothing the shared ones do not add variance: the
-    heating cases of the tuning sets lose 2-10 points of share with the history's unsigned
-    columns beside its signed ones (docs/flexible.md)."""
+    full model's on a tie.  Columns that carry nothing more add variance (docs/flexible.md)."""
     best = (cv, use)
     for g in named:
         others = {i for h in named if h != g for i in groups[h]}
@@ -548,7 +550,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
         R_wo = eng.R({k: v for k, v in theta.items() if k not in drop})
         for c in stand_ins:
             R_fit[:, c] = R_wo[:, c]
-    X, columns = inputs(pipe, R_fit)
+    X, columns = inputs(pipe, R_fit, direction=True)
     noun = pipe.model.facts.joint_noun
     fitted = stage_columns(eng, theta, stand_ins, chans)
     out = []
@@ -587,7 +589,7 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     decimated samples and interpolated in time (zero elsewhere).  A black box: it follows the
     recorded motion, not the replayed one."""
     pipe = eng.pipe
-    X, _ = inputs(pipe, R)
+    X, _ = inputs(pipe, R, direction=True)
     t = pipe.t[pipe.idx]
     out = np.zeros((rows, pipe.nd))
     for f in fits:
