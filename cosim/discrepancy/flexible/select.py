@@ -21,6 +21,13 @@ cross-validating without each, with two rules of cause before consequence.
   group is named too (for those columns: its others are not added to the model), instead of
   the product hiding behind one name.
 
+* **A consequence is no answer by itself.**  On a weak channel the stage judges the strongest
+  single input alone (:func:`~.flexible.stage.fit_channel`); when that input is a consequence,
+  it is the copy of the force the controller made, which out-predicts a force's causes when
+  these act as a product (a friction sign(qd_j) |u_k| whose mean level a fitted Coulomb took:
+  neither factor alone explains anything).  There the trees on every input are judged first,
+  causes before consequences, and the consequence alone only when they claim nothing.
+
 The check of the other screened groups is the one the stage always had: a group is kept when
 leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
 is kept (interchangeable inputs), all are.

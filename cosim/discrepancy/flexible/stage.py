@@ -375,7 +375,9 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     by one by cross-validating without them; the share claimed is that of the trees on the named
     inputs alone (the model the statement describes), out of fold.  When the trees on every
     input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
-    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged.  ``fitted``:
+    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged; on a weak channel
+    whose strongest input is a consequence (:func:`.select.consequences`) the trees on every input
+    are judged first, causes before consequences, and that input alone only when they claim nothing.  ``fitted``:
     the fitted model's columns on the channel (:func:`.backfit.fitted_columns`), re-adjusted
     beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
@@ -402,8 +404,12 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         cv = None if weak else cross_validate(X, y, fold_rows)
         share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
         deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
+        strongest = _strongest_alone(X, y, fold_rows, groups) if weak else None
+        if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
+            cv = cross_validate(X, y, fold_rows)
+            share, z, explained = judged(cv.mse)
         if not explained:  # the trees on every input spread a weak force over many: the strongest input alone
-            g, cv_g = _strongest_alone(X, y, fold_rows, groups)
+            g, cv_g = strongest or _strongest_alone(X, y, fold_rows, groups)
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
