@@ -112,3 +112,32 @@ def partners(kept, groups, y, var, cv_on) -> list:
             if gain(cv_on(out, shared)[0], cv_on(out)[0], y, var)[1]:
                 out.append(h)
     return out
+
+
+def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
+    """The trees on fewer columns where named groups share columns (a signed history: the rate's
+    and the history's): per such group, cross-validated without its columns no other named group
+    holds (it stays named for its shared ones); ``(cv, use)`` of the smallest held-out error, the
+    full model's on a tie (``cross_validate``: the stage's).  Columns that carry nothing more add
+    variance (docs/flexible.md)."""
+    best = (cv, use)
+    for g in named:
+        others = {i for h in named if h != g for i in groups[h]}
+        sub = [i for i in use if i in others]
+        if not set(groups[g]) & others or len(sub) == len(use):
+            continue
+        cv_s = cross_validate(X[:, sub], y, fold_rows)
+        if cv_s.mse < best[0].mse:
+            best = (cv_s, sub)
+    return best
+
+
+def strongest_alone(X, y, fold_rows, groups, cross_validate):
+    """The group whose strongest column alone explains the most out of fold as a step
+    function (:func:`~.cv.binned_shares`, on the same blocks), and the trees cross-validated on
+    that group's columns (``cross_validate``: the stage's): ``(group, cross-validation)``."""
+    from .cv import binned_shares
+
+    shares = binned_shares(X, y, fold_rows)
+    g = max(groups, key=lambda k: float(np.max(shares[groups[k]])))
+    return g, cross_validate(X[:, groups[g]], y, fold_rows)

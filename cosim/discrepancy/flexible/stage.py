@@ -38,7 +38,7 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   only where the other inputs cannot explain the same share) and a group sharing a named one's
   columns named where those add (:mod:`.select`); the share claimed is then that of
   the trees on the named groups alone (where two share columns, on fewer of them when that
-  explains more out of fold: :func:`_lean`), judged again by the same two bars: when it fails them,
+  explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
   the groups and their share).  When the trees on every input claim nothing (a weak force spread
   over many inputs), the group whose strongest column alone explains the most out of fold as a
@@ -66,8 +66,8 @@ import numpy as np
 
 from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
-from .cv import N_FOLDS, binned_shares, cross_validate, final_model, folds, gap_for, importance, outside
-from .select import DROP_MIN, consequences, gain, partners, select  # noqa: F401
+from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
+from .select import DROP_MIN, consequences, gain, lean, partners, select, strongest_alone  # noqa: F401
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -342,32 +342,6 @@ def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple
     return chosen if gain(alone[1], chosen[1], y, float(np.var(y)))[1] else alone
 
 
-def _lean(X, y, fold_rows, groups, named, use, cv) -> tuple:
-    """The trees on fewer columns where named groups share columns (a signed history: the rate's
-    and the history's): per such group, cross-validated without its columns no other named group
-    holds (it stays named for its shared ones); ``(cv, use)`` of the smallest held-out error, the
-    full model's on a tie.  Columns that carry nothing more add variance (docs/flexible.md)."""
-    best = (cv, use)
-    for g in named:
-        others = {i for h in named if h != g for i in groups[h]}
-        sub = [i for i in use if i in others]
-        if not set(groups[g]) & others or len(sub) == len(use):
-            continue
-        cv_s = cross_validate(X[:, sub], y, fold_rows)
-        if cv_s.mse < best[0].mse:
-            best = (cv_s, sub)
-    return best
-
-
-def _strongest_alone(X, y, fold_rows, groups):
-    """The group whose strongest column alone explains the most out of fold as a step
-    function (:func:`~.cv.binned_shares`, on the same blocks), and the trees
-    cross-validated on that group's columns: ``(group, cross-validation)``."""
-    shares = binned_shares(X, y, fold_rows)
-    g = max(groups, key=lambda k: float(np.max(shares[groups[k]])))
-    return g, cross_validate(X[:, groups[g]], y, fold_rows)
-
-
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
@@ -404,12 +378,12 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         cv = None if weak else cross_validate(X, y, fold_rows)
         share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
         deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
-        strongest = _strongest_alone(X, y, fold_rows, groups) if weak else None
+        strongest = strongest_alone(X, y, fold_rows, groups, cross_validate) if weak else None
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows)
             share, z, explained = judged(cv.mse)
         if not explained:  # the trees on every input spread a weak force over many: the strongest input alone
-            g, cv_g = strongest or _strongest_alone(X, y, fold_rows, groups)
+            g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, cross_validate)
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
@@ -432,7 +406,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
                     named, screened = [], (tuple(kept), share_k)
         moved, y_t, cv_t = (), y, cv
         if explained and named:
-            cv, use = _lean(X, y, fold_rows, groups, named, use, cv)
+            cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
             share, z, _ = judged(cv.mse)
             cv_t = cv
             cv, moved = readjusted(X[:, use], y, fitted, cv)
