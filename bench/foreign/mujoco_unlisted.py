@@ -350,11 +350,14 @@ class _RuleLog:
 
     PATTERN = (r"^(?P<effect>\S+?)(?P<tied> \(tied already\))?: (?P<where>elsewhere|position|reversal) "
                r"(?P<feature>.*) chi2 - ln n_eff = (?P<stat>\S+) against (?P<bar>\S+)$")
+    #: the smallest change of the level the rule could see (cosim.discrepancy.keyed.power), where no product passed
+    POWER = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) smallest visible change of the level "
+             r"(?P<delta>\S+) \((?P<feature>.*)\)$")
 
     def __init__(self):
         import logging
 
-        self.rows, self.handler = [], logging.Handler(logging.DEBUG)
+        self.rows, self.power, self.handler = [], [], logging.Handler(logging.DEBUG)
         self.handler.emit = self._emit
         self.logger = logging.getLogger("cosim.discrepancy.keyed.elsewhere")
 
@@ -365,6 +368,10 @@ class _RuleLog:
         if m:
             self.rows.append({"effect": m["effect"], "tied_already": bool(m["tied"]), "where": m["where"],
                               "feature": m["feature"], "stat": float(m["stat"]), "bar": float(m["bar"])})
+        m = re.match(self.POWER, record.getMessage())
+        if m:
+            self.power.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
+                               "delta": float(m["delta"])})
 
     def __enter__(self):
         import logging
@@ -420,7 +427,8 @@ def _run(job):
            "periodic": [f"{e['channel']}: {e['keyed_on']}" for e in d.unexplained if e["signature"] == "periodic"],
            "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible if f.explained],
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
-           "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows}
+           "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
+           "power": rule.power}
     if kind == "clean":
         row["clean"] = not (d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts
                             or row["flexible"])
@@ -481,7 +489,9 @@ def _reached(r) -> list:
 def sweep_table(rows) -> list:
     """Per kind and scale: the cases, the size, a library effect named with confidence, tied (by
     the keyed rule), structure left, "no missing physics found", and the rule's strongest
-    statistic against its bar where it was reached (the effect not tied before its test)."""
+    statistic against its bar where it was reached (the effect not tied before its test), with the
+    largest of the smallest level changes it could see per kind where no product passed
+    (cosim.discrepancy.keyed.power; above 0.5 the effect is tied as too weak to tell)."""
     eff = [r for r in rows if r["kind"] != "clean"]
     L = ["| kind | scale | cases | size (RMS / noise) | library named with confidence | library tied (by the keyed "
          "rule) | structure left | no missing physics found | rule reached: strongest statistic / bar (kind) |",
@@ -497,7 +507,10 @@ def sweep_table(rows) -> list:
             rule = _reached(r)
             if rule:
                 best = max(rule, key=lambda x: x["stat"] - x["bar"])
-                stats.append(f"{best['stat']:.1f}/{best['bar']:.1f} ({best['where']})")
+                weak = max(r.get("power", []), key=lambda x: x["delta"], default=None)
+                stats.append(f"{best['stat']:.1f}/{best['bar']:.1f} ({best['where']}"
+                             + (f"; smallest visible change {weak['delta']:.2f}, {weak['where']}" if weak else "")
+                             + ")")
         sizes = [r["size_over_noise"] for r in rs]
         L.append(f"| {kind} | {scale:g} | {len(rs)} | {min(sizes):.1f}-{max(sizes):.1f} | "
                  f"{len(conf)}{' (' + '; '.join(c['case'] + ': ' + ', '.join(c['library_confident']) for c in conf) + ')' if conf else ''} | "
