@@ -5,5 +5,5 @@
 * :mod:`.elsewhere`: the effect's force times another joint's inputs, and the ties that follow
   (docs/discrepancy.md, section 4);
 * :mod:`.power`: the smallest change of the effect's level the products could show; an effect
-  too weak for a change of half its level is not named with confidence either.
+  too weak for a change of its level as large as itself is not named with confidence either.
 """

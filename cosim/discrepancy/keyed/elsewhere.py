@@ -20,8 +20,8 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
   the time since its last reversal";
 * :func:`modulations` again, where no product passes: the recording is too weak to tell the
   level of a library friction from a keyed one (:mod:`.power`: for some kind of product, no
-  level change smaller than half the friction's level would pass the bar); the look-alike then
-  says "perhaps keyed on ...";
+  level change as large as the friction's level would pass the bar); the look-alike then says
+  "perhaps keyed on ...";
 * :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`..flexible`, judged out
   of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
   with the joint's own position), on time (the drift stage's subject) or on the joint's own

@@ -33,8 +33,10 @@ import numpy as np
 #: the library's frictions (forces of the joint's rate), the effects the power is required of
 FRICTIONS = frozenset({"coulomb", "viscous", "stribeck", "smooth_coulomb"})
 #: the change of an effect's level (a fraction of its fitted level, over the range of an input)
-#: the rule must be able to see for the effect to be named with confidence: half of it
-LEVEL_CHANGE = 0.5
+#: the rule must be able to see for the effect to be named with confidence: the level itself (a
+#: level that doubles, or vanishes, over the input's range: the unlisted frictions' changes are
+#: of that size or more)
+LEVEL_CHANGE = 1.0
 
 
 def spans(Z) -> np.ndarray:
