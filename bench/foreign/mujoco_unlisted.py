@@ -1,7 +1,13 @@
 """Mechanisms no issue and no family names, hidden in MuJoCo's 6-PUS, diagnosed with the defaults.
 
     .venv/bin/python bench/foreign/mujoco_unlisted.py [--kinds tendon_slack,...] [--clean 4] [--jobs 1]
-        [--second | --first-seed 32700] [--out results/mujoco_unlisted]
+        [--second | --first-seed 32700] [--sets 1] [--scale 1] [--out results/mujoco_unlisted]
+
+``--scale 0.01,0.03,0.1,0.3`` runs every rail kind with its force multiplied by each factor (the
+same draws: rail, band, time constant), the detection limit to beyond ten times it; the sweep table
+then counts per kind and scale the library effects named with confidence, tied, structure left,
+"no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
+kinds from the detection limit to 10 times it").
 
 A measurement, not a tuning set: the engine has no library effect,
 no term family and no platform force for any of these, so the honest answer is the structure
