@@ -1,7 +1,13 @@
 """Mechanisms no issue and no family names, hidden in MuJoCo's 6-PUS, diagnosed with the defaults.
 
     .venv/bin/python bench/foreign/mujoco_unlisted.py [--kinds tendon_slack,...] [--clean 4] [--jobs 1]
-        [--second | --first-seed 32700] [--out results/mujoco_unlisted]
+        [--second | --first-seed 32700] [--sets 1] [--scale 1] [--out results/mujoco_unlisted]
+
+``--scale 0.01,0.03,0.1,0.3`` runs every rail kind with its force multiplied by each factor (the
+same draws: rail, band, time constant), the detection limit to beyond ten times it; the sweep table
+then counts per kind and scale the library effects named with confidence, tied, structure left,
+"no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
+kinds from the detection limit to 10 times it").
 
 A measurement, not a tuning set: the engine has no library effect,
 no term family and no platform force for any of these, so the honest answer is the structure
@@ -237,12 +243,13 @@ def _since_reversal(j):
     return since
 
 
-def _rail_mechanism(kind, rng, mo):
-    """(hook, truth, j, k) of a force on one rail (0-based j; k the other rail or None)."""
+def _rail_mechanism(kind, rng, mo, scale=1.0):
+    """(hook, truth, j, k) of a force on one rail (0-based j; k the other rail or None); ``scale``
+    multiplies the force's magnitude (its levels, not its shape: the same draws at every scale)."""
     n = len(mo["E"])
     j = int(rng.integers(n))
     k = int((j + 1 + rng.integers(n - 1)) % n)
-    size = float(rng.uniform(0.1, 0.2))
+    size = scale * float(rng.uniform(0.1, 0.2))
     E, V = mo["E"], mo["V"]
     if kind == "rate_coupled_friction":
         c = 1.5 * size * E[j]
@@ -299,12 +306,15 @@ def _rail_mechanism(kind, rng, mo):
     raise ValueError(kind)
 
 
-def draw(kind, rng, m, mo):
-    """(hook, edit, truth, keyed-on inputs, joint of the force or None) of one case."""
+def draw(kind, rng, m, mo, scale=1.0):
+    """(hook, edit, truth, keyed-on inputs, joint of the force or None) of one case; ``scale``
+    multiplies a rail mechanism's force (a platform mechanism's must be 1)."""
     if kind in PLATFORM:
+        if scale != 1.0:
+            raise ValueError(f"--scale applies to the rail kinds only, not to {kind}")
         hook, edit, truth = _platform_mechanism(kind, rng, m, mo)
         return hook, edit, truth, keyed(kind), None
-    hook, truth, j, k = _rail_mechanism(kind, rng, mo)
+    hook, truth, j, k = _rail_mechanism(kind, rng, mo, scale)
     truth.update(rail=j + 1, **({"other_rail": k + 1} if k is not None else {}))
     return hook, None, truth, keyed(kind, j + 1, None if k is None else k + 1), j + 1
 
@@ -339,6 +349,54 @@ def judge(fits, key, joint) -> tuple:
     return ok, max(f.share for f in told), named
 
 
+class _RuleLog:
+    """The confidence rule's statistics (cosim.discrepancy.keyed.elsewhere logs, per effect and
+    kind of product, its strongest product's chi-square less ln n_eff against the bar, at DEBUG):
+    collected as ``{"effect", "tied_already", "where", "feature", "stat", "bar"}`` rows."""
+
+    PATTERN = (r"^(?P<effect>\S+?)(?P<tied> \(tied already\))?: (?P<where>elsewhere|position|reversal) "
+               r"(?P<feature>.*) chi2 - ln n_eff = (?P<stat>\S+) against (?P<bar>\S+)$")
+    #: the smallest change of the level the rule could see (cosim.discrepancy.keyed.power), where no product passed
+    POWER = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) smallest visible change of the level "
+             r"(?P<delta>\S+) \((?P<feature>.*)\)$")
+
+    def __init__(self):
+        import logging
+
+        self.rows, self.power, self.handler = [], [], logging.Handler(logging.DEBUG)
+        self.handler.emit = self._emit
+        self.logger = logging.getLogger("cosim.discrepancy.keyed.elsewhere")
+
+    def _emit(self, record):
+        import re
+
+        m = re.match(self.PATTERN, record.getMessage())
+        if m:
+            self.rows.append({"effect": m["effect"], "tied_already": bool(m["tied"]), "where": m["where"],
+                              "feature": m["feature"], "stat": float(m["stat"]), "bar": float(m["bar"])})
+        m = re.match(self.POWER, record.getMessage())
+        if m:
+            self.power.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
+                               "delta": float(m["delta"])})
+
+    def __enter__(self):
+        import logging
+
+        self.level = self.logger.level
+        self.logger.addHandler(self.handler)
+        self.logger.setLevel(logging.DEBUG)
+        return self
+
+    def __exit__(self, *exc):
+        self.logger.removeHandler(self.handler)
+        self.logger.setLevel(self.level)
+
+
+def case_name(kind, seed, scale=1.0) -> str:
+    """The case's key: ``kind_seed``, with ``_x<scale>`` when the force is scaled."""
+    return f"{kind}_{seed}" + ("" if scale == 1.0 else f"_x{scale:g}")
+
+
 def _run(job):
     import mujoco_blind as mb
 
@@ -346,32 +404,37 @@ def _run(job):
     from cosim.discrepancy import blind, diagnose
     from cosim.discrepancy.diagnosis import tied
 
-    kind, seed, out = job
+    kind, seed, out, scale = job
     m = Model("6pus")
     hook = edit = joint = None
     truth, key = {}, None
     if kind != "clean":
-        hook, edit, truth, key, joint = draw(kind, np.random.default_rng(seed), m, motion(m, seed))
+        hook, edit, truth, key, joint = draw(kind, np.random.default_rng(seed), m, motion(m, seed), scale)
     noise = blind.load_config()["noise"]["6pus"]
     rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook, edit=edit)
-    csv = mb.write_case(m, rec, Path(out) / f"{kind}_{seed}.csv")
+    name = case_name(kind, seed, scale)
+    csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
     t0 = time.process_time()
-    d = diagnose(csv, figures=False, replay=False)  # the defaults: families, platform, drift, flexible on
+    with _RuleLog() as rule:  # the rule's statistics, for the record (computed on tied effects too)
+        d = diagnose(csv, figures=False, replay=False)  # the defaults: families, platform, drift, flexible on
     cpu = time.process_time() - t0
     library = [e["key"] + (f"[{e['joint']}]" if e["joint"] else "") for e in d.effects
                if not any(tied(a) for a in e["lookalikes"])]
+    ties = {e["key"] + (f"[{e['joint']}]" if e["joint"] else ""): [a["group"] for a in e["lookalikes"] if tied(a)]
+            for e in d.effects if any(tied(a) for a in e["lookalikes"])}
     terms = [("(partial) " if t.partial else "") + t.equation for t in d.discovered]
     before = np.asarray(d.residual["before"])[:, :6]
     size = np.sqrt(np.mean((before - before.mean(axis=0)) ** 2, axis=0)) / noise["tau"]
-    row = {"case": f"{kind}_{seed}", "kind": kind, "seed": seed, "cpu": cpu, "truth": truth, "joint": joint,
-           "library_confident": library, "library_all": d.named(), "discovered": terms,
+    row = {"case": name, "kind": kind, "seed": seed, "scale": scale, "cpu": cpu, "truth": truth, "joint": joint,
+           "library_confident": library, "library_tied": ties, "library_all": d.named(), "discovered": terms,
            "platform": d.platform_force.equation if d.platform_force else "",
            "drifts": [f"{x.param} {x.kind}" for x in d.drifts],
            "unexplained": [f"{e['channel']} {e['signature']}" for e in d.unexplained],
            "periodic": [f"{e['channel']}: {e['keyed_on']}" for e in d.unexplained if e["signature"] == "periodic"],
            "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible if f.explained],
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
-           "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion}
+           "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
+           "power": rule.power}
     if kind == "clean":
         row["clean"] = not (d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts
                             or row["flexible"])
@@ -424,6 +487,48 @@ def table(rows) -> list:
     return L
 
 
+def _reached(r) -> list:
+    """The rule's rows of a case on effects it judged (not tied before its test)."""
+    return [x for x in r.get("rule", []) if not x["tied_already"]]
+
+
+def sweep_table(rows) -> list:
+    """Per kind and scale: the cases, the size, a library effect named with confidence, tied (by
+    the keyed rule), structure left, "no missing physics found", and the rule's strongest
+    statistic against its bar where it was reached (the effect not tied before its test), with the
+    largest of the smallest level changes it could see per kind where no product passed
+    (cosim.discrepancy.keyed.power; above 0.5 the effect is tied as too weak to tell)."""
+    eff = [r for r in rows if r["kind"] != "clean"]
+    L = ["| kind | scale | cases | size (RMS / noise) | library named with confidence | library tied (by the keyed "
+         "rule) | structure left | no missing physics found | rule reached: strongest statistic / bar (kind) |",
+         "|---" * 9 + "|"]
+    cells = sorted({(r["kind"], r.get("scale", 1.0)) for r in eff}, key=lambda c: (KINDS.index(c[0]), c[1]))
+    for kind, scale in cells:
+        rs = sorted([r for r in eff if r["kind"] == kind and r.get("scale", 1.0) == scale], key=lambda r: r["seed"])
+        conf = [r for r in rs if r["library_confident"]]
+        tied_ = [r for r in rs if not r["library_confident"] and r.get("library_tied")]
+        by_rule = [r for r in tied_ if any("keyed_elsewhere" in g for g in r["library_tied"].values())]
+        stats = []
+        for r in rs:
+            rule = _reached(r)
+            if rule:
+                best = max(rule, key=lambda x: x["stat"] - x["bar"])
+                weak = max(r.get("power", []), key=lambda x: x["delta"], default=None)
+                stats.append(f"{best['stat']:.1f}/{best['bar']:.1f} ({best['where']}"
+                             + (f"; smallest visible change {weak['delta']:.2f}, {weak['where']}" if weak else "")
+                             + ")")
+        sizes = [r["size_over_noise"] for r in rs]
+        L.append(f"| {kind} | {scale:g} | {len(rs)} | {min(sizes):.1f}-{max(sizes):.1f} | "
+                 f"{len(conf)}{' (' + '; '.join(c['case'] + ': ' + ', '.join(c['library_confident']) for c in conf) + ')' if conf else ''} | "
+                 f"{len(tied_)} ({len(by_rule)}) | {sum(bool(r['unexplained']) for r in rs)} | "
+                 f"{sum(r['conclusion'].startswith('no missing physics') for r in rs)} | {', '.join(stats) or '-'} |")
+    clean = [r for r in rows if r["kind"] == "clean"]
+    if clean:
+        L.append(f"\nclean recordings clean: {sum(r['clean'] for r in clean)}/{len(clean)}; library effects named "
+                 f"with confidence over all: {sum(bool(r['library_confident']) for r in eff)}/{len(eff)}")
+    return L
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--kinds", default=",".join(KINDS))
@@ -432,6 +537,11 @@ def main(argv=None) -> int:
     ap.add_argument("--second", action="store_true", help="the second seed set (SEED + 1000 +)")
     ap.add_argument("--first-seed", type=int, default=None,
                     help="another seed set: this seed + the kind's index, clean cases this + 90 + (e.g. 32700)")
+    ap.add_argument("--scale", default="1",
+                    help="comma-separated factors on the rail kinds' force magnitudes (e.g. 0.05,0.15,0.5); every "
+                         "rail kind is run at each; a platform kind only at 1")
+    ap.add_argument("--sets", type=int, default=1,
+                    help="seed sets from the first one on, 1000 apart (e.g. --first-seed 30700 --sets 5: sets 1-5)")
     ap.add_argument("--out", type=Path, default=REPO / "results" / "mujoco_unlisted")
     a = ap.parse_args(argv)
     kinds = [k for k in a.kinds.split(",") if k]
@@ -439,9 +549,19 @@ def main(argv=None) -> int:
     if bad:
         ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(KINDS)}")
     a.out.mkdir(parents=True, exist_ok=True)
+    try:
+        scales = [float(x) for x in a.scale.split(",") if x]
+    except ValueError:
+        ap.error(f"--scale {a.scale!r}: comma-separated numbers expected")
+    if not scales or not all(math.isfinite(x) and x > 0 for x in scales):
+        ap.error(f"--scale {a.scale!r}: positive factors expected")
+    if any(x != 1.0 for x in scales) and any(k in PLATFORM for k in kinds):
+        ap.error(f"--scale applies to the rail kinds only ({', '.join(KINDS[len(PLATFORM):])})")
     s0 = a.first_seed if a.first_seed is not None else SEED + (1000 if a.second else 0)
-    jobs = [(k, s0 + KINDS.index(k), str(a.out)) for k in kinds]
-    jobs += [("clean", s0 + 90 + i, str(a.out)) for i in range(a.clean)]
+    jobs = []
+    for base in range(s0, s0 + 1000 * a.sets, 1000):
+        jobs += [(k, base + KINDS.index(k), str(a.out), x) for x in scales for k in kinds]
+        jobs += [("clean", base + 90 + i, str(a.out), 1.0) for i in range(a.clean)]
     rows = []
     with Pool(a.jobs) as pool:
         for row in pool.imap_unordered(_run, jobs):
@@ -449,6 +569,8 @@ def main(argv=None) -> int:
             print(json.dumps(row, default=str), flush=True)
     (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
     print("\n" + "\n".join(table(rows)))
+    if len(scales) > 1 or scales != [1.0]:
+        print("\n" + "\n".join(sweep_table(rows)))
     return 0
 
 

@@ -3,5 +3,7 @@
 * :mod:`.own`: the effect's force times bands of the joint's own stroke, powers of its position and the
   time since its last reversal;
 * :mod:`.elsewhere`: the effect's force times another joint's inputs, and the ties that follow
-  (docs/discrepancy.md, section 4).
+  (docs/discrepancy.md, section 4);
+* :mod:`.power`: the smallest change of the effect's level the products could show; an effect
+  too weak for a change of its level as large as itself is not named with confidence either.
 """

@@ -18,6 +18,10 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
   over part of the stroke, one that relaxes after each reversal, taken by the library's
   friction at its mean level); the look-alike then says "keyed on its position" or "keyed on
   the time since its last reversal";
+* :func:`modulations` again, where no product passes: the recording is too weak to tell the
+  level of a library friction from a keyed one (:mod:`.power`: for some kind of product, no
+  level change as large as the friction's level would pass the bar); the look-alike then says
+  "perhaps keyed on ...";
 * :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`..flexible`, judged out
   of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
@@ -78,6 +82,11 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
             why.append(f"the flexible model of what is left there depends on the {on} ({100 * fit.share:.0f} % of "
                        f"what is left, out of fold)")
         for feat, chi2, rms, where in modulated.get(i, ()):
+            if where.startswith("weak "):
+                why.append(f"the recording is too weak to tell its level from one that changes with "
+                           f"{_KEYS[where[5:]]} (the smallest change of its level the rule could see, with {feat}, "
+                           f"is {100 * chi2:.0f} % of it)")
+                continue
             what = {"elsewhere": feat, "position": f"its position ({feat})",
                     "reversal": f"the time since it last reversed ({feat})"}[where]
             why.append(f"its level changes with {what} (chi-square {chi2:.0f} in independent samples, rms "
@@ -85,20 +94,29 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
         if not why or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        keys = ([f"another {noun}"] if other or any(m[3] == "elsewhere" for m in modulated.get(i, ())) else [])
-        keys += [{"position": "its position", "reversal": "the time since its last reversal"}[m[3]]
-                 for m in modulated.get(i, ()) if m[3] != "elsewhere"]
-        out.append(replace(e, lookalikes=[_alternative(e, noun, " and ".join(keys), why)] + list(e["lookalikes"])))
+        kinds = [m[3].removeprefix("weak ") for m in modulated.get(i, ())]
+        keys = [_KEYS["elsewhere"]] if other else []
+        keys += [_KEYS[w] for w in dict.fromkeys(kinds) if _KEYS[w] not in keys]
+        keys = [k.replace("another joint", f"another {noun}") for k in keys]
+        weak = not other and all(k.startswith("weak ") for k in (m[3] for m in modulated.get(i, ())))
+        alike = _alternative(e, noun, " and ".join(keys), why, weak)
+        out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
     return out
 
 
-def _alternative(e, noun, keys, why):
+#: what a kind of product keys the level on
+_KEYS = {"elsewhere": "another joint", "position": "its position", "reversal": "the time since its last reversal"}
+
+
+def _alternative(e, noun, keys, why, weak=False):
     from ..results import Alternative
 
-    name = f"a force on {noun} {e['joint']} keyed on {keys} ({'; '.join(why)})"
+    name = f"a force on {noun} {e['joint']} {'perhaps ' if weak else ''}keyed on {keys} ({'; '.join(why)})"
+    what = (f"the recording cannot tell whether the truth on this channel depends on an input {e['name']} does not "
+            f"use" if weak else f"the truth on this channel depends on an input {e['name']} does not use")
     return Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
-                       f"{name}: the truth on this channel depends on an input {e['name']} does not use, and the fit "
-                       f"may stand in for part of it; {e['name']} is not named with confidence")
+                       f"{name}: {what}, and the fit may stand in for part of it; {e['name']} is not named with "
+                       f"confidence")
 
 
 def modulations(eng, theta: dict, effects: list, R, threshold: float | None = None) -> dict:
@@ -118,9 +136,14 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
     chi-square the product explains beyond g, in independent samples against the channel's own
     noise (:func:`.signatures.own_noise`), less ln n_eff for its coefficient, passes above the
     structure test's threshold plus the look-elsewhere cost 2 ln M (M products tried for the
-    effect, every kind together)."""
+    effect, every kind together).  Where none passes, the effect is listed with ``where`` "weak "
+    + the kind, ``feature`` the kind's best-powered product and ``chi2`` the smallest change of
+    the level it could see (a fraction of the level, :func:`.power.smallest_change`), for each
+    kind whose smallest change exceeds :data:`.power.LEVEL_CHANGE`: the library's frictions
+    only (:data:`.power.FRICTIONS`)."""
     from ..flexible.stage import inputs
     from .own import KINEMATIC, beyond, own_products
+    from .power import FRICTIONS, smallest_change, spans, too_weak
     from ..signatures import own_noise, samples_per_independent
     from ..structure import THRESHOLD
     from ..ties import tied
@@ -154,18 +177,30 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
         if not float(gc @ gc) > 0:  # a constant (an offset): its products are the inputs themselves
             continue
         base = y - gc * float(gc @ y) / float(gc @ gc)  # the effect's own column refitted
-        P, names = _elsewhere_products(g, X, columns, j)
+        P, names, span = _elsewhere_products(g, X, columns, j)
         wheres = ["elsewhere"] * len(names)
         if e["key"] not in KINEMATIC:
             Z, own_names, own_wheres = own_products(pipe, j)
             P = np.column_stack([P, beyond(g, Z)])
-            names, wheres = names + own_names, wheres + own_wheres
+            names, wheres, span = names + own_names, wheres + own_wheres, np.concatenate([span, spans(Z)])
         if not names:
             continue
-        passed = _passing(P, base, names, wheres, sigma ** 2 * phi, bar0 + 2.0 * math.log(len(names)),
-                          math.log(n_eff), f"{e['key']}[{j}]" + (" (tied already)" if already else ""))
-        if passed and not already:
+        bar, var, cost = bar0 + 2.0 * math.log(len(names)), sigma ** 2 * phi, math.log(n_eff)
+        label = f"{e['key']}[{j}]" + (" (tied already)" if already else "")
+        passed = _passing(P, base, names, wheres, var, bar, cost, label)
+        if already:
+            continue
+        if passed:
             out[i] = [(f, c2, math.sqrt(gn / n), w) for f, c2, gn, w in passed]
+            continue
+        if e["key"] not in FRICTIONS:
+            continue
+        changes = smallest_change(P, span, wheres, var, bar + cost)
+        for where, (delta, k) in changes.items():
+            _log.debug("%s: %s smallest visible change of the level %.3g (%s)", label, where, delta, names[k])
+        weak = too_weak(changes)
+        if weak:  # no product could pass: the recording cannot tell the level constant
+            out[i] = [(names[changes[w][1]], delta, float("nan"), "weak " + w) for w, delta in weak]
     return out
 
 
@@ -196,8 +231,11 @@ def _passing(P, base, names, wheres, var, bar, cost, key) -> list:
 
 
 def _elsewhere_products(g, X, columns, j) -> tuple:
-    """``(P, names)``: the products g (z - mean z) for every input z of a joint other than ``j``
-    (and |z - median z|), with what g explains of them taken out."""
+    """``(P, names, span)``: the products g (z - mean z) for every input z of a joint other than
+    ``j`` (and |z - median z|), with what g explains of them taken out, and the range of each z
+    (:func:`.power.spans`)."""
+    from .power import spans
+
     other = [k for k, col in enumerate(columns) if col[2] is not None and col[2] != j]
     Z = X[:, other]
     Z = np.column_stack([Z, np.abs(Z - np.median(Z, axis=0))])
@@ -208,4 +246,4 @@ def _elsewhere_products(g, X, columns, j) -> tuple:
     gc = g - g.mean()
     P = g[:, None] * Z
     P = P - gc[:, None] * ((gc @ P) / float(gc @ gc))[None, :]  # the product beyond g
-    return P, names
+    return P, names, spans(Z)

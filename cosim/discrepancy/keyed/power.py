@@ -1,0 +1,81 @@
+"""Whether the confidence rule could have seen a library effect's level change: its power.
+
+The rule of :mod:`.elsewhere` withholds an effect's confidence when its level changes with
+another joint's input, its joint's position or the time since the joint reversed: a product of
+the effect's force g and such an input z explains what is left beyond a look-elsewhere bar.  Near
+the detection limit no product can pass: the effect itself is barely above the noise, and a level
+that changes by its own size over the stroke explains less than the bar.  There the recording
+cannot tell the library's constant level from a keyed one, and an effect named with confidence
+there is a guess (measured on MuJoCo: a Coulomb friction named with confidence for a friction
+that rises over a band of the stroke, or after each reversal, at a hundredth of the bench's
+magnitudes; docs/discrepancy.md, section 4, "Nor where the recording is too weak to tell").
+
+The power of one product: a level change of ``delta`` (a fraction of the effect's fitted level)
+over the range of z (its 1st to 99th percentile) adds the force ``delta g (z - mean z) / span(z)``,
+beyond g, whose chi-square is ``delta^2 |P|^2 / (span^2 var)`` (P the product beyond g, as the rule
+fits it, ``var`` the noise variance per independent sample).  The smallest level change the rule
+could see with it is the ``delta`` that brings that chi-square to the rule's bar (its bar plus
+the coefficient's cost); of a kind of product (another joint's inputs, the position, the time
+since the reversal), the smallest over the kind's products (:func:`smallest_change`).  A friction
+of the library (:data:`FRICTIONS`) is too weak to be named with confidence when for some kind it
+exceeds :data:`LEVEL_CHANGE`.  Only the frictions: they are the library's forces of the joint's
+rate, whose level the unlisted frictions key on something else (a zone of the stroke, a seal
+after a reversal, a neighbour's speed or load); the level of an inertia, a dead zone, a
+saturation or an offset is not what such a mechanism changes, and a kinematic effect's force has
+no level of its own (on MuJoCo's library recordings they read 1.3-23 where they are the truth).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: the library's frictions (forces of the joint's rate), the effects the power is required of
+FRICTIONS = frozenset({"coulomb", "viscous", "stribeck", "smooth_coulomb"})
+#: the change of an effect's level (a fraction of its fitted level, over the range of an input)
+#: the rule must be able to see for the effect to be named with confidence: the level itself (a
+#: level that doubles, or vanishes, over the input's range: the unlisted frictions' changes are
+#: of that size or more)
+LEVEL_CHANGE = 1.0
+
+
+def spans(Z) -> np.ndarray:
+    """The range of each column of ``Z`` (n, m) from its 1st to its 99th percentile, (m,)."""
+    Z = np.asarray(Z, float)
+    if Z.shape[1] == 0:
+        return np.zeros(0)
+    lo, hi = np.quantile(Z, [0.01, 0.99], axis=0)
+    return hi - lo
+
+
+def smallest_change(P, span, wheres, var: float, bar: float) -> dict:
+    """Per kind of product (``wheres``), the smallest change of the effect's level (a fraction
+    of it, over an input's range ``span``) whose product, a column of ``P`` (the product beyond
+    the effect's force g), would explain a chi-square of ``bar`` against the noise variance per
+    independent sample ``var``: ``{where: (delta, column)}``; inf for a kind whose products are all
+    zero or constant.
+
+    Example
+    -------
+    >>> P = np.array([[1.0, 0.0], [-1.0, 0.0], [1.0, 0.0], [-1.0, 0.0]])
+    >>> {w: round(d, 3) for w, (d, k) in smallest_change(P, np.ones(2), ["position", "reversal"],
+    ...                                                   0.25, 4.0).items()}
+    {'position': 0.5, 'reversal': inf}
+    """
+    P, span = np.asarray(P, float), np.asarray(span, float)
+    norm = np.sqrt(np.einsum("ij,ij->j", P, P))
+    ok = (norm > 0) & (span > 0)
+    delta = np.full(len(norm), math.inf)
+    delta[ok] = span[ok] * math.sqrt(bar * var) / norm[ok]
+    out = {}
+    for where in dict.fromkeys(wheres):
+        at = [k for k, w in enumerate(wheres) if w == where]
+        best = min(at, key=lambda k: delta[k])
+        out[where] = (float(delta[best]), best)
+    return out
+
+
+def too_weak(changes: dict, limit: float = LEVEL_CHANGE) -> list:
+    """The kinds of ``changes`` (:func:`smallest_change`) whose smallest visible change of the
+    level exceeds ``limit``: ``[(where, delta)]``, in the order given."""
+    return [(w, d) for w, (d, _) in changes.items() if not d <= limit]
