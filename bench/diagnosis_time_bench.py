@@ -90,8 +90,24 @@ STAGES = {"prepare": ["cosim.discrepancy.residuals:Pipeline.__init__"],
 COLUMNS = ["prepare", "noise", "library", "inference", "discovery", "held-out", "replay", "total"]
 
 
+def readable(csv: Path) -> bool:
+    """Does ``csv`` exist and read as a recording with today's reader?  A case written by older
+    code may not (the Quattro's pose column was ``theta``, the core's name is now ``rz``): such a
+    file is stale and :func:`make_cases` writes it again."""
+    from cosim.errors import InputError
+    from cosim.recording import read_recording
+
+    if not csv.exists():
+        return False
+    try:
+        read_recording(csv)
+    except (InputError, OSError, ValueError):
+        return False
+    return True
+
+
 def make_cases(out: Path, names, mujoco: bool) -> dict:
-    """Write the recordings not yet in ``out``; returns {case: csv path}."""
+    """Write the recordings not yet in ``out`` (or stale there: :func:`readable`); returns {case: csv path}."""
     from cosim.discrepancy import blind
 
     out.mkdir(parents=True, exist_ok=True)
@@ -101,6 +117,9 @@ def make_cases(out: Path, names, mujoco: bool) -> dict:
     cfg["general"]["two_effects"] = 0.0
     for name in names:
         csv = out / f"{name}.csv"
+        if csv.exists() and not readable(csv):
+            print(f"{csv}: stale (does not read with this code), written again", flush=True)
+            csv.unlink()
         if name in OWN:
             if not csv.exists():
                 robot, hidden, seed = OWN[name]
