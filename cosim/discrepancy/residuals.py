@@ -272,18 +272,7 @@ class Pipeline:
         # Pose, rate and acceleration of every sample (for the inverse dynamics) and of
         # the smoothed joints (descriptors of the motion, geometry corrections).
         same = same_kinematics(kinematics, rec, model, window=w, polyorder=polyorder, segments=segments, zoh=zoh)
-        if same:
-            k = kinematics
-            self.x_f, self.xd_f, self.xdd_f, self.x_s = k.x_f, k.xd_f, k.xdd_f, k.x_s
-            if self.pose is not None:
-                self.xd_p = k.xd_p
-        else:
-            self.x_f = self._fk(model, self.q, self.pose)
-            self.xd_f = cc.pose_velocity(model, self.x_f, self.qd, times=t)
-            self.xdd_f = cc.pose_acceleration(model, self.x_f, self.xd_f, qdd_l, times=t)
-            self.x_s = self._fk(model, self.q_s, self.x_f)
-            if self.pose is not None:
-                self.xd_p = cc.pose_velocity(model, self.pose, self.qd, times=t)
+        self._pose_motion(model, qdd_l, kinematics if same else None)
         self.tau_ref_s = self._reference_effort(model, kinematics.ref_motion if same else False)
         self.nominal = model.params()
         if geometry is None:
@@ -304,6 +293,23 @@ class Pipeline:
         self._drive_params = model.drive_layer_params()
         self._compliant = any(k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
         self._built = True
+
+    def _pose_motion(self, model, qdd_l, k):
+        """The pose, rate and acceleration of every recorded sample, the pose of the smoothed
+        joints and the pose rate at the tracker's poses: those of the pipeline ``k`` (of the same
+        kinematics, :func:`._kinshare.same_kinematics`), else computed through the core."""
+        if k is not None:
+            self.x_f, self.xd_f, self.xdd_f, self.x_s = k.x_f, k.xd_f, k.xdd_f, k.x_s
+            if self.pose is not None:
+                self.xd_p = k.xd_p
+            return
+        t = self.t
+        self.x_f = self._fk(model, self.q, self.pose)
+        self.xd_f = cc.pose_velocity(model, self.x_f, self.qd, times=t)
+        self.xdd_f = cc.pose_acceleration(model, self.x_f, self.xd_f, qdd_l, times=t)
+        self.x_s = self._fk(model, self.q_s, self.x_f)
+        if self.pose is not None:
+            self.xd_p = cc.pose_velocity(model, self.pose, self.qd, times=t)
 
     def __setattr__(self, name, value):
         if getattr(self, "_built", False):
