@@ -44,7 +44,8 @@ def test_kept_bins_give_each_channel_and_each_input_set_its_own_shares():
 def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch):
     """The folds' trees with the training rows binned once per fold are scikit-learn's trees
     bit for bit (a per-fold target included), and the second step does not bin again; rows
-    that differ are binned again."""
+    that differ are binned again.  The held-out predictions of the second step, continued from
+    the first step's last, are scikit-learn's staged predictions."""
     import pickle
 
     from sklearn.ensemble import HistGradientBoostingRegressor
@@ -75,6 +76,12 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
             assert np.array_equal(a.predict(X), b.predict(X)) and a.n_iter_ == b.n_iter_
             assert "_kept_bins" not in a.__dict__
     pickle.loads(pickle.dumps(kept[0][0]))
+    # the held-out predictions continued from an iteration are staged_predict's own
+    m, (held, _) = kept[0][0], rows[0]
+    every = list(m.staged_predict(X[held]))
+    for start in (1, 20, len(every) - 1):
+        after = list(m.staged_predict_after(X[held], start, every[start - 1]))
+        assert len(after) == len(every) - start and all(np.array_equal(a, b) for a, b in zip(after, every[start:]))
     # other rows at the second fit: binned again
     m = flexible_cv._trees_keeping_bins()(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
     calls.clear()

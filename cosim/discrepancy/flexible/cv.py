@@ -120,7 +120,7 @@ def grow(X, Y, fold_rows) -> tuple:
     for n in STEPS:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
             m.set_params(max_iter=n).fit(X[fit], target(b)[fit])
-            new = list(islice(m.staged_predict(X[held]), len(staged[b]), None))
+            new = list(_staged_after(m, X[held], staged[b]))
             staged[b] = np.vstack([staged[b]] + new)
         total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
                     for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
@@ -130,6 +130,15 @@ def grow(X, Y, fold_rows) -> tuple:
     for m in models:  # the kept training rows are no part of the fitted trees
         m.__dict__.pop("_kept_bins", None)
     return models, best, [p[best - 1] for p in staged]
+
+
+def _staged_after(m, X, done):
+    """``m.staged_predict(X)`` after its first ``len(done)`` values ``done`` (the trees grown at
+    the earlier steps): continued from the last of them (:meth:`_Trees.staged_predict_after`)
+    instead of predicted again from the first tree, the same values."""
+    if len(done) and hasattr(m, "staged_predict_after"):
+        return m.staged_predict_after(X, len(done), done[-1])
+    return islice(m.staged_predict(X), len(done), None)
 
 
 _TREES_KEEPING_BINS: list = []
@@ -159,6 +168,22 @@ def _trees_keeping_bins():
                 elif is_training_data:
                     self.__dict__["_kept_bins"] = (np.array(X), self._bin_mapper, out)
                 return out
+
+            def staged_predict_after(self, X, start, at_start):
+                """``staged_predict(X)``'s values after iteration ``start``, given its value there
+                (``at_start``): the trees' raw predictions added from it as ``staged_predict``
+                adds them, the same values (squared error: the raw prediction is the value)."""
+                from sklearn.utils._openmp_helpers import _openmp_effective_n_threads
+
+                if self.loss != "squared_error" or not hasattr(self, "_preprocess_X"):
+                    yield from islice(self.staged_predict(X), start, None)
+                    return
+                X = self._preprocess_X(X, reset=False)
+                raw = np.array(np.asarray(at_start, self._baseline_prediction.dtype).reshape(-1, 1), order="F")
+                threads = _openmp_effective_n_threads()
+                for i in range(start, len(self._predictors)):
+                    self._predict_iterations(X, self._predictors[i:i + 1], raw, is_binned=False, n_threads=threads)
+                    yield raw.ravel().copy()
         Trees.__module__, Trees.__name__, Trees.__qualname__ = __name__, "_Trees", "_Trees"
         _TREES_KEEPING_BINS.append(Trees)
     return _TREES_KEEPING_BINS[0]
