@@ -150,7 +150,11 @@ def _trees_keeping_bins():
     again (its private ``_bin_data``: some 30 ms on 800 rows of 97 columns, a third of such a
     fold's two fits), into the same bins, since the bins are the quantiles of those rows alone.
     The bins and the bin mapper of the last training rows are kept and given back when the rows
-    are equal, element for element; any other call is scikit-learn's own."""
+    are equal, element for element; any other call is scikit-learn's own.  Its
+    ``staged_predict_after`` continues the staged predictions from a given iteration (the next
+    step's new trees only).  Both read scikit-learn's private ``_bin_data``, ``_predictors`` and
+    ``_predict_iterations`` (scikit-learn 1.4-1.9); ``tests/discrepancy/test_flexible_cv.py``
+    compares the trees and predictions with scikit-learn's own, bit for bit."""
     if not _TREES_KEEPING_BINS:
         from sklearn.ensemble import HistGradientBoostingRegressor
 
