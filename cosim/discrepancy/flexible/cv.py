@@ -153,7 +153,7 @@ def _trees_keeping_bins():
     are equal, element for element; any other call is scikit-learn's own.  Its
     ``staged_predict_after`` continues the staged predictions from a given iteration (the next
     step's new trees only).  Both read scikit-learn's private ``_bin_data``, ``_predictors`` and
-    ``_predict_iterations`` (scikit-learn 1.4-1.9); ``tests/discrepancy/test_flexible_cv.py``
+    ``_predict_iterations`` (written against scikit-learn 1.9.1); ``tests/discrepancy/test_flexible_cv.py``
     compares the trees and predictions with scikit-learn's own, bit for bit."""
     if not _TREES_KEEPING_BINS:
         from sklearn.ensemble import HistGradientBoostingRegressor
