@@ -364,7 +364,10 @@ def _try_width(st, opts, Q, y_perp):
     as well as a constant effort offset of that sign, its look-alike, instead of losing
     to it by the grid's spacing."""
     g = opts[0].group
-    ts = [y_perp] + [y_perp + (st.vec(o.offset) - Q @ (Q.T @ st.vec(o.offset))) for o in opts]
+    ts = [y_perp]
+    for o in opts:
+        off = st.vec(o.offset)  # (once: the same weighted offset on both sides)
+        ts.append(y_perp + (off - Q @ (Q.T @ off)))
     best, where = None, None
     for i in range(len(opts)):
         d = ts[i + 1] - ts[i]

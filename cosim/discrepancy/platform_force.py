@@ -391,7 +391,8 @@ def diagnosis_stage(eng, sel, rec, model, groups, pipeline_kw: dict, prepare_kw:
     def reselect(params):
         m2 = model.copy()
         m2.set_params(params)
-        return attribute(prepare(Pipeline(rec, m2, **pipeline_kw), groups, **prepare_kw))
+        # the first pipeline's kinematics are taken (a force on the platform moves no joint)
+        return attribute(prepare(Pipeline(rec, m2, kinematics=eng.pipe, **pipeline_kw), groups, **prepare_kw))
     return platform_stage(eng, sel, prepare_kw["threshold"], reselect)
 
 

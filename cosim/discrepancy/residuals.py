@@ -52,6 +52,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
+from ._kinshare import kinematic_entries, same_kinematics
 from ._memo import Memo
 from ..errors import DiagnosisError
 
@@ -187,6 +188,11 @@ class Pipeline:
         :mod:`.working_set`); each is uniformly sampled at the same step, and residuals are
         evaluated only where the smoother and the delays stay inside one stretch.  Default:
         the whole recording is one stretch.
+    kinematics : Pipeline, optional
+        A pipeline of the same recording whose model differs from ``model`` only in parameters
+        that move no joint (a mass, an inertia, a force on the platform): its poses and their
+        rates and the kinematic entries of its cache are taken instead of computed again, the
+        same values (:mod:`._kinshare`).  Ignored when that does not hold.
 
     Raises
     ------
@@ -196,7 +202,8 @@ class Pipeline:
     """
 
     def __init__(self, rec, model, *, window: float = 0.05, polyorder: int = 3, step: int | None = None,
-                 zoh: bool = True, max_delay: float = 0.02, geometry=None, segments=None):
+                 zoh: bool = True, max_delay: float = 0.02, geometry=None, segments=None,
+                 kinematics=None):
         where = str(rec.path) if rec.path else "recording"
         if rec.robot != model.robot:
             raise DiagnosisError(f"{where}: recording of robot {rec.robot!r}, model of {model.robot!r}")
@@ -264,13 +271,9 @@ class Pipeline:
 
         # Pose, rate and acceleration of every sample (for the inverse dynamics) and of
         # the smoothed joints (descriptors of the motion, geometry corrections).
-        self.x_f = self._fk(model, self.q, self.pose)
-        self.xd_f = cc.pose_velocity(model, self.x_f, self.qd, times=t)
-        self.xdd_f = cc.pose_acceleration(model, self.x_f, self.xd_f, qdd_l, times=t)
-        self.x_s = self._fk(model, self.q_s, self.x_f)
-        if self.pose is not None:
-            self.xd_p = cc.pose_velocity(model, self.pose, self.qd, times=t)
-        self.tau_ref_s = self._reference_effort(model)
+        same = same_kinematics(kinematics, rec, model, window=w, polyorder=polyorder, segments=segments, zoh=zoh)
+        self._pose_motion(model, qdd_l, kinematics if same else None)
+        self.tau_ref_s = self._reference_effort(model, kinematics.ref_motion if same else False)
         self.nominal = model.params()
         if geometry is None:
             from .effects import groups_for
@@ -279,6 +282,8 @@ class Pipeline:
         self.geometry = frozenset(geometry)
         # the evaluations' cache and scratch model: the pipeline's attributes are fixed from here on
         self._memo = Memo(model, self.nominal)
+        for key, v in (kinematic_entries(kinematics) if same else []):
+            self._memo.get(key, lambda v=v: v)
         # a few recorded samples whose joint motion tells whether a parameter moves it (_moves_joints)
         rows = np.linspace(0, n - 1, min(n, 16)).astype(int)
         self._probe = (self.x_f[rows], self.xd_f[rows], self.xdd_f[rows])
@@ -289,21 +294,43 @@ class Pipeline:
         self._compliant = any(k.endswith(".compliance") and v != 0 for k, v in self.nominal.items())
         self._built = True
 
+    def _pose_motion(self, model, qdd_l, k):
+        """The pose, rate and acceleration of every recorded sample, the pose of the smoothed
+        joints and the pose rate at the tracker's poses: those of the pipeline ``k`` (of the same
+        kinematics, :func:`._kinshare.same_kinematics`), else computed through the core."""
+        if k is not None:
+            self.x_f, self.xd_f, self.xdd_f, self.x_s = k.x_f, k.xd_f, k.xdd_f, k.x_s
+            if self.pose is not None:
+                self.xd_p = k.xd_p
+            return
+        t = self.t
+        self.x_f = self._fk(model, self.q, self.pose)
+        self.xd_f = cc.pose_velocity(model, self.x_f, self.qd, times=t)
+        self.xdd_f = cc.pose_acceleration(model, self.x_f, self.xd_f, qdd_l, times=t)
+        self.x_s = self._fk(model, self.q_s, self.x_f)
+        if self.pose is not None:
+            self.xd_p = cc.pose_velocity(model, self.pose, self.qd, times=t)
+
     def __setattr__(self, name, value):
         if getattr(self, "_built", False):
             raise AttributeError(f"Pipeline.{name}: a pipeline is fixed once built (its evaluations' cache and "
                                  f"scratch model are its Memo)")
         object.__setattr__(self, name, value)
 
-    def _reference_effort(self, model):
+    def _reference_effort(self, model, motion=False):
         """Smoothed inverse dynamics of the reference (``qref``) through the nominal
         model, or None: a noise-free image of the commanded effort, the instrument of the
         delay estimates (the recorded command carries the controller's reaction to the
         rate noise, and so do the motion terms, as its derivative: a delay signature
-        built from either correlates with the residual's noise)."""
+        built from either correlates with the residual's noise).  ``motion``: the
+        reference's pose motion (x, xd, xdd) or None as another pipeline of the same
+        kinematics found it (False: computed here)."""
         self.ref_motion = None
         if self.rec.qref is None:
             return None
+        if motion is not False:
+            self.ref_motion = motion
+            return None if motion is None else self.S(model.inverse_dynamics(*motion))
         qref = np.asarray(self.rec.qref, float)
         try:
             x = model.fk(qref, x_guess=self.x_f)
@@ -528,11 +555,18 @@ class Pipeline:
             # reading = q + e(q, qd, tau): one fixed-point step from the nominal pose
             # (e is the sensor error, at most a few 1e-4 of the stroke).
             e = cc.measure_joints(m, x0, xd0, self.tau_s[i]) - m.ik(x0)
-            q = q - e
+            x, xd, xdd = self._posed(m, q - e, x0, qd, qdd)
+        else:  # the pose motion depends on the parameters that move the joints only
+            kin = tuple(sorted((k, v) for k, v in params.items() if self._moves_joints(k)))
+            x, xd, xdd = self._cached(("X", kin) + at, lambda: self._posed(m, q, x0, qd, qdd))
+        return m.inverse_dynamics(x, xd, xdd) - self._inverse_dynamics(m, at, params.items(), x0, xd0, xdd0)
+
+    @staticmethod
+    def _posed(m, q, x0, qd, qdd):
+        """Pose (from the guess x0), pose rate and acceleration of model m for joints q, qd, qdd."""
         x = m.fk(q, x_guess=x0)
         xd = cc.pose_velocity(m, x, qd)
-        xdd = cc.pose_acceleration(m, x, xd, qdd)
-        return m.inverse_dynamics(x, xd, xdd) - self._inverse_dynamics(m, at, params.items(), x0, xd0, xdd0)
+        return x, xd, cc.pose_acceleration(m, x, xd, qdd)
 
     def _nominal_rates(self, x0, qd, qdd):
         """Pose rate and acceleration of the nominal model at poses x0 for joint rates qd and

@@ -39,3 +39,53 @@ def test_kept_bins_give_each_channel_and_each_input_set_its_own_shares():
     other = flexible_cv.folds(n, gap=8)  # other folds on the same inputs
     y = np.cos(4.0 * X[:, 0]) + rng.normal(0.0, 0.1, n)
     assert np.array_equal(flexible_cv.binned_shares(X, y, other), _by_definition(X, y, other))
+
+
+def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch):
+    """The folds' trees with the training rows binned once per fold are scikit-learn's trees
+    bit for bit (a per-fold target included), and the second step does not bin again; rows
+    that differ are binned again.  The held-out predictions of the second step, continued from
+    the first step's last, are scikit-learn's staged predictions."""
+    import pickle
+
+    from sklearn.ensemble import HistGradientBoostingRegressor
+    from sklearn.ensemble._hist_gradient_boosting import binning
+
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(600, 7))
+    Y = np.column_stack([np.sin(3 * X[:, 0]) + 0.3 * X[:, 1] * X[:, 2] + 0.2 * rng.normal(size=600)
+                         for _ in range(flexible_cv.N_FOLDS)]) + 0.1 * rng.normal(size=(600, flexible_cv.N_FOLDS))
+    rows = flexible_cv.folds(600, gap=3)
+    calls = []
+    fit_transform = binning._BinMapper.fit_transform
+    monkeypatch.setattr(binning._BinMapper, "fit_transform", lambda self, *a, **k: calls.append(1) or
+                        fit_transform(self, *a, **k))
+    for y in (Y[:, 0], Y):
+        calls.clear()
+        kept = flexible_cv.grow(X, y, rows)
+        assert len(calls) == flexible_cv.N_FOLDS  # once per fold
+        with monkeypatch.context() as m:
+            m.setattr(flexible_cv, "_trees_keeping_bins", lambda: HistGradientBoostingRegressor)
+            calls.clear()
+            plain = flexible_cv.grow(X, y, rows)
+            assert len(calls) == 2 * flexible_cv.N_FOLDS  # at each of the two steps
+        assert kept[1] == plain[1] and kept[1] + flexible_cv.PATIENCE > flexible_cv.STEPS[0]  # the second step ran
+        for a, b in zip(kept[2], plain[2]):
+            assert np.array_equal(a, b)
+        for a, b in zip(kept[0], plain[0]):
+            assert np.array_equal(a.predict(X), b.predict(X)) and a.n_iter_ == b.n_iter_
+            assert "_kept_bins" not in a.__dict__
+    pickle.loads(pickle.dumps(kept[0][0]))
+    # the held-out predictions continued from an iteration are staged_predict's own
+    m, (held, _) = kept[0][0], rows[0]
+    every = list(m.staged_predict(X[held]))
+    for start in (1, 20, len(every) - 1):
+        after = list(m.staged_predict_after(X[held], start, every[start - 1]))
+        assert len(after) == len(every) - start and all(np.array_equal(a, b) for a, b in zip(after, every[start:]))
+    # other rows at the second fit: binned again
+    m = flexible_cv._trees_keeping_bins()(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
+    calls.clear()
+    m.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
+    ref = HistGradientBoostingRegressor(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
+    ref.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
+    assert len(calls) == 3 and np.array_equal(m.predict(X), ref.predict(X))  # m binned again, ref twice

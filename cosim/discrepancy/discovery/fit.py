@@ -129,11 +129,12 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     costs = {t: acceptance.cost(search, t, threshold) for t in candidates}
     cost = lambda t: costs[t] if t in costs else acceptance.cost(search, t, threshold)  # noqa: E731
     price = {t: len(TERMS[t[0]][0]) * logn for t in candidates}  # the BIC price of its coefficients
+    coefs = {t: frozenset(TERMS[t[0]][0]) for t in candidates}
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
         tried = [cand for cand in candidates
-                 if not (cand in refused or held & set(TERMS[cand[0]][0]))  # a coefficient is entered once
+                 if not (cand in refused or not held.isdisjoint(coefs[cand]))  # a coefficient is entered once
                  and not products.clash(search, c, chosen, cand, model)]  # the core holds one shape per joint
         for cand, c2 in zip(tried, chi2_each([chosen + [cand] for cand in tried])):
             gain = (chi2 - c2) - price[cand] - costs[cand]  # a family term pays more

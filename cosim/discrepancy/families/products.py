@@ -205,6 +205,8 @@ def clash(search, c, chosen, cand, held=None) -> bool:
     (:data:`ZONE_NOT_BESIDE`)?"""
     if cand[0] == "zone" and held and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE):
         return True
+    if not chosen:  # no term to clash with
+        return False
     key = (c, cand, tuple(chosen))  # the bootstrap's selections ask the same again and again
     cache = _CLASHES.setdefault(search, {})  # per search: a Search is a value (its shapes fixed)
     if key not in cache:

@@ -113,23 +113,90 @@ def grow(X, Y, fold_rows) -> tuple:
     same trees as one fit of as many iterations) and stop once the summed held-out loss has not
     fallen for :data:`PATIENCE` iterations, or at the last.  Returns ``(models, iterations, the
     held-out predictions per fold at that number)``."""
-    from sklearn.ensemble import HistGradientBoostingRegressor
-
     Y = np.asarray(Y)
     target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
-    models = [HistGradientBoostingRegressor(**dict(TREES, warm_start=True)) for _ in fold_rows]
+    models = [_trees_keeping_bins()(**dict(TREES, warm_start=True)) for _ in fold_rows]
     staged = [np.empty((0, len(held))) for held, _ in fold_rows]
     for n in STEPS:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
             m.set_params(max_iter=n).fit(X[fit], target(b)[fit])
-            new = list(islice(m.staged_predict(X[held]), len(staged[b]), None))
+            new = list(_staged_after(m, X[held], staged[b]))
             staged[b] = np.vstack([staged[b]] + new)
         total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
                     for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
         if n - best >= PATIENCE:
             break
+    for m in models:  # the kept training rows are no part of the fitted trees
+        m.__dict__.pop("_kept_bins", None)
     return models, best, [p[best - 1] for p in staged]
+
+
+def _staged_after(m, X, done):
+    """``m.staged_predict(X)`` after its first ``len(done)`` values ``done`` (the trees grown at
+    the earlier steps): continued from the last of them (:meth:`_Trees.staged_predict_after`)
+    instead of predicted again from the first tree, the same values."""
+    if len(done) and hasattr(m, "staged_predict_after"):
+        return m.staged_predict_after(X, len(done), done[-1])
+    return islice(m.staged_predict(X), len(done), None)
+
+
+_TREES_KEEPING_BINS: list = []
+
+
+def _trees_keeping_bins():
+    """scikit-learn's ``HistGradientBoostingRegressor`` that bins its training rows once when a
+    warm-started fit is given the same rows again (:func:`grow`'s second step): a fit bins them
+    again (its private ``_bin_data``: some 30 ms on 800 rows of 97 columns, a third of such a
+    fold's two fits), into the same bins, since the bins are the quantiles of those rows alone.
+    The bins and the bin mapper of the last training rows are kept and given back when the rows
+    are equal, element for element; any other call is scikit-learn's own.  Its
+    ``staged_predict_after`` continues the staged predictions from a given iteration (the next
+    step's new trees only).  Both read scikit-learn's private ``_bin_data``, ``_predictors`` and
+    ``_predict_iterations`` (written against scikit-learn 1.9.1); ``tests/discrepancy/test_flexible_cv.py``
+    compares the trees and predictions with scikit-learn's own, bit for bit."""
+    if not _TREES_KEEPING_BINS:
+        from sklearn.ensemble import HistGradientBoostingRegressor
+
+        class Trees(HistGradientBoostingRegressor):
+            def _bin_data(self, X, *args, is_training_data, **kw):
+                weights = [a for a in args + tuple(kw.values()) if a is not None]
+                kept = self.__dict__.get("_kept_bins")
+                if (is_training_data and not weights and kept is not None and kept[0].shape == X.shape
+                        and kept[0].dtype == X.dtype and np.array_equal(kept[0], X)):
+                    self._bin_mapper = kept[1]
+                    return kept[2]
+                out = super()._bin_data(X, *args, is_training_data=is_training_data, **kw)
+                if is_training_data and weights:
+                    self.__dict__.pop("_kept_bins", None)
+                elif is_training_data:
+                    self.__dict__["_kept_bins"] = (np.array(X), self._bin_mapper, out)
+                return out
+
+            def staged_predict_after(self, X, start, at_start):
+                """``staged_predict(X)``'s values after iteration ``start``, given its value there
+                (``at_start``): the trees' raw predictions added from it as ``staged_predict``
+                adds them, the same values (squared error: the raw prediction is the value)."""
+                from sklearn.utils._openmp_helpers import _openmp_effective_n_threads
+
+                if self.loss != "squared_error" or not hasattr(self, "_preprocess_X"):
+                    yield from islice(self.staged_predict(X), start, None)
+                    return
+                X = self._preprocess_X(X, reset=False)
+                raw = np.array(np.asarray(at_start, self._baseline_prediction.dtype).reshape(-1, 1), order="F")
+                threads = _openmp_effective_n_threads()
+                for i in range(start, len(self._predictors)):
+                    self._predict_iterations(X, self._predictors[i:i + 1], raw, is_binned=False, n_threads=threads)
+                    yield raw.ravel().copy()
+        Trees.__module__, Trees.__name__, Trees.__qualname__ = __name__, "_Trees", "_Trees"
+        _TREES_KEEPING_BINS.append(Trees)
+    return _TREES_KEEPING_BINS[0]
+
+
+def __getattr__(name):
+    if name == "_Trees":  # the class by its name, for pickle (made when first asked for)
+        return _trees_keeping_bins()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def final_model(X, y, cv: CV):

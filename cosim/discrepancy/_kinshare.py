@@ -1,0 +1,45 @@
+"""What a residual pipeline (:class:`.residuals.Pipeline`) can take from another pipeline of the
+same recording whose model has the same kinematics: the poses, pose rates and accelerations of
+the recorded and smoothed joints and of the reference, and the kinematic entries of its
+evaluation cache (the joint motion along a pose motion, the nominal pose rates, whether a
+parameter moves the joints, the poses of a geometry change).
+
+The platform-force stage (:mod:`.platform_force`) builds a second pipeline for the model with a
+force on the platform; a force, a mass or an inertia leaves the kinematics as they are, and
+these are the costly part of a pipeline that does not depend on them.  What is taken is the
+value the pipeline would compute, bit for bit (the same core calls on the same inputs).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: first element of the keys of a pipeline's evaluation cache whose values depend on the
+#: model's kinematics only (``Pipeline._inverse_dynamics``'s "J", ``_pose_term``'s "P0" and
+#: "X", ``_moves_joints``'s "moves joints")
+KINEMATIC_KEYS = ("J", "P0", "X", "moves joints")
+
+
+def same_kinematics(prev, rec, model, *, window: int, polyorder: int, segments, zoh: bool) -> bool:
+    """Can a pipeline of ``rec`` for ``model`` take the kinematics of the pipeline ``prev``?
+
+    Yes when ``prev`` is a pipeline of the same recording object with the same smoothing,
+    segments and effort hold, and every parameter of ``model`` that differs from ``prev``'s
+    model is one that moves no joint (``prev._moves_joints``: not a geometry parameter, and
+    the joint motion of a few recorded samples unchanged when it is moved; a mass, an inertia,
+    gravity or a force on the platform)."""
+    if prev is None or prev.rec is not rec or prev.model.robot != model.robot:
+        return False
+    if (prev.window, prev.polyorder, prev.zoh) != (window, polyorder, zoh):
+        return False
+    if prev.segments != ([(0, prev.n)] if segments is None else [(int(a), int(b)) for a, b in segments]):
+        return False
+    mine, theirs = model.params(), prev.nominal
+    if set(mine) != set(theirs):
+        return False
+    return not any(prev._moves_joints(k) for k, v in mine.items() if theirs[k] != v
+                   and not (np.isnan(v) and np.isnan(theirs[k])))
+
+
+def kinematic_entries(prev) -> list:
+    """The entries of ``prev``'s evaluation cache that hold kinematics only, oldest first."""
+    return [(k, v) for k, v in prev._memo.entries.items() if k[0] in KINEMATIC_KEYS]

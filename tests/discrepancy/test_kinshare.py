@@ -1,0 +1,55 @@
+"""A residual pipeline built with another's kinematics (``Pipeline(..., kinematics=first)``, the
+platform-force stage's second pipeline) equals the pipeline built from scratch, bit for bit: its
+nominal residual, reference effort and every evaluation (drive layer, mechanism, geometry, pose
+term); the kinematics are taken only when the models differ in parameters that move no joint."""
+import numpy as np
+import pytest
+
+from cosim.core import Model
+from cosim.discrepancy.residuals import Pipeline
+
+CABLE = {"cable.tension": 0.4, "cable.anchor_z": 0.3}
+
+
+def _model(params):
+    """The 6-PUS with ``params`` set; a value given as a string "*f" scales the nominal one by f."""
+    m = Model("6pus")
+    nominal = m.params()
+    m.set_params({k: nominal[k] * float(v[1:]) if isinstance(v, str) else v for k, v in params.items()})
+    return m
+
+
+def _same(a, b):
+    if a is None or b is None:
+        return a is None and b is None
+    return np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize("params, taken", [(CABLE, True), ({"payload.m": 0.1, "gravity.x": 0.05}, True),
+                                           ({"leg[1].L": "*1.001"}, False), ({**CABLE, "rail[2].S0x": "*1.01"}, False)])
+def test_a_pipeline_with_anothers_kinematics_equals_one_built_from_scratch(clean_runs, params, taken):
+    rec = clean_runs["6pus"]
+    first = Pipeline(rec, Model("6pus"))
+    first.evaluate({"leg[2].L": first.nominal["leg[2].L"] * 1.001})  # a geometry change's pose motion kept
+    shared = Pipeline(rec, _model(params), kinematics=first)
+    fresh = Pipeline(rec, _model(params))
+    assert (shared.x_f is first.x_f) == taken and (shared.x_s is first.x_s) == taken
+    for k in ("x_f", "xd_f", "xdd_f", "x_s", "tau_ref_s"):
+        assert _same(getattr(shared, k), getattr(fresh, k)), k
+    j = "rail"
+    cases = [{}, {f"{j}[1].coulomb": 0.05}, {"payload.m": 0.05}, {"leg[2].L": fresh.nominal["leg[2].L"] * 1.001},
+             {"leg[2].L": fresh.nominal["leg[2].L"] * 1.001, "payload.m": 0.05}, {f"{j}[3].encoder_offset": 1e-4},
+             {"cable.tension": 0.2}, {}]
+    for p in cases:
+        a, b = shared.evaluate(p), fresh.evaluate(p)
+        assert _same(a.eff, b.eff) and _same(a.kin, b.kin), p
+        assert _same(shared.pose_term(p), fresh.pose_term(p)), p
+    if fresh.has_reference:
+        assert _same(shared.reference_effort({"payload.m": 0.05}), fresh.reference_effort({"payload.m": 0.05}))
+
+
+def test_kinematics_of_another_recording_or_smoothing_are_not_taken(clean_runs):
+    first = Pipeline(clean_runs["6pus"], Model("6pus"))
+    other = Pipeline(clean_runs["6pus"], _model(CABLE), window=0.07, kinematics=first)
+    assert other.x_s is not first.x_s
+    assert np.array_equal(other.x_s, Pipeline(clean_runs["6pus"], _model(CABLE), window=0.07).x_s)
