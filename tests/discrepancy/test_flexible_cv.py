@@ -7,8 +7,21 @@ column on the fitted rows, the fitted rows' mean per bin (the fitted mean for an
 predicting the held-out rows.
 """
 import numpy as np
+import pytest
 
 from cosim.discrepancy.flexible import cv as flexible_cv
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    # the trees on one thread, as the stage grows them: OpenMP's default threads on a busy
+    # machine turn seconds into minutes.  scikit-learn's ensembles are loaded first:
+    # threadpoolctl limits only the runtimes already loaded.
+    import sklearn.ensemble  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        yield
 
 
 def _by_definition(X, y, fold_rows, bins=flexible_cv.BINS):
