@@ -10,7 +10,8 @@ and the library's Coulomb friction is fitted to it by least squares (the oracle:
 mean one).  The residual left is within the channel's own noise to the structure test's eye, but
 the Coulomb force times a function of the position, or of the time since the reversal, explains
 it.  A Coulomb friction that is the truth (constant level) is left alone, and so is a kinematic
-effect (its force is a function of the position by nature)."""
+effect (its force is a function of the position by nature).  A rotor inertia fitted on the
+channel of a friction measured keyed is tied beside it; beside one only "perhaps keyed" it is not."""
 import math
 from types import SimpleNamespace
 
@@ -123,3 +124,43 @@ def test_a_friction_too_weak_to_tell_its_level_constant_is_not_named_with_confid
     assert "too weak to tell its level" in marked["lookalikes"][0]["name"]
     eng, theta, effects, R, _, _ = _case(0.01 + 0.01 * band)
     assert [m[3] for m in modulations(eng, theta, effects, R)[0]] == ["position"]
+
+
+def _beside(joint=1):
+    """A rotor inertia fitted on ``joint`` beside the Coulomb friction of joint 1 (its parameter
+    is not in theta: the rule reads no force of it, it only sits on the channel)."""
+    return FoundEffect("rotor_inertia", "rotor inertia", f"rotor_inertia[{joint}]", f"rotor inertia, joint {joint}",
+                       joint, "effort", {f"rail[{joint}].rotor_inertia": {}}, 30.0, 30.0, "", [])
+
+
+def test_an_effect_fitted_beside_a_keyed_friction_loses_its_confidence_too():
+    """A friction that relaxes after each reversal is tied as keyed; the rotor inertia fitted on
+    the same channel (it can take the part of the keyed force that follows the acceleration at
+    a reversal) gets a tie that says beside what; an inertia on the other joint does not."""
+    t, _, qd, _ = _motion()
+    s = time_since_reversal(qd[:, 0], t, 1e-3)
+    eng, theta, effects, R, _, _ = _case(0.02 + 0.03 * np.exp(-s / 0.15))
+    effects = effects + [_beside(1), _beside(2)]
+    found = modulations(eng, theta, effects, R)
+    assert "reversal" in [m[3] for m in found.get(0, [])] and set(found) == {0}, found
+    marked = withheld(effects, [], "slider", found)
+    first = marked[1]["lookalikes"][0]
+    assert first["group"] == KEYED_ELSEWHERE and tied(first), marked[1]
+    assert first["name"] == ("fitted beside Coulomb friction, whose level is keyed on the time since its last "
+                             "reversal: it may stand in for part of that force")
+    assert marked[2]["lookalikes"] == []  # another joint's channel
+    assert [a["group"] for a in marked[0]["lookalikes"]] == [KEYED_ELSEWHERE]  # its own tie, once
+
+
+def test_a_friction_only_perhaps_keyed_leaves_the_effect_beside_it_alone():
+    """Near the detection limit the friction is tied "perhaps keyed" (no keyed force measured): the
+    inertia beside it keeps its confidence."""
+    t, q, _, _ = _motion()
+    lo, hi = np.quantile(q[:, 0], [0.55, 0.85])
+    band = 0.5 * (np.tanh((q[:, 0] - lo) / 0.002) - np.tanh((q[:, 0] - hi) / 0.002))
+    eng, theta, effects, R, _, _ = _case(0.001 + 0.001 * band)
+    effects = effects + [_beside(1)]
+    found = modulations(eng, theta, effects, R)
+    assert found and all(m[3].startswith("weak ") for m in found[0]), found
+    marked = withheld(effects, [], "slider", found)
+    assert "perhaps keyed on" in marked[0]["lookalikes"][0]["name"] and marked[1]["lookalikes"] == []

@@ -27,8 +27,11 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
   inputs (the effect's own shape against the plant's) does not count.
 
-Effects of no single joint (a platform mass, a tilt, a delay) act through every joint's motion
-and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
+An effect whose level was measured keyed (a product passed; not a "perhaps keyed" tie) ties the
+other library effects fitted on its channel as well (:func:`_beside`: "fitted beside Coulomb
+friction, whose level is keyed on ...: it may stand in for part of that force"), as a discovered
+term fitted beside a tied effect is marked partial.  Effects of no single joint (a platform mass,
+a tilt, a delay) act through every joint's motion and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
 joint" and "Nor where its level follows the joint's own position or its reversals", states the
 rule and what it was measured on.
 """
@@ -62,7 +65,9 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
     keyed elsewhere than the effect's own shape: its flexible fit (``fits``,
     :class:`~.flexible.FlexibleFit`) claims a part keyed on another joint's input, or its level
     changes with one, with the joint's position or with the time since it reversed
-    (``modulated``, per effect index, from :func:`modulations`); the others as they are.
+    (``modulated``, per effect index, from :func:`modulations`); every other effect on the
+    channel of an effect whose level was measured keyed gets one too (:func:`_beside`); the
+    others as they are.
 
     Example
     -------
@@ -100,6 +105,35 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
         keys = [k.replace("another joint", f"another {noun}") for k in keys]
         weak = not other and all(k.startswith("weak ") for k in (m[3] for m in modulated.get(i, ())))
         alike = _alternative(e, noun, " and ".join(keys), why, weak)
+        out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
+    return _beside(out, modulated, noun)
+
+
+def _beside(effects: list, modulated: dict, noun: str) -> list:
+    """``effects`` with a tied look-alike :data:`KEYED_ELSEWHERE` added to every other library
+    effect on the channel of an effect whose level was measured keyed (a product of
+    :func:`modulations` passed; not a "perhaps keyed" tie of a weak recording, which measured no
+    keyed force): fitted beside it by least squares, an inertia, an offset or a kinematic effect
+    takes the part of the keyed force its own force correlates with.  An effect tied already by
+    this rule is left as it is."""
+    from ..results import Alternative
+
+    keyed = {}
+    for i, found in modulated.items():
+        kinds = [m[3] for m in found if not m[3].startswith("weak ")]
+        if kinds:
+            e = effects[i]
+            keys = " and ".join(_KEYS[k] for k in dict.fromkeys(kinds)).replace("another joint", f"another {noun}")
+            keyed.setdefault(e["joint"], []).append((i, f"{e['name']}, whose level is keyed on {keys}"))
+    out = []
+    for i, e in enumerate(effects):
+        by = [why for k, why in keyed.get(e["joint"], ()) if k != i]
+        if not by or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
+            out.append(e)
+            continue
+        name = f"fitted beside {'; '.join(by)}: it may stand in for part of that force"
+        alike = Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
+                            f"{e['name']} on {noun} {e['joint']}, {name}; {e['name']} is not named with confidence")
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
     return out
 
