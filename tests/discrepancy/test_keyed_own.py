@@ -146,8 +146,9 @@ def test_an_effect_fitted_beside_a_keyed_friction_loses_its_confidence_too():
     marked = withheld(effects, [], "slider", found)
     first = marked[1]["lookalikes"][0]
     assert first["group"] == KEYED_ELSEWHERE and tied(first), marked[1]
-    assert first["name"] == ("fitted beside Coulomb friction, whose level is keyed on the time since its last "
-                             "reversal: it may stand in for part of that force")
+    assert first["name"] == ("a force on slider 1 keyed on the time since its last reversal (fitted beside Coulomb "
+                             "friction, whose level is keyed on the time since its last reversal: it may stand in "
+                             "for part of that force)")
     assert marked[2]["lookalikes"] == []  # another joint's channel
     assert [a["group"] for a in marked[0]["lookalikes"]] == [KEYED_ELSEWHERE]  # its own tie, once
 

@@ -31,9 +31,10 @@ An effect whose level was measured keyed (a product passed; not a "perhaps keyed
 other library effects fitted on its channel as well (:func:`_beside`: "fitted beside Coulomb
 friction, whose level is keyed on ...: it may stand in for part of that force"), as a discovered
 term fitted beside a tied effect is marked partial.  Effects of no single joint (a platform mass,
-a tilt, a delay) act through every joint's motion and are not tested.  docs/discrepancy.md, section 4, "Nor where what is left is keyed on another
-joint" and "Nor where its level follows the joint's own position or its reversals", states the
-rule and what it was measured on.
+a tilt, a delay) act through every joint's motion and are not tested.  docs/discrepancy.md,
+section 4, "Nor where what is left is keyed on another joint", "Nor where its level follows the
+joint's own position or its reversals" and "Nor beside a friction keyed", states the rule and
+what it was measured on.
 """
 from __future__ import annotations
 
@@ -124,14 +125,16 @@ def _beside(effects: list, modulated: dict, noun: str) -> list:
         if kinds:
             e = effects[i]
             keys = " and ".join(_KEYS[k] for k in dict.fromkeys(kinds)).replace("another joint", f"another {noun}")
-            keyed.setdefault(e["joint"], []).append((i, f"{e['name']}, whose level is keyed on {keys}"))
+            keyed.setdefault(e["joint"], []).append((i, e["name"], keys))
     out = []
     for i, e in enumerate(effects):
-        by = [why for k, why in keyed.get(e["joint"], ()) if k != i]
+        by = [(what, keys) for k, what, keys in keyed.get(e["joint"], ()) if k != i]
         if not by or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        name = f"fitted beside {'; '.join(by)}: it may stand in for part of that force"
+        beside = "; ".join(f"{what}, whose level is keyed on {keys}" for what, keys in by)
+        name = (f"a force on {noun} {e['joint']} keyed on {' and '.join(dict.fromkeys(k for _, k in by))} (fitted "
+                f"beside {beside}: it may stand in for part of that force)")
         alike = Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
                             f"{e['name']} on {noun} {e['joint']}, {name}; {e['name']} is not named with confidence")
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
