@@ -11,7 +11,8 @@ mean one).  The residual left is within the channel's own noise to the structure
 the Coulomb force times a function of the position, or of the time since the reversal, explains
 it.  A Coulomb friction that is the truth (constant level) is left alone, and so is a kinematic
 effect (its force is a function of the position by nature).  A rotor inertia fitted on the
-channel of a friction measured keyed is tied beside it; beside one only "perhaps keyed" it is not."""
+channel of a friction measured keyed is tied beside it; beside one only "perhaps keyed" it is not,
+nor is a friction beside an inertia whose level reads keyed."""
 import math
 from types import SimpleNamespace
 
@@ -151,6 +152,9 @@ def test_an_effect_fitted_beside_a_keyed_friction_loses_its_confidence_too():
                              "for part of that force)")
     assert marked[2]["lookalikes"] == []  # another joint's channel
     assert [a["group"] for a in marked[0]["lookalikes"]] == [KEYED_ELSEWHERE]  # its own tie, once
+    # an inertia whose level reads keyed (a stand-in itself) does not tie the friction beside it
+    marked = withheld(effects[:2], [], "slider", {1: [("|qdd2|", 61.0, 0.002, "elsewhere")]})
+    assert marked[0]["lookalikes"] == [] and marked[1]["lookalikes"][0]["group"] == KEYED_ELSEWHERE
 
 
 def test_a_friction_only_perhaps_keyed_leaves_the_effect_beside_it_alone():

@@ -27,7 +27,7 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
   inputs (the effect's own shape against the plant's) does not count.
 
-An effect whose level was measured keyed (a product passed; not a "perhaps keyed" tie) ties the
+A library friction whose level was measured keyed (a product passed; not a "perhaps keyed" tie) ties the
 other library effects fitted on its channel as well (:func:`_beside`: "fitted beside Coulomb
 friction, whose level is keyed on ...: it may stand in for part of that force"), as a discovered
 term fitted beside a tied effect is marked partial.  Effects of no single joint (a platform mass,
@@ -112,17 +112,21 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
 
 def _beside(effects: list, modulated: dict, noun: str) -> list:
     """``effects`` with a tied look-alike :data:`KEYED_ELSEWHERE` added to every other library
-    effect on the channel of an effect whose level was measured keyed (a product of
-    :func:`modulations` passed; not a "perhaps keyed" tie of a weak recording, which measured no
-    keyed force): fitted beside it by least squares, an inertia, an offset or a kinematic effect
-    takes the part of the keyed force its own force correlates with.  An effect tied already by
+    effect on the channel of a library friction (:data:`.power.FRICTIONS`) whose level was
+    measured keyed (a product of :func:`modulations` passed; not a "perhaps keyed" tie of a weak
+    recording, which measured no keyed force): fitted beside it by least squares, an inertia, an
+    offset or a kinematic effect takes the part of the keyed force its own force correlates with.
+    Only beside a friction: the unlisted mechanisms key a friction's level; an inertia or another
+    effect whose level reads keyed is itself the stand-in (for a true elasticity's unmodelled
+    part, MuJoCo seeds 11 and 12), not a force others stand in for.  An effect tied already by
     this rule is left as it is."""
     from ..results import Alternative
+    from .power import FRICTIONS
 
     keyed = {}
     for i, found in modulated.items():
         kinds = [m[3] for m in found if not m[3].startswith("weak ")]
-        if kinds:
+        if kinds and effects[i]["key"] in FRICTIONS:
             e = effects[i]
             keys = " and ".join(_KEYS[k] for k in dict.fromkeys(kinds)).replace("another joint", f"another {noun}")
             keyed.setdefault(e["joint"], []).append((i, e["name"], keys))
