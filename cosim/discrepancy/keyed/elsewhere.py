@@ -100,10 +100,7 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
         if not why or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        kinds = [m[3].removeprefix("weak ") for m in modulated.get(i, ())]
-        keys = [_KEYS["elsewhere"]] if other else []
-        keys += [_KEYS[w] for w in dict.fromkeys(kinds) if _KEYS[w] not in keys]
-        keys = [k.replace("another joint", f"another {noun}") for k in keys]
+        keys = _keyed_on([m[3].removeprefix("weak ") for m in modulated.get(i, ())], noun, bool(other))
         weak = not other and all(k.startswith("weak ") for k in (m[3] for m in modulated.get(i, ())))
         alike = _alternative(e, noun, " and ".join(keys), why, weak)
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
@@ -120,7 +117,6 @@ def _beside(effects: list, modulated: dict, noun: str) -> list:
     effect whose level reads keyed is itself the stand-in (for a true elasticity's unmodelled
     part, MuJoCo seeds 11 and 12), not a force others stand in for.  An effect tied already by
     this rule is left as it is."""
-    from ..results import Alternative
     from .power import FRICTIONS
 
     keyed = {}
@@ -128,7 +124,7 @@ def _beside(effects: list, modulated: dict, noun: str) -> list:
         kinds = [m[3] for m in found if not m[3].startswith("weak ")]
         if kinds and effects[i]["key"] in FRICTIONS:
             e = effects[i]
-            keys = " and ".join(_KEYS[k] for k in dict.fromkeys(kinds)).replace("another joint", f"another {noun}")
+            keys = " and ".join(_keyed_on(kinds, noun))
             keyed.setdefault(e["joint"], []).append((i, e["name"], keys))
     out = []
     for i, e in enumerate(effects):
@@ -139,8 +135,7 @@ def _beside(effects: list, modulated: dict, noun: str) -> list:
         beside = "; ".join(f"{what}, whose level is keyed on {keys}" for what, keys in by)
         name = (f"a force on {noun} {e['joint']} keyed on {' and '.join(dict.fromkeys(k for _, k in by))} (fitted "
                 f"beside {beside}: it may stand in for part of that force)")
-        alike = Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
-                            f"{e['name']} on {noun} {e['joint']}, {name}; {e['name']} is not named with confidence")
+        alike = _tie(name, f"{e['name']} on {noun} {e['joint']}, {name}; {e['name']} is not named with confidence")
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
     return out
 
@@ -149,15 +144,27 @@ def _beside(effects: list, modulated: dict, noun: str) -> list:
 _KEYS = {"elsewhere": "another joint", "position": "its position", "reversal": "the time since its last reversal"}
 
 
-def _alternative(e, noun, keys, why, weak=False):
+def _keyed_on(kinds, noun: str, other: bool = False) -> list:
+    """What a level is keyed on, in words, once per kind of product (``kinds``, in order; another
+    joint first where the flexible fit named one, ``other``)."""
+    keys = ["elsewhere"] if other else []
+    keys += [k for k in dict.fromkeys(kinds) if k not in keys]
+    return [_KEYS[k].replace("another joint", f"another {noun}") for k in keys]
+
+
+def _tie(name: str, description: str):
+    """The tied look-alike :data:`KEYED_ELSEWHERE` of that ``name`` (no fit of its own)."""
     from ..results import Alternative
 
+    return Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False, description)
+
+
+def _alternative(e, noun, keys, why, weak=False):
     name = f"a force on {noun} {e['joint']} {'perhaps ' if weak else ''}keyed on {keys} ({'; '.join(why)})"
     what = (f"the recording cannot tell whether the truth on this channel depends on an input {e['name']} does not "
             f"use" if weak else f"the truth on this channel depends on an input {e['name']} does not use")
-    return Alternative(KEYED_ELSEWHERE, KEYED_ELSEWHERE, name, 0.0, 0.0, 0, float("nan"), False,
-                       f"{name}: {what}, and the fit may stand in for part of it; {e['name']} is not named with "
-                       f"confidence")
+    return _tie(name, f"{name}: {what}, and the fit may stand in for part of it; {e['name']} is not named with "
+                      f"confidence")
 
 
 def modulations(eng, theta: dict, effects: list, R, threshold: float | None = None) -> dict:
