@@ -2,6 +2,9 @@
 
     .venv/bin/python bench/flexible_mujoco_bench.py [--seeds 3] [--clean 2] [--base 12000]
 
+``--capture DIR`` keeps, per case, what the flexible stage was given and ``--replay DIR`` re-runs
+only the stage on it, as ``bench/flexible_bench.py`` does (its ``_captured`` and ``replay``).
+
 The MuJoCo model is bench/foreign/mujoco_blind.py's (the hand-written 6-PUS, PD + gravity, the
 engine's exciting trajectory, the generator's sensor noise).  A force none of the discovery
 step's families covers is computed in MuJoCo's step from MuJoCo's own state (``simulate(...,
@@ -87,7 +90,8 @@ def draw(kind, rng, mo):
     return hook, log, j + 1, truth
 
 
-def one(kind, seed, out):
+def one(kind, seed, out, capture=None):
+    import flexible_bench as fb
     import mujoco_blind as mb
     from discovery_mujoco_bench import motion
     from threadpoolctl import threadpool_limits
@@ -104,11 +108,13 @@ def one(kind, seed, out):
     csv = mb.write_case(m, rec, Path(out) / f"{kind}_{seed}.csv")
     with threadpool_limits(limits=1):
         t0 = time.process_time()
-        d = diagnose(csv, figures=False, replay=False)
+        d, kept = fb._captured(lambda: diagnose(csv, figures=False, replay=False))
         cpu = time.process_time() - t0
-    row = {"kind": kind, "seed": seed, "cpu": cpu, "joint": joint, "truth": truth}
+    row = {"kind": kind, "seed": seed, "cpu": cpu, "joint": joint, "truth": truth, "truth_inputs": truth,
+           "flex_cpu": d.timings.get("flexible", 0.0)}
     if kind == "clean":
         row["claims"] = [(f.channel, round(f.share, 2), [x.group for x in f.inputs]) for f in d.flexible if f.explained]
+        fb._keep(capture, row, kept)
         return row
     lt = np.array(log)
     force = np.zeros((len(lt), 6))
@@ -121,6 +127,20 @@ def one(kind, seed, out):
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(truth)
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
     row["others"] = [(f.channel, [x.group for x in f.inputs]) for f in d.flexible if f.explained and f.joint != joint]
+    fb._keep(capture, row, kept)
+    return row
+
+
+def case(kind, seed, a):
+    """:func:`one`, or its stage re-run on the inputs ``--capture`` kept (``--replay``)."""
+    if a.replay is None:
+        return one(kind, seed, a.out, a.capture)
+    import flexible_bench as fb
+
+    row = fb.replay(Path(a.replay) / f"{seed}.pkl")
+    row["truth"] = row["truth_inputs"]
+    if kind == "clean":
+        row["claims"] = [(c, round(s, 2), g) for c, s, g in row["claims"]]
     return row
 
 
@@ -131,19 +151,22 @@ def main(argv=None):
     ap.add_argument("--base", type=int, default=12000)
     ap.add_argument("--out", default="/tmp/flexible_mujoco")
     ap.add_argument("--kinds", default=",".join(KINDS))
+    ap.add_argument("--capture", default=None, help="keep each case's stage inputs in this directory")
+    ap.add_argument("--replay", default=None, help="re-run only the stage on the inputs kept there (--capture)")
     a = ap.parse_args(argv)
     Path(a.out).mkdir(parents=True, exist_ok=True)
     rows = []
     for i in range(a.seeds):
         for k in a.kinds.split(","):
-            r = one(k, a.base + 10 * i + KINDS.index(k), a.out)
+            r = case(k, a.base + 10 * i + KINDS.index(k), a)
             rows.append(r)
             print(f"{k:20s} seed {r['seed']} joint {r['joint']}: share {r['share']:.2f} truth {r['truth_share']:.2f} | "
                   f"named {r['named']} truth {r['truth']} | {'OK' if r['inputs_ok'] else 'wrong'} inputs, share "
-                  f"{'OK' if r['share_ok'] else 'off'} | cpu {r['cpu']:.1f} s | other channels {r['others']}",
+                  f"{'OK' if r['share_ok'] else 'off'} | cpu {r['cpu']:.1f} s (flexible stage {r['flex_cpu']:.2f} s) | "
+                  f"other channels {r['others']}",
                   flush=True)
     for i in range(a.clean):
-        r = one("clean", a.base + 500 + i, a.out)
+        r = case("clean", a.base + 500 + i, a)
         rows.append(r)
         print(f"{'clean':20s} seed {r['seed']}: claims {r['claims']} | cpu {r['cpu']:.1f} s", flush=True)
     eff = [r for r in rows if r["kind"] != "clean"]
