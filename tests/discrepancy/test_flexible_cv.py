@@ -1,12 +1,10 @@
-"""The flexible stage's cross-validation (cosim.discrepancy.flexible.cv).
+"""The single-input screen of the flexible stage (cosim.discrepancy.flexible.cv.binned_shares):
+its bins computed once for the inputs a stage's channels share, and kept, give every channel the
+shares of the screen's definition.
 
-The single-input screen (binned_shares): its bins computed once for the inputs a stage's channels
-share, and kept, give every channel the shares of the screen's definition.  The oracle is the
-definition written out column by column: per fold, the quantile bins of the column on the fitted
-rows, the fitted rows' mean per bin (the fitted mean for an empty bin) predicting the held-out rows.
-
-The boosted trees (grow, final_model): the oracle is LightGBM's own single fit with the same
-settings, and the held-out error of its own predictions.
+The oracle is the definition written out column by column: per fold, the quantile bins of the
+column on the fitted rows, the fitted rows' mean per bin (the fitted mean for an empty bin)
+predicting the held-out rows.
 """
 import numpy as np
 import pytest
@@ -17,9 +15,9 @@ from cosim.discrepancy.flexible import cv as flexible_cv
 @pytest.fixture(autouse=True)
 def _one_thread():
     # the trees on one thread, as the stage grows them: OpenMP's default threads on a busy
-    # machine turn seconds into minutes.  LightGBM is loaded first: threadpoolctl limits only
-    # the runtimes already loaded.
-    import lightgbm  # noqa: F401
+    # machine turn seconds into minutes.  scikit-learn's ensembles are loaded first:
+    # threadpoolctl limits only the runtimes already loaded.
+    import sklearn.ensemble  # noqa: F401
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1):
@@ -56,66 +54,51 @@ def test_kept_bins_give_each_channel_and_each_input_set_its_own_shares():
     assert np.array_equal(flexible_cv.binned_shares(X, y, other), _by_definition(X, y, other))
 
 
-def _one_fit(X, y, iterations):
-    """LightGBM's own fit of ``iterations`` iterations with the stage's settings (its booster as
-    trained, not reloaded from its text: the text rounds the nodes' internal values)."""
-    import lightgbm
+def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch):
+    """The folds' trees with the training rows binned once per fold are scikit-learn's trees
+    bit for bit (a per-fold target included), and the second step does not bin again; rows
+    that differ are binned again.  The held-out predictions of the second step, continued from
+    the first step's last, are scikit-learn's staged predictions."""
+    import pickle
 
-    return lightgbm.train(flexible_cv.TREES, lightgbm.Dataset(X, y, params=flexible_cv.TREES),
-                          num_boost_round=iterations, keep_training_booster=True)
+    from sklearn.ensemble import HistGradientBoostingRegressor
+    from sklearn.ensemble._hist_gradient_boosting import binning
 
-
-def test_grow_in_steps_is_one_fit_and_chooses_the_held_out_minimum():
-    """The folds' trees grown in two steps are LightGBM's trees of one fit of as many iterations
-    (a per-fold target included); the chosen number of iterations is the minimum of the summed
-    held-out squared error of those trees' own predictions (from MIN_ITER on), and the held-out
-    predictions are theirs at that number."""
     rng = np.random.default_rng(3)
     X = rng.normal(size=(600, 7))
     Y = np.column_stack([np.sin(3 * X[:, 0]) + 0.3 * X[:, 1] * X[:, 2] + 0.2 * rng.normal(size=600)
                          for _ in range(flexible_cv.N_FOLDS)]) + 0.1 * rng.normal(size=(600, flexible_cv.N_FOLDS))
     rows = flexible_cv.folds(600, gap=3)
+    calls = []
+    fit_transform = binning._BinMapper.fit_transform
+    monkeypatch.setattr(binning._BinMapper, "fit_transform", lambda self, *a, **k: calls.append(1) or
+                        fit_transform(self, *a, **k))
     for y in (Y[:, 0], Y):
-        models, best, held_pred = flexible_cv.grow(X, y, rows)
-        assert best + flexible_cv.PATIENCE > flexible_cv.STEPS[0]  # the second step ran
-        total = np.zeros(flexible_cv.STEPS[-1])
-        for b, ((held, fit), m) in enumerate(zip(rows, models)):
-            t = y if y.ndim == 1 else y[:, b]
-            assert m.current_iteration() == flexible_cv.STEPS[-1]
-            ref = _one_fit(X[fit], t[fit], flexible_cv.STEPS[-1])
-            assert m.dump_model()["tree_info"] == ref.dump_model()["tree_info"]
-            assert np.array_equal(m.predict(X), ref.predict(X))
-            assert np.array_equal(held_pred[b], ref.predict(X[held], num_iteration=best))
-            total += [np.sum((t[held] - ref.predict(X[held], num_iteration=k)) ** 2)
-                      for k in range(1, flexible_cv.STEPS[-1] + 1)]
-        assert best == int(np.argmin(total[flexible_cv.MIN_ITER - 1:])) + flexible_cv.MIN_ITER
-
-
-def test_grow_stops_after_the_first_step_when_the_minimum_is_early_and_survives_pickling():
-    """A target the inputs do not explain: the held-out loss is lowest early, and the trees stop
-    at the first step (PATIENCE iterations past the minimum); the fitted trees pickle."""
-    import pickle
-
-    rng = np.random.default_rng(5)
-    X, y = rng.normal(size=(500, 4)), rng.normal(size=500)
-    rows = flexible_cv.folds(500, gap=2)
-    models, best, _ = flexible_cv.grow(X, y, rows)
-    assert best <= flexible_cv.STEPS[0] - flexible_cv.PATIENCE
-    assert all(m.current_iteration() == flexible_cv.STEPS[0] for m in models)
-    again = pickle.loads(pickle.dumps(models[0]))
-    assert np.array_equal(again.predict(X), models[0].predict(X))
-
-
-def test_grow_on_a_constant_target_and_the_final_model_is_lightgbms_own_fit():
-    """A constant target (no split anywhere) gives a constant held-out prediction, no NaN; the
-    final model (LightGBM's scikit-learn regressor, the settings renamed) is LightGBM's own fit
-    of the chosen number of iterations on every sample, bit for bit."""
-    rng = np.random.default_rng(7)
-    X = rng.normal(size=(400, 5))
-    rows = flexible_cv.folds(400, gap=2)
-    cv = flexible_cv.cross_validate(X, np.full(400, 2.5), rows)
-    assert np.allclose(cv.pred, 2.5) and np.isfinite(cv.mse)
-    y = np.tanh(2 * X[:, 0]) + 0.5 * X[:, 1] ** 2 + 0.1 * rng.normal(size=400)
-    cv = flexible_cv.cross_validate(X, y, rows)
-    model = flexible_cv.final_model(X, y, cv)
-    assert np.array_equal(model.predict(X), _one_fit(X, y, cv.iterations).predict(X))
+        calls.clear()
+        kept = flexible_cv.grow(X, y, rows)
+        assert len(calls) == flexible_cv.N_FOLDS  # once per fold
+        with monkeypatch.context() as m:
+            m.setattr(flexible_cv, "_trees_keeping_bins", lambda: HistGradientBoostingRegressor)
+            calls.clear()
+            plain = flexible_cv.grow(X, y, rows)
+            assert len(calls) == 2 * flexible_cv.N_FOLDS  # at each of the two steps
+        assert kept[1] == plain[1] and kept[1] + flexible_cv.PATIENCE > flexible_cv.STEPS[0]  # the second step ran
+        for a, b in zip(kept[2], plain[2]):
+            assert np.array_equal(a, b)
+        for a, b in zip(kept[0], plain[0]):
+            assert np.array_equal(a.predict(X), b.predict(X)) and a.n_iter_ == b.n_iter_
+            assert "_kept_bins" not in a.__dict__
+    pickle.loads(pickle.dumps(kept[0][0]))
+    # the held-out predictions continued from an iteration are staged_predict's own
+    m, (held, _) = kept[0][0], rows[0]
+    every = list(m.staged_predict(X[held]))
+    for start in (1, 20, len(every) - 1):
+        after = list(m.staged_predict_after(X[held], start, every[start - 1]))
+        assert len(after) == len(every) - start and all(np.array_equal(a, b) for a, b in zip(after, every[start:]))
+    # other rows at the second fit: binned again
+    m = flexible_cv._trees_keeping_bins()(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
+    calls.clear()
+    m.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
+    ref = HistGradientBoostingRegressor(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
+    ref.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
+    assert len(calls) == 3 and np.array_equal(m.predict(X), ref.predict(X))  # m binned again, ref twice

@@ -29,10 +29,11 @@ function of the force's inputs alone either.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import islice
 
 import numpy as np
 
-from .cv import CV, grow, predict
+from .cv import CV, grow
 
 #: backfitting rounds after the trees on the residual alone (each: a linear refit per fold, then the trees)
 ROUNDS = 2
@@ -171,7 +172,7 @@ def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
     for _ in range(rounds):
         Y = np.empty((len(y), len(cv.folds)))
         for b, (held, fit) in enumerate(cv.folds):
-            inside = predict(models[b], X[fit], iters)
+            inside = next(islice(models[b].staged_predict(X[fit]), iters - 1, None))
             coef[b] = _refit(Js[fit], y[fit] - inside)
             Y[:, b] = y - Js @ coef[b]
         models, iters, held_pred = grow(X, Y, cv.folds)

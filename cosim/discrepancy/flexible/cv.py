@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import islice
 
 import numpy as np
 
@@ -28,21 +29,18 @@ N_FOLDS, BLOCKS_PER_FOLD = 5, 4
 GAP_INDEPENDENT = 1.0
 #: fewest iterations the held-out loss may choose
 MIN_ITER = 5
-#: the folds' trees grow to these numbers of iterations in turn (the last: MAX_ITER), and stop
-#: when the summed held-out loss has not fallen for PATIENCE iterations (its minimum is then the
-#: chosen number)
+#: the folds' trees grow to these numbers of iterations in turn (the last: TREES["max_iter"]),
+#: and stop when the summed held-out loss has not fallen for PATIENCE iterations (its minimum
+#: is then the chosen number); each step bins the inputs again, hence two steps only
 STEPS, PATIENCE = (50, 75), 25
-MAX_ITER = STEPS[-1]
-#: the boosted trees' settings, LightGBM's (small: a few hundred decimated samples; the number of
-#: iterations, at most MAX_ITER, is chosen on the held-out blocks): leaf-wise trees of 12 leaves,
-#: 20 samples a leaf, an L2 penalty of 1 on the leaves, 64 quantile bins, no row or column
-#: sampling, one thread, the same trees on every run.  A cross-validation whose held-out minimum
-#: lies within the first MAX_ITER iterations is the same with any larger bound (the same trees,
-#: grown in the same order); a faster learning rate over fewer iterations names other inputs
-#: (docs/discrepancy.md, Speed)
-TREES = dict(objective="regression", metric="l2", learning_rate=0.15, num_leaves=12, min_data_in_leaf=20,
-             lambda_l2=1.0, min_sum_hessian_in_leaf=1e-3, max_bin=64, bagging_fraction=1.0, bagging_freq=0,
-             feature_fraction=1.0, deterministic=True, force_col_wise=True, num_threads=1, seed=0, verbosity=-1)
+#: the boosted trees' settings (small: a few hundred decimated samples; the number of
+#: iterations, at most max_iter, is chosen on the held-out blocks).  A tree costs about 0.5 ms
+#: whatever its inputs (scikit-learn's per-node work on some 800 rows): the stage's time is its
+#: number of trees.  A cross-validation whose held-out minimum lies within the first max_iter
+#: iterations is the same with any larger bound (the same trees, grown in the same order); a
+#: faster learning rate over fewer iterations names other inputs (docs/discrepancy.md, Speed)
+TREES = dict(max_iter=75, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
+             max_bins=64, early_stopping=False, random_state=0)
 #: quantile bins of the single-input screen (:func:`binned_shares`)
 BINS = 16
 #: an input's held-out value is outside the fitted range when it lies beyond it by this share
@@ -64,15 +62,7 @@ class CV:
 
     def predict(self, b: int, X) -> np.ndarray:
         """Fold ``b``'s trees at the chosen number of iterations on the rows ``X``."""
-        return predict(self.models[b], X, self.iterations)
-
-
-def predict(trees, X, iterations: int) -> np.ndarray:
-    """The boosted trees ``trees`` (a LightGBM booster) on the rows ``X`` with their first
-    ``iterations`` iterations (all of them where they grew fewer: no split left), on one thread
-    (a prediction's own settings: the booster's are not used)."""
-    return trees.predict(np.asarray(X, float), num_iteration=min(int(iterations), trees.current_iteration()),
-                         num_threads=TREES["num_threads"])
+        return next(islice(self.models[b].staged_predict(X), self.iterations - 1, None))
 
 
 def folds(n: int, gap: int, k: int = N_FOLDS, per_fold: int = BLOCKS_PER_FOLD) -> tuple:
@@ -119,43 +109,102 @@ def grow(X, Y, fold_rows) -> tuple:
     """Boosted trees per fold of ``fold_rows`` on the target ``Y``: (n,), or (n, folds) with a
     target per fold (each fold's loss on its own).
 
-    The folds' trees grow together to each of :data:`STEPS` iterations in turn (LightGBM's
-    booster trained on: the same trees as one fit of as many iterations) and stop once the summed
-    held-out loss has not fallen for :data:`PATIENCE` iterations, or at the last.  The held-out
-    loss of each iteration is the booster's own, on the held-out rows binned as the fitted ones.
-    Returns ``(models, iterations, the held-out predictions per fold at that number)``."""
-    import lightgbm
-
-    X, Y = np.asarray(X, float), np.asarray(Y, float)
+    The folds' trees grow together to each of :data:`STEPS` iterations in turn (warm start: the
+    same trees as one fit of as many iterations) and stop once the summed held-out loss has not
+    fallen for :data:`PATIENCE` iterations, or at the last.  Returns ``(models, iterations, the
+    held-out predictions per fold at that number)``."""
+    Y = np.asarray(Y)
     target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
-    models, losses = [], []
-    for b, (held, fit) in enumerate(fold_rows):
-        fitted = lightgbm.Dataset(X[fit], target(b)[fit], params=TREES)
-        m = lightgbm.Booster(TREES, fitted)
-        m.add_valid(lightgbm.Dataset(X[held], target(b)[held], reference=fitted, params=TREES), "held")
-        models.append(m)
-        losses.append([])
+    models = [_trees_keeping_bins()(**dict(TREES, warm_start=True)) for _ in fold_rows]
+    staged = [np.empty((0, len(held))) for held, _ in fold_rows]
     for n in STEPS:
-        for (held, _), m, loss in zip(fold_rows, models, losses):
-            while len(loss) < n:
-                m.update()  # where no split is left, the trees stay as they are
-                loss.append(m.eval_valid()[0][2] * len(held))  # the mean squared error, summed
-        total = np.sum(losses, axis=0)
+        for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
+            m.set_params(max_iter=n).fit(X[fit], target(b)[fit])
+            new = list(_staged_after(m, X[held], staged[b]))
+            staged[b] = np.vstack([staged[b]] + new)
+        total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
+                    for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
         if n - best >= PATIENCE:
             break
-    for m in models:  # the binned rows are no part of the fitted trees
-        m.free_dataset()
-    return models, best, [predict(m, X[held], best) for m, (held, _) in zip(models, fold_rows)]
+    for m in models:  # the kept training rows are no part of the fitted trees
+        m.__dict__.pop("_kept_bins", None)
+    return models, best, [p[best - 1] for p in staged]
+
+
+def _staged_after(m, X, done):
+    """``m.staged_predict(X)`` after its first ``len(done)`` values ``done`` (the trees grown at
+    the earlier steps): continued from the last of them (:meth:`_Trees.staged_predict_after`)
+    instead of predicted again from the first tree, the same values."""
+    if len(done) and hasattr(m, "staged_predict_after"):
+        return m.staged_predict_after(X, len(done), done[-1])
+    return islice(m.staged_predict(X), len(done), None)
+
+
+_TREES_KEEPING_BINS: list = []
+
+
+def _trees_keeping_bins():
+    """scikit-learn's ``HistGradientBoostingRegressor`` that bins its training rows once when a
+    warm-started fit is given the same rows again (:func:`grow`'s second step): a fit bins them
+    again (its private ``_bin_data``: some 30 ms on 800 rows of 97 columns, a third of such a
+    fold's two fits), into the same bins, since the bins are the quantiles of those rows alone.
+    The bins and the bin mapper of the last training rows are kept and given back when the rows
+    are equal, element for element; any other call is scikit-learn's own.  Its
+    ``staged_predict_after`` continues the staged predictions from a given iteration (the next
+    step's new trees only).  Both read scikit-learn's private ``_bin_data``, ``_predictors`` and
+    ``_predict_iterations`` (written against scikit-learn 1.9.1); ``tests/discrepancy/test_flexible_cv.py``
+    compares the trees and predictions with scikit-learn's own, bit for bit."""
+    if not _TREES_KEEPING_BINS:
+        from sklearn.ensemble import HistGradientBoostingRegressor
+
+        class Trees(HistGradientBoostingRegressor):
+            def _bin_data(self, X, *args, is_training_data, **kw):
+                weights = [a for a in args + tuple(kw.values()) if a is not None]
+                kept = self.__dict__.get("_kept_bins")
+                if (is_training_data and not weights and kept is not None and kept[0].shape == X.shape
+                        and kept[0].dtype == X.dtype and np.array_equal(kept[0], X)):
+                    self._bin_mapper = kept[1]
+                    return kept[2]
+                out = super()._bin_data(X, *args, is_training_data=is_training_data, **kw)
+                if is_training_data and weights:
+                    self.__dict__.pop("_kept_bins", None)
+                elif is_training_data:
+                    self.__dict__["_kept_bins"] = (np.array(X), self._bin_mapper, out)
+                return out
+
+            def staged_predict_after(self, X, start, at_start):
+                """``staged_predict(X)``'s values after iteration ``start``, given its value there
+                (``at_start``): the trees' raw predictions added from it as ``staged_predict``
+                adds them, the same values (squared error: the raw prediction is the value)."""
+                from sklearn.utils._openmp_helpers import _openmp_effective_n_threads
+
+                if self.loss != "squared_error" or not hasattr(self, "_preprocess_X"):
+                    yield from islice(self.staged_predict(X), start, None)
+                    return
+                X = self._preprocess_X(X, reset=False)
+                raw = np.array(np.asarray(at_start, self._baseline_prediction.dtype).reshape(-1, 1), order="F")
+                threads = _openmp_effective_n_threads()
+                for i in range(start, len(self._predictors)):
+                    self._predict_iterations(X, self._predictors[i:i + 1], raw, is_binned=False, n_threads=threads)
+                    yield raw.ravel().copy()
+        Trees.__module__, Trees.__name__, Trees.__qualname__ = __name__, "_Trees", "_Trees"
+        _TREES_KEEPING_BINS.append(Trees)
+    return _TREES_KEEPING_BINS[0]
+
+
+def __getattr__(name):
+    if name == "_Trees":  # the class by its name, for pickle (made when first asked for)
+        return _trees_keeping_bins()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def final_model(X, y, cv: CV):
     """The trees on every sample with the cross-validation's number of iterations (the model
-    the partial dependence and the black box use): LightGBM's scikit-learn regressor given
-    :data:`TREES` in LightGBM's own names (they take precedence over the regressor's defaults)."""
-    from lightgbm import LGBMRegressor
+    the partial dependence and the black box use)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
 
-    return LGBMRegressor(n_estimators=cv.iterations, **TREES).fit(np.asarray(X, float), np.asarray(y, float))
+    return HistGradientBoostingRegressor(**dict(TREES, max_iter=cv.iterations)).fit(X, y)
 
 
 def importance(cv: CV, X, y, groups, rng, repeats=2) -> dict:

@@ -37,7 +37,7 @@ def markdown(fits: list, files: dict) -> list:
     if not fits:
         return []
     L = ["## Where no equation was found: a flexible model and its dependence", "",
-         "Boosted trees (LightGBM) on each channel that keeps structure, on "
+         "Boosted trees (scikit-learn HistGradientBoostingRegressor) on each channel that keeps structure, on "
          "every joint's position, rate (and commanded rate), acceleration and model effort, their low-passed "
          "|rate|, effort and power, the pose and time; judged out of fold over blocks in time spread through "
          "the recording.  The inputs are those whose permutation costs the most out of fold; the curves are "

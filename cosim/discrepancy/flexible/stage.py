@@ -2,8 +2,8 @@
 
 After the library, the discovery step and the platform force, an effort channel that still
 keeps structure (:mod:`.structure`, or a residual holding more than its own noise by the bars of
-a claim: :func:`beyond_noise`) is fitted with a flexible regression, LightGBM's boosted trees
-(:mod:`.cv`), on every input the
+a claim: :func:`beyond_noise`) is fitted with a flexible regression, scikit-learn's
+:class:`~sklearn.ensemble.HistGradientBoostingRegressor` (boosted trees), on every input the
 recording offers at the decimated samples: each joint's position, rate (the smoothed reading,
 and the commanded rate where the recording has a reference: its sign is the direction of
 motion where the smoothed reading lags at a reversal; with it the sign of the commanded rate
