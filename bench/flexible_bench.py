@@ -85,17 +85,25 @@ def _smoother(light):
 
 
 def _captured(run):
-    """Run ``run()`` (a diagnosis) keeping the flexible stage's inputs: ``(result, kept)``."""
+    """Run ``run()`` (a diagnosis) keeping the flexible stage's inputs: ``(result, kept)``.
+
+    ``flexible.stage.inputs`` is also called outside the stage (:mod:`cosim.discrepancy.keyed.elsewhere`,
+    after it, on the residual before a partial discovered term is set aside; the black box): the
+    pipeline and residual kept are those of the call whose matrix the fitted channels were given."""
     from cosim.discrepancy.flexible import stage
 
     kept = {"channels": []}
+    calls = []  # (X, pipeline, residual) of every call of inputs during the run
     inputs, fit_channel = stage.inputs, stage.fit_channel
 
     def inputs_kept(pipe, R, **kw):
-        kept["pipe"], kept["R"] = _light(pipe), np.asarray(R, float).copy()
-        return inputs(pipe, R, **kw)
+        X, columns = inputs(pipe, R, **kw)
+        calls.append((X, _light(pipe), np.asarray(R, float).copy()))
+        return X, columns
 
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
+        if "R" not in kept:
+            kept["pipe"], kept["R"] = next((p, R) for Xc, p, R in calls if Xc is X)
         kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
         return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted)
 
@@ -146,6 +154,18 @@ def _keep(capture, row, kept):
             pickle.dump({"row": row, "kept": kept}, fh)
 
 
+def _stage_residual(kept):
+    """The residual the stage built its inputs from, for a capture that kept the last call of
+    ``stage.inputs`` (:mod:`cosim.discrepancy.keyed.elsewhere`'s, after the stage, on the residual
+    before a partial discovered term is set aside): the stage's residual differs from it only in the
+    channels of such terms, all of them fitted, whose targets the capture holds.  Unchanged for a
+    capture of :func:`_captured`."""
+    R = np.array(kept["R"], float)
+    for ch in kept["channels"]:
+        R[:, kept["pipe"].channels.index(ch["unit"][1])] = ch["y"]
+    return R
+
+
 def replay(path):
     """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
     with the new share, names and the stage's CPU time."""
@@ -158,6 +178,7 @@ def replay(path):
     row, kept = dict(got["row"]), got["kept"]
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
+        kept["R"] = _stage_residual(kept)
     fits = []
     with threadpool_limits(limits=1):
         t0 = time.process_time()
