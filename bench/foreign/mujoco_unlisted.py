@@ -359,11 +359,14 @@ class _RuleLog:
     #: the smallest change of the level the rule could see (cosim.discrepancy.keyed.power), where no product passed
     POWER = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) smallest visible change of the level "
              r"(?P<delta>\S+) \((?P<feature>.*)\)$")
+    #: a product the residual leans on whose interval reaches the level (cosim.discrepancy.keyed.power.leaning_change)
+    LEANING = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) largest change of the level not excluded "
+               r"(?P<change>\S+) \((?P<feature>.*); chi2 - ln n_eff = (?P<stat>\S+)\)$")
 
     def __init__(self):
         import logging
 
-        self.rows, self.power, self.handler = [], [], logging.Handler(logging.DEBUG)
+        self.rows, self.power, self.leaning, self.handler = [], [], [], logging.Handler(logging.DEBUG)
         self.handler.emit = self._emit
         self.logger = logging.getLogger("cosim.discrepancy.keyed.elsewhere")
 
@@ -378,6 +381,10 @@ class _RuleLog:
         if m:
             self.power.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
                                "delta": float(m["delta"])})
+        m = re.match(self.LEANING, record.getMessage())
+        if m:
+            self.leaning.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
+                                 "change": float(m["change"]), "stat": float(m["stat"])})
 
     def __enter__(self):
         import logging
@@ -434,7 +441,7 @@ def _run(job):
            "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible if f.explained],
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
-           "power": rule.power}
+           "power": rule.power, "leaning": rule.leaning}
     if kind == "clean":
         row["clean"] = not (d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts
                             or row["flexible"])
@@ -497,7 +504,9 @@ def sweep_table(rows) -> list:
     the keyed rule), structure left, "no missing physics found", and the rule's strongest
     statistic against its bar where it was reached (the effect not tied before its test), with the
     largest of the smallest level changes it could see per kind where no product passed
-    (cosim.discrepancy.keyed.power; above 0.5 the effect is tied as too weak to tell)."""
+    (cosim.discrepancy.keyed.power; above 1 the effect is tied as too weak to tell) and the product
+    the residual leans on whose interval reaches the level (its chi-square less ln n_eff, above the
+    look-elsewhere cost: tied as leaning)."""
     eff = [r for r in rows if r["kind"] != "clean"]
     L = ["| kind | scale | cases | size (RMS / noise) | library named with confidence | library tied (by the keyed "
          "rule) | structure left | no missing physics found | rule reached: strongest statistic / bar (kind) |",
@@ -514,9 +523,11 @@ def sweep_table(rows) -> list:
             if rule:
                 best = max(rule, key=lambda x: x["stat"] - x["bar"])
                 weak = max(r.get("power", []), key=lambda x: x["delta"], default=None)
+                lean = max(r.get("leaning", []), key=lambda x: x["stat"], default=None)
                 stats.append(f"{best['stat']:.1f}/{best['bar']:.1f} ({best['where']}"
                              + (f"; smallest visible change {weak['delta']:.2f}, {weak['where']}" if weak else "")
-                             + ")")
+                             + (f"; leaning {lean['stat']:.1f} ({lean['where']}), change not excluded "
+                                f"{lean['change']:.2f}" if lean else "") + ")")
         sizes = [r["size_over_noise"] for r in rs]
         L.append(f"| {kind} | {scale:g} | {len(rs)} | {min(sizes):.1f}-{max(sizes):.1f} | "
                  f"{len(conf)}{' (' + '; '.join(c['case'] + ': ' + ', '.join(c['library_confident']) for c in conf) + ')' if conf else ''} | "

@@ -11,15 +11,19 @@ mean one).  The residual left is within the channel's own noise to the structure
 the Coulomb force times a function of the position, or of the time since the reversal, explains
 it.  A Coulomb friction that is the truth (constant level) is left alone, and so is a kinematic
 effect (its force is a function of the position by nature).  A rotor inertia fitted on the
-channel of a friction measured keyed is tied beside it; beside one only "perhaps keyed" it is not,
-nor is a friction beside an inertia whose level reads keyed."""
+channel of a friction measured keyed is tied beside it, and a discovered term there is marked
+partial; beside one "perhaps keyed" by the power alone they are not, nor is a friction beside an
+inertia whose level reads keyed.  A friction whose recording leans to a keyed level it cannot
+bound below the level itself is tied "perhaps keyed", and so are the effects beside it."""
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE, modulations, withheld
+from cosim.discrepancy.discovery.terms import DiscoveredTerm
+from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE, modulations, terms_beside, withheld
 from cosim.discrepancy.keyed.own import time_since_reversal
 from cosim.discrepancy.results import FoundEffect
 from cosim.discrepancy.ties import tied
@@ -127,6 +131,36 @@ def test_a_friction_too_weak_to_tell_its_level_constant_is_not_named_with_confid
     assert [m[3] for m in modulations(eng, theta, effects, R)[0]] == ["position"]
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_friction_the_recording_leans_to_keying_is_not_named_with_confidence(seed):
+    """A level of 5 mN that rises by 3 mN after each reversal and relaxes with 0.1 s: no product
+    passes the bar, and every kind's best product could see a change of the whole level (the
+    power alone would name the Coulomb friction with confidence: the reversal's best could see 65 %
+    of it), but the residual leans on the reversal's products (chi-square less ln n_eff 11-19,
+    beyond the look-elsewhere cost 2 ln M of about 8) and the bar cannot exclude a change as large
+    as the level along them: tied, "perhaps keyed on the time since its last reversal".
+    A constant level of the same mean (the library's truth) has no such product and is left
+    alone; a rotor inertia beside the leaning friction is tied "perhaps keyed" too (the recording
+    leans to a keyed force it may take part of)."""
+    t, _, qd, _ = _motion()
+    s = time_since_reversal(qd[:, 0], t, 1e-3)
+    assert modulations(*_case(np.full(len(t), 0.0065), seed=seed)[:4]) == {}
+    eng, theta, effects, R, _, _ = _case(0.005 + 0.003 * np.exp(-s / 0.1), seed=seed)
+    effects = effects + [_beside(1)]
+    found = modulations(eng, theta, effects, R)
+    assert [m[3] for m in found.get(0, [])] == ["leaning reversal"], found
+    feat, change, stat, _ = found[0][0]
+    assert feat.startswith("exp(-s / ") and change >= 1.0 and stat > 0, found
+    marked = withheld(effects, [], "slider", found)
+    first = marked[0]["lookalikes"][0]
+    assert tied(first) and "perhaps keyed on the time since its last reversal" in first["name"], first
+    assert "leans to a level that changes with the time since its last reversal" in first["name"]
+    beside = marked[1]["lookalikes"][0]
+    assert tied(beside) and beside["name"].startswith(
+        "a force on slider 1 perhaps keyed on the time since its last reversal (fitted beside Coulomb friction, "
+        "whose level is perhaps keyed on the time since its last reversal"), beside
+
+
 def _beside(joint=1):
     """A rotor inertia fitted on ``joint`` beside the Coulomb friction of joint 1 (its parameter
     is not in theta: the rule reads no force of it, it only sits on the channel)."""
@@ -155,6 +189,28 @@ def test_an_effect_fitted_beside_a_keyed_friction_loses_its_confidence_too():
     # an inertia whose level reads keyed (a stand-in itself) does not tie the friction beside it
     marked = withheld(effects[:2], [], "slider", {1: [("|qdd2|", 61.0, 0.002, "elsewhere")]})
     assert marked[0]["lookalikes"] == [] and marked[1]["lookalikes"][0]["group"] == KEYED_ELSEWHERE
+
+
+def test_a_discovered_term_beside_a_keyed_friction_is_a_partial_fit():
+    """A term discovered on the channel of a friction whose level relaxes after each reversal (an
+    acceleration term takes the bump after each reversal) is marked partial, "fitted beside ...";
+    one on the other joint is not, nor one beside a friction tied "perhaps keyed" by the power
+    alone; beside one the recording leans to keying it is."""
+    t, _, qd, _ = _motion()
+    s = time_since_reversal(qd[:, 0], t, 1e-3)
+    eng, theta, effects, R, _, _ = _case(0.02 + 0.03 * np.exp(-s / 0.15))
+    found = modulations(eng, theta, effects, R)
+    term = DiscoveredTerm(1, "tau1", ["inertia"], "slider 1: F = m qdd", {}, {}, "", {}, 0.0, 0.0, 0.0, "qdd1")
+    other = replace(term, joint=2, channel="tau2")
+    out = terms_beside([term, other], effects, found, "slider")
+    assert out[0].partial.startswith("fitted beside Coulomb friction, whose level is keyed on the time since its "
+                                     "last reversal"), out[0].partial
+    assert out[1].partial == ""
+    weak = {0: [("exp(-s / 0.2 s)", 1.5, float("nan"), "weak reversal")]}
+    assert terms_beside([term], effects, weak, "slider")[0].partial == ""
+    leaning = {0: [("exp(-s / 0.1 s)", 1.4, 12.5, "leaning reversal")]}
+    assert terms_beside([term], effects, leaning, "slider")[0].partial.startswith(
+        "fitted beside Coulomb friction, whose level is perhaps keyed on the time since its last reversal")
 
 
 def test_a_friction_only_perhaps_keyed_leaves_the_effect_beside_it_alone():

@@ -440,10 +440,11 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
                               theta)
         spent["flexible"] = time.perf_counter() - t3c
     if theta:  # a part left on an effect's channel keyed on another joint: the effect may stand in for it
-        from ..keyed.elsewhere import modulations, withheld
+        from ..keyed.elsewhere import modulations, terms_beside, withheld
 
-        effects_out = withheld(effects_out, flex, pipe.model.facts.joint_noun,
-                               modulations(eng0, theta, effects_out, r_after))
+        modulated, noun = modulations(eng0, theta, effects_out, r_after), pipe.model.facts.joint_noun
+        found = terms_beside(found, effects_out, modulated, noun)  # a term beside a friction keyed: partial
+        effects_out = withheld(effects_out, flex, noun, modulated)
     conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)

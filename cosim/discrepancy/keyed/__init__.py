@@ -4,6 +4,8 @@
   time since its last reversal;
 * :mod:`.elsewhere`: the effect's force times another joint's inputs, and the ties that follow
   (docs/discrepancy.md, section 4);
-* :mod:`.power`: the smallest change of the effect's level the products could show; an effect
-  too weak for a change of its level as large as itself is not named with confidence either.
+* :mod:`.power`: the smallest change of the effect's level the products could show, and the
+  largest one the products the residual leans on cannot exclude; an effect too weak for a change
+  of its level as large as itself, or one whose recording leans to such a change, is not named
+  with confidence either.
 """

@@ -20,17 +20,20 @@ changes with |qd2| ...)"), so it is named tied, not with confidence:
   the time since its last reversal";
 * :func:`modulations` again, where no product passes: the recording is too weak to tell the
   level of a library friction from a keyed one (:mod:`.power`: for some kind of product, no
-  level change as large as the friction's level would pass the bar); the look-alike then says
-  "perhaps keyed on ...";
+  level change as large as the friction's level would pass the bar, or the residual leans on a
+  product along which the bar cannot exclude a change as large as the level); the look-alike
+  then says "perhaps keyed on ...";
 * :func:`foreign_inputs`: the flexible stage's claim on the channel (:mod:`..flexible`, judged out
   of fold) names an input of another joint.  A claim on no single input, on the pose (it moves
   with the joint's own position), on time (the drift stage's subject) or on the joint's own
   inputs (the effect's own shape against the plant's) does not count.
 
-A library friction whose level was measured keyed (a product passed; not a "perhaps keyed" tie) ties the
+A library friction whose level was measured keyed (a product passed) or that the recording
+leans to keying (a "perhaps keyed" tie of a leaning product; not of the power alone) ties the
 other library effects fitted on its channel as well (:func:`_beside`: "fitted beside Coulomb
-friction, whose level is keyed on ...: it may stand in for part of that force"), as a discovered
-term fitted beside a tied effect is marked partial.  Effects of no single joint (a platform mass,
+friction, whose level is keyed on ...: it may stand in for part of that force") and marks the
+discovered terms there partial (:func:`terms_beside`), as a discovered term fitted beside a tied
+effect is marked partial.  Effects of no single joint (a platform mass,
 a tilt, a delay) act through every joint's motion and are not tested.  docs/discrepancy.md,
 section 4, "Nor where what is left is keyed on another joint", "Nor where its level follows the
 joint's own position or its reversals" and "Nor beside a friction keyed", states the rule and
@@ -93,6 +96,11 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
                            f"{_KEYS[where[5:]]} (the smallest change of its level the rule could see, with {feat}, "
                            f"is {100 * chi2:.0f} % of it)")
                 continue
+            if where.startswith("leaning "):
+                why.append(f"the recording leans to a level that changes with {_KEYS[where[8:]]} ({feat}: chi-square "
+                           f"{rms:.0f} beyond its cost, above the look-elsewhere cost, below the rule's bar) and "
+                           f"cannot exclude a change as large as the level (up to {100 * chi2:.0f} % of it)")
+                continue
             what = {"elsewhere": feat, "position": f"its position ({feat})",
                     "reversal": f"the time since it last reversed ({feat})"}[where]
             why.append(f"its level changes with {what} (chi-square {chi2:.0f} in independent samples, rms "
@@ -100,8 +108,8 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
         if not why or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        keys = _keyed_on([m[3].removeprefix("weak ") for m in modulated.get(i, ())], noun, bool(other))
-        weak = not other and all(k.startswith("weak ") for k in (m[3] for m in modulated.get(i, ())))
+        keys = _keyed_on([_kind(m[3]) for m in modulated.get(i, ())], noun, bool(other))
+        weak = not other and all(_kind(m[3]) != m[3] for m in modulated.get(i, ()))
         alike = _alternative(e, noun, " and ".join(keys), why, weak)
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
     return _beside(out, modulated, noun)
@@ -110,34 +118,81 @@ def withheld(effects: list, fits: list, noun: str = "joint", modulated: dict | N
 def _beside(effects: list, modulated: dict, noun: str) -> list:
     """``effects`` with a tied look-alike :data:`KEYED_ELSEWHERE` added to every other library
     effect on the channel of a library friction (:data:`.power.FRICTIONS`) whose level was
-    measured keyed (a product of :func:`modulations` passed; not a "perhaps keyed" tie of a weak
-    recording, which measured no keyed force): fitted beside it by least squares, an inertia, an
-    offset or a kinematic effect takes the part of the keyed force its own force correlates with.
+    measured keyed (a product of :func:`modulations` passed) or that the recording leans to keying
+    (a "leaning" product, significant beyond the look-elsewhere cost; not a "perhaps keyed" tie of
+    a weak recording alone, which saw no keyed force): fitted beside it by least squares, an
+    inertia, an offset or a kinematic effect takes the part of the keyed force its own force
+    correlates with.
     Only beside a friction: the unlisted mechanisms key a friction's level; an inertia or another
     effect whose level reads keyed is itself the stand-in (for a true elasticity's unmodelled
     part, MuJoCo seeds 11 and 12), not a force others stand in for.  An effect tied already by
     this rule is left as it is."""
-    from .power import FRICTIONS
-
-    keyed = {}
-    for i, found in modulated.items():
-        kinds = [m[3] for m in found if not m[3].startswith("weak ")]
-        if kinds and effects[i]["key"] in FRICTIONS:
-            e = effects[i]
-            keys = " and ".join(_keyed_on(kinds, noun))
-            keyed.setdefault(e["joint"], []).append((i, e["name"], keys))
+    keyed = _keyed_frictions(effects, modulated, noun)
     out = []
     for i, e in enumerate(effects):
         by = [(what, keys) for k, what, keys in keyed.get(e["joint"], ()) if k != i]
         if not by or any(a["group"] == KEYED_ELSEWHERE for a in e["lookalikes"]):
             out.append(e)
             continue
-        beside = "; ".join(f"{what}, whose level is keyed on {keys}" for what, keys in by)
-        name = (f"a force on {noun} {e['joint']} keyed on {' and '.join(dict.fromkeys(k for _, k in by))} (fitted "
+        beside = "; ".join(f"{what}, whose level is {keys}" for what, keys in by)
+        name = (f"a force on {noun} {e['joint']} {' and '.join(dict.fromkeys(k for _, k in by))} (fitted "
                 f"beside {beside}: it may stand in for part of that force)")
         alike = _tie(name, f"{e['name']} on {noun} {e['joint']}, {name}; {e['name']} is not named with confidence")
         out.append(replace(e, lookalikes=[alike] + list(e["lookalikes"])))
     return out
+
+
+def _keyed_frictions(effects: list, modulated: dict, noun: str) -> dict:
+    """The library frictions (:data:`.power.FRICTIONS`) of ``effects`` whose level was measured
+    keyed (a product of :func:`modulations` passed) or that the recording leans to keying (a
+    "leaning " kind), per joint: ``{joint: [(index, name, "keyed on ..." or "perhaps keyed on
+    ...")]}``."""
+    from .power import FRICTIONS
+
+    keyed = {}
+    for i, found in modulated.items():
+        if effects[i]["key"] not in FRICTIONS:
+            continue
+        kinds = [m[3] for m in found if _kind(m[3]) == m[3]]
+        leaning = [_kind(m[3]) for m in found if m[3].startswith("leaning ")]
+        if kinds or leaning:
+            e = effects[i]
+            keys = " and ".join(_keyed_on(kinds or leaning, noun))
+            keyed.setdefault(e["joint"], []).append((i, e["name"], f"{'' if kinds else 'perhaps '}keyed on {keys}"))
+    return keyed
+
+
+def terms_beside(terms: list, effects: list, modulated: dict, noun: str) -> list:
+    """The discovered ``terms`` (:class:`~..discovery.terms.DiscoveredTerm`), each on the joint of a
+    library friction of ``effects`` whose level was measured keyed or that the recording leans to
+    keying (``modulated``, from :func:`modulations`; :func:`_keyed_frictions`) marked partial:
+    fitted beside it by least squares, the term takes the part of the keyed force its own force
+    correlates with, as a library effect beside it does (:func:`_beside`; measured on MuJoCo: an
+    acceleration term of 8.4 g beside a Coulomb friction whose level relaxes after each reversal,
+    docs/discrepancy.md, section 4).  A term already partial is left as it is."""
+    keyed = _keyed_frictions(effects, modulated, noun)
+    out = []
+    for t in terms:
+        by = keyed.get(t.joint, ())
+        if t.partial or not by:
+            out.append(t)
+            continue
+        beside = "; ".join(f"{what}, whose level is {keys}" for _, what, keys in by)
+        out.append(replace(t, partial=f"fitted beside {beside}: it may stand in for part of that force, so it is "
+                                      f"not named as the physics with confidence"))
+    return out
+
+
+#: prefixes of a kind of product where no product passed (:func:`modulations`): no keyed force measured
+_TENTATIVE = ("weak ", "leaning ")
+
+
+def _kind(where: str) -> str:
+    """The kind of product of a ``where`` of :func:`modulations`, without a tentative prefix."""
+    for prefix in _TENTATIVE:
+        if where.startswith(prefix):
+            return where[len(prefix):]
+    return where
 
 
 #: what a kind of product keys the level on
@@ -187,11 +242,14 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
     effect, every kind together).  Where none passes, the effect is listed with ``where`` "weak "
     + the kind, ``feature`` the kind's best-powered product and ``chi2`` the smallest change of
     the level it could see (a fraction of the level, :func:`.power.smallest_change`), for each
-    kind whose smallest change exceeds :data:`.power.LEVEL_CHANGE`: the library's frictions
-    only (:data:`.power.FRICTIONS`)."""
+    kind whose smallest change exceeds :data:`.power.LEVEL_CHANGE`; and with ``where`` "leaning "
+    + the kind, ``feature`` the product the residual leans on, ``chi2`` the largest change of the
+    level the bar does not exclude and ``rms`` its chi-square less ln n_eff
+    (:func:`.power.leaning_change`), for each other kind with such a product: the library's
+    frictions only (:data:`.power.FRICTIONS`)."""
     from ..flexible.stage import inputs
     from .own import KINEMATIC, beyond, own_products
-    from .power import FRICTIONS, smallest_change, spans, too_weak
+    from .power import FRICTIONS, leaning_change, smallest_change, spans, too_weak
     from ..signatures import own_noise, samples_per_independent
     from ..structure import THRESHOLD
     from ..ties import tied
@@ -246,9 +304,16 @@ def modulations(eng, theta: dict, effects: list, R, threshold: float | None = No
         changes = smallest_change(P, span, wheres, var, bar + cost)
         for where, (delta, k) in changes.items():
             _log.debug("%s: %s smallest visible change of the level %.3g (%s)", label, where, delta, names[k])
-        weak = too_weak(changes)
-        if weak:  # no product could pass: the recording cannot tell the level constant
-            out[i] = [(names[changes[w][1]], delta, float("nan"), "weak " + w) for w, delta in weak]
+        leaning = leaning_change(P, base, span, wheres, var, bar + cost, cost, bar - bar0)
+        for where, (change, k, stat) in leaning.items():
+            _log.debug("%s: %s largest change of the level not excluded %.3g (%s; chi2 - ln n_eff = %.1f)", label,
+                       where, change, names[k], stat)
+        weak = too_weak(changes)  # no product could pass: the recording cannot tell the level constant
+        found = [(names[changes[w][1]], delta, float("nan"), "weak " + w) for w, delta in weak]
+        found += [(names[k], change, stat, "leaning " + w) for w, (change, k, stat) in leaning.items()
+                  if w not in dict(weak)]  # the data lean to a keyed level the rule cannot bound below the level
+        if found:
+            out[i] = found
     return out
 
 
