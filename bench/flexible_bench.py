@@ -92,7 +92,8 @@ def _captured(run):
     inputs, fit_channel = stage.inputs, stage.fit_channel
 
     def inputs_kept(pipe, R, **kw):
-        kept["pipe"], kept["R"] = _light(pipe), np.asarray(R, float).copy()
+        if kw.get("direction"):  # the stage's own call (cosim.discrepancy.keyed reads the inputs without it)
+            kept["pipe"], kept["R"] = _light(pipe), np.asarray(R, float).copy()
         return inputs(pipe, R, **kw)
 
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
@@ -146,16 +147,16 @@ def _keep(capture, row, kept):
             pickle.dump({"row": row, "kept": kept}, fh)
 
 
-def replay(path):
-    """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
-    with the new share, names and the stage's CPU time."""
+def refit(kept) -> tuple:
+    """The stage re-run on what :func:`_captured` kept (the diagnosis's calls: ``stage.inputs``
+    and ``fit_channel`` per fitted channel, one thread): ``(fits with their joint set, CPU time
+    [s])``."""
+    from dataclasses import replace
+
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
 
-    with open(path, "rb") as fh:
-        got = pickle.load(fh)
-    row, kept = dict(got["row"]), got["kept"]
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
     fits = []
@@ -166,8 +167,19 @@ def replay(path):
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"])
-                fits.append((kept["pipe"].channels.index(ch["unit"][1]) + 1, f))
-        row["flex_cpu"] = time.process_time() - t0
+                fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
+        cpu = time.process_time() - t0
+    return fits, cpu
+
+
+def replay(path):
+    """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
+    with the new share, names and the stage's CPU time."""
+    with open(path, "rb") as fh:
+        got = pickle.load(fh)
+    row = dict(got["row"])
+    fits, row["flex_cpu"] = refit(got["kept"])
+    fits = [(f.joint, f) for f in fits]
     claims = [(j, f) for j, f in fits if f.explained]
     if row["kind"] == "clean":
         row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for _, f in claims]

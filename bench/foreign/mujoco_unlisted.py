@@ -64,6 +64,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import pickle
 import sys
 import time
 from multiprocessing import Pool
@@ -404,7 +405,7 @@ def _run(job):
     from cosim.discrepancy import blind, diagnose
     from cosim.discrepancy.diagnosis import tied
 
-    kind, seed, out, scale = job
+    kind, seed, out, scale, capture = job
     m = Model("6pus")
     hook = edit = joint = None
     truth, key = {}, None
@@ -416,7 +417,8 @@ def _run(job):
     csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
     t0 = time.process_time()
     with _RuleLog() as rule:  # the rule's statistics, for the record (computed on tied effects too)
-        d = diagnose(csv, figures=False, replay=False)  # the defaults: families, platform, drift, flexible on
+        # the defaults: families, platform, drift, flexible on; the stage's inputs kept for --replay
+        d, kept = _captured(lambda: diagnose(csv, figures=False, replay=False))
     cpu = time.process_time() - t0
     library = [e["key"] + (f"[{e['joint']}]" if e["joint"] else "") for e in d.effects
                if not any(tied(a) for a in e["lookalikes"])]
@@ -435,13 +437,50 @@ def _run(job):
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
            "power": rule.power}
-    if kind == "clean":
-        row["clean"] = not (d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts
-                            or row["flexible"])
+    row["found_before_flexible"] = bool(d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts)
+    _judged(row, d.flexible, key)
+    if capture is not None:
+        Path(capture).mkdir(parents=True, exist_ok=True)
+        with open(Path(capture) / f"{name}.pkl", "wb") as fh:
+            pickle.dump({"row": row, "kept": kept, "key": key}, fh)
+    return row
+
+
+def _captured(run):
+    """``run()`` (a diagnosis) with the flexible stage's inputs kept (bench/flexible_bench.py's)."""
+    from flexible_bench import _captured as captured
+
+    return captured(run)
+
+
+def _judged(row, fits, key):
+    """``row`` with the flexible stage's ``fits`` and their judgement against ``key`` (clean: no
+    claim and nothing found before the stage)."""
+    row["flexible"] = [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in fits if f.explained]
+    if row["kind"] == "clean":
+        row["clean"] = not (row["found_before_flexible"] or row["flexible"])
     else:
-        row["inputs_right"], row["share"], row["named"] = judge(d.flexible, key, joint)
+        row["inputs_right"], row["share"], row["named"] = judge(fits, key, row["joint"])
         row["keyed_on"] = {k: sorted(v) for k, v in key.items()}
     return row
+
+
+def _replayed(job):
+    """The row of a case captured by ``--capture`` with only the flexible stage re-run on its kept
+    inputs (bench/flexible_bench.py's :func:`refit`); ``key`` re-read from :func:`keyed` (the
+    declaration as it is now), ``cpu`` the stage's alone."""
+    from flexible_bench import refit
+
+    kind, seed, _, scale, capture = job
+    with open(Path(capture) / f"{case_name(kind, seed, scale)}.pkl", "rb") as fh:
+        got = pickle.load(fh)
+    row = dict(got["row"])
+    key = None
+    if kind != "clean":
+        truth = row["truth"]
+        key = keyed(kind, truth.get("rail"), truth.get("other_rail"))
+    fits, row["cpu"] = refit(got["kept"])
+    return _judged(row, fits, key)
 
 
 def _cell(r):
@@ -543,6 +582,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sets", type=int, default=1,
                     help="seed sets from the first one on, 1000 apart (e.g. --first-seed 30700 --sets 5: sets 1-5)")
     ap.add_argument("--out", type=Path, default=REPO / "results" / "mujoco_unlisted")
+    ap.add_argument("--capture", default=None, help="keep each case's flexible-stage inputs in this directory")
+    ap.add_argument("--replay", default=None,
+                    help="re-run only the flexible stage on the inputs kept there (--capture); cpu is the stage's")
     a = ap.parse_args(argv)
     kinds = [k for k in a.kinds.split(",") if k]
     bad = [k for k in kinds if k not in KINDS]
@@ -560,11 +602,11 @@ def main(argv=None) -> int:
     s0 = a.first_seed if a.first_seed is not None else SEED + (1000 if a.second else 0)
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):
-        jobs += [(k, base + KINDS.index(k), str(a.out), x) for x in scales for k in kinds]
-        jobs += [("clean", base + 90 + i, str(a.out), 1.0) for i in range(a.clean)]
+        jobs += [(k, base + KINDS.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
+        jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture) for i in range(a.clean)]
     rows = []
     with Pool(a.jobs) as pool:
-        for row in pool.imap_unordered(_run, jobs):
+        for row in pool.imap_unordered(_replayed if a.replay else _run, jobs):
             rows.append(row)
             print(json.dumps(row, default=str), flush=True)
     (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))

@@ -40,10 +40,12 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   the trees on the named groups alone (where two share columns, on fewer of them when that
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
-  the groups and their share).  When the trees on every input claim nothing (a weak force spread
-  over many inputs), the group whose strongest column alone explains the most out of fold as a
-  step function (:func:`~.cv.binned_shares`) is cross-validated alone and, when that
-  passes the same two bars, named with its share;
+  the groups and their share).  When the trees on every input claim nothing (a force on a few
+  inputs drowned by the many that carry nothing, or a weak force spread over many), the groups
+  their importance passes are checked as above and their trees judged alone by the same two bars
+  (:func:`.select.screened_first`); when those claim nothing either, the group whose strongest
+  column alone explains the most out of fold as a step function (:func:`~.cv.binned_shares`) is
+  cross-validated alone and, when that passes the same two bars, named with its share;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -67,7 +69,8 @@ import numpy as np
 from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
-from .select import DROP_MIN, consequences, gain, lean, partners, select, strongest_alone  # noqa: F401
+from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
+                     select, strongest_alone)
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -325,31 +328,16 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
-def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple:
-    """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
-    columns)`` of :func:`_select`, a consequence among them): the trees cross-validated on every
-    input but the consequences ``follow`` (:func:`.select.consequences`), screened and
-    checked as the full model's; ``chosen`` stays when those trees claim nothing or ``chosen``
-    beats the causes' refit significantly (:func:`.select.gain`)."""
-    cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
-    cv = cross_validate(X[:, cols], y, fold_rows)
-    share, _, ok = judged(cv.mse)
-    sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
-    causes = _screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
-    if not causes:
-        return chosen
-    alone = _select(X, y, fold_rows, groups, causes, float(np.var(y)), follow)
-    return chosen if gain(alone[1], chosen[1], y, float(np.var(y)))[1] else alone
-
-
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
     by one by cross-validating without them; the share claimed is that of the trees on the named
     inputs alone (the model the statement describes), out of fold.  When the trees on every
-    input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
-    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged; on a weak channel
+    input claim nothing, the groups their importance passes are checked and judged alone
+    (:func:`.select.screened_first`), and only when those claim nothing either, or at once for a
+    ``weak`` channel (no structure flagged, RMS under :data:`RMS_OVER_NOISE` times the noise), the
+    strongest input alone is judged; on a weak channel
     whose strongest input is a consequence (:func:`.select.consequences`) the trees on every input
     are judged first, causes before consequences, and that input alone only when they claim nothing.  ``fitted``:
     the fitted model's columns on the channel (:func:`.backfit.fitted_columns`), re-adjusted
@@ -382,7 +370,12 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows)
             share, z, explained = judged(cv.mse)
-        if not explained:  # the trees on every input spread a weak force over many: the strongest input alone
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate) \
+            if cv is not None and not explained else None
+        if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
+            named, cv, use, share, z = first
+            explained = True
+        elif not explained:  # the trees on every input spread a weak force over many: the strongest input alone
             g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, cross_validate)
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
@@ -398,7 +391,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
-                    kept, cv_k, use_k = _causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k))
+                    kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
+                                                     _screen, cross_validate)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
