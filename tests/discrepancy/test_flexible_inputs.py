@@ -48,7 +48,27 @@ def test_the_smoothed_commanded_direction_is_a_rate_input():
     assert cols[i][1] == "rate of slider 1"
     rate = np.gradient(pipe.rec.qref[:, 0], pipe.dt)
     assert np.allclose(X[:, i], pipe.S(np.sign(rate))[pipe.idx])
-    assert len(flexible.inputs(pipe, y[:, None])[1]) == len(cols) - 1  # the keyed products' inputs: without it
+    # the keyed products' inputs: without it and without the time since the last reversal
+    assert len(flexible.inputs(pipe, y[:, None])[1]) == len(cols) - 2
+
+
+def test_the_time_since_the_commanded_direction_last_changed_is_a_history_input():
+    # q = 0.02 sin(2 pi 0.5 t): the commanded rate changes sign at t = 0.5, 1.5, 2.5, ... s
+    n, dt = 4000, 1e-3
+    t = np.arange(n) * dt
+    q = 0.02 * np.sin(2 * np.pi * 0.5 * t)
+    idx = np.arange(55, n - 50, 10)  # no sample on a reversal: the next one counts from itself
+    pipe = types.SimpleNamespace(
+        idx=idx, nd=1, t=t, segments=[(0, n)], dt=dt, tau_s=np.zeros((n, 1)), q_s=q[:, None],
+        qd_s=np.gradient(q, dt)[:, None], qdd_s=np.zeros((n, 1)), has_pose=False, channels=["tau1"],
+        S=lambda a, deriv=0: a, rec=types.SimpleNamespace(qref=q[:, None]),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    X, cols = flexible.inputs(pipe, np.zeros((len(idx), 1)), direction=True)
+    i = [c[0] for c in cols].index("time since qd1 reversed")
+    assert cols[i][1:4] == ("history of slider 1", 1, "history")
+    tk = t[idx]
+    last = np.where(tk < 0.5, tk[0], np.floor(tk - 0.5) + 0.5)  # before the first reversal: since the start
+    assert np.allclose(X[:, i], tk - last, atol=10 * dt)  # within one decimated sample
 
 
 def test_a_friction_switching_with_the_commanded_direction_is_explained_at_its_share():

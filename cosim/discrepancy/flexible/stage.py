@@ -13,7 +13,9 @@ effort (not the measured one: it holds the residual itself), the low-passed |rat
 of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated power
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
-platform pose where the recording gives one, and time.
+time since its direction of motion last changed (the commanded one where the recording has a
+reference: a friction state a reversal resets, a seal's lip or stiction), the platform pose
+where the recording gives one, and time.
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -197,7 +199,8 @@ def inputs(pipe, R, direction=False) -> tuple:
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
     input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
-    direction (the stage's own inputs; :mod:`..keyed.elsewhere` reads the others).  Returns
+    direction and the time since each joint's direction last changed (the stage's own inputs;
+    :mod:`..keyed.elsewhere` reads the others).  Returns
     ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
     idx, nd = pipe.idx, pipe.nd
     facts = pipe.model.facts
@@ -241,6 +244,10 @@ def inputs(pipe, R, direction=False) -> tuple:
             cols += [(f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"),
                      (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
                       "history x direction", f"{eu} {rate_u}")]
+        if direction:  # a friction state a reversal resets (a seal's lip, stiction): the time since it
+            X.append(_since_reversal(qd, t, starts, 0.05) if rate_ref is None
+                     else _since_reversal(rate_ref[:, k], t, starts))
+            cols.append((f"time since qd{k + 1} reversed", group, k + 1, "history", "s"))
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -250,6 +257,23 @@ def inputs(pipe, R, direction=False) -> tuple:
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
+
+
+def _since_reversal(rate, t, starts, dead=0.0) -> np.ndarray:
+    """The time [s] since ``rate`` last changed sign, counted from the start of each block of the
+    recording (``starts``, rows); within ``dead`` times its RMS of zero it keeps the last sign
+    (a measured rate's noise about a standstill is no reversal)."""
+    out = np.zeros(len(rate))
+    last, sign = t[0], 0.0
+    for i, v in enumerate(np.where(np.abs(rate) > dead * np.sqrt(np.mean(rate ** 2)), np.sign(rate), 0.0)):
+        if i in starts:
+            last, sign = t[i], v
+        elif v and v != sign:
+            if sign:
+                last = t[i]
+            sign = v
+        out[i] = t[i] - last
+    return out
 
 
 def input_groups(columns) -> dict:
