@@ -13,9 +13,8 @@ effort (not the measured one: it holds the residual itself), the low-passed |rat
 of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated power
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
-time since its direction of motion last changed (the commanded one where the recording has a
-reference: a friction state a reversal resets, a seal's lip or stiction), the platform pose
-where the recording gives one, and time.
+time since its direction last changed (a friction state a reversal resets: its own channel's
+input), the platform pose where the recording gives one, and time.
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -43,11 +42,10 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
   the groups and their share).  When the trees on every input claim nothing (a force on a few
-  inputs drowned by the many that carry nothing, or a weak force spread over many), the groups
-  their importance passes are checked as above and their trees judged alone by the same two bars
-  (:func:`.select.screened_first`); when those claim nothing either, the group whose strongest
-  column alone explains the most out of fold as a step function (:func:`~.cv.binned_shares`) is
-  cross-validated alone and, when that passes the same two bars, named with its share;
+  inputs drowned by the many, or a weak force spread over many), the groups their importance
+  passes are checked and judged alone as above (:func:`.select.screened_first`); when those claim
+  nothing either, the group whose strongest column alone explains the most out of fold as a step
+  function (:func:`~.cv.binned_shares`) is cross-validated alone and named where it passes;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -101,6 +99,8 @@ MAX_INPUTS = 4
 #: truths 0.41-0.74): only the strongest input alone is cross-validated there, one small fit
 #: instead of the full model's (library cases leave such channels on several joints)
 RMS_OVER_NOISE = 2.0
+#: the time since a joint's direction last changed (its feature's name): its own contacts' state
+SINCE = "time since"
 #: the statement warns of extrapolation when the named inputs leave the fitted range in their
 #: held-out block at more than this share of the samples
 OUTSIDE_WARN = 0.1
@@ -247,7 +247,7 @@ def inputs(pipe, R, direction=False) -> tuple:
         if direction:  # a friction state a reversal resets (a seal's lip, stiction): the time since it
             X.append(_since_reversal(qd, t, starts, 0.05) if rate_ref is None
                      else _since_reversal(rate_ref[:, k], t, starts))
-            cols.append((f"time since qd{k + 1} reversed", group, k + 1, "history", "s"))
+            cols.append((f"{SINCE} qd{k + 1} reversed", group, k + 1, "history", "s"))
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -260,9 +260,8 @@ def inputs(pipe, R, direction=False) -> tuple:
 
 
 def _since_reversal(rate, t, starts, dead=0.0) -> np.ndarray:
-    """The time [s] since ``rate`` last changed sign, counted from the start of each block of the
-    recording (``starts``, rows); within ``dead`` times its RMS of zero it keeps the last sign
-    (a measured rate's noise about a standstill is no reversal)."""
+    """The time [s] since ``rate`` last changed sign, from each block's start (``starts``, rows);
+    within ``dead`` times its RMS of zero it keeps the last sign (noise about a standstill)."""
     out = np.zeros(len(rate))
     last, sign = t[0], 0.0
     for i, v in enumerate(np.where(np.abs(rate) > dead * np.sqrt(np.mean(rate ** 2)), np.sign(rate), 0.0)):
@@ -361,11 +360,11 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     input claim nothing, the groups their importance passes are checked and judged alone
     (:func:`.select.screened_first`), and only when those claim nothing either, or at once for a
     ``weak`` channel (no structure flagged, RMS under :data:`RMS_OVER_NOISE` times the noise), the
-    strongest input alone is judged; on a weak channel
-    whose strongest input is a consequence (:func:`.select.consequences`) the trees on every input
-    are judged first, causes before consequences, and that input alone only when they claim nothing.  ``fitted``:
-    the fitted model's columns on the channel (:func:`.backfit.fitted_columns`), re-adjusted
-    beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
+    strongest input alone; on a weak channel whose strongest input is a consequence
+    (:func:`.select.consequences`) the trees on every input first, causes before consequences.  The
+    time since a joint's direction last changed is an input of that joint's channel only.
+    ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
+    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -383,6 +382,9 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
+    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
+    X, columns = X[:, keep], [every[i] for i in keep]
     groups = input_groups(columns)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
@@ -441,7 +443,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
                        beyond_noise=beyond_noise(y, noise, spi),
-                       screened=screened, model=model, columns=tuple(columns), use=tuple(use), readjusted=moved)
+                       screened=screened, model=model, columns=every, use=tuple(keep[i] for i in use),
+                       readjusted=moved)
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
