@@ -9,6 +9,11 @@ then counts per kind and scale the library effects named with confidence, tied, 
 "no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
 kinds from the detection limit to 10 times it").
 
+``--capture DIR`` keeps, per case, what the flexible stage was given (bench/flexible_bench.py's
+capture); ``--replay DIR`` re-runs only the stage on it (its ``refit``: the diagnosis's calls) and
+judges it against the declarations as they are now; the CPU column is then the stage's.  A set
+re-runs in 1-2 minutes instead of 10-15.
+
 A measurement, not a tuning set: the engine has no library effect,
 no term family and no platform force for any of these, so the honest answer is the structure
 and what it is keyed on (the flexible stage, cosim.discrepancy.flexible), and no library effect
