@@ -28,6 +28,10 @@ cross-validating without each, with two rules of cause before consequence.
   neither factor alone explains anything).  There the trees on every input are judged first,
   causes before consequences, and the consequence alone only when they claim nothing.
 
+* **The inputs that stood out, before the strongest alone.**  Where the trees on every input
+  claim nothing, the groups their importance passes are checked by the same rules and their
+  trees judged alone (:func:`screened_first`) before the strongest single column alone.
+
 The check of the other screened groups is the one the stage always had: a group is kept when
 leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
 is kept (interchangeable inputs), all are.
