@@ -166,16 +166,16 @@ def _stage_residual(kept):
     return R
 
 
-def replay(path):
-    """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
-    with the new share, names and the stage's CPU time."""
+def refit(kept) -> tuple:
+    """The stage re-run on what :func:`_captured` kept (the diagnosis's calls: ``stage.inputs``
+    and ``fit_channel`` per fitted channel, one thread): ``(fits with their joint set, CPU time
+    [s])``."""
+    from dataclasses import replace
+
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
 
-    with open(path, "rb") as fh:
-        got = pickle.load(fh)
-    row, kept = dict(got["row"]), got["kept"]
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
         kept["R"] = _stage_residual(kept)
@@ -187,8 +187,19 @@ def replay(path):
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"])
-                fits.append((kept["pipe"].channels.index(ch["unit"][1]) + 1, f))
-        row["flex_cpu"] = time.process_time() - t0
+                fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
+        cpu = time.process_time() - t0
+    return fits, cpu
+
+
+def replay(path):
+    """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
+    with the new share, names and the stage's CPU time."""
+    with open(path, "rb") as fh:
+        got = pickle.load(fh)
+    row = dict(got["row"])
+    fits, row["flex_cpu"] = refit(got["kept"])
+    fits = [(f.joint, f) for f in fits]
     claims = [(j, f) for j, f in fits if f.explained]
     if row["kind"] == "clean":
         row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for _, f in claims]

@@ -9,6 +9,11 @@ then counts per kind and scale the library effects named with confidence, tied, 
 "no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
 kinds from the detection limit to 10 times it").
 
+``--capture DIR`` keeps, per case, what the flexible stage was given (bench/flexible_bench.py's
+capture); ``--replay DIR`` re-runs only the stage on it (its ``refit``: the diagnosis's calls) and
+judges it against the declarations as they are now; the CPU column is then the stage's.  A set
+re-runs in 1-2 minutes instead of 10-15.
+
 A measurement, not a tuning set: the engine has no library effect,
 no term family and no platform force for any of these, so the honest answer is the structure
 and what it is keyed on (the flexible stage, cosim.discrepancy.flexible), and no library effect
@@ -41,7 +46,9 @@ MuJoCo's step computed from MuJoCo's own state (``hook``).  The mechanisms:
   motor, mu |u_k| tanh(qd_j / v) (a bearing block preloaded by the neighbouring drive).
 
 The inputs the flexible stage should name were fixed with the mechanisms, before any run
-(:func:`keyed`): per case the groups that must be named (all of ``need``, or one of ``any``) and
+(:func:`keyed`; after set 6 the physics of three was read again, the reasons written there: the
+pendulum is driven by the platform's pose as by its acceleration, and the tendon's and the pad's
+soft constraints are damped, so the rates may be named beside their positions): per case the groups that must be named (all of ``need``, or one of ``any``) and
 those that may be (``allowed``); a platform mechanism is judged over every channel the stage
 explains, a rail's on that rail's channel.  The seeds (``SEED`` + the kind's index, clean cases
 ``SEED`` + 90 +) were fixed before any output was seen (``--second``, the same + 1000, after the
@@ -64,6 +71,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import pickle
 import sys
 import time
 from multiprocessing import Pool
@@ -93,12 +101,22 @@ def keyed(kind, j=None, k=None) -> dict:
     rate = {f"rate of slider {i}" for i in range(1, 7)}
     acc = {f"acceleration of slider {i}" for i in range(1, 7)}
     pose = {"the platform pose"}
-    if kind in ("tendon_slack", "magnet", "soft_stop"):
+    if kind == "magnet":
         return {"need": set(), "any": pos | pose, "allowed": pos | pose}
+    if kind in ("tendon_slack", "soft_stop"):
+        # MuJoCo's soft limit and soft contact (solref -k -b) push with a stiffness on the stretch or
+        # the penetration and a damping b on its rate: the platform's velocity, the rails' rates
+        return {"need": set(), "any": pos | pose, "allowed": pos | pose | rate}
     if kind in ("gyro_spindle", "ball_joint_friction"):
         return {"need": set(), "any": rate, "allowed": rate | pos | pose}
     if kind == "slosh":
-        return {"need": set(), "any": acc, "allowed": acc | rate | pos | pose}
+        # the bob hangs from a pivot L above the platform's reference point, its restoring moment
+        # set by the world's vertical, not the platform's: tilted by theta, the platform carries the
+        # bob's weight L sin(theta) off the point where the model's rigid mass sits (a moment about
+        # mb g L theta, keyed on the pose, which the rails' positions set), and below its own
+        # frequency the bob lines up with the effective gravity g - a (a shift of about L a / g):
+        # the pose drives it as an acceleration does
+        return {"need": set(), "any": acc | pos | pose, "allowed": acc | rate | pos | pose}
     if kind == "fan_unbalance":
         return {"need": {"time"}, "any": set(), "allowed": {"time"} | pos | pose}
     own = lambda q: f"{q} of slider {j}"  # noqa: E731
@@ -411,7 +429,7 @@ def _run(job):
     from cosim.discrepancy import blind, diagnose
     from cosim.discrepancy.diagnosis import tied
 
-    kind, seed, out, scale = job
+    kind, seed, out, scale, capture = job
     m = Model("6pus")
     hook = edit = joint = None
     truth, key = {}, None
@@ -423,7 +441,8 @@ def _run(job):
     csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
     t0 = time.process_time()
     with _RuleLog() as rule:  # the rule's statistics, for the record (computed on tied effects too)
-        d = diagnose(csv, figures=False, replay=False)  # the defaults: families, platform, drift, flexible on
+        # the defaults: families, platform, drift, flexible on; the stage's inputs kept for --replay
+        d, kept = _captured(lambda: diagnose(csv, figures=False, replay=False))
     cpu = time.process_time() - t0
     library = [e["key"] + (f"[{e['joint']}]" if e["joint"] else "") for e in d.effects
                if not any(tied(a) for a in e["lookalikes"])]
@@ -442,13 +461,50 @@ def _run(job):
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
            "power": rule.power, "leaning": rule.leaning}
-    if kind == "clean":
-        row["clean"] = not (d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts
-                            or row["flexible"])
+    row["found_before_flexible"] = bool(d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts)
+    _judged(row, d.flexible, key)
+    if capture is not None:
+        Path(capture).mkdir(parents=True, exist_ok=True)
+        with open(Path(capture) / f"{name}.pkl", "wb") as fh:
+            pickle.dump({"row": row, "kept": kept, "key": key}, fh)
+    return row
+
+
+def _captured(run):
+    """``run()`` (a diagnosis) with the flexible stage's inputs kept (bench/flexible_bench.py's)."""
+    from flexible_bench import _captured as captured
+
+    return captured(run)
+
+
+def _judged(row, fits, key):
+    """``row`` with the flexible stage's ``fits`` and their judgement against ``key`` (clean: no
+    claim and nothing found before the stage)."""
+    row["flexible"] = [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in fits if f.explained]
+    if row["kind"] == "clean":
+        row["clean"] = not (row["found_before_flexible"] or row["flexible"])
     else:
-        row["inputs_right"], row["share"], row["named"] = judge(d.flexible, key, joint)
+        row["inputs_right"], row["share"], row["named"] = judge(fits, key, row["joint"])
         row["keyed_on"] = {k: sorted(v) for k, v in key.items()}
     return row
+
+
+def _replayed(job):
+    """The row of a case captured by ``--capture`` with only the flexible stage re-run on its kept
+    inputs (bench/flexible_bench.py's :func:`refit`); ``key`` re-read from :func:`keyed` (the
+    declaration as it is now), ``cpu`` the stage's alone."""
+    from flexible_bench import refit
+
+    kind, seed, _, scale, capture = job
+    with open(Path(capture) / f"{case_name(kind, seed, scale)}.pkl", "rb") as fh:
+        got = pickle.load(fh)
+    row = dict(got["row"])
+    key = None
+    if kind != "clean":
+        truth = row["truth"]
+        key = keyed(kind, truth.get("rail"), truth.get("other_rail"))
+    fits, row["cpu"] = refit(got["kept"])
+    return _judged(row, fits, key)
 
 
 def _cell(r):
@@ -554,6 +610,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sets", type=int, default=1,
                     help="seed sets from the first one on, 1000 apart (e.g. --first-seed 30700 --sets 5: sets 1-5)")
     ap.add_argument("--out", type=Path, default=REPO / "results" / "mujoco_unlisted")
+    ap.add_argument("--capture", default=None, help="keep each case's flexible-stage inputs in this directory")
+    ap.add_argument("--replay", default=None,
+                    help="re-run only the flexible stage on the inputs kept there (--capture); cpu is the stage's")
     a = ap.parse_args(argv)
     kinds = [k for k in a.kinds.split(",") if k]
     bad = [k for k in kinds if k not in KINDS]
@@ -571,11 +630,11 @@ def main(argv=None) -> int:
     s0 = a.first_seed if a.first_seed is not None else SEED + (1000 if a.second else 0)
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):
-        jobs += [(k, base + KINDS.index(k), str(a.out), x) for x in scales for k in kinds]
-        jobs += [("clean", base + 90 + i, str(a.out), 1.0) for i in range(a.clean)]
+        jobs += [(k, base + KINDS.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
+        jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture) for i in range(a.clean)]
     rows = []
     with Pool(a.jobs) as pool:
-        for row in pool.imap_unordered(_run, jobs):
+        for row in pool.imap_unordered(_replayed if a.replay else _run, jobs):
             rows.append(row)
             print(json.dumps(row, default=str), flush=True)
     (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))

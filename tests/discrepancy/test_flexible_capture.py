@@ -4,6 +4,7 @@ the stage built its inputs from, though ``flexible.stage.inputs`` is called agai
 import pickle
 import sys
 from pathlib import Path
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -23,13 +24,20 @@ def _pipe(n=30):
                            model=SimpleNamespace(facts=facts), rec=SimpleNamespace(qref=None), polyorder=3)
 
 
+@dataclass(frozen=True)
+class _Fit:
+    explained: bool = False
+    joint: int = 0
+    weak: bool = False
+
+
 def _fakes(monkeypatch, seen):
     """stage.inputs and fit_channel as cheap stand-ins: the matrix is the residual itself."""
     monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
 
     def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
         seen.append(np.array(X))
-        return SimpleNamespace(explained=False)
+        return _Fit()
     monkeypatch.setattr(stage, "fit_channel", fit)
 
 

@@ -48,7 +48,27 @@ def test_the_smoothed_commanded_direction_is_a_rate_input():
     assert cols[i][1] == "rate of slider 1"
     rate = np.gradient(pipe.rec.qref[:, 0], pipe.dt)
     assert np.allclose(X[:, i], pipe.S(np.sign(rate))[pipe.idx])
-    assert len(flexible.inputs(pipe, y[:, None])[1]) == len(cols) - 1  # the keyed products' inputs: without it
+    # the keyed products' inputs: without it and without the time since the last reversal
+    assert len(flexible.inputs(pipe, y[:, None])[1]) == len(cols) - 2
+
+
+def test_the_time_since_the_commanded_direction_last_changed_is_a_history_input():
+    # q = 0.02 sin(2 pi 0.5 t): the commanded rate changes sign at t = 0.5, 1.5, 2.5, ... s
+    n, dt = 4000, 1e-3
+    t = np.arange(n) * dt
+    q = 0.02 * np.sin(2 * np.pi * 0.5 * t)
+    idx = np.arange(55, n - 50, 10)  # no sample on a reversal: the next one counts from itself
+    pipe = types.SimpleNamespace(
+        idx=idx, nd=1, t=t, segments=[(0, n)], dt=dt, tau_s=np.zeros((n, 1)), q_s=q[:, None],
+        qd_s=np.gradient(q, dt)[:, None], qdd_s=np.zeros((n, 1)), has_pose=False, channels=["tau1"],
+        S=lambda a, deriv=0: a, rec=types.SimpleNamespace(qref=q[:, None]),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    X, cols = flexible.inputs(pipe, np.zeros((len(idx), 1)), direction=True)
+    i = [c[0] for c in cols].index("time since qd1 reversed")
+    assert cols[i][1:4] == ("history of slider 1", 1, "history")
+    tk = t[idx]
+    last = np.where(tk < 0.5, tk[0], np.floor(tk - 0.5) + 0.5)  # before the first reversal: since the start
+    assert np.allclose(X[:, i], tk - last, atol=10 * dt)  # within one decimated sample
 
 
 def test_a_friction_switching_with_the_commanded_direction_is_explained_at_its_share():
@@ -85,3 +105,24 @@ def test_named_groups_sharing_a_signed_history_drop_the_columns_that_add_only_va
     assert sorted(d.group for d in fit.inputs) == ["history of slider 1", "rate of slider 1"]
     assert sorted(fit.use) == [0, 1]
     assert abs(fit.share - truth) < 0.1
+
+
+def test_the_time_since_another_joint_reversed_is_no_input_of_this_channel():
+    # a force on slider 1's channel that follows slider 2's reversals: the time since a reversal is
+    # the state of the joint's own contacts, so on tau1 the column of slider 2 is left out (the
+    # trees would name it: 0.3 exp(-s2 / 0.3) is a function of it alone)
+    n, sigma = 900, 0.02
+    rng = np.random.default_rng(1)
+    t = np.linspace(0.0, 9.0, n)
+    since = lambda period: np.mod(t, period)  # noqa: E731  (a reversal every period)
+    y = 0.3 * np.exp(-since(0.83) / 0.3) + rng.normal(0.0, sigma, n)
+    X = np.column_stack([np.sin(2 * np.pi * 0.4 * t), since(1.21), since(0.83)])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"),
+            ("time since qd1 reversed", "history of slider 1", 1, "history", "s"),
+            ("time since qd2 reversed", "history of slider 2", 2, "history", "s")]
+    pipe = types.SimpleNamespace(channels=["tau1", "tau2"], window=5, step=5)
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    assert 2 not in fit.use and "history of slider 2" not in [d.group for d in fit.inputs]
+    assert len(fit.columns) == 3  # the stage's columns, which its black box predicts on
+    fit2 = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau2"))  # on slider 2's own channel it is one
+    assert [d.group for d in fit2.inputs] == ["history of slider 2"]

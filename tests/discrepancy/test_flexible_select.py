@@ -43,3 +43,36 @@ def test_a_weak_channel_whose_strongest_input_is_a_consequence_gets_the_trees_on
     fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"), weak=True)
     assert fit.explained
     assert sorted(d.group for d in fit.inputs) == ["effort of slider 2", "rate of slider 1"]
+
+
+def _coulomb_zone(n=900, sigma=0.05, seed=3, others=16):
+    """A Coulomb level on slider 1 rising over a band of its stroke, its mean level taken by a
+    fitted Coulomb friction: 0.3 tanh(qd1 / 0.05) (band(q1) - mean band), beside ``others`` smooth
+    inputs that carry nothing (sums of three sines at random frequencies)."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 9.0, n)
+    q1 = np.sin(2 * np.pi * 0.23 * t) + 0.5 * np.sin(2 * np.pi * 0.61 * t + 1.0)
+    qd1 = np.gradient(q1, t)
+    band = 0.5 * (np.tanh((q1 + 0.2) / 0.05) - np.tanh((q1 - 0.6) / 0.05))
+    y = 0.3 * np.tanh(qd1 / 0.05) * (band - np.mean(band)) + rng.normal(0.0, sigma, n)
+    carry_nothing = [sum(np.sin(2 * np.pi * f * t + p) for f, p in zip(rng.uniform(0.05, 1.0, 3),
+                                                                        rng.uniform(0.0, 6.3, 3)))
+                     for _ in range(others)]
+    X = np.column_stack([q1, qd1] + carry_nothing)
+    cols = [("q1", "position of slider 1", 1, "position", "m"), ("qd1", "rate of slider 1", 1, "rate", "m/s")]
+    cols += [(f"q{i + 2}", f"position of slider {i + 2}", i + 2, "position", "m") for i in range(others)]
+    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+    return pipe, X, cols, y, sigma
+
+
+def test_where_the_trees_on_every_input_claim_nothing_the_screened_inputs_are_judged_before_the_strongest_alone():
+    # the trees on all 18 inputs explain nothing out of fold (the 16 that carry nothing add their
+    # variance); their importance still singles out the rail's rate and position, whose trees
+    # alone explain 0.63: both are named.  Without the rule the strongest column alone is judged
+    # (one factor of the product, or nothing)
+    pipe, X, cols, y, sigma = _coulomb_zone()
+    full = flexible.cross_validate(X, y, flexible.folds(len(y), flexible.gap_for(1.0)))
+    assert 1.0 - full.mse / np.var(y) < flexible.SHARE_MIN  # the situation the rule is for
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
+    assert fit.explained and fit.share > 0.5
+    assert sorted(d.group for d in fit.inputs) == ["position of slider 1", "rate of slider 1"]

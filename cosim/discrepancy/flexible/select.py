@@ -28,6 +28,10 @@ cross-validating without each, with two rules of cause before consequence.
   neither factor alone explains anything).  There the trees on every input are judged first,
   causes before consequences, and the consequence alone only when they claim nothing.
 
+* **The inputs that stood out, before the strongest alone.**  Where the trees on every input
+  claim nothing, the groups their importance passes are checked by the same rules and their
+  trees judged alone (:func:`screened_first`) before the strongest single column alone.
+
 The check of the other screened groups is the one the stage always had: a group is kept when
 leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
 is kept (interchangeable inputs), all are.
@@ -141,3 +145,51 @@ def strongest_alone(X, y, fold_rows, groups, cross_validate):
     shares = binned_shares(X, y, fold_rows)
     g = max(groups, key=lambda k: float(np.max(shares[groups[k]])))
     return g, cross_validate(X[:, groups[g]], y, fold_rows)
+
+
+def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate) -> tuple:
+    """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
+    columns)`` of :func:`select`, a consequence among them): the trees cross-validated on every
+    input but the consequences ``follow`` (:func:`consequences`), screened (``screen``: the
+    stage's, on their permutation importance) and checked as the full model's; ``chosen`` stays
+    when those trees claim nothing (``judged``: the stage's two bars) or ``chosen`` beats the
+    causes' refit significantly (:func:`gain`)."""
+    from .cv import importance
+
+    cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
+    cv = cross_validate(X[:, cols], y, fold_rows)
+    share, _, ok = judged(cv.mse)
+    sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
+    causes = screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
+    if not causes:
+        return chosen
+    var = float(np.var(y))
+    alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate)
+    return chosen if gain(alone[1], chosen[1], y, var)[1] else alone
+
+
+def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, cross_validate):
+    """Where the trees on every input (``cv``, ``share``) claim nothing: the groups their
+    permutation importance passes (``screen``: the stage's), checked as the full model's are
+    (:func:`select`, causes before consequences, :func:`causes_alone`), and their trees' claim
+    judged by the same two bars (``judged``); ``(named, cross-validation, columns, share,
+    chi-square)``, None when no group passes or their trees claim nothing either.
+
+    Many inputs that carry nothing add variance that can drown a force on two of them (a Coulomb
+    level keyed on the rail's position, MuJoCo: the trees on every input -0.07 out of fold, on
+    that rail's rate and position alone 0.70, docs/flexible.md); the importance is read out of
+    fold, so the groups that stand out there are judged before the strongest single column
+    alone, which names at most one factor of such a product."""
+    from .cv import importance
+
+    rng = np.random.default_rng(0)  # its own draws: the named inputs' importance keeps the stage's
+    named = screen(importance(cv, X, y, groups, rng), share)
+    if not named:
+        return None
+    var = float(np.var(y))
+    kept, cv_k, use_k = select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate)
+    if any(g in follow for g in kept):
+        kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
+                                         screen, cross_validate)
+    share_k, z_k, ok = judged(cv_k.mse)
+    return (kept, cv_k, use_k, share_k, z_k) if ok else None

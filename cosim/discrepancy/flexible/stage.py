@@ -13,7 +13,8 @@ effort (not the measured one: it holds the residual itself), the low-passed |rat
 of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated power
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
-platform pose where the recording gives one, and time.
+time since its direction last changed (a friction state a reversal resets: its own channel's
+input), the platform pose where the recording gives one, and time.
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -40,10 +41,11 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   the trees on the named groups alone (where two share columns, on fewer of them when that
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
-  the groups and their share).  When the trees on every input claim nothing (a weak force spread
-  over many inputs), the group whose strongest column alone explains the most out of fold as a
-  step function (:func:`~.cv.binned_shares`) is cross-validated alone and, when that
-  passes the same two bars, named with its share;
+  the groups and their share).  When the trees on every input claim nothing (a force on a few
+  inputs drowned by the many, or a weak force spread over many), the groups their importance
+  passes are checked and judged alone as above (:func:`.select.screened_first`); when those claim
+  nothing either, the group whose strongest column alone explains the most out of fold as a step
+  function (:func:`~.cv.binned_shares`) is cross-validated alone and named where it passes;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -67,7 +69,8 @@ import numpy as np
 from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
-from .select import DROP_MIN, consequences, gain, lean, partners, select, strongest_alone  # noqa: F401
+from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
+                     select, strongest_alone)
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
 #: power |effort x rate| (a first-order thermal model's temperature rise)
@@ -96,6 +99,8 @@ MAX_INPUTS = 4
 #: truths 0.41-0.74): only the strongest input alone is cross-validated there, one small fit
 #: instead of the full model's (library cases leave such channels on several joints)
 RMS_OVER_NOISE = 2.0
+#: the time since a joint's direction last changed (its feature's name): its own contacts' state
+SINCE = "time since"
 #: the statement warns of extrapolation when the named inputs leave the fitted range in their
 #: held-out block at more than this share of the samples
 OUTSIDE_WARN = 0.1
@@ -194,7 +199,8 @@ def inputs(pipe, R, direction=False) -> tuple:
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
     input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
-    direction (the stage's own inputs; :mod:`..keyed.elsewhere` reads the others).  Returns
+    direction and the time since each joint's direction last changed (the stage's own inputs;
+    :mod:`..keyed.elsewhere` reads the others).  Returns
     ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
     idx, nd = pipe.idx, pipe.nd
     facts = pipe.model.facts
@@ -238,6 +244,10 @@ def inputs(pipe, R, direction=False) -> tuple:
             cols += [(f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"),
                      (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
                       "history x direction", f"{eu} {rate_u}")]
+        if direction:  # a friction state a reversal resets (a seal's lip, stiction): the time since it
+            X.append(_since_reversal(qd, t, starts, 0.05) if rate_ref is None
+                     else _since_reversal(rate_ref[:, k], t, starts))
+            cols.append((f"{SINCE} qd{k + 1} reversed", group, k + 1, "history", "s"))
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -247,6 +257,22 @@ def inputs(pipe, R, direction=False) -> tuple:
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
+
+
+def _since_reversal(rate, t, starts, dead=0.0) -> np.ndarray:
+    """The time [s] since ``rate`` last changed sign, from each block's start (``starts``, rows);
+    within ``dead`` times its RMS of zero it keeps the last sign (noise about a standstill)."""
+    out = np.zeros(len(rate))
+    last, sign = t[0], 0.0
+    for i, v in enumerate(np.where(np.abs(rate) > dead * np.sqrt(np.mean(rate ** 2)), np.sign(rate), 0.0)):
+        if i in starts:
+            last, sign = t[i], v
+        elif v and v != sign:
+            if sign:
+                last = t[i]
+            sign = v
+        out[i] = t[i] - last
+    return out
 
 
 def input_groups(columns) -> dict:
@@ -325,35 +351,20 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
-def _causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen) -> tuple:
-    """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
-    columns)`` of :func:`_select`, a consequence among them): the trees cross-validated on every
-    input but the consequences ``follow`` (:func:`.select.consequences`), screened and
-    checked as the full model's; ``chosen`` stays when those trees claim nothing or ``chosen``
-    beats the causes' refit significantly (:func:`.select.gain`)."""
-    cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
-    cv = cross_validate(X[:, cols], y, fold_rows)
-    share, _, ok = judged(cv.mse)
-    sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
-    causes = _screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
-    if not causes:
-        return chosen
-    alone = _select(X, y, fold_rows, groups, causes, float(np.var(y)), follow)
-    return chosen if gain(alone[1], chosen[1], y, float(np.var(y)))[1] else alone
-
-
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
     by one by cross-validating without them; the share claimed is that of the trees on the named
     inputs alone (the model the statement describes), out of fold.  When the trees on every
-    input claim nothing, or at once for a ``weak`` channel (no structure flagged, RMS under
-    :data:`RMS_OVER_NOISE` times the noise), the strongest input alone is judged; on a weak channel
-    whose strongest input is a consequence (:func:`.select.consequences`) the trees on every input
-    are judged first, causes before consequences, and that input alone only when they claim nothing.  ``fitted``:
-    the fitted model's columns on the channel (:func:`.backfit.fitted_columns`), re-adjusted
-    beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
+    input claim nothing, the groups their importance passes are checked and judged alone
+    (:func:`.select.screened_first`), and only when those claim nothing either, or at once for a
+    ``weak`` channel (no structure flagged, RMS under :data:`RMS_OVER_NOISE` times the noise), the
+    strongest input alone; on a weak channel whose strongest input is a consequence
+    (:func:`.select.consequences`) the trees on every input first, causes before consequences.  The
+    time since a joint's direction last changed is an input of that joint's channel only.
+    ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
+    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -371,6 +382,9 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
+    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
+    X, columns = X[:, keep], [every[i] for i in keep]
     groups = input_groups(columns)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
@@ -382,7 +396,12 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows)
             share, z, explained = judged(cv.mse)
-        if not explained:  # the trees on every input spread a weak force over many: the strongest input alone
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate) \
+            if cv is not None and not explained else None
+        if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
+            named, cv, use, share, z = first
+            explained = True
+        elif not explained:  # the trees on every input spread a weak force over many: the strongest input alone
             g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, cross_validate)
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
@@ -398,7 +417,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
-                    kept, cv_k, use_k = _causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k))
+                    kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
+                                                     _screen, cross_validate)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
@@ -423,7 +443,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
                        beyond_noise=beyond_noise(y, noise, spi),
-                       screened=screened, model=model, columns=tuple(columns), use=tuple(use), readjusted=moved)
+                       screened=screened, model=model, columns=every, use=tuple(keep[i] for i in use),
+                       readjusted=moved)
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
