@@ -87,7 +87,7 @@ _EXCLUDED: set = set()
 #: turned them off (``diagnose(families=False)``, ``cosim diagnose --no-families``)
 _SEARCHED: list = []
 
-#: the answers of :func:`clash` per search (gone with the search)
+#: per search (gone with it): the answers of :func:`clash` per pair of terms and the terms' full shapes
 _CLASHES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -198,6 +198,14 @@ def _full_shape(search, c, term, option):
 ZONE_NOT_BESIDE = ("coulomb", "viscous", "stribeck")
 
 
+def _shape_kept(shapes, search, c, term):
+    """:func:`_full_shape` of ``term`` on joint c, kept in ``shapes``."""
+    sh = shapes.get((c, term))
+    if sh is None:
+        sh = shapes[(c, term)] = _full_shape(search, c, *term)
+    return sh
+
+
 def clash(search, c, chosen, cand, held=None) -> bool:
     """Is ``cand`` no candidate on joint c beside ``chosen``: it sets a shape parameter of the
     joint to another value than a term of ``chosen`` (the core holds one per joint), or it is a
@@ -207,13 +215,18 @@ def clash(search, c, chosen, cand, held=None) -> bool:
         return True
     if not chosen:  # no term to clash with
         return False
-    key = (c, cand, tuple(chosen))  # the bootstrap's selections ask the same again and again
-    cache = _CLASHES.setdefault(search, {})  # per search: a Search is a value (its shapes fixed)
-    if key not in cache:
-        a = _full_shape(search, c, *cand)
-        cache[key] = any(any(k in b and b[k] != v for k, v in a.items())
-                         for b in (_full_shape(search, c, *t) for t in chosen))
-    return cache[key]
+    # per search (a Search is a value: its shapes fixed) and per pair of terms: the selections of
+    # the bootstrap's resamples ask about the same pairs beside other chosen sets
+    pairs, shapes = _CLASHES.get(search) or _CLASHES.setdefault(search, ({}, {}))
+    for t in chosen:
+        key = (c, cand, t)
+        hit = pairs.get(key)
+        if hit is None:
+            a, b = (_shape_kept(shapes, search, c, u) for u in (cand, t))
+            hit = pairs[key] = any(k in b and b[k] != v for k, v in a.items())
+        if hit:
+            return True
+    return False
 
 
 def option_of(search, term_obj, name) -> int:
