@@ -133,9 +133,10 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
+        clashing = products.clashing(search, c, chosen, model)  # the core holds one shape per joint
         tried = [cand for cand in candidates
                  if not (cand in refused or not held.isdisjoint(coefs[cand]))  # a coefficient is entered once
-                 and not products.clash(search, c, chosen, cand, model)]  # the core holds one shape per joint
+                 and not products.clashes(clashing, cand)]
         for cand, c2 in zip(tried, chi2_each([chosen + [cand] for cand in tried])):
             gain = (chi2 - c2) - price[cand] - costs[cand]  # a family term pays more
             if best is None or gain > best[0]:
