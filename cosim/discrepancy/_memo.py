@@ -18,6 +18,10 @@ from .._native import PkmError
 #: (docs/discrepancy.md, "Speed").
 CACHE_ENTRIES = 64
 CACHE_BYTES = 128 * 2**20
+#: the last evaluations' residuals kept whole (:meth:`Memo.residual`), the least recently used
+#: leaving first: a selection asks for the chi-square at its parameters once per group it tries
+#: to remove, an interval's or a Jacobian's centre again (docs/discrepancy.md, "Speed")
+RESIDUALS = 32
 
 
 def _nbytes(v) -> int:
@@ -64,6 +68,7 @@ class Memo:
         self.probe = None  # a model copy for moves_joints
         self.entries: OrderedDict = OrderedDict()
         self.nbytes = 0
+        self.residuals: OrderedDict = OrderedDict()
 
     def moves_joints(self, name, motion) -> bool:
         """Does the model's parameter ``name`` change the joint motion (positions, rates,
@@ -103,3 +108,18 @@ class Memo:
             while len(self.entries) > CACHE_ENTRIES and self.nbytes > CACHE_BYTES:
                 self.nbytes -= _nbytes(self.entries.popitem(last=False)[1])
         return v
+
+    def residual(self, params: dict, fn):
+        """fn(), a :class:`.residuals.Residual` of the parameters ``params`` ({core name: float},
+        those that differ from the nominal ones) at the pipeline's own positions, kept under the
+        parameters' names and exact values (``float.hex``: -0.0 is not 0.0); a copy of its arrays
+        is returned, so that a caller may change them."""
+        key = tuple(sorted((k, v.hex()) for k, v in params.items()))
+        r = self.residuals.get(key)
+        if r is None:
+            r = self.residuals[key] = fn()
+            if len(self.residuals) > RESIDUALS:
+                self.residuals.popitem(last=False)
+        else:
+            self.residuals.move_to_end(key)
+        return type(r)(r.eff.copy(), None if r.kin is None else r.kin.copy())

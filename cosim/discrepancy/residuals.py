@@ -43,6 +43,7 @@ engine's regressors are finite differences of :meth:`Pipeline.evaluate`.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -64,6 +65,12 @@ SENSOR_KEYS = (".encoder_offset", ".backlash", ".compliance", "sensor.delay")
 
 def _is(name, keys):
     return any(name.endswith(k) or name == k for k in keys)
+
+
+@functools.lru_cache(maxsize=4096)
+def _is_kept(name, keys) -> bool:
+    """:func:`_is`, kept (each evaluation asks it of every parameter set)."""
+    return _is(name, keys)
 
 
 @dataclass
@@ -488,17 +495,23 @@ class Pipeline:
         ``positions`` are sample indices (default: the decimated interior samples).
         """
         params = {k: float(v) for k, v in (params or {}).items() if self.nominal.get(k) != float(v)}
+        if positions is None:  # a selection asks for the same parameters again (a chi-square, a Jacobian's centre)
+            return self._memo.residual(params, lambda: self._evaluate(params, self.idx))
+        return self._evaluate(params, np.asarray(positions))
+
+    def _evaluate(self, params: dict, pos) -> Residual:
+        """:meth:`evaluate` at the sample positions ``pos`` of ``params`` (only those that differ
+        from the nominal ones, as floats)."""
         m = self.model_for(params)
-        pos = self.idx if positions is None else np.asarray(positions)
         d_a = m.param("actuator.delay") / self.dt
         d_s = m.param("sensor.delay") / self.dt
         # 1e-9: the largest delay searched, (max_shift - 2) dt, divided by dt may round above max_shift - 2
         if max(d_a, d_s) > self.max_shift - 2 + 1e-9:
             raise DiagnosisError(f"a delay of {max(d_a, d_s) * self.dt * 1e3:.3g} ms is beyond the "
                                  f"{(self.max_shift - 2) * self.dt * 1e3:.3g} ms the pipeline was built for")
-        dyn = tuple(sorted((k, v) for k, v in params.items() if not _is(k, ACTUATOR_KEYS + SENSOR_KEYS)))
+        dyn = tuple(sorted((k, v) for k, v in params.items() if not _is_kept(k, ACTUATOR_KEYS + SENSOR_KEYS)))
         act = tuple(sorted((k, v) for k, v in params.items() if k.endswith((".effort_max", ".dead_zone"))))
-        sens = tuple(sorted((k, v) for k, v in params.items() if _is(k, SENSOR_KEYS) and k != "sensor.delay"))
+        sens = tuple(sorted((k, v) for k, v in params.items() if _is_kept(k, SENSOR_KEYS) and k != "sensor.delay"))
         geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
 
         A = self._cached(("A", act), lambda: self._applied(m, act))

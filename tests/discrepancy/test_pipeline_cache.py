@@ -70,3 +70,21 @@ def test_the_joint_motion_moves_with_lengths_and_positions_not_with_masses_or_fo
     pipe = Pipeline(clean_runs[robot], Model(robot))
     assert all(pipe._moves_joints(n) for n in moving), [n for n in moving if not pipe._moves_joints(n)]
     assert not any(pipe._moves_joints(n) for n in still), [n for n in still if pipe._moves_joints(n)]
+
+
+def test_a_kept_residual_is_keyed_on_the_exact_values_and_handed_out_as_a_copy(clean_runs):
+    """The last evaluations' residuals are kept whole (``Memo.residual``): the same parameters
+    again (in another order, as ints or floats) give the same residual, other values of the same
+    parameters their own, and a caller that changes the arrays it got changes no later answer."""
+    pipe = Pipeline(clean_runs["6pus"], Model("6pus"))
+    j = pipe.model.facts.joint_prefix
+    a = {f"{j}[1].coulomb": 0.05, "payload.m": 0.05}
+    b = {"payload.m": 0.05, f"{j}[1].coulomb": 0.05 + 1e-3}  # the same names, another value
+    first = pipe.evaluate(a).eff
+    assert np.array_equal(first, _direct(pipe, a))
+    assert np.array_equal(pipe.evaluate(b).eff, _direct(pipe, b))
+    again = pipe.evaluate(dict(reversed(list(a.items()))))
+    assert np.array_equal(again.eff, first) and again.eff is not first
+    again.eff[:] = 0.0  # a caller's own copy
+    assert np.array_equal(pipe.evaluate(a).eff, _direct(pipe, a))
+    assert np.array_equal(pipe.evaluate({}).eff, _direct(pipe, {}))

@@ -116,7 +116,7 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     def chi2_each(sets):  # [chi2_of(terms) for terms in sets], the solves of one size in one call
         refit = search.name(c, "offset") in (held or {})  # offset_refit's first condition, for all
         full = [terms + offset_refit(search, c, held, terms) if refit else terms for terms in sets]
-        fits = gram.fit_many([np.concatenate([gram.at[u] for u in ts]) if ts else np.zeros(0, int) for ts in full])
+        fits = gram.fit_many([gram.columns_of(ts) for ts in full])
         return [c2 if _above_floor(terms, coef, floor) else math.inf for terms, (c2, coef) in zip(sets, fits)]
 
     def part_of(terms, cand, cols):  # chi-square with only the columns ``cols`` of cand
@@ -133,9 +133,10 @@ def stepwise(search, c, y, rows, threshold, phi, n_eff, fixed=frozenset(), floor
     for _ in range(MAX_STEPS):
         best = None
         held = {k for t, _ in chosen for k in TERMS[t][0]} | set(fixed)
+        clashing = products.clashing(search, c, chosen, model)  # the core holds one shape per joint
         tried = [cand for cand in candidates
                  if not (cand in refused or not held.isdisjoint(coefs[cand]))  # a coefficient is entered once
-                 and not products.clash(search, c, chosen, cand, model)]  # the core holds one shape per joint
+                 and not products.clashes(clashing, cand)]
         for cand, c2 in zip(tried, chi2_each([chosen + [cand] for cand in tried])):
             gain = (chi2 - c2) - price[cand] - costs[cand]  # a family term pays more
             if best is None or gain > best[0]:
@@ -175,9 +176,10 @@ _SIDE_BY_SIDE: dict = {}
 
 
 def _side_by_side(search, c, candidates) -> tuple:
-    """``(X, at)``: the columns of ``candidates`` on channel c side by side (samples, columns) and
-    each candidate's column indices in X, kept for the searches that share the columns (a
-    selection and the bootstrap's resamples read the same ones)."""
+    """``(X, at, sets)``: the columns of ``candidates`` on channel c side by side (samples, columns),
+    each candidate's column indices in X and a dict for the indices of sets of them
+    (:meth:`_Gram.columns_of`), kept for the searches that share the columns (a selection and the
+    bootstrap's resamples read the same ones)."""
     held = _SIDE_BY_SIDE.get(id(search.cols))
     if held is None or held[0] is not search.cols:
         held = _SIDE_BY_SIDE[id(search.cols)] = (search.cols, {})
@@ -191,7 +193,7 @@ def _side_by_side(search, c, candidates) -> tuple:
             at[cand] = np.arange(n, n + col.shape[1])
             n += col.shape[1]
             blocks.append(col)
-        held[1][key] = (np.concatenate(blocks, axis=1), at)
+        held[1][key] = (np.concatenate(blocks, axis=1), at, {})
     return held[1][key]
 
 
@@ -205,9 +207,19 @@ class _Gram:
         w = search.w[c] * search.eng.use[rows, c]
         t = y[rows] * w
         # those the selection searches, their columns side by side (the same for every resample)
-        Xc, self.at = _side_by_side(search, c, tuple(search.candidates() if candidates is None else candidates))
+        Xc, self.at, self._sets = _side_by_side(search, c,
+                                                tuple(search.candidates() if candidates is None else candidates))
         X = Xc[rows] * w[:, None]
         self.G, self.b, self.tt = X.T @ X, X.T @ t, float(t @ t)
+
+    def columns_of(self, terms) -> np.ndarray:
+        """The column indices of ``terms`` (a list of candidates) one after the other, kept for
+        the next selection on the same columns (the bootstrap's resamples try the same sets)."""
+        key = tuple(terms)
+        i = self._sets.get(key)
+        if i is None:
+            i = self._sets[key] = np.concatenate([self.at[u] for u in terms]) if terms else np.zeros(0, int)
+        return i
 
     def fit(self, terms):
         """(chi-square, coefficients) of the least-squares fit of ``terms``, as :func:`_ls_fit`."""

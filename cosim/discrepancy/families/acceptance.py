@@ -31,6 +31,7 @@ beyond what a term of the library of one joint's position and rate must.
 from __future__ import annotations
 
 import math
+import weakref
 
 from .products import TERMS as FAMILY_TERMS
 
@@ -75,11 +76,22 @@ def cost(search, term, threshold: float) -> float:
     return threshold + (getattr(search, "fam_extra", 0.0) if is_family(term) else 0.0)
 
 
+#: :func:`searched`'s answers per search (gone with it; a Search is a value): library_only -> candidates
+_SEARCHED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def searched(search, library_only: bool = False) -> list:
     """The candidates a selection searches: the library's, and the families' unless
-    ``library_only`` or ``search.fam_on`` is False (the library's trials)."""
-    lib, fam = split(search.candidates())
-    return lib if library_only or not getattr(search, "fam_on", True) else lib + fam
+    ``library_only`` or ``search.fam_on`` is False (the library's trials).  A new list, the
+    same for the same search (each bootstrap resample's selection asks)."""
+    kept = _SEARCHED.get(search)
+    if kept is None:
+        kept = _SEARCHED.setdefault(search, {})
+    out = kept.get(library_only)
+    if out is None:
+        lib, fam = split(search.candidates())
+        out = kept[library_only] = lib if library_only or not getattr(search, "fam_on", True) else lib + fam
+    return list(out)
 
 
 def own_part(chi2_cols, chi2_full, cand, at, logn, bar) -> bool:

@@ -87,7 +87,7 @@ _EXCLUDED: set = set()
 #: turned them off (``diagnose(families=False)``, ``cosim diagnose --no-families``)
 _SEARCHED: list = []
 
-#: the answers of :func:`clash` per search (gone with the search)
+#: per search (gone with it): the terms clashing with each term per joint (:func:`clash`) and the terms' full shapes
 _CLASHES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -198,22 +198,60 @@ def _full_shape(search, c, term, option):
 ZONE_NOT_BESIDE = ("coulomb", "viscous", "stribeck")
 
 
+def _shape_kept(shapes, search, c, term):
+    """:func:`_full_shape` of ``term`` on joint c, kept in ``shapes``."""
+    sh = shapes.get((c, term))
+    if sh is None:
+        sh = shapes[(c, term)] = _full_shape(search, c, *term)
+    return sh
+
+
+def _zone_not_here(search, c, held) -> bool:
+    """Does the model ``held`` hold a library friction on joint c (:data:`ZONE_NOT_BESIDE`)?"""
+    return bool(held) and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE)
+
+
+def _clashing_with(search, c, t) -> frozenset:
+    """The terms of the search that set a shape parameter of joint c to another value than
+    ``t`` does, kept per search (a Search is a value: its shapes fixed) and (c, t)."""
+    kept, shapes = _CLASHES.get(search) or _CLASHES.setdefault(search, ({}, {}))
+    out = kept.get((c, t))
+    if out is None:
+        b = _shape_kept(shapes, search, c, t)
+        out = kept[(c, t)] = frozenset(u for u in search.cols if any(
+            k in b and b[k] != v for k, v in _shape_kept(shapes, search, c, u).items()))
+    return out
+
+
+def clashing(search, c, chosen, held=None):
+    """The candidates of :func:`clash` beside ``chosen`` on joint c, as a set: ``cand in
+    clashing(...)`` is ``clash(..., cand, held)`` for every term of the search (a zone beside a
+    library friction of ``held`` is marked by ``"zone"``: see :func:`clashes`)."""
+    out = set()
+    for t in chosen:
+        out |= _clashing_with(search, c, t)
+    if _zone_not_here(search, c, held):
+        out.add("zone")
+    return out
+
+
+def clashes(clashing_set, cand) -> bool:
+    """Is ``cand`` in the set :func:`clashing` made (a zone where it marks zones)?"""
+    return cand in clashing_set or (cand[0] == "zone" and "zone" in clashing_set)
+
+
 def clash(search, c, chosen, cand, held=None) -> bool:
     """Is ``cand`` no candidate on joint c beside ``chosen``: it sets a shape parameter of the
     joint to another value than a term of ``chosen`` (the core holds one per joint), or it is a
     zone where the model ``held`` ({core parameter: value}) holds a library friction
     (:data:`ZONE_NOT_BESIDE`)?"""
-    if cand[0] == "zone" and held and any(search.name(c, k) in held for k in ZONE_NOT_BESIDE):
+    if cand[0] == "zone" and _zone_not_here(search, c, held):
         return True
-    if not chosen:  # no term to clash with
-        return False
-    key = (c, cand, tuple(chosen))  # the bootstrap's selections ask the same again and again
-    cache = _CLASHES.setdefault(search, {})  # per search: a Search is a value (its shapes fixed)
-    if key not in cache:
-        a = _full_shape(search, c, *cand)
-        cache[key] = any(any(k in b and b[k] != v for k, v in a.items())
-                         for b in (_full_shape(search, c, *t) for t in chosen))
-    return cache[key]
+    # the set of the search's terms clashing with each chosen term (the bootstrap's selections ask
+    # about the same terms beside other chosen sets)
+    return any(cand in _clashing_with(search, c, t) for t in chosen) if cand in search.cols else \
+        any(any(k in b and b[k] != v for k, v in _full_shape(search, c, *cand).items())
+            for b in (_full_shape(search, c, *t) for t in chosen))
 
 
 def option_of(search, term_obj, name) -> int:
