@@ -69,19 +69,19 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
     Y = np.column_stack([np.sin(3 * X[:, 0]) + 0.3 * X[:, 1] * X[:, 2] + 0.2 * rng.normal(size=600)
                          for _ in range(flexible_cv.N_FOLDS)]) + 0.1 * rng.normal(size=(600, flexible_cv.N_FOLDS))
     rows = flexible_cv.folds(600, gap=3)
-    calls = []
-    fit_transform = binning._BinMapper.fit_transform
-    monkeypatch.setattr(binning._BinMapper, "fit_transform", lambda self, *a, **k: calls.append(1) or
-                        fit_transform(self, *a, **k))
-    for y in (Y[:, 0], Y):
+    calls = []  # the thresholds of one column found (scikit-learn's fit finds them column by column)
+    find = binning._find_binning_thresholds
+    monkeypatch.setattr(binning, "_find_binning_thresholds", lambda *a, **k: calls.append(1) or find(*a, **k))
+    monkeypatch.setattr(flexible_cv, "_THRESHOLDS", {})
+    for y, found in ((Y[:, 0], flexible_cv.N_FOLDS * X.shape[1]), (Y, 0)):
         calls.clear()
         kept = flexible_cv.grow(X, y, rows)
-        assert len(calls) == flexible_cv.N_FOLDS  # once per fold
+        assert len(calls) == found  # once per fold and column; none for the same rows with another target
         with monkeypatch.context() as m:
             m.setattr(flexible_cv, "_trees_keeping_bins", lambda: HistGradientBoostingRegressor)
             calls.clear()
             plain = flexible_cv.grow(X, y, rows)
-            assert len(calls) == 2 * flexible_cv.N_FOLDS  # at each of the two steps
+            assert len(calls) == 2 * flexible_cv.N_FOLDS * X.shape[1]  # at each of the two steps
         assert kept[1] == plain[1] and kept[1] + flexible_cv.PATIENCE > flexible_cv.STEPS[0]  # the second step ran
         for a, b in zip(kept[2], plain[2]):
             assert np.array_equal(a, b)
@@ -101,7 +101,19 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
     m.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
     ref = HistGradientBoostingRegressor(**dict(flexible_cv.TREES, warm_start=True, max_iter=5)).fit(X, Y[:, 0])
     ref.set_params(max_iter=8).fit(X + 1e-3, Y[:, 0])
-    assert len(calls) == 3 and np.array_equal(m.predict(X), ref.predict(X))  # m binned again, ref twice
+    assert len(calls) == 3 * X.shape[1] and np.array_equal(m.predict(X), ref.predict(X))  # m binned again, ref twice
+    # a column met again in other training rows takes the thresholds found the first time: the same
+    # mapper and bins as scikit-learn's fit finds
+    calls.clear()
+    mapper = binning._BinMapper(n_bins=flexible_cv.TREES["max_bins"] + 1, random_state=0, n_threads=1)
+    Z = np.column_stack([X[:, 4], np.round(X[:, 0]), np.where(X[:, 1] > 1.0, np.nan, X[:, 1])])
+    binned = flexible_cv._binned_with_kept_thresholds(mapper, Z)
+    assert len(calls) == 2  # X's column 4 known, the other two new
+    ref = binning._BinMapper(n_bins=flexible_cv.TREES["max_bins"] + 1, random_state=0, n_threads=1)
+    assert np.array_equal(binned, ref.fit_transform(Z)) and sorted(vars(ref)) == sorted(vars(mapper))
+    assert all(np.array_equal(a, b) for a, b in zip(mapper.bin_thresholds_, ref.bin_thresholds_))
+    assert np.array_equal(mapper.n_bins_non_missing_, ref.n_bins_non_missing_)
+    assert mapper.missing_values_bin_idx_ == ref.missing_values_bin_idx_
 
 
 def test_remembered_fits_once_per_inputs_target_and_folds():

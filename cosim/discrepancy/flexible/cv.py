@@ -196,7 +196,9 @@ def _trees_keeping_bins():
                         and kept[0].dtype == X.dtype and np.array_equal(kept[0], X)):
                     self._bin_mapper = kept[1]
                     return kept[2]
-                out = super()._bin_data(X, *args, is_training_data=is_training_data, **kw)
+                out = _binned_with_kept_thresholds(self._bin_mapper, X) if is_training_data and not weights else None
+                if out is None:
+                    out = super()._bin_data(X, *args, is_training_data=is_training_data, **kw)
                 if is_training_data and weights:
                     self.__dict__.pop("_kept_bins", None)
                 elif is_training_data:
@@ -221,6 +223,42 @@ def _trees_keeping_bins():
         Trees.__module__, Trees.__name__, Trees.__qualname__ = __name__, "_Trees", "_Trees"
         _TREES_KEEPING_BINS.append(Trees)
     return _TREES_KEEPING_BINS[0]
+
+
+#: per (bins less one, a training column's bytes): the bin thresholds scikit-learn finds on that
+#: column (:func:`_binned_with_kept_thresholds`); emptied when it holds THRESHOLDS_MAX
+_THRESHOLDS: dict = {}
+THRESHOLDS_MAX = 20000
+
+
+def _binned_with_kept_thresholds(mapper, X):
+    """The training rows ``X`` binned as scikit-learn's ``_BinMapper.fit_transform`` bins them,
+    each column's thresholds found once: its ``fit`` finds each column's thresholds from that
+    column alone (``_find_binning_thresholds``, with no weights and no subsample under
+    ``mapper.subsample`` rows), so a column met again (the same fold's rows of an input every
+    channel and most input subsets share: a stage bins about 200 folds' rows) takes the
+    thresholds found the first time, the same values; ``mapper`` is given the attributes its
+    ``fit`` sets.  None where that ``fit`` would do more (categories, subsampling)."""
+    from sklearn.ensemble._hist_gradient_boosting import binning
+
+    if (mapper.is_categorical is not None or mapper.known_categories is not None or X.ndim != 2
+            or X.dtype != binning.X_DTYPE or not 3 <= mapper.n_bins <= 256
+            or (mapper.subsample is not None and X.shape[0] > mapper.subsample)):
+        return None
+    max_bins, found = mapper.n_bins - 1, []
+    for f in range(X.shape[1]):
+        key = (max_bins, X[:, f].tobytes())
+        t = _THRESHOLDS.get(key)
+        if t is None:
+            if len(_THRESHOLDS) >= THRESHOLDS_MAX:
+                _THRESHOLDS.clear()
+            t = _THRESHOLDS[key] = binning._find_binning_thresholds(X[:, f], max_bins, sample_weight=None)
+        found.append(t.copy())
+    mapper.is_categorical_ = np.zeros(X.shape[1], dtype=np.uint8)
+    mapper.missing_values_bin_idx_ = mapper.n_bins - 1
+    mapper.bin_thresholds_ = found
+    mapper.n_bins_non_missing_ = np.array([t.shape[0] + 1 for t in found], dtype=np.uint32)
+    return mapper.transform(X)
 
 
 def __getattr__(name):
