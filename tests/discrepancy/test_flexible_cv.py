@@ -115,30 +115,3 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
     assert np.array_equal(mapper.n_bins_non_missing_, ref.n_bins_non_missing_)
     assert mapper.missing_values_bin_idx_ == ref.missing_values_bin_idx_
 
-
-def test_remembered_fits_once_per_inputs_target_and_folds():
-    # a stand-in that counts its calls: the memo returns an earlier result only for the same
-    # inputs (columns and their order), the same target and the same folds
-    calls = []
-
-    def counted(X, y, fold_rows):
-        calls.append(1)
-        return object()
-
-    cv = flexible_cv.remembered(counted)
-    rng = np.random.default_rng(0)
-    X, y = rng.normal(size=(200, 3)), rng.normal(size=200)
-    rows, other_rows = flexible_cv.folds(200, 2), flexible_cv.folds(200, 4)
-    first = cv(X, y, rows)
-    assert cv(X.copy(), y.copy(), rows) is first and len(calls) == 1  # equal element for element: remembered
-    assert cv(X, y[::-1].copy(), rows) is not first  # another target
-    assert cv(X[:, [0, 2, 1]], y, rows) is not first  # other columns (the same values in another order)
-    assert cv(X[:, :2], y, rows) is not first  # fewer columns
-    assert cv(X, y, other_rows) is not first  # other folds
-    assert len(calls) == 5
-    # the default is the stage's cross-validation itself: the same trees and predictions
-    real = flexible_cv.remembered()
-    a = real(X, y, rows)
-    assert real(X, y, rows) is a
-    b = flexible_cv.cross_validate(X, y, rows)
-    assert a.iterations == b.iterations and np.array_equal(a.pred, b.pred) and a.mse == b.mse

@@ -105,36 +105,6 @@ def cross_validate(X, y, fold_rows) -> CV:
     return CV(tuple(fold_rows), tuple(models), best, pred, float(np.mean((y - pred) ** 2)))
 
 
-def remembered(cross_validate_=None):
-    """``cross_validate_`` (:func:`cross_validate` by default) remembering its results: a call
-    given the same inputs, target and folds as an earlier one, element for element, returns that
-    call's cross-validation instead of fitting the same trees again (the fit is a function of
-    those three alone: fixed seed, no subsampling).  The input subsets the stage's checks try
-    recur (the screen's groups checked again by :func:`~.select.causes_alone`, a group tried
-    alone that a check fits too); kept for one channel's fit (:func:`~.stage.fit_channel`)."""
-    fit = cross_validate if cross_validate_ is None else cross_validate_
-    kept: dict = {}
-
-    def cv(X, y, fold_rows):
-        import hashlib
-
-        X, y = np.asarray(X), np.asarray(y)
-        rows = [np.asarray(r) for pair in fold_rows for r in pair]
-        h = hashlib.blake2b(digest_size=16)
-        for a in [X, y] + rows:
-            h.update(str((a.shape, a.dtype.str)).encode())
-            h.update(np.ascontiguousarray(a).tobytes())
-        key = h.digest()
-        if key in kept:
-            was = kept[key]
-            if len(was[0]) == 2 + len(rows) and all(np.array_equal(a, b) for a, b in zip([X, y] + rows, was[0])):
-                return was[1]
-        out = fit(X, y, fold_rows)
-        kept[key] = ([np.array(a) for a in [X, y] + rows], out)
-        return out
-    return cv
-
-
 def grow(X, Y, fold_rows) -> tuple:
     """Boosted trees per fold of ``fold_rows`` on the target ``Y``: (n,), or (n, folds) with a
     target per fold (each fold's loss on its own).

@@ -62,13 +62,13 @@ The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
-from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside, remembered
+from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
 
@@ -345,10 +345,10 @@ def _screen(imp, share) -> list:
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, cross_validate_=None):
-    """The check of the screened groups (:func:`.select.select`): ``(kept, cross-validation, its columns)``."""
-    return select(X, y, fold_rows, groups, named, var, follow=follow, known=known,
-                  cross_validate=cross_validate_ or cross_validate)
+def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
+    """The check of the screened groups (:func:`.select.select`, causes before
+    consequences): ``(kept, cross-validation on the kept groups' columns, its columns)``."""
+    return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
@@ -387,28 +387,27 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     X, columns = X[:, keep], [every[i] for i in keep]
     groups = input_groups(columns)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
-    rng, trees_cv = np.random.default_rng(0), remembered(cross_validate)  # each set of inputs fitted once
+    rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
-        cv = None if weak else trees_cv(X, y, fold_rows)
+        cv = None if weak else cross_validate(X, y, fold_rows)
         share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
         deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
-        strongest = strongest_alone(X, y, fold_rows, groups, trees_cv) if weak else None
+        strongest = strongest_alone(X, y, fold_rows, groups, cross_validate) if weak else None
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
-            cv = trees_cv(X, y, fold_rows)
+            cv = cross_validate(X, y, fold_rows)
             share, z, explained = judged(cv.mse)
-        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, trees_cv) \
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate) \
             if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
             named, cv, use, share, z = first
             explained = True
         elif not explained:  # the trees on every input spread a weak force over many: the strongest input alone
-            g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, trees_cv)
+            g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, cross_validate)
             share_g, z_g, ok = judged(cv_g.mse)
             if ok or weak:
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
             named = [g] if ok else []  # with the group sharing its columns where they add (partners)
-            kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, {tuple(sorted(use)): cv_g},
-                                        trees_cv) \
+            kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, known={tuple(sorted(use)): cv_g}) \
                 if ok else (named, cv, use)
             share_k, z_k, ok_k = judged(cv_k.mse)
             if kept != named and ok_k:
@@ -416,10 +415,10 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         else:
             named = _screen(importance(cv, X, y, groups, rng), share)
             if named:
-                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, cross_validate_=trees_cv)
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                                     _screen, trees_cv)
+                                                     _screen, cross_validate)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
@@ -427,7 +426,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
                     named, screened = [], (tuple(kept), share_k)
         moved, y_t, cv_t = (), y, cv
         if explained and named:
-            cv, use = lean(X, y, fold_rows, groups, named, use, cv, trees_cv)
+            cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
             share, z, _ = judged(cv.mse)
             cv_t = cv
             cv, moved = readjusted(X[:, use], y, fitted, cv)
@@ -573,6 +572,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
 
 
 def _with(fit, **kw):
+    from dataclasses import replace
+
     return replace(fit, **kw)
 
 
