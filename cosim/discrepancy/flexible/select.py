@@ -21,6 +21,12 @@ cross-validating without each, with two rules of cause before consequence.
   group is named too (for those columns: its others are not added to the model), instead of
   the product hiding behind one name.
 
+* **Another joint's history stands in for the rates.**  Beside a named rate, the history of a
+  joint whose rate is not named (:func:`stand_ins`) stays named only where leaving it out costs
+  :data:`DROP_MIN` of the variance significantly over the folds (:func:`gain`): the check alone
+  keeps it on a cost of :data:`DROP_MIN` that may swing over the folds.  A joint's history
+  beside its own rate is checked as before (a friction level the joint's slow state sets).
+
 * **A consequence is no answer by itself.**  On a weak channel the stage judges the strongest
   single input alone (:func:`~.flexible.stage.fit_channel`); when that input is a consequence,
   it is the copy of the force the controller made, which out-predicts a force's causes when
@@ -58,6 +64,18 @@ def consequences(columns, groups, joint) -> set:
     def follows(col):
         return col[3] in ("effort", "acceleration") and col[2] == joint
     return {g for g, idx in groups.items() if idx and all(follows(columns[i]) for i in idx)}
+
+
+def stand_ins(named) -> set:
+    """The histories among ``named`` that may only stand in for the rates beside them: another
+    joint's history (its own rate not named) on a channel where a rate is named.  A low-passed
+    |rate|, effort or power of a joint in motion is a smoothed copy of that motion, which the
+    named rates carry; out of fold it can take a share by chance beside them (a heating friction
+    on rail 5 named with rail 1's history, MuJoCo, docs/flexible.md).  A joint's history beside
+    its own rate is not one: that is the friction level a slow state of the joint sets."""
+    if not any(g.startswith("rate of ") for g in named):
+        return set()
+    return {g for g in named if g.startswith("history of ") and g.replace("history of", "rate of", 1) not in named}
 
 
 def gain(without, with_, y, var) -> tuple:
@@ -98,6 +116,10 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
     if causes:
         base = cv_on(kept)[0]
         kept += [g for g in named if g in follow and gain(base, cv_on(kept + [g])[0], y, var)[1]]
+    for h in [g for g in kept if g in stand_ins(kept)]:  # named only where it adds significantly
+        rest = [g for g in kept if g != h]
+        if not gain(cv_on(rest)[0], cv_on(kept)[0], y, var)[1]:
+            kept = rest
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
 
