@@ -107,11 +107,12 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
     calls.clear()
     mapper = binning._BinMapper(n_bins=flexible_cv.TREES["max_bins"] + 1, random_state=0, n_threads=1)
     Z = np.column_stack([X[:, 4], np.round(X[:, 0]), np.where(X[:, 1] > 1.0, np.nan, X[:, 1])])
-    binned = flexible_cv._binned_with_kept_thresholds(mapper, Z)
+    fitted, binned = flexible_cv._binned_with_kept_thresholds(mapper, Z)
+    assert not hasattr(mapper, "bin_thresholds_")  # the mapper given is left as it was
     assert len(calls) == 2  # X's column 4 known, the other two new
     ref = binning._BinMapper(n_bins=flexible_cv.TREES["max_bins"] + 1, random_state=0, n_threads=1)
-    assert np.array_equal(binned, ref.fit_transform(Z)) and sorted(vars(ref)) == sorted(vars(mapper))
-    assert all(np.array_equal(a, b) for a, b in zip(mapper.bin_thresholds_, ref.bin_thresholds_))
-    assert np.array_equal(mapper.n_bins_non_missing_, ref.n_bins_non_missing_)
-    assert mapper.missing_values_bin_idx_ == ref.missing_values_bin_idx_
+    assert np.array_equal(binned, ref.fit_transform(Z)) and sorted(vars(ref)) == sorted(vars(fitted))
+    assert all(np.array_equal(a, b) for a, b in zip(fitted.bin_thresholds_, ref.bin_thresholds_))
+    assert np.array_equal(fitted.n_bins_non_missing_, ref.n_bins_non_missing_)
+    assert fitted.missing_values_bin_idx_ == ref.missing_values_bin_idx_
 

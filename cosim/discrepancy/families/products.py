@@ -198,12 +198,18 @@ def _full_shape(search, c, term, option):
 ZONE_NOT_BESIDE = ("coulomb", "viscous", "stribeck")
 
 
-def _shape_kept(shapes, search, c, term):
-    """:func:`_full_shape` of ``term`` on joint c, kept in ``shapes``."""
+def _shape_kept(search, c, term):
+    """:func:`_full_shape` of ``term`` on joint c, kept per search (:data:`_CLASHES`)."""
+    shapes = _kept(search)[1]
     sh = shapes.get((c, term))
     if sh is None:
         sh = shapes[(c, term)] = _full_shape(search, c, *term)
     return sh
+
+
+def _kept(search) -> tuple:
+    """What :data:`_CLASHES` keeps for ``search``: ``({(c, term): clashing terms}, {(c, term): shape})``."""
+    return _CLASHES.get(search) or _CLASHES.setdefault(search, ({}, {}))
 
 
 def _zone_not_here(search, c, held) -> bool:
@@ -214,12 +220,12 @@ def _zone_not_here(search, c, held) -> bool:
 def _clashing_with(search, c, t) -> frozenset:
     """The terms of the search that set a shape parameter of joint c to another value than
     ``t`` does, kept per search (a Search is a value: its shapes fixed) and (c, t)."""
-    kept, shapes = _CLASHES.get(search) or _CLASHES.setdefault(search, ({}, {}))
+    kept = _kept(search)[0]
     out = kept.get((c, t))
     if out is None:
-        b = _shape_kept(shapes, search, c, t)
+        b = _shape_kept(search, c, t)
         out = kept[(c, t)] = frozenset(u for u in search.cols if any(
-            k in b and b[k] != v for k, v in _shape_kept(shapes, search, c, u).items()))
+            k in b and b[k] != v for k, v in _shape_kept(search, c, u).items()))
     return out
 
 

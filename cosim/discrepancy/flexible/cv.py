@@ -16,6 +16,7 @@ standard error is their spread) and the refits of the input selection are all ou
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from itertools import islice
@@ -166,8 +167,10 @@ def _trees_keeping_bins():
                         and kept[0].dtype == X.dtype and np.array_equal(kept[0], X)):
                     self._bin_mapper = kept[1]
                     return kept[2]
-                out = _binned_with_kept_thresholds(self._bin_mapper, X) if is_training_data and not weights else None
-                if out is None:
+                got = _binned_with_kept_thresholds(self._bin_mapper, X) if is_training_data and not weights else None
+                if got is not None:
+                    self._bin_mapper, out = got
+                else:
                     out = super()._bin_data(X, *args, is_training_data=is_training_data, **kw)
                 if is_training_data and weights:
                     self.__dict__.pop("_kept_bins", None)
@@ -208,8 +211,9 @@ def _binned_with_kept_thresholds(mapper, X):
     column alone (``_find_binning_thresholds``, with no weights and no subsample under
     ``mapper.subsample`` rows), so a column met again (the same fold's rows of an input every
     channel and most input subsets share: a stage bins about 200 folds' rows) takes the
-    thresholds found the first time, the same values; ``mapper`` is given the attributes its
-    ``fit`` sets.  None where that ``fit`` would do more (categories, subsampling)."""
+    thresholds found the first time, the same values.  Returns ``(fitted, binned)``: a copy of
+    ``mapper`` with the attributes its ``fit`` sets, and the bins; None where that ``fit`` would do
+    more (categories, subsampling)."""
     from sklearn.ensemble._hist_gradient_boosting import binning
 
     if (mapper.is_categorical is not None or mapper.known_categories is not None or X.ndim != 2
@@ -225,11 +229,12 @@ def _binned_with_kept_thresholds(mapper, X):
                 _THRESHOLDS.clear()
             t = _THRESHOLDS[key] = binning._find_binning_thresholds(X[:, f], max_bins, sample_weight=None)
         found.append(t.copy())
-    mapper.is_categorical_ = np.zeros(X.shape[1], dtype=np.uint8)
-    mapper.missing_values_bin_idx_ = mapper.n_bins - 1
-    mapper.bin_thresholds_ = found
-    mapper.n_bins_non_missing_ = np.array([t.shape[0] + 1 for t in found], dtype=np.uint32)
-    return mapper.transform(X)
+    fitted = copy.copy(mapper)
+    fitted.is_categorical_ = np.zeros(X.shape[1], dtype=np.uint8)
+    fitted.missing_values_bin_idx_ = mapper.n_bins - 1
+    fitted.bin_thresholds_ = found
+    fitted.n_bins_non_missing_ = np.array([t.shape[0] + 1 for t in found], dtype=np.uint32)
+    return fitted, fitted.transform(X)
 
 
 def __getattr__(name):
