@@ -69,3 +69,18 @@ def test_a_parameter_the_core_refuses_to_take_out_is_left_out_not_raised():
     assert cols[0][1] == ["a"]
     assert np.allclose(cols[0][0][:, 0], 0.5 * t)  # taken out: the residual rises by what it took
     assert cols[1][1] == []
+
+
+def test_a_fitted_column_zero_on_a_folds_fitted_rows_gives_a_gain_not_a_singular_matrix():
+    # a fitted effect's column that is zero wherever a fold is fitted (an effect active only in one
+    # block of the recording): the relative ridge is zero too, and the refit takes no part of it
+    rng = np.random.default_rng(3)
+    n = 400
+    y = rng.normal(size=n)
+    cv = types.SimpleNamespace(pred=np.zeros(n), folds=[(np.arange(0, 200), np.arange(200, n)),
+                                                        (np.arange(200, n), np.arange(0, 200))])
+    J = np.zeros((n, 2))
+    J[:200, 0] = rng.normal(size=200)  # zero on the first fold's fitted rows
+    gain = flexible_backfit.linear_gain(J, y, cv)
+    assert np.isfinite(gain)
+    assert np.array_equal(flexible_backfit._refit(J[200:], y[200:]), np.zeros(2))

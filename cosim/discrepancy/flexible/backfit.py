@@ -138,9 +138,15 @@ class BackfitCV(CV):
 
 
 def _refit(J, r, ridge=RIDGE):
-    """Least squares of ``r`` on the columns ``J`` (scaled to unit RMS), a relative ridge."""
+    """Least squares of ``r`` on the columns ``J`` (scaled to unit RMS), a relative ridge; the
+    least-norm solution where the system is singular (columns that are zero on these rows, as a
+    fitted effect's columns can be on one fold's fitted rows: the ridge is relative, so it is zero too)."""
     G = J.T @ J
-    return np.linalg.solve(G + ridge * np.trace(G) / max(len(G), 1) * np.eye(len(G)), J.T @ r)
+    A, b = G + ridge * np.trace(G) / max(len(G), 1) * np.eye(len(G)), J.T @ r
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(A, b, rcond=None)[0]
 
 
 def linear_gain(J, y, cv) -> float:
