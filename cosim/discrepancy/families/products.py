@@ -224,9 +224,13 @@ def _clashing_with(search, c, t) -> frozenset:
     out = kept.get((c, t))
     if out is None:
         b = _shape_kept(search, c, t)
-        out = kept[(c, t)] = frozenset(u for u in search.cols if any(
-            k in b and b[k] != v for k, v in _shape_kept(search, c, u).items()))
+        out = kept[(c, t)] = frozenset(u for u in search.cols if _differ(_shape_kept(search, c, u), b))
     return out
+
+
+def _differ(a, b) -> bool:
+    """Does the shape ``a`` set a shape parameter that ``b`` sets to another value?"""
+    return any(k in b and b[k] != v for k, v in a.items())
 
 
 def clashing(search, c, chosen, held=None):
@@ -255,9 +259,9 @@ def clash(search, c, chosen, cand, held=None) -> bool:
         return True
     # the set of the search's terms clashing with each chosen term (the bootstrap's selections ask
     # about the same terms beside other chosen sets)
-    return any(cand in _clashing_with(search, c, t) for t in chosen) if cand in search.cols else \
-        any(any(k in b and b[k] != v for k, v in _full_shape(search, c, *cand).items())
-            for b in (_full_shape(search, c, *t) for t in chosen))
+    if cand in search.cols:
+        return any(cand in _clashing_with(search, c, t) for t in chosen)
+    return any(_differ(_shape_kept(search, c, cand), _shape_kept(search, c, t)) for t in chosen)
 
 
 def option_of(search, term_obj, name) -> int:
