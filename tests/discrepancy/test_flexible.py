@@ -255,10 +255,10 @@ def test_when_the_trees_on_every_input_claim_nothing_the_strongest_input_alone_i
     pipe, X, cols, y, truth = _synthetic(lambda X: 0.3 * np.sin(6.0 * X[:, 2]))
     real = flexible.cross_validate
 
-    def cross_validate(Xs, ys, fold_rows):
+    def cross_validate(Xs, ys, fold_rows, **kw):
         if Xs.shape[1] == X.shape[1]:
             ys = np.random.default_rng(2).permutation(ys)
-        return real(Xs, ys, fold_rows)
+        return real(Xs, ys, fold_rows, **kw)
 
     monkeypatch.setattr(flexible, "cross_validate", cross_validate)
     fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
@@ -354,3 +354,31 @@ def test_a_rate_named_alone_names_the_history_its_signed_columns_carry():
     assert kept == ["rate of slider 1", "history of slider 1"]
     assert use == [0, 2]  # the model keeps the rate's columns: the history is named for its shared one
     assert 1.0 - cv.mse / np.var(y) > 0.9
+
+
+def test_the_trees_on_every_input_stop_once_they_claim_and_claim_as_their_whole_growth(monkeypatch):
+    # a force far above the claim's bars: the trees on every input stop after their first step, and
+    # their claim is that of the trees grown as far as the held-out loss asks (to the bound here);
+    # on noise alone nothing is claimed and the trees are those of the whole growth
+    real, seen = flexible.cross_validate, []
+
+    def cross_validate(Xs, ys, fold_rows, enough=None):
+        cv = real(Xs, ys, fold_rows, enough=enough)
+        if enough is not None:
+            seen.append((cv, real(Xs, ys, fold_rows), enough))
+        return cv
+
+    monkeypatch.setattr(flexible, "cross_validate", cross_validate)
+    pipe, X, cols, y, _ = _synthetic(lambda X: 0.3 * np.sin(6.0 * X[:, 2]) + 0.2 * X[:, 0] * X[:, 1])
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
+    (early, whole, claimed), = seen
+    assert all(m.n_iter_ == flexible_cv.STEPS[0] for m in early.models)  # stopped after the first step
+    assert all(m.n_iter_ > flexible_cv.STEPS[0] for m in whole.models)  # where the whole growth takes the second
+    assert claimed(early.mse) and claimed(whole.mse) and fit.explained
+    assert early.mse >= whole.mse
+    seen.clear()
+    pipe, X, cols, y, _ = _synthetic(lambda X: np.zeros(len(X)))
+    fit = flexible.fit_channel(pipe, X, cols, y, 0.05, ("N", "tau1"))
+    (early, whole, claimed), = seen
+    assert not claimed(early.mse) and not fit.explained
+    assert early.iterations == whole.iterations and np.array_equal(early.pred, whole.pred)

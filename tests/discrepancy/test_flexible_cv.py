@@ -6,6 +6,8 @@ The oracle is the definition written out column by column: per fold, the quantil
 column on the fitted rows, the fitted rows' mean per bin (the fitted mean for an empty bin)
 predicting the held-out rows.
 """
+from itertools import islice
+
 import numpy as np
 import pytest
 
@@ -116,3 +118,31 @@ def test_grow_bins_equal_training_rows_once_and_fits_the_same_trees(monkeypatch)
     assert np.array_equal(fitted.n_bins_non_missing_, ref.n_bins_non_missing_)
     assert fitted.missing_values_bin_idx_ == ref.missing_values_bin_idx_
 
+
+
+def test_a_claim_stops_the_trees_early_and_decides_as_the_whole_growth():
+    """A cross-validation whose ``enough`` holds after the first step stops there; every test
+    of the kind the stage makes (the held-out error at most a bar: a share claimed) decides on
+    it as on the whole growth, for bars on both sides of the two errors; the stopped trees are
+    the first step's of the whole growth, and a test that never holds changes nothing."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(600, 7))
+    y = np.sin(3 * X[:, 0]) + 0.3 * X[:, 1] * X[:, 2] + 0.2 * rng.normal(size=600)
+    rows = flexible_cv.folds(600, gap=3)
+    whole = flexible_cv.cross_validate(X, y, rows)
+    assert whole.iterations > flexible_cv.STEPS[0] - flexible_cv.PATIENCE  # the whole growth takes the second step
+    never = flexible_cv.cross_validate(X, y, rows, enough=lambda mse: False)
+    assert never.iterations == whole.iterations and never.mse == whole.mse and np.array_equal(never.pred, whole.pred)
+    first = flexible_cv.cross_validate(X, y, rows, enough=lambda mse: True)
+    assert all(m.n_iter_ == flexible_cv.STEPS[0] for m in first.models)  # stopped after the first step
+    assert first.mse > whole.mse  # the second step's trees lower the held-out error here
+    for (held, _), m, w in zip(rows, first.models, whole.models):  # the same trees, fewer of them
+        assert np.array_equal(next(islice(m.staged_predict(X[held]), first.iterations - 1, None)),
+                              next(islice(w.staged_predict(X[held]), first.iterations - 1, None)))
+    var = float(np.var(y))
+    decided = 0
+    for bar in np.linspace(whole.mse - 0.2 * var, first.mse + 0.2 * var, 41):
+        early = flexible_cv.cross_validate(X, y, rows, enough=lambda mse: mse <= bar)
+        assert (early.mse <= bar) == (whole.mse <= bar)
+        decided += early.iterations <= flexible_cv.STEPS[0] < whole.iterations
+    assert decided >= 10  # the bars at or above the first step's error: decided on its trees

@@ -96,24 +96,38 @@ def gap_for(spi: float) -> int:
     return int(math.ceil(GAP_INDEPENDENT * spi))
 
 
-def cross_validate(X, y, fold_rows) -> CV:
+def cross_validate(X, y, fold_rows, enough=None) -> CV:
     """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`), grown
-    as :func:`grow` grows them."""
-    models, best, held_pred = grow(X, y, fold_rows)
-    pred = np.empty(len(y))
-    for (held, _), p in zip(fold_rows, held_pred):
-        pred[held] = p
-    return CV(tuple(fold_rows), tuple(models), best, pred, float(np.mean((y - pred) ** 2)))
+    as :func:`grow` grows them.
+
+    ``enough``: a test of the held-out mean squared error at the number of iterations chosen so
+    far, made after each step of :func:`grow` but the last; where it holds, the trees grow no
+    further (their number, predictions and error are then the step's).  The error chosen over
+    more iterations is at most the one chosen over fewer (the minimum of the same trees' summed
+    losses over more iterations, to the rounding of the mean), so a test that every smaller error
+    passes too (a share claimed: :func:`~.flexible.stage.fit_channel`) decides as the whole growth
+    would, on fewer trees (``tests/discrepancy/test_flexible_cv.py``)."""
+    def held_out(held_pred):
+        pred = np.empty(len(y))
+        for (held, _), p in zip(fold_rows, held_pred):
+            pred[held] = p
+        return pred, float(np.mean((y - pred) ** 2))
+
+    stop = None if enough is None else (lambda held_pred: enough(held_out(held_pred)[1]))
+    models, best, held_pred = grow(X, y, fold_rows, stop)
+    pred, mse = held_out(held_pred)
+    return CV(tuple(fold_rows), tuple(models), best, pred, mse)
 
 
-def grow(X, Y, fold_rows) -> tuple:
+def grow(X, Y, fold_rows, stop=None) -> tuple:
     """Boosted trees per fold of ``fold_rows`` on the target ``Y``: (n,), or (n, folds) with a
     target per fold (each fold's loss on its own).
 
     The folds' trees grow together to each of :data:`STEPS` iterations in turn (warm start: the
     same trees as one fit of as many iterations) and stop once the summed held-out loss has not
-    fallen for :data:`PATIENCE` iterations, or at the last.  Returns ``(models, iterations, the
-    held-out predictions per fold at that number)``."""
+    fallen for :data:`PATIENCE` iterations, at the last, or where ``stop`` (a callable of the
+    held-out predictions per fold at the number chosen so far) says so after a step but the
+    last.  Returns ``(models, iterations, the held-out predictions per fold at that number)``."""
     Y = np.asarray(Y)
     target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
     models = [_trees_keeping_bins()(**dict(TREES, warm_start=True)) for _ in fold_rows]
@@ -126,7 +140,7 @@ def grow(X, Y, fold_rows) -> tuple:
         total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
                     for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
-        if n - best >= PATIENCE:
+        if n - best >= PATIENCE or (stop is not None and n != STEPS[-1] and stop([p[best - 1] for p in staged])):
             break
     for m in models:  # the kept training rows are no part of the fitted trees
         m.__dict__.pop("_kept_bins", None)

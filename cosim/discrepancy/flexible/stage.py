@@ -377,7 +377,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     var = float(np.var(y))
     spi = samples_per_independent(pipe)
     fold_rows = folds(len(y), gap_for(spi))
-    def judged(mse):  # (share, chi-square, whether claimed) of a cross-validation's held-out error
+    def judged(mse):  # (share, chi-square, whether claimed) of a held-out error (a claim stops the screen's trees)
         share = 1.0 - mse / var if var > 0 else 0.0
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
@@ -389,12 +389,12 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
-        cv = None if weak else cross_validate(X, y, fold_rows)
+        cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
         share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
         deps, use, beyond, named, screened = (), list(range(X.shape[1])), 0.0, [], ()
         strongest = strongest_alone(X, y, fold_rows, groups, cross_validate) if weak else None
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
-            cv = cross_validate(X, y, fold_rows)
+            cv = cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
             share, z, explained = judged(cv.mse)
         first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate) \
             if cv is not None and not explained else None
