@@ -27,6 +27,15 @@ cross-validating without each, with two rules of cause before consequence.
   keeps it on a cost of :data:`DROP_MIN` that may swing over the folds.  A joint's history
   beside its own rate is checked as before (a friction level the joint's slow state sets).
 
+* **A model effort where no rate is named: what it is computed from, where that says as much.**
+  The model computes a joint's effort from the pose, the rates and the accelerations; a force on
+  the platform (a function of its pose and twist) enters every rail's effort through the
+  tracking error the controller answers, so a rail's effort can carry it better than its true
+  inputs.  A friction keyed on a drive's load needs the direction of motion: beside a named
+  rate the efforts stay.  Elsewhere the groups they are computed from (:func:`made_of`) are
+  named in their place unless the efforts beat them by :data:`DROP_MIN` significantly over
+  the folds (:func:`gain`, the bar of a consequence; :func:`made_of_efforts`).
+
 * **A consequence is no answer by itself.**  On a weak channel the stage judges the strongest
   single input alone (:func:`~.flexible.stage.fit_channel`); when that input is a consequence,
   it is the copy of the force the controller made, which out-predicts a force's causes when
@@ -47,6 +56,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+#: the platform pose's group (:func:`~.flexible.stage.inputs`)
+POSE = "the platform pose"
 
 #: a group is kept (or a consequence or a partner added) when it is worth this share of the
 #: residual's variance out of fold ...
@@ -120,8 +132,55 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         rest = [g for g in kept if g != h]
         if not gain(cv_on(rest)[0], cv_on(kept)[0], y, var)[1]:
             kept = rest
+    kept = made_of_efforts(kept, groups, follow, y, var, cv_on)
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
+
+
+def made_of(effort, groups, follow=()) -> tuple:
+    """What the model effort group ``effort`` ("effort of slider 4") is computed from, as the
+    inverse dynamics along the measured motion: ``(where, rate, acceleration)``, the platform
+    pose (:data:`POSE`; the joint's position where no pose is recorded), the joint's rate and
+    its acceleration, each () where not an input or a consequence (``follow``)."""
+    joint = effort[len("effort of "):]
+    place = POSE if POSE in groups else f"position of {joint}"
+    return tuple((g,) if g in groups and g not in follow else () for g in
+                 (place, f"rate of {joint}", f"acceleration of {joint}"))
+
+
+def made_of_efforts(kept, groups, follow, y, var, cv_on) -> list:
+    """``kept`` with its model efforts replaced by what they are computed from (:func:`made_of`)
+    unless the efforts beat that by :data:`DROP_MIN` significantly over the folds (:func:`gain`),
+    when no rate is named beside them.
+
+    A model effort is no physical input: the model computes it from the pose, the rates and the
+    accelerations.  A force acting on the platform (a tendon, a contact, a magnet: functions of
+    its pose and twist) enters every rail's effort twice: through the pose, and through the
+    tracking error's acceleration the controller answers it with, a copy of the force itself; so
+    a rail's effort can out-predict the pose, as the channel's own effort does (a consequence,
+    judged by the same bar).  A friction keyed on a drive's load is the force the effort is the
+    input of, and a friction needs the direction of motion: beside a named rate the efforts stay.
+    Elsewhere the fewest constituents first: the groups left beside the efforts, then with the
+    pose, then the pose and the rates or the pose and the accelerations (the lower held-out
+    error), then all three; the first the efforts do not beat is named in their place, each
+    larger set only where a smaller one is beaten."""
+    efforts = [g for g in kept if g.startswith("effort of ")]
+    if not efforts or any(g.startswith("rate of ") for g in kept):
+        return kept
+    rest = [g for g in kept if g not in efforts]
+    parts = [made_of(g, groups, follow) for g in efforts]
+    place, rates, accs = ([h for p in parts for h in p[i] if h not in rest] for i in range(3))
+    ladder = [[rest]] if rest else []
+    ladder += [[rest + place], [rest + place + rates, rest + place + accs], [rest + place + rates + accs]]
+    full = cv_on(kept)[0]
+    for step in ladder:
+        step = [list(dict.fromkeys(s)) for s in step if s]
+        if not step:
+            continue
+        best = min(step, key=lambda s: cv_on(s)[0].mse)
+        if not gain(cv_on(best)[0], full, y, var)[1]:
+            return best
+    return kept
 
 
 def partners(kept, groups, y, var, cv_on) -> list:

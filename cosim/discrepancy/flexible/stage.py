@@ -69,7 +69,7 @@ import numpy as np
 from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
-from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
+from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
 
 #: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
@@ -253,7 +253,7 @@ def inputs(pipe, R, direction=False) -> tuple:
         for i in range(x.shape[1]):
             if np.std(x[:, i]) > 0:
                 X.append(x[:, i])
-                cols.append((f"pose[{i}]", "the platform pose", None, "pose", ""))
+                cols.append((f"pose[{i}]", POSE, None, "pose", ""))
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
