@@ -1,0 +1,81 @@
+"""A group's columns projected on the direction a linear fit of the residual takes (:mod:`.flexible`).
+
+Boosted trees split on one column at a time.  A force that is a function of an oblique
+direction of a group of columns (the distance of the platform to a point, the depth along a
+plane's normal: a direction of the 6-column pose that is none of its columns) takes many
+splits on several columns to learn from some 700 decimated samples, while a single column that
+moves nearly linearly along that direction (a rail's model effort: the pose through gravity)
+gives the trees the same course in one: the trees name that proxy instead of the pose.
+
+Per channel, each group of :data:`PROJECTED` gets one more column, in that group: the group's
+columns (scaled to unit RMS on the rows fitted) projected on the direction of a ridge fit of the
+residual on them (relative ridge :data:`RIDGE`).  The direction is fitted per fold of the
+cross-validation on that fold's fitted rows only (:class:`~.cv.FoldInputs`: no held-out row
+moves the column its trees are judged on), and once on every sample for the final model, its
+partial dependence and the black box (:func:`extended`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .cv import FoldInputs
+
+#: the groups whose columns are projected: (group, the quantity of its columns)
+PROJECTED = (("the platform pose", "pose"),)
+#: relative ridge of the linear fit (columns scaled to unit RMS on the fitted rows)
+RIDGE = 1e-2
+
+
+def direction(Z, y) -> tuple:
+    """The ridge fit of ``y`` on the columns ``Z`` (rows fitted): ``(mean, scale, weights)`` with
+    the projected column ``((Z - mean) / scale) @ weights``."""
+    mean = Z.mean(axis=0)
+    scale = Z.std(axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    S = (Z - mean) / scale
+    A = S.T @ S
+    lam = RIDGE * max(float(np.trace(A)) / max(A.shape[0], 1), 1e-300)
+    w = np.linalg.solve(A + lam * np.eye(A.shape[0]), S.T @ (y - y.mean()))
+    return mean, scale, w
+
+
+def _project(Z, fitted) -> np.ndarray:
+    mean, scale, w = fitted
+    return ((Z - mean) / scale) @ w
+
+
+def extend(X, columns, groups, y, fold_rows) -> tuple:
+    """``X`` (n, p) with, per group of :data:`PROJECTED` of at least 2 columns, the group's
+    columns projected on the direction of a ridge fit of ``y`` on them: fitted per fold on its
+    fitted rows (``fold_rows``) and on every sample.  Returns ``(X as a FoldInputs, columns,
+    groups, projections)``, ``projections`` per added column ``(the group's columns (indices
+    into X), mean, scale, weights)`` fitted on every sample (:func:`extended`)."""
+    X = np.asarray(X, float)
+    y = np.asarray(y, float)
+    added, per_fold, projections = [], [], []
+    columns, groups = list(columns), {g: list(c) for g, c in groups.items()}
+    for group, quantity in PROJECTED:
+        cols = [i for i in groups.get(group, []) if columns[i][3] == quantity]
+        if len(cols) < 2:
+            continue
+        Z = X[:, cols]
+        whole = direction(Z, y)
+        added.append(_project(Z, whole))
+        per_fold.append([_project(Z, direction(Z[fit], y[fit])) for _, fit in fold_rows])
+        projections.append((tuple(cols),) + whole)
+        groups[group].append(X.shape[1] + len(added) - 1)
+        columns.append((f"{quantity} along its linear fit", group, None, quantity, ""))
+    if not added:
+        return X, columns, groups, ()
+    whole = np.column_stack([X] + added)
+    variants = np.stack([np.column_stack([X] + [p[b] for p in per_fold]) for b in range(len(fold_rows))])
+    return FoldInputs(whole, variants), columns, groups, tuple(projections)
+
+
+def extended(X, projections) -> np.ndarray:
+    """The stage's inputs ``X`` with the projected columns fitted on every sample
+    (``projections`` of :func:`extend`), in the order :func:`extend` added them."""
+    X = np.asarray(X, float)
+    if not projections:
+        return X
+    return np.column_stack([X] + [_project(X[:, list(cols)], (m, s, w)) for cols, m, s, w in projections])
