@@ -175,6 +175,7 @@ def refit(kept) -> tuple:
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
+    from cosim.discrepancy.flexible.backfit import actuator_levels
 
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
@@ -183,7 +184,10 @@ def refit(kept) -> tuple:
     with threadpool_limits(limits=1):
         t0 = time.process_time()
         if kept["channels"]:
-            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
+            fitted = {kept["pipe"].channels.index(ch["unit"][1]): ch["fitted"] for ch in kept["channels"]
+                      if ch["fitted"] is not None}
+            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True,
+                                      levels=actuator_levels(fitted, np.shape(kept["R"])))
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"])

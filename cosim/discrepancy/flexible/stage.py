@@ -67,7 +67,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
-from .backfit import readjusted, stage_columns
+from .backfit import actuator_levels, readjusted, stage_columns
 from .oblique import extend, extended
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
@@ -178,6 +178,8 @@ class FlexibleFit:
     readjusted: tuple = ()
     #: the projected columns (:func:`.oblique.extend`: ``columns`` and ``use`` past the stage's inputs)
     projections: tuple = field(default=(), repr=False, compare=False)
+    #: the part of the fitted model's effort its actuator levels take, left out of the effort input
+    levels: object = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
@@ -197,11 +199,12 @@ def _lowpass(x, dt, tau, starts):
     return y
 
 
-def inputs(pipe, R, direction=False) -> tuple:
+def inputs(pipe, R, direction=False, levels=None) -> tuple:
     """The flexible model's inputs at the decimated samples.
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
-    input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
+    input is the model's, measured minus ``R``, less ``levels`` (the part its fitted actuator
+    levels take, :func:`.backfit.actuator_levels`: a copy of any force on the joint); ``direction``: with the smoothed commanded
     direction and the time since each joint's direction last changed (the stage's own inputs;
     :mod:`..keyed.elsewhere` reads the others).  Returns
     ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
@@ -213,6 +216,8 @@ def inputs(pipe, R, direction=False) -> tuple:
     starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
     dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
+    if levels is not None:
+        effort = effort - np.asarray(levels, float)[:, :nd]
     qref = getattr(pipe.rec, "qref", None)
     rate_ref = smoothed = None
     if qref is not None:
@@ -530,14 +535,15 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
         R_wo = eng.R({k: v for k, v in theta.items() if k not in drop})
         for c in stand_ins:
             R_fit[:, c] = R_wo[:, c]
-    X, columns = inputs(pipe, R_fit, direction=True)
-    noun = pipe.model.facts.joint_noun
     fitted = stage_columns(eng, theta, stand_ins, chans)
+    levels = actuator_levels(fitted, R_fit.shape)
+    X, columns = inputs(pipe, R_fit, direction=True, levels=levels)
+    noun = pipe.model.facts.joint_noun
     out = []
     for c in chans:
         fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
                           weak=c in weak, fitted=fitted.get(c))
-        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
+        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak, levels=levels)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
             test = np.asarray(eng.test, bool)
@@ -569,7 +575,7 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     decimated samples and interpolated in time (zero elsewhere).  A black box: it follows the
     recorded motion, not the replayed one."""
     pipe = eng.pipe
-    X, _ = inputs(pipe, R, direction=True)
+    X, _ = inputs(pipe, R, direction=True, levels=next((f.levels for f in fits), None))
     t = pipe.t[pipe.idx]
     out = np.zeros((rows, pipe.nd))
     for f in fits:
