@@ -101,11 +101,11 @@ def _captured(run):
         calls.append((X, _light(pipe), np.asarray(R, float).copy()))
         return X, columns
 
-    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
+    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, levels=None):
         if "R" not in kept:
             kept["pipe"], kept["R"] = next((p, R) for Xc, p, R in calls if Xc is X)
         kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
-        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted)
+        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, levels=levels)
 
     stage.inputs, stage.fit_channel = inputs_kept, fit_kept
     try:
@@ -186,11 +186,11 @@ def refit(kept) -> tuple:
         if kept["channels"]:
             fitted = {kept["pipe"].channels.index(ch["unit"][1]): ch["fitted"] for ch in kept["channels"]
                       if ch["fitted"] is not None}
-            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True,
-                                      levels=actuator_levels(fitted, np.shape(kept["R"])))
+            levels = actuator_levels(fitted, np.shape(kept["R"]))
+            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True, levels=levels)
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
-                                      fitted=ch["fitted"])
+                                      fitted=ch["fitted"], levels=levels)
                 fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
         cpu = time.process_time() - t0
     return fits, cpu

@@ -178,7 +178,8 @@ class FlexibleFit:
     readjusted: tuple = ()
     #: the projected columns (:func:`.oblique.extend`: ``columns`` and ``use`` past the stage's inputs)
     projections: tuple = field(default=(), repr=False, compare=False)
-    #: the part of the fitted model's effort its actuator levels take, left out of the effort input
+    #: the part of the fitted model's effort its actuator levels take, left out of the effort
+    #: inputs of the other joints (:func:`inputs`)
     levels: object = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict:
@@ -204,7 +205,8 @@ def inputs(pipe, R, direction=False, levels=None) -> tuple:
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
     input is the model's, measured minus ``R``, less ``levels`` (the part its fitted actuator
-    levels take, :func:`.backfit.actuator_levels`: a copy of any force on the joint); ``direction``: with the smoothed commanded
+    levels take, :func:`.backfit.actuator_levels`: a copy of any force on the joint; its histories
+    keep them); ``direction``: with the smoothed commanded
     direction and the time since each joint's direction last changed (the stage's own inputs;
     :mod:`..keyed.elsewhere` reads the others).  Returns
     ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
@@ -216,8 +218,7 @@ def inputs(pipe, R, direction=False, levels=None) -> tuple:
     starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
     dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
-    if levels is not None:
-        effort = effort - np.asarray(levels, float)[:, :nd]
+    load = effort if levels is None else effort - np.asarray(levels, float)[:, :nd]
     qref = getattr(pipe.rec, "qref", None)
     rate_ref = smoothed = None
     if qref is not None:
@@ -231,7 +232,7 @@ def inputs(pipe, R, direction=False, levels=None) -> tuple:
         q, qd, qdd = pipe.q_s[idx, k], pipe.qd_s[idx, k], pipe.qdd_s[idx, k]
         for name, v, quantity, unit in ((f"q{k + 1}", q, "position", qu), (f"qd{k + 1}", qd, "rate", rate_u),
                                         (f"qdd{k + 1}", qdd, "acceleration", f"{qu}/s^2"),
-                                        (f"effort{k + 1}", effort[:, k], "effort", eu)):
+                                        (f"effort{k + 1}", load[:, k], "effort", eu)):
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
         if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
@@ -333,7 +334,7 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, levels=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
@@ -346,7 +347,9 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     (:func:`.select.consequences`) the trees on every input first, causes before consequences.  The
     time since a joint's direction last changed is an input of that joint's channel only.
     ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
-    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
+    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`).
+    ``levels``: the fitted actuator levels the effort inputs of ``X`` leave out (:func:`inputs`); the
+    channel's own effort keeps its own (a consequence of the force either way: :mod:`.select`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -364,6 +367,11 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    if levels is not None and c is not None and np.any(levels[:, c]):
+        X = X.copy()
+        X[:, [col[0] for col in columns].index(f"effort{c + 1}")] += levels[:, c]
+        levels = levels.copy()
+        levels[:, c] = 0.0
     every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
@@ -427,7 +435,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
                        beyond_noise=beyond_noise(y, noise, spi),
                        screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
                        use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
-                       readjusted=moved,
+                       readjusted=moved, levels=levels,
                        projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections))
 
 
@@ -542,8 +550,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     out = []
     for c in chans:
         fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
-                          weak=c in weak, fitted=fitted.get(c))
-        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak, levels=levels)
+                          weak=c in weak, fitted=fitted.get(c), levels=levels)
+        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
             test = np.asarray(eng.test, bool)
@@ -575,11 +583,11 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     decimated samples and interpolated in time (zero elsewhere).  A black box: it follows the
     recorded motion, not the replayed one."""
     pipe = eng.pipe
-    X, _ = inputs(pipe, R, direction=True, levels=next((f.levels for f in fits), None))
     t = pipe.t[pipe.idx]
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
+            X, _ = inputs(pipe, R, direction=True, levels=f.levels)
             predicted = f.model.predict(extended(X, f.projections)[:, list(f.use)])
             out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, predicted, left=0.0,
                                              right=0.0)
