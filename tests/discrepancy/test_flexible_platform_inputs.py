@@ -93,3 +93,16 @@ def test_a_joints_effort_input_leaves_out_what_its_fitted_actuator_levels_take()
     X, cols = flexible.inputs(pipe, y[:, None], direction=True, levels=level[:, None])
     i = [c[0] for c in cols].index("effort1")
     assert np.allclose(X[:, i], pipe.tau_s[pipe.idx, 0] - y - level)
+
+
+def test_the_channels_own_effort_keeps_its_levels():
+    # the channel's own model effort is a consequence of the force with or without its level
+    # (judged after the causes): its column gets its own level back, and the fit keeps the
+    # levels its inputs left out (the other joints', for the black box)
+    pipe, X, cols, y, sigma = _oblique()
+    X = np.column_stack([X, np.zeros(len(y))])
+    cols = cols + [("effort1", "effort of slider 1", 1, "effort", "N")]
+    levels = np.column_stack([np.full(len(y), 0.3), np.full(len(y), 0.2)])
+    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"), levels=levels)
+    assert np.array_equal(fit.levels[:, 0], np.zeros(len(y))) and np.array_equal(fit.levels[:, 1], levels[:, 1])
+    assert np.array_equal(levels[:, 0], np.full(len(y), 0.3))  # the stage's array is not changed

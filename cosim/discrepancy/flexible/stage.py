@@ -14,7 +14,9 @@ of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
-input), the platform pose where the recording gives one, and time.
+input), the platform pose where the recording gives one (per channel also projected on the direction
+of a linear fit of the residual, fitted per fold: :mod:`.oblique`), and time; another joint's
+effort without its fitted actuator levels (:func:`.backfit.actuator_levels`).
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -367,10 +369,10 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, level
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
-    if levels is not None and c is not None and np.any(levels[:, c]):
-        X = X.copy()
-        X[:, [col[0] for col in columns].index(f"effort{c + 1}")] += levels[:, c]
-        levels = levels.copy()
+    own = [i for i, col in enumerate(columns) if col[0] == f"effort{c + 1}"] if c is not None else []
+    if levels is not None and own and np.any(levels[:, c]):
+        X, levels = X.copy(), levels.copy()
+        X[:, own[0]] += levels[:, c]
         levels[:, c] = 0.0
     every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
