@@ -7,21 +7,30 @@ splits on several columns to learn from some 700 decimated samples, while a sing
 moves nearly linearly along that direction (a rail's model effort: the pose through gravity)
 gives the trees the same course in one: the trees name that proxy instead of the pose.
 
-Per channel, each group of :data:`PROJECTED` gets one more column, in that group: the group's
-columns (scaled to unit RMS on the rows fitted) projected on the direction of a ridge fit of the
-residual on them (relative ridge :data:`RIDGE`).  The direction is fitted per fold of the
+The same holds for the joints' rates: a gyroscopic moment H x omega is linear in the platform's
+angular rate, an oblique combination of the rails' rates.
+
+Per channel, the platform pose and the joints' rates (the smoothed readings) each get one more
+column: the columns (scaled to unit RMS on the rows fitted) projected on the direction of a ridge
+fit of the residual on them (relative ridge :data:`RIDGE`).  The pose's is in the pose's group;
+the rates' in the rate group of each joint whose weight is at least :data:`MEMBER` of the
+largest (on every sample: which inputs the column stands for, not its values).  The direction is fitted per fold of the
 cross-validation on that fold's fitted rows only (:class:`~.cv.FoldInputs`: no held-out row
 moves the column its trees are judged on), and once on every sample for the final model, its
 partial dependence and the black box (:func:`extended`).
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .cv import FoldInputs
 
-#: the groups whose columns are projected: (group, the quantity of its columns)
-PROJECTED = (("the platform pose", "pose"),)
+#: the columns projected: (quantity, the pattern of their feature names)
+PROJECTED = (("pose", r"pose\[\d+\]"), ("rate", r"qd\d+"))
+#: a rate group holds the rates' projected column when its joint's weight is this share of the largest
+MEMBER = 0.5
 #: relative ridge of the linear fit (columns scaled to unit RMS on the fitted rows)
 RIDGE = 1e-2
 
@@ -54,8 +63,8 @@ def extend(X, columns, groups, y, fold_rows) -> tuple:
     y = np.asarray(y, float)
     added, per_fold, projections = [], [], []
     columns, groups = list(columns), {g: list(c) for g, c in groups.items()}
-    for group, quantity in PROJECTED:
-        cols = [i for i in groups.get(group, []) if columns[i][3] == quantity]
+    for quantity, pattern in PROJECTED:
+        cols = [i for i, col in enumerate(columns[:X.shape[1]]) if col[3] == quantity and re.fullmatch(pattern, col[0])]
         if len(cols) < 2:
             continue
         Z = X[:, cols]
@@ -63,8 +72,12 @@ def extend(X, columns, groups, y, fold_rows) -> tuple:
         added.append(_project(Z, whole))
         per_fold.append([_project(Z, direction(Z[fit], y[fit])) for _, fit in fold_rows])
         projections.append((tuple(cols),) + whole)
-        groups[group].append(X.shape[1] + len(added) - 1)
-        columns.append((f"{quantity} along its linear fit", group, None, quantity, ""))
+        w = np.abs(whole[2])
+        held_by = [columns[i][1] for i, wi in zip(cols, w) if wi >= MEMBER * w.max()] if quantity == "rate" \
+            else [columns[cols[0]][1]]
+        for g in held_by:
+            groups[g].append(X.shape[1] + len(added) - 1)
+        columns.append((f"{quantity} along its linear fit", held_by[0], None, quantity, ""))
     if not added:
         return X, columns, groups, ()
     whole = np.column_stack([X] + added)
