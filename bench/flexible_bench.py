@@ -101,11 +101,11 @@ def _captured(run):
         calls.append((X, _light(pipe), np.asarray(R, float).copy()))
         return X, columns
 
-    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, levels=None):
+    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
         if "R" not in kept:
             kept["pipe"], kept["R"] = next((p, R) for Xc, p, R in calls if Xc is X)
         kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
-        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, levels=levels)
+        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted)
 
     stage.inputs, stage.fit_channel = inputs_kept, fit_kept
     try:
@@ -175,7 +175,6 @@ def refit(kept) -> tuple:
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
-    from cosim.discrepancy.flexible.backfit import actuator_levels
 
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
@@ -184,13 +183,10 @@ def refit(kept) -> tuple:
     with threadpool_limits(limits=1):
         t0 = time.process_time()
         if kept["channels"]:
-            fitted = {kept["pipe"].channels.index(ch["unit"][1]): ch["fitted"] for ch in kept["channels"]
-                      if ch["fitted"] is not None}
-            levels = actuator_levels(fitted, np.shape(kept["R"]))
-            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True, levels=levels)
+            X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
-                                      fitted=ch["fitted"], levels=levels)
+                                      fitted=ch["fitted"])
                 fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
         cpu = time.process_time() - t0
     return fits, cpu

@@ -35,7 +35,7 @@ def _fakes(monkeypatch, seen):
     """stage.inputs and fit_channel as cheap stand-ins: the matrix is the residual itself."""
     monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
 
-    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None, levels=None):
+    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
         seen.append(np.array(X))
         return _Fit()
     monkeypatch.setattr(stage, "fit_channel", fit)

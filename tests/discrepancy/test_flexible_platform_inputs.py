@@ -1,7 +1,7 @@
 """Inputs for forces on the platform: the platform pose projected on the direction of a linear fit
 of the residual (cosim.discrepancy.flexible.oblique): a force keyed on an oblique direction of the
 pose is named on the pose, not on a one-column proxy of it; the direction is fitted on each fold's
-fitted rows.  A joint's effort input without its fitted actuator levels (flexible.backfit.actuator_levels).
+fitted rows.
 
 Synthetic, truth in closed form: six pose columns (sums of three sines at random frequencies),
 a force 0.5 tanh(3 s) on s, the pose along the oblique direction (1, -1, 1, 1, -1, 1) / sqrt(6)
@@ -73,36 +73,3 @@ def test_the_direction_is_fitted_on_each_folds_fitted_rows_only():
     assert isinstance(sub, FoldInputs) and np.array_equal(at(sub, 2)[:, 1], at(Xe, 2)[:, -1])
     assert type(Xe[held]) is np.ndarray
 
-
-def test_a_joints_effort_input_leaves_out_what_its_fitted_actuator_levels_take():
-    # an effort limit or a dead zone fitted on a rail is a function of the commanded effort, which
-    # answers any force on that rail: its part of the model effort is a copy of the force.  Only the
-    # levels' own columns (not their derivatives, not other parameters) are left out, on their channel
-    from cosim.discrepancy.flexible.backfit import actuator_levels
-    from test_flexible_inputs import _reversing_joint
-
-    rng = np.random.default_rng(0)
-    J0, J2 = rng.normal(size=(50, 3)), rng.normal(size=(50, 1))
-    fitted = {0: (J0, ["rail[1].coulomb", "rail[1].effort_max", "rail[1].effort_max (derivative)"]),
-              2: (J2, ["rail[3].dead_zone"])}
-    got = actuator_levels(fitted, (50, 3))
-    assert np.array_equal(got, np.column_stack([J0[:, 1], np.zeros(50), J2[:, 0]]))
-    assert actuator_levels({0: (J0, ["rail[1].coulomb", "rail[1].viscous", "rail[1].offset"])}, (50, 3)) is None
-    pipe, y, _, _ = _reversing_joint()
-    level = 0.1 * np.sin(np.arange(len(y)))
-    X, cols = flexible.inputs(pipe, y[:, None], direction=True, levels=level[:, None])
-    i = [c[0] for c in cols].index("effort1")
-    assert np.allclose(X[:, i], pipe.tau_s[pipe.idx, 0] - y - level)
-
-
-def test_the_channels_own_effort_keeps_its_levels():
-    # the channel's own model effort is a consequence of the force with or without its level
-    # (judged after the causes): its column gets its own level back, and the fit keeps the
-    # levels its inputs left out (the other joints', for the black box)
-    pipe, X, cols, y, sigma = _oblique()
-    X = np.column_stack([X, np.zeros(len(y))])
-    cols = cols + [("effort1", "effort of slider 1", 1, "effort", "N")]
-    levels = np.column_stack([np.full(len(y), 0.3), np.full(len(y), 0.2)])
-    fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"), levels=levels)
-    assert np.array_equal(fit.levels[:, 0], np.zeros(len(y))) and np.array_equal(fit.levels[:, 1], levels[:, 1])
-    assert np.array_equal(levels[:, 0], np.full(len(y), 0.3))  # the stage's array is not changed

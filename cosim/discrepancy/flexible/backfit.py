@@ -210,27 +210,6 @@ def readjusted(X, y, fitted, cv):
     return cv_b, tuple(dict.fromkeys(n.replace(" (derivative)", "") for n in names))
 
 
-def actuator_levels(fitted, shape):
-    """The part of the fitted model's effort its actuator levels take (the effects of the library's
-    ``saturation`` kind: an effort limit, a dead zone), per channel of ``fitted``
-    (:func:`fitted_columns`: channel -> ``(J, names)``; a level's column is the change of the
-    residual when it is taken out of the fit), zero elsewhere: (n, channels) of ``shape``, or None
-    where no level is fitted.  Such a level is a function of the commanded effort, which in closed
-    loop answers whatever force acts on the joint: fitted, it takes part of a force nobody listed
-    (MuJoCo's tendon 38700: rail 4's fitted effort limit is 0.56 of that rail's model effort's RMS,
-    and alone explains 0.52-0.53 of the residuals of rails 3 and 6 out of fold), and a joint's model
-    effort with it is a copy of that force, no cause of it."""
-    from ..effects import LIBRARY
-
-    ends = tuple(t[t.index("]") + 1:] for e in LIBRARY if e.kind == "saturation" for t in e.params)
-    out = np.zeros(shape)
-    for c, (J, names) in (fitted or {}).items():
-        for k, name in enumerate(names):
-            if name.endswith(ends):
-                out[:, c] += J[:, k]
-    return out if np.any(out) else None
-
-
 def stage_columns(eng, theta, stand_ins, channels) -> dict:
     """:func:`fitted_columns` of the flexible stage's ``channels`` at the fitted ``theta``; on a
     channel whose partial discovered term is set aside (``stand_ins``: channel -> term), at

@@ -14,9 +14,8 @@ of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
-input), the platform pose where the recording gives one (per channel also projected on the direction
-of a linear fit of the residual, fitted per fold: :mod:`.oblique`), and time; another joint's
-effort without its fitted actuator levels (:func:`.backfit.actuator_levels`).
+input), the platform pose where the recording gives one, and time; per channel also the pose and
+the rates projected on the direction of a linear fit of the residual, fitted per fold (:mod:`.oblique`).
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -69,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
-from .backfit import actuator_levels, readjusted, stage_columns
+from .backfit import readjusted, stage_columns
 from .oblique import extend, extended
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .select import (DROP_MIN, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
@@ -180,9 +179,6 @@ class FlexibleFit:
     readjusted: tuple = ()
     #: the projected columns (:func:`.oblique.extend`: ``columns`` and ``use`` past the stage's inputs)
     projections: tuple = field(default=(), repr=False, compare=False)
-    #: the part of the fitted model's effort its actuator levels take, left out of the effort
-    #: inputs of the other joints (:func:`inputs`)
-    levels: object = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
@@ -202,13 +198,11 @@ def _lowpass(x, dt, tau, starts):
     return y
 
 
-def inputs(pipe, R, direction=False, levels=None) -> tuple:
+def inputs(pipe, R, direction=False) -> tuple:
     """The flexible model's inputs at the decimated samples.
 
     ``R`` is the residual after the fitted model (decimated samples x channels); the effort
-    input is the model's, measured minus ``R``, less ``levels`` (the part its fitted actuator
-    levels take, :func:`.backfit.actuator_levels`: a copy of any force on the joint; its histories
-    keep them); ``direction``: with the smoothed commanded
+    input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
     direction and the time since each joint's direction last changed (the stage's own inputs;
     :mod:`..keyed.elsewhere` reads the others).  Returns
     ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
@@ -220,7 +214,6 @@ def inputs(pipe, R, direction=False, levels=None) -> tuple:
     starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
     dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
-    load = effort if levels is None else effort - np.asarray(levels, float)[:, :nd]
     qref = getattr(pipe.rec, "qref", None)
     rate_ref = smoothed = None
     if qref is not None:
@@ -234,7 +227,7 @@ def inputs(pipe, R, direction=False, levels=None) -> tuple:
         q, qd, qdd = pipe.q_s[idx, k], pipe.qd_s[idx, k], pipe.qdd_s[idx, k]
         for name, v, quantity, unit in ((f"q{k + 1}", q, "position", qu), (f"qd{k + 1}", qd, "rate", rate_u),
                                         (f"qdd{k + 1}", qdd, "acceleration", f"{qu}/s^2"),
-                                        (f"effort{k + 1}", load[:, k], "effort", eu)):
+                                        (f"effort{k + 1}", effort[:, k], "effort", eu)):
             X.append(v)
             cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
         if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
@@ -336,7 +329,7 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, levels=None) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
@@ -349,9 +342,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, level
     (:func:`.select.consequences`) the trees on every input first, causes before consequences.  The
     time since a joint's direction last changed is an input of that joint's channel only.
     ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
-    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`).
-    ``levels``: the fitted actuator levels the effort inputs of ``X`` leave out (:func:`inputs`); the
-    channel's own effort keeps its own (a consequence of the force either way: :mod:`.select`)."""
+    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -369,11 +360,6 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, level
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
-    own = [i for i, col in enumerate(columns) if col[0] == f"effort{c + 1}"] if c is not None else []
-    if levels is not None and own and np.any(levels[:, c]):
-        X, levels = X.copy(), levels.copy()
-        X[:, own[0]] += levels[:, c]
-        levels[:, c] = 0.0
     every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
@@ -437,7 +423,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, level
                        beyond_noise=beyond_noise(y, noise, spi),
                        screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
                        use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
-                       readjusted=moved, levels=levels,
+                       readjusted=moved,
                        projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections))
 
 
@@ -545,14 +531,13 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
         R_wo = eng.R({k: v for k, v in theta.items() if k not in drop})
         for c in stand_ins:
             R_fit[:, c] = R_wo[:, c]
-    fitted = stage_columns(eng, theta, stand_ins, chans)
-    levels = actuator_levels(fitted, R_fit.shape)
-    X, columns = inputs(pipe, R_fit, direction=True, levels=levels)
+    X, columns = inputs(pipe, R_fit, direction=True)
     noun = pipe.model.facts.joint_noun
+    fitted = stage_columns(eng, theta, stand_ins, chans)
     out = []
     for c in chans:
         fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
-                          weak=c in weak, fitted=fitted.get(c), levels=levels)
+                          weak=c in weak, fitted=fitted.get(c))
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
@@ -585,11 +570,11 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     decimated samples and interpolated in time (zero elsewhere).  A black box: it follows the
     recorded motion, not the replayed one."""
     pipe = eng.pipe
+    X, _ = inputs(pipe, R, direction=True)
     t = pipe.t[pipe.idx]
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
-            X, _ = inputs(pipe, R, direction=True, levels=f.levels)
             predicted = f.model.predict(extended(X, f.projections)[:, list(f.use)])
             out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, predicted, left=0.0,
                                              right=0.0)
