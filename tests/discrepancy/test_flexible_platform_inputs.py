@@ -99,3 +99,19 @@ def test_a_moment_linear_in_an_oblique_combination_of_the_rates_is_learnt_on_the
     fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
     assert fit.explained and fit.share > 0.85
     assert fit.inputs and all(d.group.startswith("rate of slider") for d in fit.inputs)
+
+
+def test_the_rates_are_projected_only_where_their_combination_beats_the_best_single_rate():
+    # a force on one rail's rate (a friction, sign-like) is fitted on that rate alone: no projected
+    # rates column (it would stand in the rate groups of the joints moving with that rail); the
+    # spindle's moment needs the combination: projected
+    from cosim.discrepancy.flexible.oblique import OBLIQUE_MIN, oblique_gain
+
+    pipe, X, cols, y, sigma = _spindle()
+    rows = folds(len(y), 5)
+    groups = flexible.input_groups(cols)
+    qd = X[:, 6:]
+    friction = 0.3 * np.tanh(qd[:, 2] / (0.05 * np.std(qd[:, 2]))) + np.random.default_rng(2).normal(0.0, sigma, len(y))
+    assert oblique_gain(qd, friction, rows) < OBLIQUE_MIN < oblique_gain(qd, y, rows)
+    assert extend(X, cols, groups, friction, rows)[0].shape[1] == X.shape[1]
+    assert extend(X, cols, groups, y, rows)[0].shape[1] == X.shape[1] + 1
