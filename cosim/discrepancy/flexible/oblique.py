@@ -1,23 +1,23 @@
-"""A group's columns projected on the direction a linear fit of the residual takes (:mod:`.flexible`).
+"""The pose and the rates projected on the direction a linear fit of the residual takes (:mod:`.flexible`).
 
 Boosted trees split on one column at a time.  A force that is a function of an oblique
 direction of a group of columns (the distance of the platform to a point, the depth along a
 plane's normal: a direction of the 6-column pose that is none of its columns) takes many
-splits on several columns to learn from some 700 decimated samples, while a single column that
-moves nearly linearly along that direction (a rail's model effort: the pose through gravity)
-gives the trees the same course in one: the trees name that proxy instead of the pose.
-
-The same holds for the joints' rates: a gyroscopic moment H x omega is linear in the platform's
-angular rate, an oblique combination of the rails' rates.
+splits on several columns to learn from some 700 decimated samples, and a single column that
+moves nearly linearly along that direction gives the trees the same course in one.  The same
+holds for the joints' rates: a gyroscopic moment H x omega is linear in the platform's angular
+rate, an oblique combination of the rails' rates.
 
 Per channel, the platform pose and the joints' rates (the smoothed readings) each get one more
 column: the columns (scaled to unit RMS on the rows fitted) projected on the direction of a ridge
 fit of the residual on them (relative ridge :data:`RIDGE`).  The pose's is in the pose's group;
-the rates' in the rate group of each joint whose weight is at least :data:`MEMBER` of the
-largest (on every sample: which inputs the column stands for, not its values).  The direction is fitted per fold of the
-cross-validation on that fold's fitted rows only (:class:`~.cv.FoldInputs`: no held-out row
-moves the column its trees are judged on), and once on every sample for the final model, its
-partial dependence and the black box (:func:`extended`).
+the rates' only where their linear fit beats the best single rate's out of fold by
+:data:`OBLIQUE_MIN` (:func:`oblique_gain`), in the rate group of each joint whose weight is at
+least :data:`MEMBER` of the largest (on every sample: which inputs the column stands for, not its
+values).  The direction is fitted per fold of the cross-validation on that fold's fitted rows
+only (:class:`~.cv.FoldInputs`: no held-out row moves the column its trees are judged on), and
+once on every sample for the final model, its partial dependence and the black box
+(:func:`extended`).  Measured on seen sets: docs/flexible.md, "Forces on the platform".
 """
 from __future__ import annotations
 
