@@ -4,6 +4,7 @@
 * :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
 * :mod:`.select`: which inputs are named (causes before consequences);
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
+* :mod:`.oblique`: the platform pose and the rates projected on the direction of a linear fit of the residual, per fold;
 * :mod:`.report`: the stage's figure and Markdown;
 * :mod:`.cases`: forces no term family covers, simulated with their truth (the stage's test cases).
 """

@@ -33,7 +33,7 @@ from itertools import islice
 
 import numpy as np
 
-from .cv import CV, grow
+from .cv import CV, at, grow
 
 #: backfitting rounds after the trees on the residual alone (each: a linear refit per fold, then the trees)
 ROUNDS = 2
@@ -178,7 +178,7 @@ def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
     for _ in range(rounds):
         Y = np.empty((len(y), len(cv.folds)))
         for b, (held, fit) in enumerate(cv.folds):
-            inside = next(islice(models[b].staged_predict(X[fit]), iters - 1, None))
+            inside = next(islice(models[b].staged_predict(at(X, b)[fit]), iters - 1, None))
             coef[b] = _refit(Js[fit], y[fit] - inside)
             Y[:, b] = y - Js @ coef[b]
         models, iters, held_pred = grow(X, Y, cv.folds)

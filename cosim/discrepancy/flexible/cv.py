@@ -49,6 +49,38 @@ BINS = 16
 RANGE_TOL = 0.02
 
 
+class FoldInputs(np.ndarray):
+    """Inputs with columns fitted per fold (:mod:`.oblique`): the array holds the columns fitted
+    on every sample (the final model's, the black box's); ``variants`` (folds, n, p) holds, per
+    fold of the cross-validation, the columns fitted on that fold's fitted rows alone, which its
+    trees are fitted and judged on (:func:`at`).  Selecting columns (``X[:, cols]``) keeps the
+    variants; selecting rows gives the columns fitted on every sample, a plain array."""
+
+    def __new__(cls, whole, variants):
+        out = np.asarray(whole, float).view(cls)
+        out.variants = variants
+        return out
+
+    def __array_finalize__(self, obj):
+        self.variants = None  # an array computed from these holds the whole columns only
+
+    def __getitem__(self, key):
+        whole = self.view(np.ndarray)
+        if (self.variants is not None and isinstance(key, tuple) and len(key) == 2
+                and isinstance(key[0], slice) and key[0] == slice(None)):
+            got = whole[key]
+            if got.ndim == 2:
+                return FoldInputs(got, self.variants[:, :, key[1]])
+        return whole[key]
+
+
+def at(X, b: int) -> np.ndarray:
+    """The inputs fold ``b``'s trees see: ``X``'s variant fitted on that fold's fitted rows
+    (:class:`FoldInputs`), or ``X`` itself."""
+    variants = getattr(X, "variants", None)
+    return np.asarray(X) if variants is None else variants[b]
+
+
 @dataclass(frozen=True)
 class CV:
     """One blocked cross-validation: ``folds`` ((held-out rows, fitted rows) per fold),
@@ -134,8 +166,8 @@ def grow(X, Y, fold_rows, stop=None) -> tuple:
     staged = [np.empty((0, len(held))) for held, _ in fold_rows]
     for n in STEPS:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
-            m.set_params(max_iter=n).fit(X[fit], target(b)[fit])
-            new = list(_staged_after(m, X[held], staged[b]))
+            m.set_params(max_iter=n).fit(at(X, b)[fit], target(b)[fit])
+            new = list(_staged_after(m, at(X, b)[held], staged[b]))
             staged[b] = np.vstack([staged[b]] + new)
         total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
                     for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
@@ -276,9 +308,10 @@ def importance(cv: CV, X, y, groups, rng, repeats=2) -> dict:
     for _ in range(repeats):
         perm = rng.permutation(len(X))
         for b, (h, _) in enumerate(cv.folds):  # every group's permuted copy of the block in one prediction
-            stack = np.tile(X[h], (len(names), 1))
+            Xb = at(X, b)
+            stack = np.tile(Xb[h], (len(names), 1))
             for i, g in enumerate(names):
-                stack[i * len(h):(i + 1) * len(h), groups[g]] = X[perm[h]][:, groups[g]]
+                stack[i * len(h):(i + 1) * len(h), groups[g]] = Xb[perm[h]][:, groups[g]]
             e = (np.tile(y[h], len(names)) - cv.predict(b, stack)) ** 2
             rise[:, b] += e.reshape(len(names), len(h)).mean(axis=1)
     base = np.array([np.mean((y[h] - cv.pred[h]) ** 2) for h, _ in cv.folds])
@@ -294,10 +327,11 @@ def outside(X, cv: CV, cols) -> float:
     if not cols:
         return 0.0
     out = 0
-    for held, fit in cv.folds:
-        lo, hi = X[fit][:, cols].min(axis=0), X[fit][:, cols].max(axis=0)
+    for b, (held, fit) in enumerate(cv.folds):
+        Xb = at(X, b)
+        lo, hi = Xb[fit][:, cols].min(axis=0), Xb[fit][:, cols].max(axis=0)
         tol = RANGE_TOL * (hi - lo)
-        v = X[held][:, cols]
+        v = Xb[held][:, cols]
         out += int(np.sum(np.any((v < lo - tol) | (v > hi + tol), axis=1)))
     return out / len(X)
 
@@ -310,7 +344,8 @@ def _bins(X, fold_rows, bins):
     bins are kept (:data:`_BINS_KEPT`)."""
     import hashlib
 
-    h = hashlib.blake2b(np.ascontiguousarray(X).tobytes(), digest_size=16)
+    variants = getattr(X, "variants", None)
+    h = hashlib.blake2b(np.ascontiguousarray(X if variants is None else variants).tobytes(), digest_size=16)
     for held, fit in fold_rows:
         h.update(np.asarray(held).tobytes())
         h.update(b"|")
@@ -320,8 +355,8 @@ def _bins(X, fold_rows, bins):
     if kept is None or kept[0] != key:
         q = np.linspace(0.0, 1.0, bins + 1)[1:-1]
         out = []
-        for held, fit in fold_rows:
-            Xf, Xh = X[fit], X[held]
+        for b, (held, fit) in enumerate(fold_rows):
+            Xf, Xh = at(X, b)[fit], at(X, b)[held]
             cuts = np.quantile(Xf, q, axis=0)  # column by column, as np.quantile of each column
             kf, kh, nb = np.empty(Xf.shape[::-1], np.intp), np.empty(Xh.shape[::-1], np.intp), []
             for c in range(X.shape[1]):
@@ -354,7 +389,7 @@ def binned_shares(X, y, fold_rows, bins: int = BINS) -> np.ndarray:
     >>> bool(s[0] > 0.9 and s[1] < 0.1)
     True
     """
-    X, y = np.asarray(X, float), np.asarray(y, float)
+    X, y = (X if isinstance(X, FoldInputs) else np.asarray(X, float)), np.asarray(y, float)
     var = float(np.var(y))
     sse = np.zeros(X.shape[1])
     for (held, fit), (kf, kh, total) in zip(fold_rows, _bins(X, fold_rows, bins)):

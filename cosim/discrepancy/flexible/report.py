@@ -2,6 +2,8 @@
 and the Markdown section of the fits a report states."""
 from __future__ import annotations
 
+import numpy as np
+
 
 def figure(fits: list, path):
     """Partial-dependence figure of the explained channels (one panel per named input): the
@@ -52,3 +54,29 @@ def markdown(fits: list, files: dict) -> list:
     if files.get("flexible"):
         L += ["![Partial dependence of the flexible model](flexible.png)", ""]
     return L
+
+
+def _where(grid, curve, unit) -> str:
+    """Where the partial dependence acts, in words: "above x" / "below x" when it is flat
+    (within a tenth of its span) over at least a quarter of the range at one end only, "from
+    x0 to x1" when at both (a step), else "over x0 to x1"."""
+    span = float(np.max(curve) - np.min(curve))
+    n = len(grid)
+    if not span > 0 or n < 4:
+        return ""
+    tol = 0.1 * span
+    near_lo = np.abs(np.asarray(curve) - curve[0]) <= tol
+    near_hi = np.abs(np.asarray(curve) - curve[-1]) <= tol
+    a = int(np.argmin(near_lo))            # first point off the low end's level
+    b = n - 1 - int(np.argmin(near_hi[::-1]))  # last point off the high end's level
+    lo, hi = a >= 0.25 * n, (n - 1 - b) >= 0.25 * n
+
+    def x(i):
+        return f"{grid[i]:.3g}"
+    if lo and hi:
+        return f"a change from {x(a - 1)} to {x(b + 1)} {unit}".rstrip()
+    if lo:
+        return f"above {x(a - 1)} {unit}".rstrip()
+    if hi:
+        return f"below {x(b + 1)} {unit}".rstrip()
+    return f"over {x(0)} to {x(n - 1)} {unit}".rstrip()

@@ -14,7 +14,8 @@ of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated
 |effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
-input), the platform pose where the recording gives one, and time.
+input), the platform pose where the recording gives one, and time; per channel also the pose and
+the rates projected on the direction of a linear fit of the residual, fitted per fold (:mod:`.oblique`).
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -66,8 +67,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .report import figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
+from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
+from .oblique import extend, extended
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
@@ -175,6 +177,8 @@ class FlexibleFit:
     #: the fitted model's parameters re-adjusted beside the trees (:mod:`.backfit`): the
     #: share is then that of the trees plus the re-adjusted fit, out of fold
     readjusted: tuple = ()
+    #: the projected columns (:func:`.oblique.extend`: ``columns`` and ``use`` past the stage's inputs)
+    projections: tuple = field(default=(), repr=False, compare=False)
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
@@ -310,32 +314,6 @@ def candidates(pipe, R, left, noise) -> list:
     return sorted(flagged | {c for c in range(pipe.nd) if beyond_noise(R[:, c], noise[c], spi)})
 
 
-def _where(grid, curve, unit) -> str:
-    """Where the partial dependence acts, in words: "above x" / "below x" when it is flat
-    (within a tenth of its span) over at least a quarter of the range at one end only, "from
-    x0 to x1" when at both (a step), else "over x0 to x1"."""
-    span = float(np.max(curve) - np.min(curve))
-    n = len(grid)
-    if not span > 0 or n < 4:
-        return ""
-    tol = 0.1 * span
-    near_lo = np.abs(np.asarray(curve) - curve[0]) <= tol
-    near_hi = np.abs(np.asarray(curve) - curve[-1]) <= tol
-    a = int(np.argmin(near_lo))            # first point off the low end's level
-    b = n - 1 - int(np.argmin(near_hi[::-1]))  # last point off the high end's level
-    lo, hi = a >= 0.25 * n, (n - 1 - b) >= 0.25 * n
-
-    def x(i):
-        return f"{grid[i]:.3g}"
-    if lo and hi:
-        return f"a change from {x(a - 1)} to {x(b + 1)} {unit}".rstrip()
-    if lo:
-        return f"above {x(a - 1)} {unit}".rstrip()
-    if hi:
-        return f"below {x(b + 1)} {unit}".rstrip()
-    return f"over {x(0)} to {x(n - 1)} {unit}".rstrip()
-
-
 def _screen(imp, share) -> list:
     """Groups whose permutation importance passes the thresholds and is significant over the
     folds, most important first (at most :data:`MAX_INPUTS`)."""
@@ -384,8 +362,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
 
     every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
-    X, columns = X[:, keep], [every[i] for i in keep]
-    groups = input_groups(columns)
+    X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
+                                             input_groups([every[i] for i in keep]), y, fold_rows)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
@@ -443,8 +421,10 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
                        z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
                        beyond_noise=beyond_noise(y, noise, spi),
-                       screened=screened, model=model, columns=every, use=tuple(keep[i] for i in use),
-                       readjusted=moved)
+                       screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
+                       use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
+                       readjusted=moved,
+                       projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections))
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -595,6 +575,7 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
-            out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, f.model.predict(X[:, list(f.use)]), left=0.0,
+            predicted = f.model.predict(extended(X, f.projections)[:, list(f.use)])
+            out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, predicted, left=0.0,
                                              right=0.0)
     return out
