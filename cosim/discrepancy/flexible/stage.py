@@ -249,9 +249,14 @@ def inputs(pipe, R, direction=False) -> tuple:
                      (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
                       "history x direction", f"{eu} {rate_u}")]
         if direction:  # a friction state a reversal resets (a seal's lip, stiction): the time since it
-            X.append(_since_reversal(qd, t, starts, 0.05) if rate_ref is None
-                     else _since_reversal(rate_ref[:, k], t, starts))
+            since, held = _since_reversal(qd, t, starts, 0.05) if rate_ref is None \
+                else _since_reversal(rate_ref[:, k], t, starts)
+            X.append(since)
             cols.append((f"{SINCE} qd{k + 1} reversed", group, k + 1, "history", "s"))
+            # signed by the direction of motion: a friction a reversal's state sets is sign(qd) f(s), a
+            # function of this one column that trees on (rate, s) learn from the product's corners only
+            X.append(held * since)
+            cols.append((f"{SINCE} qd{k + 1} reversed x sign(qd{k + 1})", group, k + 1, "history x direction", "s"))
     if pipe.has_pose:
         x = pipe.x_s[idx]
         for i in range(x.shape[1]):
@@ -263,10 +268,11 @@ def inputs(pipe, R, direction=False) -> tuple:
     return np.column_stack(X), cols
 
 
-def _since_reversal(rate, t, starts, dead=0.0) -> np.ndarray:
-    """The time [s] since ``rate`` last changed sign, from each block's start (``starts``, rows);
-    within ``dead`` times its RMS of zero it keeps the last sign (noise about a standstill)."""
-    out = np.zeros(len(rate))
+def _since_reversal(rate, t, starts, dead=0.0) -> tuple:
+    """The time [s] since ``rate`` last changed sign, from each block's start (``starts``, rows),
+    and the sign held (+-1, 0 before the first motion): within ``dead`` times its RMS of zero it
+    keeps the last sign (noise about a standstill)."""
+    out, held = np.zeros(len(rate)), np.zeros(len(rate))
     last, sign = t[0], 0.0
     for i, v in enumerate(np.where(np.abs(rate) > dead * np.sqrt(np.mean(rate ** 2)), np.sign(rate), 0.0)):
         if i in starts:
@@ -275,8 +281,8 @@ def _since_reversal(rate, t, starts, dead=0.0) -> np.ndarray:
             if sign:
                 last = t[i]
             sign = v
-        out[i] = t[i] - last
-    return out
+        out[i], held[i] = t[i] - last, sign
+    return out, held
 
 
 def input_groups(columns) -> dict:
