@@ -219,7 +219,7 @@ def partners(kept, groups, y, var, cv_on) -> list:
     significant, none of them is named (one fit, not one per member)."""
     out = list(kept)
     passed = set()
-    for u in units(kept, groups):
+    for u in [u for u in units(kept, groups) if len(u) > 1]:
         common = {i for g in u for h in u if h != g for i in set(groups[g]) & set(groups[h])}
         pairs = [(g, h) for g in u for h in groups if h not in out and set(groups[g]) & set(groups[h])
                  and not set(groups[g]) & set(groups[h]) & common]
