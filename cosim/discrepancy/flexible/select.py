@@ -49,7 +49,8 @@ cross-validating without each, with two rules of cause before consequence.
 
 The check of the other screened groups is the one the stage always had: a group is kept when
 leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
-is kept (interchangeable inputs), all are.
+is kept (interchangeable inputs), all are.  The rate groups that hold the rates' projected column
+(:mod:`.oblique`) are one unit there (:func:`units`): left out together, kept or dropped whole.
 """
 from __future__ import annotations
 
