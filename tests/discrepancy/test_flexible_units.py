@@ -86,3 +86,13 @@ def test_a_members_signed_history_that_adds_is_still_named(monkeypatch):
     kept_each, _ = _select(X, y, groups, named)
     assert kept_unit == kept_each
     assert "history of slider 1" in kept_unit and "history of slider 2" not in kept_unit
+
+
+def test_a_single_rate_groups_partners_are_checked_one_by_one():
+    # one rate group named: no unit, no joint check of its partners; each checked alone: the trees
+    # on rail 1's rate, one fit per partner (rails 2 and 3 on the projected column, rail 1's history
+    # on its signed history) and one per partner added (the trees on the kept groups then): 1 + 3 + 2
+    X, y, groups = _spindle_groups()
+    kept, fits = _select(X, y, groups, ["rate of slider 1"])
+    assert kept == ["rate of slider 1", "rate of slider 2", "rate of slider 3"]
+    assert fits == 6

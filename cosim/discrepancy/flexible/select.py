@@ -219,18 +219,18 @@ def partners(kept, groups, y, var, cv_on) -> list:
     judged together first: where all their shared columns left out at once add nothing
     significant, none of them is named (one fit, not one per member)."""
     out = list(kept)
-    passed = set()
+    judged_out = set()
     for u in [u for u in units(kept, groups) if len(u) > 1]:
         common = {i for g in u for h in u if h != g for i in set(groups[g]) & set(groups[h])}
         pairs = [(g, h) for g in u for h in groups if h not in out and set(groups[g]) & set(groups[h])
                  and not set(groups[g]) & set(groups[h]) & common]
         together = {i for g, h in pairs for i in set(groups[g]) & set(groups[h])}
         if len(pairs) > 1 and not gain(cv_on(out, together)[0], cv_on(out)[0], y, var)[1]:
-            passed.update(pairs)
+            judged_out.update(pairs)
     for g in kept:
         for h, idx in groups.items():
             shared = set(groups[g]) & set(idx)
-            if (g, h) in passed or h in out or not shared or not {i for k in out for i in groups[k]} - shared:
+            if (g, h) in judged_out or h in out or not shared or not {i for k in out for i in groups[k]} - shared:
                 continue
             if gain(cv_on(out, shared)[0], cv_on(out)[0], y, var)[1]:
                 out.append(h)
