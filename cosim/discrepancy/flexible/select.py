@@ -49,7 +49,8 @@ cross-validating without each, with two rules of cause before consequence.
 
 The check of the other screened groups is the one the stage always had: a group is kept when
 leaving it out costs at least :data:`DROP_MIN` of the residual's variance out of fold; when none
-is kept (interchangeable inputs), all are.
+is kept (interchangeable inputs), all are.  The rate groups that hold the rates' projected column
+(:mod:`.oblique`) are one unit there (:func:`units`): left out together, kept or dropped whole.
 """
 from __future__ import annotations
 
@@ -116,11 +117,14 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
             done[tuple(cols)] = cross_validate(X[:, cols], y, fold_rows)
         return done[tuple(cols)], cols
 
-    def check(gs):  # kept when leaving it out costs DROP_MIN; none kept: all
-        if len(gs) == 1:
+    def check(gs):  # a unit is kept when leaving it out costs DROP_MIN; none kept: all
+        us = units(gs, groups)
+        if len(us) == 1:
             return list(gs)
         full = cv_on(gs)[0]
-        kept = [g for g in gs if (cv_on(gs, groups[g])[0].mse - full.mse) / var >= DROP_MIN]
+        out = {g for u in us if (cv_on(gs, [i for h in u for i in groups[h]])[0].mse - full.mse) / var < DROP_MIN
+               for g in u}
+        kept = [g for g in gs if g not in out]
         return kept if kept else list(gs)
 
     causes = [g for g in named if g not in follow]
@@ -135,6 +139,27 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
     kept = made_of_efforts(kept, groups, follow, y, var, cv_on)
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
+
+
+def units(gs, groups) -> list:
+    """``gs`` in the units the leave-one-out check judges: the rate groups that hold a column in
+    common (the rates' projected column, :mod:`.oblique`, in the group of every joint of a large
+    weight) form one, every other group is one by itself.  Leaving one such rate group out takes
+    the common column with it, so each of them costs as much as the column (3 to 5 fits naming
+    all of them); judged as one, the unit costs one fit and is named whole or not at all."""
+    rates = [g for g in gs if g.startswith("rate of ")]
+    unit = {g: {g} for g in gs}
+    for i, g in enumerate(rates):
+        for h in rates[i + 1:]:
+            if unit[g] is not unit[h] and set(groups[g]) & set(groups[h]):
+                merged = unit[g] | unit[h]
+                for k in merged:
+                    unit[k] = merged
+    out = []
+    for g in gs:
+        if unit[g] not in out:
+            out.append(unit[g])
+    return [[g for g in gs if g in u] for u in out]
 
 
 def made_of(effort, groups, follow=()) -> tuple:
@@ -187,12 +212,25 @@ def partners(kept, groups, y, var, cv_on) -> list:
     """``kept`` with the groups that share columns with a kept one added where those shared
     columns add a significant share (:func:`gain`) to the trees on the kept groups.  A partner
     is named for its shared columns: its other columns are not added to the model (they were
-    not shown to add anything)."""
+    not shown to add anything).
+
+    The partners of a unit's members (:func:`units`: rate groups holding the rates' projected
+    column) on columns other than the unit's common ones (their joints' signed histories) are
+    judged together first: where all their shared columns left out at once add nothing
+    significant, none of them is named (one fit, not one per member)."""
     out = list(kept)
+    judged_out = set()
+    for u in [u for u in units(kept, groups) if len(u) > 1]:
+        common = {i for g in u for h in u if h != g for i in set(groups[g]) & set(groups[h])}
+        pairs = [(g, h) for g in u for h in groups if h not in out and set(groups[g]) & set(groups[h])
+                 and not set(groups[g]) & set(groups[h]) & common]
+        together = {i for g, h in pairs for i in set(groups[g]) & set(groups[h])}
+        if len(pairs) > 1 and not gain(cv_on(out, together)[0], cv_on(out)[0], y, var)[1]:
+            judged_out.update(pairs)
     for g in kept:
         for h, idx in groups.items():
             shared = set(groups[g]) & set(idx)
-            if h in out or not shared or not {i for k in out for i in groups[k]} - shared:
+            if (g, h) in judged_out or h in out or not shared or not {i for k in out for i in groups[k]} - shared:
                 continue
             if gain(cv_on(out, shared)[0], cv_on(out)[0], y, var)[1]:
                 out.append(h)
