@@ -22,6 +22,16 @@ def _sines(rng, t, k):
             for _ in range(k)]
 
 
+def _sliders(quantity, unit, joints):
+    """The stage's column tuples of ``quantity`` ("position", "rate", ...) for the 1-based ``joints``."""
+    short = {"position": "q", "rate": "qd"}.get(quantity, quantity)
+    return [(f"{short}{j}", f"{quantity} of slider {j}", j, quantity, unit) for j in joints]
+
+
+#: what fit_channel reads of the pipeline: one channel, its window and decimation step
+PIPE = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
+
+
 def _oblique(n=900, sigma=0.05, seed=5):
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 9.0, n)
@@ -33,11 +43,9 @@ def _oblique(n=900, sigma=0.05, seed=5):
     proxy = s + 0.6 * own / np.std(own)
     others = _sines(rng, t, 3)
     X = np.column_stack([proxy] + others + [pose[:, i] for i in range(6)])
-    cols = [("effort2", "effort of slider 2", 2, "effort", "N")]
-    cols += [(f"q{i + 3}", f"position of slider {i + 3}", i + 3, "position", "m") for i in range(3)]
+    cols = _sliders("effort", "N", [2]) + _sliders("position", "m", range(3, 6))
     cols += [(f"pose[{i}]", "the platform pose", None, "pose", "") for i in range(6)]
-    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
-    return pipe, X, cols, y, sigma
+    return PIPE, X, cols, y, sigma
 
 
 def test_a_force_on_an_oblique_direction_of_the_pose_is_named_on_the_pose_not_on_a_rails_effort():
@@ -74,7 +82,6 @@ def test_the_direction_is_fitted_on_each_folds_fitted_rows_only():
     assert type(Xe[held]) is np.ndarray
 
 
-
 def _spindle(n=900, sigma=0.05, seed=7):
     """A moment linear in an oblique combination of six rails' rates (a gyroscopic H x omega):
     0.5 r, r the rates along (1, 0.8, -1, 0.6, -0.9, 1) scaled to unit RMS, beside the rails'
@@ -86,10 +93,8 @@ def _spindle(n=900, sigma=0.05, seed=7):
     r = qd @ np.array([1.0, 0.8, -1.0, 0.6, -0.9, 1.0])
     y = 0.5 * r / np.std(r) + rng.normal(0.0, sigma, n)
     X = np.column_stack([q, qd])
-    cols = [(f"q{i + 1}", f"position of slider {i + 1}", i + 1, "position", "m") for i in range(6)]
-    cols += [(f"qd{i + 1}", f"rate of slider {i + 1}", i + 1, "rate", "m/s") for i in range(6)]
-    pipe = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
-    return pipe, X, cols, y, sigma
+    cols = _sliders("position", "m", range(1, 7)) + _sliders("rate", "m/s", range(1, 7))
+    return PIPE, X, cols, y, sigma
 
 
 def test_a_moment_linear_in_an_oblique_combination_of_the_rates_is_learnt_on_the_rates():
