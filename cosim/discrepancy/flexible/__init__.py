@@ -1,6 +1,7 @@
 """Where no family fits: a flexible model of what is left, then its dependence (docs/flexible.md).
 
 * :mod:`.stage`: the stage itself (inputs, one channel's fit, the statement, the black-box force);
+* :mod:`.columns`: the stage's inputs (the columns its trees are given) and their groups;
 * :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
 * :mod:`.select`: which inputs are named (causes before consequences);
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;

@@ -4,14 +4,14 @@ After the library, the discovery step and the platform force, an effort channel 
 keeps structure (:mod:`.structure`, or a residual holding more than its own noise by the bars of
 a claim: :func:`beyond_noise`) is fitted with a flexible regression, scikit-learn's
 :class:`~sklearn.ensemble.HistGradientBoostingRegressor` (boosted trees), on every input the
-recording offers at the decimated samples: each joint's position, rate (the smoothed reading,
+recording offers at the decimated samples (:mod:`.columns`): each joint's position, rate (the smoothed reading,
 and the commanded rate where the recording has a reference: its sign is the direction of
 motion where the smoothed reading lags at a reversal; with it the sign of the commanded rate
 smoothed as the efforts are, the course a force switching with the direction takes in the
 smoothed residual), acceleration and the fitted model's
 effort (not the measured one: it holds the residual itself), the low-passed |rate| and effort
-of each joint (time constants :data:`TIME_CONSTANTS`), its low-passed dissipated power
-|effort x rate| (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
+of each joint (time constants :data:`~.columns.TIME_CONSTANTS`), its low-passed dissipated power
+|effort x rate| (:data:`~.columns.POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
 input), the platform pose where the recording gives one, and time; per channel also the pose and
@@ -62,11 +62,12 @@ The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _since_reversal,  # noqa: F401
+                      input_groups, inputs)
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .oblique import extend, extended
@@ -74,10 +75,6 @@ from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance
 from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
 
-#: time constants of the low-passed histories [s]: |rate| and effort (duty), and the dissipated
-#: power |effort x rate| (a first-order thermal model's temperature rise)
-TIME_CONSTANTS = (1.0, 4.0)
-POWER_TIME_CONSTANTS = (0.5, 2.0, 8.0)
 #: fewest decimated samples per cross-validation block for a fit
 BLOCK = 25
 #: smallest explained share claimed, and the chi-square (independent samples) it must explain
@@ -101,8 +98,6 @@ MAX_INPUTS = 4
 #: truths 0.41-0.74): only the strongest input alone is cross-validated there, one small fit
 #: instead of the full model's (library cases leave such channels on several joints)
 RMS_OVER_NOISE = 2.0
-#: the time since a joint's direction last changed (its feature's name): its own contacts' state
-SINCE = "time since"
 #: the statement warns of extrapolation when the named inputs leave the fitted range in their
 #: held-out block at more than this share of the samples
 OUTSIDE_WARN = 0.1
@@ -186,116 +181,6 @@ class FlexibleFit:
                                              "beyond_noise", "screened", "weak", "readjusted")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
-
-
-def _lowpass(x, dt, tau, starts):
-    """First-order low-pass of the columns of x (sample step dt) with time constant tau,
-    restarted at each block start."""
-    a = math.exp(-dt / tau)
-    y = np.empty_like(x)
-    for i in range(len(x)):
-        y[i] = x[i] if i in starts else a * y[i - 1] + (1 - a) * x[i]
-    return y
-
-
-def inputs(pipe, R, direction=False) -> tuple:
-    """The flexible model's inputs at the decimated samples.
-
-    ``R`` is the residual after the fitted model (decimated samples x channels); the effort
-    input is the model's, measured minus ``R``; ``direction``: with the smoothed commanded
-    direction and the time since each joint's direction last changed (the stage's own inputs;
-    :mod:`..keyed.elsewhere` reads the others).  Returns
-    ``(X, columns)``: X (n, p) and per column ``(feature, group, joint or None, quantity, unit)``."""
-    idx, nd = pipe.idx, pipe.nd
-    facts = pipe.model.facts
-    noun, qu, eu = facts.joint_noun, facts.joint_unit, facts.effort_unit
-    rate_u = f"{qu}/s"
-    t = pipe.t[idx]
-    starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
-    effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
-    qref = getattr(pipe.rec, "qref", None)
-    rate_ref = smoothed = None
-    if qref is not None:
-        rate_full = np.gradient(np.asarray(qref, float), pipe.dt, axis=0)
-        # the commanded direction as the residual sees it: the residual is a smoothed effort, so a
-        # force that switches with the direction of motion shows there as the smoothed sign
-        rate_ref = rate_full[idx]
-        smoothed = pipe.S(np.sign(rate_full))[idx] if direction else None
-    cols, X = [], []
-    for k in range(nd):
-        q, qd, qdd = pipe.q_s[idx, k], pipe.qd_s[idx, k], pipe.qdd_s[idx, k]
-        for name, v, quantity, unit in ((f"q{k + 1}", q, "position", qu), (f"qd{k + 1}", qd, "rate", rate_u),
-                                        (f"qdd{k + 1}", qdd, "acceleration", f"{qu}/s^2"),
-                                        (f"effort{k + 1}", effort[:, k], "effort", eu)):
-            X.append(v)
-            cols.append((name, f"{quantity} of {noun} {k + 1}", k + 1, quantity, unit))
-        if rate_ref is not None:  # the commanded rate: the direction of motion where the smoothed reading lags
-            X.append(rate_ref[:, k])
-            cols.append((f"qd{k + 1} reference", f"rate of {noun} {k + 1}", k + 1, "rate", rate_u))
-        if smoothed is not None:
-            X.append(smoothed[:, k])
-            cols.append((f"sign(qd{k + 1} reference) smoothed", f"rate of {noun} {k + 1}", k + 1, "rate", ""))
-        group = f"history of {noun} {k + 1}"
-        for tc in TIME_CONSTANTS:
-            hist = _lowpass(np.column_stack([np.abs(qd), effort[:, k]]), dt, tc, starts)
-            X += [hist[:, 0], hist[:, 1]]
-            cols += [(f"|qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", rate_u),
-                     (f"effort{k + 1} low-passed {tc:g} s", group, k + 1, "history", eu)]
-        for tc in POWER_TIME_CONSTANTS:
-            power = _lowpass(np.abs(effort[:, k] * qd)[:, None], dt, tc, starts)[:, 0]
-            X += [power, np.sign(qd) * power]
-            cols += [(f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"),
-                     (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
-                      "history x direction", f"{eu} {rate_u}")]
-        if direction:  # a friction state a reversal resets (a seal's lip, stiction): the time since it
-            since, held = _since_reversal(qd, t, starts, 0.05) if rate_ref is None \
-                else _since_reversal(rate_ref[:, k], t, starts)
-            X.append(since)
-            cols.append((f"{SINCE} qd{k + 1} reversed", group, k + 1, "history", "s"))
-            # signed by the direction of motion: a friction a reversal's state sets is sign(qd) f(s), a
-            # function of this one column that trees on (rate, s) learn from the product's corners only
-            X.append(held * since)
-            cols.append((f"{SINCE} qd{k + 1} reversed x sign(qd{k + 1})", group, k + 1, "history x direction", "s"))
-    if pipe.has_pose:
-        x = pipe.x_s[idx]
-        for i in range(x.shape[1]):
-            if np.std(x[:, i]) > 0:
-                X.append(x[:, i])
-                cols.append((f"pose[{i}]", POSE, None, "pose", ""))
-    X.append(t)
-    cols.append(("t", "time", None, "time", "s"))
-    return np.column_stack(X), cols
-
-
-def _since_reversal(rate, t, starts, dead=0.0) -> tuple:
-    """The time [s] since ``rate`` last changed sign, from each block's start (``starts``, rows),
-    and the sign held (+-1, 0 before the first motion): within ``dead`` times its RMS of zero it
-    keeps the last sign (noise about a standstill)."""
-    out, held = np.zeros(len(rate)), np.zeros(len(rate))
-    last, sign = t[0], 0.0
-    for i, v in enumerate(np.where(np.abs(rate) > dead * np.sqrt(np.mean(rate ** 2)), np.sign(rate), 0.0)):
-        if i in starts:
-            last, sign = t[i], v
-        elif v and v != sign:
-            if sign:
-                last = t[i]
-            sign = v
-        out[i], held[i] = t[i] - last, sign
-    return out, held
-
-
-def input_groups(columns) -> dict:
-    """The inputs' groups: per group name, its columns (indices).  A column of a history signed
-    by the direction of motion belongs to the joint's history and to its rate: a friction
-    level that a slow state modulates is their product, which neither explains alone (greedy
-    trees do not find a split in either), and permuting or leaving out either input removes it."""
-    groups = {}
-    for i, col in enumerate(columns):
-        groups.setdefault(col[1], []).append(i)
-        if col[3] == "history x direction":
-            groups.setdefault(col[1].replace("history of", "rate of", 1), []).append(i)
-    return groups
 
 
 def beyond_noise(y, noise, spi) -> bool:
