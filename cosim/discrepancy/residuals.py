@@ -56,6 +56,7 @@ from . import _corecalls as cc
 from ._kinshare import kinematic_entries, same_kinematics
 from ._memo import Memo
 from ..errors import DiagnosisError
+from .recorded import applied_efforts, check_joint_limits, uniform_step
 
 
 #: parameters of the actuator (applied to the recorded command) and of the sensors
@@ -92,78 +93,6 @@ def _at(a, pos):
     f = (pos - i0)[:, None]
     i0 = np.clip(i0, 0, len(a) - 2)
     return a[i0] * (1.0 - f) + a[i0 + 1] * f
-
-
-def _check_joint_limits(model, t, q, where, whole=True):
-    """Refuse recorded joint positions outside the model's joint limits (a continuous joint
-    has none, but its angle must be unwrapped: no jump of more than pi between samples),
-    naming the first row (as the file counts it: the header is row 1; on a working
-    set of blocks, the time alone), the time, the value and what to do."""
-    lo, hi = model.joint_limits()
-    for j in range(model.ndof):
-        jump = np.flatnonzero(np.abs(np.diff(q[:, j])) > np.pi) if model.joint_unit == "rad" else []
-        if len(jump) and np.isnan(lo[j]) and np.isnan(hi[j]):
-            k = int(jump[0]) + 1
-            at = f"row {k + 2} (t = {t[k]:.6g} s)" if whole else f"t = {t[k]:.6g} s"
-            raise DiagnosisError(f"{where}: {at}: q{j + 1} of the continuous joint {j + 1} jumps by "
-                                 f"{q[k, j] - q[k - 1, j]:.6g} rad in one sample ({len(jump)} jumps in all): a "
-                                 f"wrapped angle; the toolkit's is unwrapped (import it with angle = \"unwrap\", "
-                                 f"docs/importing.md)")
-        out = np.flatnonzero((q[:, j] < lo[j]) | (q[:, j] > hi[j]))
-        if out.size:
-            k = int(out[0])
-            unit = model.joint_unit
-            at = f"row {k + 2} (t = {t[k]:.6g} s)" if whole else f"t = {t[k]:.6g} s"
-            hint = ("declare the joint continuous (continuous = true, docs/robots.md) if it turns without limit, or "
-                    "check the import map's unit, scale, offset or angle wrapping" if unit == "rad" else
-                    "check the import map's unit, scale and offset, or the robot's stroke")
-            raise DiagnosisError(f"{where}: {at}: joint {j + 1} q{j + 1} = {q[k, j]:.6g} {unit} is outside its "
-                                 f"limits [{lo[j]:.6g}, {hi[j]:.6g}] {unit} ({out.size} rows outside in all); {hint}")
-
-
-def _uniform_step(t, segments, where, whole) -> float:
-    """The sampling step [s] of the stretches ``segments`` ([start, stop) rows of ``t``),
-    refusing a step more than 1 % off it (naming the rows, or the time on a working set of
-    blocks: ``whole`` False)."""
-    n = len(t)
-    dt = (sum(t[b - 1] - t[a] for a, b in segments)
-          / max(sum(b - a - 1 for a, b in segments), 1))
-    inside = np.ones(n - 1, bool)
-    inside[[a - 1 for a, _ in segments[1:]]] = False  # the jumps between stretches
-    dev = np.where(inside, np.abs(np.diff(t) - dt), 0.0)
-    if dev.max() > 0.01 * dt:
-        k = int(np.argmax(dev))
-        at = (f"rows {k + 2}-{k + 3}" if whole else f"t = {t[k]:.6g} s")
-        raise DiagnosisError(f"{where}: the sampling is not uniform ({at}: step "
-                             f"{t[k + 1] - t[k]:.6g} s, mean {dt:.6g} s); resample it to a constant step")
-    return dt
-
-
-def _applied_efforts(rec, n, nd, zoh, where):
-    """``(tau_c, f_ext)``: the command that reached the drives and the measured external
-    effort per joint (None without f_ext columns), (n, nd) each, as the mean of the held values
-    on both sides of a sample when ``zoh``."""
-    tau = np.asarray(rec.tau, float)
-    # A test signal added to the command and logged without it (cosim.injection) reached
-    # the drive all the same: the command is the recorded one plus it.
-    from ..injection import from_recording
-
-    injected = from_recording(rec)
-    if injected is not None:
-        tau = injected.applied_from_recorded(tau)
-    if zoh:
-        tau = np.vstack([tau[:1], 0.5 * (tau[1:] + tau[:-1])])
-    # A measured external effort per joint (f_ext columns) is a known input: the mechanism
-    # feels the actuator's effort plus it, so it joins the effort side of the residual,
-    # sampled and smoothed like the effort (never left for the engine to explain).
-    f_ext = getattr(rec, "f_ext", None)
-    if f_ext is not None:
-        f_ext = np.asarray(f_ext, float)
-        if f_ext.shape != (n, nd):
-            raise DiagnosisError(f"{where}: f_ext has shape {f_ext.shape}, the recording ({n}, {nd})")
-        if zoh:
-            f_ext = np.vstack([f_ext[:1], 0.5 * (f_ext[1:] + f_ext[:-1])])
-    return tau, f_ext
 
 
 class Pipeline:
@@ -220,7 +149,7 @@ class Pipeline:
         if n < 3:
             raise DiagnosisError(f"{where}: {n} samples; a diagnosis needs a recording of at least a second")
         self.segments = [(0, n)] if segments is None else [(int(a), int(b)) for a, b in segments]
-        dt = _uniform_step(t, self.segments, where, whole=segments is None)
+        dt = uniform_step(t, self.segments, where, whole=segments is None)
         w = int(round(window / dt)) | 1
         w = max(w, 7)
         self.dt, self.n, self.nd, self.window, self.polyorder = dt, n, nd, w, polyorder
@@ -251,10 +180,10 @@ class Pipeline:
             raise DiagnosisError(f"{where}: the {model.robot} model of the core has no inverse dynamics, so the "
                                  f"effort residual cannot be formed") from None
         self.zoh = zoh
-        self.tau_c, self.f_ext = _applied_efforts(rec, n, nd, zoh, where)
+        self.tau_c, self.f_ext = applied_efforts(rec, n, nd, zoh, where)
         self.q = np.asarray(rec.q, float)
         self.qd = np.asarray(rec.qd, float)
-        _check_joint_limits(model, t, self.q, where, whole=segments is None)
+        check_joint_limits(model, t, self.q, where, whole=segments is None)
         self.pose = None if rec.pose is None else np.asarray(rec.pose, float)
         self._smooth_args = dict(window_length=w, polyorder=polyorder, axis=0, mode="interp")
         self._coeffs = savgol_coeffs(w, polyorder, delta=dt)
