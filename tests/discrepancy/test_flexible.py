@@ -105,6 +105,19 @@ def test_the_statement_says_when_the_inputs_were_extrapolated():
     assert "outside the range" not in flexible.statement(dataclasses.replace(fit, outside=0.02), "slider")
 
 
+def test_the_statement_gives_a_direction_as_the_direction_of_motion():
+    # a force keyed on the smoothed commanded direction, peaking where the smoother overshoots -1
+    d = flexible.Dependence("rate of slider 1", "sign(qd1 reference) smoothed", 1, "rate", 0.9, "",
+                            (-1.12, -0.5, 0.0, 0.5, 1.0), (-18.6, -9.0, 0.0, 9.0, 17.0))
+    fit = flexible.FlexibleFit("tau1", 1, "N", 0.99, 900.0, True, 1.0, 0.1, (d,))
+    s = flexible.statement(fit, "carriage")
+    assert "up to 18.6 N at motion in the negative direction" in s
+    assert "overshoots" in s and "= -1.12" in s
+    d1 = dataclasses.replace(d, grid=(-1.0, -0.5, 0.0, 0.5, 1.0))
+    s1 = flexible.statement(dataclasses.replace(fit, inputs=(d1,)), "carriage")
+    assert "at motion in the negative direction;" in s1 and "overshoots" not in s1
+
+
 @pytest.mark.parametrize("curve, expect", [((0, 0, 0, 0, 0, 0, 1, 2, 3, 4), "above"),
                                            ((4, 3, 2, 1, 0, 0, 0, 0, 0, 0), "below"),
                                            ((0, 1, 2, 3, 4, 5, 6, 7, 8, 9), "over")])

@@ -351,6 +351,16 @@ def family_says(fit: FlexibleFit, discovered, effects) -> str:
     return ""
 
 
+def _at_value(feature, x, unit) -> str:
+    """Where a partial dependence peaks, in words: for a direction (a sign, smoothed as the efforts
+    are), the direction of motion; the smoothed sign overshoots +-1 after a reversal, which the
+    value beside says."""
+    if not feature.startswith("sign("):
+        return f"{feature} = {x:.3g} {unit}".rstrip()
+    said = f"motion in the {'negative' if x < 0 else 'positive'} direction"
+    return said + (f" ({feature} = {x:.3g}: the smoothed sign overshoots +-1 after a reversal)" if abs(x) > 1 else "")
+
+
 def statement(fit: FlexibleFit, noun: str) -> str:
     """The report's sentence for one channel."""
     if not fit.explained and not fit.beyond_noise:
@@ -370,7 +380,7 @@ def statement(fit: FlexibleFit, noun: str) -> str:
     for d in fit.inputs:
         size = max(abs(min(d.curve)), abs(max(d.curve)))
         k = int(np.argmax(np.abs(np.asarray(d.curve))))
-        at = f"{d.feature} = {d.grid[k]:.3g} {d.unit}".rstrip()
+        at = _at_value(d.feature, d.grid[k], d.unit)
         parts.append(f"the {d.group.replace(f'{noun} {fit.joint}', f'{noun}')} ({d.feature}"
                      f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
                      f"importance {100 * d.importance:.0f} %)")
