@@ -35,8 +35,10 @@ were then set with tune and report3-report7 as tuning sets (the stage re-run on 
 captured inputs), and ``--set report8`` (seeds 11500 +) was run once on that stage.  The smoothed
 commanded direction (a rate input) and the trees on fewer columns where named groups share a
 signed history were then set with tune and report3-report8 as tuning sets (``--capture`` /
-``--replay``), and ``--set report9`` (seeds 11700 +) was run once on that stage; ``--set report10``
-(seeds 11900 +) is kept for the next report run.
+``--replay``), and ``--set report9`` (seeds 11700 +) was run once on that stage.  The projected pose and
+rates, rate units and the signed time since a reversal were then set with tune and report3-report9, and
+``--set report10`` (seeds 11900 +) was run once on that stage; ``--set report11`` (seeds 12100 +) is kept
+for the next report run.
 The truth's share is measured over every decimated sample, as the stage judges its own.
 
     .venv/bin/python bench/flexible_bench.py --set report8 --per-kind 3 --clean 3
@@ -58,7 +60,7 @@ from types import SimpleNamespace
 import numpy as np
 
 SEEDS = {"tune": 7100, "report": 8300, "fresh": 9300, "report2": 10300, "report3": 10500, "report4": 10700, "report5": 10900, "report6": 11100, "report7": 11300,
-         "report8": 11500, "report9": 11700, "report10": 11900}
+         "report8": 11500, "report9": 11700, "report10": 11900, "report11": 12100}
 
 
 def _light(pipe):
