@@ -50,10 +50,31 @@ def _sinusoid(t, y, f, F=None):
     return fit, float(math.hypot(beta[-2], beta[-1])), float(r0 @ r0 - r @ r)
 
 
-def _peak(t, x, dt, f_lo, f_hi):
+def _wave(t, y, f, at) -> np.ndarray:
+    """The sinusoid at f [Hz] fitted to ``y`` at the times ``t`` (beside a constant, least
+    squares), evaluated at the times ``at`` (without the constant)."""
+    a = 2.0 * math.pi * f * np.asarray(t, float)
+    beta, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(a)), np.cos(a), np.sin(a)]), y, rcond=None)
+    b = 2.0 * math.pi * f * np.asarray(at, float)
+    return beta[1] * np.cos(b) + beta[2] * np.sin(b)
+
+
+def _motion_share(t, pos, f) -> float:
+    """The largest share of a column of ``pos`` (positions, centred) a sinusoid at f explains."""
+    ss = np.maximum(np.sum(pos ** 2, axis=0), 1e-300)
+    return max(_sinusoid(t, pos[:, j], f)[2] / ss[j] for j in range(pos.shape[1]))
+
+
+def _peak(t, x, dt, f_lo, f_hi, rows=None):
     """The frequency [Hz] of the highest periodogram peak of x in [f_lo, f_hi], refined by least
-    squares over the bin around it (None when the band is empty)."""
+    squares over the bin around it (None when the band is empty).  ``rows``: of these samples only
+    (the others count as zero in the periodogram and not at all in the refinement)."""
     n = len(x)
+    if rows is not None:
+        rows = np.asarray(rows)
+        kept = np.zeros(n)
+        kept[rows] = x[rows] - np.mean(x[rows])
+        x = kept
     nfft = 1 << int(math.ceil(math.log2(4 * n)))
     P = np.abs(np.fft.rfft(x * np.hanning(n), nfft))
     f = np.fft.rfftfreq(nfft, dt)
@@ -62,7 +83,8 @@ def _peak(t, x, dt, f_lo, f_hi):
         return None
     k = band[np.argmax(P[band])]
     grid = f[k] + np.linspace(-1.0, 1.0, 21) * (f[1] - f[0])
-    return float(grid[np.argmax([_sinusoid(t, x, g)[2] for g in grid])])
+    tr, xr = (t, x) if rows is None else (t[rows], x[rows])
+    return float(grid[np.argmax([_sinusoid(tr, xr, g)[2] for g in grid])])
 
 
 def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
@@ -108,7 +130,6 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
     cost = 2.0 * math.log(n_eff) + math.log(max((f_hi - f_lo) * (t[-1] - t[0]), 1.0))
     pos = np.asarray(pipe.q_s[pipe.idx], float)
     pos = pos - pos.mean(axis=0)
-    pos_ss = np.maximum(np.sum(pos ** 2, axis=0), 1e-300)
     out = []
     for c in range(R.shape[1]):
         x0 = R[:, c] - R[:, c].mean()
@@ -124,7 +145,7 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
             if f is None:
                 break
             fit, amp, ss = _sinusoid(t, base, f, F)
-            motion = max(_sinusoid(t, pos[:, j], f)[2] / pos_ss[j] for j in range(pos.shape[1]))
+            motion = _motion_share(t, pos, f)
             sigma = own_noise(pipe, x - fit, 0.0 if floor is None else floor[c])
             if not (sigma > 0 and ss / total > MOTION_RATIO * motion and ss / sigma ** 2 / phi - cost > threshold):
                 break

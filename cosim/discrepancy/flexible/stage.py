@@ -15,7 +15,10 @@ of each joint (time constants :data:`~.columns.TIME_CONSTANTS`), its low-passed 
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
 input), the platform pose where the recording gives one, and time; per channel also the pose and
-the rates projected on the direction of a linear fit of the residual, fitted per fold (:mod:`.oblique`).
+the rates projected on the direction of a linear fit of the residual, fitted per fold (:mod:`.oblique`),
+and where the residual holds a line of its spectrum, the line's phase (:mod:`.periodic`).  A channel
+whose structure left is a line is fitted against the own noise of the residual without its lines
+(:func:`with_lines`).
 
 It is judged out of fold, by cross-validation over blocks in time spread through the recording
 (:mod:`.cv`): a slowly varying input takes in the held-out blocks the values the
@@ -71,6 +74,7 @@ from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _si
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .oblique import extend, extended
+from . import periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
@@ -174,6 +178,8 @@ class FlexibleFit:
     readjusted: tuple = ()
     #: the projected columns (:func:`.oblique.extend`: ``columns`` and ``use`` past the stage's inputs)
     projections: tuple = field(default=(), repr=False, compare=False)
+    #: the line's column (:func:`.periodic.extend`: after the projected ones), fitted on every sample
+    lines: tuple = field(default=(), repr=False, compare=False)
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
@@ -203,6 +209,19 @@ def candidates(pipe, R, left, noise) -> list:
     flagged = {e["joint"] - 1 for e in left if e["channel"] in pipe.channels[:pipe.nd]}
     spi = samples_per_independent(pipe)
     return sorted(flagged | {c for c in range(pipe.nd) if beyond_noise(R[:, c], noise[c], spi)})
+
+
+def with_lines(pipe, left, lines, noise) -> tuple:
+    """``(left, noise)`` with the effort channels whose structure left is a spectral line
+    (``lines``: entries of :func:`..structure.unexplained` of signature ``periodic``) flagged, and
+    their noise the entries' (the own noise of the residual without its lines, where it is the
+    smaller): the own noise of a residual holding a fast line reads the line's amplitude, and
+    such a channel would hold nothing beyond it (:func:`beyond_noise`)."""
+    own = [e for e in lines if e["channel"] in pipe.channels[:pipe.nd]]
+    noise = list(noise)
+    for e in own:
+        noise[e["joint"] - 1] = min(noise[e["joint"] - 1], float(e["noise"]))
+    return list(left) + own, noise
 
 
 def _screen(imp, share) -> list:
@@ -255,6 +274,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
+    X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
@@ -315,7 +335,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
                        screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
                        use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
                        readjusted=moved,
-                       projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections))
+                       projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections),
+                       lines=tuple((keep[x[0]],) + x[1:] for x in lines))
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -381,6 +402,11 @@ def statement(fit: FlexibleFit, noun: str) -> str:
         size = max(abs(min(d.curve)), abs(max(d.curve)))
         k = int(np.argmax(np.abs(np.asarray(d.curve))))
         at = _at_value(d.feature, d.grid[k], d.unit)
+        if d.feature.startswith(periodic.LINE):  # the force's phase: its curve is the line's amplitude
+            hz = d.feature[len(periodic.LINE):].split(" Hz")[0].strip()
+            parts.append(f"the time (a line at {hz} Hz; up to {size:.3g} {fit.unit}; "
+                         f"importance {100 * d.importance:.0f} %)")
+            continue
         parts.append(f"the {d.group.replace(f'{noun} {fit.joint}', f'{noun}')} ({d.feature}"
                      f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
                      f"importance {100 * d.importance:.0f} %)")
@@ -394,7 +420,7 @@ def statement(fit: FlexibleFit, noun: str) -> str:
     return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
 
 
-def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
+def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()) -> list:
     """The flexible stage of a diagnosis: one :class:`FlexibleFit` per effort channel worth a
     fit (:func:`candidates`), on the residual ``R`` after the fitted model (decimated samples
     x channels), judged out of fold over blocks in time (:mod:`.cv`).
@@ -403,6 +429,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     missing) is no equation found: on its channel the flexible model is fitted on the residual
     without it (the fitted parameters ``theta`` less the term's), and the statement says how
     much of that the term explained on the engine's held-out part beside the flexible model's share.
+
+    ``lines``: the structure left whose signature is a spectral line (:mod:`..lines`): its channels
+    are fitted too, judged against the own noise of the residual without the lines (the entries'
+    ``noise``: the own noise of the residual with them reads a fast line's amplitude), and their
+    trees are given the line's phase (:mod:`.periodic`).
 
     Example
     -------
@@ -417,7 +448,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None) -> list:
     if len(R) < N_FOLDS * BLOCK:
         return []
     floor = eng.accuracy()
-    noise = [own_noise(pipe, R[:, c], floor[c]) for c in range(pipe.nd)]
+    left, noise = with_lines(pipe, left, lines, [own_noise(pipe, R[:, c], floor[c]) for c in range(pipe.nd)])
     chans = candidates(pipe, R, left, noise)
     if not chans:
         return []
@@ -476,7 +507,7 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
-            predicted = f.model.predict(extended(X, f.projections)[:, list(f.use)])
+            predicted = f.model.predict(periodic.extended(extended(X, f.projections), f.lines)[:, list(f.use)])
             out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, predicted, left=0.0,
                                              right=0.0)
     return out
