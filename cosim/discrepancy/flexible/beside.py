@@ -88,7 +88,7 @@ def passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate) -> 
     if not any(g.startswith("effort of ") for g in kept) or any(g.startswith("rate of ") for g in kept):
         return kept
     y2 = without_levels(y, fitted)
-    if y2 is None:
+    if y2 is None or not np.var(y2) > 0:  # nothing to judge on (a NaN variance included)
         return kept
     done = {}
 
