@@ -4,6 +4,7 @@
 * :mod:`.columns`: the stage's inputs (the columns its trees are given) and their groups;
 * :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
 * :mod:`.select`: which inputs are named (causes before consequences);
+* :mod:`.beside`: what stands beside a force's inputs without being one (time, a copy beside the pose, a fitted limit's part);
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
 * :mod:`.oblique`: the platform pose and the rates projected on the direction of a linear fit of the residual, per fold;
 * :mod:`.report`: the stage's figure and Markdown;

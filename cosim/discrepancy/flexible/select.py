@@ -102,11 +102,12 @@ def gain(without, with_, y, var) -> tuple:
     return float(overall), bool(overall >= DROP_MIN and float(np.mean(d)) > GAIN_Z * se)
 
 
-def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None):
+def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None, after=None):
     """The named groups among the screened ``named``, their trees cross-validated on them
     alone: ``(kept, cross-validation, its columns)``.  ``follow``: the consequence groups
     (:func:`consequences`), judged after the others; ``known``: cross-validations already
-    made, by their sorted columns."""
+    made, by their sorted columns; ``after(kept, cv_on)``: the caller's further rules on the
+    kept groups (:mod:`.beside`), given this selection's cross-validations."""
     if cross_validate is None:
         from .cv import cross_validate
     done = dict(known or {})
@@ -137,6 +138,8 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         if not gain(cv_on(rest)[0], cv_on(kept)[0], y, var)[1]:
             kept = rest
     kept = made_of_efforts(kept, groups, follow, y, var, cv_on)
+    if after is not None:
+        kept = after(kept, cv_on)
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
 
@@ -266,13 +269,13 @@ def strongest_alone(X, y, fold_rows, groups, cross_validate):
     return g, cross_validate(X[:, groups[g]], y, fold_rows)
 
 
-def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate) -> tuple:
+def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate, after=None) -> tuple:
     """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
     columns)`` of :func:`select`, a consequence among them): the trees cross-validated on every
     input but the consequences ``follow`` (:func:`consequences`), screened (``screen``: the
     stage's, on their permutation importance) and checked as the full model's; ``chosen`` stays
     when those trees claim nothing (``judged``: the stage's two bars) or ``chosen`` beats the
-    causes' refit significantly (:func:`gain`)."""
+    causes' refit significantly (:func:`gain`); ``after``: :func:`select`'s."""
     from .cv import importance
 
     cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
@@ -283,16 +286,17 @@ def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, c
     if not causes:
         return chosen
     var = float(np.var(y))
-    alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate)
+    alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate, after=after)
     return chosen if gain(alone[1], chosen[1], y, var)[1] else alone
 
 
-def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, cross_validate):
+def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, cross_validate, after=None):
     """Where the trees on every input (``cv``, ``share``) claim nothing: the groups their
     permutation importance passes (``screen``: the stage's), checked as the full model's are
     (:func:`select`, causes before consequences, :func:`causes_alone`), and their trees' claim
     judged by the same two bars (``judged``); ``(named, cross-validation, columns, share,
-    chi-square)``, None when no group passes or their trees claim nothing either.
+    chi-square)``, None when no group passes or their trees claim nothing either; ``after``:
+    :func:`select`'s.
 
     Many inputs that carry nothing add variance that can drown a force on two of them (a Coulomb
     level keyed on the rail's position, MuJoCo: the trees on every input -0.07 out of fold, on
@@ -306,9 +310,10 @@ def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, c
     if not named:
         return None
     var = float(np.var(y))
-    kept, cv_k, use_k = select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate)
+    kept, cv_k, use_k = select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate,
+                               after=after)
     if any(g in follow for g in kept):
         kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                         screen, cross_validate)
+                                         screen, cross_validate, after=after)
     share_k, z_k, ok = judged(cv_k.mse)
     return (kept, cv_k, use_k, share_k, z_k) if ok else None

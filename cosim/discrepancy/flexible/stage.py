@@ -73,6 +73,7 @@ from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _si
                       input_groups, inputs)
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
+from .beside import copy_alone, judged_last, rules
 from .oblique import extend, extended
 from . import periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
@@ -233,10 +234,12 @@ def _screen(imp, share) -> list:
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, fold_rows, groups, named, var, follow=(), known=None):
+def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=None):
     """The check of the screened groups (:func:`.select.select`, causes before
-    consequences): ``(kept, cross-validation on the kept groups' columns, its columns)``."""
-    return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known)
+    consequences; ``after``: :func:`.beside.rules`): ``(kept, cross-validation on the kept
+    groups' columns, its columns)``."""
+    return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known,
+                  after=after)
 
 
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
@@ -275,7 +278,8 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows)
-    follow = consequences(columns, groups, c + 1 if c is not None else None)
+    follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups)  # time too
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
@@ -285,7 +289,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
             share, z, explained = judged(cv.mse)
-        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate) \
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate, after) \
             if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
             named, cv, use, share, z = first
@@ -296,18 +300,20 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
             if ok or weak:
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
             named = [g] if ok else []  # with the group sharing its columns where they add (partners)
-            kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, known={tuple(sorted(use)): cv_g}) \
-                if ok else (named, cv, use)
+            kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, known={tuple(sorted(use)): cv_g},
+                                        after=after) if ok else (named, cv, use)
             share_k, z_k, ok_k = judged(cv_k.mse)
             if kept != named and ok_k:
                 named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
+            elif copy_alone(named, kept, ok_k):  # a model effort whose constituents claim nothing: no input
+                named = []
         else:
             named = _screen(importance(cv, X, y, groups, rng), share)
             if named:
-                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow)
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                                     _screen, cross_validate)
+                                                     _screen, cross_validate, after)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
