@@ -47,7 +47,7 @@ def test_an_eddy_brake_over_a_band_of_the_stroke_is_fitted_folded_and_named_by_p
     # name both; on the residual itself they need the splits of the product's two factors at once
     # (without the rule: nothing explained, or one factor named)
     pipe, X, cols, y, sigma, truth, held = _recording(_eddy)
-    assert folded.prefer(X, y, folded.direction(X, cols, 1), flexible.folds(len(y), flexible.gap_for(1.0)))
+    assert folded.prefer(X, y, folded.direction(X, cols, 1), flexible.folds(len(y), flexible.gap_for(1.0))) != ""
     fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
     assert fit.folded and fit.explained and fit.share > 0.6
     assert {d.group for d in fit.inputs} == {"position of slider 1", "rate of slider 1"}
@@ -63,7 +63,7 @@ def test_a_force_on_position_alone_is_not_folded():
     # product; the screen does not pass it (where it would, the plain fit explains more and is kept)
     pipe, X, cols, y, sigma, truth, held = _recording(lambda q1, qd1: 0.4 * np.tanh(q1 / 0.3))
     rows = flexible.folds(len(y), flexible.gap_for(1.0))
-    assert not folded.prefer(X, y, folded.direction(X, cols, 1), rows)
+    assert folded.prefer(X, y, folded.direction(X, cols, 1), rows) == ""
     fit = flexible.fit_channel(pipe, X, cols, y, sigma, ("N", "tau1"))
     assert not fit.folded and fit.explained
     assert [d.group for d in fit.inputs] == ["position of slider 1"]

@@ -23,7 +23,8 @@ the stage's columns alone (the black box, a replay of the stage) folds as the fi
 The folded fit is made only where a cheap screen says it may do better (:func:`prefer`): the
 best single input as a step function (:func:`~.cv.binned_shares`, out of fold on the stage's
 blocks) must explain at least :data:`MARGIN` more of ``var(y)`` folded than plain (one screen on
-each target, the quantile bins shared, no trees).  There the channel is fitted both ways and the
+each target, the quantile bins shared, no trees).  From :data:`ALONE` more it replaces the plain
+fit; between the two the channel is fitted both ways and the
 fit whose claim explains more of ``y`` out of fold is kept (:func:`kept`): a friction whose level
 a slow state of its own joint sets (a drive's temperature) is such a product too, but the plain
 fit has a column for it (the power signed by the direction, :mod:`.columns`) that no other
@@ -40,6 +41,10 @@ from .columns import SINCE
 #: at least this share of var(y) more on the folded residual than on the residual itself
 #: (docs/flexible.md: set on the seen MuJoCo sets and the own generator's tuning set)
 MARGIN = 0.10
+#: ... and instead of the plain fit (no plain fit made) where it explains at least this much more
+#: (docs/flexible.md: above the largest gain of a friction whose level its own joint's history
+#: sets, 0.30, where the plain fit explained more)
+ALONE = 0.40
 
 
 def direction(X, columns, joint) -> np.ndarray | None:
@@ -69,31 +74,34 @@ def direction_columns(columns, joint) -> list:
     return [names.index(since_name), names.index(f"{since_name} x sign(qd{joint})"), names.index(rate_name)]
 
 
-def prefer(X, y, sigma, fold_rows, margin: float = MARGIN) -> bool:
-    """Whether the folded fit is used: the best single column of ``X`` as a step function
-    (:func:`~.cv.binned_shares`, out of fold on ``fold_rows``) explains at least ``margin`` of
-    ``var(y)`` more of ``sigma y`` than of ``y`` (both errors over ``var(y)``).
+def prefer(X, y, sigma, fold_rows, margin: float = MARGIN, alone: float = ALONE) -> str:
+    """Whether the folded fit is made: the best single column of ``X`` as a step function
+    (:func:`~.cv.binned_shares`, out of fold on ``fold_rows``) explains more of ``sigma y`` than
+    of ``y`` (both errors over ``var(y)``) by at least ``alone``: ``"folded"`` (instead of the
+    plain fit); by at least ``margin``: ``"both"`` (the one explaining more kept, :func:`kept`);
+    else ``""``.
 
     Example
     -------
     >>> from cosim.discrepancy.flexible.cv import folds
     >>> t = np.linspace(0.0, 40.0, 800)
     >>> sigma, x = np.sign(np.sin(t)), np.sin(0.37 * t)
-    >>> prefer(np.column_stack([x, np.sin(t)]), sigma * np.abs(x), sigma, folds(800, gap=4))
-    True
-    >>> prefer(np.column_stack([x, np.sin(t)]), np.abs(x), sigma, folds(800, gap=4))
-    False
+    >>> prefer(np.column_stack([x, np.sin(t)]), sigma * x, sigma, folds(800, gap=4))  # sigma x: x alone folded
+    'folded'
+    >>> prefer(np.column_stack([x, np.sin(t)]), np.abs(x), sigma, folds(800, gap=4))  # |x| does not switch
+    ''
     """
     from .cv import binned_shares
 
     var = float(np.var(y))
     if sigma is None or var <= 0:
-        return False
+        return ""
     folded = sigma * y
     plain = float(np.max(binned_shares(X, y, fold_rows)))
     # the folded target's share over its own variance, on var(y): the same held-out error
     on_y = 1.0 - (1.0 - float(np.max(binned_shares(X, folded, fold_rows)))) * float(np.var(folded)) / var
-    return on_y - plain >= margin
+    gain = on_y - plain
+    return "folded" if gain >= alone else "both" if gain >= margin else ""
 
 
 class FoldedModel:

@@ -246,9 +246,10 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     time since a joint's direction last changed is an input of that joint's channel only.
     ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
     re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`).
-    Where :func:`.folded.prefer` says so, all of it is done again on the residual folded by the
-    joint's direction of motion (its columns too), judged against the variance of ``y`` itself,
-    and the fit explaining more out of fold is kept (:func:`.folded.kept`)."""
+    Where :func:`.folded.prefer` says so, all of it is done on the residual folded by the joint's
+    direction of motion (its columns too), judged against the variance of ``y`` itself: instead of
+    the plain fit where the screen's gain is at least :data:`.folded.ALONE`, else beside it, the
+    fit explaining more out of fold kept (:func:`.folded.kept`)."""
     plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted)
     if sigma is None:
         return plain
@@ -258,8 +259,9 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
 
 def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None) -> tuple:
     """:func:`fit_channel`'s fit, on ``y`` folded by ``sigma`` where given (:mod:`.folded`):
-    ``(fit, sigma)``, ``sigma`` the direction where it is not given and the screen
-    (:func:`.folded.prefer`) says the folded fit may do better, else None."""
+    ``(fit, sigma)``: where ``sigma`` is not given, the screen (:func:`.folded.prefer`) folds at once
+    where the folded residual is far better explained, and where it may be, returns the direction
+    ``sigma`` for a folded fit beside this plain one (else None)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -282,12 +284,12 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
-    folded, screened_fold = sigma is not None, None
+    how = prefer(X, y, direction(X, columns, c + 1), fold_rows) if sigma is None and c is not None else ""
+    screened_fold = direction(X, columns, c + 1) if how == "both" else None  # the folded fit made too
+    sigma = direction(X, columns, c + 1) if how == "folded" else sigma
+    folded = sigma is not None
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    elif c is not None:
-        direction_c = direction(X, columns, c + 1)
-        screened_fold = direction_c if prefer(X, y, direction_c, fold_rows) else None
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
