@@ -42,8 +42,8 @@ from .columns import SINCE
 #: (docs/flexible.md: set on the seen MuJoCo sets and the own generator's tuning set)
 MARGIN = 0.10
 #: ... and instead of the plain fit (no plain fit made) where it explains at least this much more
-#: (docs/flexible.md: above the largest gain of a friction whose level its own joint's history
-#: sets, 0.30, where the plain fit explained more)
+#: on a column that is not the joint's own history (docs/flexible.md: above the largest gain of a
+#: friction whose level its own joint's history sets, 0.30, where the plain fit explained more)
 ALONE = 0.40
 
 
@@ -74,12 +74,13 @@ def direction_columns(columns, joint) -> list:
     return [names.index(since_name), names.index(f"{since_name} x sign(qd{joint})"), names.index(rate_name)]
 
 
-def prefer(X, y, sigma, fold_rows, margin: float = MARGIN, alone: float = ALONE) -> str:
+def prefer(X, y, sigma, fold_rows, own_history=(), margin: float = MARGIN, alone: float = ALONE) -> str:
     """Whether the folded fit is made: the best single column of ``X`` as a step function
     (:func:`~.cv.binned_shares`, out of fold on ``fold_rows``) explains more of ``sigma y`` than
-    of ``y`` (both errors over ``var(y)``) by at least ``alone``: ``"folded"`` (instead of the
-    plain fit); by at least ``margin``: ``"both"`` (the one explaining more kept, :func:`kept`);
-    else ``""``.
+    of ``y`` (both errors over ``var(y)``) by at least ``alone``, that column not one of
+    ``own_history`` (the joint's own history: the plain fit has it signed by the direction, the
+    power and the time since a reversal): ``"folded"`` (instead of the plain fit); by at least
+    ``margin``: ``"both"`` (the one explaining more kept, :func:`kept`); else ``""``.
 
     Example
     -------
@@ -97,11 +98,10 @@ def prefer(X, y, sigma, fold_rows, margin: float = MARGIN, alone: float = ALONE)
     if sigma is None or var <= 0:
         return ""
     folded = sigma * y
-    plain = float(np.max(binned_shares(X, y, fold_rows)))
+    plain, shares = float(np.max(binned_shares(X, y, fold_rows))), binned_shares(X, folded, fold_rows)
     # the folded target's share over its own variance, on var(y): the same held-out error
-    on_y = 1.0 - (1.0 - float(np.max(binned_shares(X, folded, fold_rows)))) * float(np.var(folded)) / var
-    gain = on_y - plain
-    return "folded" if gain >= alone else "both" if gain >= margin else ""
+    gain = 1.0 - (1.0 - float(np.max(shares))) * float(np.var(folded)) / var - plain
+    return "folded" if gain >= alone and int(np.argmax(shares)) not in own_history else "both" if gain >= margin else ""
 
 
 class FoldedModel:

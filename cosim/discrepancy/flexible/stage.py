@@ -284,7 +284,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
-    how = prefer(X, y, direction(X, columns, c + 1), fold_rows) if sigma is None and c is not None else ""
+    how = prefer(X, y, direction(X, columns, c + 1), fold_rows, [i for i, col in enumerate(columns) if col[2] == (
+        c or 0) + 1 and col[3].startswith("history")]) if sigma is None and c is not None else ""
     screened_fold = direction(X, columns, c + 1) if how == "both" else None  # the folded fit made too
     sigma = direction(X, columns, c + 1) if how == "folded" else sigma
     folded = sigma is not None
@@ -345,7 +346,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                          for g in named)
             if folded:  # the direction of motion first: the curves above are of the level g
                 deps = (Dependence(joint=c + 1, **direction_dependence(
-                    f"rate of {pipe.model.facts.joint_noun} {c + 1}", direction_importance(
+                    next(col[1] for col in columns if col[2] == c + 1 and col[3] == "rate"), direction_importance(
                         cv_t, sigma * y_t, sigma, rng)[0], model.predict(X[:, use]))),) + deps
         if folded:  # sigma g from the stage's columns: the direction's columns last
             model, use = FoldedModel(model, len(use)), list(use) + direction_columns(columns, c + 1)
