@@ -104,6 +104,14 @@ def prefer(X, y, sigma, fold_rows, own_history=(), margin: float = MARGIN, alone
     return "folded" if gain >= alone and int(np.argmax(shares)) not in own_history else "both" if gain >= margin else ""
 
 
+def screen(X, y, columns, joint, fold_rows) -> tuple:
+    """:func:`prefer` on the channel of ``joint`` (1-based; ``X`` and its ``columns`` the stage's):
+    ``(its answer, the direction or None)``."""
+    own = [i for i, col in enumerate(columns) if col[2] == joint and col[3].startswith("history")]
+    sigma = direction(X, columns, joint)
+    return prefer(X, y, sigma, fold_rows, own), sigma
+
+
 class FoldedModel:
     """``sigma g(x)``: the trees ``level`` (the level ``g`` on the first ``n_level`` columns of
     what it is given) times the direction read from its last three columns (:func:`direction`'s

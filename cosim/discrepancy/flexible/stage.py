@@ -49,11 +49,12 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   function (:func:`~.cv.binned_shares`) is cross-validated alone and named where it passes;
 * **folded by the direction of motion** (:mod:`.folded`): where the best single input as a step
   function explains :data:`~.folded.MARGIN` more of the residual's variance once the residual is
-  multiplied by its own joint's direction sigma = +-1, the channel is fitted again with the trees
-  on sigma y (the level g of a force sigma g: a friction whose level another input sets),
-  predicting sigma g; its held-out error, hence its claim, is judged on y as the plain fit's, and
-  the fit explaining more is kept; folded, the joint's rate is named for the direction, first,
-  and the curves are those of the level;
+  multiplied by its own joint's direction sigma = +-1, the channel is fitted with the trees on
+  sigma y (the level g of a force sigma g: a friction whose level another input sets),
+  predicting sigma g; its held-out error, hence its claim, is judged on y as the plain fit's;
+  from :data:`~.folded.ALONE` more (not on the joint's own history) instead of the plain fit,
+  else beside it, the fit explaining more kept; folded, the joint's rate is named for the
+  direction, first, and the curves are those of the level;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -79,8 +80,8 @@ from .report import _where, figure, markdown, reported  # noqa: F401 (the stage'
 from .backfit import readjusted, stage_columns
 from .oblique import extend, extended
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
-from .folded import (FoldedModel, direction, direction_columns, direction_dependence, direction_importance,
-                     fitted_folded, importance_on_y, kept, prefer)
+from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
+                     importance_on_y, kept, screen)
 from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
 
@@ -284,11 +285,10 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     follow = consequences(columns, groups, c + 1 if c is not None else None)
-    how = prefer(X, y, direction(X, columns, c + 1), fold_rows, [i for i, col in enumerate(columns) if col[2] == (
-        c or 0) + 1 and col[3].startswith("history")]) if sigma is None and c is not None else ""
-    screened_fold = direction(X, columns, c + 1) if how == "both" else None  # the folded fit made too
-    sigma = direction(X, columns, c + 1) if how == "folded" else sigma
-    folded = sigma is not None
+    how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
+    screened_fold = direction_c if how == "both" else None  # the folded fit made too
+    sigma = direction_c if how == "folded" else sigma
+    folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
     rng = np.random.default_rng(0)
@@ -351,8 +351,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         if folded:  # sigma g from the stage's columns: the direction's columns last
             model, use = FoldedModel(model, len(use)), list(use) + direction_columns(columns, c + 1)
     return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
-                       z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
-                       beyond_noise=beyond_noise(y, noise, spi),
+                       z, explained, float(np.std(y_seen)), float(noise), deps, outside=beyond,
+                       beyond_noise=beyond_noise(y_seen, noise, spi),
                        screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
                        use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
                        readjusted=moved, folded=folded,
