@@ -50,6 +50,14 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   passes are checked and judged alone as above (:func:`.select.screened_first`); when those claim
   nothing either, the group whose strongest column alone explains the most out of fold as a step
   function (:func:`~.cv.binned_shares`) is cross-validated alone and named where it passes;
+* **folded by the direction of motion** (:mod:`.folded`): where the best single input as a step
+  function explains :data:`~.folded.MARGIN` more of the residual's variance once the residual is
+  multiplied by its own joint's direction sigma = +-1, the channel is fitted with the trees on
+  sigma y (the level g of a force sigma g: a friction whose level another input sets),
+  predicting sigma g; its held-out error, hence its claim, is judged on y as the plain fit's;
+  from :data:`~.folded.ALONE` more (not on the joint's own history) instead of the plain fit,
+  else beside it, the fit explaining more kept; folded, the joint's rate is named for the
+  direction, first, and the curves are those of the level;
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -77,6 +85,8 @@ from .beside import copy_alone, judged_last, rules
 from .oblique import extend, extended
 from . import periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
+from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
+                     importance_on_y, kept, screen)
 from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
                      select, strongest_alone)
 
@@ -181,11 +191,14 @@ class FlexibleFit:
     projections: tuple = field(default=(), repr=False, compare=False)
     #: the line's column (:func:`.periodic.extend`: after the projected ones), fitted on every sample
     lines: tuple = field(default=(), repr=False, compare=False)
+    #: fitted folded by the direction of motion (:mod:`.folded`): the force is sigma g, ``inputs``
+    #: the direction (first) and the inputs of its level g, ``model`` predicts sigma g
+    folded: bool = False
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
-                                             "beyond_noise", "screened", "weak", "readjusted")}
+                                             "beyond_noise", "screened", "weak", "readjusted", "folded")}
         out["inputs"] = [vars(d) for d in self.inputs]
         return out
 
@@ -255,7 +268,23 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     (:func:`.select.consequences`) the trees on every input first, causes before consequences.  The
     time since a joint's direction last changed is an input of that joint's channel only.
     ``fitted``: the fitted model's columns on the channel (:func:`.backfit.fitted_columns`),
-    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`)."""
+    re-adjusted beside the trees on the named inputs where that adds (:func:`.backfit.readjusted`).
+    Where :func:`.folded.prefer` says so, all of it is done on the residual folded by the joint's
+    direction of motion (its columns too), judged against the variance of ``y`` itself: instead of
+    the plain fit where the screen's gain is at least :data:`.folded.ALONE`, else beside it, the
+    fit explaining more out of fold kept (:func:`.folded.kept`)."""
+    plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted)
+    if sigma is None:
+        return plain
+    folded = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, sigma=sigma)[0]
+    return kept(plain, folded)
+
+
+def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None) -> tuple:
+    """:func:`fit_channel`'s fit, on ``y`` folded by ``sigma`` where given (:mod:`.folded`):
+    ``(fit, sigma)``: where ``sigma`` is not given, the screen (:func:`.folded.prefer`) folds at once
+    where the folded residual is far better explained, and where it may be, returns the direction
+    ``sigma`` for a folded fit beside this plain one (else None)."""
     # loaded before the limit is set: threadpoolctl limits only the OpenMP runtimes already loaded, and
     # an unlimited first fit spins threads on a busy machine (98 s CPU instead of 1.8 s measured)
     import sklearn.ensemble  # noqa: F401
@@ -273,12 +302,14 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
-    every = tuple(columns)  # another joint's reversal acts here through the coupling's forces, already inputs
-    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
-    X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
-                                             input_groups([every[i] for i in keep]), y, fold_rows)
-    X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows)
+    X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c)
     follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups)  # time too
+    how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
+    screened_fold = direction_c if how == "both" else None  # the folded fit made too
+    sigma = direction_c if how == "folded" else sigma
+    folded, y_seen = sigma is not None, y
+    if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
+        y, fitted = sigma * y, fitted_folded(fitted, sigma)
     after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
@@ -329,20 +360,47 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
                 share, z, _ = judged(cv.mse)
                 cv_t, y_t = cv.trees(y)
             sub = {g: [use.index(i) for i in groups[g] if i in use] for g in named}  # a partner: its shared columns
-            imp_k = importance(cv_t, X[:, use], y_t, sub, rng)
+            imp_k = importance_on_y(importance(cv_t, X[:, use], y_t, sub, rng), y_t, sigma)
             beyond = outside(X[:, use], cv, list(range(len(use))))
         model = final_model(X[:, use], cv.less_refit(y, fitted[0]) if moved else y, cv)
         if explained and named:
             deps = tuple(_dependence(model, X[:, use], [columns[i] for i in use], sub[g], g, imp_k[g][0], unit)
                          for g in named)
-    return FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
-                       z, explained, float(np.std(y)), float(noise), deps, outside=beyond,
-                       beyond_noise=beyond_noise(y, noise, spi),
-                       screened=screened, model=model, columns=tuple(every) + tuple(columns[len(keep):]),
-                       use=tuple(keep[i] if i < len(keep) else len(every) + i - len(keep) for i in use),
-                       readjusted=moved,
-                       projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections),
-                       lines=tuple((keep[x[0]],) + x[1:] for x in lines))
+            if folded:  # the direction of motion first: the curves above are of the level g
+                deps = (Dependence(joint=c + 1, **direction_dependence(
+                    next(col[1] for col in columns if col[2] == c + 1 and col[3] == "rate"), direction_importance(
+                        cv_t, sigma * y_t, sigma, rng)[0], model.predict(X[:, use]))),) + deps
+        if folded:  # sigma g from the stage's columns: the direction's columns last
+            model, use = FoldedModel(model, len(use)), list(use) + direction_columns(columns, c + 1)
+    return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
+                       z, explained, float(np.std(y_seen)), float(noise), deps, outside=beyond,
+                       beyond_noise=beyond_noise(y_seen, noise, spi),
+                       screened=screened, model=model, readjusted=moved, folded=folded,
+                       **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
+
+
+def _channel_columns(X, columns, y, fold_rows, c) -> tuple:
+    """The inputs of channel ``c`` (0-based; None: any): the stage's columns but another joint's time
+    since a reversal (which acts here through the coupling's forces, already inputs), with the pose
+    and rates projected (:mod:`.oblique`) and the line's phase (:mod:`.periodic`), fitted per fold.
+    Returns ``(X, columns, groups, every, keep, projections, lines)``: ``every`` the stage's
+    columns, ``keep`` the indices into them of ``X``'s first columns."""
+    every = tuple(columns)
+    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
+    X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
+                                             input_groups([every[i] for i in keep]), y, fold_rows)
+    X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows)
+    return X, columns, groups, every, keep, projections, lines
+
+
+def _on_stage_columns(every, keep, columns, use, projections, lines) -> dict:
+    """A fit's ``columns``, ``use``, ``projections`` and ``lines`` with indices into the stage's
+    columns ``every`` followed by the columns fitted for the channel (:func:`_channel_columns`)."""
+    def at(i):
+        return keep[i] if i < len(keep) else len(every) + i - len(keep)
+    return dict(columns=tuple(every) + tuple(columns[len(keep):]), use=tuple(at(i) for i in use),
+                projections=tuple((tuple(keep[i] for i in p[0]),) + p[1:] for p in projections),
+                lines=tuple((keep[x[0]],) + x[1:] for x in lines))
 
 
 def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
@@ -403,8 +461,13 @@ def statement(fit: FlexibleFit, noun: str) -> str:
             s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) alone: share out of fold "
                   f"{100 * fit.screened[1]:.0f} %, not significant")
         return s
-    parts = []
-    for d in fit.inputs:
+    parts, head = [], f"a force on {noun} {fit.joint} that depends on "
+    ins = fit.inputs
+    if fit.folded:  # sigma g: the direction, then what its level depends on
+        head = (f"a force on {noun} {fit.joint} that switches with its direction of motion (importance "
+                f"{100 * ins[0].importance:.0f} %), its level depending on ")
+        ins = ins[1:]
+    for d in ins:
         size = max(abs(min(d.curve)), abs(max(d.curve)))
         k = int(np.argmax(np.abs(np.asarray(d.curve))))
         at = _at_value(d.feature, d.grid[k], d.unit)
@@ -418,7 +481,7 @@ def statement(fit: FlexibleFit, noun: str) -> str:
                      f"importance {100 * d.importance:.0f} %)")
     only = " and on nothing else" if len(parts) == 1 else ""
     beside = f", with the fitted {', '.join(fit.readjusted)} re-adjusted beside it" if fit.readjusted else ""
-    s = (f"a force on {noun} {fit.joint} that depends on " + " and on ".join(parts) + only
+    s = (head + (" and on ".join(parts) if parts else "nothing else recorded") + only
          + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model{beside})")
     if fit.outside > OUTSIDE_WARN:
         s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
