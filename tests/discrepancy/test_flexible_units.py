@@ -96,3 +96,27 @@ def test_a_single_rate_groups_partners_are_checked_one_by_one():
     kept, fits = _select(X, y, groups, ["rate of slider 1"])
     assert kept == ["rate of slider 1", "rate of slider 2", "rate of slider 3"]
     assert fits == 6
+
+
+def test_the_fits_whose_gain_already_falls_short_stop_early_and_name_as_the_whole_growth():
+    # the leave-one-out fits of the check and the partners' fits stop after their first step where
+    # their held-out error is already under the kept groups' plus DROP_MIN of the variance (it only
+    # falls with more trees): the same names, columns and trees on them as with every fit grown whole
+    from cosim.discrepancy.flexible import cv as flexible_cv
+
+    X, y, groups = _spindle_groups(signed=True)
+    named = ["rate of slider 1", "rate of slider 2", "history of slider 4", "rate of slider 4"]
+    rows = folds(len(y), 10)
+    got = {}
+    for how in ("whole", "early"):
+        flexible_cv._DONE.clear()
+        flexible_cv._STOPPED.clear()
+        made = []
+
+        def cv(Xs, ys, fold_rows, enough=None):
+            made.append(cross_validate(Xs, ys, fold_rows, enough=None if how == "whole" else enough))
+            return made[-1]
+        kept, cv_k, cols = sel.select(X, y, rows, groups, named, float(np.var(y)), cross_validate=cv)
+        got[how] = (kept, cols, cv_k.mse, sum(c.stopped for c in made))
+    assert got["early"][:3] == got["whole"][:3]
+    assert got["whole"][3] == 0 and got["early"][3] >= 1
