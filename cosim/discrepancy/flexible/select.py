@@ -259,12 +259,20 @@ def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
     and the history's): per such group, cross-validated without its columns no other named group
     holds (it stays named for its shared ones); ``(cv, use)`` of the smallest held-out error, the
     full model's on a tie (``cross_validate``: the stage's).  Columns that carry nothing more add
-    variance (docs/flexible.md)."""
+    variance (docs/flexible.md).
+
+    The rate groups of a unit (:func:`units`: they hold the rates' projected column) are one
+    candidate, as in the check: cross-validated without all their columns but the common ones and
+    those another named group holds (one fit, not one per member: 3-5 on a spindle's channels,
+    docs/discrepancy.md, Speed)."""
     best = (cv, use)
-    for g in named:
-        others = {i for h in named if h != g for i in groups[h]}
-        sub = [i for i in use if i in others]
-        if not set(groups[g]) & others or len(sub) == len(use):
+    joint = [u for u in units(list(named), groups) if len(u) > 1]
+    for gs in [[g] for g in named if not any(g in u for u in joint)] + joint:
+        held = {i for g in gs for i in groups[g]}
+        others = {i for h in named if h not in gs for i in groups[h]}
+        common = set.intersection(*(set(groups[g]) for g in gs)) if len(gs) > 1 else set()
+        sub = [i for i in use if i not in held - others - common]
+        if not held & (others | common) or len(sub) == len(use):
             continue
         cv_s = cross_validate(X[:, sub], y, fold_rows)
         if cv_s.mse < best[0].mse:
