@@ -146,3 +146,72 @@ def test_a_claim_stops_the_trees_early_and_decides_as_the_whole_growth():
         assert (early.mse <= bar) == (whole.mse <= bar)
         decided += early.iterations <= flexible_cv.STEPS[0] < whole.iterations
     assert decided >= 10  # the bars at or above the first step's error: decided on its trees
+
+
+def _forgotten():
+    flexible_cv._DONE.clear()
+    flexible_cv._STOPPED.clear()
+    flexible_cv._TARGET.clear()
+
+
+def _fits_counted(monkeypatch):
+    """The warm-started fits of the folds' trees, by the number of iterations each was asked for."""
+    trees, calls = flexible_cv._trees_keeping_bins(), []
+    fit = trees.fit
+
+    def counted(self, *args, **kw):
+        calls.append(self.max_iter)
+        return fit(self, *args, **kw)
+    monkeypatch.setattr(trees, "fit", counted)
+    return calls
+
+
+def _case():
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(600, 6))
+    y = np.sin(3 * X[:, 0]) + 0.3 * X[:, 1] * X[:, 2] + 0.2 * rng.normal(size=600)
+    return X, y, flexible_cv.folds(600, gap=3)
+
+
+def test_a_cross_validation_asked_again_on_equal_inputs_is_the_first_one(monkeypatch):
+    """Equal values (other arrays) give the cross-validation made the first time, no tree grown;
+    another target grows its own."""
+    X, y, rows = _case()
+    _forgotten()
+    first = flexible_cv.cross_validate(X, y, rows)
+    calls = _fits_counted(monkeypatch)
+    again = flexible_cv.cross_validate(X.copy(), y.copy(), rows)
+    assert again is first and calls == []
+    other = flexible_cv.cross_validate(X, y + 0.5 * X[:, 3], rows)
+    assert len(calls) >= len(rows) and other.mse != first.mse
+
+
+def test_a_growth_stopped_early_grows_on_as_the_whole_growth_bit_for_bit(monkeypatch):
+    """Trees stopped after the first step (``enough``) and asked for again whole are grown on from
+    there: the second step's fits only, and the whole growth's trees, predictions and error bit for
+    bit; the stopped cross-validation keeps its own trees."""
+    X, y, rows = _case()
+    _forgotten()
+    whole = flexible_cv.cross_validate(X, y, rows)
+    assert whole.iterations > flexible_cv.STEPS[0] - flexible_cv.PATIENCE  # the whole growth takes the second step
+    _forgotten()
+    early = flexible_cv.cross_validate(X, y, rows, enough=lambda mse: True)
+    assert early.stopped and all(m.n_iter_ == flexible_cv.STEPS[0] for m in early.models)
+    calls = _fits_counted(monkeypatch)
+    grown_on = flexible_cv.cross_validate(X, y, rows)
+    assert calls == [flexible_cv.STEPS[1]] * len(rows)  # the second step alone
+    assert not grown_on.stopped and grown_on.iterations == whole.iterations and grown_on.mse == whole.mse
+    assert np.array_equal(grown_on.pred, whole.pred)
+    for (held, _), g, w in zip(rows, grown_on.models, whole.models):
+        assert g.n_iter_ == w.n_iter_
+        assert np.array_equal(g.predict(X[held]), w.predict(X[held]))
+    assert all(m.n_iter_ == flexible_cv.STEPS[0] for m in early.models)
+
+
+def test_the_first_trees_predict_as_the_staged_prediction_bit_for_bit():
+    X, y, rows = _case()
+    models, _, _ = flexible_cv.grow(X, y, rows)
+    held = rows[0][0]
+    for k in (1, 7, models[0].n_iter_):
+        staged = next(islice(models[0].staged_predict(X[held]), k - 1, None))
+        assert np.array_equal(flexible_cv.first_trees(models[0], X[held], k), staged)

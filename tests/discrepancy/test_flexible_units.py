@@ -96,3 +96,52 @@ def test_a_single_rate_groups_partners_are_checked_one_by_one():
     kept, fits = _select(X, y, groups, ["rate of slider 1"])
     assert kept == ["rate of slider 1", "rate of slider 2", "rate of slider 3"]
     assert fits == 6
+
+
+def test_the_fits_whose_gain_already_falls_short_stop_early_and_name_as_the_whole_growth():
+    # the leave-one-out fits of the check and the partners' fits stop after their first step where
+    # their held-out error is already under the kept groups' plus DROP_MIN of the variance (it only
+    # falls with more trees): the same names, columns and trees on them as with every fit grown whole
+    from cosim.discrepancy.flexible import cv as flexible_cv
+
+    X, y, groups = _spindle_groups(signed=True)
+    named = ["rate of slider 1", "rate of slider 2", "history of slider 4", "rate of slider 4"]
+    rows = folds(len(y), 10)
+    got = {}
+    for how in ("whole", "early"):
+        flexible_cv._DONE.clear()
+        flexible_cv._STOPPED.clear()
+        made = []
+
+        def cv(Xs, ys, fold_rows, enough=None):
+            made.append(cross_validate(Xs, ys, fold_rows, enough=None if how == "whole" else enough))
+            return made[-1]
+        kept, cv_k, cols = sel.select(X, y, rows, groups, named, float(np.var(y)), cross_validate=cv)
+        got[how] = (kept, cols, cv_k.mse, sum(c.stopped for c in made))
+    assert got["early"][:3] == got["whole"][:3]
+    assert got["whole"][3] == 0 and got["early"][3] >= 1
+
+
+def test_the_lean_refit_judges_a_unit_as_one_candidate():
+    # the rates of rails 1-3 hold the projected column (4): one refit without all their own columns
+    # (the trees on the projected column alone), not one per member; a rate and its history sharing
+    # a signed history are still refitted one by one (each without its own columns)
+    X, y, groups = _spindle_groups()
+    rows = folds(len(y), 10)
+    cv, calls = _counted()
+    named = ["rate of slider 1", "rate of slider 2", "rate of slider 3"]
+    use = sorted({i for g in named for i in groups[g]})
+    full = cross_validate(X[:, use], y, rows)
+    seen = []
+
+    def logged(Xs, ys, fold_rows, enough=None):
+        seen.append(Xs.shape[1])
+        return cv(Xs, ys, fold_rows, enough=enough)
+    got, sub = sel.lean(X, y, rows, groups, named, use, full, logged)
+    assert seen == [1]
+    assert sub in (use, [4]) and got.mse <= full.mse
+    seen.clear()
+    named = ["rate of slider 4", "history of slider 4"]
+    use = sorted({i for g in named for i in groups[g]})
+    sel.lean(X, y, rows, groups, named, use, cross_validate(X[:, use], y, rows), logged)
+    assert seen == [2, 2]

@@ -29,11 +29,10 @@ function of the force's inputs alone either.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import islice
 
 import numpy as np
 
-from .cv import CV, at, grow
+from .cv import CV, at, first_trees, grow
 
 #: backfitting rounds after the trees on the residual alone (each: a linear refit per fold, then the trees)
 ROUNDS = 2
@@ -178,7 +177,7 @@ def backfit_cv(X, y, J, cv, rounds=ROUNDS) -> BackfitCV:
     for _ in range(rounds):
         Y = np.empty((len(y), len(cv.folds)))
         for b, (held, fit) in enumerate(cv.folds):
-            inside = next(islice(models[b].staged_predict(at(X, b)[fit]), iters - 1, None))
+            inside = first_trees(models[b], at(X, b)[fit], iters)
             coef[b] = _refit(Js[fit], y[fit] - inside)
             Y[:, b] = y - Js @ coef[b]
         models, iters, held_pred = grow(X, Y, cv.folds)

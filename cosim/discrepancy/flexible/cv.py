@@ -17,7 +17,9 @@ standard error is their spread) and the refits of the input selection are all ou
 from __future__ import annotations
 
 import copy
+import hashlib
 import math
+import threading
 from dataclasses import dataclass
 from itertools import islice
 
@@ -92,10 +94,22 @@ class CV:
     iterations: int
     pred: np.ndarray
     mse: float
+    #: where ``enough`` stopped the trees after a step but the last (:func:`cross_validate`): True
+    stopped: bool = False
 
     def predict(self, b: int, X) -> np.ndarray:
-        """Fold ``b``'s trees at the chosen number of iterations on the rows ``X``."""
-        return next(islice(self.models[b].staged_predict(X), self.iterations - 1, None))
+        """Fold ``b``'s trees at the chosen number of iterations on the rows ``X`` (the first
+        ``iterations`` trees summed in their order, as ``staged_predict`` sums them)."""
+        return first_trees(self.models[b], X, self.iterations)
+
+
+def first_trees(model, X, k: int) -> np.ndarray:
+    """The prediction of ``model``'s first ``k`` trees on the rows ``X``: ``staged_predict``'s
+    ``k``-th value, the same trees summed in the same order (without the values before it where
+    the model is :func:`grow`'s)."""
+    if hasattr(model, "predict_first"):
+        return model.predict_first(X, k)
+    return next(islice(model.staged_predict(X), k - 1, None))
 
 
 def folds(n: int, gap: int, k: int = N_FOLDS, per_fold: int = BLOCKS_PER_FOLD) -> tuple:
@@ -138,17 +152,87 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
     more iterations is at most the one chosen over fewer (the minimum of the same trees' summed
     losses over more iterations, to the rounding of the mean), so a test that every smaller error
     passes too (a share claimed: :func:`~.flexible.stage.fit_channel`) decides as the whole growth
-    would, on fewer trees (``tests/discrepancy/test_flexible_cv.py``)."""
+    would, on fewer trees (``tests/discrepancy/test_flexible_cv.py``).
+
+    The trees are a function of the inputs' values, the target and the folds alone (their
+    settings fixed, ``random_state`` 0): a cross-validation asked again on equal values (the same
+    columns judged by two steps of the selection: a leave-one-out fit and a leaner refit, the
+    screened groups checked twice) is the one made the first time (:func:`_remembered`), unless
+    ``enough`` stopped that one early."""
     def held_out(held_pred):
         pred = np.empty(len(y))
         for (held, _), p in zip(fold_rows, held_pred):
             pred[held] = p
         return pred, float(np.mean((y - pred) ** 2))
 
-    stop = None if enough is None else (lambda held_pred: enough(held_out(held_pred)[1]))
-    models, best, held_pred = grow(X, y, fold_rows, stop)
-    pred, mse = held_out(held_pred)
-    return CV(tuple(fold_rows), tuple(models), best, pred, mse)
+    key = _inputs_key(X, y, fold_rows)
+    done = _DONE.get(key)
+    if done is not None and (enough is None or all(m.n_iter_ == STEPS[0] for m in done.models)):
+        return done  # (with ``enough``: the growth ended at the first step, where the test is not made)
+    with _DONE_LOCK:
+        start = _STOPPED.pop(key, None)
+    stopped = []
+
+    def stop(held_pred):
+        stopped.append(bool(enough(held_out(held_pred)[1])))
+        return stopped[-1]
+
+    models, best, staged = _grow(X, y, fold_rows, None if enough is None else stop,
+                                 None if start is None else (copy.deepcopy(start[0]), start[1]))
+    pred, mse = held_out([p[best - 1] for p in staged])
+    out = CV(tuple(fold_rows), tuple(models), best, pred, mse, stopped=any(stopped))
+    if any(stopped):  # kept to be grown on where the whole growth is asked for
+        _remembered(_STOPPED, key, (models, staged), y)
+    else:  # the whole growth: the same as a call without ``enough``
+        _remembered(_DONE, key, out, y)
+    return out
+
+
+#: the last cross-validations made (:func:`cross_validate`), by :func:`_inputs_key`, and the
+#: growths ``enough`` stopped (their trees and held-out predictions per step), of one target
+#: (a channel's fits share it; another target lets them go: ``_TARGET``); at most DONE_MAX each
+#: (a channel makes 5-40 cross-validations, some 0.2 s of trees and 0.7-1 MB each)
+_DONE: dict = {}
+_STOPPED: dict = {}
+_TARGET: dict = {}
+DONE_MAX = 32
+_DONE_LOCK = threading.Lock()
+
+
+def _inputs_key(X, y, fold_rows) -> bytes:
+    """A digest of what a cross-validation's trees are a function of: the inputs' values (with
+    their per-fold variants, :class:`FoldInputs`), the target, the folds, and the trees' settings
+    and steps."""
+    h = hashlib.blake2b(digest_size=20)
+    variants = getattr(X, "variants", None)
+    for a in (np.asarray(X, float), variants, np.asarray(y, float)):
+        if a is None:
+            h.update(b"none")
+            continue
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.shape}{a.dtype.str}".encode())
+        h.update(a.tobytes())
+    for held, fit in fold_rows:
+        h.update(np.asarray(held, np.int64).tobytes())
+        h.update(b"|")
+        h.update(np.asarray(fit, np.int64).tobytes())
+        h.update(b";")
+    h.update(repr((sorted(TREES.items()), STEPS, PATIENCE, MIN_ITER)).encode())
+    return h.digest()
+
+
+def _remembered(kept: dict, key, value, y) -> None:
+    """Keeps ``value`` under ``key`` in ``kept`` among its last :data:`DONE_MAX`, all of the
+    target ``y`` (kept for another target are let go)."""
+    target = hashlib.blake2b(np.ascontiguousarray(np.asarray(y, float)).tobytes(), digest_size=16).digest()
+    with _DONE_LOCK:
+        if _TARGET.get("y") != target:
+            _DONE.clear()
+            _STOPPED.clear()
+            _TARGET["y"] = target
+        while len(kept) >= DONE_MAX:
+            kept.pop(next(iter(kept)))
+        kept[key] = value
 
 
 def grow(X, Y, fold_rows, stop=None) -> tuple:
@@ -160,12 +244,26 @@ def grow(X, Y, fold_rows, stop=None) -> tuple:
     fallen for :data:`PATIENCE` iterations, at the last, or where ``stop`` (a callable of the
     held-out predictions per fold at the number chosen so far) says so after a step but the
     last.  Returns ``(models, iterations, the held-out predictions per fold at that number)``."""
+    models, best, staged = _grow(X, Y, fold_rows, stop)
+    return models, best, [p[best - 1] for p in staged]
+
+
+def _grow(X, Y, fold_rows, stop=None, start=None) -> tuple:
+    """:func:`grow`, returning the held-out predictions per fold at every iteration grown
+    (``staged``) instead of the chosen one's, and grown on from ``start`` (``(models, staged)``
+    of a growth ``stop`` ended after a step: its trees are the first of the whole growth's, and
+    a warm-started fit adds the next ones as one fit of as many iterations would)."""
     Y = np.asarray(Y)
     target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
-    models = [_trees_keeping_bins()(**dict(TREES, warm_start=True)) for _ in fold_rows]
-    staged = [np.empty((0, len(held))) for held, _ in fold_rows]
+    if start is None:
+        models = [_trees_keeping_bins()(**dict(TREES, warm_start=True)) for _ in fold_rows]
+        staged = [np.empty((0, len(held))) for held, _ in fold_rows]
+    else:
+        models, staged = list(start[0]), list(start[1])
     for n in STEPS:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
+            if len(staged[b]) >= n:  # grown to this step already (``start``)
+                continue
             m.set_params(max_iter=n).fit(at(X, b)[fit], target(b)[fit])
             new = list(_staged_after(m, at(X, b)[held], staged[b]))
             staged[b] = np.vstack([staged[b]] + new)
@@ -176,7 +274,7 @@ def grow(X, Y, fold_rows, stop=None) -> tuple:
             break
     for m in models:  # the kept training rows are no part of the fitted trees
         m.__dict__.pop("_kept_bins", None)
-    return models, best, [p[best - 1] for p in staged]
+    return models, best, staged
 
 
 def _staged_after(m, X, done):
@@ -223,6 +321,21 @@ def _trees_keeping_bins():
                 elif is_training_data:
                     self.__dict__["_kept_bins"] = (np.array(X), self._bin_mapper, out)
                 return out
+
+            def predict_first(self, X, k):
+                """The prediction of the first ``k`` trees on ``X``: the baseline and their raw
+                predictions added in their order, as ``staged_predict`` adds them (its ``k``-th
+                value, without the values before it)."""
+                from sklearn.utils._openmp_helpers import _openmp_effective_n_threads
+
+                if self.loss != "squared_error" or not hasattr(self, "_preprocess_X"):
+                    return next(islice(self.staged_predict(X), k - 1, None))
+                X = self._preprocess_X(X, reset=False)
+                raw = np.zeros((X.shape[0], 1), dtype=self._baseline_prediction.dtype, order="F")
+                raw += self._baseline_prediction
+                self._predict_iterations(X, self._predictors[:k], raw, is_binned=False,
+                                         n_threads=_openmp_effective_n_threads())
+                return raw.ravel().copy()
 
             def staged_predict_after(self, X, start, at_start):
                 """``staged_predict(X)``'s values after iteration ``start``, given its value there

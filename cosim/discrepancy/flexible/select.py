@@ -112,18 +112,23 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         from .cv import cross_validate
     done = dict(known or {})
 
-    def cv_on(gs, without=()):  # a column two groups share leaves with either; one fit per set of columns
+    def cv_on(gs, without=(), under=None):  # a column two groups share leaves with either; one fit per set of columns
         cols = sorted({i for g in gs for i in groups[g]} - set(without))
-        if tuple(cols) not in done:
-            done[tuple(cols)] = cross_validate(X[:, cols], y, fold_rows)
-        return done[tuple(cols)], cols
+        if tuple(cols) in done:
+            return done[tuple(cols)], cols
+        got = cross_validate(X[:, cols], y, fold_rows) if under is None else \
+            cross_validate(X[:, cols], y, fold_rows, enough=lambda mse: mse < under)
+        if not getattr(got, "stopped", False):
+            done[tuple(cols)] = got
+        return got, cols
 
     def check(gs):  # a unit is kept when leaving it out costs DROP_MIN; none kept: all
         us = units(gs, groups)
         if len(us) == 1:
             return list(gs)
         full = cv_on(gs)[0]
-        out = {g for u in us if (cv_on(gs, [i for h in u for i in groups[h]])[0].mse - full.mse) / var < DROP_MIN
+        bar = full.mse + DROP_MIN * var  # below it the unit is out, on the trees of a first step as on all
+        out = {g for u in us if (cv_on(gs, [i for h in u for i in groups[h]], bar)[0].mse - full.mse) / var < DROP_MIN
                for g in u}
         kept = [g for g in gs if g not in out]
         return kept if kept else list(gs)
@@ -142,6 +147,18 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         kept = after(kept, cv_on)
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
+
+
+def adds(without, with_, y, var, cv_on) -> bool:
+    """Whether the columns ``without`` leaves out of the groups ``with_`` add a significant
+    share (:func:`gain`): ``cv_on(groups, without=(), under=None)`` is :func:`select`'s
+    cross-validation of the groups' columns less ``without``, whose trees may stop after a step
+    once their held-out error is ``under`` a bar (``enough`` of :func:`~.cv.cross_validate`).
+    Under the trees on ``with_`` plus :data:`DROP_MIN` of the variance the gain falls short of
+    DROP_MIN, and the error of trees grown further is lower still: decided on the first step's
+    trees as on the whole growth."""
+    full = cv_on(with_)[0]
+    return gain(cv_on(with_, without, full.mse + DROP_MIN * var)[0], full, y, var)[1]
 
 
 def units(gs, groups) -> list:
@@ -228,14 +245,14 @@ def partners(kept, groups, y, var, cv_on) -> list:
         pairs = [(g, h) for g in u for h in groups if h not in out and set(groups[g]) & set(groups[h])
                  and not set(groups[g]) & set(groups[h]) & common]
         together = {i for g, h in pairs for i in set(groups[g]) & set(groups[h])}
-        if len(pairs) > 1 and not gain(cv_on(out, together)[0], cv_on(out)[0], y, var)[1]:
+        if len(pairs) > 1 and not adds(together, out, y, var, cv_on):
             judged_out.update(pairs)
     for g in kept:
         for h, idx in groups.items():
             shared = set(groups[g]) & set(idx)
             if (g, h) in judged_out or h in out or not shared or not {i for k in out for i in groups[k]} - shared:
                 continue
-            if gain(cv_on(out, shared)[0], cv_on(out)[0], y, var)[1]:
+            if adds(shared, out, y, var, cv_on):
                 out.append(h)
     return out
 
@@ -245,12 +262,20 @@ def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
     and the history's): per such group, cross-validated without its columns no other named group
     holds (it stays named for its shared ones); ``(cv, use)`` of the smallest held-out error, the
     full model's on a tie (``cross_validate``: the stage's).  Columns that carry nothing more add
-    variance (docs/flexible.md)."""
+    variance (docs/flexible.md).
+
+    The rate groups of a unit (:func:`units`: they hold the rates' projected column) are one
+    candidate, as in the check: cross-validated without all their columns but the common ones and
+    those another named group holds (one fit, not one per member: 3-5 on a spindle's channels,
+    docs/discrepancy.md, Speed)."""
     best = (cv, use)
-    for g in named:
-        others = {i for h in named if h != g for i in groups[h]}
-        sub = [i for i in use if i in others]
-        if not set(groups[g]) & others or len(sub) == len(use):
+    joint = [u for u in units(list(named), groups) if len(u) > 1]
+    for gs in [[g] for g in named if not any(g in u for u in joint)] + joint:
+        held = {i for g in gs for i in groups[g]}
+        others = {i for h in named if h not in gs for i in groups[h]}
+        common = set.intersection(*(set(groups[g]) for g in gs)) if len(gs) > 1 else set()
+        sub = [i for i in use if i not in held - others - common]
+        if not held & (others | common) or len(sub) == len(use):
             continue
         cv_s = cross_validate(X[:, sub], y, fold_rows)
         if cv_s.mse < best[0].mse:
@@ -272,14 +297,15 @@ def strongest_alone(X, y, fold_rows, groups, cross_validate):
 def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate, after=None) -> tuple:
     """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
     columns)`` of :func:`select`, a consequence among them): the trees cross-validated on every
-    input but the consequences ``follow`` (:func:`consequences`), screened (``screen``: the
-    stage's, on their permutation importance) and checked as the full model's; ``chosen`` stays
+    input but the consequences ``follow`` (:func:`consequences`), grown as the full model's
+    (stopped after a step once they claim: ``enough`` of :func:`~.cv.cross_validate`), screened
+    (``screen``: the stage's, on their permutation importance) and checked as the full model's; ``chosen`` stays
     when those trees claim nothing (``judged``: the stage's two bars) or ``chosen`` beats the
     causes' refit significantly (:func:`gain`); ``after``: :func:`select`'s."""
     from .cv import importance
 
     cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
-    cv = cross_validate(X[:, cols], y, fold_rows)
+    cv = cross_validate(X[:, cols], y, fold_rows, enough=lambda mse: judged(mse)[2])  # as the stage's on every input
     share, _, ok = judged(cv.mse)
     sub = {g: [cols.index(i) for i in idx] for g, idx in groups.items() if g not in follow}
     causes = screen(importance(cv, X[:, cols], y, sub, rng), share) if ok else []
