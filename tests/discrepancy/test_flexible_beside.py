@@ -150,3 +150,19 @@ def test_a_rails_effort_alone_on_a_weak_channel_is_no_answer_where_the_pose_clai
     assert fit.inputs == ()
     assert beside.copy_alone(["effort of slider 4"], ["the platform pose"], False)
     assert not beside.copy_alone(["effort of slider 4"], ["the platform pose"], True)
+
+
+def test_time_holding_a_lines_phase_is_judged_with_the_causes_not_last():
+    # a line's phase is fitted per fold and repeats through every block: no event one block carries, so
+    # time is not set aside as a consequence, and the neighbouring-blocks check is not made on it
+    groups = {"time": [0, 1], "the platform pose": [2], "effort of slider 1": [3]}
+    line = ((0, 3.23, 0.1, 0.2),)
+    assert beside.judged_last({"effort of slider 1"}, groups) == {"effort of slider 1", "time"}
+    assert beside.judged_last({"effort of slider 1"}, groups, line) == {"effort of slider 1"}
+    rng = np.random.default_rng(0)
+    X, y = rng.normal(size=(400, 4)), rng.normal(size=400)
+
+    def refused(*_, **__):  # the neighbouring-blocks check would fit trees on time and the rest
+        raise AssertionError("once() fitted")
+    after = beside.rules(X, y, folds(400, 2), groups, set(), None, refused, line)
+    assert after(["time", "effort of slider 1"], None) == ["time", "effort of slider 1"]

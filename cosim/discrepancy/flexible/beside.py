@@ -43,10 +43,12 @@ from .select import POSE, gain, made_of_efforts
 TIME = "time"
 
 
-def judged_last(follow, groups) -> set:
+def judged_last(follow, groups, lines=()) -> set:
     """The groups judged after the others: the consequences ``follow``
-    (:func:`~.select.consequences`) and time, where it is an input."""
-    return set(follow) | ({TIME} & set(groups))
+    (:func:`~.select.consequences`) and time, where it is an input and holds no line's phase
+    (``lines``, :func:`.periodic.extend`): a line is fitted per fold and repeats through every
+    block, no event one block carries."""
+    return set(follow) | (set() if lines else {TIME} & set(groups))
 
 
 def beside_pose(kept) -> set:
@@ -124,15 +126,16 @@ def once(kept, groups, X, y, cross_validate) -> list:
     return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
-def rules(X, y, fold_rows, groups, follow, fitted, cross_validate):
+def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=()):
     """The ``after`` of :func:`~.select.select` on one channel: the efforts' choice made again
     without the fitted levels (:func:`passed_on`), the groups beside the pose named only where
     they add significantly (:func:`significant_only`), time beside other groups only where it
-    adds with the neighbouring blocks held out (:func:`once`)."""
+    adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
+    (``lines``: see :func:`judged_last`)."""
     var = float(np.var(y))
 
     def after(kept, cv_on):
         kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
         kept = significant_only(kept, groups, y, var, cv_on)
-        return once(kept, groups, X, y, cross_validate)
+        return kept if lines else once(kept, groups, X, y, cross_validate)
     return after

@@ -303,14 +303,14 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
     X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c)
-    follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups)  # time too
+    follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
     screened_fold = direction_c if how == "both" else None  # the folded fit made too
     sigma = direction_c if how == "folded" else sigma
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
