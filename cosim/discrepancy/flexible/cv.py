@@ -182,9 +182,9 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
     pred, mse = held_out([p[best - 1] for p in staged])
     out = CV(tuple(fold_rows), tuple(models), best, pred, mse, stopped=any(stopped))
     if any(stopped):  # kept to be grown on where the whole growth is asked for
-        _remembered(_STOPPED, key, (models, staged), y)
+        _remembered("stopped", key, (models, staged), y)
     else:  # the whole growth: the same as a call without ``enough``
-        _remembered(_DONE, key, out, y)
+        _remembered("done", key, out, y)
     return out
 
 
@@ -221,10 +221,12 @@ def _inputs_key(X, y, fold_rows) -> bytes:
     return h.digest()
 
 
-def _remembered(kept: dict, key, value, y) -> None:
-    """Keeps ``value`` under ``key`` in ``kept`` among its last :data:`DONE_MAX`, all of the
-    target ``y`` (kept for another target are let go)."""
+def _remembered(which: str, key, value, y) -> None:
+    """Keeps ``value`` under ``key`` in the module's store ``which`` ("done": whole growths,
+    "stopped": growths stopped early) among its last :data:`DONE_MAX`, all of the target ``y``
+    (kept for another target are let go)."""
     target = hashlib.blake2b(np.ascontiguousarray(np.asarray(y, float)).tobytes(), digest_size=16).digest()
+    kept = {"done": _DONE, "stopped": _STOPPED}[which]
     with _DONE_LOCK:
         if _TARGET.get("y") != target:
             _DONE.clear()
