@@ -37,7 +37,7 @@ MOTION_RATIO = 20.0
 MAX_LINES = 6
 
 
-def _sinusoid(t, y, f, F=None):
+def sinusoid(t, y, f, F=None):
     """(the sinusoid's part, its amplitude, the sum of squares it explains) of a fit of y with a
     sinusoid at f beside the columns F (a constant when None)."""
     a = 2.0 * math.pi * f * t
@@ -50,7 +50,7 @@ def _sinusoid(t, y, f, F=None):
     return fit, float(math.hypot(beta[-2], beta[-1])), float(r0 @ r0 - r @ r)
 
 
-def _wave(t, y, f, at) -> np.ndarray:
+def wave_at(t, y, f, at) -> np.ndarray:
     """The sinusoid at f [Hz] fitted to ``y`` at the times ``t`` (beside a constant, least
     squares), evaluated at the times ``at`` (without the constant)."""
     a = 2.0 * math.pi * f * np.asarray(t, float)
@@ -59,13 +59,13 @@ def _wave(t, y, f, at) -> np.ndarray:
     return beta[1] * np.cos(b) + beta[2] * np.sin(b)
 
 
-def _motion_share(t, pos, f) -> float:
+def motion_share(t, pos, f) -> float:
     """The largest share of a column of ``pos`` (positions, centred) a sinusoid at f explains."""
     ss = np.maximum(np.sum(pos ** 2, axis=0), 1e-300)
-    return max(_sinusoid(t, pos[:, j], f)[2] / ss[j] for j in range(pos.shape[1]))
+    return max(sinusoid(t, pos[:, j], f)[2] / ss[j] for j in range(pos.shape[1]))
 
 
-def _peak(t, x, dt, f_lo, f_hi, rows=None):
+def peak(t, x, dt, f_lo, f_hi, rows=None):
     """The frequency [Hz] of the highest periodogram peak of x in [f_lo, f_hi], refined by least
     squares over the bin around it (None when the band is empty).  ``rows``: of these samples only
     (the others count as zero in the periodogram and not at all in the refinement)."""
@@ -84,7 +84,7 @@ def _peak(t, x, dt, f_lo, f_hi, rows=None):
     k = band[np.argmax(P[band])]
     grid = f[k] + np.linspace(-1.0, 1.0, 21) * (f[1] - f[0])
     tr, xr = (t, x) if rows is None else (t[rows], x[rows])
-    return float(grid[np.argmax([_sinusoid(tr, xr, g)[2] for g in grid])])
+    return float(grid[np.argmax([sinusoid(tr, xr, g)[2] for g in grid])])
 
 
 def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
@@ -141,11 +141,11 @@ def lines(pipe, R, floor=None, threshold: float = 25.0) -> list:
         for _ in range(MAX_LINES):
             base = x - F @ np.linalg.lstsq(F, x, rcond=None)[0]
             total = float(base @ base)
-            f = _peak(t, base, dt, f_lo, f_hi) if total > 0 else None
+            f = peak(t, base, dt, f_lo, f_hi) if total > 0 else None
             if f is None:
                 break
-            fit, amp, ss = _sinusoid(t, base, f, F)
-            motion = _motion_share(t, pos, f)
+            fit, amp, ss = sinusoid(t, base, f, F)
+            motion = motion_share(t, pos, f)
             sigma = own_noise(pipe, x - fit, 0.0 if floor is None else floor[c])
             if not (sigma > 0 and ss / total > MOTION_RATIO * motion and ss / sigma ** 2 / phi - cost > threshold):
                 break

@@ -5,9 +5,9 @@ that the motion does not hold, :mod:`..lines`) is a function of time, but not on
 on the time column can predict in a held-out block of time: they learn the values of the blocks
 they were fitted on, not the phase the force has in the others.  A column that is the force's
 phase does: per channel, where the residual's highest periodogram peak in the line rule's band
-(:func:`..lines._peak`) lies at a frequency the joints' positions do not hold (the line rule's
+(:func:`..lines.peak`) lies at a frequency the joints' positions do not hold (the line rule's
 :data:`~..lines.MOTION_RATIO`), one more column in the time group, the sinusoid at that
-frequency fitted to the residual (:func:`..lines._wave`), at unit amplitude.
+frequency fitted to the residual (:func:`..lines.wave_at`), at unit amplitude.
 
 Its frequency (the peak and its least-squares refinement), phase and amplitude are fitted per
 fold of the cross-validation on that fold's fitted rows only (:class:`~.cv.FoldInputs`, as the
@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..lines import LOW_CYCLES, MOTION_RATIO, _motion_share, _peak, _sinusoid, _wave
+from ..lines import LOW_CYCLES, MOTION_RATIO, motion_share, peak, sinusoid, wave_at
 from .cv import FoldInputs
 
 #: the line's column is added where the sinusoid fitted per fold explains, out of fold, this share
@@ -59,13 +59,13 @@ def line(t, y, pos) -> float | None:
     dt, lo, hi = _band(t)
     x = y - y.mean()
     total = float(x @ x)
-    f = _peak(t, x, dt, lo, hi) if total > 0 else None
+    f = peak(t, x, dt, lo, hi) if total > 0 else None
     if f is None:
         return None
     p = np.asarray(pos, float)
     p = p - p.mean(axis=0)
-    ss = _sinusoid(t, x, f)[2]
-    return f if ss / total > MOTION_RATIO * (_motion_share(t, p, f) if p.shape[1] else 0.0) else None
+    ss = sinusoid(t, x, f)[2]
+    return f if ss / total > MOTION_RATIO * (motion_share(t, p, f) if p.shape[1] else 0.0) else None
 
 
 def per_fold(t, y, fold_rows) -> list:
@@ -75,8 +75,8 @@ def per_fold(t, y, fold_rows) -> list:
     dt, lo, hi = _band(t)
     out = []
     for _, fit in fold_rows:
-        f = _peak(t, y, dt, lo, hi, rows=fit)
-        out.append(np.zeros(len(t)) if f is None else _wave(t[fit], y[fit], f, t))
+        f = peak(t, y, dt, lo, hi, rows=fit)
+        out.append(np.zeros(len(t)) if f is None else wave_at(t[fit], y[fit], f, t))
     return out
 
 
@@ -110,7 +110,7 @@ def extend(X, columns, groups, y, fold_rows) -> tuple:
     waves = per_fold(t, y, fold_rows)
     if line_gain(y, waves, fold_rows) < LINE_MIN:
         return X, columns, groups, ()
-    wave = _wave(t, y, f, t)
+    wave = wave_at(t, y, f, t)
     a = 2.0 * math.pi * f * t
     ab, *_ = np.linalg.lstsq(np.column_stack([np.cos(a), np.sin(a)]), _unit(wave), rcond=None)
     columns, groups = list(columns), {g: list(c) for g, c in groups.items()}
