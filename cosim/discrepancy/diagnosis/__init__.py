@@ -435,11 +435,17 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
         from ..flexible import flexible_stage
 
         t3c = time.perf_counter()
+        # a discovered term whose form holds less than the trees find in the residual before it: partial
+        from ..flexible.rival import rivalled
+
+        found, rivals = rivalled(eng0, theta, r_after, found)
+        spent["rival"] = time.perf_counter() - t3c
         # a channel whose structure is a spectral line: fitted with the line's phase as an input, against
         # the own noise of the residual without its lines (the lines' entries)
         flex = flexible_stage(eng0, r_after, [e for e in left if e["signature"] != "periodic"], found, effects_out,
-                              theta, lines=[e for e in left if e["signature"] == "periodic"])
-        spent["flexible"] = time.perf_counter() - t3c
+                              theta, lines=[e for e in left if e["signature"] == "periodic"],
+                              outfit={c: r.fit for c, r in rivals.items() if r.outfit})
+        spent["flexible"] = time.perf_counter() - t3c - spent["rival"]
     if theta:  # a part left on an effect's channel keyed on another joint: the effect may stand in for it
         from ..keyed.elsewhere import modulations, terms_beside, withheld
 

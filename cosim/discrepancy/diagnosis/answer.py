@@ -34,6 +34,10 @@ def _partial_sentence(left, joint: int) -> str:
 
 def _partial_reason(partial: str) -> str:
     """The conclusion's short form of why a discovered term is a partial fit."""
+    from ..flexible.rival import PARTIAL
+
+    if partial.startswith(PARTIAL):
+        return "a flexible model explains more"
     return "fitted beside a tied library effect" if partial.startswith("fitted beside") else "structure remains"
 
 

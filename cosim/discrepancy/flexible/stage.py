@@ -194,6 +194,8 @@ class FlexibleFit:
     #: fitted folded by the direction of motion (:mod:`.folded`): the force is sigma g, ``inputs``
     #: the direction (first) and the inputs of its level g, ``model`` predicts sigma g
     folded: bool = False
+    #: the claimed model's out-of-fold prediction of the residual (decimated samples), in ``unit``
+    pred: object = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
@@ -376,6 +378,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                        z, explained, float(np.std(y_seen)), float(noise), deps, outside=beyond,
                        beyond_noise=beyond_noise(y_seen, noise, spi),
                        screened=screened, model=model, readjusted=moved, folded=folded,
+                       pred=sigma * cv.pred if folded else cv.pred,
                        **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
@@ -489,7 +492,7 @@ def statement(fit: FlexibleFit, noun: str) -> str:
     return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
 
 
-def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()) -> list:
+def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=(), outfit=()) -> list:
     """The flexible stage of a diagnosis: one :class:`FlexibleFit` per effort channel worth a
     fit (:func:`candidates`), on the residual ``R`` after the fitted model (decimated samples
     x channels), judged out of fold over blocks in time (:mod:`.cv`).
@@ -503,6 +506,10 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     are fitted too, judged against the own noise of the residual without the lines (the entries'
     ``noise``: the own noise of the residual with them reads a fast line's amplitude), and their
     trees are given the line's phase (:mod:`.periodic`).
+
+    ``outfit``: {channel (0-based): :class:`FlexibleFit`} where the trees outfit a discovered term
+    (:mod:`.rival`): that fit of the residual without the term is the channel's, even where what
+    the term leaves holds nothing.
 
     Example
     -------
@@ -518,12 +525,12 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
         return []
     floor = eng.accuracy()
     left, noise = with_lines(pipe, left, lines, [own_noise(pipe, R[:, c], floor[c]) for c in range(pipe.nd)])
-    chans = candidates(pipe, R, left, noise)
+    chans = sorted(set(candidates(pipe, R, left, noise)) | {c for c in outfit if 0 <= c < pipe.nd})
     if not chans:
         return []
     flagged = {e["joint"] - 1 for e in left if e["channel"] in pipe.channels[:pipe.nd]}
     rms = np.std(R[:, :pipe.nd], axis=0)
-    weak = {c for c in chans if c not in flagged and rms[c] <= RMS_OVER_NOISE * noise[c]}
+    weak = {c for c in chans if c not in flagged and c not in outfit and rms[c] <= RMS_OVER_NOISE * noise[c]}
     stand_ins = {t.joint - 1: t for t in discovered if t.partial and t.joint - 1 in chans}
     R_fit = R
     if stand_ins and theta is not None:
@@ -534,11 +541,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
             R_fit[:, c] = R_wo[:, c]
     X, columns = inputs(pipe, R_fit, direction=True)
     noun = pipe.model.facts.joint_noun
-    fitted = stage_columns(eng, theta, stand_ins, chans)
+    fitted = stage_columns(eng, theta, stand_ins, [c for c in chans if c not in outfit])
     out = []
     for c in chans:
-        fit = fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
-                          weak=c in weak, fitted=fitted.get(c))
+        fit = outfit[c] if c in outfit else fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (
+            pipe.model.facts.effort_unit, pipe.channels[c]), weak=c in weak, fitted=fitted.get(c))
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
