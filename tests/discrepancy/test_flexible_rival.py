@@ -47,3 +47,32 @@ def test_no_variance_is_no_claim():
     y = np.zeros(400)
     rows = folds(len(y), gap=2)
     assert not rival.compare(y, y, y, rows).outfit
+
+
+def _band_force(kind, rng, t, q, qd, qdd, E, noun, tau=None):
+    """A damping on joint 3 while its position lies between the 55 % and 70 % quantiles of its
+    stroke, sized to 0.3 of the joint's RMS effort (flexible.cases.hidden_force's signature)."""
+    j = 2
+    lo, hi = np.quantile(q[:, j], [0.55, 0.7])
+    inside = (q[:, j] > lo) & (q[:, j] < hi)
+    f = np.zeros_like(q)
+    f[:, j] = 0.3 * E[j] / np.sqrt(np.mean(qd[inside, j] ** 2)) * qd[:, j] * inside
+    return f, j + 1, [f"rate of {noun} 3", f"position of {noun} 3"], "a damping band"
+
+
+def test_a_term_of_another_form_than_the_force_is_partial_and_the_stage_fits_its_channel(monkeypatch):
+    # the discovery step writes an added inertia on slider 3 for the band; the structure the term
+    # leaves and a tied library effect beside it would call it partial on their own, so those
+    # rules are switched off here: the rival's comparison alone must call it partial and hand the
+    # channel to the flexible stage
+    from cosim.discrepancy import diagnose, diagnosis
+    from cosim.discrepancy.flexible import cases
+
+    monkeypatch.setattr(cases, "hidden_force", _band_force)
+    monkeypatch.setattr(diagnosis, "_partial_sentence", lambda left, joint: "")
+    monkeypatch.setattr(diagnosis, "_beside_tie_sentence", lambda ties, gone, term: "")
+    rec, _ = cases.simulate("position_threshold", 11)
+    d = diagnose(rec, figures=False, replay=False)
+    on3 = [t for t in d.discovered if t.joint == 3]
+    assert on3 and all(t.partial.startswith(rival.PARTIAL) for t in on3)
+    assert any(f.joint == 3 and f.explained for f in d.flexible)
