@@ -149,6 +149,7 @@ def rivalled(eng, theta, R, found) -> tuple:
         if not var > 0 or left <= MARGIN * var:  # no prediction beats it by the margin over the folds
             done[c] = Rivalry(c, 1.0 - float(np.mean((y - pred) ** 2)) / var if var > 0 else 0.0, float("nan"),
                               float("nan"), float("nan"), False)
+            _LOG.debug("rival %s: %s", t.channel, done[c])
             continue
         before[c] = (t, y, pred)
     if before:
