@@ -57,8 +57,9 @@ class Rivalry:
     """One discovered term against the trees on its channel (0-based ``channel``): the shares of
     the residual before the term explained out of fold by the equation refitted per fold
     (``equation``) and by the trees (``trees``), the trees' ``excess`` (mean over the folds of
-    the per-fold difference, in shares of the variance) and its standard error ``se``;
-    ``outfit`` whether the term is called partial."""
+    the per-fold difference, in shares of the variance) and its standard error ``se`` (the three
+    NaN where the trees were not fitted: the equation left at most :data:`MARGIN`); ``outfit``
+    whether the term is called partial, ``fit`` the trees' :class:`~.stage.FlexibleFit`."""
 
     channel: int
     equation: float
@@ -69,7 +70,8 @@ class Rivalry:
     fit: object = field(default=None, repr=False, compare=False)
 
     def sentence(self) -> str:
-        return (f"{PARTIAL} (out of fold {100 * self.trees:.0f} % against the equation's {100 * self.equation:.0f} %; "
+        return (f"{PARTIAL} (out of fold {100 * self.trees:.0f} % against the equation's "
+                f"{100 * self.equation:.0f} %; "
                 f"{100 * self.excess:+.0f} +- {100 * self.se:.0f} % over {N_FOLDS} folds, not shown to stay within "
                 f"{100 * MARGIN:.0f} %): it may stand in for a force of another form, so it is not named as the physics")
 
