@@ -505,7 +505,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     ``lines``: the structure left whose signature is a spectral line (:mod:`..lines`): its channels
     are fitted too, judged against the own noise of the residual without the lines (the entries'
     ``noise``: the own noise of the residual with them reads a fast line's amplitude), and their
-    trees are given the line's phase (:mod:`.periodic`).
+    trees are given the line's phase (:mod:`.periodic`); their lines that repeat, and those a
+    channel holds by its own rule, are offered to every channel fitted (:func:`.periodic.offered`).
 
     Example
     -------
