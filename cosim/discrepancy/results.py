@@ -103,7 +103,8 @@ class Structure(Record):
     ``"acceleration"``, ``"offset"``, ``"pose"``, ``"low_speed"``, ``"periodic"``: spectral lines,
     :mod:`.lines`), ``keyed_on`` (in words), ``closest`` (library effects
     of that kind), ``chi2`` (explained, in independent samples), ``rms`` (of the structured
-    part) and ``noise`` (the residual's own high-frequency noise), in the channel's unit."""
+    part) and ``noise`` (the residual's own high-frequency noise), in the channel's unit;
+    ``lines``: for ``"periodic"``, the lines as ``(frequency [Hz], amplitude)``, strongest first."""
 
     channel: str
     joint: int
@@ -113,3 +114,4 @@ class Structure(Record):
     chi2: float
     rms: float
     noise: float
+    lines: list = field(default_factory=list)

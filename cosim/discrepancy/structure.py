@@ -86,7 +86,8 @@ def unexplained(pipe, R, floor=None, threshold: float = THRESHOLD) -> list:
                 best, sigma = chosen, sigma_clean
         if best:
             keyed, closest = SIGNATURES[best[1]] if len(best) < 5 else (best[4], SIGNATURES["periodic"][1])
-            out.append(Structure(name, c % pipe.nd + 1, best[1], keyed, list(closest), best[2], best[3], sigma))
+            out.append(Structure(name, c % pipe.nd + 1, best[1], keyed, list(closest), best[2], best[3], sigma,
+                                 lines=list(periodic[c]["lines"]) if best[1] == "periodic" else []))
     out.sort(key=lambda e: -e.chi2)
     return out
 

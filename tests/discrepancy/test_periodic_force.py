@@ -52,6 +52,10 @@ def test_a_force_turning_at_5_hz_is_structure_keyed_on_time_not_noise(clean_csv,
     f = float(keyed.split("repeating at ")[1].split(" Hz")[0])
     amp = float(keyed.split("amplitude ")[1].split(")")[0])
     assert abs(f - F_HZ) < 0.02 * F_HZ and abs(amp - AMP) < 0.15 * AMP, keyed
+    # the entry carries its lines (frequency, amplitude) for the flexible stage, which offers them
+    # to every channel
+    (f_line, a_line), *_ = periodic[0]["lines"]
+    assert abs(f_line - F_HZ) < 0.02 * F_HZ and abs(a_line - AMP) < 0.15 * AMP, periodic[0]["lines"]
     # the yardstick is the noise without the line: the smoothed 5 mN sensor noise, not the force
     assert periodic[0]["noise"] < 0.1 * AMP, periodic
     confident = [e["key"] for e in d.effects if not any(tied(a) for a in e["lookalikes"])]

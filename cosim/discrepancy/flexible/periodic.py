@@ -14,7 +14,15 @@ fold of the cross-validation on that fold's fitted rows only (:class:`~.cv.FoldI
 projected columns of :mod:`.oblique`: no held-out row moves the column its trees are judged on),
 and once on every sample for the final model, its partial dependence and the black box
 (:func:`extended`).  The column is added where the sinusoid alone explains, out of fold, at least
-:data:`LINE_MIN` of the residual's variance (:func:`line_gain`).  Measured on seen sets:
+:data:`LINE_MIN` of the residual's variance (:func:`line_gain`).
+
+A force on the platform (a rotating unbalance) reaches every rail through the Jacobian, but a
+channel whose residual something else carries holds the line below that share, or not at its
+highest peak.  A line found on one channel, or one of the discrepancy's periodic report that
+repeats on its channel (:func:`offered`), is offered to every channel: where the channel's own rule
+finds none, the sinusoid at the offered frequency, refined and fitted per fold on that channel's
+rows (:func:`at_offered`), is the column where it predicts anything out of fold
+(:data:`OFFERED_MIN`), and the trees judge it as every input.  Measured on seen sets:
 docs/flexible.md, "A force repeating at a fixed frequency".
 """
 from __future__ import annotations
@@ -32,6 +40,11 @@ from .cv import FoldInputs
 #: sets: measured on seen MuJoCo sets, at most 0.51 on the pendulums' 36 channels against 0.89-1.00
 #: on 16 of the 18 fan channels of sets 5-7 (docs/flexible.md)
 LINE_MIN = 0.7
+#: a line offered from elsewhere (:func:`offered`) is a column of a channel whose own rule finds
+#: none where its sinusoid fitted per fold explains, out of fold, more than this share of the
+#: residual's variance beyond the fitted rows' mean; it is then judged as every input (named only
+#: where it adds out of fold)
+OFFERED_MIN = 0.0
 #: the column's name (followed by the frequency fitted on every sample)
 LINE = "t along a line at"
 
@@ -90,26 +103,103 @@ def line_gain(y, waves, fold_rows) -> float:
     return 1.0 - sse / len(y) / var
 
 
-def extend(X, columns, groups, y, fold_rows) -> tuple:
-    """``X`` (n, p; a :class:`~.cv.FoldInputs` or an array) with the line's column where the
-    residual ``y`` holds one (:func:`line`) that the sinusoid fitted per fold predicts out of fold
-    (:func:`line_gain` at least :data:`LINE_MIN`): its time column ``t`` and positions (quantity
-    ``position``) are read from ``columns``.  Returns ``(X, columns, groups, lines)``, ``lines``
-    per added column ``(the time column (index into X), frequency [Hz], cos and sin coefficients)``
-    fitted on every sample (:func:`extended`)."""
-    y = np.asarray(y, float)
-    tcol = next((i for i, c in enumerate(columns[:X.shape[1]]) if c[0] == "t" and c[3] == "time"), None)
-    if tcol is None:
-        return X, columns, groups, ()
+def near(t, y, f, rows=None) -> float:
+    """``f`` [Hz] refined by least squares on the samples ``rows`` of ``y`` (all where None): the
+    frequency within a quarter of the resolution (one over the samples' span) of ``f`` whose
+    sinusoid explains the most of them."""
+    tr, yr = (t, y) if rows is None else (t[rows], y[rows])
+    grid = f + np.linspace(-1.0, 1.0, 21) * 0.25 / max(float(tr[-1] - tr[0]), 1e-9)
+    return float(grid[np.argmax([sinusoid(tr, yr, g)[2] for g in grid])])
+
+
+def at_offered(t, y, fold_rows, f) -> list:
+    """:func:`per_fold` at a line offered from elsewhere (:func:`offered`): per fold, the
+    sinusoid at ``f`` refined on the fold's fitted rows (:func:`near`), fitted to them."""
+    return [wave_at(t[fit], y[fit], near(t, y, f, fit), t) for _, fit in fold_rows]
+
+
+def _time_column(columns, p) -> int | None:
+    """The index of the time column ``t`` among the first ``p`` of ``columns`` (None: none)."""
+    return next((i for i, c in enumerate(columns[:p]) if c[0] == "t" and c[3] == "time"), None)
+
+
+def time_and_positions(X, columns) -> tuple:
+    """``(t, positions (n, joints))`` of the inputs ``X``: its time column ``t`` and its columns of
+    quantity ``position`` (read from ``columns``); ``(None, None)`` without a time column."""
     whole = np.asarray(X)
-    t = whole[:, tcol]
-    pos = whole[:, [i for i, c in enumerate(columns[:X.shape[1]]) if c[3] == "position"]]
+    tcol = _time_column(columns, whole.shape[1])
+    if tcol is None:
+        return None, None
+    return whole[:, tcol], whole[:, [i for i, c in enumerate(columns[:whole.shape[1]]) if c[3] == "position"]]
+
+
+def own(t, y, pos, fold_rows) -> tuple:
+    """``(frequency [Hz], per-fold sinusoids)`` of the line residual ``y`` holds by the channel's own
+    rule: :func:`line`, predicted out of fold by :func:`per_fold` (:func:`line_gain` at least
+    :data:`LINE_MIN`); ``(None, None)`` where it holds none."""
     f = line(t, y, pos)
     if f is None:
-        return X, columns, groups, ()
+        return None, None
     waves = per_fold(t, y, fold_rows)
-    if line_gain(y, waves, fold_rows) < LINE_MIN:
+    return (f, waves) if line_gain(y, waves, fold_rows) >= LINE_MIN else (None, None)
+
+
+def offered(t, R, pos, fold_rows, report=()) -> tuple:
+    """The lines offered to every channel [Hz]: those the residuals ``R`` (n, channels, in the
+    channels' order) hold by their own rule (:func:`own`), then those of the discrepancy's periodic
+    report (``report``: entries of a ``joint`` (1-based column of ``R``) whose ``lines`` are
+    ``(frequency [Hz], amplitude)``) whose sinusoid fitted per fold on their own channel predicts
+    at least :data:`LINE_MIN` of it out of fold (:func:`at_offered`): a force at a fixed frequency,
+    not a resonance the motion sets ringing, whose phase the motion sets; the strongest first, one
+    per resolution (one over the recording's span).  A force on the platform reaches every rail
+    through the Jacobian, also one whose residual something else carries, where the channel's own
+    rule does not find it."""
+    if t is None or len(t) < 64:
+        return ()
+    R = np.asarray(R, float).reshape(len(t), -1)
+    resolution, out = 1.0 / max(float(t[-1] - t[0]), 1e-9), []
+
+    def new(f):
+        return all(abs(f - g) >= resolution for g in out)
+    found = []
+    for y in R.T:
+        f, _ = own(t, y, pos, fold_rows)
+        if f is not None:
+            found.append((sinusoid(t, y - y.mean(), f)[1], f))
+    for _, f in sorted(found, reverse=True):
+        if new(f):
+            out.append(f)
+    listed = sorted(((float(a), float(f), e["joint"] - 1) for e in report for f, a in e.get("lines", ())
+                     if 0 < e["joint"] <= R.shape[1]), reverse=True)
+    for _, f, c in listed:
+        if new(f) and line_gain(R[:, c], at_offered(t, R[:, c], fold_rows, f), fold_rows) >= LINE_MIN:
+            out.append(f)
+    return tuple(out)
+
+
+def extend(X, columns, groups, y, fold_rows, lines=()) -> tuple:
+    """``X`` (n, p; a :class:`~.cv.FoldInputs` or an array) with the line's column where the
+    residual ``y`` holds one by its own rule (:func:`own`), else where one of the lines ``lines``
+    offered from elsewhere (:func:`offered`, [Hz]), the sinusoid at it fitted per fold
+    (:func:`at_offered`), predicts more than :data:`OFFERED_MIN` of ``y``'s variance out of fold
+    beyond the fitted rows' mean (the best such): its time column ``t`` and positions (quantity
+    ``position``) are read from ``columns``.  Returns ``(X, columns, groups, lines)``, ``lines`` per
+    added column ``(the time column (index into X), frequency [Hz], cos and sin coefficients)``
+    fitted on every sample (:func:`extended`)."""
+    y = np.asarray(y, float)
+    t, pos = time_and_positions(X, columns)
+    if t is None:
         return X, columns, groups, ()
+    tcol, whole = _time_column(columns, X.shape[1]), np.asarray(X)
+    f, waves = own(t, y, pos, fold_rows)
+    if f is None:  # a line found elsewhere: judged beyond the fitted rows' mean, which the trees hold too
+        mean_only = line_gain(y, [np.zeros(len(y))] * len(fold_rows), fold_rows)
+        tried = [(line_gain(y, w, fold_rows) - mean_only, g, w)
+                 for g in lines for w in [at_offered(t, y, fold_rows, g)]]
+        gain, f, waves = max(tried, key=lambda x: x[0], default=(0.0, None, None))
+        if f is None or not gain > OFFERED_MIN:
+            return X, columns, groups, ()
+        f = near(t, y, f)
     wave = wave_at(t, y, f, t)
     a = 2.0 * math.pi * f * t
     ab, *_ = np.linalg.lstsq(np.column_stack([np.cos(a), np.sin(a)]), _unit(wave), rcond=None)

@@ -257,7 +257,7 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=No
                   after=after)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
@@ -274,15 +274,17 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None) -> Fl
     Where :func:`.folded.prefer` says so, all of it is done on the residual folded by the joint's
     direction of motion (its columns too), judged against the variance of ``y`` itself: instead of
     the plain fit where the screen's gain is at least :data:`.folded.ALONE`, else beside it, the
-    fit explaining more out of fold kept (:func:`.folded.kept`)."""
-    plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted)
+    fit explaining more out of fold kept (:func:`.folded.kept`).  ``offered``: the lines [Hz] found
+    elsewhere in the recording (:func:`.periodic.offered`), the line's phase where ``y`` holds none by
+    its own rule (:func:`.periodic.extend`)."""
+    plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, offered=offered)
     if sigma is None:
         return plain
-    folded = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, sigma=sigma)[0]
+    folded = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, sigma=sigma, offered=offered)[0]
     return kept(plain, folded)
 
 
-def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None) -> tuple:
+def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None, offered=()) -> tuple:
     """:func:`fit_channel`'s fit, on ``y`` folded by ``sigma`` where given (:mod:`.folded`):
     ``(fit, sigma)``: where ``sigma`` is not given, the screen (:func:`.folded.prefer`) folds at once
     where the folded residual is far better explained, and where it may be, returns the direction
@@ -304,7 +306,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
-    X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c)
+    X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c, offered)
     follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
     screened_fold = direction_c if how == "both" else None  # the folded fit made too
@@ -382,17 +384,18 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                        **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
-def _channel_columns(X, columns, y, fold_rows, c) -> tuple:
+def _channel_columns(X, columns, y, fold_rows, c, offered=()) -> tuple:
     """The inputs of channel ``c`` (0-based; None: any): the stage's columns but another joint's time
     since a reversal (which acts here through the coupling's forces, already inputs), with the pose
-    and rates projected (:mod:`.oblique`) and the line's phase (:mod:`.periodic`), fitted per fold.
+    and rates projected (:mod:`.oblique`) and the line's phase (:mod:`.periodic`; ``offered``: the lines
+    found elsewhere), fitted per fold.
     Returns ``(X, columns, groups, every, keep, projections, lines)``: ``every`` the stage's
     columns, ``keep`` the indices into them of ``X``'s first columns."""
     every = tuple(columns)
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
-    X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows)
+    X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows, offered)
     return X, columns, groups, every, keep, projections, lines
 
 
@@ -505,7 +508,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     ``lines``: the structure left whose signature is a spectral line (:mod:`..lines`): its channels
     are fitted too, judged against the own noise of the residual without the lines (the entries'
     ``noise``: the own noise of the residual with them reads a fast line's amplitude), and their
-    trees are given the line's phase (:mod:`.periodic`).
+    trees are given the line's phase (:mod:`.periodic`); their lines that repeat, and those a
+    channel holds by its own rule, are offered to every channel fitted (:func:`.periodic.offered`).
 
     ``outfit``: {channel (0-based): :class:`FlexibleFit`} where the trees outfit a discovered term
     (:mod:`.rival`): that fit of the residual without the term is the channel's, even where what
@@ -517,7 +521,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     >>> fits[0].statement                                      # doctest: +SKIP
     'a force on slider 3 that depends on the position of slider (q3, above 0.42 m; ...'
     """
-    from ..structure import own_noise
+    from ..structure import own_noise, samples_per_independent
 
     pipe = eng.pipe
     R = np.asarray(R, float)
@@ -542,10 +546,14 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     X, columns = inputs(pipe, R_fit, direction=True)
     noun = pipe.model.facts.joint_noun
     fitted = stage_columns(eng, theta, stand_ins, [c for c in chans if c not in outfit])
+    t, pos = periodic.time_and_positions(X, columns)
+    offered = periodic.offered(t, R_fit[:, :pipe.nd], pos, folds(len(R_fit), gap_for(samples_per_independent(pipe))),
+                               [e for e in lines if e["channel"] in pipe.channels[:pipe.nd]])
     out = []
     for c in chans:
-        fit = outfit[c] if c in outfit else fit_channel(pipe, X, columns, R_fit[:, c], noise[c], (
-            pipe.model.facts.effort_unit, pipe.channels[c]), weak=c in weak, fitted=fitted.get(c))
+        fit = outfit[c] if c in outfit else fit_channel(
+            pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
+            weak=c in weak, fitted=fitted.get(c), offered=offered)
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
