@@ -215,3 +215,41 @@ def test_the_first_trees_predict_as_the_staged_prediction_bit_for_bit():
     for k in (1, 7, models[0].n_iter_):
         staged = next(islice(models[0].staged_predict(X[held]), k - 1, None))
         assert np.array_equal(flexible_cv.first_trees(models[0], X[held], k), staged)
+
+
+def test_a_cross_validation_made_before_another_targets_is_still_the_first_one(monkeypatch):
+    """A channel's fits on another target in between (the efforts' choice made again without the
+    fitted levels) do not let its own go: asked again, the first one, no tree grown."""
+    X, y, rows = _case()
+    _forgotten()
+    first = flexible_cv.cross_validate(X, y, rows)
+    flexible_cv.cross_validate(X, y + 0.5 * X[:, 3], rows)
+    calls = _fits_counted(monkeypatch)
+    again = flexible_cv.cross_validate(X.copy(), y.copy(), rows)
+    assert again is first and calls == []
+    for shift in (1.0, 2.0):  # older than the last TARGETS_KEPT targets: let go, grown again
+        flexible_cv.cross_validate(X, y + shift * X[:, 4], rows)
+    assert flexible_cv.cross_validate(X, y, rows) is not first and len(calls) >= len(rows)
+
+
+class _Stacked:
+    """A fold's trees seen through ``predict_first`` alone: the permutation importance then
+    predicts every group's permuted block in one stacked prediction."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def predict_first(self, X, k):
+        return self.model.predict_first(X, k)
+
+
+def test_the_importance_predicts_again_only_the_trees_a_permuted_group_reaches_bit_for_bit():
+    X, y, rows = _case()
+    X = np.column_stack([X, np.random.default_rng(2).normal(size=(len(X), 4))])
+    _forgotten()
+    cv = flexible_cv.cross_validate(X, y, rows)
+    groups = {"a": [0], "b": [1, 2], "c": [3, 4], "d": [5, 6, 7], "e": [8, 9], "none": []}
+    stacked = flexible_cv.CV(cv.folds, tuple(_Stacked(m) for m in cv.models), cv.iterations, cv.pred, cv.mse)
+    got = flexible_cv.importance(cv, X, y, groups, np.random.default_rng(4))
+    assert got == flexible_cv.importance(stacked, X, y, groups, np.random.default_rng(4))
+    assert got["a"][0] > 0.1 and got["none"] == (0.0, 0.0)

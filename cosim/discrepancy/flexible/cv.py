@@ -189,13 +189,17 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
 
 
 #: the last cross-validations made (:func:`cross_validate`), by :func:`_inputs_key`, and the
-#: growths ``enough`` stopped (their trees and held-out predictions per step), of one target
-#: (a channel's fits share it; another target lets them go: ``_TARGET``); at most DONE_MAX each
-#: (a channel makes 5-40 cross-validations, some 0.2 s of trees and 0.7-1 MB each)
+#: growths ``enough`` stopped (their trees and held-out predictions per step), of the last
+#: TARGETS_KEPT targets (a channel's fits share one; the efforts' choice made again without the
+#: fitted levels, :func:`.beside.passed_on`, fits a second between the channel's own): at most
+#: DONE_MAX of each per target (a channel makes 5-40 cross-validations, some 0.2 s of trees and
+#: 0.7-1 MB each); ``_TARGET``: per target kept, the (store, key) of its entries, the most recent
+#: target last
 _DONE: dict = {}
 _STOPPED: dict = {}
 _TARGET: dict = {}
 DONE_MAX = 32
+TARGETS_KEPT = 2
 _DONE_LOCK = threading.Lock()
 
 
@@ -223,18 +227,27 @@ def _inputs_key(X, y, fold_rows) -> bytes:
 
 def _remembered(which: str, key, value, y) -> None:
     """Keeps ``value`` under ``key`` in the module's store ``which`` ("done": whole growths,
-    "stopped": growths stopped early) among its last :data:`DONE_MAX`, all of the target ``y``
-    (kept for another target are let go)."""
+    "stopped": growths stopped early) among the last :data:`DONE_MAX` of the target ``y``; the
+    entries of targets older than the last :data:`TARGETS_KEPT` are let go."""
     target = hashlib.blake2b(np.ascontiguousarray(np.asarray(y, float)).tobytes(), digest_size=16).digest()
-    kept = {"done": _DONE, "stopped": _STOPPED}[which]
+    stores = {"done": _DONE, "stopped": _STOPPED}
     with _DONE_LOCK:
-        if _TARGET.get("y") != target:
-            _DONE.clear()
-            _STOPPED.clear()
-            _TARGET["y"] = target
-        while len(kept) >= DONE_MAX:
-            kept.pop(next(iter(kept)))
-        kept[key] = value
+        entries = _TARGET.pop(target, None)  # put back last: the most recent target
+        if entries is None:
+            entries = []
+            while len(_TARGET) >= TARGETS_KEPT:
+                for w, k in _TARGET.pop(next(iter(_TARGET))):
+                    stores[w].pop(k, None)
+        entries = [(w, k) for w, k in entries if k in stores[w] and (w, k) != (which, key)]  # (a stopped growth
+        # grown on is gone from its store)
+        mine = [k for w, k in entries if w == which]
+        while len(mine) >= DONE_MAX:
+            old = mine.pop(0)
+            stores[which].pop(old, None)
+            entries.remove((which, old))
+        stores[which][key] = value
+        entries.append((which, key))
+        _TARGET[target] = entries
 
 
 def grow(X, Y, fold_rows, stop=None) -> tuple:
@@ -339,6 +352,37 @@ def _trees_keeping_bins():
                                          n_threads=_openmp_effective_n_threads())
                 return raw.ravel().copy()
 
+            def predict_first_replaced(self, X, Xr, col_groups, k):
+                """Per group of columns ``col_groups``, the prediction of the first ``k`` trees on
+                the rows ``X`` with that group's columns taken from ``Xr`` (as many rows): row for
+                row :meth:`predict_first` of those rows, stacked group after group.  A tree reads
+                only the columns it splits on, so it is predicted again only on the groups that
+                hold one of them; its prediction on ``X`` serves the others, added in the same
+                order (the same values)."""
+                from sklearn.utils._openmp_helpers import _openmp_effective_n_threads
+
+                if self.loss != "squared_error" or not hasattr(self, "_preprocess_X"):
+                    return None
+                X, Xr = self._preprocess_X(X, reset=False), self._preprocess_X(Xr, reset=False)
+                known, f_idx = self._bin_mapper.make_known_categories_bitsets()
+                threads = _openmp_effective_n_threads()
+                replaced = {}
+                for i, cols in enumerate(col_groups):
+                    replaced[i] = np.array(X)
+                    replaced[i][:, cols] = Xr[:, cols]
+                raw = np.zeros((len(col_groups), X.shape[0]), dtype=self._baseline_prediction.dtype)
+                raw += self._baseline_prediction.ravel()[0]
+                col_sets = [set(np.asarray(cols, int).tolist()) for cols in col_groups]
+                for (tree,) in self._predictors[:k]:
+                    nodes = tree.nodes
+                    used = set(nodes["feature_idx"][nodes["is_leaf"] == 0].tolist())
+                    hit = np.array([bool(c & used) for c in col_sets])
+                    if not hit.all():
+                        raw[~hit] += tree.predict(X, known, f_idx, threads)
+                    for i in np.flatnonzero(hit):
+                        raw[i] += tree.predict(replaced[i], known, f_idx, threads)
+                return raw
+
             def staged_predict_after(self, X, start, at_start):
                 """``staged_predict(X)``'s values after iteration ``start``, given its value there
                 (``at_start``): the trees' raw predictions added from it as ``staged_predict``
@@ -422,12 +466,17 @@ def importance(cv: CV, X, y, groups, rng, repeats=2) -> dict:
     rise = np.zeros((len(names), len(cv.folds)))
     for _ in range(repeats):
         perm = rng.permutation(len(X))
-        for b, (h, _) in enumerate(cv.folds):  # every group's permuted copy of the block in one prediction
+        for b, (h, _) in enumerate(cv.folds):  # every group's permuted copy of the block
             Xb = at(X, b)
-            stack = np.tile(Xb[h], (len(names), 1))
-            for i, g in enumerate(names):
-                stack[i * len(h):(i + 1) * len(h), groups[g]] = Xb[perm[h]][:, groups[g]]
-            e = (np.tile(y[h], len(names)) - cv.predict(b, stack)) ** 2
+            replaced = getattr(cv.models[b], "predict_first_replaced", None)
+            got = None if replaced is None else replaced(Xb[h], Xb[perm[h]], [groups[g] for g in names],
+                                                         cv.iterations)
+            if got is None:  # in one prediction
+                stack = np.tile(Xb[h], (len(names), 1))
+                for i, g in enumerate(names):
+                    stack[i * len(h):(i + 1) * len(h), groups[g]] = Xb[perm[h]][:, groups[g]]
+                got = cv.predict(b, stack)
+            e = (np.tile(y[h], len(names)) - got.ravel()) ** 2
             rise[:, b] += e.reshape(len(names), len(h)).mean(axis=1)
     base = np.array([np.mean((y[h] - cv.pred[h]) ** 2) for h, _ in cv.folds])
     d = (rise / repeats - base[None, :]) / var
