@@ -82,6 +82,7 @@ from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _si
 from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
 from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
+from .copies import on_channel
 from .oblique import extend, extended
 from . import periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
@@ -302,7 +303,9 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    given = (X, columns)
     X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c)
+    reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
     follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
     screened_fold = direction_c if how == "both" else None  # the folded fit made too
@@ -310,7 +313,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference=reference)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
