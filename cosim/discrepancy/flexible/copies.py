@@ -90,26 +90,31 @@ def _mean_only(y, fold_rows):
 
 def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) -> list:
     """The groups of ``kept`` that carry only the answer to the force: the accelerations, efforts
-    and histories (:data:`ANSWERED_GROUPS`) whose leaving out costs less than
-    :data:`~.select.DROP_MIN` above :data:`~.select.GAIN_Z` standard errors (:func:`~.select.gain`)
-    once every column of ``kept`` built from the measured accelerations or efforts is its
-    counterpart along the reference motion (``reference``, the channel's :func:`counterparts`,
-    or a function giving them: :func:`on_channel`; the trees on no group: a constant).  ``done``: the cross-validations already made, by their
-    columns."""
-    answered = [g for g in kept if g.startswith(ANSWERED_GROUPS)]
+    and histories (:data:`ANSWERED_GROUPS`; not a joint's history beside its own rate, the level
+    a slow state of the joint sets, as :func:`~.select.stand_ins` has it) whose leaving out costs
+    less than :data:`~.select.DROP_MIN` above :data:`~.select.GAIN_Z` standard errors
+    (:func:`~.select.gain`) once their columns (but those another named group holds) are their
+    counterparts along the reference motion (``reference``, the channel's
+    :func:`counterparts`, or a function giving them: :func:`on_channel`; the trees on no group: a
+    constant).  ``done``: the cross-validations already made, by their columns."""
+    answered = [g for g in kept if g.startswith(ANSWERED_GROUPS)
+                and not (g.startswith("history of ") and g.replace("history of", "rate of", 1) in kept)]
     reference = reference() if callable(reference) and answered else reference
     if reference is None or not answered:
         return []
     done = {} if done is None else done
     var = float(np.var(y))
 
-    def exogenous(gs):  # the trees on gs' columns, each built from the answer replaced by its counterpart
+    state = {i for h in kept if h not in answered for i in groups[h]}
+    judged = {i for h in answered for i in groups[h]} - state
+
+    def exogenous(gs):  # the trees on gs' columns, the judged groups' replaced by their counterparts
         cols = tuple(sorted({i for h in gs for i in groups[h]}))
         if not cols:
             return _mean_only(y, fold_rows)
         if cols not in done:
             M = X[:, cols].copy()
-            at = [j for j, i in enumerate(cols) if i < reference.shape[1]]
+            at = [j for j, i in enumerate(cols) if i in judged]
             M[:, at] = reference[:, [cols[j] for j in at]]
             done[cols] = cross_validate(M, y, fold_rows)
         return done[cols]
