@@ -67,8 +67,9 @@ def _light(pipe):
     """What ``flexible.stage.inputs`` and ``fit_channel`` read of the pipeline, without the core."""
     f = pipe.model.facts
     names = ("idx", "nd", "t", "segments", "dt", "tau_s", "q_s", "qd_s", "qdd_s", "has_pose", "channels", "window",
-             "step", "tau_ref_s")
+             "step")
     out = SimpleNamespace(**{k: getattr(pipe, k) for k in names})
+    out.tau_ref_s = getattr(pipe, "tau_ref_s", None)  # the reference effort (flexible/copies.py), None without
     out.x_s = pipe.x_s if pipe.has_pose else None
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
                                                       effort_unit=f.effort_unit))

@@ -40,8 +40,9 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   errors over the folds; it is named when the trees cross-validated without it (on the other
   passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (the
   channel's own model effort and acceleration follow the force in closed loop: named
-  only where the other inputs cannot explain the same share) and a group sharing a named one's
-  columns named where those add (:mod:`.select`); the share claimed is then that of
+  only where the other inputs cannot explain the same share; an acceleration, effort or history
+  only where its counterpart along the reference motion adds too: :mod:`.copies`) and a group
+  sharing a named one's columns named where those add (:mod:`.select`); the share claimed is then that of
   the trees on the named groups alone (where two share columns, on fewer of them when that
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
