@@ -118,3 +118,22 @@ def test_the_counterparts_are_the_reference_motions_acceleration_effort_and_hist
     assert np.allclose(Xr[:, at["effort1 low-passed 1 s"]] + 0.1, X[:, at["effort1 low-passed 1 s"]], atol=1e-3)
     for name in ("q1", "qd1", "qd1 reference"):
         assert np.array_equal(Xr[:, at[name]], X[:, at[name]])
+
+
+def test_a_joints_history_beside_its_own_rate_is_not_judged_as_a_copy():
+    # a friction whose level a slow state of the joint sets (a heating drive's power history):
+    # the measured history is its input, and a counterpart along the reference that does not
+    # carry that state (here a slow signal of its own) would take it for a copy
+    n = 900
+    t = np.linspace(0.0, 9.0, n)
+    qd1 = np.sin(2 * np.pi * 0.41 * t) + 0.4 * np.sin(2 * np.pi * 1.3 * t + 0.5)
+    heat = 1.0 + 0.5 * np.sin(2 * np.pi * 0.13 * t)
+    y = np.tanh(qd1 / 0.05) * heat + np.random.default_rng(4).normal(0.0, 0.05, n)
+    X = np.column_stack([qd1, heat])
+    reference = np.column_stack([qd1, 1.0 + 0.5 * np.sin(2 * np.pi * 0.37 * t + 1.0)])
+    cols = [("qd1", "rate of slider 1", 1, "rate", "m/s"),
+            ("|effort1 qd1| low-passed 8 s", "history of slider 1", 1, "history", "N m/s")]
+    groups = flexible.input_groups(cols)
+    fold_rows = flexible.folds(n, flexible.gap_for(1.0))
+    assert copies(["rate of slider 1", "history of slider 1"], groups, X, reference, y, fold_rows,
+                  flexible.cross_validate) == []
