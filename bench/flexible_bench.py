@@ -69,6 +69,7 @@ def _light(pipe):
     names = ("idx", "nd", "t", "segments", "dt", "tau_s", "q_s", "qd_s", "qdd_s", "has_pose", "channels", "window",
              "step")
     out = SimpleNamespace(**{k: getattr(pipe, k) for k in names})
+    out.tau_ref_s = getattr(pipe, "tau_ref_s", None)  # the reference effort (flexible/copies.py), None without
     out.x_s = pipe.x_s if pipe.has_pose else None
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
                                                       effort_unit=f.effort_unit))
@@ -85,6 +86,20 @@ def _smoother(light):
     order = getattr(light, "polyorder", 3)
     return lambda a, deriv=0: savgol_filter(a, light.window, order, deriv=deriv, delta=light.dt, axis=0,
                                             mode="interp")
+
+
+def _reference_effort(light, robot="6pus"):
+    """The pipeline's reference effort (``Pipeline.tau_ref_s``: the core's inverse dynamics of the
+    reference motion, smoothed) for a kept pipeline that did not keep it (captures made before it
+    was kept: every one of the 6-PUS), or None without a reference."""
+    from cosim.core import Model
+    from cosim.discrepancy.residuals import reference_motion
+
+    if light.rec.qref is None or light.x_s is None:
+        return None
+    model = Model(robot)
+    motion = reference_motion(model, light.rec.qref, light.dt, light.x_s)
+    return None if motion is None else light.S(model.inverse_dynamics(*motion))
 
 
 def _captured(run):
@@ -181,6 +196,8 @@ def refit(kept) -> tuple:
 
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
+        if not hasattr(kept["pipe"], "tau_ref_s"):
+            kept["pipe"].tau_ref_s = _reference_effort(kept["pipe"])
         kept["R"] = _stage_residual(kept)
     fits = []
     with threadpool_limits(limits=1):

@@ -95,6 +95,23 @@ def _at(a, pos):
     return a[i0] * (1.0 - f) + a[i0 + 1] * f
 
 
+def reference_motion(model, qref, dt, x_guess):
+    """The pose motion ``(x, xd, xdd)`` of the reference joint positions ``qref`` (rows at
+    step ``dt`` [s]) through the core (forward kinematics from the poses ``x_guess``, its rates
+    and accelerations from a 7-point cubic fit of ``qref``), or None where the forward kinematics
+    fails: the motion the controller was asked for, whose inverse dynamics is the pipeline's
+    reference effort (:attr:`Pipeline.tau_ref_s`)."""
+    qref = np.asarray(qref, float)
+    try:
+        x = model.fk(qref, x_guess=x_guess)
+    except PkmError:
+        return None
+    qd = savgol_filter(qref, 7, 3, deriv=1, delta=dt, axis=0, mode="interp")
+    qdd = savgol_filter(qref, 7, 3, deriv=2, delta=dt, axis=0, mode="interp")
+    xd = cc.pose_velocity(model, x, qd)
+    return x, xd, cc.pose_acceleration(model, x, xd, qdd)
+
+
 class Pipeline:
     """The residual pipeline of one recording against one model.
 
@@ -267,17 +284,8 @@ class Pipeline:
         if motion is not False:
             self.ref_motion = motion
             return None if motion is None else self.S(model.inverse_dynamics(*motion))
-        qref = np.asarray(self.rec.qref, float)
-        try:
-            x = model.fk(qref, x_guess=self.x_f)
-        except PkmError:
-            return None
-        qd = savgol_filter(qref, 7, 3, deriv=1, delta=self.dt, axis=0, mode="interp")
-        qdd = savgol_filter(qref, 7, 3, deriv=2, delta=self.dt, axis=0, mode="interp")
-        xd = cc.pose_velocity(model, x, qd)
-        xdd = cc.pose_acceleration(model, x, xd, qdd)
-        self.ref_motion = (x, xd, xdd)
-        return self.S(model.inverse_dynamics(x, xd, xdd))
+        self.ref_motion = reference_motion(model, self.rec.qref, self.dt, self.x_f)
+        return None if self.ref_motion is None else self.S(model.inverse_dynamics(*self.ref_motion))
 
     @property
     def has_reference(self) -> bool:

@@ -1,6 +1,6 @@
 """Where no family fits: a flexible model of what is left, then its dependence (docs/flexible.md).
 
-* :mod:`.stage`: the stage itself (inputs, one channel's fit, the statement, the black-box force);
+* :mod:`.stage`: the stage itself (one channel's fit, every channel's, the black-box force);
 * :mod:`.columns`: the stage's inputs (the columns its trees are given) and their groups;
 * :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
 * :mod:`.select`: which inputs are named (causes before consequences);
@@ -8,7 +8,7 @@
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
 * :mod:`.oblique`: the platform pose and the rates projected on the direction of a linear fit of the residual, per fold;
 * :mod:`.rival`: a discovered equation against the stage's fit of the residual before it (named with confidence or partial);
-* :mod:`.report`: the stage's figure and Markdown;
+* :mod:`.report`: the stage's statements, figure and Markdown;
 * :mod:`.cases`: forces no term family covers, simulated with their truth (the stage's test cases).
 """
 from .stage import (  # noqa: F401 (the stage's public names)

@@ -35,6 +35,15 @@ def _lowpass(x, dt, tau, starts):
     return y
 
 
+def blocks(pipe) -> tuple:
+    """``(starts, dt)``: the decimated rows where a stretch of motion starts (the histories
+    restart there) and the decimated samples' step [s]."""
+    idx = pipe.idx
+    t = pipe.t[idx]
+    starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
+    return starts, (float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt)
+
+
 def inputs(pipe, R, direction=False) -> tuple:
     """The flexible model's inputs at the decimated samples.
 
@@ -48,8 +57,7 @@ def inputs(pipe, R, direction=False) -> tuple:
     noun, qu, eu = facts.joint_noun, facts.joint_unit, facts.effort_unit
     rate_u = f"{qu}/s"
     t = pipe.t[idx]
-    starts = {0} | {int(np.searchsorted(idx, a)) for a, _ in pipe.segments[1:]}
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else pipe.dt
+    starts, dt = blocks(pipe)
     effort = pipe.tau_s[idx, :nd] - np.asarray(R, float)[:, :nd]
     qref = getattr(pipe.rec, "qref", None)
     rate_ref = smoothed = None
@@ -74,14 +82,11 @@ def inputs(pipe, R, direction=False) -> tuple:
             X.append(smoothed[:, k])
             cols.append((f"sign(qd{k + 1} reference) smoothed", f"rate of {noun} {k + 1}", k + 1, "rate", ""))
         group = f"history of {noun} {k + 1}"
+        X += histories(qd, effort[:, k], dt, starts)
         for tc in TIME_CONSTANTS:
-            hist = _lowpass(np.column_stack([np.abs(qd), effort[:, k]]), dt, tc, starts)
-            X += [hist[:, 0], hist[:, 1]]
             cols += [(f"|qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", rate_u),
                      (f"effort{k + 1} low-passed {tc:g} s", group, k + 1, "history", eu)]
         for tc in POWER_TIME_CONSTANTS:
-            power = _lowpass(np.abs(effort[:, k] * qd)[:, None], dt, tc, starts)[:, 0]
-            X += [power, np.sign(qd) * power]
             cols += [(f"|effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1, "history", f"{eu} {rate_u}"),
                      (f"sign(qd{k + 1}) |effort{k + 1} qd{k + 1}| low-passed {tc:g} s", group, k + 1,
                       "history x direction", f"{eu} {rate_u}")]
@@ -103,6 +108,21 @@ def inputs(pipe, R, direction=False) -> tuple:
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
+
+
+def histories(qd, effort, dt, starts) -> list:
+    """A joint's low-passed histories (restarted at the rows ``starts``; sample step ``dt`` [s])
+    from its rate ``qd`` and effort ``effort``, in the order of :func:`inputs`' columns: per
+    :data:`TIME_CONSTANTS` |qd| and the effort, per :data:`POWER_TIME_CONSTANTS` the power
+    |effort x qd| and that power signed by the direction of motion."""
+    out = []
+    for tc in TIME_CONSTANTS:
+        hist = _lowpass(np.column_stack([np.abs(qd), effort]), dt, tc, starts)
+        out += [hist[:, 0], hist[:, 1]]
+    for tc in POWER_TIME_CONSTANTS:
+        power = _lowpass(np.abs(effort * qd)[:, None], dt, tc, starts)[:, 0]
+        out += [power, np.sign(qd) * power]
+    return out
 
 
 def _since_reversal(rate, t, starts, dead=0.0) -> tuple:

@@ -1,8 +1,15 @@
-"""The flexible stage's part of the report (:mod:`.flexible`): the partial-dependence figure
-and the Markdown section of the fits a report states."""
+"""The flexible stage's part of the report (:mod:`.flexible`): each channel's statement, the
+conclusion's clause, the partial-dependence figure and the Markdown section of the fits a report
+states."""
 from __future__ import annotations
 
 import numpy as np
+
+from . import periodic
+
+#: the statement warns of extrapolation when the named inputs leave the fitted range in their
+#: held-out block at more than this share of the samples
+OUTSIDE_WARN = 0.1
 
 
 def figure(fits: list, path):
@@ -80,3 +87,76 @@ def _where(grid, curve, unit) -> str:
     if hi:
         return f"below {x(b + 1)} {unit}".rstrip()
     return f"over {x(0)} to {x(n - 1)} {unit}".rstrip()
+
+
+def family_says(fit, discovered, effects) -> str:
+    """A found discovered term or library effect of the channel's joint keyed on an input the
+    flexible model depends on, in words; "" if none."""
+    key_of = {"position": "position", "velocity": "rate", "acceleration": "acceleration"}
+    own = {d.quantity for d in fit.inputs if d.joint == fit.joint}
+    for t in discovered:
+        if t.joint == fit.joint and key_of.get(t.key_variable) in own:
+            return f"the discovered term ({t.equation}) is keyed on the same input and leaves this part"
+    for e in effects:
+        if e["joint"] == fit.joint:
+            return f"{e['name']} on this joint was fitted and leaves this part"
+    return ""
+
+
+def _at_value(feature, x, unit) -> str:
+    """Where a partial dependence peaks, in words: for a direction (a sign, smoothed as the efforts
+    are), the direction of motion; the smoothed sign overshoots +-1 after a reversal, which the
+    value beside says."""
+    if not feature.startswith("sign("):
+        return f"{feature} = {x:.3g} {unit}".rstrip()
+    said = f"motion in the {'negative' if x < 0 else 'positive'} direction"
+    return said + (f" ({feature} = {x:.3g}: the smoothed sign overshoots +-1 after a reversal)" if abs(x) > 1 else "")
+
+
+def statement(fit, noun: str) -> str:
+    """The report's sentence for one channel."""
+    if not fit.explained and not fit.beyond_noise:
+        return (f"{fit.channel}: whether what is left is explainable cannot be judged: it holds nothing beyond "
+                f"its own noise (RMS {fit.rms_left:.3g} {fit.unit} against a noise of {fit.noise:.3g} {fit.unit})")
+    if not fit.explained:
+        return (f"{fit.channel}: the structure left is not explainable from the recorded inputs "
+                f"(share out of fold {100 * fit.share:.0f} %, chi-square {fit.z:.0f}, not significant)")
+    if not fit.inputs:
+        s = (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
+             f"(out of fold)")
+        if fit.screened:
+            s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) alone: share out of fold "
+                  f"{100 * fit.screened[1]:.0f} %, not significant")
+        return s
+    parts, head = [], f"a force on {noun} {fit.joint} that depends on "
+    ins = fit.inputs
+    if fit.folded:  # sigma g: the direction, then what its level depends on
+        head = (f"a force on {noun} {fit.joint} that switches with its direction of motion (importance "
+                f"{100 * ins[0].importance:.0f} %), its level depending on ")
+        ins = ins[1:]
+    for d in ins:
+        size = max(abs(min(d.curve)), abs(max(d.curve)))
+        k = int(np.argmax(np.abs(np.asarray(d.curve))))
+        at = _at_value(d.feature, d.grid[k], d.unit)
+        if d.feature.startswith(periodic.LINE):  # the force's phase: its curve is the line's amplitude
+            hz = d.feature[len(periodic.LINE):].split(" Hz")[0].strip()
+            parts.append(f"the time (a line at {hz} Hz; up to {size:.3g} {fit.unit}; "
+                         f"importance {100 * d.importance:.0f} %)")
+            continue
+        parts.append(f"the {d.group.replace(f'{noun} {fit.joint}', f'{noun}')} ({d.feature}"
+                     f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
+                     f"importance {100 * d.importance:.0f} %)")
+    only = " and on nothing else" if len(parts) == 1 else ""
+    beside = f", with the fitted {', '.join(fit.readjusted)} re-adjusted beside it" if fit.readjusted else ""
+    s = (head + (" and on ".join(parts) if parts else "nothing else recorded") + only
+         + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model{beside})")
+    if fit.outside > OUTSIDE_WARN:
+        s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
+              f"fitted on without them (extrapolated flat: the share is a lower bound there)")
+    return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
+
+
+def sentence(fits: list) -> str:
+    """The conclusion's clause: the explained channels' statements."""
+    told = [f.statement for f in fits if f.explained]
+    return "where no equation was found: " + "; ".join(told) if told else ""

@@ -40,8 +40,9 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   errors over the folds; it is named when the trees cross-validated without it (on the other
   passing groups) lose :data:`DROP_MIN` of the variance, causes before consequences (the
   channel's own model effort and acceleration follow the force in closed loop: named
-  only where the other inputs cannot explain the same share) and a group sharing a named one's
-  columns named where those add (:mod:`.select`); the share claimed is then that of
+  only where the other inputs cannot explain the same share; an acceleration, effort or history
+  only where its counterpart along the reference motion adds too: :mod:`.copies`) and a group
+  sharing a named one's columns named where those add (:mod:`.select`); the share claimed is then that of
   the trees on the named groups alone (where two share columns, on fewer of them when that
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
@@ -79,9 +80,11 @@ import numpy as np
 
 from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _since_reversal,  # noqa: F401
                       input_groups, inputs)
-from .report import _where, figure, markdown, reported  # noqa: F401 (the stage's report, re-exported)
+from .report import (OUTSIDE_WARN, _where, family_says, figure, markdown, reported, sentence,  # noqa: F401
+                     statement)  # the stage's report, re-exported
 from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
+from .copies import on_channel
 from .oblique import extend, extended
 from . import periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
@@ -113,9 +116,6 @@ MAX_INPUTS = 4
 #: truths 0.41-0.74): only the strongest input alone is cross-validated there, one small fit
 #: instead of the full model's (library cases leave such channels on several joints)
 RMS_OVER_NOISE = 2.0
-#: the statement warns of extrapolation when the named inputs leave the fitted range in their
-#: held-out block at more than this share of the samples
-OUTSIDE_WARN = 0.1
 
 _QUANTITIES = ("position", "rate", "acceleration", "effort", "history")
 
@@ -306,7 +306,9 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    given = (X, columns)
     X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c, offered)
+    reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
     follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
     screened_fold = direction_c if how == "both" else None  # the folded fit made too
@@ -314,7 +316,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference=reference)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
@@ -428,73 +430,6 @@ def _dependence(model, X, columns, cols, group, importance, unit) -> Dependence:
                       tuple(curve.tolist()), _where(grid, curve, xunit))
 
 
-def family_says(fit: FlexibleFit, discovered, effects) -> str:
-    """A found discovered term or library effect of the channel's joint keyed on an input the
-    flexible model depends on, in words; "" if none."""
-    key_of = {"position": "position", "velocity": "rate", "acceleration": "acceleration"}
-    own = {d.quantity for d in fit.inputs if d.joint == fit.joint}
-    for t in discovered:
-        if t.joint == fit.joint and key_of.get(t.key_variable) in own:
-            return f"the discovered term ({t.equation}) is keyed on the same input and leaves this part"
-    for e in effects:
-        if e["joint"] == fit.joint:
-            return f"{e['name']} on this joint was fitted and leaves this part"
-    return ""
-
-
-def _at_value(feature, x, unit) -> str:
-    """Where a partial dependence peaks, in words: for a direction (a sign, smoothed as the efforts
-    are), the direction of motion; the smoothed sign overshoots +-1 after a reversal, which the
-    value beside says."""
-    if not feature.startswith("sign("):
-        return f"{feature} = {x:.3g} {unit}".rstrip()
-    said = f"motion in the {'negative' if x < 0 else 'positive'} direction"
-    return said + (f" ({feature} = {x:.3g}: the smoothed sign overshoots +-1 after a reversal)" if abs(x) > 1 else "")
-
-
-def statement(fit: FlexibleFit, noun: str) -> str:
-    """The report's sentence for one channel."""
-    if not fit.explained and not fit.beyond_noise:
-        return (f"{fit.channel}: whether what is left is explainable cannot be judged: it holds nothing beyond "
-                f"its own noise (RMS {fit.rms_left:.3g} {fit.unit} against a noise of {fit.noise:.3g} {fit.unit})")
-    if not fit.explained:
-        return (f"{fit.channel}: the structure left is not explainable from the recorded inputs "
-                f"(share out of fold {100 * fit.share:.0f} %, chi-square {fit.z:.0f}, not significant)")
-    if not fit.inputs:
-        s = (f"{fit.channel}: {100 * fit.share:.0f} % of what is left is explainable, on no single input "
-             f"(out of fold)")
-        if fit.screened:
-            s += (f"; the inputs that stood out ({', '.join(fit.screened[0])}) alone: share out of fold "
-                  f"{100 * fit.screened[1]:.0f} %, not significant")
-        return s
-    parts, head = [], f"a force on {noun} {fit.joint} that depends on "
-    ins = fit.inputs
-    if fit.folded:  # sigma g: the direction, then what its level depends on
-        head = (f"a force on {noun} {fit.joint} that switches with its direction of motion (importance "
-                f"{100 * ins[0].importance:.0f} %), its level depending on ")
-        ins = ins[1:]
-    for d in ins:
-        size = max(abs(min(d.curve)), abs(max(d.curve)))
-        k = int(np.argmax(np.abs(np.asarray(d.curve))))
-        at = _at_value(d.feature, d.grid[k], d.unit)
-        if d.feature.startswith(periodic.LINE):  # the force's phase: its curve is the line's amplitude
-            hz = d.feature[len(periodic.LINE):].split(" Hz")[0].strip()
-            parts.append(f"the time (a line at {hz} Hz; up to {size:.3g} {fit.unit}; "
-                         f"importance {100 * d.importance:.0f} %)")
-            continue
-        parts.append(f"the {d.group.replace(f'{noun} {fit.joint}', f'{noun}')} ({d.feature}"
-                     f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
-                     f"importance {100 * d.importance:.0f} %)")
-    only = " and on nothing else" if len(parts) == 1 else ""
-    beside = f", with the fitted {', '.join(fit.readjusted)} re-adjusted beside it" if fit.readjusted else ""
-    s = (head + (" and on ".join(parts) if parts else "nothing else recorded") + only
-         + f": {100 * fit.share:.0f} % of what is left (out of fold, flexible model{beside})")
-    if fit.outside > OUTSIDE_WARN:
-        s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
-              f"fitted on without them (extrapolated flat: the share is a lower bound there)")
-    return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
-
-
 def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=(), outfit=()) -> list:
     """The flexible stage of a diagnosis: one :class:`FlexibleFit` per effort channel worth a
     fit (:func:`candidates`), on the residual ``R`` after the fitted model (decimated samples
@@ -571,12 +506,6 @@ def _with(fit, **kw):
     from dataclasses import replace
 
     return replace(fit, **kw)
-
-
-def sentence(fits: list) -> str:
-    """The conclusion's clause: the explained channels' statements."""
-    told = [f.statement for f in fits if f.explained]
-    return "where no equation was found: " + "; ".join(told) if told else ""
 
 
 def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
