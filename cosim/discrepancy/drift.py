@@ -18,14 +18,14 @@ tried), and two more rules hold, each general (no kind of force named in them):
 - **Time beyond the place** (:func:`beyond_places`): a force keyed on where the robot is looks
   like a change in time wherever the trajectory visits other places later in the recording.
   The recording's samples are grouped into :data:`PLACES` places (k-means of the joint
-  positions, each joint scaled by its spread), and a force keyed on the place (one level per
-  place and channel) is taken out of the residual, of the parameter's column and of its drift
-  column alike.  The drift is dropped where its BIC decrease over the constant, so judged, no
-  longer exceeds the bar while the force keyed on the place is itself supported beside the
-  drift (its BIC decrease, one level per place and channel counted, above the bar): the
-  residual then holds a force keyed on the place that the drift only mimics.  Where the place
-  brings nothing beside the drift (a trajectory that seldom revisits a place, a drift and
-  nothing else), the drift stands on its own BIC decrease: time and place cannot be told apart
+  positions, each joint scaled by its spread).  On each channel where one level per place is
+  supported (the residual with the parameter's constant fitted: its chi-square decrease less
+  ``PLACES ln n`` above the bar), those levels are taken out of the residual, of the
+  parameter's column and of its drift column alike, and the drift is kept only where its BIC
+  decrease over the constant, so judged, still exceeds the bar: what the time adds beyond the
+  place, within places visited before and after the change.  Where no channel supports a
+  force keyed on the place (a drift and nothing else, a trajectory that seldom revisits its
+  places), the drift stands on its own BIC decrease: time and place cannot be told apart
   there, and the place is the one without support.
 - **One time course, one statement** (:func:`_one_statement`): a drift whose time course (a
   trend, or a step at the same time within one grid step) is that of a stronger drift already
@@ -116,8 +116,9 @@ class Drift:
     held: str = ""
     #: BIC decrease over the constant with a force keyed on the place taken out (None: not judged)
     beyond_places: float | None = None
-    #: the force keyed on the place's BIC decrease beside the drift (None: not judged)
-    places_bic: float | None = None
+    #: the channels (0-based) where a force keyed on the place is supported, taken out before
+    #: ``beyond_places`` (None: not judged)
+    place_channels: list | None = None
     #: parameters the same time course also fits, adding nothing beyond this drift
     also: tuple = ()
 
@@ -127,7 +128,7 @@ class Drift:
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("param", "unit", "kind", "mean", "size", "ci95", "time", "start", "end",
                                                "delta_bic", "bar", "windows", "equation", "course", "held",
-                                               "beyond_places", "places_bic", "also")}
+                                               "beyond_places", "place_channels", "also")}
 
 
 def _column(eng, theta, R, k):
@@ -217,8 +218,8 @@ def _off_places(v, weights, label, channels=None):
 
 
 def beyond_places(y, c, profile, weights, label, n_coef: int, logn: float, bar: float) -> tuple:
-    """A drift against a force keyed on the place: the channels where such a force is supported
-    beside the drift, and what the drift adds beyond it there.
+    """A drift against a force keyed on the place: the channels where such a force is supported,
+    and what the drift adds beyond it there.
 
     Parameters
     ----------
@@ -235,22 +236,23 @@ def beyond_places(y, c, profile, weights, label, n_coef: int, logn: float, bar: 
     logn : float
         ``ln`` of the effectively independent samples.
     bar : float
-        The BIC decrease a channel's levels must bring beside the drift to be supported.
+        The BIC decrease a channel's levels must bring to be supported.
 
     Returns
     -------
     (float, list of int)
         The drift's BIC decrease over the constant with the force keyed on the place taken out
         of the supported channels (near ``-n_coef logn`` where the places alone reproduce the
-        time course; the drift's own decrease where no channel supports it), and those channels.
+        time course; the drift's own decrease where no channel supports it), and those channels
+        (a channel's levels supported on the residual with the constant fitted: their
+        chi-square decrease less one ``logn`` per level above ``bar``).
     """
     m, C = weights.shape
     coef, _ = _lstsq(c[:, None], y)
     r = y - c * coef[0]
     rp = _off_places(r, weights, label)
     levels = int(label.max()) + 1
-    gain = [float(r[ch * m:(ch + 1) * m] @ r[ch * m:(ch + 1) * m] - rp[ch * m:(ch + 1) * m] @ rp[ch * m:(ch + 1) * m])
-            for ch in range(C)]
+    gain = np.sum(r.reshape(C, m) ** 2, 1) - np.sum(rp.reshape(C, m) ** 2, 1)  # channel after channel
     channels = [ch for ch in range(C) if gain[ch] - levels * logn > bar]
     yp, cp, gp = (_off_places(v, weights, label, channels) for v in (y, c, c * profile))
     if not float(cp @ cp) > 0:
@@ -387,7 +389,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             dr = Drift(k, u, "trend", p, size, ci, None, p + coef_t[0] - size / 2, p + coef_t[0] + size / 2,
                        float(d_trend), float(bar), course,
                        f"{k}(t) = {p + coef_t[0]:.4g} + ({size:.3g} ± {ci:.2g}) (t - {tm:.3g} s) / {T:.3g} s {u}",
-                       beyond_places=beyond, places_bic=place)
+                       beyond_places=beyond, place_channels=place)
         else:
             ts, _, coef_s, h = best_s
             X = np.stack([c, c * (h - h.mean())], 1)
@@ -397,7 +399,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             before = p + coef_s[0] - size * w
             dr = Drift(k, u, "step", p, size, ci, float(ts), before, before + size, float(d_step), float(bar), course,
                        f"{k}(t) = {before:.4g} {u} before t = {ts:.3g} s, {before + size:.4g} {u} after "
-                       f"(a step of {size:.3g} ± {ci:.2g} {u})", beyond_places=beyond, places_bic=place)
+                       f"(a step of {size:.3g} ± {ci:.2g} {u})", beyond_places=beyond, place_channels=place)
         found.append(dr)
         cols[k] = c
     found = sorted(found, key=lambda d: -d.delta_bic)
@@ -511,7 +513,8 @@ def markdown(drifts, files: dict) -> list:
     L = ["## Drifts", "",
          "Every fitted parameter tried as a trend or a step in time over the whole recording (BIC with the "
          "look-elsewhere cost of every parameter and step time tried), and not where a force keyed on the place "
-         f"({PLACES} places of the joint positions) explains it and is itself supported; the time course is "
+         f"({PLACES} places of the joint positions, levels on the channels that support them) explains it; the "
+         "time course is "
          "the parameter refitted "
          f"alone in {WINDOWS} windows.  A drift the core can model is modelled as a drift: the replay's plant "
          "carries it as its parameter's time course, fitted again (its kind chosen too) on the fitting rows alone.", ""]
@@ -524,8 +527,10 @@ def markdown(drifts, files: dict) -> list:
             plant = f"modelled as a drift: the plant carries {how}"
         else:
             plant = d.held or "the plant holds the mean"
-        beside = "" if d.beyond_places is None else (f", {d.beyond_places:.0f} beyond a force keyed on the place, "
-                                                     f"which brings {d.places_bic:.0f} beside it")
+        beside = "" if d.beyond_places is None else (
+            f", {d.beyond_places:.0f} beyond a force keyed on the place on channels "
+            f"{', '.join(str(ch + 1) for ch in d.place_channels)}" if d.place_channels else
+            ", no channel supports a force keyed on the place")
         L += [f"- **{d.equation}** (BIC decrease {d.delta_bic:.0f}{beside}, bar {d.bar:.1f}); {plant}",
               "  - windows: " + ", ".join(f"{v:.4g} ± {c:.2g} at {t:.3g} s"
                                           for t, v, c in zip(d.windows["t"], d.windows["value"], d.windows["ci95"]))]

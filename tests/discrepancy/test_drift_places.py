@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from cosim.discrepancy.drift import find_drifts
+from cosim.discrepancy.drift import find_drifts, markdown, sentence
 
 M, THRESHOLD = 2000, 10.0
 
@@ -83,3 +83,6 @@ def test_parameters_that_step_together_are_one_statement():
     found = find_drifts(eng, theta, THRESHOLD)
     assert len(found) == 1 and found[0].kind == "step", [d.equation for d in found]
     assert set(found[0].also) | {found[0].param} == {"rail[1].offset", "rail[1].twin"}
+    other = ({"rail[1].offset", "rail[1].twin"} - {found[0].param}).pop()
+    assert f"the same course also fits {other}" in sentence(found)
+    assert any(line.endswith(other) and "also fits" in line for line in markdown(found, {}))
