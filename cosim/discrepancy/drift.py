@@ -151,8 +151,9 @@ def _lstsq(X, y):
     return coef, float(r @ r)
 
 
-def _course(eng, y_all, c_all, t, rows, s2):
-    """The parameter refitted alone in WINDOWS windows of the rows: centres, values, 95 %."""
+def _course(eng, y_all, c_all, t, rows, s2, p):
+    """The parameter (fitted constant ``p``) refitted alone in WINDOWS windows of the rows:
+    centres, values, 95 %, and the rows' first and last time (``span``)."""
     edges = np.linspace(t[rows].min(), t[rows].max(), WINDOWS + 1)
     C = eng.C
     out = {"t": [], "value": [], "ci95": []}
@@ -164,8 +165,9 @@ def _course(eng, y_all, c_all, t, rows, s2):
         if den <= 0:
             continue
         out["t"].append(0.5 * (a + b))
-        out["value"].append(float(x @ y_all[w]) / den)
+        out["value"].append(p + float(x @ y_all[w]) / den)
         out["ci95"].append(1.96 * math.sqrt(s2 / den))
+    out["span"] = [float(t[rows].min()), float(t[rows].max())]
     return out
 
 
@@ -262,6 +264,22 @@ def beyond_places(y, c, profile, weights, label, n_coef: int, logn: float, bar: 
     return float(chi_c - chi_t - n_coef * logn), channels
 
 
+def _against_place(eng, rows, memo, y, c, times, step_time, logn, bar):
+    """:func:`beyond_places` of a drift (a trend where ``step_time`` is False, else a step then)
+    on ``eng``'s ``rows``; ``times`` is ``(tt, tm, T)``, the stacked times, their middle and span;
+    ``memo`` keeps the places and weights for the next parameter."""
+    if not memo:
+        memo["label"] = places(eng.pipe.q_s[eng.pipe.idx][rows])
+        memo["weights"] = np.asarray(eng.W)[rows]
+    tt, tm, T = times
+    if step_time is False:
+        g, n_coef = (tt - tm) / T, 1
+    else:
+        h = (tt >= step_time).astype(float)
+        g, n_coef = h - h.mean(), 2
+    return beyond_places(y, c, g, memo["weights"], memo["label"], n_coef, logn, bar)
+
+
 def _profile(d, tt, T, tm):
     """The centred time course of drift ``d`` at the stacked times ``tt``."""
     if d.kind == "trend":
@@ -345,8 +363,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     keys = [k for k in theta if np.isfinite(theta[k]) and (kinds is None or k in kinds)]
     tried = len(keys) * (1 + len(cuts))
     bar = threshold + 2.0 * math.log(max(tried, 1))
-    found, cols = [], {}
-    label = weights = None
+    found, cols, memo = [], {}, {}
     for k in keys:
         col = _column(eng, theta, R, k)
         if col is None:
@@ -369,18 +386,12 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             continue
         beyond = place = None
         if forced is None:  # the place judged first: time is kept only where it adds beyond it
-            if label is None:
-                label, weights = places(pipe.q_s[pipe.idx][rows]), np.asarray(eng.W)[rows]
-            kind_t = d_trend >= d_step
-            g = (tt - tm) / T if kind_t else (tt >= best_s[0]) - float(np.mean(tt >= best_s[0]))
-            beyond, place = beyond_places(y, c, g, weights, label, 1 if kind_t else 2, logn, bar)
-            if beyond <= bar:  # a force keyed on the place, supported beside it, explains it
+            beyond, place = _against_place(eng, rows, memo, y, c, (tt, tm, T), d_step > d_trend and best_s[0], logn, bar)
+            if beyond <= bar:  # a force keyed on the place, supported on its channels, explains it
                 continue
         s2 = max(1.0, min(chi_t, best_s[1]) / max(len(y) - 2, 1))
         p = float(theta[k])
-        course = _course(eng, y, c, t, rows, s2)
-        course["value"] = [p + v for v in course["value"]]
-        course["span"] = [float(tr.min()), float(tr.max())]
+        course = _course(eng, y, c, t, rows, s2, p)
         u = (units or {}).get(k, "")
         if d_trend >= d_step if forced in (None, "either") else forced == "trend":
             X = np.stack([c, c * (tt - tm) / T], 1)
