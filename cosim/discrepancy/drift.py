@@ -13,7 +13,28 @@ the whole recording, each column multiplied by a function of time:
 
 A drift is named when its BIC decrease over the constant exceeds the diagnosis's threshold
 plus the look-elsewhere cost ``2 ln M`` (M: every parameter times every model and step time
-tried).  Its time course is also measured directly: the parameter refitted on its own in
+tried), and two more rules hold, each general (no kind of force named in them):
+
+- **Time beyond the place** (:func:`beyond_places`): a force keyed on where the robot is looks
+  like a change in time wherever the trajectory visits other places later in the recording.
+  The recording's samples are grouped into :data:`PLACES` places (k-means of the joint
+  positions, each joint scaled by its spread).  On each channel where one level per place is
+  supported (the residual with the parameter's constant fitted: its chi-square decrease less
+  ``PLACES ln n`` above the bar), those levels are taken out of the residual, of the
+  parameter's column and of its drift column alike, and the drift is kept only where its BIC
+  decrease over the constant, so judged, still exceeds the bar: what the time adds beyond the
+  place, within places visited before and after the change.  Where no channel supports a
+  force keyed on the place (a drift and nothing else, a trajectory that seldom revisits its
+  places), the drift stands on its own BIC decrease: time and place cannot be told apart
+  there, and the place is the one without support.
+- **One time course, one statement** (:func:`_one_statement`): a drift whose time course (a
+  trend, or a step at the same time within one grid step) is that of a stronger drift already
+  named is named only where it adds beyond it (its BIC decrease beside the stronger drift above
+  the bar); else it is listed as a parameter the same course also fits (``Drift.also``), and
+  the replay's plant carries only the stronger one (separately fitted, both would carry the
+  same change twice).
+
+Its time course is also measured directly: the parameter refitted on its own in
 :data:`WINDOWS` consecutive windows (the others held), each with its 95 % interval, for the
 report and its figure.
 
@@ -35,6 +56,11 @@ import numpy as np
 WINDOWS = 6
 #: step times tried, as fractions of the recording
 STEP_GRID = np.linspace(0.1, 0.9, 33)
+#: places (k-means of the scaled joint positions) a force keyed on where the robot is may take
+#: a level in, per channel, before a drift is judged (:func:`beyond_places`)
+PLACES = 16
+#: k-means iterations of the places
+PLACE_ITERATIONS = 15
 
 
 @dataclass
@@ -88,13 +114,21 @@ class Drift:
     course: dict | None = None
     #: why the plant holds the mean instead ("" when it carries the course)
     held: str = ""
+    #: BIC decrease over the constant with a force keyed on the place taken out (None: not judged)
+    beyond_places: float | None = None
+    #: the channels (0-based) where a force keyed on the place is supported, taken out before
+    #: ``beyond_places`` (None: not judged)
+    place_channels: list | None = None
+    #: parameters the same time course also fits, adding nothing beyond this drift
+    also: tuple = ()
 
     def __getitem__(self, k):
         return getattr(self, k)
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("param", "unit", "kind", "mean", "size", "ci95", "time", "start", "end",
-                                               "delta_bic", "bar", "windows", "equation", "course", "held")}
+                                               "delta_bic", "bar", "windows", "equation", "course", "held",
+                                               "beyond_places", "place_channels", "also")}
 
 
 def _column(eng, theta, R, k):
@@ -117,8 +151,9 @@ def _lstsq(X, y):
     return coef, float(r @ r)
 
 
-def _course(eng, y_all, c_all, t, rows, s2):
-    """The parameter refitted alone in WINDOWS windows of the rows: centres, values, 95 %."""
+def _course(eng, y_all, c_all, t, rows, s2, p):
+    """The parameter (fitted constant ``p``) refitted alone in WINDOWS windows of the rows:
+    centres, values, 95 %, and the rows' first and last time (``span``)."""
     edges = np.linspace(t[rows].min(), t[rows].max(), WINDOWS + 1)
     C = eng.C
     out = {"t": [], "value": [], "ci95": []}
@@ -130,9 +165,154 @@ def _course(eng, y_all, c_all, t, rows, s2):
         if den <= 0:
             continue
         out["t"].append(0.5 * (a + b))
-        out["value"].append(float(x @ y_all[w]) / den)
+        out["value"].append(p + float(x @ y_all[w]) / den)
         out["ci95"].append(1.96 * math.sqrt(s2 / den))
+    out["span"] = [float(t[rows].min()), float(t[rows].max())]
     return out
+
+
+def places(positions, n_places: int = PLACES) -> np.ndarray:
+    """The place of every sample: k-means of the joint positions, each joint scaled by its spread.
+
+    Parameters
+    ----------
+    positions : numpy.ndarray, shape (m, n)
+        Joint positions [the joints' units].
+    n_places : int
+        Places (fewer when there are fewer distinct samples).
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (m,)
+        The place of each sample, 0 .. n_places - 1.  The centres start at the first sample
+        and then each at the sample farthest from those taken, so the places are the same on
+        every run.
+    """
+    q = np.asarray(positions, float)
+    Z = (q - q.mean(0)) / np.maximum(q.std(0), 1e-12)
+    centres = [Z[0]]
+    far = np.sum((Z - Z[0]) ** 2, 1)
+    for _ in range(n_places - 1):
+        if not far.max() > 0:
+            break
+        centres.append(Z[int(np.argmax(far))])
+        far = np.minimum(far, np.sum((Z - centres[-1]) ** 2, 1))
+    C = np.array(centres)
+    for _ in range(PLACE_ITERATIONS):
+        label = np.argmin(((Z[:, None, :] - C[None]) ** 2).sum(2), 1)
+        C = np.array([Z[label == j].mean(0) if np.any(label == j) else C[j] for j in range(len(C))])
+    return np.argmin(((Z[:, None, :] - C[None]) ** 2).sum(2), 1)
+
+
+def _off_places(v, weights, label, channels=None):
+    """``v`` (stacked channel after channel, as :meth:`FitState.vec`) less its least-squares fit
+    by one level per place on each of ``channels`` (default: all; the level's column is the
+    channel's weights there)."""
+    m, C = weights.shape
+    n = int(label.max()) + 1
+    out = np.array(v, float)
+    for ch in range(C) if channels is None else channels:
+        seg, w = out[ch * m:(ch + 1) * m], weights[:, ch]
+        den = np.bincount(label, w * w, n)
+        level = np.divide(np.bincount(label, w * seg, n), den, out=np.zeros(n), where=den > 0)
+        seg -= w * level[label]
+    return out
+
+
+def beyond_places(y, c, profile, weights, label, n_coef: int, logn: float, bar: float) -> tuple:
+    """A drift against a force keyed on the place: the channels where such a force is supported,
+    and what the drift adds beyond it there.
+
+    Parameters
+    ----------
+    y, c : numpy.ndarray, shape (m C,)
+        The weighted residual to cancel and the parameter's weighted column, stacked.
+    profile : numpy.ndarray, shape (m C,)
+        The drift's time course (centred), stacked as ``c``.
+    weights : numpy.ndarray, shape (m, C)
+        The weights of the rows and channels.
+    label : numpy.ndarray of int, shape (m,)
+        The place of each row (:func:`places`).
+    n_coef : int
+        The drift's coefficients (1 for a trend, 2 for a step).
+    logn : float
+        ``ln`` of the effectively independent samples.
+    bar : float
+        The BIC decrease a channel's levels must bring to be supported.
+
+    Returns
+    -------
+    (float, list of int)
+        The drift's BIC decrease over the constant with the force keyed on the place taken out
+        of the supported channels (near ``-n_coef logn`` where the places alone reproduce the
+        time course; the drift's own decrease where no channel supports it), and those channels
+        (a channel's levels supported on the residual with the constant fitted: their
+        chi-square decrease less one ``logn`` per level above ``bar``).
+    """
+    m, C = weights.shape
+    coef, _ = _lstsq(c[:, None], y)
+    r = y - c * coef[0]
+    rp = _off_places(r, weights, label)
+    levels = int(label.max()) + 1
+    gain = np.sum(r.reshape(C, m) ** 2, 1) - np.sum(rp.reshape(C, m) ** 2, 1)  # channel after channel
+    channels = [ch for ch in range(C) if gain[ch] - levels * logn > bar]
+    yp, cp, gp = (_off_places(v, weights, label, channels) for v in (y, c, c * profile))
+    if not float(cp @ cp) > 0:
+        return -n_coef * logn, channels
+    _, chi_c = _lstsq(cp[:, None], yp)
+    _, chi_t = _lstsq(np.stack([cp, gp], 1), yp)
+    return float(chi_c - chi_t - n_coef * logn), channels
+
+
+def _against_place(eng, rows, memo, y, c, times, step_time, logn, bar):
+    """:func:`beyond_places` of a drift (a trend where ``step_time`` is False, else a step then)
+    on ``eng``'s ``rows``; ``times`` is ``(tt, tm, T)``, the stacked times, their middle and span;
+    ``memo`` keeps the places and weights for the next parameter."""
+    if not memo:
+        memo["label"] = places(eng.pipe.q_s[eng.pipe.idx][rows])
+        memo["weights"] = np.asarray(eng.W)[rows]
+    tt, tm, T = times
+    if step_time is False:
+        g, n_coef = (tt - tm) / T, 1
+    else:
+        h = (tt >= step_time).astype(float)
+        g, n_coef = h - h.mean(), 2
+    return beyond_places(y, c, g, memo["weights"], memo["label"], n_coef, logn, bar)
+
+
+def _profile(d, tt, T, tm):
+    """The centred time course of drift ``d`` at the stacked times ``tt``."""
+    if d.kind == "trend":
+        return (tt - tm) / T
+    h = (tt >= d.time).astype(float)
+    return h - h.mean()
+
+
+def _same_course(a, b, T) -> bool:
+    """Drifts ``a`` and ``b`` have one time course: both trends, or steps within one grid step."""
+    if a.kind != b.kind:
+        return False
+    return a.kind == "trend" or abs(a.time - b.time) <= T * (STEP_GRID[1] - STEP_GRID[0]) * 1.001
+
+
+def _one_statement(found, cols, y, tt, T, tm, logn):
+    """``found`` (strongest first) with each drift whose time course a stronger kept drift has
+    kept only where it adds beyond that one (BIC decrease above its bar); else its parameter is
+    listed in the stronger one's ``also``."""
+    kept = []
+    for d in found:
+        with_same = [k for k in kept if _same_course(k, d, T)]
+        if with_same:
+            first = with_same[0]
+            g = _profile(first, tt, T, tm)
+            base = [cols[k.param] for k in with_same] + [cols[d.param]] + [cols[k.param] * g for k in with_same]
+            _, chi_0 = _lstsq(np.stack(base, 1), y)
+            _, chi_1 = _lstsq(np.stack(base + [cols[d.param] * g], 1), y)
+            if chi_0 - chi_1 - logn <= d.bar:
+                kept[kept.index(first)] = replace(first, also=first.also + (d.param,))
+                continue
+        kept.append(d)
+    return kept
 
 
 def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, rows=None, kinds=None) -> list:
@@ -183,7 +363,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     keys = [k for k in theta if np.isfinite(theta[k]) and (kinds is None or k in kinds)]
     tried = len(keys) * (1 + len(cuts))
     bar = threshold + 2.0 * math.log(max(tried, 1))
-    found = []
+    found, cols, memo = [], {}, {}
     for k in keys:
         col = _column(eng, theta, R, k)
         if col is None:
@@ -204,11 +384,14 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
         forced = None if kinds is None else kinds[k]
         if forced is None and max(d_trend, d_step) <= bar:
             continue
+        beyond = place = None
+        if forced is None:  # the place judged first: time is kept only where it adds beyond it
+            beyond, place = _against_place(eng, rows, memo, y, c, (tt, tm, T), d_step > d_trend and best_s[0], logn, bar)
+            if beyond <= bar:  # a force keyed on the place, supported on its channels, explains it
+                continue
         s2 = max(1.0, min(chi_t, best_s[1]) / max(len(y) - 2, 1))
         p = float(theta[k])
-        course = _course(eng, y, c, t, rows, s2)
-        course["value"] = [p + v for v in course["value"]]
-        course["span"] = [float(tr.min()), float(tr.max())]
+        course = _course(eng, y, c, t, rows, s2, p)
         u = (units or {}).get(k, "")
         if d_trend >= d_step if forced in (None, "either") else forced == "trend":
             X = np.stack([c, c * (tt - tm) / T], 1)
@@ -216,7 +399,8 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             ci = 1.96 * math.sqrt(s2 * np.linalg.pinv(X.T @ X)[1, 1])
             dr = Drift(k, u, "trend", p, size, ci, None, p + coef_t[0] - size / 2, p + coef_t[0] + size / 2,
                        float(d_trend), float(bar), course,
-                       f"{k}(t) = {p + coef_t[0]:.4g} + ({size:.3g} ± {ci:.2g}) (t - {tm:.3g} s) / {T:.3g} s {u}")
+                       f"{k}(t) = {p + coef_t[0]:.4g} + ({size:.3g} ± {ci:.2g}) (t - {tm:.3g} s) / {T:.3g} s {u}",
+                       beyond_places=beyond, place_channels=place)
         else:
             ts, _, coef_s, h = best_s
             X = np.stack([c, c * (h - h.mean())], 1)
@@ -226,9 +410,11 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             before = p + coef_s[0] - size * w
             dr = Drift(k, u, "step", p, size, ci, float(ts), before, before + size, float(d_step), float(bar), course,
                        f"{k}(t) = {before:.4g} {u} before t = {ts:.3g} s, {before + size:.4g} {u} after "
-                       f"(a step of {size:.3g} ± {ci:.2g} {u})")
+                       f"(a step of {size:.3g} ± {ci:.2g} {u})", beyond_places=beyond, place_channels=place)
         found.append(dr)
-    return sorted(found, key=lambda d: -d.delta_bic)
+        cols[k] = c
+    found = sorted(found, key=lambda d: -d.delta_bic)
+    return found if kinds is not None else _one_statement(found, cols, y, tt, T, tm, logn)
 
 
 def _course_of(d: Drift) -> dict:
@@ -303,6 +489,14 @@ def residual(eng, theta: dict, drifts, R):
     return R
 
 
+def _listed(names, shown: int = 3) -> str:
+    """``names`` in a sentence: the first ``shown`` and how many more."""
+    names = list(names)
+    if len(names) <= shown:
+        return ", ".join(names)
+    return ", ".join(names[:shown]) + f" and {len(names) - shown} more"
+
+
 def sentence(drifts) -> str:
     """The conclusion's clause on the drifts."""
     parts = []
@@ -319,6 +513,8 @@ def sentence(drifts) -> str:
             p += f", modelled as a drift ({'a trend' if d.course['kind'] == 'trend' else 'a step'} on the fitting rows)"
         else:
             p += ", modelled as a drift"
+        if d.also:
+            p += f"; the same course also fits {_listed(d.also)}"
         parts.append(p)
     return "drift: " + "; ".join(parts)
 
@@ -327,7 +523,10 @@ def markdown(drifts, files: dict) -> list:
     """The report's section on the drifts (lines of Markdown)."""
     L = ["## Drifts", "",
          "Every fitted parameter tried as a trend or a step in time over the whole recording (BIC with the "
-         "look-elsewhere cost of every parameter and step time tried); the time course is the parameter refitted "
+         "look-elsewhere cost of every parameter and step time tried), and not where a force keyed on the place "
+         f"({PLACES} places of the joint positions, levels on the channels that support them) explains it; the "
+         "time course is "
+         "the parameter refitted "
          f"alone in {WINDOWS} windows.  A drift the core can model is modelled as a drift: the replay's plant "
          "carries it as its parameter's time course, fitted again (its kind chosen too) on the fitting rows alone.", ""]
     for d in drifts:
@@ -339,9 +538,15 @@ def markdown(drifts, files: dict) -> list:
             plant = f"modelled as a drift: the plant carries {how}"
         else:
             plant = d.held or "the plant holds the mean"
-        L += [f"- **{d.equation}** (BIC decrease {d.delta_bic:.0f}, bar {d.bar:.1f}); {plant}",
+        beside = "" if d.beyond_places is None else (
+            f", {d.beyond_places:.0f} beyond a force keyed on the place on channels "
+            f"{', '.join(str(ch + 1) for ch in d.place_channels)}" if d.place_channels else
+            ", no channel supports a force keyed on the place")
+        L += [f"- **{d.equation}** (BIC decrease {d.delta_bic:.0f}{beside}, bar {d.bar:.1f}); {plant}",
               "  - windows: " + ", ".join(f"{v:.4g} ± {c:.2g} at {t:.3g} s"
                                           for t, v, c in zip(d.windows["t"], d.windows["value"], d.windows["ci95"]))]
+        if d.also:
+            L += ["  - the same time course also fits, adding nothing beyond it: " + ", ".join(d.also)]
     if "drifts" in files:
         L += ["", "![the drifting parameters over the recording](drifts.png)"]
     return L + [""]

@@ -514,7 +514,9 @@ def _conclusion_and_details(conclusion, effects_out, found, left, held, plat, dr
     if left:
         conclusion = (conclusion + "; " + sentence(left) if effects_out or found else
                       "no effect of the library explains the residual: " + sentence(left))
-    others = ([short_name(plat)] if plat is not None else []) + [f"a drift of {dr.param} (a {dr.kind})" for dr in drifts]
+    others = ([short_name(plat)] if plat is not None else []) + [
+        f"a drift of {dr.param} (a {dr.kind}" + (f"; the same {dr.kind} fits {len(dr.also)} more parameter{'s' * (len(dr.also) > 1)}" if dr.also else "")
+        + ")" for dr in drifts]
     head = headline(effects_out, found, left, held.get("gain"), UNEXPLAINED, tied, others)
     if flex:
         from ..flexible import sentence as flexible_sentence
