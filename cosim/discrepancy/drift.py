@@ -264,20 +264,30 @@ def beyond_places(y, c, profile, weights, label, n_coef: int, logn: float, bar: 
     return float(chi_c - chi_t - n_coef * logn), channels
 
 
-def _against_place(eng, rows, memo, y, c, times, step_time, logn, bar):
+def _places_of(eng, rows):
+    """A function giving the places (:func:`places`) and weights of ``eng``'s ``rows``, made on
+    first call (most recordings name no drift to judge) and kept for the next parameter."""
+    made = []
+
+    def get():
+        if not made:
+            made.append((places(eng.pipe.q_s[eng.pipe.idx][rows]), np.asarray(eng.W)[rows]))
+        return made[0]
+    return get
+
+
+def _against_place(place, y, c, times, step_time, logn, bar):
     """:func:`beyond_places` of a drift (a trend where ``step_time`` is False, else a step then)
-    on ``eng``'s ``rows``; ``times`` is ``(tt, tm, T)``, the stacked times, their middle and span;
-    ``memo`` keeps the places and weights for the next parameter."""
-    if not memo:
-        memo["label"] = places(eng.pipe.q_s[eng.pipe.idx][rows])
-        memo["weights"] = np.asarray(eng.W)[rows]
+    at the places ``place`` gives (:func:`_places_of`); ``times`` is ``(tt, tm, T)``, the stacked
+    times, their middle and span."""
+    label, weights = place()
     tt, tm, T = times
     if step_time is False:
         g, n_coef = (tt - tm) / T, 1
     else:
         h = (tt >= step_time).astype(float)
         g, n_coef = h - h.mean(), 2
-    return beyond_places(y, c, g, memo["weights"], memo["label"], n_coef, logn, bar)
+    return beyond_places(y, c, g, weights, label, n_coef, logn, bar)
 
 
 def _profile(d, tt, T, tm):
@@ -363,7 +373,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     keys = [k for k in theta if np.isfinite(theta[k]) and (kinds is None or k in kinds)]
     tried = len(keys) * (1 + len(cuts))
     bar = threshold + 2.0 * math.log(max(tried, 1))
-    found, cols, memo = [], {}, {}
+    found, cols, place_of = [], {}, _places_of(eng, rows)
     for k in keys:
         col = _column(eng, theta, R, k)
         if col is None:
@@ -386,7 +396,7 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             continue
         beyond = place = None
         if forced is None:  # the place judged first: time is kept only where it adds beyond it
-            beyond, place = _against_place(eng, rows, memo, y, c, (tt, tm, T), d_step > d_trend and best_s[0], logn, bar)
+            beyond, place = _against_place(place_of, y, c, (tt, tm, T), d_step > d_trend and best_s[0], logn, bar)
             if beyond <= bar:  # a force keyed on the place, supported on its channels, explains it
                 continue
         s2 = max(1.0, min(chi_t, best_s[1]) / max(len(y) - 2, 1))
