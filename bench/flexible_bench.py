@@ -123,11 +123,12 @@ def _captured(run):
         calls.append((X, _light(pipe), np.asarray(R, float).copy()))
         return X, columns
 
-    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
+    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
         if "R" not in kept:
             kept["pipe"], kept["R"] = next((p, R) for Xc, p, R in calls if Xc is X)
-        kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted))
-        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted)
+        kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted,
+                                     offered=tuple(offered)))
+        return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered)
 
     stage.inputs, stage.fit_channel = inputs_kept, fit_kept
     try:
@@ -210,7 +211,7 @@ def refit(kept) -> tuple:
             X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
             for ch in kept["channels"]:
                 f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
-                                      fitted=ch["fitted"])
+                                      fitted=ch["fitted"], offered=ch.get("offered", ()))
                 fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
         cpu = time.process_time() - t0
     return fits, cpu

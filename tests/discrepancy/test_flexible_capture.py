@@ -31,21 +31,28 @@ class _Fit:
     weak: bool = False
 
 
-def _fakes(monkeypatch, seen):
-    """stage.inputs and fit_channel as cheap stand-ins: the matrix is the residual itself."""
+def _fakes(monkeypatch, seen, offers=None):
+    """stage.inputs and fit_channel as cheap stand-ins: the matrix is the residual itself; the
+    lines offered to each fit are appended to ``offers``."""
+    offers = [] if offers is None else offers
     monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
 
-    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None):
+    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
         seen.append(np.array(X))
+        offers.append(tuple(offered))
         return _Fit()
     monkeypatch.setattr(stage, "fit_channel", fit)
+
+
+#: a line offered to every channel, as the stage passes it (:func:`~cosim.discrepancy.flexible.periodic.offered`)
+OFFERED = ((4.57, 0.1),)
 
 
 def _diagnosis(pipe, r_after, r_fit):
     """The order of a diagnosis: the stage's inputs on its residual (a partial term's channel set
     aside), its channel fitted, then keyed.elsewhere's inputs on the residual before that."""
     X, cols = stage.inputs(pipe, r_fit, direction=True)
-    stage.fit_channel(pipe, X, cols, r_fit[:, 1], 0.1, ("N", "tau2"))
+    stage.fit_channel(pipe, X, cols, r_fit[:, 1], 0.1, ("N", "tau2"), offered=OFFERED)
     from cosim.discrepancy.flexible.stage import inputs  # as keyed.elsewhere imports it: at call time
     inputs(pipe, r_after)
     return "diagnosis"
@@ -60,6 +67,19 @@ def test_capture_keeps_the_residual_the_stage_was_given(monkeypatch):
     assert out == "diagnosis"
     np.testing.assert_array_equal(kept["R"], r_fit)
     assert len(kept["channels"]) == 1
+
+
+def test_capture_keeps_the_lines_offered_and_the_replay_offers_them_again(monkeypatch, tmp_path):
+    offers = []
+    _fakes(monkeypatch, [], offers)
+    r_after = np.random.default_rng(2).normal(size=(30, 2))
+    out, kept = bench._captured(lambda: _diagnosis(_pipe(), r_after, r_after.copy()))
+    assert offers == [OFFERED] and kept["channels"][0]["offered"] == OFFERED
+    kept["pipe"] = bench._light(SimpleNamespace(**vars(_pipe()), x_s=None))
+    with open(tmp_path / "0.pkl", "wb") as fh:
+        pickle.dump({"row": {"kind": "clean", "seed": 0, "cpu": 0.0}, "kept": kept}, fh)
+    bench.replay(tmp_path / "0.pkl")
+    assert offers == [OFFERED, OFFERED]
 
 
 def test_replay_gives_the_stage_its_own_residual_from_a_capture_of_the_last_call(monkeypatch, tmp_path):
