@@ -111,7 +111,10 @@ def _captured(run):
 
     ``flexible.stage.inputs`` is also called outside the stage (:mod:`cosim.discrepancy.keyed.elsewhere`,
     after it, on the residual before a partial discovered term is set aside; the black box): the
-    pipeline and residual kept are those of the call whose matrix the fitted channels were given."""
+    pipeline and residual kept are those of the call whose matrix the fitted channels were given.
+    ``fit_channel`` called on a matrix the stage's ``inputs`` did not make (a discovered term's
+    rival, :mod:`cosim.discrepancy.flexible.rival`) is passed through and not kept: where the rival's
+    fit is the channel's (the term outfit), the replay does not fit that channel."""
     from cosim.discrepancy.flexible import stage
 
     kept = {"channels": []}
@@ -124,8 +127,11 @@ def _captured(run):
         return X, columns
 
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
+        given = next(((p, R) for Xc, p, R in calls if Xc is X), None)
+        if given is None:  # not the stage's inputs: a discovered term's rival (flexible.rival), not kept
+            return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered)
         if "R" not in kept:
-            kept["pipe"], kept["R"] = next((p, R) for Xc, p, R in calls if Xc is X)
+            kept["pipe"], kept["R"] = given
         kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted,
                                      offered=tuple(offered)))
         return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered)

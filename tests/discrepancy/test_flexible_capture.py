@@ -95,3 +95,17 @@ def test_replay_gives_the_stage_its_own_residual_from_a_capture_of_the_last_call
     bench.replay(tmp_path / "0.pkl")
     np.testing.assert_array_equal(seen[0][:, 1], y)
     np.testing.assert_array_equal(seen[0][:, 0], r_after[:, 0])
+
+
+def test_a_fit_on_inputs_the_stage_did_not_make_passes_through_and_is_not_kept(monkeypatch):
+    offers = []
+    _fakes(monkeypatch, [], offers)
+    r = np.random.default_rng(3).normal(size=(30, 2))
+
+    def rival_then_stage():
+        # a discovered term's rival: its own matrix, then the stage's
+        stage.fit_channel(_pipe(), r.copy(), ["a", "b"], r[:, 0], 0.1, ("N", "tau1"))
+        return _diagnosis(_pipe(), r, r.copy())
+    out, kept = bench._captured(rival_then_stage)
+    assert out == "diagnosis" and len(offers) == 2
+    assert [ch["unit"] for ch in kept["channels"]] == [("N", "tau2")]
