@@ -67,7 +67,7 @@ def fitted_columns(eng, theta, channels) -> dict:
     scale = np.maximum(np.sqrt(np.mean(base ** 2, axis=0)), 1e-300)
     out = {c: ([], []) for c in channels}
     for p, v in theta.items():
-        Rw = _residual(eng, {k: w for k, w in theta.items() if k != p})
+        Rw = residual_at(eng, {k: w for k, w in theta.items() if k != p})
         if Rw is None:
             continue  # it cannot be taken out
         took = Rw - base
@@ -86,7 +86,7 @@ def fitted_columns(eng, theta, channels) -> dict:
     return {c: (np.column_stack(J) if J else np.zeros((len(base), 0)), names) for c, (J, names) in out.items()}
 
 
-def _residual(eng, theta):
+def residual_at(eng, theta):
     """The residual at ``theta``, or None where the core cannot evaluate it: beside an invalid
     parameter set or a reading outside a stroke (``try_R``), a parameter taken out or moved may
     leave a model the core refuses along the recording (a drive whose effort terms self-lock,
@@ -104,8 +104,8 @@ def _derivative(eng, theta, p, v, base):
     """Central difference of the residual in parameter ``p`` at ``v`` (one-sided where one side
     is no valid parameter set; ``base`` the residual at ``theta``); None when neither side is."""
     h = 1e-3 * abs(v) if v != 0 else 1e-4
-    hi = _residual(eng, dict(theta, **{p: v + h}))
-    lo = _residual(eng, dict(theta, **{p: v - h}))
+    hi = residual_at(eng, dict(theta, **{p: v + h}))
+    lo = residual_at(eng, dict(theta, **{p: v - h}))
     if hi is not None and lo is not None:
         return (hi - lo) / (2 * h)
     if hi is not None or lo is not None:

@@ -38,15 +38,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .backfit import _residual
+from .backfit import residual_at
 from .columns import inputs
 from .cv import N_FOLDS, folds, gap_for
+from .stage import BLOCK_Z, SHARE_MIN
 
 #: share of the residual's variance (before the term) the trees may explain beyond the equation
 #: out of fold, and the standard errors over the folds within which that must be shown, for the
 #: equation to be named with confidence: the stage's smallest claimed share (stage.SHARE_MIN)
 #: and its bar of an input's importance (stage.BLOCK_Z)
-MARGIN, Z = 0.05, 2.0
+MARGIN, Z = SHARE_MIN, BLOCK_Z
 _LOG = logging.getLogger(__name__)
 #: the start of a term's partial sentence where the trees may outfit it (the conclusion's short reason reads it)
 PARTIAL = "a flexible model of the residual before the term may explain more of it than the term's form"
@@ -83,7 +84,7 @@ def equation_columns(eng, theta, term, c, R) -> np.ndarray:
     gives none."""
     cols = []
     for p, coef in term.coefficients.items():
-        Rb = _residual(eng, dict(theta, **{p: coef.base}))
+        Rb = residual_at(eng, dict(theta, **{p: coef.base}))
         if Rb is not None:
             cols.append(np.asarray(Rb, float)[:, c] - R[:, c])
     return np.column_stack(cols) if cols else np.zeros((len(R), 0))
@@ -141,7 +142,7 @@ def rivalled(eng, theta, R, found) -> tuple:
     done, before = {}, {}
     for t in sure:
         c = t.joint - 1
-        R_wo = _residual(eng, {k: v for k, v in theta.items() if k not in t.params()})
+        R_wo = residual_at(eng, {k: v for k, v in theta.items() if k not in t.params()})
         if R_wo is None or c in done:
             continue
         y = np.asarray(R_wo, float)[:, c]
