@@ -276,26 +276,22 @@ def _places_of(eng, rows):
     return get
 
 
+def _profile(tt, tm, T, step_time=None):
+    """The centred time course of a drift at the stacked times ``tt`` (their middle ``tm`` and
+    span ``T`` [s]): a trend where ``step_time`` is None, else a step at ``step_time`` [s]."""
+    if step_time is None:
+        return (tt - tm) / T
+    h = (tt >= step_time).astype(float)
+    return h - h.mean()
+
+
 def _against_place(place, y, c, times, step_time, logn, bar):
-    """:func:`beyond_places` of a drift (a trend where ``step_time`` is False, else a step then)
+    """:func:`beyond_places` of a drift (a trend where ``step_time`` is None, else a step then)
     at the places ``place`` gives (:func:`_places_of`); ``times`` is ``(tt, tm, T)``, the stacked
     times, their middle and span."""
     label, weights = place()
-    tt, tm, T = times
-    if step_time is False:
-        g, n_coef = (tt - tm) / T, 1
-    else:
-        h = (tt >= step_time).astype(float)
-        g, n_coef = h - h.mean(), 2
-    return beyond_places(y, c, g, weights, label, n_coef, logn, bar)
-
-
-def _profile(d, tt, T, tm):
-    """The centred time course of drift ``d`` at the stacked times ``tt``."""
-    if d.kind == "trend":
-        return (tt - tm) / T
-    h = (tt >= d.time).astype(float)
-    return h - h.mean()
+    g = _profile(*times, step_time)
+    return beyond_places(y, c, g, weights, label, 1 if step_time is None else 2, logn, bar)
 
 
 def _same_course(a, b, T) -> bool:
@@ -314,7 +310,7 @@ def _one_statement(found, cols, y, tt, T, tm, logn):
         with_same = [k for k in kept if _same_course(k, d, T)]
         if with_same:
             first = with_same[0]
-            g = _profile(first, tt, T, tm)
+            g = _profile(tt, tm, T, None if first.kind == "trend" else first.time)
             base = [cols[k.param] for k in with_same] + [cols[d.param]] + [cols[k.param] * g for k in with_same]
             _, chi_0 = _lstsq(np.stack(base, 1), y)
             _, chi_1 = _lstsq(np.stack(base + [cols[d.param] * g], 1), y)
@@ -376,10 +372,8 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
     found, cols, place_of = [], {}, _places_of(eng, rows)
     for k in keys:
         col = _column(eng, theta, R, k)
-        if col is None:
-            continue
-        c = eng.vec(col, rows)
-        if not float(c @ c) > 0:
+        c = None if col is None else eng.vec(col, rows)
+        if c is None or not float(c @ c) > 0:
             continue
         _, chi_c = _lstsq(c[:, None], y)  # the constant refitted on every row
         coef_t, chi_t = _lstsq(np.stack([c, c * (tt - tm) / T], 1), y)
@@ -396,7 +390,8 @@ def find_drifts(eng, theta: dict, threshold: float, units: dict | None = None, r
             continue
         beyond = place = None
         if forced is None:  # the place judged first: time is kept only where it adds beyond it
-            beyond, place = _against_place(place_of, y, c, (tt, tm, T), d_step > d_trend and best_s[0], logn, bar)
+            beyond, place = _against_place(place_of, y, c, (tt, tm, T),
+                                           best_s[0] if d_step > d_trend else None, logn, bar)
             if beyond <= bar:  # a force keyed on the place, supported on its channels, explains it
                 continue
         s2 = max(1.0, min(chi_t, best_s[1]) / max(len(y) - 2, 1))
