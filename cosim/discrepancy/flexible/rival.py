@@ -41,6 +41,7 @@ import numpy as np
 from .backfit import residual_at
 from .columns import inputs
 from .cv import N_FOLDS, folds, gap_for
+from .select import fold_gain
 from .stage import BLOCK_Z, SHARE_MIN
 
 #: share of the residual's variance (before the term) the trees may explain beyond the equation
@@ -103,17 +104,15 @@ def equation_out_of_fold(J, y, fold_rows) -> np.ndarray:
 
 def compare(y, pred_eq, pred_trees, fold_rows, channel=0) -> Rivalry:
     """:class:`Rivalry` of two out-of-fold predictions of ``y`` over the folds ``fold_rows``: the
-    excess the mean of the per-fold differences of the held-out errors over ``var(y)``, its
-    standard error their spread over the folds (as the stage's importances, :func:`~.cv.importance`)."""
+    excess what the trees gain over the equation (:func:`~.select.fold_gain`: the mean of the
+    per-fold differences of the held-out errors over ``var(y)``, its standard error their spread
+    over the folds), the term outfit unless ``excess + Z se <= MARGIN``."""
     var = float(np.var(y))
     if not var > 0:
         return Rivalry(channel, 0.0, 0.0, 0.0, 0.0, False)
-    d = np.array([(np.mean((y[h] - pred_eq[h]) ** 2) - np.mean((y[h] - pred_trees[h]) ** 2)) / var
-                  for h, _ in fold_rows])
-    se = float(np.std(d, ddof=1) / np.sqrt(len(d))) if len(d) > 1 else float("inf")
-    excess = float(np.mean(d))
+    excess, se, outfit = fold_gain(y, pred_eq, pred_trees, fold_rows, var, lambda mean, se: mean + Z * se > MARGIN)
     share = lambda p: 1.0 - float(np.mean((y - p) ** 2)) / var  # noqa: E731
-    return Rivalry(channel, share(pred_eq), share(pred_trees), excess, se, bool(excess + Z * se > MARGIN))
+    return Rivalry(channel, share(pred_eq), share(pred_trees), excess, se, outfit)
 
 
 def rivalled(eng, theta, R, found) -> tuple:

@@ -91,15 +91,25 @@ def stand_ins(named) -> set:
     return {g for g in named if g.startswith("history of ") and g.replace("history of", "rate of", 1) not in named}
 
 
+def fold_gain(y, pred_without, pred_with, fold_rows, var, shown) -> tuple:
+    """What the out-of-fold prediction ``pred_with`` of ``y`` gains over ``pred_without`` on the
+    folds ``fold_rows``: per fold the held-out mean squared error without less that with, over
+    ``var`` (shares of the variance).  ``shown(mean, se)`` is the criterion the gain is judged
+    by.  Returns ``(mean over the folds, its standard error (inf for one fold: no spread),
+    shown(mean, se))``."""
+    d = np.array([(np.mean((y[h] - pred_without[h]) ** 2) - np.mean((y[h] - pred_with[h]) ** 2)) / var
+                  for h, _ in fold_rows])
+    se = float(np.std(d, ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else float("inf")
+    mean = float(np.mean(d))
+    return mean, se, bool(shown(mean, se))
+
+
 def gain(without, with_, y, var) -> tuple:
     """What cross-validation ``with_`` gains over ``without`` (same folds): ``(share of the
     variance, whether it is at least DROP_MIN and above GAIN_Z standard errors over the folds)``."""
-    def per_fold(cv):
-        return np.array([np.mean((y[h] - cv.pred[h]) ** 2) for h, _ in cv.folds])
-    d = (per_fold(without) - per_fold(with_)) / var
-    overall = (without.mse - with_.mse) / var
-    se = float(np.std(d, ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else 0.0
-    return float(overall), bool(overall >= DROP_MIN and float(np.mean(d)) > GAIN_Z * se)
+    overall = float((without.mse - with_.mse) / var)
+    return overall, fold_gain(y, without.pred, with_.pred, without.folds, var,
+                              lambda mean, se: overall >= DROP_MIN and mean > GAIN_Z * se)[2]
 
 
 def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None, after=None):
