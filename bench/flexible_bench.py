@@ -112,35 +112,57 @@ def _captured(run):
     ``flexible.stage.inputs`` is also called outside the stage (:mod:`cosim.discrepancy.keyed.elsewhere`,
     after it, on the residual before a partial discovered term is set aside; the black box): the
     pipeline and residual kept are those of the call whose matrix the fitted channels were given.
-    ``fit_channel`` called on a matrix the stage's ``inputs`` did not make (a discovered term's
-    rival, :mod:`cosim.discrepancy.flexible.rival`) is passed through and not kept: where the rival's
-    fit is the channel's (the term outfit), the replay does not fit that channel."""
-    from cosim.discrepancy.flexible import stage
+    A discovered term's rival (:mod:`cosim.discrepancy.flexible.rival`) fits a channel on inputs of
+    its own residual: where its fit is the channel's (the term outfit) that channel is kept too,
+    with that residual (``R``), so that the replay fits it on the same inputs; a rival's fit that
+    is not the channel's is not kept."""
+    from cosim.discrepancy.flexible import rival, stage
 
     kept = {"channels": []}
-    calls = []  # (X, pipeline, residual) of every call of inputs during the run
-    inputs, fit_channel = stage.inputs, stage.fit_channel
+    calls = []  # (X, pipeline, residual) of every call of the stage's inputs during the run
+    rival_calls, rival_fits = [], {}  # the rival's inputs, and its fits per channel (0-based)
+    inputs, fit_channel, rival_inputs, rivalled = stage.inputs, stage.fit_channel, rival.inputs, rival.rivalled
 
     def inputs_kept(pipe, R, **kw):
         X, columns = inputs(pipe, R, **kw)
         calls.append((X, _light(pipe), np.asarray(R, float).copy()))
         return X, columns
 
+    def rival_inputs_kept(pipe, R, **kw):
+        X, columns = rival_inputs(pipe, R, **kw)
+        rival_calls.append((X, _light(pipe), np.asarray(R, float).copy()))
+        return X, columns
+
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
+        entry = dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted, offered=tuple(offered))
         given = next(((p, R) for Xc, p, R in calls if Xc is X), None)
-        if given is None:  # not the stage's inputs: a discovered term's rival (flexible.rival), not kept
+        if given is None:  # not the stage's inputs: a discovered term's rival, kept where it outfits the term
+            of_rival = next(((p, R) for Xc, p, R in rival_calls if Xc is X), None)
+            if of_rival is not None:
+                rival_fits[of_rival[0].channels.index(unit[1])] = dict(entry, R=of_rival[1], pipe=of_rival[0])
             return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered)
         if "R" not in kept:
             kept["pipe"], kept["R"] = given
-        kept["channels"].append(dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted,
-                                     offered=tuple(offered)))
+        kept["channels"].append(entry)
         return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered)
 
-    stage.inputs, stage.fit_channel = inputs_kept, fit_kept
+    def rivalled_kept(*args, **kw):
+        found, done = rivalled(*args, **kw)
+        for c, r in done.items():
+            if r.outfit and c in rival_fits:
+                kept.setdefault("rival_pipe", rival_fits[c]["pipe"])
+                kept["channels"].append({k: v for k, v in rival_fits[c].items() if k != "pipe"})
+        return found, done
+
+    stage.inputs, stage.fit_channel, rival.inputs, rival.rivalled = inputs_kept, fit_kept, rival_inputs_kept, rivalled_kept
     try:
-        return run(), kept
+        out = run()
     finally:
-        stage.inputs, stage.fit_channel = inputs, fit_channel
+        stage.inputs, stage.fit_channel, rival.inputs, rival.rivalled = inputs, fit_channel, rival_inputs, rivalled
+    rival_pipe = kept.pop("rival_pipe", None)
+    if "pipe" not in kept and rival_pipe is not None:  # the rival's channels alone: their pipeline
+        kept["pipe"], kept["R"] = rival_pipe, next(ch["R"] for ch in kept["channels"] if "R" in ch)
+    return out, kept
 
 
 def one(kind, seed, duration=None, capture=None):
@@ -191,7 +213,8 @@ def _stage_residual(kept):
     capture of :func:`_captured`."""
     R = np.array(kept["R"], float)
     for ch in kept["channels"]:
-        R[:, kept["pipe"].channels.index(ch["unit"][1])] = ch["y"]
+        if "R" not in ch:  # a rival's channel: fitted on its own residual's inputs
+            R[:, kept["pipe"].channels.index(ch["unit"][1])] = ch["y"]
     return R
 
 
@@ -216,7 +239,9 @@ def refit(kept) -> tuple:
         if kept["channels"]:
             X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
             for ch in kept["channels"]:
-                f = stage.fit_channel(kept["pipe"], X, columns, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
+                # a rival's channel (its own residual kept): the inputs the rival fitted it on
+                Xc, cc = (X, columns) if "R" not in ch else stage.inputs(kept["pipe"], ch["R"], direction=True)
+                f = stage.fit_channel(kept["pipe"], Xc, cc, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"], offered=ch.get("offered", ()))
                 fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
         cpu = time.process_time() - t0

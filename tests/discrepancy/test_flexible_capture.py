@@ -109,3 +109,53 @@ def test_a_fit_on_inputs_the_stage_did_not_make_passes_through_and_is_not_kept(m
     out, kept = bench._captured(rival_then_stage)
     assert out == "diagnosis" and len(offers) == 2
     assert [ch["unit"] for ch in kept["channels"]] == [("N", "tau2")]
+
+
+def _fake_rivalled(pipe, r_rival, outfit):
+    """A discovered term's rival on both channels (the residual before the terms, ``r_rival``):
+    its own inputs, one fit per channel, ``outfit`` {channel (0-based): whether the trees outfit
+    the term}, as :func:`cosim.discrepancy.flexible.rival.rivalled` returns it."""
+    from cosim.discrepancy.flexible import rival
+
+    def rivalled(eng, theta, R, found):
+        X, cols = rival.inputs(pipe, r_rival, direction=True)
+        for c in (0, 1):
+            stage.fit_channel(pipe, X, cols, r_rival[:, c], 0.1, ("N", pipe.channels[c]))
+        return found, {c: SimpleNamespace(outfit=o) for c, o in outfit.items()}
+    return rivalled
+
+
+def _rival_diagnosis(pipe, r_after):
+    """The rival (the module's, at call time, as the diagnosis imports it), then the stage."""
+    from cosim.discrepancy.flexible.rival import rivalled
+
+    rivalled(None, {}, r_after, [])
+    return _diagnosis(pipe, r_after, r_after.copy())
+
+
+def test_capture_keeps_a_channel_the_rival_outfits_and_the_replay_fits_it_on_the_rivals_inputs(monkeypatch,
+                                                                                                 tmp_path):
+    from cosim.discrepancy.flexible import rival
+
+    seen = []
+    _fakes(monkeypatch, seen)
+    r_after = np.random.default_rng(4).normal(size=(30, 2))
+    r_rival = r_after.copy()
+    r_rival[:, 0] += 2.0  # channel 1 before its term
+    monkeypatch.setattr(rival, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
+    monkeypatch.setattr(rival, "rivalled", _fake_rivalled(_pipe(), r_rival, {0: True, 1: False}))
+    out, kept = bench._captured(lambda: _rival_diagnosis(_pipe(), r_after))
+    assert out == "diagnosis"
+    # the stage's channel 2 and the rival's channel 1 (outfit); the rival's channel 2 (not outfit) is not kept
+    assert sorted(ch["unit"] for ch in kept["channels"]) == [("N", "tau1"), ("N", "tau2")]
+    ch1 = next(ch for ch in kept["channels"] if ch["unit"] == ("N", "tau1"))
+    np.testing.assert_array_equal(ch1["R"], r_rival)
+    np.testing.assert_array_equal(ch1["y"], r_rival[:, 0])
+    kept["pipe"] = bench._light(SimpleNamespace(**vars(_pipe()), x_s=None))
+    with open(tmp_path / "0.pkl", "wb") as fh:
+        pickle.dump({"row": {"kind": "clean", "seed": 0, "cpu": 0.0}, "kept": kept}, fh)
+    seen.clear()
+    bench.replay(tmp_path / "0.pkl")
+    # the rival's channel fitted on the rival's inputs, the stage's on the stage's
+    assert len(seen) == 2
+    assert any(np.array_equal(X, r_rival) for X in seen) and any(np.array_equal(X, r_after) for X in seen)
