@@ -59,7 +59,7 @@ STEP_GRID = np.linspace(0.1, 0.9, 33)
 #: places (k-means of the scaled joint positions) a force keyed on where the robot is may take
 #: a level in, per channel, before a drift is judged (:func:`beyond_places`)
 PLACES = 16
-#: k-means iterations of the places
+#: k-means iterations of the places (fewer only where no sample changes place)
 PLACE_ITERATIONS = 15
 
 
@@ -184,9 +184,10 @@ def places(positions, n_places: int = PLACES) -> np.ndarray:
     Returns
     -------
     numpy.ndarray of int, shape (m,)
-        The place of each sample, 0 .. n_places - 1.  The centres start at the first sample
-        and then each at the sample farthest from those taken, so the places are the same on
-        every run.
+        The place of each sample, 0 .. n_places - 1: scikit-learn's k-means (Lloyd,
+        :data:`PLACE_ITERATIONS` iterations) from centres at the first sample and then each at
+        the sample farthest from those taken, so the places are the same on every run (no
+        random start).
     """
     q = np.asarray(positions, float)
     Z = (q - q.mean(0)) / np.maximum(q.std(0), 1e-12)
@@ -197,11 +198,11 @@ def places(positions, n_places: int = PLACES) -> np.ndarray:
             break
         centres.append(Z[int(np.argmax(far))])
         far = np.minimum(far, np.sum((Z - centres[-1]) ** 2, 1))
-    C = np.array(centres)
-    for _ in range(PLACE_ITERATIONS):
-        label = np.argmin(((Z[:, None, :] - C[None]) ** 2).sum(2), 1)
-        C = np.array([Z[label == j].mean(0) if np.any(label == j) else C[j] for j in range(len(C))])
-    return np.argmin(((Z[:, None, :] - C[None]) ** 2).sum(2), 1)
+    from sklearn.cluster import KMeans
+
+    km = KMeans(len(centres), init=np.array(centres), n_init=1, max_iter=PLACE_ITERATIONS, tol=0.0,
+                algorithm="lloyd")
+    return km.fit(Z).labels_.astype(int)
 
 
 def _off_places(v, weights, label, channels=None):
