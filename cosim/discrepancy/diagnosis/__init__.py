@@ -549,9 +549,9 @@ def _replayed(commanded, eng0, sel, rec, mdl, compare, theta, r_after, flex, bla
     ``black_box``)."""
     bb = None
     if black_box and any(f.explained for f in flex):
-        from ..flexible import black_box_force
+        from .replay import black_box_for_plant
 
-        bb = black_box_force(eng0, r_after, flex, len(rec.time))
+        bb = black_box_for_plant(eng0, r_after, flex, len(rec.time))
         flex = [replace(f, black_box=True) if f.explained else f for f in flex]
     return flex, _replay(commanded, eng0, sel, _compared(rec, mdl, compare), theta, black_box=bb, drifts=drifts)
 

@@ -78,6 +78,29 @@ def _compared(rec, mdl, compare) -> dict:
     return out
 
 
+def black_box_for_plant(eng, R, fits, rows: int) -> np.ndarray:
+    """The explained flexible models as the replay's black-box force (rows, joints), for the
+    fitted plant, which carries every fitted term (:func:`.flexible.black_box_force`).  A partial
+    term's channel is fitted on the residual before the term (``FlexibleFit.target``): its model
+    predicts that, evaluated on the inputs it was fitted on; what the plant leaves is that less
+    the term's part (``target`` less the residual ``R`` after the fitted model, interpolated as
+    the force), else the plant and the black box would both carry the term's force."""
+    from ..flexible import black_box_force
+
+    R = np.asarray(R, float)
+    R_fitted = R.copy()  # the stage's residual: each fitted channel's target
+    for f in fits:
+        if f.target is not None:
+            R_fitted[:, f.joint - 1] = f.target
+    out = black_box_force(eng, R_fitted, fits, rows)
+    t, t_rows = eng.pipe.t[eng.pipe.idx], eng.pipe.t[:rows]
+    for f in fits:
+        if f.explained and f.target is not None:
+            out[:, f.joint - 1] += np.interp(t_rows, t, R_fitted[:, f.joint - 1] - R[:, f.joint - 1],
+                                             left=0.0, right=0.0)
+    return out
+
+
 def _replay(rec, eng, sel, compared=None, theta=None, black_box=None, drifts=()):
     """Closed-loop replay of the held-out part: the core plant (nominal, then fitted, then,
     with a fitted gap or compliance, the fitted plant with those drives as two bodies,
@@ -89,7 +112,7 @@ def _replay(rec, eng, sel, compared=None, theta=None, black_box=None, drifts=())
     nothing at first and sees no velocity, a kick of hundreds of newtons on a real drive).
     Per run the RMS differences and the relative error of the efforts, norm of the
     difference over the norm of the recorded effort.  ``black_box`` (rows x joints, the
-    flexible model's force, :func:`.flexible.black_box_force`): one more run, "fitted + black
+    flexible model's force, :func:`black_box_for_plant`): one more run, "fitted + black
     box", the fitted plant with that force as a known external effort.  ``drifts`` (:mod:`.drift`,
     :func:`.drift.for_plant`): the fitted plant carries those with a course as its parameters'
     time courses, and one more run, "fitted, mean", holds every parameter at the constant fitted."""
