@@ -9,6 +9,13 @@ then counts per kind and scale the library effects named with confidence, tied, 
 "no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
 kinds from the detection limit to 10 times it").
 
+``--kinds-set 2`` runs a second set of mechanisms, none of them a kind below
+(bench/foreign/mujoco_unlisted_more.py: a cable carrier between two carriages, a spring that
+softens as its motor heats, detents at irregular positions, a mass on a spring in the platform, a
+bellows' friction keyed on the platform's height, a magnet's preload keyed on the gap to a
+neighbouring carriage, a drag on the platform's angular velocity, a pump's pulses, a snubber
+that locks above an acceleration, a drive's saturation), seeds ``SEED_MORE`` + (50700 +).
+
 ``--capture DIR`` keeps, per case, what the flexible stage was given (bench/flexible_bench.py's
 capture); ``--replay DIR`` re-runs only the stage on it (its ``refit``: the diagnosis's calls) and
 judges it against the declarations as they are now; the CPU column is then the stage's.  A set
@@ -82,10 +89,14 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
+from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  # noqa: E402
+
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
          "rate_coupled_friction", "reversal_seal", "eddy_brake_zone", "cross_effort_friction", "coulomb_zone",
          "reversal_stiction")
 PLATFORM = KINDS[:7]
+#: the kind sets of ``--kinds-set``: 1 the kinds above, 2 bench/foreign/mujoco_unlisted_more.py's
+KIND_SETS = {1: KINDS, 2: KINDS_MORE}
 #: seeds: SEED + the kind's index, clean cases SEED + 90 + i (fixed before any run); ``--second``
 #: draws every case again at SEED + 1000 + (the same): added after the first set's output was seen
 #: (and after the platform-drag sign rule), before any of its own
@@ -97,6 +108,8 @@ DURATION, LEAD = 9.0, 0.5
 def keyed(kind, j=None, k=None) -> dict:
     """The inputs (flexible-stage groups) a mechanism is keyed on: ``need`` (all named),
     ``any`` (one of them named), ``allowed`` (nothing else named)."""
+    if kind in KINDS_MORE:
+        return keyed_more(kind, j, k)
     pos = {f"position of slider {i}" for i in range(1, 7)}
     rate = {f"rate of slider {i}" for i in range(1, 7)}
     acc = {f"acceleration of slider {i}" for i in range(1, 7)}
@@ -326,7 +339,12 @@ def _rail_mechanism(kind, rng, mo, scale=1.0):
 
 def draw(kind, rng, m, mo, scale=1.0):
     """(hook, edit, truth, keyed-on inputs, joint of the force or None) of one case; ``scale``
-    multiplies a rail mechanism's force (a platform mechanism's must be 1)."""
+    multiplies a rail mechanism's force (a platform mechanism's must be 1); a second-set kind's
+    joint is a tuple of two rails when its force acts on both."""
+    if kind in KINDS_MORE:
+        if scale != 1.0:
+            raise ValueError(f"--scale applies to the first set's rail kinds only, not to {kind}")
+        return draw_more(kind, rng, m, mo)
     if kind in PLATFORM:
         if scale != 1.0:
             raise ValueError(f"--scale applies to the rail kinds only, not to {kind}")
@@ -350,14 +368,19 @@ def motion(m, seed):
     traj = excitation(m, DURATION, seed=seed)
     ref = make_reference(m, traj, step=DT, duration=round(traj.duration / DT) * DT)
     k0 = int(round(LEAD / DT))
-    out["absu"] = np.mean(np.abs(m.inverse_dynamics(ref.x[k0:], ref.xd[k0:], ref.xdd[k0:])), axis=0)
+    u = np.asarray(m.inverse_dynamics(ref.x[k0:], ref.xd[k0:], ref.xdd[k0:]))
+    out["absu"] = np.mean(np.abs(u), axis=0)
     out["xp"] = np.asarray(ref.x[k0:, :3])
+    # the second set's draws: the efforts, the pose, the rails' positions and accelerations
+    out.update(u=u, xr=np.asarray(ref.x[k0:]), qref=np.asarray(ref.q[k0:]), qddref=np.asarray(ref.qdd[k0:]))
     return out
 
 
 def judge(fits, key, joint) -> tuple:
-    """(inputs right, share, named groups per explained channel) of the flexible stage."""
-    told = [f for f in fits if f.explained and (joint is None or f.joint == joint)]
+    """(inputs right, share, named groups per explained channel) of the flexible stage, on the
+    channels of ``joint`` (a rail, rails, or None: every channel)."""
+    on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
+    told = [f for f in fits if f.explained and (on is None or f.joint in on)]
     named = {f.channel: [x.group for x in f.inputs] for f in told}
     if not told or not any(named.values()):
         return False, max([f.share for f in told], default=0.0), named
@@ -517,8 +540,12 @@ def _periodic(r) -> list:
     return [u.split()[0] for u in r["unexplained"] if u.endswith(" periodic")]
 
 
+def _order(kind) -> int:
+    return (KINDS + KINDS_MORE).index(kind)
+
+
 def table(rows) -> list:
-    eff = sorted([r for r in rows if r["kind"] != "clean"], key=lambda r: KINDS.index(r["kind"]))
+    eff = sorted([r for r in rows if r["kind"] != "clean"], key=lambda r: _order(r["kind"]))
     clean = sorted([r for r in rows if r["kind"] == "clean"], key=lambda r: r["seed"])
     L = ["| case | size (RMS / noise) | named with confidence | library named with confidence | flexible: "
          "inputs named (keyed-on right?) | share | held-out gain | CPU [s] |", "|---" * 8 + "|"]
@@ -567,7 +594,7 @@ def sweep_table(rows) -> list:
     L = ["| kind | scale | cases | size (RMS / noise) | library named with confidence | library tied (by the keyed "
          "rule) | structure left | no missing physics found | rule reached: strongest statistic / bar (kind) |",
          "|---" * 9 + "|"]
-    cells = sorted({(r["kind"], r.get("scale", 1.0)) for r in eff}, key=lambda c: (KINDS.index(c[0]), c[1]))
+    cells = sorted({(r["kind"], r.get("scale", 1.0)) for r in eff}, key=lambda c: (_order(c[0]), c[1]))
     for kind, scale in cells:
         rs = sorted([r for r in eff if r["kind"] == kind and r.get("scale", 1.0) == scale], key=lambda r: r["seed"])
         conf = [r for r in rs if r["library_confident"]]
@@ -598,7 +625,9 @@ def sweep_table(rows) -> list:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--kinds", default=",".join(KINDS))
+    ap.add_argument("--kinds", default=None, help="comma-separated kinds of either set (default: --kinds-set's)")
+    ap.add_argument("--kinds-set", type=int, choices=sorted(KIND_SETS), default=1,
+                    help="1: the kinds above; 2: bench/foreign/mujoco_unlisted_more.py's (seeds SEED_MORE +)")
     ap.add_argument("--clean", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--second", action="store_true", help="the second seed set (SEED + 1000 +)")
@@ -614,10 +643,12 @@ def main(argv=None) -> int:
     ap.add_argument("--replay", default=None,
                     help="re-run only the flexible stage on the inputs kept there (--capture); cpu is the stage's")
     a = ap.parse_args(argv)
-    kinds = [k for k in a.kinds.split(",") if k]
-    bad = [k for k in kinds if k not in KINDS]
+    kinds = [k for k in a.kinds.split(",") if k] if a.kinds is not None else list(KIND_SETS[a.kinds_set])
+    bad = [k for k in kinds if k not in KINDS + KINDS_MORE]
     if bad:
-        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(KINDS)}")
+        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(KINDS + KINDS_MORE)}")
+    if any(k in KINDS for k in kinds) and any(k in KINDS_MORE for k in kinds):
+        ap.error("--kinds: kinds of one set at a time (their seeds count from different first seeds)")
     a.out.mkdir(parents=True, exist_ok=True)
     try:
         scales = [float(x) for x in a.scale.split(",") if x]
@@ -625,12 +656,14 @@ def main(argv=None) -> int:
         ap.error(f"--scale {a.scale!r}: comma-separated numbers expected")
     if not scales or not all(math.isfinite(x) and x > 0 for x in scales):
         ap.error(f"--scale {a.scale!r}: positive factors expected")
-    if any(x != 1.0 for x in scales) and any(k in PLATFORM for k in kinds):
+    if any(x != 1.0 for x in scales) and any(k in PLATFORM or k in KINDS_MORE for k in kinds):
         ap.error(f"--scale applies to the rail kinds only ({', '.join(KINDS[len(PLATFORM):])})")
-    s0 = a.first_seed if a.first_seed is not None else SEED + (1000 if a.second else 0)
+    more = any(k in KINDS_MORE for k in kinds)
+    s0 = a.first_seed if a.first_seed is not None else (SEED_MORE if more else SEED) + (1000 if a.second else 0)
+    order = KINDS_MORE if more else KINDS
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):
-        jobs += [(k, base + KINDS.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
+        jobs += [(k, base + order.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
         jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture) for i in range(a.clean)]
     rows = []
     with Pool(a.jobs) as pool:

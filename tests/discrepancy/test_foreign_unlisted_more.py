@@ -1,0 +1,88 @@
+"""The second set of bench/foreign/mujoco_unlisted.py's mechanisms (``--kinds-set 2``,
+bench/foreign/mujoco_unlisted_more.py): each kind builds and runs in MuJoCo, its force changes
+the recording, and its declaration of the inputs it is keyed on is well-formed in the flexible
+stage's own vocabulary; a force on two rails is judged over both rails' channels."""
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench"
+sys.path[:0] = [str(BENCH / "foreign"), str(BENCH)]
+
+import mujoco_blind as mb  # noqa: E402
+import mujoco_unlisted as mu  # noqa: E402
+import mujoco_unlisted_more as more  # noqa: E402
+
+from cosim.core import Model  # noqa: E402
+from cosim.discrepancy import blind  # noqa: E402
+from cosim.discrepancy.flexible import stage as flexible  # noqa: E402
+
+
+def _stage_groups() -> set:
+    """The group names the flexible stage gives a 6-slider recording with a pose (its inputs on
+    a made-up recording: only the names are read)."""
+    n, dt = 400, 1e-3
+    t = np.arange(n) * dt
+    rng = np.random.default_rng(0)
+    q = np.cumsum(rng.normal(size=(n, 6)), axis=0) * 1e-4
+    pipe = types.SimpleNamespace(
+        idx=np.arange(20, n - 20, 10), nd=6, t=t, segments=[(0, n)], dt=dt, tau_s=rng.normal(size=(n, 6)),
+        q_s=q, qd_s=np.gradient(q, dt, axis=0), qdd_s=rng.normal(size=(n, 6)), has_pose=True,
+        x_s=rng.normal(size=(n, 6)), channels=[f"tau{i}" for i in range(1, 7)], S=lambda a, deriv=0: a,
+        rec=types.SimpleNamespace(qref=q),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
+    return set(flexible.input_groups(cols))
+
+
+def _case(kind):
+    m = Model("6pus")
+    seed = more.SEED_MORE + more.KINDS_MORE.index(kind)
+    return m, seed, mu.draw(kind, np.random.default_rng(seed), m, mu.motion(m, seed))
+
+
+def test_every_declaration_names_the_stage_s_inputs_and_can_be_met():
+    vocabulary = _stage_groups()
+    assert "the platform pose" in vocabulary and "time" in vocabulary
+    for kind in more.KINDS_MORE:
+        _, _, (_, _, truth, key, joint) = _case(kind)
+        assert set(key) == {"need", "any", "allowed"}, kind
+        assert key["need"] or key["any"], kind  # a declaration that nothing meets judges nothing
+        assert key["need"] <= key["allowed"] and key["any"] <= key["allowed"], kind
+        assert key["allowed"] <= vocabulary, (kind, key["allowed"] - vocabulary)
+        if kind in more.PLATFORM_MORE:
+            assert joint is None and "rail" not in truth, kind
+        else:  # a rail's force: its own inputs are named after the rail it acts on
+            assert truth["rail"] in (joint if isinstance(joint, tuple) else (joint,)), kind
+            assert any(g.endswith(f"slider {truth['rail']}") for g in key["need"] | key["any"]) or kind == "pulse_pump"
+
+
+@pytest.mark.parametrize("kind", more.KINDS_MORE)
+def test_every_kind_builds_runs_in_mujoco_and_changes_the_recording(kind):
+    m, seed, (hook, edit, _, _, _) = _case(kind)
+    noise = dict(blind.load_config()["noise"]["6pus"])
+    noise = {k: (0.0 if np.isscalar(v) else [0.0] * len(v)) for k, v in noise.items()}  # the force alone differs
+    rec, _ = mb.simulate(m, None, 0.0, 0, seed, 2.0, noise, hook=hook, edit=edit)
+    clean, _ = mb.simulate(m, None, 0.0, 0, seed, 2.0, noise)
+    tau, tau0 = np.asarray(rec.tau), np.asarray(clean.tau)
+    assert np.isfinite(tau).all() and np.isfinite(np.asarray(rec.q)).all()
+    assert tau.shape == tau0.shape
+    # [N]: the mechanism acts (a run is deterministic at its seed: a no-op differs by round-off);
+    # the snubber's rail passes its threshold within 2 s (not within 1.5 s), and the platform's mass
+    # on a spring, driven far below its 4-9 Hz, moves the efforts by 2e-4 N RMS in 1.5 s
+    assert np.sqrt(np.mean((tau - tau0) ** 2)) > 1e-5
+
+
+def test_a_force_on_two_rails_is_judged_over_both_rails_channels():
+    key = more.keyed_more("cable_carrier", 2, 1)
+    fit = lambda joint, groups: types.SimpleNamespace(  # noqa: E731
+        explained=True, joint=joint, channel=f"tau{joint}", share=0.5,
+        inputs=[types.SimpleNamespace(group=g) for g in groups])
+    fits = [fit(2, ["position of slider 2"]), fit(1, ["position of slider 1"]), fit(4, ["time"])]
+    ok, _, named = mu.judge(fits, key, (2, 1))
+    assert ok and set(named) == {"tau2", "tau1"}  # rail 4's channel is not the carrier's
+    assert not mu.judge(fits[:1], key, (2, 1))[0]  # one position alone is not the difference
+    assert not mu.judge(fits, key, None)[0]  # over every channel, time is named where it may not be
