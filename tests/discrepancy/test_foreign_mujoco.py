@@ -72,6 +72,24 @@ def test_a_gap_is_put_on_a_rail_whose_effort_changes_sign():
     assert mb.gap_joint(m, 1109, 9.0, 5) == 5  # a rail whose effort changes sign stays
 
 
+def test_the_delay_in_the_answer_key_is_the_one_the_delay_line_makes():
+    # the delay line applies each 1 kHz command from the first 0.1 ms MuJoCo step at or after its
+    # time plus the drawn delay: a drawn 2.74 ms is a shift of the held command by 2.8 ms, the
+    # same recording as 2.8 ms drawn (where the line is exact) and not that of 2.7 ms
+    m, noise = Model("6pus"), blind.load_config()["noise"]["6pus"]
+
+    def run(delay):
+        return mb.simulate(m, "actuator_delay", delay, 0, seed=5, duration=1.5, noise=noise)
+
+    rec, truth = run(2.74e-3)
+    key = truth["actuator.delay"]
+    same, _ = run(2.8e-3)
+    shorter, _ = run(2.7e-3)
+    assert np.array_equal(np.asarray(rec.q), np.asarray(same.q))
+    assert not np.array_equal(np.asarray(rec.q), np.asarray(shorter.q))
+    assert abs(key - 2.8e-3) < 1e-12, key
+
+
 def test_a_fitted_gap_is_replayed_as_two_bodies_closer_to_the_recorded_readings(gap_case):
     # MuJoCo's gap: a 0.05 kg drive (declared as the rail's rotor inertia) on faces of 1e6 N/m
     # with damping ratio 0.3; the engine fits the gap by its reading model, then the damping and
