@@ -1,7 +1,8 @@
 """Inference of the attribution: :func:`infer` (step 4 of the engine, see :mod:`.engine`).
 
 From a :class:`.selection.Selection`: the noise of the final fit, confidence intervals
-(95 %, the wider of the chi-square rescaled and the HAC one), the importance of each group
+(95 %, the widest of the chi-square rescaled, the HAC one, the spread across windows and, for
+a friction, the spread across its joint's speed bands), the importance of each group
 (chi-square increase when removed), look-alikes (the best alternative group in its place,
 within ``lookalike_margin`` a tie; two selected groups that are one column on the recording,
 :data:`VIF_ONE_COLUMN`, each other's tied look-alikes) and the detectability of every
