@@ -182,7 +182,8 @@ def run_case(job) -> dict:
     case, profile, folder, *spread = job
     from cosim.discrepancy import diagnose, intervals
 
-    intervals.WINDOW_SPREAD = bool(spread[0]) if spread else True
+    # the noise's intervals alone are without either spread (windows in time, a friction's speed bands)
+    intervals.WINDOW_SPREAD = intervals.SPEED_BANDS = bool(spread[0]) if spread else True
 
     t0 = time.perf_counter()
     try:
@@ -200,7 +201,8 @@ def run_case(job) -> dict:
 def run_all(case_list, profile: Profile, folder, jobs: int = 1, progress=None, window_spread: bool = True) -> list:
     """:func:`run_case` over ``case_list``, ``jobs`` processes (spawned: each its own BLAS);
     ``window_spread=False`` states the library's intervals without the estimate's spread across
-    windows (``cosim.discrepancy.intervals.WINDOW_SPREAD``), to measure what it adds."""
+    windows (``cosim.discrepancy.intervals.WINDOW_SPREAD``) nor a friction's across its joint's speed
+    bands (``SPEED_BANDS``), to measure what they add."""
     args = [(c, profile, str(folder), window_spread) for c in case_list]
     rows = []
     if jobs <= 1:
@@ -268,7 +270,8 @@ def main(argv=None) -> int:
                     help="seeds first-seed .. first-seed + seeds - 1 (default 0; keep a tuning set apart from a report set)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--no-window-spread", action="store_true",
-                    help="the library's intervals from the noise alone (without the spread across windows)")
+                    help="the library's intervals from the noise alone (without the spread across windows or, for a "
+                         "friction, across its joint's speed bands)")
     ap.add_argument("--short", action="store_true",
                     help="the test's profile: shorter recordings, the own generator on the 6-PUS only (with the "
                          "default seeds, the test's cases)")

@@ -4,7 +4,7 @@
 
 Reads a run of ``bench/coverage_bench.py`` (its ``rows.json`` and the recordings under
 ``rec/``), diagnoses every recording that gave estimates again with
-``cosim.discrepancy.intervals.WINDOW_SPREAD`` off (the library's intervals from the noise
+``cosim.discrepancy.intervals.WINDOW_SPREAD`` and ``SPEED_BANDS`` off (the library's intervals from the noise
 alone: the wider of the classical and the HAC one), and prints per source and type how many of
 the same estimates each statement holds, and how much wider the stated half widths are.  The
 truths are the bench's (its answer keys), matched by parameter name.
@@ -26,7 +26,7 @@ def _noise_only(job):
     from cosim.discrepancy import diagnose, intervals
     from cosim.discrepancy.blind import stated_intervals
 
-    intervals.WINDOW_SPREAD = False
+    intervals.WINDOW_SPREAD = intervals.SPEED_BANDS = False
     d = diagnose(csv, figures=False, replay=False)
     return case, {p: (float(v), float(h)) for p, (v, h) in stated_intervals(d, shapes=True).items()}
 

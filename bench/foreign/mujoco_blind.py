@@ -56,6 +56,8 @@ from cosim.discrepancy.keyed.elsewhere import KEYED_ELSEWHERE  # noqa: E402
 from cosim.recording import Recording, write_recording  # noqa: E402
 
 DT, SUBSTEPS = 1e-3, 10  # controller / recording period, MuJoCo steps per period (0.1 ms)
+#: tolerance [s] of the delay line's comparison of times (sums of periods and steps in floating point)
+TIME_TOL = 1e-12
 
 #: effect type -> (range from scenarios/blind/config.toml, the core parameter the engine should find)
 EFFECTS = {
@@ -165,6 +167,24 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
     return xml
 
 
+def held_delay(delay: float) -> float:
+    """The actuator delay [s] the plant has when :func:`simulate` draws ``delay`` [s].
+
+    The delay line applies a command issued at ``t`` from the first MuJoCo step (``DT /
+    SUBSTEPS`` = 0.1 ms) at or after ``t + delay`` until the next command takes over one period
+    later: the applied effort is the recorded one, held over each period, shifted by ``delay``
+    rounded up to a whole step, with no other change (a drawn 2.74 ms and 2.8 ms give the same
+    recording).  The answer key is that shift, not the drawn value.
+
+    Example
+    -------
+    >>> round(held_delay(2.74e-3) * 1e3, 6), round(held_delay(2.8e-3) * 1e3, 6), held_delay(0.0)
+    (2.8, 2.8, 0.0)
+    """
+    step = DT / SUBSTEPS
+    return max(math.ceil((delay - TIME_TOL) / step), 0) * step
+
+
 def controller(kind: str, m: Model):
     """The recording's controller, designed on the nominal model: the engine generator's PD +
     gravity, or a PID with a filtered derivative and output limits (the core's law; the
@@ -224,7 +244,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
         elif eff == "actuator_delay":
             delay = val
-            truth["actuator.delay"] = val
+            truth["actuator.delay"] = held_delay(val)
         elif eff == "dead_zone":
             dead, dead_joint = val, jnt
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
@@ -253,7 +273,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
             ts = t + s * DT / substeps
             cmd = np.zeros(6)
             for ti, c in reversed(issued):
-                if ti <= ts - delay + 1e-12:
+                if ti <= ts - delay + TIME_TOL:
                     cmd = c
                     break
             if dead > 0:

@@ -123,6 +123,10 @@ def hac_covariance(X: np.ndarray, e: np.ndarray, Z: np.ndarray | None = None, n_
 #: False leaves the noise's alone (for measuring what the spread adds)
 WINDOW_SPREAD = True
 
+#: a friction's interval includes its estimate's spread across its joint's speed bands
+#: (:func:`block_jackknife` with ``order``); False leaves the windows in time alone
+SPEED_BANDS = True
+
 #: contiguous blocks of :func:`block_jackknife` (a tenth of the recording each: long enough to
 #: hold several of the trajectory's phases and a slow misfit's swing, with 9 degrees of freedom
 #: for the Student multiplier)
@@ -130,7 +134,7 @@ JACKKNIFE_BLOCKS = 10
 
 
 def block_jackknife(X: np.ndarray, e: np.ndarray, Z: np.ndarray | None = None, n_series: int = 1,
-                    blocks: int = JACKKNIFE_BLOCKS) -> tuple[np.ndarray, float]:
+                    blocks: int = JACKKNIFE_BLOCKS, order: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Delete-one-block jackknife covariance of the coefficients fitted so that ``t + X c``
     has residual ``e`` (least squares, or instrumental variables with ``Z``): the spread of
     the estimate across the recording's windows.
@@ -150,6 +154,10 @@ def block_jackknife(X: np.ndarray, e: np.ndarray, Z: np.ndarray | None = None, n
         As for :func:`hac_covariance`.
     blocks : int
         Number of blocks K (at least 2).
+    order : (n,) array, optional
+        A value per time sample (a joint's speed): the blocks are then the K bands of equal
+        count of its ranks (the samples of its smallest tenth, the next tenth, ...) instead of
+        stretches of time, and the covariance is the estimate's spread across those bands.
 
     Returns
     -------
@@ -172,6 +180,10 @@ def block_jackknife(X: np.ndarray, e: np.ndarray, Z: np.ndarray | None = None, n
     if p == 0 or n < 2 * K:
         return np.full((p, p), np.nan), float("nan")
     idx = np.arange(N) % n  # time index of each row (the series one after the other)
+    if order is not None:
+        rank = np.empty(n, dtype=int)
+        rank[np.argsort(np.asarray(order, float)[:n], kind="stable")] = np.arange(n)
+        idx = rank[idx]  # the row's place in the order instead of in time
     edges = np.linspace(0, n, K + 1).astype(int)
     ZX, Ze = Z.T @ X, Z.T @ e
     d = []
