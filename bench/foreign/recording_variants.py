@@ -174,6 +174,8 @@ def main(argv=None) -> int:
     bad = [v for v in names if v not in VARIANTS]
     if bad:
         ap.error(f"unknown variant(s) {', '.join(bad)}; known: {', '.join(VARIANTS)}")
+    if not (a.set / "rows.json").is_file():
+        ap.error(f"--set {a.set}: no rows.json (a mujoco_unlisted.py --out directory holds one beside its CSVs)")
     given = json.loads((a.set / "rows.json").read_text())
     want = {c for c in a.cases.split(",") if c}
     given = sorted([g for g in given if not want or g["case"] in want], key=lambda g: (g["kind"] == "clean", g["seed"]))
