@@ -74,7 +74,7 @@ def _light(pipe):
              "step")
     out = SimpleNamespace(**{k: getattr(pipe, k) for k in names})
     out.tau_ref_s = getattr(pipe, "tau_ref_s", None)  # the reference effort (flexible/copies.py), None without
-    out.x_s = pipe.x_s if pipe.has_pose else None
+    out.x_s = getattr(pipe, "x_s", None)  # the platform pose input (flexible/columns.py), tracker or not
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
                                                       effort_unit=f.effort_unit))
     out.rec = SimpleNamespace(qref=getattr(pipe.rec, "qref", None))

@@ -450,7 +450,6 @@ def _run(job):
 
     from cosim.core import Model
     from cosim.discrepancy import blind, diagnose
-    from cosim.discrepancy.diagnosis import tied
 
     kind, seed, out, scale, capture = job
     m = Model("6pus")
@@ -467,14 +466,30 @@ def _run(job):
         # the defaults: families, platform, drift, flexible on; the stage's inputs kept for --replay
         d, kept = _captured(lambda: diagnose(csv, figures=False, replay=False))
     cpu = time.process_time() - t0
+    row = diagnosed_row(d, kind, seed, scale, truth, joint, noise["tau"], cpu, rule)
+    _judged(row, d.flexible, key)
+    if capture is not None:
+        Path(capture).mkdir(parents=True, exist_ok=True)
+        with open(Path(capture) / f"{name}.pkl", "wb") as fh:
+            pickle.dump({"row": row, "kept": kept, "key": key}, fh)
+    return row
+
+
+def diagnosed_row(d, kind, seed, scale, truth, joint, tau_noise, cpu, rule) -> dict:
+    """The row of a case from its diagnosis ``d``: what is named (with confidence, tied, the
+    flexible stage's channels), the mechanism's size over the effort noise ``tau_noise`` [N] on
+    its most affected channel, ``cpu`` [s] and the confidence rule's statistics ``rule``
+    (:class:`_RuleLog`); the judgement against the declaration is :func:`_judged`'s."""
+    from cosim.discrepancy.diagnosis import tied
+
     library = [e["key"] + (f"[{e['joint']}]" if e["joint"] else "") for e in d.effects
                if not any(tied(a) for a in e["lookalikes"])]
     ties = {e["key"] + (f"[{e['joint']}]" if e["joint"] else ""): [a["group"] for a in e["lookalikes"] if tied(a)]
             for e in d.effects if any(tied(a) for a in e["lookalikes"])}
     terms = [("(partial) " if t.partial else "") + t.equation for t in d.discovered]
     before = np.asarray(d.residual["before"])[:, :6]
-    size = np.sqrt(np.mean((before - before.mean(axis=0)) ** 2, axis=0)) / noise["tau"]
-    row = {"case": name, "kind": kind, "seed": seed, "scale": scale, "cpu": cpu, "truth": truth, "joint": joint,
+    size = np.sqrt(np.mean((before - before.mean(axis=0)) ** 2, axis=0)) / tau_noise
+    row = {"case": case_name(kind, seed, scale), "kind": kind, "seed": seed, "scale": scale, "cpu": cpu, "truth": truth, "joint": joint,
            "library_confident": library, "library_tied": ties, "library_all": d.named(), "discovered": terms,
            "platform": d.platform_force.equation if d.platform_force else "",
            "drifts": [f"{x.param} {x.kind}" for x in d.drifts],
@@ -485,11 +500,6 @@ def _run(job):
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
            "power": rule.power, "leaning": rule.leaning}
     row["found_before_flexible"] = bool(d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts)
-    _judged(row, d.flexible, key)
-    if capture is not None:
-        Path(capture).mkdir(parents=True, exist_ok=True)
-        with open(Path(capture) / f"{name}.pkl", "wb") as fh:
-            pickle.dump({"row": row, "kept": kept, "key": key}, fh)
     return row
 
 

@@ -281,7 +281,9 @@ def _layout(path, side, meta, rname, nd, pose_cols, header) -> _Layout:
     required = [f"{k}{i}" for i in range(1, nd + 1) for k in ("q", "qd", "tau")]
     for col in required:
         if col not in header:
-            raise RecordingError(path, f"required column is missing for robot {rname} ({nd} joints)", row=1,
+            hint = ("; a rate not measured can be derived from the positions: cosim import, "
+                    "derive = \"central_difference\" (docs/importing.md)" if col.startswith("qd") else "")
+            raise RecordingError(path, f"required column is missing for robot {rname} ({nd} joints){hint}", row=1,
                                  column=col)
 
     def all_or_none(prefix, what):

@@ -178,3 +178,36 @@ def test_a_friction_keyed_on_the_time_since_a_reversal_is_named_on_its_own_rate_
         right += "rate of slider 1" in named and named <= {"rate of slider 1", "history of slider 1",
                                                            "acceleration of slider 1"}
     assert right >= 5
+
+
+def _untracked_pipe(x_s, q):
+    """A pipeline of a recording without a tracker's pose: its joints ``q`` (n, nd) and the
+    core's forward kinematics of them ``x_s`` (n, p)."""
+    n, nd = q.shape
+    return types.SimpleNamespace(
+        idx=np.arange(0, n, 5), nd=nd, t=np.arange(n) * 1e-3, segments=[(0, n)], dt=1e-3, tau_s=np.zeros((n, nd)),
+        q_s=q, qd_s=np.gradient(q, 1e-3, axis=0), qdd_s=np.zeros((n, nd)), has_pose=False, x_s=x_s,
+        channels=[f"tau{k + 1}" for k in range(nd)], window=5, step=5, S=lambda a, deriv=0: a,
+        rec=types.SimpleNamespace(qref=None),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+
+
+def test_without_a_tracker_the_platform_pose_is_still_an_input_from_the_joints():
+    # a platform's pose is a nonlinear function of its joints, which the core computes whether a
+    # tracker recorded it or not: a force keyed on the pose needs it as an input
+    t = np.arange(2000) * 1e-3
+    q = np.column_stack([0.02 * np.sin(2 * np.pi * 0.7 * t), 0.03 * np.sin(2 * np.pi * 0.3 * t + 1.0)])
+    x_s = np.column_stack([q[:, 0] + q[:, 1], np.arctan2(q[:, 1] - q[:, 0], 0.1)])
+    pipe = _untracked_pipe(x_s, q)
+    X, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 2)))
+    pose = [i for i, c in enumerate(cols) if c[1] == "the platform pose"]
+    assert [cols[i][0] for i in pose] == ["pose[0]", "pose[1]"]
+    assert np.allclose(X[:, pose], x_s[pipe.idx])
+
+
+def test_a_pose_that_is_one_joint_scaled_is_not_named_twice():
+    # a rig whose pose is its joint (one carriage: x = 2 q + 0.1) has no pose input beside the joint
+    t = np.arange(2000) * 1e-3
+    q = 0.02 * np.sin(2 * np.pi * 0.7 * t)[:, None]
+    _, cols = flexible.inputs(_untracked_pipe(2.0 * q + 0.1, q), np.zeros((400, 1)))
+    assert "the platform pose" not in [c[1] for c in cols]

@@ -137,3 +137,14 @@ def test_a_recording_of_a_described_robot_carries_its_description(tmp_path):
     (moved / "a.json").write_text(json.dumps(meta))
     out = subprocess.run([sys.executable, "-c", code, str(moved / "a.csv")], capture_output=True, text=True)
     assert out.returncode != 0 and "description file ../robots/my_delta.toml is gone" in out.stderr
+
+
+def test_a_recording_without_rates_is_refused_saying_how_to_derive_them(tmp_path):
+    # another simulator may log positions only: the refusal names the column and the importer's derivation
+    csv_path, _ = write_recording(tmp_path / "run.csv", _rec(pose=False, qref=False))
+    lines = csv_path.read_text().splitlines()
+    keep = [i for i, c in enumerate(lines[0].split(",")) if not c.startswith("qd")]
+    csv_path.write_text("\n".join(",".join(line.split(",")[i] for i in keep) for line in lines) + "\n")
+    with pytest.raises(RecordingError, match=r"row 1, column 'qd1': required column is missing .* derive = "
+                                             r"\"central_difference\" \(docs/importing.md\)"):
+        read_recording(csv_path)

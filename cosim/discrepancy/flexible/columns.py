@@ -5,9 +5,10 @@ rate and its sign smoothed as the efforts are, where the recording has a referen
 acceleration and the fitted model's effort, the low-passed |rate| and effort
 (:data:`TIME_CONSTANTS`), the low-passed dissipated power |effort x rate|
 (:data:`POWER_TIME_CONSTANTS`) and that power signed by the direction of motion, the time since
-its direction last changed and that time signed by the direction; then the platform pose where
-the recording gives one, and time.  :func:`input_groups` gathers the columns into the inputs the
-stage names ("position of slider 3", the pose, time).
+its direction last changed and that time signed by the direction; then the platform pose (the
+core's forward kinematics of the smoothed joints, with a tracker's pose recorded or not; without
+one, the coordinates that are not one joint's position scaled), and time.  :func:`input_groups`
+gathers the columns into the inputs the stage names ("position of slider 3", the pose, time).
 """
 from __future__ import annotations
 
@@ -99,15 +100,26 @@ def inputs(pipe, R, direction=False) -> tuple:
             # function of this one column that trees on (rate, s) learn from the product's corners only
             X.append(held * since)
             cols.append((f"{SINCE} qd{k + 1} reversed x sign(qd{k + 1})", group, k + 1, "history x direction", "s"))
-    if pipe.has_pose:
-        x = pipe.x_s[idx]
-        for i in range(x.shape[1]):
-            if np.std(x[:, i]) > 0:
-                X.append(x[:, i])
-                cols.append((f"pose[{i}]", POSE, None, "pose", ""))
+    # the core's forward kinematics of the smoothed joints, tracker or not (a pipeline kept by a
+    # bench's capture without a tracker's pose may hold none)
+    x_s = getattr(pipe, "x_s", None)
+    x = np.zeros((len(idx), 0)) if x_s is None else np.asarray(x_s)[idx]
+    for i in range(x.shape[1]):
+        if np.std(x[:, i]) > 0 and (pipe.has_pose or not _joint_copy(x[:, i], pipe.q_s[idx])):
+            X.append(x[:, i])
+            cols.append((f"pose[{i}]", POSE, None, "pose", ""))
     X.append(t)
     cols.append(("t", "time", None, "time", "s"))
     return np.column_stack(X), cols
+
+
+def _joint_copy(x, q) -> bool:
+    """Whether the pose coordinate ``x`` is one joint's position ``q[:, k]`` scaled and shifted
+    (a rig whose pose is its joint: the column would name the joint twice)."""
+    for k in range(q.shape[1]):
+        if np.std(q[:, k]) > 0 and abs(np.corrcoef(x, q[:, k])[0, 1]) > 1.0 - 1e-9:
+            return True
+    return False
 
 
 def histories(qd, effort, dt, starts) -> list:

@@ -14,7 +14,7 @@ of each joint (time constants :data:`~.columns.TIME_CONSTANTS`), its low-passed 
 |effort x rate| (:data:`~.columns.POWER_TIME_CONSTANTS`) and that power signed by the direction of motion
 (a friction level a slow state sets: a product greedy trees do not find from its factors), the
 time since its direction last changed (a friction state a reversal resets: its own channel's
-input), the platform pose where the recording gives one, and time; per channel also the pose and
+input), the platform pose (from the joints, tracker or not), and time; per channel also the pose and
 the rates projected on the direction of a linear fit of the residual, fitted per fold (:mod:`.oblique`),
 and where the residual holds a line of its spectrum, the line's phase (:mod:`.periodic`).  A channel
 whose structure left is a line is fitted against the own noise of the residual without its lines
