@@ -43,7 +43,9 @@ cross-validating without each, with two rules of cause before consequence.
   with two are cross-validated (:func:`fewest_rails`: greedy, at most three fits); the first the
   pose does not beat by :data:`DROP_MIN` of the variance out of fold is named in its place.  A
   force on the platform (a magnet, a contact, a tendon) depends on every rail: there the pose
-  stays.
+  stays where two rails explain less.  On seen sets (the stage re-run on captured inputs,
+  docs/flexible.md): MuJoCo's second set of kinds 6 of 10 declared inputs named (4 without),
+  the gap-preloaded friction on rail 2's rate and rails 2's and 3's positions.
 
 * **A consequence is no answer by itself.**  On a weak channel the stage judges the strongest
   single input alone (:func:`~.flexible.stage.fit_channel`); when that input is a consequence,
