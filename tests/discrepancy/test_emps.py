@@ -49,9 +49,10 @@ def test_the_nominal_model_is_corrected_to_the_published_one(emps):
     p = _param(d, "rail[1].viscous")
     assert abs(p["value"] - PUBLISHED["rail[1].viscous"]) < 0.03 * PUBLISHED["rail[1].viscous"], p
     # the interval carries the friction's spread over the recording's windows (the rig's viscous
-    # friction is 194 N s/m on the first 60 % of the file and 209 on the rest, docs/emps.md):
-    # it holds the published value and stays below 15 %
-    assert 0 < p["ci95"] < 0.15 * p["value"], p
+    # friction is 194 N s/m on the first 60 % of the file and 209 on the rest, docs/emps.md) and
+    # over its speed bands (a friction law of another shape than the model's: 28 N s/m from the
+    # windows, 32 with the bands): it holds the published value and stays below 20 %
+    assert 0 < p["ci95"] < 0.20 * p["value"], p
     assert abs(p["value"] - PUBLISHED["rail[1].viscous"]) <= p["ci95"], p
     off = _param(d, "rail[1].offset")
     assert abs(off["value"] - PUBLISHED["rail[1].offset"]) < 0.5, off
