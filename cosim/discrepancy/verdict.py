@@ -111,6 +111,16 @@ def _title(e) -> str:
     return f"{e['title']} ({vals})" if vals else e["title"]
 
 
+def _heldout_words(gain) -> str:
+    """The held-out sentence: a ratio below 1 (the fit does worse than the nominal model on the
+    part it was not fitted on) said as the residual's rise, not as a fraction "lower"."""
+    if not (gain and math.isfinite(gain) and gain > 0):
+        return ""
+    if gain >= 1.0:
+        return f" Held-out residual RMS {gain:.3g}x lower."
+    return f" Held-out residual RMS {1.0 / gain:.3g}x higher: the fit does not carry over to the held-out part."
+
+
 def headline(effects, found, left, gain=None, unexplained_group: str = "unexplained", tied=None, others=()) -> str:
     """The conclusion's first paragraph (see the module's text).
 
@@ -139,7 +149,7 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
     """
     if not effects and not found and not left and not others:
         return ""
-    better = f" Held-out residual RMS {gain:.3g}x lower." if gain and math.isfinite(gain) and gain > 0 else ""
+    better = _heldout_words(gain)
     # a discovered term by its kinds (its equation, long, is in the details)
     short = {id(t): f"a force on {t.channel} no library effect names ({', '.join(t.terms)})" for t in found}
     names = [_title(e) for e in effects] + [short[id(t)] for t in found] + list(others)
