@@ -110,10 +110,13 @@ def _speed_bands(st, sel: Selection, J, e, Z, names, half):
     does."""
     speed = np.abs(st.pipe.qd_s[st.pipe.idx][st.train])
     half = np.array(half, dtype=float)
+    per_joint = {}  # one jackknife per joint: its frictions (Coulomb and viscous) share the bands
     for a in sel.selected:
         if a.group.key not in FRICTIONS or a.group.joint is None:
             continue
-        cov, t95 = block_jackknife(J, e, Z, n_series=st.C, order=speed[:, a.group.joint])
+        if a.group.joint not in per_joint:
+            per_joint[a.group.joint] = block_jackknife(J, e, Z, n_series=st.C, order=speed[:, a.group.joint])
+        cov, t95 = per_joint[a.group.joint]
         for p in a.group.params:
             i = names.index(p) if p in names else None
             if i is not None and math.isfinite(cov[i, i]):
