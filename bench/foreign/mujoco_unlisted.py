@@ -15,6 +15,13 @@ softens as its motor heats, detents at irregular positions, a mass on a spring i
 bellows' friction keyed on the platform's height, a magnet's preload keyed on the gap to a
 neighbouring carriage, a drag on the platform's angular velocity, a pump's pulses, a snubber
 that locks above an acceleration, a drive's saturation), seeds ``SEED_MORE`` + (50700 +).
+``--kinds-set 3`` runs a third set, none of them a kind of the first two
+(bench/foreign/mujoco_unlisted_third.py: a linear motor's thrust ripple, a viscoelastic vacuum
+hose on the platform, a rail wiper collecting debris, a payload loose in a tray, a damper between
+two carriages, a drive's back-EMF limit, a brake dragging over a window of time, a leg's elastic
+flexure joint, a shared DC bus sagging under a neighbour's current, a grease thinning as it
+warms), seeds ``SEED_THIRD`` + (53700 +).  The code the sets share (helpers of the draws, the
+judgement, the tables) is bench/foreign/unlisted_common.py.
 
 ``--capture DIR`` keeps, per case, what the flexible stage was given (bench/flexible_bench.py's
 capture); ``--replay DIR`` re-runs only the stage on it (its ``refit``: the diagnosis's calls) and
@@ -90,13 +97,19 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
 from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  # noqa: E402
+from mujoco_unlisted_third import KINDS_THIRD, SEED_THIRD, draw_third, keyed_third  # noqa: E402
+from unlisted_common import RuleLog as _RuleLog  # noqa: E402
+from unlisted_common import judge, sweep_table, table  # noqa: E402
+from unlisted_common import unit_direction as _dir  # noqa: E402
 
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
          "rate_coupled_friction", "reversal_seal", "eddy_brake_zone", "cross_effort_friction", "coulomb_zone",
          "reversal_stiction")
 PLATFORM = KINDS[:7]
-#: the kind sets of ``--kinds-set``: 1 the kinds above, 2 bench/foreign/mujoco_unlisted_more.py's
-KIND_SETS = {1: KINDS, 2: KINDS_MORE}
+#: the kind sets of ``--kinds-set``: 1 the kinds above, 2 bench/foreign/mujoco_unlisted_more.py's,
+#: 3 bench/foreign/mujoco_unlisted_third.py's
+KIND_SETS = {1: KINDS, 2: KINDS_MORE, 3: KINDS_THIRD}
+ALL_KINDS = KINDS + KINDS_MORE + KINDS_THIRD
 #: seeds: SEED + the kind's index, clean cases SEED + 90 + i (fixed before any run); ``--second``
 #: draws every case again at SEED + 1000 + (the same): added after the first set's output was seen
 #: (and after the platform-drag sign rule), before any of its own
@@ -110,6 +123,8 @@ def keyed(kind, j=None, k=None) -> dict:
     ``any`` (one of them named), ``allowed`` (nothing else named)."""
     if kind in KINDS_MORE:
         return keyed_more(kind, j, k)
+    if kind in KINDS_THIRD:
+        return keyed_third(kind, j, k)
     pos = {f"position of slider {i}" for i in range(1, 7)}
     rate = {f"rate of slider {i}" for i in range(1, 7)}
     acc = {f"acceleration of slider {i}" for i in range(1, 7)}
@@ -146,11 +161,6 @@ def keyed(kind, j=None, k=None) -> dict:
         need = {own("position"), own("rate")}
         return {"need": need, "any": set(), "allowed": need | {own("history")}}
     raise ValueError(kind)
-
-
-def _dir(rng):
-    d = rng.normal(size=3)
-    return d / np.linalg.norm(d)
 
 
 def _platform_mechanism(kind, rng, m, mo):
@@ -341,10 +351,10 @@ def draw(kind, rng, m, mo, scale=1.0):
     """(hook, edit, truth, keyed-on inputs, joint of the force or None) of one case; ``scale``
     multiplies a rail mechanism's force (a platform mechanism's must be 1); a second-set kind's
     joint is a tuple of two rails when its force acts on both."""
-    if kind in KINDS_MORE:
+    if kind in KINDS_MORE or kind in KINDS_THIRD:
         if scale != 1.0:
             raise ValueError(f"--scale applies to the first set's rail kinds only, not to {kind}")
-        return draw_more(kind, rng, m, mo)
+        return (draw_more if kind in KINDS_MORE else draw_third)(kind, rng, m, mo)
     if kind in PLATFORM:
         if scale != 1.0:
             raise ValueError(f"--scale applies to the rail kinds only, not to {kind}")
@@ -374,70 +384,6 @@ def motion(m, seed):
     # the second set's draws: the efforts, the pose, the rails' positions and accelerations
     out.update(u=u, xr=np.asarray(ref.x[k0:]), qref=np.asarray(ref.q[k0:]), qddref=np.asarray(ref.qdd[k0:]))
     return out
-
-
-def judge(fits, key, joint) -> tuple:
-    """(inputs right, share, named groups per explained channel) of the flexible stage, on the
-    channels of ``joint`` (a rail, rails, or None: every channel)."""
-    on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
-    told = [f for f in fits if f.explained and (on is None or f.joint in on)]
-    named = {f.channel: [x.group for x in f.inputs] for f in told}
-    if not told or not any(named.values()):
-        return False, max([f.share for f in told], default=0.0), named
-    union = set().union(*map(set, named.values()))
-    ok = all(set(g) <= key["allowed"] for g in named.values()) and key["need"] <= union
-    ok = ok and (not key["any"] or bool(union & key["any"]))
-    return ok, max(f.share for f in told), named
-
-
-class _RuleLog:
-    """The confidence rule's statistics (cosim.discrepancy.keyed.elsewhere logs, per effect and
-    kind of product, its strongest product's chi-square less ln n_eff against the bar, at DEBUG):
-    collected as ``{"effect", "tied_already", "where", "feature", "stat", "bar"}`` rows."""
-
-    PATTERN = (r"^(?P<effect>\S+?)(?P<tied> \(tied already\))?: (?P<where>elsewhere|position|reversal) "
-               r"(?P<feature>.*) chi2 - ln n_eff = (?P<stat>\S+) against (?P<bar>\S+)$")
-    #: the smallest change of the level the rule could see (cosim.discrepancy.keyed.power), where no product passed
-    POWER = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) smallest visible change of the level "
-             r"(?P<delta>\S+) \((?P<feature>.*)\)$")
-    #: a product the residual leans on whose interval reaches the level (cosim.discrepancy.keyed.power.leaning_change)
-    LEANING = (r"^(?P<effect>\S+?): (?P<where>elsewhere|position|reversal) largest change of the level not excluded "
-               r"(?P<change>\S+) \((?P<feature>.*); chi2 - ln n_eff = (?P<stat>\S+)\)$")
-
-    def __init__(self):
-        import logging
-
-        self.rows, self.power, self.leaning, self.handler = [], [], [], logging.Handler(logging.DEBUG)
-        self.handler.emit = self._emit
-        self.logger = logging.getLogger("cosim.discrepancy.keyed.elsewhere")
-
-    def _emit(self, record):
-        import re
-
-        m = re.match(self.PATTERN, record.getMessage())
-        if m:
-            self.rows.append({"effect": m["effect"], "tied_already": bool(m["tied"]), "where": m["where"],
-                              "feature": m["feature"], "stat": float(m["stat"]), "bar": float(m["bar"])})
-        m = re.match(self.POWER, record.getMessage())
-        if m:
-            self.power.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
-                               "delta": float(m["delta"])})
-        m = re.match(self.LEANING, record.getMessage())
-        if m:
-            self.leaning.append({"effect": m["effect"], "where": m["where"], "feature": m["feature"],
-                                 "change": float(m["change"]), "stat": float(m["stat"])})
-
-    def __enter__(self):
-        import logging
-
-        self.level = self.logger.level
-        self.logger.addHandler(self.handler)
-        self.logger.setLevel(logging.DEBUG)
-        return self
-
-    def __exit__(self, *exc):
-        self.logger.removeHandler(self.handler)
-        self.logger.setLevel(self.level)
 
 
 def case_name(kind, seed, scale=1.0) -> str:
@@ -540,104 +486,12 @@ def _replayed(job):
     return _judged(row, fits, key)
 
 
-def _cell(r):
-    named = "; ".join(f"{c}: {', '.join(g) or 'no single input'}" for c, g in r["named"].items()) or "nothing explained"
-    return named
-
-
-def _periodic(r) -> list:
-    """The channels of a row whose structure left is a spectral line (signature ``periodic``)."""
-    return [u.split()[0] for u in r["unexplained"] if u.endswith(" periodic")]
-
-
-def _order(kind) -> int:
-    return (KINDS + KINDS_MORE).index(kind)
-
-
-def table(rows) -> list:
-    eff = sorted([r for r in rows if r["kind"] != "clean"], key=lambda r: _order(r["kind"]))
-    clean = sorted([r for r in rows if r["kind"] == "clean"], key=lambda r: r["seed"])
-    L = ["| case | size (RMS / noise) | named with confidence | library named with confidence | flexible: "
-         "inputs named (keyed-on right?) | share | held-out gain | CPU [s] |", "|---" * 8 + "|"]
-    for r in eff:
-        conf = r["library_confident"] + [t for t in r["discovered"] if not t.startswith("(partial)")]
-        if not r["unexplained"]:  # with structure left, the conclusion says they "may stand in"
-            conf += ([r["platform"]] if r["platform"] else []) + r["drifts"]
-        g = r["gain"]
-        L.append(f"| {r['case']} | {r['size_over_noise']:.1f} (tau{r['size_channel']}) | {'; '.join(conf) or '-'} | "
-                 f"{'**' + ', '.join(r['library_confident']) + '**' if r['library_confident'] else '-'} | "
-                 f"{_cell(r)} ({'yes' if r['inputs_right'] else 'no'}) | {r['share']:.2f} | "
-                 f"{'-' if g is None or not math.isfinite(g) else f'{g:.2f}'} | {r['cpu']:.1f} |")
-    for r in clean:
-        what = "; ".join(r["library_all"] + r["discovered"] + r["drifts"] + [c for c, _, _ in r["flexible"]])
-        L.append(f"| {r['case']} | {r['size_over_noise']:.1f} | {'clean' if r['clean'] else 'NOT CLEAN: ' + what} | "
-                 f"- | - | - | - | {r['cpu']:.1f} |")
-    n = len(eff)
-    if n:
-        L += ["", f"library effect named with confidence: {sum(bool(r['library_confident']) for r in eff)}/{n}; "
-                  f"flexible stage names the keyed-on inputs: {sum(r['inputs_right'] for r in eff)}/{n}; "
-                  f"a channel explained by the flexible stage: {sum(bool(r['named']) for r in eff)}/{n}; "
-                  f"a periodic force reported (structure keyed on time): "
-                  f"{', '.join(r['case'] for r in eff if _periodic(r)) or 'none'}"]
-        L += [f"  {r['case']}: {'; '.join(r.get('periodic') or _periodic(r))}" for r in eff if _periodic(r)]
-    if clean:
-        L.append(f"clean recordings clean: {sum(r['clean'] for r in clean)}/{len(clean)}")
-    L.append(f"diagnosis CPU: median {np.median([r['cpu'] for r in rows]):.1f} s, largest "
-             f"{max(r['cpu'] for r in rows):.1f} s")
-    return L
-
-
-def _reached(r) -> list:
-    """The rule's rows of a case on effects it judged (not tied before its test)."""
-    return [x for x in r.get("rule", []) if not x["tied_already"]]
-
-
-def sweep_table(rows) -> list:
-    """Per kind and scale: the cases, the size, a library effect named with confidence, tied (by
-    the keyed rule), structure left, "no missing physics found", and the rule's strongest
-    statistic against its bar where it was reached (the effect not tied before its test), with the
-    largest of the smallest level changes it could see per kind where no product passed
-    (cosim.discrepancy.keyed.power; above 1 the effect is tied as too weak to tell) and the product
-    the residual leans on whose interval reaches the level (its chi-square less ln n_eff, above the
-    look-elsewhere cost: tied as leaning)."""
-    eff = [r for r in rows if r["kind"] != "clean"]
-    L = ["| kind | scale | cases | size (RMS / noise) | library named with confidence | library tied (by the keyed "
-         "rule) | structure left | no missing physics found | rule reached: strongest statistic / bar (kind) |",
-         "|---" * 9 + "|"]
-    cells = sorted({(r["kind"], r.get("scale", 1.0)) for r in eff}, key=lambda c: (_order(c[0]), c[1]))
-    for kind, scale in cells:
-        rs = sorted([r for r in eff if r["kind"] == kind and r.get("scale", 1.0) == scale], key=lambda r: r["seed"])
-        conf = [r for r in rs if r["library_confident"]]
-        tied_ = [r for r in rs if not r["library_confident"] and r.get("library_tied")]
-        by_rule = [r for r in tied_ if any("keyed_elsewhere" in g for g in r["library_tied"].values())]
-        stats = []
-        for r in rs:
-            rule = _reached(r)
-            if rule:
-                best = max(rule, key=lambda x: x["stat"] - x["bar"])
-                weak = max(r.get("power", []), key=lambda x: x["delta"], default=None)
-                lean = max(r.get("leaning", []), key=lambda x: x["stat"], default=None)
-                stats.append(f"{best['stat']:.1f}/{best['bar']:.1f} ({best['where']}"
-                             + (f"; smallest visible change {weak['delta']:.2f}, {weak['where']}" if weak else "")
-                             + (f"; leaning {lean['stat']:.1f} ({lean['where']}), change not excluded "
-                                f"{lean['change']:.2f}" if lean else "") + ")")
-        sizes = [r["size_over_noise"] for r in rs]
-        L.append(f"| {kind} | {scale:g} | {len(rs)} | {min(sizes):.1f}-{max(sizes):.1f} | "
-                 f"{len(conf)}{' (' + '; '.join(c['case'] + ': ' + ', '.join(c['library_confident']) for c in conf) + ')' if conf else ''} | "
-                 f"{len(tied_)} ({len(by_rule)}) | {sum(bool(r['unexplained']) for r in rs)} | "
-                 f"{sum(r['conclusion'].startswith('no missing physics') for r in rs)} | {', '.join(stats) or '-'} |")
-    clean = [r for r in rows if r["kind"] == "clean"]
-    if clean:
-        L.append(f"\nclean recordings clean: {sum(r['clean'] for r in clean)}/{len(clean)}; library effects named "
-                 f"with confidence over all: {sum(bool(r['library_confident']) for r in eff)}/{len(eff)}")
-    return L
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--kinds", default=None, help="comma-separated kinds of either set (default: --kinds-set's)")
     ap.add_argument("--kinds-set", type=int, choices=sorted(KIND_SETS), default=1,
-                    help="1: the kinds above; 2: bench/foreign/mujoco_unlisted_more.py's (seeds SEED_MORE +)")
+                    help="1: the kinds above; 2: bench/foreign/mujoco_unlisted_more.py's (seeds SEED_MORE +); "
+                         "3: bench/foreign/mujoco_unlisted_third.py's (seeds SEED_THIRD +)")
     ap.add_argument("--clean", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--second", action="store_true", help="the second seed set (SEED + 1000 +)")
@@ -654,10 +508,11 @@ def main(argv=None) -> int:
                     help="re-run only the flexible stage on the inputs kept there (--capture); cpu is the stage's")
     a = ap.parse_args(argv)
     kinds = [k for k in a.kinds.split(",") if k] if a.kinds is not None else list(KIND_SETS[a.kinds_set])
-    bad = [k for k in kinds if k not in KINDS + KINDS_MORE]
+    bad = [k for k in kinds if k not in ALL_KINDS]
     if bad:
-        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(KINDS + KINDS_MORE)}")
-    if any(k in KINDS for k in kinds) and any(k in KINDS_MORE for k in kinds):
+        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(ALL_KINDS)}")
+    sets = sorted({n for n, ks in KIND_SETS.items() for k in kinds if k in ks})
+    if len(sets) > 1:
         ap.error("--kinds: kinds of one set at a time (their seeds count from different first seeds)")
     a.out.mkdir(parents=True, exist_ok=True)
     try:
@@ -666,11 +521,11 @@ def main(argv=None) -> int:
         ap.error(f"--scale {a.scale!r}: comma-separated numbers expected")
     if not scales or not all(math.isfinite(x) and x > 0 for x in scales):
         ap.error(f"--scale {a.scale!r}: positive factors expected")
-    if any(x != 1.0 for x in scales) and any(k in PLATFORM or k in KINDS_MORE for k in kinds):
+    if any(x != 1.0 for x in scales) and any(k in PLATFORM or k not in KINDS for k in kinds):
         ap.error(f"--scale applies to the rail kinds only ({', '.join(KINDS[len(PLATFORM):])})")
-    more = any(k in KINDS_MORE for k in kinds)
-    s0 = a.first_seed if a.first_seed is not None else (SEED_MORE if more else SEED) + (1000 if a.second else 0)
-    order = KINDS_MORE if more else KINDS
+    order = KIND_SETS[sets[0] if sets else a.kinds_set]
+    first = {1: SEED, 2: SEED_MORE, 3: SEED_THIRD}[sets[0] if sets else a.kinds_set]
+    s0 = a.first_seed if a.first_seed is not None else first + (1000 if a.second else 0)
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):
         jobs += [(k, base + order.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
@@ -681,9 +536,9 @@ def main(argv=None) -> int:
             rows.append(row)
             print(json.dumps(row, default=str), flush=True)
     (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
-    print("\n" + "\n".join(table(rows)))
+    print("\n" + "\n".join(table(rows, ALL_KINDS)))
     if len(scales) > 1 or scales != [1.0]:
-        print("\n" + "\n".join(sweep_table(rows)))
+        print("\n" + "\n".join(sweep_table(rows, ALL_KINDS)))
     return 0
 
 

@@ -35,6 +35,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from unlisted_common import excess as _excess
+from unlisted_common import platform_dof as _platform
+from unlisted_common import rms as _rms
+from unlisted_common import softplus as _softplus
+from unlisted_common import unit_direction as _dir
 
 KINDS_MORE = ("cable_carrier", "thermal_spring", "detent_train", "platform_tmd", "bellows_friction",
               "gap_preload_friction", "spin_drag", "pulse_pump", "accel_snubber", "drive_saturation")
@@ -95,25 +100,6 @@ def keyed_more(kind, j=None, k=None) -> dict:
         # the shortfall is a function of the command, the drive's effort, alone
         return {"need": {own("effort")}, "any": set(), "allowed": {own("effort")}}
     raise ValueError(kind)
-
-
-def _dir(rng):
-    d = rng.normal(size=3)
-    return d / np.linalg.norm(d)
-
-
-def _rms(x) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
-
-
-def _softplus(x):
-    return np.logaddexp(0.0, x)
-
-
-def _platform(model):
-    """(body id, the free joint's first dof) of MuJoCo's platform."""
-    b = model.body("platform").id
-    return b, int(model.jnt_dofadr[model.body_jntadr[b]])
 
 
 def _platform_mechanism(kind, rng, m, mo):
@@ -252,10 +238,6 @@ def _pulse_pump(rng, mo, j, target):
         f[j] = amp * (pulse((f0 * t + ph) % 1.0) - wd / 2)
         return f
     return hook, {"amplitude": amp, "frequency": f0, "width": wd}
-
-
-def _excess(x, at) -> float:
-    return _rms(np.maximum(np.abs(x) - at, 0.0))
 
 
 def _snubber(rng, mo, j, target, slider_mass):

@@ -1,0 +1,135 @@
+"""The third set of bench/foreign/mujoco_unlisted.py's mechanisms (``--kinds-set 3``,
+bench/foreign/mujoco_unlisted_third.py): each kind builds and runs in MuJoCo and changes the
+recording; a rail force computed in MuJoCo's step, run along its case's reference, has the RMS it
+was drawn to (at most, where a cap on its coefficient binds); the damper built as a MuJoCo tendon
+pushes the two carriages equally and oppositely; every declaration is well-formed in the flexible
+stage's vocabulary."""
+import math
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench"
+sys.path[:0] = [str(BENCH / "foreign"), str(BENCH)]
+
+import mujoco_blind as mb  # noqa: E402
+import mujoco_unlisted as mu  # noqa: E402
+import mujoco_unlisted_third as third  # noqa: E402
+
+from cosim.core import Model  # noqa: E402
+from cosim.discrepancy import blind  # noqa: E402
+from cosim.discrepancy.flexible import stage as flexible  # noqa: E402
+
+#: the rail forces computed in MuJoCo's step (the others edit MuJoCo's model)
+HOOKED_RAIL = ("thrust_ripple", "wiper_debris", "backemf_limit", "brake_window", "shared_bus_sag", "grease_warming")
+
+
+def _stage_groups() -> set:
+    """The group names the flexible stage gives a 6-slider recording with a pose (its inputs on
+    a made-up recording: only the names are read)."""
+    n, dt = 400, 1e-3
+    t = np.arange(n) * dt
+    rng = np.random.default_rng(0)
+    q = np.cumsum(rng.normal(size=(n, 6)), axis=0) * 1e-4
+    pipe = types.SimpleNamespace(
+        idx=np.arange(20, n - 20, 10), nd=6, t=t, segments=[(0, n)], dt=dt, tau_s=rng.normal(size=(n, 6)),
+        q_s=q, qd_s=np.gradient(q, dt, axis=0), qdd_s=rng.normal(size=(n, 6)), has_pose=True,
+        x_s=rng.normal(size=(n, 6)), channels=[f"tau{i}" for i in range(1, 7)], S=lambda a, deriv=0: a,
+        rec=types.SimpleNamespace(qref=q),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
+    return set(flexible.input_groups(cols))
+
+
+def _case(kind):
+    m = Model("6pus")
+    seed = third.SEED_THIRD + third.KINDS_THIRD.index(kind)
+    mo = mu.motion(m, seed)
+    return m, seed, mo, mu.draw(kind, np.random.default_rng(seed), m, mo)
+
+
+def test_the_third_set_is_new_and_every_declaration_names_the_stage_s_inputs():
+    assert len(third.KINDS_THIRD) == 10
+    assert not set(third.KINDS_THIRD) & (set(mu.KINDS) | set(mu.KINDS_MORE))
+    assert mu.KIND_SETS[3] == third.KINDS_THIRD
+    vocabulary = _stage_groups()
+    for kind in third.KINDS_THIRD:
+        _, _, _, (_, _, truth, key, joint) = _case(kind)
+        assert key == mu.keyed(kind, truth.get("rail"), truth.get("other_rail")), kind  # what --replay re-reads
+        assert set(key) == {"need", "any", "allowed"}, kind
+        assert key["need"] or key["any"], kind  # a declaration that nothing meets judges nothing
+        assert key["need"] <= key["allowed"] and key["any"] <= key["allowed"], kind
+        assert key["allowed"] <= vocabulary, (kind, key["allowed"] - vocabulary)
+        if kind in third.PLATFORM_THIRD:
+            assert joint is None and "rail" not in truth, kind
+        else:  # a rail's force: its own inputs are named after the rail it acts on
+            assert truth["rail"] in (joint if isinstance(joint, tuple) else (joint,)), kind
+            assert any(g.endswith(f"slider {truth['rail']}") for g in key["need"] | key["any"]), kind
+
+
+@pytest.mark.parametrize("kind", HOOKED_RAIL)
+def test_a_rail_force_along_its_reference_has_the_rms_it_was_drawn_to(kind):
+    """The hook run along the case's reference (the commanded efforts, positions and rates, at the
+    recording's 1 ms from its start) gives a force on the drawn rail alone whose RMS is the drawn
+    target, or below it by the cap on its coefficient (the ripple's 0.3, the sag's 0.5, the
+    back-EMF limiter's gain 0.8); the RMS is recomputed here from the hook's output, not read
+    from the draw's own figures.  The back-EMF limiter's shortfall at the reference's command,
+    s short, is made up by the loop asking e = s (short + e) more: its target is e = s / (1 - s)
+    short.  The bus's sag x of the command is made up by u x / (1 - x), its target the RMS of
+    that about its mean (an offset)."""
+    _, _, mo, (hook, edit, truth, _, joint) = _case(kind)
+    assert edit is None
+    q = np.asarray(mo["qref"])
+    qd = np.gradient(q, mb.DT, axis=0)
+    u = np.asarray(mo["u"])
+    f = np.array([hook(None, None, third.LEAD + i * mb.DT, q[i], qd[i], u[i]) for i in range(len(q))])
+    j = truth["rail"] - 1
+    assert np.all(np.delete(f, j, axis=1) == 0.0)
+    got = float(np.sqrt(np.mean(f[:, j] ** 2)))
+    if kind == "backemf_limit":
+        got /= 1.0 - truth["gain"]
+    if kind == "shared_bus_sag":
+        x = -f[:, j] / u[:, j]
+        e = u[:, j] * x / (1 - x)
+        got = float(np.sqrt(np.mean((e - e.mean()) ** 2)))
+    capped = {"thrust_ripple": truth.get("ripple") == 0.3, "shared_bus_sag": truth.get("sag") == 0.5,
+              "backemf_limit": truth.get("gain") == pytest.approx(0.8)}.get(kind, False)
+    assert got > 0.2 * truth["rms_target"], (kind, got, truth)
+    assert got < 1.1 * truth["rms_target"], (kind, got, truth)
+    if not capped:  # the coefficient set for the target: the target to within the step's discretisation
+        assert got == pytest.approx(truth["rms_target"], rel=0.05), (kind, got, truth)
+
+
+def test_the_coupling_damper_is_a_mujoco_tendon_that_pushes_the_two_carriages_oppositely():
+    import mujoco
+
+    m, seed, _, (hook, edit, truth, _, joint) = _case("coupling_damper")
+    assert hook is None and joint == (truth["rail"], truth["other_rail"])
+    xml, _ = mb.case_xml(m, [], np.random.default_rng(seed))
+    model = mujoco.MjModel.from_xml_string(edit(xml))
+    data = mujoco.MjData(model)
+    j, k = (model.joint(f"rail{r - 1}").dofadr[0] for r in joint)
+    data.qvel[j], data.qvel[k] = 0.03, -0.01  # [m/s]
+    mujoco.mj_forward(model, data)
+    c = truth["damping"]
+    assert data.qfrc_passive[j] == pytest.approx(-c * 0.04, rel=1e-7)  # c written to 9 digits
+    assert data.qfrc_passive[k] == pytest.approx(c * 0.04, rel=1e-7)  # c written to 9 digits
+
+
+@pytest.mark.parametrize("kind", third.KINDS_THIRD)
+def test_every_kind_builds_runs_in_mujoco_and_changes_the_recording(kind):
+    m, seed, _, (hook, edit, _, _, _) = _case(kind)
+    noise = dict(blind.load_config()["noise"]["6pus"])
+    noise = {k: (0.0 if np.isscalar(v) else [0.0] * len(v)) for k, v in noise.items()}  # the force alone differs
+    duration = 6.0 if kind == "brake_window" else 2.0  # the brake's window opens 1.5-5.5 s into the run
+    rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, hook=hook, edit=edit)
+    clean, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise)
+    tau, tau0 = np.asarray(rec.tau), np.asarray(clean.tau)
+    assert np.isfinite(tau).all() and np.isfinite(np.asarray(rec.q)).all()
+    assert tau.shape == tau0.shape
+    # [N]: the mechanism acts, at a tenth of the effort noise (5 mN) or more (a run is
+    # deterministic at its seed: a no-op differs by round-off)
+    assert math.sqrt(np.mean((tau - tau0) ** 2)) > 5e-4, kind
