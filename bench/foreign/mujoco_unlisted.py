@@ -425,7 +425,7 @@ def diagnosed_row(d, kind, seed, scale, truth, joint, tau_noise, cpu, rule) -> d
     """The row of a case from its diagnosis ``d``: what is named (with confidence, tied, the
     flexible stage's channels), the mechanism's size over the effort noise ``tau_noise`` [N] on
     its most affected channel, ``cpu`` [s] and the confidence rule's statistics ``rule``
-    (:class:`_RuleLog`); the judgement against the declaration is :func:`_judged`'s."""
+    (:class:`unlisted_common.RuleLog`); the judgement against the declaration is :func:`_judged`'s."""
     from cosim.discrepancy.diagnosis import tied
 
     library = [e["key"] + (f"[{e['joint']}]" if e["joint"] else "") for e in d.effects
