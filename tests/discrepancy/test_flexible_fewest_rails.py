@@ -53,36 +53,3 @@ def test_a_force_on_the_platform_keeps_the_pose():
     fit = flexible.fit_channel(PIPE, X, cols, y, sigma, ("N", "tau1"))
     assert fit.explained and fit.share > 0.6
     assert [d.group for d in fit.inputs] == ["the platform pose"]
-
-
-def _asked(mse_of):
-    """fewest_rails on the magnet's rails with cross-validations given by ``mse_of(groups)``
-    (variance 1): ``(the named groups, the group sets cross-validated)``."""
-    from cosim.discrepancy.flexible.columns import input_groups
-    from cosim.discrepancy.flexible.cv import folds
-    from cosim.discrepancy.flexible.select import fewest_rails
-
-    rng, q, pose, X, cols = _rails()
-    groups = input_groups(cols)
-    y = 1.0 / (1.5 + np.sum((pose[:, [0, 2, 4]] - np.array([0.5, 0.8, -0.6])) ** 2, axis=1))
-    asked = []
-
-    def cv_on(gs, without=(), under=None):
-        asked.append(tuple(gs))
-        return types.SimpleNamespace(mse=mse_of(gs), pred=np.zeros(len(y))), []
-    named = fewest_rails(["the platform pose"], groups, set(), X, y, folds(len(y), 2), 1.0, cv_on)
-    return named, {a for a in asked if a != ("the platform pose",)}
-
-
-def test_the_one_rail_is_not_cross_validated_where_the_pose_beats_two():
-    # the pose 0.1, any rails 0.9: the pair is beaten, so is one of its rails (one fit, not two)
-    named, asked = _asked(lambda gs: 0.1 if "the platform pose" in gs else 0.9)
-    assert named == ["the platform pose"]
-    assert [len(a) for a in asked] == [2]
-
-
-def test_where_the_pose_does_not_beat_two_rails_one_is_tried_and_named_when_it_does_as_well():
-    # two rails 0.11, one 0.12 (within the check's bar of 0.03 of each other): the one rail named
-    named, asked = _asked(lambda gs: 0.1 if "the platform pose" in gs else 0.11 if len(gs) == 2 else 0.12)
-    assert sorted(len(a) for a in asked) == [1, 2]
-    assert len(named) == 1 and named[0].startswith("position of slider")

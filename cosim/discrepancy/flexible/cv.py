@@ -538,31 +538,6 @@ def _bins(X, fold_rows, bins):
 _BINS_KEPT: dict = {}
 
 
-def binned_pred(x, y, fold_rows, bins: int = BINS) -> np.ndarray:
-    """The out-of-fold prediction of ``y`` by a step function of the column ``x`` alone, as
-    :func:`binned_shares` judges it: per fold, the means of ``y`` over ``bins`` quantile bins of
-    ``x`` on the fitted rows (an empty bin: the fitted mean) at the held-out rows.
-
-    Example
-    -------
-    >>> x = np.linspace(0.0, 1.0, 400)
-    >>> p = binned_pred(x, np.where(x > 0.5, 2.0, 0.0), folds(400, gap=2))
-    >>> bool(np.all(p[x < 0.4] == 0.0) and np.all(p[x > 0.6] == 2.0))
-    True
-    """
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    q = np.linspace(0.0, 1.0, bins + 1)[1:-1]
-    pred = np.empty(len(y))
-    for held, fit in fold_rows:
-        edges = np.unique(np.quantile(x[fit], q))
-        k = np.searchsorted(edges, x[fit])
-        count = np.bincount(k, minlength=len(edges) + 1)
-        mean = np.where(count > 0, np.bincount(k, y[fit], minlength=len(edges) + 1) / np.maximum(count, 1),
-                        y[fit].mean())
-        pred[held] = mean[np.searchsorted(edges, x[held])]
-    return pred
-
-
 def binned_shares(X, y, fold_rows, bins: int = BINS) -> np.ndarray:
     """Per column of ``X``, the share of ``y``'s variance a step function of that column
     alone explains out of fold: per fold, the means of ``y`` over ``bins`` quantile bins of

@@ -39,10 +39,9 @@ cross-validating without each, with two rules of cause before consequence.
 * **The pose where no more than two rails' positions say the same.**  The pose is the forward
   kinematics of every rail's position, so a force keyed on two rails' positions (a cable
   carrier pulled by their gap, a friction preloaded by it) is a function of the pose too.
-  Where the pose is named, the other named groups alone, then with two rails' positions, then
-  with one are cross-validated (:func:`fewest_rails`: the rails chosen by step functions, at most
-  three fits, the one rail's only where the pose does not beat the two); the first the pose does
-  not beat by :data:`DROP_MIN` of the variance out of fold is named in its place.  A
+  Where the pose is named, the other named groups alone, then with one rail's position, then
+  with two are cross-validated (:func:`fewest_rails`: greedy, at most three fits); the first the
+  pose does not beat by :data:`DROP_MIN` of the variance out of fold is named in its place.  A
   force on the platform (a magnet, a contact, a tendon) depends on every rail: there the pose
   stays where two rails explain less.  On seen sets (the stage re-run on captured inputs,
   docs/flexible.md): MuJoCo's second set of kinds 6 of 10 declared inputs named (4 without),
@@ -262,24 +261,20 @@ def fewest_rails(kept, groups, follow, X, y, fold_rows, var, cv_on) -> list:
     (a magnet, a contact, a tendon) depends on all of them: there one or two rails' positions
     explain less and the pose stays.
 
-    The sets, each with the other kept groups: none (``s0``), the position that explains most
-    of what their trees leave out of fold (``s1``: a step function of it alone,
-    :func:`~.cv.binned_shares`, no trees), that position and the one whose position, or its
-    difference from the first, explains most of what a step function of the first leaves
-    (``s2``: :func:`~.cv.binned_pred`, no trees).  ``s0`` is cross-validated first; where the
-    pose beats it, ``s2``, and ``s1`` only where the pose does not beat ``s2``: a pose that
-    beats the trees on two rails beside the other groups beats them on one (on the MuJoCo
-    platform mechanisms of set 13, 45700 +, it beat every ``s1``; one fit fewer per channel
-    naming the pose).  The first set the pose does not beat is named in its place, or the
-    next one where its rail costs :data:`DROP_MIN` of the variance left out (the check of
-    :func:`select`): a force on the gap of two rails is partly a function of either alone.
-    At most three cross-validations per channel where the pose is named.
+    Greedy, at most three cross-validations per channel where the pose is named: the other kept
+    groups alone (``s0``); with the position that explains most of what their trees leave out of
+    fold (``s1``: a step function of it alone, :func:`~.cv.binned_shares`, no trees); with that
+    position and the one whose position, or its difference from the first, explains most of
+    what the trees on ``s1`` leave (``s2``).  The first of these the pose does not beat is named
+    in its place, or the next one where its rail costs :data:`DROP_MIN` of the variance left out
+    (the check of :func:`select`): a force on the gap of two rails is partly a function of
+    either alone.
 
     The bar is the check's, not :func:`gain`'s: the positions take the pose's place, and a pose
     that explains 0.66 of the variance where one rail's position explains -0.10 is not
     significantly better over five folds when the force acts in one fold's blocks (a tendon
     taut part of the time, ``tests/discrepancy/test_flexible_beside.py``)."""
-    from .cv import binned_pred, binned_shares
+    from .cv import binned_shares
 
     rails = [g for g in groups if g.startswith("position of ") and g not in follow and g not in kept]
     if POSE not in kept or not rails:
@@ -289,29 +284,27 @@ def fewest_rails(kept, groups, follow, X, y, fold_rows, var, cv_on) -> list:
     def beaten(cv):  # the pose's held-out error lower by DROP_MIN of the variance
         return (cv.mse - full.mse) / var >= DROP_MIN
 
-    def position(g):
-        return np.asarray(X[:, groups[g][0]], float)
-
-    def bar(smaller, larger):  # the larger set where its rail costs DROP_MIN left out (the check's bar)
-        return larger if (cv_on(smaller)[0].mse - cv_on(larger)[0].mse) / var >= DROP_MIN else smaller
-
-    s0 = [g for g in kept if g != POSE]
-    cv0 = cv_on(s0)[0] if s0 else None
-    r = y - (cv0.pred if cv0 is not None else 0.0)
-    first = rails[int(np.argmax(binned_shares(np.column_stack([position(g) for g in rails]), r, fold_rows)))]
-    s1 = s0 + [first]
-    if cv0 is not None and not beaten(cv0):
-        return bar(s0, s1)
-    left = [g for g in rails if g != first]
-    if not left:
-        return kept if beaten(cv_on(s1)[0]) else s1
-    q = np.column_stack([position(g) for g in left])
-    q = np.column_stack([q, q - position(first)[:, None]])  # a gap to the first rail: its difference too
-    shares = binned_shares(q, r - binned_pred(position(first), r, fold_rows), fold_rows)
-    s2 = s1 + [left[int(np.argmax(shares)) % len(left)]]
-    if beaten(cv_on(s2)[0]):
+    steps, cvs, named = [[g for g in kept if g != POSE]], [], None
+    while True:
+        cvs.append(cv_on(steps[-1])[0] if steps[-1] else None)
+        left = [g for g in rails if g not in steps[-1]]
+        if named is not None or len(steps) == 3 or not left:
+            break
+        if cvs[-1] is not None and not beaten(cvs[-1]):
+            named = len(steps) - 1
+        q = np.column_stack([np.asarray(X[:, groups[g][0]], float) for g in left])
+        added = [g for g in steps[-1] if g in rails]  # a gap to the rail added before: its difference too
+        if added:
+            q = np.column_stack([q, q - np.asarray(X[:, groups[added[0]][0]], float)[:, None]])
+        shares = binned_shares(q, y - (cvs[-1].pred if cvs[-1] is not None else 0.0), fold_rows)
+        steps.append(steps[-1] + [left[int(np.argmax(shares)) % len(left)]])
+    if named is None:
+        named = next((i for i, cv in enumerate(cvs) if cv is not None and not beaten(cv)), None)
+    if named is None:
         return kept
-    return s2 if beaten(cv_on(s1)[0]) else bar(s1, s2)
+    if named + 1 < len(cvs) and (cvs[named].mse - cvs[named + 1].mse) / var >= DROP_MIN:  # the check's bar
+        return steps[named + 1]
+    return steps[named]
 
 
 def partners(kept, groups, y, var, cv_on) -> list:
