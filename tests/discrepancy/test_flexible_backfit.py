@@ -84,3 +84,11 @@ def test_a_fitted_column_zero_on_a_folds_fitted_rows_gives_a_gain_not_a_singular
     gain = flexible_backfit.linear_gain(J, y, cv)
     assert np.isfinite(gain)
     assert np.array_equal(flexible_backfit._refit(J[200:], y[200:]), np.zeros(2))
+
+
+def test_no_channel_asks_the_core_for_no_residual():
+    # every channel fitted without its stand-in (stage_columns) leaves none for the fit at theta
+    def refuse(theta):
+        raise AssertionError("a residual evaluated for no channel")
+    eng = types.SimpleNamespace(R=refuse)
+    assert flexible_backfit.fitted_columns(eng, {"a": 1.0, "b": 2.0}, []) == {}

@@ -63,6 +63,8 @@ def fitted_columns(eng, theta, channels) -> dict:
     >>> cols[2][1]                                                    # doctest: +SKIP
     ['rail[3].effort_max', 'rail[3].effort_max (derivative)']
     """
+    if not len(channels):  # (each parameter costs a residual of the core: none without a channel to read it)
+        return {}
     base = np.asarray(eng.R(theta), float)
     scale = np.maximum(np.sqrt(np.mean(base ** 2, axis=0)), 1e-300)
     out = {c: ([], []) for c in channels}
