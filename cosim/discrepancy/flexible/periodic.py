@@ -16,6 +16,15 @@ and once on every sample for the final model, its partial dependence and the bla
 (:func:`extended`).  The column is added where the sinusoid alone explains, out of fold, at least
 :data:`LINE_MIN` of the residual's variance (:func:`..lines.line_gain`).
 
+A force on its own clock that is no sinusoid (a pump's pressure pulses, a fifth of the period
+wide) is a comb: a line at its fundamental and lines at its multiples, which carry the force
+together; the sinusoid at the highest of them carries a part (a third on a pump's rail), and the
+fundamental may lie where the motion holds a share too.  Where a channel holds no line by its own
+rule, its comb (:func:`comb`: the highest peak's fundamental and up to :data:`HARMONICS` of its
+multiples, fitted per fold as the line is) is the column, "t along harmonics of 1.89 Hz", where it
+predicts out of fold at least :data:`COMB_GAIN` more of the residual than the sinusoid at the
+highest peak: any periodic shape of the force, to its eighth harmonic.
+
 A force on the platform (a rotating unbalance) reaches every rail through the Jacobian, but a
 channel whose residual something else carries holds the line below that share, or not at its
 highest peak.  A line found on one channel, or one of the discrepancy's periodic report that
@@ -58,9 +67,9 @@ SUB_SHARE = 0.1
 #: a channel without a line of its own is given its comb's column where the comb fitted per fold
 #: (:func:`comb`) predicts, out of fold, at least this share of the residual's variance more than
 #: the sinusoid at the highest peak (nothing where that predicts less than nothing): the harmonics
-#: carry the force together.  Measured on seen sets (docs/flexible.md): 0.64 and 0.19 on the two pulse
-#: pumps' rails, at most 0.09 on every other channel the stage was given (a fan's channel whose
-#: highest peak is the harmonic; the sloshing pendulums' ringing at most 0.05)
+#: carry the force together.  Measured on seen sets (docs/flexible.md): 0.64 and 0.17 on the two pulse
+#: pumps' rails, at most 0.09 on the 613 other channels the stage was given (a fan's channel whose
+#: highest peak is the harmonic; the sloshing pendulums' ringing at most 0.02)
 COMB_GAIN = 0.15
 
 
