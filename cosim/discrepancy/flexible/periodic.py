@@ -40,7 +40,8 @@ import math
 
 import numpy as np
 
-from ..lines import LOW_CYCLES, MOTION_RATIO, at_offered, line_gain, motion_share, near, peak, sinusoid, wave_at  # noqa: F401
+from ..lines import (LOW_CYCLES, MOTION_RATIO, at_offered, line_gain, motion_share, near, peak,  # noqa: F401
+                     sinusoid, wave_at)
 from .cv import FoldInputs
 
 #: the line's column is added where the sinusoid fitted per fold explains, out of fold, this share
@@ -145,8 +146,8 @@ def _comb_ss(t, y, f, count) -> float:
 
 
 def fundamental(t, y, rows=None) -> tuple:
-    """``(fundamental [Hz], harmonics, the highest peak [Hz])`` of the comb ``y`` holds (on the samples ``rows`` where
-    given): the highest periodogram peak in the line rule's band (:func:`..lines.peak`), or its
+    """``(fundamental [Hz], harmonics, the highest peak [Hz])`` of the comb ``y`` holds (on the
+    samples ``rows`` where given): the highest periodogram peak in the line rule's band (:func:`..lines.peak`), or its
     half or third where that is in the band and its sinusoid explains at least :data:`SUB_SHARE`
     of what the peak's does (the lowest such), refined by least squares on the comb of its first
     :data:`HARMONICS` multiples in the band (11 frequencies over a quarter of the resolution on
