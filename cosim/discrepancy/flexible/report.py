@@ -143,6 +143,11 @@ def statement(fit, noun: str) -> str:
             parts.append(f"the time (a line at {hz} Hz; up to {size:.3g} {fit.unit}; "
                          f"importance {100 * d.importance:.0f} %)")
             continue
+        if d.feature.startswith(periodic.COMB):  # a pulse train's phase: its curve is the comb's amplitude
+            hz = d.feature[len(periodic.COMB):].split(" Hz")[0].strip()
+            parts.append(f"the time (a force repeating at {hz} Hz, its harmonics beside; up to {size:.3g} "
+                         f"{fit.unit}; importance {100 * d.importance:.0f} %)")
+            continue
         parts.append(f"the {d.group.replace(f'{noun} {fit.joint}', f'{noun}')} ({d.feature}"
                      f"{', ' + d.where if d.where else ''}; up to {size:.3g} {fit.unit} at {at}; "
                      f"importance {100 * d.importance:.0f} %)")
