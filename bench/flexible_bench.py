@@ -79,7 +79,7 @@ def _light(pipe):
     out.tau_ref_s = getattr(pipe, "tau_ref_s", None)  # the reference effort (flexible/copies.py), None without
     out.x_s = getattr(pipe, "x_s", None)  # the platform pose input (flexible/columns.py), tracker or not
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
-                                                      effort_unit=f.effort_unit))
+                                                      effort_unit=f.effort_unit, pose_units=f.pose_units))
     out.rec = SimpleNamespace(qref=getattr(pipe.rec, "qref", None))
     out.polyorder = pipe.polyorder
     return out
@@ -235,6 +235,10 @@ def refit(kept) -> tuple:
         kept["pipe"].S = _smoother(kept["pipe"])
         if not hasattr(kept["pipe"], "tau_ref_s"):
             kept["pipe"].tau_ref_s = _reference_effort(kept["pipe"])
+        if not hasattr(kept["pipe"].model.facts, "pose_units"):  # kept before the pose's units were: the 6-PUS
+            from cosim.core import Model
+
+            kept["pipe"].model.facts.pose_units = Model("6pus").facts.pose_units
         kept["R"] = _stage_residual(kept)
     fits = []
     with threadpool_limits(limits=1):
