@@ -6,8 +6,8 @@ platform's acceleration: ``m x'' + c x' + k x = -m a``, the force ``k x + c x'``
 resonance that force is ``m a``, near it the force lags and grows.  None of the stage's inputs
 holds it (the joints' positions, rates and accelerations are the motion of one instant, and
 trees split on one column at a time), so per channel the stage's inputs get one more column in
-the group :data:`MOTION`: the platform's world-frame acceleration (the second derivative of the
-pose's length coordinates, the core's forward kinematics of the smoothed joints) filtered by a
+the group :data:`MOTION`: the platform's world-frame acceleration along the reference (the core's
+kinematics of the commanded joints, the pose's length coordinates: :func:`platform_acceleration`) filtered by a
 resonator ``(2 zeta w s + w^2) / (s^2 + 2 zeta w s + w^2)`` (:data:`DAMPING`) at the frequency
 of :data:`FREQUENCIES` whose filtered accelerations a least-squares fit of the residual follows
 best, projected on the direction of a ridge fit of the residual on them (:func:`.oblique.direction`).
@@ -36,24 +36,21 @@ DAMPING = 0.05
 
 
 def platform_acceleration(pipe) -> np.ndarray | None:
-    """The platform's acceleration [m/s^2] at every recorded row: the second derivative in time of
-    the pose's length coordinates (the core's forward kinematics of the smoothed joints, ``x_s``),
-    per stretch of motion; None where the pipeline holds no pose with a length coordinate that moves
-    (a rig whose pose is its joint)."""
-    x_s = getattr(pipe, "x_s", None)
+    """The commanded platform's acceleration [m/s^2] at every recorded row: the world-frame
+    acceleration of the pose's length coordinates along the reference (``pipe.ref_motion``, the
+    core's kinematics of ``qref``); None without a reference, or with no length coordinate that
+    moves.  The reference, not the measured motion: a force on the platform (an unbalanced fan)
+    shakes the measured platform, whose acceleration then holds the force as its consequence; the
+    commanded motion holds no force's response, and a carried body follows it as the platform does."""
+    ref = getattr(pipe, "ref_motion", None)
+    if ref is None:
+        return None
+    x, xdd = np.asarray(ref[0], float), np.asarray(ref[2], float)
     units = getattr(pipe.model.facts, "pose_units", ())
-    if x_s is None:
+    lengths = [i for i, u in enumerate(units[:xdd.shape[1]]) if u == "m" and np.std(x[:, i]) > 0]
+    if not lengths or len(xdd) != len(pipe.t) or not np.all(np.isfinite(xdd[:, lengths])):
         return None
-    x = np.asarray(x_s, float)
-    lengths = [i for i, u in enumerate(units[:x.shape[1]]) if u == "m" and np.std(x[:, i]) > 0]
-    if not lengths or not np.all(np.isfinite(x[:, lengths])):
-        return None
-    a = np.zeros((len(x), len(lengths)))
-    for start, stop in pipe.segments:
-        if stop - start >= 3:
-            seg = x[start:stop, lengths]
-            a[start:stop] = np.gradient(np.gradient(seg, pipe.dt, axis=0), pipe.dt, axis=0)
-    return a
+    return xdd[:, lengths]
 
 
 def resonated(a, dt, frequency, starts=(0,)) -> np.ndarray:
