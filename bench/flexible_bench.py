@@ -80,7 +80,7 @@ def _light(pipe):
     out.x_s = getattr(pipe, "x_s", None)  # the platform pose input (flexible/columns.py), tracker or not
     out.ref_motion = getattr(pipe, "ref_motion", None)  # the reference's pose motion (flexible/motion.py)
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
-                                                      effort_unit=f.effort_unit, pose_units=f.pose_units))
+                                                      effort_unit=f.effort_unit, pose_units=getattr(f, "pose_units", ())))
     out.rec = SimpleNamespace(qref=getattr(pipe.rec, "qref", None))
     out.polyorder = pipe.polyorder
     return out

@@ -382,13 +382,11 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                         cv_t, sigma * y_t, sigma, rng)[0], model.predict(X[:, use]))),) + deps
         if folded:  # sigma g from the stage's columns: the direction's columns last
             model, use = FoldedModel(model, len(use)), list(use) + direction_columns(columns, c + 1)
-    return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
-                       z, explained, float(np.std(y_seen)), float(noise), deps, outside=beyond,
-                       beyond_noise=beyond_noise(y_seen, noise, spi),
-                       screened=screened, model=model, readjusted=moved, folded=folded,
+    return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share, z, explained, float(np.std(y_seen)),
+                       float(noise), deps, outside=beyond, beyond_noise=beyond_noise(y_seen, noise, spi),
+                       screened=screened, model=model, readjusted=moved, folded=folded, resonance=resonance,
                        pred=sigma * cv.pred if folded else cv.pred,
-                       resonance=resonance, **_on_stage_columns(every, keep, columns, use, projections, lines)),
-            screened_fold)
+                       **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
 def _channel_columns(X, columns, y, fold_rows, c, offered=(), responses=None) -> tuple:
