@@ -97,7 +97,7 @@ def test_the_resonance_is_fitted_on_each_folds_fitted_rows_only():
     assert groups_e[MOTION] == [X.shape[1]] and cols_e[-1][1] == MOTION
     held = rows[2][0]
     y2 = y.copy()
-    y2[held] = np.random.default_rng(1).normal(0.0, 1.0, len(held))
+    y2[held] = 0.5 * y[held] + np.random.default_rng(1).normal(0.0, 0.05, len(held))
     Xe2, _, _, _ = extend(X, cols, groups, y2, rows, responses)
     assert np.array_equal(at(Xe, 2), at(Xe2, 2))
     assert not np.allclose(at(Xe, 1)[:, -1], at(Xe2, 1)[:, -1])
@@ -117,3 +117,12 @@ def test_no_column_without_a_reference_or_a_moving_length():
     assert bank(types.SimpleNamespace(**{**vars(pipe), "ref_motion": (x, None, nan)})) is None
     Xe, cols_e, _, resonance = extend(X, cols, flexible.input_groups(cols), y, folds(len(y), 5), None)
     assert Xe is X and resonance == ()
+
+
+def test_no_column_where_the_resonance_explains_nothing_out_of_fold():
+    # a force on one rail's speed |qd| (a drag the same both ways): the resonance's linear fit
+    # explains none of it held out (below MOTION_MIN), and the trees get no column to split on by chance
+    pipe, X, cols, y, sigma = _carried()
+    friction = 0.2 * np.abs(X[:, 1]) / np.std(X[:, 1]) + np.random.default_rng(4).normal(0.0, sigma, len(y))
+    Xe, _, groups, resonance = extend(X, cols, flexible.input_groups(cols), friction, folds(len(y), 5), bank(pipe))
+    assert Xe is X and resonance == () and MOTION not in groups
