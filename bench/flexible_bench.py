@@ -78,8 +78,9 @@ def _light(pipe):
     out = SimpleNamespace(**{k: getattr(pipe, k) for k in names})
     out.tau_ref_s = getattr(pipe, "tau_ref_s", None)  # the reference effort (flexible/copies.py), None without
     out.x_s = getattr(pipe, "x_s", None)  # the platform pose input (flexible/columns.py), tracker or not
+    out.ref_motion = getattr(pipe, "ref_motion", None)  # the reference's pose motion (flexible/motion.py)
     out.model = SimpleNamespace(facts=SimpleNamespace(joint_noun=f.joint_noun, joint_unit=f.joint_unit,
-                                                      effort_unit=f.effort_unit))
+                                                      effort_unit=f.effort_unit, pose_units=getattr(f, "pose_units", ())))
     out.rec = SimpleNamespace(qref=getattr(pipe.rec, "qref", None))
     out.polyorder = pipe.polyorder
     return out
@@ -96,17 +97,18 @@ def _smoother(light):
 
 
 def _reference_effort(light, robot="6pus"):
-    """The pipeline's reference effort (``Pipeline.tau_ref_s``: the core's inverse dynamics of the
-    reference motion, smoothed) for a kept pipeline that did not keep it (captures made before it
-    was kept: every one of the 6-PUS), or None without a reference."""
+    """The pipeline's reference effort and the reference's pose motion (``Pipeline.tau_ref_s``: the
+    core's inverse dynamics of the reference motion, smoothed; ``Pipeline.ref_motion``) for a kept
+    pipeline that did not keep them (captures made before they were kept: every one of the 6-PUS),
+    ``(None, None)`` without a reference."""
     from cosim.core import Model
     from cosim.discrepancy.residuals import reference_motion
 
     if light.rec.qref is None or light.x_s is None:
-        return None
+        return None, None
     model = Model(robot)
     motion = reference_motion(model, light.rec.qref, light.dt, light.x_s)
-    return None if motion is None else light.S(model.inverse_dynamics(*motion))
+    return (None, None) if motion is None else (light.S(model.inverse_dynamics(*motion)), motion)
 
 
 def _captured(run):
@@ -233,8 +235,14 @@ def refit(kept) -> tuple:
 
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
-        if not hasattr(kept["pipe"], "tau_ref_s"):
-            kept["pipe"].tau_ref_s = _reference_effort(kept["pipe"])
+        if not hasattr(kept["pipe"], "tau_ref_s") or not hasattr(kept["pipe"], "ref_motion"):
+            tau_ref_s, kept["pipe"].ref_motion = _reference_effort(kept["pipe"])
+            if not hasattr(kept["pipe"], "tau_ref_s"):
+                kept["pipe"].tau_ref_s = tau_ref_s
+        if not hasattr(kept["pipe"].model.facts, "pose_units"):  # kept before the pose's units were: the 6-PUS
+            from cosim.core import Model
+
+            kept["pipe"].model.facts.pose_units = Model("6pus").facts.pose_units
         kept["R"] = _stage_residual(kept)
     fits = []
     with threadpool_limits(limits=1):

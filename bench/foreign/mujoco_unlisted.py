@@ -143,8 +143,11 @@ def keyed(kind, j=None, k=None) -> dict:
         # bob's weight L sin(theta) off the point where the model's rigid mass sits (a moment about
         # mb g L theta, keyed on the pose, which the rails' positions set), and below its own
         # frequency the bob lines up with the effective gravity g - a (a shift of about L a / g):
-        # the pose drives it as an acceleration does
-        return {"need": set(), "any": acc | pos | pose, "allowed": acc | rate | pos | pose}
+        # the pose drives it as an acceleration does; the bob is a second-order body the platform's
+        # acceleration drives through its resonance (the platform's motion, a group added to the stage
+        # after this declaration: this body is what that input is for)
+        motion = {"the platform's motion"}
+        return {"need": set(), "any": acc | pos | pose | motion, "allowed": acc | rate | pos | pose | motion}
     if kind == "fan_unbalance":
         return {"need": {"time"}, "any": set(), "allowed": {"time"} | pos | pose}
     own = lambda q: f"{q} of slider {j}"  # noqa: E731

@@ -61,8 +61,11 @@ def keyed_more(kind, j=None, k=None) -> dict:
     if kind == "platform_tmd":
         # the guided mass follows the platform's acceleration through its spring (below 4-9 Hz its
         # force is mb a, near the resonance it lags: the rates), and a tilt of the platform puts
-        # gravity along its guide (the pose, which the rails' positions set)
-        return {"need": set(), "any": acc | pos | pose, "allowed": acc | rate | pos | pose}
+        # gravity along its guide (the pose, which the rails' positions set); its force is the
+        # platform's acceleration through its resonance (the platform's motion, a group added to the
+        # stage after this declaration: this body is what that input is for)
+        motion = {"the platform's motion"}
+        return {"need": set(), "any": acc | pos | pose | motion, "allowed": acc | rate | pos | pose | motion}
     if kind == "bellows_friction":
         # a friction on the platform's vertical velocity (the rails' rates through the Jacobian),
         # its level set by the height (the pose, or the rails' positions that set it)

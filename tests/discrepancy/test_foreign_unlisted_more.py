@@ -19,6 +19,7 @@ import mujoco_unlisted_more as more  # noqa: E402
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind  # noqa: E402
 from cosim.discrepancy.flexible import stage as flexible  # noqa: E402
+from cosim.discrepancy.flexible.motion import MOTION  # noqa: E402
 
 
 def _stage_groups() -> set:
@@ -35,7 +36,8 @@ def _stage_groups() -> set:
         rec=types.SimpleNamespace(qref=q),
         model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
     _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
-    return set(flexible.input_groups(cols))
+    # and the group a channel's fit adds where a reference's platform acceleration explains it
+    return set(flexible.input_groups(cols)) | {MOTION}
 
 
 def _case(kind):

@@ -7,6 +7,7 @@
 * :mod:`.beside`: what stands beside a force's inputs without being one (time, a copy beside the pose, a fitted limit's part);
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
 * :mod:`.oblique`: the platform pose and the rates projected on the direction of a linear fit of the residual, per fold;
+* :mod:`.motion`: the commanded platform's acceleration through a resonance fitted per fold (a body carried on a spring);
 * :mod:`.rival`: a discovered equation against the stage's fit of the residual before it (named with confidence or partial);
 * :mod:`.report`: the stage's statements, figure and Markdown;
 * :mod:`.cases`: forces no term family covers, simulated with their truth (the stage's test cases).

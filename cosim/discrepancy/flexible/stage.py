@@ -86,7 +86,7 @@ from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
 from .oblique import extend, extended
-from . import periodic
+from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
                      importance_on_y, kept, screen)
@@ -191,6 +191,9 @@ class FlexibleFit:
     projections: tuple = field(default=(), repr=False, compare=False)
     #: the line's column (:func:`.periodic.extend`: after the projected ones), fitted on every sample
     lines: tuple = field(default=(), repr=False, compare=False)
+    #: the platform's acceleration through a resonance (:func:`.motion.extend`: after the line's),
+    #: fitted on every sample: ``(frequency [Hz], mean, scale, weights)`` or ()
+    resonance: tuple = field(default=(), repr=False, compare=False)
     #: fitted folded by the direction of motion (:mod:`.folded`): the force is sigma g, ``inputs``
     #: the direction (first) and the inputs of its level g, ``model`` predicts sigma g
     folded: bool = False
@@ -307,7 +310,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
     given = (X, columns)
-    X, columns, groups, every, keep, projections, lines = _channel_columns(X, columns, y, fold_rows, c, offered)
+    X, columns, groups, every, keep, projections, lines, resonance = _channel_columns(
+        X, columns, y, fold_rows, c, offered, motion.bank(pipe))
     reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
     follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
@@ -378,27 +382,29 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                         cv_t, sigma * y_t, sigma, rng)[0], model.predict(X[:, use]))),) + deps
         if folded:  # sigma g from the stage's columns: the direction's columns last
             model, use = FoldedModel(model, len(use)), list(use) + direction_columns(columns, c + 1)
-    return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share,
-                       z, explained, float(np.std(y_seen)), float(noise), deps, outside=beyond,
-                       beyond_noise=beyond_noise(y_seen, noise, spi),
-                       screened=screened, model=model, readjusted=moved, folded=folded,
+    return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share, z, explained, float(np.std(y_seen)),
+                       float(noise), deps, outside=beyond, beyond_noise=beyond_noise(y_seen, noise, spi),
+                       screened=screened, model=model, readjusted=moved, folded=folded, resonance=resonance,
                        pred=sigma * cv.pred if folded else cv.pred,
                        **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
-def _channel_columns(X, columns, y, fold_rows, c, offered=()) -> tuple:
+def _channel_columns(X, columns, y, fold_rows, c, offered=(), responses=None) -> tuple:
     """The inputs of channel ``c`` (0-based; None: any): the stage's columns but another joint's time
     since a reversal (which acts here through the coupling's forces, already inputs), with the pose
-    and rates projected (:mod:`.oblique`) and the line's phase (:mod:`.periodic`; ``offered``: the lines
-    found elsewhere), fitted per fold.
-    Returns ``(X, columns, groups, every, keep, projections, lines)``: ``every`` the stage's
+    and rates projected (:mod:`.oblique`), the line's phase (:mod:`.periodic`; ``offered``: the lines
+    found elsewhere) and, on a platform with a pose, its acceleration through a resonance
+    (:mod:`.motion`; ``responses``: its :func:`.motion.bank`), fitted per fold.
+    Returns ``(X, columns, groups, every, keep, projections, lines, resonance)``: ``every`` the stage's
     columns, ``keep`` the indices into them of ``X``'s first columns."""
     every = tuple(columns)
     keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows, offered)
-    return X, columns, groups, every, keep, projections, lines
+    X, columns, groups, resonance = motion.extend(X, columns, groups, y, fold_rows,
+                                                  responses if groups.get(POSE) else None)
+    return X, columns, groups, every, keep, projections, lines, resonance
 
 
 def _on_stage_columns(every, keep, columns, use, projections, lines) -> dict:
@@ -520,7 +526,8 @@ def black_box_force(eng, R, fits, rows: int) -> np.ndarray:
     out = np.zeros((rows, pipe.nd))
     for f in fits:
         if f.explained:
-            predicted = f.model.predict(periodic.extended(extended(X, f.projections), f.lines)[:, list(f.use)])
+            given = motion.extended(periodic.extended(extended(X, f.projections), f.lines), pipe, f.resonance)
+            predicted = f.model.predict(given[:, list(f.use)])
             out[:, f.joint - 1] = -np.interp(pipe.t[:rows], t, predicted, left=0.0,
                                              right=0.0)
     return out
