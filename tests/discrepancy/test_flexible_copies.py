@@ -137,3 +137,39 @@ def test_a_joints_history_beside_its_own_rate_is_not_judged_as_a_copy():
     fold_rows = flexible.folds(n, flexible.gap_for(1.0))
     assert copies(["rate of slider 1", "history of slider 1"], groups, X, reference, y, fold_rows,
                   flexible.cross_validate) == []
+
+
+def test_the_copies_trees_are_fitted_on_the_columns_fitted_per_fold_with_the_counterparts_in_each():
+    """With inputs whose columns are fitted per fold (:class:`~cosim.discrepancy.flexible.cv.FoldInputs`:
+    a projected pose column fitted on each fold's fitted rows), every cross-validation the rule makes is
+    given those per-fold columns, the judged effort replaced by its counterpart in each fold's columns as
+    in the whole array: columns fitted on every sample, held-out rows included, would judge the held-out
+    rows on what was fitted on them."""
+    from cosim.discrepancy.flexible.cv import N_FOLDS, FoldInputs, cross_validate, folds
+
+    rng = np.random.default_rng(5)
+    n = 400
+    whole = rng.normal(size=(n, 3))  # rate of slider 1, effort of slider 1, the projected pose
+    variants = np.repeat(whole[None], N_FOLDS, axis=0)
+    variants[:, :, 2] += np.arange(1, N_FOLDS + 1)[:, None] * rng.normal(size=(N_FOLDS, n))  # per fold
+    X = FoldInputs(whole, variants)
+    reference = whole + np.array([0.0, 1.0, 0.0]) * rng.normal(size=(n, 3))  # the effort's counterpart
+    groups = {"rate of slider 1": [0], "effort of slider 1": [1], "platform pose": [2]}
+    y = whole[:, 1] + 0.5 * whole[:, 2]
+    given = []
+
+    def spy(M, y_, fold_rows):
+        given.append(M)
+        return cross_validate(M, y_, fold_rows)
+
+    copies(list(groups), groups, X, reference, y, folds(n, gap=2), spy)
+    assert len(given) == 2  # the trees on every named group, and without the effort
+    for M, cols in zip(given, [(0, 1, 2), (0, 2)]):
+        assert getattr(M, "variants", None) is not None
+        for b in range(N_FOLDS):
+            for j, c in enumerate(cols):
+                expected = reference[:, c] if c == 1 else variants[b, :, c]
+                np.testing.assert_array_equal(M.variants[b, :, j], expected)
+                np.testing.assert_array_equal(np.asarray(M)[:, j], reference[:, c] if c == 1 else whole[:, c])
+    np.testing.assert_array_equal(np.asarray(X), whole)  # the stage's inputs untouched
+    np.testing.assert_array_equal(X.variants[:, :, 1], np.repeat(whole[None, :, 1], N_FOLDS, axis=0))

@@ -96,7 +96,9 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) 
     (:func:`~.select.gain`) once their columns (but those another named group holds) are their
     counterparts along the reference motion (``reference``, the channel's
     :func:`counterparts`, or a function giving them: :func:`on_channel`; the trees on no group: a
-    constant).  ``done``: the cross-validations already made, by their columns."""
+    constant).  Where ``X`` holds columns fitted per fold (:class:`~.cv.FoldInputs`), each fold's
+    trees are fitted and judged on that fold's, the counterparts in place as in the whole array.
+    ``done``: the cross-validations already made, by their columns."""
     answered = [g for g in kept if g.startswith(ANSWERED_GROUPS)
                 and not (g.startswith("history of ") and g.replace("history of", "rate of", 1) in kept)]
     reference = reference() if callable(reference) and answered else reference
@@ -113,9 +115,11 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) 
         if not cols:
             return _mean_only(y, fold_rows)
         if cols not in done:
-            M = X[:, cols].copy()
+            M = X[:, cols].copy()  # with the columns fitted per fold, where X has them (FoldInputs)
             at = [j for j, i in enumerate(cols) if i in judged]
             M[:, at] = reference[:, [cols[j] for j in at]]
+            if getattr(M, "variants", None) is not None:  # the counterparts are fitted on no fold
+                M.variants[:, :, at] = reference[:, [cols[j] for j in at]]
             done[cols] = cross_validate(M, y, fold_rows)
         return done[cols]
 

@@ -55,8 +55,10 @@ class FoldInputs(np.ndarray):
     """Inputs with columns fitted per fold (:mod:`.oblique`): the array holds the columns fitted
     on every sample (the final model's, the black box's); ``variants`` (folds, n, p) holds, per
     fold of the cross-validation, the columns fitted on that fold's fitted rows alone, which its
-    trees are fitted and judged on (:func:`at`).  Selecting columns (``X[:, cols]``) keeps the
-    variants; selecting rows gives the columns fitted on every sample, a plain array."""
+    trees are fitted and judged on (:func:`at`).  Selecting columns (``X[:, cols]``) and
+    :meth:`copy` keep the variants (a copy's are copied too: a column assigned in the copy is
+    to be assigned in each of them as well); selecting rows gives the columns fitted on every
+    sample, a plain array, and so does any other computation on the array."""
 
     def __new__(cls, whole, variants):
         out = np.asarray(whole, float).view(cls)
@@ -65,6 +67,11 @@ class FoldInputs(np.ndarray):
 
     def __array_finalize__(self, obj):
         self.variants = None  # an array computed from these holds the whole columns only
+
+    def copy(self, order="C"):
+        out = np.ndarray.copy(self, order)
+        out.variants = None if self.variants is None else self.variants.copy()
+        return out
 
     def __getitem__(self, key):
         whole = self.view(np.ndarray)
