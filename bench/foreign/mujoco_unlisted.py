@@ -99,7 +99,7 @@ sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  # noqa: E402
 from mujoco_unlisted_third import KINDS_THIRD, SEED_THIRD, draw_third, keyed_third  # noqa: E402
 from unlisted_common import RuleLog as _RuleLog  # noqa: E402
-from unlisted_common import judge, sweep_table, table  # noqa: E402
+from unlisted_common import judge, slider_groups, sweep_table, table  # noqa: E402
 from unlisted_common import unit_direction as _dir  # noqa: E402
 
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
@@ -125,10 +125,7 @@ def keyed(kind, j=None, k=None) -> dict:
         return keyed_more(kind, j, k)
     if kind in KINDS_THIRD:
         return keyed_third(kind, j, k)
-    pos = {f"position of slider {i}" for i in range(1, 7)}
-    rate = {f"rate of slider {i}" for i in range(1, 7)}
-    acc = {f"acceleration of slider {i}" for i in range(1, 7)}
-    pose = {"the platform pose"}
+    pos, rate, acc, pose = slider_groups()
     if kind == "magnet":
         return {"need": set(), "any": pos | pose, "allowed": pos | pose}
     if kind in ("tendon_slack", "soft_stop"):

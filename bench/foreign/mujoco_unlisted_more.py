@@ -38,6 +38,7 @@ import numpy as np
 from unlisted_common import excess as _excess
 from unlisted_common import platform_dof as _platform
 from unlisted_common import rms as _rms
+from unlisted_common import slider_groups
 from unlisted_common import softplus as _softplus
 from unlisted_common import unit_direction as _dir
 
@@ -54,10 +55,7 @@ def keyed_more(kind, j=None, k=None) -> dict:
     """The inputs (flexible-stage groups) a second-set mechanism is keyed on: ``need`` (all
     named), ``any`` (one of them named), ``allowed`` (nothing else named); ``j``, ``k`` 1-based
     rails.  Written before any run; the reason for each is the physics beside it."""
-    pos = {f"position of slider {i}" for i in range(1, 7)}
-    rate = {f"rate of slider {i}" for i in range(1, 7)}
-    acc = {f"acceleration of slider {i}" for i in range(1, 7)}
-    pose = {"the platform pose"}
+    pos, rate, acc, pose = slider_groups()
     if kind == "platform_tmd":
         # the guided mass follows the platform's acceleration through its spring (below 4-9 Hz its
         # force is mb a, near the resonance it lags: the rates), and a tilt of the platform puts

@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from unlisted_common import platform_dof, rms
+from unlisted_common import platform_dof, rms, slider_groups
 
 KINDS_THIRD = ("thrust_ripple", "vacuum_hose", "wiper_debris", "loose_payload", "coupling_damper",
                "backemf_limit", "brake_window", "flexure_joint", "shared_bus_sag", "grease_warming")
@@ -68,10 +68,7 @@ def keyed_third(kind, j=None, k=None) -> dict:
     """The inputs (flexible-stage groups) a third-set mechanism is keyed on: ``need`` (all
     named), ``any`` (one of them named), ``allowed`` (nothing else named); ``j``, ``k`` 1-based
     rails.  Written before any run; the reason for each is the physics beside it."""
-    pos = {f"position of slider {i}" for i in range(1, 7)}
-    rate = {f"rate of slider {i}" for i in range(1, 7)}
-    acc = {f"acceleration of slider {i}" for i in range(1, 7)}
-    pose = {"the platform pose"}
+    pos, rate, acc, pose = slider_groups()
     if kind == "vacuum_hose":
         # the Maxwell element's force is c times the clamp's velocity low-passed over c / k: the
         # rails' rates (and, the lag, their accelerations) through the Jacobian the pose sets; its

@@ -9,6 +9,13 @@ import math
 import numpy as np
 
 
+def slider_groups() -> tuple:
+    """``(positions, rates, accelerations, pose)``: the flexible stage's group names (sets) of the
+    6-PUS's six sliders and of its platform's pose, the words a declaration is written in."""
+    return ({f"position of slider {i}" for i in range(1, 7)}, {f"rate of slider {i}" for i in range(1, 7)},
+            {f"acceleration of slider {i}" for i in range(1, 7)}, {"the platform pose"})
+
+
 def unit_direction(rng):
     """A direction drawn uniformly on the sphere (3,)."""
     d = rng.normal(size=3)

@@ -1,11 +1,14 @@
 """Helpers of the discrepancy-engine tests: plants with hidden effects, closed-loop runs."""
 import copy
+import types
 
 import numpy as np
 
 from cosim.core import Model
 from cosim.discrepancy import blind
 from cosim.discrepancy.excitation import excitation
+from cosim.discrepancy.flexible import stage as flexible
+from cosim.discrepancy.flexible.motion import MOTION
 from cosim.discrepancy.runs import closed_loop
 from cosim.master import make_reference
 
@@ -66,3 +69,21 @@ def strip_pose(rec):
 
 def rms(a, axis=0):
     return np.sqrt(np.mean(np.asarray(a) ** 2, axis=axis))
+
+
+def stage_groups() -> set:
+    """The group names the flexible stage gives a 6-slider recording with a pose and a reference
+    (its inputs on a made-up recording: only the names are read), and the group a channel's fit
+    adds where the reference's platform acceleration explains it: a declaration's vocabulary."""
+    n, dt = 400, 1e-3
+    t = np.arange(n) * dt
+    rng = np.random.default_rng(0)
+    q = np.cumsum(rng.normal(size=(n, 6)), axis=0) * 1e-4
+    pipe = types.SimpleNamespace(
+        idx=np.arange(20, n - 20, 10), nd=6, t=t, segments=[(0, n)], dt=dt, tau_s=rng.normal(size=(n, 6)),
+        q_s=q, qd_s=np.gradient(q, dt, axis=0), qdd_s=rng.normal(size=(n, 6)), has_pose=True,
+        x_s=rng.normal(size=(n, 6)), channels=[f"tau{i}" for i in range(1, 7)], S=lambda a, deriv=0: a,
+        rec=types.SimpleNamespace(qref=q),
+        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
+    _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
+    return set(flexible.input_groups(cols)) | {MOTION}

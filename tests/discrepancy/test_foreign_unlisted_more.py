@@ -18,26 +18,9 @@ import mujoco_unlisted_more as more  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind  # noqa: E402
-from cosim.discrepancy.flexible import stage as flexible  # noqa: E402
-from cosim.discrepancy.flexible.motion import MOTION  # noqa: E402
+from disc_helpers import stage_groups  # noqa: E402
 
 
-def _stage_groups() -> set:
-    """The group names the flexible stage gives a 6-slider recording with a pose (its inputs on
-    a made-up recording: only the names are read)."""
-    n, dt = 400, 1e-3
-    t = np.arange(n) * dt
-    rng = np.random.default_rng(0)
-    q = np.cumsum(rng.normal(size=(n, 6)), axis=0) * 1e-4
-    pipe = types.SimpleNamespace(
-        idx=np.arange(20, n - 20, 10), nd=6, t=t, segments=[(0, n)], dt=dt, tau_s=rng.normal(size=(n, 6)),
-        q_s=q, qd_s=np.gradient(q, dt, axis=0), qdd_s=rng.normal(size=(n, 6)), has_pose=True,
-        x_s=rng.normal(size=(n, 6)), channels=[f"tau{i}" for i in range(1, 7)], S=lambda a, deriv=0: a,
-        rec=types.SimpleNamespace(qref=q),
-        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
-    _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
-    # and the group a channel's fit adds where a reference's platform acceleration explains it
-    return set(flexible.input_groups(cols)) | {MOTION}
 
 
 def _case(kind):
@@ -47,7 +30,7 @@ def _case(kind):
 
 
 def test_every_declaration_names_the_stage_s_inputs_and_can_be_met():
-    vocabulary = _stage_groups()
+    vocabulary = stage_groups()
     assert "the platform pose" in vocabulary and "time" in vocabulary
     for kind in more.KINDS_MORE:
         _, _, (_, _, truth, key, joint) = _case(kind)

@@ -6,7 +6,6 @@ pushes the two carriages equally and oppositely; every declaration is well-forme
 stage's vocabulary."""
 import math
 import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -21,27 +20,12 @@ import mujoco_unlisted_third as third  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind  # noqa: E402
-from cosim.discrepancy.flexible import stage as flexible  # noqa: E402
+from disc_helpers import stage_groups  # noqa: E402
 
 #: the rail forces computed in MuJoCo's step (the others edit MuJoCo's model)
 HOOKED_RAIL = ("thrust_ripple", "wiper_debris", "backemf_limit", "brake_window", "shared_bus_sag", "grease_warming")
 
 
-def _stage_groups() -> set:
-    """The group names the flexible stage gives a 6-slider recording with a pose (its inputs on
-    a made-up recording: only the names are read)."""
-    n, dt = 400, 1e-3
-    t = np.arange(n) * dt
-    rng = np.random.default_rng(0)
-    q = np.cumsum(rng.normal(size=(n, 6)), axis=0) * 1e-4
-    pipe = types.SimpleNamespace(
-        idx=np.arange(20, n - 20, 10), nd=6, t=t, segments=[(0, n)], dt=dt, tau_s=rng.normal(size=(n, 6)),
-        q_s=q, qd_s=np.gradient(q, dt, axis=0), qdd_s=rng.normal(size=(n, 6)), has_pose=True,
-        x_s=rng.normal(size=(n, 6)), channels=[f"tau{i}" for i in range(1, 7)], S=lambda a, deriv=0: a,
-        rec=types.SimpleNamespace(qref=q),
-        model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
-    _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
-    return set(flexible.input_groups(cols))
 
 
 def _case(kind):
@@ -55,7 +39,7 @@ def test_the_third_set_is_new_and_every_declaration_names_the_stage_s_inputs():
     assert len(third.KINDS_THIRD) == 10
     assert not set(third.KINDS_THIRD) & (set(mu.KINDS) | set(mu.KINDS_MORE))
     assert mu.KIND_SETS[3] == third.KINDS_THIRD
-    vocabulary = _stage_groups()
+    vocabulary = stage_groups()
     for kind in third.KINDS_THIRD:
         _, _, _, (_, _, truth, key, joint) = _case(kind)
         assert key == mu.keyed(kind, truth.get("rail"), truth.get("other_rail")), kind  # what --replay re-reads
