@@ -197,8 +197,11 @@ def _discovery_section(d, files: dict) -> list:
         for t in d.discovered:
             L += [f"- **{t.equation}**", f"  - what makes such a term: {t.mechanisms}",
                   f"  - held-out residual of `{t.channel}`: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g} "
-                  f"(chi-square {t.delta_chi2_heldout:.0f} lower); kept in "
-                  + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items()) + " of the bootstrap resamples"]
+                  f"(chi-square {t.delta_chi2_heldout:.0f} lower); "
+                  + (f"one coefficient on {t.channel} and joint {t.pair}, kept against the two channels' separate "
+                     "terms (BIC, held-out part)" if t.pair else "kept in "
+                     + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items())
+                     + " of the bootstrap resamples")]
             L += [f"  - library effect it replaces: {x}" for x in t.instead_of]
             if t.partial:
                 L.append(f"  - not named as the physics: {t.partial}")
