@@ -239,7 +239,8 @@ def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
                  + (f" [not named as the physics: {_partial_reason(t.partial)}]" if t.partial else "") for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
-            worse = [w["title"] for w in withdrawn if not w.get("as_well") and "refitted" not in w and not w.get("pair")]
+            worse = [w["title"] for w in withdrawn
+                     if not w.get("as_well") and "refitted" not in w and not w.get("pair")]
             absorbed = [w["title"] for w in withdrawn if w.get("pair")]
             same = [w["title"] for w in withdrawn if w.get("as_well")]
             zero = [w["title"] for w in withdrawn if "refitted" in w]

@@ -11,7 +11,9 @@ joints): it replaces them when it pays the selection's criterion (BIC in effecti
 coefficients) and the separate model does not fit the held-out part significantly better
 (:func:`.judgement.significant`).  The core holds the pair as each joint's ``force_vpos`` =
 ``force_vneg`` = c and ``force_xv`` = -c on the other joint (``force_xj``), so the plant, the
-FMU and the replay simulate what is reported.
+FMU and the replay simulate what is reported.  The pair's held-out chi-square change
+(``delta_chi2_heldout``) is over both channels; its interval is the classical one of the
+residual's own noise in effective samples (it is not bootstrapped).
 """
 from __future__ import annotations
 
@@ -61,6 +63,13 @@ def _chi2(search, R, chans, rows):
     return float(sum(np.sum((R[rows, c] * search.w[c] * eng.use[rows, c]) ** 2) for c in chans))
 
 
+def _held_rms(eng, R, a) -> float:
+    """The RMS of channel a's held-out residual in ``R`` (NaN where it holds no sample, as a
+    discovered term's)."""
+    r = R[eng.test, a][eng.use[eng.test, a] > 0]
+    return float(np.sqrt(np.mean(r ** 2))) if r.size else float("nan")
+
+
 def _library_viscous(search, sel, theta, chans) -> list:
     """The library's viscous frictions selected on ``chans`` and still in ``theta``."""
     names = {search.name(c, "viscous") for c in chans}
@@ -105,8 +114,10 @@ def _trial(eng, search, sel, theta, found, j, k, threshold):
     sep = [t for t in found if t.joint - 1 in chans]
     libs = _library_viscous(search, sel, theta, chans)
     drop = _dropped(sep, libs)
-    R_sep = eng.R(theta)
-    R0 = eng.R({p: v for p, v in theta.items() if p not in drop})
+    R_sep = eng.try_R(theta)
+    R0 = eng.try_R({p: v for p, v in theta.items() if p not in drop})
+    if R_sep is None or R0 is None:
+        return None
     train, test = eng.train, eng.test
     w = np.concatenate([X[train, c] * search.w[c] * eng.use[train, c] for c in chans])
     y = np.concatenate([R0[train, c] * search.w[c] * eng.use[train, c] for c in chans])
@@ -116,8 +127,11 @@ def _trial(eng, search, sel, theta, found, j, k, threshold):
     R_pair = R0 + c_hat * X
     phi = samples_per_independent(eng.pipe)
     n_eff = sum(float((eng.use[train, c] > 0).sum()) for c in chans) / phi
+    if not n_eff > 1.0:
+        return None
     chi_pair = _chi2(search, R_pair, chans, train)
-    k_sep = sum(len(t.coefficients) for t in sep) + len(libs)
+    # the separate model's coefficients (the library offset a term refitted stays on both sides)
+    k_sep = sum(not p.endswith(".offset") for t in sep for p in t.coefficients) + len(libs)
     # the selection's criterion: BIC in effective samples, one coefficient against the separate ones
     if not chi_pair + math.log(n_eff) < _chi2(search, R_sep, chans, train) + k_sep * math.log(n_eff):
         return None
@@ -128,9 +142,8 @@ def _trial(eng, search, sel, theta, found, j, k, threshold):
         return None
     s2 = max(chi_pair / max(n_eff - 1.0, 1.0), 1.0)
     half = 1.96 * math.sqrt(s2 / float(w @ w))
-    use = lambda R, a: float(np.sqrt(np.mean(R[test, a][eng.use[test, a] > 0] ** 2)))  # noqa: E731
-    before = {a: use(R0, a) for a in chans}
-    after = {a: use(R_pair, a) for a in chans}
+    before = {a: _held_rms(eng, R0, a) for a in chans}
+    after = {a: _held_rms(eng, R_pair, a) for a in chans}
     return _pair_terms(search, j, k, c_hat, half, d_held, before, after), libs
 
 
