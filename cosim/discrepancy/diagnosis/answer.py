@@ -217,6 +217,8 @@ def _where(groups) -> str:
 
 
 def _withdrawn_sentence(w) -> str:
+    if w.get("pair"):
+        return f"{w['title']}: part of the damper between two joints found in its place"
     if "refitted" in w:
         r = w["refitted"]
         return (f"{w['title']}: refitted with the discovered term to {r['value']:.3g} +- {r['ci95']:.2g} {r['unit']}, "
@@ -231,18 +233,23 @@ def _withdrawn_sentence(w) -> str:
 
 
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
+    found = [t for t in found if not 0 < t.pair < t.joint]  # a pair between two joints is stated once
     if found:
         parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})"
                  + (f" [not named as the physics: {_partial_reason(t.partial)}]" if t.partial else "") for t in found]
         head = "missing physics no library effect names: " + "; ".join(parts)
         if withdrawn:
-            worse = [w["title"] for w in withdrawn if not w.get("as_well") and "refitted" not in w]
+            worse = [w["title"] for w in withdrawn
+                     if not w.get("as_well") and "refitted" not in w and not w.get("pair")]
+            absorbed = [w["title"] for w in withdrawn if w.get("pair")]
             same = [w["title"] for w in withdrawn if w.get("as_well")]
             zero = [w["title"] for w in withdrawn if "refitted" in w]
             if worse:
                 head += "; look-alike(s) of the library that fit the held-out part worse: " + ", ".join(worse)
             if zero:
                 head += "; refitted to zero with the terms (they stood in for them): " + ", ".join(zero)
+            if absorbed:
+                head += "; part of the damper between two joints found in their place: " + ", ".join(absorbed)
             if same:
                 head += ("; look-alike(s) of the library that fit the held-out part as well, two effects for one "
                          "force: " + ", ".join(same))

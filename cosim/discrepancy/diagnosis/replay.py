@@ -19,6 +19,7 @@ def _discover(eng, sel, threshold):
     Returns (terms, withdrawn groups, parameters: library kept + discovered, the groups tied
     with discovered terms)."""
     from ..discovery import judge_library
+    from ..discovery.pair import paired
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
@@ -28,6 +29,7 @@ def _discover(eng, sel, threshold):
     theta = dict(theta)
     for t in found:
         theta.update(t.params())
+    found, withdrawn, theta = paired(eng, search, sel, theta, found, withdrawn, threshold)
     R_all = eng.R(theta) if found else None
     return [replace(t, curve=_curve(eng, theta, R_all, t)) for t in found], withdrawn, theta, ties
 

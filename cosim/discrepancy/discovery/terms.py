@@ -136,6 +136,9 @@ class DiscoveredTerm:
     #: 95 % half widths of the shape parameters the fit moves (a step's position and width, a
     #: ripple's period, a fading friction's velocity scale), {core parameter: half width}
     shape_ci95: dict = field(default_factory=dict)
+    #: the other joint (1-based) of a damper between two joints found as one pair
+    #: (:mod:`.pair`: the pair's equation on both channels, reported once), 0 for none
+    pair: int = 0
     #: for the report's figure, on the decimated samples: ``key`` (the joint's position or
     #: rate), ``before`` / ``after`` (the channel's residual without / with the term)
     curve: dict = field(default_factory=dict, repr=False)

@@ -19,12 +19,15 @@ KINDS = {
     "stroke_friction": ("stroke", "a Coulomb level changing linearly over the stroke on one joint"),
     "cable_link": ("cross", "a force on one joint in proportion to another joint's position (a cable carrier)"),
     "cross_damper": ("cross", "a force on one joint in proportion to another joint's rate"),
+    "pair_damper": ("cross", "a damper between two joints: c (qd_j - qd_k) against joint j, c (qd_k - qd_j) "
+                    "against joint k"),
     "effort_position": ("effortpos", "a force in proportion to the applied effort and the position on one joint"),
     "position_damper": ("posrate", "a damping that changes linearly over the stroke on one joint"),
 }
 #: the coefficient (core key) each kind must be found with
 NEEDS = {"load_friction": "force_cload", "friction_zone": "force_czone", "stroke_friction": "force_cq1",
-         "cable_link": "force_xk1", "cross_damper": "force_xv", "effort_position": "force_eq",
+         "cable_link": "force_xk1", "cross_damper": "force_xv", "pair_damper": "force_xv",
+         "effort_position": "force_eq",
          "position_damper": "force_qv"}
 #: the smallest typical force drawn, per RMS effort (see the module's docstring)
 SIZE_LO = 0.02
@@ -55,6 +58,12 @@ def sample(kind, rng, motion, name, nd):
             p.update({name(j, "force_xqc"): float(home[k]), name(j, "force_xk1"): sign * 1.5 * size * E[j] / T[k]})
         else:
             p[name(j, "force_xv")] = sign * 1.5 * size * E[j] / V[k]
+    elif kind == "pair_damper":  # the core's viscous levels and the other joint's rate, equal and opposite
+        k = int((j + rng.integers(1, nd)) % nd)
+        c = 1.5 * size * E[j] / V[j]
+        p = {name(a, key): v for a, b in ((j, k), (k, j))
+             for key, v in (("force_xj", float(b + 1)), ("force_vpos", c), ("force_vneg", c), ("force_xv", -c))}
+        return p, [j, k]
     elif kind == "effort_position":
         p = {name(j, "force_qc"): float(home[j]), name(j, "force_eq"): float(rng.choice([-1, 1])) * 1.5 * size / T[j]}
     elif kind == "position_damper":
