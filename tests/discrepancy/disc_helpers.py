@@ -87,3 +87,20 @@ def stage_groups() -> set:
         model=types.SimpleNamespace(facts=types.SimpleNamespace(joint_noun="slider", joint_unit="m", effort_unit="N")))
     _, cols = flexible.inputs(pipe, np.zeros((len(pipe.idx), 6)), direction=True)
     return set(flexible.input_groups(cols)) | {MOTION}
+
+
+def check_declaration(kind, key, truth, joint, platform, vocabulary, own_inputs=True):
+    """Assert that ``key``, the inputs a bench mechanism ``kind`` is declared keyed on, is
+    well-formed in the stage's ``vocabulary`` (:func:`stage_groups`): need/any/allowed, something
+    to meet, nothing outside what is allowed; a platform kind (in ``platform``) acts on no rail, a
+    rail's force is on its joint and (``own_inputs``) names one of that rail's inputs."""
+    assert set(key) == {"need", "any", "allowed"}, kind
+    assert key["need"] or key["any"], kind  # a declaration that nothing meets judges nothing
+    assert key["need"] <= key["allowed"] and key["any"] <= key["allowed"], kind
+    assert key["allowed"] <= vocabulary, (kind, key["allowed"] - vocabulary)
+    if kind in platform:
+        assert joint is None and "rail" not in truth, kind
+    else:  # a rail's force: its own inputs are named after the rail it acts on
+        assert truth["rail"] in (joint if isinstance(joint, tuple) else (joint,)), kind
+        if own_inputs:
+            assert any(g.endswith(f"slider {truth['rail']}") for g in key["need"] | key["any"]), kind

@@ -20,7 +20,7 @@ import mujoco_unlisted_third as third  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind  # noqa: E402
-from disc_helpers import stage_groups  # noqa: E402
+from disc_helpers import check_declaration, stage_groups  # noqa: E402
 
 #: the rail forces computed in MuJoCo's step (the others edit MuJoCo's model)
 HOOKED_RAIL = ("thrust_ripple", "wiper_debris", "backemf_limit", "brake_window", "shared_bus_sag", "grease_warming")
@@ -43,15 +43,7 @@ def test_the_third_set_is_new_and_every_declaration_names_the_stage_s_inputs():
     for kind in third.KINDS_THIRD:
         _, _, _, (_, _, truth, key, joint) = _case(kind)
         assert key == mu.keyed(kind, truth.get("rail"), truth.get("other_rail")), kind  # what --replay re-reads
-        assert set(key) == {"need", "any", "allowed"}, kind
-        assert key["need"] or key["any"], kind  # a declaration that nothing meets judges nothing
-        assert key["need"] <= key["allowed"] and key["any"] <= key["allowed"], kind
-        assert key["allowed"] <= vocabulary, (kind, key["allowed"] - vocabulary)
-        if kind in third.PLATFORM_THIRD:
-            assert joint is None and "rail" not in truth, kind
-        else:  # a rail's force: its own inputs are named after the rail it acts on
-            assert truth["rail"] in (joint if isinstance(joint, tuple) else (joint,)), kind
-            assert any(g.endswith(f"slider {truth['rail']}") for g in key["need"] | key["any"]), kind
+        check_declaration(kind, key, truth, joint, third.PLATFORM_THIRD, vocabulary)
 
 
 @pytest.mark.parametrize("kind", HOOKED_RAIL)
