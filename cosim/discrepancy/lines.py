@@ -43,7 +43,7 @@ MOTION_RATIO = 20.0
 MAX_LINES = 6
 #: a channel's lines count where the sinusoid at the strongest, fitted per fold, predicts at least
 #: this share of the residual's variance out of fold (:func:`repeats`).  Measured on seen MuJoCo
-#: sets (docs/flexible.md): 0.39-0.99 on the fans' channels with a line, 0.28 on a pulse pump's rail,
+#: sets (docs/records/flexible_mujoco_runs.md): 0.39-0.99 on the fans' channels with a line, 0.28 on a pulse pump's rail,
 #: at most 0.10 where no force repeats (a saturated drive, a spindle, a magnet, a soft pad, an
 #: effort-coupled friction, a bellows' friction)
 REPEAT_MIN = 0.15

@@ -13,7 +13,7 @@ of :data:`FREQUENCIES` whose filtered accelerations a least-squares fit of the r
 best, projected on the direction of a ridge fit of the residual on them (:func:`.oblique.direction`).
 Frequency and direction are fitted per fold of the cross-validation on that fold's fitted rows only
 (:class:`~.cv.FoldInputs`), and once on every sample for the final model and the black box
-(:func:`extended`).  Measured on seen sets: docs/flexible.md, "The platform's motion".
+(:func:`extended`).  Measured on seen sets: docs/records/flexible_mujoco_runs.md, "The platform's motion".
 """
 from __future__ import annotations
 

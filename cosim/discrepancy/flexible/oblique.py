@@ -17,7 +17,7 @@ least :data:`MEMBER` of the largest (on every sample: which inputs the column st
 values).  The direction is fitted per fold of the cross-validation on that fold's fitted rows
 only (:class:`~.cv.FoldInputs`: no held-out row moves the column its trees are judged on), and
 once on every sample for the final model, its partial dependence and the black box
-(:func:`extended`).  Measured on seen sets: docs/flexible.md, "Forces on the platform".
+(:func:`extended`).  Measured on seen sets: docs/records/flexible_mujoco_runs.md, "Forces on the platform".
 """
 from __future__ import annotations
 
