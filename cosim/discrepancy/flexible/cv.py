@@ -36,7 +36,7 @@ STEPS, PATIENCE = (50, 75), 25
 #: whatever its inputs (scikit-learn's per-node work on some 800 rows): the stage's time is its
 #: number of trees.  A cross-validation whose held-out minimum lies within the first max_iter
 #: iterations is the same with any larger bound (the same trees, grown in the same order); a
-#: faster learning rate over fewer iterations names other inputs (docs/discrepancy.md, Speed)
+#: faster learning rate over fewer iterations names other inputs (docs/records/speed_runs.md, Speed)
 TREES = dict(max_iter=75, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
              max_bins=64, early_stopping=False, random_state=0)
 #: quantile bins of the single-input screen (:func:`binned_shares`)

@@ -346,7 +346,7 @@ def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
     The rate groups of a unit (:func:`units`: they hold the rates' projected column) are one
     candidate, as in the check: cross-validated without all their columns but the common ones and
     those another named group holds (one fit, not one per member: 3-5 on a spindle's channels,
-    docs/discrepancy.md, Speed)."""
+    docs/records/speed_runs.md, Speed)."""
     best = (cv, use)
     joint = [u for u in units(list(named), groups) if len(u) > 1]
     for gs in [[g] for g in named if not any(g in u for u in joint)] + joint:
