@@ -9,7 +9,7 @@ a random joint, its size log-uniform over a decade from about the detection limi
 path; the answer key is read afterwards.
 
 Seed sets: ``--set tune`` (seeds 41000 +) is the set the families were tuned on; ``--set
-report`` (seeds 93000 +) is the one docs/discrepancy.md reports, not looked at while tuning.
+report`` (seeds 93000 +) is the one docs/records/discovery_unnamed_runs.md reports, not looked at while tuning.
 
 Printed per family and over all, for the cases the family's kinds hide: found with the right
 structure (the coefficient on the right joint; for a cross term read from the right other

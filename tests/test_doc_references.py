@@ -7,9 +7,9 @@ import subprocess
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-PAGE = re.compile(r"docs/([A-Za-z0-9_]+\.md)")
+PAGE = re.compile(r"docs/((?:records/)?[A-Za-z0-9_]+\.md)")
 # docs/X.md, Section)   docs/X.md, "Section"   docs/X.md "Section"
-SECTION = re.compile(r"docs/([A-Za-z0-9_]+\.md)(?:,\s*\"([^\"\n]+)\"|\s+\"([^\"\n]+)\"|,\s*([A-Z][A-Za-z -]*?)\s*\))")
+SECTION = re.compile(r"docs/((?:records/)?[A-Za-z0-9_]+\.md)(?:,\s*\"([^\"\n]+)\"|\s+\"([^\"\n]+)\"|,\s*([A-Z][A-Za-z -]*?)\s*\))")
 
 
 def _tracked():

@@ -6,7 +6,7 @@
 ``--scale 0.01,0.03,0.1,0.3`` runs every rail kind with its force multiplied by each factor (the
 same draws: rail, band, time constant), the detection limit to beyond ten times it; the sweep table
 then counts per kind and scale the library effects named with confidence, tied, structure left,
-"no missing physics found", and the confidence rule's statistics (docs/discrepancy.md, "The rail
+"no missing physics found", and the confidence rule's statistics (docs/records/discovery_unnamed_runs.md, "The rail
 kinds from the detection limit to 10 times it").
 
 ``--kinds-set 2`` runs a second set of mechanisms, none of them a kind below

@@ -15,12 +15,12 @@ from .._native import PkmError
 #: joint motion, the readings) are read by every candidate and stay, the evaluations of one
 #: selection step's Jacobian are read again within the next steps.  At 128 MB no evaluation of the
 #: benchmark's 10 s recordings is computed twice that 256 MB first in, first out computed once
-#: (docs/discrepancy.md, "Speed").
+#: (docs/records/speed_runs.md, "Speed").
 CACHE_ENTRIES = 64
 CACHE_BYTES = 128 * 2**20
 #: the last evaluations' residuals kept whole (:meth:`Memo.residual`), the least recently used
 #: leaving first: a selection asks for the chi-square at its parameters once per group it tries
-#: to remove, an interval's or a Jacobian's centre again (docs/discrepancy.md, "Speed")
+#: to remove, an interval's or a Jacobian's centre again (docs/records/speed_runs.md, "Speed")
 RESIDUALS = 32
 
 

@@ -22,7 +22,7 @@ frequency refined by least squares on the samples' times, is a line when
 A line found is taken out and the search repeated (an amplitude modulated by the pose leaves
 side lines), at most ``MAX_LINES`` times.  A channel's lines count only where the strongest
 repeats through the recording (:func:`repeats`): its sinusoid, refined and fitted on the fitted
-rows of each fold of the flexible stage's blocked cross-validation (:func:`~.flexible.cv.folds`),
+rows of each fold of the flexible stage's blocked cross-validation (:func:`~.blocked_folds.folds`),
 predicts at least ``REPEAT_MIN`` of the residual's variance on the held-out rows.  A chance
 line among the harmonics of a misfit keyed on the motion (a saturated drive's shortfall: a line at
 3.02 Hz holding 0.06 of the residual) passes the chi-square where the residual is far above its
@@ -34,6 +34,8 @@ import math
 
 import numpy as np
 
+from .blocked_folds import folds, gap_for
+
 #: the lowest frequency searched, in cycles over the recording's span
 LOW_CYCLES = 10.0
 #: a line counts when its share of the residual's variance exceeds this many times its largest
@@ -43,7 +45,7 @@ MOTION_RATIO = 20.0
 MAX_LINES = 6
 #: a channel's lines count where the sinusoid at the strongest, fitted per fold, predicts at least
 #: this share of the residual's variance out of fold (:func:`repeats`).  Measured on seen MuJoCo
-#: sets (docs/flexible.md): 0.39-0.99 on the fans' channels with a line, 0.28 on a pulse pump's rail,
+#: sets (docs/records/flexible_mujoco_runs.md): 0.39-0.99 on the fans' channels with a line, 0.28 on a pulse pump's rail,
 #: at most 0.10 where no force repeats (a saturated drive, a spindle, a magnet, a soft pad, an
 #: effort-coupled friction, a bellows' friction)
 REPEAT_MIN = 0.15
@@ -127,9 +129,7 @@ def line_gain(y, waves, fold_rows) -> float:
 def repeats(t, y, f, spi) -> float:
     """The share of ``y``'s variance the sinusoid at ``f`` [Hz] predicts out of fold: refined and
     fitted on each fold's fitted rows (:func:`at_offered`), over the flexible stage's blocked
-    folds (:func:`~.flexible.cv.folds`, a gap of one independent sample, ``spi`` samples each)."""
-    from .flexible.cv import folds, gap_for
-
+    folds (:func:`~.blocked_folds.folds`, a gap of one independent sample, ``spi`` samples each)."""
     t, y = np.asarray(t, float), np.asarray(y, float)
     rows = folds(len(y), gap_for(spi))
     return line_gain(y, at_offered(t, y, rows, f), rows)

@@ -1,7 +1,7 @@
 """A mechanism no library effect, term family or platform force names, hidden in MuJoCo's 6-PUS.
 
 One case of bench/foreign/mujoco_unlisted.py (which runs eleven such mechanisms and clean
-recordings; docs/discrepancy.md has its table), at the bench's seed for the kind, recorded for
+recordings; docs/records/discovery_unnamed_runs.md has its table), at the bench's seed for the kind, recorded for
 6 s instead of 9 s: a seal on one rail whose friction grows with the time since the rail last
 reversed, c (1 - exp(-s / tau)) tanh(qd / v), computed in MuJoCo's step from MuJoCo's state.
 The truth is outside the library, so the diagnosis must see the force (structure left on the

@@ -53,7 +53,7 @@ def test_blind_case(diagnosed, case):
     assert s["gain_measurable"] and s["gain_windows"] > 3.0, d.heldout
     # The reported 95 % interval is honest: the truth is within twice its half-width (3.9
     # standard errors: an honest interval misses that by chance once in 10,000). Coverage at
-    # the stated 95 % over many recordings: docs/discrepancy.md, "how often they hold the truth".
+    # the stated 95 % over many recordings: docs/records/discovery_runs.md, "how often they hold the truth".
     e = d.effects[0]
     truth = key["effects"][0]["params"]
     for p, v in e["params"].items():

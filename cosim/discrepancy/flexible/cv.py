@@ -1,11 +1,9 @@
 """Blocked cross-validation of the flexible stage's boosted trees (:mod:`.flexible`).
 
-The recording's decimated samples are cut into ``N_FOLDS x BLOCKS_PER_FOLD`` contiguous blocks
-in time, dealt to :data:`N_FOLDS` folds in turn (each fold's blocks spread through the
-recording); each fold is held out in turn and the trees are fitted on the others, less
-:data:`GAP_INDEPENDENT` independent samples' worth on each side of each held-out block (the
-smoothed residual is correlated over a smoothing window: a neighbour of a fitted sample is no
-held-out sample).
+The folds are blocks in time (:mod:`cosim.discrepancy.blocked_folds`): the recording's decimated samples cut
+into ``N_FOLDS x BLOCKS_PER_FOLD`` contiguous blocks dealt to the folds in turn, each fold held
+out in turn and the trees fitted on the others, less a gap of ``GAP_INDEPENDENT`` independent
+samples' worth on each side of each held-out block (:func:`folds`, :func:`gap_for`).
 Every sample is predicted once by trees that never saw it, and a slowly varying input (a
 drive's temperature, the duty of the excitation) takes over the held-out blocks the values the
 fitted ones span, instead of lying beyond them as it does at the end of the recording.
@@ -25,11 +23,8 @@ from itertools import islice
 
 import numpy as np
 
-#: folds of the cross-validation, and blocks in time per fold (spread through the recording:
-#: fold i holds out blocks i, i + N_FOLDS, ...)
-N_FOLDS, BLOCKS_PER_FOLD = 5, 4
-#: independent samples' worth left out of the fit on each side of a held-out block
-GAP_INDEPENDENT = 1.0
+from ..blocked_folds import BLOCKS_PER_FOLD, GAP_INDEPENDENT, N_FOLDS, folds, gap_for  # noqa: F401  (the stage's folds)
+
 #: fewest iterations the held-out loss may choose
 MIN_ITER = 5
 #: the folds' trees grow to these numbers of iterations in turn (the last: TREES["max_iter"]),
@@ -41,7 +36,7 @@ STEPS, PATIENCE = (50, 75), 25
 #: whatever its inputs (scikit-learn's per-node work on some 800 rows): the stage's time is its
 #: number of trees.  A cross-validation whose held-out minimum lies within the first max_iter
 #: iterations is the same with any larger bound (the same trees, grown in the same order); a
-#: faster learning rate over fewer iterations names other inputs (docs/discrepancy.md, Speed)
+#: faster learning rate over fewer iterations names other inputs (docs/records/speed_runs.md, Speed)
 TREES = dict(max_iter=75, learning_rate=0.15, max_leaf_nodes=12, min_samples_leaf=20, l2_regularization=1.0,
              max_bins=64, early_stopping=False, random_state=0)
 #: quantile bins of the single-input screen (:func:`binned_shares`)
@@ -117,36 +112,6 @@ def first_trees(model, X, k: int) -> np.ndarray:
     if hasattr(model, "predict_first"):
         return model.predict_first(X, k)
     return next(islice(model.staged_predict(X), k - 1, None))
-
-
-def folds(n: int, gap: int, k: int = N_FOLDS, per_fold: int = BLOCKS_PER_FOLD) -> tuple:
-    """``k`` folds of ``range(n)``, each ``per_fold`` contiguous blocks spread through it (the
-    blocks in time order dealt to the folds in turn): per fold (its rows, the rows fitted when
-    it is held out: all others but ``gap`` on each side of each of its blocks).
-
-    Example
-    -------
-    >>> rows = folds(40, gap=1, k=2, per_fold=2)
-    >>> rows[0][0].tolist() == list(range(10)) + list(range(20, 30))
-    True
-    >>> rows[0][1].tolist() == list(range(11, 19)) + list(range(31, 40))
-    True
-    """
-    edges = np.linspace(0, n, k * per_fold + 1).astype(int)
-    every = np.arange(n)
-    out = []
-    for i in range(k):
-        held, near = np.zeros(n, bool), np.zeros(n, bool)
-        for a, b in zip(edges[i:-1:k], edges[i + 1::k]):
-            held[a:b] = True
-            near[max(0, a - gap):min(n, b + gap)] = True
-        out.append((every[held], every[~near]))
-    return tuple(out)
-
-
-def gap_for(spi: float) -> int:
-    """The gap in decimated samples for ``spi`` decimated samples per independent one."""
-    return int(math.ceil(GAP_INDEPENDENT * spi))
 
 
 def cross_validate(X, y, fold_rows, enough=None) -> CV:

@@ -39,10 +39,10 @@ from .columns import SINCE
 
 #: the folded fit is used when the best single input explains, out of fold as a step function,
 #: at least this share of var(y) more on the folded residual than on the residual itself
-#: (docs/flexible.md: set on the seen MuJoCo sets and the own generator's tuning set)
+#: (docs/records/flexible_mujoco_runs.md: set on the seen MuJoCo sets and the own generator's tuning set)
 MARGIN = 0.10
 #: ... and instead of the plain fit (no plain fit made) where it explains at least this much more
-#: on a column that is not the joint's own history (docs/flexible.md: above the largest gain of a
+#: on a column that is not the joint's own history (docs/records/flexible_mujoco_runs.md: above the largest gain of a
 #: friction whose level its own joint's history sets, 0.30, where the plain fit explained more)
 ALONE = 0.40
 

@@ -13,7 +13,7 @@ of :data:`FREQUENCIES` whose filtered accelerations a least-squares fit of the r
 best, projected on the direction of a ridge fit of the residual on them (:func:`.oblique.direction`).
 Frequency and direction are fitted per fold of the cross-validation on that fold's fitted rows only
 (:class:`~.cv.FoldInputs`), and once on every sample for the final model and the black box
-(:func:`extended`).  Measured on seen sets: docs/flexible.md, "The platform's motion".
+(:func:`extended`).  Measured on seen sets: docs/records/flexible_mujoco_runs.md, "The platform's motion".
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from .cv import FoldInputs
-from .oblique import _project, direction
+from .oblique import direction, projected
 
 #: the group of the column (:func:`extend`)
 MOTION = "the platform's motion"
@@ -111,7 +111,7 @@ def _held_out_share(responses, y, fold_rows, per_fold) -> float:
         return 0.0
     pred = np.zeros_like(y)
     for (held, fit), p in zip(fold_rows, per_fold):
-        pred[held] = _project(responses[p[0]][held], p[1:]) + y[np.asarray(fit)].mean()
+        pred[held] = projected(responses[p[0]][held], p[1:]) + y[np.asarray(fit)].mean()
     return 1.0 - float(np.mean((y - pred) ** 2)) / var
 
 
@@ -132,12 +132,12 @@ def extend(X, columns, groups, y, fold_rows, responses) -> tuple:
                                 MOTION, None, "motion", "m/s^2")]
     groups = {g: list(c) for g, c in groups.items()}
     groups[MOTION] = [X.shape[1]]
-    added = _project(responses[whole[0]], whole[1:])
+    added = projected(responses[whole[0]], whole[1:])
     variants = getattr(X, "variants", None)
     base = np.asarray(X, float)
     if variants is None:
         variants = np.stack([base] * len(fold_rows))
-    out = np.stack([np.column_stack([variants[b], _project(responses[p[0]], p[1:])]) for b, p in enumerate(per_fold)])
+    out = np.stack([np.column_stack([variants[b], projected(responses[p[0]], p[1:])]) for b, p in enumerate(per_fold)])
     return FoldInputs(np.column_stack([base, added]), out), columns, groups, tuple(whole)
 
 
@@ -150,4 +150,4 @@ def extended(X, pipe, resonance) -> np.ndarray:
     a = platform_acceleration(pipe)
     f, mean, scale, w = resonance
     r = resonated(a, pipe.dt, f, [a0 for a0, _ in pipe.segments])[pipe.idx]
-    return np.column_stack([X, _project(r, (mean, scale, w))])
+    return np.column_stack([X, projected(r, (mean, scale, w))])

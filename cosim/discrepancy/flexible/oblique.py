@@ -17,7 +17,7 @@ least :data:`MEMBER` of the largest (on every sample: which inputs the column st
 values).  The direction is fitted per fold of the cross-validation on that fold's fitted rows
 only (:class:`~.cv.FoldInputs`: no held-out row moves the column its trees are judged on), and
 once on every sample for the final model, its partial dependence and the black box
-(:func:`extended`).  Measured on seen sets: docs/flexible.md, "Forces on the platform".
+(:func:`extended`).  Measured on seen sets: docs/records/flexible_mujoco_runs.md, "Forces on the platform".
 """
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ RIDGE = 1e-2
 
 def direction(Z, y) -> tuple:
     """The ridge fit of ``y`` on the columns ``Z`` (rows fitted): ``(mean, scale, weights)`` with
-    the projected column ``((Z - mean) / scale) @ weights``."""
+    the projected column ``((Z - mean) / scale) @ weights`` (:func:`projected`)."""
     mean = Z.mean(axis=0)
     scale = Z.std(axis=0)
     scale = np.where(scale > 0, scale, 1.0)
@@ -64,13 +64,29 @@ def oblique_gain(Z, y, fold_rows) -> float:
     for held, fit in fold_rows:
         for k, cols in enumerate([list(range(Z.shape[1]))] + [[j] for j in range(Z.shape[1])]):
             d = direction(Z[fit][:, cols], y[fit])
-            e = y[held] - y[fit].mean() - _project(Z[held][:, cols], d)
+            e = y[held] - y[fit].mean() - projected(Z[held][:, cols], d)
             sse[k] += float(e @ e)
     share = 1.0 - sse / len(y) / var
     return float(share[0] - share[1:].max())
 
 
-def _project(Z, fitted) -> np.ndarray:
+def projected(Z, fitted) -> np.ndarray:
+    """The columns ``Z`` projected on a direction of :func:`direction`.
+
+    Parameters
+    ----------
+    Z : ndarray, shape (n, k)
+        The columns, each in its own unit (a pose coordinate's m or rad, a rate's m/s or rad/s,
+        a filtered acceleration's m/s^2).
+    fitted : tuple
+        ``(mean, scale, weights)`` as :func:`direction` returns them: ``mean`` and ``scale``
+        (k,) in the columns' units, ``weights`` (k,) in the unit of the target it was fitted on.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        ``((Z - mean) / scale) @ weights``: the ridge fit's prediction of the target less the
+        target's mean, in the target's unit (the residual's N or N m)."""
     mean, scale, w = fitted
     return ((Z - mean) / scale) @ w
 
@@ -93,8 +109,8 @@ def extend(X, columns, groups, y, fold_rows) -> tuple:
         if only_oblique and oblique_gain(Z, y, fold_rows) < OBLIQUE_MIN:
             continue
         whole = direction(Z, y)
-        added.append(_project(Z, whole))
-        per_fold.append([_project(Z, direction(Z[fit], y[fit])) for _, fit in fold_rows])
+        added.append(projected(Z, whole))
+        per_fold.append([projected(Z, direction(Z[fit], y[fit])) for _, fit in fold_rows])
         projections.append((tuple(cols),) + whole)
         w = np.abs(whole[2])
         held_by = [columns[i][1] for i, wi in zip(cols, w) if wi >= MEMBER * w.max()] if quantity == "rate" \
@@ -115,4 +131,4 @@ def extended(X, projections) -> np.ndarray:
     X = np.asarray(X, float)
     if not projections:
         return X
-    return np.column_stack([X] + [_project(X[:, list(cols)], (m, s, w)) for cols, m, s, w in projections])
+    return np.column_stack([X] + [projected(X[:, list(cols)], (m, s, w)) for cols, m, s, w in projections])

@@ -32,7 +32,7 @@ repeats on its channel (:func:`offered`), is offered to every channel: where the
 finds none, the sinusoid at the offered frequency, refined and fitted per fold on that channel's
 rows (:func:`..lines.at_offered`), is the column where it predicts anything out of fold
 (:data:`OFFERED_MIN`), and the trees judge it as every input.  Measured on seen sets:
-docs/flexible.md, "A force repeating at a fixed frequency".
+docs/records/flexible_mujoco_runs.md, "A force repeating at a fixed frequency".
 """
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ from .cv import FoldInputs
 #: of the residual's variance: a force at a fixed frequency carries the channel.  A resonance the
 #: motion sets ringing (a sloshing pendulum at 2.0-2.9 Hz) is a line too, whose phase the motion
 #: sets: measured on seen MuJoCo sets, at most 0.51 on the pendulums' 36 channels against 0.89-1.00
-#: on 16 of the 18 fan channels of sets 5-7 (docs/flexible.md)
+#: on 16 of the 18 fan channels of sets 5-7 (docs/records/flexible_mujoco_runs.md)
 LINE_MIN = 0.7
 #: a line offered from elsewhere (:func:`offered`) is a column of a channel whose own rule finds
 #: none where its sinusoid fitted per fold explains, out of fold, more than this share of the
@@ -68,7 +68,7 @@ SUB_SHARE = 0.1
 #: a channel without a line of its own is given its comb's column where the comb fitted per fold
 #: (:func:`comb`) predicts, out of fold, at least this share of the residual's variance more than
 #: the sinusoid at the highest peak (nothing where that predicts less than nothing): the harmonics
-#: carry the force together.  Measured on seen sets (docs/flexible.md): 0.64 and 0.17 on the two pulse
+#: carry the force together.  Measured on seen sets (docs/records/flexible_mujoco_runs.md): 0.64 and 0.17 on the two pulse
 #: pumps' rails, at most 0.09 on the 613 other channels the stage was given (a fan's channel whose
 #: highest peak is the harmonic; the sloshing pendulums' ringing at most 0.02)
 COMB_GAIN = 0.15

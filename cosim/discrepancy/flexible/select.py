@@ -44,7 +44,7 @@ cross-validating without each, with two rules of cause before consequence.
   pose does not beat by :data:`DROP_MIN` of the variance out of fold is named in its place.  A
   force on the platform (a magnet, a contact, a tendon) depends on every rail: there the pose
   stays where two rails explain less.  On seen sets (the stage re-run on captured inputs,
-  docs/flexible.md): MuJoCo's second set of kinds 6 of 10 declared inputs named (4 without),
+  docs/records/flexible_mujoco_runs.md): MuJoCo's second set of kinds 6 of 10 declared inputs named (4 without),
   the gap-preloaded friction on rail 2's rate and rails 2's and 3's positions.
 
 * **A consequence is no answer by itself.**  On a weak channel the stage judges the strongest
@@ -95,7 +95,7 @@ def stand_ins(named) -> set:
     joint's history (its own rate not named) on a channel where a rate is named.  A low-passed
     |rate|, effort or power of a joint in motion is a smoothed copy of that motion, which the
     named rates carry; out of fold it can take a share by chance beside them (a heating friction
-    on rail 5 named with rail 1's history, MuJoCo, docs/flexible.md).  A joint's history beside
+    on rail 5 named with rail 1's history, MuJoCo, docs/records/flexible_mujoco_runs.md).  A joint's history beside
     its own rate is not one: that is the friction level a slow state of the joint sets."""
     if not any(g.startswith("rate of ") for g in named):
         return set()
@@ -346,7 +346,7 @@ def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
     The rate groups of a unit (:func:`units`: they hold the rates' projected column) are one
     candidate, as in the check: cross-validated without all their columns but the common ones and
     those another named group holds (one fit, not one per member: 3-5 on a spindle's channels,
-    docs/discrepancy.md, Speed)."""
+    docs/records/speed_runs.md, Speed)."""
     best = (cv, use)
     joint = [u for u in units(list(named), groups) if len(u) > 1]
     for gs in [[g] for g in named if not any(g in u for u in joint)] + joint:
@@ -405,7 +405,7 @@ def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, c
 
     Many inputs that carry nothing add variance that can drown a force on two of them (a Coulomb
     level keyed on the rail's position, MuJoCo: the trees on every input -0.07 out of fold, on
-    that rail's rate and position alone 0.70, docs/flexible.md); the importance is read out of
+    that rail's rate and position alone 0.70, docs/records/flexible_mujoco_runs.md); the importance is read out of
     fold, so the groups that stand out there are judged before the strongest single column
     alone, which names at most one factor of such a product."""
     from .cv import importance

@@ -70,7 +70,7 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
 * **whether a found family already says it**: a discovered term or a library effect of the
   same joint keyed on the same input.
 
-The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs/flexible.md).
+The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs/records/flexible_runs.md).
 """
 from __future__ import annotations
 
