@@ -161,11 +161,12 @@ def _cord(rng, m, mo):
     def edit(xml):
         head = f'<joint name="rail{j}" type="slide" axis="1 0 0"/>'
         xml = xml.replace(head, f'{head}\n      <site name="cord_a" pos="{top[0]:g} {top[1]:g} {top[2]:g}"/>', 1)
-        xml = xml.replace("<freejoint/>", f'<freejoint/>\n      <site name="cord_b" pos="{tie[0]:.9g} {tie[1]:.9g} 0"/>',
-                          1)
+        tip = f'<site name="cord_b" pos="{tie[0]:.9g} {tie[1]:.9g} 0"/>'
+        xml = xml.replace("<freejoint/>", f"<freejoint/>\n      {tip}", 1)
         return xml.replace("</equality>", f'''</equality>
   <tendon>
-    <spatial name="cord" stiffness="{k:.9g}" springlength="{rest:.9g}"><site site="cord_a"/><site site="cord_b"/></spatial>
+    <spatial name="cord" stiffness="{k:.9g}" springlength="{rest:.9g}">
+      <site site="cord_a"/><site site="cord_b"/></spatial>
   </tendon>''', 1)
     return None, edit, {"carriage": j + 1, "tie": tie.tolist(), "stiffness": k, "rest_length": rest,
                         "tension_rms": force}

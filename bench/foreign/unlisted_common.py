@@ -1,7 +1,8 @@
 """What the sets of bench/foreign/mujoco_unlisted.py's mechanisms share: small helpers of
 their draws (a random direction, an RMS, a smooth one-sided ramp, a first-order low-pass, the
-time a hook's state advances by, the platform's body and free joint in MuJoCo), the judgement of the flexible stage against a declaration (:func:`judge`), the
-confidence rule's statistics read from its log (:class:`RuleLog`) and the printed tables."""
+time a hook's state advances by, the platform's body and free joint in MuJoCo), the judgement of
+the flexible stage against a declaration (:func:`judge`), the confidence rule's statistics read
+from its log (:class:`RuleLog`) and the printed tables."""
 from __future__ import annotations
 
 import math

@@ -103,7 +103,8 @@ def test_a_rail_force_along_its_reference_has_the_rms_it_was_drawn_to(kind):
     if kind == "magnet_heating":
         x = np.divide(-f[:, j], u[:, j], out=np.zeros(len(u)), where=u[:, j] != 0)
         got = float(np.sqrt(np.mean((u[:, j] * x / (1 - x)) ** 2)))
-    capped = {"coil_crosstalk": truth.get("coupling") == 0.5, "magnet_heating": truth.get("loss") == pytest.approx(fourth.LOSS),
+    capped = {"coil_crosstalk": truth.get("coupling") == 0.5,
+              "magnet_heating": truth.get("loss") == pytest.approx(fourth.LOSS),
               "misaligned_nut": truth.get("mu") == pytest.approx(0.5)}.get(kind)
     assert 0.2 * truth["rms_target"] < got < 1.05 * truth["rms_target"], (kind, got, truth)
     if not capped:
@@ -139,8 +140,8 @@ def test_the_bundle_s_friction_builds_over_its_twist_and_saturates():
 
 def test_the_coiled_cord_is_a_mujoco_tendon_of_the_draw_s_geometry():
     """MuJoCo's own tendon length at the reference's configurations (the rails' positions and the
-    platform's pose of the reference): its mean is the rest length the draw computed, and the
-    tension k (L - rest) has the drawn RMS."""
+    platform's pose of the reference): its spring's tension k (L - rest), with MuJoCo's stiffness
+    and rest length, is zero on average and has the drawn RMS."""
     import mujoco
 
     m, seed, mo, (hook, edit, truth, _, joint) = _case("coiled_cord")
@@ -163,9 +164,10 @@ def test_the_coiled_cord_is_a_mujoco_tendon_of_the_draw_s_geometry():
         mujoco.mj_forward(model, data)
         lengths.append(float(data.ten_length[model.tendon("cord").id]))
     lengths = np.asarray(lengths)
-    k = float(model.tendon_stiffness[model.tendon("cord").id])
+    cord = model.tendon("cord").id
+    k, rest = float(model.tendon_stiffness[cord]), float(np.ravel(model.tendon_lengthspring[cord])[0])
     assert k == pytest.approx(truth["stiffness"], rel=1e-7)
-    tension = k * (lengths - truth["rest_length"])
+    tension = k * (lengths - rest)  # MuJoCo's spring: its stiffness and rest length as built
     assert abs(tension.mean()) < 0.05 * truth["tension_rms"]
     assert np.sqrt(np.mean(tension ** 2)) == pytest.approx(truth["tension_rms"], rel=0.03)
 
