@@ -1,7 +1,7 @@
 """Mechanisms no issue and no family names, hidden in MuJoCo's 6-PUS, diagnosed with the defaults.
 
     .venv/bin/python bench/foreign/mujoco_unlisted.py [--kinds tendon_slack,...] [--clean 4] [--jobs 1]
-        [--second | --first-seed 32700] [--sets 1] [--scale 1] [--out results/mujoco_unlisted]
+        [--kinds-set 1|2|3|4] [--second | --first-seed 32700] [--sets 1] [--scale 1] [--out results/mujoco_unlisted]
 
 ``--scale 0.01,0.03,0.1,0.3`` runs every rail kind with its force multiplied by each factor (the
 same draws: rail, band, time constant), the detection limit to beyond ten times it; the sweep table
@@ -20,7 +20,14 @@ that locks above an acceleration, a drive's saturation), seeds ``SEED_MORE`` + (
 hose on the platform, a rail wiper collecting debris, a payload loose in a tray, a damper between
 two carriages, a drive's back-EMF limit, a brake dragging over a window of time, a leg's elastic
 flexure joint, a shared DC bus sagging under a neighbour's current, a grease thinning as it
-warms), seeds ``SEED_THIRD`` + (53700 +).  The code the sets share (helpers of the draws, the
+warms), seeds ``SEED_THIRD`` + (53700 +).  ``--kinds-set 4`` runs a fourth set, none of them a
+kind of the first three, of the engine's generators, of the discovery families or of the library
+(bench/foreign/mujoco_unlisted_fourth.py: a pneumatic cushion at a stroke's end, an eddy-current
+plate under the platform, a screw nut misaligned over the stroke, an air jet's lift on the
+platform's tilt, the stray field of a neighbouring motor's coil, a coiled cord from a carriage to
+the platform, a motor's magnets weakening as its copper heats, a cable bundle's torsion with its
+wires' friction, a guide heated by a neighbouring motor, a floor shaken by a press), seeds
+``SEED_FOURTH`` + (57700 +).  The code the sets share (helpers of the draws, the
 judgement, the tables) is bench/foreign/unlisted_common.py.
 
 ``--capture DIR`` keeps, per case, what the flexible stage was given (bench/flexible_bench.py's
@@ -97,6 +104,7 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
 from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  # noqa: E402
+from mujoco_unlisted_fourth import KINDS_FOURTH, SEED_FOURTH, draw_fourth, keyed_fourth  # noqa: E402
 from mujoco_unlisted_third import KINDS_THIRD, SEED_THIRD, draw_third, keyed_third  # noqa: E402
 from unlisted_common import RuleLog as _RuleLog  # noqa: E402
 from unlisted_common import judge, slider_groups, sweep_table, table  # noqa: E402
@@ -107,9 +115,9 @@ KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_un
          "reversal_stiction")
 PLATFORM = KINDS[:7]
 #: the kind sets of ``--kinds-set``: 1 the kinds above, 2 bench/foreign/mujoco_unlisted_more.py's,
-#: 3 bench/foreign/mujoco_unlisted_third.py's
-KIND_SETS = {1: KINDS, 2: KINDS_MORE, 3: KINDS_THIRD}
-ALL_KINDS = KINDS + KINDS_MORE + KINDS_THIRD
+#: 3 bench/foreign/mujoco_unlisted_third.py's, 4 bench/foreign/mujoco_unlisted_fourth.py's
+KIND_SETS = {1: KINDS, 2: KINDS_MORE, 3: KINDS_THIRD, 4: KINDS_FOURTH}
+ALL_KINDS = KINDS + KINDS_MORE + KINDS_THIRD + KINDS_FOURTH
 #: seeds: SEED + the kind's index, clean cases SEED + 90 + i (fixed before any run); ``--second``
 #: draws every case again at SEED + 1000 + (the same): added after the first set's output was seen
 #: (and after the platform-drag sign rule), before any of its own
@@ -125,6 +133,8 @@ def keyed(kind, j=None, k=None) -> dict:
         return keyed_more(kind, j, k)
     if kind in KINDS_THIRD:
         return keyed_third(kind, j, k)
+    if kind in KINDS_FOURTH:
+        return keyed_fourth(kind, j, k)
     pos, rate, acc, pose = slider_groups()
     if kind == "magnet":
         return {"need": set(), "any": pos | pose, "allowed": pos | pose}
@@ -351,10 +361,12 @@ def draw(kind, rng, m, mo, scale=1.0):
     """(hook, edit, truth, keyed-on inputs, joint of the force or None) of one case; ``scale``
     multiplies a rail mechanism's force (a platform mechanism's must be 1); a second-set kind's
     joint is a tuple of two rails when its force acts on both."""
-    if kind in KINDS_MORE or kind in KINDS_THIRD:
+    later = {**dict.fromkeys(KINDS_MORE, draw_more), **dict.fromkeys(KINDS_THIRD, draw_third),
+             **dict.fromkeys(KINDS_FOURTH, draw_fourth)}
+    if kind in later:
         if scale != 1.0:
             raise ValueError(f"--scale applies to the first set's rail kinds only, not to {kind}")
-        return (draw_more if kind in KINDS_MORE else draw_third)(kind, rng, m, mo)
+        return later[kind](kind, rng, m, mo)
     if kind in PLATFORM:
         if scale != 1.0:
             raise ValueError(f"--scale applies to the rail kinds only, not to {kind}")
@@ -491,7 +503,8 @@ def main(argv=None) -> int:
     ap.add_argument("--kinds", default=None, help="comma-separated kinds of either set (default: --kinds-set's)")
     ap.add_argument("--kinds-set", type=int, choices=sorted(KIND_SETS), default=1,
                     help="1: the kinds above; 2: bench/foreign/mujoco_unlisted_more.py's (seeds SEED_MORE +); "
-                         "3: bench/foreign/mujoco_unlisted_third.py's (seeds SEED_THIRD +)")
+                         "3: bench/foreign/mujoco_unlisted_third.py's (seeds SEED_THIRD +); "
+                         "4: bench/foreign/mujoco_unlisted_fourth.py's (seeds SEED_FOURTH +)")
     ap.add_argument("--clean", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--second", action="store_true", help="the second seed set (SEED + 1000 +)")
@@ -524,7 +537,7 @@ def main(argv=None) -> int:
     if any(x != 1.0 for x in scales) and any(k in PLATFORM or k not in KINDS for k in kinds):
         ap.error(f"--scale applies to the rail kinds only ({', '.join(KINDS[len(PLATFORM):])})")
     order = KIND_SETS[sets[0] if sets else a.kinds_set]
-    first = {1: SEED, 2: SEED_MORE, 3: SEED_THIRD}[sets[0] if sets else a.kinds_set]
+    first = {1: SEED, 2: SEED_MORE, 3: SEED_THIRD, 4: SEED_FOURTH}[sets[0] if sets else a.kinds_set]
     s0 = a.first_seed if a.first_seed is not None else first + (1000 if a.second else 0)
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):

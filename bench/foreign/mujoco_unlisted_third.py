@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from unlisted_common import platform_dof, rms, slider_groups
+from unlisted_common import lowpass, platform_dof, rms, slider_groups
 
 KINDS_THIRD = ("thrust_ripple", "vacuum_hose", "wiper_debris", "loose_payload", "coupling_damper",
                "backemf_limit", "brake_window", "flexure_joint", "shared_bus_sag", "grease_warming")
@@ -117,16 +117,6 @@ def keyed_third(kind, j=None, k=None) -> dict:
         return {"need": {own("rate")}, "any": {own("history"), "time"},
                 "allowed": {own("rate"), own("history"), "time"}}
     raise ValueError(kind)
-
-
-def lowpass(x, dt, tau):
-    """First-order low-pass of ``x`` (rows, sample step ``dt`` [s]) with time constant ``tau`` [s],
-    from ``x[0]``."""
-    a = math.exp(-dt / tau)
-    y = np.empty_like(np.asarray(x, float))
-    for i, v in enumerate(np.asarray(x, float)):
-        y[i] = v if i == 0 else a * y[i - 1] + (1 - a) * v
-    return y
 
 
 def _platform_mechanism(kind, rng, m, mo):

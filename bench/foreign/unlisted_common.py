@@ -1,7 +1,8 @@
-"""What the three sets of bench/foreign/mujoco_unlisted.py's mechanisms share: small helpers of
-their draws (a random direction, an RMS, a smooth one-sided ramp, the platform's body and free
-joint in MuJoCo), the judgement of the flexible stage against a declaration (:func:`judge`), the
-confidence rule's statistics read from its log (:class:`RuleLog`) and the printed tables."""
+"""What the sets of bench/foreign/mujoco_unlisted.py's mechanisms share: small helpers of
+their draws (a random direction, an RMS, a smooth one-sided ramp, a first-order low-pass, the
+time a hook's state advances by, the platform's body and free joint in MuJoCo), the judgement of
+the flexible stage against a declaration (:func:`judge`), the confidence rule's statistics read
+from its log (:class:`RuleLog`) and the printed tables."""
 from __future__ import annotations
 
 import math
@@ -33,6 +34,23 @@ def softplus(x):
 def excess(x, at) -> float:
     """The RMS of ``x``'s magnitude beyond ``at`` (0 below it)."""
     return rms(np.maximum(np.abs(x) - at, 0.0))
+
+
+def lowpass(x, dt, tau):
+    """First-order low-pass of ``x`` (rows, sample step ``dt`` [s]) with time constant ``tau`` [s],
+    from ``x[0]``."""
+    a = math.exp(-dt / tau)
+    y = np.empty_like(np.asarray(x, float))
+    for i, v in enumerate(np.asarray(x, float)):
+        y[i] = v if i == 0 else a * y[i - 1] + (1 - a) * v
+    return y
+
+
+def elapsed(state, t) -> float:
+    """The time [s] since the last call with this ``state`` (a dict holding ``"t"``; 0 at the first
+    call or where ``t`` does not advance): how far a hook's own state moves in MuJoCo's step."""
+    last, state["t"] = state.get("t"), t
+    return 0.0 if last is None or t <= last else t - last
 
 
 def platform_dof(model):
