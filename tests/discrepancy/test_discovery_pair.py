@@ -1,8 +1,11 @@
-"""A damper or a spring between two joints (cosim/discrepancy/discovery/pair.py): hidden by the families'
-generator (``pair_damper``: c (qd_j - qd_k) against joint j, c (qd_k - qd_j) against joint k),
-it is found as one pair term on both joints with c within 5 %, stated once, and the plant handed
-on holds it on both joints.  The truth is read from the answer key after the diagnosis.  Without
-the pair rule the per-channel search reports no pair term (checked by reverting the rule)."""
+"""A damper or a spring between two joints (cosim/discrepancy/discovery/pair.py): hidden by the
+families' generator (``pair_damper``: c (qd_j - qd_k) against joint j, c (qd_k - qd_j) against
+joint k; ``pair_spring``: k (q_j - q_k - L) against joint j, its opposite against joint k), it is
+found as one pair term on both joints with c or k within 5 % (and the spring's rest difference L),
+stated once, and the plant handed on holds it on both joints; a library offset the spring pair
+refits to zero is withdrawn.  The truth is read from the answer key after the diagnosis.  Without
+the pair rule the per-channel search reports no pair term, and without the withdrawal the offset
+stays named (each checked by reverting the rule)."""
 import json
 from pathlib import Path
 
@@ -56,3 +59,16 @@ def test_a_spring_between_two_joints_is_found_once_as_a_pair(tmp_path, short_cfg
     for a, b in ((j, k), (k, j)):
         assert p[f"rail[{a}].force_xj"] == b
         assert p[f"rail[{a}].force_k1"] == stiff and p[f"rail[{a}].force_xk1"] == -stiff
+
+
+def test_a_library_offset_the_spring_pair_refits_to_zero_is_withdrawn(tmp_path, short_cfg):
+    # seed 5: the library names an offset on one of the two joints (the spring's constant, before
+    # the pair); refitted with the pair it is zero within its interval, and is withdrawn
+    rec, key = blind.make_case(blind.CaseSpec("pair_spring5", "6pus", ["pair_spring"], 5), tmp_path / "c",
+                               tmp_path / "k", cfg=short_cfg)
+    (truth,) = json.loads(Path(key).read_text())["effects"]
+    d = diagnose(rec, figures=False, replay=False)
+    assert {t.joint for t in d.discovered if t.pair} == set(truth["joints"]), d.conclusion
+    zeroed = [w for w in d.withdrawn if "refitted" in w and w["group"].startswith("offset")]
+    assert zeroed and all(abs(w["refitted"]["value"]) <= w["refitted"]["ci95"] for w in zeroed), d.withdrawn
+    assert not any(e["key"] == "offset" for e in d.effects), d.conclusion

@@ -102,17 +102,37 @@ def _columns(search, theta, j, k, kind):
 
 
 def _spring_constant(search, theta, coef, cov, held, lo, hi):
-    """``((k, m), covariance of (k, m), {offset parameter: new value})``: the stiffness and the
-    lower joint's constant m from the fitted coefficients; where both joints hold an offset the
-    equal and opposite part of the two (refitted) offsets is m and each keeps the common part."""
+    """``((k, m), covariance of (k, m), {offset parameter: (new value, 95 % half width)})``: the
+    stiffness and the lower joint's constant m from the fitted coefficients; where both joints
+    hold an offset the equal and opposite part of the two (refitted) offsets is m and each keeps
+    the common part."""
     off = {a: theta[search.name(a, "offset")] + coef[-len(held) + i] for i, a in enumerate(held)}
     if len(held) < 2:
         T = np.eye(2, len(coef))
-        return T @ coef, T @ cov @ T.T, {search.name(a, "offset"): float(v) for a, v in off.items()}
+        return T @ coef, T @ cov @ T.T, {search.name(a, "offset"): (float(v), 1.96 * math.sqrt(max(
+            float(cov[-1, -1]), 0.0))) for a, v in off.items()}
     T = np.array([[1.0, 0.0, 0.0], [0.0, 0.5, -0.5]])
     common = 0.5 * (off[lo] + off[hi])
+    half = 1.96 * math.sqrt(max(0.25 * float(cov[1, 1] + cov[2, 2] + 2.0 * cov[1, 2]), 0.0))
     km = np.array([coef[0], 0.5 * (off[lo] - off[hi])])
-    return km, T @ cov @ T.T, {search.name(lo, "offset"): float(common), search.name(hi, "offset"): float(common)}
+    return km, T @ cov @ T.T, {search.name(a, "offset"): (float(common), half) for a in (lo, hi)}
+
+
+def _offsets_zeroed(sel, terms) -> list:
+    """The library's offsets the spring pair refitted to zero (within their 95 % interval): they
+    stood in for its constant, and are withdrawn (the plant holds the refitted value)."""
+    out = []
+    for a in sel.selected:
+        g = a.group
+        c = next((t.coefficients[g.params[0]] for t in terms if g.key == "offset" and g.params[0] in t.coefficients),
+                 None)
+        if c is None or abs(c.value) > c.ci95:
+            continue
+        out.append({"group": g.label, "effect": g.effect.name, "title": g.title,
+                    "params": {g.params[0]: float(sel.theta.get(g.params[0], float("nan")))},
+                    "replaced_by": [t.channel for t in terms],
+                    "refitted": {"value": c.value, "ci95": c.ci95, "unit": c.unit}})
+    return out
 
 
 def _chi2(search, R, chans, rows):
@@ -172,7 +192,8 @@ def _spring_terms(search, j, k, coef, cov, offsets, d_held, before, after) -> li
     """The spring pair as the two channels' :class:`DiscoveredTerm`: ``coef`` = (k, m), the
     stiffness and the lower joint's constant on top of k ((q_j - qc_j) - (q_k - qc_k)), ``cov``
     their covariance; the rest difference L = qc_j - qc_k - m / k (j < k); ``offsets`` {the
-    library's offset: its value refitted with the pair} (a coefficient of its joint's term)."""
+    library's offset: (its value refitted with the pair, 95 % half width)} (a coefficient of its
+    joint's term)."""
     j, k = min(j, k), max(j, k)
     stiff, m = coef
     qc = search.q_centre
@@ -192,7 +213,7 @@ def _spring_terms(search, j, k, coef, cov, offsets, d_held, before, after) -> li
                  for key, s in (("force_k1", 1.0), ("force_xk1", -1.0))}
         o = search.name(a, "offset")
         if o in offsets:
-            coefs[o] = Coefficient(o, offsets[o], float("nan"), units.get(o, ""), base=float(search.theta.get(o, 0.0)))
+            coefs[o] = Coefficient(o, *offsets[o], units.get(o, ""), base=float(search.theta.get(o, 0.0)))
         shape = {search.name(a, "force_xj"): float(b + 1), search.name(a, "force_qc"): float(qc[a]),
                  search.name(a, "force_xqc"): float(qc[a] - sign * rest)}
         out.append(DiscoveredTerm(a + 1, search.pipe.channels[a], ["spring", "cross_q"], eq, coefs, shape,
@@ -271,7 +292,8 @@ def paired(eng, search, sel, theta, found, withdrawn, threshold):
     spring) and a cross term (on the other joint's rate, its position) that are equal and opposite
     (:func:`_halves`), the pair is tried (:func:`_trial`); when it wins it replaces the two
     channels' discovered terms, and the library viscous frictions on the two joints (a damper's)
-    are withdrawn (``replaced_by`` the pair's channels)."""
+    and the library offsets a spring refitted to zero (:func:`_offsets_zeroed`) are withdrawn
+    (``replaced_by`` the pair's channels)."""
     for t, kind in [(t, kind) for t in found for kind in KINDS]:
         k = _cross_partner(search, t, kind)
         if k is None or t.pair or not _halves(search, t, kind) or not any(u is t for u in found):
@@ -290,6 +312,7 @@ def paired(eng, search, sel, theta, found, withdrawn, threshold):
         withdrawn = withdrawn + [{"group": g.label, "effect": g.effect.name, "title": g.title,
                                   "params": {g.params[0]: float(sel.theta.get(g.params[0], float("nan")))},
                                   "replaced_by": chans, "pair": True} for g in libs]
+        withdrawn = withdrawn + (_offsets_zeroed(sel, terms) if kind == "spring" else [])
         terms = [replace(u, instead_of=[w for v in sep for w in v.instead_of]) for u in terms]
         found = [u for u in found if u.joint - 1 not in (j, k)] + terms
     return found, withdrawn, theta
