@@ -195,7 +195,7 @@ def _spring_terms(search, j, k, coef, cov, offsets, d_held, before, after) -> li
     library's offset: (its value refitted with the pair, 95 % half width)} (a coefficient of its
     joint's term)."""
     j, k = min(j, k), max(j, k)
-    stiff, m = coef
+    stiff, m = float(coef[0]), float(coef[1])
     qc = search.q_centre
     rest = float(qc[j] - qc[k] - m / stiff)
     grad = np.array([m / stiff ** 2, -1.0 / stiff])  # dL / d(k, m)
@@ -209,8 +209,8 @@ def _spring_terms(search, j, k, coef, cov, offsets, d_held, before, after) -> li
           f"k = {stiff:.3g} +- {half:.2g} {u}, rest difference L = {rest:.5g} +- {half_rest:.2g} {facts.joint_unit}")
     out = []
     for a, b, sign in ((j, k, 1.0), (k, j, -1.0)):
-        coefs = {search.name(a, key): Coefficient(search.name(a, key), s * stiff, half, units.get(search.name(a, key), ""))
-                 for key, s in (("force_k1", 1.0), ("force_xk1", -1.0))}
+        coefs = {n: Coefficient(n, s * stiff, half, units.get(n, ""))
+                 for n, s in ((search.name(a, "force_k1"), 1.0), (search.name(a, "force_xk1"), -1.0))}
         o = search.name(a, "offset")
         if o in offsets:
             coefs[o] = Coefficient(o, *offsets[o], units.get(o, ""), base=float(search.theta.get(o, 0.0)))
