@@ -196,13 +196,14 @@ def _discovery_section(d, files: dict) -> list:
               "the core's joint force (`<j>[i].force_*`), so the fitted plant below carries it.", ""]
         for t in d.discovered:
             held = f"  - held-out residual of `{t.channel}`: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g}"
-            if 0 < t.pair < t.joint:  # a damper between two joints: stated once, under its first joint
+            if 0 < t.pair < t.joint:  # a pair between two joints: stated once, under its first joint
                 L.append(held)
                 continue
             L += [f"- **{t.equation}**", f"  - what makes such a term: {t.mechanisms}",
                   held + f" (chi-square {t.delta_chi2_heldout:.0f} lower{' over both channels' * bool(t.pair)}); "
-                  + (f"one coefficient on {t.channel} and joint {t.pair}, kept against the two channels' separate "
-                     "terms (BIC, held-out part)" if t.pair else "kept in "
+                  + (f"{'two coefficients (k, L)' if 'spring' in t.terms else 'one coefficient'} on {t.channel} "
+                     f"and joint {t.pair}, kept against the two channels' separate terms (BIC, held-out part)"
+                     if t.pair else "kept in "
                      + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items())
                      + " of the bootstrap resamples")]
             L += [f"  - library effect it replaces: {x}" for x in t.instead_of]

@@ -21,12 +21,15 @@ KINDS = {
     "cross_damper": ("cross", "a force on one joint in proportion to another joint's rate"),
     "pair_damper": ("cross", "a damper between two joints: c (qd_j - qd_k) against joint j, c (qd_k - qd_j) "
                     "against joint k"),
+    "pair_spring": ("cross", "a spring between two joints: k (q_j - q_k - L) against joint j, its opposite against "
+                    "joint k"),
     "effort_position": ("effortpos", "a force in proportion to the applied effort and the position on one joint"),
     "position_damper": ("posrate", "a damping that changes linearly over the stroke on one joint"),
 }
 #: the coefficient (core key) each kind must be found with
 NEEDS = {"load_friction": "force_cload", "friction_zone": "force_czone", "stroke_friction": "force_cq1",
          "cable_link": "force_xk1", "cross_damper": "force_xv", "pair_damper": "force_xv",
+         "pair_spring": "force_xk1",
          "effort_position": "force_eq",
          "position_damper": "force_qv"}
 #: the smallest typical force drawn, per RMS effort (see the module's docstring)
@@ -63,6 +66,14 @@ def sample(kind, rng, motion, name, nd):
         c = 1.5 * size * E[j] / V[j]
         p = {name(a, key): v for a, b in ((j, k), (k, j))
              for key, v in (("force_xj", float(b + 1)), ("force_vpos", c), ("force_vneg", c), ("force_xv", -c))}
+        return p, [j, k]
+    elif kind == "pair_spring":  # the core's springs and the other joint's position, equal and opposite
+        k = int((j + rng.integers(1, nd)) % nd)
+        stiff = 1.5 * size * E[j] / T[j]
+        rest = float(home[j] - home[k] + rng.uniform(-0.5, 0.5) * T[j])  # the rest difference L
+        p = {name(a, key): v for a, b, sign in ((j, k, 1.0), (k, j, -1.0))
+             for key, v in (("force_xj", float(b + 1)), ("force_k1", stiff), ("force_xk1", -stiff),
+                            ("force_qc", float(home[a])), ("force_xqc", float(home[a]) - sign * rest))}
         return p, [j, k]
     elif kind == "effort_position":
         p = {name(j, "force_qc"): float(home[j]), name(j, "force_eq"): float(rng.choice([-1, 1])) * 1.5 * size / T[j]}
