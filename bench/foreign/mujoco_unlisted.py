@@ -85,7 +85,10 @@ structure left the conclusion says they "may stand in"), whether a library effec
 confidence (a failure: the truth is outside the library), the flexible stage's channels,
 inputs and held-out share and whether the inputs are the keyed-on ones, the held-out gain, the
 nominal residual's RMS over the noise on the most affected channel (the mechanism's size as the
-engine sees it), and the diagnosis's CPU time.
+engine sees it), and the diagnosis's CPU time; and a second judgement, the declared inputs against
+what either stage models (the flexible stage's inputs with the groups the discovery's terms, a
+platform force and drifts read: :func:`unlisted_common.judge_either`, docs/flexible.md, "Modelled
+by either stage"), with the discovery's confident terms and with its partial ones too.
 """
 from __future__ import annotations
 
@@ -107,7 +110,7 @@ from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  #
 from mujoco_unlisted_fourth import KINDS_FOURTH, SEED_FOURTH, draw_fourth, keyed_fourth  # noqa: E402
 from mujoco_unlisted_third import KINDS_THIRD, SEED_THIRD, draw_third, keyed_third  # noqa: E402
 from unlisted_common import RuleLog as _RuleLog  # noqa: E402
-from unlisted_common import judge, slider_groups, sweep_table, table  # noqa: E402
+from unlisted_common import judge, judge_either, slider_groups, stage_reads, sweep_table, table  # noqa: E402
 from unlisted_common import unit_direction as _dir  # noqa: E402
 
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
@@ -409,16 +412,18 @@ def _run(job):
     from cosim.core import Model
     from cosim.discrepancy import blind, diagnose
 
-    kind, seed, out, scale, capture = job
+    kind, seed, out, scale, capture, recordings = job
     m = Model("6pus")
     hook = edit = joint = None
     truth, key = {}, None
     if kind != "clean":
         hook, edit, truth, key, joint = draw(kind, np.random.default_rng(seed), m, motion(m, seed), scale)
     noise = blind.load_config()["noise"]["6pus"]
-    rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook, edit=edit)
     name = case_name(kind, seed, scale)
-    csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
+    csv = Path(recordings or out) / f"{name}.csv"
+    if recordings is None or not csv.exists():  # else the recording a run with this seed wrote (--recordings)
+        rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook, edit=edit)
+        csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
     t0 = time.process_time()
     with _RuleLog() as rule:  # the rule's statistics, for the record (computed on tied effects too)
         # the defaults: families, platform, drift, flexible on; the stage's inputs kept for --replay
@@ -458,6 +463,7 @@ def diagnosed_row(d, kind, seed, scale, truth, joint, tau_noise, cpu, rule) -> d
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
            "power": rule.power, "leaning": rule.leaning}
     row["found_before_flexible"] = bool(d.effects or d.discovered or d.unexplained or d.platform_force or d.drifts)
+    row["stage_reads"] = stage_reads(d)  # for judge_either
     return row
 
 
@@ -476,6 +482,9 @@ def _judged(row, fits, key):
         row["clean"] = not (row["found_before_flexible"] or row["flexible"])
     else:
         row["inputs_right"], row["share"], row["named"] = judge(fits, key, row["joint"])
+        if "stage_reads" in row:  # a run's whole diagnosis (a capture made before it was kept has none)
+            row["either_right"] = {v: judge_either(fits, reads, key, row["joint"])
+                                   for v, reads in row["stage_reads"].items()}
         row["keyed_on"] = {k: sorted(v) for k, v in key.items()}
     return row
 
@@ -486,7 +495,7 @@ def _replayed(job):
     declaration as it is now), ``cpu`` the stage's alone."""
     from flexible_bench import refit
 
-    kind, seed, _, scale, capture = job
+    kind, seed, _, scale, capture = job[:5]
     with open(Path(capture) / f"{case_name(kind, seed, scale)}.pkl", "rb") as fh:
         got = pickle.load(fh)
     row = dict(got["row"])
@@ -519,6 +528,9 @@ def main(argv=None) -> int:
     ap.add_argument("--capture", default=None, help="keep each case's flexible-stage inputs in this directory")
     ap.add_argument("--replay", default=None,
                     help="re-run only the flexible stage on the inputs kept there (--capture); cpu is the stage's")
+    ap.add_argument("--recordings", default=None,
+                    help="diagnose the recordings a run of the same seeds wrote there (its --out) instead of "
+                         "simulating them again (a case without one is simulated)")
     a = ap.parse_args(argv)
     kinds = [k for k in a.kinds.split(",") if k] if a.kinds is not None else list(KIND_SETS[a.kinds_set])
     bad = [k for k in kinds if k not in ALL_KINDS]
@@ -541,8 +553,10 @@ def main(argv=None) -> int:
     s0 = a.first_seed if a.first_seed is not None else first + (1000 if a.second else 0)
     jobs = []
     for base in range(s0, s0 + 1000 * a.sets, 1000):
-        jobs += [(k, base + order.index(k), str(a.out), x, a.replay or a.capture) for x in scales for k in kinds]
-        jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture) for i in range(a.clean)]
+        jobs += [(k, base + order.index(k), str(a.out), x, a.replay or a.capture, a.recordings)
+                 for x in scales for k in kinds]
+        jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture, a.recordings)
+                 for i in range(a.clean)]
     rows = []
     with Pool(a.jobs) as pool:
         for row in pool.imap_unordered(_replayed if a.replay else _run, jobs):

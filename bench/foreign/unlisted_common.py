@@ -73,6 +73,110 @@ def judge(fits, key, joint) -> tuple:
     return ok, max(f.share for f in told), named
 
 
+#: the quantities a discovered term (cosim.discrepancy.discovery.terms.TERMS) reads of its own joint i,
+#: each the group "<quantity> of slider i": q -> position, qd (its sign too) -> rate, qdd ->
+#: acceleration, the drive's effort tau -> effort; a constant force reads nothing
+OWN_READS = {"constant": (), "spring": ("position",), "quadratic": ("position",), "cubic": ("position",),
+             "ripple": ("position",), "step": ("position",), "drag": ("rate",), "viscous_pos": ("rate",),
+             "viscous_neg": ("rate",), "viscous_both": ("rate",), "coulomb_pos": ("rate",), "coulomb_neg": ("rate",),
+             "coulomb_both": ("rate",), "fading": ("rate",), "inertia": ("acceleration",),
+             "load": ("effort", "rate"), "effortpos": ("effort", "position"), "posrate": ("position", "rate"),
+             "stroke_1": ("position", "rate"), "stroke_2": ("position", "rate"), "zone": ("position", "rate"),
+             "cross_q": (), "cross_v": ()}
+#: the quantity a cross term reads of the other joint (its shape's ``force_xj``, 1-based)
+OTHER_READS = {"cross_q": "position", "cross_v": "rate"}
+#: a platform force's families (cosim.discrepancy.platform_force): a force, wrench or cable reaches
+#: the rails through the Jacobian at the pose ("the platform pose"); a drag -c v reads the
+#: platform's velocity, which the bench's declarations write as the rails' rates through the
+#: Jacobian the pose sets ("rate of slider 1" ... "rate of slider 6" and the pose)
+STATIC_FAMILIES = ("force", "wrench", "cable")
+
+
+def term_groups(term, noun: str = "slider") -> set:
+    """The flexible stage's groups a discovered term (``joint`` 1-based, ``terms``, ``shape``: a
+    :class:`cosim.discrepancy.discovery.terms.DiscoveredTerm`) reads: per term of ``terms``
+    :data:`OWN_READS` of its own joint, and for a cross term (``cross_q``, ``cross_v``)
+    :data:`OTHER_READS` of the joint its shape's ``force_xj`` names.  A damper between two joints
+    found as a pair (``pair`` set) is ``viscous_both`` and ``cross_v`` on each of its two
+    channels: its own rate and the other's.  A term this table does not hold reads "an unknown
+    term <name>", a group no declaration allows (the case is refused, not passed silently)."""
+    out = set()
+    for t in term.terms:
+        out |= {f"{q} of {noun} {term.joint}" for q in OWN_READS.get(t, ())}
+        if t not in OWN_READS:
+            out.add(f"an unknown term {t}")
+        if t in OTHER_READS:
+            k = next((v for p, v in term.shape.items() if p.endswith(".force_xj")), None)
+            out.add(f"an unknown term {t}" if k is None else f"{OTHER_READS[t]} of {noun} {int(k)}")
+    return out
+
+
+def platform_groups(family: str, n: int = 6, noun: str = "slider") -> set:
+    """The groups a platform force of ``family`` (``force``, ``wrench``, ``cable``, ``drag`` or a
+    static family ``+drag``) reads on every one of the ``n`` channels (:data:`STATIC_FAMILIES`)."""
+    parts = family.split("+")
+    out = {"the platform pose"}
+    if "drag" in parts:
+        out |= {f"rate of {noun} {i}" for i in range(1, n + 1)}
+    if not all(p in STATIC_FAMILIES or p == "drag" for p in parts):
+        out.add(f"an unknown platform force {family}")
+    return out
+
+
+def stage_reads(d, n: int = 6, noun: str = "slider") -> dict:
+    """What the diagnosis ``d`` models besides the flexible stage, as the groups it reads per
+    joint (1-based, as str: a row's JSON): ``{"confident": {...}, "with_partial": {...}}``.
+
+    ``with_partial``: every discovered term (:func:`term_groups`, on its joint's channel), a
+    platform force (:func:`platform_groups`, on every channel) and every drift ("time", on the
+    drifting parameter's joint, or on every channel for a parameter of no joint: a drift is the
+    library effect's level changing with time; the effect's own inputs are not added, a library
+    effect not being a term the discovery writes).  ``confident``: the terms not flagged partial,
+    and the platform force and drifts only where no structure is left (beside structure left the
+    conclusion says they "may stand in", the bench's rule for what is named with confidence)."""
+    from cosim.discrepancy.verdict import _joint
+
+    every = [str(i) for i in range(1, n + 1)]
+    out = {"confident": {}, "with_partial": {}}
+    settled = not d.unexplained
+    for t in d.discovered:
+        for v in ("with_partial",) + (("confident",) if not t.partial else ()):
+            out[v].setdefault(str(t.joint), set()).update(term_groups(t, noun))
+    extra = []
+    if d.platform_force:
+        extra += [(every, platform_groups(d.platform_force.family, n, noun))]
+    for x in d.drifts:
+        j = _joint(x.param)
+        extra += [(every if j is None else [str(j + 1)], {"time"})]
+    for joints, groups in extra:
+        for v in ("with_partial",) + (("confident",) if settled else ()):
+            for j in joints:
+                out[v].setdefault(j, set()).update(groups)
+    return {v: {j: sorted(g) for j, g in sorted(per.items())} for v, per in out.items()}
+
+
+def judge_either(fits, reads, key, joint) -> bool:
+    """Are the declared inputs ``key`` modelled by either stage?  The rule: per channel, the union
+    of the flexible stage's named groups (its explained channels, as :func:`judge`) and the groups
+    the rest of the diagnosis reads there (``reads``: one variant of :func:`stage_reads`, {joint
+    (1-based, int or str): groups}); over the case's channels (``joint``: a rail, rails, or None:
+    every channel) that union must hold every ``need`` group and one ``any`` group (where any is
+    declared) and nothing outside ``allowed``: either stage naming a group outside it refuses
+    the case.  Nothing named by either stage: no."""
+    on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
+    per = {}
+    for f in fits:
+        if f.explained and (on is None or f.joint in on):
+            per.setdefault(int(f.joint), set()).update(x.group for x in f.inputs)
+    for j, groups in reads.items():
+        if on is None or int(j) in on:
+            per.setdefault(int(j), set()).update(groups)
+    union = set().union(*per.values()) if per else set()
+    if not union:
+        return False
+    return union <= key["allowed"] and key["need"] <= union and (not key["any"] or bool(union & key["any"]))
+
+
 class RuleLog:
     """The confidence rule's statistics (cosim.discrepancy.keyed.elsewhere logs, per effect and
     kind of product, its strongest product's chi-square less ln n_eff against the bar, at DEBUG):
@@ -128,6 +232,18 @@ def _cell(r):
     return named
 
 
+def _either_cell(r) -> str:
+    """The either-stage judgement of a row (:func:`judge_either`) and what the diagnosis besides
+    the flexible stage reads on the case's channels (with partial terms)."""
+    if "either_right" not in r:
+        return "-"
+    yes = lambda v: "yes" if r["either_right"][v] else "no"  # noqa: E731
+    joint = r["joint"]
+    on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
+    reads = sorted({g for j, gs in r["stage_reads"]["with_partial"].items() if on is None or int(j) in on for g in gs})
+    return f"{yes('confident')} / {yes('with_partial')}" + (f" (reads {', '.join(reads)})" if reads else "")
+
+
 def _periodic(r) -> list:
     """The channels of a row whose structure left is a spectral line (signature ``periodic``)."""
     return [u.split()[0] for u in r["unexplained"] if u.endswith(" periodic")]
@@ -138,8 +254,11 @@ def table(rows, order) -> list:
     the clean recordings), then the counts."""
     eff = sorted([r for r in rows if r["kind"] != "clean"], key=lambda r: order.index(r["kind"]))
     clean = sorted([r for r in rows if r["kind"] == "clean"], key=lambda r: r["seed"])
+    either = any("either_right" in r for r in eff)  # rows of a run that kept the whole diagnosis
     L = ["| case | size (RMS / noise) | named with confidence | library named with confidence | flexible: "
-         "inputs named (keyed-on right?) | share | held-out gain | CPU [s] |", "|---" * 8 + "|"]
+         "inputs named (keyed-on right?) | share | held-out gain | CPU [s] |"
+         + (" either stage: keyed-on right? (confident terms / with partial) |" if either else ""),
+         "|---" * (9 if either else 8) + "|"]
     for r in eff:
         conf = r["library_confident"] + [t for t in r["discovered"] if not t.startswith("(partial)")]
         if not r["unexplained"]:  # with structure left, the conclusion says they "may stand in"
@@ -148,11 +267,12 @@ def table(rows, order) -> list:
         L.append(f"| {r['case']} | {r['size_over_noise']:.1f} (tau{r['size_channel']}) | {'; '.join(conf) or '-'} | "
                  f"{'**' + ', '.join(r['library_confident']) + '**' if r['library_confident'] else '-'} | "
                  f"{_cell(r)} ({'yes' if r['inputs_right'] else 'no'}) | {r['share']:.2f} | "
-                 f"{'-' if g is None or not math.isfinite(g) else f'{g:.2f}'} | {r['cpu']:.1f} |")
+                 f"{'-' if g is None or not math.isfinite(g) else f'{g:.2f}'} | {r['cpu']:.1f} |"
+                 + (f" {_either_cell(r)} |" if either else ""))
     for r in clean:
         what = "; ".join(r["library_all"] + r["discovered"] + r["drifts"] + [c for c, _, _ in r["flexible"]])
         L.append(f"| {r['case']} | {r['size_over_noise']:.1f} | {'clean' if r['clean'] else 'NOT CLEAN: ' + what} | "
-                 f"- | - | - | - | {r['cpu']:.1f} |")
+                 f"- | - | - | - | {r['cpu']:.1f} |" + (" - |" if either else ""))
     n = len(eff)
     if n:
         L += ["", f"library effect named with confidence: {sum(bool(r['library_confident']) for r in eff)}/{n}; "
@@ -161,6 +281,12 @@ def table(rows, order) -> list:
                   f"a periodic force reported (structure keyed on time): "
                   f"{', '.join(r['case'] for r in eff if _periodic(r)) or 'none'}"]
         L += [f"  {r['case']}: {'; '.join(r.get('periodic') or _periodic(r))}" for r in eff if _periodic(r)]
+        kept = [r for r in eff if "either_right" in r]
+        if kept:  # judge_either's rule
+            L.append(f"modelled as declared by either stage: {sum(r['either_right']['confident'] for r in kept)}"
+                     f"/{len(kept)} with the discovery's confident terms, "
+                     f"{sum(r['either_right']['with_partial'] for r in kept)}/{len(kept)} with its partial ones too"
+                     + (f" ({n - len(kept)} of {n} rows without the whole diagnosis)" if len(kept) < n else ""))
     if clean:
         L.append(f"clean recordings clean: {sum(r['clean'] for r in clean)}/{len(clean)}")
     L.append(f"diagnosis CPU: median {np.median([r['cpu'] for r in rows]):.1f} s, largest "
