@@ -260,7 +260,8 @@ def table(rows, order) -> list:
          + (" either stage: keyed-on right? (confident terms / with partial) |" if either else ""),
          "|---" * (9 if either else 8) + "|"]
     for r in eff:
-        conf = r["library_confident"] + [t for t in r["discovered"] if not t.startswith("(partial)")]
+        # a pair is one term per channel, the same equation on both: stated once
+        conf = list(dict.fromkeys(r["library_confident"] + [t for t in r["discovered"] if not t.startswith("(partial)")]))
         if not r["unexplained"]:  # with structure left, the conclusion says they "may stand in"
             conf += ([r["platform"]] if r["platform"] else []) + r["drifts"]
         g = r["gain"]
