@@ -17,7 +17,7 @@ from cosim.discrepancy.flexible import stage as flexible
 from cosim.discrepancy.flexible.beside import rules
 from cosim.discrepancy.flexible.copies import copies
 from cosim.discrepancy.flexible.own_joint import beside_another, counterpart, joint_of, own_first
-from cosim.discrepancy.flexible.select import DROP_MIN, consequences, select
+from cosim.discrepancy.flexible.select import DROP_MIN, consequences, fold_gain, select
 
 
 def _lowpassed(x, dt, tau):
@@ -120,3 +120,45 @@ def test_an_own_effort_beside_another_drives_effort_stays_where_leaving_it_out_c
     assert (without.mse - full.mse) / np.var(y) > 2 * DROP_MIN
     assert copies(kept, groups, X, X, y, fold_rows, cross_validate) == ["effort of slider 4"]
     assert copies(kept, groups, X, X, y, fold_rows, cross_validate, checked=beside_another(kept, 4)) == []
+
+
+def _fake_cvs(n=500, k=5, seed=1):
+    """Fake cross-validations by the groups they hold (``cv_on`` of :func:`select`): per set of
+    groups a held-out prediction in closed form of a residual ``y`` (unit variance)."""
+    rng = np.random.default_rng(seed)
+    y = rng.normal(0.0, 1.0, n)
+    fold_rows = tuple((np.arange(i, n, k), np.setdiff1d(np.arange(n), np.arange(i, n, k))) for i in range(k))
+
+    def cv(explained, **in_fold):  # explains a share of y, in some folds' rows another (fold0=0.1)
+        share = np.full(n, explained)
+        for name, v in in_fold.items():
+            share[fold_rows[int(name[4:])][0]] = v
+        pred = (1.0 - np.sqrt(1.0 - share)) * y
+        return types.SimpleNamespace(pred=pred, folds=fold_rows, mse=float(np.mean((y - pred) ** 2)))
+    return y, cv
+
+
+def test_the_own_joints_input_is_named_where_it_explains_as_much_and_claims_alike():
+    cols = [(f"qd{k}", f"rate of slider {k}", k, "rate", "m/s") for k in (1, 2)]
+    groups = flexible.input_groups(cols)
+    y, cv = _fake_cvs()
+    var = float(np.var(y))
+    other, own = ["rate of slider 2"], ["rate of slider 1"]
+
+    def run(by, claims=None):
+        return own_first(other, groups, 1, (), y, var, lambda gs: (by[tuple(gs)],), claims)
+    # the other joint's rate explains 0.60, the own 0.50 in every fold: a loss beyond the folds' bar
+    assert run({tuple(other): cv(0.60), tuple(own): cv(0.50)}) == other
+    # a loss of 0.07 between one and two standard errors (not significant by select.gain): kept
+    near = cv(0.60, fold0=0.30, fold4=0.55)
+    mean, se, _ = fold_gain(y, near.pred, cv(0.60).pred, near.folds, var, lambda m, s: True)
+    assert se < mean < 2 * se
+    assert run({tuple(other): cv(0.60), tuple(own): near}) == other
+    # the own explains 0.62, but 0.10 in fold 0's rows: a loss over DROP_MIN within one standard error
+    wide = cv(0.62, fold0=0.10)
+    mean, se, _ = fold_gain(y, wide.pred, cv(0.60).pred, wide.folds, var, lambda m, s: True)
+    assert (wide.mse - cv(0.60).mse) / var > DROP_MIN and 0 < mean <= se
+    assert run({tuple(other): cv(0.60), tuple(own): wide}) == own
+    # the own explains more, but only its trees would claim (a claim bar of 0.55): the other's stays
+    assert run({tuple(other): cv(0.50), tuple(own): cv(0.60)}, claims=lambda c: c.mse < 0.45 * var) == other
+    assert run({tuple(other): cv(0.50), tuple(own): cv(0.60)}) == own

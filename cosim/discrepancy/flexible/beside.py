@@ -128,7 +128,7 @@ def once(kept, groups, X, y, cross_validate) -> list:
     return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
-def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None):
+def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None, judged=None):
     """The ``after`` of :func:`~.select.select` on one channel: the groups that carry only the
     controller's answer to the force left out where others stay (:func:`.copies.copies`, on the
     channel's ``reference`` counterparts; none without), the efforts' choice made again
@@ -137,12 +137,14 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
     (``lines``: see :func:`judged_last`); first, on the channel of ``joint`` (1-based), another
     joint's input gives way to the own joint's of the same quantity where that explains as much
-    (:func:`.own_joint.own_first`)."""
+    and claims alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third
+    item is the claim)."""
     var = float(np.var(y))
     swapped = {}
 
     def after(kept, cv_on):
-        kept = own_first(kept, groups, joint, follow, y, var, cv_on)
+        kept = own_first(kept, groups, joint, follow, y, var, cv_on,
+                         None if judged is None else (lambda cv: judged(cv.mse)[2]))
         answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped,
                          checked=beside_another(kept, joint))
         kept = [g for g in kept if g not in answers] or kept

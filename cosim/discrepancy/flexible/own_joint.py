@@ -13,17 +13,18 @@ fold carries.  One rule, general (no kind of force is named in it):
   counterpart on the channel's own joint that is no consequence of the force
   (:func:`~.select.consequences`: the own effort and acceleration, copies of it), the trees on the
   named groups with that counterpart in its place (left out where the counterpart is named
-  already) are cross-validated; where the named groups do not beat them by
-  :data:`~.select.DROP_MIN` of the variance above :data:`~.select.GAIN_Z` standard errors over the
-  folds (:func:`~.select.gain`, the bar a consequence and a stand-in are judged by), the own
-  joint's is named.  All such groups are replaced at once first (one fit), then, where that is
-  beaten, one by one in the order named.  A force truly keyed on another joint (a damper between
-  two rails, a cable carrier pulled by their gap) loses far more than that bar without the other
-  joint's input, and keeps it.
+  already) are cross-validated; where they explain as much out of fold (:func:`as_much`: the
+  named groups' gain over them under :data:`~.select.DROP_MIN` of the variance, the check's bar,
+  or its mean over the folds within one standard error), and claim or not as the named groups do
+  (the rule chooses between copies of an input, not whether the channel holds a force), the own
+  joint's is named.  All such groups are replaced at once first (one fit), then, where that
+  explains less, one by one in the order named.  A force truly keyed on another joint (a damper
+  between two rails, a cable carrier pulled by their gap) loses far more than that bar without
+  the other joint's input, and keeps it.
 """
 from __future__ import annotations
 
-from .select import gain
+from .select import DROP_MIN, fold_gain
 
 #: the quantities whose group on another joint has a counterpart on the channel's own joint
 #: (an effort or an acceleration of the own joint is a consequence of its force, no cause)
@@ -62,18 +63,30 @@ def swapped(kept, moves) -> list:
     return out
 
 
-def own_first(kept, groups, joint, follow, y, var, cv_on) -> list:
+def as_much(own, other, y, var) -> bool:
+    """Whether the cross-validation ``own`` (the trees with the own joint's inputs) explains as
+    much of ``y`` (variance ``var``) out of fold as ``other`` (same folds): ``other``'s gain over it
+    is under :data:`~.select.DROP_MIN` of the variance (what the leave-one-out check counts as no
+    cost), or its mean over the folds is within one standard error of zero."""
+    mean, se, _ = fold_gain(y, own.pred, other.pred, other.folds, var, lambda m, s: True)
+    return (own.mse - other.mse) / var < DROP_MIN or mean <= se
+
+
+def own_first(kept, groups, joint, follow, y, var, cv_on, claims=None) -> list:
     """``kept`` with the groups of other joints that have a counterpart on the channel's own
-    ``joint`` (:func:`counterpart`) replaced by it wherever the named groups do not beat that
-    significantly (:func:`~.select.gain`; ``cv_on``: :func:`~.select.select`'s cross-validations):
-    all at once first, then one by one.  ``kept`` unchanged for a channel of no joint."""
+    ``joint`` (:func:`counterpart`) replaced by it wherever that explains as much out of fold
+    (:func:`as_much`; ``cv_on``: :func:`~.select.select`'s cross-validations) and claims or not as
+    ``kept`` does (``claims(cv)``: whether trees of that held-out error claim a force; None: not
+    judged): all at once first, then one by one.  ``kept`` unchanged for a channel of no joint."""
     moves = {g: counterpart(g, joint, groups, follow) for g in kept}
     moves = {g: h for g, h in moves.items() if h is not None}
     if not moves:
         return kept
 
-    def keeps(before, after):  # the own joint's named unless before beats it significantly
-        return gain(cv_on(after)[0], cv_on(before)[0], y, var)[1]
+    def keeps(before, after):  # the own joint's named where it explains as much and claims alike
+        own, other = cv_on(after)[0], cv_on(before)[0]
+        alike = claims is None or claims(own) == claims(other)
+        return not (alike and as_much(own, other, y, var))
 
     every = swapped(kept, moves)
     if not keeps(kept, every):

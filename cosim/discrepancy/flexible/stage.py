@@ -320,7 +320,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference=reference, joint=joint)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
