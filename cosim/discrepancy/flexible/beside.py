@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from .copies import copies
+from .own_joint import beside_another, own_first
 from .cv import BLOCKS_PER_FOLD, N_FOLDS, folds
 from .select import POSE, gain, made_of_efforts
 
@@ -127,19 +128,25 @@ def once(kept, groups, X, y, cross_validate) -> list:
     return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
-def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None):
+def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None, judged=None):
     """The ``after`` of :func:`~.select.select` on one channel: the groups that carry only the
     controller's answer to the force left out where others stay (:func:`.copies.copies`, on the
     channel's ``reference`` counterparts; none without), the efforts' choice made again
     without the fitted levels (:func:`passed_on`), the groups beside the pose named only where
     they add significantly (:func:`significant_only`), time beside other groups only where it
     adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
-    (``lines``: see :func:`judged_last`)."""
+    (``lines``: see :func:`judged_last`); first, on the channel of ``joint`` (1-based), another
+    joint's input gives way to the own joint's of the same quantity where that explains as much
+    and claims alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third
+    item is the claim)."""
     var = float(np.var(y))
     swapped = {}
 
     def after(kept, cv_on):
-        answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped)
+        kept = own_first(kept, groups, joint, follow, y, var, cv_on,
+                         None if judged is None else (lambda cv: judged(cv.mse)[2]))
+        answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped,
+                         checked=beside_another(kept, joint))
         kept = [g for g in kept if g not in answers] or kept
         kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
         kept = significant_only(kept, groups, y, var, cv_on)

@@ -23,7 +23,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .columns import SINCE, blocks, histories
-from .select import gain
+from .select import DROP_MIN, gain
 
 #: the quantities of the columns built from the measured accelerations or model efforts
 ANSWERED = ("acceleration", "effort", "history", "history x direction")
@@ -88,7 +88,7 @@ def _mean_only(y, fold_rows):
     return SimpleNamespace(pred=pred, folds=fold_rows, mse=float(np.mean((y - pred) ** 2)))
 
 
-def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) -> list:
+def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None, checked=()) -> list:
     """The groups of ``kept`` that carry only the answer to the force: the accelerations, efforts
     and histories (:data:`ANSWERED_GROUPS`; not a joint's history beside its own rate, the level
     a slow state of the joint sets, as :func:`~.select.stand_ins` has it) whose leaving out costs
@@ -98,7 +98,10 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) 
     :func:`counterparts`, or a function giving them: :func:`on_channel`; the trees on no group: a
     constant).  Where ``X`` holds columns fitted per fold (:class:`~.cv.FoldInputs`), each fold's
     trees are fitted and judged on that fold's, the counterparts in place as in the whole array.
-    ``done``: the cross-validations already made, by their columns."""
+    ``done``: the cross-validations already made, by their columns; ``checked``: the groups that
+    stay where leaving them out costs :data:`~.select.DROP_MIN` alone, the leave-one-out check's
+    bar (a channel's own joint's input beside another joint's of the same quantity:
+    :func:`.own_joint.beside_another`)."""
     answered = [g for g in kept if g.startswith(ANSWERED_GROUPS)
                 and not (g.startswith("history of ") and g.replace("history of", "rate of", 1) in kept)]
     reference = reference() if callable(reference) and answered else reference
@@ -124,4 +127,8 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None) 
         return done[cols]
 
     whole = exogenous(kept)
-    return [g for g in answered if not gain(exogenous([h for h in kept if h != g]), whole, y, var)[1]]
+
+    def costs(g):
+        overall, shown = gain(exogenous([h for h in kept if h != g]), whole, y, var)
+        return overall >= DROP_MIN if g in checked else shown
+    return [g for g in answered if not costs(g)]

@@ -313,14 +313,14 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     X, columns, groups, every, keep, projections, lines, resonance = _channel_columns(
         X, columns, y, fold_rows, c, offered, motion.bank(pipe))
     reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
-    follow = judged_last(consequences(columns, groups, c + 1 if c is not None else None), groups, lines)
+    follow = judged_last(consequences(columns, groups, (joint := c + 1 if c is not None else None)), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
     screened_fold = direction_c if how == "both" else None  # the folded fit made too
     sigma = direction_c if how == "folded" else sigma
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference=reference)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged)
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
