@@ -36,12 +36,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .clock import TIME, on_time
 from .copies import copies
 from .cv import BLOCKS_PER_FOLD, N_FOLDS, folds
 from .select import POSE, gain, made_of_efforts
-
-#: the group of time (:func:`~.columns.input_groups`)
-TIME = "time"
 
 
 def judged_last(follow, groups, lines=()) -> set:
@@ -131,7 +129,8 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     """The ``after`` of :func:`~.select.select` on one channel: the groups that carry only the
     controller's answer to the force left out where others stay (:func:`.copies.copies`, on the
     channel's ``reference`` counterparts; none without), the efforts' choice made again
-    without the fitted levels (:func:`passed_on`), the groups beside the pose named only where
+    without the fitted levels (:func:`passed_on`), time in the place of histories that do not
+    beat it significantly (:func:`.clock.on_time`), the groups beside the pose named only where
     they add significantly (:func:`significant_only`), time beside other groups only where it
     adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
     (``lines``: see :func:`judged_last`)."""
@@ -142,6 +141,7 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
         answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped)
         kept = [g for g in kept if g not in answers] or kept
         kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
+        kept = kept if lines else on_time(kept, groups, y, var, cv_on)
         kept = significant_only(kept, groups, y, var, cv_on)
         return kept if lines else once(kept, groups, X, y, cross_validate)
     return after
