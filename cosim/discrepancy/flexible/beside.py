@@ -129,11 +129,12 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     """The ``after`` of :func:`~.select.select` on one channel: the groups that carry only the
     controller's answer to the force left out where others stay (:func:`.copies.copies`, on the
     channel's ``reference`` counterparts; none without), the efforts' choice made again
-    without the fitted levels (:func:`passed_on`), time in the place of histories that do not
-    beat it significantly (:func:`.clock.on_time`), the groups beside the pose named only where
+    without the fitted levels (:func:`passed_on`), the groups beside the pose named only where
     they add significantly (:func:`significant_only`), time beside other groups only where it
-    adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
-    (``lines``: see :func:`judged_last`)."""
+    adds with the neighbouring blocks held out (:func:`once`), then time in the place of
+    histories that do not beat it significantly (:func:`.clock.on_time`; judged by :func:`once`
+    again beside other groups), unless time holds a line's phase (``lines``: see
+    :func:`judged_last`)."""
     var = float(np.var(y))
     swapped = {}
 
@@ -141,7 +142,10 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
         answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped)
         kept = [g for g in kept if g not in answers] or kept
         kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
-        kept = kept if lines else on_time(kept, groups, y, var, cv_on)
         kept = significant_only(kept, groups, y, var, cv_on)
-        return kept if lines else once(kept, groups, X, y, cross_validate)
+        if lines:
+            return kept
+        kept = once(kept, groups, X, y, cross_validate)
+        timed = on_time(kept, groups, y, var, cv_on)
+        return kept if timed == kept else once(timed, groups, X, y, cross_validate)
     return after
