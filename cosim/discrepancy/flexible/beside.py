@@ -14,7 +14,10 @@ named in them):
   slowly in the recording, so, as a consequence of the force in closed loop is
   (:func:`~.select.consequences`), it is named only where the trees on the other inputs plus it
   beat the other inputs alone by :data:`~.select.DROP_MIN` of the variance, above
-  :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`).
+  :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`).  Where the
+  low-passed histories named instead do not beat time by that bar, time is named in their place
+  (:func:`.clock.on_time`: a state set by time, a window or a warming from cold, that slow
+  histories follow by chance over the one change a recording holds).
 * **Beside the pose, only what adds significantly** (:func:`beside_pose`): beside the named
   platform pose, a history, an acceleration, an effort or time stays named only where leaving
   it out costs :data:`~.select.DROP_MIN` above :data:`~.select.GAIN_Z` standard errors over the
