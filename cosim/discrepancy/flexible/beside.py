@@ -14,7 +14,10 @@ named in them):
   slowly in the recording, so, as a consequence of the force in closed loop is
   (:func:`~.select.consequences`), it is named only where the trees on the other inputs plus it
   beat the other inputs alone by :data:`~.select.DROP_MIN` of the variance, above
-  :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`).
+  :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`).  Where the
+  low-passed histories named instead do not beat time by that bar, time is named in their place
+  (:func:`.clock.on_time`: a state set by time, a window or a warming from cold, that slow
+  histories follow by chance over the one change a recording holds).
 * **Beside the pose, only what adds significantly** (:func:`beside_pose`): beside the named
   platform pose, a history, an acceleration, an effort or time stays named only where leaving
   it out costs :data:`~.select.DROP_MIN` above :data:`~.select.GAIN_Z` standard errors over the
@@ -36,13 +39,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .clock import TIME, on_time
 from .copies import copies
 from .own_joint import beside_another, own_first
 from .cv import BLOCKS_PER_FOLD, N_FOLDS, folds
 from .select import POSE, gain, made_of_efforts
-
-#: the group of time (:func:`~.columns.input_groups`)
-TIME = "time"
 
 
 def judged_last(follow, groups, lines=()) -> set:
@@ -134,11 +135,13 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     channel's ``reference`` counterparts; none without), the efforts' choice made again
     without the fitted levels (:func:`passed_on`), the groups beside the pose named only where
     they add significantly (:func:`significant_only`), time beside other groups only where it
-    adds with the neighbouring blocks held out (:func:`once`), unless time holds a line's phase
-    (``lines``: see :func:`judged_last`); first, on the channel of ``joint`` (1-based), another
-    joint's input gives way to the own joint's of the same quantity where that explains as much
-    and claims alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third
-    item is the claim)."""
+    adds with the neighbouring blocks held out (:func:`once`), then time in the place of
+    histories that do not beat it significantly (:func:`.clock.on_time`; judged by :func:`once`
+    again beside other groups), unless time holds a line's phase (``lines``: see
+    :func:`judged_last`); first, on the channel of ``joint`` (1-based), another joint's input
+    gives way to the own joint's of the same quantity where that explains as much and claims
+    alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third item is
+    the claim)."""
     var = float(np.var(y))
     swapped = {}
 
@@ -150,5 +153,9 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
         kept = [g for g in kept if g not in answers] or kept
         kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
         kept = significant_only(kept, groups, y, var, cv_on)
-        return kept if lines else once(kept, groups, X, y, cross_validate)
+        if lines:
+            return kept
+        kept = once(kept, groups, X, y, cross_validate)
+        timed = on_time(kept, groups, y, var, cv_on)
+        return kept if timed == kept else once(timed, groups, X, y, cross_validate)
     return after
