@@ -47,6 +47,7 @@ sys.path.insert(0, str(REPO / "bench"))
 from closed_loop_bench import mujoco_xml  # noqa: E402  (the MJCF of the same 6-PUS)
 
 from cosim.controllers import ControllerError, Reference  # noqa: E402
+from cosim.errors import JointLimitError  # noqa: E402
 from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.excitation import excitation  # noqa: E402
@@ -437,7 +438,7 @@ def main(argv=None) -> int:
         try:
             rec, truth = simulate(m, effect, value, joint, seed, a.duration, noise, a.controller,
                                   gap_model=a.gap_model)
-        except ControllerError as e:  # the drawn case drove a rail off its stroke: not a recording
+        except (ControllerError, JointLimitError) as e:  # the drawn case drove a rail off its stroke: not a recording
             print(f"{name:22s} NOT GENERATED ({e})", flush=True)
             continue
         csv = write_case(m, rec, a.out / f"{name}.csv")
