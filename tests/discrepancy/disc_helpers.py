@@ -104,3 +104,21 @@ def check_declaration(kind, key, truth, joint, platform, vocabulary, own_inputs=
         assert truth["rail"] in (joint if isinstance(joint, tuple) else (joint,)), kind
         if own_inputs:
             assert any(g.endswith(f"slider {truth['rail']}") for g in key["need"] | key["any"]), kind
+
+
+def check_mechanism_acts(mb, m, seed, hook, edit, duration, kind):
+    """A mechanism's ``hook``/``edit`` built for ``bench/foreign/mujoco_blind.simulate`` (``mb``)
+    runs in MuJoCo over ``duration`` [s] without the effort noise and changes the recorded
+    efforts against the same run without it."""
+    import math
+
+    noise = dict(blind.load_config()["noise"]["6pus"])
+    noise = {k: (0.0 if np.isscalar(v) else [0.0] * len(v)) for k, v in noise.items()}  # the force alone differs
+    rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, hook=hook, edit=edit)
+    clean, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise)
+    tau, tau0 = np.asarray(rec.tau), np.asarray(clean.tau)
+    assert np.isfinite(tau).all() and np.isfinite(np.asarray(rec.q)).all()
+    assert tau.shape == tau0.shape
+    # [N]: the mechanism acts, at a tenth of the effort noise (5 mN) or more (a run is
+    # deterministic at its seed: a no-op differs by round-off)
+    assert math.sqrt(np.mean((tau - tau0) ** 2)) > 5e-4, kind

@@ -21,8 +21,7 @@ import mujoco_unlisted as mu  # noqa: E402
 import mujoco_unlisted_fourth as fourth  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
-from cosim.discrepancy import blind  # noqa: E402
-from disc_helpers import stage_groups  # noqa: E402
+from disc_helpers import stage_groups, check_mechanism_acts  # noqa: E402
 
 #: the tests' seeds: TEST_SEED + the kind's index (the bench draws 57700 +; sizes were checked at 57750-57769)
 TEST_SEED = 57800
@@ -175,14 +174,5 @@ def test_the_coiled_cord_is_a_mujoco_tendon_of_the_draw_s_geometry():
 @pytest.mark.parametrize("kind", fourth.KINDS_FOURTH)
 def test_every_kind_builds_runs_in_mujoco_and_changes_the_recording(kind):
     m, seed, _, (hook, edit, _, _, _) = _case(kind)
-    noise = dict(blind.load_config()["noise"]["6pus"])
-    noise = {k: (0.0 if np.isscalar(v) else [0.0] * len(v)) for k, v in noise.items()}  # the force alone differs
     duration = 9.0 if kind == "end_cushion" else 2.0  # the cushion is reached over the stroke's last 8-15 %
-    rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, hook=hook, edit=edit)
-    clean, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise)
-    tau, tau0 = np.asarray(rec.tau), np.asarray(clean.tau)
-    assert np.isfinite(tau).all() and np.isfinite(np.asarray(rec.q)).all()
-    assert tau.shape == tau0.shape
-    # [N]: the mechanism acts, at a tenth of the effort noise (5 mN) or more (a run is
-    # deterministic at its seed: a no-op differs by round-off)
-    assert math.sqrt(np.mean((tau - tau0) ** 2)) > 5e-4, kind
+    check_mechanism_acts(mb, m, seed, hook, edit, duration, kind)

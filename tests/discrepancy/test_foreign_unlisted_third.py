@@ -4,7 +4,6 @@ recording; a rail force computed in MuJoCo's step, run along its case's referenc
 was drawn to (at most, where a cap on its coefficient binds); the damper built as a MuJoCo tendon
 pushes the two carriages equally and oppositely; every declaration is well-formed in the flexible
 stage's vocabulary."""
-import math
 import sys
 from pathlib import Path
 
@@ -19,8 +18,7 @@ import mujoco_unlisted as mu  # noqa: E402
 import mujoco_unlisted_third as third  # noqa: E402
 
 from cosim.core import Model  # noqa: E402
-from cosim.discrepancy import blind  # noqa: E402
-from disc_helpers import check_declaration, stage_groups  # noqa: E402
+from disc_helpers import check_declaration, stage_groups, check_mechanism_acts  # noqa: E402
 
 #: the rail forces computed in MuJoCo's step (the others edit MuJoCo's model)
 HOOKED_RAIL = ("thrust_ripple", "wiper_debris", "backemf_limit", "brake_window", "shared_bus_sag", "grease_warming")
@@ -98,14 +96,5 @@ def test_the_coupling_damper_is_a_mujoco_tendon_that_pushes_the_two_carriages_op
 @pytest.mark.parametrize("kind", third.KINDS_THIRD)
 def test_every_kind_builds_runs_in_mujoco_and_changes_the_recording(kind):
     m, seed, _, (hook, edit, _, _, _) = _case(kind)
-    noise = dict(blind.load_config()["noise"]["6pus"])
-    noise = {k: (0.0 if np.isscalar(v) else [0.0] * len(v)) for k, v in noise.items()}  # the force alone differs
     duration = 6.0 if kind == "brake_window" else 2.0  # the brake's window opens 1.5-5.5 s into the run
-    rec, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise, hook=hook, edit=edit)
-    clean, _ = mb.simulate(m, None, 0.0, 0, seed, duration, noise)
-    tau, tau0 = np.asarray(rec.tau), np.asarray(clean.tau)
-    assert np.isfinite(tau).all() and np.isfinite(np.asarray(rec.q)).all()
-    assert tau.shape == tau0.shape
-    # [N]: the mechanism acts, at a tenth of the effort noise (5 mN) or more (a run is
-    # deterministic at its seed: a no-op differs by round-off)
-    assert math.sqrt(np.mean((tau - tau0) ** 2)) > 5e-4, kind
+    check_mechanism_acts(mb, m, seed, hook, edit, duration, kind)
