@@ -110,7 +110,7 @@ from mujoco_unlisted_more import KINDS_MORE, SEED_MORE, draw_more, keyed_more  #
 from mujoco_unlisted_fourth import KINDS_FOURTH, SEED_FOURTH, draw_fourth, keyed_fourth  # noqa: E402
 from mujoco_unlisted_third import KINDS_THIRD, SEED_THIRD, draw_third, keyed_third  # noqa: E402
 from unlisted_common import RuleLog as _RuleLog  # noqa: E402
-from unlisted_common import judge, judge_either, slider_groups, stage_reads, sweep_table, table  # noqa: E402
+from unlisted_common import judge, judge_either, slider_groups, stage_reads, sweep_table, table, two_rails  # noqa: E402
 from unlisted_common import unit_direction as _dir  # noqa: E402
 
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
@@ -301,8 +301,7 @@ def _rail_mechanism(kind, rng, mo, scale=1.0):
     """(hook, truth, j, k) of a force on one rail (0-based j; k the other rail or None); ``scale``
     multiplies the force's magnitude (its levels, not its shape: the same draws at every scale)."""
     n = len(mo["E"])
-    j = int(rng.integers(n))
-    k = int((j + 1 + rng.integers(n - 1)) % n)
+    j, k = two_rails(rng, n)
     size = scale * float(rng.uniform(0.1, 0.2))
     E, V = mo["E"], mo["V"]
     if kind == "rate_coupled_friction":

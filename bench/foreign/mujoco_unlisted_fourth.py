@@ -57,7 +57,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from unlisted_common import elapsed, lowpass, platform_dof, rms, slider_groups
+from unlisted_common import elapsed, lowpass, platform_dof, rms, slider_groups, two_rails
 
 KINDS_FOURTH = ("end_cushion", "eddy_plate", "misaligned_nut", "air_jet_lift", "coil_crosstalk", "coiled_cord",
                 "magnet_heating", "bundle_torsion", "neighbour_heat", "floor_vibration")
@@ -406,8 +406,7 @@ def _crosstalk(rng, mo, j, k, target):
 def _rail_mechanism(kind, rng, m, mo):
     """(hook, truth, j, k) of a fourth-set force on rails (0-based j; k the other rail or None)."""
     n = len(mo["E"])
-    j = int(rng.integers(n))
-    k = int((j + 1 + rng.integers(n - 1)) % n)
+    j, k = two_rails(rng, n)
     target = float(rng.uniform(0.1, 0.2)) * float(mo["E"][j])  # the force's RMS along the reference [N]
     if kind in ("coil_crosstalk", "neighbour_heat"):
         hook, truth = (_crosstalk if kind == "coil_crosstalk" else _neighbour_heat)(rng, mo, j, k, target)

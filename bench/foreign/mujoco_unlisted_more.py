@@ -38,7 +38,7 @@ import numpy as np
 from unlisted_common import excess as _excess
 from unlisted_common import platform_dof as _platform
 from unlisted_common import rms as _rms
-from unlisted_common import slider_groups
+from unlisted_common import slider_groups, two_rails
 from unlisted_common import softplus as _softplus
 from unlisted_common import unit_direction as _dir
 
@@ -278,8 +278,7 @@ def _saturation(rng, mo, j, target):
 def _rail_mechanism(kind, rng, m, mo):
     """(hook, truth, j, k) of a second-set force on rails (0-based j; k the other rail or None)."""
     n = len(mo["E"])
-    j = int(rng.integers(n))
-    k = int((j + 1 + rng.integers(n - 1)) % n)
+    j, k = two_rails(rng, n)
     target = 1.5 * float(rng.uniform(0.1, 0.2)) * float(mo["E"][j])  # the force's RMS along the reference [N]
     if kind == "cable_carrier":
         return (*_carrier(rng, mo, j, k, target), j, k)

@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from unlisted_common import lowpass, platform_dof, rms, slider_groups
+from unlisted_common import lowpass, platform_dof, rms, slider_groups, two_rails
 
 KINDS_THIRD = ("thrust_ripple", "vacuum_hose", "wiper_debris", "loose_payload", "coupling_damper",
                "backemf_limit", "brake_window", "flexure_joint", "shared_bus_sag", "grease_warming")
@@ -314,8 +314,7 @@ def _grease(rng, mo, j, target):
 def _rail_mechanism(kind, rng, m, mo):
     """(hook, edit, truth, j, k) of a third-set force on rails (0-based j; k the other rail or None)."""
     n = len(mo["E"])
-    j = int(rng.integers(n))
-    k = int((j + 1 + rng.integers(n - 1)) % n)
+    j, k = two_rails(rng, n)
     target = float(rng.uniform(0.1, 0.2)) * float(mo["E"][j])  # the force's RMS along the reference [N]
     if kind == "coupling_damper":
         edit, truth = _coupling(rng, mo, j, k, target)

@@ -23,6 +23,13 @@ def unit_direction(rng):
     return d / np.linalg.norm(d)
 
 
+def two_rails(rng, n) -> tuple:
+    """(j, k): a rail drawn of ``n`` and another one, k != j (0-based), in this order of draws
+    from ``rng`` (every set's seeds are fixed on it)."""
+    j = int(rng.integers(n))
+    return j, int((j + 1 + rng.integers(n - 1)) % n)
+
+
 def rms(x) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
