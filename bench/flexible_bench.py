@@ -189,18 +189,18 @@ def one(kind, seed, duration=None, capture=None):
     row = {"kind": key["kind"], "seed": seed, "cpu": cpu, "flex_cpu": d.timings.get("flexible", 0.0),
            "truth_inputs": key["truth"], "joint": key["joint"]}
     if kind is None:
-        row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for f in d.flexible if f.explained]
+        row["claims"] = [(f.channel, f.share, list(f.named)) for f in d.flexible if f.explained]
         row["ok"] = not row["claims"]
         _keep(capture, row, kept)
         return row
     fit = next((f for f in d.flexible if f.joint == key["joint"]), None)
     row["truth_share"] = truth_share(d, key, fit)
     row["share"] = fit.share if fit is not None and fit.explained else 0.0
-    row["named"] = [x.group for x in fit.inputs] if fit is not None else []
+    row["named"] = list(fit.named) if fit is not None else []
     row["readjusted"] = list(fit.readjusted) if fit is not None else []
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(key["truth"])
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
-    row["others"] = [(f.channel, [x.group for x in f.inputs]) for f in d.flexible if f.explained and f.joint != key["joint"]]
+    row["others"] = [(f.channel, list(f.named)) for f in d.flexible if f.explained and f.joint != key["joint"]]
     row["statement"] = fit.statement if fit is not None else "(no flexible fit on the force's channel)"
     kept["force"] = np.interp(np.asarray(d.residual["time"]), key["time"], key["force"][:, key["joint"] - 1])
     kept["before"] = np.asarray(d.residual["before"])[:, key["joint"] - 1]
@@ -274,16 +274,16 @@ def replay(path):
     fits = [(f.joint, f) for f in fits]
     claims = [(j, f) for j, f in fits if f.explained]
     if row["kind"] == "clean":
-        row["claims"] = [(f.channel, f.share, [x.group for x in f.inputs]) for _, f in claims]
+        row["claims"] = [(f.channel, f.share, list(f.named)) for _, f in claims]
         row["ok"] = not row["claims"]
         return row
     fit = next((f for j, f in fits if j == row["joint"]), None)
     row["share"] = fit.share if fit is not None and fit.explained else 0.0
-    row["named"] = [x.group for x in fit.inputs] if fit is not None else []
+    row["named"] = list(fit.named) if fit is not None else []
     row["readjusted"] = list(fit.readjusted) if fit is not None else []
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(row["truth_inputs"])
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
-    row["others"] = [(f.channel, [x.group for x in f.inputs]) for j, f in claims if j != row["joint"]]
+    row["others"] = [(f.channel, list(f.named)) for j, f in claims if j != row["joint"]]
     return row
 
 

@@ -113,7 +113,7 @@ def one(kind, seed, out, capture=None):
     row = {"kind": kind, "seed": seed, "cpu": cpu, "joint": joint, "truth": truth, "truth_inputs": truth,
            "flex_cpu": d.timings.get("flexible", 0.0)}
     if kind == "clean":
-        row["claims"] = [(f.channel, round(f.share, 2), [x.group for x in f.inputs]) for f in d.flexible if f.explained]
+        row["claims"] = [(f.channel, round(f.share, 2), list(f.named)) for f in d.flexible if f.explained]
         fb._keep(capture, row, kept)
         return row
     lt = np.array(log)
@@ -123,10 +123,10 @@ def one(kind, seed, out, capture=None):
     fit = next((f for f in d.flexible if f.joint == joint), None)
     row["truth_share"] = truth_share(d, key, fit)
     row["share"] = fit.share if fit is not None and fit.explained else 0.0
-    row["named"] = [x.group for x in fit.inputs] if fit is not None else []
+    row["named"] = list(fit.named) if fit is not None else []
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(truth)
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
-    row["others"] = [(f.channel, [x.group for x in f.inputs]) for f in d.flexible if f.explained and f.joint != joint]
+    row["others"] = [(f.channel, list(f.named)) for f in d.flexible if f.explained and f.joint != joint]
     fb._keep(capture, row, kept)
     return row
 

@@ -497,7 +497,7 @@ def main(argv=None) -> int:
                      "confident_before": confident_before, "confident_elsewhere": confident_elsewhere,
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall,
-                     "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible
+                     "flexible": [(f.channel, round(f.share, 3), list(f.named)) for f in d.flexible
                                   if f.explained]})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "

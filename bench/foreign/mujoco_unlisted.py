@@ -457,7 +457,7 @@ def diagnosed_row(d, kind, seed, scale, truth, joint, tau_noise, cpu, rule) -> d
            "drifts": [f"{x.param} {x.kind}" for x in d.drifts],
            "unexplained": [f"{e['channel']} {e['signature']}" for e in d.unexplained],
            "periodic": [f"{e['channel']}: {e['keyed_on']}" for e in d.unexplained if e["signature"] == "periodic"],
-           "flexible": [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in d.flexible if f.explained],
+           "flexible": [(f.channel, round(f.share, 3), list(f.named)) for f in d.flexible if f.explained],
            "gain": d.heldout.get("gain"), "size_over_noise": float(size.max()),
            "size_channel": int(np.argmax(size)) + 1, "conclusion": d.conclusion, "rule": rule.rows,
            "power": rule.power, "leaning": rule.leaning}
@@ -476,7 +476,7 @@ def _captured(run):
 def _judged(row, fits, key):
     """``row`` with the flexible stage's ``fits`` and their judgement against ``key`` (clean: no
     claim and nothing found before the stage)."""
-    row["flexible"] = [(f.channel, round(f.share, 3), [x.group for x in f.inputs]) for f in fits if f.explained]
+    row["flexible"] = [(f.channel, round(f.share, 3), list(f.named)) for f in fits if f.explained]
     if row["kind"] == "clean":
         row["clean"] = not (row["found_before_flexible"] or row["flexible"])
     else:

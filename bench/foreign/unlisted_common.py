@@ -71,7 +71,7 @@ def judge(fits, key, joint) -> tuple:
     channels of ``joint`` (a rail, rails, or None: every channel)."""
     on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
     told = [f for f in fits if f.explained and (on is None or f.joint in on)]
-    named = {f.channel: [x.group for x in f.inputs] for f in told}
+    named = {f.channel: list(f.named) for f in told}
     if not told or not any(named.values()):
         return False, max([f.share for f in told], default=0.0), named
     union = set().union(*map(set, named.values()))
@@ -174,7 +174,7 @@ def judge_either(fits, reads, key, joint) -> bool:
     per = {}
     for f in fits:
         if f.explained and (on is None or f.joint in on):
-            per.setdefault(int(f.joint), set()).update(x.group for x in f.inputs)
+            per.setdefault(int(f.joint), set()).update(f.named)
     for j, groups in reads.items():
         if on is None or int(j) in on:
             per.setdefault(int(j), set()).update(groups)

@@ -19,7 +19,7 @@ def term(joint, terms, shape=None, partial="", pair=0):
 
 def fit(joint, groups, explained=True):
     return NS(joint=joint, channel=f"tau{joint}", explained=explained, share=0.8,
-              inputs=[NS(group=g) for g in groups])
+              inputs=[NS(group=g) for g in groups], named=tuple(groups))
 
 
 def diagnosis(discovered=(), platform=None, drifts=(), unexplained=()):

@@ -58,7 +58,7 @@ def test_a_force_on_two_rails_is_judged_over_both_rails_channels():
     key = more.keyed_more("cable_carrier", 2, 1)
     fit = lambda joint, groups: types.SimpleNamespace(  # noqa: E731
         explained=True, joint=joint, channel=f"tau{joint}", share=0.5,
-        inputs=[types.SimpleNamespace(group=g) for g in groups])
+        inputs=[types.SimpleNamespace(group=g) for g in groups], named=tuple(groups))
     fits = [fit(2, ["position of slider 2"]), fit(1, ["position of slider 1"]), fit(4, ["time"])]
     ok, _, named = mu.judge(fits, key, (2, 1))
     assert ok and set(named) == {"tau2", "tau1"}  # rail 4's channel is not the carrier's

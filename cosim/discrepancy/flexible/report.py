@@ -54,13 +54,23 @@ def markdown(fits: list, files: dict) -> list:
          "| channel | explained (out of fold) | chi-square | RMS left | own noise | inputs (importance) |",
          "| --- | --- | --- | --- | --- | --- |"]
     for f in fits:
-        ins = ", ".join(f"{d.group} ({100 * d.importance:.0f} %)" for d in f.inputs) or "-"
+        ins = _inputs_cell(f)
         L.append(f"| {f.channel} | {100 * f.share:.0f} %{'' if f.explained else ' (not claimed)'} | {f.z:.0f} | "
                  f"{f.rms_left:.3g} {f.unit} | {f.noise:.3g} {f.unit} | {ins} |")
     L += [""] + [f"- {f.statement}" for f in fits] + [""]
     if files.get("flexible"):
         L += ["![Partial dependence of the flexible model](flexible.png)", ""]
     return L
+
+
+def _inputs_cell(fit) -> str:
+    """The table's inputs of a fit: each named group once (:attr:`~.stage.FlexibleFit.named`) with
+    the importance of each of its curves; a folded fit's own rate the direction's, then the level's."""
+    imp = {}
+    for d in fit.inputs:
+        said = "direction " if d.feature == "direction of motion" else ("level " if d.group in imp else "")
+        imp.setdefault(d.group, []).append(f"{said}{100 * d.importance:.0f} %")
+    return ", ".join(f"{g} ({', '.join(imp[g])})" for g in fit.named) or "-"
 
 
 def _where(grid, curve, unit) -> str:

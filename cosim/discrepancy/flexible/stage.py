@@ -200,11 +200,19 @@ class FlexibleFit:
     #: the claimed model's out-of-fold prediction of the residual (decimated samples), in ``unit``
     pred: object = field(default=None, repr=False, compare=False)
 
+    @property
+    def named(self) -> tuple:
+        """The groups of ``inputs``, each once, in their order: a folded fit whose level depends on
+        the joint's own rate holds that rate twice in ``inputs`` (the direction first, then the
+        level's curve on it), one input named."""
+        return tuple(dict.fromkeys(d.group for d in self.inputs))
+
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
                                              "beyond_noise", "screened", "weak", "readjusted", "folded")}
         out["inputs"] = [vars(d) for d in self.inputs]
+        out["named"] = list(self.named)
         return out
 
 
