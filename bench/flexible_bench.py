@@ -264,9 +264,10 @@ def refit(kept) -> tuple:
     return fits, cpu
 
 
-def replay(path):
+def replay(path, with_fits=False):
     """The stage re-run on a case's captured inputs (``--capture``): the row of :func:`one`
-    with the new share, names and the stage's CPU time."""
+    with the new share, names and the stage's CPU time (``with_fits``: ``(row, fits)``, the
+    fits with their joint set)."""
     with open(path, "rb") as fh:
         got = pickle.load(fh)
     row = dict(got["row"])
@@ -276,7 +277,7 @@ def replay(path):
     if row["kind"] == "clean":
         row["claims"] = [(f.channel, f.share, list(f.named)) for _, f in claims]
         row["ok"] = not row["claims"]
-        return row
+        return (row, [f for _, f in fits]) if with_fits else row
     fit = next((f for j, f in fits if j == row["joint"]), None)
     row["share"] = fit.share if fit is not None and fit.explained else 0.0
     row["named"] = list(fit.named) if fit is not None else []
@@ -284,7 +285,7 @@ def replay(path):
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(row["truth_inputs"])
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
     row["others"] = [(f.channel, list(f.named)) for j, f in claims if j != row["joint"]]
-    return row
+    return (row, [f for _, f in fits]) if with_fits else row
 
 
 def main(argv=None):

@@ -23,6 +23,13 @@ A 15-30 % of the rail's RMS effort.  Each recording is diagnosed blind with the 
 key is read afterwards.  Per case, as bench/flexible_bench.py: the inputs named against the true
 ones, the share against the truth's (flexible.cases.truth_share, from the logged force).  No
 threshold of the stage was set on these cases.
+
+A second judgement, in its own column and line, as bench/foreign/mujoco_unlisted.py's: the true
+inputs against what either stage models on the rail's channel (:func:`unlisted_common.judge_either`
+on the diagnosis's :func:`unlisted_common.stage_reads`, with the discovery's confident terms and
+with its partial ones too), the truth written as a declaration that needs and allows exactly the
+true groups (:func:`declared`: the first judgement's set equality).  A replay has it where its
+capture kept ``stage_reads``.
 """
 from __future__ import annotations
 
@@ -36,6 +43,8 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
+
+from unlisted_common import either_cell, either_line, judge_either, stage_reads  # noqa: E402
 
 KINDS = ("position_threshold", "cross_position", "heating")
 #: the friction's rate scale [m/s] (as bench/foreign/mujoco_unnamed.py)
@@ -90,6 +99,21 @@ def draw(kind, rng, mo):
     return hook, log, j + 1, truth
 
 
+def declared(truth) -> dict:
+    """The true groups as a declaration of :func:`unlisted_common.judge_either`: every one needed,
+    nothing else allowed (on one channel, the named set equal to the truth's, as ``inputs_ok``)."""
+    return {"need": set(truth), "any": set(), "allowed": set(truth)}
+
+
+def either(row, fits) -> dict:
+    """``row`` (a mechanism's, with ``stage_reads``) with ``either_right``: per variant of
+    :func:`unlisted_common.stage_reads`, whether either stage models the true inputs on the rail's
+    channel (:func:`unlisted_common.judge_either`, :func:`declared`)."""
+    row["either_right"] = {v: judge_either(fits, reads, declared(row["truth_inputs"]), row["joint"])
+                           for v, reads in row["stage_reads"].items()}
+    return row
+
+
 def one(kind, seed, out, capture=None):
     import flexible_bench as fb
     import mujoco_blind as mb
@@ -127,6 +151,8 @@ def one(kind, seed, out, capture=None):
     row["inputs_ok"] = bool(row["named"]) and set(row["named"]) == set(truth)
     row["share_ok"] = abs(row["share"] - row["truth_share"]) <= 0.10
     row["others"] = [(f.channel, list(f.named)) for f in d.flexible if f.explained and f.joint != joint]
+    row["stage_reads"] = stage_reads(d)
+    either(row, d.flexible)
     fb._keep(capture, row, kept)
     return row
 
@@ -137,10 +163,12 @@ def case(kind, seed, a):
         return one(kind, seed, a.out, a.capture)
     import flexible_bench as fb
 
-    row = fb.replay(Path(a.replay) / f"{seed}.pkl")
+    row, fits = fb.replay(Path(a.replay) / f"{seed}.pkl", with_fits=True)
     row["truth"] = row["truth_inputs"]
     if kind == "clean":
         row["claims"] = [(c, round(s, 2), g) for c, s, g in row["claims"]]
+    elif "stage_reads" in row:  # the rest of the diagnosis as captured, the flexible stage's fits re-run
+        either(row, fits)
     return row
 
 
@@ -162,18 +190,25 @@ def main(argv=None):
             rows.append(r)
             print(f"{k:20s} seed {r['seed']} joint {r['joint']}: share {r['share']:.2f} truth {r['truth_share']:.2f} | "
                   f"named {r['named']} truth {r['truth']} | {'OK' if r['inputs_ok'] else 'wrong'} inputs, share "
-                  f"{'OK' if r['share_ok'] else 'off'} | cpu {r['cpu']:.1f} s (flexible stage {r['flex_cpu']:.2f} s) | "
+                  f"{'OK' if r['share_ok'] else 'off'} | either stage (confident terms / with partial): "
+                  f"{either_cell(r)} | cpu {r['cpu']:.1f} s (flexible stage {r['flex_cpu']:.2f} s) | "
                   f"other channels {r['others']}",
                   flush=True)
     for i in range(a.clean):
         r = case("clean", a.base + 500 + i, a)
         rows.append(r)
         print(f"{'clean':20s} seed {r['seed']}: claims {r['claims']} | cpu {r['cpu']:.1f} s", flush=True)
+    print("\n" + "\n".join(summary(rows, a.base, a.clean)))
+
+
+def summary(rows, base, clean) -> list:
+    """The counts of a run's ``rows``: the flexible stage's line, then the either-stage judgement's
+    (:func:`unlisted_common.either_line`, where the rows kept the whole diagnosis)."""
     eff = [r for r in rows if r["kind"] != "clean"]
-    print(f"\nMuJoCo, base {a.base}: inputs right {sum(r['inputs_ok'] for r in eff)} of {len(eff)}, shares within "
-          f"10 points {sum(r['share_ok'] for r in eff)} of {len(eff)}; clean with no claim "
-          f"{sum(not r['claims'] for r in rows if r['kind'] == 'clean')} of {a.clean}; "
-          f"diagnosis CPU max {max(r['cpu'] for r in rows):.1f} s")
+    return ([f"MuJoCo, base {base}: inputs right {sum(r['inputs_ok'] for r in eff)} of {len(eff)}, shares within "
+             f"10 points {sum(r['share_ok'] for r in eff)} of {len(eff)}; clean with no claim "
+             f"{sum(not r['claims'] for r in rows if r['kind'] == 'clean')} of {clean}; "
+             f"diagnosis CPU max {max(r['cpu'] for r in rows):.1f} s"] + either_line(eff))
 
 
 if __name__ == "__main__":

@@ -239,7 +239,7 @@ def _cell(r):
     return named
 
 
-def _either_cell(r) -> str:
+def either_cell(r) -> str:
     """The either-stage judgement of a row (:func:`judge_either`) and what the diagnosis besides
     the flexible stage reads on the case's channels (with partial terms)."""
     if "either_right" not in r:
@@ -249,6 +249,19 @@ def _either_cell(r) -> str:
     on = None if joint is None else set(joint) if isinstance(joint, (list, tuple)) else {joint}
     reads = sorted({g for j, gs in r["stage_reads"]["with_partial"].items() if on is None or int(j) in on for g in gs})
     return f"{yes('confident')} / {yes('with_partial')}" + (f" (reads {', '.join(reads)})" if reads else "")
+
+
+def either_line(eff) -> list:
+    """The count of :func:`judge_either`'s rule over the mechanism rows ``eff`` (their
+    ``either_right``), one line; none where no row kept the whole diagnosis (a replay of a capture
+    made without ``stage_reads``)."""
+    kept, n = [r for r in eff if "either_right" in r], len(eff)
+    if not kept:
+        return []
+    return [f"modelled as declared by either stage: {sum(r['either_right']['confident'] for r in kept)}"
+            f"/{len(kept)} with the discovery's confident terms, "
+            f"{sum(r['either_right']['with_partial'] for r in kept)}/{len(kept)} with its partial ones too"
+            + (f" ({n - len(kept)} of {n} rows without the whole diagnosis)" if len(kept) < n else "")]
 
 
 def _periodic(r) -> list:
@@ -276,7 +289,7 @@ def table(rows, order) -> list:
                  f"{'**' + ', '.join(r['library_confident']) + '**' if r['library_confident'] else '-'} | "
                  f"{_cell(r)} ({'yes' if r['inputs_right'] else 'no'}) | {r['share']:.2f} | "
                  f"{'-' if g is None or not math.isfinite(g) else f'{g:.2f}'} | {r['cpu']:.1f} |"
-                 + (f" {_either_cell(r)} |" if either else ""))
+                 + (f" {either_cell(r)} |" if either else ""))
     for r in clean:
         what = "; ".join(r["library_all"] + r["discovered"] + r["drifts"] + [c for c, _, _ in r["flexible"]])
         L.append(f"| {r['case']} | {r['size_over_noise']:.1f} | {'clean' if r['clean'] else 'NOT CLEAN: ' + what} | "
@@ -289,12 +302,7 @@ def table(rows, order) -> list:
                   f"a periodic force reported (structure keyed on time): "
                   f"{', '.join(r['case'] for r in eff if _periodic(r)) or 'none'}"]
         L += [f"  {r['case']}: {'; '.join(r.get('periodic') or _periodic(r))}" for r in eff if _periodic(r)]
-        kept = [r for r in eff if "either_right" in r]
-        if kept:  # judge_either's rule
-            L.append(f"modelled as declared by either stage: {sum(r['either_right']['confident'] for r in kept)}"
-                     f"/{len(kept)} with the discovery's confident terms, "
-                     f"{sum(r['either_right']['with_partial'] for r in kept)}/{len(kept)} with its partial ones too"
-                     + (f" ({n - len(kept)} of {n} rows without the whole diagnosis)" if len(kept) < n else ""))
+        L += either_line(eff)
     if clean:
         L.append(f"clean recordings clean: {sum(r['clean'] for r in clean)}/{len(clean)}")
     L.append(f"diagnosis CPU: median {np.median([r['cpu'] for r in rows]):.1f} s, largest "

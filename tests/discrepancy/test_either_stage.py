@@ -127,3 +127,38 @@ def test_the_table_counts_both_judgements_and_keeps_the_flexible_line():
     assert ("modelled as declared by either stage: 0/1 with the discovery's confident terms, 1/1 with its partial "
             "ones too") in lines
     assert "no / yes (reads rate of slider 4, rate of slider 5) |" in lines[2]
+
+
+def test_the_flexible_mujoco_bench_judges_its_truth_on_the_rails_channel_by_either_stage():
+    import flexible_mujoco_bench as fmb
+
+    # a cross-joint position (rail 2's position on rail 4): the flexible stage names nothing on tau4,
+    # the discovery's cross term on slider 4 reads slider 2's position
+    cross = term(4, ["cross_q"], {"rail[4].force_xj": 2.0})
+    row = {"kind": "cross_position", "joint": 4, "truth_inputs": ["position of slider 2"],
+           "stage_reads": uc.stage_reads(diagnosis([cross]))}
+    got = fmb.either(dict(row), [fit(4, [], explained=False), fit(2, ["position of slider 2"])])["either_right"]
+    assert got == {"confident": True, "with_partial": True}
+    # the declaration is the truth exactly: a partial drift on slider 4 reads time, outside it
+    drift = NS(param="rail[4].viscous", kind="trend")
+    row["stage_reads"] = uc.stage_reads(diagnosis([cross], drifts=[drift], unexplained=[{"channel": "tau4"}]))
+    got = fmb.either(dict(row), [fit(4, ["position of slider 2"])])["either_right"]
+    assert got == {"confident": True, "with_partial": False}
+    # the flexible stage's heating named on its rate alone: its history is needed
+    heat = {"kind": "heating", "joint": 3, "truth_inputs": ["rate of slider 3", "history of slider 3"],
+            "stage_reads": {"confident": {}, "with_partial": {}}}
+    assert fmb.either(heat, [fit(3, ["rate of slider 3"])])["either_right"]["confident"] is False
+
+
+def test_the_flexible_mujoco_bench_prints_the_either_line_where_the_rows_kept_the_diagnosis():
+    import flexible_mujoco_bench as fmb
+
+    rows = [{"kind": "heating", "inputs_ok": False, "share_ok": True, "cpu": 4.0,
+             "either_right": {"confident": True, "with_partial": False}},
+            {"kind": "cross_position", "inputs_ok": True, "share_ok": True, "cpu": 5.0},
+            {"kind": "clean", "claims": [], "cpu": 3.0}]
+    lines = fmb.summary(rows, 12000, 1)
+    assert lines[0].startswith("MuJoCo, base 12000: inputs right 1 of 2, shares within 10 points 2 of 2")
+    assert lines[1] == ("modelled as declared by either stage: 1/1 with the discovery's confident terms, 0/1 with "
+                        "its partial ones too (1 of 2 rows without the whole diagnosis)")
+    assert fmb.summary([rows[1], rows[2]], 12000, 1)[1:] == []  # a replay of a capture without stage_reads
