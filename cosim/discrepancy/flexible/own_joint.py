@@ -26,7 +26,8 @@ fold carries.  Two rules, general (no kind of force is named in them):
   out its counterpart along the reference costs :data:`~.select.DROP_MIN` of the variance, without
   significance over the folds (a limit one drive's load sets on another's effort: both efforts).
 
-Figures on the seen sets: docs/flexible.md, "The channel's own joint before another's".
+The rules: docs/flexible.md, "The channel's own joint before another's"; figures on the seen
+sets: docs/records/flexible_rules.md, "The channel's own joint before another's".
 """
 from __future__ import annotations
 
