@@ -4,10 +4,9 @@ opposite against joint k, the core's ``force_taut``), it is found as one pair te
 with k and the slack s within 5 %, stated once, and the plant handed on holds it on both joints;
 where the library's effects on the two joints stand in for part of the tension, the variant in
 their place wins and withdraws them.  The truth is read from the answer key after the diagnosis.
-Seed 3's pair is named by the screen alone (no discovered term links the two joints: without the
-screen nothing is found), seed 4's by the variant that replaces the library's saturation on rail 5
-(without it the diagnosis keeps the saturation and names no cable); each checked by reverting the
-rule once."""
+Seed 4's pair is found only through the screen (without it no pair is found) and only in the place
+of the library's saturation on rail 5 (without that variant the pair stays partial beside it); seed 3's
+is found through either trigger.  Each checked by reverting the rule once."""
 import json
 from pathlib import Path
 
