@@ -10,8 +10,8 @@ saturations or dead zones on the two joints take part of the tension.
 
 **Which pairs.**  The pairs a discovered term links (its ``cross_q`` term's other joint, a spring
 pair of :mod:`.pair`), and at most :data:`N_SCREENED` pairs the screen names
-(:func:`_screened`): with the discovered terms and the library's groups of the two joints left
-out, both channels' residuals fall by more than the threshold plus the screen's look-elsewhere
+(:func:`_screened`): with every discovered term and every library group of one joint left out,
+both channels' residuals fall by more than the threshold plus the screen's look-elsewhere
 cost (2 ln of the pairs and hinges tried) on one hinge max(+-(q_j - q_k - s), 0) equal and
 opposite on the two channels.  The screen is a statistic of the data; every force is the core's.
 
@@ -88,12 +88,11 @@ class _Fit:
         # a stiffness whose force over the difference's range is the joints' RMS effort
         self.delta = float(max(search.effort[lo], search.effort[hi])) / max(self.span, 1e-12)
         one = search.cols.get(("constant", 0))
-        self.offsets = []
-        for a in held:
-            O = np.zeros(self.R0.shape) if self.R0 is not None else None
-            if O is not None and one is not None:
-                O[:, a] = one[:, a, 0]
-                self.offsets.append(O)
+        self.offsets = []  # the offsets' columns (each on its joint's channel)
+        for a in held if self.R0 is not None and one is not None else ():
+            O = np.zeros(self.R0.shape)
+            O[:, a] = one[:, a, 0]
+            self.offsets.append(O)
         self.evals = 0
 
     def column(self, s, w):
@@ -266,8 +265,8 @@ def _trial(eng, search, sel, theta, found, lo, hi, threshold, libs=()):
 
 
 def _screened(eng, search, sel, theta, found, threshold) -> list:
-    """The joint pairs (lo, hi) whose two channels' residuals, with the discovered terms and the
-    library's groups of the two joints left out, both fall by more than the threshold plus the
+    """The joint pairs (lo, hi) whose two channels' residuals, with every discovered term and every
+    library group of one joint left out, both fall by more than the threshold plus the
     look-elsewhere cost of the screen (2 ln of the pairs and hinges tried) on one common hinge
     max(+-(q_lo - q_hi - s), 0), equal and opposite on the two channels (a constant on each), s
     on :data:`SLACK_QUANTILES` of the difference: a tension on their difference past a slack.  A
