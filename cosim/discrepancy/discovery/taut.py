@@ -8,10 +8,9 @@ stiffness where the cable is taut over a quarter of the difference's range) besi
 polynomials and offsets on either channel, or nothing at all, while the library's offsets,
 saturations or dead zones on the two joints take part of the tension.
 
-**Which pairs.**  The pairs a discovered term links (its ``cross_q`` term's other joint, a spring
-pair of :mod:`.pair`), and at most :data:`N_SCREENED` pairs the screen names
-(:func:`_screened`): with every discovered term and every library group of one joint left out,
-both channels' residuals fall by more than the threshold plus the screen's look-elsewhere
+**Which pairs.**  At most :data:`N_SCREENED` pairs the screen names (:func:`_screened`), linked
+by a discovered term or not: with every discovered term and every library group of one joint left
+out, both channels' residuals fall by more than the threshold plus the screen's look-elsewhere
 cost (2 ln of the pairs and hinges tried) on one hinge max(+-(q_j - q_k - s), 0) equal and
 opposite on the two channels.  The screen is a statistic of the data; every force is the core's.
 
@@ -52,20 +51,6 @@ WIDTHS = (0.02, 0.08)
 N_MOVE = 40
 #: most joint pairs the screen hands to the fit (:func:`_screened`)
 N_SCREENED = 2
-
-
-def _partners(search, found) -> list:
-    """The joint pairs (lo, hi), 0-based, a discovered term links: its cross position term's
-    other joint, or the other joint of a spring pair."""
-    out = []
-    for t in found:
-        c = t.joint - 1
-        if "cross_q" not in t.terms and not (t.pair and "spring" in t.terms):
-            continue
-        k = t.pair - 1 if t.pair else int(t.shape.get(search.name(c, "force_xj"), 0)) - 1
-        if k >= 0 and k != c and (min(c, k), max(c, k)) not in out:
-            out.append((min(c, k), max(c, k)))
-    return out
 
 
 def _shape(search, lo, hi, K, s, w) -> dict:
@@ -309,16 +294,15 @@ def _screened(eng, search, sel, theta, found, threshold) -> list:
 
 def taut_pairs(eng, search, sel, theta, found, withdrawn, threshold):
     """``(found, withdrawn, theta)`` with each one-sided spring between two joints found as one
-    pair term (see the module's text).  Tried on the pairs a discovered term links
-    (:func:`_partners`) and those the screen names (:func:`_screened`), each in two variants:
+    pair term (see the module's text).  Tried on the pairs the screen names (:func:`_screened`),
+    each in two variants:
     beside the library's groups of the two joints, and in their place (they may stand in for part
     of the tension); the variant of the lower criterion that wins replaces the two channels'
     discovered terms, and the library groups it replaces and the library's offsets it refitted to
     zero (within their 95 % interval) are withdrawn (``replaced_by`` its channels)."""
     from .pair import _dropped, _offsets_zeroed
 
-    pairs = _partners(search, found)
-    pairs += [p for p in _screened(eng, search, sel, theta, found, threshold) if p not in pairs]
+    pairs = _screened(eng, search, sel, theta, found, threshold)
     done = set()
     for lo, hi in pairs:
         if {lo, hi} & done:  # a joint holds one other joint (force_xj)
