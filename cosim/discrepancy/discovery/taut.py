@@ -266,6 +266,8 @@ def _screened(eng, search, sel, theta, found, threshold) -> list:
         return []
     rows = eng.train
     q = search.pipe.q_s[search.pipe.idx][rows]
+    if q.shape[0] < 2 * len(SLACK_QUANTILES):  # too few fitted samples to place a slack
+        return []
     pairs = [(a, b) for a in range(nd) for b in range(a + 1, nd)]
     bar = threshold + 2.0 * math.log(max(1, nd * (nd - 1) // 2 * 2 * len(SLACK_QUANTILES)))
     out = []
