@@ -362,8 +362,9 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  * transmission carries).  All coefficients default to 0.  The force_taut term is a one-sided
  * spring (a cable carrier or hose joining two carriages, pulling once taut) [N/m | N m/rad] past
  * the slack force_taut_q [m | rad] of q - q_k, with a smooth onset of width force_taut_w [m | rad]
- * (negative: taut below force_taut_q); the reaction on joint k is k's own term with force_xj = i
- * and the three values negated.  Its constant term is the drive's
+ * (negative: taut below force_taut_q); the reaction on joint k is k's own term with force_xj = i,
+ * the same force_taut, force_taut_q and force_taut_w negated; a one-sided spring without another
+ * joint (force_xj = 0) is refused.  Its constant term is the drive's
  * offset "<j>[i].offset" (pkm_joint_friction): one parameter for a constant effort, whoever
  * finds it.  Its acceleration term force_inertia [kg | kg m2] is an inertia the drive carries
  * on the joint (a coupling, pulley, belt, a mass riding on the carriage): the same physics as
