@@ -89,9 +89,10 @@ OWN_READS = {"constant": (), "spring": ("position",), "quadratic": ("position",)
              "coulomb_both": ("rate",), "fading": ("rate",), "inertia": ("acceleration",),
              "load": ("effort", "rate"), "effortpos": ("effort", "position"), "posrate": ("position", "rate"),
              "stroke_1": ("position", "rate"), "stroke_2": ("position", "rate"), "zone": ("position", "rate"),
-             "cross_q": (), "cross_v": ()}
-#: the quantity a cross term reads of the other joint (its shape's ``force_xj``, 1-based)
-OTHER_READS = {"cross_q": "position", "cross_v": "rate"}
+             "cross_q": (), "cross_v": (), "taut": ("position",)}
+#: the quantity a cross term reads of the other joint (its shape's ``force_xj``, 1-based); a
+#: one-sided spring (``taut``) reads the difference of the two joints' positions
+OTHER_READS = {"cross_q": "position", "cross_v": "rate", "taut": "position"}
 #: a platform force's families (cosim.discrepancy.platform_force): a force, wrench or cable reaches
 #: the rails through the Jacobian at the pose ("the platform pose"); a drag -c v reads the
 #: platform's velocity, which the bench's declarations write as the rails' rates through the

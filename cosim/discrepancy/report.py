@@ -182,6 +182,13 @@ def _why_section(d, files: dict) -> list:
     return L
 
 
+def _pair_coefficients(t) -> str:
+    """The coefficients a pair between two joints fits, in words."""
+    if "taut" in t.terms:
+        return "three coefficients (k, slack, width)"
+    return "two coefficients (k, L)" if "spring" in t.terms else "one coefficient"
+
+
 def _discovery_section(d, files: dict) -> list:
     """The discovery step's section (none when it found and withdrew nothing): each term, why it was kept, what
     it replaces."""
@@ -201,7 +208,7 @@ def _discovery_section(d, files: dict) -> list:
                 continue
             L += [f"- **{t.equation}**", f"  - what makes such a term: {t.mechanisms}",
                   held + f" (chi-square {t.delta_chi2_heldout:.0f} lower{' over both channels' * bool(t.pair)}); "
-                  + (f"{'two coefficients (k, L)' if 'spring' in t.terms else 'one coefficient'} on {t.channel} "
+                  + (f"{_pair_coefficients(t)} on {t.channel} "
                      f"and joint {t.pair}, kept against the two channels' separate terms (BIC, held-out part)"
                      if t.pair else "kept in "
                      + ", ".join(f"{100 * v:.0f} % ({k})" for k, v in t.stability.items())

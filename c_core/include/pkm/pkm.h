@@ -353,12 +353,18 @@ PKM_API int pkm_energy(const pkm_model* m, pkm_data* d, const double* x, const d
  *     + force_qv z qd + (force_cq1 z + force_cq2 z^2) s
  *     + force_czone s (1 + tanh((q - force_czone_q) / force_czone_w)) / 2             (width != 0)
  *     + force_xk1 (q_k - force_xqc) + force_xv qd_k          (k = force_xj, another joint, 1-based; 0: none)
+ *     + force_taut w softplus((q - q_k - force_taut_q) / w)  (w = force_taut_w != 0; softplus(x) = log(1 + e^x))
  *     + force_cload |tau| s + force_ceff tau s + (force_eq z + force_eg) tau
  * (tau: the effort the drive applies; the inverse dynamics solve for it, tau = b / (1 - g - mu sign(b)),
  * g = force_ceff s + force_eq z + force_eg, mu = force_cload s; an error where the drive self-locks)
  * [N | N m], an effort the drive spends on the joint like friction (added to the inverse
  * dynamics, subtracted from the applied effort in the forward dynamics and in the effort a
- * transmission carries).  All coefficients default to 0.  Its constant term is the drive's
+ * transmission carries).  All coefficients default to 0.  The force_taut term is a one-sided
+ * spring (a cable carrier or hose joining two carriages, pulling once taut) [N/m | N m/rad] past
+ * the slack force_taut_q [m | rad] of q - q_k, with a smooth onset of width force_taut_w [m | rad]
+ * (negative: taut below force_taut_q); the reaction on joint k is k's own term with force_xj = i,
+ * the same force_taut, force_taut_q and force_taut_w negated; a one-sided spring without another
+ * joint (force_xj = 0) is refused.  Its constant term is the drive's
  * offset "<j>[i].offset" (pkm_joint_friction): one parameter for a constant effort, whoever
  * finds it.  Its acceleration term force_inertia [kg | kg m2] is an inertia the drive carries
  * on the joint (a coupling, pulley, belt, a mass riding on the carriage): the same physics as

@@ -17,18 +17,21 @@ const char* const kKeys[kNKeys] = {"force_qc",   "force_k1",   "force_k2",     "
                                    "force_inertia", "force_qv",   "force_cq1",    "force_cq2",
                                    "force_czone", "force_czone_q", "force_czone_w", "force_xj",
                                    "force_xqc",  "force_xk1",  "force_xv",     "force_cload",
-                                   "force_ceff", "force_eq",   "force_eg"};
+                                   "force_ceff", "force_eq",   "force_eg",     "force_taut",
+                                   "force_taut_q", "force_taut_w"};
 namespace {
 enum { QC, K1, K2, K3, V2, VPOS, VNEG, CPOS, CNEG, SIN, COS, PERIOD, STEP, STEP_Q, STEP_W, CV, INERTIA,
-       QV, CQ1, CQ2, CZONE, CZONE_Q, CZONE_W, XJ, XQC, XK1, XV, CLOAD, CEFF, EQ, EG };
+       QV, CQ1, CQ2, CZONE, CZONE_Q, CZONE_W, XJ, XQC, XK1, XV, CLOAD, CEFF, EQ, EG, TAUT, TAUT_Q, TAUT_W };
 static_assert(INERTIA == kInertia, "kInertia names the acceleration term");
-static_assert(EG + 1 == kNKeys, "one key per term");
+static_assert(TAUT_W + 1 == kNKeys, "one key per term");
 // keys that shape a term and are no force alone
 bool shape_key(int k) {
   return k == QC || k == PERIOD || k == STEP_Q || k == STEP_W || k == CV || k == INERTIA || k == CZONE_Q ||
-         k == CZONE_W || k == XJ || k == XQC;
+         k == CZONE_W || k == XJ || k == XQC || k == TAUT_Q || k == TAUT_W;
 }
 bool effort_key(int k) { return k == CLOAD || k == CEFF || k == EQ || k == EG; }
+// log(1 + e^x) without overflow: max(x, 0) + log1p(e^-|x|); its slope (the logistic) is in (0, 1)
+double softplus(double x) { return std::fmax(x, 0.0) + std::log1p(std::exp(-std::fabs(x))); }
 }  // namespace
 
 std::vector<ParamSpec> specs(const Robot& r) {
@@ -85,6 +88,14 @@ std::vector<ParamSpec> specs(const Robot& r) {
     add(EQ, "1/" + Q, "force per unit of the applied effort and of z: force_eq z tau (an efficiency that changes "
                       "over the stroke)", -big);
     add(EG, "", "force per unit of the applied effort: force_eg tau (a torque constant or ratio off)", -big);
+    add(TAUT, F + "/" + Q,
+        "stiffness of a one-sided spring on the difference d = q - q_k to the other joint k = force_xj (a cable "
+        "carrier or hose that pulls once taut): force_taut force_taut_w softplus((d - force_taut_q) / force_taut_w)",
+        -big);
+    add(TAUT_Q, Q, "the difference q - q_k past which the one-sided spring is taut (its slack)", -big);
+    add(TAUT_W, Q,
+        "width of the one-sided spring's smooth onset (0: no one-sided spring; negative: taut below force_taut_q)",
+        -big);
   }
   return out;
 }
@@ -111,6 +122,11 @@ Coefficients compile(const Robot& r, const std::vector<ParamSpec>& sp, const std
       throw Error(PKM_ERR_PARAMETER, joint_param(r, i, kKeys[XJ]) + " = " + num(x, 6) +
                                          " must be 0 or the 1-based index of another joint (1.." +
                                          std::to_string(r.ndof()) + ", not " + std::to_string(i + 1) + ")");
+    if (x == 0 && c.v[TAUT][i] != 0 && c.v[TAUT_W][i] != 0)
+      throw Error(PKM_ERR_PARAMETER, joint_param(r, i, kKeys[TAUT]) + " = " + num(c.v[TAUT][i], 6) +
+                                         " is a one-sided spring to another joint: " +
+                                         joint_param(r, i, kKeys[XJ]) + " must name it (1.." +
+                                         std::to_string(r.ndof()) + ")");
   }
   return c;
 }
@@ -136,7 +152,11 @@ void force(const Coefficients& c, int nd, double v_eps, const double* q, const d
     f += v[QV][i] * z * w + (v[CQ1][i] + v[CQ2][i] * z) * z * s;
     if (v[CZONE_W][i] != 0) f += v[CZONE][i] * s * 0.5 * (1.0 + std::tanh((q[i] - v[CZONE_Q][i]) / v[CZONE_W][i]));
     const int k = static_cast<int>(v[XJ][i]) - 1;
-    if (k >= 0 && k < nd) f += v[XK1][i] * (q[k] - v[XQC][i]) + v[XV][i] * qd[k];
+    if (k >= 0 && k < nd) {
+      f += v[XK1][i] * (q[k] - v[XQC][i]) + v[XV][i] * qd[k];
+      const double w_taut = v[TAUT_W][i];
+      if (w_taut != 0) f += v[TAUT][i] * w_taut * softplus((q[i] - q[k] - v[TAUT_Q][i]) / w_taut);
+    }
     F[i] = f;
   }
 }

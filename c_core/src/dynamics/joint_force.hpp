@@ -14,6 +14,7 @@
 //     + (force_cq1 z + force_cq2 z^2) s                               (a Coulomb level over the stroke)
 //     + force_czone s (1 + tanh((q - force_czone_q) / force_czone_w)) / 2   (a friction zone; width != 0)
 //     + force_xk1 (q_k - force_xqc) + force_xv qd_k                   (another joint's motion, k = force_xj)
+//     + force_taut w softplus((q - q_k - force_taut_q) / w)           (one-sided spring; w = force_taut_w != 0)
 //     + force_cload |tau| s + force_ceff tau s + (force_eq z + force_eg) tau   (the drive's applied effort tau)
 //
 // The last line depends on the effort the drive applies (a friction that grows with the
@@ -22,6 +23,15 @@
 // joint (b the effort without these terms, g = force_ceff s + force_eq z + force_eg, mu = force_cload s):
 // tau = b / (1 - g - mu sign(b)), unique while 1 - g - |mu| > 0 (else the drive self-locks:
 // an error naming the joint).  force_xj is the 1-based index of the other joint (0: none).
+//
+// The one-sided spring is a cable carrier or hose joining two carriages that pulls only once
+// taut: softplus(x) = log(1 + e^x), so for w > 0 it is about force_taut (d - force_taut_q) once
+// the difference d = q - q_k is a few w past its slack force_taut_q, 0 well below it, and smooth
+// between (its slope force_taut / (1 + e^-x) is bounded: the dynamics stay Lipschitz).  A
+// negative w makes it taut below force_taut_q.  Joint i's force_taut is its slope dF_i/dq_i once
+// taut; the reaction on the other joint k is k's own term with force_xj = i, the same
+// force_taut, and force_taut_q and force_taut_w negated (force on k = -force on i).  A one-sided
+// spring set without another joint (force_xj = 0) is an error.
 //
 // F is an effort the drive spends on the joint, like friction: it adds to the inverse
 // dynamics and is subtracted from the applied effort in the forward dynamics.  Its
@@ -44,7 +54,7 @@ namespace joint_force {
 
 constexpr int kMaxJoints = 6;
 // Per-joint parameter keys, "<prefix>[i].<key>", in the order of Coefficients::field.
-constexpr int kNKeys = 31;
+constexpr int kNKeys = 34;
 // Index of "force_inertia" in kKeys (the acceleration term, not evaluated by force()).
 constexpr int kInertia = 16;
 extern const char* const kKeys[kNKeys];

@@ -152,7 +152,7 @@ def simulate_case(spec: CaseSpec, cfg: dict | None = None):
         qd_ref = np.gradient(ref.q[k0:], dt, axis=0)
         motion = {"E": np.sqrt(np.mean(signed**2, axis=0)), "T": ref.q[k0:].std(axis=0),
                   "V": np.sqrt(np.mean(qd_ref**2, axis=0)), "span": np.ptp(ref.q[k0:], axis=0),
-                  "home": nominal.ik(nominal.home())}
+                  "home": nominal.ik(nominal.home()), "q": ref.q[k0:]}
         try:
             hidden = [sample_unlisted(k, nominal, rng, motion) if k in UNLISTED or k in FAMILY_KINDS else
                       sample_effect(k, nominal, rng, cfg, tau_peak) for k in spec.hidden]

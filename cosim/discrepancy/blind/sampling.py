@@ -167,7 +167,8 @@ UNLISTED = {
 def sample_unlisted(kind, model, rng, motion) -> Hidden:
     """Draw one force of :data:`UNLISTED` for ``model``; ``motion`` holds per joint ``E`` (RMS
     feed-forward effort), ``T`` (position spread), ``V`` (RMS rate), ``span`` (stroke used)
-    and ``home`` (joint position at the home pose) of the case's reference."""
+    and ``home`` (joint position at the home pose) of the case's reference, and ``q`` its joint
+    positions (samples x joints)."""
     pre = joint_prefix(model)
     nd = model.ndof
     E, T, V, span, home = (np.asarray(motion[k], float) for k in ("E", "T", "V", "span", "home"))

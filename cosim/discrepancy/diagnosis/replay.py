@@ -20,6 +20,7 @@ def _discover(eng, sel, threshold):
     with discovered terms)."""
     from ..discovery import judge_library
     from ..discovery.pair import paired
+    from ..discovery.taut import taut_pairs
 
     theta, withdrawn, ties, search, base = judge_library(eng, sel, threshold)
     found = [t for t in base.values() if t is not None]  # the terms on what the library keeps
@@ -30,6 +31,7 @@ def _discover(eng, sel, threshold):
     for t in found:
         theta.update(t.params())
     found, withdrawn, theta = paired(eng, search, sel, theta, found, withdrawn, threshold)
+    found, withdrawn, theta = taut_pairs(eng, search, sel, theta, found, withdrawn, threshold)
     R_all = eng.R(theta) if found else None
     return [replace(t, curve=_curve(eng, theta, R_all, t)) for t in found], withdrawn, theta, ties
 

@@ -23,13 +23,15 @@ KINDS = {
                     "against joint k"),
     "pair_spring": ("cross", "a spring between two joints: k (q_j - q_k - L) against joint j, its opposite against "
                     "joint k"),
+    "cable_taut": ("cross", "a cable carrier between two joints that pulls once taut: k w softplus((q_j - q_k - s) / w) "
+                   "against joint j, its opposite against joint k"),
     "effort_position": ("effortpos", "a force in proportion to the applied effort and the position on one joint"),
     "position_damper": ("posrate", "a damping that changes linearly over the stroke on one joint"),
 }
 #: the coefficient (core key) each kind must be found with
 NEEDS = {"load_friction": "force_cload", "friction_zone": "force_czone", "stroke_friction": "force_cq1",
          "cable_link": "force_xk1", "cross_damper": "force_xv", "pair_damper": "force_xv",
-         "pair_spring": "force_xk1",
+         "pair_spring": "force_xk1", "cable_taut": "force_taut",
          "effort_position": "force_eq",
          "position_damper": "force_qv"}
 #: the smallest typical force drawn, per RMS effort (see the module's docstring)
@@ -39,7 +41,8 @@ SIZE_LO = 0.02
 def sample(kind, rng, motion, name, nd):
     """``(params, joints)`` of one force of ``kind`` (:data:`KINDS`): core parameters
     (``name(i, key)`` the core name of joint i's key) and the 0-based joints it acts on;
-    ``motion`` as for ``blind.sample_unlisted``."""
+    ``motion`` as for ``blind.sample_unlisted`` (``q``: the joints' reference positions, samples x
+    joints, for the one-sided spring's slack)."""
     E, T, V, span, home = (np.asarray(motion[k], float) for k in ("E", "T", "V", "span", "home"))
     j = int(rng.integers(0, nd))
     size = SIZE_LO * 10.0 ** float(rng.uniform(0.0, 1.0))
@@ -74,6 +77,17 @@ def sample(kind, rng, motion, name, nd):
         p = {name(a, key): v for a, b, sign in ((j, k, 1.0), (k, j, -1.0))
              for key, v in (("force_xj", float(b + 1)), ("force_k1", stiff), ("force_xk1", -stiff),
                             ("force_qc", float(home[a])), ("force_xqc", float(home[a]) - sign * rest))}
+        return p, [j, k]
+    elif kind == "cable_taut":  # the core's one-sided spring on q_j - q_k, its reaction on k
+        k = int((j + rng.integers(1, nd)) % nd)
+        d = np.asarray(motion["q"], float)[:, j] - np.asarray(motion["q"], float)[:, k]  # along the reference
+        slack = float(np.quantile(d, rng.uniform(0.6, 0.85)))  # taut over the last 15-40 % of the difference
+        width = float(rng.uniform(0.03, 0.1)) * float(np.ptp(d))
+        # its typical force past the slack size * E (the hinge's RMS sizes it)
+        stiff = 1.5 * size * E[j] / max(float(np.sqrt(np.mean(np.maximum(d - slack, 0.0) ** 2))), 1e-12)
+        p = {name(a, key): v for a, b, sign in ((j, k, 1.0), (k, j, -1.0))
+             for key, v in (("force_xj", float(b + 1)), ("force_taut", stiff), ("force_taut_q", sign * slack),
+                            ("force_taut_w", sign * width))}
         return p, [j, k]
     elif kind == "effort_position":
         p = {name(j, "force_qc"): float(home[j]), name(j, "force_eq"): float(rng.choice([-1, 1])) * 1.5 * size / T[j]}
