@@ -86,6 +86,7 @@ from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
 from .oblique import extend, extended
+from .own_state import beside_named
 from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
@@ -361,7 +362,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                 else:  # they do not carry it alone: the claim stays the full model's, on no single input
                     named, screened = [], (tuple(kept), share_k)
         moved, y_t, cv_t = (), y, cv
-        if explained and named:
+        if explained and named:  # the own joint's rate and effort the screen's bars passed over
+            named, cv, use = beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, cross_validate)
             cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
             share, z, _ = judged(cv.mse)
             cv_t = cv
