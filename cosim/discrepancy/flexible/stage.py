@@ -322,6 +322,12 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
     after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged)
+    passed = set()  # the groups the screen passed, judged by the rules above (:mod:`.own_state`: not again)
+
+    def _screen_c(imp, share):
+        got = _screen(imp, share)
+        passed.update(got)
+        return got
     rng = np.random.default_rng(0)
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
@@ -331,7 +337,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
             share, z, explained = judged(cv.mse)
-        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate, after) \
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen_c, cross_validate, after) \
             if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
             named, cv, use, share, z = first
@@ -350,12 +356,12 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
             elif copy_alone(named, kept, ok_k):  # a model effort whose constituents claim nothing: no input
                 named = []
         else:
-            named = _screen(importance(cv, X, y, groups, rng), share)
+            named = _screen_c(importance(cv, X, y, groups, rng), share)
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                                     _screen, cross_validate, after)
+                                                     _screen_c, cross_validate, after)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
@@ -363,7 +369,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                     named, screened = [], (tuple(kept), share_k)
         moved, y_t, cv_t = (), y, cv
         if explained and named:  # the own joint's rate and effort the screen's bars passed over
-            named, cv, use = beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, cross_validate)
+            named, cv, use = beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, cross_validate,
+                                          passed, folded)
             cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
             share, z, _ = judged(cv.mse)
             cv_t = cv
