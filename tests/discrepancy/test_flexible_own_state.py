@@ -6,7 +6,7 @@ reference motion adds too (a force the effort only echoes is not in the referenc
 Synthetic, truth in closed form, on slider 1's channel: a ripple of the position,
 sin(2 pi q1 / 0.25), scaled by (1 + 0.6 load) with load the drive's effort along the reference
 (a thrust ripple whose amplitude the current sets), or beside a damping 0.3 qd1 (a cushion's spring and
-its air's drag), or alone; the effort is the load, or with an echo the load plus twice the force the
+its air's drag) or a force 0.8 load, or alone; the effort is the load, or with an echo the load plus twice the force the
 controller answers, which then holds a slow disturbance no other input carries.
 """
 import numpy as np
@@ -30,7 +30,7 @@ def _rail(scaled_by=None, echo=0.0, n=1200, sigma=0.05, seed=3):
     load = np.sin(2 * np.pi * 0.13 * t + 0.7) + 0.4 * np.sin(2 * np.pi * 0.41 * t)
     q2 = 0.2 * np.sin(2 * np.pi * 0.07 * t + 1.0)
     scale = 1.0 + 0.6 * load if scaled_by == "effort" else 1.0
-    damping = 0.3 * qd1 if scaled_by == "rate" else 0.0
+    damping = 0.3 * qd1 if scaled_by == "rate" else 0.8 * load if scaled_by == "load" else 0.0
     kernel = np.exp(-np.arange(60) / 15.0)
     disturbance = np.convolve(rng.normal(0.0, 1.0, n + 59), kernel / np.linalg.norm(kernel), "valid")
     y = np.sin(2 * np.pi * q1 / 0.25) * scale + damping + (0.5 * disturbance if echo else 0.0)
@@ -41,13 +41,13 @@ def _rail(scaled_by=None, echo=0.0, n=1200, sigma=0.05, seed=3):
     return X, reference, y
 
 
-def _named(X, reference, y, named=("position of slider 1",)):
+def _named(X, reference, y, named=("position of slider 1",), passed=()):
     groups = flexible.input_groups(COLS)
     fold_rows = flexible.folds(len(y), flexible.gap_for(1.0))
     use = sorted({i for g in named for i in groups[g]})
     cv = flexible.cross_validate(X[:, use], y, fold_rows)
     got, cv_got, use_got = beside_named(list(named), use, cv, groups, 1, X, y, fold_rows, reference,
-                                        flexible.cross_validate)
+                                        flexible.cross_validate, passed)
     assert cv_got.mse <= cv.mse and set(use) <= set(use_got)
     return sorted(got)
 
@@ -57,6 +57,16 @@ def test_the_own_effort_a_force_scales_is_named_beside_its_position():
     assert _named(X, reference, y) == ["effort of slider 1", "position of slider 1"]
     # without a reference motion the effort cannot be told from the controller's answer: not named
     assert _named(X, None, y) == ["position of slider 1"]
+    # an effort the screen passed was judged by the other rules: not tried again
+    assert _named(X, reference, y, passed=("effort of slider 1",)) == ["position of slider 1"]
+
+
+def test_the_effort_is_tried_only_beside_the_own_joints_position():
+    # a force 0.8 load beside the ripple: the effort adds beside slider 1's position, and is not
+    # tried beside another joint's position alone (a force on the platform reaches every effort)
+    X, reference, y = _rail(scaled_by="load")
+    assert _named(X, reference, y, passed=("rate of slider 1",)) == ["effort of slider 1", "position of slider 1"]
+    assert _named(X, reference, y, ("position of slider 2",), passed=("rate of slider 1",)) == ["position of slider 2"]
 
 
 def test_an_effort_that_only_echoes_the_force_is_not_named():

@@ -6,21 +6,33 @@ trees' explained variance.  Where a force is a product of the joint's position a
 effort or rate (a thrust ripple or a screw's misalignment whose amplitude the drive's load
 sets, an air cushion whose force grows with stroke and speed), the position alone carries most
 of it: the trees split on the position first, and permuting the effort or the rate costs them
-a share under the screen's bars (0.006-0.03 of the variance on MuJoCo's fourth set of kinds),
-though the trees on the position and that factor explain more than those on the position alone.
-The channel's own effort and acceleration are moreover judged last, as consequences of the force
-in closed loop (:func:`~.select.consequences`), which the screen then never offers.
+a share under the screen's bars (on the seen MuJoCo sets 0.006-0.058 of the variance, under
+:data:`~.stage.IMPORTANCE_MIN` or a tenth of the strongest group's), though the trees on the
+position and that factor explain more out of fold than those on the position alone (0.04-0.26
+of the variance).
 
 **The own joint's state beside the named inputs** (:func:`beside_named`): where the stage names
-inputs and a claim, the channel's own joint's rate and effort that are not named are each
-cross-validated beside them; one is named where it adds :data:`~.select.DROP_MIN` of the
-variance above :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`,
-the bar of a consequence), the larger gain first and the other judged beside it.  The effort
-carries the controller's answer to the force (:mod:`.copies`), so it is named only where its
-counterpart along the reference motion (the reference's inverse dynamics: the load the commanded
-motion sets, which the force does not move) adds by the same bar in its place: a force keyed on
-the drive's load is keyed on the commanded load too, a force the effort only echoes is not in it.
-The rule names no kind of force.
+inputs and a claim, the channel's own joint's rate and effort that the screen did not pass are
+each cross-validated beside them; one is named where it adds :data:`~.select.DROP_MIN` of the
+variance above :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`, the
+bar of a consequence), the larger gain first and the other judged beside it.  Three guards keep
+the closed-loop answer out:
+
+* a group the screen passed was judged by the other rules (causes before consequences, copies,
+  what a model effort is computed from: :mod:`.select`, :mod:`.beside`), and is not tried again;
+* the effort carries the controller's answer to the force (:mod:`.copies`): it is named only
+  where its counterpart along the reference motion (the reference's inverse dynamics: the load
+  the commanded motion sets, which the force does not move) adds by the same bar in its place: a
+  force keyed on the drive's load is keyed on the commanded load too, one the effort only echoes
+  is not in it;
+* the effort is tried only beside the own joint's named position: a force the drive's load
+  scales acts along the joint's own stroke (a motor's thrust, a nut's contact); a force on the
+  platform, named on its pose, its motion or the rates of its twist, reaches every drive's
+  effort through the dynamics that effort is computed from, where the effort beside them is a
+  copy of that force, no factor of it.
+
+On a fit folded by the joint's direction (:mod:`.folded`) the rate is named as the direction
+already and is not tried.  The rule names no kind of force.
 
 Figures on the seen sets: docs/flexible.md, "The own joint's effort and rate beside the named inputs".
 """
