@@ -46,8 +46,7 @@ def _named(X, reference, y, named=("position of slider 1",), passed=()):
     fold_rows = flexible.folds(len(y), flexible.gap_for(1.0))
     use = sorted({i for g in named for i in groups[g]})
     cv = flexible.cross_validate(X[:, use], y, fold_rows)
-    got, cv_got, use_got = beside_named(list(named), use, cv, groups, 1, X, y, fold_rows, reference,
-                                        flexible.cross_validate, passed)
+    got, cv_got, use_got = beside_named(list(named), use, cv, groups, 1, X, y, fold_rows, reference, passed)
     assert cv_got.mse <= cv.mse and set(use) <= set(use_got)
     return sorted(got)
 

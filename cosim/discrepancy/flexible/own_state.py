@@ -55,16 +55,30 @@ def own_groups(groups, joint, named) -> list:
     return [g for g in groups if g not in named and joint_of(g) in {(q, joint) for q in QUANTITIES}]
 
 
-def beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, cross_validate, passed=(),
-                 direction=False) -> tuple:
+def recorded(screen) -> tuple:
+    """``(screen', passed)``: the stage's ``screen`` and the set of every group it passes, filled
+    as it is called (:func:`beside_named`'s ``passed``)."""
+    passed = set()
+
+    def screen_(imp, share):
+        got = screen(imp, share)
+        passed.update(got)
+        return got
+    return screen_, passed
+
+
+def beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, passed=(), direction=False,
+                 cross_validate=None) -> tuple:
     """``(named, cv, use)`` with the own ``joint``'s rate and effort (:func:`own_groups`) added
     where they add significantly beside the named groups (module docstring): ``cv`` the trees'
     cross-validation on the columns ``use`` of ``X``, ``reference`` the channel's counterparts
     along the reference motion (an array of ``X``'s layout, a function giving it:
     :func:`.copies.on_channel`, or None: no effort is named then); ``cross_validate``: the
-    stage's; ``passed``: the groups the screen passed (the other rules judged them: not tried
+    stage's (:func:`~.cv.cross_validate` where None); ``passed``: the groups the screen passed (the other rules judged them: not tried
     again); ``direction``: the fit is folded by the joint's direction (:mod:`.folded`), which names
     its rate already.  Unchanged where nothing adds."""
+    if cross_validate is None:
+        from .cv import cross_validate
     var = float(np.var(y))
     stroke = any(joint_of(g) == ("position", joint) for g in named)  # the own joint's position named
     tried = [g for g in own_groups(groups, joint, list(named) + list(passed))
