@@ -74,9 +74,10 @@ def beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, pass
     cross-validation on the columns ``use`` of ``X``, ``reference`` the channel's counterparts
     along the reference motion (an array of ``X``'s layout, a function giving it:
     :func:`.copies.on_channel`, or None: no effort is named then); ``cross_validate``: the
-    stage's (:func:`~.cv.cross_validate` where None); ``passed``: the groups the screen passed (the other rules judged them: not tried
-    again); ``direction``: the fit is folded by the joint's direction (:mod:`.folded`), which names
-    its rate already.  Unchanged where nothing adds."""
+    stage's (:func:`~.cv.cross_validate` where None); ``passed``: the groups the screen passed
+    (the other rules judged them: not tried again); ``direction``: the fit is folded by the
+    joint's direction (:mod:`.folded`), which names its rate already.  Unchanged where nothing
+    adds."""
     if cross_validate is None:
         from .cv import cross_validate
     var = float(np.var(y))
