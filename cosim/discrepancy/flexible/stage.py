@@ -42,7 +42,8 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   channel's own model effort and acceleration follow the force in closed loop: named
   only where the other inputs cannot explain the same share; an acceleration, effort or history
   only where its counterpart along the reference motion adds too: :mod:`.copies`) and a group
-  sharing a named one's columns named where those add (:mod:`.select`); the share claimed is then that of
+  sharing a named one's columns named where those add (:mod:`.select`), the channel's own rate and
+  effort the screen passed over named where they add significantly (:mod:`.own_state`); the share claimed is then that of
   the trees on the named groups alone (where two share columns, on fewer of them when that
   explains more out of fold: :func:`.select.lean`), judged again by the same two bars: when it fails them,
   no input is named and the claim is the full model's, on no single input (``screened`` holds
@@ -86,6 +87,7 @@ from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
 from .oblique import extend, extended
+from .own_state import beside_named, recorded
 from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
@@ -323,13 +325,12 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
     follow = judged_last(consequences(columns, groups, (joint := c + 1 if c is not None else None)), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
-    screened_fold = direction_c if how == "both" else None  # the folded fit made too
-    sigma = direction_c if how == "folded" else sigma
+    screened_fold, sigma = (direction_c if how == "both" else None), (direction_c if how == "folded" else sigma)
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
     after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged)
-    rng = np.random.default_rng(0)
+    (_screen_c, passed), rng = recorded(_screen), np.random.default_rng(0)  # passed: judged by the rules
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
         share, z, explained = (0.0, 0.0, False) if weak else judged(cv.mse)
@@ -338,7 +339,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
             share, z, explained = judged(cv.mse)
-        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen, cross_validate, after) \
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen_c, cross_validate, after) \
             if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
             named, cv, use, share, z = first
@@ -357,19 +358,20 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
             elif copy_alone(named, kept, ok_k):  # a model effort whose constituents claim nothing: no input
                 named = []
         else:
-            named = _screen(importance(cv, X, y, groups, rng), share)
+            named = _screen_c(importance(cv, X, y, groups, rng), share)
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                                     _screen, cross_validate, after)
+                                                     _screen_c, cross_validate, after)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
                 else:  # they do not carry it alone: the claim stays the full model's, on no single input
                     named, screened = [], (tuple(kept), share_k)
         moved, y_t, cv_t = (), y, cv
-        if explained and named:
+        if explained and named:  # the own joint's rate and effort the screen's bars passed over
+            named, cv, use = beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, passed, folded)
             cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
             share, z, _ = judged(cv.mse)
             cv_t = cv
