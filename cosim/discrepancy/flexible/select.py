@@ -138,7 +138,7 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         if tuple(cols) in done:
             return done[tuple(cols)], cols
         got = cross_validate(X[:, cols], y, fold_rows) if under is None else \
-            cross_validate(X[:, cols], y, fold_rows, enough=lambda mse: mse < under)
+            cross_validate(X[:, cols], y, fold_rows, under=under)
         if not getattr(got, "stopped", False):
             done[tuple(cols)] = got
         return got, cols
