@@ -375,8 +375,8 @@ def test_the_trees_on_every_input_stop_once_they_claim_and_claim_as_their_whole_
     # on noise alone nothing is claimed and the trees are those of the whole growth
     real, seen = flexible.cross_validate, []
 
-    def cross_validate(Xs, ys, fold_rows, enough=None):
-        cv = real(Xs, ys, fold_rows, enough=enough)
+    def cross_validate(Xs, ys, fold_rows, enough=None, under=None):
+        cv = real(Xs, ys, fold_rows, enough=enough, under=under)
         if enough is not None:
             seen.append((cv, real(Xs, ys, fold_rows), enough))
         return cv

@@ -148,6 +148,33 @@ def test_a_claim_stops_the_trees_early_and_decides_as_the_whole_growth():
     assert decided >= 10  # the bars at or above the first step's error: decided on its trees
 
 
+def test_a_bar_stops_the_trees_after_10_or_25_iterations_and_decides_as_the_whole_growth(monkeypatch):
+    """A cross-validation judged against a bar alone (``under``) is tested after 10 and 25
+    iterations too: under the bar there it stops, and for bars on both sides of the errors it
+    decides as the whole growth does; asked for again whole it grows on from there, the whole
+    growth's trees, predictions and error bit for bit."""
+    X, y, rows = _case()
+    _forgotten()
+    whole = flexible_cv.cross_validate(X, y, rows)
+    _forgotten()
+    lowest = flexible_cv.cross_validate(X, y, rows, under=float("inf"))
+    assert lowest.stopped and all(m.n_iter_ == flexible_cv.BAR_STEPS[0] == 10 for m in lowest.models)
+    calls = _fits_counted(monkeypatch)
+    grown_on = flexible_cv.cross_validate(X, y, rows)
+    assert calls == [n for n in flexible_cv.STEPS if n <= max(m.n_iter_ for m in whole.models)
+                     for _ in rows]  # the steps of 50 and 75 iterations only
+    assert grown_on.iterations == whole.iterations and grown_on.mse == whole.mse
+    assert np.array_equal(grown_on.pred, whole.pred)
+    var = float(np.var(y))
+    steps = set()
+    for bar in np.linspace(whole.mse - 0.2 * var, lowest.mse + 0.2 * var, 41):
+        _forgotten()
+        early = flexible_cv.cross_validate(X, y, rows, under=bar)
+        assert (early.mse < bar) == (whole.mse < bar)
+        steps.add(max(m.n_iter_ for m in early.models))
+    assert {10, 25} <= steps  # bars decided on the trees of 10 and of 25 iterations
+
+
 def _forgotten():
     flexible_cv._DONE.clear()
     flexible_cv._STOPPED.clear()

@@ -40,9 +40,9 @@ def _spindle_groups(n=700, sigma=0.05, seed=11, signed=False):
 def _counted():
     calls = []
 
-    def cv(X, y, fold_rows, enough=None):
+    def cv(X, y, fold_rows, enough=None, under=None):
         calls.append(X.shape[1])
-        return cross_validate(X, y, fold_rows, enough=enough)
+        return cross_validate(X, y, fold_rows, enough=enough, under=under)
     return cv, calls
 
 
@@ -113,8 +113,9 @@ def test_the_fits_whose_gain_already_falls_short_stop_early_and_name_as_the_whol
         flexible_cv._STOPPED.clear()
         made = []
 
-        def cv(Xs, ys, fold_rows, enough=None):
-            made.append(cross_validate(Xs, ys, fold_rows, enough=None if how == "whole" else enough))
+        def cv(Xs, ys, fold_rows, enough=None, under=None):
+            made.append(cross_validate(Xs, ys, fold_rows, enough=None if how == "whole" else enough,
+                                       under=None if how == "whole" else under))
             return made[-1]
         kept, cv_k, cols = sel.select(X, y, rows, groups, named, float(np.var(y)), cross_validate=cv)
         got[how] = (kept, cols, cv_k.mse, sum(c.stopped for c in made))
@@ -134,9 +135,9 @@ def test_the_lean_refit_judges_a_unit_as_one_candidate():
     full = cross_validate(X[:, use], y, rows)
     seen = []
 
-    def logged(Xs, ys, fold_rows, enough=None):
+    def logged(Xs, ys, fold_rows, enough=None, under=None):
         seen.append(Xs.shape[1])
-        return cv(Xs, ys, fold_rows, enough=enough)
+        return cv(Xs, ys, fold_rows, enough=enough, under=under)
     got, sub = sel.lean(X, y, rows, groups, named, use, full, logged)
     assert seen == [1]
     assert sub in (use, [4]) and got.mse <= full.mse

@@ -31,6 +31,11 @@ MIN_ITER = 5
 #: and stop when the summed held-out loss has not fallen for PATIENCE iterations (its minimum
 #: is then the chosen number); each step bins the inputs again, hence two steps only
 STEPS, PATIENCE = (50, 75), 25
+#: the steps of a growth judged against a bar alone (``under`` of :func:`cross_validate`): the
+#: held-out error is tested after 10 and 25 iterations too, where PATIENCE cannot end a growth
+#: (10 - 5 and 25 - 5 < 25), and a growth under the bar there stops (the warm-started fits add
+#: the same trees as :data:`STEPS`' do; a fit's bins are kept, :func:`_trees_keeping_bins`)
+BAR_STEPS = (10, 25) + STEPS
 #: the boosted trees' settings (small: a few hundred decimated samples; the number of
 #: iterations, at most max_iter, is chosen on the held-out blocks).  A tree costs about 0.5 ms
 #: whatever its inputs (scikit-learn's per-node work on some 800 rows): the stage's time is its
@@ -114,7 +119,7 @@ def first_trees(model, X, k: int) -> np.ndarray:
     return next(islice(model.staged_predict(X), k - 1, None))
 
 
-def cross_validate(X, y, fold_rows, enough=None) -> CV:
+def cross_validate(X, y, fold_rows, enough=None, under=None) -> CV:
     """Boosted trees cross-validated over the blocks ``fold_rows`` (from :func:`folds`), grown
     as :func:`grow` grows them.
 
@@ -125,6 +130,12 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
     losses over more iterations, to the rounding of the mean), so a test that every smaller error
     passes too (a share claimed: :func:`~.flexible.stage.fit_channel`) decides as the whole growth
     would, on fewer trees (``tests/discrepancy/test_flexible_cv.py``).
+
+    ``under``: a bar on the held-out mean squared error where only whether the error falls under
+    it matters (a leave-one-out fit, the fit without a partner's columns: :func:`.select.select`);
+    the test ``enough`` is then ``mse < under``, made after each of :data:`BAR_STEPS` but the last,
+    and a growth stopped under the bar after 10 or 25 iterations decides as one stopped after 50
+    or grown whole (the error chosen over more iterations is at most that one).
 
     The trees are a function of the inputs' values, the target and the folds alone (their
     settings fixed, ``random_state`` 0): a cross-validation asked again on equal values (the same
@@ -139,8 +150,11 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
 
     key = _inputs_key(X, y, fold_rows)
     done = _DONE.get(key)
-    if done is not None and (enough is None or all(m.n_iter_ == STEPS[0] for m in done.models)):
-        return done  # (with ``enough``: the growth ended at the first step, where the test is not made)
+    if under is not None:
+        enough = lambda mse: mse < under  # noqa: E731
+    if done is not None and (enough is None or under is not None or all(m.n_iter_ == STEPS[0] for m in done.models)):
+        return done  # (with ``enough``: the growth ended at the first step, where the test is not made; with
+        # ``under``: the whole growth's error is under the bar where any step's is)
     with _DONE_LOCK:
         start = _STOPPED.pop(key, None)
     stopped = []
@@ -150,7 +164,8 @@ def cross_validate(X, y, fold_rows, enough=None) -> CV:
         return stopped[-1]
 
     models, best, staged = _grow(X, y, fold_rows, None if enough is None else stop,
-                                 None if start is None else (copy.deepcopy(start[0]), start[1]))
+                                 None if start is None else (copy.deepcopy(start[0]), start[1]),
+                                 STEPS if under is None else BAR_STEPS)
     pred, mse = held_out([p[best - 1] for p in staged])
     out = CV(tuple(fold_rows), tuple(models), best, pred, mse, stopped=any(stopped))
     if any(stopped):  # kept to be grown on where the whole growth is asked for
@@ -235,11 +250,12 @@ def grow(X, Y, fold_rows, stop=None) -> tuple:
     return models, best, [p[best - 1] for p in staged]
 
 
-def _grow(X, Y, fold_rows, stop=None, start=None) -> tuple:
+def _grow(X, Y, fold_rows, stop=None, start=None, steps=STEPS) -> tuple:
     """:func:`grow`, returning the held-out predictions per fold at every iteration grown
     (``staged``) instead of the chosen one's, and grown on from ``start`` (``(models, staged)``
     of a growth ``stop`` ended after a step: its trees are the first of the whole growth's, and
-    a warm-started fit adds the next ones as one fit of as many iterations would)."""
+    a warm-started fit adds the next ones as one fit of as many iterations would), ``stop`` tested
+    after each of ``steps`` but the last (:data:`STEPS` or :data:`BAR_STEPS`: the same trees)."""
     Y = np.asarray(Y)
     target = (lambda b: Y) if Y.ndim == 1 else (lambda b: Y[:, b])
     if start is None:
@@ -247,7 +263,7 @@ def _grow(X, Y, fold_rows, stop=None, start=None) -> tuple:
         staged = [np.empty((0, len(held))) for held, _ in fold_rows]
     else:
         models, staged = list(start[0]), list(start[1])
-    for n in STEPS:
+    for n in steps:
         for b, ((held, fit), m) in enumerate(zip(fold_rows, models)):
             if len(staged[b]) >= n:  # grown to this step already (``start``)
                 continue
@@ -257,7 +273,7 @@ def _grow(X, Y, fold_rows, stop=None, start=None) -> tuple:
         total = sum(np.sum((target(b)[held][None, :] - p) ** 2, axis=1)
                     for b, ((held, _), p) in enumerate(zip(fold_rows, staged)))
         best = int(np.argmin(total[MIN_ITER - 1:])) + MIN_ITER
-        if n - best >= PATIENCE or (stop is not None and n != STEPS[-1] and stop([p[best - 1] for p in staged])):
+        if n - best >= PATIENCE or (stop is not None and n != steps[-1] and stop([p[best - 1] for p in staged])):
             break
     for m in models:  # the kept training rows are no part of the fitted trees
         m.__dict__.pop("_kept_bins", None)

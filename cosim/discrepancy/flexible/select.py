@@ -138,7 +138,7 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         if tuple(cols) in done:
             return done[tuple(cols)], cols
         got = cross_validate(X[:, cols], y, fold_rows) if under is None else \
-            cross_validate(X[:, cols], y, fold_rows, enough=lambda mse: mse < under)
+            cross_validate(X[:, cols], y, fold_rows, under=under)
         if not getattr(got, "stopped", False):
             done[tuple(cols)] = got
         return got, cols
@@ -148,7 +148,7 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         if len(us) == 1:
             return list(gs)
         full = cv_on(gs)[0]
-        bar = full.mse + DROP_MIN * var  # below it the unit is out, on the trees of a first step as on all
+        bar = full.mse + DROP_MIN * var  # below it the unit is out, on the trees of 10, 25 or 50 iterations as on all
         out = {g for u in us if (cv_on(gs, [i for h in u for i in groups[h]], bar)[0].mse - full.mse) / var < DROP_MIN
                for g in u}
         kept = [g for g in gs if g not in out]
@@ -174,11 +174,11 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
 def adds(without, with_, y, var, cv_on) -> bool:
     """Whether the columns ``without`` leaves out of the groups ``with_`` add a significant
     share (:func:`gain`): ``cv_on(groups, without=(), under=None)`` is :func:`select`'s
-    cross-validation of the groups' columns less ``without``, whose trees may stop after a step
-    once their held-out error is ``under`` a bar (``enough`` of :func:`~.cv.cross_validate`).
-    Under the trees on ``with_`` plus :data:`DROP_MIN` of the variance the gain falls short of
-    DROP_MIN, and the error of trees grown further is lower still: decided on the first step's
-    trees as on the whole growth."""
+    cross-validation of the groups' columns less ``without``, whose trees may stop after 10, 25
+    or 50 iterations once their held-out error is ``under`` a bar (``under`` of
+    :func:`~.cv.cross_validate`).  Under the trees on ``with_`` plus :data:`DROP_MIN` of the
+    variance the gain falls short of DROP_MIN, and the error of trees grown further is lower
+    still: decided on the fewer trees as on the whole growth."""
     full = cv_on(with_)[0]
     return gain(cv_on(with_, without, full.mse + DROP_MIN * var)[0], full, y, var)[1]
 
