@@ -448,7 +448,7 @@ def diagnosed_row(d, kind, seed, scale, truth, joint, tau_noise, cpu, rule) -> d
                if not any(tied(a) for a in e["lookalikes"])]
     ties = {e["key"] + (f"[{e['joint']}]" if e["joint"] else ""): [a["group"] for a in e["lookalikes"] if tied(a)]
             for e in d.effects if any(tied(a) for a in e["lookalikes"])}
-    terms = [("(partial) " if t.partial else "") + t.equation for t in d.discovered]
+    terms = [("(partial) " if t.partial else "") + t.equation for t in d.discovered if not t.repeats_its_pair]
     before = np.asarray(d.residual["before"])[:, :6]
     size = np.sqrt(np.mean((before - before.mean(axis=0)) ** 2, axis=0)) / tau_noise
     row = {"case": case_name(kind, seed, scale), "kind": kind, "seed": seed, "scale": scale, "cpu": cpu, "truth": truth, "joint": joint,

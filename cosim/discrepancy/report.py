@@ -203,7 +203,7 @@ def _discovery_section(d, files: dict) -> list:
               "the core's joint force (`<j>[i].force_*`), so the fitted plant below carries it.", ""]
         for t in d.discovered:
             held = f"  - held-out residual of `{t.channel}`: RMS {t.heldout_before:.3g} -> {t.heldout_after:.3g}"
-            if 0 < t.pair < t.joint:  # a pair between two joints: stated once, under its first joint
+            if t.repeats_its_pair:
                 L.append(held)
                 continue
             L += [f"- **{t.equation}**", f"  - what makes such a term: {t.mechanisms}",

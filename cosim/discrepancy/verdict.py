@@ -151,7 +151,7 @@ def headline(effects, found, left, gain=None, unexplained_group: str = "unexplai
         return ""
     better = _heldout_words(gain)
     # a discovered term by its kinds (its equation, long, is in the details)
-    found = [t for t in found if not 0 < t.pair < t.joint]  # a pair between two joints is stated once
+    found = [t for t in found if not t.repeats_its_pair]
     short = {id(t): f"a force on {t.channel} no library effect names ({', '.join(t.terms)})"
              if not t.pair else t.equation.split(":")[0] for t in found}
     names = [_title(e) for e in effects] + [short[id(t)] for t in found] + list(others)

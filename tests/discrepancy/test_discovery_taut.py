@@ -27,6 +27,7 @@ def _check_found(d, truth):
     assert {(t.joint, t.pair) for t in pairs} == {(j, k), (k, j)}, d.conclusion
     assert all(t.terms == ["taut"] and not t.partial for t in pairs), [(t.terms, t.partial) for t in pairs]
     assert (d.conclusion + d.details).count(pairs[0].equation) == 1, d.details  # stated once
+    assert [t.joint for t in pairs if not t.repeats_its_pair] == [min(j, k)]  # listed under its first joint
     p = d.plant_parameters()
     k_true, s_true = p_true[f"rail[{j}].force_taut"], p_true[f"rail[{j}].force_taut_q"]
     # the plant holds it on j as drawn (taut above s on q_j - q_k) and its reaction on k

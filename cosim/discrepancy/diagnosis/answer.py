@@ -233,7 +233,7 @@ def _withdrawn_sentence(w) -> str:
 
 
 def _conclusion(effects, not_excited, eng, sel, found=(), withdrawn=()) -> str:
-    found = [t for t in found if not 0 < t.pair < t.joint]  # a pair between two joints is stated once
+    found = [t for t in found if not t.repeats_its_pair]
     if found:
         parts = [f"{t.equation} ({', '.join(t.terms)}; {t.mechanisms})"
                  + (f" [not named as the physics: {_partial_reason(t.partial)}]" if t.partial else "") for t in found]

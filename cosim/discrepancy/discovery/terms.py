@@ -146,6 +146,12 @@ class DiscoveredTerm:
     def __getitem__(self, k):
         return getattr(self, k)
 
+    @property
+    def repeats_its_pair(self) -> bool:
+        """True on the second joint of a pair between two joints: the pair is stated once, under
+        its first joint (the lower index), and this term only carries it on its own channel."""
+        return 0 < self.pair < self.joint
+
     def params(self) -> dict:
         """Core parameters that put the term into the plant (shape and coefficients)."""
         return {**self.shape, **{p: c.value for p, c in self.coefficients.items()}}
