@@ -118,7 +118,7 @@ def _spring_constant(search, theta, coef, cov, held, lo, hi):
     return km, T @ cov @ T.T, {search.name(a, "offset"): (float(common), half) for a in (lo, hi)}
 
 
-def _offsets_zeroed(sel, terms) -> list:
+def offsets_zeroed(sel, terms) -> list:
     """The library's offsets the spring pair refitted to zero (within their 95 % interval): they
     stood in for its constant, and are withdrawn (the plant holds the refitted value)."""
     out = []
@@ -135,12 +135,12 @@ def _offsets_zeroed(sel, terms) -> list:
     return out
 
 
-def _chi2(search, R, chans, rows):
+def chi2_on(search, R, chans, rows):
     eng = search.eng
     return float(sum(np.sum((R[rows, c] * search.w[c] * eng.use[rows, c]) ** 2) for c in chans))
 
 
-def _held_rms(eng, R, a) -> float:
+def held_rms(eng, R, a) -> float:
     """The RMS of channel a's held-out residual in ``R`` (NaN where it holds no sample, as a
     discovered term's)."""
     r = R[eng.test, a][eng.use[eng.test, a] > 0]
@@ -154,7 +154,7 @@ def _library_viscous(search, sel, theta, chans) -> list:
             if a.group.key == "viscous" and a.group.params[0] in names and a.group.params[0] in theta]
 
 
-def _kept(t, p, kind) -> bool:
+def kept(t, p, kind) -> bool:
     """Does the pair keep separate term ``t``'s parameter ``p``?  The library's offset a term
     refitted stays at its refitted value; a spring's constant is the pair's, so the offset a
     spring's separate terms found where the library held none (its base 0) goes with them."""
@@ -163,10 +163,10 @@ def _kept(t, p, kind) -> bool:
     return kind == "damper" or p not in t.coefficients or t.coefficients[p].base != 0.0
 
 
-def _dropped(sep, libs, kind="damper") -> set:
+def dropped(sep, libs, kind="damper") -> set:
     """The parameters the pair replaces: the separate terms' (but the offsets it keeps,
-    :func:`_kept`) and the library viscous frictions'."""
-    return {p for t in sep for p in t.params() if not _kept(t, p, kind)} | {g.params[0] for g in libs}
+    :func:`kept`) and the library viscous frictions'."""
+    return {p for t in sep for p in t.params() if not kept(t, p, kind)} | {g.params[0] for g in libs}
 
 
 def _pair_terms(search, j, k, c, half, d_held, before, after) -> list:
@@ -245,7 +245,7 @@ def _trial(eng, search, sel, theta, found, j, k, threshold, kind="damper"):
     chans = (j, k)
     sep = [t for t in found if t.joint - 1 in chans]
     libs = _library_viscous(search, sel, theta, chans) if kind == "damper" else []
-    drop = _dropped(sep, libs, kind)
+    drop = dropped(sep, libs, kind)
     rest = {p: v for p, v in theta.items() if p not in drop}
     Xs, held = _columns(search, rest, j, k, kind)
     if Xs is None:
@@ -263,20 +263,20 @@ def _trial(eng, search, sel, theta, found, j, k, threshold, kind="damper"):
     n_eff = sum(float((eng.use[train, c] > 0).sum()) for c in chans) / phi
     if not n_eff > 1.0:
         return None
-    chi_pair = _chi2(search, R_pair, chans, train)
+    chi_pair = chi2_on(search, R_pair, chans, train)
     # the separate model's coefficients (the offsets the pair keeps stay on both sides)
-    k_sep = sum(not _kept(t, p, kind) for t in sep for p in t.coefficients) + len(libs)
+    k_sep = sum(not kept(t, p, kind) for t in sep for p in t.coefficients) + len(libs)
     # the selection's criterion: BIC in effective samples, the pair's coefficients against the separate ones
-    if not chi_pair + len(Xs) * math.log(n_eff) < _chi2(search, R_sep, chans, train) + k_sep * math.log(n_eff):
+    if not chi_pair + len(Xs) * math.log(n_eff) < chi2_on(search, R_sep, chans, train) + k_sep * math.log(n_eff):
         return None
     # the discovery's held-out check (the pair lowers the held-out chi-square by more than the
     # threshold), and the separate model not significantly better there
-    d_held = _chi2(search, R0, chans, test) - _chi2(search, R_pair, chans, test)
+    d_held = chi2_on(search, R0, chans, test) - chi2_on(search, R_pair, chans, test)
     if not d_held > threshold or significant(search, R_pair, R_sep, chans, threshold)[0]:
         return None
     s2 = max(chi_pair / max(n_eff - len(Xs), 1.0), 1.0)
-    before = {a: _held_rms(eng, R0, a) for a in chans}
-    after = {a: _held_rms(eng, R_pair, a) for a in chans}
+    before = {a: held_rms(eng, R0, a) for a in chans}
+    after = {a: held_rms(eng, R_pair, a) for a in chans}
     if kind == "damper":
         half = 1.96 * math.sqrt(s2 / float(A[:, 0] @ A[:, 0]))
         return _pair_terms(search, j, k, float(coef[0]), half, d_held, before, after), libs
@@ -292,7 +292,7 @@ def paired(eng, search, sel, theta, found, withdrawn, threshold):
     spring) and a cross term (on the other joint's rate, its position) that are equal and opposite
     (:func:`_halves`), the pair is tried (:func:`_trial`); when it wins it replaces the two
     channels' discovered terms, and the library viscous frictions on the two joints (a damper's)
-    and the library offsets a spring refitted to zero (:func:`_offsets_zeroed`) are withdrawn
+    and the library offsets a spring refitted to zero (:func:`offsets_zeroed`) are withdrawn
     (``replaced_by`` the pair's channels)."""
     for t, kind in [(t, kind) for t in found for kind in KINDS]:
         k = _cross_partner(search, t, kind)
@@ -304,15 +304,27 @@ def paired(eng, search, sel, theta, found, withdrawn, threshold):
             continue
         terms, libs = won
         sep = [u for u in found if u.joint - 1 in (j, k)]
-        gone = _dropped(sep, libs, kind)
-        theta = {p: v for p, v in theta.items() if p not in gone}
-        for u in terms:
-            theta.update(u.params())
-        chans = [u.channel for u in terms]
-        withdrawn = withdrawn + [{"group": g.label, "effect": g.effect.name, "title": g.title,
-                                  "params": {g.params[0]: float(sel.theta.get(g.params[0], float("nan")))},
-                                  "replaced_by": chans, "pair": True} for g in libs]
-        withdrawn = withdrawn + (_offsets_zeroed(sel, terms) if kind == "spring" else [])
-        terms = [replace(u, instead_of=[w for v in sep for w in v.instead_of]) for u in terms]
-        found = [u for u in found if u.joint - 1 not in (j, k)] + terms
+        found, withdrawn, theta = installed(sel, theta, found, withdrawn, terms, sep, libs, kind)
     return found, withdrawn, theta
+
+
+def installed(sel, theta, found, withdrawn, terms, sep, libs, kind) -> tuple:
+    """``(found, withdrawn, theta)`` with a won pair ``terms`` in place of the two joints'
+    separate discovered terms ``sep`` and the library groups ``libs``: their parameters leave
+    ``theta`` (but the offsets the pair keeps, :func:`kept`) and the pair's enter; the groups are
+    withdrawn (``replaced_by`` the pair's channels, each parameter's value recorded) and, for a
+    spring, the library offsets it refitted to zero (:func:`offsets_zeroed`), each group once;
+    the pair's terms carry what the separate terms stood ``instead_of``."""
+    gone = dropped(sep, libs, kind)
+    theta = {p: v for p, v in theta.items() if p not in gone}
+    for u in terms:
+        theta.update(u.params())
+    chans = [u.channel for u in terms]
+    withdrawn = withdrawn + [{"group": g.label, "effect": g.effect.name, "title": g.title,
+                              "params": {p: float(sel.theta.get(p, float("nan"))) for p in g.params},
+                              "replaced_by": chans, "pair": True} for g in libs]
+    if kind == "spring":
+        known = {w["group"] for w in withdrawn}
+        withdrawn = withdrawn + [w for w in offsets_zeroed(sel, terms) if w["group"] not in known]
+    terms = [replace(u, instead_of=[x for v in sep for x in v.instead_of]) for u in terms]
+    return [u for u in found if not any(u is v for v in sep)] + terms, withdrawn, theta

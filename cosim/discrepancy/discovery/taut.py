@@ -37,7 +37,6 @@ effective samples (the columns of the three at the fit).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -206,12 +205,12 @@ def _trial(eng, search, sel, theta, found, lo, hi, threshold, libs=()):
     joints lo, hi in place of their discovered terms and the library groups ``libs`` when it wins
     (see the module's text), else None."""
     from .judgement import significant
-    from .pair import _chi2, _dropped, _held_rms, _kept
+    from .pair import chi2_on, dropped, held_rms, kept
     from ..structure import samples_per_independent
 
     chans = (lo, hi)
     sep = [t for t in found if t.joint - 1 in chans]
-    rest = {p: v for p, v in theta.items() if p not in _dropped(sep, libs, "spring")}
+    rest = {p: v for p, v in theta.items() if p not in dropped(sep, libs, "spring")}
     held = tuple(a for a in chans if search.name(a, "offset") in rest)
     fit = _Fit(eng, search, rest, lo, hi, held)
     R_sep = eng.try_R(theta)
@@ -229,23 +228,23 @@ def _trial(eng, search, sel, theta, found, lo, hi, threshold, libs=()):
     if not n_eff > 1.0:
         return None
     n_taut = 1 + len(fit.offsets) + 2  # the stiffness, the offsets refitted, the slack and the width
-    k_sep = sum(not _kept(t, p, "spring") for t in sep for p in t.coefficients) + sum(len(g.params) for g in libs)
+    k_sep = sum(not kept(t, p, "spring") for t in sep for p in t.coefficients) + sum(len(g.params) for g in libs)
     crit = chi_taut + n_taut * math.log(n_eff)
-    if not crit < _chi2(search, R_sep, chans, eng.train) + k_sep * math.log(n_eff):
+    if not crit < chi2_on(search, R_sep, chans, eng.train) + k_sep * math.log(n_eff):
         return None
     # the held-out check with the look-elsewhere cost of the shapes tried on every pair of joints
     # and both variants (:func:`taut_pairs`), and the separate model not significantly better there
     nd = search.nd
     bar = threshold + 2.0 * math.log(2 * tried * nd * (nd - 1) / 2)
-    d_held = _chi2(search, fit.R0, chans, eng.test) - _chi2(search, R_taut, chans, eng.test)
+    d_held = chi2_on(search, fit.R0, chans, eng.test) - chi2_on(search, R_taut, chans, eng.test)
     if not d_held > bar or significant(search, R_taut, R_sep, chans, threshold)[0]:
         return None
     s2 = max(chi_taut / max(n_eff - n_taut, 1.0), 1.0)
     cov = _covariance(fit, coef, X, s, w, s2)
     if cov is None:
         return None
-    before = {a: _held_rms(eng, fit.R0, a) for a in chans}
-    after = {a: _held_rms(eng, R_taut, a) for a in chans}
+    before = {a: held_rms(eng, fit.R0, a) for a in chans}
+    after = {a: held_rms(eng, R_taut, a) for a in chans}
     return _terms(search, fit, coef, cov, s, w, d_held, before, after), sep, list(libs), crit
 
 
@@ -302,7 +301,7 @@ def taut_pairs(eng, search, sel, theta, found, withdrawn, threshold):
     of the tension); the variant of the lower criterion that wins replaces the two channels'
     discovered terms, and the library groups it replaces and the library's offsets it refitted to
     zero (within their 95 % interval) are withdrawn (``replaced_by`` its channels)."""
-    from .pair import _dropped, _offsets_zeroed
+    from .pair import installed
 
     pairs = _screened(eng, search, sel, theta, found, threshold)
     done = set()
@@ -317,17 +316,6 @@ def taut_pairs(eng, search, sel, theta, found, withdrawn, threshold):
         if won is None:
             continue
         terms, sep, libs, _ = won
-        gone = _dropped(sep, libs, "spring")
-        theta = {p: v for p, v in theta.items() if p not in gone}
-        for u in terms:
-            theta.update(u.params())
-        chans = [u.channel for u in terms]
-        withdrawn = withdrawn + [{"group": g.label, "effect": g.effect.name, "title": g.title,
-                                  "params": {p: float(sel.theta.get(p, float("nan"))) for p in g.params},
-                                  "replaced_by": chans, "pair": True} for g in libs]
-        known = {w["group"] for w in withdrawn}
-        withdrawn = withdrawn + [w for w in _offsets_zeroed(sel, terms) if w["group"] not in known]
-        terms = [replace(u, instead_of=[x for v in sep for x in v.instead_of]) for u in terms]
-        found = [u for u in found if u.joint - 1 not in (lo, hi)] + terms
+        found, withdrawn, theta = installed(sel, theta, found, withdrawn, terms, sep, libs, "spring")
         done |= {lo, hi}
     return found, withdrawn, theta
