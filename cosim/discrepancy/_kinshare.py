@@ -2,7 +2,9 @@
 same recording whose model has the same kinematics: the poses, pose rates and accelerations of
 the recorded and smoothed joints and of the reference, and the kinematic entries of its
 evaluation cache (the joint motion along a pose motion, the nominal pose rates, whether a
-parameter moves the joints, the poses of a geometry change).
+parameter moves the joints, the poses of a geometry change), and, when no actuator or sensor
+parameter differs either, the actuators' efforts for the recorded command and the sensors'
+readings at the tracker's poses.
 
 The platform-force stage (:mod:`.platform_force`) builds a second pipeline for the model with a
 force on the platform; a force, a mass or an inertia leaves the kinematics as they are, and
