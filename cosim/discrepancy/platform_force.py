@@ -117,7 +117,7 @@ def unit_columns(eng, keys) -> dict:
     recorded motion, and the per-sample efforts (n, nd) of the unit forces before smoothing
     (``raw``): the core's mechanism inverse dynamics with the parameter set, less without.
     The model with the parameter set is the pipeline's scratch model (:meth:`.residuals.Pipeline.model_for`):
-    a copy of the model per parameter costs twice its inverse dynamics over a 10 s recording."""
+    a copy of the model per parameter costs more than its inverse dynamics over a 10 s recording."""
     pipe = eng.pipe
     motion = (pipe.x_f, pipe.xd_f, pipe.xdd_f)
     base = pipe.model.mechanism_inverse_dynamics(*motion)
