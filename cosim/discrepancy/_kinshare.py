@@ -2,7 +2,9 @@
 same recording whose model has the same kinematics: the poses, pose rates and accelerations of
 the recorded and smoothed joints and of the reference, and the kinematic entries of its
 evaluation cache (the joint motion along a pose motion, the nominal pose rates, whether a
-parameter moves the joints, the poses of a geometry change).
+parameter moves the joints, the poses of a geometry change), and, when no actuator or sensor
+parameter differs either, the actuators' efforts for the recorded command and the sensors'
+readings at the tracker's poses.
 
 The platform-force stage (:mod:`.platform_force`) builds a second pipeline for the model with a
 force on the platform; a force, a mass or an inertia leaves the kinematics as they are, and
@@ -17,6 +19,12 @@ import numpy as np
 #: model's kinematics only (``Pipeline._inverse_dynamics``'s "J", ``_pose_term``'s "P0" and
 #: "X", ``_moves_joints``'s "moves joints")
 KINEMATIC_KEYS = ("J", "P0", "X", "moves joints")
+#: first element of the keys whose values depend on the kinematics and on the actuators' and the
+#: sensors' parameters only (``Pipeline._applied``'s "A": the efforts the actuators apply for the
+#: recorded command; ``Pipeline._readings``' "K": the readings the sensors give at the tracker's
+#: poses); taken when no parameter of either kind differs (a saturation's or a dead zone's
+#: profile is some 50 of them)
+COMMAND_KEYS = ("A", "K")
 
 
 def same_kinematics(prev, rec, model, *, window: int, polyorder: int, segments, zoh: bool) -> bool:
@@ -33,13 +41,20 @@ def same_kinematics(prev, rec, model, *, window: int, polyorder: int, segments, 
         return False
     if prev.segments != ([(0, prev.n)] if segments is None else [(int(a), int(b)) for a, b in segments]):
         return False
-    mine, theirs = model.params(), prev.nominal
-    if set(mine) != set(theirs):
+    if set(model.params()) != set(prev.nominal):
         return False
-    return not any(prev._moves_joints(k) for k, v in mine.items() if theirs[k] != v
-                   and not (np.isnan(v) and np.isnan(theirs[k])))
+    return not any(prev._moves_joints(k) for k in changed(prev, model))
 
 
-def kinematic_entries(prev) -> list:
-    """The entries of ``prev``'s evaluation cache that hold kinematics only, oldest first."""
-    return [(k, v) for k, v in prev._memo.entries.items() if k[0] in KINEMATIC_KEYS]
+def changed(prev, model) -> list:
+    """The parameters of ``model`` whose values differ from those of ``prev``'s model (a NaN
+    equals a NaN)."""
+    theirs = prev.nominal
+    return [k for k, v in model.params().items() if theirs[k] != v and not (np.isnan(v) and np.isnan(theirs[k]))]
+
+
+def kinematic_entries(prev, command: bool = False) -> list:
+    """The entries of ``prev``'s evaluation cache that hold kinematics only, and with ``command``
+    those of :data:`COMMAND_KEYS` too, oldest first."""
+    keys = KINEMATIC_KEYS + (COMMAND_KEYS if command else ())
+    return [(k, v) for k, v in prev._memo.entries.items() if k[0] in keys]

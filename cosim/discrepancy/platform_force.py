@@ -40,6 +40,8 @@ FORCE = ("wrench.fx", "wrench.fy", "wrench.fz")
 MOMENT = ("wrench.mx", "wrench.my", "wrench.mz")
 DRAG = ("platform_drag.linear",)
 ANCHOR = ("cable.anchor_x", "cable.anchor_y", "cable.anchor_z")
+#: the parameters whose unit values' columns :func:`search` fits
+UNIT_KEYS = FORCE + MOMENT + DRAG
 #: distances of the anchor searches' starts from the mean platform position, along the fitted
 #: constant force [m]
 ANCHOR_STARTS = (0.1, 0.3, 1.0, 3.0)
@@ -113,15 +115,15 @@ def has_platform_force(model) -> bool:
 def unit_columns(eng, keys) -> dict:
     """Residual columns (m, C) of a unit value of each core parameter in ``keys`` along the
     recorded motion, and the per-sample efforts (n, nd) of the unit forces before smoothing
-    (``raw``): the core's mechanism inverse dynamics with the parameter set, less without."""
+    (``raw``): the core's mechanism inverse dynamics with the parameter set, less without.
+    The model with the parameter set is the pipeline's scratch model (:meth:`.residuals.Pipeline.model_for`):
+    a copy of the model per parameter costs more than its inverse dynamics over a 10 s recording."""
     pipe = eng.pipe
-    m0 = pipe.model
-    base = m0.mechanism_inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f)
+    motion = (pipe.x_f, pipe.xd_f, pipe.xdd_f)
+    base = pipe.model.mechanism_inverse_dynamics(*motion)
     cols, raw = {}, {}
     for k in keys:
-        mk = m0.copy()
-        mk.set_params({k: m0.param(k) + 1.0})
-        raw[k] = mk.mechanism_inverse_dynamics(pipe.x_f, pipe.xd_f, pipe.xdd_f) - base
+        raw[k] = pipe.model_for({k: pipe.nominal[k] + 1.0}).mechanism_inverse_dynamics(*motion) - base
         cols[k] = _residual_column(eng, raw[k])
     return cols, raw
 
@@ -218,14 +220,15 @@ def _search_anchor(eng, y, cols, P, f0, extra):
     return A, coef, cov, best[1]
 
 
-def search(eng, threshold: float, theta=None, tried0: int = 0, drag_cable: bool = True):
+def search(eng, threshold: float, theta=None, tried0: int = 0, drag_cable: bool = True, cols=None):
     """The best platform-force option on the residual of the nominal model (with the parameters
     ``theta``, default none), or None when no option passes the threshold plus its look-elsewhere
     cost (``tried0`` options tried before count too; ``drag_cable`` False: no anchor search for a
-    cable with a drag).  Returns ``(option, delta_bic, bar, M)``."""
+    cable with a drag; ``cols``: the unit forces' columns, :func:`unit_columns` of
+    :data:`UNIT_KEYS`, when already made).  Returns ``(option, delta_bic, bar, M)``."""
     y = -eng.vec(eng.R(theta) if theta else eng.R0)  # what the parameters' columns must cancel
     chi0 = float(y @ y)
-    cols, _ = unit_columns(eng, FORCE + MOMENT + DRAG)
+    cols = unit_columns(eng, UNIT_KEYS)[0] if cols is None else cols
     stack = {k: cols[k][:, :, None] for k in cols}
     logn = math.log(eng.n_eff)
     options = []
@@ -341,7 +344,8 @@ def platform_stage(eng, sel, threshold: float, reselect):
     if not has_platform_force(eng.model):
         return None, eng, sel
     try:
-        found = search(eng, threshold)
+        cols = unit_columns(eng, UNIT_KEYS)[0]  # the same for both searches: the residual's change, not the residual
+        found = search(eng, threshold, cols=cols)
     except (PkmError, np.linalg.LinAlgError):  # a pose the core refuses (a dependent pose not solved): no stage
         return None, eng, sel
     # only a force that alone (or with the library's joint frictions and rotor inertias beside it:
@@ -356,7 +360,7 @@ def platform_stage(eng, sel, threshold: float, reselect):
             return None, eng, sel
         try:
             # (the cable with a drag not searched again: half the time of a second search)
-            found = search(eng, threshold, joint, tried0=found[3] if found else _TRIED, drag_cable=False)
+            found = search(eng, threshold, joint, tried0=found[3] if found else _TRIED, drag_cable=False, cols=cols)
         except (PkmError, np.linalg.LinAlgError):
             return None, eng, sel
         if found is None or found[0].chi2 + (found[0].k + len(joint)) * logn >= lib_bic:

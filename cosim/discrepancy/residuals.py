@@ -53,7 +53,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
-from ._kinshare import kinematic_entries, same_kinematics
+from ._kinshare import changed, kinematic_entries, same_kinematics
 from ._memo import Memo
 from ..errors import DiagnosisError
 from .recorded import applied_efforts, check_joint_limits, uniform_step
@@ -235,7 +235,9 @@ class Pipeline:
         self.geometry = frozenset(geometry)
         # the evaluations' cache and scratch model: the pipeline's attributes are fixed from here on
         self._memo = Memo(model, self.nominal)
-        for key, v in (kinematic_entries(kinematics) if same else []):
+        # the actuators' efforts and the sensors' readings too when neither's parameters differ
+        command = same and not any(_is(k, ACTUATOR_KEYS + SENSOR_KEYS) for k in changed(kinematics, model))
+        for key, v in (kinematic_entries(kinematics, command) if same else []):
             self._memo.get(key, lambda v=v: v)
         # a few recorded samples whose joint motion tells whether a parameter moves it (_moves_joints)
         rows = np.linspace(0, n - 1, min(n, 16)).astype(int)

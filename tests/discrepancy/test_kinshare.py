@@ -53,3 +53,27 @@ def test_kinematics_of_another_recording_or_smoothing_are_not_taken(clean_runs):
     other = Pipeline(clean_runs["6pus"], _model(CABLE), window=0.07, kinematics=first)
     assert other.x_s is not first.x_s
     assert np.array_equal(other.x_s, Pipeline(clean_runs["6pus"], _model(CABLE), window=0.07).x_s)
+
+
+def test_the_actuators_efforts_and_the_readings_are_taken_when_neither_kinds_parameters_differ(clean_runs):
+    """A saturation's and a dead zone's efforts and a sensor's readings computed by the first
+    pipeline serve the second (the model with a force on the platform) and equal those the second
+    would compute; a model whose actuator or sensor parameters differ computes its own."""
+    rec = clean_runs["6pus"]
+    first = Pipeline(rec, Model("6pus"))
+    sat = {"rail[2].effort_max": 0.3 * float(np.abs(first.tau_c[:, 1]).max()), "rail[4].dead_zone": 0.01}
+    first.evaluate(sat)
+    first.evaluate({"rail[3].encoder_offset": 1e-4})
+    taken = [k for k in first._memo.entries if k[0] in ("A", "K")]
+    assert any(k[0] == "A" and k[1] for k in taken)  # a moved actuator's efforts among them
+    shared = Pipeline(rec, _model(CABLE), kinematics=first)
+    fresh = Pipeline(rec, _model(CABLE))
+    for k in taken:
+        assert shared._memo.entries.get(k) is first._memo.entries[k], k
+    for p in (sat, {"rail[3].encoder_offset": 1e-4}, {}):
+        a, b = shared.evaluate(p), fresh.evaluate(p)
+        assert _same(a.eff, b.eff) and _same(a.kin, b.kin), p
+    for own in ({**CABLE, "rail[1].effort_max": 0.5}, {**CABLE, "rail[1].encoder_offset": 1e-4}):
+        other = Pipeline(rec, _model(own), kinematics=first)
+        assert other.x_f is first.x_f  # the kinematics taken, the efforts and readings not
+        assert not any(k[0] in ("A", "K") for k in other._memo.entries), own

@@ -28,11 +28,23 @@ SINCE = "time since"
 
 def _lowpass(x, dt, tau, starts):
     """First-order low-pass of the columns of x (sample step dt) with time constant tau,
-    restarted at each block start."""
+    restarted at each block start (rows ``starts``, the first among them):
+    ``y[i] = a y[i-1] + (1 - a) x[i]``, ``a = exp(-dt / tau)``.
+
+    The recursion runs on Python floats, column by column: the same double-precision products
+    and sums as numpy's on each row (IEEE 754 rounds each alike), without a row's array operations
+    (``tests/discrepancy/test_flexible_columns.py`` compares it with them, bit for bit)."""
     a = math.exp(-dt / tau)
+    x = np.asarray(x)
     y = np.empty_like(x)
-    for i in range(len(x)):
-        y[i] = x[i] if i in starts else a * y[i - 1] + (1 - a) * x[i]
+    flat = x.reshape(len(x), -1)
+    fed = ((1 - a) * flat).T.tolist()  # each row's share of the input, as numpy multiplies it
+    for c, (col, share) in enumerate(zip(flat.T.tolist(), fed)):
+        out, prev = [], 0.0
+        for i, v in enumerate(col):
+            prev = v if i in starts else a * prev + share[i]
+            out.append(prev)
+        y.reshape(len(x), -1)[:, c] = out
     return y
 
 
