@@ -280,30 +280,3 @@ def test_the_importance_predicts_again_only_the_trees_a_permuted_group_reaches_b
     got = flexible_cv.importance(cv, X, y, groups, np.random.default_rng(4))
     assert got == flexible_cv.importance(stacked, X, y, groups, np.random.default_rng(4))
     assert got["a"][0] > 0.1 and got["none"] == (0.0, 0.0)
-
-
-def test_a_buffer_format_parsed_once_grows_the_same_trees(monkeypatch):
-    """numpy's parse of a buffer format, kept per string once the stage's trees are made, gives
-    numpy's own dtype, serves the histogram of every tree after the first, and the trees grown with
-    it are those grown with numpy's parse at every call, bit for bit."""
-    from numpy._core import _internal
-    from sklearn.ensemble import HistGradientBoostingRegressor
-
-    flexible_cv._trees_keeping_bins()
-    kept = _internal._dtype_from_pep3118
-    parse = kept.__wrapped__  # numpy's own
-    rng = np.random.default_rng(5)
-    X = rng.normal(size=(500, 6))
-    y = np.sin(2 * X[:, 0]) + 0.4 * X[:, 1] * X[:, 3] + 0.1 * rng.normal(size=500)
-    settings = dict(flexible_cv.TREES, max_iter=30)
-    hits = kept.cache_info().hits
-    grown = HistGradientBoostingRegressor(**settings).fit(X, y)
-    assert kept.cache_info().hits >= hits + 29  # a tree's histogram after the first: parsed before
-    specs = []
-    monkeypatch.setattr(_internal, "_dtype_from_pep3118", lambda spec: specs.append(spec) or parse(spec))
-    plain = HistGradientBoostingRegressor(**settings).fit(X, y)
-    assert len(specs) == 30 and set(specs) == {specs[0]}  # one parse per tree, of one string
-    assert kept(specs[0]) == parse(specs[0]) and kept(specs[0]).names == parse(specs[0]).names
-    assert np.array_equal(grown.predict(X), plain.predict(X))
-    for (a,), (b,) in zip(grown._predictors, plain._predictors):
-        assert np.array_equal(a.nodes, b.nodes)

@@ -306,8 +306,6 @@ def _trees_keeping_bins():
     if not _TREES_KEEPING_BINS:
         from sklearn.ensemble import HistGradientBoostingRegressor
 
-        _buffer_formats_parsed_once()
-
         class Trees(HistGradientBoostingRegressor):
             def _bin_data(self, X, *args, is_training_data, **kw):
                 weights = [a for a in args + tuple(kw.values()) if a is not None]
@@ -391,25 +389,6 @@ def _trees_keeping_bins():
         Trees.__module__, Trees.__name__, Trees.__qualname__ = __name__, "_Trees", "_Trees"
         _TREES_KEEPING_BINS.append(Trees)
     return _TREES_KEEPING_BINS[0]
-
-
-def _buffer_formats_parsed_once() -> None:
-    """numpy's parse of a buffer's format string into a dtype (``numpy._core._internal.
-    _dtype_from_pep3118``, Python), kept per string.  scikit-learn's tree grower wraps a histogram
-    buffer as an array once per tree (``TreeGrower._initialize_root``): the parse, the same string
-    every time, is 13-45 us of a tree's 0.5-1 ms (by the load).  The dtype is a function of the string alone
-    (``tests/discrepancy/test_flexible_cv.py`` compares the kept parse with numpy's and the trees
-    grown with it with those grown without).  Nothing changes where numpy has no such function."""
-    import functools
-
-    try:
-        from numpy._core import _internal
-    except ImportError:  # pragma: no cover - numpy < 2
-        return
-    parse = getattr(_internal, "_dtype_from_pep3118", None)
-    if parse is None or hasattr(parse, "cache_info"):
-        return
-    _internal._dtype_from_pep3118 = functools.lru_cache(maxsize=64)(parse)
 
 
 #: per (bins less one, a training column's bytes): the bin thresholds scikit-learn finds on that
