@@ -49,10 +49,22 @@ def _cmake_build(b: Path, targets, jobs: int) -> None:
                    stdout=subprocess.DEVNULL)
 
 
+def _configure(source: Path, b: Path, values: dict) -> None:
+    """Configure the build directory ``b`` of the CMake project ``source`` (with ``-D`` values).
+    A configuration that fails leaves no ``CMakeCache.txt``: CMake writes the cache before it
+    stops, and a cache with the values asked for would pass for a finished configuration, so the
+    next run would build a tree that has no build files instead of configuring it again."""
+    try:
+        subprocess.run(["cmake", "-S", str(source), "-B", str(b), *(f"-D{k}={v}" for k, v in values.items())],
+                       check=True, stdout=subprocess.DEVNULL)
+    except BaseException:  # a failure or ctrl-C: either can stop CMake between the cache and the build files
+        (b / "CMakeCache.txt").unlink(missing_ok=True)
+        raise
+
+
 def configure_project(b: Path, values: dict | None = None) -> None:
     """Configure the project's build directory ``b`` (with ``-D`` values)."""
-    subprocess.run(["cmake", "-S", str(REPO), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release",
-                    *(f"-D{k}={v}" for k, v in (values or {}).items())], check=True, stdout=subprocess.DEVNULL)
+    _configure(REPO, b, {"CMAKE_BUILD_TYPE": "Release", **(values or {})})
 
 
 def cache_values(b: Path, defaults: dict) -> dict:
@@ -133,8 +145,7 @@ def build_description(desc: Path, ident: str, b: Path, jobs: int, platforms) -> 
               "PKM_FMU_PLATFORMS": ";".join(extra) or "none"}
     with _locked(b / "fmu_descriptions" / f"{ident}.lock"):
         if cache_values(tree, dict.fromkeys(wanted, "")) != wanted:
-            subprocess.run(["cmake", "-S", str(REPO / "fmu" / "described"), "-B", str(tree),
-                            *(f"-D{k}={v}" for k, v in wanted.items())], check=True, stdout=subprocess.DEVNULL)
+            _configure(REPO / "fmu" / "described", tree, wanted)
         _cmake_build(tree, fmu_targets(ident), jobs)
         for sub in ("", "fmi3", "source"):
             for name in (f"{ident}.fmu", f"{ident}_CTRL.fmu"):
