@@ -19,6 +19,10 @@ struct pkm_model {
   std::string robot_name;
   std::vector<pkm::ParamSpec> specs;
   std::vector<double> values;
+  // Per actuated joint i, the indices of the parameters holding its lower and upper limit
+  // ([2 i], [2 i + 1]; -1: none), looked up once from the robot's joint_limit_param: the
+  // forward kinematics check every call's joints against them.
+  std::vector<int> joint_limit_index;
   // Null until pkm_model_validate succeeds; reset by pkm_param_set.
   std::shared_ptr<const pkm::RobotModel> compiled;
   std::shared_ptr<const pkm::drive::Params> drive;  // the drive layer's parameters (dynamics/drive.hpp)

@@ -78,6 +78,11 @@ int pkm_model_create_status(const char* robot, const char* param_set, pkm_model*
       for (auto& s : m->specs)
         if (s.name == o.first) s.value = o.second;
     for (const auto& s : m->specs) m->values.push_back(s.value);
+    for (int i = 0; i < r->ndof(); ++i)
+      for (int up = 0; up < 2; ++up) {
+        const std::string name = r->joint_limit_param(i, up != 0);
+        m->joint_limit_index.push_back(name.empty() ? -1 : pkm_param_index(m.get(), name.c_str()));
+      }
     m->compiled = std::shared_ptr<const pkm::RobotModel>(r->compile(m->specs, m->values));
     m->drive = pkm::drive::compile(*r, m->specs, m->values);
     out = m.release();
@@ -189,11 +194,8 @@ const char* pkm_model_joint_prefix(const pkm_model* m) { return m ? m->robot->jo
 
 int pkm_model_joint_limits(const pkm_model* m, int i, int* lower, int* upper) {
   if (!m || i < 0 || i >= m->robot->ndof()) return PKM_ERR_ARGUMENT;
-  for (int up = 0; up < 2; ++up) {
-    const std::string name = m->robot->joint_limit_param(i, up != 0);
-    const int idx = name.empty() ? -1 : pkm_param_index(m, name.c_str());
-    if (up ? upper != nullptr : lower != nullptr) *(up ? upper : lower) = idx;
-  }
+  if (lower) *lower = m->joint_limit_index[2 * (size_t)i];
+  if (upper) *upper = m->joint_limit_index[2 * (size_t)i + 1];
   return PKM_OK;
 }
 

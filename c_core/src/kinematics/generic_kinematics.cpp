@@ -22,20 +22,26 @@ void Robot::direct_singularity_guard(const RobotModel& rm, RobotData& rd, const 
   *det_j = Eigen::PartialPivLU<Mat>(J).determinant();
 }
 
-void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const double* x_guess,
-               const pkm_fk_options& opt, double* x_out, pkm_fk_info& info) const {
-  const int n = ndof();
-  Vec x = Eigen::Map<const Vec>(x_guess, n), qk(n), r(n), dx(n), xt(n), qt(n);
-  Eigen::Map<const Vec> qv(q, n);
-  Mat J(n, n);
+namespace {
+
+// The damped Newton of Robot::fk on n = N coordinates (N fixed: Eigen's fixed-size products
+// and factorisation are several times faster than its dynamic ones at these sizes).
+template <int N>
+void newton_fk(const Robot& robot, const RobotModel& rm, RobotData& rd, const double* q, const double* x_guess,
+               const pkm_fk_options& opt, double* x_out, pkm_fk_info& info) {
+  using MatN = Eigen::Matrix<double, N, N, Eigen::RowMajor>;
+  using VecN = Eigen::Matrix<double, N, 1>;
+  VecN x = Eigen::Map<const VecN>(x_guess), qk, r, dx, xt, qt;
+  const Eigen::Map<const VecN> qv(q);
+  MatN J;
   // The guess itself must be a pose the legs can reach.
-  ik(rm, rd, x.data(), qk.data());
+  robot.ik(rm, rd, x.data(), qk.data());
   r = qk - qv;
   double rn = r.cwiseAbs().maxCoeff();
   int it = 0;
   for (; it < opt.max_iter && rn > opt.tol; ++it) {
-    jacobians(rm, rd, x.data(), nullptr, nullptr, J.data());
-    Mat A = J.transpose() * J;
+    robot.jacobians(rm, rd, x.data(), nullptr, nullptr, J.data());
+    MatN A = J.transpose() * J;
     A.diagonal().array() += opt.damping;
     dx = -A.ldlt().solve(J.transpose() * r);
     if (!dx.allFinite())
@@ -44,7 +50,7 @@ void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const doubl
     double rt = 0;
     const bool accepted = backtracking_step(rn, opt.tol, [&](double step) {
       xt = x + step * dx;
-      ik(rm, rd, xt.data(), qt.data());
+      robot.ik(rm, rd, xt.data(), qt.data());
       return rt = (qt - qv).cwiseAbs().maxCoeff();
     });
     if (!accepted) break;
@@ -61,7 +67,22 @@ void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const doubl
        << " iterations (tolerance " << opt.tol << "); the joints may be unreachable from this guess";
     throw Error(PKM_ERR_NO_CONVERGENCE, os.str());
   }
-  for (int i = 0; i < n; ++i) x_out[i] = x[i];
+  for (int i = 0; i < N; ++i) x_out[i] = x[i];
+}
+
+}  // namespace
+
+void Robot::fk(const RobotModel& rm, RobotData& rd, const double* q, const double* x_guess,
+               const pkm_fk_options& opt, double* x_out, pkm_fk_info& info) const {
+  switch (ndof()) {
+    case 1: return newton_fk<1>(*this, rm, rd, q, x_guess, opt, x_out, info);
+    case 2: return newton_fk<2>(*this, rm, rd, q, x_guess, opt, x_out, info);
+    case 3: return newton_fk<3>(*this, rm, rd, q, x_guess, opt, x_out, info);
+    case 4: return newton_fk<4>(*this, rm, rd, q, x_guess, opt, x_out, info);
+    case 5: return newton_fk<5>(*this, rm, rd, q, x_guess, opt, x_out, info);
+    case 6: return newton_fk<6>(*this, rm, rd, q, x_guess, opt, x_out, info);
+  }
+  throw Error(PKM_ERR_ARGUMENT, "forward kinematics: " + std::to_string(ndof()) + " coordinates (1 to 6 supported)");
 }
 
 void Robot::joint_acceleration(const RobotModel& rm, RobotData& rd, const double* x, const double* xd,

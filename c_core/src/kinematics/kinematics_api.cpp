@@ -14,14 +14,14 @@ static pkm_fk_options fk_defaults(const pkm_fk_options* o) {
 }
 
 // Joint values outside the range of their joint have no pose: refused up front, naming the
-// joint, its value and its range (the robot's joint_limit_param; none for a joint without).
+// joint, its value and its range (the robot's joint_limit_param, indexed in the model once;
+// none for a joint without).
 static void check_joint_range(const pkm_model* m, const double* q) {
   const Robot& r = *m->robot;
   for (int i = 0; i < r.ndof(); ++i) {
     double lim[2];
     for (int up = 0; up < 2; ++up) {
-      const std::string name = r.joint_limit_param(i, up != 0);
-      const int k = name.empty() ? -1 : pkm_param_index(m, name.c_str());
+      const int k = m->joint_limit_index[2 * (size_t)i + (size_t)up];
       if (k < 0) return;
       lim[up] = m->values[(size_t)k];
     }
