@@ -14,6 +14,8 @@ import types
 import numpy as np
 
 from cosim.discrepancy.flexible import stage as flexible
+from cosim.discrepancy.flexible.beside import passed_on
+from cosim.discrepancy.flexible.select import select
 
 
 def _lagged(f, t, tc):
@@ -82,3 +84,30 @@ def test_a_drives_load_beside_the_rate_stays_named_though_the_pose_sets_it():
     fit = flexible.fit_channel(PIPE, X, cols, y, sigma, ("N", "tau1"))
     assert fit.explained
     assert sorted(d.group for d in fit.inputs) == ["effort of slider 2", "rate of slider 1"]
+
+
+def test_a_drives_load_in_a_fit_folded_by_the_direction_stays_named():
+    # folded by slider 1's direction (flexible/folded.py) the trees learn the level 0.25 |effort2|
+    # on no rate: the direction is the rate, named already, and the effort stays; judged as a fit
+    # with no direction the pose it is computed from takes its place
+    X, level, groups, fold_rows, named = _folded_load_friction()
+    var = float(np.var(level))
+    assert select(X, level, fold_rows, groups, named, var, directed=True)[0] == named
+    assert select(X, level, fold_rows, groups, named, var)[0] == ["the platform pose"]
+
+
+def test_a_folded_fits_effort_stays_named_in_the_choice_made_without_the_fitted_levels():
+    # the choice of the efforts made again on the residual without a fitted level (beside.passed_on;
+    # here a level that took nothing): the folded fit's effort stays there too
+    X, level, groups, fold_rows, named = _folded_load_friction()
+    fitted = (np.zeros((len(level), 2)), ["limit", "limit (derivative)"])
+    on = (X, level, fold_rows, fitted, flexible.cross_validate)
+    assert passed_on(named, groups, (), *on, directed=True) == named
+    assert passed_on(named, groups, (), *on) == ["the platform pose"]
+
+
+def _folded_load_friction():
+    """The load friction folded by slider 1's direction: ``(X, level, groups, fold_rows, named)``."""
+    X, cols, y, _ = _load_friction()
+    return (X, np.sign(X[:, 0]) * y, flexible.input_groups(cols), flexible.folds(len(y), flexible.gap_for(1.0)),
+            ["effort of slider 2"])

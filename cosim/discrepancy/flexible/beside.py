@@ -86,10 +86,11 @@ def without_levels(y, fitted):
     return np.asarray(y, float) + np.sum(took, axis=0) if took else None
 
 
-def passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate) -> list:
+def passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate, directed=False) -> list:
     """``kept`` where efforts are named without a rate: the choice of
     :func:`~.select.made_of_efforts` made again on the residual without the effects that do not
-    act linearly (:func:`without_levels`); ``kept`` unchanged where there is none."""
+    act linearly (:func:`without_levels`); ``kept`` unchanged where there is none; ``directed``:
+    the fit is folded by the joint's direction (:func:`~.select.made_of_efforts`)."""
     if not any(g.startswith("effort of ") for g in kept) or any(g.startswith("rate of ") for g in kept):
         return kept
     y2 = without_levels(y, fitted)
@@ -103,7 +104,7 @@ def passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate) -> 
             done[tuple(cols)] = cross_validate(X[:, cols], y2, fold_rows)
         return done[tuple(cols)], cols
 
-    return made_of_efforts(kept, groups, follow, y2, float(np.var(y2)), cv_on)
+    return made_of_efforts(kept, groups, follow, y2, float(np.var(y2)), cv_on, directed)
 
 
 def copy_alone(named, kept, claimed) -> bool:
@@ -129,7 +130,8 @@ def once(kept, groups, X, y, cross_validate) -> list:
     return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
-def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None, judged=None):
+def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None, judged=None,
+          directed=False):
     """The ``after`` of :func:`~.select.select` on one channel: the groups that carry only the
     controller's answer to the force left out where others stay (:func:`.copies.copies`, on the
     channel's ``reference`` counterparts; none without), the efforts' choice made again
@@ -141,7 +143,7 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     :func:`judged_last`); first, on the channel of ``joint`` (1-based), another joint's input
     gives way to the own joint's of the same quantity where that explains as much and claims
     alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third item is
-    the claim)."""
+    the claim; ``directed``: the fit is folded by the joint's direction, :func:`passed_on`)."""
     var = float(np.var(y))
     swapped = {}
 
@@ -151,7 +153,7 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
         answers = copies(kept, groups, X, reference, y, fold_rows, cross_validate, swapped,
                          checked=beside_another(kept, joint))
         kept = [g for g in kept if g not in answers] or kept
-        kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate)
+        kept = passed_on(kept, groups, follow, X, y, fold_rows, fitted, cross_validate, directed)
         kept = significant_only(kept, groups, y, var, cv_on)
         if lines:
             return kept

@@ -123,12 +123,14 @@ def gain(without, with_, y, var) -> tuple:
                               lambda mean, se: overall >= DROP_MIN and mean > GAIN_Z * se)[2]
 
 
-def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None, after=None):
+def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None, after=None,
+           directed=False):
     """The named groups among the screened ``named``, their trees cross-validated on them
     alone: ``(kept, cross-validation, its columns)``.  ``follow``: the consequence groups
     (:func:`consequences`), judged after the others; ``known``: cross-validations already
     made, by their sorted columns; ``after(kept, cv_on)``: the caller's further rules on the
-    kept groups (:mod:`.beside`), given this selection's cross-validations."""
+    kept groups (:mod:`.beside`), given this selection's cross-validations; ``directed``: the fit
+    is folded by the joint's direction (:func:`made_of_efforts`)."""
     if cross_validate is None:
         from .cv import cross_validate
     done = dict(known or {})
@@ -163,7 +165,7 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         rest = [g for g in kept if g != h]
         if not gain(cv_on(rest)[0], cv_on(kept)[0], y, var)[1]:
             kept = rest
-    kept = made_of_efforts(kept, groups, follow, y, var, cv_on)
+    kept = made_of_efforts(kept, groups, follow, y, var, cv_on, directed)
     if after is not None:
         kept = after(kept, cv_on)
     kept = fewest_rails(kept, groups, follow, X, y, fold_rows, var, cv_on)
@@ -215,10 +217,11 @@ def made_of(effort, groups, follow=()) -> tuple:
                  (place, f"rate of {joint}", f"acceleration of {joint}"))
 
 
-def made_of_efforts(kept, groups, follow, y, var, cv_on) -> list:
+def made_of_efforts(kept, groups, follow, y, var, cv_on, directed=False) -> list:
     """``kept`` with its model efforts replaced by what they are computed from (:func:`made_of`)
     unless the efforts beat that by :data:`DROP_MIN` significantly over the folds (:func:`gain`),
-    when no rate is named beside them.
+    when no rate is named beside them; ``directed``: the fit is folded by the joint's direction
+    (:mod:`.folded`), whose rate is named as that direction: the efforts stay.
 
     A model effort is no physical input: the model computes it from the pose, the rates and the
     accelerations.  A force acting on the platform (a tendon, a contact, a magnet: functions of
@@ -232,7 +235,7 @@ def made_of_efforts(kept, groups, follow, y, var, cv_on) -> list:
     error), then all three; the first the efforts do not beat is named in their place, each
     larger set only where a smaller one is beaten."""
     efforts = [g for g in kept if g.startswith("effort of ")]
-    if not efforts or any(g.startswith("rate of ") for g in kept):
+    if not efforts or directed or any(g.startswith("rate of ") for g in kept):
         return kept
     rest = [g for g in kept if g not in efforts]
     parts = [made_of(g, groups, follow) for g in efforts]
@@ -373,14 +376,15 @@ def strongest_alone(X, y, fold_rows, groups, cross_validate):
     return g, cross_validate(X[:, groups[g]], y, fold_rows)
 
 
-def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate, after=None) -> tuple:
+def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, cross_validate, after=None,
+                 directed=False) -> tuple:
     """The causes alone where they explain the same share as ``chosen`` (``(kept, cross-validation,
     columns)`` of :func:`select`, a consequence among them): the trees cross-validated on every
     input but the consequences ``follow`` (:func:`consequences`), grown as the full model's
     (stopped after a step once they claim: ``enough`` of :func:`~.cv.cross_validate`), screened
     (``screen``: the stage's, on their permutation importance) and checked as the full model's; ``chosen`` stays
     when those trees claim nothing (``judged``: the stage's two bars) or ``chosen`` beats the
-    causes' refit significantly (:func:`gain`); ``after``: :func:`select`'s."""
+    causes' refit significantly (:func:`gain`); ``after``, ``directed``: :func:`select`'s."""
     from .cv import importance
 
     cols = sorted({i for g, idx in groups.items() if g not in follow for i in idx})
@@ -391,17 +395,19 @@ def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, c
     if not causes:
         return chosen
     var = float(np.var(y))
-    alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate, after=after)
+    alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate, after=after,
+                   directed=directed)
     return chosen if gain(alone[1], chosen[1], y, var)[1] else alone
 
 
-def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, cross_validate, after=None):
+def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, cross_validate, after=None,
+                   directed=False):
     """Where the trees on every input (``cv``, ``share``) claim nothing: the groups their
     permutation importance passes (``screen``: the stage's), checked as the full model's are
     (:func:`select`, causes before consequences, :func:`causes_alone`), and their trees' claim
     judged by the same two bars (``judged``); ``(named, cross-validation, columns, share,
-    chi-square)``, None when no group passes or their trees claim nothing either; ``after``:
-    :func:`select`'s.
+    chi-square)``, None when no group passes or their trees claim nothing either; ``after``,
+    ``directed``: :func:`select`'s.
 
     Many inputs that carry nothing add variance that can drown a force on two of them (a Coulomb
     level keyed on the rail's position, MuJoCo: the trees on every input -0.07 out of fold, on
@@ -416,9 +422,9 @@ def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, c
         return None
     var = float(np.var(y))
     kept, cv_k, use_k = select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate,
-                               after=after)
+                               after=after, directed=directed)
     if any(g in follow for g in kept):
         kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                         screen, cross_validate, after=after)
+                                         screen, cross_validate, after=after, directed=directed)
     share_k, z_k, ok = judged(cv_k.mse)
     return (kept, cv_k, use_k, share_k, z_k) if ok else None

@@ -59,7 +59,8 @@ fitted ones span, where a held-out end of the recording would lie beyond them.
   predicting sigma g; its held-out error, hence its claim, is judged on y as the plain fit's;
   from :data:`~.folded.ALONE` more (not on the joint's own history) instead of the plain fit,
   else beside it, the fit explaining more kept; folded, the joint's rate is named for the
-  direction, first, and the curves are those of the level;
+  direction, first, and the curves are those of the level; the level's efforts stay as beside a
+  named rate (``directed`` of :func:`.select.made_of_efforts`);
 * **the fitted model re-adjusted**: once inputs are named, the fitted model's parameters on the
   channel are refitted linearly beside the trees on them, in turn, per fold
   (:mod:`.backfit`), where that beats the trees alone as an added input must; the share
@@ -262,12 +263,12 @@ def _screen(imp, share) -> list:
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=None):
+def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=None, directed=False):
     """The check of the screened groups (:func:`.select.select`, causes before
     consequences; ``after``: :func:`.beside.rules`): ``(kept, cross-validation on the kept
     groups' columns, its columns)``."""
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known,
-                  after=after)
+                  after=after, directed=directed)
 
 
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()) -> FlexibleFit:
@@ -329,7 +330,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     folded, y_seen = sigma is not None, y
     if folded:  # the trees learn the level g of sigma g (:mod:`.folded`); judged on y: the same held-out error
         y, fitted = sigma * y, fitted_folded(fitted, sigma)
-    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged)
+    after = rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines, reference, joint, judged, folded)
     (_screen_c, passed), rng = recorded(_screen), np.random.default_rng(0)  # passed: judged by the rules
     with threadpool_limits(limits=1):
         cv = None if weak else cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
@@ -339,8 +340,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         if weak and strongest[0] in follow:  # a consequence is no cause: the trees on every input, causes first
             cv = cross_validate(X, y, fold_rows, enough=lambda mse: judged(mse)[2])
             share, z, explained = judged(cv.mse)
-        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen_c, cross_validate, after) \
-            if cv is not None and not explained else None
+        first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen_c, cross_validate, after,
+                               folded) if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
             named, cv, use, share, z = first
             explained = True
@@ -351,7 +352,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                 cv, use, share, z, explained = cv_g, list(groups[g]), share_g, z_g, ok
             named = [g] if ok else []  # with the group sharing its columns where they add (partners)
             kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, known={tuple(sorted(use)): cv_g},
-                                        after=after) if ok else (named, cv, use)
+                                        after=after, directed=folded) if ok else (named, cv, use)
             share_k, z_k, ok_k = judged(cv_k.mse)
             if kept != named and ok_k:
                 named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
@@ -360,10 +361,10 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         else:
             named = _screen_c(importance(cv, X, y, groups, rng), share)
             if named:
-                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after)
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after, directed=folded)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
-                                                     _screen_c, cross_validate, after)
+                                                     _screen_c, cross_validate, after, folded)
                 share_k, z_k, ok = judged(cv_k.mse)
                 if ok:  # the claim is the named inputs' refit's, judged again by the same criterion
                     named, cv, use, share, z = kept, cv_k, use_k, share_k, z_k
