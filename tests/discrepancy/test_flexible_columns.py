@@ -29,3 +29,11 @@ def test_the_low_pass_on_python_floats_is_the_one_on_numpys_rows(shape, tau):
     assert got.shape == want.shape and got.dtype == want.dtype
     assert np.array_equal(got, want)
     assert got.tobytes() == want.tobytes()  # signs of zeros too
+
+
+def test_an_input_in_any_memory_layout_is_filtered_as_a_contiguous_one():
+    # a column-major 3-D input: the output is written whole, not into a copy of a reshape
+    x = np.asfortranarray(np.random.default_rng(3).normal(size=(300, 2, 3)))
+    starts = {0, 120}
+    got, want = _lowpass(x, 0.01, 0.5, starts), _rows(np.ascontiguousarray(x), 0.01, 0.5, starts)
+    assert got.shape == x.shape and np.array_equal(got, want)

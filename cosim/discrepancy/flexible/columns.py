@@ -36,16 +36,16 @@ def _lowpass(x, dt, tau, starts):
     (``tests/discrepancy/test_flexible_columns.py`` compares it with them, bit for bit)."""
     a = math.exp(-dt / tau)
     x = np.asarray(x)
-    y = np.empty_like(x)
     flat = x.reshape(len(x), -1)
+    y = np.empty(flat.shape, x.dtype)  # written by column, then given x's shape (a reshape of any layout)
     fed = ((1 - a) * flat).T.tolist()  # each row's share of the input, as numpy multiplies it
     for c, (col, share) in enumerate(zip(flat.T.tolist(), fed)):
         out, prev = [], 0.0
         for i, v in enumerate(col):
             prev = v if i in starts else a * prev + share[i]
             out.append(prev)
-        y.reshape(len(x), -1)[:, c] = out
-    return y
+        y[:, c] = out
+    return y.reshape(x.shape)
 
 
 def blocks(pipe) -> tuple:
