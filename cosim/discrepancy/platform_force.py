@@ -134,7 +134,7 @@ def _residual_column(eng, efforts):
     (recorded less modelled); no change on the reading channels."""
     pipe = eng.pipe
     out = np.zeros_like(eng.R0)
-    out[:, :pipe.nd] = -pipe.S_inner(efforts)[pipe.idx]
+    out[:, :pipe.nd] = -pipe.S_rows(efforts, pipe.idx)
     return out
 
 

@@ -55,6 +55,7 @@ from .._native import PkmError, UnsupportedError
 from . import _corecalls as cc
 from ._kinshare import changed, kinematic_entries, same_kinematics
 from ._memo import Memo
+from ._smooth_rows import smoothed_rows
 from ..errors import DiagnosisError
 from .recorded import applied_efforts, check_joint_limits, uniform_step
 
@@ -307,7 +308,7 @@ class Pipeline:
 
         def ev():
             m = self.model_for(params)
-            return self.S_inner(self._inverse_dynamics(m, "ref", params.items(), *self.ref_motion))[self.idx]
+            return self.S_rows(self._inverse_dynamics(m, "ref", params.items(), *self.ref_motion), self.idx)
         return self._cached(key, ev)
 
     def _inverse_dynamics(self, m, motion, params, x, xd, xdd):
@@ -359,6 +360,24 @@ class Pipeline:
         y[:h] = np.nan
         y[len(y) - h:] = np.nan
         return y
+
+    def _smoothed_at_samples(self, a):
+        """:meth:`S_inner` of ``a`` at the decimated samples ``idx`` (the rows an evaluation reads),
+        NaN at the other rows: an array of S_inner's shape, whose size the evaluation cache
+        weighs as S_inner's (the entries it keeps are those it kept for S_inner: a second
+        pipeline takes some of them, :mod:`._kinshare`)."""
+        out = np.full(np.shape(a), np.nan)
+        out[self.idx] = self.S_rows(a, self.idx)
+        return out
+
+    def S_rows(self, a, rows):
+        """``S_inner(a)[rows]``, bit for bit, smoothing the rows ``rows`` alone where they are the
+        decimated samples (:func:`._smooth_rows.smoothed_rows`: an evaluation reads no other)."""
+        rows = np.asarray(rows)
+        h = self.window // 2
+        if len(rows) and rows.min() >= h and rows.max() < len(a) - h:
+            return smoothed_rows(a, self._coeffs, rows)
+        return self.S_inner(a)[rows]
 
     @property
     def has_pose(self) -> bool:
@@ -454,13 +473,15 @@ class Pipeline:
         geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
 
         A = self._cached(("A", act), lambda: self._applied(m, act))
-        B = self._cached(("B", dyn), lambda: self.S_inner(self._inverse_dynamics(m, "recorded", dyn, self.x_f,
-                                                                                  self.xd_f, self.xdd_f)))
+        B = self._cached(("B", dyn), lambda: self._smoothed_at_samples(
+            self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f)))
         # Readings lagging by d_s show the motion of t - d_s, driven by the command of
         # t - d_s - d_a: the residual is labelled by the recorded motion's sample, so an
         # actuator delay and a sensor lag give the same effort residual (they are the same
         # closed loop) and differ only in the readings against the tracker.
         p_m = pos
+        if pos is not self.idx and not np.isin(pos, self.idx).all():  # rows the smoothing at the samples left out
+            B = self.S_inner(self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f))
         eff = _at(A[1], pos - d_a - d_s) - B[pos]
         if self.f_ext_s is not None:
             eff = eff + self.f_ext_s[pos]  # recorded with the motion it drives
