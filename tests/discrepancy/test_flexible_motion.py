@@ -126,3 +126,20 @@ def test_no_column_where_the_resonance_explains_nothing_out_of_fold():
     friction = 0.2 * np.abs(X[:, 1]) / np.std(X[:, 1]) + np.random.default_rng(4).normal(0.0, sigma, len(y))
     Xe, _, groups, resonance = extend(X, cols, flexible.input_groups(cols), friction, folds(len(y), 5), bank(pipe))
     assert Xe is X and resonance == () and MOTION not in groups
+
+
+def test_a_pipelines_bank_is_filtered_once_and_equals_the_plain_filtering(clean_runs):
+    """The stage asks for the bank on every channel: a pipeline's is filtered once, the same
+    values as the resonators' filtering of its platform's acceleration, bit for bit, read-only."""
+    from cosim.core import Model
+    from cosim.discrepancy.flexible.motion import FREQUENCIES, platform_acceleration, resonated
+    from cosim.discrepancy.residuals import Pipeline
+
+    pipe = Pipeline(clean_runs["6pus"], Model("6pus"))
+    first, again = bank(pipe), bank(pipe)
+    a = platform_acceleration(pipe)
+    assert a is not None and list(first) == list(FREQUENCIES)
+    for f in FREQUENCIES:
+        assert np.array_equal(first[f], resonated(a, pipe.dt, f, [0])[pipe.idx])
+        assert again[f] is first[f] and not first[f].flags.writeable
+    assert again is not first  # the caller's own dict

@@ -18,6 +18,7 @@ Frequency and direction are fitted per fold of the cross-validation on that fold
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 
@@ -79,12 +80,32 @@ def resonated(a, dt, frequency, starts=(0,)) -> np.ndarray:
 
 def bank(pipe) -> dict | None:
     """Per frequency of :data:`FREQUENCIES`, the platform's accelerations through its resonator at
-    the decimated samples (decimated x coordinates), or None without a platform's acceleration."""
+    the decimated samples (decimated x coordinates, read-only), or None without a platform's
+    acceleration.  A function of the pipeline alone (fixed once built), filtered once per pipeline
+    (:data:`_BANKS`): the stage asks for it on every channel it fits."""
+    try:
+        got = _BANKS.get(pipe, _BANKS)
+    except TypeError:  # an object no weak reference can name (a stand-in for a pipeline): filtered each time
+        return _filtered(pipe)
+    if got is _BANKS:
+        got = _BANKS[pipe] = _filtered(pipe)
+    return None if got is None else dict(got)
+
+
+def _filtered(pipe) -> dict | None:
+    """:func:`bank`'s filtering."""
     a = platform_acceleration(pipe)
     if a is None:
         return None
     starts = [a0 for a0, _ in pipe.segments]
-    return {f: resonated(a, pipe.dt, f, starts)[pipe.idx] for f in FREQUENCIES}
+    got = {f: resonated(a, pipe.dt, f, starts)[pipe.idx] for f in FREQUENCIES}
+    for r in got.values():
+        r.setflags(write=False)
+    return got
+
+
+#: the banks of the pipelines alive (:func:`bank`), let go with their pipeline
+_BANKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _best(responses, y, rows) -> float:
