@@ -280,3 +280,32 @@ def test_the_importance_predicts_again_only_the_trees_a_permuted_group_reaches_b
     got = flexible_cv.importance(cv, X, y, groups, np.random.default_rng(4))
     assert got == flexible_cv.importance(stacked, X, y, groups, np.random.default_rng(4))
     assert got["a"][0] > 0.1 and got["none"] == (0.0, 0.0)
+
+
+def test_each_columns_bins_are_kept_and_serve_inputs_that_share_it():
+    """Channels' inputs share all but their own few columns: a column's bins on a fold are made
+    once and serve every input set holding it, with its per-fold variants; the shares stay the
+    definition's."""
+    rng = np.random.default_rng(5)
+    n = 500
+    rows = flexible_cv.folds(n, gap=3)
+    common = np.column_stack([rng.uniform(size=n), rng.normal(size=n), np.repeat([0.0, 1.0], n // 2)])
+    flexible_cv._COLUMN_BINS.clear()
+    for k in range(3):  # three channels: the common columns and one of their own, fitted per fold
+        own = rng.normal(size=n)
+        variants = np.stack([np.column_stack([common, own + 0.1 * b]) for b in range(len(rows))])
+        X = flexible_cv.FoldInputs(np.column_stack([common, own]), variants)
+        before = len(flexible_cv._COLUMN_BINS)
+        y = np.sin(5.0 * common[:, 0] + k) + 0.5 * own + rng.normal(0.0, 0.2, n)
+        shares = flexible_cv.binned_shares(X, y, rows)
+        # per fold, only the channel's own column is binned after the first channel
+        assert len(flexible_cv._COLUMN_BINS) - before == (4 if k == 0 else 1) * len(rows)
+        for b, ((held, fit), (kf, kh, total)) in enumerate(zip(rows, flexible_cv._bins(X, rows, flexible_cv.BINS))):
+            Xb, start = variants[b], 0  # the definition on each fold's own inputs
+            for c in range(X.shape[1]):
+                edges = np.unique(np.quantile(Xb[fit, c], np.linspace(0.0, 1.0, flexible_cv.BINS + 1)[1:-1]))
+                assert np.array_equal(kf[c], np.searchsorted(edges, Xb[fit, c]) + start)
+                assert np.array_equal(kh[c], np.searchsorted(edges, Xb[held, c]) + start)
+                start += len(edges) + 1
+            assert total == start
+        assert np.all(np.isfinite(shares))

@@ -493,7 +493,8 @@ def _bins(X, fold_rows, bins):
     fitted row, bin of each held-out row, bins per column)``, the bins of column ``c`` numbered
     from the sum of the earlier columns' bins (one ``bincount`` serves every column).  They
     depend on the inputs and the folds only, which a stage's channels share: the last inputs'
-    bins are kept (:data:`_BINS_KEPT`)."""
+    bins are kept (:data:`_BINS_KEPT`), and each column's per fold (:data:`_COLUMN_BINS`: the
+    channels' inputs differ in their own few columns)."""
     import hashlib
 
     variants = getattr(X, "variants", None)
@@ -508,18 +509,35 @@ def _bins(X, fold_rows, bins):
         q = np.linspace(0.0, 1.0, bins + 1)[1:-1]
         out = []
         for b, (held, fit) in enumerate(fold_rows):
-            Xf, Xh = at(X, b)[fit], at(X, b)[held]
-            cuts = np.quantile(Xf, q, axis=0)  # column by column, as np.quantile of each column
-            kf, kh, nb = np.empty(Xf.shape[::-1], np.intp), np.empty(Xh.shape[::-1], np.intp), []
-            for c in range(X.shape[1]):
-                edges = np.unique(cuts[:, c])
-                kf[c], kh[c] = np.searchsorted(edges, Xf[:, c]), np.searchsorted(edges, Xh[:, c])
-                nb.append(len(edges) + 1)
+            Xb = at(X, b)
+            Xf, Xh = Xb[fit], Xb[held]
+            rows = (bins, hashlib.blake2b(np.asarray(held).tobytes() + b"|" + np.asarray(fit).tobytes()).digest())
+            keys = [rows + (Xb[:, c].tobytes(),) for c in range(X.shape[1])]
+            got = [_COLUMN_BINS.get(k) for k in keys]
+            new = [c for c, g in enumerate(got) if g is None]
+            cuts = np.quantile(Xf[:, new], q, axis=0) if new else None  # column by column, as of each column
+            if len(_COLUMN_BINS) + len(new) > COLUMN_BINS_MAX:
+                _COLUMN_BINS.clear()
+            for i, c in enumerate(new):
+                edges = np.unique(cuts[:, i])
+                got[c] = _COLUMN_BINS[keys[c]] = (np.searchsorted(edges, Xf[:, c]), np.searchsorted(edges, Xh[:, c]),
+                                                  len(edges) + 1)
+            kf, kh = np.empty(Xf.shape[::-1], np.intp), np.empty(Xh.shape[::-1], np.intp)
+            for c, g in enumerate(got):
+                kf[c], kh[c] = g[0], g[1]
+            nb = [g[2] for g in got]
             start = np.concatenate([[0], np.cumsum(nb)[:-1]]).astype(np.intp)
             out.append((kf + start[:, None], kh + start[:, None], int(sum(nb))))
         # one assignment: a diagnosis in another thread reads the old pair or the new one, whole
         kept = _BINS_KEPT["last"] = (key, out)
     return kept[1]
+
+
+#: per (bins, a fold's rows, a column's values in that fold's inputs): the column's bins on the
+#: fold (:func:`_bins`); emptied when it would hold more than COLUMN_BINS_MAX (some 16 kB each on
+#: 1,000 rows: a stage of seven channels keeps some 600)
+_COLUMN_BINS: dict = {}
+COLUMN_BINS_MAX = 1500
 
 
 #: the quantile bins of the last inputs (:func:`_bins`): ``"last"`` holds their key and bins
