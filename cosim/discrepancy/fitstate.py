@@ -14,6 +14,7 @@ parameter, the noise floor.  The steps of the engine are free functions over it
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
@@ -159,16 +160,33 @@ class FitState:
     def vec(self, Rm, mask=None, w=None) -> np.ndarray:
         """Weighted residual channels of the rows in ``mask`` (default: the fitted ones), one
         channel after the other; ``w`` (C,) weights instead of :attr:`W`."""
+        if mask is None and w is None:  # the fitted rows and their weights, taken once
+            rows, W = self._fitted
+            return (Rm[rows] * W).T.reshape(-1)
         mask = self.train if mask is None else mask
         W = (self.W if w is None else w * self.use)[mask]
         return (Rm[mask] * W).T.reshape(-1)
 
     def vec_cols(self, cols, mask=None, w=None) -> np.ndarray:
         """Columns (m, C, k) weighted and stacked as :meth:`vec` does each one: (n C, k)."""
-        mask = self.train if mask is None else mask
-        W = (self.W if w is None else w * self.use)[mask]
-        c = cols[mask] * W[:, :, None]
+        if mask is None and w is None:
+            rows, W = self._fitted
+            c = cols[rows] * W[:, :, None]
+        else:
+            mask = self.train if mask is None else mask
+            W = (self.W if w is None else w * self.use)[mask]
+            c = cols[mask] * W[:, :, None]
         return c.transpose(1, 0, 2).reshape(-1, cols.shape[2])
+
+    @functools.cached_property
+    def _fitted(self) -> tuple:
+        """``(rows, weights)``: the fitted rows' indices and their weights :attr:`W`, what
+        :meth:`vec` and :meth:`vec_cols` read by default (thousands of times a selection), the
+        same rows and values as the mask ``train`` selects."""
+        rows = np.flatnonzero(self.train) if self.train.dtype == bool else np.asarray(self.train)
+        W = self.W[rows]
+        W.setflags(write=False)
+        return rows, W
 
     # ------------------------------------------------------------ the candidates
 
