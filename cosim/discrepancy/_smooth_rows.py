@@ -11,7 +11,7 @@ scipy (``NI_Correlate1D``, ``ni_filters.c``) correlates with the reversed weight
 ``DBL_EPSILON`` is taken as symmetric, and each output is then
 ``x[i] fw[h] + (x[i-h] + x[i+h]) fw[0] + ... + (x[i-1] + x[i+1]) fw[h-1]``, the sums made from
 the farthest pair inwards, the left weight for both.  Any other filter, or rows not evenly
-spaced, is smoothed whole as before (the same values).
+spaced, is smoothed whole and indexed (the same values).
 """
 from __future__ import annotations
 
