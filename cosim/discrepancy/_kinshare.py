@@ -9,7 +9,8 @@ readings at the tracker's poses.
 The platform-force stage (:mod:`.platform_force`) builds a second pipeline for the model with a
 force on the platform; a force, a mass or an inertia leaves the kinematics as they are, and
 these are the costly part of a pipeline that does not depend on them.  What is taken is the
-value the pipeline would compute, bit for bit (the same core calls on the same inputs).
+value the pipeline would compute, bit for bit (the same core calls on the same inputs): the
+readings where a backlash or a compliance makes them read the dynamics are not taken.
 """
 from __future__ import annotations
 
@@ -55,6 +56,18 @@ def changed(prev, model) -> list:
 
 def kinematic_entries(prev, command: bool = False) -> list:
     """The entries of ``prev``'s evaluation cache that hold kinematics only, and with ``command``
-    those of :data:`COMMAND_KEYS` too, oldest first."""
+    those of :data:`COMMAND_KEYS` too, oldest first; readings ("K") only where no backlash or
+    compliance acts (:func:`reads_dynamics`)."""
     keys = KINEMATIC_KEYS + (COMMAND_KEYS if command else ())
-    return [(k, v) for k, v in prev._memo.entries.items() if k[0] in keys]
+    flexible_nominal = reads_dynamics(prev.nominal.items())
+    return [(k, v) for k, v in prev._memo.entries.items()
+            if k[0] in keys and not (k[0] == "K" and (flexible_nominal or reads_dynamics(k[1])))]
+
+
+def reads_dynamics(params) -> bool:
+    """Do the sensors' readings with these ``(name, value)`` parameters depend on the model's
+    dynamics?  With a backlash or a compliance they do: the encoder reads the drive side of the
+    transmission, which leans or deflects with the effort the transmission carries, the applied
+    effort less the drive's friction, inertia and joint force and the force on the platform
+    (``pkm_measure_joints``); a model with another force on the platform reads otherwise."""
+    return any(k.endswith((".backlash", ".compliance")) and v != 0 for k, v in params)
