@@ -4,13 +4,18 @@ Synthetic, truth in closed form: a force level over a window of time (2.6-5.4 s 
 channel whose inputs hold time and the low-passed |rate| of two other rails, one of which works
 harder in the middle of the run (its history rises and falls over the window); and a force
 that rail 3's work sets (its low-passed |rate|: it works and rests several times in the run).
+Beside the platform pose: a force of the pose alone, on only where the pose comes near a point
+(a tendon taut in a few stretches of a repeated motion), and the window in time, each with a
+rail's low-passed |effort| that carries the force beside its own motion.
 """
 import types
 
 import numpy as np
 
+from cosim.discrepancy.flexible import clock
 from cosim.discrepancy.flexible import stage as flexible
 from cosim.discrepancy.flexible.columns import _lowpass
+from cosim.discrepancy.flexible.cv import cross_validate, folds
 
 PIPE = types.SimpleNamespace(channels=["tau1"], window=5, step=5)
 COLUMNS = [("q1", "position of slider 1", 1, "position", "m"), ("qd1", "rate of slider 1", 1, "rate", "m/s"),
@@ -54,3 +59,33 @@ def test_a_force_the_motion_sets_stays_on_its_history():
         fit = flexible.fit_channel(PIPE, X, COLUMNS, y, sigma, ("N", "tau1"))
         assert fit.explained and fit.share > 0.8
         assert [d.group for d in fit.inputs] == ["history of slider 3"]
+
+
+def _beside_the_pose(kind, seed, n=900, sigma=0.05):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 9.0, n)
+    px = np.sin(2 * np.pi * 0.23 * t) + 0.4 * np.sin(2 * np.pi * 0.71 * t + 1.0)
+    py = np.sin(2 * np.pi * 0.31 * t + 2.0) + 0.4 * np.sin(2 * np.pi * 0.57 * t)
+    if kind == "taut":  # on where the pose is within 1 of (1.2, 1.2): a few stretches of the run
+        f = 1.5 * np.maximum(0.0, 1.0 - np.hypot(px - 1.2, py - 1.2))
+    else:
+        f = 0.5 / (1.0 + np.exp(-(t - 2.6) / 0.05)) / (1.0 + np.exp((t - 5.4) / 0.05))
+    effort = np.sin(2 * np.pi * 0.43 * t) + 2.0 * f + 0.3 * rng.normal(size=n)
+    history = _lowpass(np.abs(effort)[:, None], t[1] - t[0], 0.5, {0})[:, 0]
+    y = f + rng.normal(0.0, sigma, n)
+    X, rows = np.column_stack([px, py, history, t]), folds(n, 5)
+    groups = {"the platform pose": [0, 1], "history of slider 1": [2], "time": [3]}
+
+    def cv_on(gs):
+        cols = sorted({i for g in gs for i in groups[g]})
+        return cross_validate(X[:, cols], y, rows), cols
+    return clock.on_time(["history of slider 1"], groups, y, float(np.var(y)), cv_on)
+
+
+def test_in_the_place_of_a_history_the_pose_where_it_beats_time_and_time_where_it_beats_the_pose():
+    # taut: trees on the pose explain 0.75-0.79 out of fold, on time 0.41-0.43, on the history
+    # 0.23-0.32, which does not beat time significantly (measured, seeds 1-3); without the rule
+    # time is named in its place.  The window: time 0.83-0.84, the pose none (-0.13 to -0.05)
+    for seed in (1, 2):
+        assert _beside_the_pose("taut", seed) == ["the platform pose"]
+        assert _beside_the_pose("window", seed) == ["time"]

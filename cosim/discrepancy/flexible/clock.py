@@ -22,6 +22,14 @@ Time is named in their place where
 * time adds at least :data:`~.select.DROP_MIN` of the variance to the other named groups (the
   check's bar for keeping a group, :func:`~.select.select`; over nothing where no other is named).
 
+**The pose before time** where the platform pose is an input and not named: it is the candidate
+in the histories' place instead of time where the trees on the other named groups and it beat
+those on them and time by :data:`~.select.DROP_MIN` of the variance out of fold.  The slow state
+the histories follow is then the motion's: a force of the pose on only in the stretches where
+the platform comes near a point (a tendon taut in a few stretches of a repeated programme) is
+followed by slow histories and, between neighbouring blocks, by time; trees on the pose know the
+stretches wherever they recur.
+
 Physically: a state the motion sets follows the motion: a joint's temperature falls when it
 rests and rises when it works, a reversal resets a seal's lip, so the relation of the force to
 the history holds through the whole recording, at its pauses and restarts, where the single time
@@ -40,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .select import DROP_MIN, gain
+from .select import DROP_MIN, POSE, gain
 
 #: the group of time (:func:`~.columns.input_groups`)
 TIME = "time"
@@ -75,7 +83,9 @@ def on_time(kept, groups, y, var, cv_on) -> list:
     """``kept`` with its histories (:func:`histories`) replaced by time where they do not beat
     time significantly (:func:`~.select.gain`) and time adds at least
     :data:`~.select.DROP_MIN` of the variance ``var`` to the other named groups (module
-    docstring); ``kept`` unchanged where time is no input or is named, or no history is.
+    docstring); the platform pose in the place of time where it is an input, not named, and
+    beats time there by :data:`~.select.DROP_MIN`; ``kept`` unchanged where time is no input or
+    is named, or no history is.
     ``cv_on(groups)``: :func:`~.select.select`'s cross-validation of the groups' columns,
     ``(cv, columns)``."""
     past = histories(kept)
@@ -86,6 +96,11 @@ def on_time(kept, groups, y, var, cv_on) -> list:
     with_histories, with_time = cv_on(kept)[0], cv_on(clock)[0]
     if gain(with_time, with_histories, y, var)[1]:  # the motion sets the state: the histories beat time
         return kept
+    if POSE in groups and POSE not in rest:  # the slow state the histories follow: the pose's where it beats time
+        posed = rest + [POSE]
+        with_pose = cv_on(posed)[0]
+        if (with_time.mse - with_pose.mse) / var >= DROP_MIN:
+            clock, with_time = posed, with_pose
     base = cv_on(rest)[0] if rest else level(y, with_time.folds)
     held = min((base.mse - with_histories.mse) / var, (base.mse - with_time.mse) / var)
     return clock if held >= DROP_MIN else kept
