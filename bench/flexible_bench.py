@@ -67,11 +67,15 @@ from __future__ import annotations
 
 import argparse
 import pickle
+import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+
+# the package of this checkout, not an installed one of another: a replay measures this stage
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 SEEDS = {"tune": 7100, "report": 8300, "fresh": 9300, "report2": 10300, "report3": 10500, "report4": 10700, "report5": 10900, "report6": 11100, "report7": 11300,
          "report8": 11500, "report9": 11700, "report10": 11900, "report11": 12100,
