@@ -473,15 +473,16 @@ class Pipeline:
         geo = tuple((k, v) for k, v in dyn if self._is_geometry(k))
 
         A = self._cached(("A", act), lambda: self._applied(m, act))
-        B = self._cached(("B", dyn), lambda: self._smoothed_at_samples(
-            self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f)))
+        if pos is self.idx or np.isin(pos, self.idx).all():
+            B = self._cached(("B", dyn), lambda: self._smoothed_at_samples(
+                self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f)))
+        else:  # rows the smoothing at the samples leaves out: smoothed whole, not kept
+            B = self.S_inner(self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f))
         # Readings lagging by d_s show the motion of t - d_s, driven by the command of
         # t - d_s - d_a: the residual is labelled by the recorded motion's sample, so an
         # actuator delay and a sensor lag give the same effort residual (they are the same
         # closed loop) and differ only in the readings against the tracker.
         p_m = pos
-        if pos is not self.idx and not np.isin(pos, self.idx).all():  # rows the smoothing at the samples left out
-            B = self.S_inner(self._inverse_dynamics(m, "recorded", dyn, self.x_f, self.xd_f, self.xdd_f))
         eff = _at(A[1], pos - d_a - d_s) - B[pos]
         if self.f_ext_s is not None:
             eff = eff + self.f_ext_s[pos]  # recorded with the motion it drives
