@@ -187,10 +187,20 @@ def select(st) -> tuple:
             refused[opt.group.label] = "its fitted parameters are not a valid parameter set of the core"
             st = st.without_options([opt.group.label] + [g.label for g in opt.expand or []])
             continue
-        theta = new
-        for g in opt.expand or [opt.group]:
-            selected.append(Attribution(g, {}, {}, float(dbic)))
-        theta = refine(st, selected, theta)
+        before_entry, entered = theta, [Attribution(g, {}, {}, float(dbic)) for g in opt.expand or [opt.group]]
+        theta = refine(st, selected + entered, new)
+        why = _unphysical_entry(st, selected, theta)
+        if why:
+            # An entry whose refinement takes a parameter selected before it out of the physical
+            # ranges (an actuator limit at ~0 once a mass enters: with the force clipped at zero any
+            # mass fits) is two nearly dependent effects fighting; it is refused alone and the fit
+            # that stood before it stands.  An entry unphysical in its own parameters only is kept:
+            # the whole fit is then refused (.verdict), the model itself being in question.
+            refused[opt.group.label] = why
+            st = st.without_options([opt.group.label] + [g.label for g in opt.expand or []])
+            theta = before_entry
+            continue
+        selected += entered
         if st.settings.verbose:
             print(f"  + {opt.group.label}: dBIC {dbic:.1f} -> {theta}")
         steps.append({"group": opt.group.label, "delta_bic": float(dbic),
@@ -211,6 +221,16 @@ def select(st) -> tuple:
                 theta = refine(st, selected, theta)
     return st, Selection(tuple(selected), theta, chi2_nom, st.chi2(theta), st.n_eff, st.sig, st.phi, tuple(steps),
                          last_best, {}, st.settings.threshold, refused)
+
+
+def _unphysical_entry(st, selected, theta):
+    """Why the refined parameters of the groups ``selected`` before an entry are not physical
+    after it (:func:`.verdict.fit_problems` on theirs), or None."""
+    from .verdict import fit_problems
+
+    params = {p for a in selected for p in a.group.params}
+    problems = fit_problems(st, {p: v for p, v in theta.items() if p in params})
+    return "its fit is not physical: " + "; ".join(problems) if problems else None
 
 
 def _best_entry(st, selected, removed, projected, chi2, logn):

@@ -111,3 +111,24 @@ def test_replay_of_the_held_out_part(blind_subset):
     assert runs["fitted"]["rms_tau"][j] < 0.5 * runs["nominal"]["rms_tau"][j]
     rec = read_recording(csv)
     assert len(runs["fitted"]["time"]) == len(rec.time) - int(np.searchsorted(rec.time, d.replay["start"]))
+
+
+def test_an_entry_that_takes_a_selected_parameter_out_of_its_range_is_named():
+    """The selection's check of an entry (``selection._unphysical_entry``): the parameters of
+    the groups selected before it, judged after its refinement.  An actuator limit driven to
+    ~0 (0.1 % of the largest recorded effort) is reported; a limit at 20 % is not; a new group's
+    own parameter at ~0 is not its business (the verdict refuses the whole fit then)."""
+    from types import SimpleNamespace
+
+    from cosim.discrepancy.selection import _unphysical_entry
+
+    pipe = SimpleNamespace(tau_s=np.array([[0.1], [-0.5]]), qd_s=np.array([[0.2], [0.1]]), idx=np.array([0, 1]))
+    info = [SimpleNamespace(name="rail[1].effort_max", unit="N"), SimpleNamespace(name="platform.m", unit="kg")]
+    model = SimpleNamespace(param_info=lambda: info, facts=SimpleNamespace(effort_unit="N"))
+    st = SimpleNamespace(pipe=pipe, model=model, nominal={"rail[1].effort_max": 0.0, "platform.m": 1.0})
+    limit = [SimpleNamespace(group=SimpleNamespace(params=("rail[1].effort_max",)))]
+    why = _unphysical_entry(st, limit, {"rail[1].effort_max": 5e-4, "platform.m": 1e-6})
+    assert why == ("its fit is not physical: rail[1].effort_max = 0.0005 N: an actuator limit at ~0 "
+                   "(the recorded effort reaches 0.5 N on joint 1)"), why
+    assert _unphysical_entry(st, limit, {"rail[1].effort_max": 0.1, "platform.m": 1e-6}) is None
+    assert _unphysical_entry(st, [], {"rail[1].effort_max": 5e-4}) is None
