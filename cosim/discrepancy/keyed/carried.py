@@ -22,7 +22,7 @@ confidence.  The whole recording counts, not the effect's channels: a platform e
 every channel.  Other effects are not tested: a rail's rotor inertia is keyed on its own
 rail's acceleration, which the keyed rule (:mod:`.elsewhere`) judges; a tilt is a force of the
 pose, a delay one of the efforts' course.  docs/discrepancy.md, section 4, "Nor beside a body the
-platform carries on a spring", states the rule and what it was measured on.
+platform carries on a spring", states the rule and the seen sets it is measured on.
 """
 from __future__ import annotations
 
