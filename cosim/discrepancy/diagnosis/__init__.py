@@ -452,6 +452,10 @@ def _statement(pipe, eng0, eng, sel, theta, ties, found, withdrawn, problems, pl
         modulated, noun = modulations(eng0, theta, effects_out, r_after), pipe.model.facts.joint_noun
         found = terms_beside(found, effects_out, modulated, noun)  # a term beside a friction keyed: partial
         effects_out = withheld(effects_out, flex, noun, modulated)
+    if flex:  # a force of the platform's motion through a resonance: an inertia fitted beside it may stand in
+        from ..keyed.carried import withheld_carried
+
+        effects_out = withheld_carried(effects_out, flex)
     conclusion = _library_conclusion(effects_out, not_excited, eng, sel, found, withdrawn, plat, drifts)
     conclusion, details = _conclusion_and_details(conclusion, effects_out, found, left, held, plat, drifts, flex,
                                                   problems)
