@@ -118,3 +118,37 @@ def test_another_joints_history_that_adds_on_every_fold_is_named():
 def test_a_joints_history_beside_its_own_rate_is_checked_as_before():
     # a friction level the joint's slow state sets (a heating drive): the check's cost suffices
     assert _stub(SWINGS, rate="rate of slider 1") == ["rate of slider 1", "history of slider 1"]
+
+
+def _effort_or_pose(claims):
+    """The groups ``select`` names on a model effort (column 0) that explains 0.7 of a residual of
+    variance 1 on every fold, beside the pose (column 1) it is computed from, which explains
+    nothing on three folds and less than nothing on the fourth (a force in that fold's blocks):
+    the effort's gain (0.875 of the variance) is not significant over the folds, so
+    ``made_of_efforts`` puts the pose in its place; ``claims``: the stage's bars (a stub)."""
+    from cosim.discrepancy.flexible import select as flexible_select
+
+    n = 40
+    y = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+    fold_rows = [(np.arange(i, n, 4), np.setdiff1d(np.arange(n), np.arange(i, n, 4))) for i in range(4)]
+    X = np.tile(np.arange(2.0), (n, 1))
+    per_fold = {(0,): [0.3] * 4, (1,): [3.8, 0.3, 0.3, 0.3], (0, 1): [0.3] * 4}
+
+    def cross_validate(Xs, y_, rows, enough=None, under=None):
+        e = np.zeros(n)
+        for (h, _), m in zip(rows, per_fold[tuple(int(v) for v in Xs[0])]):
+            e[h] = math.sqrt(m)
+        return types.SimpleNamespace(mse=float(np.mean(e ** 2)), pred=y_ + e, folds=rows)
+
+    groups = {"effort of slider 4": [0], "the platform pose": [1]}
+    return flexible_select.select(X, y, fold_rows, groups, ["effort of slider 4"], 1.0, cross_validate=cross_validate,
+                                  claims=claims)[0]
+
+
+def test_a_replacement_whose_trees_claim_nothing_leaves_the_checked_groups_named():
+    # the pose's trees (held-out error 1.175 of the variance) claim nothing, the effort's (0.3) do
+    assert _effort_or_pose(lambda cv: cv.mse <= 0.95) == ["effort of slider 4"]
+
+
+def test_a_replacement_whose_trees_claim_stands():
+    assert _effort_or_pose(lambda cv: cv.mse <= 1.5) == ["the platform pose"]

@@ -54,6 +54,10 @@ cross-validating without each, with two rules of cause before consequence.
   neither factor alone explains anything).  There the trees on every input are judged first,
   causes before consequences, and the consequence alone only when they claim nothing.
 
+* **A replacement stands where it claims.**  The rules after the check (the efforts' constituents,
+  the caller's ``after``, the fewest rails) decide on gains over the folds, which a force acting
+  in a few blocks does not show significant however large; where the groups they leave claim
+  nothing and the checked ones do, the checked ones are named (:func:`claimed_or_checked`).
 * **The inputs that stood out, before the strongest alone.**  Where the trees on every input
   claim nothing, the groups their importance passes are checked by the same rules and their
   trees judged alone (:func:`screened_first`) before the strongest single column alone.
@@ -124,13 +128,14 @@ def gain(without, with_, y, var) -> tuple:
 
 
 def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, known=None, after=None,
-           directed=False):
+           directed=False, claims=None):
     """The named groups among the screened ``named``, their trees cross-validated on them
     alone: ``(kept, cross-validation, its columns)``.  ``follow``: the consequence groups
     (:func:`consequences`), judged after the others; ``known``: cross-validations already
     made, by their sorted columns; ``after(kept, cv_on)``: the caller's further rules on the
     kept groups (:mod:`.beside`), given this selection's cross-validations; ``directed``: the fit
-    is folded by the joint's direction (:func:`made_of_efforts`)."""
+    is folded by the joint's direction (:func:`made_of_efforts`); ``claims(cv)``: whether a
+    cross-validation passes the stage's two bars (:func:`claimed_or_checked`)."""
     if cross_validate is None:
         from .cv import cross_validate
     done = dict(known or {})
@@ -165,12 +170,30 @@ def select(X, y, fold_rows, groups, named, var, follow=(), cross_validate=None, 
         rest = [g for g in kept if g != h]
         if not gain(cv_on(rest)[0], cv_on(kept)[0], y, var)[1]:
             kept = rest
+    checked = kept
     kept = made_of_efforts(kept, groups, follow, y, var, cv_on, directed)
     if after is not None:
         kept = after(kept, cv_on)
-    kept = fewest_rails(kept, groups, follow, X, y, fold_rows, var, cv_on)
+    kept = claimed_or_checked(fewest_rails(kept, groups, follow, X, y, fold_rows, var, cv_on), checked, cv_on, claims)
     cv, cols = cv_on(kept)
     return partners(kept, groups, y, var, cv_on), cv, cols
+
+
+def claimed_or_checked(kept, checked, cv_on, claims=None) -> list:
+    """``kept`` (the groups the rules after the check put in the place of the ``checked`` ones, or
+    left of them), or ``checked`` where the trees on ``kept`` claim nothing and those on
+    ``checked`` do (``claims(cv)``: the stage's two bars; None: ``kept``).
+
+    The rules that replace named groups (what a model effort is computed from, the fewest rails'
+    positions, the choice made again without the fitted levels) decide by whether the groups
+    they replace beat the others significantly over the folds; a force that acts in a few blocks
+    (a drive's saturation above a high effort) gives a large gain that the folds do not show
+    significant, and the groups put in its place may then explain nothing at all.  A replacement
+    stands where its trees still carry the claim, as another joint's input gives way to the own
+    joint's only where that claims alike (:func:`.own_joint.own_first`)."""
+    if claims is None or kept == checked or claims(cv_on(kept)[0]) or not claims(cv_on(checked)[0]):
+        return kept
+    return checked
 
 
 def adds(without, with_, y, var, cv_on) -> bool:
@@ -396,7 +419,7 @@ def causes_alone(X, y, fold_rows, groups, follow, rng, judged, chosen, screen, c
         return chosen
     var = float(np.var(y))
     alone = select(X, y, fold_rows, groups, causes, var, follow=follow, cross_validate=cross_validate, after=after,
-                   directed=directed)
+                   directed=directed, claims=lambda c: judged(c.mse)[2])
     return chosen if gain(alone[1], chosen[1], y, var)[1] else alone
 
 
@@ -422,7 +445,7 @@ def screened_first(X, y, fold_rows, groups, follow, judged, cv, share, screen, c
         return None
     var = float(np.var(y))
     kept, cv_k, use_k = select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate,
-                               after=after, directed=directed)
+                               after=after, directed=directed, claims=lambda c: judged(c.mse)[2])
     if any(g in follow for g in kept):
         kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
                                          screen, cross_validate, after=after, directed=directed)

@@ -263,12 +263,13 @@ def _screen(imp, share) -> list:
     return sorted(ok, key=lambda g: -imp[g][0])[:MAX_INPUTS]
 
 
-def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=None, directed=False):
+def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=None, directed=False, claims=None):
     """The check of the screened groups (:func:`.select.select`, causes before
-    consequences; ``after``: :func:`.beside.rules`): ``(kept, cross-validation on the kept
-    groups' columns, its columns)``."""
+    consequences; ``after``: :func:`.beside.rules`; ``claims``: whether a cross-validation passes the
+    two bars, the replacing rules' guard, :func:`.select.claimed_or_checked`): ``(kept,
+    cross-validation on the kept groups' columns, its columns)``."""
     return select(X, y, fold_rows, groups, named, var, follow=follow, cross_validate=cross_validate, known=known,
-                  after=after, directed=directed)
+                  after=after, directed=directed, claims=claims)
 
 
 def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()) -> FlexibleFit:
@@ -320,6 +321,9 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
+    def claims(cv):  # the guard of the rules that replace named groups (select.claimed_or_checked)
+        return judged(cv.mse)[2]
+
     given = (X, columns)
     X, columns, groups, every, keep, projections, lines, resonance = _channel_columns(
         X, columns, y, fold_rows, c, offered, motion.bank(pipe))
@@ -361,7 +365,8 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         else:
             named = _screen_c(importance(cv, X, y, groups, rng), share)
             if named:
-                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after, directed=folded)
+                kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after, directed=folded,
+                                            claims=claims)
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
                                                      _screen_c, cross_validate, after, folded)
