@@ -321,9 +321,6 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         z = len(y) * (var - mse) / max(noise, 1e-300) ** 2 / spi
         return share, z, share >= SHARE_MIN and z > CHI2_MIN
 
-    def claims(cv):  # the guard of the rules that replace named groups (select.claimed_or_checked)
-        return judged(cv.mse)[2]
-
     given = (X, columns)
     X, columns, groups, every, keep, projections, lines, resonance = _channel_columns(
         X, columns, y, fold_rows, c, offered, motion.bank(pipe))
@@ -347,8 +344,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         first = screened_first(X, y, fold_rows, groups, follow, judged, cv, share, _screen_c, cross_validate, after,
                                folded) if cv is not None and not explained else None
         if first is not None:  # the trees on the inputs that stood out claim what those on every input did not
-            named, cv, use, share, z = first
-            explained = True
+            (named, cv, use, share, z), explained = first, True
         elif not explained:  # the trees on every input spread a weak force over many: the strongest input alone
             g, cv_g = strongest or strongest_alone(X, y, fold_rows, groups, cross_validate)
             share_g, z_g, ok = judged(cv_g.mse)
@@ -366,7 +362,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
             named = _screen_c(importance(cv, X, y, groups, rng), share)
             if named:
                 kept, cv_k, use_k = _select(X, y, fold_rows, groups, named, var, follow, after=after, directed=folded,
-                                            claims=claims)
+                                            claims=lambda v: judged(v.mse)[2])  # the replacing rules' guard
                 if any(g in follow for g in kept):  # a consequence named: the causes alone, where they do as well
                     kept, cv_k, use_k = causes_alone(X, y, fold_rows, groups, follow, rng, judged, (kept, cv_k, use_k),
                                                      _screen_c, cross_validate, after, folded)
