@@ -158,9 +158,9 @@ def test_the_copies_trees_are_fitted_on_the_columns_fitted_per_fold_with_the_cou
     y = whole[:, 1] + 0.5 * whole[:, 2]
     given = []
 
-    def spy(M, y_, fold_rows, **kw):
+    def spy(M, y_, fold_rows):
         given.append(M)
-        return cross_validate(M, y_, fold_rows, **kw)
+        return cross_validate(M, y_, fold_rows)
 
     copies(list(groups), groups, X, reference, y, folds(n, gap=2), spy)
     assert len(given) == 2  # the trees on every named group, and without the effort

@@ -102,8 +102,7 @@ def _one_fold_carries(n=500, k=5):
     cols = [("effort1", "effort of slider 1", 1, "effort", "N"), ("effort4", "effort of slider 4", 4, "effort", "N")]
     groups = flexible.input_groups(cols)
 
-    # the columns told apart by their values: effort 1's are 1, effort 4's 4 (no trees: no growth stops under a bar)
-    def cross_validate(M, y_, rows, under=None):
+    def cross_validate(M, y_, rows):  # the columns told apart by their values: effort 1's are 1, effort 4's 4
         held = {float(v) for v in np.asarray(M)[0]}
         pred = 0.9 * y_ if 1.0 in held else np.zeros(len(y_))  # without effort 1: nothing explained
         if 4.0 not in held:  # without effort 4: fold 0's rows unexplained

@@ -119,9 +119,7 @@ def once(kept, groups, X, y, cross_validate) -> list:
     too (a gap of one block on each side).  Trees on time predict a held-out block from the
     fitted rows nearest in time: a change slower than the blocks (a drift, a warming) is still
     there two blocks away, an event that lasts a block or two (an excursion of the pose that
-    happens once) is not.  ``cross_validate``: the stage's (:func:`~.cv.cross_validate`); the trees
-    without time are judged against a bar, those with it plus DROP_MIN of the variance, and stop
-    growing once under it (``under``: time then adds less than DROP_MIN whatever the folds)."""
+    happens once) is not."""
     if TIME not in kept or len(kept) == 1:
         return kept
     wide = folds(len(y), len(y) // (N_FOLDS * BLOCKS_PER_FOLD))

@@ -86,10 +86,8 @@ def on_time(kept, groups, y, var, cv_on) -> list:
     docstring); the platform pose in the place of time where it is an input, not named, and
     beats time there by :data:`~.select.DROP_MIN`; ``kept`` unchanged where time is no input or
     is named, or no history is.
-    ``cv_on(groups, under=None)``: :func:`~.select.select`'s cross-validation of the groups' columns,
-    ``(cv, columns)``; the other groups' trees are judged against a bar (``under``: the larger error
-    of the trees with the histories or with time, plus DROP_MIN of the variance), their growth
-    stopped once under it: the histories then stay whatever the folds."""
+    ``cv_on(groups)``: :func:`~.select.select`'s cross-validation of the groups' columns,
+    ``(cv, columns)``."""
     past = histories(kept)
     if TIME not in groups or TIME in kept or not past or not var > 0:
         return kept

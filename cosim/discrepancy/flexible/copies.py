@@ -98,11 +98,7 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None, 
     :func:`counterparts`, or a function giving them: :func:`on_channel`; the trees on no group: a
     constant).  Where ``X`` holds columns fitted per fold (:class:`~.cv.FoldInputs`), each fold's
     trees are fitted and judged on that fold's, the counterparts in place as in the whole array.
-    ``cross_validate``: the stage's (:func:`~.cv.cross_validate`: a leave-one-out is judged against
-    a bar alone, the trees on every named group plus DROP_MIN of the variance, and its growth stops
-    once under it, ``under``; a group whose leave-one-out falls under the bar costs less than
-    DROP_MIN whatever its folds).  ``done``: the cross-validations already made (whole growths), by
-    their columns; ``checked``: the groups that
+    ``done``: the cross-validations already made, by their columns; ``checked``: the groups that
     stay where leaving them out costs :data:`~.select.DROP_MIN` alone, the leave-one-out check's
     bar (a channel's own joint's input beside another joint's of the same quantity:
     :func:`.own_joint.beside_another`)."""
