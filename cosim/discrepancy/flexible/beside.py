@@ -43,7 +43,7 @@ from .clock import TIME, on_time
 from .copies import copies
 from .own_joint import beside_another, own_first
 from .cv import BLOCKS_PER_FOLD, N_FOLDS, folds
-from .select import DROP_MIN, POSE, gain, made_of_efforts
+from .select import POSE, gain, made_of_efforts
 
 
 def judged_last(follow, groups, lines=()) -> set:
@@ -125,16 +125,9 @@ def once(kept, groups, X, y, cross_validate) -> list:
     wide = folds(len(y), len(y) // (N_FOLDS * BLOCKS_PER_FOLD))
     rest = [g for g in kept if g != TIME]
 
-    def cv(gs, under=None):
-        cols = sorted({i for g in gs for i in groups[g]})
-        return cross_validate(X[:, cols], y, wide) if under is None else cross_validate(X[:, cols], y, wide, under=under)
-    var = float(np.var(y))
-    whole = cv(kept)
-    # judged against a bar: trees without time under it gain it less than DROP_MIN, whatever the folds
-    without = cv(rest, under=whole.mse + DROP_MIN * var)
-    if getattr(without, "stopped", False):
-        return rest
-    return kept if gain(without, whole, y, var)[1] else rest
+    def cv(gs):
+        return cross_validate(X[:, sorted({i for g in gs for i in groups[g]})], y, wide)
+    return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
 def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), reference=None, joint=None, judged=None,

@@ -101,11 +101,6 @@ def on_time(kept, groups, y, var, cv_on) -> list:
         with_pose = cv_on(posed)[0]
         if (with_time.mse - with_pose.mse) / var >= DROP_MIN:
             clock, with_time = posed, with_pose
-    # judged against a bar: the other groups' trees under it leave time and the histories less than
-    # DROP_MIN to add, on trees stopped after 10, 25 or 50 iterations as on the whole growth
-    bar = max(with_histories.mse, with_time.mse) + DROP_MIN * var
-    base = cv_on(rest, under=bar)[0] if rest else level(y, with_time.folds)
-    if getattr(base, "stopped", False):
-        return kept
+    base = cv_on(rest)[0] if rest else level(y, with_time.folds)
     held = min((base.mse - with_histories.mse) / var, (base.mse - with_time.mse) / var)
     return clock if held >= DROP_MIN else kept

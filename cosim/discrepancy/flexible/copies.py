@@ -113,28 +113,22 @@ def copies(kept, groups, X, reference, y, fold_rows, cross_validate, done=None, 
     state = {i for h in kept if h not in answered for i in groups[h]}
     judged = {i for h in answered for i in groups[h]} - state
 
-    def exogenous(gs, under=None):  # the trees on gs' columns, the judged groups' replaced by their counterparts
+    def exogenous(gs):  # the trees on gs' columns, the judged groups' replaced by their counterparts
         cols = tuple(sorted({i for h in gs for i in groups[h]}))
         if not cols:
             return _mean_only(y, fold_rows)
-        if cols in done:
-            return done[cols]
-        M = X[:, cols].copy()  # with the columns fitted per fold, where X has them (FoldInputs)
-        at = [j for j, i in enumerate(cols) if i in judged]
-        M[:, at] = reference[:, [cols[j] for j in at]]
-        if getattr(M, "variants", None) is not None:  # the counterparts are fitted on no fold
-            M.variants[:, :, at] = reference[:, [cols[j] for j in at]]
-        got = cross_validate(M, y, fold_rows) if under is None else cross_validate(M, y, fold_rows, under=under)
-        if not getattr(got, "stopped", False):  # a growth stopped under the bar is no whole one
-            done[cols] = got
-        return got
+        if cols not in done:
+            M = X[:, cols].copy()  # with the columns fitted per fold, where X has them (FoldInputs)
+            at = [j for j, i in enumerate(cols) if i in judged]
+            M[:, at] = reference[:, [cols[j] for j in at]]
+            if getattr(M, "variants", None) is not None:  # the counterparts are fitted on no fold
+                M.variants[:, :, at] = reference[:, [cols[j] for j in at]]
+            done[cols] = cross_validate(M, y, fold_rows)
+        return done[cols]
 
     whole = exogenous(kept)
 
-    def costs(g):  # judged against a bar: a leave-one-out under it costs less than DROP_MIN, whatever its folds
-        without = exogenous([h for h in kept if h != g], under=whole.mse + DROP_MIN * var)
-        if getattr(without, "stopped", False):
-            return False
-        overall, shown = gain(without, whole, y, var)
+    def costs(g):
+        overall, shown = gain(exogenous([h for h in kept if h != g]), whole, y, var)
         return overall >= DROP_MIN if g in checked else shown
     return [g for g in answered if not costs(g)]
