@@ -45,8 +45,9 @@ def test_identified_on_A_beats_the_makers_model_on_B_and_C(kuka):
     recs, ident = kuka
     assert len(ident.names) == 58 and ident.gap < ident.gap_bound
     para, mine = Model(ROBOT, "para"), ident.model(ROBOT)
-    # B axis 1: 17.9 % where written, 22.0-26.0 % on another CPU and iteration cap (docs/kuka.md:
-    # the consistent fit stops at its cap, where it stops moves with the floating-point paths)
+    # B axis 1: 17.9 % on one machine (docs/kuka.md's table), 22.0-26.0 % on another CPU and
+    # iteration cap (the consistent fit stops at its cap; where it stops moves with the
+    # floating-point paths)
     bound = {"B": [28.0, 32.0], "C": [25.0, 25.0]}
     for t in "BC":
         ref, err = _held_out(para, recs[t])[0], _held_out(mine, recs[t])[0]
