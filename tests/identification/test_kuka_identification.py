@@ -54,7 +54,7 @@ def test_identified_on_A_beats_the_makers_model_on_B_and_C(kuka):
     para, mine = Model(ROBOT, "para"), ident.model(ROBOT)
     # B axis 1: 17.1 % measured (50 draws; 17.1 % with the bench's 200, docs/kuka.md's table).
     # The fit is the convex program's unique optimum: solver settings and a 1e-12 change of the
-    # base parameters move every figure by at most 0.05 points; the bound of 20 % leaves 2.9 points
+    # base parameters move every figure by less than 0.01 points; the bound of 20 % leaves 2.9 points
     # for the filters' and the least squares' floating point on other CPUs and libraries, and is
     # half the makers' model's 38.9 %.  C axis 4 is the closest to the 60 % floor (59.0 %).
     bound = {"B": [20.0, 32.0], "C": [25.0, 25.0]}
