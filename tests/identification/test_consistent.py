@@ -114,3 +114,17 @@ def test_what_no_recording_sees_stays_at_its_start():
     assert phi[9] == pytest.approx(beta[0], rel=1e-5) and cost < 1e-6
     assert phi[0] == pytest.approx(400.0, rel=1e-2), phi[0]
     assert is_consistent(phi)
+
+
+def test_a_solver_that_stops_short_is_an_error_naming_its_status_and_links(monkeypatch):
+    """Clarabel stopped after one iteration (link 1 not yet a rigid body) or three (every link
+    one, the optimum not reached): no parameters, a RuntimeError."""
+    import cosim.identification.consistent as consistent
+
+    rng = np.random.default_rng(3)
+    phi0, beta = _body(rng, 5.0), -_body(rng, 2.0)
+    names = [f"link[1].p{k}" for k in range(10)]
+    for iters, where in ((1, r"link 1: pseudo-inertia's least eigenvalue -"), (3, "every link a rigid body")):
+        monkeypatch.setattr(consistent, "TOLERANCES", {**consistent.TOLERANCES, "max_iter": iters})
+        with pytest.raises(RuntimeError, match=rf"program ended 'user_limit' in CLARABEL \({where}"):
+            consistent_fit(np.eye(10), np.eye(10), beta, phi0, names, 1)
