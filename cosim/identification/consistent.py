@@ -128,17 +128,20 @@ def consistent_fit(P, L, beta, phi0, names, nlinks: int, prior: float = 1e-6):
     # |A phi - L beta|^2 + |w (phi - phi0)|^2 = |R phi - c|^2 + a constant
     Q, R = np.linalg.qr(np.vstack([A, np.diag(w)]))
     c = Q.T @ np.concatenate([L @ beta, w * phi0])
+    from cvxpy.error import SolverError
+
     prob, expr = _problem(R, c, phi0, names, nlinks)
     try:
         prob.solve(solver=SOLVER, **TOLERANCES)
-    except Exception as e:  # cvxpy's SolverError: the solver stopped on a numerical failure
+    except SolverError as e:  # the solver stopped on a numerical failure
         raise RuntimeError(f"the consistent fit's semidefinite program failed in {SOLVER}: {e}") from e
     phi = None if expr.value is None else np.array(expr.value, float)
     bad = [] if phi is None else [(i + 1, np.linalg.eigvalsh(pseudo_inertia(phi[10 * i:10 * i + 10]))[0])
                                   for i in range(nlinks) if not is_consistent(phi[10 * i:10 * i + 10])]
     if prob.status not in ("optimal", "optimal_inaccurate") or phi is None or bad:
         where = ("no parameters returned" if phi is None else
-                 "; ".join(f"link {i}: pseudo-inertia's least eigenvalue {v:.3g}" for i, v in bad) or "every link a rigid body")
+                 "; ".join(f"link {i}: pseudo-inertia's least eigenvalue {v:.3g}" for i, v in bad)
+                 or "every link a rigid body")
         raise RuntimeError(f"the consistent fit's semidefinite program ended '{prob.status}' in {SOLVER} ({where})")
     if prob.status == "optimal_inaccurate":
         warnings.warn(f"the consistent fit's semidefinite program is solved to reduced accuracy ({SOLVER})",
