@@ -116,6 +116,7 @@ def test_what_no_recording_sees_stays_at_its_start():
     assert is_consistent(phi)
 
 
+@pytest.mark.filterwarnings("ignore:Solution may be inaccurate")  # cvxpy's, for the stopped solver
 def test_a_solver_that_stops_short_is_an_error_naming_its_status_and_links(monkeypatch):
     """Clarabel stopped after one iteration (link 1 not yet a rigid body) or three (every link
     one, the optimum not reached): no parameters, a RuntimeError."""
