@@ -4,7 +4,7 @@
 recording, physically consistent, with intervals; the result's :meth:`Identification.write`
 gives the nominal model ``cosim diagnose --model`` takes.  Modules: :mod:`.regressor` (the
 regressor from the core by linearity), :mod:`.base` (the base parameters by QR),
-:mod:`.consistent` (the rigid-body constraint by the pseudo-inertia's Cholesky factor),
+:mod:`.consistent` (the rigid-body constraint: a semidefinite program on the pseudo-inertias),
 :mod:`.identify`.
 """
 from .base import BaseParameters, base_parameters
