@@ -1,4 +1,4 @@
-"""A partner stays named only where its shared columns still add beside every group named
+"""A partner stays named only where its shared columns add to the kept groups' model
 (:func:`~.select.partners`, the flexible stage's choice of the inputs it names).
 
 A group that shares columns with a named one (a joint's history and its rate share the history
@@ -23,15 +23,14 @@ model, which the kept groups' columns make.
 """
 from __future__ import annotations
 
-from .select import adds
 
-
-def still_added(out, kept, groups, y, var, cv_on) -> list:
+def still_added(out, kept, groups, y, var, cv_on, adds) -> list:
     """``out`` (:func:`~.select.partners`' named groups: the selection's ``kept`` and the partners
     added after them) without each partner whose columns shared with the ``kept`` groups do not
     add significantly to the trees on the kept groups' columns (:func:`~.select.adds`; module
     docstring).  ``cv_on(groups, without=(), under=None)``: :func:`~.select.select`'s
-    cross-validation."""
+    cross-validation; ``adds``: :func:`~.select.adds` (passed in: this module is imported by
+    :mod:`.select`)."""
     held = {i for g in kept for i in groups[g]}
     named = list(out)
     for h in [g for g in out if g not in kept]:

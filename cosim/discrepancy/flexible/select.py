@@ -73,6 +73,8 @@ import math
 
 import numpy as np
 
+from . import partnered
+
 #: the platform pose's group (:func:`~.flexible.stage.inputs`)
 POSE = "the platform pose"
 
@@ -343,8 +345,6 @@ def partners(kept, groups, y, var, cv_on) -> list:
     column) on columns other than the unit's common ones (their joints' signed histories) are
     judged together first: where all their shared columns left out at once add nothing
     significant, none of them is named (one fit, not one per member)."""
-    from .partnered import still_added
-
     out = list(kept)
     judged_out = set()
     for u in [u for u in units(kept, groups) if len(u) > 1]:
@@ -361,7 +361,7 @@ def partners(kept, groups, y, var, cv_on) -> list:
                 continue
             if adds(shared, out, y, var, cv_on):
                 out.append(h)
-    return still_added(out, kept, groups, y, var, cv_on)  # judged again on the kept groups' model
+    return partnered.still_added(out, kept, groups, y, var, cv_on, adds)  # judged again on the kept groups' model
 
 
 def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
