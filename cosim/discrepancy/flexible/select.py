@@ -73,6 +73,8 @@ import math
 
 import numpy as np
 
+from . import partnered
+
 #: the platform pose's group (:func:`~.flexible.stage.inputs`)
 POSE = "the platform pose"
 
@@ -359,7 +361,7 @@ def partners(kept, groups, y, var, cv_on) -> list:
                 continue
             if adds(shared, out, y, var, cv_on):
                 out.append(h)
-    return out
+    return partnered.still_added(out, kept, groups, y, var, cv_on, adds)  # judged again on the kept groups' model
 
 
 def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
