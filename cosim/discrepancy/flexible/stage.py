@@ -89,7 +89,6 @@ from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
 from .oblique import extend, extended
 from .own_state import beside_named, recorded
-from .scaled import scaled_by
 from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
@@ -375,9 +374,9 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
         moved, y_t, cv_t = (), y, cv
         if explained and named:  # the own joint's rate and effort the screen's bars passed over
             named, cv, use = beside_named(named, use, cv, groups, joint, X, y, fold_rows, reference, passed, folded)
-            named, cv, use = scaled_by(named, use, cv, groups, X, y, fold_rows, reference, judged)
             cv, use = lean(X, y, fold_rows, groups, named, use, cv, cross_validate)
-            (share, z, _), cv_t = judged(cv.mse), cv
+            share, z, _ = judged(cv.mse)
+            cv_t = cv
             cv, moved = readjusted(X[:, use], y, fitted, cv)
             if moved:  # the share claimed is the trees' plus the fitted model re-adjusted beside them
                 share, z, _ = judged(cv.mse)
