@@ -1,5 +1,5 @@
 """A partner stays named only where its shared columns add to the kept groups' model
-(cosim.discrepancy.flexible.partnered).
+(cosim.discrepancy.flexible.select.still_added).
 
 Synthetic, truth in closed form: rail 2's rate named (its reading, a column ``c`` it shares with
 rail 1's rate, as the rates' projected column, and its signed history ``s``, shared with rail 2's
@@ -17,7 +17,6 @@ import sklearn.ensemble  # noqa: F401  (loaded before the thread limit: threadpo
 from scipy.ndimage import gaussian_filter1d
 from threadpoolctl import threadpool_limits
 
-from cosim.discrepancy.flexible import partnered
 from cosim.discrepancy.flexible import select as sel
 from cosim.discrepancy.flexible.cv import folds
 
@@ -44,7 +43,7 @@ def test_a_partner_judged_beside_another_partners_columns_is_not_named(monkeypat
     for seed in (1, 2):
         X, y, groups = _case(seed)
         assert _named(X, y, groups) == ["rate of slider 2", "rate of slider 1"]
-        monkeypatch.setattr(partnered, "still_added", lambda out, *a: out)  # the rule taken out
+        monkeypatch.setattr(sel, "still_added", lambda out, *a: out)  # the rule taken out
         assert _named(X, y, groups) == ["rate of slider 2", "rate of slider 1", "history of slider 2"]
         monkeypatch.undo()
 

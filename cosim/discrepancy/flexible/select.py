@@ -73,8 +73,6 @@ import math
 
 import numpy as np
 
-from . import partnered
-
 #: the platform pose's group (:func:`~.flexible.stage.inputs`)
 POSE = "the platform pose"
 
@@ -361,7 +359,26 @@ def partners(kept, groups, y, var, cv_on) -> list:
                 continue
             if adds(shared, out, y, var, cv_on):
                 out.append(h)
-    return partnered.still_added(out, kept, groups, y, var, cv_on, adds)  # judged again on the kept groups' model
+    return still_added(out, kept, groups, y, var, cv_on)
+
+
+def still_added(out, kept, groups, y, var, cv_on) -> list:
+    """``out`` (:func:`partners`' named groups: ``kept`` and the partners added after them)
+    without each partner whose columns shared with the ``kept`` groups do not add (:func:`adds`)
+    to the trees on the kept groups' columns, the model the stage fits.  :func:`partners` judges
+    each partner against the groups named before it, earlier partners' own columns included,
+    which that model never holds: a signed history judged beside one rate, before the other
+    rates of that rate's unit join, can add what those rates carry and stay named once they have
+    joined although its columns then add nothing (docs/flexible.md).  Judged again here, the
+    order the partners were named in does not matter.  A partner whose shared columns are all
+    the kept groups' columns is not judged (nothing to judge them beside)."""
+    held = {i for g in kept for i in groups[g]}
+    named = list(out)
+    for h in [g for g in out if g not in kept]:
+        shared = set(groups[h]) & held
+        if shared and held - shared and not adds(shared, kept, y, var, cv_on):
+            named.remove(h)
+    return named
 
 
 def lean(X, y, fold_rows, groups, named, use, cv, cross_validate) -> tuple:
