@@ -9,9 +9,8 @@ and counterbalance ``para`` gets wrong) better than ``para`` does and within the
 axis 2 must rise with q2 (the hydraulic counterbalance, a position-dependent torque).  The
 consistent fit is solved to its optimum (the solver's status optimal, no warning of reduced
 accuracy)."""
-from pathlib import Path
-
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
