@@ -8,28 +8,13 @@ from cosim.calibration.ident import column_scale, identifiability
 from cosim.calibration.joint_problem import JointProblem
 from cosim.calibration.problems import (PKM_FRAME_PLATFORM, PKM_FRAME_WORLD, CalibrationWarning,
                                         calib_rows)
+from cosim.calibration.data import SEED000_POSES
+from cosim.calibration.seed import SEED000_LEG_NAMES, SEED000_TABLE_4_22
 from cosim.core import Model
 
-# Tiberi 2020 Table 4.22, typed from the thesis: leg 1 at the ten poses of Tables 4.2-4.20,
-# columns [X, Y, Z, Sx, Sy, Sz, L, sx, sy, sz].
-TABLE_4_22 = np.array([
-    [1, 0.1019, 1.0824, -1, -0.1019, -1.0824, -1.4771, -0.0550, -0.0056, -0.0595],
-    [1, 0.1121, 1.0738, -1, -0.1121, -1.0738, -1.4716, -0.0542, -0.0061, -0.0582],
-    [1, 1.0480, 1.6470, -1, -1.0480, -1.6470, -2.1934, -0.1319, -0.1383, -0.2173],
-    [1, 0.1086, 0.8269, -1, -0.1086, -0.8269, -1.3021, -0.0634, -0.0069, -0.0524],
-    [1, 0.2630, 0.3440, -1, -0.2630, -0.3440, -1.0897, -0.0419, -0.0110, -0.0144],
-    [1, 0.9434, 0.2043, -1, -0.9434, -0.2043, -1.3899, -0.0446, -0.0421, -0.0091],
-    [1, 0.1389, 0.6173, -1, -0.1389, -0.6173, -1.1834, -0.0026, -0.0004, -0.0016],
-    [1, 0.2260, 1.6368, -1, -0.2260, -1.6368, -1.9314, -0.0518, -0.0117, -0.0848],
-    [1, 0.0489, 1.5925, -1, -0.0489, -1.5925, -1.8811, -0.0312, -0.0015, -0.0498],
-    [1, -0.3401, 0.6347, -1, 0.3401, -0.6347, -1.2323, -0.0893, -0.0304, -0.0567],
-])
-NAMES = ["X", "Y", "Z", "Sx", "Sy", "Sz", "L", "sx", "sy", "sz"]
-# Tiberi 2020 Tables 4.2-4.20: the poses (x, y, z [m], rx, ry, rz [deg]).
-POSES_DEG = np.array([[0, 0, 0.085, 0, 0, 0], [0, 0, 0.085, 1, 1, 1], [0.05, 0.05, 0.09, 1, 4, -3],
-                      [0.02, 0, 0.075, -1, 1, 2], [0.015, 0.02, 0.04, 0, 4, 0], [-0.01, 0.07, 0.018, 5, 4, 1],
-                      [-0.04, 0.01, 0.065, -4, 3, -5], [-0.023, -0.019, 0.1, 0, 2, -3],
-                      [-0.038, -0.009, 0.1, 5, 5, 5], [0.05, -0.04, 0.063, 2, 5, 0]])
+# Tiberi 2020 Table 4.22 (leg 1 at the ten poses of Tables 4.2-4.20, columns X, Y, Z, S0x, S0y, S0z, L,
+# sx, sy, sz) and the poses, as the calibration package holds them
+TABLE_4_22, NAMES, POSES = SEED000_TABLE_4_22, SEED000_LEG_NAMES, SEED000_POSES
 
 
 def test_seed_table_rail_origin_not_identifiable_with_platform_point():
@@ -38,17 +23,17 @@ def test_seed_table_rail_origin_not_identifiable_with_platform_point():
     assert b.rank == 7
     # QR in the error-model order: R_44, R_55, R_66 ~ 1e-16 (Tiberi 2020 ch. 4.2)
     assert np.all(b.qr_diag[3:6] < 1e-12) and np.all(b.qr_diag[[0, 1, 2, 6, 7, 8, 9]] > 1e-4)
-    assert sorted(b.not_identifiable) == ["Sx", "Sy", "Sz"]
+    assert sorted(b.not_identifiable) == ["S0x", "S0y", "S0z"]
     # found from the null space, with the combination: moving P and S0 together is invisible
     combos = [set(v) for v in b.null_space]
-    assert sorted(map(sorted, combos)) == [["Sx", "X"], ["Sy", "Y"], ["Sz", "Z"]]
+    assert sorted(map(sorted, combos)) == [["S0x", "X"], ["S0y", "Y"], ["S0z", "Z"]]
     for v in b.null_space:
         np.testing.assert_allclose(sorted(v.values()), [1.0, 1.0], atol=1e-9)
-    # what the structural model estimates: X - Sx etc.
+    # what the structural model estimates: X - S0x etc.
     for c in b.combinations:
-        if c.parameter in ("Sx", "Sy", "Sz"):
+        if c.parameter in ("S0x", "S0y", "S0z"):
             assert c.residual < 1e-9
-            key = c.parameter.replace("S", "").upper()
+            key = c.parameter[-1].upper()
             assert c.coefficients[key] == pytest.approx(-1.0, abs=1e-9)
     assert b.cond_after < 100
     assert "not identifiable" in rep.text()
@@ -56,7 +41,7 @@ def test_seed_table_rail_origin_not_identifiable_with_platform_point():
 
 def _seed_poses_rows(frame):
     model = Model("6pus")
-    x = np.column_stack([POSES_DEG[:, :3], np.radians(POSES_DEG[:, 3:])])
+    x = POSES
     rows, ok = [], []
     for k in range(10):
         try:
@@ -71,7 +56,7 @@ def test_core_rows_at_seed_poses_world_frame_same_conclusion():
     J, ok = _seed_poses_rows(PKM_FRAME_WORLD)
     assert len(ok) >= 8
     b = identifiability(J, NAMES).blocks[0]
-    assert sorted(b.not_identifiable) == ["Sx", "Sy", "Sz"]
+    assert sorted(b.not_identifiable) == ["S0x", "S0y", "S0z"]
     assert b.rank == 7
 
 
@@ -81,7 +66,7 @@ def test_platform_frame_makes_rail_origin_identifiable_in_principle():
     J, ok = _seed_poses_rows(PKM_FRAME_PLATFORM)
     b = identifiability(J, NAMES).blocks[0]
     assert b.rank == min(len(ok), 10)
-    assert not any(set(v) <= {"X", "Y", "Z", "Sx", "Sy", "Sz"} for v in b.null_space)
+    assert not any(set(v) <= {"X", "Y", "Z", "S0x", "S0y", "S0z"} for v in b.null_space)
 
 
 def test_elimination_drops_the_dominant_parameter_and_reports_the_combination():
