@@ -2,26 +2,11 @@
 line naming the row as the file counts it, the time and what to do; the same recording of a
 continuous joint (docs/robots.md) has no limits to leave."""
 import numpy as np
+from continuous_axis import continuous_pendulum
 
 from cosim.core import Model
 from cosim.discrepancy.residuals import Pipeline
 from cosim.recording import Recording, write_recording
-
-SPINNER = """
-[robot]
-name = "spin_axis"
-coordinates = ["ry"]
-home = [0.0]
-[platform]
-mass = 1.0
-inertia = [1e-4, 1e-4, 1e-4]
-[[leg]]
-type = "R"
-platform_point = [0.0, 0.0, 0.5]
-axis_point = [0.0, 0.0, 1.0]
-axis = [0.0, 1.0, 0.0]
-continuous = true
-"""
 
 
 def _spin(robot, n=3000):
@@ -48,7 +33,7 @@ def test_diagnose_names_the_row_the_time_and_a_hint(tmp_path, capsys):
 
 
 def test_a_continuous_joint_takes_the_same_recording(tmp_path):
-    (tmp_path / "spin_axis.toml").write_text(SPINNER)
+    continuous_pendulum(tmp_path, "spin_axis")
     m = Model(str(tmp_path / "spin_axis.toml"))
     p = Pipeline(_spin("spin_axis"), m)
     assert p.q[-1, 0] > 10
@@ -59,7 +44,7 @@ def test_a_continuous_joint_recorded_wrapped_is_refused_with_the_way_out(tmp_pat
 
     from cosim.discrepancy.residuals import DiagnosisError
 
-    (tmp_path / "spin_axis.toml").write_text(SPINNER)
+    continuous_pendulum(tmp_path, "spin_axis")
     m = Model(str(tmp_path / "spin_axis.toml"))
     rec = _spin("spin_axis")
     rec.q[:, 0] = np.angle(np.exp(1j * rec.q[:, 0]))  # into (-pi, pi]: jumps by -2 pi

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from continuous_axis import continuous_pendulum
 
 from cosim import fmu
 
@@ -110,9 +111,8 @@ def made(tmp_path_factory):
     pendulum made a continuous axis without gravity) for linux64, ``my_stewart.toml`` (the
     bundled hexapod under another name) for the three platforms."""
     d = tmp_path_factory.mktemp("mine")
-    text = (REPO / "robots" / "pendulum.toml").read_text().replace("stroke = [-3.1, 3.1]", "continuous = true")
-    text = text.replace('name = "pendulum"', 'name = "my_pendulum"')
-    (d / "my_pendulum.toml").write_text(text.replace("vector = [0.0, 0.0, -9.81]", "vector = [0.0, 0.0, 0.0]"))
+    mine = continuous_pendulum(d, "my_pendulum")
+    mine.write_text(mine.read_text().replace("vector = [0.0, 0.0, -9.81]", "vector = [0.0, 0.0, 0.0]"))
     shutil.copyfile(REPO / "robots" / "hexapod_ups.toml", d / "my_stewart.toml")
     runs = {"my_pendulum": "linux64", "my_stewart": "linux64,win64,aarch64-linux"}
     status = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True, cwd=REPO).stdout

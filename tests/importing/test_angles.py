@@ -7,28 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from continuous_axis import continuous_pendulum
 
 from cosim.importing import to_recording
 from cosim.importing.angles import unwrap, wrap
 from cosim.importing.errors import ImportFailure
 
 REPO = Path(__file__).resolve().parents[2]
-
-SPINNER = """
-[robot]
-name = "spinner"
-coordinates = ["ry"]
-home = [0.0]
-[platform]
-mass = 1.0
-inertia = [1e-4, 1e-4, 1e-4]
-[[leg]]
-type = "R"
-platform_point = [0.0, 0.0, 0.5]
-axis_point = [0.0, 0.0, 1.0]
-axis = [0.0, 1.0, 0.0]
-continuous = true
-"""
 
 MAP = """robot = "{robot}"
 [columns]
@@ -64,7 +49,7 @@ def _map(tmp_path, robot, extra=""):
 
 
 def test_a_spinning_axis_recorded_wrapped_is_unwrapped_for_a_continuous_joint(tmp_path):
-    (tmp_path / "spinner.toml").write_text(SPINNER)
+    continuous_pendulum(tmp_path, "spinner")
     t = np.arange(2000) * 1e-3
     true = 0.3 + 50.0 * t + 5.0 * t**2  # rad: 110 rad after 2 s
     src = _csv(tmp_path, np.degrees(wrap(true)), t)
