@@ -95,12 +95,7 @@ def model_check(m: Model, seed: int, duration: float, noise: dict, time_step: fl
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seed", type=int, default=90, help="seed of the case plan (default 90)")
-    ap.add_argument("--clean", type=int, default=4, help="clean cases (default 4)")
-    ap.add_argument("--duration", type=float, default=9.0, help="recorded seconds per case (default 9)")
-    ap.add_argument("--out", type=Path, default=REPO / "results" / "foreign_drake", help="where the recordings go")
-    ap.add_argument("--controller", choices=["pd_gravity", "pid"], default="pd_gravity",
-                    help="the recordings' controller (default pd_gravity)")
+    mb.case_options(ap, 90, REPO / "results" / "foreign_drake")
     ap.add_argument("--only", default=None, metavar="TYPE[,TYPE]",
                     help="run only these cases of the plan (effect types, or 'clean'); the others are drawn as usual")
     ap.add_argument("--no-check", action="store_true", help="skip the model check")

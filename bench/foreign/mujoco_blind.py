@@ -431,14 +431,21 @@ def _pair(m, hidden, seed, a, noise, rows):
           f"params {ok_par}/{n_par}", flush=True)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def case_options(ap: argparse.ArgumentParser, seed: int, out: Path) -> None:
+    """Add the options of a blind run on a foreign simulator to ``ap``: the plan's ``--seed``
+    (default ``seed``), ``--clean`` cases, ``--duration`` [s], ``--out`` folder (default
+    ``out``) and ``--controller``."""
     ap.add_argument("--clean", type=int, default=4, help="clean cases (default 4)")
-    ap.add_argument("--seed", type=int, default=11, help="seed of the case plan (default 11)")
+    ap.add_argument("--seed", type=int, default=seed, help=f"seed of the case plan (default {seed})")
     ap.add_argument("--duration", type=float, default=9.0, help="recorded seconds per case (default 9)")
-    ap.add_argument("--out", type=Path, default=REPO / "results" / "foreign", help="where the recordings go")
+    ap.add_argument("--out", type=Path, default=out, help="where the recordings go")
     ap.add_argument("--controller", choices=["pd_gravity", "pid"], default="pd_gravity",
                     help="the recordings' controller (default pd_gravity)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    case_options(ap, 11, REPO / "results" / "foreign")
     ap.add_argument("--gap-model", choices=["applied", "mujoco"], default="applied",
                     help="a two-body rail's gap or spring: a force applied per step (stiff faces, default) or "
                          "MuJoCo's own soft joint limit / joint stiffness")
