@@ -17,7 +17,10 @@ Effects hidden in Drake's own physics (``hidden``: (type, value, joint) each, jo
 * ``payload``: a body of that mass [kg] welded to the platform at an offset drawn from ``rng``;
 * ``platform_mass``: the platform's mass times (1 + value);
 * ``gravity_tilt``: gravity tilted by value [deg] towards an azimuth drawn from ``rng``;
-* ``offset``: a constant force [N] on the rail along +q (Drake's applied generalized force).
+* ``offset``: a constant force [N] on the rail along +q (Drake's applied generalized force);
+* ``cable``: a cable of constant tension value [N] from the platform's reference point to an
+  anchor drawn from ``rng`` (:func:`cable_anchor`), a force on the platform body renewed at
+  every step (Drake's applied spatial force).
 
 The drive-side effects (encoder offset, actuator delay, dead zone) are applied around the
 plant by ``mujoco_blind``'s :func:`drive_effects`, :func:`read_joints` and
@@ -48,11 +51,20 @@ from cosim.recording import Recording  # noqa: E402
 #: Drake's time step [s] (the discrete plant's period; 10 per 1 kHz control period)
 TIME_STEP = 1e-4
 #: the effect types hidden in Drake's physics (the drive-side ones are mujoco_blind's)
-PHYSICS = ("viscous", "rotor_inertia", "payload", "platform_mass", "gravity_tilt", "offset")
+PHYSICS = ("viscous", "rotor_inertia", "payload", "platform_mass", "gravity_tilt", "offset", "cable")
 #: radius [m] giving a leg's spin about its own axis an inertia (m r^2 / 2): the core's slender
 #: rod has none, and a ball joint needs some (MuJoCo's capsule of bench/closed_loop_bench.py has
 #: the same radius)
 ROD_RADIUS = 1e-3
+
+
+def cable_anchor(m: Model, rng) -> np.ndarray:
+    """A cable's anchor [m] in the world frame: 0.2-0.5 m from the platform at home, in a
+    direction drawn uniformly over the upper half of the sphere (the cable pulls up and
+    sideways, as a hose hung above the robot)."""
+    u = rng.normal(size=3)
+    u[2] = abs(u[2])
+    return m.home()[:3] + rng.uniform(0.2, 0.5) * u / np.linalg.norm(u)
 
 
 def rotation_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
@@ -110,6 +122,7 @@ class Drake6Pus:
         from pydrake.systems.analysis import Simulator
 
         truth = {} if truth is None else truth
+        self.cable = None  # (tension [N], anchor [m])
         p = m.params()
         x0 = m.home()
         self.q0 = m.ik(x0)
@@ -139,6 +152,10 @@ class Drake6Pus:
             elif effect == "platform_mass":
                 platform_m = p["platform.m"] * (1 + value)
                 truth["platform.m"] = platform_m
+            elif effect == "cable":
+                self.cable = (value, cable_anchor(m, rng))
+                truth.update({"cable.tension": value, **{f"cable.anchor_{a}": float(v)
+                                                         for a, v in zip("xyz", self.cable[1])}})
             elif effect == "gravity_tilt":
                 az = rng.uniform(0, 2 * math.pi)
                 gn = abs(p["gravity.z"])
@@ -176,6 +193,8 @@ class Drake6Pus:
         for i, rail in enumerate(self.rails):
             applied[rail.velocity_start()] = force[i]
         plant.get_applied_generalized_force_input_port().FixValue(self.context, applied)
+        if self.cable is not None:
+            self._spatial = plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
         self.simulator = Simulator(plant, self.context)
         self.simulator.Initialize()
         self.steps = 0  # updates made
@@ -198,8 +217,27 @@ class Drake6Pus:
         times before ``t``; it is advanced to half a step before the next step time, so that
         the rounding of a sum of steps never leaves one update out."""
         self._cmd.GetMutableData().get_mutable_value().SetFromVector(force)
-        self.steps += steps
-        self.simulator.AdvanceTo((self.steps - 0.5) * self.time_step)
+        if self.cable is None:
+            self.steps += steps
+            self.simulator.AdvanceTo((self.steps - 0.5) * self.time_step)
+            return
+        for _ in range(steps):  # the cable's direction follows the platform: renewed every step
+            self._pull()
+            self.steps += 1
+            self.simulator.AdvanceTo((self.steps - 0.5) * self.time_step)
+
+    def _pull(self) -> None:
+        """The cable's force on the platform at its reference point, for the coming step."""
+        from pydrake.multibody.math import SpatialForce
+        from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+
+        tension, anchor = self.cable
+        d = anchor - self.plant.EvalBodyPoseInWorld(self.context, self.platform).translation()
+        pull = ExternallyAppliedSpatialForce()
+        pull.body_index = self.platform.index()
+        pull.p_BoBq_B = np.zeros(3)
+        pull.F_Bq_W = SpatialForce(np.zeros(3), tension * d / np.linalg.norm(d))
+        self._spatial.GetMutableData().set_value([pull])
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", physics: Model | None = None,
