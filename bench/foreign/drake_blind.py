@@ -127,7 +127,6 @@ def main(argv=None) -> int:
     known = set(TYPES) | {"cable", "clean"}
     if only and not only <= known:
         ap.error(f"--only: unknown type(s) {', '.join(sorted(only - known))}; known: {', '.join(TYPES)}, cable, clean")
-    from pydrake import getDrakePath  # noqa: F401  (pydrake must import before any case runs)
     import importlib.metadata
 
     version = importlib.metadata.version("drake")
