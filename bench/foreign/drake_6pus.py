@@ -4,14 +4,14 @@ Drake (PyPI ``drake``, pydrake; Tedrake 2019) is a simulator the project did not
 plant: a free platform, six carriages on prismatic joints along their rails, six legs as
 uniform slender rods on ball joints at the carriages, and each loop closed at the platform
 by a ball constraint (a discrete plant stepped by Drake's SAP solver, Castro et al. 2023,
-the solver Drake requires for such constraints; they hold the loops closed to 0.02 um under
-rail forces of 0.5 N).  Every number comes from
-``cosim.core.Model("6pus")``: the parameters (masses, inertias, platform points, rail
+the solver Drake requires for such constraints; on a 0.3 s probe, the gravity load plus
+sinusoids of 0.5 N on the rails, the loops stayed closed to 0.02 um).  Every number comes
+from ``cosim.core.Model("6pus")``: the parameters (masses, inertias, platform points, rail
 directions, gravity) and the geometry at home (``ik``, ``leg_points``).
 
 Effects hidden in Drake's own physics (``hidden``: (type, value, joint) each, joint 0-based):
 
-* ``viscous``: the prismatic joint's damping [N s/m] (Drake applies it implicitly);
+* ``viscous``: the prismatic joint's damping [N s/m];
 * ``rotor_inertia``: the rail actuator's rotor inertia [kg] with gear ratio 1 (Drake's
   reflected inertia, added to the mass matrix's diagonal);
 * ``payload``: a body of that mass [kg] welded to the platform at an offset drawn from ``rng``;

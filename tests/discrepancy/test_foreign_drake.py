@@ -46,7 +46,7 @@ def test_a_clean_drake_recording_is_called_clean(tmp_path):
 
 
 def test_drakes_joint_damping_is_found_as_the_rails_viscous_friction(tmp_path):
-    # 0.5 N s/m of damping on rail 3's prismatic joint (Drake applies it implicitly in its step)
+    # 0.5 N s/m of damping on rail 3's prismatic joint (Drake's own joint damping)
     truth, d = _diagnosis(tmp_path, "viscous", 0.5, 2)
     assert d.named()[0] == "viscous", d.conclusion
     est = d.plant_parameters()["rail[3].viscous"]
