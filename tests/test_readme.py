@@ -39,6 +39,7 @@ NOT_RUN = {
     ".venv/bin/cosim blind-benchmark --cases 48": "minutes (tests/discrepancy: the held-out benchmark on a few cases)",
     ".venv/bin/python bench/foreign/mujoco_blind.py": "a benchmark of minutes (tests/discrepancy/test_foreign_mujoco.py)",
     ".venv/bin/python bench/foreign/mujoco_rate_noise.py": "a benchmark of minutes (tests/discrepancy)",
+    ".venv/bin/python bench/foreign/drake_blind.py": "a benchmark of minutes (tests/discrepancy/test_foreign_drake.py)",
     ".venv/bin/python bench/long_recording.py": "a benchmark of minutes (tests/discrepancy/test_long_recording.py)",
     ".venv/bin/python bench/discovery_mujoco_bench.py": "a benchmark of minutes "
                                                         "(tests/discrepancy/test_discovery_mujoco.py)",

@@ -37,6 +37,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -168,12 +169,12 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
     return xml
 
 
-def held_delay(delay: float) -> float:
+def held_delay(delay: float, step: float = DT / SUBSTEPS) -> float:
     """The actuator delay [s] the plant has when :func:`simulate` draws ``delay`` [s].
 
-    The delay line applies a command issued at ``t`` from the first MuJoCo step (``DT /
-    SUBSTEPS`` = 0.1 ms) at or after ``t + delay`` until the next command takes over one period
-    later: the applied effort is the recorded one, held over each period, shifted by ``delay``
+    The delay line applies a command issued at ``t`` from the first simulator step (``step``
+    [s], default MuJoCo's ``DT / SUBSTEPS`` = 0.1 ms) at or after ``t + delay`` until the next
+    command takes over one period later: the applied effort is the recorded one, held over each period, shifted by ``delay``
     rounded up to a whole step, with no other change (a drawn 2.74 ms and 2.8 ms give the same
     recording).  The answer key is that shift, not the drawn value.
 
@@ -182,8 +183,64 @@ def held_delay(delay: float) -> float:
     >>> round(held_delay(2.74e-3) * 1e3, 6), round(held_delay(2.8e-3) * 1e3, 6), held_delay(0.0)
     (2.8, 2.8, 0.0)
     """
-    step = DT / SUBSTEPS
     return max(math.ceil((delay - TIME_TOL) / step), 0) * step
+
+
+class DriveEffects(NamedTuple):
+    """The hidden effects that live in the drive and its encoder, not in a simulator's physics."""
+
+    offset: np.ndarray  #: encoder offset per rail, added to the reading [m]
+    delay: float  #: actuator delay drawn [s] (the plant's is :func:`held_delay` of it)
+    dead: float  #: dead zone half width [N] (0: none)
+    dead_joint: int  #: the rail of the dead zone (0-based)
+
+
+def drive_effects(hidden, truth: dict, step: float = DT / SUBSTEPS) -> DriveEffects:
+    """The drive-side effects among ``hidden`` ((type, value, joint) each: an encoder offset,
+    an actuator delay, a dead zone); their answers are written into ``truth`` under the core's
+    parameter names (the delay as the one the delay line makes on the simulator's ``step`` [s],
+    :func:`held_delay`)."""
+    offset = np.zeros(6)
+    delay = dead = 0.0
+    dead_joint = 0
+    for eff, val, jnt in hidden:
+        if eff == "encoder_offset":
+            offset[jnt] = val
+            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
+        elif eff == "actuator_delay":
+            delay = val
+            truth["actuator.delay"] = held_delay(val, step)
+        elif eff == "dead_zone":
+            dead, dead_joint = val, jnt
+            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
+    return DriveEffects(offset, delay, dead, dead_joint)
+
+
+def read_joints(rng, noise: dict, drive: DriveEffects, q_true, qd_true, pose_true):
+    """The recorded readings (q [m], qd [m/s], pose [m, rad]) of the rails' true positions and
+    rates and the platform's true pose (x, y, z, rx, ry, rz in the core's convention): the
+    encoder offset added, then the noise of ``noise`` (the blind configuration's standard
+    deviations ``q``, ``qd`` and per coordinate ``pose``) drawn from ``rng`` in that order."""
+    q_read = q_true + drive.offset + rng.normal(0, noise["q"], 6)
+    qd_read = qd_true + rng.normal(0, noise["qd"], 6)
+    pose = pose_true + rng.normal(0, 1, 6) * np.asarray(noise["pose"])
+    return q_read, qd_read, pose
+
+
+def drive_command(issued: list, ts: float, drive: DriveEffects) -> np.ndarray:
+    """The six rail forces [N] the drive applies at time ``ts`` [s]: the latest command of
+    ``issued`` ((time [s], command [N]) pairs, oldest first) issued at or before ``ts`` less the
+    delay (zero before the first), less the dead zone on its rail."""
+    cmd = np.zeros(6)
+    for ti, c in reversed(issued):
+        if ti <= ts - drive.delay + TIME_TOL:
+            cmd = c
+            break
+    if drive.dead > 0:
+        cmd = cmd.copy()
+        u = cmd[drive.dead_joint]
+        cmd[drive.dead_joint] = 0.0 if abs(u) <= drive.dead else u - math.copysign(drive.dead, u)
+    return cmd
 
 
 def controller(kind: str, m: Model):
@@ -236,20 +293,9 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     ref = make_reference(m, traj, step=DT, duration=round(traj.duration / DT) * DT)
     ctrl = controller(kind, m)
     ctrl.reset(0.0, q0, m.home())
-    offset = np.zeros(6)
-    delay = dead = 0.0
-    dead_joint = 0
+    drive = drive_effects(hidden, truth)
     for eff, val, jnt in hidden:
-        if eff == "encoder_offset":
-            offset[jnt] = val
-            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
-        elif eff == "actuator_delay":
-            delay = val
-            truth["actuator.delay"] = held_delay(val)
-        elif eff == "dead_zone":
-            dead, dead_joint = val, jnt
-            truth[EFFECTS[eff][1].format(j=jnt + 1)] = val
-        elif eff == "offset":
+        if eff == "offset":
             data.qfrc_applied[drails[jnt]] += val
             truth[EFFECTS[eff][1].format(j=jnt + 1)] = -val
     applied = data.qfrc_applied[drails].copy()  # the constant part (a hidden offset)
@@ -259,28 +305,17 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     sig = noise
     for k in range(n):
         t = k * DT
-        q_true = q0 + data.qpos[rails]
-        qd_true = data.qvel[drails].copy()
-        q_read = q_true + offset + rng.normal(0, sig["q"], 6)
-        qd_read = qd_true + rng.normal(0, sig["qd"], 6)
-        tau = ctrl(t, q_read, qd_read, Reference(ref.q[k], ref.qd[k], ref.qdd[k], ref.x[k]))
         mujoco.mj_kinematics(model, data)  # xpos/xmat of mj_step are those at the start of the step
         R = data.xmat[plat].reshape(3, 3)
-        pose = np.r_[data.xpos[plat], euler_xyz(R)] + rng.normal(0, 1, 6) * np.asarray(sig["pose"])
+        q_read, qd_read, pose = read_joints(rng, sig, drive, q0 + data.qpos[rails], data.qvel[drails],
+                                            np.r_[data.xpos[plat], euler_xyz(R)])
+        tau = ctrl(t, q_read, qd_read, Reference(ref.q[k], ref.qd[k], ref.qdd[k], ref.x[k]))
         rows["q"][k], rows["qd"][k], rows["tau"][k], rows["pose"][k] = q_read, qd_read, tau, pose
         rows["tau"][k] += rng.normal(0, sig["tau"], 6)
         issued.append((t, tau.copy()))
         for s in range(substeps):
             ts = t + s * DT / substeps
-            cmd = np.zeros(6)
-            for ti, c in reversed(issued):
-                if ti <= ts - delay + TIME_TOL:
-                    cmd = c
-                    break
-            if dead > 0:
-                cmd = cmd.copy()
-                u = cmd[dead_joint]
-                cmd[dead_joint] = 0.0 if abs(u) <= dead else u - math.copysign(dead, u)
+            cmd = drive_command(issued, ts, drive)
             data.ctrl[:] = cmd
             if force is not None:
                 data.qfrc_applied[drails] = applied + force(q0 + data.qpos[rails], data.qvel[drails])
@@ -396,14 +431,21 @@ def _pair(m, hidden, seed, a, noise, rows):
           f"params {ok_par}/{n_par}", flush=True)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def case_options(ap: argparse.ArgumentParser, seed: int, out: Path) -> None:
+    """Add the options of a blind run on a foreign simulator to ``ap``: the plan's ``--seed``
+    (default ``seed``), ``--clean`` cases, ``--duration`` [s], ``--out`` folder (default
+    ``out``) and ``--controller``."""
     ap.add_argument("--clean", type=int, default=4, help="clean cases (default 4)")
-    ap.add_argument("--seed", type=int, default=11, help="seed of the case plan (default 11)")
+    ap.add_argument("--seed", type=int, default=seed, help=f"seed of the case plan (default {seed})")
     ap.add_argument("--duration", type=float, default=9.0, help="recorded seconds per case (default 9)")
-    ap.add_argument("--out", type=Path, default=REPO / "results" / "foreign", help="where the recordings go")
+    ap.add_argument("--out", type=Path, default=out, help="where the recordings go")
     ap.add_argument("--controller", choices=["pd_gravity", "pid"], default="pd_gravity",
                     help="the recordings' controller (default pd_gravity)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    case_options(ap, 11, REPO / "results" / "foreign")
     ap.add_argument("--gap-model", choices=["applied", "mujoco"], default="applied",
                     help="a two-body rail's gap or spring: a force applied per step (stiff faces, default) or "
                          "MuJoCo's own soft joint limit / joint stiffness")
