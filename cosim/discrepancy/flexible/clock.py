@@ -24,12 +24,12 @@ Time is named in their place where
 
 **Time judged beside the rate's own columns** (:func:`timed`): a joint's histories signed by its
 direction of motion (its dissipated power low-passed, the time since it reversed) are columns of
-its rate's group as well as of its history's (:func:`~.columns.input_groups`), so where time takes the place of a joint's
-history beside that joint's named rate, the rate's group still holds the history's signed
-columns.  Time named beside other groups is judged once more with each held-out block's
-neighbours held out too (:func:`.beside.once`); there it is judged without the replaced
-histories' columns, beside the other groups' own.  The fitted model keeps them (the trees on the
-named groups' columns): only the judgement leaves them out.
+its rate's group as well as of its history's (:func:`~.columns.input_groups`), so where time
+takes the place of a joint's history beside that joint's named rate, the rate's group still
+holds the history's signed columns.  Time named beside other groups is judged once more with
+each held-out block's neighbours held out too (:func:`.beside.once`); there it is judged without
+the replaced histories' columns, beside the other groups' own.  The fitted model keeps them (the
+trees on the named groups' columns): only the judgement leaves them out.
 
 **The pose before time** where the platform pose is an input and not named: it is the candidate
 in the histories' place instead of time where the trees on the other named groups and it beat
