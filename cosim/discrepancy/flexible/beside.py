@@ -17,7 +17,9 @@ named in them):
   :data:`~.select.GAIN_Z` standard errors over the folds (:func:`~.select.gain`).  Where the
   low-passed histories named instead do not beat time by that bar, time is named in their place
   (:func:`.clock.on_time`: a state set by time, a window or a warming from cold, that slow
-  histories follow by chance over the one change a recording holds).
+  histories follow by chance over the one change a recording holds), then judged as time named
+  beside other groups is (:func:`once`) without the replaced histories' columns
+  (:func:`.clock.timed`: their signed columns a named rate holds).
 * **Beside the pose, only what adds significantly** (:func:`beside_pose`): beside the named
   platform pose, a history, an acceleration, an effort or time stays named only where leaving
   it out costs :data:`~.select.DROP_MIN` above :data:`~.select.GAIN_Z` standard errors over the
@@ -39,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clock import TIME, on_time
+from .clock import TIME, level, timed
 from .copies import copies
 from .own_joint import beside_another, own_first
 from .cv import BLOCKS_PER_FOLD, N_FOLDS, folds
@@ -113,20 +115,22 @@ def copy_alone(named, kept, claimed) -> bool:
     return kept != named and not claimed and any(g.startswith("effort of ") for g in named)
 
 
-def once(kept, groups, X, y, cross_validate) -> list:
+def once(kept, groups, X, y, cross_validate, without=()) -> list:
     """``kept`` without time where it is named beside other groups and does not add
     significantly (:func:`~.select.gain`) once each held-out block's neighbours are held out
-    too (a gap of one block on each side).  Trees on time predict a held-out block from the
-    fitted rows nearest in time: a change slower than the blocks (a drift, a warming) is still
-    there two blocks away, an event that lasts a block or two (an excursion of the pose that
-    happens once) is not."""
+    too (a gap of one block on each side); ``without``: columns left out of both fits (the
+    replaced histories' columns, :func:`.clock.timed`).  Trees on time predict a
+    held-out block from the fitted rows nearest in time: a change slower than the blocks (a
+    drift, a warming) is still there two blocks away, an event that lasts a block or two (an
+    excursion of the pose that happens once) is not."""
     if TIME not in kept or len(kept) == 1:
         return kept
     wide = folds(len(y), len(y) // (N_FOLDS * BLOCKS_PER_FOLD))
     rest = [g for g in kept if g != TIME]
 
     def cv(gs):
-        return cross_validate(X[:, sorted({i for g in gs for i in groups[g]})], y, wide)
+        cols = sorted({i for g in gs for i in groups[g]} - set(without))
+        return cross_validate(X[:, cols], y, wide) if cols else level(y, wide)
     return kept if gain(cv(rest), cv(kept), y, float(np.var(y)))[1] else rest
 
 
@@ -139,7 +143,7 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     they add significantly (:func:`significant_only`), time beside other groups only where it
     adds with the neighbouring blocks held out (:func:`once`), then time in the place of
     histories that do not beat it significantly (:func:`.clock.on_time`; judged by :func:`once`
-    again beside other groups), unless time holds a line's phase (``lines``: see
+    again beside other groups, without the replaced histories' columns), unless time holds a line's phase (``lines``: see
     :func:`judged_last`); first, on the channel of ``joint`` (1-based), another joint's input
     gives way to the own joint's of the same quantity where that explains as much and claims
     alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third item is
@@ -158,6 +162,6 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
         if lines:
             return kept
         kept = once(kept, groups, X, y, cross_validate)
-        timed = on_time(kept, groups, y, var, cv_on)
-        return kept if timed == kept else once(timed, groups, X, y, cross_validate)
+        named, without = timed(kept, groups, y, var, cv_on)
+        return kept if named == kept else once(named, groups, X, y, cross_validate, without)
     return after
