@@ -143,11 +143,12 @@ def rules(X, y, fold_rows, groups, follow, fitted, cross_validate, lines=(), ref
     they add significantly (:func:`significant_only`), time beside other groups only where it
     adds with the neighbouring blocks held out (:func:`once`), then time in the place of
     histories that do not beat it significantly (:func:`.clock.on_time`; judged by :func:`once`
-    again beside other groups, without the replaced histories' columns), unless time holds a line's phase (``lines``: see
-    :func:`judged_last`); first, on the channel of ``joint`` (1-based), another joint's input
-    gives way to the own joint's of the same quantity where that explains as much and claims
-    alike (:func:`.own_joint.own_first`; ``judged(mse)``: the stage's bars, whose third item is
-    the claim; ``directed``: the fit is folded by the joint's direction, :func:`passed_on`)."""
+    again beside other groups, without the replaced histories' columns), unless time holds a
+    line's phase (``lines``: see :func:`judged_last`); first, on the channel of ``joint``
+    (1-based), another joint's input gives way to the own joint's of the same quantity where
+    that explains as much and claims alike (:func:`.own_joint.own_first`; ``judged(mse)``: the
+    stage's bars, whose third item is the claim; ``directed``: the fit is folded by the joint's
+    direction, :func:`passed_on`)."""
     var = float(np.var(y))
     swapped = {}
 
