@@ -40,6 +40,8 @@ NOT_RUN = {
     ".venv/bin/python bench/foreign/mujoco_blind.py": "a benchmark of minutes (tests/discrepancy/test_foreign_mujoco.py)",
     ".venv/bin/python bench/foreign/mujoco_rate_noise.py": "a benchmark of minutes (tests/discrepancy)",
     ".venv/bin/python bench/foreign/drake_blind.py": "a benchmark of minutes (tests/discrepancy/test_foreign_drake.py)",
+    ".venv/bin/python bench/foreign/drake_unlisted.py": "a benchmark of minutes (tests/discrepancy/"
+                                                        "test_foreign_drake.py runs a hook on Drake against MuJoCo)",
     ".venv/bin/python bench/long_recording.py": "a benchmark of minutes (tests/discrepancy/test_long_recording.py)",
     ".venv/bin/python bench/discovery_mujoco_bench.py": "a benchmark of minutes "
                                                         "(tests/discrepancy/test_discovery_mujoco.py)",

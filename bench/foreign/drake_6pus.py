@@ -22,6 +22,11 @@ Effects hidden in Drake's own physics (``hidden``: (type, value, joint) each, jo
   anchor drawn from ``rng`` (:func:`cable_anchor`), a force on the platform body renewed at
   every step (Drake's applied spatial force).
 
+Loads computed at every step from the plant's state (``load``): a function of the plant, the
+time and the rails' commanded forces returning more rail forces (Drake's applied generalized
+force) and spatial forces on bodies (Drake's applied spatial forces), renewed at every step as
+the cable's (bench/foreign/drake_unlisted.py's mechanisms).
+
 The drive-side effects (encoder offset, actuator delay, dead zone) are applied around the
 plant by ``mujoco_blind``'s :func:`drive_effects`, :func:`read_joints` and
 :func:`drive_command`, as for MuJoCo.  :func:`simulate` runs one case and returns the
@@ -189,12 +194,11 @@ class Drake6Pus:
         self.plant, self.platform, self.time_step = plant, platform, time_step
         self.context = plant.CreateDefaultContext()
         self._cmd = plant.get_actuation_input_port().FixValue(self.context, np.zeros(6))
-        applied = np.zeros(plant.num_velocities())
-        for i, rail in enumerate(self.rails):
-            applied[rail.velocity_start()] = force[i]
-        plant.get_applied_generalized_force_input_port().FixValue(self.context, applied)
-        if self.cable is not None:
-            self._spatial = plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
+        self.offset = np.zeros(plant.num_velocities())  # the constant applied generalized force (``offset``)
+        self.rail_dofs = [rail.velocity_start() for rail in self.rails]
+        self.offset[self.rail_dofs] = force
+        self._applied = plant.get_applied_generalized_force_input_port().FixValue(self.context, self.offset)
+        self._spatial = plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
         self.simulator = Simulator(plant, self.context)
         self.simulator.Initialize()
         self.steps = 0  # updates made
@@ -210,38 +214,62 @@ class Drake6Pus:
         X = self.plant.EvalBodyPoseInWorld(self.context, self.platform)
         return np.r_[X.translation(), mb.euler_xyz(X.rotation().matrix())]
 
-    def step(self, force, steps: int = 1) -> None:
+    def platform_motion(self) -> tuple:
+        """The platform body's origin [m], rotation matrix (body to world), and its origin's
+        velocity [m/s] and angular velocity [rad/s], both in the world frame."""
+        X = self.plant.EvalBodyPoseInWorld(self.context, self.platform)
+        V = self.plant.EvalBodySpatialVelocityInWorld(self.context, self.platform)
+        return X.translation(), X.rotation().matrix(), V.translational(), V.rotational()
+
+    def step(self, force, steps: int = 1, load=None) -> None:
         """``steps`` time steps with the six rail forces ``force`` [N] (along +q) held over them.
 
+        ``load``, if given, is called before every step as ``load(self, t, force)`` (t [s] the
+        step's start) and returns (six more rail forces [N] along +q or None, a list of Drake
+        ``ExternallyAppliedSpatialForce``), applied over that step beside a cable's pull.
         Drake's simulator, advanced to a time ``t``, has made the plant's updates at the step
         times before ``t``; it is advanced to half a step before the next step time, so that
         the rounding of a sum of steps never leaves one update out."""
         self._cmd.GetMutableData().get_mutable_value().SetFromVector(force)
-        if self.cable is None:
+        if self.cable is None and load is None:
             self.steps += steps
             self.simulator.AdvanceTo((self.steps - 0.5) * self.time_step)
             return
-        for _ in range(steps):  # the cable's direction follows the platform: renewed every step
-            self._pull()
+        for _ in range(steps):  # forces that follow the state: renewed every step
+            rails, spatial = None, [self._pull()] if self.cable is not None else []
+            if load is not None:
+                rails, more = load(self, self.steps * self.time_step, force)
+                spatial += list(more)
+            applied = self.offset.copy()
+            if rails is not None:
+                applied[self.rail_dofs] += rails
+            self._applied.GetMutableData().get_mutable_value().SetFromVector(applied)
+            self._spatial.GetMutableData().set_value(spatial)
             self.steps += 1
             self.simulator.AdvanceTo((self.steps - 0.5) * self.time_step)
 
-    def _pull(self) -> None:
+    def _pull(self):
         """The cable's force on the platform at its reference point, for the coming step."""
-        from pydrake.multibody.math import SpatialForce
-        from pydrake.multibody.plant import ExternallyAppliedSpatialForce
-
         tension, anchor = self.cable
         d = anchor - self.plant.EvalBodyPoseInWorld(self.context, self.platform).translation()
-        pull = ExternallyAppliedSpatialForce()
-        pull.body_index = self.platform.index()
-        pull.p_BoBq_B = np.zeros(3)
-        pull.F_Bq_W = SpatialForce(np.zeros(3), tension * d / np.linalg.norm(d))
-        self._spatial.GetMutableData().set_value([pull])
+        return spatial_force(self.platform, np.zeros(3), tension * d / np.linalg.norm(d))
+
+
+def spatial_force(body, torque, force, at=None):
+    """Drake's ``ExternallyAppliedSpatialForce`` on ``body``: ``force`` [N] and ``torque`` [N m],
+    both in the world frame, at the point ``at`` [m] of the body's frame (its origin if None)."""
+    from pydrake.multibody.math import SpatialForce
+    from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+
+    out = ExternallyAppliedSpatialForce()
+    out.body_index = body.index()
+    out.p_BoBq_B = np.zeros(3) if at is None else np.asarray(at, float)
+    out.F_Bq_W = SpatialForce(np.asarray(torque, float), np.asarray(force, float))
+    return out
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", physics: Model | None = None,
-             time_step: float = TIME_STEP, motion: bool = False):
+             time_step: float = TIME_STEP, motion: bool = False, load=None):
     """One case on Drake: (Recording in the plant's joint coordinates, zero at home, truth).
 
     Parameters
@@ -267,6 +295,8 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         Also return the true motion: ``{"q", "qd"}`` [m, m/s] of the rails at every control
         instant and the end (n + 1 rows), ``"force"`` [N] the mean applied rail force over each
         period (n rows), ``"t"`` [s] the control instants, ``"k0"`` the first recorded row.
+    load : callable, optional
+        Loads renewed at every Drake step from the plant's state (:meth:`Drake6Pus.step`).
     """
     rng = np.random.default_rng(seed)
     hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
@@ -299,7 +329,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
             if s + 1 < substeps and np.array_equal(cmds[s + 1], cmds[s]):
                 run += 1
                 continue
-            sim.step(cmds[s], run)
+            sim.step(cmds[s], run, load)
             run = 1
         if len(issued) > 20:
             issued = issued[-20:]

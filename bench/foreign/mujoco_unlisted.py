@@ -405,7 +405,22 @@ def case_name(kind, seed, scale=1.0) -> str:
     return f"{kind}_{seed}" + ("" if scale == 1.0 else f"_x{scale:g}")
 
 
+def _mujoco(m, seed, noise, hook, edit):
+    """The case's recording on MuJoCo (bench/foreign/mujoco_blind.py's :func:`simulate`)."""
+    import mujoco_blind as mb
+
+    return mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook, edit=edit)[0]
+
+
 def _run(job):
+    return run_case(job, _mujoco)
+
+
+def run_case(job, simulate) -> dict:
+    """The judged row of one case ``job`` (kind, seed, out, scale, capture, recordings: as
+    :func:`jobs` makes them): the mechanism drawn (:func:`draw`), its recording made by
+    ``simulate(m, seed, noise, hook, edit)`` (a :class:`cosim.recording.Recording` of
+    ``DURATION`` s after ``LEAD``) and written, then diagnosed with the defaults."""
     import mujoco_blind as mb
 
     from cosim.core import Model
@@ -421,8 +436,7 @@ def _run(job):
     name = case_name(kind, seed, scale)
     csv = Path(recordings or out) / f"{name}.csv"
     if recordings is None or not csv.exists():  # else the recording a run with this seed wrote (--recordings)
-        rec, _ = mb.simulate(m, None, 0.0, 0, seed, DURATION, noise, hook=hook, edit=edit)
-        csv = mb.write_case(m, rec, Path(out) / f"{name}.csv")
+        csv = mb.write_case(m, simulate(m, seed, noise, hook, edit), Path(out) / f"{name}.csv")
     t0 = time.process_time()
     with _RuleLog() as rule:  # the rule's statistics, for the record (computed on tied effects too)
         # the defaults: families, platform, drift, flexible on; the stage's inputs kept for --replay
@@ -506,6 +520,42 @@ def _replayed(job):
     return _judged(row, fits, key)
 
 
+def kinds_of(ap, text, kinds_set) -> tuple:
+    """(kinds, their set) of ``--kinds`` ``text`` (comma-separated; None: ``kinds_set``'s), or
+    ``ap``'s error: a kind no set holds, or kinds of several sets (their seeds count from
+    different first seeds)."""
+    kinds = [k for k in text.split(",") if k] if text is not None else list(KIND_SETS[kinds_set])
+    bad = [k for k in kinds if k not in ALL_KINDS]
+    if bad:
+        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(ALL_KINDS)}")
+    sets = sorted({n for n, ks in KIND_SETS.items() for k in kinds if k in ks})
+    if len(sets) > 1:
+        ap.error("--kinds: kinds of one set at a time (their seeds count from different first seeds)")
+    return kinds, sets[0] if sets else kinds_set
+
+
+def jobs(kinds, kinds_set, base, clean, out, scales=(1.0,), capture=None, recordings=None) -> list:
+    """The cases of one seed set: each of ``kinds`` at ``base`` + its index in ``kinds_set``'s
+    order, at each of ``scales``, then ``clean`` clean ones at ``base`` + 90 +; each a job
+    (kind, seed, out, scale, capture, recordings) of :func:`run_case`."""
+    order = KIND_SETS[kinds_set]
+    return ([(k, base + order.index(k), str(out), x, capture, recordings) for x in scales for k in kinds]
+            + [("clean", base + 90 + i, str(out), 1.0, capture, recordings) for i in range(clean)])
+
+
+def run_jobs(run, todo, n_jobs, out) -> list:
+    """The rows of ``run`` over the jobs ``todo`` on ``n_jobs`` processes, each printed as it
+    comes, all written to ``out``/rows.json, then the table (:func:`unlisted_common.table`)."""
+    rows = []
+    with Pool(n_jobs) as pool:
+        for row in pool.imap_unordered(run, todo):
+            rows.append(row)
+            print(json.dumps(row, default=str), flush=True)
+    (Path(out) / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
+    print("\n" + "\n".join(table(rows, ALL_KINDS)))
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--kinds", default=None, help="comma-separated kinds of either set (default: --kinds-set's)")
@@ -531,13 +581,7 @@ def main(argv=None) -> int:
                     help="diagnose the recordings a run of the same seeds wrote there (its --out) instead of "
                          "simulating them again (a case without one is simulated)")
     a = ap.parse_args(argv)
-    kinds = [k for k in a.kinds.split(",") if k] if a.kinds is not None else list(KIND_SETS[a.kinds_set])
-    bad = [k for k in kinds if k not in ALL_KINDS]
-    if bad:
-        ap.error(f"unknown kind(s) {', '.join(bad)}; known: {', '.join(ALL_KINDS)}")
-    sets = sorted({n for n, ks in KIND_SETS.items() for k in kinds if k in ks})
-    if len(sets) > 1:
-        ap.error("--kinds: kinds of one set at a time (their seeds count from different first seeds)")
+    kinds, kinds_set = kinds_of(ap, a.kinds, a.kinds_set)
     a.out.mkdir(parents=True, exist_ok=True)
     try:
         scales = [float(x) for x in a.scale.split(",") if x]
@@ -547,22 +591,12 @@ def main(argv=None) -> int:
         ap.error(f"--scale {a.scale!r}: positive factors expected")
     if any(x != 1.0 for x in scales) and any(k in PLATFORM or k not in KINDS for k in kinds):
         ap.error(f"--scale applies to the rail kinds only ({', '.join(KINDS[len(PLATFORM):])})")
-    order = KIND_SETS[sets[0] if sets else a.kinds_set]
-    first = {1: SEED, 2: SEED_MORE, 3: SEED_THIRD, 4: SEED_FOURTH}[sets[0] if sets else a.kinds_set]
+    first = {1: SEED, 2: SEED_MORE, 3: SEED_THIRD, 4: SEED_FOURTH}[kinds_set]
     s0 = a.first_seed if a.first_seed is not None else first + (1000 if a.second else 0)
-    jobs = []
-    for base in range(s0, s0 + 1000 * a.sets, 1000):
-        jobs += [(k, base + order.index(k), str(a.out), x, a.replay or a.capture, a.recordings)
-                 for x in scales for k in kinds]
-        jobs += [("clean", base + 90 + i, str(a.out), 1.0, a.replay or a.capture, a.recordings)
-                 for i in range(a.clean)]
-    rows = []
-    with Pool(a.jobs) as pool:
-        for row in pool.imap_unordered(_replayed if a.replay else _run, jobs):
-            rows.append(row)
-            print(json.dumps(row, default=str), flush=True)
-    (a.out / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
-    print("\n" + "\n".join(table(rows, ALL_KINDS)))
+    todo = [job for base in range(s0, s0 + 1000 * a.sets, 1000)
+            for job in jobs(kinds, kinds_set, base, a.clean, a.out, scales,
+                            a.replay or a.capture, a.recordings)]
+    rows = run_jobs(_replayed if a.replay else _run, todo, a.jobs, a.out)
     if len(scales) > 1 or scales != [1.0]:
         print("\n" + "\n".join(sweep_table(rows, ALL_KINDS)))
     return 0

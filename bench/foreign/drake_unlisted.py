@@ -1,0 +1,161 @@
+"""bench/foreign/mujoco_unlisted.py's mechanisms hidden in Drake's 6-PUS, diagnosed with the defaults.
+
+    .venv/bin/python bench/foreign/drake_unlisted.py [--kinds-set 1|2|3|4] [--kinds cable_carrier,...]
+        [--first-seed 91000] [--clean 4] [--jobs 1] [--out results/drake_unlisted]
+
+A measurement, not a tuning set: the unlisted mechanisms (forces no library effect, term family
+or platform force names) of bench/foreign/mujoco_unlisted.py's four kind sets, on a second
+simulator, Drake (bench/foreign/drake_6pus.py's plant: SAP at 0.1 ms, loops closed by ball
+constraints, the controller, trajectory, noise and recording of the MuJoCo cases).  Each case is
+drawn by the kind's own code (``mujoco_unlisted.draw``: its parameters, its ``hook`` and the
+inputs it is keyed on), diagnosed with the defaults and judged by the same code as on MuJoCo
+(``mujoco_unlisted.run_case``: ``unlisted_common.judge``, ``judge_either`` and ``table``).
+
+The kinds ported are those whose force is a hook, ``hook(model, data, t, q, qd, cmd)``, of the
+rails' positions and rates, the commanded forces, time, states the hook keeps itself, and the
+platform's pose and twist (:data:`PORTED`).  The hook is called before every Drake step with a
+view of Drake's state in the MuJoCo fields it reads (:class:`MuJoCoView`: the platform body's
+``xpos``, ``xmat``, its free joint's ``qvel`` (linear velocity in the world frame, angular in
+the body's, as MuJoCo's), ``model.body("platform").id``, ``body_jntadr``, ``jnt_dofadr`` and
+``opt.gravity``); what it returns is applied as rail forces (Drake's applied generalized force),
+what it writes in ``xfrc_applied`` as a spatial force on the platform at its origin (its centre
+of mass, as MuJoCo's), and a change it makes to ``opt.gravity`` as the uniform field's change on
+every body (m dg at each body's centre of mass).  MuJoCo's hook reads the platform's pose of the
+previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  The kinds
+built by editing MuJoCo's model (:data:`NOT_PORTED`, with the reason) are not run.
+
+Seeds: ``--first-seed`` + the kind's index in its set, clean cases ``--first-seed`` + 90 +
+(development seeds 91000-91999: 91000 the first set, 91100 the second, 91200 the third, 91300 the
+fourth, by default).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
+
+import mujoco_unlisted as mu  # noqa: E402
+
+#: the kinds built by editing MuJoCo's model, not run on Drake: what each needs of MuJoCo
+NOT_PORTED = {
+    "tendon_slack": "MuJoCo's spatial tendon with a length limit (its soft constraint)",
+    "soft_stop": "MuJoCo's frictionless contact of a sphere with a plane (solref)",
+    "slosh": "a body on a damped ball joint in the platform",
+    "ball_joint_friction": "MuJoCo's frictionloss in a leg's ball joint",
+    "platform_tmd": "a body on a sprung slide joint in the platform",
+    "loose_payload": "a body on a slide joint with limits and frictionloss in the platform",
+    "flexure_joint": "stiffness and damping of a leg's ball joint",
+    "coupling_damper": "MuJoCo's fixed tendon with damping between two rails",
+    "coiled_cord": "MuJoCo's spatial tendon with stiffness from a carriage to the platform",
+}
+#: the kinds run on Drake (per set, in the set's order): the hook-based ones
+PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
+#: the default first seed of each set (development seeds)
+FIRST_SEED = {1: 91000, 2: 91100, 3: 91200, 4: 91300}
+PLATFORM_ID = 1  # the platform's body id in the view (0 is the world, as MuJoCo's)
+
+
+class MuJoCoView:
+    """The MuJoCo ``model`` and ``data`` fields a mechanism's hook reads and writes, kept for a
+    Drake plant (:class:`drake_6pus.Drake6Pus`): two bodies (the world, the platform), the
+    platform's free joint as the only joint (six dofs).  A hook asking for another body fails."""
+
+    def __init__(self, sim):
+        g = np.array(sim.plant.gravity_field().gravity_vector())
+        self.gravity = g.copy()  # the plant's gravity [m/s^2]
+        self.model = SimpleNamespace(body=self._body, body_jntadr=np.array([-1, 0]), jnt_dofadr=np.array([0]),
+                                     opt=SimpleNamespace(gravity=g))
+        self.data = SimpleNamespace(xpos=np.zeros((2, 3)), xmat=np.zeros((2, 9)), qvel=np.zeros(6),
+                                    xfrc_applied=np.zeros((2, 6)))
+        from pydrake.multibody.tree import BodyIndex
+
+        self.bodies = [sim.plant.get_body(BodyIndex(i)) for i in range(1, sim.plant.num_bodies())]  # 0: the world
+
+    @staticmethod
+    def _body(name):
+        if name != "platform":
+            raise KeyError(f"the Drake view holds the platform only, not {name!r}")
+        return SimpleNamespace(id=PLATFORM_ID)
+
+    def fill(self, sim) -> None:
+        """The platform's pose and twist (MuJoCo's conventions) from Drake's state."""
+        p, R, v, w = sim.platform_motion()
+        self.data.xpos[PLATFORM_ID] = p
+        self.data.xmat[PLATFORM_ID] = R.reshape(9)
+        self.data.qvel[:3] = v  # the free joint's linear velocity: world frame
+        self.data.qvel[3:] = R.T @ w  # its angular velocity: the body's frame
+
+    def loads(self, sim) -> list:
+        """Drake's spatial forces of what the hook wrote: ``xfrc_applied`` on the platform (force,
+        torque, world frame, at its centre of mass) and the change of ``opt.gravity`` on every body."""
+        import drake_6pus as d6
+
+        f = self.data.xfrc_applied[PLATFORM_ID]
+        out = [d6.spatial_force(sim.platform, f[3:], f[:3])] if np.any(f) else []
+        dg = np.asarray(self.model.opt.gravity) - self.gravity
+        if np.any(dg):
+            for b in self.bodies:
+                out.append(d6.spatial_force(b, np.zeros(3), b.default_mass() * dg, at=b.default_com()))
+        return out
+
+
+def as_load(hook):
+    """A MuJoCo hook as drake_6pus's ``load(sim, t, cmd)``: the view made at the first call
+    and filled before every one; (the hook's rail forces, the spatial forces of what it wrote)."""
+    view = {}
+
+    def load(sim, t, cmd):
+        if not view:
+            view["v"] = MuJoCoView(sim)
+        v = view["v"]
+        v.fill(sim)
+        q, qd = sim.joints()
+        rails = hook(v.model, v.data, t, q, qd.copy(), np.asarray(cmd, float).copy())
+        return (None if rails is None else np.asarray(rails, float)), v.loads(sim)
+    return load
+
+
+def _drake(m, seed, noise, hook, edit):
+    """The case's recording on Drake (drake_6pus's :func:`simulate`), the hook as a load."""
+    import drake_6pus as d6
+
+    if edit is not None:
+        raise ValueError("a kind that edits MuJoCo's model does not run on Drake")
+    return d6.simulate(m, None, 0.0, 0, seed, mu.DURATION, noise, load=None if hook is None else as_load(hook))[0]
+
+
+def _run(job):
+    return mu.run_case(job, _drake)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--kinds", default=None, help="comma-separated ported kinds of one set (default: --kinds-set's)")
+    ap.add_argument("--kinds-set", type=int, choices=sorted(PORTED), default=1,
+                    help="the set of bench/foreign/mujoco_unlisted.py (1-4) whose ported kinds run")
+    ap.add_argument("--first-seed", type=int, default=None,
+                    help="this seed + the kind's index in its set, clean cases this + 90 + (default: "
+                         + ", ".join(f"set {n} {s}" for n, s in FIRST_SEED.items()) + ")")
+    ap.add_argument("--clean", type=int, default=4)
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--out", type=Path, default=REPO / "results" / "drake_unlisted")
+    a = ap.parse_args(argv)
+    kinds, kinds_set = mu.kinds_of(ap, a.kinds if a.kinds is not None else ",".join(PORTED[a.kinds_set]),
+                                   a.kinds_set)
+    bad = [k for k in kinds if k in NOT_PORTED]
+    if bad:
+        ap.error("not run on Drake: " + "; ".join(f"{k} ({NOT_PORTED[k]})" for k in bad))
+    a.out.mkdir(parents=True, exist_ok=True)
+    s0 = a.first_seed if a.first_seed is not None else FIRST_SEED[kinds_set]
+    mu.run_jobs(_run, mu.jobs(kinds, kinds_set, s0, a.clean, a.out), a.jobs, a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
