@@ -18,6 +18,13 @@ Effects hidden in Drake's own physics (``hidden``: (type, value, joint) each, jo
 * ``platform_mass``: the platform's mass times (1 + value);
 * ``gravity_tilt``: gravity tilted by value [deg] towards an azimuth drawn from ``rng``;
 * ``offset``: a constant force [N] on the rail along +q (Drake's applied generalized force);
+* ``compliance``, ``backlash``: the rail made two bodies as in mujoco_blind: the drive (a body
+  of mass ``mujoco_blind.DRIVE_MASS`` on the rail's prismatic joint, the encoder reading it and
+  the motor acting on it) and the carriage on a second prismatic joint relative to it (along the
+  same axis); a compliance value [m/N] is Drake's ``PrismaticSpring`` of stiffness 1/value on
+  that joint plus the joint's damping for mujoco_blind's ``DAMPING_RATIO`` with the drive's
+  mass, a backlash value [m] the joint's position limits at +-value/2 (SAP's limit constraints:
+  free inside the band, stiff faces);
 * ``cable``: a cable of constant tension value [N] from the platform's reference point to an
   anchor drawn from ``rng`` (:func:`cable_anchor`), a force on the platform body renewed at
   every step (Drake's applied spatial force).
@@ -56,7 +63,7 @@ from cosim.recording import Recording  # noqa: E402
 #: Drake's time step [s] (the discrete plant's period; 10 per 1 kHz control period)
 TIME_STEP = 1e-4
 #: the effect types hidden in Drake's physics (the drive-side ones are mujoco_blind's)
-PHYSICS = ("viscous", "rotor_inertia", "payload", "platform_mass", "gravity_tilt", "offset", "cable")
+PHYSICS = ("viscous", "rotor_inertia", "payload", "platform_mass", "gravity_tilt", "offset", "cable") + mb.TWO_BODY
 #: radius [m] giving a leg's spin about its own axis an inertia (m r^2 / 2): the core's slender
 #: rod has none, and a ball joint needs some (MuJoCo's capsule of bench/closed_loop_bench.py has
 #: the same radius)
@@ -122,8 +129,8 @@ class Drake6Pus:
     def __init__(self, m: Model, hidden=(), rng=None, truth: dict | None = None, time_step: float = TIME_STEP):
         from pydrake.math import RigidTransform, RotationMatrix
         from pydrake.multibody.plant import DiscreteContactApproximation, MultibodyPlant
-        from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, RotationalInertia,
-                                            SpatialInertia)
+        from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, PrismaticSpring,
+                                            RotationalInertia, SpatialInertia)
         from pydrake.systems.analysis import Simulator
 
         truth = {} if truth is None else truth
@@ -137,7 +144,7 @@ class Drake6Pus:
         damping, rotor, force = np.zeros(6), np.zeros(6), np.zeros(6)
         platform_m = p["platform.m"]
         g = np.array([p["gravity.x"], p["gravity.y"], p["gravity.z"]])
-        payloads = []
+        payloads, two_body = [], {}  # two_body: rail -> (type, value)
         if p.get("payload.m", 0.0) > 0:
             payloads.append((p["payload.m"], np.array([p["payload.x"], p["payload.y"], p["payload.z"]])))
         for effect, value, j in hidden:
@@ -150,6 +157,9 @@ class Drake6Pus:
             elif effect == "offset":
                 force[j] += value
                 truth[mb.EFFECTS[effect][1].format(j=j + 1)] = -value
+            elif effect in mb.TWO_BODY:
+                two_body[j] = (effect, value)
+                truth[mb.EFFECTS[effect][1].format(j=j + 1)] = value
             elif effect == "payload":
                 off = np.array([rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02), rng.uniform(0.005, 0.02)])
                 payloads.append((value, off))
@@ -178,8 +188,22 @@ class Drake6Pus:
             axis = np.array([p[f"rail[{i + 1}].s{c}"] for c in "xyz"])
             origin = plant.AddFrame(FixedOffsetFrame(f"rail{i}", plant.world_frame(), RigidTransform(S[i])))
             slider = plant.AddRigidBody(f"slider{i}", point_inertia(p[f"slider[{i + 1}].m"]))
-            rail = plant.AddJoint(PrismaticJoint(f"rail{i}", origin, slider.body_frame(), axis,
+            driven = slider  # the body the rail's joint moves: the drive of a two-body rail
+            if i in two_body:
+                driven = plant.AddRigidBody(f"drive{i}", point_inertia(mb.DRIVE_MASS))
+            rail = plant.AddJoint(PrismaticJoint(f"rail{i}", origin, driven.body_frame(), axis,
                                                  damping=float(damping[i])))
+            if i in two_body:
+                kind, size = two_body[i]
+                if kind == "compliance":
+                    k = 1.0 / size
+                    gap = plant.AddJoint(PrismaticJoint(
+                        f"gap{i}", driven.body_frame(), slider.body_frame(), axis,
+                        damping=2 * mb.DAMPING_RATIO * math.sqrt(k * mb.DRIVE_MASS)))
+                    plant.AddForceElement(PrismaticSpring(gap, 0.0, k))
+                else:
+                    plant.AddJoint(PrismaticJoint(f"gap{i}", driven.body_frame(), slider.body_frame(), axis,
+                                                  pos_lower_limit=-0.5 * size, pos_upper_limit=0.5 * size))
             actuator = plant.AddJointActuator(f"drive{i}", rail)
             actuator.set_default_rotor_inertia(float(rotor[i]))
             actuator.set_default_gear_ratio(1.0)
@@ -204,7 +228,8 @@ class Drake6Pus:
         self.steps = 0  # updates made
 
     def joints(self) -> tuple[np.ndarray, np.ndarray]:
-        """The rails' true positions [m] (the core's coordinates) and rates [m/s]."""
+        """The rails' true positions [m] (the core's coordinates) and rates [m/s] (a two-body
+        rail's drive's: what its encoder reads)."""
         q = np.array([r.get_translation(self.context) for r in self.rails])
         qd = np.array([r.get_translation_rate(self.context) for r in self.rails])
         return self.q0 + q, qd
@@ -338,7 +363,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     s = slice(k0, n)
     rec = Recording("6pus", ref.time[s] - ref.time[k0], rows["q"][s] - q0, rows["qd"][s], rows["tau"][s],
                     qref=ref.q[s] - q0, pose=rows["pose"][s], controller=ctrl.describe(),
-                    notes="Drake run (bench/foreign/drake_6pus.py)")
+                    parameters=mb.drive_declared(hidden), notes="Drake run (bench/foreign/drake_6pus.py)")
     if motion:
         return rec, truth, dict(true, t=ref.time, k0=k0)
     return rec, truth

@@ -10,7 +10,11 @@ the nominal model, or a PID) along the engine's exciting trajectory, with the bl
 configuration's sensor noise.  One effect per case is hidden in Drake's physics (joint
 damping, an actuator's rotor inertia, a payload body welded to the platform, a heavier
 platform, tilted gravity, a constant force on a rail) or in the drive around it (a command
-delay, an encoder offset, a dead zone); magnitudes are drawn from the ranges of
+delay, an encoder offset, a dead zone) or in a rail made two bodies (drake_6pus: a drive and
+the carriage on a relative prismatic joint, a compliance as Drake's ``PrismaticSpring``, a
+backlash as that joint's position limits; the backlash moved to a rail whose effort changes
+sign by mujoco_blind's ``gap_joint``, and a gap read as the offset b/2 it is on a one-signed
+rail counted right, as mujoco_blind does); magnitudes are drawn from the ranges of
 ``scenarios/blind/config.toml``.  Then ``--cables`` cases hide a cable of constant tension
 (0.2-0.5 N) from the platform to an anchor 0.2-0.5 m away, to be found by the engine's
 platform-force stage (its family ``cable``, tension and anchor within 15 %).
@@ -48,8 +52,10 @@ from cosim.core import Model  # noqa: E402
 from cosim.discrepancy import blind, diagnose  # noqa: E402
 from cosim.discrepancy.diagnosis import tied  # noqa: E402
 
-#: the effect types of a Drake case: its physics' (drake_6pus.PHYSICS) and the drive's
-TYPES = [e for e in mb.EFFECTS if e in d6.PHYSICS or e in ("actuator_delay", "encoder_offset", "dead_zone")]
+#: the effect types of a Drake case drawn first: its physics' (drake_6pus.PHYSICS) and the drive's,
+#: the two-body rails' (mujoco_blind.TWO_BODY) apart: they are drawn after the cables
+TYPES = [e for e in mb.EFFECTS if (e in d6.PHYSICS and e not in mb.TWO_BODY)
+         or e in ("actuator_delay", "encoder_offset", "dead_zone")]
 #: the range of a hidden cable's tension [N] (the rails' efforts are 0.5-0.9 N)
 CABLE_TENSION = (0.2, 0.5)
 
@@ -57,12 +63,15 @@ CABLE_TENSION = (0.2, 0.5)
 def plan(seed: int, n_clean: int, n_cable: int = 0):
     """The cases (type or None, value, joint 0-based, seed): every type of TYPES once, its
     magnitude and rail drawn from ``seed``, then ``n_cable`` platform cables (tension drawn
-    from CABLE_TENSION [N], the anchor by the case's seed), then ``n_clean`` clean ones."""
+    from CABLE_TENSION [N], the anchor by the case's seed), then the two-body rails
+    (mujoco_blind.TWO_BODY, drawn as TYPES), then ``n_clean`` clean ones."""
     cfg = blind.load_config()["effects"]["6pus"]
     rng = np.random.default_rng(seed)
     cases = [(effect, mb._draw(effect, cfg, rng), int(rng.integers(6)), seed * 100 + i)
              for i, effect in enumerate(TYPES)]
     cases += [("cable", float(rng.uniform(*CABLE_TENSION)), 0, seed * 100 + 40 + i) for i in range(n_cable)]
+    cases += [(effect, mb._draw(effect, cfg, rng), int(rng.integers(6)), seed * 100 + 30 + i)
+              for i, effect in enumerate(mb.TWO_BODY)]
     return cases + [(None, 0.0, 0, seed * 100 + 50 + i) for i in range(n_clean)]
 
 
@@ -124,9 +133,10 @@ def main(argv=None) -> int:
     ap.add_argument("--no-check", action="store_true", help="skip the model check")
     a = ap.parse_args(argv)
     only = None if a.only is None else set(a.only.split(","))
-    known = set(TYPES) | {"cable", "clean"}
+    known = set(TYPES) | set(mb.TWO_BODY) | {"cable", "clean"}
     if only and not only <= known:
-        ap.error(f"--only: unknown type(s) {', '.join(sorted(only - known))}; known: {', '.join(TYPES)}, cable, clean")
+        ap.error(f"--only: unknown type(s) {', '.join(sorted(only - known))}; "
+                 f"known: {', '.join(TYPES + list(mb.TWO_BODY))}, cable, clean")
     import importlib.metadata
 
     version = importlib.metadata.version("drake")
@@ -148,6 +158,8 @@ def main(argv=None) -> int:
         name = f"{effect or 'clean'}_{seed}"
         if only and (effect or "clean") not in only:
             continue
+        if effect == "backlash":
+            joint = mb.gap_joint(m, seed, a.duration, joint)
         t0 = time.perf_counter()
         rec, truth = d6.simulate(m, effect, value, joint, seed, a.duration, noise, a.controller)
         sim_wall = time.perf_counter() - t0
@@ -159,6 +171,9 @@ def main(argv=None) -> int:
         first = named[0] if named else None
         ok = (first == effect or (effect is not None and first is not None and effect in d.ties(first))) \
             if effect else first is None
+        same = mb.gap_as_offset(d, effect, value, joint)  # a gap on a one-signed rail read as its offset b/2
+        if same is not None:
+            ok = same
         if effect == "cable":
             ok, t_err, a_err = cable_found(d, truth)
             first = "platform cable" if ok else first
@@ -180,12 +195,14 @@ def main(argv=None) -> int:
             perr = abs(est[key] - truth[key]) / max(abs(truth[key] - nominal), 1e-12)
         rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1,
                      "named": named, "ok": bool(ok), "confident": confident, "param_error": perr,
+                     "same_physics": same is not None,
                      "truth": truth, "estimate": {k: est[k] for k in truth if k in est},
                      "conclusion": d.conclusion, "cpu_s": cpu, "simulation_s": sim_wall})
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
               f"{'ok ' if ok else 'MISS'}{' confident' if confident else '          '}  param err {pe:>8s}  "
-              f"(Drake {sim_wall:.0f} s, diagnosis {cpu:.1f} s CPU)", flush=True)
+              f"(Drake {sim_wall:.0f} s, diagnosis {cpu:.1f} s CPU)"
+              f"{'  [one-signed effort: the gap is an offset b/2]' if same is not None else ''}", flush=True)
     if not rows:
         return 0
     eff = [r for r in rows if r["hidden"] not in ("clean", "cable")]
@@ -197,7 +214,8 @@ def main(argv=None) -> int:
           f"{len(eff)} effect cases over {len(eff)} types, {len(clean)} clean; {time.perf_counter() - t_start:.0f} s")
     for step, r in check.items():
         print(f"model check at {step * 1e3:g} ms: effort error {r.min():.3f}-{r.max():.3f} x noise per rail")
-    print(f"right effect named first:  {sum(r['ok'] for r in eff)}/{len(eff)}")
+    print(f"right effect named first:  {sum(r['ok'] for r in eff)}/{len(eff)} (of which a gap read as the offset "
+          f"it is on a one-signed rail: {sum(r['same_physics'] and r['ok'] for r in eff)})")
     print(f"right and named with confidence: {sum(r['confident'] for r in eff)}/{len(eff)}")
     print(f"parameter within 15 %:     {sum(r['param_error'] < 0.15 for r in comparable)}/{len(comparable)} "
           f"comparable")

@@ -89,6 +89,8 @@ ALSO_RIGHT = {"coulomb": {"smooth_coulomb"}}
 #: rail's rotor inertia), the contact stiffness of the gap's faces [N/m] and the damping ratio of
 #: the contact and of the spring
 DRIVE_MASS, CONTACT_K, DAMPING_RATIO = 0.05, 1e6, 0.3
+#: the effects that make a rail two bodies (drive and carriage)
+TWO_BODY = ("backlash", "compliance")
 #: time constant [s] of a gap's faces made as MuJoCo's joint limit (``--gap-model mujoco``):
 #: MuJoCo's default is 0.02 (faces so soft that the effort deflects them by millimetres, a
 #: spring rather than a gap); 0.0005 gives faces deflecting a few um under the rail's effort
@@ -133,7 +135,7 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
         new = p["platform.m"] * (1 + value)
         xml = xml.replace(f'mass="{p["platform.m"]:.17g}"', f'mass="{new:.17g}"', 1)
         truth["platform.m"] = new
-    elif effect in ("backlash", "compliance"):
+    elif effect in TWO_BODY:
         # the rail's body becomes the drive (motor and encoder on its joint, a small mass) and the
         # carriage rides on it through a relative slide joint whose force is applied per step
         start = xml.index(f'<body name="slider{j}"')
@@ -281,7 +283,7 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     xml, truth = case_xml(m, hidden, rng, gap_model)
     model = mujoco.MjModel.from_xml_string(xml if edit is None else edit(xml))
     gaps = [(model.joint(f"gap{j}").qposadr[0], model.joint(f"gap{j}").dofadr[0], eff, val)
-            for eff, val, j in hidden if eff in ("backlash", "compliance")]
+            for eff, val, j in hidden if eff in TWO_BODY]
     substeps = SUBSTEPS
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -331,11 +333,32 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
     k0 = int(round(0.5 / DT))  # after the lead-in standstill, as the engine's own generator
     s = slice(k0, n)
     # written in MuJoCo's joint coordinates: zero at home (recorded = model - q0)
-    known = {f"rail[{j + 1}].rotor_inertia": DRIVE_MASS for eff, _, j in hidden if eff in ("backlash", "compliance")}
+    known = drive_declared(hidden)
     rec = Recording("6pus", ref.time[s] - ref.time[k0], rows["q"][s] - q0, rows["qd"][s], rows["tau"][s],
                     qref=ref.q[s] - q0, pose=rows["pose"][s], controller=ctrl.describe(), parameters=known,
                     notes="MuJoCo run (bench/foreign/mujoco_blind.py)")
     return rec, truth
+
+
+def drive_declared(hidden) -> dict:
+    """The parameters a recording's sidecar declares for its two-body rails (``hidden``:
+    (type, value, joint) each): the drive body's mass DRIVE_MASS [kg] as the rail's rotor
+    inertia, as a datasheet would give the motor's."""
+    return {f"rail[{j + 1}].rotor_inertia": DRIVE_MASS for eff, _, j in hidden if eff in TWO_BODY}
+
+
+def gap_as_offset(d, effect, value: float, joint: int):
+    """A backlash of total gap ``value`` [m] on rail ``joint`` (0-based) whose effort keeps one
+    sign is a constant offset of b/2 on that recording: None unless diagnosis ``d`` names an
+    encoder offset first with the backlash listed as not excited on that rail, else whether the
+    offset found is b/2 within 10 % (right: the carriage rests on one face, the side the effort
+    pushes to giving the sign)."""
+    named = d.named()
+    if not (effect == "backlash" and named and named[0] == "encoder_offset"
+            and any(x.startswith("backlash") and f"joint {joint + 1})" in x for x in d.not_excited)):
+        return None
+    found = d.plant_parameters().get(f"rail[{joint + 1}].encoder_offset", 0.0)
+    return bool(abs(abs(found) - value / 2) < 0.1 * value / 2)
 
 
 def gap_force(effect: str, value: float, gap: float, rate: float) -> float:
@@ -502,12 +525,9 @@ def main(argv=None) -> int:
               or (effect is not None and first is not None and effect in d.ties(first)))
         # a gap on a joint whose effort keeps one sign is a constant offset of b/2 on this recording:
         # right when the engine says so (offset b/2 within 10 %, backlash listed as not excited there)
-        same = (effect == "backlash" and first == "encoder_offset"
-                and any(x.startswith("backlash") and f"joint {joint + 1})" in x for x in d.not_excited))
-        if same:
-            key_off = f"rail[{joint + 1}].encoder_offset"
-            # the face it rests on, so the sign of the offset, is the side the effort pushes to
-            ok = abs(abs(d.plant_parameters().get(key_off, 0.0)) - value / 2) < 0.1 * value / 2
+        same = gap_as_offset(d, effect, value, joint)
+        if same is not None:
+            ok = same
         stand_in = False
         if a.hold_out and effect:
             ok = bool(d.unexplained)  # its type is not in the library: the structure must be reported
@@ -535,7 +555,7 @@ def main(argv=None) -> int:
                  if p in stated and np.isfinite(stated[p]["ci95"])]
         rows.append({"case": name, "hidden": effect or "clean", "value": value, "joint": joint + 1, "holds": holds,
                      "named": first or "none", "ok": bool(ok if effect else first is None), "param_error": perr,
-                     "same_physics": bool(same), "stand_in": bool(stand_in), "confident": confident,
+                     "same_physics": same is not None, "stand_in": bool(stand_in), "confident": confident,
                      "confident_before": confident_before, "confident_elsewhere": confident_elsewhere,
                      "warnings": d.warnings, "unexplained": [e["channel"] for e in d.unexplained],
                      "conclusion": d.conclusion, "wall_s": wall,
@@ -544,7 +564,7 @@ def main(argv=None) -> int:
         pe = "-" if perr is None else f"{100 * perr:.1f} %"
         print(f"{name:22s} hidden {effect or 'clean':15s} named {first or 'none':15s} "
               f"{'ok ' if rows[-1]['ok'] else 'MISS'}  param err {pe:>8s}  interval holds {sum(holds)}/{len(holds)}  ({wall:.1f} s)"
-              f"{'  [one-signed effort: the gap is an offset b/2]' if same else ''}"
+              f"{'  [one-signed effort: the gap is an offset b/2]' if same is not None else ''}"
               f"{'  [held out: named its same-physics stand-in at the right size]' if stand_in else ''}", flush=True)
     if a.two:
         pairs = [r for r in rows if "+" in r["hidden"]]
