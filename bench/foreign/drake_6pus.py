@@ -161,7 +161,7 @@ class Drake6Pus:
                 two_body[j] = (effect, value)
                 truth[mb.EFFECTS[effect][1].format(j=j + 1)] = value
             elif effect == "payload":
-                off = np.array([rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02), rng.uniform(0.005, 0.02)])
+                off = np.array(mb.payload_offset(rng))
                 payloads.append((value, off))
                 truth.update({"payload.m": value, "payload.x": off[0], "payload.y": off[1], "payload.z": off[2]})
             elif effect == "platform_mass":

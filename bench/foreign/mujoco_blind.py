@@ -117,6 +117,12 @@ def case_xml(m: Model, hidden: list, rng, gap_model: str = "applied") -> tuple[s
     return xml, truth
 
 
+def payload_offset(rng) -> list:
+    """A hidden payload's point on the platform [m] (platform frame): within 2 cm of the centre
+    in x and y, 5-20 mm above it."""
+    return [rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02), rng.uniform(0.005, 0.02)]
+
+
 def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict, gap_model: str = "applied") -> str:
     p = m.params()
     j = joint
@@ -126,7 +132,7 @@ def _hide(xml: str, m: Model, effect, value: float, joint: int, rng, truth: dict
         xml = xml.replace(rail, f'{rail} {attr}="{value:.17g}"')
         truth[EFFECTS[effect][1].format(j=j + 1)] = value
     elif effect == "payload":
-        off = [rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02), rng.uniform(0.005, 0.02)]
+        off = payload_offset(rng)
         body = (f'\n      <body name="payload" pos="{off[0]:.17g} {off[1]:.17g} {off[2]:.17g}">'
                 f'<inertial pos="0 0 0" mass="{value:.17g}" diaginertia="1e-9 1e-9 1e-9"/></body>')
         xml = xml.replace("<freejoint/>", "<freejoint/>" + body)
