@@ -21,8 +21,10 @@ the body's, as MuJoCo's), ``model.body("platform").id``, ``body_jntadr``, ``jnt_
 what it writes in ``xfrc_applied`` as a spatial force on the platform at its origin (its centre
 of mass, as MuJoCo's), and a change it makes to ``opt.gravity`` as the uniform field's change on
 every body (m dg at each body's centre of mass).  MuJoCo's hook reads the platform's pose of the
-previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  The kinds
-built by editing MuJoCo's model (:data:`NOT_PORTED`, with the reason) are not run.
+previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  Three kinds
+MuJoCo builds by editing its model (:data:`BUILT`: the tendon, the coupling damper, the coiled
+cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`); the other model
+edits (:data:`NOT_PORTED`, with the reason) are not run.
 
 Seeds: ``--first-seed`` + the kind's index in its set, clean cases ``--first-seed`` + 90 +
 (development seeds 91000-91999: 91000 the first set, 91100 the second, 91200 the third, 91300 the
@@ -44,16 +46,18 @@ import mujoco_unlisted as mu  # noqa: E402
 
 #: the kinds built by editing MuJoCo's model, not run on Drake: what each needs of MuJoCo
 NOT_PORTED = {
-    "tendon_slack": "MuJoCo's spatial tendon with a length limit (its soft constraint)",
     "soft_stop": "MuJoCo's frictionless contact of a sphere with a plane (solref)",
     "slosh": "a body on a damped ball joint in the platform",
     "ball_joint_friction": "MuJoCo's frictionloss in a leg's ball joint",
     "platform_tmd": "a body on a sprung slide joint in the platform",
     "loose_payload": "a body on a slide joint with limits and frictionloss in the platform",
     "flexure_joint": "stiffness and damping of a leg's ball joint",
-    "coupling_damper": "MuJoCo's fixed tendon with damping between two rails",
-    "coiled_cord": "MuJoCo's spatial tendon with stiffness from a carriage to the platform",
 }
+#: the kinds MuJoCo builds by editing its model whose force Drake gets as a hook of its state,
+#: from the same draw (the kind's truth): see :func:`drake_hook`
+BUILT = ("tendon_slack", "coupling_damper", "coiled_cord")
+#: the damping of the tendon's taut stretch [N s/m] (MuJoCo's solreflimit "-k -2")
+TENDON_DAMPING = 2.0
 #: the kinds run on Drake (per set, in the set's order): the hook-based ones
 PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
@@ -121,6 +125,76 @@ def as_load(hook):
     return load
 
 
+def drake_hook(kind, truth, m):
+    """The force of a :data:`BUILT` kind, which MuJoCo's case builds by editing its model, as a
+    hook of Drake's state (:func:`as_load`), from the kind's drawn ``truth``:
+
+    * ``coupling_damper``: -c (qd_j - qd_k) on rail j, the opposite on rail k (MuJoCo's fixed
+      tendon with damping);
+    * ``tendon_slack``: a tension k (d - L) + b dd/dt, never negative, while the distance d from
+      the platform's origin to the anchor exceeds the slack length L, along that line (MuJoCo's
+      length-limited spatial tendon, its soft limit's stiffness k and damping b,
+      :data:`TENDON_DAMPING`);
+    * ``coiled_cord``: a tension k (L - L0) along the cord from carriage j's top (5 mm above the
+      rail's point, moving along the rail's axis) to the tie point of the platform, on the
+      platform (a force and its moment) and on carriage j (its component along the rail), as
+      MuJoCo's spatial tendon with stiffness and spring length."""
+    if kind == "coupling_damper":
+        j, k, c = truth["rail"] - 1, truth["other_rail"] - 1, truth["damping"]
+
+        def damper(model, data, t, q, qd, u):
+            f = np.zeros(len(q))
+            f[j] = -c * (qd[j] - qd[k])
+            f[k] = -f[j]
+            return f
+        return damper
+    if kind == "tendon_slack":
+        anchor, L, k = np.asarray(truth["anchor"], float), truth["slack_length"], truth["stiffness"]
+
+        def tendon(model, data, t, q, qd, u):
+            b = model.body("platform").id
+            d = anchor - data.xpos[b]
+            dist = float(np.linalg.norm(d))
+            if dist > L:
+                rate = -float(d @ data.qvel[:3]) / dist  # the stretch's rate
+                data.xfrc_applied[b, :3] = max(k * (dist - L) + TENDON_DAMPING * rate, 0.0) * d / dist
+            else:
+                data.xfrc_applied[b, :3] = 0.0
+        return tendon
+    if kind == "coiled_cord":
+        p = m.params()
+        j = truth["carriage"] - 1
+        axis = np.array([p[f"rail[{j + 1}].s{c}"] for c in "xyz"])
+        q0 = np.asarray(m.ik(m.home()))
+        base = np.asarray(m.leg_points(m.home())[1][j]) + np.array([0.0, 0.0, 0.005])
+        tie, k, L0 = np.asarray(truth["tie"], float), truth["stiffness"], truth["rest_length"]
+
+        def cord(model, data, t, q, qd, u):
+            b = model.body("platform").id
+            R = data.xmat[b].reshape(3, 3)
+            arm = R @ tie
+            end = base + (q[j] - q0[j]) * axis
+            d = end - (data.xpos[b] + arm)  # from the tie to the carriage
+            length = float(np.linalg.norm(d))
+            pull = k * (length - L0) * d / length  # on the platform, towards the carriage when stretched
+            data.xfrc_applied[b, :3] = pull
+            data.xfrc_applied[b, 3:] = np.cross(arm, pull)
+            f = np.zeros(len(q))
+            f[j] = -float(pull @ axis)
+            return f
+        return cord
+    raise ValueError(f"{kind} is not built on Drake")
+
+
+def drawn(kind, rng, m, mo, scale=1.0):
+    """``mujoco_unlisted.draw`` with a :data:`BUILT` kind's model edit replaced by its force as a
+    hook of Drake's state (:func:`drake_hook`), from the same draw."""
+    hook, edit, truth, key, joint = mu.draw(kind, rng, m, mo, scale)
+    if kind in BUILT:
+        hook, edit = drake_hook(kind, truth, m), None
+    return hook, edit, truth, key, joint
+
+
 def _drake(m, seed, noise, hook, edit):
     """The case's recording on Drake (drake_6pus's :func:`simulate`), the hook as a load."""
     import drake_6pus as d6
@@ -131,7 +205,7 @@ def _drake(m, seed, noise, hook, edit):
 
 
 def _run(job):
-    return mu.run_case(job, _drake)
+    return mu.run_case(job, _drake, drawn)
 
 
 def main(argv=None) -> int:

@@ -416,11 +416,12 @@ def _run(job):
     return run_case(job, _mujoco)
 
 
-def run_case(job, simulate) -> dict:
+def run_case(job, simulate, drawn=None) -> dict:
     """The judged row of one case ``job`` (kind, seed, out, scale, capture, recordings: as
-    :func:`jobs` makes them): the mechanism drawn (:func:`draw`), its recording made by
-    ``simulate(m, seed, noise, hook, edit)`` (a :class:`cosim.recording.Recording` of
-    ``DURATION`` s after ``LEAD``) and written, then diagnosed with the defaults."""
+    :func:`jobs` makes them): the mechanism drawn (``drawn``, :func:`draw`'s signature; default
+    :func:`draw`), its recording made by ``simulate(m, seed, noise, hook, edit)`` (a
+    :class:`cosim.recording.Recording` of ``DURATION`` s after ``LEAD``) and written, then
+    diagnosed with the defaults."""
     import mujoco_blind as mb
 
     from cosim.core import Model
@@ -431,7 +432,7 @@ def run_case(job, simulate) -> dict:
     hook = edit = joint = None
     truth, key = {}, None
     if kind != "clean":
-        hook, edit, truth, key, joint = draw(kind, np.random.default_rng(seed), m, motion(m, seed), scale)
+        hook, edit, truth, key, joint = (drawn or draw)(kind, np.random.default_rng(seed), m, motion(m, seed), scale)
     noise = blind.load_config()["noise"]["6pus"]
     name = case_name(kind, seed, scale)
     csv = Path(recordings or out) / f"{name}.csv"
