@@ -124,9 +124,14 @@ class Drake6Pus:
         Receives each hidden effect's answer under the core's parameter names.
     time_step : float
         Drake's discrete period [s].
+    body : (float, callable), optional
+        A body the platform carries on a joint of its own: its mass [kg], taken off the
+        platform's (as a model edit of MuJoCo's case takes it), and ``add(plant, platform)``,
+        which adds the body and its joint before the plant is finalised.
     """
 
-    def __init__(self, m: Model, hidden=(), rng=None, truth: dict | None = None, time_step: float = TIME_STEP):
+    def __init__(self, m: Model, hidden=(), rng=None, truth: dict | None = None, time_step: float = TIME_STEP,
+                 body=None):
         from pydrake.math import RigidTransform, RotationMatrix
         from pydrake.multibody.plant import DiscreteContactApproximation, MultibodyPlant
         from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, PrismaticSpring,
@@ -178,6 +183,8 @@ class Drake6Pus:
                 g = np.array([gn * math.sin(tilt) * math.cos(az), gn * math.sin(tilt) * math.sin(az),
                               -gn * math.cos(tilt)])
                 truth.update({"gravity.x": g[0], "gravity.y": g[1]})
+        if body is not None:
+            platform_m -= body[0]
         platform = plant.AddRigidBody("platform", SpatialInertia.MakeFromCentralInertia(
             platform_m, np.zeros(3), RotationalInertia(p["platform.Ixx"], p["platform.Iyy"], p["platform.Izz"])))
         for k, (mass, off) in enumerate(payloads):
@@ -212,6 +219,8 @@ class Drake6Pus:
             plant.AddJoint(BallRpyJoint(f"ball{i}", slider.body_frame(), leg.body_frame()))
             plant.AddBallConstraint(leg, a, platform, np.array([p[f"leg[{i + 1}].p{c}"] for c in "xyz"]))
             self.rails.append(rail)
+        if body is not None:
+            body[1](plant, platform)
         plant.mutable_gravity_field().set_gravity_vector(g)
         plant.SetDefaultFloatingBaseBodyPose(platform, RigidTransform(RotationMatrix(rotation_xyz(*x0[3:])), x0[:3]))
         plant.Finalize()
@@ -294,7 +303,7 @@ def spatial_force(body, torque, force, at=None):
 
 
 def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gravity", physics: Model | None = None,
-             time_step: float = TIME_STEP, motion: bool = False, load=None):
+             time_step: float = TIME_STEP, motion: bool = False, load=None, body=None):
     """One case on Drake: (Recording in the plant's joint coordinates, zero at home, truth).
 
     Parameters
@@ -322,11 +331,13 @@ def simulate(m: Model, effect, value, joint, seed, duration, noise, kind="pd_gra
         period (n rows), ``"t"`` [s] the control instants, ``"k0"`` the first recorded row.
     load : callable, optional
         Loads renewed at every Drake step from the plant's state (:meth:`Drake6Pus.step`).
+    body : (float, callable), optional
+        A body the platform carries on a joint of its own (:class:`Drake6Pus`).
     """
     rng = np.random.default_rng(seed)
     hidden = effect if isinstance(effect, list) else ([] if effect is None else [(effect, value, joint)])
     truth = {}
-    sim = Drake6Pus(m if physics is None else physics, hidden, rng, truth, time_step)
+    sim = Drake6Pus(m if physics is None else physics, hidden, rng, truth, time_step, body=body)
     substeps = int(round(mb.DT / time_step))
     drive = mb.drive_effects(hidden, truth, step=mb.DT / substeps)
     q0 = m.ik(m.home())

@@ -23,8 +23,9 @@ of mass, as MuJoCo's), and a change it makes to ``opt.gravity`` as the uniform f
 every body (m dg at each body's centre of mass).  MuJoCo's hook reads the platform's pose of the
 previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  Three kinds
 MuJoCo builds by editing its model (:data:`BUILT`: the tendon, the coupling damper, the coiled
-cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`); the other model
-edits (:data:`NOT_PORTED`, with the reason) are not run.
+cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`), two (:data:`BODIES`:
+the pendulum, the tuned mass damper) as the same body on the same joint in Drake's plant
+(:func:`drake_body`); the other model edits (:data:`NOT_PORTED`, with the reason) are not run.
 
 Seeds: ``--first-seed`` + the kind's index in its set, clean cases ``--first-seed`` + 90 +
 (development seeds 91000-91999: 91000 the first set, 91100 the second, 91200 the third, 91300 the
@@ -47,15 +48,17 @@ import mujoco_unlisted as mu  # noqa: E402
 #: the kinds built by editing MuJoCo's model, not run on Drake: what each needs of MuJoCo
 NOT_PORTED = {
     "soft_stop": "MuJoCo's frictionless contact of a sphere with a plane (solref)",
-    "slosh": "a body on a damped ball joint in the platform",
     "ball_joint_friction": "MuJoCo's frictionloss in a leg's ball joint",
-    "platform_tmd": "a body on a sprung slide joint in the platform",
-    "loose_payload": "a body on a slide joint with limits and frictionloss in the platform",
+    "loose_payload": "a body on a slide joint with limits and frictionloss in the platform (Drake's joints "
+                     "have no dry friction)",
     "flexure_joint": "stiffness and damping of a leg's ball joint",
 }
 #: the kinds MuJoCo builds by editing its model whose force Drake gets as a hook of its state,
 #: from the same draw (the kind's truth): see :func:`drake_hook`
 BUILT = ("tendon_slack", "coupling_damper", "coiled_cord")
+#: the kinds MuJoCo builds as a body on a joint in the platform, built as the same body and joint
+#: in Drake's plant from the same draw: see :func:`drake_body`
+BODIES = ("slosh", "platform_tmd")
 #: the damping of the tendon's taut stretch [N s/m] (MuJoCo's solreflimit "-k -2")
 TENDON_DAMPING = 2.0
 #: the kinds run on Drake (per set, in the set's order): the hook-based ones
@@ -186,22 +189,66 @@ def drake_hook(kind, truth, m):
     raise ValueError(f"{kind} is not built on Drake")
 
 
+def drake_body(kind, truth):
+    """The body of a :data:`BODIES` kind, which MuJoCo's case adds to the platform by editing its
+    model, as drake_6pus's ``body`` (its mass, taken off the platform's, and the function adding
+    it to Drake's plant), from the kind's drawn ``truth``:
+
+    * ``slosh``: a point mass m_b hung L below a pivot L above the platform's origin on a ball
+      joint (Drake's roll-pitch-yaw ball joint) with the angular damping c = 2 zeta m_b L^2
+      sqrt(g / L) of MuJoCo's ball joint;
+    * ``platform_tmd``: a point mass m_b on a slide joint along the guide (the platform's frame)
+      with a spring k = m_b w0^2 (Drake's PrismaticSpring) whose rest offset m_b g a_z / k holds it
+      at home, and the joint's damping 2 zeta m_b w0, as MuJoCo's slide joint."""
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, PrismaticSpring,
+                                        RotationalInertia, SpatialInertia)
+
+    mass = truth["mass"]
+    tiny = RotationalInertia(1e-9, 1e-9, 1e-9)
+    if kind == "slosh":
+        L = truth["length"]
+        c = 2 * truth["damping_ratio"] * mass * L * L * np.sqrt(9.81 / L)
+
+        def add(plant, platform):
+            bob = plant.AddRigidBody("bob", SpatialInertia.MakeFromCentralInertia(mass, np.array([0.0, 0.0, -L]), tiny))
+            pivot = plant.AddFrame(FixedOffsetFrame("pivot", platform.body_frame(), RigidTransform([0.0, 0.0, L])))
+            plant.AddJoint(BallRpyJoint("slosh", pivot, bob.body_frame(), damping=c))
+        return mass, add
+    if kind == "platform_tmd":
+        w0 = 2 * np.pi * truth["frequency"]
+        axis = np.asarray(truth["axis"], float)
+        k, c = mass * w0 * w0, 2 * truth["damping_ratio"] * mass * w0
+
+        def add(plant, platform):
+            tmd = plant.AddRigidBody("tmd", SpatialInertia.MakeFromCentralInertia(mass, np.zeros(3), tiny))
+            guide = plant.AddJoint(PrismaticJoint("tmd", platform.body_frame(), tmd.body_frame(), axis, damping=c))
+            plant.AddForceElement(PrismaticSpring(guide, mass * 9.81 * axis[2] / k, k))
+        return mass, add
+    raise ValueError(f"{kind} is not a body on Drake")
+
+
 def drawn(kind, rng, m, mo, scale=1.0):
     """``mujoco_unlisted.draw`` with a :data:`BUILT` kind's model edit replaced by its force as a
-    hook of Drake's state (:func:`drake_hook`), from the same draw."""
+    hook of Drake's state (:func:`drake_hook`), a :data:`BODIES` kind's by its body in Drake's
+    plant (:func:`drake_body`, as the edit), from the same draw."""
     hook, edit, truth, key, joint = mu.draw(kind, rng, m, mo, scale)
     if kind in BUILT:
         hook, edit = drake_hook(kind, truth, m), None
+    elif kind in BODIES:
+        hook, edit = None, drake_body(kind, truth)
     return hook, edit, truth, key, joint
 
 
 def _drake(m, seed, noise, hook, edit):
-    """The case's recording on Drake (drake_6pus's :func:`simulate`), the hook as a load."""
+    """The case's recording on Drake (drake_6pus's :func:`simulate`), the hook as a load, the
+    edit a body on the platform (:func:`drake_body`)."""
     import drake_6pus as d6
 
-    if edit is not None:
+    if edit is not None and not isinstance(edit, tuple):
         raise ValueError("a kind that edits MuJoCo's model does not run on Drake")
-    return d6.simulate(m, None, 0.0, 0, seed, mu.DURATION, noise, load=None if hook is None else as_load(hook))[0]
+    return d6.simulate(m, None, 0.0, 0, seed, mu.DURATION, noise, load=None if hook is None else as_load(hook),
+                       body=edit)[0]
 
 
 def _run(job):

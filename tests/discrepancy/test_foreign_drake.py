@@ -69,8 +69,9 @@ def test_a_cable_on_drakes_platform_is_found_as_the_engines_platform_cable(tmp_p
 
 def _changes(m, seed, duration, quiet, kinds):
     """Per kind, the efforts' change from a clean noise-free run on Drake and on MuJoCo, the
-    mechanism drawn once per simulator: Drake's through drake_unlisted's hook (a model edit of
-    MuJoCo's case built as a force of Drake's state), MuJoCo's as its case runs it."""
+    mechanism drawn once per simulator: Drake's through drake_unlisted's hook or body (a model
+    edit of MuJoCo's case built as a force of Drake's state or as the same body), MuJoCo's as its
+    case runs it."""
     import drake_unlisted as du
     import mujoco_unlisted as mu
 
@@ -80,8 +81,9 @@ def _changes(m, seed, duration, quiet, kinds):
     for kind in kinds:
         mo = mu.motion(m, seed)
         hook, edit = mu.draw(kind, np.random.default_rng(seed), m, mo)[:2]
-        on_drake = d6.simulate(m, None, 0.0, 0, seed, duration, quiet,
-                               load=du.as_load(du.drawn(kind, np.random.default_rng(seed), m, mo)[0]))[0].tau
+        drake_hook, body = du.drawn(kind, np.random.default_rng(seed), m, mo)[:2]
+        on_drake = d6.simulate(m, None, 0.0, 0, seed, duration, quiet, body=body,
+                               load=None if drake_hook is None else du.as_load(drake_hook))[0].tau
         on_mujoco = mb.simulate(m, None, 0.0, 0, seed, duration, quiet, hook=hook, edit=edit)[0].tau
         out[kind] = (on_drake - clean_drake, on_mujoco - clean_mujoco)
     return out
@@ -97,11 +99,12 @@ def test_an_unlisted_mechanisms_hook_acts_on_drakes_plant_as_on_mujocos():
     # within 0.2 mN of each other.  Two kinds MuJoCo builds by editing its model, built on Drake as
     # forces of its state (drake_unlisted.drake_hook): a damper between rails 1 and 2 (MuJoCo's
     # fixed tendon; 0.11 N, within 0.14 mN) and a coiled cord from carriage 2 to the platform
-    # (MuJoCo's spatial tendon with stiffness; 6.4 mN, within 5 uN)
+    # (MuJoCo's spatial tendon with stiffness; 6.4 mN, within 5 uN); and a pendulum hung in the
+    # platform, the same body on Drake's ball joint (37 mN, within 10 uN)
     m = Model("6pus")
     quiet = {k: [0.0] * len(v) if isinstance(v, list) else 0.0 for k, v in NOISE.items()}
     rms = lambda x: np.sqrt(np.mean(np.square(x), axis=0))  # noqa: E731
-    changes = _changes(m, 91998, 1.5, quiet, ("gyro_spindle", "pulse_pump", "coupling_damper", "coiled_cord"))
+    changes = _changes(m, 91998, 1.5, quiet, ("gyro_spindle", "pulse_pump", "coupling_damper", "coiled_cord", "slosh"))
     for kind, (on_drake, on_mujoco) in changes.items():
         assert rms(on_mujoco).max() > 0.005, (kind, rms(on_mujoco))
         assert rms(on_drake - on_mujoco).max() < 0.02 * rms(on_mujoco).max(), (kind, rms(on_drake), rms(on_mujoco))
