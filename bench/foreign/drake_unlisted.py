@@ -21,9 +21,9 @@ the body's, as MuJoCo's), ``model.body("platform").id``, ``body_jntadr``, ``jnt_
 what it writes in ``xfrc_applied`` as a spatial force on the platform at its origin (its centre
 of mass, as MuJoCo's), and a change it makes to ``opt.gravity`` as the uniform field's change on
 every body (m dg at each body's centre of mass).  MuJoCo's hook reads the platform's pose of the
-previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  Three kinds
-MuJoCo builds by editing its model (:data:`BUILT`: the tendon, the coupling damper, the coiled
-cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`), two (:data:`BODIES`:
+previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  Four kinds
+MuJoCo builds by editing its model (:data:`BUILT`: the tendon, the soft pad, the coupling damper,
+the coiled cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`), two (:data:`BODIES`:
 the pendulum, the tuned mass damper) as the same body on the same joint in Drake's plant
 (:func:`drake_body`); the other model edits (:data:`NOT_PORTED`, with the reason) are not run.
 
@@ -47,7 +47,6 @@ import mujoco_unlisted as mu  # noqa: E402
 
 #: the kinds built by editing MuJoCo's model, not run on Drake: what each needs of MuJoCo
 NOT_PORTED = {
-    "soft_stop": "MuJoCo's frictionless contact of a sphere with a plane (solref)",
     "ball_joint_friction": "MuJoCo's frictionloss in a leg's ball joint",
     "loose_payload": "a body on a slide joint with limits and frictionloss in the platform (Drake's joints "
                      "have no dry friction)",
@@ -55,12 +54,14 @@ NOT_PORTED = {
 }
 #: the kinds MuJoCo builds by editing its model whose force Drake gets as a hook of its state,
 #: from the same draw (the kind's truth): see :func:`drake_hook`
-BUILT = ("tendon_slack", "coupling_damper", "coiled_cord")
+BUILT = ("tendon_slack", "soft_stop", "coupling_damper", "coiled_cord")
 #: the kinds MuJoCo builds as a body on a joint in the platform, built as the same body and joint
 #: in Drake's plant from the same draw: see :func:`drake_body`
 BODIES = ("slosh", "platform_tmd")
 #: the damping of the tendon's taut stretch [N s/m] (MuJoCo's solreflimit "-k -2")
 TENDON_DAMPING = 2.0
+#: the damping of the pad's penetration [N s/m] (MuJoCo's solref "-k -3")
+PAD_DAMPING = 3.0
 #: the kinds run on Drake (per set, in the set's order): the hook-based ones
 PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
@@ -138,6 +139,10 @@ def drake_hook(kind, truth, m):
       the platform's origin to the anchor exceeds the slack length L, along that line (MuJoCo's
       length-limited spatial tendon, its soft limit's stiffness k and damping b,
       :data:`TENDON_DAMPING`);
+    * ``soft_stop``: a push k p + b dp/dt, never negative, normal to the pad while the platform's
+      origin is p past it along the drawn axis and side (MuJoCo's frictionless contact of a
+      sphere on the platform with a plane, its solref stiffness k and damping b,
+      :data:`PAD_DAMPING`);
     * ``coiled_cord``: a tension k (L - L0) along the cord from carriage j's top (5 mm above the
       rail's point, moving along the rail's axis) to the tie point of the platform, on the
       platform (a force and its moment) and on carriage j (its component along the rail), as
@@ -164,6 +169,17 @@ def drake_hook(kind, truth, m):
             else:
                 data.xfrc_applied[b, :3] = 0.0
         return tendon
+    if kind == "soft_stop":
+        e = np.zeros(3)
+        e["xyz".index(truth["axis"])] = truth["side"]
+        at, k = truth["at"], truth["stiffness"]
+
+        def pad(model, data, t, q, qd, u):
+            b = model.body("platform").id
+            depth = float(e @ data.xpos[b]) - at
+            push = max(k * depth + PAD_DAMPING * float(e @ data.qvel[:3]), 0.0) if depth > 0 else 0.0
+            data.xfrc_applied[b, :3] = -push * e
+        return pad
     if kind == "coiled_cord":
         p = m.params()
         j = truth["carriage"] - 1

@@ -121,3 +121,29 @@ def test_drakes_prismatic_spring_between_drive_and_carriage_is_found_as_the_rail
     assert d.named()[0] == "compliance", d.conclusion
     est = d.plant_parameters()["rail[2].compliance"]
     assert abs(est - truth["rail[2].compliance"]) < 0.15 * truth["rail[2].compliance"], (est, truth)
+
+
+def test_a_soft_pad_on_drake_pushes_the_platform_back_only_past_the_pad():
+    # drake_unlisted.drake_hook's soft pad (MuJoCo's sphere-on-plane contact as a force of Drake's
+    # state): 250 N/m past the pad at z = 0.31 m on the +z side; 2 mm past it and still, a push of
+    # 0.5 N down; moving in at 0.1 m/s, 0.3 N more; 1 mm short of it, or moving out faster
+    # than the spring pushes, nothing
+    from types import SimpleNamespace
+
+    import drake_unlisted as du
+
+    pad = du.drake_hook("soft_stop", {"axis": "z", "side": 1.0, "at": 0.31, "stiffness": 250.0}, Model("6pus"))
+    model = SimpleNamespace(body=lambda name: SimpleNamespace(id=1))
+
+    def push(z, vz):
+        data = SimpleNamespace(xpos=np.array([[0, 0, 0], [0.01, -0.02, z]], float),
+                               xmat=np.tile(np.eye(3).ravel(), (2, 1)),
+                               qvel=np.array([0, 0, vz, 0, 0, 0], float), xfrc_applied=np.zeros((2, 6)))
+        pad(model, data, 0.0, np.zeros(6), np.zeros(6), np.zeros(6))
+        return data.xfrc_applied[1]
+
+    assert np.allclose(push(0.312, 0.0), [0, 0, -0.5, 0, 0, 0])
+    assert np.allclose(push(0.312, 0.1), [0, 0, -0.5 - du.PAD_DAMPING * 0.1, 0, 0, 0])
+    assert np.allclose(push(0.309, 0.0), 0.0)
+    assert np.allclose(push(0.312, -1.0), 0.0)
+
