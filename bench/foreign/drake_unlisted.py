@@ -58,11 +58,7 @@ BUILT = ("tendon_slack", "soft_stop", "coupling_damper", "coiled_cord")
 #: the kinds MuJoCo builds as a body on a joint in the platform, built as the same body and joint
 #: in Drake's plant from the same draw: see :func:`drake_body`
 BODIES = ("slosh", "platform_tmd")
-#: the damping of the tendon's taut stretch [N s/m] (MuJoCo's solreflimit "-k -2")
-TENDON_DAMPING = 2.0
-#: the damping of the pad's penetration [N s/m] (MuJoCo's solref "-k -3")
-PAD_DAMPING = 3.0
-#: the kinds run on Drake (per set, in the set's order): the hook-based ones
+#: the kinds run on Drake (per set, in the set's order): all but NOT_PORTED
 PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
 FIRST_SEED = {1: 91000, 2: 91100, 3: 91200, 4: 91300}
@@ -138,11 +134,11 @@ def drake_hook(kind, truth, m):
     * ``tendon_slack``: a tension k (d - L) + b dd/dt, never negative, while the distance d from
       the platform's origin to the anchor exceeds the slack length L, along that line (MuJoCo's
       length-limited spatial tendon, its soft limit's stiffness k and damping b,
-      :data:`TENDON_DAMPING`);
+      :data:`mujoco_unlisted.TENDON_DAMPING`);
     * ``soft_stop``: a push k p + b dp/dt, never negative, normal to the pad while the platform's
       origin is p past it along the drawn axis and side (MuJoCo's frictionless contact of a
       sphere on the platform with a plane, its solref stiffness k and damping b,
-      :data:`PAD_DAMPING`);
+      :data:`mujoco_unlisted.PAD_DAMPING`);
     * ``coiled_cord``: a tension k (L - L0) along the cord from carriage j's top (5 mm above the
       rail's point, moving along the rail's axis) to the tie point of the platform, on the
       platform (a force and its moment) and on carriage j (its component along the rail), as
@@ -165,7 +161,7 @@ def drake_hook(kind, truth, m):
             dist = float(np.linalg.norm(d))
             if dist > L:
                 rate = -float(d @ data.qvel[:3]) / dist  # the stretch's rate
-                data.xfrc_applied[b, :3] = max(k * (dist - L) + TENDON_DAMPING * rate, 0.0) * d / dist
+                data.xfrc_applied[b, :3] = max(k * (dist - L) + mu.TENDON_DAMPING * rate, 0.0) * d / dist
             else:
                 data.xfrc_applied[b, :3] = 0.0
         return tendon
@@ -177,7 +173,7 @@ def drake_hook(kind, truth, m):
         def pad(model, data, t, q, qd, u):
             b = model.body("platform").id
             depth = float(e @ data.xpos[b]) - at
-            push = max(k * depth + PAD_DAMPING * float(e @ data.qvel[:3]), 0.0) if depth > 0 else 0.0
+            push = max(k * depth + mu.PAD_DAMPING * float(e @ data.qvel[:3]), 0.0) if depth > 0 else 0.0
             data.xfrc_applied[b, :3] = -push * e
         return pad
     if kind == "coiled_cord":
@@ -185,7 +181,7 @@ def drake_hook(kind, truth, m):
         j = truth["carriage"] - 1
         axis = np.array([p[f"rail[{j + 1}].s{c}"] for c in "xyz"])
         q0 = np.asarray(m.ik(m.home()))
-        base = np.asarray(m.leg_points(m.home())[1][j]) + np.array([0.0, 0.0, 0.005])
+        base = np.asarray(m.leg_points(m.home())[1][j]) + np.asarray(truth["top"], float)
         tie, k, L0 = np.asarray(truth["tie"], float), truth["stiffness"], truth["rest_length"]
 
         def cord(model, data, t, q, qd, u):
@@ -223,8 +219,7 @@ def drake_body(kind, truth):
     mass = truth["mass"]
     tiny = RotationalInertia(1e-9, 1e-9, 1e-9)
     if kind == "slosh":
-        L = truth["length"]
-        c = 2 * truth["damping_ratio"] * mass * L * L * np.sqrt(9.81 / L)
+        L, c = truth["length"], truth["damping"]
 
         def add(plant, platform):
             bob = plant.AddRigidBody("bob", SpatialInertia.MakeFromCentralInertia(mass, np.array([0.0, 0.0, -L]), tiny))
@@ -232,14 +227,13 @@ def drake_body(kind, truth):
             plant.AddJoint(BallRpyJoint("slosh", pivot, bob.body_frame(), damping=c))
         return mass, add
     if kind == "platform_tmd":
-        w0 = 2 * np.pi * truth["frequency"]
         axis = np.asarray(truth["axis"], float)
-        k, c = mass * w0 * w0, 2 * truth["damping_ratio"] * mass * w0
+        k, c, ref = truth["stiffness"], truth["damping"], truth["rest_offset"]
 
         def add(plant, platform):
             tmd = plant.AddRigidBody("tmd", SpatialInertia.MakeFromCentralInertia(mass, np.zeros(3), tiny))
             guide = plant.AddJoint(PrismaticJoint("tmd", platform.body_frame(), tmd.body_frame(), axis, damping=c))
-            plant.AddForceElement(PrismaticSpring(guide, mass * 9.81 * axis[2] / k, k))
+            plant.AddForceElement(PrismaticSpring(guide, ref, k))
         return mass, add
     raise ValueError(f"{kind} is not a body on Drake")
 

@@ -113,6 +113,9 @@ from unlisted_common import RuleLog as _RuleLog  # noqa: E402
 from unlisted_common import judge, judge_either, slider_groups, stage_reads, sweep_table, table, two_rails  # noqa: E402
 from unlisted_common import unit_direction as _dir  # noqa: E402
 
+#: the damping [N s/m] of the tendon's soft length limit and of the pad's soft contact (the
+#: second number of MuJoCo's ``solreflimit`` / ``solref`` "-k -b": a direct damping)
+TENDON_DAMPING, PAD_DAMPING = 2.0, 3.0
 KINDS = ("tendon_slack", "magnet", "soft_stop", "gyro_spindle", "slosh", "fan_unbalance", "ball_joint_friction",
          "rate_coupled_friction", "reversal_seal", "eddy_brake_zone", "cross_effort_friction", "coulomb_zone",
          "reversal_stiction")
@@ -193,7 +196,7 @@ def _platform_mechanism(kind, rng, m, mo):
             xml = xml.replace("<freejoint/>", '<freejoint/>\n      <site name="tie" pos="0 0 0"/>', 1)
             return xml.replace("</equality>", f'''</equality>
   <tendon>
-    <spatial name="cord" limited="true" range="0 {length:.9g}" solreflimit="{-k:.9g} -2">
+    <spatial name="cord" limited="true" range="0 {length:.9g}" solreflimit="{-k:.9g} {-TENDON_DAMPING:g}">
       <site site="anchor"/><site site="tie"/>
     </spatial>
   </tendon>''', 1)
@@ -227,7 +230,7 @@ def _platform_mechanism(kind, rng, m, mo):
             return xml.replace("<worldbody>", f'<worldbody>\n    <geom name="pad" type="plane" size="0.2 0.2 0.01" '
                                               f'pos="{pos[0]:.9g} {pos[1]:.9g} {pos[2]:.9g}" zaxis="{-e[0]:g} '
                                               f'{-e[1]:g} {-e[2]:g}" contype="1" conaffinity="1" condim="1" '
-                                              f'solref="{-k:.9g} -3"/>', 1)
+                                              f'solref="{-k:.9g} {-PAD_DAMPING:g}"/>', 1)
         return None, edit, {"axis": "xyz"[axis], "side": sign, "at": at, "stiffness": k}
     if kind == "gyro_spindle":
         h = float(rng.uniform(0.02, 0.04))  # angular momentum [N m s]
@@ -252,7 +255,7 @@ def _platform_mechanism(kind, rng, m, mo):
             return xml.replace("<freejoint/>", f'''<freejoint/>
       <body name="bob" pos="0 0 {L:.9g}"><joint name="slosh" type="ball" damping="{c:.9g}"/>
         <inertial pos="0 0 {-L:.9g}" mass="{mb:.9g}" diaginertia="1e-9 1e-9 1e-9"/></body>''', 1)
-        return None, edit, {"mass": mb, "length": L, "damping_ratio": zeta}
+        return None, edit, {"mass": mb, "length": L, "damping_ratio": zeta, "damping": c}
     if kind == "fan_unbalance":
         amp, f = float(rng.uniform(0.3, 0.6)), float(rng.uniform(3.0, 7.0))
         phase = float(rng.uniform(0, 2 * math.pi))

@@ -168,8 +168,8 @@ def _cord(rng, m, mo):
     <spatial name="cord" stiffness="{k:.9g}" springlength="{rest:.9g}">
       <site site="cord_a"/><site site="cord_b"/></spatial>
   </tendon>''', 1)
-    return None, edit, {"carriage": j + 1, "tie": tie.tolist(), "stiffness": k, "rest_length": rest,
-                        "tension_rms": force}
+    return None, edit, {"carriage": j + 1, "tie": tie.tolist(), "top": top.tolist(), "stiffness": k,
+                        "rest_length": rest, "tension_rms": force}
 
 
 def _eddy(rng, mo):

@@ -121,7 +121,8 @@ def _platform_mechanism(kind, rng, m, mo):
       <body name="tmd" pos="0 0 0"><joint name="tmd" type="slide" axis="{axis[0]:.9g} {axis[1]:.9g} {axis[2]:.9g}"
         stiffness="{k:.9g}" damping="{c:.9g}" springref="{ref:.9g}"/>
         <inertial pos="0 0 0" mass="{mb:.9g}" diaginertia="1e-9 1e-9 1e-9"/></body>''', 1)
-        return None, edit, {"mass": mb, "frequency": f0, "damping_ratio": zeta, "axis": axis.tolist()}
+        return None, edit, {"mass": mb, "frequency": f0, "damping_ratio": zeta, "axis": axis.tolist(),
+                            "stiffness": k, "damping": c, "rest_offset": ref}
     if kind == "bellows_friction":
         z = mo["xp"][:, 2]
         z_mid = float(np.quantile(z, rng.uniform(0.4, 0.6)))

@@ -77,9 +77,8 @@ def _changes(m, seed, duration, quiet, kinds):
 
     clean_drake = d6.simulate(m, None, 0.0, 0, seed, duration, quiet)[0].tau
     clean_mujoco = mb.simulate(m, None, 0.0, 0, seed, duration, quiet)[0].tau
-    out = {}
+    out, mo = {}, mu.motion(m, seed)
     for kind in kinds:
-        mo = mu.motion(m, seed)
         hook, edit = mu.draw(kind, np.random.default_rng(seed), m, mo)[:2]
         drake_hook, body = du.drawn(kind, np.random.default_rng(seed), m, mo)[:2]
         on_drake = d6.simulate(m, None, 0.0, 0, seed, duration, quiet, body=body,
@@ -131,6 +130,7 @@ def test_a_soft_pad_on_drake_pushes_the_platform_back_only_past_the_pad():
     from types import SimpleNamespace
 
     import drake_unlisted as du
+    import mujoco_unlisted as mu
 
     pad = du.drake_hook("soft_stop", {"axis": "z", "side": 1.0, "at": 0.31, "stiffness": 250.0}, Model("6pus"))
     model = SimpleNamespace(body=lambda name: SimpleNamespace(id=1))
@@ -143,7 +143,7 @@ def test_a_soft_pad_on_drake_pushes_the_platform_back_only_past_the_pad():
         return data.xfrc_applied[1]
 
     assert np.allclose(push(0.312, 0.0), [0, 0, -0.5, 0, 0, 0])
-    assert np.allclose(push(0.312, 0.1), [0, 0, -0.5 - du.PAD_DAMPING * 0.1, 0, 0, 0])
+    assert np.allclose(push(0.312, 0.1), [0, 0, -0.5 - mu.PAD_DAMPING * 0.1, 0, 0, 0])
     assert np.allclose(push(0.309, 0.0), 0.0)
     assert np.allclose(push(0.312, -1.0), 0.0)
 
