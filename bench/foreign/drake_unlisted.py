@@ -23,9 +23,12 @@ of mass, as MuJoCo's), and a change it makes to ``opt.gravity`` as the uniform f
 every body (m dg at each body's centre of mass).  MuJoCo's hook reads the platform's pose of the
 previous step's start (``xpos`` after ``mj_step``); the view gives the current one.  Four kinds
 MuJoCo builds by editing its model (:data:`BUILT`: the tendon, the soft pad, the coupling damper,
-the coiled cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`), two (:data:`BODIES`:
-the pendulum, the tuned mass damper) as the same body on the same joint in Drake's plant
-(:func:`drake_body`); the other model edits (:data:`NOT_PORTED`, with the reason) are not run.
+the coiled cord) run on Drake as hooks of its state from the same draw (:func:`drake_hook`), three (:data:`BODIES`:
+the pendulum, the tuned mass damper, the loose payload) as the same body on the same joint in Drake's
+plant (:func:`drake_body`; the payload's dry friction a force of the joint's rate, :func:`drake_load`),
+and two in a leg's ball joint (:data:`LEGS`: its dry friction, the flexure's stiffness and damping)
+as moments between the leg and its carriage (:func:`drake_load`).  Every model edit of MuJoCo's
+kinds runs on Drake.
 
 Seeds: ``--first-seed`` + the kind's index in its set, clean cases ``--first-seed`` + 90 +
 (development seeds 91000-91999: 91000 the first set, 91100 the second, 91200 the third, 91300 the
@@ -34,6 +37,7 @@ fourth, by default).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -45,19 +49,23 @@ sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
 import mujoco_unlisted as mu  # noqa: E402
 
-#: the kinds built by editing MuJoCo's model, not run on Drake: what each needs of MuJoCo
-NOT_PORTED = {
-    "ball_joint_friction": "MuJoCo's frictionloss in a leg's ball joint",
-    "loose_payload": "a body on a slide joint with limits and frictionloss in the platform (Drake's joints "
-                     "have no dry friction)",
-    "flexure_joint": "stiffness and damping of a leg's ball joint",
-}
+#: the kinds built by editing MuJoCo's model that are not run on Drake, with what each needs of
+#: MuJoCo (none: every kind runs)
+NOT_PORTED: dict = {}
 #: the kinds MuJoCo builds by editing its model whose force Drake gets as a hook of its state,
 #: from the same draw (the kind's truth): see :func:`drake_hook`
 BUILT = ("tendon_slack", "soft_stop", "coupling_damper", "coiled_cord")
 #: the kinds MuJoCo builds as a body on a joint in the platform, built as the same body and joint
-#: in Drake's plant from the same draw: see :func:`drake_body`
-BODIES = ("slosh", "platform_tmd")
+#: in Drake's plant from the same draw: see :func:`drake_body` (the loose payload's dry friction:
+#: :func:`drake_load`)
+BODIES = ("slosh", "platform_tmd", "loose_payload")
+#: the kinds MuJoCo builds as a property of a leg's ball joint, run on Drake as moments between
+#: the leg and its carriage from the same draw: see :func:`drake_load`
+LEGS = ("ball_joint_friction", "flexure_joint")
+#: the angular rate [rad/s] of the smooth sign of a ball joint's dry friction (the legs swing at
+#: about 1 rad/s; at Drake's 0.1 ms step, a leg's 1.1e-4 kg m^2 about its joint and the largest
+#: friction drawn, 6 mN m, the explicit force's slope stays at 0.55 of the stable bound)
+W_FRICTION = 0.01
 #: the kinds run on Drake (per set, in the set's order): all but NOT_PORTED
 PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
@@ -201,6 +209,95 @@ def drake_hook(kind, truth, m):
     raise ValueError(f"{kind} is not built on Drake")
 
 
+class DrakeLoad:
+    """A force computed from Drake's own state, drake_6pus's ``load(sim, t, cmd)`` as it is
+    (not a MuJoCo hook to be viewed through :class:`MuJoCoView`): :func:`load_of` passes it on."""
+
+    def __init__(self, load):
+        self.load = load
+
+    def __call__(self, sim, t, cmd):
+        return self.load(sim, t, cmd)
+
+
+def load_of(hook):
+    """drake_6pus's ``load`` of a drawn hook: a :class:`DrakeLoad` as it is, a MuJoCo hook
+    through :func:`as_load`, None for none."""
+    if hook is None or isinstance(hook, DrakeLoad):
+        return hook
+    return as_load(hook)
+
+
+def _rotation_vector(R) -> np.ndarray:
+    """The rotation vector (axis times angle [rad]) of the rotation matrix ``R``; the same
+    expressed in either frame the rotation relates (its axis is its own image)."""
+    c = float(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0))
+    angle = math.acos(c)
+    v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = math.sin(angle)
+    return v * (angle / s) if s > 1e-9 else v
+
+
+def drake_load(kind, truth, m):
+    """The force of a :data:`LEGS` kind, or the loose payload's dry friction, as a
+    :class:`DrakeLoad` of Drake's state, from the kind's drawn ``truth``:
+
+    * ``ball_joint_friction``: MuJoCo's ``frictionloss`` L on each of the ball joint's three
+      rotations in the leg's frame, as -L tanh(w_i / :data:`W_FRICTION`) of the leg's angular
+      rate relative to its carriage (which does not turn) in the leg's frame;
+    * ``flexure_joint``: MuJoCo's ball-joint ``stiffness`` k and ``damping`` c about the home
+      pose, -k r - c w (r the rotation vector of the leg from home, w its angular rate);
+    * ``loose_payload``: the tray's ``frictionloss`` L as -L tanh(v / mujoco_unlisted's
+      ``V_FRICTION``) on the tray's slide joint (v its rate), on the payload and the opposite on
+      the platform at the payload's place (the body and joint: :func:`drake_body`).
+
+    A leg's moment acts on the leg and the opposite on its carriage, less its part along the
+    leg: a slender rod's spin about its own axis (Drake's leg, 1 mm in radius: 1.3e-8 kg m^2)
+    moves nothing else in the robot, and a moment on it at Drake's explicit step would be
+    unstable (a damping's explicit bound c dt / I < 2 fails above c = 0.3 uN m s)."""
+    import drake_6pus as d6
+
+    if kind == "loose_payload":
+        loss, axis = truth["frictionloss"], np.asarray(truth["axis"], float)
+        ids = {}
+
+        def tray(sim, t, cmd):
+            if not ids:
+                ids["joint"] = sim.plant.GetJointByName("tray")
+                ids["body"] = sim.plant.GetBodyByName("tray")
+            x = ids["joint"].get_translation(sim.context)
+            f = -loss * math.tanh(ids["joint"].get_translation_rate(sim.context) / mu.V_FRICTION)
+            R = sim.plant.EvalBodyPoseInWorld(sim.context, sim.platform).rotation().matrix()
+            push = f * (R @ axis)
+            return None, [d6.spatial_force(ids["body"], np.zeros(3), push),
+                          d6.spatial_force(sim.platform, np.zeros(3), -push, at=x * axis)]
+        return DrakeLoad(tray)
+    if kind not in LEGS:
+        raise ValueError(f"{kind} is not a Drake load")
+    i = truth["leg"] - 1
+    P, S = m.leg_points(m.home())
+    along = (np.asarray(P[i]) - np.asarray(S[i])) / np.linalg.norm(np.asarray(P[i]) - np.asarray(S[i]))
+    ids = {}
+
+    def moment(R, w):
+        if kind == "ball_joint_friction":
+            return R @ (-truth["frictionloss"] * np.tanh((R.T @ w) / W_FRICTION))
+        return -truth["stiffness"] * _rotation_vector(R) - truth["damping"] * w
+
+    def leg(sim, t, cmd):
+        if not ids:
+            ids["leg"] = sim.plant.GetBodyByName(f"leg{i}")
+            ids["slider"] = sim.plant.GetBodyByName(f"slider{i}")
+        R = sim.plant.EvalBodyPoseInWorld(sim.context, ids["leg"]).rotation().matrix()
+        w = sim.plant.EvalBodySpatialVelocityInWorld(sim.context, ids["leg"]).rotational()
+        tau = moment(R, w)
+        u = R @ along  # the leg's axis now
+        tau = tau - float(tau @ u) * u
+        return None, [d6.spatial_force(ids["leg"], tau, np.zeros(3)),
+                      d6.spatial_force(ids["slider"], -tau, np.zeros(3))]
+    return DrakeLoad(leg)
+
+
 def drake_body(kind, truth):
     """The body of a :data:`BODIES` kind, which MuJoCo's case adds to the platform by editing its
     model, as drake_6pus's ``body`` (its mass, taken off the platform's, and the function adding
@@ -211,7 +308,10 @@ def drake_body(kind, truth):
       sqrt(g / L) of MuJoCo's ball joint;
     * ``platform_tmd``: a point mass m_b on a slide joint along the guide (the platform's frame)
       with a spring k = m_b w0^2 (Drake's PrismaticSpring) whose rest offset m_b g a_z / k holds it
-      at home, and the joint's damping 2 zeta m_b w0, as MuJoCo's slide joint."""
+      at home, and the joint's damping 2 zeta m_b w0, as MuJoCo's slide joint;
+    * ``loose_payload``: a point mass m_p at the platform's origin on a slide joint along the
+      tray's level axis (the platform's frame) with limits at +-play (SAP's limit constraints,
+      stiffer than MuJoCo's soft limit of 5 ms); its dry friction: :func:`drake_load`."""
     from pydrake.math import RigidTransform
     from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, PrismaticSpring,
                                         RotationalInertia, SpatialInertia)
@@ -235,18 +335,31 @@ def drake_body(kind, truth):
             guide = plant.AddJoint(PrismaticJoint("tmd", platform.body_frame(), tmd.body_frame(), axis, damping=c))
             plant.AddForceElement(PrismaticSpring(guide, ref, k))
         return mass, add
+    if kind == "loose_payload":
+        axis, play = np.asarray(truth["axis"], float), truth["play"]
+
+        def add(plant, platform):
+            tray = plant.AddRigidBody("tray", SpatialInertia.MakeFromCentralInertia(mass, np.zeros(3), tiny))
+            plant.AddJoint(PrismaticJoint("tray", platform.body_frame(), tray.body_frame(), axis,
+                                          pos_lower_limit=-play, pos_upper_limit=play))
+        return mass, add
     raise ValueError(f"{kind} is not a body on Drake")
 
 
 def drawn(kind, rng, m, mo, scale=1.0):
     """``mujoco_unlisted.draw`` with a :data:`BUILT` kind's model edit replaced by its force as a
     hook of Drake's state (:func:`drake_hook`), a :data:`BODIES` kind's by its body in Drake's
-    plant (:func:`drake_body`, as the edit), from the same draw."""
+    plant (:func:`drake_body`, as the edit; the loose payload's dry friction as a load,
+    :func:`drake_load`), a :data:`LEGS` kind's by its moments in the leg's ball joint
+    (:func:`drake_load`), from the same draw."""
     hook, edit, truth, key, joint = mu.draw(kind, rng, m, mo, scale)
     if kind in BUILT:
         hook, edit = drake_hook(kind, truth, m), None
     elif kind in BODIES:
-        hook, edit = None, drake_body(kind, truth)
+        hook = drake_load(kind, truth, m) if kind == "loose_payload" else None
+        edit = drake_body(kind, truth)
+    elif kind in LEGS:
+        hook, edit = drake_load(kind, truth, m), None
     return hook, edit, truth, key, joint
 
 
@@ -257,8 +370,7 @@ def _drake(m, seed, noise, hook, edit):
 
     if edit is not None and not isinstance(edit, tuple):
         raise ValueError("a kind that edits MuJoCo's model does not run on Drake")
-    return d6.simulate(m, None, 0.0, 0, seed, mu.DURATION, noise, load=None if hook is None else as_load(hook),
-                       body=edit)[0]
+    return d6.simulate(m, None, 0.0, 0, seed, mu.DURATION, noise, load=load_of(hook), body=edit)[0]
 
 
 def _run(job):

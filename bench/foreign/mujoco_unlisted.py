@@ -56,7 +56,9 @@ MuJoCo's step computed from MuJoCo's own state (``hook``).  The mechanisms:
   joint, whose mass is taken off the platform's (the same mass and centre of mass at rest);
 * ``fan_unbalance``: an eccentric mass on a fan rotor on the platform, spinning at constant
   speed: a force m e w^2 turning in the platform's xy plane (``xfrc_applied``);
-* ``ball_joint_friction``: MuJoCo's ``frictionloss`` in the passive spherical joint of one leg;
+* ``ball_joint_friction``: MuJoCo's ``frictionloss`` in the passive spherical joint of one leg
+  (on this model MuJoCo's friction constraint barely acts: under 0.1 mN at the rails, the
+  residual at the noise, nothing to find; Drake's port reaches them, docs/discrepancy.md);
 * ``rate_coupled_friction``: a Coulomb friction on rail j in proportion to the speed of rail k,
   c |qd_k| / V_k tanh(qd_j / v) (a shared bearing warmed by its neighbour's belt);
 * ``reversal_seal``: a seal whose friction grows with the time since rail j last reversed,
