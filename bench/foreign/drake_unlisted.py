@@ -62,10 +62,6 @@ BODIES = ("slosh", "platform_tmd", "loose_payload")
 #: the kinds MuJoCo builds as a property of a leg's ball joint, run on Drake as moments between
 #: the leg and its carriage from the same draw: see :func:`drake_load`
 LEGS = ("ball_joint_friction", "flexure_joint")
-#: the angular rate [rad/s] of the smooth sign of a ball joint's dry friction (the legs swing at
-#: about 1 rad/s; at Drake's 0.1 ms step, a leg's 1.1e-4 kg m^2 about its joint and the largest
-#: friction drawn, 6 mN m, the explicit force's slope stays at 0.55 of the stable bound)
-W_FRICTION = 0.01
 #: the kinds run on Drake (per set, in the set's order): all but NOT_PORTED
 PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
@@ -242,9 +238,9 @@ def drake_load(kind, truth, m):
     """The force of a :data:`LEGS` kind, or the loose payload's dry friction, as a
     :class:`DrakeLoad` of Drake's state, from the kind's drawn ``truth``:
 
-    * ``ball_joint_friction``: MuJoCo's ``frictionloss`` L on each of the ball joint's three
-      rotations in the leg's frame, as -L tanh(w_i / :data:`W_FRICTION`) of the leg's angular
-      rate relative to its carriage (which does not turn) in the leg's frame;
+    * ``ball_joint_friction``: MuJoCo's moment (``mujoco_unlisted.ball_friction``), -L tanh(w_i /
+      W) on each of the ball joint's three rotations in the leg's frame (w the leg's angular rate
+      relative to its carriage, which does not turn), of the drawn friction L;
     * ``flexure_joint``: MuJoCo's ball-joint ``stiffness`` k and ``damping`` c about the home
       pose, -k r - c w (r the rotation vector of the leg from home, w its angular rate);
     * ``loose_payload``: the tray's ``frictionloss`` L as -L tanh(v / mujoco_unlisted's
@@ -280,9 +276,11 @@ def drake_load(kind, truth, m):
     ids = {}
 
     def moment(R, w):
-        if kind == "ball_joint_friction":
-            return R @ (-truth["frictionloss"] * np.tanh((R.T @ w) / W_FRICTION))
-        return -truth["stiffness"] * _rotation_vector(R) - truth["damping"] * w
+        if kind == "ball_joint_friction":  # MuJoCo's moment, in the leg's frame
+            return R @ mu.ball_friction(R.T @ w, truth["frictionloss"], along)
+        tau = -truth["stiffness"] * _rotation_vector(R) - truth["damping"] * w
+        u = R @ along  # the leg's axis now
+        return tau - float(tau @ u) * u
 
     def leg(sim, t, cmd):
         if not ids:
@@ -291,8 +289,6 @@ def drake_load(kind, truth, m):
         R = sim.plant.EvalBodyPoseInWorld(sim.context, ids["leg"]).rotation().matrix()
         w = sim.plant.EvalBodySpatialVelocityInWorld(sim.context, ids["leg"]).rotational()
         tau = moment(R, w)
-        u = R @ along  # the leg's axis now
-        tau = tau - float(tau @ u) * u
         return None, [d6.spatial_force(ids["leg"], tau, np.zeros(3)),
                       d6.spatial_force(ids["slider"], -tau, np.zeros(3))]
     return DrakeLoad(leg)
