@@ -152,3 +152,35 @@ def test_a_replacement_whose_trees_claim_nothing_leaves_the_checked_groups_named
 
 def test_a_replacement_whose_trees_claim_stands():
     assert _effort_or_pose(lambda cv: cv.mse <= 1.5) == ["the platform pose"]
+
+
+def test_replacements_that_together_lose_significantly_leave_the_efforts_named():
+    # a force keyed on slider 6's position and model effort (a thrust ripple: the command times a
+    # function of the position), the two named by the check (leaving either out costs 0.4 of the
+    # variance); the effort's constituents (the pose and the rate) lose 0.02 of the variance, under
+    # DROP_MIN: made_of_efforts puts them in the effort's place; the pose then loses 0.02 to the
+    # rail's own position beside the rate, under the bar: fewest_rails takes the position.  Each
+    # step passes its own bar, but position and rate lose 0.04 to position and effort on every
+    # fold: the replacements are undone, the effort stays named (without the guard: position and
+    # rate of slider 6)
+    from cosim.discrepancy.flexible import select as flexible_select
+
+    n = 40
+    y = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+    fold_rows = [(np.arange(i, n, 4), np.setdiff1d(np.arange(n), np.arange(i, n, 4))) for i in range(4)]
+    X = np.tile(np.arange(5.0), (n, 1))
+    X[1:, 4] = np.random.default_rng(0).uniform(-1.0, 1.0, n - 1)  # slider 3's position: fewest_rails bins it
+    per_fold = {(0, 1): [0.10] * 4, (0,): [0.5] * 4, (1,): [0.5] * 4, (1, 2): [0.3] * 4,
+                (1, 2, 3): [0.12] * 4, (1, 3): [0.14] * 4, (1, 3, 4): [0.14] * 4}
+
+    def cross_validate(Xs, y_, rows, enough=None, under=None):
+        e = np.zeros(n)
+        for (h, _), m in zip(rows, per_fold[tuple(int(v) for v in Xs[0])]):
+            e[h] = math.sqrt(m)
+        return types.SimpleNamespace(mse=float(np.mean(e ** 2)), pred=y_ + e, folds=rows)
+
+    groups = {"effort of slider 6": [0], "position of slider 6": [1], "the platform pose": [2],
+              "rate of slider 6": [3], "position of slider 3": [4]}
+    named = flexible_select.select(X, y, fold_rows, groups, ["position of slider 6", "effort of slider 6"], 1.0,
+                                   cross_validate=cross_validate)[0]
+    assert sorted(named) == ["effort of slider 6", "position of slider 6"]
