@@ -11,9 +11,9 @@ drawn by the kind's own code (``mujoco_unlisted.draw``: its parameters, its ``ho
 inputs it is keyed on), diagnosed with the defaults and judged by the same code as on MuJoCo
 (``mujoco_unlisted.run_case``: ``unlisted_common.judge``, ``judge_either`` and ``table``).
 
-The kinds ported are those whose force is a hook, ``hook(model, data, t, q, qd, cmd)``, of the
-rails' positions and rates, the commanded forces, time, states the hook keeps itself, and the
-platform's pose and twist (:data:`PORTED`).  The hook is called before every Drake step with a
+Every kind of the four sets runs.  A kind whose force is a hook, ``hook(model, data, t, q, qd,
+cmd)``, of the rails' positions and rates, the commanded forces, time, states the hook keeps
+itself, and the platform's pose and twist, runs through that hook.  The hook is called before every Drake step with a
 view of Drake's state in the MuJoCo fields it reads (:class:`MuJoCoView`: the platform body's
 ``xpos``, ``xmat``, its free joint's ``qvel`` (linear velocity in the world frame, angular in
 the body's, as MuJoCo's), ``model.body("platform").id``, ``body_jntadr``, ``jnt_dofadr`` and
@@ -49,9 +49,6 @@ sys.path[:0] = [str(REPO), str(REPO / "bench"), str(REPO / "bench" / "foreign")]
 
 import mujoco_unlisted as mu  # noqa: E402
 
-#: the kinds built by editing MuJoCo's model that are not run on Drake, with what each needs of
-#: MuJoCo (none: every kind runs)
-NOT_PORTED: dict = {}
 #: the kinds MuJoCo builds by editing its model whose force Drake gets as a hook of its state,
 #: from the same draw (the kind's truth): see :func:`drake_hook`
 BUILT = ("tendon_slack", "soft_stop", "coupling_damper", "coiled_cord")
@@ -62,8 +59,6 @@ BODIES = ("slosh", "platform_tmd", "loose_payload")
 #: the kinds MuJoCo builds as a property of a leg's ball joint, run on Drake as moments between
 #: the leg and its carriage from the same draw: see :func:`drake_load`
 LEGS = ("ball_joint_friction", "flexure_joint")
-#: the kinds run on Drake (per set, in the set's order): all but NOT_PORTED
-PORTED = {n: tuple(k for k in ks if k not in NOT_PORTED) for n, ks in mu.KIND_SETS.items()}
 #: the default first seed of each set (development seeds)
 FIRST_SEED = {1: 91000, 2: 91100, 3: 91200, 4: 91300}
 PLATFORM_ID = 1  # the platform's body id in the view (0 is the world, as MuJoCo's)
@@ -375,9 +370,9 @@ def _run(job):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--kinds", default=None, help="comma-separated ported kinds of one set (default: --kinds-set's)")
-    ap.add_argument("--kinds-set", type=int, choices=sorted(PORTED), default=1,
-                    help="the set of bench/foreign/mujoco_unlisted.py (1-4) whose ported kinds run")
+    ap.add_argument("--kinds", default=None, help="comma-separated kinds of one set (default: --kinds-set's)")
+    ap.add_argument("--kinds-set", type=int, choices=sorted(mu.KIND_SETS), default=1,
+                    help="the set of bench/foreign/mujoco_unlisted.py (1-4) whose kinds run")
     ap.add_argument("--first-seed", type=int, default=None,
                     help="this seed + the kind's index in its set, clean cases this + 90 + (default: "
                          + ", ".join(f"set {n} {s}" for n, s in FIRST_SEED.items()) + ")")
@@ -385,11 +380,8 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", type=Path, default=REPO / "results" / "drake_unlisted")
     a = ap.parse_args(argv)
-    kinds, kinds_set = mu.kinds_of(ap, a.kinds if a.kinds is not None else ",".join(PORTED[a.kinds_set]),
+    kinds, kinds_set = mu.kinds_of(ap, a.kinds if a.kinds is not None else ",".join(mu.KIND_SETS[a.kinds_set]),
                                    a.kinds_set)
-    bad = [k for k in kinds if k in NOT_PORTED]
-    if bad:
-        ap.error("not run on Drake: " + "; ".join(f"{k} ({NOT_PORTED[k]})" for k in bad))
     a.out.mkdir(parents=True, exist_ok=True)
     s0 = a.first_seed if a.first_seed is not None else FIRST_SEED[kinds_set]
     mu.run_jobs(_run, mu.jobs(kinds, kinds_set, s0, a.clean, a.out), a.jobs, a.out)
