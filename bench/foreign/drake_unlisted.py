@@ -219,16 +219,6 @@ def load_of(hook):
     return as_load(hook)
 
 
-def _rotation_vector(R) -> np.ndarray:
-    """The rotation vector (axis times angle [rad]) of the rotation matrix ``R``; the same
-    expressed in either frame the rotation relates (its axis is its own image)."""
-    c = float(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0))
-    angle = math.acos(c)
-    v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    s = math.sin(angle)
-    return v * (angle / s) if s > 1e-9 else v
-
-
 def drake_load(kind, truth, m):
     """The force of a :data:`LEGS` kind, or the loose payload's dry friction, as a
     :class:`DrakeLoad` of Drake's state, from the kind's drawn ``truth``:
@@ -243,9 +233,8 @@ def drake_load(kind, truth, m):
       the platform at the payload's place (the body and joint: :func:`drake_body`).
 
     A leg's moment acts on the leg and the opposite on its carriage, less its part along the
-    leg: a slender rod's spin about its own axis (Drake's leg, 1 mm in radius: 1.3e-8 kg m^2)
-    moves nothing else in the robot, and a moment on it at Drake's explicit step would be
-    unstable (a damping's explicit bound c dt / I < 2 fails above c = 0.3 uN m s)."""
+    leg (``mujoco_unlisted.across_leg``: on Drake's 1 mm rod a damping's explicit bound c dt / I
+    < 2 fails above c = 0.3 uN m s)."""
     import drake_6pus as d6
 
     if kind == "loose_payload":
@@ -265,17 +254,17 @@ def drake_load(kind, truth, m):
         return DrakeLoad(tray)
     if kind not in LEGS:
         raise ValueError(f"{kind} is not a Drake load")
+    from scipy.spatial.transform import Rotation
+
     i = truth["leg"] - 1
-    P, S = m.leg_points(m.home())
-    along = (np.asarray(P[i]) - np.asarray(S[i])) / np.linalg.norm(np.asarray(P[i]) - np.asarray(S[i]))
+    along = mu.leg_axis(m, i)
     ids = {}
 
     def moment(R, w):
         if kind == "ball_joint_friction":  # MuJoCo's moment, in the leg's frame
             return R @ mu.ball_friction(R.T @ w, truth["frictionloss"], along)
-        tau = -truth["stiffness"] * _rotation_vector(R) - truth["damping"] * w
-        u = R @ along  # the leg's axis now
-        return tau - float(tau @ u) * u
+        tau = -truth["stiffness"] * Rotation.from_matrix(R).as_rotvec() - truth["damping"] * w
+        return mu.across_leg(tau, R @ along)  # (the leg's axis now)
 
     def leg(sim, t, cmd):
         if not ids:

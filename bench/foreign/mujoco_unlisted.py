@@ -278,8 +278,7 @@ def _platform_mechanism(kind, rng, m, mo):
     if kind == "ball_joint_friction":
         leg = int(rng.integers(6))
         loss = float(rng.uniform(0.003, 0.006))
-        P, S = m.leg_points(m.home())
-        along = (np.asarray(P[leg]) - np.asarray(S[leg])) / np.linalg.norm(np.asarray(P[leg]) - np.asarray(S[leg]))
+        along = leg_axis(m, leg)
         dofs = []
 
         def hook(model, data, t, q, qd, u):
@@ -291,14 +290,27 @@ def _platform_mechanism(kind, rng, m, mo):
     raise ValueError(kind)
 
 
+def leg_axis(m, leg) -> np.ndarray:
+    """The unit vector from leg ``leg``'s (0-based) carriage joint to its platform joint at home
+    (the leg's frame is the world's there, on MuJoCo as on Drake)."""
+    P, S = m.leg_points(m.home())
+    a = np.asarray(P[leg], float) - np.asarray(S[leg], float)
+    return a / np.linalg.norm(a)
+
+
+def across_leg(tau, along) -> np.ndarray:
+    """The moment ``tau`` less its part along the leg (``along``, a unit vector in the same
+    frame): a leg's spin about its own axis moves nothing else in the robot, and on a thin rod's
+    axial inertia (the 1 mm capsule's 1.3e-8 kg m^2) an explicit moment about it would be unstable."""
+    along = np.asarray(along, float)
+    return tau - float(tau @ along) * along
+
+
 def ball_friction(w, loss, along) -> np.ndarray:
     """The dry friction moment [N m] of a ball joint, -``loss`` tanh(w_i / :data:`W_BALL`) on each
     of its rotations (``w``: the child's angular rate relative to its parent in the child's frame
-    [rad/s], MuJoCo's ball dofs), less its part along the leg (``along``, a unit vector in the same
-    frame): a leg's spin about its own axis moves nothing else in the robot, and on a thin rod's
-    axial inertia (the 1 mm capsule's 1.3e-8 kg m^2) the explicit force would be unstable."""
-    tau = -loss * np.tanh(np.asarray(w, float) / W_BALL)
-    return tau - float(tau @ along) * np.asarray(along, float)
+    [rad/s], MuJoCo's ball dofs), across the leg (:func:`across_leg`; ``along`` in the same frame)."""
+    return across_leg(-loss * np.tanh(np.asarray(w, float) / W_BALL), along)
 
 
 def _stroke_band(rng, mo, j):
