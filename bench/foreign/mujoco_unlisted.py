@@ -59,8 +59,8 @@ MuJoCo's step computed from MuJoCo's own state (``hook``).  The mechanisms:
 * ``ball_joint_friction``: a dry friction in the passive spherical joint of one leg, a moment on
   the ball's three dofs (:func:`ball_friction`, ``qfrc_applied``).  MuJoCo's own ``frictionloss``
   there barely acts (under 0.1 mN at the rails, as at 100 times the loss: its soft constraint's
-  regulariser follows the dofs' inverse inertia, which the thin leg's spin sets), so the cases
-  drawn before (seeds up to 70706) held nothing to find (docs/discrepancy.md, "On Drake");
+  regulariser follows the dofs' inverse inertia, which the thin leg's spin sets; the recorded
+  runs at seeds up to 70706 used it: docs/discrepancy.md, "On Drake");
 * ``rate_coupled_friction``: a Coulomb friction on rail j in proportion to the speed of rail k,
   c |qd_k| / V_k tanh(qd_j / v) (a shared bearing warmed by its neighbour's belt);
 * ``reversal_seal``: a seal whose friction grows with the time since rail j last reversed,
