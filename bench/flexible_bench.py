@@ -156,7 +156,10 @@ def _captured(run):
         rival_calls.append((X, _light(pipe), np.asarray(R, float).copy()))
         return X, columns
 
-    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
+    def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=(), without=()):
+        if without:  # a channel fitted again (stage.without_lone_pose): the replay makes it again from its entry
+            return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered,
+                               without=without)
         entry = dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted, offered=tuple(offered))
         given = next(((p, R) for Xc, p, R in calls if Xc is X), None)
         if given is None:  # not the stage's inputs: a discovered term's rival, kept where it outfits the term
@@ -267,12 +270,17 @@ def refit(kept) -> tuple:
         t0 = time.process_time()
         if kept["channels"]:
             X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
-            for ch in kept["channels"]:
+
+            def fitted(ch, without=()):
                 # a rival's channel (its own residual kept): the inputs the rival fitted it on
                 Xc, cc = (X, columns) if "R" not in ch else stage.inputs(kept["pipe"], ch["R"], direction=True)
                 f = stage.fit_channel(kept["pipe"], Xc, cc, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
-                                      fitted=ch["fitted"], offered=ch.get("offered", ()))
-                fits.append(replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"]))
+                                      fitted=ch["fitted"], offered=ch.get("offered", ()), without=without)
+                return replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"])
+            fits = [fitted(ch) for ch in kept["channels"]]
+            by_fit = {id(f): ch for f, ch in zip(fits, kept["channels"])}
+            fits = stage.without_lone_pose(fits, kept["pipe"].nd, lambda f: None if "R" in by_fit[id(f)] else
+                                           fitted(by_fit[id(f)], without=(stage.POSE,)))
         cpu = time.process_time() - t0
     return fits, cpu
 

@@ -37,7 +37,7 @@ def _fakes(monkeypatch, seen, offers=None):
     offers = [] if offers is None else offers
     monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
 
-    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()):
+    def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=(), without=()):
         seen.append(np.array(X))
         offers.append(tuple(offered))
         return _Fit()

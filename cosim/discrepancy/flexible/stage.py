@@ -272,7 +272,7 @@ def _select(X, y, fold_rows, groups, named, var, follow=(), known=None, after=No
                   after=after, directed=directed, claims=claims)
 
 
-def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=()) -> FlexibleFit:
+def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=(), without=()) -> FlexibleFit:
     """The flexible model of residual ``y`` (decimated samples, in time order) on inputs ``X``,
     cross-validated over blocks in time (:mod:`.cv`).  The inputs it names are screened
     by grouped permutation importance out of fold, significant over the blocks, then checked one
@@ -291,15 +291,18 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offer
     the plain fit where the screen's gain is at least :data:`.folded.ALONE`, else beside it, the
     fit explaining more out of fold kept (:func:`.folded.kept`).  ``offered``: the lines [Hz] found
     elsewhere in the recording (:func:`.periodic.offered`), the line's phase where ``y`` holds none by
-    its own rule (:func:`.periodic.extend`)."""
-    plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, offered=offered)
+    its own rule (:func:`.periodic.extend`).  ``without``: groups whose columns the channel's trees
+    are not given (:func:`lone_channel`)."""
+    plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, offered=offered, without=without)
     if sigma is None:
         return plain
-    folded = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, sigma=sigma, offered=offered)[0]
+    folded = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, sigma=sigma, offered=offered,
+                          without=without)[0]
     return kept(plain, folded)
 
 
-def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None, offered=()) -> tuple:
+def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None, offered=(),
+                 without=()) -> tuple:
     """:func:`fit_channel`'s fit, on ``y`` folded by ``sigma`` where given (:mod:`.folded`):
     ``(fit, sigma)``: where ``sigma`` is not given, the screen (:func:`.folded.prefer`) folds at once
     where the folded residual is far better explained, and where it may be, returns the direction
@@ -323,7 +326,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
 
     given = (X, columns)
     X, columns, groups, every, keep, projections, lines, resonance = _channel_columns(
-        X, columns, y, fold_rows, c, offered, motion.bank(pipe))
+        X, columns, y, fold_rows, c, offered, motion.bank(pipe), without)
     reference = on_channel(pipe, *given, keep, X)  # the inputs built from the answer, along the reference
     follow = judged_last(consequences(columns, groups, (joint := c + 1 if c is not None else None)), groups, lines)
     how, direction_c = screen(X, y, columns, c + 1, fold_rows) if sigma is None and c is not None else ("", None)
@@ -401,16 +404,18 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
                        **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
-def _channel_columns(X, columns, y, fold_rows, c, offered=(), responses=None) -> tuple:
+def _channel_columns(X, columns, y, fold_rows, c, offered=(), responses=None, without=()) -> tuple:
     """The inputs of channel ``c`` (0-based; None: any): the stage's columns but another joint's time
     since a reversal (which acts here through the coupling's forces, already inputs), with the pose
     and rates projected (:mod:`.oblique`), the line's phase (:mod:`.periodic`; ``offered``: the lines
     found elsewhere) and, on a platform with a pose, its acceleration through a resonance
-    (:mod:`.motion`; ``responses``: its :func:`.motion.bank`), fitted per fold.
+    (:mod:`.motion`; ``responses``: its :func:`.motion.bank`), fitted per fold; the columns of the
+    groups ``without`` left out.
     Returns ``(X, columns, groups, every, keep, projections, lines, resonance)``: ``every`` the stage's
     columns, ``keep`` the indices into them of ``X``'s first columns."""
     every = tuple(columns)
-    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)]
+    keep = [i for i, col in enumerate(every) if not (col[0].startswith(SINCE) and c is not None and col[2] != c + 1)
+            and col[1] not in without]
     X, columns, groups, projections = extend(X[:, keep], [every[i] for i in keep],
                                              input_groups([every[i] for i in keep]), y, fold_rows)
     X, columns, groups, lines = periodic.extend(X, columns, groups, y, fold_rows, offered)
@@ -502,11 +507,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     t, pos = periodic.time_and_positions(X, columns)
     offered = periodic.offered(t, R_fit[:, :pipe.nd], pos, folds(len(R_fit), gap_for(samples_per_independent(pipe))),
                                [e for e in lines if e["channel"] in pipe.channels[:pipe.nd]])
-    out = []
-    for c in chans:
+
+    def fitted_on(c, without=()):
         fit = outfit[c] if c in outfit else fit_channel(
             pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
-            weak=c in weak, fitted=fitted.get(c), offered=offered)
+            weak=c in weak, fitted=fitted.get(c), offered=offered, without=without)
         fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
@@ -516,8 +521,32 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
             said = (f"the discovered term ({stand_ins[c].equation}), which may stand in for it, explains "
                     f"{100 * term_share:.0f} % of it held out; the flexible model is fitted without it")
         fit = _with(fit, family=said)
-        out.append(_with(fit, statement=statement(fit, noun)))
-    return out
+        return _with(fit, statement=statement(fit, noun))
+
+    return without_lone_pose([fitted_on(c) for c in chans], pipe.nd,
+                             lambda f: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without=(POSE,)))
+
+
+def without_lone_pose(fits, channels: int, fit_without):
+    """``fits`` with the one that names the platform pose, where it is the only one of the
+    robot's ``channels`` (more than one) that names anything, fitted again without the pose's
+    columns (``fit_without(fit)``: that fit, or None where it cannot be made), where that fit
+    claims a share on named inputs.
+
+    A force on the platform (a wrench that its pose and twist set) reaches every rail through the
+    Jacobian: the efforts of all the rails answer it, not one alone.  Where one channel holds a
+    force and the others nothing the trees claim, the pose named there stands for what it is
+    computed from, the rails' positions, or for what the pose sets, the drive's load, and the
+    channel's trees are judged without it.  On the seen MuJoCo sets every such channel held a
+    rail's own force with the pose in its place (a detent's position, a heating magnet's load:
+    docs/records/flexible_mujoco_runs.md)."""
+    told = [f for f in fits if f.explained and f.named]
+    if channels < 2 or len(told) != 1 or POSE not in told[0].named:
+        return fits
+    again = fit_without(told[0])
+    if again is None or not (again.explained and again.named):
+        return fits
+    return [again if f is told[0] else f for f in fits]
 
 
 def _with(fit, **kw):
