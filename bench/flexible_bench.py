@@ -253,6 +253,7 @@ def refit(kept) -> tuple:
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
+    from cosim.discrepancy.structure import samples_per_independent
 
     if "pipe" in kept:
         kept["pipe"].S = _smoother(kept["pipe"])
@@ -276,11 +277,13 @@ def refit(kept) -> tuple:
                 Xc, cc = (X, columns) if "R" not in ch else stage.inputs(kept["pipe"], ch["R"], direction=True)
                 f = stage.fit_channel(kept["pipe"], Xc, cc, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"], offered=ch.get("offered", ()), without=without)
-                return replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"])
+                return replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"],
+                               target=np.asarray(ch["y"], float))
             fits = [fitted(ch) for ch in kept["channels"]]
             by_fit = {id(f): ch for f, ch in zip(fits, kept["channels"])}
+            rows = stage.folds(len(kept["R"]), stage.gap_for(samples_per_independent(kept["pipe"])))
             fits = stage.without_lone_pose(fits, kept["pipe"].nd, lambda f: None if "R" in by_fit[id(f)] else
-                                           fitted(by_fit[id(f)], without=(stage.POSE,)))
+                                           fitted(by_fit[id(f)], without=(stage.POSE,)), rows)
         cpu = time.process_time() - t0
     return fits, cpu
 

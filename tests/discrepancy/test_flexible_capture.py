@@ -29,6 +29,7 @@ class _Fit:
     explained: bool = False
     joint: int = 0
     weak: bool = False
+    target: object = None
 
 
 def _fakes(monkeypatch, seen, offers=None):

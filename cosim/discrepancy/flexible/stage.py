@@ -93,8 +93,8 @@ from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
                      importance_on_y, kept, screen)
-from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
-                     select, strongest_alone)
+from .select import (DROP_MIN, GAIN_Z, POSE, causes_alone, consequences, fold_gain, gain, lean, partners,  # noqa: F401
+                     screened_first, select, strongest_alone)
 
 #: fewest decimated samples per cross-validation block for a fit
 BLOCK = 25
@@ -524,29 +524,42 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
         return _with(fit, statement=statement(fit, noun))
 
     return without_lone_pose([fitted_on(c) for c in chans], pipe.nd,
-                             lambda f: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without=(POSE,)))
+                             lambda f: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without=(POSE,)),
+                             folds(len(R_fit), gap_for(samples_per_independent(pipe))))
 
 
-def without_lone_pose(fits, channels: int, fit_without):
+def without_lone_pose(fits, channels: int, fit_without, fold_rows):
     """``fits`` with the one that names the platform pose, where it is the only one of the
     robot's ``channels`` (more than one) that names anything, fitted again without the pose's
     columns (``fit_without(fit)``: that fit, or None where it cannot be made), where that fit
-    claims a share on named inputs.
+    claims a share on named inputs and the fit with the pose does not beat it by the bar of a
+    consequence (:func:`.select.gain`'s: :data:`DROP_MIN` of the variance and
+    :data:`.select.GAIN_Z` standard errors over the blocks ``fold_rows``; each fit's ``pred``,
+    out of fold, against its ``target``).
 
     A force on the platform (a wrench that its pose and twist set) reaches every rail through the
     Jacobian: the efforts of all the rails answer it, not one alone.  Where one channel holds a
-    force and the others nothing the trees claim, the pose named there stands for what it is
-    computed from, the rails' positions, or for what the pose sets, the drive's load, and the
-    channel's trees are judged without it.  On the seen MuJoCo sets every such channel held a
-    rail's own force with the pose in its place (a detent's position, a heating magnet's load:
-    docs/records/flexible_mujoco_runs.md)."""
+    force and the others nothing the trees claim, the pose named there may stand for what it is
+    computed from, the rails' positions, or for what the pose sets, the drive's load: the
+    channel's trees are judged without it, and where they explain as much, what they name is
+    the answer.  Where the pose explains significantly more, it stays: it carries what the
+    trees on single columns do not (a gap between two rails in one tilt).  On the seen MuJoCo
+    sets every channel that was the only one naming anything and named the pose held a rail's
+    own force (docs/records/flexible_rules.md, "The pose on one channel alone")."""
     told = [f for f in fits if f.explained and f.named]
     if channels < 2 or len(told) != 1 or POSE not in told[0].named:
         return fits
-    again = fit_without(told[0])
+    posed = told[0]
+    again = fit_without(posed)
     if again is None or not (again.explained and again.named):
         return fits
-    return [again if f is told[0] else f for f in fits]
+    y = np.asarray(posed.target, float)
+    var = float(np.var(y))
+    overall = float(np.mean((y - again.pred) ** 2) - np.mean((y - posed.pred) ** 2)) / var if var > 0 else 0.0
+    if fold_gain(y, again.pred, posed.pred, fold_rows, var,
+                 lambda mean, se: overall >= DROP_MIN and mean > GAIN_Z * se)[2]:
+        return fits
+    return [again if f is posed else f for f in fits]
 
 
 def _with(fit, **kw):
