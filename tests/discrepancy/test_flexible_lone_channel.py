@@ -32,6 +32,10 @@ def test_the_fit_without_the_pose_is_given_no_pose_column_and_the_pose_stays_whe
     assert again.explained and flexible.POSE not in again.named and "effort of slider 2" in again.named
     # no pose column among the trees' inputs, and their columns index the stage's (the black box's)
     assert all(again.columns[i][1] != flexible.POSE for i in again.use)
+    assert again.without == (flexible.POSE,) and posed.without == ()
+    said = flexible.statement(again, "slider")
+    assert "the platform pose left out of the inputs" in said and "the platform pose left out" not in \
+        flexible.statement(posed, "slider")
     y = _oblique()[3]
     posed = replace(posed, target=y)
     # the pose explains 0.95, the rail's effort 0.56: the pose stays

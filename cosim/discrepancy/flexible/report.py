@@ -168,6 +168,9 @@ def statement(fit, noun: str) -> str:
     if fit.outside > OUTSIDE_WARN:
         s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
               f"fitted on without them (extrapolated flat: the share is a lower bound there)")
+    if fit.without:
+        s += (f"; {', '.join(fit.without)} left out of the inputs: the only channel holding a force, which a force "
+              f"on the platform would not be (it reaches every rail)")
     return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
 
 

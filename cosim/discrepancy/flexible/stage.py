@@ -202,6 +202,8 @@ class FlexibleFit:
     folded: bool = False
     #: the claimed model's out-of-fold prediction of the residual (decimated samples), in ``unit``
     pred: object = field(default=None, repr=False, compare=False)
+    #: the groups whose columns the trees were not given (:func:`without_lone_pose`: the pose)
+    without: tuple = ()
 
     @property
     def named(self) -> tuple:
@@ -213,7 +215,8 @@ class FlexibleFit:
     def to_dict(self) -> dict:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
-                                             "beyond_noise", "screened", "weak", "readjusted", "folded")}
+                                             "beyond_noise", "screened", "weak", "readjusted", "folded",
+                                             "without")}
         out["inputs"] = [vars(d) for d in self.inputs]
         out["named"] = list(self.named)
         return out
@@ -400,7 +403,7 @@ def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigm
     return (FlexibleFit(pipe.channels[c] if c is not None else "", 0, unit, share, z, explained, float(np.std(y_seen)),
                        float(noise), deps, outside=beyond, beyond_noise=beyond_noise(y_seen, noise, spi),
                        screened=screened, model=model, readjusted=moved, folded=folded, resonance=resonance,
-                       pred=sigma * cv.pred if folded else cv.pred,
+                       pred=sigma * cv.pred if folded else cv.pred, without=tuple(without),
                        **_on_stage_columns(every, keep, columns, use, projections, lines)), screened_fold)
 
 
