@@ -304,8 +304,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offer
     return kept(plain, folded)
 
 
-def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None, offered=(),
-                 without=()) -> tuple:
+def _fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, sigma=None, offered=(), without=()):
     """:func:`fit_channel`'s fit, on ``y`` folded by ``sigma`` where given (:mod:`.folded`):
     ``(fit, sigma)``: where ``sigma`` is not given, the screen (:func:`.folded.prefer`) folds at once
     where the folded residual is far better explained, and where it may be, returns the direction
