@@ -283,10 +283,10 @@ def refit(kept) -> tuple:
                 return replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"],
                                target=np.asarray(ch["y"], float))
             fits = [fitted(ch) for ch in kept["channels"]]
-            by_fit = {id(f): ch for f, ch in zip(fits, kept["channels"])}
+            entry = {id(f): ch for f, ch in zip(fits, kept["channels"])}  # a fit's channel entry
             rows = stage.folds(len(kept["R"]), stage.gap_for(samples_per_independent(kept["pipe"])))
-            fits = stage.without_lone_pose(fits, kept["pipe"].nd, lambda f: None if "R" in by_fit[id(f)] else
-                                           fitted(by_fit[id(f)], without=(stage.POSE,)), rows)
+            fits = stage.without_lone_pose(fits, kept["pipe"].nd, lambda f: None if "R" in entry[id(f)] else
+                                           fitted(entry[id(f)], without=(stage.POSE,)), rows)
         cpu = time.process_time() - t0
     return fits, cpu
 

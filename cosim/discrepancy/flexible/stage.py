@@ -77,6 +77,7 @@ The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -93,8 +94,8 @@ from . import motion, periodic
 from .cv import N_FOLDS, cross_validate, final_model, folds, gap_for, importance, outside
 from .folded import (FoldedModel, direction_columns, direction_dependence, direction_importance, fitted_folded,
                      importance_on_y, kept, screen)
-from .select import (DROP_MIN, GAIN_Z, POSE, causes_alone, consequences, fold_gain, gain, lean, partners,  # noqa: F401
-                     screened_first, select, strongest_alone)
+from .select import (DROP_MIN, POSE, causes_alone, consequences, gain, lean, partners, screened_first,  # noqa: F401
+                     select, strongest_alone)
 
 #: fewest decimated samples per cross-validation block for a fit
 BLOCK = 25
@@ -295,7 +296,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offer
     fit explaining more out of fold kept (:func:`.folded.kept`).  ``offered``: the lines [Hz] found
     elsewhere in the recording (:func:`.periodic.offered`), the line's phase where ``y`` holds none by
     its own rule (:func:`.periodic.extend`).  ``without``: groups whose columns the channel's trees
-    are not given (:func:`lone_channel`)."""
+    are not given (:func:`without_lone_pose`)."""
     plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, offered=offered, without=without)
     if sigma is None:
         return plain
@@ -507,7 +508,8 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     noun = pipe.model.facts.joint_noun
     fitted = stage_columns(eng, theta, stand_ins, [c for c in chans if c not in outfit])
     t, pos = periodic.time_and_positions(X, columns)
-    offered = periodic.offered(t, R_fit[:, :pipe.nd], pos, folds(len(R_fit), gap_for(samples_per_independent(pipe))),
+    fold_rows = folds(len(R_fit), gap_for(samples_per_independent(pipe)))
+    offered = periodic.offered(t, R_fit[:, :pipe.nd], pos, fold_rows,
                                [e for e in lines if e["channel"] in pipe.channels[:pipe.nd]])
 
     def fitted_on(c, without=()):
@@ -527,7 +529,7 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
 
     return without_lone_pose([fitted_on(c) for c in chans], pipe.nd,
                              lambda f: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without=(POSE,)),
-                             folds(len(R_fit), gap_for(samples_per_independent(pipe))))
+                             fold_rows)
 
 
 def without_lone_pose(fits, channels: int, fit_without, fold_rows):
@@ -535,7 +537,7 @@ def without_lone_pose(fits, channels: int, fit_without, fold_rows):
     robot's ``channels`` (more than one) that names anything, fitted again without the pose's
     columns (``fit_without(fit)``: that fit, or None where it cannot be made), where that fit
     claims a share on named inputs and the fit with the pose does not beat it by the bar of a
-    consequence (:func:`.select.gain`'s: :data:`DROP_MIN` of the variance and
+    consequence (:func:`.select.gain`: :data:`DROP_MIN` of the variance and
     :data:`.select.GAIN_Z` standard errors over the blocks ``fold_rows``; each fit's ``pred``,
     out of fold, against its ``target``).
 
@@ -556,10 +558,9 @@ def without_lone_pose(fits, channels: int, fit_without, fold_rows):
     if again is None or not (again.explained and again.named):
         return fits
     y = np.asarray(posed.target, float)
-    var = float(np.var(y))
-    overall = float(np.mean((y - again.pred) ** 2) - np.mean((y - posed.pred) ** 2)) / var if var > 0 else 0.0
-    if fold_gain(y, again.pred, posed.pred, fold_rows, var,
-                 lambda mean, se: overall >= DROP_MIN and mean > GAIN_Z * se)[2]:
+    held_out = [SimpleNamespace(pred=f.pred, folds=fold_rows, mse=float(np.mean((y - f.pred) ** 2)))
+                for f in (again, posed)]
+    if gain(*held_out, y, float(np.var(y)))[1]:
         return fits
     return [again if f is posed else f for f in fits]
 
