@@ -160,7 +160,7 @@ def _captured(run):
         return X, columns
 
     def fit_kept(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=(), without=()):
-        if without:  # a channel fitted again (stage.without_lone_pose): the replay makes it again from its entry
+        if without:  # a channel fitted again (flexible.across): the replay makes it again from its entry
             return fit_channel(pipe, X, columns, y, noise, unit, weak=weak, fitted=fitted, offered=offered,
                                without=without)
         entry = dict(y=np.asarray(y).copy(), noise=noise, unit=unit, weak=weak, fitted=fitted, offered=tuple(offered))
@@ -256,6 +256,7 @@ def refit(kept) -> tuple:
     from threadpoolctl import threadpool_limits
 
     from cosim.discrepancy.flexible import stage
+    from cosim.discrepancy.flexible.across import across_channels
     from cosim.discrepancy.structure import samples_per_independent
 
     if "pipe" in kept:
@@ -275,18 +276,19 @@ def refit(kept) -> tuple:
         if kept["channels"]:
             X, columns = stage.inputs(kept["pipe"], kept["R"], direction=True)
 
-            def fitted(ch, without=()):
+            def fitted(ch, without=(), why=""):
                 # a rival's channel (its own residual kept): the inputs the rival fitted it on
                 Xc, cc = (X, columns) if "R" not in ch else stage.inputs(kept["pipe"], ch["R"], direction=True)
                 f = stage.fit_channel(kept["pipe"], Xc, cc, ch["y"], ch["noise"], ch["unit"], weak=ch["weak"],
                                       fitted=ch["fitted"], offered=ch.get("offered", ()), without=without)
                 return replace(f, joint=kept["pipe"].channels.index(ch["unit"][1]) + 1, weak=ch["weak"],
-                               target=np.asarray(ch["y"], float))
+                               target=np.asarray(ch["y"], float), left_out=why)
             fits = [fitted(ch) for ch in kept["channels"]]
-            entry = {id(f): ch for f, ch in zip(fits, kept["channels"])}  # a fit's channel entry
+            entry = {f.joint: ch for f, ch in zip(fits, kept["channels"])}  # a fit's channel entry
             rows = stage.folds(len(kept["R"]), stage.gap_for(samples_per_independent(kept["pipe"])))
-            fits = stage.without_lone_pose(fits, kept["pipe"].nd, lambda f: None if "R" in entry[id(f)] else
-                                           fitted(entry[id(f)], without=(stage.POSE,)), rows)
+            fits = across_channels(fits, kept["pipe"].nd, dict.fromkeys(col[1] for col in columns),
+                                   lambda f, without, why: None if "R" in entry[f.joint] else
+                                   fitted(entry[f.joint], without, why), rows)
         cpu = time.process_time() - t0
     return fits, cpu
 

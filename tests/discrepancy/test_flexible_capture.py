@@ -30,13 +30,15 @@ class _Fit:
     joint: int = 0
     weak: bool = False
     target: object = None
+    left_out: str = ""
 
 
 def _fakes(monkeypatch, seen, offers=None):
     """stage.inputs and fit_channel as cheap stand-ins: the matrix is the residual itself; the
     lines offered to each fit are appended to ``offers``."""
     offers = [] if offers is None else offers
-    monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), ["a", "b"]))
+    monkeypatch.setattr(stage, "inputs", lambda pipe, R, **kw: (np.array(R, float), [("a", "a", 1, "position", "m"),
+                                                                          ("b", "b", 2, "position", "m")]))
 
     def fit(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offered=(), without=()):
         seen.append(np.array(X))

@@ -1,4 +1,4 @@
-"""A force on one channel alone is no force on the platform (cosim.discrepancy.flexible.stage.
+"""A force on one channel alone is no force on the platform (cosim.discrepancy.flexible.across.
 without_lone_pose): where one channel of several names anything and it names the platform pose,
 that channel is fitted again without the pose's columns, and the new fit is the answer where the
 pose does not explain significantly more.
@@ -33,13 +33,13 @@ def test_the_fit_without_the_pose_is_given_no_pose_column_and_the_pose_stays_whe
     # no pose column among the trees' inputs, and their columns index the stage's (the black box's)
     assert all(again.columns[i][1] != flexible.POSE for i in again.use)
     assert again.without == (flexible.POSE,) and posed.without == ()
-    said = flexible.statement(again, "slider")
+    said = flexible.statement(replace(again, left_out="the platform pose left out of the inputs: ..."), "slider")
     assert "the platform pose left out of the inputs" in said and "the platform pose left out" not in \
         flexible.statement(posed, "slider")
     y = _oblique()[3]
     posed = replace(posed, target=y)
     # the pose explains 0.95, the rail's effort 0.56: the pose stays
-    assert flexible.without_lone_pose([posed], 6, lambda f: again, folds(len(y), 5))[0] is posed
+    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: again, folds(len(y), 5))[0] is posed
 
 
 def _stub(named, missed, seed, explained=True):
@@ -52,20 +52,22 @@ def _stub(named, missed, seed, explained=True):
 
 def test_the_fit_without_the_pose_is_the_answer_where_it_explains_about_as_much():
     posed, again = _stub([flexible.POSE], 0.20, 0), _stub(["position of slider 4"], 0.21, 1)
-    assert flexible.without_lone_pose([posed], 6, lambda f: again, ROWS) == [again]
+    asked = []
+    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: asked.append((w, why)) or again, ROWS) == [again]
+    assert asked[0][0] == (flexible.POSE,) and asked[0][1].startswith("the platform pose left out of the inputs")
     worse = _stub(["position of slider 4"], 0.50, 1)
-    assert flexible.without_lone_pose([posed], 6, lambda f: worse, ROWS) == [posed]
+    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: worse, ROWS) == [posed]
 
 
 def test_the_pose_stays_beside_another_channel_on_a_one_channel_robot_and_where_the_refit_claims_nothing():
     posed, other = _stub([flexible.POSE], 0.20, 0), _stub(["rate of slider 2"], 0.3, 2)
     asked = []
 
-    def refit(f):
+    def refit(f, without, why):
         asked.append(f)
         return _stub(["position of slider 4"], 0.2, 1, explained=False)
     assert flexible.without_lone_pose([posed, other], 6, refit, ROWS) == [posed, other]
     assert flexible.without_lone_pose([posed], 1, refit, ROWS) == [posed]
     assert not asked
     assert flexible.without_lone_pose([posed], 6, refit, ROWS) == [posed] and len(asked) == 1
-    assert flexible.without_lone_pose([posed], 6, lambda f: None, ROWS) == [posed]
+    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: None, ROWS) == [posed]

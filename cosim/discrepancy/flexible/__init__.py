@@ -5,6 +5,7 @@
 * :mod:`.cv`: cross-validation over blocks in time, the single-input screen, the staged tree growth;
 * :mod:`.select`: which inputs are named (causes before consequences);
 * :mod:`.beside`: what stands beside a force's inputs without being one (time, a copy beside the pose, a fitted limit's part);
+* :mod:`.across`: what the channels say together (the pose on one channel alone, a kind of input on one channel alone);
 * :mod:`.backfit`: the fitted model's parameters re-adjusted beside the trees;
 * :mod:`.oblique`: the platform pose and the rates projected on the direction of a linear fit of the residual, per fold;
 * :mod:`.motion`: the commanded platform's acceleration through a resonance fitted per fold (a body carried on a spring);

@@ -124,7 +124,13 @@ def _at_value(feature, x, unit) -> str:
 
 
 def statement(fit, noun: str) -> str:
-    """The report's sentence for one channel."""
+    """The report's sentence for one channel, with the inputs a rule reading the channels side by
+    side left out of its fit and why (:mod:`.across`: ``left_out``)."""
+    said = _statement(fit, noun)
+    return f"{said}; {fit.left_out}" if fit.left_out else said
+
+
+def _statement(fit, noun: str) -> str:
     if not fit.explained and not fit.beyond_noise:
         return (f"{fit.channel}: whether what is left is explainable cannot be judged: it holds nothing beyond "
                 f"its own noise (RMS {fit.rms_left:.3g} {fit.unit} against a noise of {fit.noise:.3g} {fit.unit})")
@@ -168,9 +174,6 @@ def statement(fit, noun: str) -> str:
     if fit.outside > OUTSIDE_WARN:
         s += (f"; at {100 * fit.outside:.0f} % of the samples these inputs lay outside the range the trees were "
               f"fitted on without them (extrapolated flat: the share is a lower bound there)")
-    if fit.without:
-        s += (f"; {', '.join(fit.without)} left out of the inputs: the only channel holding a force, which a force "
-              f"on the platform would not be (it reaches every rail)")
     return s + (f"; {fit.family}" if fit.family else "; no found family is keyed on these inputs")
 
 

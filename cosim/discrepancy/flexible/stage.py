@@ -77,7 +77,6 @@ The thresholds were set on the tuning seeds of ``bench/flexible_bench.py`` (docs
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -85,6 +84,7 @@ from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _si
                       input_groups, inputs)
 from .report import (OUTSIDE_WARN, _where, family_says, figure, markdown, reported, sentence,  # noqa: F401
                      statement)  # the stage's report, re-exported
+from .across import across_channels, without_lone_pose  # noqa: F401 (the stage's rules across channels)
 from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
@@ -203,8 +203,9 @@ class FlexibleFit:
     folded: bool = False
     #: the claimed model's out-of-fold prediction of the residual (decimated samples), in ``unit``
     pred: object = field(default=None, repr=False, compare=False)
-    #: the groups whose columns the trees were not given (:func:`without_lone_pose`: the pose)
+    #: the groups whose columns the trees were not given (:mod:`.across`) and the clause saying why
     without: tuple = ()
+    left_out: str = ""
 
     @property
     def named(self) -> tuple:
@@ -217,7 +218,7 @@ class FlexibleFit:
         out = {k: getattr(self, k) for k in ("channel", "joint", "unit", "share", "z", "explained", "rms_left",
                                              "noise", "family", "statement", "black_box", "outside",
                                              "beyond_noise", "screened", "weak", "readjusted", "folded",
-                                             "without")}
+                                             "without", "left_out")}
         out["inputs"] = [vars(d) for d in self.inputs]
         out["named"] = list(self.named)
         return out
@@ -296,7 +297,7 @@ def fit_channel(pipe, X, columns, y, noise, unit, weak=False, fitted=None, offer
     fit explaining more out of fold kept (:func:`.folded.kept`).  ``offered``: the lines [Hz] found
     elsewhere in the recording (:func:`.periodic.offered`), the line's phase where ``y`` holds none by
     its own rule (:func:`.periodic.extend`).  ``without``: groups whose columns the channel's trees
-    are not given (:func:`without_lone_pose`)."""
+    are not given (:mod:`.across`: the rules reading the channels side by side)."""
     plain, sigma = _fit_channel(pipe, X, columns, y, noise, unit, weak, fitted, offered=offered, without=without)
     if sigma is None:
         return plain
@@ -512,11 +513,11 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
     offered = periodic.offered(t, R_fit[:, :pipe.nd], pos, fold_rows,
                                [e for e in lines if e["channel"] in pipe.channels[:pipe.nd]])
 
-    def fitted_on(c, without=()):
+    def fitted_on(c, without=(), why=""):
         fit = outfit[c] if c in outfit else fit_channel(
             pipe, X, columns, R_fit[:, c], noise[c], (pipe.model.facts.effort_unit, pipe.channels[c]),
             weak=c in weak, fitted=fitted.get(c), offered=offered, without=without)
-        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak)
+        fit = _with(fit, joint=c + 1, target=R_fit[:, c].copy(), weak=c in weak, left_out=why)
         said = family_says(fit, discovered, effects) if fit.explained else ""
         if c in stand_ins and R_fit is not R:
             test = np.asarray(eng.test, bool)
@@ -527,42 +528,9 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
         fit = _with(fit, family=said)
         return _with(fit, statement=statement(fit, noun))
 
-    return without_lone_pose([fitted_on(c) for c in chans], pipe.nd,
-                             lambda f: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without=(POSE,)),
-                             fold_rows)
-
-
-def without_lone_pose(fits, channels: int, fit_without, fold_rows):
-    """``fits`` with the one that names the platform pose, where it is the only one of the
-    robot's ``channels`` (more than one) that names anything, fitted again without the pose's
-    columns (``fit_without(fit)``: that fit, or None where it cannot be made), where that fit
-    claims a share on named inputs and the fit with the pose does not beat it by the bar of a
-    consequence (:func:`.select.gain`: :data:`DROP_MIN` of the variance and
-    :data:`.select.GAIN_Z` standard errors over the blocks ``fold_rows``; each fit's ``pred``,
-    out of fold, against its ``target``).
-
-    A force on the platform (a wrench that its pose and twist set) reaches every rail through the
-    Jacobian: the efforts of all the rails answer it, not one alone.  Where one channel holds a
-    force and the others nothing the trees claim, the pose named there may stand for what it is
-    computed from, the rails' positions, or for what the pose sets, the drive's load: the
-    channel's trees are judged without it, and where they explain as much, what they name is
-    the answer.  Where the pose explains significantly more, it stays: it carries what the
-    trees on single columns do not (a gap between two rails in one tilt).  On the seen MuJoCo
-    sets every channel that was the only one naming anything and named the pose held a rail's
-    own force (docs/records/flexible_rules.md, "The pose on one channel alone")."""
-    told = [f for f in fits if f.explained and f.named]
-    if channels < 2 or len(told) != 1 or POSE not in told[0].named:
-        return fits
-    posed = told[0]
-    again = fit_without(posed)
-    if again is None or not (again.explained and again.named):
-        return fits
-    y = np.asarray(posed.target, float)
-    held_out = [SimpleNamespace(pred=f.pred, folds=fold_rows, mse=float(np.mean((y - f.pred) ** 2)))
-                for f in (again, posed)]
-    if gain(*held_out, y, float(np.var(y)))[1]:
-        return fits
-    return [again if f is posed else f for f in fits]
+    return across_channels([fitted_on(c) for c in chans], pipe.nd, dict.fromkeys(col[1] for col in columns),
+                           lambda f, without, why: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without,
+                                                                                                 why), fold_rows)
 
 
 def _with(fit, **kw):
