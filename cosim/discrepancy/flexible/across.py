@@ -19,7 +19,7 @@ out, ``why`` the clause its statement ends with, or None where it cannot be made
   channel is fitted again without any input of that kind, and that fit is its answer.
 
 On the seen MuJoCo sets (docs/records/flexible_rules.md, "A kind of input on one channel alone"):
-every such input was outside the mechanism's declared inputs.
+19 of the 20 such inputs were outside the mechanism's declared inputs.
 """
 from __future__ import annotations
 
