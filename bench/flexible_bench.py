@@ -59,7 +59,9 @@ and ``--set report19`` (seeds 13700 +) was run once on that stage.  Time that to
 judged without their columns was then set on seen sets, and ``--set report20`` (seeds 13900 +) was
 run once on that stage (its inputs captured on the stage before, the stage replayed on them).
 The pose named on one channel alone fitted again without it was then set on seen sets, and ``--set
-report21`` (seeds 14100 +) was run once on that stage.
+report21`` (seeds 14100 +) was run once on that stage.  A kind of input named on one channel alone of
+three or more left out there was then set on seen sets, and ``--set report22`` (seeds 14300 +) was run
+once on that stage.
 The truth's share is measured over every decimated sample, as the stage judges its own.
 
     .venv/bin/python bench/flexible_bench.py --set report8 --per-kind 3 --clean 3
@@ -88,7 +90,7 @@ SEEDS = {"tune": 7100, "report": 8300, "fresh": 9300, "report2": 10300, "report3
          "report8": 11500, "report9": 11700, "report10": 11900, "report11": 12100,
          "report12": 12300, "report13": 12500, "report14": 12700,
          "report15": 12900, "report16": 13100, "report17": 13300, "report18": 13500, "report19": 13700, "report20": 13900,
-         "report21": 14100}
+         "report21": 14100, "report22": 14300}
 
 
 def _light(pipe):
