@@ -288,7 +288,7 @@ def refit(kept) -> tuple:
             fits = [fitted(ch) for ch in kept["channels"]]
             entry = {f.joint: ch for f, ch in zip(fits, kept["channels"])}  # a fit's channel entry
             rows = stage.folds(len(kept["R"]), stage.gap_for(samples_per_independent(kept["pipe"])))
-            fits = across_channels(fits, kept["pipe"].nd, dict.fromkeys(col[1] for col in columns),
+            fits = across_channels(fits, kept["pipe"].nd, columns,
                                    lambda f, without, why: None if "R" in entry[f.joint] else
                                    fitted(entry[f.joint], without, why), rows)
         cpu = time.process_time() - t0

@@ -13,6 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from cosim.discrepancy.flexible import across
 from cosim.discrepancy.flexible import stage as flexible
 from cosim.discrepancy.flexible.cv import folds
 from test_flexible_platform_inputs import _oblique
@@ -39,7 +40,7 @@ def test_the_fit_without_the_pose_is_given_no_pose_column_and_the_pose_stays_whe
     y = _oblique()[3]
     posed = replace(posed, target=y)
     # the pose explains 0.95, the rail's effort 0.56: the pose stays
-    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: again, folds(len(y), 5))[0] is posed
+    assert across.without_lone_pose([posed], 6, lambda f, w, why: again, folds(len(y), 5))[0] is posed
 
 
 def _stub(named, missed, seed, explained=True):
@@ -53,10 +54,10 @@ def _stub(named, missed, seed, explained=True):
 def test_the_fit_without_the_pose_is_the_answer_where_it_explains_about_as_much():
     posed, again = _stub([flexible.POSE], 0.20, 0), _stub(["position of slider 4"], 0.21, 1)
     asked = []
-    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: asked.append((w, why)) or again, ROWS) == [again]
+    assert across.without_lone_pose([posed], 6, lambda f, w, why: asked.append((w, why)) or again, ROWS) == [again]
     assert asked[0][0] == (flexible.POSE,) and asked[0][1].startswith("the platform pose left out of the inputs")
     worse = _stub(["position of slider 4"], 0.50, 1)
-    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: worse, ROWS) == [posed]
+    assert across.without_lone_pose([posed], 6, lambda f, w, why: worse, ROWS) == [posed]
 
 
 def test_the_pose_stays_beside_another_channel_on_a_one_channel_robot_and_where_the_refit_claims_nothing():
@@ -66,8 +67,8 @@ def test_the_pose_stays_beside_another_channel_on_a_one_channel_robot_and_where_
     def refit(f, without, why):
         asked.append(f)
         return _stub(["position of slider 4"], 0.2, 1, explained=False)
-    assert flexible.without_lone_pose([posed, other], 6, refit, ROWS) == [posed, other]
-    assert flexible.without_lone_pose([posed], 1, refit, ROWS) == [posed]
+    assert across.without_lone_pose([posed, other], 6, refit, ROWS) == [posed, other]
+    assert across.without_lone_pose([posed], 1, refit, ROWS) == [posed]
     assert not asked
-    assert flexible.without_lone_pose([posed], 6, refit, ROWS) == [posed] and len(asked) == 1
-    assert flexible.without_lone_pose([posed], 6, lambda f, w, why: None, ROWS) == [posed]
+    assert across.without_lone_pose([posed], 6, refit, ROWS) == [posed] and len(asked) == 1
+    assert across.without_lone_pose([posed], 6, lambda f, w, why: None, ROWS) == [posed]

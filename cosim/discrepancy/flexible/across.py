@@ -28,6 +28,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .clock import TIME
+from .columns import input_groups
 from .select import POSE, gain
 
 #: a force held by at least this many channels is the robot's, not one rail's
@@ -111,8 +112,8 @@ def without_lone_kinds(fits, groups, refit) -> list:
     return fits
 
 
-def across_channels(fits, channels: int, groups, refit, fold_rows) -> list:
+def across_channels(fits, channels: int, columns, refit, fold_rows) -> list:
     """The channels' fits read side by side: :func:`without_lone_pose`, then
-    :func:`without_lone_kinds` (``groups``: the stage's group names)."""
+    :func:`without_lone_kinds` over the groups of the stage's ``columns``."""
     fits = without_lone_pose(fits, channels, refit, fold_rows)
-    return without_lone_kinds(fits, groups, refit)
+    return without_lone_kinds(fits, list(input_groups(columns)), refit)

@@ -84,7 +84,7 @@ from .columns import (POWER_TIME_CONSTANTS, SINCE, TIME_CONSTANTS, _lowpass, _si
                       input_groups, inputs)
 from .report import (OUTSIDE_WARN, _where, family_says, figure, markdown, reported, sentence,  # noqa: F401
                      statement)  # the stage's report, re-exported
-from .across import across_channels, without_lone_pose  # noqa: F401 (the stage's rules across channels)
+from .across import across_channels
 from .backfit import readjusted, stage_columns
 from .beside import copy_alone, judged_last, rules
 from .copies import on_channel
@@ -528,9 +528,9 @@ def flexible_stage(eng, R, left, discovered=(), effects=(), theta=None, lines=()
         fit = _with(fit, family=said)
         return _with(fit, statement=statement(fit, noun))
 
-    return across_channels([fitted_on(c) for c in chans], pipe.nd, dict.fromkeys(col[1] for col in columns),
-                           lambda f, without, why: None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without,
-                                                                                                 why), fold_rows)
+    def refit(f, without, why):  # a rival's channel (outfit) is the rival's fit
+        return None if f.joint - 1 in outfit else fitted_on(f.joint - 1, without, why)
+    return across_channels([fitted_on(c) for c in chans], pipe.nd, columns, refit, fold_rows)
 
 
 def _with(fit, **kw):
